@@ -1,0 +1,206 @@
+"""Closed-form rod compliance ("Calc", paper Eqs. 15-18) by the unit-load method.
+
+The rod is a statically determinate cantilever clamped at the flange face, so the ball-centre
+displacement follows exactly from the internal forces of the load and of a unit load
+(Castigliano / virtual work) integrated along the centreline:
+
+    C_ij = integral( m_i^T K_m^-1 m_j + f_i^T K_f^-1 f_j ) ds,
+
+with ``m_i(s) = (p - r(s)) x e_i`` the moment of a unit tip force, ``K_m^-1 = t t^T / GJ +
+(I - t t^T) / EI`` and ``K_f^-1 = t t^T / EA + (I - t t^T) / kGA`` along the local tangent ``t``.
+For gravity the moment at ``s`` is that of all the mass distal to ``s`` (tubes, rings, bend,
+holders and the ball as a point mass at the tip). Each segment carries its composite section
+(tube plus sleeve), so the model covers any gamma, the bend arc and every part; with
+``pipes_only=True`` it reduces to the paper's idealisation, and :func:`paper_compliance`
+evaluates Eqs. 15 and 17 literally (gamma = 90 only).
+
+Frames: forces and gravity in {T}; displacements of the ball centre in {T} [mm]. C_F [mm/N],
+C_g [mm per g0] (gravity of magnitude g0 = 9.80665 m/s^2 along the given {T} direction).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from enum import Enum
+
+import numpy as np
+
+from .design import RodDesign
+from .enums import Part
+from .errors import DesignError
+from .layout import Layer, Segment, SegmentKind, layout
+from .units import G0, gpa_to_mpa, kg_m3_to_kg_mm3
+
+__all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments"]
+
+
+class BendModel(str, Enum):
+    """How the closed form treats the bend pipe."""
+
+    ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
+    CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """Skew matrices of vectors, shape (..., 3) -> (..., 3, 3), ``skew(a) @ b = a x b``."""
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+
+
+def pipes_only_segments(design: RodDesign) -> list[Segment]:
+    """The paper's idealisation: pipe I (length L1) and pipe II (length L2) meeting at a sharp corner."""
+    d = design
+    t1 = Layer(Part.PIPE_I, d.pipe_I.material, d.pipe_I.outer_diameter_mm, d.pipe_I.inner_diameter_mm)
+    t2 = Layer(Part.PIPE_II, d.pipe_II.material, d.pipe_II.outer_diameter_mm, d.pipe_II.inner_diameter_mm)
+    ez = np.array([0.0, 0.0, 1.0])
+    return [Segment(SegmentKind.LINE, 0.0, d.L1_mm, np.zeros(3), ez, (t1,)),
+            Segment(SegmentKind.LINE, d.L1_mm, d.L2_mm, d.L1_mm * ez, d.pipe_II_direction, (t2,))]
+
+
+def _gauss(n: int):
+    x, w = np.polynomial.legendre.leggauss(n)
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces: int = 8):
+    """Quadrature points along all segments: (seg index, local u, weight)."""
+    rows = []
+    for k, seg in enumerate(segs):
+        pieces = arc_pieces if seg.kind is SegmentKind.ARC else 1
+        xg, wg = _gauss(n_arc if seg.kind is SegmentKind.ARC else n_line)
+        h = seg.length_mm / pieces
+        for p in range(pieces):
+            for x, w in zip(xg, wg):
+                rows.append((k, (p + x) * h, w * h))
+    idx = np.array([r[0] for r in rows], dtype=int)
+    u = np.array([r[1] for r in rows])
+    w = np.array([r[2] for r in rows])
+    return idx, u, w
+
+
+def _distal_moments(segs, idx, u, tip_mass_kg, tip_F):
+    """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point."""
+    n_sub = 24
+    xg, wg = _gauss(n_sub)
+    # whole-segment totals, then suffix sums
+    tot_m = np.zeros(len(segs))
+    tot_q = np.zeros((len(segs), 3))
+    for k, seg in enumerate(segs):
+        uu = xg * seg.length_mm
+        ww = wg * seg.length_mm * seg.mass_per_mm
+        tot_m[k] = ww.sum()
+        tot_q[k] = (ww[:, None] * seg.point(uu)).sum(0)
+    suf_m = np.concatenate([np.cumsum(tot_m[::-1])[::-1][1:], [0.0]]) + tip_mass_kg
+    suf_q = np.concatenate([np.cumsum(tot_q[::-1], axis=0)[::-1][1:], np.zeros((1, 3))]) + tip_mass_kg * tip_F
+    W = np.empty(u.size)
+    Q = np.empty((u.size, 3))
+    for q, (k, u0) in enumerate(zip(idx, u)):
+        seg = segs[k]
+        span = seg.length_mm - u0
+        uu = u0 + xg * span
+        ww = wg * span * seg.mass_per_mm
+        W[q] = ww.sum() + suf_m[k]
+        Q[q] = (ww[:, None] * seg.point(uu)).sum(0) + suf_q[k]
+    return W, Q
+
+
+def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool):
+    idx, u, w = _quadrature(segs)
+    r = np.concatenate([segs[k].point([uu]) for k, uu in zip(idx, u)])
+    t = np.concatenate([segs[k].tangent([uu]) for k, uu in zip(idx, u)])
+    EI = np.array([segs[k].EI for k in idx])
+    GJ = np.array([segs[k].GJ for k in idx])
+    EA = np.array([segs[k].EA for k in idx])
+    kGA = np.array([segs[k].kGA for k in idx])
+    tt = t[:, :, None] * t[:, None, :]
+    eye = np.eye(3)[None]
+    Km_inv = tt / GJ[:, None, None] + (eye - tt) / EI[:, None, None]
+    Kf_inv = np.zeros_like(tt)
+    if axial:
+        Kf_inv = Kf_inv + tt / EA[:, None, None]
+    if shear:
+        Kf_inv = Kf_inv + (eye - tt) / kGA[:, None, None]
+    Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
+    CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
+    W, Q = _distal_moments(segs, idx, u, tip_mass_kg, tip_F)
+    Mg = G0 * _skew(Q - W[:, None] * r)                  # moment of distal weight per unit g0 along e_j
+    Ng = G0 * W[:, None, None] * np.eye(3)[None]
+    Cg = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mg) + np.einsum("q,qab,qbj->aj", w, Kf_inv, Ng)
+    return CF, Cg
+
+
+def _corner_segments(design: RodDesign, segs: list[Segment]) -> list[Segment]:
+    out = []
+    for s in segs:
+        if s.kind is SegmentKind.ARC:
+            t = design.tangent_mm
+            out.append(Segment(SegmentKind.LINE, s.s0_mm, t, s.start_F, s.direction, s.layers))
+            out.append(Segment(SegmentKind.LINE, s.s0_mm + t, t, s.start_F + t * s.direction,
+                               design.pipe_II_direction, s.layers))
+        else:
+            out.append(s)
+    return out
+
+
+def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool = False,
+                    axial: bool = True, bend: BendModel = BendModel.ARC) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form C_F [mm/N] and C_g [mm/g0] of ``design`` in {T}, each shape=(3, 3).
+
+    Parameters
+    ----------
+    pipes_only : the paper's idealisation (two tubes, sharp corner, no parts, no ball mass)
+    shear : add Timoshenko shear flexibility (Euler-Bernoulli when False, as the paper)
+    axial : add axial flexibility of the tubes (the paper neglects it)
+    bend : :class:`BendModel` of the bend pipe
+    """
+    bend = BendModel(bend)
+    if pipes_only:
+        segs = pipes_only_segments(design)
+        tip_mass = 0.0
+    else:
+        segs = layout(design)
+        if bend is BendModel.CORNER:
+            segs = _corner_segments(design, segs)
+        r = design.ball.radius_mm
+        tip_mass = 4.0 / 3.0 * math.pi * r ** 3 * kg_m3_to_kg_mm3(design.ball.material.density_kg_m3)
+    return _integrate(segs, design.tool_mm, tip_mass, shear, axial)
+
+
+def paper_compliance(design: RodDesign) -> tuple[np.ndarray, np.ndarray]:
+    """Paper Eqs. 15 and 17 literally: pipes only, one tube section, gamma = 90 deg.
+
+    ``q`` of Eq. 17 is the tube's weight per length at 1 g0 [N/mm]. Raises :class:`DesignError`
+    for other gammas or when pipe I and pipe II differ (the formulas assume one section).
+    """
+    if abs(design.gamma_deg - 90.0) > 1e-9:
+        raise DesignError(f"the paper's Eqs. 15/17 hold for gamma = 90 deg only, got {design.gamma_deg}",
+                          key="gamma_deg")
+    if design.pipe_I != replace(design.pipe_II, key=design.pipe_I.key):
+        raise DesignError("the paper's Eqs. 15/17 assume one tube for pipe I and pipe II", key="pipe_II")
+    seg = pipes_only_segments(design)[0]
+    EI, GJ = seg.EI, seg.GJ
+    q = seg.mass_per_mm * G0
+    L1, L2 = design.L1_mm, design.L2_mm
+    CF = np.array([
+        [L1 ** 3 / (3 * EI), 0.0, -L1 ** 2 * L2 / (2 * EI)],
+        [0.0, (L1 ** 3 + L2 ** 3) / (3 * EI) + L1 * L2 ** 2 / GJ, 0.0],
+        [-L1 ** 2 * L2 / (2 * EI), 0.0, L2 ** 3 / (3 * EI) + L1 * L2 ** 2 / EI]])
+    Cg = q * np.array([
+        [L1 ** 3 * L2 / (3 * EI) + L1 ** 4 / (8 * EI), 0.0, -L1 ** 2 * L2 ** 2 / (4 * EI)],
+        [0.0, L2 ** 4 / (8 * EI) + L1 ** 3 * L2 / (3 * EI) + L1 ** 4 / (8 * EI) + L1 * L2 ** 3 / (2 * GJ), 0.0],
+        [-L1 ** 3 * L2 / (6 * EI) - L1 ** 2 * L2 ** 2 / (2 * EI), 0.0, L2 ** 4 / (8 * EI) + L1 * L2 ** 3 / (2 * EI)]])
+    return CF, Cg
+
+
+def calc_rod_compliance(design: RodDesign, *, bend: BendModel = BendModel.ARC, shear: bool = False,
+                        axial: bool = True):
+    """Closed-form compliance of ``design`` as a :class:`~rodlab.compliance.RodCompliance` (method ``calc``)."""
+    from .compliance import RodCompliance
+    from .enums import Method
+    CF, Cg = calc_compliance(design, bend=bend, shear=shear, axial=axial)
+    CF = 0.5 * (CF + CF.T)  # exact in theory; remove round-off
+    return RodCompliance.from_design(design, CF, Cg, Method.CALC, {
+        "generator": "rodlab closed form (unit-load Euler-Bernoulli frame)",
+        "options": {"bend": BendModel(bend).value, "shear": shear, "axial": axial}})

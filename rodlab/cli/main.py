@@ -1,0 +1,63 @@
+"""``rodlab`` entry point: argparse sub-commands, logging set-up, and error reporting.
+
+Every input error (:class:`~rodlab.errors.RodlabError`) and OS error is printed as one clear
+line on stderr with exit code 2; never a traceback. ``--debug`` shows tracebacks.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from .. import __version__
+from ..errors import RodlabError
+from . import cmd_design
+
+__all__ = ["build_parser", "main"]
+
+#: Modules that add sub-commands: each has ``register(subparsers)``.
+_COMMAND_MODULES = [cmd_design]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rodlab",
+        description="Design, simulate, measure and use long measuring rods for on-site robot calibration "
+                    "(MultiCal).")
+    parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for mod in _COMMAND_MODULES:
+        mod.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 1
+    try:
+        return int(args.func(args) or 0)
+    except RodlabError as e:
+        if args.debug:
+            raise
+        print(f"rodlab {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        if args.debug:
+            raise
+        where = f" {e.filename}" if getattr(e, "filename", None) else ""
+        print(f"rodlab {args.command}: error:{where}: {e.strerror or e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"rodlab {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

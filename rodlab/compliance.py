@@ -1,0 +1,244 @@
+"""Rod compliance (paper Eqs. 16, 18, 19, 21-23) and the ``*.compliance.json`` file format.
+
+``C_F`` maps a force on the ball centre (N, in {T}) to the ball-centre displacement (mm, in {T});
+``C_g`` maps gravity expressed in {T} in units of g0 to the displacement (mm) caused by the rod's
+own weight. Eq. 19: ``dx_TCP = C_g g^T + C_F F^T``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import __version__
+from .design import RodDesign
+from .enums import Method
+from .errors import ComplianceError, did_you_mean
+from .fileio import atomic_write_json, sha256_file
+
+__all__ = ["RodCompliance", "c_rod_um", "r_rod", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
+           "read_compliance", "write_compliance", "design_hash"]
+
+log = logging.getLogger(__name__)
+
+FORMAT_COMPLIANCE = "rodlab.compliance/1"
+#: Contact force of the three sensors on the ball, in {D} [N] (paper Section 5.2).
+DEFAULT_CONTACT_FORCE_N = np.array([1.10, 1.25, 1.05])
+#: Relative asymmetry of C_F accepted on read (Maxwell-Betti; measured files are noisy).
+SYMMETRY_RTOL = 0.05
+
+_KEYS = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "r_rod", "c_rod_um", "mass_kg",
+         "com_T_mm", "tool_mm", "provenance")
+_REQUIRED = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "mass_kg", "com_T_mm", "tool_mm")
+
+
+def c_rod_um(C_F: np.ndarray, C_g: np.ndarray, force_N: float | None = None) -> float:
+    """Compliance index (paper Eq. 23) [um]: ``sum(C_g) + sum(C_F) |F|``, signed sums of all nine entries.
+
+    ``force_N`` is the magnitude of the contact force; default ``|[1.10, 1.25, 1.05]|`` N.
+    """
+    f = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N)) if force_N is None else float(force_N)
+    return float(1e3 * (np.sum(C_g) + np.sum(C_F) * f))
+
+
+def r_rod(C_F_meas: np.ndarray, C_F_sim: np.ndarray) -> float:
+    """Overall correction factor (paper Eq. 21): ``(c22 + c33)_meas / (c22 + c33)_sim``."""
+    num = float(C_F_meas[1, 1] + C_F_meas[2, 2])
+    den = float(C_F_sim[1, 1] + C_F_sim[2, 2])
+    if not den > 0:
+        raise ComplianceError(f"simulated c22 + c33 must be > 0 to form r_rod, got {den}")
+    return num / den
+
+
+def design_hash(design: RodDesign) -> str:
+    """SHA-256 of the design's source file, or of its canonical summary when built in memory."""
+    if design.source is not None and Path(design.source).exists():
+        return sha256_file(design.source)
+    return hashlib.sha256(json.dumps(design.summary(), sort_keys=True).encode()).hexdigest()
+
+
+def _as33(value, key: str, path) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ComplianceError(f"expected a 3x3 array of numbers, got {value!r}"[:200], path=path, key=key) from e
+    if a.shape != (3, 3):
+        raise ComplianceError(f"expected shape (3, 3), got {a.shape}", path=path, key=key)
+    if not np.all(np.isfinite(a)):
+        raise ComplianceError("entries must be finite (no NaN/inf)", path=path, key=key)
+    return a
+
+
+def _as3(value, key: str, path) -> np.ndarray:
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ComplianceError(f"expected 3 numbers, got {value!r}"[:200], path=path, key=key) from e
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ComplianceError(f"expected 3 finite numbers, got {value!r}"[:200], path=path, key=key)
+    return a
+
+
+@dataclass(frozen=True)
+class RodCompliance:
+    """Compliance of one measuring rod, as stored in a ``*.compliance.json``.
+
+    Attributes
+    ----------
+    rod : rod name
+    method : how it was obtained (:class:`~rodlab.enums.Method`)
+    C_F : force compliance in {T} [mm/N], shape=(3, 3), symmetric
+    C_g : gravity compliance in {T} [mm per g0], shape=(3, 3)
+    mass_kg : rod mass [kg]
+    com_T_mm : rod centre of mass in {T} [mm], shape=(3,)
+    tool_mm : nominal ball centre in {6} [mm], shape=(3,)
+    r_rod : correction factor measured/simulated (Eq. 21) [-]
+    provenance : free-form record of how the file was made
+    """
+
+    rod: str
+    method: Method
+    C_F: np.ndarray
+    C_g: np.ndarray
+    mass_kg: float
+    com_T_mm: np.ndarray
+    tool_mm: np.ndarray
+    r_rod: float = 1.0
+    provenance: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "method", Method.parse(self.method, "method"))
+        object.__setattr__(self, "C_F", _as33(self.C_F, "C_F_mm_per_N", None))
+        object.__setattr__(self, "C_g", _as33(self.C_g, "C_g_mm_per_g0", None))
+        object.__setattr__(self, "com_T_mm", _as3(self.com_T_mm, "com_T_mm", None))
+        object.__setattr__(self, "tool_mm", _as3(self.tool_mm, "tool_mm", None))
+        for key in ("mass_kg", "r_rod"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+                raise ComplianceError(f"must be a finite number > 0, got {v!r}", key=key)
+        if self.method is Method.NONE:
+            if np.any(self.C_F != 0) or np.any(self.C_g != 0):
+                raise ComplianceError("method `none` means zero matrices (no compensation); "
+                                      "use method calc/fea/meas for non-zero compliance", key="method")
+            return
+        scale = float(np.abs(self.C_F).max())
+        asym = float(np.abs(self.C_F - self.C_F.T).max())
+        if asym > SYMMETRY_RTOL * scale:
+            raise ComplianceError(
+                f"C_F must be symmetric (Maxwell-Betti): largest |C - C^T| = {asym:.3g} mm/N is "
+                f"{asym / scale:.1%} of max|C| (tolerance {SYMMETRY_RTOL:.0%})", key="C_F_mm_per_N")
+        eig = np.linalg.eigvalsh(0.5 * (self.C_F + self.C_F.T))
+        if eig.min() < -1e-6 * max(scale, 1e-300):
+            raise ComplianceError(f"C_F must be positive semi-definite (a passive structure); eigenvalues {eig}",
+                                  key="C_F_mm_per_N")
+
+    # -- physics ----------------------------------------------------------------------------
+    @property
+    def c_rod_um(self) -> float:
+        """Compliance index, paper Eq. 23 [um], with the default contact force magnitude."""
+        return c_rod_um(self.C_F, self.C_g)
+
+    def offset_T_mm(self, g_T_g0: np.ndarray, F_T_N: np.ndarray) -> np.ndarray:
+        """Ball-centre offset (Eq. 19) in {T} [mm], shape=(n, 3), from gravity [g0] and force [N] in {T}, shape=(n, 3)."""
+        g = np.atleast_2d(np.asarray(g_T_g0, dtype=float))
+        f = np.atleast_2d(np.asarray(F_T_N, dtype=float))
+        return g @ self.C_g.T + f @ self.C_F.T
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def from_design(cls, design: RodDesign, C_F, C_g, method: Method, provenance: dict | None = None,
+                    r_rod: float = 1.0) -> "RodCompliance":
+        """Fill mass, centre of mass and tool point from ``design``."""
+        from .massprops import mass_properties
+        mp = mass_properties(design)
+        prov = {"rodlab_version": __version__, "method": str(Method.parse(method)),
+                "design": design.name, "design_sha256": design_hash(design)}
+        if design.source is not None:
+            prov["design_file"] = str(design.source)
+        prov.update(provenance or {})
+        return cls(design.name, method, C_F, C_g, mp.mass_kg, mp.com_T_mm, design.tool_mm, r_rod, prov)
+
+    @classmethod
+    def none_like(cls, other: "RodCompliance") -> "RodCompliance":
+        """Zero compliance (no compensation) with ``other``'s mass, COM and tool."""
+        return cls(other.rod, Method.NONE, np.zeros((3, 3)), np.zeros((3, 3)), other.mass_kg, other.com_T_mm,
+                   other.tool_mm, 1.0, {"derived_from": other.provenance.get("method", str(other.method))})
+
+    # -- (de)serialisation -----------------------------------------------------------------
+    def to_dict(self) -> dict:
+        def sig(v, n=10):
+            return float(f"{float(v):.{n}g}") + 0.0
+
+        def r(a):
+            return [[sig(v) for v in row] for row in a] if np.ndim(a) == 2 else [sig(v) for v in a]
+        return {"format": FORMAT_COMPLIANCE, "rod": self.rod, "method": str(self.method),
+                "C_F_mm_per_N": r(self.C_F), "C_g_mm_per_g0": r(self.C_g), "r_rod": sig(self.r_rod),
+                "c_rod_um": round(self.c_rod_um, 4), "mass_kg": sig(self.mass_kg),
+                "com_T_mm": r(self.com_T_mm), "tool_mm": r(self.tool_mm), "provenance": self.provenance}
+
+    @classmethod
+    def from_dict(cls, data, path=None) -> "RodCompliance":
+        if not isinstance(data, dict):
+            raise ComplianceError(f"expected a JSON object, got {type(data).__name__}", path=path)
+        for k in data:
+            if k not in _KEYS:
+                log.warning("%s: unknown key %r ignored.%s", path, k, did_you_mean(k, _KEYS))
+        for k in _REQUIRED:
+            if k not in data:
+                raise ComplianceError("missing required key." + did_you_mean(k, list(data)), path=path, key=k)
+        if data["format"] != FORMAT_COMPLIANCE:
+            raise ComplianceError(f"expected {FORMAT_COMPLIANCE!r}, got {data['format']!r}", path=path, key="format")
+        if not isinstance(data["rod"], str):
+            raise ComplianceError(f"expected a string, got {data['rod']!r}", path=path, key="rod")
+        if not isinstance(data.get("provenance", {}), dict):
+            raise ComplianceError("expected an object", path=path, key="provenance")
+        try:
+            method = Method.parse(data["method"])
+        except ValueError as e:
+            raise ComplianceError(str(e), path=path, key="method") from e
+        for k in ("mass_kg", "r_rod", "c_rod_um"):
+            v = data.get(k, 1.0)
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ComplianceError(f"expected a number, got {v!r}", path=path, key=k)
+        try:
+            comp = cls(data["rod"], method, _as33(data["C_F_mm_per_N"], "C_F_mm_per_N", path),
+                       _as33(data["C_g_mm_per_g0"], "C_g_mm_per_g0", path), float(data["mass_kg"]),
+                       _as3(data["com_T_mm"], "com_T_mm", path), _as3(data["tool_mm"], "tool_mm", path),
+                       float(data.get("r_rod", 1.0)), dict(data.get("provenance", {})))
+        except ComplianceError as e:
+            if e.path is None:
+                raise ComplianceError(str(e).split(": ", 1)[-1] if e.key else str(e), path=path, key=e.key) from e
+            raise
+        stored = data.get("c_rod_um")
+        if stored is not None and abs(stored - comp.c_rod_um) > 0.01 * max(abs(comp.c_rod_um), 1.0):
+            log.warning("%s: stored c_rod_um %.4g differs from Eq. 23 on the matrices (%.4g); the matrices are used",
+                        path, stored, comp.c_rod_um)
+        return comp
+
+
+def read_compliance(path: str | Path) -> RodCompliance:
+    """Read and check a ``*.compliance.json`` (errors name the file, line and key)."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError as e:
+        raise ComplianceError("file not found", path=p) from e
+    except UnicodeDecodeError as e:
+        raise ComplianceError(f"not UTF-8 text ({e.reason})", path=p) from e
+    except OSError as e:
+        raise ComplianceError(f"cannot read: {e.strerror}", path=p) from e
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ComplianceError(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
+    return RodCompliance.from_dict(data, p)
+
+
+def write_compliance(comp: RodCompliance, path: str | Path) -> Path:
+    """Write a compliance file atomically."""
+    return atomic_write_json(path, comp.to_dict())

@@ -1,0 +1,258 @@
+"""Rod design: the parts of a MultiCal measuring rod and the rules a buildable design obeys.
+
+Geometry (contract, paper Eq. 1 and Fig. 3a): pipe I leaves the flange face along +z of the
+flange frame {6}; L1 is measured from the flange face to the bend vertex, L2 from the bend vertex
+to the ball centre; gamma is the interior angle between pipe I (pointing back to the flange) and
+pipe II, so pipe II points along ``(sin gamma, 0, -cos gamma)`` and gamma = 180 deg is straight.
+
+Part placement (the project's defaults, documented in ``docs/formats.md``):
+
+- ``pipe_holder``: flange adapter, a sleeve over the first ``length_mm`` of pipe I, from the flange face.
+- ``ring_1`` / ``ring_2``: sleeves over the last / first ``length_mm`` of pipe I / pipe II, ending
+  at the bend's tangent points (where the tubes are bonded to the bend pipe).
+- ``bend``: the bend pipe, an arc of ``radius_mm`` between the tangent points
+  (tangent length ``radius * tan((180 - gamma)/2)`` from the vertex); absent when gamma = 180.
+- ``ball_holder``: a solid stud of ``length_mm`` between the end of pipe II and the ball surface.
+- ``ball``: sphere centred on the tool point.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import DesignError
+from .materials import Material
+
+__all__ = ["TubeSpec", "BendSpec", "SleeveSpec", "BallSpec", "RodDesign", "MIN_BEND_RATIO"]
+
+#: Smallest allowed bend radius as a multiple of the bend pipe's outer diameter.
+MIN_BEND_RATIO = 1.5
+
+
+def _check_pos(name: str, value: float, key: str, allow_zero: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise DesignError(f"{name} must be a finite number, got {value!r}", key=key)
+    if value < 0 or (value == 0 and not allow_zero):
+        raise DesignError(f"{name} must be {'>= 0' if allow_zero else '> 0'}, got {value}", key=key)
+
+
+@dataclass(frozen=True)
+class TubeSpec:
+    """A round tube (pipe I, pipe II).
+
+    Attributes: material; outer_diameter_mm [mm]; wall_mm [mm], ``0 < wall < OD/2``.
+    """
+
+    material: Material
+    outer_diameter_mm: float
+    wall_mm: float
+    key: str = field(default="tube", compare=False)
+
+    def __post_init__(self) -> None:
+        _check_pos("outer_diameter_mm", self.outer_diameter_mm, f"{self.key}.outer_diameter_mm")
+        _check_pos("wall_mm", self.wall_mm, f"{self.key}.wall_mm")
+        if self.wall_mm >= self.outer_diameter_mm / 2:
+            raise DesignError(
+                f"wall {self.wall_mm} mm must be less than the outer radius {self.outer_diameter_mm / 2} mm "
+                f"(a tube, not a rod); reduce wall_mm", key=f"{self.key}.wall_mm")
+
+    @property
+    def inner_diameter_mm(self) -> float:
+        """Bore [mm]."""
+        return self.outer_diameter_mm - 2.0 * self.wall_mm
+
+
+@dataclass(frozen=True)
+class BendSpec(TubeSpec):
+    """The bend pipe: a tube swept along an arc of ``radius_mm`` [mm] (centreline radius)."""
+
+    radius_mm: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check_pos("radius_mm", self.radius_mm, f"{self.key}.radius_mm")
+
+
+@dataclass(frozen=True)
+class SleeveSpec:
+    """A sleeve over a tube (rings, pipe holder) or a solid stud (ball holder).
+
+    Attributes: material; outer_diameter_mm [mm]; length_mm [mm], 0 = part absent.
+    """
+
+    material: Material
+    outer_diameter_mm: float
+    length_mm: float
+    key: str = field(default="rings", compare=False)
+
+    def __post_init__(self) -> None:
+        _check_pos("outer_diameter_mm", self.outer_diameter_mm, f"{self.key}.outer_diameter_mm")
+        _check_pos("length_mm", self.length_mm, f"{self.key}.length_mm", allow_zero=True)
+
+    @property
+    def present(self) -> bool:
+        """False when ``length_mm == 0``."""
+        return self.length_mm > 0
+
+
+@dataclass(frozen=True)
+class BallSpec:
+    """The precision ball: material and diameter_mm [mm]."""
+
+    material: Material
+    diameter_mm: float
+
+    def __post_init__(self) -> None:
+        _check_pos("diameter_mm", self.diameter_mm, "ball.diameter_mm")
+
+    @property
+    def radius_mm(self) -> float:
+        return self.diameter_mm / 2.0
+
+
+@dataclass(frozen=True)
+class RodDesign:
+    """A complete, validated measuring-rod design.
+
+    Attributes
+    ----------
+    name : rod name (e.g. ``"1#"``)
+    L1_mm : flange face to bend vertex along pipe I [mm]
+    L2_mm : bend vertex to ball centre along pipe II [mm]
+    gamma_deg : interior bend angle in (0, 180] [deg]; 180 = straight
+    pipe_I, pipe_II : the two tubes
+    bend : the bend pipe (ignored when gamma = 180)
+    rings : the two rings (one spec for both)
+    pipe_holder : flange adapter sleeve
+    ball_holder : solid stud between pipe II and the ball
+    ball : the precision ball
+    source : the file the design was read from, if any
+    """
+
+    name: str
+    L1_mm: float
+    L2_mm: float
+    gamma_deg: float
+    pipe_I: TubeSpec
+    pipe_II: TubeSpec
+    bend: BendSpec
+    rings: SleeveSpec
+    pipe_holder: SleeveSpec
+    ball_holder: SleeveSpec
+    ball: BallSpec
+    source: Path | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        _check_pos("L1_mm", self.L1_mm, "L1_mm")
+        _check_pos("L2_mm", self.L2_mm, "L2_mm")
+        g = self.gamma_deg
+        if isinstance(g, bool) or not isinstance(g, (int, float)) or not math.isfinite(g) or not (0 < g <= 180):
+            raise DesignError(f"gamma_deg must lie in (0, 180] (180 = straight rod), got {g!r}", key="gamma_deg")
+        self._check_fits()
+        self._check_lengths()
+
+    # -- derived geometry ---------------------------------------------------------------
+    @property
+    def deflection_rad(self) -> float:
+        """Turning angle of the bend, ``pi - gamma`` [rad]."""
+        return math.pi - math.radians(self.gamma_deg)
+
+    @property
+    def has_bend(self) -> bool:
+        return self.deflection_rad > 1e-12
+
+    @property
+    def tangent_mm(self) -> float:
+        """Distance from the bend vertex to either tangent point [mm]."""
+        if not self.has_bend:
+            return 0.0
+        return self.bend.radius_mm * math.tan(self.deflection_rad / 2.0)
+
+    @property
+    def tool_mm(self) -> np.ndarray:
+        """Nominal ball centre in {6} [mm], shape=(3,) (paper Eq. 1)."""
+        gam = math.radians(self.gamma_deg)
+        x = self.L2_mm * math.sin(gam)
+        z = self.L1_mm - self.L2_mm * math.cos(gam)
+        return np.array([0.0 if abs(x) < 1e-12 else x, 0.0, z])
+
+    @property
+    def pipe_II_direction(self) -> np.ndarray:
+        """Unit vector along pipe II (vertex -> ball) in {6}, shape=(3,)."""
+        gam = math.radians(self.gamma_deg)
+        return np.array([math.sin(gam), 0.0, -math.cos(gam)])
+
+    def pipe_I_free_mm(self) -> float:
+        """Length of pipe I not covered by holder or ring [mm]."""
+        return self.L1_mm - self.tangent_mm - self.pipe_holder.length_mm - self.rings.length_mm
+
+    def pipe_II_length_mm(self) -> float:
+        """Length of pipe II from the tangent point to its end at the ball holder [mm]."""
+        return self.L2_mm - self.tangent_mm - self.ball.radius_mm - self.ball_holder.length_mm
+
+    def pipe_II_free_mm(self) -> float:
+        """Length of pipe II not covered by ring 2 [mm]."""
+        return self.pipe_II_length_mm() - self.rings.length_mm
+
+    # -- rules ---------------------------------------------------------------------------
+    def _check_fits(self) -> None:
+        for ring_tube, label in ((self.pipe_I, "pipe_I"), (self.pipe_II, "pipe_II")):
+            if self.rings.present and self.rings.outer_diameter_mm <= ring_tube.outer_diameter_mm:
+                raise DesignError(
+                    f"the rings (OD {self.rings.outer_diameter_mm} mm) do not fit over {label} "
+                    f"(OD {ring_tube.outer_diameter_mm} mm): a ring's outer diameter must exceed the tube's; "
+                    f"increase rings.outer_diameter_mm", key="rings.outer_diameter_mm")
+        if self.pipe_holder.present and self.pipe_holder.outer_diameter_mm <= self.pipe_I.outer_diameter_mm:
+            raise DesignError(
+                f"the pipe holder (OD {self.pipe_holder.outer_diameter_mm} mm) does not fit over pipe_I "
+                f"(OD {self.pipe_I.outer_diameter_mm} mm); increase pipe_holder.outer_diameter_mm",
+                key="pipe_holder.outer_diameter_mm")
+        if self.ball_holder.present and self.ball_holder.outer_diameter_mm >= self.ball.diameter_mm:
+            raise DesignError(
+                f"the ball holder (OD {self.ball_holder.outer_diameter_mm} mm) must be narrower than the ball "
+                f"({self.ball.diameter_mm} mm); reduce ball_holder.outer_diameter_mm",
+                key="ball_holder.outer_diameter_mm")
+        if self.has_bend:
+            ratio = self.bend.radius_mm / self.bend.outer_diameter_mm
+            if ratio < MIN_BEND_RATIO - 1e-9:
+                raise DesignError(
+                    f"bend radius {self.bend.radius_mm} mm is {ratio:.2f} x the bend pipe's diameter "
+                    f"{self.bend.outer_diameter_mm} mm; at least {MIN_BEND_RATIO} x is needed "
+                    f"(>= {MIN_BEND_RATIO * self.bend.outer_diameter_mm:g} mm) to bend a tube without kinking",
+                    key="bend.radius_mm")
+
+    def _check_lengths(self) -> None:
+        free1 = self.pipe_I_free_mm()
+        if free1 < -1e-9:
+            need = self.L1_mm - free1
+            raise DesignError(
+                f"L1 = {self.L1_mm} mm is too short for the parts placed on pipe I: pipe holder "
+                f"{self.pipe_holder.length_mm} + ring {self.rings.length_mm} + bend tangent {self.tangent_mm:.1f} "
+                f"= {need:.1f} mm; increase L1_mm to at least {need:.1f} or shorten those parts", key="L1_mm")
+        free2 = self.pipe_II_free_mm()
+        if free2 < -1e-9:
+            need = self.L2_mm - free2
+            raise DesignError(
+                f"L2 = {self.L2_mm} mm is too short for the parts placed on pipe II: bend tangent "
+                f"{self.tangent_mm:.1f} + ring {self.rings.length_mm} + ball holder {self.ball_holder.length_mm} "
+                f"+ ball radius {self.ball.radius_mm} = {need:.1f} mm; increase L2_mm to at least {need:.1f}",
+                key="L2_mm")
+
+    def summary(self) -> dict:
+        """Plain-dict description of the design (for ``rodlab info`` and provenance)."""
+        def tube(t):
+            return {"material": t.material.name, "outer_diameter_mm": t.outer_diameter_mm, "wall_mm": t.wall_mm}
+
+        def sleeve(s):
+            return {"material": s.material.name, "outer_diameter_mm": s.outer_diameter_mm, "length_mm": s.length_mm}
+        return {
+            "name": self.name, "L1_mm": self.L1_mm, "L2_mm": self.L2_mm, "gamma_deg": self.gamma_deg,
+            "pipe_I": tube(self.pipe_I), "pipe_II": tube(self.pipe_II),
+            "bend": dict(tube(self.bend), radius_mm=self.bend.radius_mm),
+            "rings": sleeve(self.rings), "pipe_holder": sleeve(self.pipe_holder),
+            "ball_holder": sleeve(self.ball_holder),
+            "ball": {"material": self.ball.material.name, "diameter_mm": self.ball.diameter_mm},
+        }

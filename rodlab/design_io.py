@@ -1,0 +1,234 @@
+"""Read ``*.rod.toml`` rod designs (contract ``rodlab.rod/1``) and the built-in designs.
+
+Defaults for optional parts (documented in ``docs/formats.md``; ``OD`` = pipe I's outer diameter):
+
+=============  ========================================================================
+``[bend]``     the tube itself, bent: pipe I's material, OD and wall; ``radius_mm = 2 OD``
+``[rings]``    ``al_7075``, ``outer_diameter_mm = OD + 6``, ``length_mm = 2 OD``
+``[pipe_holder]`` ``al_7075``, ``outer_diameter_mm = OD + 15``, ``length_mm = 40``
+``[ball_holder]`` ``al_7075``, ``outer_diameter_mm = min(0.8 OD, 0.7 ball)``, ``length_mm = 20``
+``[ball]``     ``alumina``, ``diameter_mm = 30``
+=============  ========================================================================
+
+``[pipe_I]`` and ``[pipe_II]`` override any key of ``[tube]``. A ``[bend]`` with only
+``radius_mm`` takes material, OD and wall from pipe I. ``length_mm = 0`` removes a part.
+"""
+from __future__ import annotations
+
+import math
+import re
+import sys
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+
+from .design import BallSpec, BendSpec, RodDesign, SleeveSpec, TubeSpec
+from .errors import DesignError, FormatError, did_you_mean
+from .materials import Material, get_material, material_from_table
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["load_design", "design_from_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
+
+FORMAT_ROD = "rodlab.rod/1"
+
+_TOP_KEYS = ("format", "name", "L1_mm", "L2_mm", "gamma_deg", "tube", "pipe_I", "pipe_II", "ball",
+             "bend", "rings", "pipe_holder", "ball_holder", "materials")
+_TUBE_KEYS = ("material", "outer_diameter_mm", "wall_mm")
+_BEND_KEYS = ("material", "outer_diameter_mm", "wall_mm", "radius_mm")
+_SLEEVE_KEYS = ("material", "outer_diameter_mm", "length_mm")
+_BALL_KEYS = ("material", "diameter_mm")
+
+
+def _line_of(text: str | None, table: str | None, key: str | None) -> int | None:
+    """1-based line of ``key = ...`` inside ``[table]`` (or of the table header), if found."""
+    if not text:
+        return None
+    current = None
+    header_line = None
+    for i, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0].strip()
+        m = re.match(r"^\[\s*([^\]]+?)\s*\]$", line)
+        if m:
+            current = m.group(1).strip()
+            if table is not None and current == table:
+                header_line = i
+                if key is None:
+                    return i
+            continue
+        if key is not None and current == table and re.match(rf"^{re.escape(key)}\s*=", line):
+            return i
+    return header_line
+
+
+class _Ctx:
+    """Carries file path and text so every error names file, line and key."""
+
+    def __init__(self, path, text):
+        self.path = path
+        self.text = text
+
+    def err(self, msg: str, table: str | None, key: str | None, cls=DesignError) -> DesignError:
+        full_key = f"{table}.{key}" if table and key else (table or key)
+        return cls(msg, path=self.path, line=_line_of(self.text, table, key), key=full_key)
+
+    def number(self, tbl: Mapping, table: str | None, key: str, default=None) -> float:
+        if key not in tbl:
+            if default is None:
+                raise self.err(f"missing required key `{key}`", table, None)
+            return float(default)
+        v = tbl[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise self.err(f"expected a number, got {v!r}", table, key)
+        v = float(v)
+        if not math.isfinite(v):
+            raise self.err(f"expected a finite number, got {v!r}", table, key)
+        if v < 0:
+            raise self.err(f"expected a non-negative number, got {v!r}", table, key)
+        return v
+
+    def check_keys(self, tbl, table: str | None, allowed) -> None:
+        if not isinstance(tbl, Mapping):
+            raise self.err(f"expected a table, got {type(tbl).__name__}", table, None)
+        for k in tbl:
+            if k not in allowed:
+                where = f"[{table}]" if table else "the top level"
+                raise self.err(f"unknown key `{k}` in {where}; allowed: {list(allowed)}." + did_you_mean(k, allowed),
+                               table, k)
+
+    def material(self, name, table: str, materials: Mapping[str, Material]) -> Material:
+        if not isinstance(name, str):
+            raise self.err(f"material must be a name (string), got {name!r}", table, "material")
+        try:
+            return get_material(name, materials)
+        except DesignError as e:
+            raise self.err(str(e), table, "material") from e
+
+
+def design_from_dict(data: Mapping, path: str | Path | None = None, text: str | None = None) -> RodDesign:
+    """Build a validated :class:`RodDesign` from parsed TOML (errors name file, line and key)."""
+    c = _Ctx(None if path is None else str(path), text)
+    try:
+        return _build(data, c, path)
+    except FormatError as e:
+        if e.path is not None or path is None:
+            raise
+        t, _, k = (e.key or "").rpartition(".")
+        raise c.err(e.detail, t or None, k or None, type(e)) from e
+
+
+def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
+    c.check_keys(data, None, _TOP_KEYS)
+    fmt = data.get("format")
+    if fmt != FORMAT_ROD:
+        raise c.err(f"expected format = \"{FORMAT_ROD}\", got {fmt!r}", None, "format", FormatError)
+    name = data.get("name", Path(str(path)).name.split(".")[0] if path else "rod")
+    if not isinstance(name, str) or not name.strip():
+        raise c.err(f"name must be a non-empty string, got {name!r}", None, "name")
+
+    materials: dict[str, Material] = {}
+    mats = data.get("materials", {})
+    c.check_keys(mats, "materials", list(mats) if isinstance(mats, Mapping) else [])
+    for mname, mtable in mats.items():
+        try:
+            materials[mname] = material_from_table(mname, mtable)
+        except DesignError as e:
+            sub = e.key.split(".")[-1] if e.key and e.key.count(".") >= 2 else None
+            raise c.err(e.detail, f"materials.{mname}", sub) from e
+
+    L1 = c.number(data, None, "L1_mm")
+    L2 = c.number(data, None, "L2_mm")
+    gamma = c.number(data, None, "gamma_deg")
+
+    if "tube" not in data and not ("pipe_I" in data and "pipe_II" in data):
+        raise c.err("missing [tube] (or both [pipe_I] and [pipe_II])", None, "tube")
+    base = data.get("tube", {})
+    c.check_keys(base, "tube", _TUBE_KEYS)
+
+    def tube(label: str) -> TubeSpec:
+        over = data.get(label, {})
+        c.check_keys(over, label, _TUBE_KEYS)
+        merged = dict(base)
+        merged.update(over)
+        src = label if any(k in over for k in _TUBE_KEYS) else "tube"
+        for k in _TUBE_KEYS:
+            if k not in merged:
+                raise c.err(f"missing `{k}` for {label} (give it in [tube] or [{label}])", "tube", None)
+        tbl = label if "material" in over else "tube"
+        mat = c.material(merged["material"], tbl, materials)
+        od = c.number(merged, label if "outer_diameter_mm" in over else "tube", "outer_diameter_mm")
+        wall = c.number(merged, label if "wall_mm" in over else "tube", "wall_mm")
+        return TubeSpec(mat, od, wall, key=label if "wall_mm" in over else src)
+
+    p1, p2 = tube("pipe_I"), tube("pipe_II")
+    od = p1.outer_diameter_mm
+
+    ball_t = data.get("ball", {})
+    c.check_keys(ball_t, "ball", _BALL_KEYS)
+    ball_mat = c.material(ball_t.get("material", "alumina"), "ball", materials)
+    ball = BallSpec(ball_mat, c.number(ball_t, "ball", "diameter_mm", 30.0))
+
+    bend_t = data.get("bend", {})
+    c.check_keys(bend_t, "bend", _BEND_KEYS)
+    bend_mat = c.material(bend_t["material"], "bend", materials) if "material" in bend_t else p1.material
+    bod = c.number(bend_t, "bend", "outer_diameter_mm", p1.outer_diameter_mm)
+    bwall = c.number(bend_t, "bend", "wall_mm", p1.wall_mm)
+    brad = c.number(bend_t, "bend", "radius_mm", 2.0 * bod)
+
+    def sleeve(label, dflt_mat, dflt_od, dflt_len) -> SleeveSpec:
+        t = data.get(label, {})
+        c.check_keys(t, label, _SLEEVE_KEYS)
+        mat = c.material(t["material"], label, materials) if "material" in t else get_material(dflt_mat)
+        return SleeveSpec(mat, c.number(t, label, "outer_diameter_mm", dflt_od),
+                          c.number(t, label, "length_mm", dflt_len), key=label)
+
+    bend = BendSpec(bend_mat, bod, bwall, key="bend", radius_mm=brad)
+    rings = sleeve("rings", "al_7075", od + 6.0, 2.0 * od)
+    holder = sleeve("pipe_holder", "al_7075", od + 15.0, 40.0)
+    stud = sleeve("ball_holder", "al_7075", min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
+    return RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
+                     source=None if path is None else Path(path))
+
+
+def load_design(path: str | Path) -> RodDesign:
+    """Read and validate a ``*.rod.toml`` file."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError as e:
+        raise FormatError("file not found", path=p) from e
+    except UnicodeDecodeError as e:
+        raise FormatError(f"not UTF-8 text ({e.reason} at byte {e.start})", path=p) from e
+    except OSError as e:
+        raise FormatError(f"cannot read: {e.strerror}", path=p) from e
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise FormatError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+    return design_from_dict(data, p, text)
+
+
+def builtin_designs() -> dict[str, Path]:
+    """Built-in designs shipped with rodlab: the six rods of the paper's Table 2 (``rod1`` .. ``rod6``)."""
+    folder = resources.files("rodlab") / "data" / "rods"
+    return {Path(str(f)).name.split(".")[0]: Path(str(f)) for f in folder.iterdir()
+            if str(f).endswith(".rod.toml")}
+
+
+def resolve_design(spec: str | Path) -> RodDesign:
+    """Load ``spec`` as a file path or, when no such file exists, as a built-in name (``rod1``, ``1#``)."""
+    p = Path(spec)
+    if p.exists() or str(spec).endswith(".toml"):
+        return load_design(p)
+    names = builtin_designs()
+    key = str(spec).strip()
+    alias = {f"{k[3:]}#": k for k in names if k.startswith("rod")}
+    key = alias.get(key, key)
+    if key in names:
+        return load_design(names[key])
+    raise FormatError(f"no such file or built-in design; built-ins: {sorted(names)}." + did_you_mean(key, names),
+                      path=spec)

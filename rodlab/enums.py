@@ -1,0 +1,84 @@
+"""Conventions of the rodlab contract as Enums (never bare strings in the API)."""
+from __future__ import annotations
+
+from enum import Enum
+
+__all__ = ["Method", "Part", "LoadAxis", "Phase"]
+
+
+class _StrEnum(str, Enum):
+    def __str__(self) -> str:  # prints as its contract spelling
+        return str(self.value)
+
+    @classmethod
+    def parse(cls, value: "str | _StrEnum", what: str = "value"):
+        """Parse the contract spelling; raise :class:`ValueError` listing the choices."""
+        if isinstance(value, cls):
+            return value
+        try:
+            return cls(str(value).strip().lower())
+        except ValueError:
+            from .errors import RodlabError, did_you_mean
+            choices = [m.value for m in cls]
+            raise RodlabError(
+                f"unknown {what} {value!r}; expected one of {choices}."
+                + did_you_mean(str(value), choices)) from None
+
+
+class Method(_StrEnum):
+    """How a compliance file was obtained (contract ``method``)."""
+
+    NONE = "none"   #: zero matrices: no rod-deflection compensation
+    CALC = "calc"   #: closed form (Euler-Bernoulli frame), paper Eqs. 15/17
+    FEA = "fea"     #: finite elements (solid or beam frame)
+    MEAS = "meas"   #: stiffness-rig measurement of C_F, C_g = r_rod * C_g_sim (Eq. 22)
+
+
+class Part(_StrEnum):
+    """Named parts of a measuring rod (paper Fig. 3a), flange to ball."""
+
+    PIPE_HOLDER = "pipe_holder"
+    PIPE_I = "pipe_I"
+    RING_1 = "ring_1"
+    BEND = "bend"
+    RING_2 = "ring_2"
+    PIPE_II = "pipe_II"
+    BALL_HOLDER = "ball_holder"
+    BALL = "ball"
+
+    @classmethod
+    def parse(cls, value, what: str = "part"):
+        if isinstance(value, cls):
+            return value
+        for m in cls:
+            if m.value.lower() == str(value).strip().lower():
+                return m
+        return super().parse(value, what)
+
+
+class LoadAxis(_StrEnum):
+    """Tool-frame direction of a load on the stiffness rig (contract ``load_axis``)."""
+
+    X = "x"
+    Y = "y"
+    Z = "z"
+    NEG_X = "-x"
+    NEG_Y = "-y"
+    NEG_Z = "-z"
+
+    @property
+    def index(self) -> int:
+        """Component index 0..2 of the axis."""
+        return "xyz".index(self.value[-1])
+
+    @property
+    def sign(self) -> float:
+        """+1 or -1."""
+        return -1.0 if self.value.startswith("-") else 1.0
+
+
+class Phase(_StrEnum):
+    """Branch of a load series (contract ``phase``)."""
+
+    LOAD = "load"
+    UNLOAD = "unload"

@@ -1,0 +1,67 @@
+"""Exception hierarchy of the rodlab core.
+
+Every error a user can trigger with bad input derives from :class:`RodlabError`, a
+:class:`ValueError`; the CLI catches it and prints its message (never a traceback).
+Domain packages (geometry, fea, stiffness_rig, calibrate) subclass it with their own base.
+Messages name the file, the line or key, what was expected and what was found, and
+suggest the fix where one is obvious ("Did you mean `wall_mm`?").
+"""
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from pathlib import Path
+
+__all__ = [
+    "RodlabError",
+    "FormatError",
+    "DesignError",
+    "ComplianceError",
+    "did_you_mean",
+]
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """Return `` Did you mean `x`?`` for the closest of ``choices``, or ``""``."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
+    return f" Did you mean `{close[0]}`?" if close else ""
+
+
+class RodlabError(ValueError):
+    """Base of every rodlab error caused by input (files, parameters, designs)."""
+
+
+class FormatError(RodlabError):
+    """A file does not follow its contract format.
+
+    Attributes
+    ----------
+    path : the offending file (or ``None`` for in-memory data)
+    line : 1-based line number where known
+    key : the offending key / column where known
+    detail : the message without the location prefix
+    """
+
+    def __init__(self, message: str, path: str | Path | None = None,
+                 line: int | None = None, key: str | None = None) -> None:
+        self.path = None if path is None else str(path)
+        self.detail = message
+        self.line = line
+        self.key = key
+        where = []
+        if self.path is not None:
+            where.append(self.path)
+        if line is not None:
+            where.append(f"line {line}")
+        if key is not None:
+            where.append(f"key `{key}`")
+        prefix = ", ".join(where)
+        super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class DesignError(FormatError):
+    """A rod design is invalid: a rule of the design is broken (names the key and rule)."""
+
+
+class ComplianceError(FormatError):
+    """A compliance file or compliance matrix is invalid."""

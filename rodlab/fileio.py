@@ -1,0 +1,60 @@
+"""File helpers: atomic writes and content hashes (nothing already recorded is ever lost)."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import tempfile
+from pathlib import Path
+
+__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "sha256_file"]
+
+
+def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` atomically: temp file in the same folder, fsync, rename.
+
+    A crash leaves either the old file or the new one, never a torn file.
+    """
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, p)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return p
+
+
+def atomic_write_text(path: str | Path, text: str) -> Path:
+    """Atomic UTF-8 text write (see :func:`atomic_write_bytes`)."""
+    return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def dumps_compact(obj, indent: int = 1) -> str:
+    """JSON with ``indent`` but innermost lists of scalars kept on one line (matrices stay legible)."""
+    text = json.dumps(obj, indent=indent, allow_nan=False)
+    return re.sub(r"\[\s*([^\[\]{}]*?)\s*\]", lambda m: "[" + ", ".join(
+        part.strip() for part in m.group(1).split(",")) + "]" if m.group(1).strip() else "[]", text)
+
+
+def atomic_write_json(path: str | Path, obj, indent: int = 1) -> Path:
+    """Atomic JSON write (NaN/inf refused) with a trailing newline; matrices on one line per row."""
+    return atomic_write_text(path, dumps_compact(obj, indent) + "\n")
+
+
+def sha256_file(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()

@@ -1,0 +1,71 @@
+"""Frames and the contract's pose convention.
+
+A pose vector ``[x, y, z, a, b, c]`` (mm, deg) is a translation followed by the rotation
+``R = Rx(a) @ Ry(b) @ Rz(c)`` (rotations about the moving axes, Staubli order). All functions
+are vectorised over leading dimensions.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["rot_x", "rot_y", "rot_z", "pose_to_matrix", "matrix_to_pose", "rotation_from_abc"]
+
+
+def _c_s(angle_rad):
+    a = np.asarray(angle_rad, dtype=float)
+    return np.cos(a), np.sin(a), a.shape
+
+
+def rot_x(angle_rad) -> np.ndarray:
+    """Rotation about x, shape=(..., 3, 3)."""
+    c, s, sh = _c_s(angle_rad)
+    o, z = np.ones(sh), np.zeros(sh)
+    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2)
+
+
+def rot_y(angle_rad) -> np.ndarray:
+    """Rotation about y, shape=(..., 3, 3)."""
+    c, s, sh = _c_s(angle_rad)
+    o, z = np.ones(sh), np.zeros(sh)
+    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+
+
+def rot_z(angle_rad) -> np.ndarray:
+    """Rotation about z, shape=(..., 3, 3)."""
+    c, s, sh = _c_s(angle_rad)
+    o, z = np.ones(sh), np.zeros(sh)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+
+
+def rotation_from_abc(abc_deg) -> np.ndarray:
+    """``Rx(a) @ Ry(b) @ Rz(c)`` from angles [deg], shape=(..., 3) -> (..., 3, 3)."""
+    abc = np.deg2rad(np.asarray(abc_deg, dtype=float))
+    return rot_x(abc[..., 0]) @ rot_y(abc[..., 1]) @ rot_z(abc[..., 2])
+
+
+def pose_to_matrix(pose) -> np.ndarray:
+    """4x4 homogeneous matrix ``T(pose)`` of pose vectors [mm, deg], shape=(..., 6) -> (..., 4, 4)."""
+    p = np.asarray(pose, dtype=float)
+    if p.shape[-1] != 6:
+        raise ValueError(f"a pose vector has 6 entries [x, y, z, a, b, c], got shape {p.shape}")
+    T = np.zeros(p.shape[:-1] + (4, 4))
+    T[..., :3, :3] = rotation_from_abc(p[..., 3:])
+    T[..., :3, 3] = p[..., :3]
+    T[..., 3, 3] = 1.0
+    return T
+
+
+def matrix_to_pose(T) -> np.ndarray:
+    """Inverse of :func:`pose_to_matrix`, shape=(..., 4, 4) -> (..., 6) [mm, deg]; ``b`` in [-90, 90]."""
+    T = np.asarray(T, dtype=float)
+    R = T[..., :3, :3]
+    # R = Rx(a) Ry(b) Rz(c): R[0,2] = sin b, R[1,2] = -sin a cos b, R[2,2] = cos a cos b,
+    # R[0,0] = cos b cos c, R[0,1] = -cos b sin c
+    b = np.arcsin(np.clip(R[..., 0, 2], -1.0, 1.0))
+    a = np.arctan2(-R[..., 1, 2], R[..., 2, 2])
+    c = np.arctan2(-R[..., 0, 1], R[..., 0, 0])
+    gimbal = np.abs(np.cos(b)) < 1e-9
+    if np.any(gimbal):  # c := 0, a from the remaining block
+        a = np.where(gimbal, np.arctan2(R[..., 2, 1], R[..., 1, 1]), a)
+        c = np.where(gimbal, 0.0, c)
+    return np.concatenate([T[..., :3, 3], np.rad2deg(np.stack([a, b, c], -1))], -1)

@@ -1,0 +1,124 @@
+"""Analytic mass properties of a rod from its parts (the CAD cross-checks them).
+
+Each part is integrated with a Gauss rule that is exact for the mass, first and second
+moments of straight cylinders, annular sections swept along an arc, and the sphere, so the
+results are exact to round-off. Positions are reported in the tool frame {T} [mm].
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .design import RodDesign
+from .enums import Part
+from .layout import Segment, SegmentKind, flange_to_tool, layout
+from .units import kg_m3_to_kg_mm3
+
+__all__ = ["MassProperties", "mass_properties", "part_mass_properties"]
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Mass, centre of mass and inertia of a body.
+
+    Attributes
+    ----------
+    mass_kg : mass [kg]
+    com_T_mm : centre of mass in {T} [mm], shape=(3,)
+    inertia_kg_mm2 : inertia tensor about the centre of mass, axes of {T} [kg mm^2], shape=(3, 3)
+    """
+
+    mass_kg: float
+    com_T_mm: np.ndarray
+    inertia_kg_mm2: np.ndarray
+
+    def __post_init__(self) -> None:
+        com = np.asarray(self.com_T_mm, dtype=float)
+        inertia = np.asarray(self.inertia_kg_mm2, dtype=float)
+        if com.shape != (3,) or inertia.shape != (3, 3):
+            raise ValueError(f"com_T_mm must have shape (3,), inertia (3, 3); got {com.shape}, {inertia.shape}")
+        object.__setattr__(self, "com_T_mm", com)
+        object.__setattr__(self, "inertia_kg_mm2", inertia)
+
+    def to_dict(self) -> dict:
+        return {"mass_kg": float(self.mass_kg), "com_T_mm": [float(v) for v in self.com_T_mm],
+                "inertia_kg_mm2": [[float(v) for v in row] for row in self.inertia_kg_mm2]}
+
+    @staticmethod
+    def from_points(pts_T: np.ndarray, w_kg: np.ndarray) -> "MassProperties":
+        m = float(w_kg.sum())
+        com = (w_kg[:, None] * pts_T).sum(axis=0) / m
+        d = pts_T - com
+        r2 = (d * d).sum(axis=1)
+        inertia = (w_kg[:, None, None] * (r2[:, None, None] * np.eye(3)[None] - d[:, :, None] * d[:, None, :])).sum(0)
+        return MassProperties(m, com, inertia)
+
+
+def _section_rule(d_out: float, d_in: float, n_r: int = 3, n_phi: int = 8):
+    """Points (radius, angle) and area weights on an annulus, exact for low-order moments."""
+    xg, wg = np.polynomial.legendre.leggauss(n_r)
+    r_o, r_i = d_out / 2.0, d_in / 2.0
+    r = 0.5 * (r_o - r_i) * xg + 0.5 * (r_o + r_i)
+    wr = 0.5 * (r_o - r_i) * wg * r
+    phi = 2 * np.pi * (np.arange(n_phi) + 0.5) / n_phi
+    R, PHI = np.meshgrid(r, phi, indexing="ij")
+    W = np.repeat(wr[:, None], n_phi, axis=1) * (2 * np.pi / n_phi)
+    return R.ravel(), PHI.ravel(), W.ravel()
+
+
+def _segment_points(seg: Segment, d_out: float, d_in: float, density_kg_mm3: float, n_s: int):
+    """Quadrature points {F} and masses [kg] of one annular layer along one segment."""
+    xg, wg = np.polynomial.legendre.leggauss(n_s)
+    u = 0.5 * seg.length_mm * (xg + 1.0)
+    wu = 0.5 * seg.length_mm * wg
+    c = seg.point(u)
+    t = seg.tangent(u)
+    e1 = np.array([0.0, 1.0, 0.0])  # out-of-plane axis (the bend lies in x-z)
+    e2 = np.cross(t, e1)            # in-plane normal, pointing away from an arc's centre
+    r, phi, wa = _section_rule(d_out, d_in)
+    off1 = r * np.cos(phi)
+    off2 = r * np.sin(phi)
+    pts = c[:, None, :] + off1[None, :, None] * e1[None, None, :] + off2[None, :, None] * e2[:, None, :]
+    jac = np.ones((u.size, r.size))
+    if seg.kind is SegmentKind.ARC:
+        # volume element (R + x) dtheta dA, x measured away from the arc centre
+        jac = 1.0 + off2[None, :] / seg.radius_mm
+    w = density_kg_mm3 * wu[:, None] * wa[None, :] * jac
+    return pts.reshape(-1, 3), w.ravel()
+
+
+def _part_clouds(design: RodDesign):
+    clouds: dict[Part, list] = {}
+    for seg in layout(design):
+        n_s = 24 if seg.kind is SegmentKind.ARC else 3
+        for layer in seg.layers:
+            pts, w = _segment_points(seg, layer.d_out_mm, layer.d_in_mm,
+                                     kg_m3_to_kg_mm3(layer.material.density_kg_m3), n_s)
+            clouds.setdefault(layer.part, []).append((flange_to_tool(pts, design), w))
+    return clouds
+
+
+def part_mass_properties(design: RodDesign) -> dict[Part, MassProperties]:
+    """Mass properties of each part present in ``design`` (ball included), in {T}."""
+    out: dict[Part, MassProperties] = {}
+    for part, items in _part_clouds(design).items():
+        pts = np.concatenate([p for p, _ in items])
+        w = np.concatenate([w for _, w in items])
+        out[part] = MassProperties.from_points(pts, w)
+    r = design.ball.radius_mm
+    m_ball = 4.0 / 3.0 * np.pi * r ** 3 * kg_m3_to_kg_mm3(design.ball.material.density_kg_m3)
+    out[Part.BALL] = MassProperties(m_ball, np.zeros(3), np.eye(3) * 0.4 * m_ball * r * r)
+    return {p: out[p] for p in Part if p in out}
+
+
+def mass_properties(design: RodDesign) -> MassProperties:
+    """Mass properties of the whole rod in {T} (parallel-axis sum of the parts)."""
+    parts = part_mass_properties(design).values()
+    m = sum(p.mass_kg for p in parts)
+    com = sum(p.mass_kg * p.com_T_mm for p in parts) / m
+    inertia = np.zeros((3, 3))
+    for p in parts:
+        d = p.com_T_mm - com
+        inertia += p.inertia_kg_mm2 + p.mass_kg * (d @ d * np.eye(3) - np.outer(d, d))
+    return MassProperties(m, com, inertia)

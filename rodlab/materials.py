@@ -1,0 +1,166 @@
+"""Material library: elastic constants and density of the parts of a measuring rod.
+
+Isotropic materials carry ``E`` and ``nu`` (``G = E / (2 (1 + nu))``). Carbon-fibre tubes are
+*transversely isotropic about the local tube axis*: ``E`` is the axial modulus (bending,
+tension), ``E_transverse`` the modulus across the tube, and ``G`` the axial (in-plane)
+shear modulus that sets the torsion of a tube. For carbon ``G`` is low (a few GPa for a
+pultruded or unidirectional tube), so an isotropic model with ``G = E/2.6`` over-predicts
+torsional stiffness many times over: keep ``G`` explicit.
+
+Built-in values and their sources (room temperature, typical, not guaranteed):
+
+- ``cfrp``: pultruded / unidirectional carbon-epoxy tube, fibre volume ~60 %. E_axial 125 GPa,
+  E_transverse 9 GPa, G_12 4.5 GPa, nu_12 0.30, 1560 kg/m^3. Typical of T700-class unidirectional
+  laminates (Toray T700S data sheet, 0 deg composite modulus 135 GPa at 60 % Vf; transverse and
+  shear values from Daniel & Ishai, *Engineering Mechanics of Composite Materials*, 2nd ed.,
+  Table A.4, carbon/epoxy AS4/3501-6: E2 = 8.96 GPa, G12 = 7.1 GPa) lowered for pultrusion.
+- ``cfrp_rolled``: roll-wrapped carbon tube with +-45 deg plies (quasi-isotropic wall):
+  E 70 GPa, E_transverse 20 GPa, G 15 GPa, nu 0.30, 1550 kg/m^3 (tube manufacturers' data for
+  0/+-45 layups; stiffer in torsion, softer in bending than ``cfrp``).
+- ``steel_304``: AISI 304 stainless, E 193 GPa, nu 0.29, 8000 kg/m^3 (ASM Handbook Vol. 1;
+  AK Steel 304/304L product data bulletin).
+- ``al_7075``: 7075-T6, E 71.7 GPa, nu 0.33, 2810 kg/m^3 (ASM Aerospace Specification Metals,
+  MatWeb 7075-T6).
+- ``al_6061``: 6061-T6, E 68.9 GPa, nu 0.33, 2700 kg/m^3 (ASM / MatWeb 6061-T6).
+- ``ti_6al4v``: Ti-6Al-4V grade 5, E 113.8 GPa, nu 0.342, 4430 kg/m^3 (ASM / MatWeb).
+- ``alumina``: 99.8 % Al2O3 (ball grade), E 370 GPa, nu 0.22, 3950 kg/m^3 (CoorsTek AD-998, CeramTec).
+- ``zirconia``: 3Y-TZP, E 205 GPa, nu 0.31, 6050 kg/m^3 (CoorsTek YTZP data sheet).
+- ``si3n4``: hot-pressed silicon nitride, E 310 GPa, nu 0.27, 3200 kg/m^3 (Kyocera SN-240 data).
+- ``epoxy``: structural epoxy adhesive, E 3.0 GPa, nu 0.35, 1200 kg/m^3 (3M Scotch-Weld
+  DP490 / Loctite EA 9466 technical data, cured).
+
+A design file may define its own materials (``[materials.NAME]``) with ``E_GPa``, ``nu``,
+``density_kg_m3`` and optionally ``E_transverse_GPa`` and ``G_GPa``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from collections.abc import Mapping
+
+from .errors import DesignError, did_you_mean
+
+__all__ = ["Material", "BUILTIN_MATERIALS", "get_material", "material_from_table"]
+
+_ISO_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear-elastic material.
+
+    Attributes
+    ----------
+    name : identifier used in designs
+    E_GPa : Young's modulus [GPa]; the axial (fibre-direction) modulus if transversely isotropic
+    nu : Poisson's ratio [-] (major ratio nu_12 for a transversely isotropic material)
+    density_kg_m3 : density [kg/m^3]
+    E_transverse_GPa : modulus across the tube axis [GPa]; ``None`` = ``E_GPa``
+    G_GPa : axial shear modulus [GPa]; ``None`` = ``E / (2 (1 + nu))``
+    source : where the numbers come from (free text)
+    """
+
+    name: str
+    E_GPa: float
+    nu: float
+    density_kg_m3: float
+    E_transverse_GPa: float | None = None
+    G_GPa: float | None = None
+    source: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        for key in ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa"):
+            v = getattr(self, key)
+            if v is None:
+                continue
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+                raise DesignError(f"material `{self.name}`: {key} must be a finite number, got {v!r}",
+                                  key=key)
+        if self.E_GPa <= 0:
+            raise DesignError(f"material `{self.name}`: E_GPa must be > 0, got {self.E_GPa}", key="E_GPa")
+        if not (-1.0 < self.nu < 0.5):
+            raise DesignError(f"material `{self.name}`: nu must lie in (-1, 0.5), got {self.nu}", key="nu")
+        if self.density_kg_m3 <= 0:
+            raise DesignError(f"material `{self.name}`: density_kg_m3 must be > 0, got {self.density_kg_m3}",
+                              key="density_kg_m3")
+        for key in ("E_transverse_GPa", "G_GPa"):
+            v = getattr(self, key)
+            if v is not None and v <= 0:
+                raise DesignError(f"material `{self.name}`: {key} must be > 0, got {v}", key=key)
+
+    @property
+    def E_t_GPa(self) -> float:
+        """Transverse modulus [GPa] (``E_GPa`` if isotropic)."""
+        return self.E_GPa if self.E_transverse_GPa is None else float(self.E_transverse_GPa)
+
+    @property
+    def G_axial_GPa(self) -> float:
+        """Axial shear modulus [GPa] (torsion of a tube)."""
+        if self.G_GPa is None:
+            return self.E_GPa / (2.0 * (1.0 + self.nu))
+        return float(self.G_GPa)
+
+    @property
+    def is_isotropic(self) -> bool:
+        """True unless a transverse modulus or an independent shear modulus was given."""
+        iso_g = self.E_GPa / (2.0 * (1.0 + self.nu))
+        if self.E_transverse_GPa is not None and abs(self.E_transverse_GPa - self.E_GPa) > _ISO_TOL * self.E_GPa:
+            return False
+        if self.G_GPa is not None and abs(self.G_GPa - iso_g) > 1e-3 * iso_g:
+            return False
+        return True
+
+
+BUILTIN_MATERIALS: dict[str, Material] = {m.name: m for m in [
+    Material("cfrp", 125.0, 0.30, 1560.0, E_transverse_GPa=9.0, G_GPa=4.5,
+             source="pultruded/UD carbon-epoxy; Toray T700S data; Daniel & Ishai Table A.4"),
+    Material("cfrp_rolled", 70.0, 0.30, 1550.0, E_transverse_GPa=20.0, G_GPa=15.0,
+             source="roll-wrapped 0/+-45 carbon tube, manufacturers' data"),
+    Material("steel_304", 193.0, 0.29, 8000.0, source="ASM Handbook Vol. 1; AK Steel 304 bulletin"),
+    Material("al_7075", 71.7, 0.33, 2810.0, source="7075-T6, ASM / MatWeb"),
+    Material("al_6061", 68.9, 0.33, 2700.0, source="6061-T6, ASM / MatWeb"),
+    Material("ti_6al4v", 113.8, 0.342, 4430.0, source="Ti-6Al-4V grade 5, ASM / MatWeb"),
+    Material("alumina", 370.0, 0.22, 3950.0, source="99.8% Al2O3 ball grade, CoorsTek AD-998 / CeramTec data"),
+    Material("zirconia", 205.0, 0.31, 6050.0, source="3Y-TZP, CoorsTek YTZP"),
+    Material("si3n4", 310.0, 0.27, 3200.0, source="hot-pressed Si3N4, Kyocera SN-240"),
+    Material("epoxy", 3.0, 0.35, 1200.0, source="structural epoxy adhesive, DP490 / EA 9466 TDS"),
+]}
+
+_MATERIAL_KEYS = ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa", "source")
+_REQUIRED_KEYS = ("E_GPa", "nu", "density_kg_m3")
+
+
+def material_from_table(name: str, table: Mapping, path=None) -> Material:
+    """Build a user material from a ``[materials.NAME]`` TOML table (errors name the key)."""
+    if not isinstance(table, Mapping):
+        raise DesignError(f"[materials.{name}] must be a table", path=path, key=f"materials.{name}")
+    for key in table:
+        if key not in _MATERIAL_KEYS:
+            raise DesignError(f"unknown key in [materials.{name}]; expected {list(_MATERIAL_KEYS[:5])}."
+                              + did_you_mean(key, _MATERIAL_KEYS), path=path, key=f"materials.{name}.{key}")
+    for key in _REQUIRED_KEYS:
+        if key not in table:
+            raise DesignError(f"[materials.{name}] needs `{key}`", path=path, key=f"materials.{name}.{key}")
+    kwargs = {}
+    for key in _MATERIAL_KEYS[:5]:
+        if key in table:
+            v = table[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise DesignError(f"expected a number, got {v!r}", path=path, key=f"materials.{name}.{key}")
+            kwargs[key] = float(v)
+    try:
+        return Material(name=name, source=str(table.get("source", f"user material in {path or 'design'}")),
+                        **kwargs)
+    except DesignError as e:
+        raise DesignError(e.detail, path=path, key=f"materials.{name}.{e.key}" if e.key else None) from e
+
+
+def get_material(name: str, extra: Mapping[str, Material] | None = None, path=None, key=None) -> Material:
+    """Look a material up among the user's (``extra``) then the built-in ones."""
+    pool = dict(BUILTIN_MATERIALS)
+    if extra:
+        pool.update(extra)
+    if name in pool:
+        return pool[name]
+    raise DesignError(f"unknown material {name!r}; known: {sorted(pool)}." + did_you_mean(name, pool),
+                      path=path, key=key)

@@ -1,0 +1,47 @@
+"""Units: the one place where rodlab converts.
+
+Interfaces use mm, N, s, deg, kg (names carry the unit). Internally the mechanics uses
+the consistent set mm - N - tonne(1e3 kg) is *not* used; instead stiffness in N/mm^2
+(= MPa) with lengths in mm gives compliances in mm/N directly, and masses in kg are
+turned into forces in N with :data:`G0`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "G0",
+    "gpa_to_mpa",
+    "kg_m3_to_kg_mm3",
+    "deg2rad",
+    "rad2deg",
+    "um_from_mm",
+]
+
+#: Standard gravity [m/s^2]; loads in the contract are ``mass_kg * G0`` newtons.
+G0: float = 9.80665
+
+
+def gpa_to_mpa(value_gpa: float) -> float:
+    """Young's/shear modulus GPa -> N/mm^2 (MPa)."""
+    return float(value_gpa) * 1.0e3
+
+
+def kg_m3_to_kg_mm3(density_kg_m3: float) -> float:
+    """Density kg/m^3 -> kg/mm^3."""
+    return float(density_kg_m3) * 1.0e-9
+
+
+def deg2rad(value_deg):
+    """Degrees -> radians (scalars or arrays)."""
+    return np.deg2rad(value_deg)
+
+
+def rad2deg(value_rad):
+    """Radians -> degrees (scalars or arrays)."""
+    return np.rad2deg(value_rad)
+
+
+def um_from_mm(value_mm):
+    """Millimetres -> micrometres."""
+    return np.asarray(value_mm) * 1.0e3

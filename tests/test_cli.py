@@ -1,0 +1,45 @@
+"""The rodlab CLI: sub-commands work and bad input is one clear line, never a traceback."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from rodlab.cli import main
+
+
+def test_help_lists_subcommands(capsys):
+    try:
+        main(["--help"])
+    except SystemExit as e:
+        assert e.code == 0
+    out = capsys.readouterr().out
+    for cmd in ("info", "compliance"):
+        assert cmd in out
+
+
+def test_info_and_compliance(tmp_path, capsys):
+    assert main(["info", "rod1"]) == 0
+    out = capsys.readouterr().out
+    assert "total mass 462.50 g" in out and "c_rod" in out
+    assert main(["info", "rod2", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["design"]["L1_mm"] == 150.0
+    out_file = tmp_path / "r.compliance.json"
+    assert main(["compliance", "rod1", "-o", str(out_file)]) == 0
+    assert json.loads(out_file.read_text())["method"] == "calc"
+    assert main(["compliance", "rod1", "--method", "none", "-o", str(tmp_path / "n.json")]) == 0
+    assert json.loads((tmp_path / "n.json").read_text())["C_F_mm_per_N"][1][1] == 0.0
+
+
+def test_bad_input_is_one_line(tmp_path):
+    bad = tmp_path / "bad.rod.toml"
+    bad.write_text('format = "rodlab.rod/1"\nL1_mm = 300\nL2_mm = 450\ngamma_deg = 90\n'
+                   '[tube]\nmaterial = "cfrp"\nouter_diameter_mm = 25\nwal_mm = 2\n')
+    r = subprocess.run([sys.executable, "-m", "rodlab", "info", str(bad)], capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    assert "line 8" in r.stderr and "Did you mean `wall_mm`?" in r.stderr
+    r = subprocess.run([sys.executable, "-m", "rodlab", "info", str(tmp_path / "none.rod.toml")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "not found" in r.stderr and "Traceback" not in r.stderr

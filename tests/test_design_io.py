@@ -1,0 +1,138 @@
+"""Rod designs: the contract format, defaults, and every validation rule."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from rodlab import DesignError, FormatError, load_design, resolve_design
+from rodlab.design_io import builtin_designs
+from rodlab.enums import Part
+from rodlab.massprops import part_mass_properties
+
+from conftest import write_toml
+
+
+def test_builtins_load_and_match_paper_table2():
+    names = builtin_designs()
+    assert sorted(names) == [f"rod{i}" for i in range(1, 7)]
+    lengths = {"rod1": (300, 450), "rod2": (150, 525), "rod3": (375, 600),
+               "rod4": (300, 450), "rod5": (150, 525), "rod6": (375, 600)}
+    for key, (l1, l2) in lengths.items():
+        d = resolve_design(key)
+        assert (d.L1_mm, d.L2_mm, d.gamma_deg) == (l1, l2, 90.0)
+    assert resolve_design("1#").name == "1#"
+
+
+def test_shared_examples_load(examples):
+    for f in sorted((examples / "rods").glob("*.rod.toml")):
+        d = load_design(f)
+        assert d.tool_mm[0] == pytest.approx(d.L2_mm)
+
+
+def test_tool_point_eq1(tmp_path, rod1_dict):
+    rod1_dict["gamma_deg"] = 120.0
+    d = load_design(write_toml(tmp_path / "r.rod.toml", rod1_dict))
+    g = math.radians(120)
+    assert d.tool_mm == pytest.approx([450 * math.sin(g), 0.0, 300 - 450 * math.cos(g)])
+
+
+def test_defaults_and_absent_parts(tmp_path):
+    data = {"format": "rodlab.rod/1", "name": "min", "L1_mm": 300.0, "L2_mm": 400.0, "gamma_deg": 90.0,
+            "tube": {"material": "cfrp", "outer_diameter_mm": 20.0, "wall_mm": 1.5}}
+    d = load_design(write_toml(tmp_path / "m.rod.toml", data))
+    assert d.bend.material.name == "cfrp" and d.bend.radius_mm == 40.0   # tube itself, bent, R = 2 OD
+    assert d.ball.material.name == "alumina" and d.ball.diameter_mm == 30.0
+    assert d.rings.present and d.pipe_holder.present and d.ball_holder.present
+    data["rings"] = {"length_mm": 0.0}
+    data["pipe_holder"] = {"length_mm": 0}
+    data["ball_holder"] = {"length_mm": 0}
+    d = load_design(write_toml(tmp_path / "m2.rod.toml", data))
+    parts = set(part_mass_properties(d))
+    assert parts == {Part.PIPE_I, Part.BEND, Part.PIPE_II, Part.BALL}
+
+
+def test_pipe_override_and_bend_only_radius(tmp_path, rod1_dict):
+    rod1_dict["pipe_II"] = {"outer_diameter_mm": 22.0}
+    rod1_dict["bend"] = {"radius_mm": 50.0}
+    d = load_design(write_toml(tmp_path / "o.rod.toml", rod1_dict))
+    assert d.pipe_II.outer_diameter_mm == 22.0 and d.pipe_II.wall_mm == 2.0
+    assert d.pipe_I.outer_diameter_mm == 25.0
+    assert d.bend.material.name == "cfrp_tube" and d.bend.outer_diameter_mm == 25.0 and d.bend.radius_mm == 50
+
+
+def test_user_material_is_transversely_isotropic(rod1_dict, tmp_path):
+    d = load_design(write_toml(tmp_path / "u.rod.toml", rod1_dict))
+    m = d.pipe_I.material
+    assert m.name == "cfrp_tube" and not m.is_isotropic and m.G_axial_GPa == 10.0 and m.E_t_GPa == 100.0
+
+
+# --- every validation rule: (mutation, expected key, words in the message) -------------------
+def _set(path, value):
+    def f(d):
+        node = d
+        for k in path[:-1]:
+            node = node.setdefault(k, {})
+        node[path[-1]] = value
+    return f
+
+
+RULES = [
+    ("wall >= radius", _set(("tube", "wall_mm"), 12.5), "tube.wall_mm", "outer radius"),
+    ("ring too narrow", _set(("rings", "outer_diameter_mm"), 25.0), "rings.outer_diameter_mm", "do not fit"),
+    ("holder too narrow", _set(("pipe_holder", "outer_diameter_mm"), 24.0), "pipe_holder.outer_diameter_mm",
+     "does not fit"),
+    ("stud wider than ball", _set(("ball_holder", "outer_diameter_mm"), 31.0), "ball_holder.outer_diameter_mm",
+     "narrower"),
+    ("bend radius", _set(("bend", "radius_mm"), 30.0), "bend.radius_mm", "1.5"),
+    ("L1 too short", _set(("L1_mm",), 100.0), "L1_mm", "too short"),
+    ("L2 too short", _set(("L2_mm",), 120.0), "L2_mm", "too short"),
+    ("unknown material", _set(("tube", "material"), "steel_340"), "tube.material", "steel_304"),
+    ("unknown key", _set(("tube", "wall"), 2.0), "tube.wall", "wall_mm"),
+    ("unknown top key", _set(("L3_mm",), 2.0), "L3_mm", "allowed"),
+    ("negative", _set(("tube", "outer_diameter_mm"), -25.0), "tube.outer_diameter_mm", "non-negative"),
+    ("zero diameter", _set(("ball", "diameter_mm"), 0.0), "ball.diameter_mm", "> 0"),
+    ("nan", _set(("L2_mm",), float("nan")), "L2_mm", "finite"),
+    ("inf", _set(("rings", "length_mm"), float("inf")), "rings.length_mm", "finite"),
+    ("string number", _set(("L1_mm",), "300"), "L1_mm", "number"),
+    ("gamma 0", _set(("gamma_deg",), 0.0), "gamma_deg", "(0, 180]"),
+    ("gamma 190", _set(("gamma_deg",), 190.0), "gamma_deg", "(0, 180]"),
+    ("format", _set(("format",), "rodlab.rod/2"), "format", "rodlab.rod/1"),
+    ("material E", _set(("materials", "cfrp_tube", "E_GPa"), -1.0), "materials.cfrp_tube.E_GPa", ""),
+    ("material nu", _set(("materials", "cfrp_tube", "nu"), 0.7), "materials.cfrp_tube.nu", "nu"),
+    ("material key", _set(("materials", "cfrp_tube", "density"), 1.0), "materials.cfrp_tube.density",
+     "density_kg_m3"),
+]
+
+
+@pytest.mark.parametrize("label,mutate,key,words", RULES, ids=[r[0] for r in RULES])
+def test_validation_rule(tmp_path, rod1_dict, label, mutate, key, words):
+    mutate(rod1_dict)
+    path = write_toml(tmp_path / "bad.rod.toml", rod1_dict)
+    with pytest.raises(FormatError) as ei:
+        load_design(path)
+    err = ei.value
+    assert err.key == key, str(err)
+    assert str(path) in str(err)
+    assert words in str(err)
+    if key.split(".")[-1] in path.read_text():
+        assert err.line is not None, str(err)
+        line = path.read_text().splitlines()[err.line - 1]
+        assert key.split(".")[-1] in line or line.startswith("["), (err.line, line)
+
+
+def test_missing_required_and_toml_syntax(tmp_path, rod1_dict):
+    del rod1_dict["L2_mm"]
+    with pytest.raises(DesignError, match="L2_mm"):
+        load_design(write_toml(tmp_path / "a.rod.toml", rod1_dict))
+    p = tmp_path / "b.rod.toml"
+    p.write_text('format = "rodlab.rod/1"\nL1_mm = = 3\n')
+    with pytest.raises(FormatError) as ei:
+        load_design(p)
+    assert ei.value.line == 2 and "TOML" in str(ei.value)
+    with pytest.raises(FormatError, match="not found"):
+        load_design(tmp_path / "nope.rod.toml")
+    q = tmp_path / "c.rod.toml"
+    q.write_bytes(b"\xff\xfe\x00junk")
+    with pytest.raises(FormatError, match="UTF-8"):
+        load_design(q)

@@ -1,0 +1,21 @@
+"""Docs that are generated from code stay in sync with it."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+from conftest import ROOT
+
+
+def test_calc_table_is_current():
+    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "gen_docs_tables.py"), "--check"])
+    assert r.returncode == 0, "docs/calc_rods.md is stale: run python scripts/gen_docs_tables.py"
+
+
+def test_readme_first_lines_give_the_two_commands():
+    lines = (ROOT / "README.md").read_text().splitlines()[:8]
+    text = "\n".join(lines)
+    assert "pip install -e ." in text and "rodlab " in text
+    assert 'pip install -e ".[test]"' in text and "python -m pytest" in text
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert 'python -m pytest -m "not slow"' in ci and 'python -m pytest -m "not slow"' in text

@@ -19,7 +19,6 @@ C_g [mm per g0] (gravity of magnitude g0 = 9.80665 m/s^2 along the given {T} dir
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from enum import Enum
 
@@ -29,7 +28,7 @@ from .design import RodDesign
 from .enums import Part
 from .errors import DesignError
 from .layout import Layer, Segment, SegmentKind, layout
-from .units import G0, gpa_to_mpa, kg_m3_to_kg_mm3
+from .units import G0
 
 __all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments"]
 
@@ -80,7 +79,7 @@ def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces
     return idx, u, w
 
 
-def _distal_moments(segs, idx, u, tip_mass_kg, tip_F):
+def _distal_moments(segs, idx, u, tip_mass_kg, tip_com_F):
     """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point."""
     n_sub = 24
     xg, wg = _gauss(n_sub)
@@ -93,7 +92,7 @@ def _distal_moments(segs, idx, u, tip_mass_kg, tip_F):
         tot_m[k] = ww.sum()
         tot_q[k] = (ww[:, None] * seg.point(uu)).sum(0)
     suf_m = np.concatenate([np.cumsum(tot_m[::-1])[::-1][1:], [0.0]]) + tip_mass_kg
-    suf_q = np.concatenate([np.cumsum(tot_q[::-1], axis=0)[::-1][1:], np.zeros((1, 3))]) + tip_mass_kg * tip_F
+    suf_q = np.concatenate([np.cumsum(tot_q[::-1], axis=0)[::-1][1:], np.zeros((1, 3))]) + tip_mass_kg * tip_com_F
     W = np.empty(u.size)
     Q = np.empty((u.size, 3))
     for q, (k, u0) in enumerate(zip(idx, u)):
@@ -106,7 +105,8 @@ def _distal_moments(segs, idx, u, tip_mass_kg, tip_F):
     return W, Q
 
 
-def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool):
+def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool,
+               tip_com_F: np.ndarray | None = None):
     idx, u, w = _quadrature(segs)
     r = np.concatenate([segs[k].point([uu]) for k, uu in zip(idx, u)])
     t = np.concatenate([segs[k].tangent([uu]) for k, uu in zip(idx, u)])
@@ -124,7 +124,7 @@ def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear
         Kf_inv = Kf_inv + (eye - tt) / kGA[:, None, None]
     Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
     CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
-    W, Q = _distal_moments(segs, idx, u, tip_mass_kg, tip_F)
+    W, Q = _distal_moments(segs, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
     Mg = G0 * _skew(Q - W[:, None] * r)                  # moment of distal weight per unit g0 along e_j
     Ng = G0 * W[:, None, None] * np.eye(3)[None]
     Cg = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mg) + np.einsum("q,qab,qbj->aj", w, Kf_inv, Ng)
@@ -163,8 +163,9 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
         segs = layout(design)
         if bend is BendModel.CORNER:
             segs = _corner_segments(design, segs)
-        r = design.ball.radius_mm
-        tip_mass = 4.0 / 3.0 * math.pi * r ** 3 * kg_m3_to_kg_mm3(design.ball.material.density_kg_m3)
+        from .massprops import ball_mass_properties
+        ball = ball_mass_properties(design)
+        return _integrate(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm)
     return _integrate(segs, design.tool_mm, tip_mass, shear, axial)
 
 

@@ -12,8 +12,11 @@ Part placement (the project's defaults, documented in ``docs/formats.md``):
   at the bend's tangent points (where the tubes are bonded to the bend pipe).
 - ``bend``: the bend pipe, an arc of ``radius_mm`` between the tangent points
   (tangent length ``radius * tan((180 - gamma)/2)`` from the vertex); absent when gamma = 180.
-- ``ball_holder``: a solid stud of ``length_mm`` between the end of pipe II and the ball surface.
-- ``ball``: sphere centred on the tool point.
+- ``ball_holder``: a solid stud of ``length_mm`` from the end of pipe II to the ball's pole, held by a
+  plug of the same material bonded inside pipe II's bore (diameter = the bore, length = half the bore:
+  :attr:`RodDesign.plug_mm`), and reaching into a flat seat of the ball (:attr:`RodDesign.seat_offset_mm`).
+- ``ball``: sphere centred on the tool point, with a flat seat where the member that holds it (the stud,
+  or pipe II when there is no stud) meets it: the plane where that member's rim touches the sphere.
 """
 from __future__ import annotations
 
@@ -189,13 +192,31 @@ class RodDesign:
         """Length of pipe I not covered by holder or ring [mm]."""
         return self.L1_mm - self.tangent_mm - self.pipe_holder.length_mm - self.rings.length_mm
 
+    @property
+    def seat_diameter_mm(self) -> float:
+        """Outer diameter of the member bonded to the ball (ball holder, else pipe II) [mm]."""
+        return self.ball_holder.outer_diameter_mm if self.ball_holder.present else self.pipe_II.outer_diameter_mm
+
+    @property
+    def seat_offset_mm(self) -> float:
+        """Distance from the ball centre to its flat seat, ``sqrt(r^2 - (d/2)^2)`` [mm]."""
+        r, a = self.ball.radius_mm, self.seat_diameter_mm / 2.0
+        return math.sqrt(max(r * r - a * a, 0.0))
+
+    @property
+    def plug_mm(self) -> float:
+        """Length of the ball holder's plug inside pipe II's bore [mm] (0 without a ball holder)."""
+        return 0.5 * self.pipe_II.inner_diameter_mm if self.ball_holder.present else 0.0
+
     def pipe_II_length_mm(self) -> float:
-        """Length of pipe II from the tangent point to its end at the ball holder [mm]."""
-        return self.L2_mm - self.tangent_mm - self.ball.radius_mm - self.ball_holder.length_mm
+        """Length of pipe II from the tangent point to its end (at the ball holder or the ball seat) [mm]."""
+        if self.ball_holder.present:
+            return self.L2_mm - self.tangent_mm - self.ball.radius_mm - self.ball_holder.length_mm
+        return self.L2_mm - self.tangent_mm - self.seat_offset_mm
 
     def pipe_II_free_mm(self) -> float:
-        """Length of pipe II not covered by ring 2 [mm]."""
-        return self.pipe_II_length_mm() - self.rings.length_mm
+        """Length of pipe II covered by neither ring 2 nor the ball holder's plug [mm]."""
+        return self.pipe_II_length_mm() - self.rings.length_mm - self.plug_mm
 
     # -- rules ---------------------------------------------------------------------------
     def _check_fits(self) -> None:
@@ -215,7 +236,20 @@ class RodDesign:
                 f"the ball holder (OD {self.ball_holder.outer_diameter_mm} mm) must be narrower than the ball "
                 f"({self.ball.diameter_mm} mm); reduce ball_holder.outer_diameter_mm",
                 key="ball_holder.outer_diameter_mm")
+        if not self.ball_holder.present and self.pipe_II.outer_diameter_mm >= self.ball.diameter_mm:
+            raise DesignError(
+                f"without a ball holder pipe II (OD {self.pipe_II.outer_diameter_mm} mm) is bonded to the ball and "
+                f"must be narrower than it ({self.ball.diameter_mm} mm); add a [ball_holder] or enlarge the ball",
+                key="ball.diameter_mm")
         if self.has_bend:
+            for tube, label in ((self.pipe_I, "pipe_I"), (self.pipe_II, "pipe_II")):
+                if max(tube.inner_diameter_mm, self.bend.inner_diameter_mm) >= min(
+                        tube.outer_diameter_mm, self.bend.outer_diameter_mm):
+                    raise DesignError(
+                        f"the bend pipe (OD {self.bend.outer_diameter_mm}, bore {self.bend.inner_diameter_mm:g} mm) "
+                        f"and {label} (OD {tube.outer_diameter_mm}, bore {tube.inner_diameter_mm:g} mm) do not "
+                        f"overlap at their joint, so they cannot be bonded; match bend.outer_diameter_mm / wall_mm "
+                        f"to the tube", key="bend.outer_diameter_mm")
             ratio = self.bend.radius_mm / self.bend.outer_diameter_mm
             if ratio < MIN_BEND_RATIO - 1e-9:
                 raise DesignError(
@@ -238,7 +272,8 @@ class RodDesign:
             raise DesignError(
                 f"L2 = {self.L2_mm} mm is too short for the parts placed on pipe II: bend tangent "
                 f"{self.tangent_mm:.1f} + ring {self.rings.length_mm} + ball holder {self.ball_holder.length_mm} "
-                f"+ ball radius {self.ball.radius_mm} = {need:.1f} mm; increase L2_mm to at least {need:.1f}",
+                f"(plug {self.plug_mm:g}) + ball radius {self.ball.radius_mm} = {need:.1f} mm; "
+                f"increase L2_mm to at least {need:.1f}",
                 key="L2_mm")
 
     def summary(self) -> dict:

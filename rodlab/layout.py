@@ -155,10 +155,10 @@ def flange_to_tool(points_F, design: RodDesign) -> np.ndarray:
 
 
 def layout(design: RodDesign) -> list[Segment]:
-    """Segments of ``design`` from the flange face to the ball holder's end, in order.
+    """Segments of ``design`` from the flange face to the ball's flat seat, in order.
 
-    The ball itself (a rigid sphere centred on the tool point) is not a segment; the part of
-    the centreline inside the ball is rigid.
+    The ball itself (a rigid, truncated sphere centred on the tool point) is not a segment; the part
+    of the centreline inside the ball is rigid.
     """
     d = design
     segs: list[Segment] = []
@@ -201,5 +201,8 @@ def layout(design: RodDesign) -> list[Segment]:
     p = add_line(p, u2, d.pipe_II_free_mm(), [tube2])
     bh = d.ball_holder
     if bh.present:
-        p = add_line(p, u2, bh.length_mm, [Layer(Part.BALL_HOLDER, bh.material, bh.outer_diameter_mm, 0.0)])
+        p = add_line(p, u2, d.plug_mm,
+                     [tube2, Layer(Part.BALL_HOLDER, bh.material, d.pipe_II.inner_diameter_mm, 0.0)])
+        seat = d.ball.radius_mm - d.seat_offset_mm   # the stud reaches into the ball's flat seat
+        p = add_line(p, u2, bh.length_mm + seat, [Layer(Part.BALL_HOLDER, bh.material, bh.outer_diameter_mm, 0.0)])
     return segs

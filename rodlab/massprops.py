@@ -15,7 +15,7 @@ from .enums import Part
 from .layout import Segment, SegmentKind, flange_to_tool, layout
 from .units import kg_m3_to_kg_mm3
 
-__all__ = ["MassProperties", "mass_properties", "part_mass_properties"]
+__all__ = ["MassProperties", "mass_properties", "part_mass_properties", "ball_mass_properties"]
 
 
 @dataclass(frozen=True)
@@ -106,10 +106,29 @@ def part_mass_properties(design: RodDesign) -> dict[Part, MassProperties]:
         pts = np.concatenate([p for p, _ in items])
         w = np.concatenate([w for _, w in items])
         out[part] = MassProperties.from_points(pts, w)
-    r = design.ball.radius_mm
-    m_ball = 4.0 / 3.0 * np.pi * r ** 3 * kg_m3_to_kg_mm3(design.ball.material.density_kg_m3)
-    out[Part.BALL] = MassProperties(m_ball, np.zeros(3), np.eye(3) * 0.4 * m_ball * r * r)
+    out[Part.BALL] = ball_mass_properties(design)
     return {p: out[p] for p in Part if p in out}
+
+
+def ball_mass_properties(design: RodDesign) -> MassProperties:
+    """The ball: a sphere truncated by its flat seat (exact slice quadrature), in {T}."""
+    r = design.ball.radius_mm
+    zc = design.seat_offset_mm
+    rho = kg_m3_to_kg_mm3(design.ball.material.density_kg_m3)
+    # axial coordinate a along the seat direction (-pipe II), disks of radius^2 = r^2 - a^2, a in [-r, zc]
+    xg, wg = np.polynomial.legendre.leggauss(6)
+    a = 0.5 * (zc + r) * xg + 0.5 * (zc - r)
+    w = 0.5 * (zc + r) * wg
+    rad2 = r * r - a * a
+    dm = rho * np.pi * rad2 * w
+    m = dm.sum()
+    a_c = (dm * a).sum() / m
+    i_axis = (dm * rad2 / 2).sum()
+    i_tr = (dm * (rad2 / 4 + (a - a_c) ** 2)).sum()
+    u = -design.pipe_II_direction          # from the centre towards the seat
+    com = a_c * u
+    inertia = i_tr * np.eye(3) + (i_axis - i_tr) * np.outer(u, u)
+    return MassProperties(float(m), com, inertia)
 
 
 def mass_properties(design: RodDesign) -> MassProperties:

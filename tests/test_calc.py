@@ -42,7 +42,7 @@ def test_paper_compliance_refuses_other_gamma():
 
 
 def test_straight_cantilever_limit_hand_computed():
-    """gamma = 180, no parts: tip of a uniform tube at L = L1 + L2, the last r_ball rigid inside the ball."""
+    """gamma = 180, no parts: a uniform tube bonded into the ball's flat seat, load at the ball centre L."""
     d = _design(gamma_deg=180.0)
     CF, Cg = calc_compliance(d)
     od, wall = 20.0, 2.0
@@ -50,18 +50,24 @@ def test_straight_cantilever_limit_hand_computed():
     I = math.pi / 64 * (od ** 4 - (od - 2 * wall) ** 4)
     A = math.pi / 4 * (od ** 2 - (od - 2 * wall) ** 2)
     L, r = 750.0, 15.0
-    Lt = L - r
-    bend_xx = (L ** 3 - r ** 3) / (3 * E * I)
+    zc = math.sqrt(r * r - (od / 2) ** 2)   # the tube ends at the seat, zc before the centre
+    Lt = L - zc
+    bend_xx = (L ** 3 - zc ** 3) / (3 * E * I)
     np.testing.assert_allclose(np.diag(CF), [bend_xx, bend_xx, Lt / (E * A)], rtol=1e-9)
     assert abs(CF[0, 1]) + abs(CF[0, 2]) + abs(CF[1, 2]) < 1e-12
-    # gravity: uniform tube load w over [0, Lt], ball m at L
+    # gravity: uniform tube load w over [0, Lt]; the truncated ball (sphere minus the cap beyond the seat)
+    # as a point weight at its centre of mass, which lies beyond the centre by |a_c|
     w = A * 8000e-9 * G0                          # N/mm per g0
-    m = 4 / 3 * math.pi * r ** 3 * 3950e-9 * G0    # N per g0
-    # deflection at L of a cantilever with a uniform load on [0, Lt] and a point load at L
-    # (virtual work: int_0^Lt (L-s) * w (Lt-s)^2/2 ds / EI)
+    h = r - zc
+    v_cap = math.pi * h * h * (3 * r - h) / 3
+    a_cap = 3 * (2 * r - h) ** 2 / (4 * (3 * r - h))   # cap centroid from the centre
+    v = 4 / 3 * math.pi * r ** 3 - v_cap
+    m = v * 3950e-9 * G0                          # N per g0
+    Lc = L + v_cap * a_cap / v                    # centre of mass of the truncated ball
+    # virtual work: unit load at L, real loads w on [0, Lt] and m at Lc
     from scipy.integrate import quad
     dist = quad(lambda s: (L - s) * w * (Lt - s) ** 2 / 2, 0, Lt)[0] / (E * I)
-    expect = dist + m * bend_xx
+    expect = dist + m * quad(lambda s: (L - s) * (Lc - s), 0, Lt)[0] / (E * I)
     np.testing.assert_allclose(Cg[0, 0], expect, rtol=1e-9)
     np.testing.assert_allclose(Cg[2, 2], (w * Lt ** 2 / 2 + m * Lt) / (E * A), rtol=1e-9)
 
@@ -95,9 +101,11 @@ def test_czz_scales_as_L2_cubed_when_L1_vanishes():
 
 
 def test_tip_mass_only_gives_Cg_equal_m_g0_CF():
-    """With (almost) massless tubes, gravity acts on the ball alone: C_g = m_ball g0 C_F."""
+    """With (almost) massless tubes and a needle-thin stud (no seat), gravity acts on the ball alone:
+    C_g = m_ball g0 C_F."""
     d = _design(materials={"light": {"E_GPa": 193.0, "nu": 0.29, "density_kg_m3": 1e-9}},
-                tube={"material": "light"})
+                tube={"material": "light"}, ball_holder={"material": "light", "outer_diameter_mm": 0.2,
+                                                          "length_mm": 10.0})
     CF, Cg = calc_compliance(d)
     m = 4 / 3 * math.pi * 15.0 ** 3 * 3950e-9
     np.testing.assert_allclose(Cg, m * G0 * CF, rtol=1e-6, atol=1e-14)

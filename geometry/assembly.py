@@ -1,0 +1,105 @@
+"""The rod as a CAD assembly: named, coloured solids; mass properties from the solids; exports."""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.design import RodDesign
+from rodlab.enums import Part
+from rodlab.fileio import atomic_write_bytes, atomic_write_json
+from rodlab.massprops import MassProperties
+from rodlab.units import kg_m3_to_kg_mm3
+
+from .parts import PART_COLOURS, part_solids
+
+__all__ = ["RodCad", "build_cad", "part_material"]
+
+log = logging.getLogger(__name__)
+
+
+def part_material(design: RodDesign, part: Part):
+    """The material of ``part`` in ``design``."""
+    return {Part.PIPE_HOLDER: design.pipe_holder.material, Part.PIPE_I: design.pipe_I.material,
+            Part.RING_1: design.rings.material, Part.BEND: design.bend.material, Part.RING_2: design.rings.material,
+            Part.PIPE_II: design.pipe_II.material, Part.BALL_HOLDER: design.ball_holder.material,
+            Part.BALL: design.ball.material}[part]
+
+
+@dataclass
+class RodCad:
+    """A built rod: its design and one build123d solid per part, in {T} [mm]."""
+
+    design: RodDesign
+    solids: dict
+
+    def mass_properties(self) -> dict[Part, MassProperties]:
+        """Mass, centre of mass in {T} and inertia about the COM of each part, from the solids."""
+        out = {}
+        for part, solid in self.solids.items():
+            rho = kg_m3_to_kg_mm3(part_material(self.design, part).density_kg_m3)
+            c = solid.center()
+            out[part] = MassProperties(rho * solid.volume, np.array([c.X, c.Y, c.Z]),
+                                       rho * np.array(solid.matrix_of_inertia))
+        return out
+
+    def total_mass_properties(self) -> MassProperties:
+        parts = self.mass_properties().values()
+        m = sum(p.mass_kg for p in parts)
+        com = sum(p.mass_kg * p.com_T_mm for p in parts) / m
+        inertia = np.zeros((3, 3))
+        for p in parts:
+            dvec = p.com_T_mm - com
+            inertia += p.inertia_kg_mm2 + p.mass_kg * (dvec @ dvec * np.eye(3) - np.outer(dvec, dvec))
+        return MassProperties(m, com, inertia)
+
+    def compound(self):
+        """A build123d assembly: one labelled, coloured child per part."""
+        import build123d as bd
+        children = []
+        for part, solid in self.solids.items():
+            child = bd.Compound([solid], label=str(part), color=bd.Color(*PART_COLOURS[part]))
+            children.append(child)
+        return bd.Compound(children=children, label=f"rod {self.design.name}")
+
+    # -- exports ---------------------------------------------------------------------------
+    def export_step(self, path: str | Path) -> Path:
+        """STEP assembly with part names and colours (written atomically)."""
+        import build123d as bd
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        tmp = p.with_name(f".{p.name}.part")
+        bd.export_step(self.compound(), str(tmp), timestamp="2000-01-01T00:00:00")
+        data = tmp.read_bytes()
+        tmp.unlink()
+        return atomic_write_bytes(p, data)
+
+    def export_stl(self, path: str | Path, tolerance_mm: float = 0.02) -> Path:
+        """One STL of the whole rod (binary, written atomically)."""
+        import build123d as bd
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        tmp = p.with_name(f".{p.name}.part")
+        bd.export_stl(bd.Compound(list(self.solids.values())), str(tmp), tolerance=tolerance_mm)
+        data = tmp.read_bytes()
+        tmp.unlink()
+        return atomic_write_bytes(p, data)
+
+    def mass_report(self) -> dict:
+        """``mass.json`` content: per part and total mass_kg, com_T_mm, inertia_kg_mm2."""
+        parts = {str(p): m.to_dict() for p, m in self.mass_properties().items()}
+        for p, name in zip(self.solids, parts):
+            parts[name]["material"] = part_material(self.design, p).name
+            parts[name]["volume_mm3"] = float(self.solids[p].volume)
+        return {"rod": self.design.name, "frame": "T (origin at the ball centre, axes of the flange frame {6})",
+                "parts": parts, "total": self.total_mass_properties().to_dict()}
+
+    def write_mass_json(self, path: str | Path) -> Path:
+        return atomic_write_json(path, self.mass_report())
+
+
+def build_cad(design: RodDesign) -> RodCad:
+    """Build the CAD assembly of ``design`` (raises :class:`~geometry.errors.GeometryError` if impossible)."""
+    return RodCad(design, part_solids(design))

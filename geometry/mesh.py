@@ -1,0 +1,240 @@
+"""Conformal multi-part tetrahedral mesh of a rod with gmsh, and its scikit-fem form.
+
+The parts' OCC solids are imported into gmsh and fragmented together, so bonded interfaces
+(tube in ring, tube in holder, plug in bore, stud in ball seat) share their nodes. One physical
+volume per part (named as :class:`~rodlab.enums.Part`), physical surfaces ``flange_face`` (the
+clamped face) and ``ball`` (the sphere). Quadratic elements are curved (``SecondOrderLinear = 0``):
+straight-sided P2 tets make a tube's section an inscribed polygon. Meshing runs single-threaded
+so that the same inputs give a bit-identical mesh.
+"""
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import tempfile
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.design import RodDesign
+from rodlab.enums import Part
+from rodlab.fileio import atomic_write_bytes
+from rodlab.layout import layout
+
+from .errors import GeometryError
+from .parts import part_solids
+
+__all__ = ["RodMesh", "mesh_rod", "default_size_mm", "GMSH_TO_VTK_TET10"]
+
+log = logging.getLogger(__name__)
+_GMSH_LOCK = threading.Lock()   # gmsh has global state
+
+#: gmsh tet10 node order (v0..v3, e01, e12, e02, e03, e23, e13) -> VTK / skfem / CalculiX (.., e13, e23)
+GMSH_TO_VTK_TET10 = np.array([0, 1, 2, 3, 4, 5, 6, 7, 9, 8])
+
+
+def default_size_mm(design: RodDesign, order: int = 2) -> float:
+    """Element size from the thinnest wall: 2 x wall for curved P2 (<= 0.15 % from converged), wall/2 for P1."""
+    walls = [design.pipe_I.wall_mm, design.pipe_II.wall_mm]
+    if design.has_bend:
+        walls.append(design.bend.wall_mm)
+    wall = min(walls)
+    return 2.0 * wall if order == 2 else 0.5 * wall
+
+
+@dataclass
+class RodMesh:
+    """A rod's FEA mesh in {T} [mm].
+
+    Attributes
+    ----------
+    mesh : ``skfem.MeshTet2`` (order 2) or ``skfem.MeshTet1`` (order 1)
+    parts : the parts present, in tag order; ``parts[part_index[e]]`` is element e's part
+    part_index : shape=(n_elements,) int, index into ``parts``
+    tube_axis : shape=(n_elements, 3), unit local tube axis at each element (along the centreline,
+        following the bend) for transversely-isotropic materials
+    flange_facets, ball_facets : skfem facet indices of the clamped face and the ball's sphere
+    size_mm, order : what was asked
+    min_quality : worst element quality (gmsh minSICN; <= 0 means inverted)
+    sha256 : hash of nodes and connectivity (determinism check)
+    """
+
+    mesh: object
+    parts: tuple
+    part_index: np.ndarray
+    tube_axis: np.ndarray
+    flange_facets: np.ndarray
+    ball_facets: np.ndarray
+    size_mm: float
+    order: int
+    min_quality: float
+    sha256: str
+    msh_path: Path | None = None
+    stats: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        n = self.mesh.t.shape[1]
+        if self.part_index.shape != (n,) or self.tube_axis.shape != (n, 3):
+            raise ValueError(f"part_index must have shape ({n},) and tube_axis ({n}, 3); got "
+                             f"{self.part_index.shape}, {self.tube_axis.shape}")
+
+    def elements_of(self, part: Part) -> np.ndarray:
+        """Element indices of ``part``."""
+        return np.nonzero(self.part_index == self.parts.index(part))[0]
+
+    def volume_by_part(self) -> dict[Part, float]:
+        """Mesh volume of each part [mm^3] (exact quadrature over the curved elements)."""
+        from skfem import Basis, ElementTetP0, Functional
+        basis = Basis(self.mesh, ElementTetP0(), intorder=2) if self.order == 2 else Basis(self.mesh, ElementTetP0())
+        vol = Functional(lambda w: 1.0 + 0 * w.x[0]).elemental(basis)
+        return {p: float(vol[self.elements_of(p)].sum()) for p in self.parts}
+
+
+def _centreline_samples(design: RodDesign, n_per_mm: float = 2.0):
+    pts, tans = [], []
+    for seg in layout(design):
+        n = max(int(seg.length_mm * n_per_mm), 2)
+        u = np.linspace(0.0, seg.length_mm, n)
+        pts.append(seg.point(u))
+        tans.append(seg.tangent(u))
+    return np.concatenate(pts) - design.tool_mm, np.concatenate(tans)
+
+
+def _tube_axes(design: RodDesign, centroids_T: np.ndarray) -> np.ndarray:
+    from scipy.spatial import cKDTree
+    pts, tans = _centreline_samples(design)
+    _, idx = cKDTree(pts).query(centroids_T)
+    return tans[idx]
+
+
+def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
+             msh_path: str | Path | None = None) -> RodMesh:
+    """Mesh ``design`` with gmsh; optionally write ``msh_path`` (gmsh 4.1, atomically).
+
+    Raises :class:`~geometry.errors.GeometryError` on a mesh with inverted elements or missing parts.
+    """
+    import build123d as bd
+    import gmsh
+
+    if order not in (1, 2):
+        raise GeometryError(f"order must be 1 or 2, got {order!r}", key="order")
+    h = default_size_mm(design, order) if size_mm is None else float(size_mm)
+    if not (h > 0 and np.isfinite(h)):
+        raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
+    solids = part_solids(design)
+    with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
+        gmsh.initialize(readConfigFiles=False, interruptible=False)
+        try:
+            gmsh.option.setNumber("General.Terminal", 0)
+            gmsh.option.setNumber("General.NumThreads", 1)
+            gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+            gmsh.model.add(f"rod_{design.name}")
+            src = []
+            for part, solid in solids.items():
+                f = os.path.join(tmp, f"{part.value}.brep")
+                bd.export_brep(solid, f)
+                vols = [dt for dt in gmsh.model.occ.importShapes(f, highestDimOnly=True) if dt[0] == 3]
+                src.append((part, vols))
+            objects = [dt for _, vols in src for dt in vols]
+            _, out_map = gmsh.model.occ.fragment(objects, [])
+            gmsh.model.occ.synchronize()
+            part_vols: dict[Part, list[int]] = {}
+            k = 0
+            for part, vols in src:
+                for _ in vols:
+                    part_vols.setdefault(part, []).extend(t for d, t in out_map[k] if d == 3)
+                    k += 1
+            for part in solids:
+                if not part_vols.get(part):
+                    raise GeometryError(f"part {part} vanished when the parts were fused; check its dimensions",
+                                        key=str(part))
+            tag_of = {}
+            for i, part in enumerate(solids):
+                tag_of[part] = gmsh.model.addPhysicalGroup(3, sorted(set(part_vols[part])), tag=i + 1,
+                                                           name=str(part))
+            z0 = -design.tool_mm[2]
+            x0 = -design.tool_mm[0]
+            eps = 1e-3
+            flange = [t for d, t in gmsh.model.getEntitiesInBoundingBox(
+                x0 - 1e3, -1e3, z0 - eps, x0 + 1e3, 1e3, z0 + eps, dim=2)]
+            if not flange:
+                raise GeometryError("no flange face found at the flange plane", key="pipe_I")
+            gmsh.model.addPhysicalGroup(2, flange, name="flange_face")
+            ball_surf = sorted({t for v in part_vols[Part.BALL]
+                                for d, t in gmsh.model.getBoundary([(3, v)], oriented=False)
+                                if gmsh.model.getType(2, t) == "Sphere"})
+            gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
+            gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+            gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h)
+            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+            gmsh.option.setNumber("Mesh.ElementOrder", order)
+            gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
+            gmsh.option.setNumber("Mesh.HighOrderOptimize", 1 if order == 2 else 0)   # untangle curved P2
+            gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+            t0 = time.perf_counter()
+            gmsh.model.mesh.generate(3)
+            log.info("gmsh generate: %.2f s", time.perf_counter() - t0)
+            node_tags, coords, _ = gmsh.model.mesh.getNodes()
+            coords = coords.reshape(-1, 3)
+            etype = 11 if order == 2 else 4
+            conn, part_idx, etags = [], [], []
+            for i, part in enumerate(solids):
+                for v in sorted(set(part_vols[part])):
+                    types, tags, nodes = gmsh.model.mesh.getElements(3, v)
+                    for ty, tg, nd in zip(types, tags, nodes):
+                        if ty != etype:
+                            raise GeometryError(f"unexpected gmsh element type {ty} in {part}")
+                        conn.append(nd.reshape(len(tg), -1))
+                        part_idx.append(np.full(len(tg), i))
+                        etags.append(tg)
+            conn = np.concatenate(conn)
+            part_idx = np.concatenate(part_idx)
+            etags = np.concatenate(etags)
+            qual = gmsh.model.mesh.getElementQualities(etags, "minSICN")
+            if msh_path is not None:
+                out = os.path.join(tmp, "rod.msh")
+                gmsh.write(out)
+                atomic_write_bytes(msh_path, Path(out).read_bytes())
+        finally:
+            gmsh.finalize()
+    return _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path)
+
+
+def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path):
+    from skfem import MeshTet1, MeshTet2
+
+    index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
+    index[node_tags.astype(np.int64)] = np.arange(node_tags.size)
+    t = index[conn.astype(np.int64)]
+    used = np.unique(t)
+    remap = np.full(node_tags.size, -1, dtype=np.int64)
+    remap[used] = np.arange(used.size)
+    t = remap[t]
+    p = coords[used]
+    if order == 2:
+        t = t[:, GMSH_TO_VTK_TET10]
+        mesh = MeshTet2(p.T.copy(), t.T.copy())
+    else:
+        mesh = MeshTet1(p.T.copy(), t.T.copy())
+    worst = float(qual.min())
+    if worst <= 0:
+        raise GeometryError(f"rod {design.name!r}: the mesh has inverted elements (worst quality {worst:.3g}); "
+                            f"use a smaller --size than {h:g} mm", key="size")
+    centroids = mesh.p[:, mesh.t].mean(axis=1).T
+    axes = _tube_axes(design, centroids)
+    z0 = -design.tool_mm[2]
+    flange = mesh.facets_satisfying(lambda x: np.abs(x[2] - z0) < 1e-6, boundaries_only=True)
+    r = design.ball.radius_mm          # the ball's sphere is centred on the {T} origin
+    tol = max(h * h / (4 * r), 1e-3 * r)   # facet midpoints sit inside the sphere by the sagitta
+    ball = mesh.facets_satisfying(lambda x: np.abs(np.linalg.norm(x, axis=0) - r) < tol, boundaries_only=True)
+    digest = hashlib.sha256(np.round(p, 9).tobytes() + t.astype(np.int64).tobytes()).hexdigest()
+    rm = RodMesh(mesh, tuple(solids), part_idx.astype(np.int32), axes, flange, ball, h, order, worst, digest,
+                 None if msh_path is None else Path(msh_path))
+    rm.stats = {"nodes": int(p.shape[0]), "elements": int(t.shape[0]), "size_mm": h, "order": order,
+                "min_quality_sicn": worst, "mean_quality_sicn": float(qual.mean()),
+                "flange_facets": int(flange.size), "ball_facets": int(ball.size)}
+    return rm

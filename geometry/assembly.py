@@ -15,17 +15,9 @@ from rodlab.units import kg_m3_to_kg_mm3
 
 from .parts import PART_COLOURS, part_solids
 
-__all__ = ["RodCad", "build_cad", "part_material"]
+__all__ = ["RodCad", "build_cad"]
 
 log = logging.getLogger(__name__)
-
-
-def part_material(design: RodDesign, part: Part):
-    """The material of ``part`` in ``design``."""
-    return {Part.PIPE_HOLDER: design.pipe_holder.material, Part.PIPE_I: design.pipe_I.material,
-            Part.RING_1: design.rings.material, Part.BEND: design.bend.material, Part.RING_2: design.rings.material,
-            Part.PIPE_II: design.pipe_II.material, Part.BALL_HOLDER: design.ball_holder.material,
-            Part.BALL: design.ball.material}[part]
 
 
 @dataclass
@@ -39,7 +31,7 @@ class RodCad:
         """Mass, centre of mass in {T} and inertia about the COM of each part, from the solids."""
         out = {}
         for part, solid in self.solids.items():
-            rho = kg_m3_to_kg_mm3(part_material(self.design, part).density_kg_m3)
+            rho = kg_m3_to_kg_mm3(self.design.material_of(part).density_kg_m3)
             c = solid.center()
             out[part] = MassProperties(rho * solid.volume, np.array([c.X, c.Y, c.Z]),
                                        rho * np.array(solid.matrix_of_inertia))
@@ -91,7 +83,7 @@ class RodCad:
         """``mass.json`` content: per part and total mass_kg, com_T_mm, inertia_kg_mm2."""
         parts = {str(p): m.to_dict() for p, m in self.mass_properties().items()}
         for p, name in zip(self.solids, parts):
-            parts[name]["material"] = part_material(self.design, p).name
+            parts[name]["material"] = self.design.material_of(p).name
             parts[name]["volume_mm3"] = float(self.solids[p].volume)
         return {"rod": self.design.name, "frame": "T (origin at the ball centre, axes of the flange frame {6})",
                 "parts": parts, "total": self.total_mass_properties().to_dict()}

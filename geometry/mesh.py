@@ -15,7 +15,6 @@ import os
 import tempfile
 import threading
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,12 +22,13 @@ import numpy as np
 from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.fileio import atomic_write_bytes
+from rodlab.fem_mesh import RodMesh
 from rodlab.layout import layout
 
 from .errors import GeometryError
 from .parts import part_solids
 
-__all__ = ["RodMesh", "mesh_rod", "default_size_mm", "GMSH_TO_VTK_TET10"]
+__all__ = ["mesh_rod", "default_size_mm", "feature_circles", "GMSH_TO_VTK_TET10"]
 
 log = logging.getLogger(__name__)
 _GMSH_LOCK = threading.Lock()   # gmsh has global state
@@ -46,52 +46,36 @@ def default_size_mm(design: RodDesign, order: int = 2) -> float:
     return 2.0 * wall if order == 2 else 0.5 * wall
 
 
-@dataclass
-class RodMesh:
-    """A rod's FEA mesh in {T} [mm].
+def feature_circles(design: RodDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Circles where the section changes (sleeve ends, bend tangents, clamp, seat): stress concentrations.
 
-    Attributes
-    ----------
-    mesh : ``skfem.MeshTet2`` (order 2) or ``skfem.MeshTet1`` (order 1)
-    parts : the parts present, in tag order; ``parts[part_index[e]]`` is element e's part
-    part_index : shape=(n_elements,) int, index into ``parts``
-    tube_axis : shape=(n_elements, 3), unit local tube axis at each element (along the centreline,
-        following the bend) for transversely-isotropic materials
-    flange_facets, ball_facets : skfem facet indices of the clamped face and the ball's sphere
-    size_mm, order : what was asked
-    min_quality : worst element quality (gmsh minSICN; <= 0 means inverted)
-    sha256 : hash of nodes and connectivity (determinism check)
+    Returns centres (n, 3) in {T} [mm], unit normals (n, 3) and radii (n,) [mm].
     """
+    centres, normals, radii = [], [], []
+    segs = layout(design)
+    for seg in segs:
+        for u in (0.0, seg.length_mm):
+            c = seg.point([u])[0] - design.tool_mm
+            t = seg.tangent([u])[0]
+            for layer in seg.layers:
+                for d in (layer.d_out_mm, layer.d_in_mm):
+                    if d > 0:
+                        centres.append(c)
+                        normals.append(t)
+                        radii.append(d / 2.0)
+    return np.array(centres), np.array(normals), np.array(radii)
 
-    mesh: object
-    parts: tuple
-    part_index: np.ndarray
-    tube_axis: np.ndarray
-    flange_facets: np.ndarray
-    ball_facets: np.ndarray
-    size_mm: float
-    order: int
-    min_quality: float
-    sha256: str
-    msh_path: Path | None = None
-    stats: dict = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        n = self.mesh.t.shape[1]
-        if self.part_index.shape != (n,) or self.tube_axis.shape != (n, 3):
-            raise ValueError(f"part_index must have shape ({n},) and tube_axis ({n}, 3); got "
-                             f"{self.part_index.shape}, {self.tube_axis.shape}")
+def _size_callback(design: RodDesign, h_near: float, h_far: float, growth: float):
+    centres, normals, radii = feature_circles(design)
 
-    def elements_of(self, part: Part) -> np.ndarray:
-        """Element indices of ``part``."""
-        return np.nonzero(self.part_index == self.parts.index(part))[0]
-
-    def volume_by_part(self) -> dict[Part, float]:
-        """Mesh volume of each part [mm^3] (exact quadrature over the curved elements)."""
-        from skfem import Basis, ElementTetP0, Functional
-        basis = Basis(self.mesh, ElementTetP0(), intorder=2) if self.order == 2 else Basis(self.mesh, ElementTetP0())
-        vol = Functional(lambda w: 1.0 + 0 * w.x[0]).elemental(basis)
-        return {p: float(vol[self.elements_of(p)].sum()) for p in self.parts}
+    def size(dim, tag, x, y, z, lc):
+        p = np.array([x, y, z]) - centres
+        a = np.einsum("ij,ij->i", p, normals)
+        radial = np.sqrt(np.maximum(np.einsum("ij,ij->i", p, p) - a * a, 0.0))
+        dist = np.sqrt(a * a + (radial - radii) ** 2).min()
+        return float(min(h_far, h_near + growth * dist, lc))
+    return size
 
 
 def _centreline_samples(design: RodDesign, n_per_mm: float = 2.0):
@@ -112,8 +96,12 @@ def _tube_axes(design: RodDesign, centroids_T: np.ndarray) -> np.ndarray:
 
 
 def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
-             msh_path: str | Path | None = None) -> RodMesh:
+             msh_path: str | Path | None = None, grading: tuple[float, float] | None = None) -> RodMesh:
     """Mesh ``design`` with gmsh; optionally write ``msh_path`` (gmsh 4.1, atomically).
+
+    ``grading = (near_factor, growth)``: element size ``near_factor * size`` at the circles where the
+    section changes (sleeve ends, bend tangents, clamp: stress concentrations), growing by ``growth`` mm per
+    mm of distance up to ``size``. ``None``: uniform size.
 
     Raises :class:`~geometry.errors.GeometryError` on a mesh with inverted elements or missing parts.
     """
@@ -168,8 +156,10 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                 for d, t in gmsh.model.getBoundary([(3, v)], oriented=False)
                                 if gmsh.model.getType(2, t) == "Sphere"})
             gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
+            if grading is not None:
+                gmsh.model.mesh.setSizeCallback(_size_callback(design, grading[0] * h, h, grading[1]))
             gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-            gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h)
+            gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h * (grading[0] if grading else 1.0))
             gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
             gmsh.option.setNumber("Mesh.ElementOrder", order)
             gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)

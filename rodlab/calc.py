@@ -81,42 +81,52 @@ def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces
 
 def _distal_moments(segs, idx, u, tip_mass_kg, tip_com_F):
     """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point."""
-    n_sub = 24
-    xg, wg = _gauss(n_sub)
-    # whole-segment totals, then suffix sums
+    xg, wg = _gauss(24)
     tot_m = np.zeros(len(segs))
     tot_q = np.zeros((len(segs), 3))
     for k, seg in enumerate(segs):
-        uu = xg * seg.length_mm
         ww = wg * seg.length_mm * seg.mass_per_mm
         tot_m[k] = ww.sum()
-        tot_q[k] = (ww[:, None] * seg.point(uu)).sum(0)
+        tot_q[k] = ww @ seg.point(xg * seg.length_mm)
     suf_m = np.concatenate([np.cumsum(tot_m[::-1])[::-1][1:], [0.0]]) + tip_mass_kg
     suf_q = np.concatenate([np.cumsum(tot_q[::-1], axis=0)[::-1][1:], np.zeros((1, 3))]) + tip_mass_kg * tip_com_F
     W = np.empty(u.size)
     Q = np.empty((u.size, 3))
-    for q, (k, u0) in enumerate(zip(idx, u)):
-        seg = segs[k]
-        span = seg.length_mm - u0
-        uu = u0 + xg * span
-        ww = wg * span * seg.mass_per_mm
-        W[q] = ww.sum() + suf_m[k]
-        Q[q] = (ww[:, None] * seg.point(uu)).sum(0) + suf_q[k]
+    for k, seg in enumerate(segs):
+        sel = np.nonzero(idx == k)[0]
+        if sel.size == 0:
+            continue
+        span = seg.length_mm - u[sel]                               # (n,)
+        uu = u[sel, None] + xg[None, :] * span[:, None]             # (n, 24)
+        ww = wg[None, :] * span[:, None] * seg.mass_per_mm          # (n, 24)
+        pts = seg.point(uu.ravel()).reshape(sel.size, xg.size, 3)
+        W[sel] = ww.sum(1) + suf_m[k]
+        Q[sel] = np.einsum("nk,nkc->nc", ww, pts) + suf_q[k]
     return W, Q
 
 
 def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool,
-               tip_com_F: np.ndarray | None = None):
+               tip_com_F: np.ndarray | None = None, bend_flex: tuple[float, float] = (1.0, 1.0)):
     idx, u, w = _quadrature(segs)
-    r = np.concatenate([segs[k].point([uu]) for k, uu in zip(idx, u)])
-    t = np.concatenate([segs[k].tangent([uu]) for k, uu in zip(idx, u)])
-    EI = np.array([segs[k].EI for k in idx])
-    GJ = np.array([segs[k].GJ for k in idx])
-    EA = np.array([segs[k].EA for k in idx])
-    kGA = np.array([segs[k].kGA for k in idx])
+    r = np.empty((u.size, 3))
+    t = np.empty((u.size, 3))
+    for k, seg in enumerate(segs):
+        sel = idx == k
+        r[sel] = seg.point(u[sel])
+        t[sel] = seg.tangent(u[sel])
+    props = np.array([[s.EI, s.GJ, s.EA, s.kGA] for s in segs])[idx]
+    EI, GJ, EA, kGA = props.T
     tt = t[:, :, None] * t[:, None, :]
     eye = np.eye(3)[None]
-    Km_inv = tt / GJ[:, None, None] + (eye - tt) / EI[:, None, None]
+    # bending flexibility: in-plane (moment about the bend-plane normal y) and out-of-plane factors on arcs
+    arc = np.array([s.kind is SegmentKind.ARC for s in segs])[idx]
+    ey = np.array([0.0, 1.0, 0.0])
+    n = np.cross(t, ey)
+    k_in = np.where(arc, bend_flex[0], 1.0)
+    k_out = np.where(arc, bend_flex[1], 1.0)
+    yy = np.broadcast_to(np.outer(ey, ey), tt.shape)
+    nn = n[:, :, None] * n[:, None, :]
+    Km_inv = (tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy + (k_out / EI)[:, None, None] * nn)
     Kf_inv = np.zeros_like(tt)
     if axial:
         Kf_inv = Kf_inv + tt / EA[:, None, None]
@@ -145,7 +155,8 @@ def _corner_segments(design: RodDesign, segs: list[Segment]) -> list[Segment]:
 
 
 def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool = False,
-                    axial: bool = True, bend: BendModel = BendModel.ARC) -> tuple[np.ndarray, np.ndarray]:
+                    axial: bool = True, bend: BendModel = BendModel.ARC,
+                    bend_flexibility: tuple[float, float] = (1.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
     """Closed-form C_F [mm/N] and C_g [mm/g0] of ``design`` in {T}, each shape=(3, 3).
 
     Parameters
@@ -154,6 +165,8 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
     shear : add Timoshenko shear flexibility (Euler-Bernoulli when False, as the paper)
     axial : add axial flexibility of the tubes (the paper neglects it)
     bend : :class:`BendModel` of the bend pipe
+    bend_flexibility : factors (in-plane, out-of-plane) on the bending compliance of the bend arc
+        (pipe-bend ovalisation, e.g. ASME B31.3 k = 1.65 / h); 1 = plain curved beam
     """
     bend = BendModel(bend)
     if pipes_only:
@@ -165,7 +178,8 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
             segs = _corner_segments(design, segs)
         from .massprops import ball_mass_properties
         ball = ball_mass_properties(design)
-        return _integrate(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm)
+        return _integrate(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm,
+                          tuple(bend_flexibility))
     return _integrate(segs, design.tool_mm, tip_mass, shear, axial)
 
 

@@ -276,6 +276,15 @@ class RodDesign:
                 f"increase L2_mm to at least {need:.1f}",
                 key="L2_mm")
 
+    def material_of(self, part) -> Material:
+        """The material of a part (:class:`~rodlab.enums.Part` or its name)."""
+        from .enums import Part
+        part = Part.parse(part)
+        return {Part.PIPE_HOLDER: self.pipe_holder.material, Part.PIPE_I: self.pipe_I.material,
+                Part.RING_1: self.rings.material, Part.BEND: self.bend.material, Part.RING_2: self.rings.material,
+                Part.PIPE_II: self.pipe_II.material, Part.BALL_HOLDER: self.ball_holder.material,
+                Part.BALL: self.ball.material}[part]
+
     def summary(self) -> dict:
         """Plain-dict description of the design (for ``rodlab info`` and provenance)."""
         def tube(t):

@@ -11,12 +11,12 @@ import sys
 
 from .. import __version__
 from ..errors import RodlabError
-from . import cmd_design, cmd_geometry
+from . import cmd_design, cmd_fea, cmd_geometry
 
 __all__ = ["build_parser", "main"]
 
 #: Modules that add sub-commands: each has ``register(subparsers)``.
-_COMMAND_MODULES = [cmd_design, cmd_geometry]
+_COMMAND_MODULES = [cmd_design, cmd_geometry, cmd_fea]
 
 
 def build_parser() -> argparse.ArgumentParser:

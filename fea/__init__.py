@@ -1,0 +1,12 @@
+"""fea: rod compliance C^F and C^g by 3-D solid FEA (scikit-fem), a fast beam-frame model, and design sweeps.
+
+The solid model consumes a :class:`rodlab.fem_mesh.RodMesh` (made by ``geometry``), never imports geometry.
+"""
+from .compute import DEFAULT_GRADING, FeaModel, compute_compliance, default_solid_size_mm, solid_compliance
+from .errors import FeaError
+from .frame import BendFlexibility, asme_bend_flexibility, frame_compliance
+from .solid import SolidResult, solve_compliance
+
+__all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "DEFAULT_GRADING",
+           "FeaError", "BendFlexibility", "asme_bend_flexibility", "frame_compliance", "SolidResult",
+           "solve_compliance"]

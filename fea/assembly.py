@@ -1,0 +1,76 @@
+"""Vectorised assembly of linear elasticity on scikit-fem meshes with per-element stiffness tensors.
+
+scikit-fem supplies the mesh, the Lagrange basis (shape functions, gradients, quadrature weights on
+curved P2 elements) and the DOF numbering; the element matrices are contracted with batched BLAS:
+``K_e[(a,i),(b,j)] = sum_q dx_q sum_kl dphi_a/dx_k C_ikjl dphi_b/dx_l``. Vector DOF numbering:
+``3 * scalar_dof + component``.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["scalar_basis", "assemble_stiffness", "assemble_body_force", "vector_dofs"]
+
+
+def scalar_basis(mesh, intorder: int | None = None):
+    """The scalar Lagrange basis of the mesh's order (P2 on MeshTet2, P1 on MeshTet1)."""
+    from skfem import Basis, ElementTetP1, ElementTetP2, MeshTet2
+    if isinstance(mesh, MeshTet2):
+        return Basis(mesh, ElementTetP2(), intorder=3 if intorder is None else intorder)
+    return Basis(mesh, ElementTetP1(), intorder=2 if intorder is None else intorder)
+
+
+def vector_dofs(basis) -> np.ndarray:
+    """Vector DOFs of every element, shape=(n_elements, n_local * 3), ordered (node a, component i)."""
+    ed = basis.element_dofs.T                               # (ne, nloc)
+    return (3 * ed[:, :, None] + np.arange(3)[None, None, :]).reshape(ed.shape[0], -1)
+
+
+def _block_pattern(basis):
+    """Scalar sparsity pattern: for every (e, a, b) the index of its 3x3 block, and the block rows/cols."""
+    ed = basis.element_dofs.T.astype(np.int64)                     # (ne, nloc)
+    ne, nloc = ed.shape
+    keys = (ed[:, :, None] * basis.N + ed[:, None, :]).ravel()
+    uniq, inv = np.unique(keys, return_inverse=True)
+    return uniq // basis.N, uniq % basis.N, inv.reshape(ne, nloc, nloc)
+
+
+def assemble_stiffness(basis, C: np.ndarray, chunk: int = 8000) -> sp.csr_matrix:
+    """Global stiffness [N/mm], shape=(3N, 3N), from element tensors C, shape=(ne, 3, 3, 3, 3).
+
+    Element blocks ``K_e[a, b]`` (3x3 per pair of nodes) are summed onto the scalar sparsity pattern with
+    ``bincount`` and the block matrix is expanded once (BSR -> CSR): ~10x less sorting than a COO build.
+    """
+    nloc = len(basis.basis)
+    G = np.stack([basis.basis[a][0].grad for a in range(nloc)])   # (nloc, 3, ne, nq)
+    dx = basis.dx                                                  # (ne, nq)
+    ne = dx.shape[0]
+    brow, bcol, inv = _block_pattern(basis)
+    nb = brow.size
+    blocks = np.zeros((9, nb))
+    for s in range(0, ne, chunk):
+        e = slice(s, min(s + chunk, ne))
+        g = G[:, :, e, :]                                          # (a, k, e, q)
+        gw = g * dx[e][None, None]
+        M = np.einsum("akeq,bleq->eklab", gw, g, optimize=True).reshape(-1, 9, nloc * nloc)
+        Cm = C[e].transpose(0, 1, 3, 2, 4).reshape(-1, 9, 9)      # [e, (i,j), (k,l)]
+        K = np.matmul(Cm, M)                                       # [e, (i,j), (a,b)]
+        idx = inv[e].reshape(-1, nloc * nloc)                      # [e, (a,b)]
+        for ij in range(9):
+            blocks[ij] += np.bincount(idx.ravel(), weights=K[:, ij, :].ravel(), minlength=nb)
+    # BSR with 3x3 blocks: rows of blocks must be sorted (they are: uniq keys are row-major sorted)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(brow, minlength=basis.N))])
+    bsr = sp.bsr_matrix((blocks.T.reshape(nb, 3, 3), bcol, indptr), shape=(3 * basis.N, 3 * basis.N))
+    return bsr.tocsr()
+
+
+def assemble_body_force(basis, f_q: np.ndarray) -> np.ndarray:
+    """Load vector [N], shape=(3N,), of a body force density f [N/mm^3] given at quadrature points,
+    shape=(3, ne, nq)."""
+    nloc = len(basis.basis)
+    phi = np.stack([np.asarray(basis.basis[a][0]) for a in range(nloc)])   # (nloc, ne, nq)
+    fe = np.einsum("aeq,ieq,eq->eai", phi, f_q, basis.dx)            # (ne, nloc, 3)
+    out = np.zeros(3 * basis.N)
+    np.add.at(out, vector_dofs(basis).ravel(), fe.reshape(-1))
+    return out

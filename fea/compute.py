@@ -1,0 +1,103 @@
+"""Rod compliance files from the solid FEA, the frame model or the closed form.
+
+``solid`` runs the 3-D model on a graded curved-P2 mesh (reference), optionally twice (sizes h and
+1.5 h) for a Richardson estimate of the discretisation error, written into the file's provenance with
+the mesh statistics, the Maxwell-Betti symmetry defect of C_F and the solver used.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from enum import Enum
+
+import numpy as np
+
+from rodlab.calc import calc_rod_compliance
+from rodlab.compliance import RodCompliance
+from rodlab.design import RodDesign
+from rodlab.enums import Method
+
+from .errors import FeaError
+from .frame import asme_bend_flexibility, frame_compliance
+
+__all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
+           "DEFAULT_GRADING"]
+
+log = logging.getLogger(__name__)
+
+#: Observed convergence order of the tip compliance on curved-P2 rod meshes (rod 1#: 3.0-3.5).
+RICHARDSON_ORDER = 3.0
+#: Element size at the section changes as a fraction of the size, and growth per mm of distance.
+DEFAULT_GRADING = (0.4, 0.3)
+
+
+class FeaModel(str, Enum):
+    """Which model computes the compliance."""
+
+    SOLID = "solid"   #: 3-D elasticity, scikit-fem, curved P2 (reference)
+    FRAME = "frame"   #: Timoshenko beam frame with pipe-bend flexibility (sweeps)
+    CALC = "calc"     #: the paper's closed form generalised (Euler-Bernoulli frame)
+
+
+def default_solid_size_mm(design: RodDesign) -> float:
+    """3 x the thinnest wall: graded down to 1.2 x wall at the section changes."""
+    walls = [design.pipe_I.wall_mm, design.pipe_II.wall_mm] + ([design.bend.wall_mm] if design.has_bend else [])
+    return 3.0 * min(walls)
+
+
+def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
+                     grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False):
+    """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
+
+    ``mesher(design, size_mm, grading) -> RodMesh`` makes the meshes (``geometry.mesh_rod`` in the CLI:
+    the domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
+    """
+    from .solid import solve_compliance
+
+    h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
+    if not (np.isfinite(h) and h > 0):
+        raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
+    t0 = time.perf_counter()
+    rm = mesher(design, h, grading)
+    t_mesh = time.perf_counter() - t0
+    res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend)
+    prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
+            "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),
+            "dofs": res.dofs, "solver": res.backend, "symmetry_defect_C_F": res.symmetry_defect,
+            "mesh_mass_kg": res.mass_kg, "timings_s": dict({k: round(v, 3) for k, v in res.timings_s.items()},
+                                                            mesh=round(t_mesh, 3)),
+            "materials": {"transverse_isotropy": "axis = local tube axis", "nu23_assumed": 0.4}}
+    CF, Cg = res.C_F, res.C_g
+    if error_estimate:
+        rc = mesher(design, 1.5 * h, grading)
+        coarse = solve_compliance(design, rc, backend=backend)
+        factor = 1.5 ** RICHARDSON_ORDER - 1.0
+        errF = np.abs(CF - coarse.C_F) / factor
+        errg = np.abs(Cg - coarse.C_g) / factor
+        scaleF, scaleg = np.abs(CF).max(), np.abs(Cg).max()
+        prov["discretisation_error"] = {
+            "method": f"Richardson, sizes {h:g} and {1.5 * h:g} mm, assumed order {RICHARDSON_ORDER:g}",
+            "C_F_mm_per_N": errF.tolist(), "C_g_mm_per_g0": errg.tolist(),
+            "max_relative_C_F": float(errF.max() / scaleF), "max_relative_C_g": float(errg.max() / scaleg),
+            "relative_diagonal_C_F": (np.diag(errF) / np.abs(np.diag(CF))).tolist()}
+    CF = 0.5 * (CF + CF.T)
+    return RodCompliance.from_design(design, CF, Cg, Method.FEA, prov), res
+
+
+def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME, mesher=None,
+                       **kwargs) -> RodCompliance:
+    """Compliance of ``design`` by ``model`` (``solid`` needs a ``mesher``, see :func:`solid_compliance`)."""
+    model = FeaModel(model)
+    if model is FeaModel.SOLID:
+        if mesher is None:
+            raise FeaError("the solid model needs a mesher (geometry.mesh_rod)", key="mesher")
+        return solid_compliance(design, mesher, **kwargs)[0]
+    if kwargs:
+        raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
+    if model is FeaModel.FRAME:
+        k = asme_bend_flexibility(design)
+        CF, Cg = frame_compliance(design, k)
+        return RodCompliance.from_design(design, CF, Cg, Method.FEA, {
+            "generator": "rodlab beam frame (Timoshenko, unit-load method)", "model": "frame",
+            "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane}})
+    return calc_rod_compliance(design)

@@ -1,0 +1,10 @@
+"""Exceptions of the fea package."""
+from __future__ import annotations
+
+from rodlab.errors import FormatError
+
+__all__ = ["FeaError"]
+
+
+class FeaError(FormatError):
+    """An analysis that cannot be run or trusted (names the parameter and the fix)."""

@@ -1,0 +1,139 @@
+"""fea/: elasticity tensors, solid model vs Timoshenko and CalculiX, the frame model, the CLI."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fea.elasticity import _frames, element_tensors, rotate_tensor, stiffness_tensor_local
+from rodlab import calc_compliance, get_material, mass_properties, resolve_design
+from rodlab.design_io import design_from_dict
+from rodlab.materials import Material
+
+
+def _as6(C):
+    idx = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)]
+    return np.array([[C[i, j, k, l] for (k, l) in idx] for (i, j) in idx])
+
+
+def test_isotropic_tensor_gives_E_and_nu():
+    m = get_material("steel_304")
+    S = np.linalg.inv(_as6(stiffness_tensor_local(m)))
+    assert 1 / S[0, 0] == pytest.approx(193e3, rel=1e-12)
+    assert -S[0, 1] / S[0, 0] == pytest.approx(0.29, rel=1e-12)
+    R = _frames(np.array([[0.3, -0.5, 0.81]]))
+    np.testing.assert_allclose(rotate_tensor(stiffness_tensor_local(m), R)[0], stiffness_tensor_local(m),
+                               atol=1e-8 * 193e3)
+
+
+def test_transversely_isotropic_tensor_along_any_axis():
+    m = get_material("cfrp")
+    a = np.array([0.2, 0.7, -0.4])
+    a /= np.linalg.norm(a)
+    C = element_tensors([m], np.zeros(1, dtype=int), a[None])[0]
+    S = np.linalg.inv(_as6(C))
+    # uniaxial stress along the fibre axis -> axial strain 1/E1
+    sig = np.outer(a, a)
+    s6 = np.array([sig[0, 0], sig[1, 1], sig[2, 2], sig[1, 2], sig[0, 2], sig[0, 1]])
+    e6 = S @ s6
+    eps = np.array([[e6[0], e6[5] / 2, e6[4] / 2], [e6[5] / 2, e6[1], e6[3] / 2], [e6[4] / 2, e6[3] / 2, e6[2]]])
+    assert a @ eps @ a == pytest.approx(1 / 125e3, rel=1e-9)
+    # shear in a plane containing the axis -> engineering shear strain 1/G12
+    b = np.cross(a, [1.0, 0, 0])
+    b /= np.linalg.norm(b)
+    tau = np.outer(a, b) + np.outer(b, a)
+    t6 = np.array([tau[0, 0], tau[1, 1], tau[2, 2], tau[1, 2], tau[0, 2], tau[0, 1]])
+    e6 = S @ t6
+    eps = np.array([[e6[0], e6[5] / 2, e6[4] / 2], [e6[5] / 2, e6[1], e6[3] / 2], [e6[4] / 2, e6[3] / 2, e6[2]]])
+    assert 2 * (a @ eps @ b) == pytest.approx(1 / 4.5e3, rel=1e-9)
+
+
+def test_frame_model_is_symmetric_and_bend_softens():
+    from fea import BendFlexibility, frame_compliance
+    d = resolve_design("rod1")
+    CF, Cg = frame_compliance(d)
+    np.testing.assert_allclose(CF, CF.T, atol=1e-15)
+    stiff, _ = frame_compliance(d, BendFlexibility(1.0, 1.0))
+    soft, _ = frame_compliance(d, BendFlexibility(3.0, 3.0))
+    assert soft[2, 2] > stiff[2, 2] and soft[1, 1] > stiff[1, 1]
+    assert soft[0, 0] >= stiff[0, 0]
+
+
+# --- solid model (needs the cad extra for the mesh) ------------------------------------------------
+cad = pytest.importorskip
+SOLID = pytest.mark.cad
+
+
+def _mesher():
+    pytest.importorskip("build123d")
+    pytest.importorskip("gmsh")
+    from geometry import mesh_rod
+    return lambda d, h, g: mesh_rod(d, size_mm=h, grading=g)
+
+
+def _straight(material):
+    return design_from_dict({"format": "rodlab.rod/1", "name": "straight", "L1_mm": 300.0, "L2_mm": 300.0,
+                             "gamma_deg": 180.0, "tube": {"material": material, "outer_diameter_mm": 20.0,
+                                                          "wall_mm": 2.0},
+                             "rings": {"length_mm": 0.0}, "pipe_holder": {"length_mm": 0.0},
+                             "ball_holder": {"length_mm": 0.0}})
+
+
+@SOLID
+@pytest.mark.parametrize("material", ["steel_304", "cfrp"])
+def test_straight_tube_matches_timoshenko(material):
+    """Default mesh order and size: bending + shear and axial tip compliance within 1 % of Timoshenko."""
+    from fea import solid_compliance
+    d = _straight(material)
+    comp, res = solid_compliance(d, _mesher(), error_estimate=False)
+    CF, _ = calc_compliance(d, shear=True)
+    np.testing.assert_allclose(np.diag(comp.C_F), np.diag(CF), rtol=0.01)
+    assert np.abs(comp.C_F - np.diag(np.diag(comp.C_F))).max() < 1e-4 * comp.C_F.max()
+    assert res.symmetry_defect < 1e-6
+
+
+@SOLID
+def test_solid_rod_mass_symmetry_and_provenance():
+    from fea import solid_compliance
+    d = resolve_design("rod4")
+    comp, res = solid_compliance(d, _mesher(), size_mm=6.0, error_estimate=True)
+    assert res.mass_kg == pytest.approx(mass_properties(d).mass_kg, rel=1e-4)
+    assert res.symmetry_defect < 1e-6
+    prov = comp.provenance
+    assert prov["dofs"] == res.dofs and prov["mesh"]["order"] == 2
+    err = prov["discretisation_error"]
+    assert 0 < err["max_relative_C_F"] < 0.02
+    # the solid is softer than the Euler-Bernoulli closed form (shear, bend ovalisation), never stiffer
+    CF, _ = calc_compliance(d)
+    assert np.all(np.diag(comp.C_F) > np.diag(CF))
+
+
+@SOLID
+def test_calculix_agrees(tmp_path):
+    from fea import solve_compliance
+    from fea.calculix import ccx_available, run_ccx_compliance
+    if ccx_available() is None:
+        pytest.skip("CalculiX (ccx) is not installed")
+    from geometry import mesh_rod
+    d = resolve_design("rod1")                 # carbon: exercises the per-element orientations
+    rm = mesh_rod(d, size_mm=8.0)
+    ours = solve_compliance(d, rm).C_F
+    theirs = run_ccx_compliance(d, rm, workdir=tmp_path)
+    big = np.abs(ours) > 1e-3 * np.abs(ours).max()
+    np.testing.assert_allclose(theirs[big], ours[big], rtol=0.005)
+
+
+@SOLID
+def test_cli_fea_models(tmp_path, capsys):
+    from rodlab.cli import main
+    for model in ("frame", "calc"):
+        out = tmp_path / f"{model}.json"
+        assert main(["fea", "rod2", "--model", model, "-o", str(out)]) == 0
+        assert json.loads(out.read_text())["method"] == ("fea" if model == "frame" else "calc")
+    out = tmp_path / "solid.json"
+    png = tmp_path / "def.png"
+    assert main(["fea", "rod5", "-o", str(out), "--size", "6", "--no-error-estimate", "--png", str(png)]) == 0
+    data = json.loads(out.read_text())
+    assert data["method"] == "fea" and data["provenance"]["model"] == "solid" and png.stat().st_size > 10_000
+    assert main(["fea", "rod5", "--model", "frame", "--size", "3", "-o", str(out)]) == 2

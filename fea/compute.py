@@ -92,12 +92,17 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
         if mesher is None:
             raise FeaError("the solid model needs a mesher (geometry.mesh_rod)", key="mesher")
         return solid_compliance(design, mesher, **kwargs)[0]
+    calibration = kwargs.pop("calibration", None)
     if kwargs:
         raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
     if model is FeaModel.FRAME:
-        k = asme_bend_flexibility(design)
-        CF, Cg = frame_compliance(design, k)
+        from .frame import CALIBRATION
+        cal = calibration or CALIBRATION
+        k = asme_bend_flexibility(design, cal)
+        CF, Cg = frame_compliance(design, k, cal)
         return RodCompliance.from_design(design, CF, Cg, Method.FEA, {
             "generator": "rodlab beam frame (Timoshenko, unit-load method)", "model": "frame",
-            "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane}})
+            "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane},
+            "calibration": {"sleeve_end": cal.sleeve_end, "bend_scale_in": cal.bend_scale_in,
+                            "bend_scale_out": cal.bend_scale_out, "family": calibration is not None}})
     return calc_rod_compliance(design)

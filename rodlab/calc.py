@@ -30,7 +30,8 @@ from .errors import DesignError
 from .layout import Layer, Segment, SegmentKind, layout
 from .units import G0
 
-__all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments"]
+__all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments",
+           "unit_load_compliance"]
 
 
 class BendModel(str, Enum):
@@ -105,8 +106,15 @@ def _distal_moments(segs, idx, u, tip_mass_kg, tip_com_F):
     return W, Q
 
 
-def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool,
-               tip_com_F: np.ndarray | None = None, bend_flex: tuple[float, float] = (1.0, 1.0)):
+def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool,
+               tip_com_F: np.ndarray | None = None, bend_flex: tuple[float, float] = (1.0, 1.0),
+               shear_factor: float = 1.0, torsion_factor: float = 1.0):
+    """C_F and C_g of a cantilever tree of ``segs`` (clamped at the first) by the unit-load method.
+
+    tip_F : load point (ball centre) in {F} [mm]; tip_mass_kg / tip_com_F : rigid tip mass and its COM;
+    shear / axial : include Timoshenko shear / axial flexibility; bend_flex : factors on the arcs' bending;
+    shear_factor / torsion_factor : factors on all shear / torsion flexibility (frame-model calibration).
+    """
     idx, u, w = _quadrature(segs)
     r = np.empty((u.size, 3))
     t = np.empty((u.size, 3))
@@ -126,12 +134,13 @@ def _integrate(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear
     k_out = np.where(arc, bend_flex[1], 1.0)
     yy = np.broadcast_to(np.outer(ey, ey), tt.shape)
     nn = n[:, :, None] * n[:, None, :]
-    Km_inv = (tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy + (k_out / EI)[:, None, None] * nn)
+    Km_inv = (torsion_factor * tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy
+              + (k_out / EI)[:, None, None] * nn)
     Kf_inv = np.zeros_like(tt)
     if axial:
         Kf_inv = Kf_inv + tt / EA[:, None, None]
     if shear:
-        Kf_inv = Kf_inv + (eye - tt) / kGA[:, None, None]
+        Kf_inv = Kf_inv + shear_factor * (eye - tt) / kGA[:, None, None]
     Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
     CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
     W, Q = _distal_moments(segs, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
@@ -178,9 +187,9 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
             segs = _corner_segments(design, segs)
         from .massprops import ball_mass_properties
         ball = ball_mass_properties(design)
-        return _integrate(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm,
+        return unit_load_compliance(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm,
                           tuple(bend_flexibility))
-    return _integrate(segs, design.tool_mm, tip_mass, shear, axial)
+    return unit_load_compliance(segs, design.tool_mm, tip_mass, shear, axial)
 
 
 def paper_compliance(design: RodDesign) -> tuple[np.ndarray, np.ndarray]:

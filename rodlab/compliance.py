@@ -19,7 +19,7 @@ from . import __version__
 from .design import RodDesign
 from .enums import Method
 from .errors import ComplianceError, did_you_mean
-from .fileio import atomic_write_json, sha256_file
+from .fileio import atomic_write_json, json_safe, sha256_file
 
 __all__ = ["RodCompliance", "c_rod_um", "r_rod", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
            "read_compliance", "write_compliance", "design_hash"]
@@ -179,7 +179,7 @@ class RodCompliance:
         return {"format": FORMAT_COMPLIANCE, "rod": self.rod, "method": str(self.method),
                 "C_F_mm_per_N": r(self.C_F), "C_g_mm_per_g0": r(self.C_g), "r_rod": sig(self.r_rod),
                 "c_rod_um": round(self.c_rod_um, 4), "mass_kg": sig(self.mass_kg),
-                "com_T_mm": r(self.com_T_mm), "tool_mm": r(self.tool_mm), "provenance": self.provenance}
+                "com_T_mm": r(self.com_T_mm), "tool_mm": r(self.tool_mm), "provenance": json_safe(self.provenance)}
 
     @classmethod
     def from_dict(cls, data, path=None) -> "RodCompliance":

@@ -8,7 +8,8 @@ import re
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "sha256_file"]
+__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
+           "sha256_file"]
 
 
 def _umask() -> int:
@@ -44,6 +45,26 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
 def atomic_write_text(path: str | Path, text: str) -> Path:
     """Atomic UTF-8 text write (see :func:`atomic_write_bytes`)."""
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def json_safe(obj):
+    """Replace non-finite floats by ``None`` (JSON ``null``) and NumPy scalars/arrays by Python values."""
+    import math
+
+    import numpy as np
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
 
 
 def dumps_compact(obj, indent: int = 1) -> str:

@@ -87,27 +87,31 @@ class Segment:
     direction: np.ndarray
     layers: tuple[Layer, ...]
     radius_mm: float = 0.0
+    slack: tuple[Part, ...] = ()   #: parts whose mass counts but not their stiffness here (load-transfer zones)
+
+    def _stiff(self):
+        return [l for l in self.layers if l.part not in self.slack]
 
     # -- section properties (composite, axial modulus for bending) -------------------------
     @property
     def EA(self) -> float:
         """Axial stiffness [N]."""
-        return sum(gpa_to_mpa(l.material.E_GPa) * l.area_mm2 for l in self.layers)
+        return sum(gpa_to_mpa(l.material.E_GPa) * l.area_mm2 for l in self._stiff())
 
     @property
     def EI(self) -> float:
         """Bending stiffness [N mm^2]."""
-        return sum(gpa_to_mpa(l.material.E_GPa) * l.I_mm4 for l in self.layers)
+        return sum(gpa_to_mpa(l.material.E_GPa) * l.I_mm4 for l in self._stiff())
 
     @property
     def GJ(self) -> float:
         """Torsional stiffness [N mm^2] (axial shear modulus)."""
-        return sum(gpa_to_mpa(l.material.G_axial_GPa) * l.J_mm4 for l in self.layers)
+        return sum(gpa_to_mpa(l.material.G_axial_GPa) * l.J_mm4 for l in self._stiff())
 
     @property
     def kGA(self) -> float:
         """Shear stiffness [N] (Timoshenko)."""
-        return sum(l.shear_coefficient * gpa_to_mpa(l.material.G_axial_GPa) * l.area_mm2 for l in self.layers)
+        return sum(l.shear_coefficient * gpa_to_mpa(l.material.G_axial_GPa) * l.area_mm2 for l in self._stiff())
 
     @property
     def mass_per_mm(self) -> float:

@@ -1,0 +1,117 @@
+"""``rodlab rig fit|simulate|acquire``: the stiffness rig (core install only; no CAD stack needed)."""
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from ..compliance import read_compliance, write_compliance
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    rig = sub.add_parser("rig", help="stiffness rig: acquire, simulate and fit recordings",
+                         description="The stiffness rig of the paper (Fig. 7): hang weights on the rod, record the "
+                                     "ball's displacement, fit the compliance.")
+    rsub = rig.add_subparsers(dest="rig_command", metavar="RIG_COMMAND")
+    p = rsub.add_parser("fit", help="fit a recording: measured C_F, r_rod (Eq. 21), measured compliance file",
+                        description="Hold averages, one line per load axis and branch, intercepts in kg, measured "
+                                    "C_F, r_rod against the simulated compliance, C_g = r_rod C_g_sim (Eq. 22).")
+    p.add_argument("recording", help="*.rig.csv")
+    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc)")
+    p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
+    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
+    p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
+    p.set_defaults(func=cmd_fit)
+    p = rsub.add_parser("simulate", help="write a recording from the rig's physical model (no hardware)",
+                        description="Simulate the stiffness rig on a rod with a known compliance and optional "
+                                    "effects (friction, tare, creep, nonlinearity, crosstalk, drift, "
+                                    "compliance_scale, torsion_compliance), the contract's protocol by default.")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                   help="add an effect, e.g. friction:F_f_N=0.3 or creep:phi=0.03,tau_s=5 (repeatable)")
+    p.add_argument("--axes", default="y,z,x", help="load axes in order (default y,z,x)")
+    p.add_argument("--masses", default="0.5,1.0,1.5,2.0", help="masses [kg] (default 0.5,1.0,1.5,2.0)")
+    p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--hold-s", type=float, default=8.0)
+    p.add_argument("--rate-hz", type=float, default=10.0)
+    p.add_argument("--noise-um", type=float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-o", "--output", required=True, help="*.rig.csv")
+    p.set_defaults(func=cmd_simulate)
+    rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    from stiffness_rig import fit_recording, plot_fit, read_recording
+    rec = read_recording(args.recording)
+    sim = read_compliance(args.sim)
+    fit = fit_recording(rec, sim, robust=args.robust)
+    if not fit.success:
+        from ..errors import RodlabError
+        raise RodlabError(f"{args.recording}: {fit.message}")
+    comp = fit.compliance(sim, rec)
+    print(f"rod {rec.rod}: {len(fit.holds)} holds, noise {fit.noise_mm * 1e3:.2f} um per reading")
+    print(f"  {'load':>5} {'comp':>4} {'slope um/N':>12} {'+-':>7} {'zero load kg (load / unload)':>30} {'sim um/N':>9}")
+    for ln in fit.lines:
+        z = ln.zero_load_kg
+        print(f"  {ln.axis.value:>5} {'xyz'[ln.component]:>4} {ln.slope_mm_per_N * 1e3:12.3f} {ln.se_mm_per_N * 1e3:7.3f} "
+              f"{z['load']:+14.4f} / {z['unload']:+8.4f} {sim.C_F[ln.component, ln.axis.index] * 1e3:12.3f}")
+    print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
+    np.set_printoptions(precision=6, suppress=True)
+    print(f"  measured C_F [mm/N] =\n{comp.C_F}")
+    print(f"  wrote {write_compliance(comp, args.output)}")
+    if args.png:
+        from stiffness_rig import plot_fit as _p  # noqa: F401
+        print(f"  wrote {plot_fit(fit, args.png, sim, title=f'rod {rec.rod}')}")
+    return 0
+
+
+def parse_effects(specs: list[str]) -> dict:
+    """``NAME[:key=value,...]`` -> {name: params}, defaults from :data:`stiffness_rig.simulate.EFFECT_DEFAULTS`."""
+    from stiffness_rig.simulate import EFFECT_DEFAULTS
+
+    from ..errors import RodlabError, did_you_mean
+    out = {}
+    for spec in specs:
+        name, _, rest = spec.partition(":")
+        name = name.strip()
+        if name not in EFFECT_DEFAULTS:
+            raise RodlabError(f"--effect {spec!r}: unknown effect {name!r}; known: {sorted(EFFECT_DEFAULTS)}."
+                              + did_you_mean(name, EFFECT_DEFAULTS))
+        params = dict(EFFECT_DEFAULTS[name])
+        for kv in filter(None, rest.split(",")):
+            k, eq, v = kv.partition("=")
+            if not eq or k.strip() not in params:
+                raise RodlabError(f"--effect {spec!r}: expected key=value with keys {sorted(params)}")
+            try:
+                params[k.strip()] = v.strip() if isinstance(params[k.strip()], str) else float(v)
+            except ValueError as e:
+                raise RodlabError(f"--effect {spec!r}: {k} must be a number, got {v!r}") from e
+        out[name] = params
+    return out
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from stiffness_rig.model import Protocol, RigModel
+    from stiffness_rig.simulate import simulate_recording
+
+    from ..errors import RodlabError
+    sim = read_compliance(args.sim)
+    effects = parse_effects(args.effect)
+    try:
+        masses = tuple(float(m) for m in args.masses.split(","))
+        axes = tuple(a.strip() for a in args.axes.split(","))
+        from ..enums import LoadAxis
+        for a in axes:
+            LoadAxis.parse(a, "load axis")
+    except ValueError as e:
+        raise RodlabError(f"--masses / --axes: {e}") from e
+    proto = Protocol(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
+    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed)
+    path = simulate_recording(model, proto, args.output, rod=sim.rod,
+                              extra_meta={"effects": json.dumps(effects) if effects else "none", "seed": args.seed})
+    print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {effects or 'none'}")
+    return 0

@@ -1,0 +1,97 @@
+"""``rodlab sweep``: L1 x L2 design sweeps (frame, calc or solid model) on Dask."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+from ..design_io import resolve_design
+from ..errors import RodlabError
+from ..fileio import atomic_write_bytes, atomic_write_text
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("sweep", help="sweep L1 x L2 designs: compliance, c_rod, mass (Dask)",
+                       description="Evaluate every L1 x L2 variant of a base design (validated; invalid ones are "
+                                   "reported in the table). Results are cached per design, so a re-run only "
+                                   "computes what is missing.")
+    p.add_argument("--L1", required=True, help="START:STOP:STEP or a,b,c [mm]")
+    p.add_argument("--L2", required=True, help="START:STOP:STEP or a,b,c [mm]")
+    p.add_argument("--base", default="rod1", help="base design (file or built-in; default rod1)")
+    p.add_argument("--model", choices=["frame", "calc", "solid"], default="frame")
+    p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
+    p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
+    p.add_argument("--serial", action="store_true", help="do not use Dask")
+    p.add_argument("--calibrate", action="store_true",
+                   help="frame: calibrate it on one solid FEA of the base design first (cad extra; ~10 s); the "
+                        "family's sections stay fixed over L1 x L2, so the local corrections carry over")
+    p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
+    p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
+    p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
+    p.set_defaults(func=cmd_sweep)
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from fea.sweep import parse_range, run_sweep
+    from fea.sweep_plot import plot_sweep
+    base = resolve_design(args.base)
+    L1s, L2s = parse_range(args.L1, "L1"), parse_range(args.L2, "L2")
+    out = Path(args.output)
+    if out.suffix not in (".csv", ".parquet"):
+        raise RodlabError(f"output must end in .csv or .parquet, got {out.name!r}")
+    mesher = None
+    if args.model == "solid":
+        from .cmd_geometry import require_cad
+        geometry = require_cad()
+        mesher = partial(_mesh, geometry.mesh_rod)
+    t0 = time.perf_counter()
+    calibration = None
+    if args.calibrate:
+        if args.model != "frame":
+            raise RodlabError("--calibrate applies to --model frame")
+        from fea import solid_compliance
+        from fea.frame import calibrate_frame, frame_errors
+
+        from .cmd_geometry import require_cad
+        geometry = require_cad()
+        comp, _ = solid_compliance(base, partial(_mesh, geometry.mesh_rod), error_estimate=False)
+        calibration = calibrate_frame([base], [comp.C_F], [comp.C_g])
+        err = frame_errors(base, comp.C_F, comp.C_g, calibration)
+        print(f"frame calibrated on the solid FEA of {base.name}: {calibration} (max |err| on the base "
+              f"{100 * abs(err).max():.2f} %)")
+
+    def progress(done, total):
+        bar = "#" * int(30 * done / max(total, 1))
+        print(f"\r  [{bar:<30}] {done}/{total} designs", end="", file=sys.stderr, flush=True)
+    df = run_sweep(base, L1s, L2s, model=args.model, scheduler=args.scheduler, workers=args.workers,
+                   cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
+                   progress=progress, calibration=calibration)
+    print(file=sys.stderr)
+    if out.suffix == ".parquet":
+        import io
+        buf = io.BytesIO()
+        try:
+            df.to_parquet(buf)
+        except ImportError as e:
+            raise RodlabError("Parquet needs pyarrow (pip install pyarrow); or write .csv") from e
+        atomic_write_bytes(out, buf.getvalue())
+    else:
+        atomic_write_text(out, df.to_csv(index=False))
+    png = Path(args.png) if args.png else out.with_suffix(".png")
+    plot_sweep(df, png, title=f"{args.model} model, base design {base.name}")
+    ok = df[df["status"] == "ok"]
+    print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")
+    if len(ok):
+        best = ok.loc[ok["c_rod_um"].idxmin()]
+        print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
+              f"mass = {1e3 * best['mass_kg']:.0f} g")
+    print(f"  wrote {out} and {png}")
+    return 0
+
+
+def _mesh(mesh_rod, design, size_mm, grading):
+    return mesh_rod(design, size_mm=size_mm, grading=grading)

@@ -1,0 +1,258 @@
+"""Rig profiles (how the instruments are wired) and acquisition plans (what to record), TOML files.
+
+Profile (``rodlab.rigprofile/1``)::
+
+    format = "rodlab.rigprofile/1"
+    [device]
+    port = "/dev/ttyUSB0"        # a device path or a pyserial URL (socket://host:port, rfc2217://..., loop://)
+    baudrate = 9600              # also: bytesize = 8, parity = "N" | "E" | "O", stopbits = 1, timeout_s = 0.5
+    protocol = "query"           # "query": request / one-line answer; "stream": the device pushes lines
+    request = "R\\r\\n"            # query only: what asks for a reading
+    separator = ","              # between channel values in a line
+    checksum = "none"            # "none" | "xor" (line ends with *HH, XOR of the bytes before '*')
+    retries = 5                  # attempts before the device counts as not answering
+    [[channel]]                  # one per gauge: its position in the line, the tool axis, sign and scale
+    index = 0
+    axis = "y"
+    sign = 1.0
+    scale_mm = 0.001             # device unit -> mm
+    [temperature]                # optional: a channel holding the temperature in degC
+    index = 2
+    [loader]                     # optional: a loader that can be commanded (non-interactive mode)
+    command = "LOAD {axis} {phase} {mass_kg:.4f}\\r\\n"
+    ack = "OK"
+
+Plan (``rodlab.rigplan/1``)::
+
+    format = "rodlab.rigplan/1"
+    rod = "1#"
+    axes = ["y", "z", "x"]
+    masses_kg = [0.5, 1.0, 1.5, 2.0]
+    repeats = 5
+    hold_s = 8.0
+    rate_Hz = 10.0
+    [settle]                     # a hold starts once the readings stay within tolerance for window_s
+    window_s = 1.0
+    tolerance_mm = 0.003
+    timeout_s = 30.0
+"""
+from __future__ import annotations
+
+import re
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rodlab.enums import LoadAxis
+from rodlab.errors import did_you_mean
+
+from .errors import RigError
+from .model import Protocol
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
+
+FORMAT_PROFILE = "rodlab.rigprofile/1"
+FORMAT_PLAN = "rodlab.rigplan/1"
+
+
+def _load_toml(path) -> tuple[dict, str]:
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError as e:
+        raise RigError("file not found", path=p) from e
+    except (OSError, UnicodeDecodeError) as e:
+        raise RigError(f"cannot read as UTF-8 text: {e}", path=p) from e
+    try:
+        return tomllib.loads(text), text
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise RigError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+
+
+def _line(text: str, key: str) -> int | None:
+    for i, raw in enumerate(text.splitlines(), start=1):
+        if re.match(rf"^\s*{re.escape(key)}\s*=", raw):
+            return i
+    return None
+
+
+class _Reader:
+    def __init__(self, path, text):
+        self.path, self.text = path, text
+
+    def err(self, msg, key):
+        return RigError(msg, path=self.path, line=_line(self.text, key.split(".")[-1]) if key else None, key=key)
+
+    def keys(self, tbl, allowed, where):
+        if not isinstance(tbl, dict):
+            raise self.err(f"expected a table", where)
+        for k in tbl:
+            if k not in allowed:
+                raise self.err(f"unknown key `{k}` in [{where}]; allowed: {sorted(allowed)}." + did_you_mean(k, allowed),
+                               f"{where}.{k}" if where else k)
+
+    def num(self, tbl, key, where, default=None, positive=True, integer=False):
+        if key not in tbl:
+            if default is None:
+                raise self.err(f"missing required key `{key}`", f"{where}.{key}" if where else key)
+            return default
+        v = tbl[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or v != v or v in (float("inf"), float("-inf")):
+            raise self.err(f"expected a finite number, got {v!r}", f"{where}.{key}" if where else key)
+        if positive and v <= 0:
+            raise self.err(f"expected a number > 0, got {v!r}", f"{where}.{key}" if where else key)
+        if integer and int(v) != v:
+            raise self.err(f"expected an integer, got {v!r}", f"{where}.{key}" if where else key)
+        return int(v) if integer else float(v)
+
+    def string(self, tbl, key, where, default=None, choices=None):
+        if key not in tbl:
+            if default is None:
+                raise self.err(f"missing required key `{key}`", f"{where}.{key}" if where else key)
+            return default
+        v = tbl[key]
+        if not isinstance(v, str):
+            raise self.err(f"expected a string, got {v!r}", f"{where}.{key}" if where else key)
+        if choices and v not in choices:
+            raise self.err(f"expected one of {list(choices)}, got {v!r}." + did_you_mean(v, choices),
+                           f"{where}.{key}" if where else key)
+        return v
+
+
+@dataclass(frozen=True)
+class Channel:
+    """A gauge: position ``index`` in the device line, tool ``axis`` (0..2), ``sign``, ``scale_mm`` per unit."""
+
+    index: int
+    axis: int
+    sign: float = 1.0
+    scale_mm: float = 1.0
+
+
+@dataclass(frozen=True)
+class RigProfile:
+    """How the rig's instruments are wired (see the module docstring for the file format)."""
+
+    port: str
+    protocol: str
+    channels: tuple
+    baudrate: int = 9600
+    bytesize: int = 8
+    parity: str = "N"
+    stopbits: float = 1
+    timeout_s: float = 0.5
+    request: str = "R\r\n"
+    separator: str = ","
+    checksum: str = "none"
+    retries: int = 5
+    temperature_index: int | None = None
+    loader_command: str | None = None
+    loader_ack: str = "OK"
+    path: Path | None = field(default=None, compare=False)
+
+    @property
+    def n_values(self) -> int:
+        idx = [c.index for c in self.channels] + ([self.temperature_index] if self.temperature_index is not None else [])
+        return max(idx) + 1
+
+
+def read_profile(path) -> RigProfile:
+    data, text = _load_toml(path)
+    r = _Reader(Path(path), text)
+    r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")
+    if data.get("format") != FORMAT_PROFILE:
+        raise r.err(f"expected format = \"{FORMAT_PROFILE}\", got {data.get('format')!r}", "format")
+    dev = data.get("device")
+    if dev is None:
+        raise r.err("missing [device]", "device")
+    r.keys(dev, {"port", "baudrate", "bytesize", "parity", "stopbits", "timeout_s", "protocol", "request",
+                 "separator", "checksum", "retries"}, "device")
+    chans = data.get("channel")
+    if not isinstance(chans, list) or not chans:
+        raise r.err("at least one [[channel]] is needed (index, axis, sign, scale_mm)", "channel")
+    channels = []
+    for ch in chans:
+        r.keys(ch, {"index", "axis", "sign", "scale_mm"}, "channel")
+        ax = r.string(ch, "axis", "channel", choices=("x", "y", "z"))
+        sign = r.num(ch, "sign", "channel", 1.0, positive=False)
+        if sign not in (1.0, -1.0):
+            raise r.err(f"sign must be 1 or -1, got {sign}", "channel.sign")
+        channels.append(Channel(r.num(ch, "index", "channel", None, positive=False, integer=True), "xyz".index(ax),
+                                sign, r.num(ch, "scale_mm", "channel", 1.0)))
+    if len({c.axis for c in channels}) != len(channels):
+        raise r.err("two channels measure the same tool axis", "channel.axis")
+    temp = data.get("temperature")
+    t_index = None
+    if temp is not None:
+        r.keys(temp, {"index"}, "temperature")
+        t_index = r.num(temp, "index", "temperature", None, positive=False, integer=True)
+    loader = data.get("loader")
+    cmd, ack = None, "OK"
+    if loader is not None:
+        r.keys(loader, {"command", "ack"}, "loader")
+        cmd = r.string(loader, "command", "loader").encode().decode("unicode_escape")
+        ack = r.string(loader, "ack", "loader", "OK")
+    return RigProfile(
+        port=r.string(dev, "port", "device"), protocol=r.string(dev, "protocol", "device", "query", ("query", "stream")),
+        channels=tuple(channels), baudrate=r.num(dev, "baudrate", "device", 9600, integer=True),
+        bytesize=r.num(dev, "bytesize", "device", 8, integer=True),
+        parity=r.string(dev, "parity", "device", "N", ("N", "E", "O")),
+        stopbits=r.num(dev, "stopbits", "device", 1.0), timeout_s=r.num(dev, "timeout_s", "device", 0.5),
+        request=r.string(dev, "request", "device", "R\\r\\n").encode().decode("unicode_escape"),
+        separator=r.string(dev, "separator", "device", ","),
+        checksum=r.string(dev, "checksum", "device", "none", ("none", "xor")),
+        retries=r.num(dev, "retries", "device", 5, integer=True), temperature_index=t_index,
+        loader_command=cmd, loader_ack=ack, path=Path(path))
+
+
+@dataclass(frozen=True)
+class RigPlan:
+    """What to record: the protocol, the settle rule [s, mm], the rod's name."""
+
+    rod: str
+    protocol: Protocol
+    settle_window_s: float = 1.0
+    settle_tolerance_mm: float = 0.003
+    settle_timeout_s: float = 30.0
+    path: Path | None = field(default=None, compare=False)
+
+
+def read_plan(path) -> RigPlan:
+    data, text = _load_toml(path)
+    r = _Reader(Path(path), text)
+    r.keys(data, {"format", "rod", "axes", "masses_kg", "repeats", "hold_s", "rate_Hz", "settle", "measured"}, "")
+    if data.get("format") != FORMAT_PLAN:
+        raise r.err(f"expected format = \"{FORMAT_PLAN}\", got {data.get('format')!r}", "format")
+    rod = r.string(data, "rod", "")
+    axes = data.get("axes", ["y", "z", "x"])
+    if not isinstance(axes, list) or not axes:
+        raise r.err("axes must be a non-empty list such as [\"y\", \"z\", \"x\"]", "axes")
+    for a in axes:
+        if a not in [x.value for x in LoadAxis]:
+            raise r.err(f"unknown load axis {a!r}; expected one of {[x.value for x in LoadAxis]}", "axes")
+    masses = data.get("masses_kg", [0.5, 1.0, 1.5, 2.0])
+    if not isinstance(masses, list) or not masses or any(isinstance(m, bool) or not isinstance(m, (int, float))
+                                                          or not m > 0 for m in masses):
+        raise r.err("masses_kg must be a non-empty list of masses > 0 [kg]", "masses_kg")
+    if sorted(masses) != list(masses):
+        raise r.err("masses_kg must increase (the loading branch)", "masses_kg")
+    settle = data.get("settle", {})
+    r.keys(settle, {"window_s", "tolerance_mm", "timeout_s"}, "settle")
+    measured = dict(Protocol().measured)
+    meas = data.get("measured", {})
+    r.keys(meas, [a.value for a in LoadAxis], "measured")
+    for k, v in meas.items():
+        if not isinstance(v, list) or any(c not in ("x", "y", "z") for c in v):
+            raise r.err("each entry lists measured components, e.g. y = [\"y\", \"z\"]", f"measured.{k}")
+        measured[k] = tuple("xyz".index(c) for c in v)
+    proto = Protocol(axes=tuple(axes), masses=tuple(float(m) for m in masses),
+                     repeats=r.num(data, "repeats", "", 5, integer=True), hold_s=r.num(data, "hold_s", "", 8.0),
+                     rate_Hz=r.num(data, "rate_Hz", "", 10.0), measured=measured)
+    return RigPlan(rod, proto, r.num(settle, "window_s", "settle", 1.0), r.num(settle, "tolerance_mm", "settle", 0.003),
+                   r.num(settle, "timeout_s", "settle", 30.0), Path(path))

@@ -1,0 +1,14 @@
+"""Exceptions of the stiffness_rig package."""
+from __future__ import annotations
+
+from rodlab.errors import FormatError
+
+__all__ = ["RigError", "DeviceError"]
+
+
+class RigError(FormatError):
+    """A recording, profile or plan that cannot be used (names the file, line and column)."""
+
+
+class DeviceError(RigError):
+    """An instrument that does not answer or answers garbage beyond the retry policy."""

@@ -1,0 +1,189 @@
+"""Load-deflection fitting (paper Section 4.2, Eqs. 20-22): measured C_F, r_rod, the measured compliance file.
+
+For every load axis and measured displacement component the hold averages are fitted with one slope and
+an intercept per branch (loading / unloading): Coulomb friction in the rig's slides shifts the two
+branches apart but leaves the slope (the compliance) alone. Separate per-branch lines are reported too,
+with their intercepts on the load axis in kg (the paper's ~0.1 kg). ``robust=True`` uses a soft-L1 loss
+(outlying holds lose weight). Standard errors come from the residual scatter of the hold averages.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab import __version__
+from rodlab.compliance import RodCompliance, r_rod as eq21_r_rod
+from rodlab.enums import LoadAxis, Method, Phase
+from rodlab.fileio import sha256_file
+from rodlab.units import G0
+
+from .errors import RigError
+from .holds import Holds, hold_averages
+from .recording import RigRecording
+
+__all__ = ["LineFit", "RigFit", "fit_recording"]
+
+_AX = "xyz"
+
+
+@dataclass
+class LineFit:
+    """Fit of one displacement component against the load along one axis.
+
+    slope_mm_per_N : common slope (= C_F[component, axis]); se_mm_per_N : its standard error
+    intercept_mm : {"load": a, "unload": a} of the common-slope model
+    branch : per-branch independent lines {phase: {"slope_mm_per_N", "intercept_mm", "zero_load_kg"}}
+    zero_load_kg : {phase: mass where the common-slope line crosses zero displacement} (NaN if slope ~ 0)
+    residual_rms_mm, n_holds : fit quality
+    """
+
+    axis: LoadAxis
+    component: int
+    slope_mm_per_N: float
+    se_mm_per_N: float
+    intercept_mm: dict
+    zero_load_kg: dict
+    branch: dict
+    residual_rms_mm: float
+    n_holds: int
+
+    def to_dict(self) -> dict:
+        return {"load_axis": str(self.axis), "component": _AX[self.component],
+                "slope_mm_per_N": self.slope_mm_per_N, "se_mm_per_N": self.se_mm_per_N,
+                "intercept_mm": self.intercept_mm, "zero_load_kg": self.zero_load_kg, "branch": self.branch,
+                "residual_rms_mm": self.residual_rms_mm, "n_holds": self.n_holds}
+
+
+@dataclass
+class RigFit:
+    """Result of fitting a recording (scipy-``OptimizeResult`` style).
+
+    C_F_meas : measured entries [mm/N], shape=(3, 3), NaN where not measured; C_F_se : their standard errors
+    lines : every :class:`LineFit`; noise_mm : within-hold noise of one reading; holds : the hold table
+    r_rod : Eq. 21 (None without a simulated compliance); success, message : whether the fit can be used
+    """
+
+    C_F_meas: np.ndarray
+    C_F_se: np.ndarray
+    lines: list
+    noise_mm: float
+    holds: Holds
+    r_rod: float | None = None
+    success: bool = True
+    message: str = ""
+    residuals_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
+        """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
+        C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file."""
+        r = self.r_rod if self.r_rod is not None else eq21(self, sim)
+        C = r * sim.C_F.copy()
+        M = self.C_F_meas
+        for i in range(3):
+            for j in range(3):
+                a, b = M[i, j], M[j, i]
+                if np.isfinite(a) and np.isfinite(b):
+                    C[i, j] = 0.5 * (a + b)
+                elif np.isfinite(a):
+                    C[i, j] = C[j, i] = a
+                elif np.isfinite(b):
+                    C[i, j] = C[j, i] = b
+        prov = {"rodlab_version": __version__, "method": "meas", "generator": "rodlab rig fit",
+                "simulated": {"method": str(sim.method), "C_F_mm_per_N": sim.C_F.tolist(),
+                              "provenance": sim.provenance},
+                "noise_mm": self.noise_mm, "lines": [ln.to_dict() for ln in self.lines],
+                "measured_entries": [[bool(np.isfinite(v)) for v in row] for row in M],
+                "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
+                "unmeasured_entries": "r_rod x simulated"}
+        if recording is not None and recording.path is not None:
+            prov["recording"] = str(recording.path)
+            prov["recording_sha256"] = sha256_file(recording.path)
+        return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm, r, prov)
+
+
+def eq21(fit: RigFit, sim: RodCompliance) -> float:
+    M = fit.C_F_meas
+    if not (np.isfinite(M[1, 1]) and np.isfinite(M[2, 2])):
+        missing = [n for n, v in (("c22 (load y, measure y)", M[1, 1]), ("c33 (load z, measure z)", M[2, 2]))
+                   if not np.isfinite(v)]
+        raise RigError(f"r_rod (Eq. 21) needs c22 and c33; the recording lacks {' and '.join(missing)}",
+                       key="load_axis")
+    return eq21_r_rod(M, sim.C_F)
+
+
+def _lsq(X, y, robust: bool, f_scale: float):
+    if not robust:
+        coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+        return coef
+    from scipy.optimize import least_squares
+    c0, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = least_squares(lambda c: X @ c - y, c0, loss="soft_l1", f_scale=max(f_scale, 1e-9))
+    return r.x
+
+
+def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: bool = False) -> RigFit:
+    """Fit every (load axis, measured component) of ``rec``; Eq. 21 when ``sim`` is given."""
+    holds = hold_averages(rec)
+    noise = holds.noise_mm()
+    lines = []
+    acc: dict[tuple[int, int], list] = {}
+    resid_all = []
+    # the first hold of each series (mass 0, no hanger) is the zero reference of the series: it carries no
+    # information on the slope, and no friction is engaged there, so it is not a point of either branch
+    first = {}
+    for i, a in enumerate(holds.axis):
+        first.setdefault(a, i)
+    reference = np.zeros(len(holds), dtype=bool)
+    for a, i in first.items():
+        reference[i] = holds.mass_kg[i] == 0.0
+    for axis in sorted(set(holds.axis), key=lambda a: a.value):
+        sel = np.array([a is axis for a in holds.axis]) & ~reference
+        h = holds.select(sel)
+        F = h.mass_kg * G0 * axis.sign                       # force component along the axis index [N]
+        is_unload = np.array([p is Phase.UNLOAD for p in h.phase])
+        for c in range(3):
+            y = h.mean_mm[:, c]
+            ok = np.isfinite(y)
+            if ok.sum() < 3 or np.ptp(F[ok]) <= 0:
+                continue
+            Fo, yo, uo = F[ok], y[ok], is_unload[ok]
+            two = uo.any() and (~uo).any()
+            X = np.column_stack([~uo, uo, Fo]).astype(float) if two else np.column_stack([np.ones_like(Fo), Fo])
+            coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
+            res = yo - X @ coef
+            dof = max(len(yo) - X.shape[1], 1)
+            s2 = float(res @ res / dof)
+            cov = s2 * np.linalg.pinv(X.T @ X)
+            slope, se = float(coef[-1]), float(np.sqrt(cov[-1, -1]))
+            icpt = {"load": float(coef[0]), "unload": float(coef[1]) if two else float(coef[0])}
+            significant = abs(slope) > 3 * se and abs(slope) > 0
+            zero = {k: (float(-v / (slope * G0 * axis.sign)) if significant else float("nan"))
+                    for k, v in icpt.items()}
+            branch = {}
+            for name, m in (("load", ~uo), ("unload", uo)):
+                if m.sum() >= 2 and np.ptp(Fo[m]) > 0:
+                    b, a = np.polyfit(Fo[m], yo[m], 1)
+                    branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
+                                    "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
+            lines.append(LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo)))
+            acc.setdefault((c, axis.index), []).append((slope, se))
+            resid_all.append(res)
+    if not lines:
+        raise RigError("no load axis has a measured component with at least 3 holds at different loads",
+                       path=rec.path, key="mass_kg")
+    M = np.full((3, 3), np.nan)
+    S = np.full((3, 3), np.nan)
+    for (c, i), vals in acc.items():
+        w = np.array([1 / max(se, 1e-12) ** 2 for _, se in vals])
+        M[c, i] = float(np.sum(w * np.array([s for s, _ in vals])) / w.sum())
+        S[c, i] = float(1 / np.sqrt(w.sum()))
+    fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all))
+    if sim is not None:
+        try:
+            fit.r_rod = eq21(fit, sim)
+        except RigError as e:
+            fit.success, fit.message = False, e.detail
+    if fit.success:
+        fit.message = f"{len(lines)} lines fitted; noise {noise * 1e3:.2f} um per reading"
+    return fit

@@ -1,0 +1,74 @@
+"""The paper's Fig. 8 for a recording: load-deflection per load axis, measured vs fitted vs simulated."""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.enums import Phase
+from rodlab.fileio import atomic_write_bytes
+from rodlab.units import G0
+
+__all__ = ["plot_fit"]
+
+_AX = "xyz"
+
+
+def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
+    """One panel per load axis: the displacement along the load axis [um] vs load [kg]; hold means with the
+    scatter over repeats (mean +- SD), the fitted loading / unloading lines, the simulated line."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    diag = [ln for ln in fit.lines if ln.component == ln.axis.index]
+    n = max(len(diag), 1)
+    fig, axes = plt.subplots(2, n, figsize=(5.2 * n, 7.0), squeeze=False, constrained_layout=True,
+                             gridspec_kw={"height_ratios": [2.2, 1]})
+    h = fit.holds
+    for ax, rax, ln in zip(axes[0], axes[1], diag):
+        ref = sim.C_F[ln.component, ln.axis.index] if sim is not None else ln.slope_mm_per_N
+        sel0 = np.array([a is ln.axis for a in h.axis])
+        for phase, colour, marker in ((Phase.LOAD, "tab:blue", "o"), (Phase.UNLOAD, "tab:orange", "s")):
+            m = sel0 & np.array([p is phase for p in h.phase])
+            if m.any():
+                r = 1e3 * (h.mean_mm[m, ln.component] - ref * h.mass_kg[m] * G0 * ln.axis.sign)
+                rax.plot(h.mass_kg[m] + (0.01 if phase is Phase.UNLOAD else -0.01), r, marker, color=colour, ms=3,
+                         alpha=0.7, label=str(phase))
+        rax.axhline(0, color="k", lw=0.8, ls="--")
+        rax.set_xlabel("load mass [kg]")
+        rax.set_ylabel("measured - " + ("simulated" if sim is not None else "fit") + " [um]")
+        rax.grid(True, lw=0.3)
+        rax.legend(fontsize=7)
+        sel = np.array([a is ln.axis for a in h.axis])
+        for phase, colour, marker in ((Phase.LOAD, "tab:blue", "o"), (Phase.UNLOAD, "tab:orange", "s")):
+            m = sel & np.array([p is phase for p in h.phase])
+            if not m.any():
+                continue
+            masses = np.unique(h.mass_kg[m])
+            y = [h.mean_mm[m & (h.mass_kg == mk), ln.component] * 1e3 for mk in masses]
+            ax.errorbar(masses, [v.mean() for v in y], yerr=[v.std(ddof=1) if v.size > 1 else 0 for v in y],
+                        fmt=marker, color=colour, ms=5, capsize=3, label=f"measured, {phase} (mean +- SD of repeats)")
+            mm = np.linspace(0, h.mass_kg[sel].max(), 50)
+            a = ln.intercept_mm[str(phase)]
+            ax.plot(mm, 1e3 * (a + ln.slope_mm_per_N * mm * G0 * ln.axis.sign), "-", color=colour, lw=1,
+                    label=f"fit, {phase}: zero at {ln.zero_load_kg[str(phase)]:+.3f} kg")
+        if sim is not None:
+            mm = np.linspace(0, h.mass_kg[sel].max(), 50)
+            ax.plot(mm, 1e3 * sim.C_F[ln.component, ln.axis.index] * mm * G0 * ln.axis.sign, "k--", lw=1,
+                    label=f"simulated ({sim.method})")
+        c = f"c{ln.component + 1}{ln.axis.index + 1}"
+        ax.set_title(f"load along {ln.axis.value}_T: {c} = {ln.slope_mm_per_N * 1e3:.2f} +- "
+                     f"{ln.se_mm_per_N * 1e3:.2f} um/N", fontsize=10)
+        ax.set_xlabel("load mass [kg] (hanger included)")
+        ax.set_ylabel(f"ball displacement along {_AX[ln.component]}_T [um]")
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=7)
+    if fit.r_rod is not None:
+        title = f"{title}  r_rod = {fit.r_rod:.4f} (Eq. 21)".strip()
+    fig.suptitle(title, fontsize=11)
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=120)
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())

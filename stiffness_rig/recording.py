@@ -1,0 +1,280 @@
+"""Stiffness-rig recordings (contract ``rodlab.rig/1``): read with line/column errors, append safely.
+
+File layout: comment lines ``# key: value`` (at least ``rod`` and ``format``), then a CSV header and one
+row per sample::
+
+    time_s,step,repeat,phase,load_axis,mass_kg,disp_x_mm,disp_y_mm,disp_z_mm[,temp_C]
+
+``disp_*`` may be empty where that axis is not measured. Every sample of a hold (``step``) has the same
+``mass_kg``, ``load_axis``, ``phase`` and ``repeat``. Each load axis's series starts with a mass-0 hold.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.enums import LoadAxis, Phase
+from rodlab.errors import did_you_mean
+
+from .errors import RigError
+
+__all__ = ["RigRecording", "read_recording", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
+           "format_row"]
+
+FORMAT_RIG = "rodlab.rig/1"
+COLUMNS = ("time_s", "step", "repeat", "phase", "load_axis", "mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm")
+OPTIONAL_COLUMNS = ("temp_C",)
+
+
+@dataclass
+class RigRecording:
+    """A stiffness-rig recording (all samples).
+
+    Attributes
+    ----------
+    meta : the ``# key: value`` header (``rod``, ``format``, ...)
+    time_s : shape=(n,) [s]; step, repeat : shape=(n,) int; phase : shape=(n,) of :class:`Phase`
+    load_axis : shape=(n,) of :class:`LoadAxis`; mass_kg : shape=(n,) [kg] (hanger included)
+    disp_mm : shape=(n, 3) [mm] ball-centre displacement in {T}, NaN where not measured
+    temp_C : shape=(n,) [degC] or None
+    """
+
+    meta: dict
+    time_s: np.ndarray
+    step: np.ndarray
+    repeat: np.ndarray
+    phase: np.ndarray
+    load_axis: np.ndarray
+    mass_kg: np.ndarray
+    disp_mm: np.ndarray
+    temp_C: np.ndarray | None = None
+    path: Path | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        n = self.time_s.shape[0]
+        for name in ("step", "repeat", "phase", "load_axis", "mass_kg"):
+            if getattr(self, name).shape != (n,):
+                raise ValueError(f"{name} must have shape ({n},), got {getattr(self, name).shape}")
+        if self.disp_mm.shape != (n, 3):
+            raise ValueError(f"disp_mm must have shape ({n}, 3), got {self.disp_mm.shape}")
+
+    @property
+    def n(self) -> int:
+        return int(self.time_s.shape[0])
+
+    @property
+    def rod(self) -> str:
+        return str(self.meta.get("rod", ""))
+
+    def measured_axes(self) -> list[int]:
+        """Components (0..2) that have at least one reading."""
+        return [i for i in range(3) if np.isfinite(self.disp_mm[:, i]).any()]
+
+    def steps(self) -> np.ndarray:
+        """Distinct step numbers in recording order."""
+        _, first = np.unique(self.step, return_index=True)
+        return self.step[np.sort(first)]
+
+
+def _float(cell: str, path, line: int, col: str, allow_empty: bool = False) -> float:
+    if cell.strip() == "":
+        if allow_empty:
+            return math.nan
+        raise RigError(f"empty cell; expected a number", path=path, line=line, key=col)
+    try:
+        v = float(cell)
+    except ValueError:
+        raise RigError(f"expected a number, got {cell!r}", path=path, line=line, key=col) from None
+    if not math.isfinite(v):
+        raise RigError(f"expected a finite number, got {cell!r}", path=path, line=line, key=col)
+    return v
+
+
+def _int(cell: str, path, line: int, col: str) -> int:
+    v = _float(cell, path, line, col)
+    if v != int(v) or v < 0:
+        raise RigError(f"expected a non-negative integer, got {cell!r}", path=path, line=line, key=col)
+    return int(v)
+
+
+def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
+    """Read a ``*.rig.csv``; every malformed cell or rule names its line and column."""
+    p = Path(path)
+    if text is None:
+        try:
+            raw = p.read_bytes()
+        except FileNotFoundError as e:
+            raise RigError("file not found", path=p) from e
+        except OSError as e:
+            raise RigError(f"cannot read: {e.strerror}", path=p) from e
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as e:
+            line = raw[:e.start].count(b"\n") + 1
+            raise RigError(f"not UTF-8 text ({e.reason})", path=p, line=line) from e
+    lines = text.splitlines()
+    meta: dict[str, str] = {}
+    i = 0
+    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
+        body = lines[i].lstrip("#").strip()
+        if ":" in body:
+            k, v = body.split(":", 1)
+            meta[k.strip()] = v.strip()
+        i += 1
+    if meta.get("format") != FORMAT_RIG:
+        raise RigError(f"expected a comment line '# format: {FORMAT_RIG}' before the header, got "
+                       f"{meta.get('format')!r}", path=p, line=1, key="format")
+    if "rod" not in meta:
+        raise RigError("expected a comment line '# rod: NAME' before the header", path=p, line=1, key="rod")
+    if i >= len(lines):
+        raise RigError("no header line", path=p, line=i + 1)
+    header_line = i + 1
+    header = [h.strip() for h in next(csv.reader([lines[i]]))]
+    for col in header:
+        if col not in COLUMNS + OPTIONAL_COLUMNS:
+            raise RigError(f"unknown column {col!r}; expected {list(COLUMNS + OPTIONAL_COLUMNS)}."
+                           + did_you_mean(col, COLUMNS + OPTIONAL_COLUMNS), path=p, line=header_line, key=col)
+    for col in COLUMNS:
+        if col not in header:
+            raise RigError(f"missing column {col!r}", path=p, line=header_line, key=col)
+    if len(set(header)) != len(header):
+        dup = [c for c in header if header.count(c) > 1][0]
+        raise RigError(f"duplicated column {dup!r}", path=p, line=header_line, key=dup)
+    ix = {c: header.index(c) for c in header}
+    has_temp = "temp_C" in ix
+    rows = []
+    for k, row in enumerate(csv.reader(lines[i + 1:]), start=header_line + 1):
+        if not row or all(not c.strip() for c in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            continue
+        if len(row) != len(header):
+            raise RigError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
+        t = _float(row[ix["time_s"]], p, k, "time_s")
+        step = _int(row[ix["step"]], p, k, "step")
+        rep = _int(row[ix["repeat"]], p, k, "repeat")
+        try:
+            ph = Phase(row[ix["phase"]].strip())
+        except ValueError:
+            raise RigError(f"expected 'load' or 'unload', got {row[ix['phase']]!r}", path=p, line=k,
+                           key="phase") from None
+        try:
+            ax = LoadAxis(row[ix["load_axis"]].strip())
+        except ValueError:
+            raise RigError(f"unknown load axis {row[ix['load_axis']]!r}; expected one of "
+                           f"{[a.value for a in LoadAxis]}", path=p, line=k, key="load_axis") from None
+        m = _float(row[ix["mass_kg"]], p, k, "mass_kg")
+        if m < 0:
+            raise RigError(f"mass must be >= 0, got {m}", path=p, line=k, key="mass_kg")
+        disp = [_float(row[ix[c]], p, k, c, allow_empty=True) for c in ("disp_x_mm", "disp_y_mm", "disp_z_mm")]
+        temp = _float(row[ix["temp_C"]], p, k, "temp_C", allow_empty=True) if has_temp else math.nan
+        rows.append((k, t, step, rep, ph, ax, m, disp, temp))
+    if not rows:
+        raise RigError("no samples after the header", path=p, line=header_line)
+    _check_holds(rows, p)
+    arr = lambda j, dt=float: np.array([r[j] for r in rows], dtype=dt)  # noqa: E731
+    rec = RigRecording(meta, arr(1), arr(2, int), arr(3, int), np.array([r[4] for r in rows], dtype=object),
+                       np.array([r[5] for r in rows], dtype=object), arr(6), np.array([r[7] for r in rows]),
+                       arr(8) if has_temp else None, p)
+    if not rec.measured_axes():
+        raise RigError("no displacement column has any reading", path=p, line=header_line, key="disp_x_mm")
+    return rec
+
+
+def _check_holds(rows, p) -> None:
+    first: dict[int, tuple] = {}
+    last_time = -math.inf
+    for k, t, step, rep, ph, ax, m, _, _ in rows:
+        if t < last_time:
+            raise RigError(f"time goes backwards ({t} after {last_time})", path=p, line=k, key="time_s")
+        last_time = t
+        if step not in first:
+            first[step] = (k, rep, ph, ax, m)
+            continue
+        k0, rep0, ph0, ax0, m0 = first[step]
+        for name, a, b in (("mass_kg", m, m0), ("load_axis", ax, ax0), ("phase", ph, ph0), ("repeat", rep, rep0)):
+            if a != b:
+                raise RigError(f"{name} changes inside hold (step {step}): {b} at line {k0}, {a} here; every "
+                               f"sample of a hold must share it", path=p, line=k, key=name)
+    # every load axis's series starts with a mass-0 hold
+    seen_axes: dict[LoadAxis, int] = {}
+    for step, (k0, rep, ph, ax, m) in first.items():
+        if ax not in seen_axes:
+            seen_axes[ax] = step
+            if m != 0.0:
+                raise RigError(f"the series for load axis {ax.value} starts with mass {m} kg; it must start with "
+                               f"a mass-0 hold (the unloaded reading)", path=p, line=k0, key="mass_kg")
+
+
+def format_row(t: float, step: int, repeat: int, phase: Phase, axis: LoadAxis, mass: float,
+               disp: tuple, temp: float | None) -> str:
+    cells = [f"{t:.3f}", str(step), str(repeat), str(phase), str(axis), f"{mass:.4f}"]
+    cells += ["" if (v is None or not math.isfinite(v)) else f"{v:.4f}" for v in disp]
+    if temp is not None:
+        cells.append("" if not math.isfinite(temp) else f"{temp:.2f}")
+    return ",".join(cells) + "\n"
+
+
+class RecordingWriter:
+    """Append samples to a recording, flushed as they arrive; never rewrites what is on disk.
+
+    Opening an existing file keeps every complete line; a torn last line (a crash mid-write) is cut off.
+    ``fsync_every`` rows the file is fsync'ed (always on :meth:`close`).
+    """
+
+    def __init__(self, path: str | Path, meta: dict, with_temp: bool = True, fsync_every: int = 50) -> None:
+        self.path = Path(path)
+        self.with_temp = with_temp
+        self.fsync_every = fsync_every
+        self._since_sync = 0
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        if self.path.exists() and self.path.stat().st_size > 0:
+            with open(self.path, "rb+") as fh:
+                data = fh.read()
+                cut = data.rfind(b"\n") + 1
+                if cut < len(data):
+                    fh.truncate(cut)
+            self._fh = open(self.path, "a", encoding="utf-8", newline="")
+        else:
+            self._fh = open(self.path, "a", encoding="utf-8", newline="")
+            head = io.StringIO()
+            meta = dict(meta)
+            meta.setdefault("format", FORMAT_RIG)
+            for k in ("format", "rod"):
+                if k in meta:
+                    head.write(f"# {k}: {meta.pop(k)}\n")
+            for k, v in meta.items():
+                head.write(f"# {k}: {v}\n")
+            head.write(",".join(COLUMNS + (OPTIONAL_COLUMNS if with_temp else ())) + "\n")
+            self._fh.write(head.getvalue())
+            self._sync()
+
+    def write(self, t, step, repeat, phase, axis, mass, disp, temp=None) -> None:
+        self._fh.write(format_row(t, step, repeat, Phase(phase), LoadAxis(axis), mass, disp,
+                                  temp if self.with_temp else None))
+        self._fh.flush()
+        self._since_sync += 1
+        if self._since_sync >= self.fsync_every:
+            self._sync()
+
+    def _sync(self) -> None:
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+        self._since_sync = 0
+
+    def close(self) -> None:
+        if not self._fh.closed:
+            self._sync()
+            self._fh.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,113 @@
+"""Stiffness-rig recordings and fitting: the contract examples, Eq. 21/22, malformed files."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rodlab import Method, read_compliance
+from rodlab.units import G0
+from stiffness_rig import RecordingWriter, RigError, fit_recording, read_recording
+
+
+@pytest.fixture
+def sim(examples):
+    return read_compliance(examples / "rod1.compliance.json")
+
+
+@pytest.mark.parametrize("name", ["null", "joint_compliance-ring_1", "friction"])
+def test_recovers_true_compliance(examples, sim, name):
+    rec = read_recording(examples / f"rig-{name}.rig.csv")
+    truth = json.loads((examples / f"rig-{name}.truth.json").read_text())
+    T = np.array(truth["C_F_true_mm_per_N"])
+    fit = fit_recording(rec, sim)
+    measured = np.isfinite(fit.C_F_meas) & (np.abs(T) > 1e-3 * np.abs(T).max())
+    np.testing.assert_allclose(fit.C_F_meas[measured], T[measured], rtol=0.01)
+    assert fit.noise_mm == pytest.approx(truth["noise_rms_mm"], rel=0.15)    # within-hold scatter
+    assert fit.success
+
+
+def test_friction_intercepts_in_kg(examples, sim):
+    rec = read_recording(examples / "rig-friction.rig.csv")
+    Ff = json.loads((examples / "rig-friction.truth.json").read_text())["parameters"]["F_f_N"]
+    fit = fit_recording(rec, sim)
+    for ln in fit.lines:
+        if ln.component == ln.axis.index:
+            half_split = 0.5 * (ln.zero_load_kg["load"] - ln.zero_load_kg["unload"])
+            assert half_split == pytest.approx(Ff / G0, rel=0.15), ln.axis
+            assert ln.zero_load_kg["load"] > 0 > ln.zero_load_kg["unload"]
+    null = fit_recording(read_recording(examples / "rig-null.rig.csv"), sim)
+    for ln in null.lines:
+        if ln.component == ln.axis.index:
+            assert abs(ln.zero_load_kg["load"] - ln.zero_load_kg["unload"]) < 0.1 * Ff / G0
+
+
+def test_measured_compliance_file(examples, sim, tmp_path):
+    from rodlab import write_compliance
+    rec = read_recording(examples / "rig-null.rig.csv")
+    fit = fit_recording(rec, sim)
+    comp = fit.compliance(sim, rec)
+    assert comp.method is Method.MEAS
+    np.testing.assert_allclose(comp.C_g, fit.r_rod * sim.C_g)                          # Eq. 22
+    r = (fit.C_F_meas[1, 1] + fit.C_F_meas[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2])
+    assert fit.r_rod == pytest.approx(r)                                                # Eq. 21
+    np.testing.assert_allclose(comp.C_F, comp.C_F.T)
+    back = read_compliance(write_compliance(comp, tmp_path / "m.compliance.json"))
+    assert back.provenance["recording_sha256"] and back.r_rod == pytest.approx(fit.r_rod)
+
+
+def test_robust_fit_resists_an_outlier_hold(examples, sim):
+    rec = read_recording(examples / "rig-null.rig.csv")
+    bad = rec.step == rec.steps()[20]
+    rec.disp_mm[bad, 1] += 0.05                                         # a mislabelled / bumped hold
+    plain = fit_recording(rec, sim)
+    robust = fit_recording(rec, sim, robust=True)
+    T = sim.C_F[1, 1]
+    assert abs(robust.C_F_meas[1, 1] / T - 1) < abs(plain.C_F_meas[1, 1] / T - 1)
+
+
+HEADER = "# format: rodlab.rig/1\n# rod: 1#\ntime_s,step,repeat,phase,load_axis,mass_kg,disp_x_mm,disp_y_mm,disp_z_mm\n"
+GOOD = ["0.0,1,1,load,y,0.0,,0.000,0.000", "0.1,1,1,load,y,0.0,,0.001,0.000",
+        "1.0,2,1,load,y,0.5,,1.000,0.000", "1.1,2,1,load,y,0.5,,1.001,0.000"]
+BAD = [
+    ("missing column", HEADER.replace(",disp_z_mm", ""), GOOD, 3, "disp_z_mm", "missing"),
+    ("extra column", HEADER.replace("disp_z_mm", "disp_z_mm,force_N"), [g + ",1" for g in GOOD], 3, "force_N",
+     "unknown column"),
+    ("non-numeric", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,abc,0.000"], 6, "disp_y_mm", "number"),
+    ("unknown axis", HEADER, GOOD[:2] + ["1.0,2,1,load,w,0.5,,1.0,0.000"], 6, "load_axis", "unknown load axis"),
+    ("bad phase", HEADER, GOOD[:2] + ["1.0,2,1,loading,y,0.5,,1.0,0.000"], 6, "phase", "load"),
+    ("mass changes in hold", HEADER, GOOD[:3] + ["1.1,2,1,load,y,0.6,,1.0,0.000"], 7, "mass_kg", "inside hold"),
+    ("axis changes in hold", HEADER, GOOD[:3] + ["1.1,2,1,load,z,0.5,,1.0,0.000"], 7, "load_axis", "inside hold"),
+    ("no zero hold", HEADER, ["0.0,1,1,load,y,0.5,,1.0,0.0", "0.1,1,1,load,y,0.5,,1.0,0.0"], 4, "mass_kg",
+     "mass-0 hold"),
+    ("wrong cell count", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,1.0"], 6, None, "cells"),
+    ("negative mass", HEADER, GOOD[:2] + ["1.0,2,1,load,y,-0.5,,1.0,0.0"], 6, "mass_kg", ">= 0"),
+    ("nan", HEADER, GOOD[:2] + ["1.0,2,1,load,y,nan,,1.0,0.0"], 6, "mass_kg", "finite"),
+    ("time backwards", HEADER, GOOD[:2] + ["0.05,2,1,load,y,0.5,,1.0,0.0"], 6, "time_s", "backwards"),
+    ("no format", HEADER.replace("# format: rodlab.rig/1\n", ""), GOOD, 1, "format", "format"),
+]
+
+
+@pytest.mark.parametrize("label,header,rows,line,key,words", BAD, ids=[b[0] for b in BAD])
+def test_malformed_recording(tmp_path, label, header, rows, line, key, words):
+    p = tmp_path / "bad.rig.csv"
+    p.write_text(header + "\n".join(rows) + "\n")
+    with pytest.raises(RigError) as ei:
+        read_recording(p)
+    e = ei.value
+    assert e.line == line and e.key == key and words in str(e) and str(p) in str(e), str(e)
+
+
+def test_writer_appends_and_cuts_a_torn_line(tmp_path):
+    p = tmp_path / "r.rig.csv"
+    with RecordingWriter(p, {"rod": "1#"}) as w:
+        w.write(0.0, 1, 1, "load", "y", 0.0, (float("nan"), 0.0, 0.0), 20.0)
+        w.write(0.1, 1, 1, "load", "y", 0.0, (float("nan"), 0.001, 0.0), 20.0)
+    with open(p, "a") as fh:
+        fh.write("0.2,1,1,lo")                        # a crash mid-line
+    with RecordingWriter(p, {"rod": "1#"}) as w:      # reopening keeps every complete line, cuts the torn one
+        w.write(1.0, 2, 1, "load", "y", 0.5, (float("nan"), 1.0, 0.0), 20.0)
+        w.write(1.1, 2, 1, "load", "y", 0.5, (float("nan"), 1.0, 0.0), 20.0)
+    rec = read_recording(p)
+    assert rec.n == 4 and np.isnan(rec.disp_mm[:, 0]).all() and rec.temp_C is not None

@@ -41,6 +41,27 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
+    p = rsub.add_parser("acquire", help="record a plan from the rig (prompts the operator or commands a loader)",
+                        description="Run an acquisition plan on the rig described by the profile; every sample is "
+                                    "appended and flushed as it arrives; re-running the same command resumes after "
+                                    "the last complete hold.")
+    p.add_argument("--profile", required=True, help="rig profile TOML (port, protocol, channels)")
+    p.add_argument("--plan", required=True, help="acquisition plan TOML (axes, masses, repeats, holds)")
+    p.add_argument("-o", "--output", required=True, help="*.rig.csv (appended to; resumable)")
+    p.add_argument("--non-interactive", action="store_true",
+                   help="command the loader of the profile instead of prompting the operator")
+    p.set_defaults(func=cmd_acquire)
+    p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
+                        description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
+                                    "commandable loader on a pty, published at --link; point a profile's port at it.")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--protocol", choices=["query", "stream"], default="query")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]")
+    p.add_argument("--checksum", choices=["none", "xor"], default="none")
+    p.add_argument("--garbage", type=float, default=0.0, help="probability of a garbage line per answer")
+    p.add_argument("--seconds", type=float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
+    p.set_defaults(func=cmd_simulator)
     rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
 
 
@@ -114,4 +135,52 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
                               extra_meta={"effects": json.dumps(effects) if effects else "none", "seed": args.seed})
     print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {effects or 'none'}")
+    return 0
+
+
+def cmd_acquire(args: argparse.Namespace) -> int:
+    import sys
+    from stiffness_rig.acquire import acquire
+    from stiffness_rig.config import read_plan, read_profile
+    profile, plan = read_profile(args.profile), read_plan(args.plan)
+
+    def operator(prompt: str) -> None:
+        if not sys.stdin or not sys.stdin.isatty():
+            from ..errors import RodlabError
+            raise RodlabError("no terminal to prompt the operator; use --non-interactive with a [loader]")
+        input(f"\n{prompt} ")
+
+    def progress(st) -> None:
+        line = (f"  [{st.holds_done}/{st.holds_total}] {st.label} - {st.samples} samples, {st.garbage} garbage "
+                f"lines, {st.reconnects} reconnects")
+        print("\r" + line.ljust(110), end="", flush=True)
+    try:
+        out = acquire(profile, plan, args.output, operator=None if args.non_interactive else operator,
+                      progress=progress, use_loader=args.non_interactive)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: every sample so far is in {args.output}; re-run the same command to resume")
+        return 130
+    print(f"\nwrote {out}")
+    return 0
+
+
+def cmd_simulator(args: argparse.Namespace) -> int:
+    import time
+    from pathlib import Path
+
+    from stiffness_rig.model import RigModel
+    from stiffness_rig.simdevice import Faults, SimulatedRig
+    sim = read_compliance(args.sim)
+    model = RigModel(sim.C_F, parse_effects(args.effect))
+    dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
+                       faults=Faults(garbage=args.garbage))
+    with dev:
+        print(f"simulated rig of rod {sim.rod} on {dev.port} ({args.protocol}, 3 gauges in um + temperature; "
+              f"loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop", flush=True)
+        t0 = time.monotonic()
+        try:
+            while not args.seconds or time.monotonic() - t0 < args.seconds:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            pass
     return 0

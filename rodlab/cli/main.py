@@ -48,6 +48,8 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"rodlab {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except BrokenPipeError:                 # output piped into `head` and closed: not an error
+        return 0
     except OSError as e:
         if args.debug:
             raise

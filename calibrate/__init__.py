@@ -1,0 +1,15 @@
+"""calibrate: the MultiCal calibrator (robot model, identification, rod-deflection compensation, validation).
+
+Uses compliance files from the FEA and the rig (the core's :class:`rodlab.RodCompliance`), never their code.
+"""
+from .campaign import Campaign, Fixture, PointSet, read_campaign, read_fixture, read_points
+from .errors import CalibrationError
+from .identify import CalibrationResult, Observations, campaign_observations, identify
+from .kinematics import ModelParams, ball_positions
+from .result import result_dict, write_result
+from .robot import Robot, read_robot, resolve_robot
+from .validate import ErrorStats, validate
+
+__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
+           "CalibrationResult", "Observations", "campaign_observations", "identify", "ModelParams", "ball_positions",
+           "result_dict", "write_result", "Robot", "read_robot", "resolve_robot", "ErrorStats", "validate"]

@@ -1,0 +1,357 @@
+"""Levenberg-Marquardt identification (paper Eqs. 7-9) with rod-deflection compensation (Eqs. 10-19).
+
+1. Measured points: ``x^W = T(chi_3j) x^D`` (Eq. 2); initial base by rigid registration of the nominal
+   ball positions to them.
+2. Identifiability: the structural rules (:mod:`calibrate.params`), then a rank analysis of the
+   column-normalised Jacobian in preference order: a parameter whose column lies (numerically) in the span
+   of those kept is fixed and reported with the combination it belongs to.
+3. LM (``scipy.optimize.least_squares``, analytic Jacobian) on the free parameters; weakly identified
+   parameters (standard error above their physical scale) get a Gaussian prior at their initial value and
+   are reported ``regularised``.
+4. Compensation: with a compliance file, the ball offset ``R_T^W (C_g g^T + C_F F^T)`` of every point is
+   computed from the current model and removed from the measurement (Eq. 11); steps 3-4 repeat until the
+   offsets stop changing (the paper's rough calibration is the first pass).
+5. Standard errors: sandwich estimate with the device noise (from the residuals) and the fixture-pose
+   uncertainty, correlated within each clamping position.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.frames import pose_to_matrix
+from rodlab.units import G0
+
+from .campaign import Campaign, Fixture
+from .errors import CalibrationError
+from .jacobian import position_jacobian
+from .kinematics import ModelParams, ball_positions
+from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
+
+__all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Observations:
+    """What the identification fits: joint angles, measured ball centres in {W}, and the loads.
+
+    q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
+    group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,)
+    """
+
+    q_rad: np.ndarray
+    x_W_mm: np.ndarray
+    force_W_N: np.ndarray
+    rod_mass_kg: float = 0.0
+    rod_com_T_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    group: np.ndarray | None = None
+    labels: list | None = None
+    fixture_T: dict | None = None          # group -> 4x4 pose of {D_j} in {W}
+    x_D_mm: np.ndarray | None = None
+
+
+def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
+    """Eq. 2: device readings to {W}; the contact force of each point in {W} (Eq. 12)."""
+    missing = sorted(set(camp.position.tolist()) - set(fix.poses))
+    if missing:
+        raise CalibrationError(f"clamping position(s) {missing} of the campaign are not in the fixture file "
+                               f"(it has {sorted(fix.poses)})", path=fix.path, key="positions")
+    xW = np.empty((camp.n, 3))
+    F = np.empty((camp.n, 3))
+    for j in np.unique(camp.position):
+        T = fix.transform(int(j))
+        m = camp.position == j
+        xW[m] = camp.x_D_mm[m] @ T[:3, :3].T + T[:3, 3]
+        F[m] = T[:3, :3] @ fix.force_D_N
+    return Observations(np.deg2rad(camp.q_deg), xW, F, rod.mass_kg, rod.com_T_mm, camp.position.copy(),
+                        camp.labels(), {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
+                        camp.x_D_mm.copy())
+
+
+def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
+    """Base pose [mm, deg] by rigid registration (Kabsch) of nominal ball positions to the measured ones."""
+    from rodlab.frames import matrix_to_pose
+    fr, _ = ball_positions(robot, params.with_(base=np.zeros(6)), obs.q_rad)
+    P, Q = fr.p0, obs.x_W_mm
+    pc, qc = P.mean(0), Q.mean(0)
+    H = (P - pc).T @ (Q - qc)
+    U, S, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    R = Vt.T @ D @ U.T
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = qc - R @ pc
+    return matrix_to_pose(T)
+
+
+@dataclass
+class CalibrationResult:
+    """Identified model and its statistics (scipy ``OptimizeResult`` style).
+
+    params : the identified :class:`ModelParams`; values / sigma : {name: value in contract units};
+    status : {name: identified | fixed | regularised}; unidentifiable : reasons; residuals_mm : (N, 3);
+    rms_mm : per scalar reading; noise_mm : estimate; correlation : (P, P) of the free parameters;
+    offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations
+    """
+
+    params: ModelParams
+    infos: list
+    values: dict
+    sigma: dict
+    status: dict
+    unidentifiable: list
+    residuals_mm: np.ndarray
+    rms_mm: float
+    noise_mm: float
+    correlation: np.ndarray
+    free: list
+    offsets_W_mm: np.ndarray
+    success: bool
+    message: str
+    nfev: int = 0
+    iterations: int = 0
+    condition: float = float("nan")
+    warnings: list = field(default_factory=list)
+
+
+def _deflection_offsets(robot, params, obs: Observations, rod: RodCompliance | None) -> np.ndarray:
+    if rod is None or (not rod.C_F.any() and not rod.C_g.any()):
+        return np.zeros_like(obs.x_W_mm)
+    fr, _ = ball_positions(robot, params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    n = robot.n
+    R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
+    g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)
+    F_T = np.einsum("nji,nj->ni", R_TW, obs.force_W_N)
+    dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
+    return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
+
+
+def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
+    """Free parameters: structural rules, user pins / frees, then the preference-ordered rank analysis."""
+    fixed = structural_fixed(robot, tool_mm, positions)
+    if "tool_y" in freed and f"dtheta_{robot.n}" not in freed:
+        fixed[f"dtheta_{robot.n}"] = "combined with the tool point's azimuth about the last axis (tool_x, tool_y)"
+    for name in freed:
+        fixed.pop(name, None)
+    for name in pinned:
+        fixed[name] = "pinned by the user"
+    A = J0.reshape(-1, J0.shape[-1])
+    norms = np.linalg.norm(A, axis=0)
+    kept: list[int] = []
+    Q = np.zeros((A.shape[0], 0))
+    reasons = dict(fixed)
+    for k, info in enumerate(infos):
+        if info.name in fixed:
+            continue
+        if norms[k] < 1e-12:
+            reasons[info.name] = "has no effect on the measured points"
+            continue
+        v = A[:, k] / norms[k]
+        r = v - Q @ (Q.T @ v)
+        if np.linalg.norm(r) < np.sqrt(tol) * 10 and info.name not in freed:
+            coef, *_ = np.linalg.lstsq(A[:, kept] / norms[kept], v, rcond=None)
+            big = [infos[kept[m]].name for m in np.argsort(-np.abs(coef)) if abs(coef[m]) > 0.1][:4]
+            reasons[info.name] = f"combined with {', '.join(big)} in this campaign"
+            continue
+        kept.append(k)
+        Q = np.column_stack([Q, r / np.linalg.norm(r)])
+    return kept, reasons
+
+
+def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
+             freed: set | None = None, robust: bool = False, max_compensation: int = 6,
+             fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None) -> CalibrationResult:
+    """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring."""
+    from scipy.optimize import least_squares
+
+    N = obs.x_W_mm.shape[0]
+    if N < 6:
+        raise CalibrationError(f"{N} points cannot identify a robot; a MultiCal campaign has ~30 (5 positions x 6 "
+                               f"orientations)", key="points")
+    if not np.all(np.isfinite(obs.x_W_mm)) or not np.all(np.isfinite(obs.q_rad)):
+        raise CalibrationError("the measurements contain NaN or inf", key="points")
+    pinned, freed = dict(pinned or {}), set(freed or ())
+    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
+    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
+    infos = catalogue(robot.n, positions)
+    names = [i.name for i in infos]
+    for nm in list(pinned) + list(freed):
+        if nm not in names:
+            from rodlab.errors import did_you_mean
+            raise CalibrationError(f"unknown parameter {nm!r}." + did_you_mean(nm, names), key="parameters")
+    start = initial or ModelParams.nominal(robot, tool_mm)
+    if initial is None:
+        start = start.with_(base=register_base(robot, start, obs))
+    x = np.zeros(len(infos))
+    for nm, v in pinned.items():
+        k = names.index(nm)
+        x[k] = (v - _value(start, infos[k], 0.0)) * INTERNAL_SCALE[infos[k].unit] if infos[k].kind in (
+            "base_t", "base_r", "tool") else v * INTERNAL_SCALE[infos[k].unit]
+    fr, tau = ball_positions(robot, apply(start, infos, x), obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm,
+                             obs.force_W_N)
+    J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
+    free, reasons = _select(robot, tool_mm, infos, J0, pinned, freed, positions)
+    structural = structural_fixed(robot, tool_mm, positions)
+    structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in freed else None
+    structural = {k: v for k, v in structural.items() if v is not None}
+    deficient = {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined",
+                                                                                                   "has no"))}
+    if deficient:
+        lines = "; ".join(f"{nm} {why}" for nm, why in list(deficient.items())[:8])
+        raise CalibrationError(
+            f"this campaign cannot identify {len(deficient)} parameter(s): {lines}. Add clamping positions or rod "
+            f"orientations (more varied joint angles), or hold them with --pin NAME=VALUE", key="campaign")
+    if len(free) > 3 * N:
+        raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
+    prior = np.zeros(len(infos), dtype=bool)
+    x_init = x.copy()                                   # priors are centred on the initial values
+    free_all = list(free)
+    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
+    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
+    rough = [k for k in free_all if infos[k].kind == "c"] if rod is not None and (rod.C_F.any() or rod.C_g.any()) \
+        else []
+    offsets = np.zeros_like(obs.x_W_mm)
+    noise_est = 0.01
+    res = None
+    it = 0
+    for it in range(1, max_compensation + 1):
+        target = obs.x_W_mm - offsets
+        free = [k for k in free_all if not (it == 1 and k in rough)]
+
+        def fun(z):
+            xx = x.copy()
+            xx[free] = z
+            p = apply(start, infos, xx)
+            frr, _ = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+            r = (frr.pW - target - _fixture_shift(infos, xx, obs)).ravel()
+            if prior[free].any():
+                sel = prior[free]
+                scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
+                r = np.concatenate([r, noise_est * (z[sel] - x0[sel]) / scale[sel]])
+            return r
+
+        def jac(z):
+            xx = x.copy()
+            xx[free] = z
+            p = apply(start, infos, xx)
+            frr, tt = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+            Jm = position_jacobian(frr, tt, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+            if prior[free].any():
+                sel = np.nonzero(prior[free])[0]
+                scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
+                Jp = np.zeros((sel.size, len(free)))
+                Jp[np.arange(sel.size), sel] = noise_est / scale[sel]
+                Jm = np.vstack([Jm, Jp])
+            return Jm
+
+        x0 = x_init[free]
+        res = least_squares(fun, x[free], jac=jac, method="trf" if robust else "lm",
+                            loss="soft_l1" if robust else "linear", f_scale=3 * noise_est, xtol=1e-12, ftol=1e-12,
+                            gtol=1e-12, max_nfev=200 * len(free))
+        x[free] = res.x
+        p = apply(start, infos, x)
+        new_off = _deflection_offsets(robot, p, obs, rod)
+        change = float(np.abs(new_off - offsets).max())
+        offsets = new_off
+        r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW
+              - (obs.x_W_mm - offsets) - _fixture_shift(infos, x, obs))
+        dof = max(3 * N - len(free), 1)
+        noise_est = max(float(np.sqrt((r3 ** 2).sum() / dof)), 1e-6)
+        # weak parameters -> prior (once), then refit
+        sig = _sigmas(robot, p, infos, free, obs, noise_est, fixture_sigma)
+        weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]]
+        newly = [k for k in weak if not prior[k]]
+        for k in newly:
+            prior[k] = True
+        log.info("compensation pass %d: offset change %.2e mm, rms %.4f mm, %d weak", it, change, noise_est, len(newly))
+        if change < 1e-5 and not newly and len(free) == len(free_all):
+            break
+    p = apply(start, infos, x)
+    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    resid = (obs.x_W_mm - offsets + _fixture_shift(infos, x, obs)) - fr.pW
+    sig, corr, cond = _sigmas(robot, p, infos, free, obs, noise_est, fixture_sigma, full=True)
+    values, sigma, status = {}, {}, {}
+    for k, info in enumerate(infos):
+        values[info.name] = _value(p, info, x[k])
+        status[info.name] = "fixed"
+        sigma[info.name] = 0.0
+    for s, k in zip(sig, free):
+        sigma[infos[k].name] = float(s / INTERNAL_SCALE[infos[k].unit])
+        status[infos[k].name] = "regularised" if prior[k] else "identified"
+    unid = [f"{nm} ({why})" for nm, why in reasons.items() if status.get(nm) == "fixed"]
+    rms = float(np.sqrt(np.mean(resid ** 2)))
+    ok = bool(res.success) if res is not None else False
+    msg = res.message if res is not None else "not run"
+    return CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, noise_est, corr,
+                             [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
+
+
+def _fixture_shift(infos, x, obs) -> np.ndarray:
+    """Corrections of the measured points by freed fixture offsets [mm], shape=(N, 3)."""
+    shift = np.zeros_like(obs.x_W_mm)
+    for info, v in zip(infos, x):
+        if info.kind == "fixture" and v != 0 and obs.group is not None:
+            shift[obs.group == info.index, "xyz".index(info.name[-1])] += v
+    return shift
+
+
+def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
+    """Contract-unit value: DH rows as errors (dtheta) or absolute (d, a, alpha, beta), c, base, tool absolute."""
+    i = info.index
+    k = info.kind
+    if k == "dtheta":
+        return float(x_int / INTERNAL_SCALE["deg"])
+    if k == "d":
+        return float(p.d[i])
+    if k == "a":
+        return float(p.a[i])
+    if k == "alpha":
+        return float(np.rad2deg(p.alpha[i]))
+    if k == "beta":
+        return float(np.rad2deg(p.beta[i]))
+    if k == "c":
+        return float(p.c[i])
+    if k == "base_t":
+        return float(p.base[i])
+    if k == "base_r":
+        return float(p.base[3 + i])
+    if k == "fixture":
+        return float(x_int)
+    return float(p.tool["xyz".index(info.name[-1])])
+
+
+def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
+    """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
+    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+    N = obs.x_W_mm.shape[0]
+    S = noise ** 2 * np.eye(3 * N)
+    if obs.group is not None and obs.fixture_T is not None:
+        st, sr = fixture_sigma[0], np.deg2rad(fixture_sigma[1])
+        for j, T in obs.fixture_T.items():
+            if np.allclose(T, np.eye(4)):
+                continue                                   # the world position defines {W}
+            m = np.nonzero(obs.group == j)[0]
+            G = np.zeros((3 * m.size, 6))
+            for r, idx in enumerate(m):
+                G[3 * r:3 * r + 3, :3] = np.eye(3) * st
+                d = obs.x_W_mm[idx] - T[:3, 3]
+                for a in range(3):
+                    G[3 * r:3 * r + 3, 3 + a] = np.cross(np.eye(3)[a], d) * sr
+            rows = (3 * m[:, None] + np.arange(3)).ravel()
+            S[np.ix_(rows, rows)] += G @ G.T
+    JtJ_inv = np.linalg.pinv(J.T @ J)
+    cov = JtJ_inv @ J.T @ S @ J @ JtJ_inv
+    sig = np.sqrt(np.clip(np.diag(cov), 0, None))
+    if not full:
+        return sig
+    d = np.where(sig > 0, sig, 1.0)
+    corr = cov / np.outer(d, d)
+    Jn = J / np.maximum(np.linalg.norm(J, axis=0), 1e-300)
+    sv = np.linalg.svd(Jn, compute_uv=False)
+    return sig, corr, float(sv[0] / max(sv[-1], 1e-300))

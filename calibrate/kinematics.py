@@ -1,0 +1,161 @@
+"""Vectorised kinematics of a serial robot with joint compliance, and static joint torques.
+
+Model (contract): ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)``,
+``theta_i = q_i + theta_offset_i + dtheta_i + c_i tau_i``; ``p^W = T_0^W T_0^n [tool, 1]``, ``T_0^W = T(base)``.
+Internal units: mm, rad, N, N m; arrays over N configurations.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from rodlab.frames import pose_to_matrix
+
+__all__ = ["ModelParams", "Frames", "forward", "static_torques", "ball_positions"]
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """Actual values of every model parameter (internal units).
+
+    theta_offset, alpha, beta [rad], d, a [mm] : shape=(n,); c [rad/(N m)] : shape=(n,);
+    base : pose of {0} in {W} [mm, deg] (contract pose vector), shape=(6,); tool : ball centre in {n} [mm]
+    """
+
+    theta_offset: np.ndarray
+    d: np.ndarray
+    a: np.ndarray
+    alpha: np.ndarray
+    beta: np.ndarray
+    c: np.ndarray
+    base: np.ndarray
+    tool: np.ndarray
+
+    @classmethod
+    def nominal(cls, robot, tool_mm, base=None) -> "ModelParams":
+        n = robot.n
+        return cls(np.deg2rad(robot.theta_offset_deg), robot.d_mm.astype(float), robot.a_mm.astype(float),
+                   np.deg2rad(robot.alpha_deg), np.deg2rad(robot.beta_deg), np.zeros(n),
+                   np.zeros(6) if base is None else np.asarray(base, float), np.asarray(tool_mm, float))
+
+    def with_(self, **kw) -> "ModelParams":
+        return replace(self, **kw)
+
+
+@dataclass
+class Frames:
+    """Kinematic quantities per configuration (N) and joint (n), in {0} unless said.
+
+    T : shape=(N, n + 1, 4, 4), frames 0..n; z_prev, o_prev : joint axes and origins (frames i-1);
+    xA : x axis after Rz(theta) (the a_i and alpha_i directions); yB : y axis after Rx(alpha) (beta_i);
+    o_i : origins of frames i; p0 : ball centre in {0}, shape=(N, 3); pW : in {W}; R_W0 : shape=(3, 3)
+    """
+
+    T: np.ndarray
+    z_prev: np.ndarray
+    o_prev: np.ndarray
+    xA: np.ndarray
+    yB: np.ndarray
+    o_i: np.ndarray
+    p0: np.ndarray
+    pW: np.ndarray
+    R_W0: np.ndarray
+    t_W0: np.ndarray
+    theta: np.ndarray
+
+
+def _rows(theta, d, a, alpha, beta):
+    """Row transforms, shape=(N, n, 4, 4), and the intermediate rotation after Rz(theta) Rx(alpha)."""
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = np.cos(alpha), np.sin(alpha)
+    cb, sb = np.cos(beta), np.sin(beta)
+    N, n = theta.shape
+    T = np.zeros((N, n, 4, 4))
+    # Rz(t) Rx(al) Ry(b)
+    RzRx = np.zeros((N, n, 3, 3))
+    RzRx[..., 0, 0], RzRx[..., 0, 1], RzRx[..., 0, 2] = ct, -st * ca, st * sa
+    RzRx[..., 1, 0], RzRx[..., 1, 1], RzRx[..., 1, 2] = st, ct * ca, -ct * sa
+    RzRx[..., 2, 0], RzRx[..., 2, 1], RzRx[..., 2, 2] = 0.0, sa, ca
+    Ry = np.zeros((n, 3, 3))
+    Ry[:, 0, 0], Ry[:, 0, 2], Ry[:, 1, 1], Ry[:, 2, 0], Ry[:, 2, 2] = cb, sb, 1.0, -sb, cb
+    T[..., :3, :3] = RzRx @ Ry[None]
+    T[..., 0, 3] = a * ct
+    T[..., 1, 3] = a * st
+    T[..., 2, 3] = d
+    T[..., 3, 3] = 1.0
+    return T, RzRx
+
+
+def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = None) -> Frames:
+    """Frames of every configuration; ``q_rad`` shape=(N, n) [rad]; ``tau_Nm`` shape=(N, n) or None."""
+    q = np.atleast_2d(q_rad)
+    N, n = q.shape
+    theta = q + params.theta_offset[None, :]
+    if tau_Nm is not None:
+        theta = theta + params.c[None, :] * tau_Nm
+    rows, RzRx = _rows(theta, params.d[None, :] + 0 * theta, params.a[None, :] + 0 * theta,
+                       params.alpha[None, :] + 0 * theta, params.beta)
+    T = np.zeros((N, n + 1, 4, 4))
+    T[:, 0] = np.eye(4)
+    for i in range(n):
+        T[:, i + 1] = T[:, i] @ rows[:, i]
+    R_prev = T[:, :n, :3, :3]
+    z_prev = R_prev[..., :, 2]
+    o_prev = T[:, :n, :3, 3]
+    ct, st = np.cos(theta), np.sin(theta)
+    xA = R_prev @ np.stack([ct, st, np.zeros_like(ct)], -1)[..., None]
+    xA = xA[..., 0]
+    yB = (R_prev @ RzRx)[..., :, 1]
+    o_i = T[:, 1:, :3, 3]
+    p0 = (T[:, n, :3, :3] @ params.tool[:, None])[..., 0] + T[:, n, :3, 3]
+    TB = pose_to_matrix(params.base)
+    R_W0, t_W0 = TB[:3, :3], TB[:3, 3]
+    pW = p0 @ R_W0.T + t_W0
+    return Frames(T, z_prev, o_prev, xA, yB, o_i, p0, pW, R_W0, t_W0, theta)
+
+
+def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=None,
+                   force_W_N: np.ndarray | None = None) -> np.ndarray:
+    """Static joint torques [N m], shape=(N, n): gravity on the links and the rod plus the contact force.
+
+    The torque about joint i (axis z_{i-1} through o_{i-1}) of every load beyond it; the joint's gearbox
+    deflects in the direction of that torque (theta = ... + c tau).
+    """
+    N = fr.T.shape[0]
+    n = robot.n
+    g0 = np.asarray(robot.gravity_base, float)                       # m/s^2 in {0}
+    # loads: link masses at their COMs (in frame i), the rod at its COM (in {T} = {n} axes at the ball)
+    pts, forces = [], []
+    for k in range(n):
+        c = (fr.T[:, k + 1, :3, :3] @ robot.com_mm[k])[..., :] + fr.T[:, k + 1, :3, 3]
+        pts.append((k, c, np.broadcast_to(robot.mass_kg[k] * g0, (N, 3))))
+    if rod_mass_kg > 0:
+        com = np.zeros(3) if rod_com_T_mm is None else np.asarray(rod_com_T_mm, float)
+        c = fr.p0 + (fr.T[:, n, :3, :3] @ com)
+        pts.append((n - 1, c, np.broadcast_to(rod_mass_kg * g0, (N, 3))))
+    if force_W_N is not None:
+        F0 = np.atleast_2d(force_W_N) @ fr.R_W0                      # {W} -> {0}
+        pts.append((n - 1, fr.p0, np.broadcast_to(F0, (N, 3))))
+    tau = np.zeros((N, n))
+    for i in range(n):
+        z, o = fr.z_prev[:, i], fr.o_prev[:, i]
+        for k, c, F in pts:
+            if k >= i:
+                tau[:, i] += np.einsum("nj,nj->n", z, np.cross(c - o, F)) * 1e-3   # N mm -> N m
+    return tau
+
+
+def ball_positions(robot, params: ModelParams, q_rad, rod_mass_kg=0.0, rod_com_T_mm=None, force_W_N=None,
+                   iterations: int = 2) -> tuple[Frames, np.ndarray]:
+    """Frames with the joint compliance solved consistently (torques at the deflected pose), and the torques."""
+    q = np.atleast_2d(q_rad)
+    tau = np.zeros_like(q)
+    fr = forward(params, q, tau)
+    if np.any(params.c != 0):
+        for _ in range(iterations):
+            tau = static_torques(robot, fr, rod_mass_kg, rod_com_T_mm, force_W_N)
+            fr = forward(params, q, tau)
+    else:
+        tau = static_torques(robot, fr, rod_mass_kg, rod_com_T_mm, force_W_N)
+    return fr, tau

@@ -1,0 +1,170 @@
+"""``rodlab calibrate`` and ``rodlab compare``: identify a robot from a MultiCal campaign (or instrument points)."""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..compliance import RodCompliance, read_compliance
+from ..errors import RodlabError
+
+__all__ = ["register", "run_calibration"]
+
+
+def _common(p) -> None:
+    p.add_argument("--robot", default="tx90", help="built-in robot name (tx90) or a robot file")
+    p.add_argument("--validate", default=None, help="validation points (*.validation.csv) for the paper's statistics")
+    p.add_argument("--pin", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold a parameter at a value (contract units), e.g. c_6=0 (repeatable)")
+    p.add_argument("--free", action="append", default=[], metavar="NAME",
+                   help="free a parameter the defaults hold, e.g. fixture_2_x (repeatable)")
+    p.add_argument("--robust", action="store_true", help="soft-L1 loss (gross alignment errors lose weight)")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("calibrate", help="identify a robot from a MultiCal campaign (or instrument points)",
+                       description="Levenberg-Marquardt identification of the robot's kinematic errors, Hayati beta, "
+                                   "base, tool and joint compliances from a MultiCal campaign, with rod-deflection "
+                                   "compensation from a compliance file (paper Eqs. 2-19); or from an external "
+                                   "instrument's points (--points).")
+    p.add_argument("campaign", nargs="?", help="*.campaign.csv (omit with --points)")
+    p.add_argument("--fixture", help="*.fixture.json (clamping poses, contact force)")
+    p.add_argument("--rod", help="the rod's *.compliance.json (tool, mass, COM, C_F, C_g)")
+    p.add_argument("--compensation", choices=["none", "file"], default="file",
+                   help="file: compensate with the rod file's matrices (its method: calc / fea / meas); none: no "
+                        "rod-deflection compensation")
+    p.add_argument("--points", default=None, help="calibrate from instrument points (*.validation.csv format)")
+    p.add_argument("--json", default=None, help="write the contract's calibration result here")
+    p.add_argument("--png", default=None, help="folder for figures (residuals per position, error distribution)")
+    _common(p)
+    p.set_defaults(func=cmd_calibrate)
+
+    p = sub.add_parser("compare", help="run every compensation method on one campaign (the paper's Table 3)",
+                       description="Calibrate one campaign with several compliance files (and none) and print the "
+                                   "validation statistics in the layout of the paper's Table 3.")
+    p.add_argument("campaign")
+    p.add_argument("--fixture", required=True)
+    p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
+                   help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")
+    p.add_argument("--png", default=None, help="error distributions per method (the paper's Fig. 10)")
+    _common(p)
+    p.set_defaults(func=cmd_compare)
+
+
+def _parse_pins(items) -> dict:
+    out = {}
+    for it in items:
+        k, eq, v = it.partition("=")
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise RodlabError(f"--pin {it!r}: expected NAME=VALUE") from None
+        if not eq:
+            raise RodlabError(f"--pin {it!r}: expected NAME=VALUE")
+    return out
+
+
+def run_calibration(args, rod: RodCompliance | None, label: str):
+    """Identification (+ validation) of one campaign with one compliance file; returns (result, before, after)."""
+    from calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
+    from calibrate import resolve_robot, validate
+    robot = resolve_robot(args.robot)
+    camp = read_campaign(args.campaign, robot.n)
+    fix = read_fixture(args.fixture)
+    base_rod = rod
+    obs = campaign_observations(camp, fix, base_rod)
+    res = identify(robot, obs, base_rod.tool_mm, None if label == "none" else base_rod,
+                   pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust)
+    before = after = None
+    if args.validate:
+        pts = read_points(args.validate, robot.n)
+        before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
+        after = validate(robot, res.params, pts)[0]
+    return robot, camp, res, before, after
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from calibrate import result_dict, write_result
+    if args.points:
+        return _calibrate_points(args)
+    if not (args.campaign and args.fixture and args.rod):
+        raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
+    rod = read_compliance(args.rod)
+    label = "none" if args.compensation == "none" else str(rod.method)
+    robot, camp, res, before, after = run_calibration(args, rod, label)
+    _print_result(res, before, after, label)
+    if args.json:
+        print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
+    if args.png:
+        from calibrate.plots import plot_residuals
+        print(f"wrote {plot_residuals(res, camp, args.png)}")
+    if not res.success:
+        raise RodlabError(f"the identification did not converge: {res.message}")
+    return 0
+
+
+def _print_result(res, before, after, label) -> None:
+    print(f"identification ({label} compensation): {len(res.free)} parameters from {res.residuals_mm.shape[0]} "
+          f"points, residual rms {res.rms_mm * 1e3:.2f} um per reading, {res.iterations} compensation passes, "
+          f"{res.message}")
+    print(f"  {'parameter':<14} {'value':>14} {'sigma':>12}  unit       status")
+    for nm in res.free:
+        info = next(i for i in res.infos if i.name == nm)
+        v, s = res.values[nm], res.sigma[nm]
+        if info.unit == "rad/(N m)":
+            print(f"  {nm:<14} {v * 1e6:14.3f} {s * 1e6:12.3f}  urad/(N m) {res.status[nm]}")
+        else:
+            print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
+    print(f"  held fixed: {len(res.unidentifiable)} (see --json for why)")
+    if before is not None:
+        print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")
+        for name, st in (("before (nominal)", before), ("after", after)):
+            print(f"    {name:<34} {st.mean_mm:6.3f} {st.max_mm:7.3f} {st.median_mm:7.3f} {st.sd_mm:7.3f}")
+
+
+def _calibrate_points(args) -> int:
+    from calibrate import Observations, ModelParams, identify, read_points, resolve_robot, result_dict, validate
+    from calibrate import write_result
+    robot = resolve_robot(args.robot)
+    pts = read_points(args.points, robot.n)
+    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
+                       pts.rod_com_T_mm)
+    res = identify(robot, obs, pts.tool_mm, None, pinned=_parse_pins(args.pin), freed=set(args.free) | {"tool_y"},
+                   robust=args.robust)
+    before = after = None
+    if args.validate:
+        test = read_points(args.validate, robot.n)
+        before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]
+        after = validate(robot, res.params, test)[0]
+    _print_result(res, before, after, "instrument points")
+    if args.json:
+        print(f"wrote {write_result(args.json, result_dict(robot, res, 'none', before, after))}")
+    return 0 if res.success else 2
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    rows = []
+    results = {}
+    for item in args.rod:
+        label, eq, path = item.partition("=")
+        if not eq:
+            raise RodlabError(f"--rod {item!r}: expected LABEL=FILE (e.g. fea=rod1.fea.compliance.json)")
+        rod = read_compliance(path)
+        runs = [("None", RodCompliance.none_like(rod), "none")] if not rows else []
+        runs.append((label, rod, label))
+        for name, r, lab in runs:
+            _, camp, res, before, after = run_calibration(args, r, lab)
+            rows.append((name, res, before, after))
+            results[name] = (res, after)
+    if not args.validate:
+        raise RodlabError("compare needs --validate (the statistics come from the validation points)")
+    print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
+    before = rows[0][2]
+    print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
+    for name, res, _, after in rows:
+        print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
+              f"{res.rms_mm * 1e3:11.2f}")
+    if args.png:
+        from calibrate.plots import plot_error_distributions
+        print(f"wrote {plot_error_distributions(args, rows, args.png)}")
+    return 0

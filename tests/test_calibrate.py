@@ -1,0 +1,148 @@
+"""The MultiCal calibrator: Jacobian, the contract examples' acceptance, degenerate campaigns, other robots."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from calibrate import (CalibrationError, ModelParams, Observations, ball_positions, campaign_observations, identify,
+                       read_campaign, read_fixture, read_points, resolve_robot, result_dict, validate)
+from calibrate.jacobian import position_jacobian
+from calibrate.params import apply, catalogue
+from rodlab import read_compliance
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return resolve_robot("tx90")
+
+
+def _load(examples, name):
+    ex = examples / name
+    return (read_campaign(ex / "multical.campaign.csv"), read_fixture(ex / "multical.fixture.json"),
+            read_compliance(ex / "rod1.compliance.json"), read_points(ex / "multical.validation.csv"),
+            json.loads((ex / "truth.json").read_text()))
+
+
+def test_analytic_jacobian_matches_finite_differences(robot):
+    rng = np.random.default_rng(0)
+    q = np.deg2rad(rng.uniform(-60, 60, (7, 6)))
+    group = np.array([1, 1, 2, 2, 2, 3, 3])
+    infos = catalogue(6, positions=[1, 2])
+    x = rng.normal(0, 0.3, len(infos))
+    x[[k for k, i in enumerate(infos) if i.kind == "c"]] = 0.0
+    base = ModelParams.nominal(robot, [450.0, 0.0, 300.0], base=[100.0, -50.0, 20.0, 10.0, -20.0, 30.0])
+    # at c = 0 the analytic Jacobian is exact; with c != 0 it omits c * d(tau)/d(geometry) (second order, <0.1 %)
+
+    def pos(xx):
+        p = apply(base, infos, xx)
+        fr, tau = ball_positions(robot, p, q, 0.47, [-330, 0, -80], np.ones((7, 3)))
+        shift = np.zeros((7, 3))
+        for info, v in zip(infos, xx):
+            if info.kind == "fixture":
+                shift[group == info.index, "xyz".index(info.name[-1])] += v
+        return fr.pW - shift, fr, tau, p
+    _, fr, tau, p = pos(x)
+    J = position_jacobian(fr, tau, infos, p.base, group)
+    for k in range(len(infos)):
+        h = 1e-2 if infos[k].kind == "c" else 1e-6      # c in urad/(N m): a larger step beats round-off
+        e = np.zeros(len(infos))
+        e[k] = h
+        fd = (pos(x + e)[0] - pos(x - e)[0]) / (2 * h)
+        tol = 1e-5
+        np.testing.assert_allclose(J[:, :, k], fd, atol=tol * max(np.abs(fd).max(), 1e-9) + 1e-9,
+                                   err_msg=infos[k].name)
+
+
+def test_null_campaign_reaches_the_floor(examples, robot):
+    camp, fix, rod, pts, truth = _load(examples, "campaign-null")
+    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    assert res.success and res.rms_mm < 1.2 * truth["floor"]["oracle"]["campaign_rms_mm"]
+    after = validate(robot, res.params, pts)[0]
+    before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
+    assert after.mean_mm <= 1.15 * truth["floor"]["oracle"]["mean"]
+    assert before.mean_mm == pytest.approx(truth["floor"]["nominal"]["mean"], rel=0.01)
+    # the rod's tool and mounting twist (contract equivalent)
+    ce = truth["contract_equivalent"]
+    assert res.values["tool_x"] == pytest.approx(ce["tool_mm"][0], abs=0.05)
+    assert res.values["tool_z"] == pytest.approx(ce["tool_mm"][2], abs=0.05)
+    assert res.values["dtheta_6"] == pytest.approx(ce["dtheta6_deg"], abs=0.005)
+    assert res.values["c_2"] == pytest.approx(truth["true_robot"]["c_rad_per_Nm"][1], rel=0.3)
+
+
+def test_fixture_pose_campaign(examples, robot):
+    camp, fix, rod, pts, truth = _load(examples, "campaign-fixture_pose")
+    obs = campaign_observations(camp, fix, rod)
+    plain = identify(robot, obs, rod.tool_mm, rod)
+    assert validate(robot, plain.params, pts)[0].mean_mm <= 1.15 * truth["floor"]["ignore_effect"]["mean"]
+    freed = identify(robot, obs, rod.tool_mm, rod, freed={"fixture_1_x", "fixture_1_y", "fixture_1_z"})
+    assert validate(robot, freed.params, pts)[0].mean_mm <= 1.15 * truth["floor"]["oracle"]["mean"]
+    est = np.array([freed.values[f"fixture_1_{k}"] for k in "xyz"])
+    np.testing.assert_allclose(-est, truth["effects"][0]["parameters"]["offset_mm"], atol=0.03)
+
+
+def test_degenerate_campaigns_are_refused(examples, robot):
+    camp, fix, rod, _, _ = _load(examples, "campaign-null")
+    obs = campaign_observations(camp, fix, rod)
+    one = camp.position == 3
+    single = Observations(obs.q_rad[one], obs.x_W_mm[one], obs.force_W_N[one], obs.rod_mass_kg, obs.rod_com_T_mm,
+                          obs.group[one], None, {3: obs.fixture_T[3]})
+    with pytest.raises(CalibrationError, match="cannot identify .* parameter"):
+        identify(robot, single, rod.tool_mm, rod)
+    few = Observations(obs.q_rad[:4], obs.x_W_mm[:4], obs.force_W_N[:4])
+    with pytest.raises(CalibrationError, match="too few|cannot identify a robot"):
+        identify(robot, few, rod.tool_mm, rod)
+    fix.poses.pop(5)
+    with pytest.raises(CalibrationError, match=r"\[5\] .* not in the fixture file"):
+        campaign_observations(camp, fix, rod)
+
+
+def test_nan_and_bad_cells_name_the_line(tmp_path):
+    p = tmp_path / "c.campaign.csv"
+    p.write_text("position,point,q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n1,1,0,0,0,0,0,0,0,0,0\n1,2,0,0,nan,0,0,0,0,0,0\n")
+    with pytest.raises(CalibrationError) as ei:
+        read_campaign(p)
+    assert ei.value.line == 3 and ei.value.key == "q3"
+
+
+def test_result_file_follows_the_contract(examples, robot, tmp_path):
+    camp, fix, rod, pts, _ = _load(examples, "campaign-null")
+    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
+    after = validate(robot, res.params, pts)[0]
+    d = result_dict(robot, res, "calc", before, after)
+    assert d["format"] == "rodlab.calibration/1" and d["robot"] == "tx90" and d["points"] == 30
+    assert d["parameters"]["c_2"]["unit"] == "rad/(N m)" and d["parameters"]["d_1"]["status"] == "fixed"
+    assert any(u.startswith("d_2 ") for u in d["unidentifiable"])
+    assert set(d["validation"]["after"]) == {"mean_mm", "max_mm", "median_mm", "sd_mm", "points"}
+    json.dumps(d, allow_nan=False)
+
+
+def test_instrument_points_calibrate_another_robot(tmp_path):
+    """A robot file other than the TX90 (a generic 6R with an offset wrist), calibrated from tracker points."""
+    text = ('format = "rodlab.robot/1"\nname = "r6"\ngravity_base = [0.0, 0.0, -9.80665]\n'
+            + "".join(f"[[joint]]\ntheta_offset_deg = {t}\nd_mm = {d}\na_mm = {a}\nalpha_deg = {al}\n"
+                      f"limits_deg = [-170.0, 170.0]\nmass_kg = {m}\ncom_mm = [0.0, 0.0, 0.0]\n"
+                      for t, d, a, al, m in [(0, 400, 150, -90, 20), (-90, 0, 600, 0, 15), (0, 0, 120, -90, 8),
+                                             (0, 640, 0, 90, 4), (0, 0, 0, -90, 2), (0, 90, 0, 0, 0.5)]))
+    f = tmp_path / "r6.toml"
+    f.write_text(text)
+    robot = resolve_robot(f)
+    rng = np.random.default_rng(3)
+    true = ModelParams.nominal(robot, [20.0, 10.0, 150.0], base=[1500.0, 200.0, -300.0, 0.5, -0.3, 30.0])
+    true = true.with_(d=true.d + rng.normal(0, 0.5, 6) * [1, 0, 1, 1, 1, 0], a=true.a + rng.normal(0, 0.5, 6) * [1, 1, 1, 1, 1, 0],
+                      alpha=true.alpha + np.deg2rad(rng.normal(0, 0.05, 6)) * [1, 1, 1, 1, 1, 0],
+                      theta_offset=true.theta_offset + np.deg2rad(rng.normal(0, 0.05, 6)) * [0, 1, 1, 1, 1, 1],
+                      beta=true.beta + np.deg2rad([0, 0.04, 0, 0, 0, 0]))
+    q = np.deg2rad(rng.uniform(-80, 80, (120, 6)))
+    fr, _ = ball_positions(robot, true, q)
+    x = fr.pW + rng.normal(0, 0.01, fr.pW.shape)
+    obs = Observations(q[:80], x[:80], np.zeros((80, 3)))
+    res = identify(robot, obs, [20.0, 10.0, 150.0], None, freed={"tool_y"}, pinned={f"c_{i}": 0.0 for i in range(2, 7)})
+    assert res.rms_mm < 0.015
+    from calibrate.campaign import PointSet
+    test = PointSet(np.rad2deg(q[80:]), x[80:], np.array([20.0, 10.0, 150.0]), 0.0, np.zeros(3))
+    after = validate(robot, res.params, test)[0]
+    before = validate(robot, ModelParams.nominal(robot, [20.0, 10.0, 150.0]), test)[0]
+    assert after.mean_mm < 0.05 < before.mean_mm

@@ -49,6 +49,7 @@ def register(sub) -> None:
     p.add_argument("--png", default=None, help="error distributions per method (the paper's Fig. 10)")
     _common(p)
     p.set_defaults(func=cmd_compare)
+    register_more(sub)
 
 
 def _parse_pins(items) -> dict:
@@ -167,4 +168,82 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.png:
         from calibrate.plots import plot_error_distributions
         print(f"wrote {plot_error_distributions(args, rows, args.png)}")
+    return 0
+
+
+def register_more(sub) -> None:
+    p = sub.add_parser("simulate-campaign", help="write a synthetic MultiCal campaign from a random truth robot",
+                       description="The project's own test data: a truth robot (random kinematic errors, joint "
+                                   "compliances), a fixture, a rod, noise; writes the contract's campaign, fixture, "
+                                   "validation and compliance files and a truth.json.")
+    p.add_argument("--robot", default="tx90")
+    p.add_argument("--rod", required=True, help="the rod's compliance file (nominal)")
+    p.add_argument("--rod-true", default=None, help="the rod as it really is (default: --rod)")
+    p.add_argument("--positions", type=int, default=5)
+    p.add_argument("--orientations", type=int, default=6)
+    p.add_argument("--noise-um", type=float, default=3.0, help="device noise [um]")
+    p.add_argument("--fixture-error", action="append", default=[], metavar="J:dx,dy,dz",
+                   help="a wrong recorded pose: offset [mm] added to position J")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-o", "--output", required=True, help="output folder")
+    p.set_defaults(func=cmd_simulate_campaign)
+
+    p = sub.add_parser("plan", help="choose rod orientations per clamping position by observability (O1)",
+                       description="Reachable rod orientations at every clamping position (numeric IK within the "
+                                   "joint limits), chosen to maximise the observability index O1; prints O1-O5 and "
+                                   "writes the joint angles for the robot program.")
+    p.add_argument("--robot", default="tx90")
+    p.add_argument("--fixture", required=True)
+    p.add_argument("--rod", required=True, help="a compliance file (tool, mass) or a *.rod.toml design")
+    p.add_argument("-k", type=int, default=6, help="orientations per position")
+    p.add_argument("--candidates", type=int, default=24)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
+    p.set_defaults(func=cmd_plan)
+
+
+def cmd_simulate_campaign(args) -> int:
+    from calibrate import resolve_robot
+    from calibrate.simulate import CampaignSpec, simulate_campaign
+    robot = resolve_robot(args.robot)
+    rod = read_compliance(args.rod)
+    rod_true = read_compliance(args.rod_true) if args.rod_true else None
+    errs = {}
+    for it in args.fixture_error:
+        j, _, v = it.partition(":")
+        try:
+            errs[int(j)] = [float(x) for x in v.split(",")]
+            assert len(errs[int(j)]) == 3
+        except (ValueError, AssertionError):
+            raise RodlabError(f"--fixture-error {it!r}: expected J:dx,dy,dz [mm]") from None
+    spec = CampaignSpec(positions=args.positions, orientations=args.orientations, device_noise_mm=args.noise_um * 1e-3,
+                        seed=args.seed)
+    simulate_campaign(robot, rod, args.output, spec, rod_true, errs or None)
+    print(f"wrote a {args.positions} x {args.orientations} campaign of {robot.name} with rod {rod.rod} to {args.output}")
+    return 0
+
+
+def cmd_plan(args) -> int:
+    from calibrate import read_fixture, resolve_robot
+    from calibrate.plan import plan_poses
+    from rodlab.fileio import atomic_write_text
+    robot = resolve_robot(args.robot)
+    fix = read_fixture(args.fixture)
+    if str(args.rod).endswith(".toml"):
+        from ..calc import calc_rod_compliance
+        from ..design_io import load_design
+        rod = calc_rod_compliance(load_design(args.rod))
+    else:
+        rod = read_compliance(args.rod)
+    poses, obs = plan_poses(robot, fix, rod.tool_mm, args.k, args.candidates, args.seed, rod.mass_kg, rod.com_T_mm)
+    print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
+          ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
+    lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]
+    for j, qs in poses.items():
+        for i, q in enumerate(qs, start=1):
+            lines.append(f"{j},{i}," + ",".join(f"{v:.4f}" for v in q))
+    if args.output:
+        print(f"wrote {atomic_write_text(args.output, chr(10).join(lines) + chr(10))}")
+    else:
+        print("\n".join(lines))
     return 0

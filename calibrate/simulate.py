@@ -1,0 +1,162 @@
+"""Synthetic MultiCal campaigns (contract files) from a known truth: the project's own test data.
+
+A truth robot (random kinematic errors of a given scale, joint compliances), a fixture with clamping
+positions in front of the robot (device frames tilted so their axes are 54.7 deg from the plumb line), a
+rod (its true compliance and tool), device and instrument noise. For each clamping position the true
+robot aligns the (deflected) ball with the datum point in ``k`` rod orientations (numeric IK) up to an
+alignment tolerance; the device reads the remaining offset in {D_j}. A validation set of random
+configurations is measured by an external instrument with a short rigid rod.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.fileio import atomic_write_json, atomic_write_text
+from rodlab.frames import matrix_to_pose, pose_to_matrix, rotation_from_abc
+
+from .errors import CalibrationError
+from .identify import _deflection_offsets, Observations
+from .ik import solve_ik_position
+from .kinematics import ModelParams, ball_positions
+
+__all__ = ["CampaignSpec", "simulate_campaign", "random_truth"]
+
+
+@dataclass
+class CampaignSpec:
+    """positions, orientations per position, noise [mm], joint resolution [deg], alignment [mm], error scale."""
+
+    positions: int = 5
+    orientations: int = 6
+    device_noise_mm: float = 0.003
+    instrument_noise_mm: float = 0.02
+    q_resolution_deg: float = 1e-4
+    alignment_mm: float = 0.15
+    fixture_noise_mm_deg: tuple = (0.01, 0.002)
+    error_scale: float = 1.0
+    validation_points: int = 100
+    seed: int = 0
+
+
+def random_truth(robot, tool_mm, rng, scale=1.0) -> ModelParams:
+    """A plausible real robot: DH errors ~0.5 mm / 0.05 deg, joint compliances 3-6 urad/(N m)."""
+    n = robot.n
+    p = ModelParams.nominal(robot, tool_mm)
+    par = set(robot.parallel_rows())
+    d = p.d + scale * rng.normal(0, 0.5, n) * np.array([0 if i in par else 1 for i in range(n)])
+    a = p.a + scale * rng.normal(0, 0.5, n)
+    al = p.alpha + scale * np.deg2rad(rng.normal(0, 0.05, n))
+    be = p.beta + scale * np.deg2rad(rng.normal(0, 0.05, n)) * np.array([1 if i in par else 0 for i in range(n)])
+    th = p.theta_offset + scale * np.deg2rad(rng.normal(0, 0.06, n))
+    c = np.concatenate([[0.0], rng.uniform(3e-6, 6e-6, n - 1)])
+    return p.with_(d=d, a=a, alpha=al, beta=be, theta_offset=th, c=c)
+
+
+def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
+                      rod_true: RodCompliance | None = None, fixture_error: dict | None = None) -> dict:
+    """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
+    and the rod file into ``out_dir``; return the truth. ``rod_true``: the rod as it really is (default:
+    ``rod``); ``fixture_error``: {position: offset [mm]} added to the recorded pose (a wrong fixture pose)."""
+    rng = np.random.default_rng(spec.seed)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rod_true = rod_true or rod
+    truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale)
+    # base pose: {W} = {D_world} near the robot, the device frame tilted 54.7 deg (axes up at equal angles)
+    tilt = np.array([-45.0, 35.26438968, 0.0])                # Rx(-45) Ry(35.26): z_D along (1,1,1)/sqrt(3) up
+    R_WD = rotation_from_abc(tilt)                            # device axes in a level lab frame
+    world_in_base = np.array([650.0, 0.0, 250.0])
+    T_base_W = np.eye(4)
+    T_base_W[:3, :3] = R_WD
+    T_base_W[:3, 3] = world_in_base
+    T_W_base = np.linalg.inv(T_base_W)
+    truth = truth.with_(base=matrix_to_pose(T_W_base))
+    wp = 1 + spec.positions // 2
+    poses, Ts = {}, {}
+    for j in range(1, spec.positions + 1):
+        if j == wp:
+            Tj = np.eye(4)
+        else:
+            ang = 2 * np.pi * (j - 1) / max(spec.positions - 1, 1)
+            off_base = np.array([150 * np.cos(ang), 180 * np.sin(ang), 80 * np.sin(2 * ang)])
+            yaw = rng.uniform(-60, 60)
+            R_base = rotation_from_abc([0, 0, yaw]) @ R_WD
+            Tb = np.eye(4)
+            Tb[:3, :3] = R_base
+            Tb[:3, 3] = world_in_base + off_base
+            Tj = T_W_base @ Tb
+        Ts[j] = Tj
+        poses[j] = matrix_to_pose(Tj)
+    R_WB = pose_to_matrix(truth.base)[:3, :3]
+    rows, qs, xs, groups = [], [], [], []
+    t = 0.0
+    for j in range(1, spec.positions + 1):
+        F_W = Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05])
+        got = 0
+        tries = 0
+        while got < spec.orientations and tries < 60 * spec.orientations:
+            tries += 1
+            # a different rod orientation each time: position-only IK pulled towards a random configuration
+            lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+            seed = rng.uniform(0.7 * lo, 0.7 * hi)
+            target = Ts[j][:3, 3] + Ts[j][:3, :3] @ rng.uniform(-spec.alignment_mm, spec.alignment_mm, 3)
+            q = solve_ik_position(robot, truth, target, seed, rod.mass_kg, rod.com_T_mm, F_W)
+            if q is None:
+                continue
+            got += 1
+            obs = Observations(q[None], np.zeros((1, 3)), F_W[None], rod.mass_kg, rod.com_T_mm)
+            fr, _ = ball_positions(robot, truth, q[None], rod.mass_kg, rod.com_T_mm, F_W[None])
+            defl = _deflection_offsets(robot, truth, obs, rod_true)
+            pW = fr.pW[0] + defl[0]
+            xD = np.linalg.inv(Ts[j]) @ np.append(pW, 1.0)
+            xD = xD[:3] + rng.normal(0, spec.device_noise_mm, 3)
+            qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
+            t += rng.uniform(40, 120)
+            rows.append(f"{j},{got}," + ",".join(f"{v:.4f}" for v in qd) + "," + ",".join(f"{v:.4f}" for v in xD)
+                        + f",{t:.0f},{22.0:.2f}")
+        if got < spec.orientations:
+            raise CalibrationError(f"clamping position {j}: only {got} of {spec.orientations} rod orientations are "
+                                   f"reachable", key="positions")
+    atomic_write_text(out / "multical.campaign.csv",
+                      "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
+                      + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")
+    rec = {}
+    st, sr = spec.fixture_noise_mm_deg
+    for j, pz in poses.items():
+        pr = np.array(pz, float)
+        if j != wp:
+            pr = pr + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
+        if fixture_error and j in fixture_error:
+            pr[:3] += np.asarray(fixture_error[j], float)
+        rec[str(j)] = [round(float(v), 6) for v in pr]
+    atomic_write_json(out / "multical.fixture.json", {"format": "rodlab.fixture/1", "world_position": wp,
+                                                      "positions": rec, "contact_force_N": [1.10, 1.25, 1.05]})
+    # validation: short rigid rod, random reachable configurations
+    vt = np.array([0.0, 0.0, 150.0])
+    vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
+    fr, _ = ball_positions(robot, vtrue, vq, 0.3, [0, 0, -60])
+    vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
+    lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
+             ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]
+    lines += [",".join(f"{v:.4f}" for v in np.rad2deg(q)) + "," + ",".join(f"{v:.3f}" for v in x)
+              for q, x in zip(vq, vx)]
+    atomic_write_text(out / "multical.validation.csv", "\n".join(lines) + "\n")
+    from rodlab.compliance import write_compliance
+    write_compliance(rod, out / "rod.compliance.json")
+    t = {"format": "rodlab.truth.campaign/1", "seed": spec.seed, "spec": spec.__dict__,
+         "true_base_pose_W": truth.base.tolist(), "true_tool_mm": truth.tool.tolist(),
+         "dtheta_deg": np.rad2deg(truth.theta_offset - np.deg2rad(robot.theta_offset_deg)).tolist(),
+         "d_mm": truth.d.tolist(), "a_mm": truth.a.tolist(), "alpha_deg": np.rad2deg(truth.alpha).tolist(),
+         "beta_deg": np.rad2deg(truth.beta).tolist(), "c_rad_per_Nm": truth.c.tolist(),
+         "true_fixture_poses_W": {str(j): p.tolist() for j, p in poses.items()},
+         "fixture_error_mm": {str(k): list(map(float, v)) for k, v in (fixture_error or {}).items()},
+         "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0}
+    atomic_write_json(out / "truth.json", t)
+    return t

@@ -1,0 +1,55 @@
+"""Synthetic campaigns (the project's own generator) and observability-based planning."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points,
+                       resolve_robot, validate)
+from calibrate.plan import observability, plan_poses
+from calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab import calc_rod_compliance, resolve_design
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return resolve_robot("tx90")
+
+
+@pytest.fixture(scope="module")
+def rod():
+    return calc_rod_compliance(resolve_design("rod1"))
+
+
+def test_simulated_campaign_round_trip(tmp_path_factory, robot, rod):
+    out = tmp_path_factory.mktemp("camp")
+    truth = simulate_campaign(robot, rod, out, CampaignSpec(seed=11))
+    camp = read_campaign(out / "multical.campaign.csv")
+    fix = read_fixture(out / "multical.fixture.json")
+    pts = read_points(out / "multical.validation.csv")
+    assert camp.n == 30 and set(fix.poses) == {1, 2, 3, 4, 5}
+    assert np.abs(camp.x_D_mm).max() < 1.0                 # aligned with the datum points (deflection included)
+    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    assert res.rms_mm < 0.01
+    after = validate(robot, res.params, pts)[0]
+    before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
+    assert after.mean_mm < 0.1 < before.mean_mm
+    assert res.values["tool_x"] == pytest.approx(rod.tool_mm[0] + truth["a_mm"][5] - robot.a_mm[5], abs=0.05)
+    json.loads((out / "truth.json").read_text())
+
+
+def test_planning_beats_a_random_choice(robot, rod, examples):
+    fix = read_fixture(examples / "campaign-null" / "multical.fixture.json")
+    poses, obs = plan_poses(robot, fix, rod.tool_mm, k=6, candidates=10, seed=2, rod_mass_kg=rod.mass_kg,
+                            rod_com_T_mm=rod.com_T_mm)
+    assert all(v.shape == (6, 6) for v in poses.values())
+    lim = robot.limits_deg
+    for q in poses.values():
+        assert np.all(q >= lim[:, 0] - 1e-6) and np.all(q <= lim[:, 1] + 1e-6)
+    assert obs["parameters"] == 32 and obs["O1"] > 0
+    assert set(obs) >= {"O1", "O2", "O3", "O4", "O5"}
+    rng = np.random.default_rng(0)
+    J = rng.normal(size=(90, 32))
+    assert observability(J)["O2"] == pytest.approx(1 / observability(J)["condition"])

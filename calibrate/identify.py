@@ -31,7 +31,8 @@ from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
 
-__all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base"]
+__all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
+           "noise_covariance"]
 
 log = logging.getLogger(__name__)
 
@@ -325,12 +326,11 @@ def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
     return float(p.tool["xyz".index(info.name[-1])])
 
 
-def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
-    """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
-    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-    J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> np.ndarray:
+    """Covariance of the measured points [mm^2], shape=(3N, 3N): device noise plus the uncertainty of each
+    recorded clamping pose (translation [mm], rotation [deg]), correlated among the points of a position."""
     N = obs.x_W_mm.shape[0]
-    S = noise ** 2 * np.eye(3 * N)
+    S = noise_mm ** 2 * np.eye(3 * N)
     if obs.group is not None and obs.fixture_T is not None:
         st, sr = fixture_sigma[0], np.deg2rad(fixture_sigma[1])
         for j, T in obs.fixture_T.items():
@@ -345,6 +345,14 @@ def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
                     G[3 * r:3 * r + 3, 3 + a] = np.cross(np.eye(3)[a], d) * sr
             rows = (3 * m[:, None] + np.arange(3)).ravel()
             S[np.ix_(rows, rows)] += G @ G.T
+    return S
+
+
+def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
+    """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
+    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+    S = noise_covariance(obs, noise, fixture_sigma)
     JtJ_inv = np.linalg.pinv(J.T @ J)
     cov = JtJ_inv @ J.T @ S @ J @ JtJ_inv
     sig = np.sqrt(np.clip(np.diag(cov), 0, None))

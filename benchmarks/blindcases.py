@@ -1,0 +1,178 @@
+"""Blind cases for the rig diagnosis, generated from the rig's physical model (never from diagnosis code).
+
+Each case: a recording on disk plus its truth (effects, locations, parameters, SNR). Effects are sized to
+a peak change of the readings of ``snr`` x the per-sample noise, as the contract examples are. Mix: ~30 %
+nulls, single effects (SNR 3-60), pairs, other noise levels and protocols, decoys (a bumped hold, a
+mislabelled load) and effects outside the library (gauge non-linearity, a step slip, mains hum), for which
+the honest answer is ``unexplained``.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rodlab import calc_rod_compliance, resolve_design
+from rodlab.layout import layout
+from stiffness_rig.model import Hold, Protocol, RigModel
+from stiffness_rig.simulate import simulate_recording
+
+__all__ = ["generate_cases", "BlindCase"]
+
+LIBRARY = ["friction", "tare", "creep", "nonlinearity", "crosstalk", "drift", "compliance_scale",
+           "torsion_compliance", "joint_compliance"]
+
+
+@dataclass
+class BlindCase:
+    path: Path
+    truth: dict
+
+
+def _places(design):
+    segs = layout(design)
+    tool = design.tool_mm
+    ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)][0]
+    p2 = [s for s in segs if any(str(l.part) == "pipe_II" for l in s.layers)]
+    s2 = p2[len(p2) // 2]
+    return {"flange_clamp": (segs[0].start_F - tool, segs[0].direction),
+            "ring_1": (ring1.point([ring1.length_mm / 2])[0] - tool, ring1.direction),
+            "pipe_II": (s2.point([s2.length_mm / 2])[0] - tool, s2.direction)}
+
+
+def _unit_effect(name, rng, places):
+    """(effects dict for a unit magnitude, location, scalable keys)."""
+    if name == "friction":
+        return {"friction": {"F_f_N": 1.0}}, None, ["F_f_N"]
+    if name == "tare":
+        return {"tare": {"tare_kg": 0.1}}, None, ["tare_kg"]
+    if name == "creep":
+        return {"creep": {"phi": 0.01, "tau_s": float(rng.choice([2.0, 4.0, 8.0]))}}, None, ["phi"]
+    if name == "nonlinearity":
+        return {"nonlinearity": {"beta": 0.01 * rng.choice([-1, 1])}}, None, ["beta"]
+    if name == "crosstalk":
+        return {"crosstalk": {"sensor": "z", "from": "y", "angle_rad": 0.01 * rng.choice([-1, 1])}}, "sensor:z", \
+            ["angle_rad"]
+    if name == "drift":
+        return {"drift": {"rate_mm_per_s": 1e-6 * rng.choice([-1, 1])}}, "time", ["rate_mm_per_s"]
+    if name == "compliance_scale":
+        return {"compliance_scale": {"r": 1.01}}, None, ["r"]
+    if name == "torsion_compliance":
+        return {"torsion_compliance": {"s_rad_per_Nmm": 1e-9, "point_T_mm": list(places["flange_clamp"][0]),
+                                       "axis": [0, 0, 1]}}, "pipe_I", ["s_rad_per_Nmm"]
+    loc = str(rng.choice(["flange_clamp", "ring_1", "pipe_II"]))
+    pt, ax = places[loc]
+    ratio = float(rng.uniform(0.2, 1.0))
+    return {"joint_compliance": {"point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nmm": 1e-9,
+                                 "s_torsion_rad_per_Nmm": ratio * 1e-9}}, loc, ["s_bend_rad_per_Nmm",
+                                                                                "s_torsion_rad_per_Nmm"]
+
+
+def _peak(C, effects, proto) -> float:
+    """Largest change of the noiseless readings an effect makes."""
+    clean = RigModel(C, {}, noise_mm=0.0, resolution_mm=0.0)
+    eff = RigModel(C, effects, noise_mm=0.0, resolution_mm=0.0)
+    peak, t = 0.0, 0.0
+    for k, (axis, rep, phase, mass) in enumerate(proto.holds()):
+        h = Hold(k, axis, rep, phase, mass, t)
+        for dt in (0.0, proto.hold_s * 0.5, proto.hold_s):
+            a = clean.reading(t + dt, h)[0]
+            b = eff.reading(t + dt, h)[0]
+            peak = max(peak, float(np.max(np.abs(b - a))))
+        t += proto.hold_s + proto.gap_s
+    return peak
+
+
+def _scale(effects, keys, factor):
+    out = json.loads(json.dumps(effects))
+    for name, params in out.items():
+        for k in keys:
+            if k in params:
+                if name == "compliance_scale" and k == "r":
+                    params[k] = 1.0 + (params[k] - 1.0) * factor
+                else:
+                    params[k] = params[k] * factor
+    return out
+
+
+def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1") -> list[BlindCase]:
+    rng = np.random.default_rng(seed)
+    design = resolve_design(rod)
+    C = calc_rod_compliance(design).C_F
+    places = _places(design)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    cases = []
+    for i in range(n):
+        u = rng.random()
+        kind = "null" if u < 0.3 else "single" if u < 0.7 else "pair" if u < 0.82 else "decoy" if u < 0.9 else "oolib"
+        noise = float(rng.choice([0.0003, 0.0006, 0.0012]))
+        proto = Protocol(axes=tuple(rng.permutation(["y", "z", "x"])), repeats=int(rng.integers(3, 6)),
+                         hold_s=float(rng.choice([5.0, 8.0])),
+                         masses=[(0.5, 1.0, 1.5, 2.0), (0.4, 0.8, 1.2, 1.6, 2.0), (1.0, 2.0, 3.0)][int(rng.integers(3))])
+        effects, truth_effects = {}, []
+        names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
+                                                                           replace=False))
+        for name in names:
+            unit, loc, keys = _unit_effect(name, rng, places)
+            snr = float(np.exp(rng.uniform(np.log(3), np.log(60))))
+            pk = _peak(C, unit, proto)
+            scaled = _scale(unit, keys, snr * noise / pk)
+            effects.update(scaled)
+            truth_effects.append({"effect": name, "location": loc, "snr": snr, "parameters": scaled[name]})
+        model = RigModel(C, effects, noise_mm=noise, resolution_mm=0.001 if noise >= 0.0006 else 0.0001,
+                         seed=int(rng.integers(1 << 30)), temp_amplitude_K=float(rng.uniform(0.2, 2.0)))
+        path = out / f"case{i:03d}.rig.csv"
+        simulate_recording(model, proto, path, rod=design.name)
+        expected = "consistent" if not truth_effects else "explained"
+        if kind == "decoy":
+            _decoy(path, rng)
+            truth_effects = []
+            expected = "consistent|unexplained"
+        if kind == "oolib":
+            _out_of_library(path, rng, noise)
+            expected = "unexplained"
+        truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise,
+                 "protocol": {"axes": list(proto.axes), "repeats": proto.repeats, "masses": list(proto.masses),
+                              "hold_s": proto.hold_s}}
+        (out / f"case{i:03d}.truth.json").write_text(json.dumps(truth, indent=1))
+        cases.append(BlindCase(path, truth))
+    return cases
+
+
+def _rewrite(path, fn):
+    lines = path.read_text().splitlines()
+    head = [l for l in lines if l.startswith("#") or l.startswith("time_s")]
+    rows = [l.split(",") for l in lines if l and not l.startswith("#") and not l.startswith("time_s")]
+    fn(rows)
+    path.write_text("\n".join(head + [",".join(r) for r in rows]) + "\n")
+
+
+def _decoy(path, rng):
+    """A bumped hold (one hold shifted by a few um) - one isolated outlier hold."""
+    def fn(rows):
+        steps = sorted({int(r[1]) for r in rows})
+        s = int(rng.choice(steps[5:]))
+        for r in rows:
+            if int(r[1]) == s:
+                for c in (6, 7, 8):
+                    if r[c]:
+                        r[c] = f"{float(r[c]) + 0.004:.4f}"
+    _rewrite(path, fn)
+
+
+def _out_of_library(path, rng, noise):
+    """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library."""
+    which = rng.choice(["quadratic", "hum"])
+
+    def fn(rows):
+        for r in rows:
+            t = float(r[0])
+            for c in (6, 7, 8):
+                if r[c]:
+                    v = float(r[c])
+                    v = v + (0.004 * v * v if which == "quadratic" else 20 * noise * np.sin(2 * np.pi * t / 3.7))
+                    r[c] = f"{v:.4f}"
+    _rewrite(path, fn)

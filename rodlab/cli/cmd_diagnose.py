@@ -1,0 +1,73 @@
+"""``rodlab diagnose``: name the physics that simulation and recordings disagree on."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..compliance import read_compliance, write_compliance
+from ..errors import RodlabError
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("diagnose", help="locate and explain the mismatch between simulation and recordings",
+                       description="Rig: a recording against the simulated compliance of its rod. Campaign: "
+                                   "calibration residuals against the identified model. Findings use the effect "
+                                   "vocabulary of the contract (friction, tare, creep, nonlinearity, crosstalk, "
+                                   "drift, compliance_scale, torsion_compliance, joint_compliance; fixture_pose, "
+                                   "rod_deflection, periodic_joint_error, thermal_drift, outliers; unexplained).")
+    p.add_argument("--rig", help="*.rig.csv recording")
+    p.add_argument("--sim", help="rig: the simulated compliance file")
+    p.add_argument("--campaign", help="*.campaign.csv")
+    p.add_argument("--fixture", help="campaign: *.fixture.json")
+    p.add_argument("--robot", default="tx90", help="campaign: robot name or file")
+    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
+    p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
+    p.add_argument("--noise-um", type=float, default=3.0, help="campaign: device noise [um] (default 3)")
+    p.add_argument("--json", help="write the contract's diagnosis report")
+    p.add_argument("--png", help="folder for figures")
+    p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
+    p.set_defaults(func=cmd_diagnose)
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
+    if bool(args.rig) == bool(args.campaign):
+        raise RodlabError("give either --rig REC.rig.csv --sim SIM.compliance.json or --campaign C.csv --fixture F.json "
+                          "--rod ROD.compliance.json")
+    if args.rig:
+        from stiffness_rig import read_recording
+        if not args.sim:
+            raise RodlabError("--rig needs --sim SIM.compliance.json")
+        sim = read_compliance(args.sim)
+        design = None
+        if args.rod:
+            from ..design_io import resolve_design
+            design = resolve_design(args.rod)
+        rec = read_recording(args.rig)
+        diag, model = diagnose_rig(rec, sim, design)
+        print(diag.summary())
+        if args.png:
+            from ..diagnose.plots import plot_rig_diagnosis
+            for p in plot_rig_diagnosis(model, args.png, title=f"rod {rec.rod}: {diag.verdict}"):
+                print(f"wrote {p}")
+        if args.export:
+            print(f"wrote {write_compliance(corrected_compliance(sim, diag, model), args.export)}")
+    else:
+        from calibrate import read_campaign, read_fixture, read_points, resolve_robot
+        if not (args.fixture and args.rod):
+            raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
+        robot = resolve_robot(args.robot)
+        pts = read_points(args.validate, robot.n) if args.validate else None
+        diag, info = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
+                                       read_compliance(args.rod), args.noise_um * 1e-3, pts)
+        print(diag.summary())
+        if "validation" in diag.extra:
+            v = diag.extra["validation"]
+            print(f"  validation mean / max [mm]: nominal {v['nominal']['mean_mm']:.3f} / {v['nominal']['max_mm']:.3f}, "
+                  f"calibrated {v['before']['mean_mm']:.3f} / {v['before']['max_mm']:.3f}, with the found physics "
+                  f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
+    if args.json:
+        print(f"wrote {diag.write(args.json)}")
+    return 0

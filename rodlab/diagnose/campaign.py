@@ -1,0 +1,229 @@
+"""Diagnosis of a MultiCal campaign: residuals of the identified model against physics left out.
+
+The identification's residuals r and Jacobian J are augmented with the columns H of each hypothesis; the
+gain is the part of r that H explains beyond what the identified parameters already absorb (the
+projection on the complement of J). Selection as for the rig (delta BIC <= -10 with the known device noise,
+likelihood-ratio p < 1e-3, leave-one-point-out cross-validation), then the campaign is identified again
+with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers) to show the fit
+(and, with validation points, the positioning error) improve.
+
+Hypotheses (``contract/effects.md``, subject ``campaign``): ``fixture_pose`` (offset of one clamping
+position), ``rod_deflection`` (compensation off by a factor: residuals follow R_T^W (C_g g + C_F F)),
+``periodic_joint_error`` (first harmonic of joint K: sin / cos q_K along the joint's motion),
+``thermal_drift`` (link growth with time_s / temp_C), ``outliers`` (isolated gross alignment errors).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.stats import chi2
+
+from .report import Diagnosis, Finding
+
+__all__ = ["diagnose_campaign"]
+
+DBIC_MIN = 10.0
+P_MAX = 1e-3
+
+
+def _rms(L, fit, cols) -> float:
+    """rms per reading [mm] of the (unwhitened) residuals of the model with ``cols``."""
+    e = L @ fit(cols)[2]
+    return float(np.sqrt(np.mean(e ** 2)))
+
+
+def _hypotheses(robot, res, obs, camp, rod):
+    from calibrate.kinematics import ball_positions
+    from calibrate.identify import _deflection_offsets
+    N = obs.x_W_mm.shape[0]
+    fr, _ = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    hyps = []
+    for j in np.unique(camp.position):
+        if obs.fixture_T is not None and np.allclose(obs.fixture_T[int(j)], np.eye(4)):
+            continue
+        H = np.zeros((N, 3, 3))
+        H[camp.position == j, :, :] = np.eye(3)
+        hyps.append(("fixture_pose", f"position:{int(j)}", ["dx_mm", "dy_mm", "dz_mm"], H.reshape(3 * N, 3),
+                     "the recorded pose of this clamping position is off: all its points share one offset"))
+    defl = _deflection_offsets(robot, res.params, obs, rod) if rod is not None else None
+    if defl is None or not np.any(defl):
+        from rodlab.compliance import RodCompliance
+        defl = None
+    if defl is not None:
+        hyps.append(("rod_deflection", None, ["k_minus_1"], defl.reshape(3 * N, 1),
+                     "the rod's deflection is compensated with the wrong compliance: residuals follow "
+                     "R_T^W (C_g g^T + C_F F^T) scaled by a factor"))
+    for k in range(robot.n):
+        g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
+        q = obs.q_rad[:, k]
+        H = np.stack([g * np.sin(q)[:, None], g * np.cos(q)[:, None]], axis=-1).reshape(3 * N, 2)
+        hyps.append(("periodic_joint_error", f"joint:{k + 1}", ["amp_sin_rad", "amp_cos_rad"], H,
+                     f"gear or encoder eccentricity of joint {k + 1}: an angle error once per revolution, "
+                     "periodic in q"))
+    centre = fr.t_W0
+    for key, vals in (("time", camp.time_s), ("temp", camp.temp_C)):
+        if vals is not None and np.isfinite(vals).all() and np.ptp(vals) > 0:
+            v = (vals - vals.min())[:, None]
+            H = (v * (fr.pW - centre)).reshape(3 * N, 1) * 1e-6
+            hyps.append(("thermal_drift", key, [f"growth_ppm_per_{'s' if key == 'time' else 'K'}"], H,
+                         f"the links grow during the campaign: positions scale about the base with {key}"))
+    return hyps
+
+
+def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
+                      fixture_sigma=(0.01, 0.002)):
+    """Diagnose a campaign; returns (report, info dict with the re-identified result)."""
+    from calibrate import ModelParams, campaign_observations, identify, validate
+    from calibrate.jacobian import position_jacobian
+    from calibrate.kinematics import ball_positions
+
+    obs = campaign_observations(camp, fix, rod)
+    res = identify(robot, obs, rod.tool_mm, rod)
+    N = obs.x_W_mm.shape[0]
+    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    free_infos = [i for i in res.infos if i.name in res.free]
+    J = position_jacobian(fr, tau, free_infos, res.params.base, obs.group).reshape(3 * N, -1)
+    # whiten with the noise covariance (device noise + fixture-pose uncertainty per position): every
+    # statistic below is then in units of the expected scatter (chi-square with known noise)
+    from calibrate.identify import noise_covariance
+    L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
+    white = lambda A: np.linalg.solve(L, A)  # noqa: E731
+    r_raw = res.residuals_mm.reshape(-1)
+    r = white(r_raw)
+    J = white(J)
+    n = r.size
+    hyps = [(e, l, nm, white(H), x) for (e, l, nm, H, x) in _hypotheses(robot, res, obs, camp, rod)]
+    # point-wise outlier columns are handled separately (many candidates)
+    chosen = []
+    rss0 = float(r @ r)
+    rss = rss0
+    findings = []
+    used_points: list[int] = []
+
+    def fit(cols):
+        A = np.column_stack([J] + cols) if cols else J
+        coef, *_ = np.linalg.lstsq(A, r, rcond=None)
+        e = r - A @ coef
+        return coef, float(e @ e), e
+
+    def cv_error(cols):
+        """Leave-one-point-out prediction error (a position-specific term is still estimable)."""
+        total = 0.0
+        for i in range(N):
+            test = np.zeros(3 * N, dtype=bool)
+            test[3 * i:3 * i + 3] = True
+            A = np.column_stack([J] + cols) if cols else J
+            coef, *_ = np.linalg.lstsq(A[~test], r[~test], rcond=None)
+            total += float(((r[test] - A[test] @ coef) ** 2).sum())
+        return total
+
+    cols_now: list = []
+    cv_now = cv_error(cols_now)
+    for _ in range(max_terms):
+        cand = []
+        for (eff, loc, names, H, expl) in hyps:
+            if any(c[0] == eff and c[1] == loc for c in chosen):
+                continue
+            coef, rss2, _ = fit(cols_now + [H])
+            lr = rss - rss2
+            cand.append((-lr + H.shape[1] * np.log(n), lr, eff, loc, names, H, expl, coef, rss2))
+        # outliers: the point with the largest residual
+        _, _, e_now = fit(cols_now)
+        norms = np.linalg.norm((L @ e_now).reshape(N, 3), axis=1)
+        order = [int(i) for i in np.argsort(-norms) if int(i) not in used_points]
+        if order:
+            i = order[0]
+            H = np.zeros((N, 3, 3))
+            H[i] = np.eye(3)
+            H = white(H.reshape(3 * N, 3))
+            coef, rss2, _ = fit(cols_now + [H])
+            lr = rss - rss2
+            # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
+            cand.append((-lr + 3 * np.log(n) + 2 * np.log(N), lr, "outliers", f"points:{camp.labels()[i]}",
+                         ["dx_mm", "dy_mm", "dz_mm"], H, "an isolated gross alignment error at this point", coef, rss2))
+        if not cand:
+            break
+        cand.sort(key=lambda c: c[0])
+        dbic, lr, eff, loc, names, H, expl, coef, rss2 = cand[0]
+        p = float(chi2.sf(max(lr, 0.0), H.shape[1]))
+        if dbic > -DBIC_MIN or p > P_MAX:
+            break
+        cv2 = cv_error(cols_now + [H]) if eff != "outliers" else cv_now * (rss2 / max(rss, 1e-300))
+        if not cv2 < cv_now:
+            break
+        A = np.column_stack([J] + cols_now + [H])
+        cov = np.linalg.pinv(A.T @ A)
+        k0 = J.shape[1] + sum(c.shape[1] for c in cols_now)
+        val = coef[k0:k0 + H.shape[1]]
+        se = np.sqrt(np.clip(np.diag(cov)[k0:k0 + H.shape[1]], 0, None))
+        params = {nm: float(v) for nm, v in zip(names, val)}
+        iv = {nm: [float(v - 1.96 * s), float(v + 1.96 * s)] for nm, v, s in zip(names, val, se)}
+        if eff == "rod_deflection":
+            params = {"k": 1.0 + params["k_minus_1"]}
+            iv = {"k": [1.0 + iv["k_minus_1"][0], 1.0 + iv["k_minus_1"][1]]}
+        if eff == "outliers":
+            used_points.append(int(camp.labels().index(loc.split(":")[1])))
+            prev = [f for f in findings if f.effect == "outliers"]
+            if prev:                                   # merge into one finding listing the points
+                f = prev[0]
+                f.location += "," + loc.split(":")[1]
+                f.rms_after_mm = _rms(L, fit, cols_now + [H])
+                chosen.append((eff, loc))
+                cols_now.append(H)
+                rss, cv_now = rss2, cv2
+                continue
+        before_rms = _rms(L, fit, cols_now) if cols_now else float(np.sqrt(np.mean(r_raw ** 2)))
+        findings.append(Finding(eff, loc, expl, params, iv, before_rms, _rms(L, fit, cols_now + [H]),
+                                {"delta_bic": float(dbic), "lr_chi2": float(lr), "lr_p": p,
+                                 "cv_sse_before": float(cv_now), "cv_sse_after": float(cv2)}))
+        chosen.append((eff, loc))
+        cols_now.append(H)
+        rss, cv_now = rss2, cv2
+    # re-identify with the found physics
+    freed, keep = set(), np.ones(N, dtype=bool)
+    rod_used = rod
+    for f in findings:
+        if f.effect == "fixture_pose":
+            j = f.location.split(":")[1]
+            freed |= {f"fixture_{j}_{k}" for k in "xyz"}
+        if f.effect == "outliers":
+            labels = camp.labels()
+            for lab in f.location.split(":")[1].split(","):
+                keep[labels.index(lab)] = False
+        if f.effect == "rod_deflection":
+            from rodlab.compliance import RodCompliance
+            k = f.parameters["k"]
+            rod_used = RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm,
+                                     rod.tool_mm, rod.r_rod * k, dict(rod.provenance, diagnosis_scale=k))
+    info = {"result_before": res}
+    if findings:
+        from calibrate.identify import Observations
+        obs2 = campaign_observations(camp, fix, rod_used)
+        if not keep.all():
+            obs2 = Observations(obs2.q_rad[keep], obs2.x_W_mm[keep], obs2.force_W_N[keep], obs2.rod_mass_kg,
+                                obs2.rod_com_T_mm, obs2.group[keep], [l for l, k in zip(camp.labels(), keep) if k],
+                                obs2.fixture_T)
+        res2 = identify(robot, obs2, rod.tool_mm, rod_used, freed=freed)
+        info["result_after"] = res2
+        rms_after = res2.rms_mm
+    else:
+        rms_after = res.rms_mm
+    verdict = "consistent" if not findings else "explained"
+    final_rms = _rms(L, fit, cols_now)
+    chi_red = rss / max(n - J.shape[1] - sum(c.shape[1] for c in cols_now), 1)
+    if chi_red > 4.0:
+        e = (L @ fit(cols_now)[2]).reshape(N, 3)
+        pos_rms = {int(j): float(np.sqrt(np.mean(e[camp.position == j] ** 2))) for j in np.unique(camp.position)}
+        worst = max(pos_rms, key=pos_rms.get)
+        findings.append(Finding("unexplained", f"position:{worst}",
+                                f"residuals {final_rms * 1e3:.1f} um remain above the expected scatter (device "
+                                f"{noise_mm * 1e3:.1f} um and fixture poses; reduced chi-square {chi_red:.1f}) with "
+                                f"no modelled cause", {"rms_mm": final_rms, "reduced_chi2": chi_red}, {},
+                                final_rms, final_rms, {"position_rms_mm": pos_rms}))
+        verdict = "unexplained"
+    extra = {}
+    if validate_points is not None:
+        b = validate(robot, res.params, validate_points)[0]
+        a = validate(robot, info.get("result_after", res).params, validate_points)[0]
+        nominal = validate(robot, ModelParams.nominal(robot, validate_points.tool_mm), validate_points)[0]
+        extra["validation"] = {"nominal": nominal.to_dict(), "before": b.to_dict(), "after": a.to_dict()}
+    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), info

@@ -1,0 +1,98 @@
+"""rodlab diagnose: the labelled examples, the export, the report, a fixed-seed blind batch."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab import load_design, read_compliance
+from rodlab.diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
+from stiffness_rig import read_recording
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("name", ["null", "friction", "joint_compliance-ring_1"])
+def test_rig_examples(examples, name):
+    sim = read_compliance(examples / "rod1.compliance.json")
+    truth = json.loads((examples / f"rig-{name}.truth.json").read_text())
+    diag, model = diagnose_rig(read_recording(examples / f"rig-{name}.rig.csv"), sim,
+                               load_design(examples / "rods" / "rod1.rod.toml"))
+    assert diag.verdict == truth["expected"]["verdict"]
+    assert [f.effect for f in diag.findings] == truth["expected"]["effects"]
+    assert [f.location for f in diag.findings] == truth["expected"]["locations"]
+    assert diag.rms_after_mm <= 1.5 * diag.noise_mm
+    for f in diag.findings:
+        for k, v in truth["parameters"].items():
+            if k in f.parameters:
+                assert f.parameters[k] == pytest.approx(v, rel=0.35)
+                lo, hi = f.intervals[k]
+                assert lo <= f.parameters[k] <= hi
+    if name.startswith("joint"):
+        corr = corrected_compliance(sim, diag, model)
+        np.testing.assert_allclose(corr.C_F, truth["C_F_true_mm_per_N"], rtol=0.005, atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["campaign-null", "campaign-fixture_pose"])
+def test_campaign_examples(examples, name):
+    from calibrate import read_campaign, read_fixture, read_points, resolve_robot
+    ex = examples / name
+    truth = json.loads((ex / "truth.json").read_text())
+    diag, info = diagnose_campaign(resolve_robot("tx90"), read_campaign(ex / "multical.campaign.csv"),
+                                   read_fixture(ex / "multical.fixture.json"), read_compliance(ex / "rod1.compliance.json"),
+                                   validate_points=read_points(ex / "multical.validation.csv"))
+    assert diag.verdict == truth["expected"]["verdict"]
+    assert [f.effect for f in diag.findings] == truth["expected"]["effects"]
+    assert [f.location for f in diag.findings] == truth["expected"]["locations"]
+    if diag.findings:
+        v = diag.extra["validation"]
+        assert v["after"]["mean_mm"] <= 1.15 * truth["floor"]["oracle"]["mean"]
+        assert v["after"]["mean_mm"] < v["before"]["mean_mm"]
+
+
+def test_report_follows_the_contract(examples, tmp_path):
+    sim = read_compliance(examples / "rod1.compliance.json")
+    diag, _ = diagnose_rig(read_recording(examples / "rig-friction.rig.csv"), sim)
+    d = json.loads(diag.write(tmp_path / "d.json").read_text())
+    assert d["format"] == "rodlab.diagnosis/1" and d["subject"] == "rig" and d["verdict"] == "explained"
+    for k in ("noise_mm", "rms_before_mm", "rms_after_mm", "findings"):
+        assert k in d
+    f = d["findings"][0]
+    assert {"effect", "location", "explanation", "parameters", "rms_before_mm", "rms_after_mm", "evidence"} <= set(f)
+    assert f["evidence"]["delta_bic"] < -10
+
+
+def test_diagnosis_never_imports_the_blind_generator():
+    code = "import sys, rodlab.diagnose, rodlab.cli.cmd_diagnose; assert 'blindcases' not in sys.modules"
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+    for f in (ROOT / "rodlab" / "diagnose").glob("*.py"):
+        assert "blindcases" not in f.read_text(), f
+
+
+def test_fixed_seed_blind_batch(tmp_path):
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from blindcases import generate_cases
+    from rodlab import calc_rod_compliance, resolve_design
+    sim = calc_rod_compliance(resolve_design("rod1"))
+    cases = generate_cases(tmp_path, 10, seed=7)
+    for c in cases:
+        diag, _ = diagnose_rig(read_recording(c.path), sim, resolve_design("rod1"))
+        t = c.truth
+        if t["kind"] == "null":
+            assert diag.verdict == "consistent", c.path
+        elif t["kind"] == "single" and t["effects"][0]["snr"] >= 5:
+            assert t["effects"][0]["effect"] in [f.effect for f in diag.findings], (c.path, t)
+        elif t["kind"] == "oolib":
+            assert diag.verdict == "unexplained"
+
+
+def test_cli_diagnose(examples, tmp_path, capsys):
+    from rodlab.cli import main
+    assert main(["diagnose", "--rig", str(examples / "rig-friction.rig.csv"), "--sim",
+                 str(examples / "rod1.compliance.json"), "--json", str(tmp_path / "d.json"), "--png", str(tmp_path)]) == 0
+    assert "friction" in capsys.readouterr().out and (tmp_path / "diagnosis_rig.png").exists()
+    assert main(["diagnose", "--rig", "x.csv"]) == 2

@@ -11,12 +11,12 @@ import sys
 
 from .. import __version__
 from ..errors import RodlabError
-from . import cmd_calibrate, cmd_design, cmd_diagnose, cmd_fea, cmd_geometry, cmd_rig, cmd_sweep
+from . import cmd_calibrate, cmd_demo, cmd_design, cmd_diagnose, cmd_fea, cmd_geometry, cmd_rig, cmd_sweep
 
 __all__ = ["build_parser", "main"]
 
 #: Modules that add sub-commands: each has ``register(subparsers)``.
-_COMMAND_MODULES = [cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_rig, cmd_calibrate, cmd_diagnose]
+_COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_rig, cmd_calibrate, cmd_diagnose]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,68 @@
+"""The main job end to end: rodlab demo, run.json, the HTML report (checked in headless Chromium)."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from rodlab.pipeline import run_demo
+from rodlab.report_html import write_report
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo")
+    run_demo(out, seed=3, sweep_grid=(np.array([150.0, 300.0, 450.0]), np.array([300.0, 450.0, 600.0])))
+    return out
+
+
+def test_demo_stages_and_results(run):
+    s = json.loads((run / "run.json").read_text())
+    st = s["stages"]
+    assert set(st) == {"design", "cad", "fea", "rig", "fit", "diagnose", "campaign", "calibrate", "sweep"}
+    d = st["diagnose"]
+    assert d["verdict"] == "explained"
+    assert [(f["effect"], f["location"]) for f in d["findings"]] == [("joint_compliance", "ring_1")]
+    assert d["corrected_vs_true_max_rel"] < 0.01
+    t3 = st["calibrate"]["table3"]
+    assert set(t3) == {"nominal", "None", "Calc", "FEA", "Meas", "Corrected"}
+    assert t3["FEA"]["mean_mm"] < t3["None"]["mean_mm"] < t3["nominal"]["mean_mm"]
+    for rel in ("rod1.fea.compliance.json", "rod1.meas.compliance.json", "rod1.corrected.compliance.json",
+                "rig/rod1.rig.csv", "campaign/multical.campaign.csv", "sweep/sweep.csv"):
+        assert (run / rel).exists(), rel
+
+
+def test_report_is_self_contained(run):
+    html = write_report(run).read_text()
+    n_files = sum(1 for v in json.loads((run / "run.json").read_text())["files"].values()
+                  for _ in (v if isinstance(v, list) else [v]))
+    assert html.count("data:image/png;base64,") == n_files
+    assert "src='http" not in html and "<script" not in html.lower()
+
+
+def test_report_in_headless_chromium(run):
+    chromium, driver_bin = shutil.which("chromium"), shutil.which("chromedriver")
+    if not (chromium and driver_bin):
+        pytest.skip("chromium / chromedriver not installed (Debian packages chromium chromium-driver)")
+    webdriver = pytest.importorskip("selenium.webdriver")
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+    opts = Options()
+    opts.binary_location = chromium
+    for a in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+              "--disable-background-networking", "--disable-component-update", "--disable-sync",
+              f"--user-data-dir={run / 'chrome-profile'}"):
+        opts.add_argument(a)
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    drv = webdriver.Chrome(service=Service(driver_bin), options=opts)
+    try:
+        drv.get((run / "report.html").resolve().as_uri())
+        imgs = drv.execute_script("return Array.from(document.images).map(i => [i.complete, i.naturalWidth])")
+        assert imgs and all(ok and w > 100 for ok, w in imgs), imgs
+        severe = [e for e in drv.get_log("browser") if e["level"] == "SEVERE"]
+        assert not severe, severe
+        assert "Table 3" in drv.page_source
+    finally:
+        drv.quit()

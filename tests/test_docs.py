@@ -12,6 +12,11 @@ def test_calc_table_is_current():
     assert r.returncode == 0, "docs/calc_rods.md is stale: run python scripts/gen_docs_tables.py"
 
 
+def test_cli_reference_is_current():
+    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "gen_cli_docs.py"), "--check"])
+    assert r.returncode == 0, "docs/cli.md is stale: run python scripts/gen_cli_docs.py"
+
+
 def test_readme_first_lines_give_the_two_commands():
     lines = (ROOT / "README.md").read_text().splitlines()[:8]
     text = "\n".join(lines)

@@ -182,7 +182,8 @@ def read_fixture(path) -> Fixture:
         raise CalibrationError(f"world_position must name one of the positions {sorted(poses)}, got {wp!r}",
                                path=p, key="world_position")
     f = data.get("contact_force_N", [1.10, 1.25, 1.05])
-    fa = np.asarray(f, dtype=float) if isinstance(f, list) else None
+    fa = np.asarray(f, dtype=float) if isinstance(f, list) and all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) for x in f) else None
     if fa is None or fa.shape != (3,) or not np.all(np.isfinite(fa)):
         raise CalibrationError(f"expected 3 numbers [N], got {f!r}", path=p, key="contact_force_N")
     return Fixture(poses, fa, wp, p)

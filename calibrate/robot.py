@@ -110,8 +110,10 @@ def read_robot(path) -> Robot:
             v = j.get(k, default)
             if v is None:
                 raise CalibrationError(f"joint {i + 1} needs `{k}`", path=p, key=f"joint[{i + 1}].{k}")
-            arr = np.asarray(v, dtype=float) if not isinstance(v, bool) else None
             shape = {"limits_deg": (2,), "com_mm": (3,)}.get(k, ())
+            items = v if isinstance(v, list) else [v]
+            ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in items)
+            arr = np.asarray(v, dtype=float) if ok else None
             if arr is None or arr.shape != shape or not np.all(np.isfinite(arr)):
                 raise CalibrationError(f"expected {'a number' if not shape else f'{shape[0]} numbers'}, got {v!r}",
                                        path=p, line=_line(text, i, k), key=f"joint[{i + 1}].{k}")
@@ -121,7 +123,9 @@ def read_robot(path) -> Robot:
             if k == "mass_kg" and arr < 0:
                 raise CalibrationError("mass must be >= 0", path=p, line=_line(text, i, k), key=f"joint[{i + 1}].{k}")
             cols[k].append(arr)
-    g = np.asarray(data.get("gravity_base", [0.0, 0.0, -9.80665]), dtype=float)
+    graw = data.get("gravity_base", [0.0, 0.0, -9.80665])
+    ok = isinstance(graw, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in graw)
+    g = np.asarray(graw, dtype=float) if ok else np.zeros(0)
     if g.shape != (3,) or not np.all(np.isfinite(g)) or np.linalg.norm(g) == 0:
         raise CalibrationError("gravity_base must be 3 finite numbers [m/s^2], not all zero", path=p,
                                key="gravity_base")

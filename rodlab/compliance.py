@@ -31,6 +31,8 @@ FORMAT_COMPLIANCE = "rodlab.compliance/1"
 DEFAULT_CONTACT_FORCE_N = np.array([1.10, 1.25, 1.05])
 #: Relative asymmetry of C_F accepted on read (Maxwell-Betti; measured files are noisy).
 SYMMETRY_RTOL = 0.05
+#: Largest plausible compliance entry [mm/N or mm per g0]
+MAX_COMPLIANCE = 1e3
 
 _KEYS = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "r_rod", "c_rod_um", "mass_kg",
          "com_T_mm", "tool_mm", "provenance")
@@ -71,6 +73,9 @@ def _as33(value, key: str, path) -> np.ndarray:
         raise ComplianceError(f"expected shape (3, 3), got {a.shape}", path=path, key=key)
     if not np.all(np.isfinite(a)):
         raise ComplianceError("entries must be finite (no NaN/inf)", path=path, key=key)
+    if np.abs(a).max() > MAX_COMPLIANCE:
+        raise ComplianceError(f"an entry of {np.abs(a).max():.3g} is not a measuring rod's (|entry| <= "
+                              f"{MAX_COMPLIANCE:g}); check the units (mm/N, mm per g0)", path=path, key=key)
     return a
 
 
@@ -81,6 +86,9 @@ def _as3(value, key: str, path) -> np.ndarray:
         raise ComplianceError(f"expected 3 numbers, got {value!r}"[:200], path=path, key=key) from e
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ComplianceError(f"expected 3 finite numbers, got {value!r}"[:200], path=path, key=key)
+    if np.abs(a).max() > 1e5:
+        raise ComplianceError(f"a coordinate of {np.abs(a).max():.3g} mm is not a measuring rod's (|x| <= 1e5 mm)",
+                              path=path, key=key)
     return a
 
 
@@ -117,10 +125,10 @@ class RodCompliance:
         object.__setattr__(self, "C_g", _as33(self.C_g, "C_g_mm_per_g0", None))
         object.__setattr__(self, "com_T_mm", _as3(self.com_T_mm, "com_T_mm", None))
         object.__setattr__(self, "tool_mm", _as3(self.tool_mm, "tool_mm", None))
-        for key in ("mass_kg", "r_rod"):
+        for key, top in (("mass_kg", 1e3), ("r_rod", 1e3)):
             v = getattr(self, key)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ComplianceError(f"must be a finite number > 0, got {v!r}", key=key)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0 or v > top:
+                raise ComplianceError(f"must be a finite number > 0 and <= {top:g}, got {v!r}", key=key)
         if self.method is Method.NONE:
             if np.any(self.C_F != 0) or np.any(self.C_g != 0):
                 raise ComplianceError("method `none` means zero matrices (no compensation); "

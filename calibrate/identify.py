@@ -166,7 +166,8 @@ def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, pos
 
 def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
              freed: set | None = None, robust: bool = False, max_compensation: int = 6,
-             fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None) -> CalibrationResult:
+             fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
+             expected_noise_mm: float | None = 0.003) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring."""
     from scipy.optimize import least_squares
 
@@ -288,8 +289,38 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     rms = float(np.sqrt(np.mean(resid ** 2)))
     ok = bool(res.success) if res is not None else False
     msg = res.message if res is not None else "not run"
-    return CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, noise_est, corr,
-                             [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
+    out = CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, noise_est, corr,
+                            [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
+    out.warnings = trust_warnings(robot, out, expected_noise_mm)
+    return out
+
+
+#: physical bounds of the identified errors; beyond them a result is flagged
+ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
+
+
+def trust_warnings(robot, res: "CalibrationResult", expected_noise_mm: float | None) -> list[str]:
+    """Reasons not to trust a calibration: no convergence, residuals far above the noise, parameters beyond
+    physical bounds."""
+    w = []
+    if not res.success:
+        w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
+    if expected_noise_mm and res.rms_mm > 5.0 * expected_noise_mm:
+        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are far above the expected noise "
+                 f"({expected_noise_mm * 1e3:.1f} um): physics is missing; run `rodlab diagnose --campaign`")
+    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
+    for info in res.infos:
+        if res.status[info.name] == "fixed":
+            continue
+        v = res.values[info.name]
+        if info.kind in ERROR_BOUNDS:
+            err = v if info.kind == "dtheta" else v - nominal[info.kind][info.index]
+            if abs(err) > ERROR_BOUNDS[info.kind]:
+                w.append(f"{info.name} moved {err:+.3g} {info.unit} from nominal (bound {ERROR_BOUNDS[info.kind]:g}): "
+                         f"not a plausible manufacturing error")
+        if info.kind == "c" and not (-1e-6 <= v <= 1e-4):
+            w.append(f"{info.name} = {v:.3g} rad/(N m) is outside [0, 1e-4]: not a plausible gearbox compliance")
+    return w
 
 
 def _fixture_shift(infos, x, obs) -> np.ndarray:

@@ -21,7 +21,8 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
     for info in res.infos:
         nm = info.name
         params[nm] = {"value": res.values[nm], "sigma": res.sigma[nm], "unit": info.unit, "status": res.status[nm]}
-    out = {"format": FORMAT_CALIBRATION, "robot": robot.name, "compensation": compensation, "parameters": params,
+    out = {"format": FORMAT_CALIBRATION, "robot": robot.name, "compensation": compensation, "trusted": not res.warnings,
+           "parameters": params,
            "unidentifiable": res.unidentifiable, "residual_rms_mm": res.rms_mm, "points": int(res.residuals_mm.shape[0]),
            "fit": {"success": res.success, "message": res.message, "nfev": res.nfev,
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,

@@ -21,7 +21,7 @@ from .errors import FeaError
 from .frame import asme_bend_flexibility, frame_compliance
 
 __all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
-           "DEFAULT_GRADING"]
+           "DEFAULT_GRADING", "estimated_dofs", "MAX_DOFS"]
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +45,18 @@ def default_solid_size_mm(design: RodDesign) -> float:
     return 3.0 * min(walls)
 
 
+#: largest solid model attempted (CHOLMOD fill ~12 GB at this size on 24 GB machines)
+MAX_DOFS = 1.5e6
+
+
+def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING) -> float:
+    """DOFs of the curved-P2 mesh, estimated from the parts' volume (empirical, within ~30 % on rods 1#-6#)."""
+    from rodlab.massprops import part_mass_properties
+    vol = sum(m.mass_kg / (design.material_of(p).density_kg_m3 * 1e-9) for p, m in part_mass_properties(design).items())
+    h = size_mm * (grading[0] if grading else 1.0)
+    return 13.0 * vol / h ** 3 * (1.0 if grading else 4.8)
+
+
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False):
     """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
@@ -57,6 +69,11 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
     if not (np.isfinite(h) and h > 0):
         raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
+    est = estimated_dofs(design, h, grading)
+    if est > MAX_DOFS:
+        raise FeaError(f"the solid model of {design.name!r} at size {h:g} mm would need ~{est / 1e6:.1f} M DOFs "
+                       f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "
+                       f"volume. Use a larger --size (error grows) or --model frame", key="size")
     t0 = time.perf_counter()
     rm = mesher(design, h, grading)
     t_mesh = time.perf_counter() - t0

@@ -122,7 +122,8 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
         client = client or GaugeClient(profile)
         meta = {"rod": plan.rod, "sample_rate_Hz": f"{plan.protocol.rate_Hz:g}", "load_N": "mass_kg * 9.80665",
                 "plan": str(plan.path or ""), "profile": str(profile.path or ""), "generator": "rodlab rig acquire"}
-        writer = RecordingWriter(out, meta, with_temp=profile.temperature_index is not None, fsync_every=20)
+        writer = RecordingWriter(out, meta, with_temp=profile.temperature_index is not None, fsync_every=20,
+                                 decimals=6)                   # raw gauge resolution kept (nm)
         if done:
             writer._fh.write(f"# resumed after hold {done}/{n_total}\n")
         t0 = time.monotonic() - (last_time + 1.0 if last_time >= 0 else 0.0)

@@ -213,9 +213,9 @@ def _check_holds(rows, p) -> None:
 
 
 def format_row(t: float, step: int, repeat: int, phase: Phase, axis: LoadAxis, mass: float,
-               disp: tuple, temp: float | None) -> str:
+               disp: tuple, temp: float | None, decimals: int = 4) -> str:
     cells = [f"{t:.3f}", str(step), str(repeat), str(phase), str(axis), f"{mass:.4f}"]
-    cells += ["" if (v is None or not math.isfinite(v)) else f"{v:.4f}" for v in disp]
+    cells += ["" if (v is None or not math.isfinite(v)) else f"{v:.{decimals}f}" for v in disp]
     if temp is not None:
         cells.append("" if not math.isfinite(temp) else f"{temp:.2f}")
     return ",".join(cells) + "\n"
@@ -228,8 +228,10 @@ class RecordingWriter:
     ``fsync_every`` rows the file is fsync'ed (always on :meth:`close`).
     """
 
-    def __init__(self, path: str | Path, meta: dict, with_temp: bool = True, fsync_every: int = 50) -> None:
+    def __init__(self, path: str | Path, meta: dict, with_temp: bool = True, fsync_every: int = 50,
+                 decimals: int = 4) -> None:
         self.path = Path(path)
+        self.decimals = decimals
         self.with_temp = with_temp
         self.fsync_every = fsync_every
         self._since_sync = 0
@@ -257,7 +259,7 @@ class RecordingWriter:
 
     def write(self, t, step, repeat, phase, axis, mass, disp, temp=None) -> None:
         self._fh.write(format_row(t, step, repeat, Phase(phase), LoadAxis(axis), mass, disp,
-                                  temp if self.with_temp else None))
+                                  temp if self.with_temp else None, self.decimals))
         self._fh.flush()
         self._since_sync += 1
         if self._since_sync >= self.fsync_every:

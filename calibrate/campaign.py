@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.errors import did_you_mean
+from rodlab.fileio import read_text_checked
 from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
@@ -72,15 +73,7 @@ class PointSet:
 
 
 def _read_text(path) -> tuple[Path, str]:
-    p = Path(path)
-    try:
-        return p, p.read_text(encoding="utf-8")
-    except FileNotFoundError as e:
-        raise CalibrationError("file not found", path=p) from e
-    except UnicodeDecodeError as e:
-        raise CalibrationError(f"not UTF-8 text ({e.reason})", path=p) from e
-    except OSError as e:
-        raise CalibrationError(f"cannot read: {e.strerror}", path=p) from e
+    return Path(path), read_text_checked(path, CalibrationError)
 
 
 def _num(cell, p, line, col):

@@ -10,7 +10,7 @@ import numpy as np
 from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.fileio import atomic_write_bytes, atomic_write_json
-from rodlab.massprops import MassProperties
+from rodlab.massprops import MassProperties, combine
 from rodlab.units import kg_m3_to_kg_mm3
 
 from .parts import PART_COLOURS, part_solids
@@ -38,14 +38,7 @@ class RodCad:
         return out
 
     def total_mass_properties(self) -> MassProperties:
-        parts = self.mass_properties().values()
-        m = sum(p.mass_kg for p in parts)
-        com = sum(p.mass_kg * p.com_T_mm for p in parts) / m
-        inertia = np.zeros((3, 3))
-        for p in parts:
-            dvec = p.com_T_mm - com
-            inertia += p.inertia_kg_mm2 + p.mass_kg * (dvec @ dvec * np.eye(3) - np.outer(dvec, dvec))
-        return MassProperties(m, com, inertia)
+        return combine(self.mass_properties().values())
 
     def compound(self):
         """A build123d assembly: one labelled, coloured child per part."""

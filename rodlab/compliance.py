@@ -19,7 +19,7 @@ from . import __version__
 from .design import RodDesign
 from .enums import Method
 from .errors import ComplianceError, did_you_mean
-from .fileio import atomic_write_json, json_safe, sha256_file
+from .fileio import atomic_write_json, json_safe, read_text_checked, sha256_file
 
 __all__ = ["RodCompliance", "c_rod_um", "r_rod", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
            "read_compliance", "write_compliance", "design_hash"]
@@ -232,14 +232,7 @@ class RodCompliance:
 def read_compliance(path: str | Path) -> RodCompliance:
     """Read and check a ``*.compliance.json`` (errors name the file, line and key)."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError as e:
-        raise ComplianceError("file not found", path=p) from e
-    except UnicodeDecodeError as e:
-        raise ComplianceError(f"not UTF-8 text ({e.reason})", path=p) from e
-    except OSError as e:
-        raise ComplianceError(f"cannot read: {e.strerror}", path=p) from e
+    text = read_text_checked(p, ComplianceError)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as e:

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from .design import BallSpec, BendSpec, RodDesign, SleeveSpec, TubeSpec
 from .errors import DesignError, FormatError, did_you_mean
+from .fileio import read_text_checked
 from .materials import Material, get_material, material_from_table
 
 if sys.version_info >= (3, 11):
@@ -196,14 +197,7 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
 def load_design(path: str | Path) -> RodDesign:
     """Read and validate a ``*.rod.toml`` file."""
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError as e:
-        raise FormatError("file not found", path=p) from e
-    except UnicodeDecodeError as e:
-        raise FormatError(f"not UTF-8 text ({e.reason} at byte {e.start})", path=p) from e
-    except OSError as e:
-        raise FormatError(f"cannot read: {e.strerror}", path=p) from e
+    text = read_text_checked(p, FormatError)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

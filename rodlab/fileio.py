@@ -9,7 +9,7 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
-           "sha256_file"]
+           "sha256_file", "read_text_checked"]
 
 
 def _umask() -> int:
@@ -77,6 +77,22 @@ def dumps_compact(obj, indent: int = 1) -> str:
 def atomic_write_json(path: str | Path, obj, indent: int = 1) -> Path:
     """Atomic JSON write (NaN/inf refused) with a trailing newline; matrices on one line per row."""
     return atomic_write_text(path, dumps_compact(obj, indent) + "\n")
+
+
+def read_text_checked(path, error_cls) -> str:
+    """A file's UTF-8 text, or ``error_cls`` (a FormatError) naming the file: not found, unreadable, not UTF-8
+    (with the line of the first bad byte)."""
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError as e:
+        raise error_cls("file not found", path=p) from e
+    except OSError as e:
+        raise error_cls(f"cannot read: {e.strerror}", path=p) from e
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise error_cls(f"not UTF-8 text ({e.reason})", path=p, line=raw[:e.start].count(b"\n") + 1) from e
 
 
 def sha256_file(path: str | Path) -> str:

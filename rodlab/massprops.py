@@ -15,7 +15,7 @@ from .enums import Part
 from .layout import Segment, SegmentKind, flange_to_tool, layout
 from .units import kg_m3_to_kg_mm3
 
-__all__ = ["MassProperties", "mass_properties", "part_mass_properties", "ball_mass_properties"]
+__all__ = ["MassProperties", "mass_properties", "part_mass_properties", "ball_mass_properties", "combine"]
 
 
 @dataclass(frozen=True)
@@ -131,9 +131,9 @@ def ball_mass_properties(design: RodDesign) -> MassProperties:
     return MassProperties(float(m), com, inertia)
 
 
-def mass_properties(design: RodDesign) -> MassProperties:
-    """Mass properties of the whole rod in {T} (parallel-axis sum of the parts)."""
-    parts = part_mass_properties(design).values()
+def combine(parts) -> MassProperties:
+    """Mass properties of a body made of ``parts`` (parallel-axis theorem), same frame."""
+    parts = list(parts)
     m = sum(p.mass_kg for p in parts)
     com = sum(p.mass_kg * p.com_T_mm for p in parts) / m
     inertia = np.zeros((3, 3))
@@ -141,3 +141,8 @@ def mass_properties(design: RodDesign) -> MassProperties:
         d = p.com_T_mm - com
         inertia += p.inertia_kg_mm2 + p.mass_kg * (d @ d * np.eye(3) - np.outer(d, d))
     return MassProperties(m, com, inertia)
+
+
+def mass_properties(design: RodDesign) -> MassProperties:
+    """Mass properties of the whole rod in {T} (parallel-axis sum of the parts)."""
+    return combine(part_mass_properties(design).values())

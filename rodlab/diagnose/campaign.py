@@ -154,6 +154,9 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         cov = np.linalg.pinv(A.T @ A)
         k0 = J.shape[1] + sum(c.shape[1] for c in cols_now)
         val = coef[k0:k0 + H.shape[1]]
+        # detection limit: an effect that moves no point by 2 device-noise SDs is not reported
+        if eff != "outliers" and float(np.max(np.abs(L @ (H @ val)))) < 2.0 * noise_mm:
+            break
         se = np.sqrt(np.clip(np.diag(cov)[k0:k0 + H.shape[1]], 0, None))
         params = {nm: float(v) for nm, v in zip(names, val)}
         iv = {nm: [float(v - 1.96 * s), float(v + 1.96 * s)] for nm, v, s in zip(names, val, se)}

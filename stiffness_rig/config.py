@@ -45,6 +45,7 @@ from pathlib import Path
 
 from rodlab.enums import LoadAxis
 from rodlab.errors import did_you_mean
+from rodlab.fileio import read_text_checked
 
 from .errors import RigError
 from .model import Protocol
@@ -62,12 +63,7 @@ FORMAT_PLAN = "rodlab.rigplan/1"
 
 def _load_toml(path) -> tuple[dict, str]:
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError as e:
-        raise RigError("file not found", path=p) from e
-    except (OSError, UnicodeDecodeError) as e:
-        raise RigError(f"cannot read as UTF-8 text: {e}", path=p) from e
+    text = read_text_checked(p, RigError)
     try:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as e:

@@ -21,6 +21,7 @@ import numpy as np
 
 from rodlab.enums import LoadAxis, Phase
 from rodlab.errors import did_you_mean
+from rodlab.fileio import read_text_checked
 
 from .errors import RigError
 
@@ -107,17 +108,7 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     """Read a ``*.rig.csv``; every malformed cell or rule names its line and column."""
     p = Path(path)
     if text is None:
-        try:
-            raw = p.read_bytes()
-        except FileNotFoundError as e:
-            raise RigError("file not found", path=p) from e
-        except OSError as e:
-            raise RigError(f"cannot read: {e.strerror}", path=p) from e
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as e:
-            line = raw[:e.start].count(b"\n") + 1
-            raise RigError(f"not UTF-8 text ({e.reason})", path=p, line=line) from e
+        text = read_text_checked(p, RigError)
     lines = text.splitlines()
     meta: dict[str, str] = {}
     i = 0

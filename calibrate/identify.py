@@ -32,7 +32,7 @@ from .kinematics import ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
-           "noise_covariance"]
+           "register_base_and_tool", "noise_covariance"]
 
 log = logging.getLogger(__name__)
 
@@ -88,6 +88,41 @@ def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
     T[:3, :3] = R
     T[:3, 3] = qc - R @ pc
     return matrix_to_pose(T)
+
+
+def register_base_and_tool(robot, params: ModelParams, obs: Observations, iterations: int = 100,
+                           tol_mm: float = 1e-6) -> tuple[np.ndarray, np.ndarray, float]:
+    """Base pose and tool point from scratch, for instrument points whose tool is only roughly known.
+
+    Alternates the rigid registration of the nominal points (:func:`register_base`) with the linear
+    least-squares tool given the base (``R_B^T (x - b) - p_n = R_n t``). Returns (base [mm, deg] shape=(6,),
+    tool in {n} [mm] shape=(3,), rms distance [mm]); the better of this and the given tool is kept.
+    """
+    from rodlab.frames import pose_to_matrix
+    n = robot.n
+
+    def rms_of(p):
+        fr, _ = ball_positions(robot, p, obs.q_rad)
+        return float(np.sqrt(np.mean(np.sum((fr.pW - obs.x_W_mm) ** 2, axis=1))))
+
+    p = params.with_(base=register_base(robot, params, obs))
+    best = (p.base, p.tool, rms_of(p))
+    prev = np.inf
+    for _ in range(iterations):
+        fr, _ = ball_positions(robot, p.with_(base=np.zeros(6)), obs.q_rad)
+        TB = pose_to_matrix(p.base)
+        lhs = (obs.x_W_mm - TB[:3, 3]) @ TB[:3, :3] - fr.T[:, n, :3, 3]        # R_B^T (x - b) - p_n
+        A = fr.T[:, n, :3, :3].reshape(-1, 3)
+        tool, *_ = np.linalg.lstsq(A, lhs.reshape(-1), rcond=None)
+        p = p.with_(tool=tool)
+        p = p.with_(base=register_base(robot, p, obs))
+        r = rms_of(p)
+        if r < best[2]:
+            best = (p.base, p.tool, r)
+        if abs(prev - r) < tol_mm:
+            break
+        prev = r
+    return best
 
 
 @dataclass
@@ -167,8 +202,17 @@ def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, pos
 def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
              freed: set | None = None, robust: bool = False, max_compensation: int = 6,
              fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
-             expected_noise_mm: float | None = 0.003) -> CalibrationResult:
-    """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring."""
+             expected_noise_mm: float | None = 0.003, fix_unidentifiable: bool = False,
+             find_tool: bool = False) -> CalibrationResult:
+    """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
+
+    fix_unidentifiable : parameters this data set cannot separate (beyond the structural rules) are held at
+        their nominal values and reported, instead of refusing the data set. Meant for instrument data that
+        was not planned for this model (single-joint sweeps, few configurations); a planned campaign should
+        not need it.
+    find_tool : start from a tool point found from the data (:func:`register_base_and_tool`), for instrument
+        points whose tool is only roughly known.
+    """
     from scipy.optimize import least_squares
 
     N = obs.x_W_mm.shape[0]
@@ -187,7 +231,12 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
             from rodlab.errors import did_you_mean
             raise CalibrationError(f"unknown parameter {nm!r}." + did_you_mean(nm, names), key="parameters")
     start = initial or ModelParams.nominal(robot, tool_mm)
-    if initial is None:
+    if initial is None and find_tool:
+        base0, tool0, rms0 = register_base_and_tool(robot, start, obs)
+        log.info("base and tool from scratch: tool %s mm, registration rms %.3f mm", np.round(tool0, 2), rms0)
+        start = start.with_(base=base0, tool=tool0)
+        tool_mm = tool0
+    elif initial is None:
         start = start.with_(base=register_base(robot, start, obs))
     x = np.zeros(len(infos))
     for nm, v in pinned.items():
@@ -203,11 +252,14 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     structural = {k: v for k, v in structural.items() if v is not None}
     deficient = {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined",
                                                                                                    "has no"))}
-    if deficient:
+    if deficient and fix_unidentifiable:
+        log.warning("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
+    elif deficient:
         lines = "; ".join(f"{nm} {why}" for nm, why in list(deficient.items())[:8])
         raise CalibrationError(
             f"this campaign cannot identify {len(deficient)} parameter(s): {lines}. Add clamping positions or rod "
-            f"orientations (more varied joint angles), or hold them with --pin NAME=VALUE", key="campaign")
+            f"orientations (more varied joint angles), hold them with --pin NAME=VALUE, or hold all of them at "
+            f"nominal with --fix-unidentifiable", key="campaign")
     if len(free) > 3 * N:
         raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
     prior = np.zeros(len(infos), dtype=bool)

@@ -20,6 +20,9 @@ def _common(p) -> None:
     p.add_argument("--free", action="append", default=[], metavar="NAME",
                    help="free a parameter the defaults hold, e.g. fixture_2_x (repeatable)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss (gross alignment errors lose weight)")
+    p.add_argument("--fix-unidentifiable", action="store_true",
+                   help="hold the parameters these points cannot identify at nominal (and report them) instead of "
+                        "refusing the data set; for instrument data not planned for this model")
 
 
 def register(sub) -> None:
@@ -76,7 +79,8 @@ def run_calibration(args, rod: RodCompliance | None, label: str):
     base_rod = rod
     obs = campaign_observations(camp, fix, base_rod)
     res = identify(robot, obs, base_rod.tool_mm, None if label == "none" else base_rod,
-                   pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust)
+                   pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
+                   fix_unidentifiable=getattr(args, "fix_unidentifiable", False))
     before = after = None
     if args.validate:
         pts = read_points(args.validate, robot.n)
@@ -135,7 +139,8 @@ def _calibrate_points(args) -> int:
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
                        pts.rod_com_T_mm)
     res = identify(robot, obs, pts.tool_mm, None, pinned=_parse_pins(args.pin), freed=set(args.free) | {"tool_y"},
-                   robust=args.robust)
+                   robust=args.robust, fix_unidentifiable=args.fix_unidentifiable,
+                   find_tool=True)
     before = after = None
     if args.validate:
         test = read_points(args.validate, robot.n)

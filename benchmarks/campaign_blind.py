@@ -1,5 +1,5 @@
 """Blind cases for the campaign diagnosis: nulls, a wrong fixture pose, a rod compliance off by a factor,
-gross alignment errors (outliers); generated with ``calibrate.simulate`` (never diagnosis code).
+gross alignment errors (outliers), a once-per-revolution joint error, thermal growth; generated with ``calibrate.simulate`` (never diagnosis code).
 
     python benchmarks/campaign_blind.py [N] [SEED]   # prints and writes docs/benchmarks/campaign_blind.md
 """
@@ -21,6 +21,18 @@ from rodlab.compliance import RodCompliance
 from rodlab.diagnose import diagnose_campaign
 from rodlab.fileio import atomic_write_text
 
+NOTES = [
+    "Magnitudes: fixture offsets N(0, 0.12 mm) per axis; rod compliance x0.6/1.5/2.0; two 0.15-0.4 mm outliers; a",
+    "once-per-revolution error of 0.002-0.008 deg on a random joint; arm growth 0.01-0.05 ppm/s (0.3-2 K over the",
+    "campaign for steel). Detection limit of thermal drift: the growth moves each clamping position by a nearly",
+    "constant offset that the kinematic parameters absorb; only its change within a position (~0.4 ppm per 500 s",
+    "position at 0.013 ppm/s, ~3 um) is evidence, so growth below ~0.02 ppm/s stays `consistent` — correctly at",
+    "the noise. A periodic joint error is named at the right joint but the re-identification does not model it",
+    "(validation unchanged): compensate it in the controller or add the harmonic to the robot model.",
+    "A null campaign once drew false alarms (thermal_drift, rod_deflection, periodic_joint_error on 5 of 8",
+    "nulls): the first hypothesis was credited with what the generalised-least-squares refit of the identified",
+    "parameters gains over the unweighted identification. Fixed: the baseline is that refit.", ""]
+KINDS = ["null", "fixture_pose", "rod_deflection", "outliers", "periodic_joint_error", "thermal_drift"]
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
 
 
@@ -45,10 +57,10 @@ def main() -> int:
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(n):
-            kind = ["null", "fixture_pose", "rod_deflection", "outliers"][i % 4]
+            kind = KINDS[i % len(KINDS)]
             out = Path(tmp) / f"c{i}"
             truth = {"kind": kind, "effect": None if kind == "null" else kind}
-            fe, rod_true = None, None
+            fe, rod_true, pje, therm = None, None, None, 0.0
             if kind == "fixture_pose":
                 j = int(rng.choice([1, 2, 4, 5]))
                 fe = {j: list(rng.normal(0, 0.12, 3))}
@@ -58,7 +70,16 @@ def main() -> int:
                 rod_true = RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm,
                                          rod.tool_mm, k)
                 truth["k"] = k
-            simulate_campaign(robot, rod, out, CampaignSpec(seed=int(rng.integers(1 << 30))), rod_true, fe)
+            if kind == "periodic_joint_error":
+                k = int(rng.integers(1, 7))
+                pje = (k, float(rng.choice([-1, 1]) * rng.uniform(0.002, 0.008)), float(rng.uniform(0, 360)))
+                truth["location"] = f"joint:{k}"
+                truth["amp_deg"] = pje[1]
+            if kind == "thermal_drift":
+                therm = float(rng.uniform(0.01, 0.05))
+                truth["location"] = "time"
+                truth["ppm_per_s"] = therm
+            simulate_campaign(robot, rod, out, CampaignSpec(seed=int(rng.integers(1 << 30))), rod_true, fe, pje, therm)
             if kind == "outliers":
                 truth["points"] = _outliers(out / "multical.campaign.csv", rng, 2)
             t0 = time.perf_counter()
@@ -77,18 +98,20 @@ def main() -> int:
         kind = truth["kind"]
         s[kind] += 1
         ok = (kind == "null" and diag.verdict == "consistent") or (kind != "null" and eff and eff[0] == kind)
-        if kind == "fixture_pose":
-            ok = ok and found[0][1] == truth["location"]
+        if kind in ("fixture_pose", "periodic_joint_error", "thermal_drift"):
+            first = [f for f in found if f[0] == kind]
+            ok = ok and first[0][1] == truth["location"]
         s[f"{kind}_ok"] += bool(ok)
         v = diag.extra.get("validation", {})
         vb, va = v.get("before", {}).get("mean_mm", float("nan")), v.get("after", {}).get("mean_mm", float("nan"))
         desc = {"null": "none", "fixture_pose": truth.get("location"), "rod_deflection": f"k = {truth.get('k')}",
-                "outliers": ",".join(truth.get("points", []))}[kind]
+                "outliers": ",".join(truth.get("points", [])),
+                "periodic_joint_error": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} deg",
+                "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s"}[kind]
         fstr = "; ".join(f"{e} {loc or ''}".strip() for e, loc in found) or "-"
         lines.append(f"| {kind} | {desc} | {diag.verdict} | {fstr} | {vb:.3f} -> {va:.3f} | {dt:.1f} |")
     lines += ["", "Correct (null: consistent; effect: named first, fixture at the right position): "
-              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in ("null", "fixture_pose", "rod_deflection", "outliers")
-                          if s[k]), ""]
+              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in KINDS if s[k]), ""] + NOTES
     atomic_write_text(OUT, "\n".join(lines))
     print("\n".join(lines))
     return 0

@@ -57,11 +57,27 @@ def random_truth(robot, tool_mm, rng, scale=1.0) -> ModelParams:
     return p.with_(d=d, a=a, alpha=al, beta=be, theta_offset=th, c=c)
 
 
+def _joint_error(q: np.ndarray, periodic) -> np.ndarray:
+    """Angles the joints really take [rad], shape=(N, n): ``q`` plus a once-per-revolution error of one joint,
+    ``periodic`` = (joint 1-based, amplitude [deg], phase [deg]) or None."""
+    if not periodic:
+        return q
+    k, amp, ph = int(periodic[0]) - 1, np.deg2rad(periodic[1]), np.deg2rad(periodic[2])
+    out = np.array(q, float, copy=True)
+    out[..., k] += amp * np.sin(out[..., k] + ph)
+    return out
+
+
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
-                      rod_true: RodCompliance | None = None, fixture_error: dict | None = None) -> dict:
+                      rod_true: RodCompliance | None = None, fixture_error: dict | None = None,
+                      periodic_joint_error: tuple | None = None, thermal_ppm_per_s: float = 0.0) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
     and the rod file into ``out_dir``; return the truth. ``rod_true``: the rod as it really is (default:
-    ``rod``); ``fixture_error``: {position: offset [mm]} added to the recorded pose (a wrong fixture pose)."""
+    ``rod``); ``fixture_error``: {position: offset [mm]} added to the recorded pose (a wrong fixture pose);
+    ``periodic_joint_error``: (joint 1-based, amplitude [deg], phase [deg]) — the joint really turns
+    ``q + A sin(q + phase)`` (gear / encoder eccentricity; also in the validation points);
+    ``thermal_ppm_per_s``: the arm grows during the campaign, positions scale about the base origin by
+    ``growth * time_s`` [ppm/s]."""
     rng = np.random.default_rng(spec.seed)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -110,13 +126,18 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                 continue
             got += 1
             obs = Observations(q[None], np.zeros((1, 3)), F_W[None], rod.mass_kg, rod.com_T_mm)
-            fr, _ = ball_positions(robot, truth, q[None], rod.mass_kg, rod.com_T_mm, F_W[None])
-            defl = _deflection_offsets(robot, truth, obs, rod_true)
+            qt = _joint_error(q[None], periodic_joint_error)
+            fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F_W[None])
+            defl = _deflection_offsets(robot, truth, Observations(qt, obs.x_W_mm, obs.force_W_N, obs.rod_mass_kg,
+                                                                  obs.rod_com_T_mm), rod_true)
             pW = fr.pW[0] + defl[0]
             xD = np.linalg.inv(Ts[j]) @ np.append(pW, 1.0)
             xD = xD[:3] + rng.normal(0, spec.device_noise_mm, 3)
             qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
             t += rng.uniform(40, 120)
+            if thermal_ppm_per_s:
+                grow = thermal_ppm_per_s * 1e-6 * round(t) * (pW - fr.t_W0)
+                xD = xD + Ts[j][:3, :3].T @ grow
             rows.append(f"{j},{got}," + ",".join(f"{v:.4f}" for v in qd) + "," + ",".join(f"{v:.4f}" for v in xD)
                         + f",{t:.0f},{22.0:.2f}")
         if got < spec.orientations:
@@ -141,7 +162,7 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
-    fr, _ = ball_positions(robot, vtrue, vq, 0.3, [0, 0, -60])
+    fr, _ = ball_positions(robot, vtrue, _joint_error(vq, periodic_joint_error), 0.3, [0, 0, -60])
     vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
     lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
              ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]
@@ -157,6 +178,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
          "beta_deg": np.rad2deg(truth.beta).tolist(), "c_rad_per_Nm": truth.c.tolist(),
          "true_fixture_poses_W": {str(j): p.tolist() for j, p in poses.items()},
          "fixture_error_mm": {str(k): list(map(float, v)) for k, v in (fixture_error or {}).items()},
+         "periodic_joint_error": list(periodic_joint_error) if periodic_joint_error else None,
+         "thermal_ppm_per_s": float(thermal_ppm_per_s),
          "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0}
     atomic_write_json(out / "truth.json", t)
     return t

@@ -14,12 +14,16 @@ position), ``rod_deflection`` (compensation off by a factor: residuals follow R_
 """
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 from scipy.stats import chi2
 
 from .report import Diagnosis, Finding
 
 __all__ = ["diagnose_campaign"]
+
+log = logging.getLogger(__name__)
 
 DBIC_MIN = 10.0
 P_MAX = 1e-3
@@ -86,16 +90,28 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     # statistic below is then in units of the expected scatter (chi-square with known noise)
     from calibrate.identify import noise_covariance
     L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
-    white = lambda A: np.linalg.solve(L, A)  # noqa: E731
     r_raw = res.residuals_mm.reshape(-1)
+    n = r_raw.size
+    # Birge ratio: a campaign has no repeats, so scatter the noise model leaves out (unmodelled small
+    # errors of the robot, the fixture, the device) shows only as chi-square above its degrees of freedom.
+    # Hypotheses are then tested against the inflated scatter: an effect must stand out of what the
+    # campaign's own residuals allow, not only out of the datasheet noise.
+    r0 = np.linalg.solve(L, r_raw)
+    Jw = np.linalg.solve(L, J)
+    e0 = r0 - Jw @ np.linalg.lstsq(Jw, r0, rcond=None)[0]
+    # robust (median per point): isolated outliers or one wrong position must not hide themselves
+    per_point = (e0.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - J.shape[1], 1)
+    chi_red0 = float(np.median(per_point)) / float(chi2.median(3))
+    birge = float(np.sqrt(max(chi_red0, 1.0)))
+    log.debug("campaign diagnosis: robust reduced chi-square %.2f, Birge ratio %.2f", chi_red0, birge)
+    L = L * birge
+    white = lambda A: np.linalg.solve(L, A)  # noqa: E731
     r = white(r_raw)
     J = white(J)
-    n = r.size
     hyps = [(e, l, nm, white(H), x) for (e, l, nm, H, x) in _hypotheses(robot, res, obs, camp, rod)]
     # point-wise outlier columns are handled separately (many candidates)
     chosen = []
-    rss0 = float(r @ r)
-    rss = rss0
+    rss = None
     findings = []
     used_points: list[int] = []
 
@@ -117,6 +133,9 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         return total
 
     cols_now: list = []
+    # the baseline is the generalised-least-squares refit of the identified parameters (the identification
+    # itself is unweighted): what that refit gains must not be credited to the first hypothesis
+    rss = fit(cols_now)[1]
     cv_now = cv_error(cols_now)
     for _ in range(max_terms):
         cand = []
@@ -155,7 +174,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         k0 = J.shape[1] + sum(c.shape[1] for c in cols_now)
         val = coef[k0:k0 + H.shape[1]]
         # detection limit: an effect that moves no point by 2 device-noise SDs is not reported
-        if eff != "outliers" and float(np.max(np.abs(L @ (H @ val)))) < 2.0 * noise_mm:
+        if eff != "outliers" and float(np.max(np.abs(L @ (H @ val)))) < 2.0 * noise_mm * birge:
             break
         se = np.sqrt(np.clip(np.diag(cov)[k0:k0 + H.shape[1]], 0, None))
         params = {nm: float(v) for nm, v in zip(names, val)}
@@ -212,7 +231,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         rms_after = res.rms_mm
     verdict = "consistent" if not findings else "explained"
     final_rms = _rms(L, fit, cols_now)
-    chi_red = rss / max(n - J.shape[1] - sum(c.shape[1] for c in cols_now), 1)
+    chi_red = rss * birge ** 2 / max(n - J.shape[1] - sum(c.shape[1] for c in cols_now), 1)   # device units
     if chi_red > 4.0:
         e = (L @ fit(cols_now)[2]).reshape(N, 3)
         pos_rms = {int(j): float(np.sqrt(np.mean(e[camp.position == j] ** 2))) for j in np.unique(camp.position)}

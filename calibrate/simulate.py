@@ -125,11 +125,10 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
             if q is None:
                 continue
             got += 1
-            obs = Observations(q[None], np.zeros((1, 3)), F_W[None], rod.mass_kg, rod.com_T_mm)
-            qt = _joint_error(q[None], periodic_joint_error)
+            qt = _joint_error(q[None], periodic_joint_error)          # the angles the joints really take
+            obs = Observations(qt, np.zeros((1, 3)), F_W[None], rod.mass_kg, rod.com_T_mm)
             fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F_W[None])
-            defl = _deflection_offsets(robot, truth, Observations(qt, obs.x_W_mm, obs.force_W_N, obs.rod_mass_kg,
-                                                                  obs.rod_com_T_mm), rod_true)
+            defl = _deflection_offsets(robot, truth, obs, rod_true)
             pW = fr.pW[0] + defl[0]
             xD = np.linalg.inv(Ts[j]) @ np.append(pW, 1.0)
             xD = xD[:3] + rng.normal(0, spec.device_noise_mm, 3)

@@ -8,7 +8,7 @@ import re
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
+__all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
            "sha256_file", "read_text_checked"]
 
 
@@ -93,6 +93,16 @@ def read_text_checked(path, error_cls) -> str:
         return raw.decode("utf-8")
     except UnicodeDecodeError as e:
         raise error_cls(f"not UTF-8 text ({e.reason})", path=p, line=raw[:e.start].count(b"\n") + 1) from e
+
+
+def write_generated(path: str | Path, text: str, check: bool = False) -> int:
+    """For the scripts that generate docs: write ``text`` to ``path`` atomically, or with ``check`` only
+    compare (exit status 0 when the file is current, 1 when it must be regenerated)."""
+    p = Path(path)
+    if check:
+        return 0 if p.exists() and p.read_text(encoding="utf-8") == text else 1
+    atomic_write_text(p, text)
+    return 0
 
 
 def sha256_file(path: str | Path) -> str:

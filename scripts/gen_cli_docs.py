@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rodlab.cli.main import build_parser
-from rodlab.fileio import atomic_write_text
+from rodlab.fileio import write_generated
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 
@@ -29,8 +29,8 @@ def render() -> str:
 
 
 if __name__ == "__main__":
-    text = render()
-    if "--check" in sys.argv:
-        sys.exit(0 if DOC.exists() and DOC.read_text() == text else 1)
-    atomic_write_text(DOC, text)
-    print(f"wrote {DOC}")
+    check = "--check" in sys.argv
+    status = write_generated(DOC, render(), check)
+    if not check:
+        print(f"wrote {DOC}")
+    sys.exit(status)

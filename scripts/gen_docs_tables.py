@@ -10,7 +10,7 @@ from pathlib import Path
 
 from rodlab.calc import calc_rod_compliance
 from rodlab.design_io import builtin_designs, load_design
-from rodlab.fileio import atomic_write_text
+from rodlab.fileio import write_generated
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "calc_rods.md"
 
@@ -52,8 +52,8 @@ def render() -> str:
 
 
 if __name__ == "__main__":
-    text = render()
-    if "--check" in sys.argv:
-        sys.exit(0 if DOC.exists() and DOC.read_text() == text else 1)
-    atomic_write_text(DOC, text)
-    print(f"wrote {DOC}")
+    check = "--check" in sys.argv
+    status = write_generated(DOC, render(), check)
+    if not check:
+        print(f"wrote {DOC}")
+    sys.exit(status)

@@ -80,7 +80,7 @@ def run_calibration(args, rod: RodCompliance | None, label: str):
     obs = campaign_observations(camp, fix, base_rod)
     res = identify(robot, obs, base_rod.tool_mm, None if label == "none" else base_rod,
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
-                   fix_unidentifiable=getattr(args, "fix_unidentifiable", False))
+                   fix_unidentifiable=args.fix_unidentifiable)
     before = after = None
     if args.validate:
         pts = read_points(args.validate, robot.n)

@@ -111,7 +111,6 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     hyps = [(e, l, nm, white(H), x) for (e, l, nm, H, x) in _hypotheses(robot, res, obs, camp, rod)]
     # point-wise outlier columns are handled separately (many candidates)
     chosen = []
-    rss = None
     findings = []
     used_points: list[int] = []
 

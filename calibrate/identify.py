@@ -98,7 +98,6 @@ def register_base_and_tool(robot, params: ModelParams, obs: Observations, iterat
     least-squares tool given the base (``R_B^T (x - b) - p_n = R_n t``). Returns (base [mm, deg] shape=(6,),
     tool in {n} [mm] shape=(3,), rms distance [mm]); the better of this and the given tool is kept.
     """
-    from rodlab.frames import pose_to_matrix
     n = robot.n
 
     def rms_of(p):

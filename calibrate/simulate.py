@@ -9,7 +9,6 @@ configurations is measured by an external instrument with a short rigid rod.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,7 +16,7 @@ import numpy as np
 
 from rodlab.compliance import RodCompliance
 from rodlab.fileio import atomic_write_json, atomic_write_text
-from rodlab.frames import matrix_to_pose, pose_to_matrix, rotation_from_abc
+from rodlab.frames import matrix_to_pose, rotation_from_abc
 
 from .errors import CalibrationError
 from .identify import _deflection_offsets, Observations
@@ -108,8 +107,7 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
             Tj = T_W_base @ Tb
         Ts[j] = Tj
         poses[j] = matrix_to_pose(Tj)
-    R_WB = pose_to_matrix(truth.base)[:3, :3]
-    rows, qs, xs, groups = [], [], [], []
+    rows = []
     t = 0.0
     for j in range(1, spec.positions + 1):
         F_W = Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05])

@@ -50,7 +50,6 @@ def _hypotheses(robot, res, obs, camp, rod):
                      "the recorded pose of this clamping position is off: all its points share one offset"))
     defl = _deflection_offsets(robot, res.params, obs, rod) if rod is not None else None
     if defl is None or not np.any(defl):
-        from rodlab.compliance import RodCompliance
         defl = None
     if defl is not None:
         hyps.append(("rod_deflection", None, ["k_minus_1"], defl.reshape(3 * N, 1),

@@ -27,8 +27,9 @@ NOTES = [
     "campaign for steel). Detection limit of thermal drift: the growth moves each clamping position by a nearly",
     "constant offset that the kinematic parameters absorb; only its change within a position (~0.4 ppm per 500 s",
     "position at 0.013 ppm/s, ~3 um) is evidence, so growth below ~0.02 ppm/s stays `consistent` — correctly at",
-    "the noise. A periodic joint error is named at the right joint but the re-identification does not model it",
-    "(validation unchanged): compensate it in the controller or add the harmonic to the robot model.",
+    "the noise. A periodic joint error is carried into the re-identification as a joint-angle correction",
+    "q + a_s sin q + a_c cos q (applied to the validation points too, as a controller would); an error of a joint",
+    "whose range is small (J2, J3) is partly absorbed by its offset, so its amplitude reads low.",
     "A null campaign once drew false alarms (thermal_drift, rod_deflection, periodic_joint_error on 5 of 8",
     "nulls): the first hypothesis was credited with what the generalised-least-squares refit of the identified",
     "parameters gains over the unweighted identification. Fixed: the baseline is that refit.", ""]

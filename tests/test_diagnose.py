@@ -111,9 +111,17 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
           "thermal": {"thermal_ppm_per_s": 0.045}}[case]
     t = simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=21), **kw)
     assert (t["periodic_joint_error"] is not None) == (case == "periodic")
+    from calibrate import read_points
     diag, _ = diagnose_campaign(robot, read_campaign(tmp_path / "multical.campaign.csv"),
-                                read_fixture(tmp_path / "multical.fixture.json"), rod)
+                                read_fixture(tmp_path / "multical.fixture.json"), rod,
+                                validate_points=read_points(tmp_path / "multical.validation.csv"))
     found = [(f.effect, f.location) for f in diag.findings]
+    v = diag.extra["validation"]
+    if case != "null":
+        # the found physics is carried into the re-identification (and the joint correction to the
+        # validation points): the fit and the positioning error improve
+        assert diag.rms_after_mm < 0.5 * diag.rms_before_mm
+        assert v["after"]["mean_mm"] < 0.9 * v["before"]["mean_mm"], v
     if case == "null":
         assert diag.verdict == "consistent", found
     elif case == "periodic":

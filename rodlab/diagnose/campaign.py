@@ -4,8 +4,10 @@ The identification's residuals r and Jacobian J are augmented with the columns H
 gain is the part of r that H explains beyond what the identified parameters already absorb (the
 projection on the complement of J). Selection as for the rig (delta BIC <= -10 with the known device noise,
 likelihood-ratio p < 1e-3, leave-one-point-out cross-validation), then the campaign is identified again
-with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers) to show the fit
-(and, with validation points, the positioning error) improve.
+with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers, joint angles
+corrected by the fitted once-per-revolution errors — also at the validation points, as a controller would —
+and measured points referred back to the campaign start for thermal growth) to show the fit (and, with
+validation points, the positioning error) improve.
 
 Hypotheses (``contract/effects.md``, subject ``campaign``): ``fixture_pose`` (offset of one clamping
 position), ``rod_deflection`` (compensation off by a factor: residuals follow R_T^W (C_g g + C_F F)),
@@ -15,6 +17,7 @@ position), ``rod_deflection`` (compensation off by a factor: residuals follow R_
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 
 import numpy as np
 from scipy.stats import chi2
@@ -33,6 +36,15 @@ def _rms(L, fit, cols) -> float:
     """rms per reading [mm] of the (unwhitened) residuals of the model with ``cols``."""
     e = L @ fit(cols)[2]
     return float(np.sqrt(np.mean(e ** 2)))
+
+
+def _correct_joints(q_rad: np.ndarray, corr: dict) -> np.ndarray:
+    """Joint angles [rad], shape=(N, n), with the fitted once-per-revolution errors {joint index: (a_sin,
+    a_cos) [rad]} added: the angles the joints really take."""
+    q = np.array(q_rad, float, copy=True)
+    for k, (a_s, a_c) in corr.items():
+        q[:, k] = q[:, k] + a_s * np.sin(q_rad[:, k]) + a_c * np.cos(q_rad[:, k])
+    return q
 
 
 def _hypotheses(robot, res, obs, camp, rod):
@@ -214,10 +226,21 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
             k = f.parameters["k"]
             rod_used = RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm,
                                      rod.tool_mm, rod.r_rod * k, dict(rod.provenance, diagnosis_scale=k))
-    info = {"result_before": res}
+    joint_corr = {int(f.location.split(":")[1]) - 1: (f.parameters["amp_sin_rad"], f.parameters["amp_cos_rad"])
+                  for f in findings if f.effect == "periodic_joint_error"}
+    info = {"result_before": res, "joint_corrections_rad": joint_corr}
     if findings:
         from calibrate.identify import Observations
         obs2 = campaign_observations(camp, fix, rod_used)
+        # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
+        obs2 = replace(obs2, q_rad=_correct_joints(obs2.q_rad, joint_corr))
+        for f in findings:
+            if f.effect == "thermal_drift":
+                # refer the measured points to the campaign start: undo the growth about the robot base
+                vals = camp.time_s if f.location == "time" else camp.temp_C
+                g = next(iter(f.parameters.values())) * 1e-6 * (vals - vals.min())
+                centre = fr.t_W0
+                obs2 = replace(obs2, x_W_mm=obs2.x_W_mm - g[:, None] * (obs2.x_W_mm - centre))
         if not keep.all():
             obs2 = Observations(obs2.q_rad[keep], obs2.x_W_mm[keep], obs2.force_W_N[keep], obs2.rod_mass_kg,
                                 obs2.rod_com_T_mm, obs2.group[keep], [l for l, k in zip(camp.labels(), keep) if k],
@@ -243,7 +266,11 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     extra = {}
     if validate_points is not None:
         b = validate(robot, res.params, validate_points)[0]
-        a = validate(robot, info.get("result_after", res).params, validate_points)[0]
+        vp_after = validate_points
+        if joint_corr:
+            vp_after = replace(validate_points, q_deg=np.rad2deg(_correct_joints(np.deg2rad(validate_points.q_deg),
+                                                                                 joint_corr)))
+        a = validate(robot, info.get("result_after", res).params, vp_after)[0]
         nominal = validate(robot, ModelParams.nominal(robot, validate_points.tool_mm), validate_points)[0]
         extra["validation"] = {"nominal": nominal.to_dict(), "before": b.to_dict(), "after": a.to_dict()}
     return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), info

@@ -63,4 +63,8 @@ class Diagnosis:
             ev = f.evidence
             lines.append(f"     rms {f.rms_before_mm * 1e3:.2f} -> {f.rms_after_mm * 1e3:.2f} um; delta BIC "
                          f"{ev.get('delta_bic', float('nan')):.1f}; LR p {ev.get('lr_p', float('nan')):.2g}")
+            if ev.get("alternatives"):
+                lines.append("     the data fit about as well with: " + "; ".join(ev["alternatives"]))
+            if ev.get("separate_by"):
+                lines.append(f"     to separate the places: {ev['separate_by']}")
         return "\n".join(lines)

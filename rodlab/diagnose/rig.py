@@ -2,10 +2,11 @@
 
 1. Screen: the noise of one reading from the within-hold scatter (detrended per hold; never from a model
    fit); the simulated model's residuals.
-2. Attribute: forward selection over the hypothesis library (:mod:`.rig_terms`), each term fitted with
-   physical bounds (bounded linear least squares). A term enters only if delta BIC <= -10 (known noise), the
-   likelihood-ratio test gives p < 1e-3 and the leave-one-repeat-out prediction error drops; at most
-   ``max_terms`` terms.
+2. Attribute: a beam search over subsets of the hypothesis library (:mod:`.rig_terms`), each term fitted
+   with physical bounds (bounded linear least squares, :mod:`.subset`). A larger model replaces the current
+   one only if delta BIC <= -10 (known noise), the likelihood-ratio test gives p < 1e-3 and the
+   leave-one-repeat-out prediction error drops; every term must change a reading by >= 2 noise SDs and stay
+   off its physical bounds, and must pass a drop-one test in the final model; at most ``max_terms`` terms.
 3. Locate: joint springs at the candidate places compete; when the runner-up fits within delta BIC 10 the
    finding names the group and the measurement that would separate them.
 4. Explain: parameters with 95 % intervals, a sentence of physics; structure left above the noise (reduced
@@ -14,10 +15,8 @@
 from __future__ import annotations
 
 import logging
-from pathlib import Path
 
 import numpy as np
-from scipy.optimize import lsq_linear
 from scipy.stats import chi2
 
 from ..compliance import RodCompliance
@@ -25,6 +24,7 @@ from ..enums import Phase
 from ..units import G0
 from .report import Diagnosis, Finding
 from .rig_terms import RigData, Term, rig_terms
+from .subset import SubsetLS
 
 __all__ = ["rig_data", "diagnose_rig", "joint_places"]
 
@@ -32,6 +32,7 @@ log = logging.getLogger(__name__)
 
 DBIC_MIN = 10.0
 P_MAX = 1e-3
+PTP_MIN = 1.0        # detection limit: peak-to-peak change of the readings of a series [noise SDs]
 
 
 def rig_data(rec) -> RigData:
@@ -88,7 +89,6 @@ def joint_places(tool_mm, design=None) -> dict:
         segs = layout(design)
         pts = {}
         ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)]
-        ring2 = [s for s in segs if any(str(l.part) == "ring_2" for l in s.layers)]
         pts["flange_clamp"] = (segs[0].start_F - tool, segs[0].direction)
         if ring1:
             pts["ring_1"] = (ring1[0].point([ring1[0].length_mm / 2])[0] - tool, ring1[0].direction)
@@ -106,36 +106,90 @@ def joint_places(tool_mm, design=None) -> dict:
             "pipe_II": (np.array([0.0, 0.0, L1]) + 0.5 * np.linalg.norm(tool - [0, 0, L1]) * u2 - tool, u2)}
 
 
-def _fit(base_r, terms: list[Term], data: RigData, sigma: float, train=None):
-    """Bounded LS of the residual on the terms' columns; returns (coef, rss, residual)."""
-    if not terms:
-        r = base_r
-        return np.zeros(0), float(r @ r), r
-    X = np.column_stack([t.X for t in terms])
-    lo = np.concatenate([t.lower for t in terms])
-    hi = np.concatenate([t.upper for t in terms])
-    norms = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
-    Xs = X / norms
-    rows = slice(None) if train is None else train
-    res = lsq_linear(Xs[rows], base_r[rows], bounds=(lo * norms, hi * norms), method="bvls", lsmr_tol="auto")
-    coef = res.x / norms
-    r = base_r - X @ coef
-    return coef, float(r @ r), r
+BEAM = 8
 
 
-def _cv_error(base_r, terms, data, sigma) -> float:
-    """Leave-one-repeat-out prediction error (sum of squares over the held-out repeats)."""
-    reps = np.unique(data.repeat)
-    if reps.size < 2:
-        return float("nan")
-    total = 0.0
-    for rp in reps:
-        test = data.repeat == rp
-        coef, _, _ = _fit(base_r, terms, data, sigma, train=~test)
-        X = np.column_stack([t.X for t in terms]) if terms else np.zeros((data.y.size, 0))
-        r = base_r[test] - X[test] @ coef if terms else base_r[test]
-        total += float(r @ r)
-    return total
+def _compatible(library: list[Term], S: tuple, j: int) -> bool:
+    """At most one term per (effect, location), one creep and one drift term."""
+    t = library[j]
+    for i in S:
+        u = library[i]
+        if u.effect == t.effect and (u.location == t.location or t.effect in ("creep", "drift")):
+            return False
+    return True
+
+
+def _admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.ndarray) -> bool:
+    """Every term changes the readings of some series by >= PTP_MIN noise SDs peak to peak (detection limit) and
+    none sits on a physical bound (then it is not this physics)."""
+    k = 0
+    for j, contrib in zip(S, ls.contribution(S, coef)):
+        t = library[j]
+        val = coef[k:k + t.X.shape[1]]
+        k += t.X.shape[1]
+        if max(np.ptp(contrib[groups == g]) for g in np.unique(groups)) < PTP_MIN * sigma:
+            return False
+        if np.any((np.abs(val - t.upper) < 1e-9 * np.maximum(1, np.abs(t.upper))) & (t.upper != 0)):
+            return False
+    return True
+
+
+def _select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
+    """Beam search over term subsets (width ``BEAM``). The best admissible subset of each size replaces the
+    current model only if delta BIC <= -10, the likelihood-ratio p < 1e-3 and the cross-validated error drops;
+    subsets need not nest, so a strong but wrong first term does not lock in the path. Then terms that are no
+    longer needed in the final model (drop-one test) are removed."""
+    npar = [t.n_params for t in library]
+
+    def k_of(S):
+        return sum(npar[j] for j in S)
+
+    cur = ()
+    _, cur_rss = ls.fit(cur)
+    cur_cv = ls.cv_error(cur)
+    beam = [()]
+    for _ in range(max_terms):
+        cands = {}
+        for S in beam:
+            for j in range(len(library)):
+                if j in S or not _compatible(library, S, j):
+                    continue
+                key = tuple(sorted(S + (j,)))
+                if key not in cands:
+                    c, rss = ls.fit(key)
+                    cands[key] = (rss / sigma ** 2 + k_of(key) * np.log(n), c, rss)
+        if not cands:
+            break
+        ranked = sorted(cands.items(), key=lambda kv: kv[1][0])
+        beam = [key for key, _ in ranked[:BEAM]]
+        best = next(((key, c, rss) for key, (_, c, rss) in ranked[:4 * BEAM]
+                     if _admissible(library, ls, key, c, sigma, groups)), None)
+        if best is None:
+            continue
+        key, c, rss = best
+        dk = k_of(key) - k_of(cur)
+        lr = (cur_rss - rss) / sigma ** 2
+        if -lr + dk * np.log(n) > -DBIC_MIN or chi2.sf(max(lr, 0.0), max(dk, 1)) > P_MAX:
+            continue
+        cv = ls.cv_error(key)
+        if np.isfinite(cur_cv) and not cv < cur_cv:
+            log.info("%s rejected: cross-validated error does not drop", [library[j].effect for j in key])
+            continue
+        cur, cur_rss, cur_cv = key, rss, cv
+    # backward: remove the weakest term while its drop-one test fails
+    while cur:
+        weakest = None
+        for j in cur:
+            rest = tuple(i for i in cur if i != j)
+            _, rss_r = ls.fit(rest)
+            lr = (rss_r - cur_rss) / sigma ** 2
+            ok = -lr + npar[j] * np.log(n) <= -DBIC_MIN and chi2.sf(max(lr, 0.0), npar[j]) <= P_MAX
+            if not ok and (weakest is None or lr < weakest[1]):
+                weakest = (rest, lr, rss_r)
+        if weakest is None:
+            break
+        cur, cur_rss = weakest[0], weakest[2]
+    return cur
 
 
 def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tuple[Diagnosis, dict]:
@@ -144,66 +198,70 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
     sigma = within_hold_noise(data)
     n = data.y.size
     base = sim.C_F[data.comp, data.axis] * data.F
-    r0 = data.y - base
     library = rig_terms(data, sim.C_F, joint_places(sim.tool_mm, design), sim.tool_mm)
-    chosen: list[Term] = []
-    coef, rss, resid = _fit(r0, chosen, data, sigma)
-    rms0 = float(np.sqrt(rss / n))
-    cv = _cv_error(r0, chosen, data, sigma)
+    # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
+    # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
+    groups = data.axis * 4 + data.comp
+    r0 = _demean(data.y - base, groups)
+    for t in library:
+        t.X = _demean(t.X, groups)
+    blocks, p0 = [], 0
+    for t in library:
+        blocks.append(np.arange(p0, p0 + t.X.shape[1]))
+        p0 += t.X.shape[1]
+    ls = SubsetLS(np.column_stack([t.X for t in library]), r0, blocks,
+                  np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]),
+                  folds=data.repeat if np.unique(data.repeat).size >= 2 else None)
+    rms0 = float(np.sqrt(r0 @ r0 / n))
+    S = _select(library, ls, sigma, n, max_terms, groups)
+    coef, rss = ls.fit(S)
+    cv_full = ls.cv_error(S)
+    # strength of each term: the likelihood ratio of dropping it from the final model
+    drop = {}
+    for j in S:
+        rest = tuple(i for i in S if i != j)
+        _, rss_r = ls.fit(rest)
+        drop[j] = ((rss_r - rss) / sigma ** 2, ls.cv_error(rest))
+    order = sorted(S, key=lambda j: -drop[j][0])
+    cols = ls.columns(S)
+    Gn = ls.G[np.ix_(cols, cols)] * np.outer(ls.norms[cols], ls.norms[cols])
+    se_all = np.sqrt(np.clip(np.diag(sigma ** 2 * np.linalg.pinv(Gn)), 0, None))
+    offsets = dict(zip(S, np.cumsum([0] + [library[j].X.shape[1] for j in S])[:-1]))
     findings = []
-    for _ in range(max_terms):
-        scored = []
-        for term in library:
-            if any(t.effect == term.effect and t.location == term.location for t in chosen):
-                continue
-            if term.effect == "creep" and any(t.effect == "creep" for t in chosen):
-                continue
-            if term.effect == "drift" and any(t.effect == "drift" for t in chosen):
-                continue
-            c2, rss2, _ = _fit(r0, chosen + [term], data, sigma)
-            k = term.X.shape[1]
-            lr = (rss - rss2) / sigma ** 2
-            dbic = -lr + k * np.log(n)
-            scored.append((dbic, lr, term, c2, rss2))
-        if not scored:
-            break
-        scored.sort(key=lambda s: s[0])
-        dbic, lr, term, c2, rss2 = scored[0]
-        p = float(chi2.sf(max(lr, 0.0), term.X.shape[1]))
-        if dbic > -DBIC_MIN or p > P_MAX:
-            break
-        cv2 = _cv_error(r0, chosen + [term], data, sigma)
-        if np.isfinite(cv) and not cv2 < cv:
-            log.info("%s rejected: cross-validated error does not drop", term.effect)
-            break
-        # the fitted value must not sit on a physical bound (then it is not this physics)
-        k0 = sum(t.X.shape[1] for t in chosen)
-        val = c2[k0:k0 + term.X.shape[1]]
-        # detection limit: an effect that changes no reading by 2 noise SDs is not reported
-        if float(np.max(np.abs(term.X @ val))) < 2.0 * sigma:
-            break
-        at_bound = np.any((np.abs(val - term.upper) < 1e-9 * np.maximum(1, np.abs(term.upper))) & (term.upper != 0))
-        if at_bound:
-            break
-        # ambiguity among places / variants of the same effect
-        runner = [s for s in scored[1:] if s[2].effect == term.effect and s[2].location != term.location
-                  and s[0] - dbic < DBIC_MIN]
+    rss_prev = float(r0 @ r0)
+    for m, j in enumerate(order):
+        term = library[j]
+        kj = term.X.shape[1]
+        val, se = coef[offsets[j]:offsets[j] + kj], se_all[offsets[j]:offsets[j] + kj]
+        _, rss_m = ls.fit(tuple(sorted(order[:m + 1])))
+        lr = drop[j][0]
+        evidence = {"delta_bic": float(-lr + term.n_params * np.log(n)), "lr_chi2": float(lr),
+                    "lr_p": float(chi2.sf(max(lr, 0.0), term.n_params)), "cv_sse_before": float(drop[j][1]),
+                    "cv_sse_after": float(cv_full)}
         location = term.location
-        evidence = {"delta_bic": float(dbic), "lr_chi2": float(lr), "lr_p": p,
-                    "cv_sse_before": float(cv), "cv_sse_after": float(cv2)}
-        if runner and term.effect == "joint_compliance":
-            location = "|".join([term.location] + [s[2].location for s in runner])
-            evidence["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): "
-                                       "the lever from each place to the ball differs in each")
-        chosen.append(term)
-        X = np.column_stack([t.X for t in chosen])
-        coef, rss_new, resid = c2, rss2, r0 - X @ c2
-        cov = sigma ** 2 * np.linalg.pinv(X.T @ X)
-        se = np.sqrt(np.clip(np.diag(cov), 0, None))[k0:k0 + term.X.shape[1]]
+        if term.effect == "joint_compliance":
+            # ambiguity among places: another place fits within delta BIC 10
+            alts = []
+            for i, u in enumerate(library):
+                if u.effect == "joint_compliance" and i != j:
+                    alt = tuple(sorted([x for x in S if x != j] + [i]))
+                    if len(set(alt)) == len(alt) and all(_compatible(library, tuple(x for x in alt if x != y), y)
+                                                         for y in alt):
+                        if (ls.fit(alt)[1] - rss) / sigma ** 2 < DBIC_MIN:
+                            alts.append(u.location)
+            if alts:
+                location = "|".join([term.location] + alts)
+                evidence["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): "
+                                           "the lever from each place to the ball differs in each")
+        alternatives = _alternatives(library, ls, S, j, rss, sigma, n)
+        if alternatives:
+            evidence["alternatives"] = alternatives
         params, intervals = _report_params(term, val, se)
         findings.append(Finding(term.effect, location, term.explanation, params, intervals,
-                                float(np.sqrt(rss / n)), float(np.sqrt(rss_new / n)), evidence))
-        rss, cv = rss_new, cv2
+                                float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), evidence))
+        rss_prev = rss_m
+    chosen = [library[j] for j in S]
+    resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))
     # lack of fit of the hold means: structure the library does not explain
     keys = data.step * 4 + data.comp
@@ -233,6 +291,33 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
         verdict = "unexplained"
     model = {"terms": chosen, "coef": coef, "resid": resid, "base_resid": r0, "data": data, "sigma": sigma}
     return Diagnosis("rig", verdict, sigma, rms0, rms, findings, {"reduced_chi2_hold_means": chi_red}), model
+
+
+def _alternatives(library, ls: SubsetLS, S: tuple, j: int, rss: float, sigma: float, n: int) -> list:
+    """Terms of another effect that, put in place of term ``j``, fit within delta BIC 10: the data cannot
+    tell them apart (e.g. creep with a time constant well below the hold time looks like a uniform scale)."""
+    out = []
+    rest = tuple(i for i in S if i != j)
+    for i, u in enumerate(library):
+        if u.effect == library[j].effect or i in S or not _compatible(library, rest, i):
+            continue
+        _, rss_alt = ls.fit(tuple(sorted(rest + (i,))))
+        dbic = (rss_alt - rss) / sigma ** 2 + (u.n_params - library[j].n_params) * np.log(n)
+        if dbic < DBIC_MIN:
+            label = u.effect + (f" at {u.location}" if u.location else "")
+            if u.effect == "creep":
+                label += f" (tau {u.extra_tau:g} s)"
+            out.append(label)
+    return out
+
+
+def _demean(a: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """``a`` (n,) or (n, k) minus its mean within each group."""
+    _, inv = np.unique(groups, return_inverse=True)
+    cnt = np.bincount(inv).astype(float)
+    a2 = a.reshape(a.shape[0], -1)
+    means = np.stack([np.bincount(inv, weights=a2[:, j]) / cnt for j in range(a2.shape[1])], axis=1)
+    return (a2 - means[inv]).reshape(a.shape)
 
 
 def _within_hold_autocorrelation(data: RigData, resid: np.ndarray) -> float:

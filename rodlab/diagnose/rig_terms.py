@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.enums import Phase
 from rodlab.units import G0
 
 __all__ = ["RigData", "Term", "rig_terms", "spring_columns", "spring_matrices"]
@@ -51,6 +50,11 @@ class Term:
     upper: np.ndarray
     explanation: str
     dC: list | None = None                   # structural terms: C_F increment [mm/N] per unit parameter
+    hidden: int = 0                          # parameters chosen from a grid (creep's tau), counted in the BIC
+
+    @property
+    def n_params(self) -> int:
+        return self.X.shape[1] + self.hidden
 
 
 def spring_matrices(point_T, axis_T):
@@ -118,16 +122,20 @@ def rig_terms(data: RigData, C_sim: np.ndarray, places: dict, tool_mm) -> list[T
                       "pipe I twists more than simulated (a low laminate shear modulus): excess compliance only in "
                       "the components that twist pipe I", dC=[spring_matrices(flange, [0, 0, 1])[1]]))
     for loc, (pt, ax) in places.items():
-        terms.append(Term("joint_compliance", loc, ["s_bend_rad_per_Nmm", "s_torsion_rad_per_Nmm"],
-                          spring_columns(data, pt, ax), np.array([0.0, 0.0]), np.array([1e-2, 1e-2]),
+        Cb, Ct = spring_matrices(pt, ax)
+        X = spring_columns(data, pt, ax)
+        names, dC = ["s_bend_rad_per_Nmm", "s_torsion_rad_per_Nmm"], [Cb, Ct]
+        if np.abs(Ct).max() < 1e-9 * np.abs(Cb).max():
+            # the member points at the ball: its torsion moves no reading and cannot be identified
+            X, names, dC = X[:, :1], names[:1], dC[:1]
+        terms.append(Term("joint_compliance", loc, names, X, np.zeros(len(names)), np.full(len(names), 1e-2),
                           f"a compliant joint (bond, clamp or thread) at {loc} acts as a rotational spring whose "
-                          f"excess compliance grows with the lever from {loc} to the ball",
-                          dC=list(spring_matrices(pt, ax))))
+                          f"excess compliance grows with the lever from {loc} to the ball", dC=dC))
     for tau in (1.0, 2.0, 4.0, 8.0, 16.0, 32.0):
         col = _kelvin_voigt(data, base, tau)
         terms.append(Term("creep", None, ["phi"], col[:, None], np.array([0.0]), np.array([1.0]),
                           f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
-                          f"constant load (time constant {tau:g} s), more at higher load"))
+                          f"constant load (time constant {tau:g} s), more at higher load", hidden=1))
         terms[-1].extra_tau = tau
     comps = sorted(set(data.comp.tolist()))
     for c in comps:

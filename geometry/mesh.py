@@ -66,16 +66,39 @@ def feature_circles(design: RodDesign) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return np.array(centres), np.array(normals), np.array(radii)
 
 
-def _size_callback(design: RodDesign, h_near: float, h_far: float, growth: float):
+def _grading_field(design: RodDesign, h_near: float, h_far: float, growth: float) -> None:
+    """Background size field of the graded mesh: ``min(h_far, h_near + growth * d)`` with ``d`` the distance
+    to the nearest feature circle (gmsh Distance + Threshold fields, evaluated natively: a Python size
+    callback cost ~2 s per mesh). The feature circles are the model's curves that lie on them."""
+    import gmsh
+
     centres, normals, radii = feature_circles(design)
 
-    def size(dim, tag, x, y, z, lc):
-        p = np.array([x, y, z]) - centres
-        a = np.einsum("ij,ij->i", p, normals)
-        radial = np.sqrt(np.maximum(np.einsum("ij,ij->i", p, p) - a * a, 0.0))
-        dist = np.sqrt(a * a + (radial - radii) ** 2).min()
-        return float(min(h_far, h_near + growth * dist, lc))
-    return size
+    def on_feature(tag: int) -> bool:
+        lo, hi = gmsh.model.getParametrizationBounds(1, tag)
+        u = np.linspace(lo[0], hi[0], 5)
+        xyz = np.asarray(gmsh.model.getValue(1, tag, u)).reshape(-1, 3)
+        for x in xyz:
+            p = x - centres
+            a = np.einsum("ij,ij->i", p, normals)
+            radial = np.sqrt(np.maximum(np.einsum("ij,ij->i", p, p) - a * a, 0.0))
+            if np.sqrt(a * a + (radial - radii) ** 2).min() > 1e-4 * max(radii.max(), 1.0):
+                return False
+        return True
+
+    curves = [t for d, t in gmsh.model.getEntities(1) if on_feature(t)]
+    if not curves:
+        return
+    f_dist = gmsh.model.mesh.field.add("Distance")
+    gmsh.model.mesh.field.setNumbers(f_dist, "CurvesList", curves)
+    gmsh.model.mesh.field.setNumber(f_dist, "Sampling", 64)
+    f_thr = gmsh.model.mesh.field.add("Threshold")
+    gmsh.model.mesh.field.setNumber(f_thr, "InField", f_dist)
+    gmsh.model.mesh.field.setNumber(f_thr, "SizeMin", h_near)
+    gmsh.model.mesh.field.setNumber(f_thr, "SizeMax", h_far)
+    gmsh.model.mesh.field.setNumber(f_thr, "DistMin", 0.0)
+    gmsh.model.mesh.field.setNumber(f_thr, "DistMax", (h_far - h_near) / growth)
+    gmsh.model.mesh.field.setAsBackgroundMesh(f_thr)
 
 
 def _centreline_samples(design: RodDesign, n_per_mm: float = 2.0):
@@ -157,14 +180,15 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                 if gmsh.model.getType(2, t) == "Sphere"})
             gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
             if grading is not None:
-                gmsh.model.mesh.setSizeCallback(_size_callback(design, grading[0] * h, h, grading[1]))
+                _grading_field(design, grading[0] * h, h, grading[1])
             gmsh.option.setNumber("Mesh.MeshSizeMax", h)
             gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h * (grading[0] if grading else 1.0))
             gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
             gmsh.option.setNumber("Mesh.ElementOrder", order)
             gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
             gmsh.option.setNumber("Mesh.HighOrderOptimize", 1 if order == 2 else 0)   # untangle curved P2
-            gmsh.option.setNumber("Mesh.Algorithm3D", 1)
+            gmsh.option.setNumber("Mesh.Algorithm", 6)      # Frontal-Delaunay surfaces
+            gmsh.option.setNumber("Mesh.Algorithm3D", 10)   # HXT: ~25 % faster than Delaunay, same quality
             t0 = time.perf_counter()
             gmsh.model.mesh.generate(3)
             log.info("gmsh generate: %.2f s", time.perf_counter() - t0)

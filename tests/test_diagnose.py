@@ -132,3 +132,54 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
         assert found and found[0] == ("thermal_drift", "time"), found
         g = diag.findings[0].parameters["growth_ppm_per_s"]
         assert 0.5 < g / 0.045 < 1.5
+
+
+def test_subset_least_squares_matches_direct_fits():
+    """The Gram-matrix fits equal bounded least squares on the full columns, and the cross-validation equals
+    refitting without each fold."""
+    from scipy.optimize import lsq_linear
+
+    from rodlab.diagnose.subset import SubsetLS
+    rng = np.random.default_rng(3)
+    n = 400
+    X = rng.normal(size=(n, 5)) * np.array([1.0, 1e-3, 10.0, 1.0, 1e2])
+    r = X @ np.array([0.5, 300.0, -0.02, 0.0, 1e-3]) + rng.normal(0, 0.1, n)
+    lo, hi = np.array([0.0, 0, -1, -1, 0]), np.array([1.0, 1e3, 1, 1, 0.0005])     # last one active at hi
+    folds = np.repeat(np.arange(4), n // 4)
+    ls = SubsetLS(X, r, [np.array([0]), np.array([1, 2]), np.array([3]), np.array([4])], lo, hi, folds)
+    for S in [(0,), (1,), (0, 1, 3), (0, 1, 2, 3)]:
+        cols = ls.columns(S)
+        ref = lsq_linear(X[:, cols], r, bounds=(lo[cols], hi[cols]), method="bvls")
+        c, rss = ls.fit(S)
+        np.testing.assert_allclose(c, ref.x, rtol=1e-6, atol=1e-9)
+        assert rss == pytest.approx(float(((X[:, cols] @ ref.x - r) ** 2).sum()), rel=1e-8)
+        cv = 0.0
+        for f in range(4):
+            m = folds == f
+            x = lsq_linear(X[~m][:, cols], r[~m], bounds=(lo[cols], hi[cols]), method="bvls").x
+            cv += float(((X[m][:, cols] @ x - r[m]) ** 2).sum())
+        assert ls.cv_error(S) == pytest.approx(cv, rel=1e-6)
+    c, _ = ls.fit((3,))
+    assert c[0] == pytest.approx(5e-4)                 # the bound holds
+
+
+@pytest.mark.parametrize("effects, expected", [
+    # greedy selection once took slow creep for this pair (it mimics friction's branch split and the scale)
+    ({"compliance_scale": {"r": 1.0029}, "friction": {"F_f_N": 0.021}}, {"compliance_scale", "friction"}),
+    # drift: the gauges are zeroed on one noisy, quantised reading; that zero error must not read as a spring
+    ({"drift": {"rate_mm_per_s": -1.5e-5}}, {"drift"}),
+    ({"creep": {"phi": 0.01, "tau_s": 8.0}}, {"creep"}),
+])
+def test_rig_effects_not_confused(tmp_path, effects, expected):
+    from rodlab import calc_rod_compliance, resolve_design
+    from stiffness_rig.model import Protocol, RigModel
+    from stiffness_rig.simulate import simulate_recording
+    design = resolve_design("rod1")
+    sim = calc_rod_compliance(design)
+    model = RigModel(sim.C_F, effects, noise_mm=0.0012, resolution_mm=0.001, seed=11)
+    path = tmp_path / "r.rig.csv"
+    simulate_recording(model, Protocol(axes=("z", "x", "y"), repeats=4, hold_s=5.0, masses=(0.5, 1.0, 1.5, 2.0)),
+                       path, rod=design.name)
+    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    assert diag.verdict == "explained", diag.summary()
+    assert {f.effect for f in diag.findings} == expected, diag.summary()

@@ -10,9 +10,11 @@ statically determinate its tip compliance follows exactly from the unit-load met
 Two effects that beam theory misses are modelled and calibrated once against the solid model
 (``scripts/calibrate_frame.py``, data in ``fea/data/solid_reference.json``):
 
-- load transfer into a bonded sleeve or plug: near each end of a sleeve that is not at the clamp, the
-  sleeve is not yet carrying its share; the frame treats ``sleeve_end * OD`` of it as absent there
-  (OD of the tube it sleeves);
+- load transfer into a bonded sleeve or plug (shear lag): near each end of a sleeve that is not at the
+  clamp, the sleeve is not yet carrying its share of the bending; the frame treats
+  ``sleeve_end * sqrt(t_tube * t_sleeve) * sqrt(E / G / 2.6)`` of it (E, G of the tube) as absent there for
+  bending, shear and tension. Torsion passes into the sleeve at once (calibrating a separate torsion zone
+  gave ~0);
 - pipe-bend flexibility: ASME B31.3 ``k = 1.65 / h`` (``h = t R / r_m^2``), scaled by ``bend_scale``
   for the restraint of the rings at both tangent points, ``k >= 1``, for in- and out-of-plane bending.
 """
@@ -52,7 +54,8 @@ class BendFlexibility:
 class FrameCalibration:
     """Calibrated constants of the frame model (dimensionless).
 
-    sleeve_end : ineffective length at each free end of a sleeve / plug, in tube outer diameters
+    sleeve_end : ineffective length at each free end of a sleeve / plug, in units of
+        sqrt(t_tube t_sleeve) sqrt(E / G / 2.6) (shear-lag scaling)
     bend_scale_in / _out : multiplier on the ASME flexibility factor (restraint by the rings)
     shear / torsion : multipliers on the Timoshenko shear and the torsion flexibility (warping restraint at the
         clamp and sleeves, shear coefficient of an anisotropic tube)
@@ -67,7 +70,7 @@ class FrameCalibration:
 
 #: Global default, fitted against the solid model on rods 1#, 4# and two off-grid designs
 #: (scripts/calibrate_frame.py); errors on all eleven reference designs in docs/fea.md.
-CALIBRATION = FrameCalibration(sleeve_end=0.0525, bend_scale_in=0.753, bend_scale_out=0.657)
+CALIBRATION = FrameCalibration(sleeve_end=0.642, bend_scale_in=0.759, bend_scale_out=0.848)
 
 
 def asme_bend_flexibility(design: RodDesign, cal: FrameCalibration = CALIBRATION) -> BendFlexibility:
@@ -93,21 +96,23 @@ def frame_segments(design: RodDesign, cal: FrameCalibration = CALIBRATION) -> li
         if seg.kind is not SegmentKind.LINE or not sleeve or not base:
             out.append(seg)
             continue
-        od = max(l.d_out_mm for l in base)
-        mat = base[0].material          # shear lag: the transfer length grows with sqrt(E / G) of the tube
+        # shear lag: the bending load passes from the tube into the sleeve over a length that grows with the
+        # walls' thicknesses and with sqrt(E / G) of the tube (long in carbon); torsion transfers at once
+        mat = base[0].material
+        t_tube = max((l.d_out_mm - l.d_in_mm) / 2.0 for l in base)
+        t_sleeve = max((l.d_out_mm - l.d_in_mm) / 2.0 for l in sleeve)
         lag = np.sqrt(mat.E_GPa / mat.G_axial_GPa / 2.6)
-        ell = min(cal.sleeve_end * od * lag, 0.45 * seg.length_mm)
+        ell = min(cal.sleeve_end * np.sqrt(t_tube * t_sleeve) * lag, 0.45 * seg.length_mm)
         at_clamp = k == 0
-        starts = [0.0 if at_clamp else ell]
         slack = tuple(l.part for l in sleeve)
-        pieces = []
-        if not at_clamp:
-            pieces.append((0.0, ell, slack))
-        pieces.append((starts[0], seg.length_mm - ell, ()))
-        pieces.append((seg.length_mm - ell, seg.length_mm, slack))
-        for a, b, sl in pieces:
+        L = seg.length_mm
+        cuts = [0.0] + ([] if at_clamp else [ell]) + [L - ell, L]
+        for a, b in zip(cuts[:-1], cuts[1:]):
             if b - a > 1e-9:
-                out.append(replace(seg, s0_mm=seg.s0_mm + a, length_mm=b - a, start_F=seg.point([a])[0], slack=sl))
+                m = 0.5 * (a + b)
+                zone = m > L - ell or (not at_clamp and m < ell)
+                out.append(replace(seg, s0_mm=seg.s0_mm + a, length_mm=b - a, start_F=seg.point([a])[0],
+                                   slack=slack if zone else (), slack_torsion=()))
     return out
 
 

@@ -88,6 +88,7 @@ class Segment:
     layers: tuple[Layer, ...]
     radius_mm: float = 0.0
     slack: tuple[Part, ...] = ()   #: parts whose mass counts but not their stiffness here (load-transfer zones)
+    slack_torsion: tuple[Part, ...] | None = None   #: the same for torsion alone (None: as ``slack``)
 
     def _stiff(self):
         return [l for l in self.layers if l.part not in self.slack]
@@ -106,7 +107,8 @@ class Segment:
     @property
     def GJ(self) -> float:
         """Torsional stiffness [N mm^2] (axial shear modulus)."""
-        return sum(gpa_to_mpa(l.material.G_axial_GPa) * l.J_mm4 for l in self._stiff())
+        slack = self.slack if self.slack_torsion is None else self.slack_torsion
+        return sum(gpa_to_mpa(l.material.G_axial_GPa) * l.J_mm4 for l in self.layers if l.part not in slack)
 
     @property
     def kGA(self) -> float:

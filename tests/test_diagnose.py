@@ -163,14 +163,19 @@ def test_subset_least_squares_matches_direct_fits():
     assert c[0] == pytest.approx(5e-4)                 # the bound holds
 
 
-@pytest.mark.parametrize("effects, expected", [
+@pytest.mark.parametrize("effects, protocol, expected", [
     # greedy selection once took slow creep for this pair (it mimics friction's branch split and the scale)
-    ({"compliance_scale": {"r": 1.0029}, "friction": {"F_f_N": 0.021}}, {"compliance_scale", "friction"}),
+    ({"compliance_scale": {"r": 1.0029}, "friction": {"F_f_N": 0.021}}, {}, {"compliance_scale", "friction"}),
     # drift: the gauges are zeroed on one noisy, quantised reading; that zero error must not read as a spring
-    ({"drift": {"rate_mm_per_s": -1.5e-5}}, {"drift"}),
-    ({"creep": {"phi": 0.01, "tau_s": 8.0}}, {"creep"}),
+    ({"drift": {"rate_mm_per_s": -1.5e-5}}, {}, {"drift"}),
+    ({"creep": {"phi": 0.01, "tau_s": 8.0}}, {}, {"creep"}),
+    # a time constant between the grid's values at high SNR, long gaps, one repeat (no cross-validation), 5 kg:
+    # the refined tau must not be patched with a compliance scale, friction or drift
+    ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"gap_s": 20.0, "repeats": 3}, {"creep"}),
+    ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"repeats": 1}, {"creep"}),
+    ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"masses": (1.0, 2.5, 5.0), "axes": ("-y", "-z", "-x")}, {"creep"}),
 ])
-def test_rig_effects_not_confused(tmp_path, effects, expected):
+def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     from rodlab import calc_rod_compliance, resolve_design
     from stiffness_rig.model import Protocol, RigModel
     from stiffness_rig.simulate import simulate_recording
@@ -178,8 +183,8 @@ def test_rig_effects_not_confused(tmp_path, effects, expected):
     sim = calc_rod_compliance(design)
     model = RigModel(sim.C_F, effects, noise_mm=0.0012, resolution_mm=0.001, seed=11)
     path = tmp_path / "r.rig.csv"
-    simulate_recording(model, Protocol(axes=("z", "x", "y"), repeats=4, hold_s=5.0, masses=(0.5, 1.0, 1.5, 2.0)),
-                       path, rod=design.name)
+    kw = dict(axes=("z", "x", "y"), repeats=4, hold_s=5.0, masses=(0.5, 1.0, 1.5, 2.0))
+    simulate_recording(model, Protocol(**{**kw, **protocol}), path, rod=design.name)
     diag, _ = diagnose_rig(read_recording(path), sim, design)
     assert diag.verdict == "explained", diag.summary()
     assert {f.effect for f in diag.findings} == expected, diag.summary()

@@ -8,20 +8,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fea.frame import FrameCalibration, calibrate_frame, frame_compliance, frame_errors
+from fea.frame import FrameCalibration, calibrate_frame, frame_errors
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
-from calibrate_frame import CALIBRATION_SET, VALIDATION_SET, design  # noqa: E402
+from calibrate_frame import CALIBRATION_SET, FAMILIES, VALIDATION_SET, design  # noqa: E402
 
 REFS = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
 
 
 @pytest.mark.parametrize("name", CALIBRATION_SET + VALIDATION_SET)
 def test_global_calibration_bounds(name):
-    """Documented accuracy of the default frame model: within 8 % on every significant entry."""
+    """Documented accuracy of the default frame model: within 3 % on every significant entry."""
     e = frame_errors(design(name), REFS[name]["C_F"], REFS[name]["C_g"])
-    assert np.abs(e).max() < 0.08, (name, np.abs(e).max())
+    assert np.abs(e).max() < 0.03, (name, np.abs(e).max())
 
 
 def test_calibration_beats_plain_beam_theory():
@@ -31,12 +31,16 @@ def test_calibration_beats_plain_beam_theory():
     assert np.mean(better) < 0.6 * np.mean(worse)
 
 
-def test_family_calibration_transfers_over_L1_L2():
-    """Calibrated on rod 4# alone, the frame predicts rods 5# and 6# (same sections) within 0.5 %."""
-    cal = calibrate_frame([design("rod4")], [REFS["rod4"]["C_F"]], [REFS["rod4"]["C_g"]])
-    for n in ("rod4", "rod5", "rod6"):
+@pytest.mark.parametrize("base", sorted(FAMILIES))
+def test_family_calibration_transfers_over_L1_L2(base):
+    """Calibrated on one solid run of the base design, the frame predicts the other L1 / L2 of the family
+    (same sections; the paper's rods and an off-grid L1 / L2) within 1 % on every significant entry (steel
+    4# -> 5#, 6#; carbon 1# -> 2#, 3#, whose short pipe I is almost all sleeve and bend: the shear-lag scaling
+    of the sleeve ends carries over)."""
+    cal = calibrate_frame([design(base)], [REFS[base]["C_F"]], [REFS[base]["C_g"]])
+    for n in [base] + FAMILIES[base]:
         e = frame_errors(design(n), REFS[n]["C_F"], REFS[n]["C_g"], cal)
-        assert np.abs(e).max() < 0.005, (n, np.abs(e).max())
+        assert np.abs(e).max() < 0.01, (n, np.abs(e).max())
 
 
 @pytest.mark.slow

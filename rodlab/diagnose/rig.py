@@ -17,13 +17,14 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+from scipy.optimize import lsq_linear
 from scipy.stats import chi2
 
 from ..compliance import RodCompliance
 from ..enums import Phase
 from ..units import G0
 from .report import Diagnosis, Finding
-from .rig_terms import RigData, Term, rig_terms
+from .rig_terms import RigData, Term, creep_term, rig_terms
 from .subset import SubsetLS
 
 __all__ = ["rig_data", "diagnose_rig", "joint_places"]
@@ -205,15 +206,32 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
     r0 = _demean(data.y - base, groups)
     for t in library:
         t.X = _demean(t.X, groups)
-    blocks, p0 = [], 0
-    for t in library:
-        blocks.append(np.arange(p0, p0 + t.X.shape[1]))
-        p0 += t.X.shape[1]
-    ls = SubsetLS(np.column_stack([t.X for t in library]), r0, blocks,
-                  np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]),
-                  folds=data.repeat if np.unique(data.repeat).size >= 2 else None)
+    folds = data.repeat if np.unique(data.repeat).size >= 2 else None
+    ls = _subset_ls(library, r0, folds)
     rms0 = float(np.sqrt(r0 @ r0 / n))
     S = _select(library, ls, sigma, n, max_terms, groups)
+    for _ in range(2):
+        # creep's time constant was picked from a grid: refine it continuously in the chosen model and in
+        # each of its sub-models that keep creep, then select again among the refined ones (a grid mismatch
+        # at high SNR must not be patched with extra terms such as a compliance scale)
+        creep = [j for j in S if library[j].effect == "creep"]
+        if not creep:
+            break
+        j = creep[0]
+        taus = []
+        for sub in [S] + [tuple(i for i in S if i != k) for k in S if k != j]:
+            tau = _refine_tau(library, sub, j, data, base, r0, groups)
+            if all(abs(np.log(tau / t)) > 0.01 for t in taus):
+                taus.append(tau)
+        if all(abs(np.log(t / library[j].extra_tau)) < 0.01 for t in taus):
+            break
+        refined = []
+        for tau in taus:
+            refined.append(creep_term(data, base, tau))
+            refined[-1].X = _demean(refined[-1].X, groups)
+        library = [t for t in library if t.effect != "creep"] + refined
+        ls = _subset_ls(library, r0, folds)
+        S = _select(library, ls, sigma, n, max_terms, groups)
     coef, rss = ls.fit(S)
     cv_full = ls.cv_error(S)
     # strength of each term: the likelihood ratio of dropping it from the final model
@@ -291,6 +309,36 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
         verdict = "unexplained"
     model = {"terms": chosen, "coef": coef, "resid": resid, "base_resid": r0, "data": data, "sigma": sigma}
     return Diagnosis("rig", verdict, sigma, rms0, rms, findings, {"reduced_chi2_hold_means": chi_red}), model
+
+
+def _subset_ls(library: list[Term], r0: np.ndarray, folds) -> SubsetLS:
+    blocks, p0 = [], 0
+    for t in library:
+        blocks.append(np.arange(p0, p0 + t.X.shape[1]))
+        p0 += t.X.shape[1]
+    return SubsetLS(np.column_stack([t.X for t in library]), r0, blocks,
+                    np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]), folds)
+
+
+def _refine_tau(library, S: tuple, j: int, data: RigData, base, r0, groups) -> float:
+    """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau)."""
+    from scipy.optimize import minimize_scalar
+    others = [library[i] for i in S if i != j]
+    X0 = [t.X for t in others]
+    lo = np.concatenate([t.lower for t in others] + [[0.0]])
+    hi = np.concatenate([t.upper for t in others] + [[1.0]])
+
+    def rss(log_tau):
+        col = _demean(creep_term(data, base, float(np.exp(log_tau))).X, groups)
+        X = np.column_stack(X0 + [col])
+        nrm = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
+        res = lsq_linear(X / nrm, r0, bounds=(lo * nrm, hi * nrm), method="bvls")
+        return float(((X / nrm) @ res.x - r0) @ ((X / nrm) @ res.x - r0))
+
+    t0 = np.log(library[j].extra_tau)
+    res = minimize_scalar(rss, bounds=(t0 - 0.5 * np.log(2), t0 + 0.5 * np.log(2)), method="bounded",
+                          options={"xatol": 0.01})
+    return float(np.exp(res.x))
 
 
 def _alternatives(library, ls: SubsetLS, S: tuple, j: int, rss: float, sigma: float, n: int) -> list:

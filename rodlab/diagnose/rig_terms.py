@@ -12,7 +12,7 @@ import numpy as np
 
 from rodlab.units import G0
 
-__all__ = ["RigData", "Term", "rig_terms", "spring_columns", "spring_matrices"]
+__all__ = ["RigData", "Term", "rig_terms", "creep_term", "CREEP_TAU_GRID_S", "spring_columns", "spring_matrices"]
 
 
 @dataclass
@@ -96,6 +96,19 @@ def _kelvin_voigt(data: RigData, base: np.ndarray, tau: float) -> np.ndarray:
     return out
 
 
+#: time constants [s] of the creep hypotheses (a factor sqrt 2 apart); the chosen one is refined continuously
+CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 0.5), 3))
+
+
+def creep_term(data: RigData, base: np.ndarray, tau: float) -> Term:
+    """Kelvin-Voigt creep with time constant ``tau`` [s] (its amplitude phi is the linear parameter)."""
+    t = Term("creep", None, ["phi"], _kelvin_voigt(data, base, tau)[:, None], np.array([0.0]), np.array([1.0]),
+             f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at constant "
+             f"load (time constant {tau:.3g} s), more at higher load", hidden=1)
+    t.extra_tau = tau
+    return t
+
+
 def rig_terms(data: RigData, C_sim: np.ndarray, places: dict, tool_mm) -> list[Term]:
     """All candidate terms for ``data``; ``places``: {location: (point in {T}, member axis)} for joint springs."""
     base = C_sim[data.comp, data.axis] * data.F                       # the simulated displacement
@@ -131,12 +144,8 @@ def rig_terms(data: RigData, C_sim: np.ndarray, places: dict, tool_mm) -> list[T
         terms.append(Term("joint_compliance", loc, names, X, np.zeros(len(names)), np.full(len(names), 1e-2),
                           f"a compliant joint (bond, clamp or thread) at {loc} acts as a rotational spring whose "
                           f"excess compliance grows with the lever from {loc} to the ball", dC=dC))
-    for tau in (1.0, 2.0, 4.0, 8.0, 16.0, 32.0):
-        col = _kelvin_voigt(data, base, tau)
-        terms.append(Term("creep", None, ["phi"], col[:, None], np.array([0.0]), np.array([1.0]),
-                          f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
-                          f"constant load (time constant {tau:g} s), more at higher load", hidden=1))
-        terms[-1].extra_tau = tau
+    for tau in CREEP_TAU_GRID_S:
+        terms.append(creep_term(data, base, float(tau)))
     comps = sorted(set(data.comp.tolist()))
     for c in comps:
         others = [j for j in comps if j != c]

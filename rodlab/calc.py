@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from enum import Enum
+from functools import lru_cache
 
 import numpy as np
 
@@ -59,25 +60,28 @@ def pipes_only_segments(design: RodDesign) -> list[Segment]:
             Segment(SegmentKind.LINE, d.L1_mm, d.L2_mm, d.L1_mm * ez, d.pipe_II_direction, (t2,))]
 
 
+@lru_cache(maxsize=None)
 def _gauss(n: int):
+    """Gauss-Legendre points and weights on [0, 1] (cached: computing them dominated the frame model)."""
     x, w = np.polynomial.legendre.leggauss(n)
-    return 0.5 * (x + 1.0), 0.5 * w
+    x, w = 0.5 * (x + 1.0), 0.5 * w
+    x.flags.writeable = False
+    w.flags.writeable = False
+    return x, w
 
 
 def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces: int = 8):
     """Quadrature points along all segments: (seg index, local u, weight)."""
-    rows = []
+    idx, u, w = [], [], []
     for k, seg in enumerate(segs):
         pieces = arc_pieces if seg.kind is SegmentKind.ARC else 1
         xg, wg = _gauss(n_arc if seg.kind is SegmentKind.ARC else n_line)
         h = seg.length_mm / pieces
-        for p in range(pieces):
-            for x, w in zip(xg, wg):
-                rows.append((k, (p + x) * h, w * h))
-    idx = np.array([r[0] for r in rows], dtype=int)
-    u = np.array([r[1] for r in rows])
-    w = np.array([r[2] for r in rows])
-    return idx, u, w
+        p = np.repeat(np.arange(pieces), xg.size)
+        u.append((p + np.tile(xg, pieces)) * h)
+        w.append(np.tile(wg, pieces) * h)
+        idx.append(np.full(p.size, k))
+    return np.concatenate(idx), np.concatenate(u), np.concatenate(w)
 
 
 def _distal_moments(segs, idx, u, tip_mass_kg, tip_com_F):

@@ -97,7 +97,20 @@ def _scale(effects, keys, factor):
     return out
 
 
-def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1") -> list[BlindCase]:
+def _wide_protocol(rng) -> Protocol:
+    """Protocols beyond the standard batches: 1-5 repeats, loads along negative axes, holds of 3-30 s sampled
+    at 2-20 Hz, gaps of 2-20 s between holds, up to 5 kg."""
+    axes = tuple(("-" if rng.random() < 0.3 else "") + a for a in rng.permutation(["y", "z", "x"]))
+    hold = float(rng.choice([3.0, 5.0, 8.0, 15.0, 30.0]))
+    rate = float(rng.choice([2.0, 5.0] if hold >= 15 else [5.0, 10.0, 20.0]))
+    masses = [(0.5, 1.0, 1.5, 2.0), (1.0, 2.5, 5.0), (0.2, 0.4, 0.6, 0.8, 1.0), (1.0, 2.0, 3.0)][int(rng.integers(4))]
+    return Protocol(axes=axes, repeats=int(rng.integers(1, 6)), hold_s=hold, rate_Hz=rate,
+                    gap_s=float(rng.choice([2.0, 4.0, 10.0, 20.0])), masses=masses)
+
+
+def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False) -> list[BlindCase]:
+    """``n`` blind cases; ``wide``: draw the protocols from :func:`_wide_protocol` (other repeats, signs, hold
+    times, sample rates, gaps and loads) instead of the standard ones."""
     rng = np.random.default_rng(seed)
     design = resolve_design(rod)
     C = calc_rod_compliance(design).C_F
@@ -109,9 +122,10 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1") ->
         u = rng.random()
         kind = "null" if u < 0.3 else "single" if u < 0.7 else "pair" if u < 0.82 else "decoy" if u < 0.9 else "oolib"
         noise = float(rng.choice([0.0003, 0.0006, 0.0012]))
-        proto = Protocol(axes=tuple(rng.permutation(["y", "z", "x"])), repeats=int(rng.integers(3, 6)),
-                         hold_s=float(rng.choice([5.0, 8.0])),
-                         masses=[(0.5, 1.0, 1.5, 2.0), (0.4, 0.8, 1.2, 1.6, 2.0), (1.0, 2.0, 3.0)][int(rng.integers(3))])
+        proto = _wide_protocol(rng) if wide else Protocol(
+            axes=tuple(rng.permutation(["y", "z", "x"])), repeats=int(rng.integers(3, 6)),
+            hold_s=float(rng.choice([5.0, 8.0])),
+            masses=[(0.5, 1.0, 1.5, 2.0), (0.4, 0.8, 1.2, 1.6, 2.0), (1.0, 2.0, 3.0)][int(rng.integers(3))])
         effects, truth_effects = {}, []
         names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
                                                                            replace=False))
@@ -136,7 +150,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1") ->
             expected = "unexplained"
         truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise,
                  "protocol": {"axes": list(proto.axes), "repeats": proto.repeats, "masses": list(proto.masses),
-                              "hold_s": proto.hold_s}}
+                              "hold_s": proto.hold_s, "rate_Hz": proto.rate_Hz, "gap_s": proto.gap_s}}
         (out / f"case{i:03d}.truth.json").write_text(json.dumps(truth, indent=1))
         cases.append(BlindCase(path, truth))
     return cases

@@ -1,7 +1,7 @@
 """Score the rig diagnosis on blind cases: false alarms, recall by SNR, wrong cause, location, parameters,
 honesty on out-of-library effects, fit after.
 
-    python benchmarks/diagnose_blind.py [N] [SEED]    # prints and writes docs/benchmarks/diagnose_blind.md
+    python benchmarks/diagnose_blind.py [N] [SEED] [wide]   # prints and writes docs/benchmarks/diagnose_blind.md
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ from rodlab.fileio import atomic_write_text  # noqa: E402
 from stiffness_rig import read_recording  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind.md"
+OUT_WIDE = OUT.with_name("diagnose_blind_wide.md")
 
 _PARAM = {"friction": ("F_f_N", "F_f_N", 1.0), "tare": ("tare_kg", "tare_kg", 1.0), "creep": ("phi", "phi", 1.0),
           "nonlinearity": ("beta", "beta_per_10N", 1.0), "compliance_scale": ("r", "r", None),
@@ -95,10 +96,11 @@ def score(cases, results) -> dict:
 def main() -> int:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 60
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1000
+    wide = len(sys.argv) > 3 and sys.argv[3] == "wide"
     sim = calc_rod_compliance(resolve_design("rod1"))
     design = resolve_design("rod1")
     with tempfile.TemporaryDirectory() as tmp:
-        cases = generate_cases(tmp, n, seed)
+        cases = generate_cases(tmp, n, seed, wide=wide)
         results = []
         for c in cases:
             t0 = time.perf_counter()
@@ -107,7 +109,8 @@ def main() -> int:
     sc = score(cases, results)
     times = [dt for _, dt in results]
     lines = ["# Blind benchmark: rig diagnosis", "",
-             f"`python benchmarks/diagnose_blind.py {n} {seed}`: {n} generated cases (rod 1#), "
+             f"`python benchmarks/diagnose_blind.py {n} {seed}{' wide' if wide else ''}`: {n} generated cases (rod 1#"
+             f"{'; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg' if wide else ''}), "
              f"{time.strftime('%Y-%m-%d')}. Goals: false alarms <= 5 %, recall >= 90 % at SNR >= 5, wrong cause <= 5 %, "
              f"location >= 90 %, parameters within 1.35x, honest `unexplained` >= 80 %, fit after <= 1.5x noise, "
              f"<= 10 s per recording.", "",
@@ -125,7 +128,7 @@ def main() -> int:
               f"| time per recording | median {np.median(times):.2f} s, max {max(times):.2f} s |", "",
               "Confusion (true effect -> first matching finding, or the strongest finding, or none):", ""]
     lines += [f"- {k}: {v}" for k, v in sc["confusion"].items()]
-    atomic_write_text(OUT, "\n".join(lines) + "\n")
+    atomic_write_text(OUT_WIDE if wide else OUT, "\n".join(lines) + "\n")
     print("\n".join(lines))
     print(json.dumps(sc["counts"]))
     return 0

@@ -188,3 +188,30 @@ def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     diag, _ = diagnose_rig(read_recording(path), sim, design)
     assert diag.verdict == "explained", diag.summary()
     assert {f.effect for f in diag.findings} == expected, diag.summary()
+
+
+@pytest.mark.parametrize("effects", [{}, {"friction": {"F_f_N": 0.05}}])
+def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
+    """One hold shifted by 4 um in a short protocol (one repeat): no effect may absorb it; the hold is named
+    and the rest diagnosed without it."""
+    from rodlab import calc_rod_compliance, resolve_design
+    from stiffness_rig.model import Protocol, RigModel
+    from stiffness_rig.simulate import simulate_recording
+    design = resolve_design("rod1")
+    sim = calc_rod_compliance(design)
+    path = tmp_path / "r.rig.csv"
+    simulate_recording(RigModel(sim.C_F, effects, noise_mm=0.0003, resolution_mm=0.0001, seed=4),
+                       Protocol(axes=("y", "z", "x"), repeats=1, hold_s=5.0), path, rod=design.name)
+    lines = path.read_text().splitlines()
+    head = [l for l in lines if l.startswith("#") or l.startswith("time_s")]
+    rows = [l.split(",") for l in lines if l and not l.startswith("#") and not l.startswith("time_s")]
+    for r in rows:
+        if r[1] == "12":
+            for c in (6, 7, 8):
+                if r[c]:
+                    r[c] = f"{float(r[c]) + 0.004:.4f}"
+    path.write_text("\n".join(head + [",".join(r) for r in rows]) + "\n")
+    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    found = [(f.effect, f.location) for f in diag.findings]
+    assert diag.verdict == "unexplained" and ("unexplained", "step:12") in found, diag.summary()
+    assert {e for e, _ in found if e != "unexplained"} == set(effects), diag.summary()

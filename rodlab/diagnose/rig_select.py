@@ -1,0 +1,171 @@
+"""Model selection of the rig diagnosis: which subset of the hypothesis library (:mod:`.rig_terms`) the
+recording supports.
+
+Beam search over term subsets with bounded least squares from the Gram matrix (:mod:`.subset`); a larger
+model replaces the current one only if delta BIC <= -10 (known noise), the likelihood-ratio p < 1e-3 and the
+leave-one-repeat-out prediction error drops; every term must change the readings of a series by at least
+``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test. Creep's time constant is refined
+continuously (:func:`refine_tau`). The gauge zero of each series is projected out (:func:`demean`).
+"""
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+from scipy.optimize import lsq_linear
+from scipy.stats import chi2
+
+from .rig_terms import RigData, Term, creep_term
+from .subset import SubsetLS
+
+__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "DBIC_MIN", "P_MAX",
+           "PTP_MIN", "BEAM"]
+
+log = logging.getLogger(__name__)
+
+DBIC_MIN = 10.0
+P_MAX = 1e-3
+PTP_MIN = 1.0        # detection limit: peak-to-peak change of the readings of a series [noise SDs]
+
+
+BEAM = 8
+
+
+def compatible(library: list[Term], S: tuple, j: int) -> bool:
+    """At most one term per (effect, location), one creep and one drift term."""
+    t = library[j]
+    for i in S:
+        u = library[i]
+        if u.effect == t.effect and (u.location == t.location or t.effect in ("creep", "drift")):
+            return False
+    return True
+
+
+def _admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.ndarray) -> bool:
+    """Every term changes the readings of some series by >= PTP_MIN noise SDs peak to peak (detection limit) and
+    none sits on a physical bound (then it is not this physics)."""
+    k = 0
+    for j, contrib in zip(S, ls.contribution(S, coef)):
+        t = library[j]
+        val = coef[k:k + t.X.shape[1]]
+        k += t.X.shape[1]
+        if max(np.ptp(contrib[groups == g]) for g in np.unique(groups)) < PTP_MIN * sigma:
+            return False
+        if np.any((np.abs(val - t.upper) < 1e-9 * np.maximum(1, np.abs(t.upper))) & (t.upper != 0)):
+            return False
+    return True
+
+
+def select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
+    """Beam search over term subsets (width ``BEAM``). The best admissible subset of each size replaces the
+    current model only if delta BIC <= -10, the likelihood-ratio p < 1e-3 and the cross-validated error drops;
+    subsets need not nest, so a strong but wrong first term does not lock in the path. Then terms that are no
+    longer needed in the final model (drop-one test) are removed."""
+    npar = [t.n_params for t in library]
+
+    def k_of(S):
+        return sum(npar[j] for j in S)
+
+    cur = ()
+    _, cur_rss = ls.fit(cur)
+    cur_cv = ls.cv_error(cur)
+    beam = [()]
+    for _ in range(max_terms):
+        cands = {}
+        for S in beam:
+            for j in range(len(library)):
+                if j in S or not compatible(library, S, j):
+                    continue
+                key = tuple(sorted(S + (j,)))
+                if key not in cands:
+                    c, rss = ls.fit(key)
+                    cands[key] = (rss / sigma ** 2 + k_of(key) * np.log(n), c, rss)
+        if not cands:
+            break
+        ranked = sorted(cands.items(), key=lambda kv: kv[1][0])
+        beam = [key for key, _ in ranked[:BEAM]]
+        best = next(((key, c, rss) for key, (_, c, rss) in ranked[:4 * BEAM]
+                     if _admissible(library, ls, key, c, sigma, groups)), None)
+        if best is None:
+            continue
+        key, c, rss = best
+        dk = k_of(key) - k_of(cur)
+        lr = (cur_rss - rss) / sigma ** 2
+        if -lr + dk * np.log(n) > -DBIC_MIN or chi2.sf(max(lr, 0.0), max(dk, 1)) > P_MAX:
+            continue
+        cv = ls.cv_error(key)
+        if np.isfinite(cur_cv) and not cv < cur_cv:
+            log.info("%s rejected: cross-validated error does not drop", [library[j].effect for j in key])
+            continue
+        cur, cur_rss, cur_cv = key, rss, cv
+    # backward: remove the weakest term while its drop-one test fails
+    while cur:
+        weakest = None
+        for j in cur:
+            rest = tuple(i for i in cur if i != j)
+            _, rss_r = ls.fit(rest)
+            lr = (rss_r - cur_rss) / sigma ** 2
+            ok = -lr + npar[j] * np.log(n) <= -DBIC_MIN and chi2.sf(max(lr, 0.0), npar[j]) <= P_MAX
+            if not ok and (weakest is None or lr < weakest[1]):
+                weakest = (rest, lr, rss_r)
+        if weakest is None:
+            break
+        cur, cur_rss = weakest[0], weakest[2]
+    return cur
+
+
+def subset_ls(library: list[Term], r0: np.ndarray, folds) -> SubsetLS:
+    blocks, p0 = [], 0
+    for t in library:
+        blocks.append(np.arange(p0, p0 + t.X.shape[1]))
+        p0 += t.X.shape[1]
+    return SubsetLS(np.column_stack([t.X for t in library]), r0, blocks,
+                    np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]), folds)
+
+
+def refine_tau(library, S: tuple, j: int, data: RigData, base, r0, groups) -> float:
+    """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau)."""
+    from scipy.optimize import minimize_scalar
+    others = [library[i] for i in S if i != j]
+    X0 = [t.X for t in others]
+    lo = np.concatenate([t.lower for t in others] + [[0.0]])
+    hi = np.concatenate([t.upper for t in others] + [[1.0]])
+
+    def rss(log_tau):
+        col = demean(creep_term(data, base, float(np.exp(log_tau))).X, groups)
+        X = np.column_stack(X0 + [col])
+        nrm = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
+        res = lsq_linear(X / nrm, r0, bounds=(lo * nrm, hi * nrm), method="bvls")
+        return float(((X / nrm) @ res.x - r0) @ ((X / nrm) @ res.x - r0))
+
+    t0 = np.log(library[j].extra_tau)
+    res = minimize_scalar(rss, bounds=(t0 - 0.5 * np.log(2), t0 + 0.5 * np.log(2)), method="bounded",
+                          options={"xatol": 0.01})
+    return float(np.exp(res.x))
+
+
+def alternatives(library, ls: SubsetLS, S: tuple, j: int, rss: float, sigma: float, n: int) -> list:
+    """Terms of another effect that, put in place of term ``j``, fit within delta BIC 10: the data cannot
+    tell them apart (e.g. creep with a time constant well below the hold time looks like a uniform scale)."""
+    out = []
+    rest = tuple(i for i in S if i != j)
+    for i, u in enumerate(library):
+        if u.effect == library[j].effect or i in S or not compatible(library, rest, i):
+            continue
+        _, rss_alt = ls.fit(tuple(sorted(rest + (i,))))
+        dbic = (rss_alt - rss) / sigma ** 2 + (u.n_params - library[j].n_params) * np.log(n)
+        if dbic < DBIC_MIN:
+            label = u.effect + (f" at {u.location}" if u.location else "")
+            if u.effect == "creep":
+                label += f" (tau {u.extra_tau:g} s)"
+            out.append(label)
+    return out
+
+
+def demean(a: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """``a`` (n,) or (n, k) minus its mean within each group."""
+    _, inv = np.unique(groups, return_inverse=True)
+    cnt = np.bincount(inv).astype(float)
+    a2 = a.reshape(a.shape[0], -1)
+    means = np.stack([np.bincount(inv, weights=a2[:, j]) / cnt for j in range(a2.shape[1])], axis=1)
+    return (a2 - means[inv]).reshape(a.shape)

@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from scipy.optimize import lsq_linear
 from scipy.stats import chi2
 
 from .rig_terms import RigData, Term, creep_term
@@ -127,16 +126,11 @@ def refine_tau(library, S: tuple, j: int, data: RigData, base, r0, groups) -> fl
     """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau)."""
     from scipy.optimize import minimize_scalar
     others = [library[i] for i in S if i != j]
-    X0 = [t.X for t in others]
-    lo = np.concatenate([t.lower for t in others] + [[0.0]])
-    hi = np.concatenate([t.upper for t in others] + [[1.0]])
 
     def rss(log_tau):
-        col = demean(creep_term(data, base, float(np.exp(log_tau))).X, groups)
-        X = np.column_stack(X0 + [col])
-        nrm = np.maximum(np.linalg.norm(X, axis=0), 1e-300)
-        res = lsq_linear(X / nrm, r0, bounds=(lo * nrm, hi * nrm), method="bvls")
-        return float(((X / nrm) @ res.x - r0) @ ((X / nrm) @ res.x - r0))
+        term = creep_term(data, base, float(np.exp(log_tau)))
+        term.X = demean(term.X, groups)
+        return subset_ls(others + [term], r0, None).fit(tuple(range(len(others) + 1)))[1]
 
     t0 = np.log(library[j].extra_tau)
     res = minimize_scalar(rss, bounds=(t0 - 0.5 * np.log(2), t0 + 0.5 * np.log(2)), method="bounded",

@@ -40,7 +40,7 @@ t_imp = time.perf_counter() - t0
 size, near, growth = (float(v) for v in sys.argv[1:4])
 d = resolve_design("rod1")
 t0 = time.perf_counter()
-comp, res = solid_compliance(d, lambda d, h, g: mesh_rod(d, size_mm=h, grading=g), size_mm=size,
+comp, res = solid_compliance(d, lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half), size_mm=size,
                              grading=(near, growth) if near < 1 else None, error_estimate=False)
 wall = time.perf_counter() - t0
 print(json.dumps({"C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs, "wall_s": wall, "import_s": t_imp,

@@ -1,6 +1,7 @@
 """Rod compliance files from the solid FEA, the frame model or the closed form.
 
-``solid`` runs the 3-D model on a graded curved-P2 mesh (reference), optionally twice (sizes h and
+``solid`` runs the 3-D model on a graded curved-P2 mesh (reference) of half the rod (it is mirror-symmetric
+about its bend plane: two half-size solves, the same answer as the whole mesh), optionally twice (sizes h and
 1.5 h) for a Richardson estimate of the discretisation error, written into the file's provenance with
 the mesh statistics, the Maxwell-Betti symmetry defect of C_F and the solver used.
 """
@@ -58,11 +59,13 @@ def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING) -
 
 
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
-                     grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False):
+                     grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
+                     symmetry: bool = True):
     """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
 
-    ``mesher(design, size_mm, grading) -> RodMesh`` makes the meshes (``geometry.mesh_rod`` in the CLI:
+    ``mesher(design, size_mm, grading, half) -> RodMesh`` makes the meshes (``geometry.mesh_rod`` in the CLI:
     the domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
+    ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
     """
     from .solid import solve_compliance
 
@@ -75,18 +78,20 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
                        f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "
                        f"volume. Use a larger --size (error grows) or --model frame", key="size")
     t0 = time.perf_counter()
-    rm = mesher(design, h, grading)
+    rm = mesher(design, h, grading, symmetry)
     t_mesh = time.perf_counter() - t0
     res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend)
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),
-            "dofs": res.dofs, "solver": res.backend, "symmetry_defect_C_F": res.symmetry_defect,
+            "dofs": res.dofs, "solver": res.backend,
+            "symmetry": ("half mesh y_T >= 0, symmetric + antisymmetric solves" if rm.is_half else "whole mesh"),
+            "symmetry_defect_C_F": res.symmetry_defect,
             "mesh_mass_kg": res.mass_kg, "timings_s": dict({k: round(v, 3) for k, v in res.timings_s.items()},
                                                             mesh=round(t_mesh, 3)),
             "materials": {"transverse_isotropy": "axis = local tube axis", "nu23_assumed": 0.4}}
     CF, Cg = res.C_F, res.C_g
     if error_estimate:
-        rc = mesher(design, 1.5 * h, grading)
+        rc = mesher(design, 1.5 * h, grading, symmetry)
         coarse = solve_compliance(design, rc, backend=backend)
         factor = 1.5 ** RICHARDSON_ORDER - 1.0
         errF = np.abs(CF - coarse.C_F) / factor

@@ -119,8 +119,14 @@ def _tube_axes(design: RodDesign, centroids_T: np.ndarray) -> np.ndarray:
 
 
 def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
-             msh_path: str | Path | None = None, grading: tuple[float, float] | None = None) -> RodMesh:
+             msh_path: str | Path | None = None, grading: tuple[float, float] | None = None,
+             half: bool = False) -> RodMesh:
     """Mesh ``design`` with gmsh; optionally write ``msh_path`` (gmsh 4.1, atomically).
+
+    ``half=True`` meshes only the half ``y_T >= 0``: every rod is mirror-symmetric about its bend plane
+    ``y_T = 0`` (straight tubes and holders along axes in that plane, the bend revolved about an axis along
+    ``y_T``, the ball on it), so the solid FEA solves two half-size problems instead of one (see
+    :func:`fea.solve_compliance`). The cut face becomes ``symmetry_face`` / ``RodMesh.symmetry_facets``.
 
     ``grading = (near_factor, growth)``: element size ``near_factor * size`` at the circles where the
     section changes (sleeve ends, bend tangents, clamp: stress concentrations), growing by ``growth`` mm per
@@ -137,6 +143,8 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     if not (h > 0 and np.isfinite(h)):
         raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
     solids = part_solids(design)
+    if half:
+        solids = _half_solids(solids)
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
@@ -179,6 +187,11 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                 for d, t in gmsh.model.getBoundary([(3, v)], oriented=False)
                                 if gmsh.model.getType(2, t) == "Sphere"})
             gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
+            if half:
+                cut = [t for d, t in gmsh.model.getEntitiesInBoundingBox(-1e4, -eps, -1e4, 1e4, eps, 1e4, dim=2)]
+                if not cut:
+                    raise GeometryError("the half mesh has no face on the symmetry plane y_T = 0", key="half")
+                gmsh.model.addPhysicalGroup(2, cut, name="symmetry_face")
             if grading is not None:
                 _grading_field(design, grading[0] * h, h, grading[1])
             gmsh.option.setNumber("Mesh.MeshSizeMax", h)
@@ -215,10 +228,26 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                 atomic_write_bytes(msh_path, Path(out).read_bytes())
         finally:
             gmsh.finalize()
-    return _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path)
+    return _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half)
 
 
-def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path):
+def _half_solids(solids: dict) -> dict:
+    """Each part cut to the half-space ``y_T >= 0``."""
+    import build123d as bd
+
+    big = 1e4
+    keep = bd.Solid.make_box(2 * big, big, 2 * big, bd.Plane(origin=(-big, 0.0, -big)))
+    out = {}
+    for part, solid in solids.items():
+        cut = solid.intersect(keep)
+        pieces = [] if cut is None else cut.solids()
+        if not pieces:
+            raise GeometryError(f"part {part} has nothing on the side y_T >= 0 of its bend plane", key=str(part))
+        out[part] = pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
+    return out
+
+
+def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False):
     from skfem import MeshTet1, MeshTet2
 
     index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
@@ -245,10 +274,11 @@ def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order,
     r = design.ball.radius_mm          # the ball's sphere is centred on the {T} origin
     tol = max(h * h / (4 * r), 1e-3 * r)   # facet midpoints sit inside the sphere by the sagitta
     ball = mesh.facets_satisfying(lambda x: np.abs(np.linalg.norm(x, axis=0) - r) < tol, boundaries_only=True)
+    sym = mesh.facets_satisfying(lambda x: np.abs(x[1]) < 1e-6, boundaries_only=True) if half else None
     digest = hashlib.sha256(np.round(p, 9).tobytes() + t.astype(np.int64).tobytes()).hexdigest()
     rm = RodMesh(mesh, tuple(solids), part_idx.astype(np.int32), axes, flange, ball, h, order, worst, digest,
-                 None if msh_path is None else Path(msh_path))
+                 None if msh_path is None else Path(msh_path), symmetry_facets=sym)
     rm.stats = {"nodes": int(p.shape[0]), "elements": int(t.shape[0]), "size_mm": h, "order": order,
                 "min_quality_sicn": worst, "mean_quality_sicn": float(qual.mean()),
-                "flange_facets": int(flange.size), "ball_facets": int(ball.size)}
+                "flange_facets": int(flange.size), "ball_facets": int(ball.size), "half": bool(half)}
     return rm

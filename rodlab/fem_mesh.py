@@ -26,6 +26,8 @@ class RodMesh:
     size_mm, order : what was asked
     min_quality : worst element quality (gmsh minSICN; <= 0 means inverted)
     sha256 : hash of nodes and connectivity (determinism check)
+    symmetry_facets : ``None`` for a whole rod; for a half mesh (``y_T >= 0``, the rod mirrored about its
+        bend plane ``y_T = 0``) the facet indices on that plane
     """
 
     mesh: object
@@ -40,12 +42,50 @@ class RodMesh:
     sha256: str
     msh_path: Path | None = None
     stats: dict = field(default_factory=dict)
+    symmetry_facets: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = self.mesh.t.shape[1]
         if self.part_index.shape != (n,) or self.tube_axis.shape != (n, 3):
             raise ValueError(f"part_index must have shape ({n},) and tube_axis ({n}, 3); got "
                              f"{self.part_index.shape}, {self.tube_axis.shape}")
+
+    @property
+    def is_half(self) -> bool:
+        """True for a half mesh (``y_T >= 0``) of a rod mirror-symmetric about ``y_T = 0``."""
+        return self.symmetry_facets is not None
+
+    def mirrored(self) -> "RodMesh":
+        """The whole rod from a half mesh: the half and its mirror image about ``y_T = 0``, conforming on the
+        plane (its nodes shared). Elements ``0..ne-1`` are the half's, ``ne..2ne-1`` their images in the same
+        order and local node order (mirror images are negatively oriented; skfem integrates with |det J|)."""
+        if not self.is_half:
+            raise ValueError("mirrored() needs a half mesh (symmetry_facets is None: this is a whole rod)")
+        from skfem import Basis, MeshTet1, MeshTet2
+        from skfem.element import ElementTetP1, ElementTetP2
+
+        elem = ElementTetP2() if self.order == 2 else ElementTetP1()
+        basis = Basis(self.mesh, elem, intorder=1)
+        x = basis.doflocs                                      # (3, n) every node, curved positions
+        t = basis.element_dofs                                 # (10 or 4, ne)
+        on_plane = np.abs(x[1]) < 1e-6
+        image = np.arange(x.shape[1])
+        off = np.nonzero(~on_plane)[0]
+        image[off] = x.shape[1] + np.arange(off.size)
+        xm = np.concatenate([x, x[:, off] * np.array([[1.0], [-1.0], [1.0]])], axis=1)
+        tm = np.concatenate([t, image[t]], axis=1)
+        mesh = (MeshTet2 if self.order == 2 else MeshTet1)(xm, tm)
+        flip = np.array([1.0, -1.0, 1.0])
+        z0 = float(self.mesh.p[2, self.mesh.facets[:, self.flange_facets]].mean())
+        flange = mesh.facets_satisfying(lambda p: np.abs(p[2] - z0) < 1e-6, boundaries_only=True)
+        ball_r = np.linalg.norm(self.mesh.p[:, self.mesh.facets[:, self.ball_facets]].mean(axis=1), axis=0)
+        lo, hi = ball_r.min(), ball_r.max()
+        ball = mesh.facets_satisfying(lambda p: (np.linalg.norm(p, axis=0) > lo - 1e-9)
+                                      & (np.linalg.norm(p, axis=0) < hi + 1e-9), boundaries_only=True)
+        return RodMesh(mesh, self.parts, np.concatenate([self.part_index, self.part_index]),
+                       np.concatenate([self.tube_axis, self.tube_axis * flip]), flange, ball, self.size_mm,
+                       self.order, self.min_quality, self.sha256 + "-mirrored", None,
+                       dict(self.stats, half=False, mirrored_from_half=True))
 
     def elements_of(self, part: Part) -> np.ndarray:
         """Element indices of ``part``."""

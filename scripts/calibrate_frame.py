@@ -60,8 +60,8 @@ def solve_references(missing_only: bool = False) -> dict:
     for name in CALIBRATION_SET + VALIDATION_SET + list(FAMILY_OFF_GRID):
         if name in out:
             continue
-        comp, res = solid_compliance(design(name), lambda d, h, g: mesh_rod(d, size_mm=h, grading=g),
-                                     error_estimate=False)
+        comp, res = solid_compliance(design(name), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
+                                     error_estimate=False, symmetry=False)
         out[name] = {"C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs,
                      "size_mm": comp.provenance["mesh"]["size_mm"]}
         print(name, res.dofs, np.diag(comp.C_F), flush=True)

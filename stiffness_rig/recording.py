@@ -99,8 +99,8 @@ def _float(cell: str, path, line: int, col: str, allow_empty: bool = False) -> f
 
 def _int(cell: str, path, line: int, col: str) -> int:
     v = _float(cell, path, line, col)
-    if v != int(v) or v < 0:
-        raise RigError(f"expected a non-negative integer, got {cell!r}", path=path, line=line, key=col)
+    if v != int(v) or v < 0 or v > 2**31 - 1:
+        raise RigError(f"expected a non-negative integer below 2^31, got {cell!r}", path=path, line=line, key=col)
     return int(v)
 
 

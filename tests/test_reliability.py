@@ -53,7 +53,7 @@ def test_extreme_bends_solve_with_an_error_estimate(gamma):
     pytest.importorskip("gmsh")
     from geometry import mesh_rod
     d = _design(gamma_deg=gamma, L1_mm=400.0, L2_mm=400.0, bend={"radius_mm": 30.0})
-    comp, res = solid_compliance(d, lambda dd, h, g: mesh_rod(dd, size_mm=h, grading=g), size_mm=8.0,
+    comp, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half), size_mm=8.0,
                                  error_estimate=True)
     err = comp.provenance["discretisation_error"]
     assert np.all(np.isfinite(comp.C_F)) and 0 < err["max_relative_C_F"] < 0.05

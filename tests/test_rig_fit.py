@@ -84,6 +84,7 @@ BAD = [
     ("wrong cell count", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,1.0"], 6, None, "cells"),
     ("negative mass", HEADER, GOOD[:2] + ["1.0,2,1,load,y,-0.5,,1.0,0.0"], 6, "mass_kg", ">= 0"),
     ("nan", HEADER, GOOD[:2] + ["1.0,2,1,load,y,nan,,1.0,0.0"], 6, "mass_kg", "finite"),
+    ("huge step", HEADER, GOOD[:2] + ["1.0,1e308,1,load,y,0.5,,1.0,0.0"], 6, "step", "below 2^31"),
     ("time backwards", HEADER, GOOD[:2] + ["0.05,2,1,load,y,0.5,,1.0,0.0"], 6, "time_s", "backwards"),
     ("no format", HEADER.replace("# format: rodlab.rig/1\n", ""), GOOD, 1, "format", "format"),
 ]

@@ -38,8 +38,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
         from .cmd_geometry import require_cad
         geometry = require_cad()
 
-        def mesher(d, h, grading):
-            return geometry.mesh_rod(d, size_mm=h, grading=grading)
+        def mesher(d, h, grading, half):
+            return geometry.mesh_rod(d, size_mm=h, grading=grading, half=half)
         comp, res = solid_compliance(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
                                      keep_displacements=bool(args.png))
         prov = comp.provenance

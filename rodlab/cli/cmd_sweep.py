@@ -93,5 +93,5 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def _mesh(mesh_rod, design, size_mm, grading):
-    return mesh_rod(design, size_mm=size_mm, grading=grading)
+def _mesh(mesh_rod, design, size_mm, grading, half):
+    return mesh_rod(design, size_mm=size_mm, grading=grading, half=half)

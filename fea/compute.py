@@ -28,8 +28,9 @@ log = logging.getLogger(__name__)
 
 #: Observed convergence order of the tip compliance on curved-P2 rod meshes (rod 1#: 3.0-3.5).
 RICHARDSON_ORDER = 3.0
-#: Element size at the section changes as a fraction of the size, and growth per mm of distance.
-DEFAULT_GRADING = (0.4, 0.3)
+#: Element size at the section changes in the tubes as a fraction of the size, growth per mm of distance, and
+#: the bend's size as a fraction of the size (see ``geometry.mesh_rod``).
+DEFAULT_GRADING = (0.3, 0.3, 0.7)
 
 
 class FeaModel(str, Enum):
@@ -50,12 +51,13 @@ def default_solid_size_mm(design: RodDesign) -> float:
 MAX_DOFS = 1.5e6
 
 
-def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING) -> float:
-    """DOFs of the curved-P2 mesh, estimated from the parts' volume (empirical, within ~30 % on rods 1#-6#)."""
+def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, half: bool = True) -> float:
+    """DOFs of the curved-P2 mesh, estimated from the parts' volume (empirical: within ~15 % on rods 1#-6# at
+    the default grading, ~22 vol / h^3 for a uniform half mesh); the whole rod has twice as many."""
     from rodlab.massprops import part_mass_properties
     vol = sum(m.mass_kg / (design.material_of(p).density_kg_m3 * 1e-9) for p, m in part_mass_properties(design).items())
-    h = size_mm * (grading[0] if grading else 1.0)
-    return 13.0 * vol / h ** 3 * (1.0 if grading else 4.8)
+    per_volume = 117.0 if grading else 21.6
+    return per_volume * vol / size_mm ** 3 * (1.0 if half else 2.0)
 
 
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
@@ -72,7 +74,7 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
     if not (np.isfinite(h) and h > 0):
         raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
-    est = estimated_dofs(design, h, grading)
+    est = estimated_dofs(design, h, grading, symmetry)
     if est > MAX_DOFS:
         raise FeaError(f"the solid model of {design.name!r} at size {h:g} mm would need ~{est / 1e6:.1f} M DOFs "
                        f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "

@@ -175,8 +175,8 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     Cg = t[:, 3:]
     defect = float(np.abs(CF - CF.T).max() / np.abs(CF).max())
     timings["total"] = time.perf_counter() - t0
-    log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, N, " (half mesh, two solves)" if half else "", solver.backend,
-             ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
+    log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, N, " (half mesh, two solves)" if half else "",
+             solver.backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return SolidResult(CF, Cg, defect, N, mass, timings, solver.backend, theta,
                        U if keep_displacements else None, rod_mesh)
 

@@ -58,7 +58,8 @@ class RodMesh:
     def mirrored(self) -> "RodMesh":
         """The whole rod from a half mesh: the half and its mirror image about ``y_T = 0``, conforming on the
         plane (its nodes shared). Elements ``0..ne-1`` are the half's, ``ne..2ne-1`` their images in the same
-        order and local node order (mirror images are negatively oriented; skfem integrates with |det J|)."""
+        order, with local vertices 1 and 2 (and their edges) swapped so that every element stays positively
+        oriented (CalculiX and VTK reject inverted tetrahedra)."""
         if not self.is_half:
             raise ValueError("mirrored() needs a half mesh (symmetry_facets is None: this is a whole rod)")
         from skfem import Basis, MeshTet1, MeshTet2
@@ -73,7 +74,8 @@ class RodMesh:
         off = np.nonzero(~on_plane)[0]
         image[off] = x.shape[1] + np.arange(off.size)
         xm = np.concatenate([x, x[:, off] * np.array([[1.0], [-1.0], [1.0]])], axis=1)
-        tm = np.concatenate([t, image[t]], axis=1)
+        swap = [0, 2, 1, 3, 6, 5, 4, 7, 9, 8] if t.shape[0] == 10 else [0, 2, 1, 3]   # edges 01 12 02 03 13 23
+        tm = np.concatenate([t, image[t][swap]], axis=1)
         mesh = (MeshTet2 if self.order == 2 else MeshTet1)(xm, tm)
         flip = np.array([1.0, -1.0, 1.0])
         z0 = float(self.mesh.p[2, self.mesh.facets[:, self.flange_facets]].mean())

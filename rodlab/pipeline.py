@@ -85,7 +85,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
             import geometry
             from fea import solid_compliance
             from fea.plot import render_deformed
-            fea, res = solid_compliance(design, lambda d, h, g, half: geometry.mesh_rod(d, size_mm=h, grading=g, half=half),
+            fea, res = solid_compliance(design,
+                                        lambda d, h, g, half: geometry.mesh_rod(d, size_mm=h, grading=g, half=half),
                                         error_estimate=False, keep_displacements=True)
             U = res.displacements.copy()
             U[:, 5] *= -1

@@ -122,6 +122,9 @@ def test_half_model_equals_mirrored_whole():
     assert np.abs(half.mesh.p[1]).min() == 0.0 and half.mesh.p[1].min() > -1e-9
     whole = half.mirrored()
     assert not whole.is_half and whole.mesh.p.shape[1] < 2 * half.mesh.p.shape[1]   # plane nodes shared
+    from fea.assembly import scalar_basis
+    b = scalar_basis(whole.mesh)
+    assert (b.mapping.detDF(b.X) > 0).all()                # images re-ordered: no inverted element
     rh = solve_compliance(d, half, keep_displacements=True)
     rw = solve_compliance(d, whole, keep_displacements=True)
     assert rh.mass_kg == pytest.approx(rw.mass_kg, rel=1e-12)
@@ -162,3 +165,9 @@ def test_cli_fea_models(tmp_path, capsys):
     data = json.loads(out.read_text())
     assert data["method"] == "fea" and data["provenance"]["model"] == "solid" and png.stat().st_size > 10_000
     assert main(["fea", "rod5", "--model", "frame", "--size", "3", "-o", str(out)]) == 2
+    # the whole rod (--no-symmetry) and the half model agree to the discretisation (their meshes differ)
+    whole = tmp_path / "whole.json"
+    assert main(["fea", "rod5", "-o", str(whole), "--size", "6", "--no-error-estimate", "--no-symmetry"]) == 0
+    dw = json.loads(whole.read_text())
+    assert dw["provenance"]["symmetry"] == "whole mesh" and "half" in data["provenance"]["symmetry"]
+    np.testing.assert_allclose(np.diag(dw["C_F_mm_per_N"]), np.diag(data["C_F_mm_per_N"]), rtol=0.005)

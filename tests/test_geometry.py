@@ -132,3 +132,20 @@ def test_first_order_mesh_and_bad_size():
     assert rm.mesh.t.shape[0] == 4 and rm.min_quality > 0
     with pytest.raises(GeometryError, match="size"):
         mesh_rod(d, size_mm=-1.0)
+
+
+def test_grading_refines_the_tubes_not_the_holders():
+    """Graded mesh: fine at the section changes inside the tubes, the bend at most bend_factor * size, parts
+    away from the tubes at the size; bad grading tuples are refused naming the key."""
+    d = resolve_design("rod1")
+    uni = mesh_rod(d, size_mm=8.0, half=True)
+    grad = mesh_rod(d, size_mm=8.0, grading=(0.4, 0.3, 0.6), half=True)
+    n = lambda rm, p: rm.elements_of(p).size  # noqa: E731
+    for p in (Part.PIPE_I, Part.PIPE_II):
+        assert n(grad, p) > 1.2 * n(uni, p), p
+    assert n(grad, Part.BEND) > 1.8 * n(uni, Part.BEND)                 # graded and at most 0.6 x size
+    assert n(grad, Part.BALL) < 1.1 * n(uni, Part.BALL)                 # no face shared with a tube: size
+    for bad in [(0.0, 0.3), (0.4,), (0.4, 0.3, 1.5), ("a", 0.3)]:
+        with pytest.raises(GeometryError) as ei:
+            mesh_rod(d, size_mm=8.0, grading=bad)
+        assert ei.value.key == "grading"

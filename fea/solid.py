@@ -8,12 +8,11 @@
 - Ball-centre displacement: a least-squares rigid-body fit ``u = t + theta x (x - 0)`` of the ball's
   nodes ({T} origin = ball centre), ``t`` is the centre's displacement.
 - C_g: self-weight of every part, 1 g0 along x, y, z of {T}.
-- One factorisation serves all six load cases.
+- One factorisation serves all six load cases (one per symmetry class on a half mesh, below).
 - A half mesh (``RodMesh.is_half``: ``y_T >= 0`` of a rod mirror-symmetric about its bend plane) is solved as
   two half-size problems sharing one ordering: loads in the plane (F_x, F_z, g_x, g_z) with ``u_y = 0`` on the
   plane, loads across it (F_y, g_y) with ``u_x = u_z = 0`` there. Same answer as the mirrored whole mesh
-  (tested to 1e-9), about a third of the factorisation work: a slender rod's fill grows with the square of
-  its section's DOFs.
+  (~5e-9 relative, tested to 1e-7) in about half the solve time of the whole mesh (rod 1#: 5.2 s vs 9.9 s).
 """
 from __future__ import annotations
 

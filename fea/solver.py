@@ -14,7 +14,7 @@ import logging
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["factorize", "available_backend", "PatternSolver", "hold_dofs"]
+__all__ = ["available_backend", "PatternSolver", "hold_dofs"]
 
 log = logging.getLogger(__name__)
 
@@ -32,17 +32,6 @@ def _superlu(Kc: sp.csc_matrix):
     from scipy.sparse.linalg import splu
     lu = splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
     return lambda B: lu.solve(np.asarray(B))
-
-
-def factorize(K: sp.spmatrix, backend: str | None = None):
-    """Factorise an SPD matrix; return ``(solve, backend)`` where ``solve(B)`` takes shape (n,) or (n, k)."""
-    backend = backend or available_backend()
-    Kc = sp.csc_matrix(K)
-    if backend == "cholmod":
-        from sksparse.cholmod import cholesky
-        f = cholesky(Kc)
-        return (lambda B: f(np.asarray(B))), backend
-    return _superlu(Kc), "superlu"
 
 
 def hold_dofs(K: sp.csc_matrix, held: np.ndarray) -> sp.csc_matrix:

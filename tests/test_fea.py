@@ -138,6 +138,21 @@ def test_half_model_equals_mirrored_whole():
 
 
 @SOLID
+def test_superlu_fallback_matches():
+    """The pure-pip fallback (SciPy SuperLU) solves the half model to the same C_F as CHOLMOD."""
+    from fea import solve_compliance
+    from fea.solver import available_backend
+    pytest.importorskip("gmsh")
+    from geometry import mesh_rod
+    d = resolve_design("rod5")
+    rm = mesh_rod(d, size_mm=12.0, half=True)
+    slu = solve_compliance(d, rm, backend="superlu")
+    assert slu.backend == "superlu" and slu.symmetry_defect < 1e-6
+    if available_backend() == "cholmod":
+        np.testing.assert_allclose(slu.C_F, solve_compliance(d, rm).C_F, atol=1e-9 * np.abs(slu.C_F).max())
+
+
+@SOLID
 def test_calculix_agrees(tmp_path):
     from fea import solve_compliance
     from fea.calculix import ccx_available, run_ccx_compliance

@@ -186,7 +186,7 @@ def mirror_displacements(rod_mesh, U: np.ndarray, whole) -> np.ndarray:
     is symmetric or antisymmetric about ``y_T = 0``."""
     from scipy.spatial import cKDTree
 
-    xh, xw = scalar_basis(rod_mesh.mesh).doflocs, scalar_basis(whole.mesh).doflocs
+    xh, xw = scalar_basis(rod_mesh.mesh, intorder=1).doflocs, scalar_basis(whole.mesh, intorder=1).doflocs
     dist, src = cKDTree(xh.T).query((xw * np.array([[1.0], [-1.0], [1.0]]) ** (xw[1] < 0)).T)
     if dist.max() > 1e-6 * np.ptp(xh).max():
         raise FeaError("the whole mesh is not the mirror image of the half mesh", key="whole")

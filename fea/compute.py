@@ -7,6 +7,8 @@ the mesh statistics, the Maxwell-Betti symmetry defect of C_F and the solver use
 """
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import logging
 import time
 from enum import Enum
@@ -123,10 +125,10 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
         from .frame import CALIBRATION
         cal = calibration or CALIBRATION
         k = asme_bend_flexibility(design, cal)
-        CF, Cg = frame_compliance(design, k, cal)
+        CF, Cg = frame_compliance(design, cal=cal)
         return RodCompliance.from_design(design, CF, Cg, Method.FEA, {
             "generator": "rodlab beam frame (Timoshenko, unit-load method)", "model": "frame",
-            "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane},
-            "calibration": {"sleeve_end": cal.sleeve_end, "bend_scale_in": cal.bend_scale_in,
-                            "bend_scale_out": cal.bend_scale_out, "family": calibration is not None}})
+            "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane,
+                                 "applies_to": "the arc between its restrained ends"},
+            "calibration": dict(asdict(cal), family=calibration is not None)})
     return calc_rod_compliance(design)

@@ -7,16 +7,22 @@ pipe-bend flexibility factors (ovalisation), the ball as the tip's rigid mass. B
 statically determinate its tip compliance follows exactly from the unit-load method along the centreline
 (:func:`rodlab.calc.unit_load_compliance`): no element discretisation error, a few ms per design.
 
-Two effects that beam theory misses are modelled and calibrated once against the solid model
-(``scripts/calibrate_frame.py``, data in ``fea/data/solid_reference.json``):
+Three effects that beam theory misses are modelled from their mechanics and their constants calibrated once
+against the solid model (``scripts/calibrate_frame.py``, data in ``fea/data/solid_reference.json``):
 
-- load transfer into a bonded sleeve or plug (shear lag): near each end of a sleeve that is not at the
-  clamp, the sleeve is not yet carrying its share of the bending; the frame treats
-  ``sleeve_end * sqrt(t_tube * t_sleeve) * sqrt(E / G / 2.6)`` of it (E, G of the tube) as absent there for
-  bending, shear and tension. Torsion passes into the sleeve at once (calibrating a separate torsion zone
-  gave ~0);
-- pipe-bend flexibility: ASME B31.3 ``k = 1.65 / h`` (``h = t R / r_m^2``), scaled by ``bend_scale``
-  for the restraint of the rings at both tangent points, ``k >= 1``, for in- and out-of-plane bending.
+- load transfer between a tube and a bonded sleeve or plug (shear lag): the axial stresses pass from one
+  wall into the other through the walls' through-thickness shear, decaying as ``exp(-lambda x)`` with
+  ``lambda^2 = (1 / (t1 / 3 G1 + t2 / 3 G2)) (1 / E1 t1 + 1 / E2 t2)`` (E axial, G the transverse shear
+  modulus of each wall: G13 for bending and tension, G23 for torsion). The frame replaces the decay by
+  a zone ``c / lambda`` at each free end of the composite in which the wall that ends there carries mass
+  but no stiffness (the sleeve where the sleeve ends, the tube where the tube ends; none where a
+  sleeve continues into the next one or at the clamp); exact for ``c = 1`` in 1-D shear-lag theory;
+- the same for torsion (G axial in place of E, G23 through the thickness), its own constant;
+- pipe-bend flexibility (ovalisation): ``k(h)`` (``h = t R / r_m^2``; von Karman / ASME B31.3
+  :func:`bend_flexibility_factor`), scaled, over the
+  middle of the arc only: the rings and tubes at the tangent points hold the section round over a zone of
+  ``bend_end r_m rho^bend_restraint`` at each end, with ``rho`` the hoop-bending stiffness of ring plus
+  tube over that of the bend wall (``(E_ring t_ring^3 + E_t,tube t_tube^3) / E_t,bend t_bend^3``).
 """
 from __future__ import annotations
 
@@ -29,9 +35,13 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.layout import Segment, SegmentKind, layout
 from rodlab.massprops import ball_mass_properties
+from rodlab.materials import Material
 
-__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "asme_bend_flexibility", "frame_compliance",
-           "frame_segments", "calibrate_frame", "frame_errors"]
+from .elasticity import NU23_DEFAULT
+
+__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "FAMILY_FIT", "asme_bend_flexibility",
+           "bend_flexibility_factor", "shear_lag_mm", "frame_compliance", "frame_segments", "calibrate_frame",
+           "frame_errors"]
 
 _SLEEVES = (Part.PIPE_HOLDER, Part.RING_1, Part.RING_2, Part.BALL_HOLDER)
 
@@ -54,11 +64,13 @@ class BendFlexibility:
 class FrameCalibration:
     """Calibrated constants of the frame model (dimensionless).
 
-    sleeve_end : ineffective length at each free end of a sleeve / plug, in units of
-        sqrt(t_tube t_sleeve) sqrt(E / G / 2.6) (shear-lag scaling)
-    bend_scale_in / _out : multiplier on the ASME flexibility factor (restraint by the rings)
-    shear / torsion : multipliers on the Timoshenko shear and the torsion flexibility (warping restraint at the
-        clamp and sleeves, shear coefficient of an anisotropic tube)
+    sleeve_end : ineffective zone at each free end of a ring or plug, in units of the shear-lag length 1 / lambda
+    holder_end : the same at the free end of the pipe holder (thick, clamped flange adapter)
+    torsion_end : the same for torsion, in units of the torsional shear-lag length
+    bend_scale_in / _out : multipliers on the ASME flexibility factor in the arc's middle (in-/out-of-plane)
+    bend_end : zone at each end of the arc held round by the rings, in units of r_m rho^bend_restraint
+    bend_restraint : exponent of the restraint ratio rho (hoop stiffness of ring + tube over the bend wall's)
+    shear / torsion : multipliers on the Timoshenko shear and the torsion flexibility (1 = theory)
     """
 
     sleeve_end: float = 0.0
@@ -66,64 +78,161 @@ class FrameCalibration:
     bend_scale_out: float = 1.0
     shear: float = 1.0
     torsion: float = 1.0
+    holder_end: float = 0.0
+    torsion_end: float = 0.0
+    bend_end: float = 0.0
+    bend_restraint: float = 0.0
 
 
-#: Global default, fitted against the solid model on rods 1#, 4# and two off-grid designs
-#: (scripts/calibrate_frame.py); errors on all eleven reference designs in docs/fea.md.
-CALIBRATION = FrameCalibration(sleeve_end=0.642, bend_scale_in=0.759, bend_scale_out=0.848)
+#: Global default, fitted against the solid model on 18 designs (the six paper rods, off-grid designs of
+#: other materials, sections, bends and parts; scripts/calibrate_frame.py); errors in docs/fea.md.
+CALIBRATION = FrameCalibration(sleeve_end=1.622, bend_scale_in=0.891, bend_scale_out=0.844, holder_end=0.914,
+                               torsion_end=0.525, bend_end=0.696, bend_restraint=0.232)
+
+
+def _g23(m: Material) -> float:
+    """Shear modulus across the tube axis [GPa] (transverse plane of a transversely isotropic wall)."""
+    return m.G_axial_GPa if m.is_isotropic else m.E_t_GPa / (2.0 * (1.0 + NU23_DEFAULT))
+
+
+def shear_lag_mm(tube: Material, t_tube: float, sleeve: Material, t_sleeve: float,
+                 torsion: bool = False) -> float:
+    """Shear-lag length 1 / lambda [mm] of load transfer between two bonded concentric walls (see module doc)."""
+    if torsion:
+        E1, E2, G1, G2 = tube.G_axial_GPa, sleeve.G_axial_GPa, _g23(tube), _g23(sleeve)
+    else:
+        E1, E2, G1, G2 = tube.E_GPa, sleeve.E_GPa, tube.G_axial_GPa, sleeve.G_axial_GPa
+    lam2 = (1.0 / E1 / t_tube + 1.0 / E2 / t_sleeve) / (t_tube / (3.0 * G1) + t_sleeve / (3.0 * G2))
+    return float(1.0 / np.sqrt(lam2))
+
+
+def bend_flexibility_factor(h: float) -> float:
+    """In-plane flexibility factor k [-] of a long, unrestrained pipe bend of characteristic h = t R / r_m^2.
+
+    The larger of von Karman's second approximation ``(105 + 4136 h^2 + 4800 h^4) / (3 + 536 h^2 + 4800 h^4)``
+    (accurate for h >~ 0.3, where ASME's ``1.65 / h`` falls to 1 too early: h = 1.2 gives 1.49, ASME 1.375)
+    and ASME B31.3 ``1.65 / h`` (its small-h asymptote); at least 1.
+    """
+    h2 = h * h
+    karman = (105.0 + 4136.0 * h2 + 4800.0 * h2 * h2) / (3.0 + 536.0 * h2 + 4800.0 * h2 * h2)
+    return max(1.0, 1.65 / h, karman)
 
 
 def asme_bend_flexibility(design: RodDesign, cal: FrameCalibration = CALIBRATION) -> BendFlexibility:
-    """ASME B31.3 flexibility factors of the design's bend, with the calibrated end restraint (1 if straight)."""
+    """Pipe-bend flexibility factors of the design's bend (:func:`bend_flexibility_factor`) scaled by the
+    calibration: the factors of the arc between its restrained ends (1 if straight; ``FrameCalibration()``
+    gives the plain factor)."""
     if not design.has_bend:
         return BendFlexibility(1.0, 1.0)
     b = design.bend
     t = b.wall_mm
     r_m = (b.outer_diameter_mm - t) / 2.0
-    k = 1.65 / (t * b.radius_mm / r_m ** 2)
+    k = bend_flexibility_factor(t * b.radius_mm / r_m ** 2)
     return BendFlexibility(max(1.0, cal.bend_scale_in * k), max(1.0, cal.bend_scale_out * k))
 
 
+def _kind(segs: list[Segment], j: int) -> str:
+    """What a neighbour segment holds: 'none' (beyond the clamp), 'both', 'base' (tube only), 'sleeve'."""
+    if j < 0 or j >= len(segs):
+        return "none"
+    has_sleeve = any(l.part in _SLEEVES for l in segs[j].layers)
+    has_base = any(l.part not in _SLEEVES for l in segs[j].layers)
+    return "both" if has_sleeve and has_base else ("base" if has_base else "sleeve")
+
+
+def _thickness(layers) -> float:
+    return max((l.d_out_mm - l.d_in_mm) / 2.0 for l in layers)
+
+
+def _split(seg: Segment, cuts, piece) -> list[Segment]:
+    """``seg`` cut at the local arc lengths ``cuts``; ``piece(a, b)`` gives each piece's replaced fields."""
+    out = []
+    cuts = sorted(set([0.0, seg.length_mm] + [c for c in cuts if 0.0 < c < seg.length_mm]))
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        if b - a > 1e-9:
+            out.append(replace(seg, s0_mm=seg.s0_mm + a, length_mm=b - a, start_F=seg.point([a])[0],
+                               direction=seg.tangent([a])[0], **piece(a, b)))
+    return out
+
+
+def _sleeve_pieces(segs: list[Segment], k: int, cal: FrameCalibration) -> list[Segment]:
+    seg = segs[k]
+    sleeve = [l for l in seg.layers if l.part in _SLEEVES]
+    base = [l for l in seg.layers if l.part not in _SLEEVES]
+    holder = any(l.part is Part.PIPE_HOLDER for l in sleeve)
+    c = cal.holder_end if holder else cal.sleeve_end
+    if not sleeve or not base or (c <= 0 and cal.torsion_end <= 0):
+        return [seg]
+    t1, t2 = _thickness(base), _thickness(sleeve)
+    m1 = base[0].material
+    m2 = max(sleeve, key=lambda l: l.d_out_mm - l.d_in_mm).material
+    L = seg.length_mm
+    ell = min(c * shear_lag_mm(m1, t1, m2, t2), 0.45 * L)
+    ell_t = min(cal.torsion_end * shear_lag_mm(m1, t1, m2, t2, torsion=True), 0.45 * L)
+    # the wall that ends at a free end of the composite is ineffective there: the sleeve where the next piece
+    # is bare tube or the bend, the tube where it ends inside the sleeve (the plug's stud); none where the
+    # composite continues or at the clamp
+    ends = {"base": tuple(l.part for l in sleeve), "sleeve": tuple(l.part for l in base)}
+    s0, s1 = ends.get(_kind(segs, k - 1)), ends.get(_kind(segs, k + 1))
+
+    def piece(a, b):
+        m = 0.5 * (a + b)
+
+        def slack(length):
+            return s1 if (s1 and m > L - length) else (s0 if (s0 and m < length) else ())
+        return {"slack": slack(ell), "slack_torsion": slack(ell_t)}
+    cuts = ([ell, ell_t] if s0 else []) + ([L - ell, L - ell_t] if s1 else [])
+    return _split(seg, cuts, piece) if cuts else [seg]
+
+
+def _restraint(design: RodDesign, tube) -> float:
+    """Hoop-bending stiffness of ring + tube over the bend wall's at one end of the bend [-]."""
+    b, r = design.bend, design.rings
+    ring = r.material.E_t_GPa * ((r.outer_diameter_mm - tube.outer_diameter_mm) / 2.0) ** 3 if r.present else 0.0
+    return (ring + tube.material.E_t_GPa * tube.wall_mm ** 3) / (b.material.E_t_GPa * b.wall_mm ** 3)
+
+
+def _bend_pieces(design: RodDesign, seg: Segment, cal: FrameCalibration) -> list[Segment]:
+    k = asme_bend_flexibility(design, FrameCalibration())          # unscaled ASME k
+    k_in, k_out = max(1.0, cal.bend_scale_in * k.in_plane), max(1.0, cal.bend_scale_out * k.out_of_plane)
+    b = design.bend
+    r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0
+    L = seg.length_mm
+    e0 = min(cal.bend_end * r_m * _restraint(design, design.pipe_I) ** cal.bend_restraint, 0.5 * L)
+    e1 = min(cal.bend_end * r_m * _restraint(design, design.pipe_II) ** cal.bend_restraint, 0.5 * L)
+
+    def piece(a, c):
+        middle = e0 < 0.5 * (a + c) < L - e1
+        return {"bend_flex": (k_in, k_out) if middle else (1.0, 1.0)}
+    return _split(seg, [e0, L - e1], piece)
+
+
 def frame_segments(design: RodDesign, cal: FrameCalibration = CALIBRATION) -> list[Segment]:
-    """The layout with the sleeves' ineffective end zones split off as tube-only segments."""
+    """The layout with the sleeves' load-transfer zones and the bend's restrained ends split off, each piece
+    carrying its ineffective parts (``slack``, ``slack_torsion``) and arc flexibility (``bend_flex``)."""
     segs = layout(design)
-    if cal.sleeve_end <= 0:
-        return segs
     out: list[Segment] = []
     for k, seg in enumerate(segs):
-        sleeve = [l for l in seg.layers if l.part in _SLEEVES]
-        base = tuple(l for l in seg.layers if l.part not in _SLEEVES)
-        if seg.kind is not SegmentKind.LINE or not sleeve or not base:
-            out.append(seg)
-            continue
-        # shear lag: the bending load passes from the tube into the sleeve over a length that grows with the
-        # walls' thicknesses and with sqrt(E / G) of the tube (long in carbon); torsion transfers at once
-        mat = base[0].material
-        t_tube = max((l.d_out_mm - l.d_in_mm) / 2.0 for l in base)
-        t_sleeve = max((l.d_out_mm - l.d_in_mm) / 2.0 for l in sleeve)
-        lag = np.sqrt(mat.E_GPa / mat.G_axial_GPa / 2.6)
-        ell = min(cal.sleeve_end * np.sqrt(t_tube * t_sleeve) * lag, 0.45 * seg.length_mm)
-        at_clamp = k == 0
-        slack = tuple(l.part for l in sleeve)
-        L = seg.length_mm
-        cuts = [0.0] + ([] if at_clamp else [ell]) + [L - ell, L]
-        for a, b in zip(cuts[:-1], cuts[1:]):
-            if b - a > 1e-9:
-                m = 0.5 * (a + b)
-                zone = m > L - ell or (not at_clamp and m < ell)
-                out.append(replace(seg, s0_mm=seg.s0_mm + a, length_mm=b - a, start_F=seg.point([a])[0],
-                                   slack=slack if zone else (), slack_torsion=()))
+        if seg.kind is SegmentKind.ARC:
+            out.extend(_bend_pieces(design, seg, cal))
+        else:
+            out.extend(_sleeve_pieces(segs, k, cal))
     return out
 
 
 def frame_compliance(design: RodDesign, bend: BendFlexibility | None = None,
                      cal: FrameCalibration = CALIBRATION) -> tuple[np.ndarray, np.ndarray]:
-    """Frame-model C_F [mm/N] and C_g [mm/g0] in {T}, shape=(3, 3) each."""
-    bend = asme_bend_flexibility(design, cal) if bend is None else bend
+    """Frame-model C_F [mm/N] and C_g [mm/g0] in {T}, shape=(3, 3) each.
+
+    ``bend``: factors for the whole arc instead of the calibrated ones (restrained ends and middle).
+    """
+    segs = frame_segments(design, cal)
+    if bend is not None:
+        segs = [replace(s, bend_flex=(bend.in_plane, bend.out_of_plane)) if s.kind is SegmentKind.ARC else s
+                for s in segs]
     ball = ball_mass_properties(design)
-    CF, Cg = unit_load_compliance(frame_segments(design, cal), design.tool_mm, ball.mass_kg, True, True,
-                                  ball.com_T_mm + design.tool_mm, (bend.in_plane, bend.out_of_plane),
-                                  cal.shear, cal.torsion)
+    CF, Cg = unit_load_compliance(segs, design.tool_mm, ball.mass_kg, True, True,
+                                  ball.com_T_mm + design.tool_mm, (1.0, 1.0), cal.shear, cal.torsion)
     return 0.5 * (CF + CF.T), Cg
 
 
@@ -138,21 +247,31 @@ def frame_errors(design: RodDesign, C_F_solid, C_g_solid, cal: FrameCalibration 
     return np.concatenate(errs)
 
 
-def calibrate_frame(designs: list[RodDesign], C_F_solid: list, C_g_solid: list) -> FrameCalibration:
-    """Fit the sleeve transfer length and the bend factors to solid results (one or more designs).
+#: the constants a per-family calibration refits (the others keep their global values)
+FAMILY_FIT = ("bend_scale_in", "bend_scale_out")
+
+
+def calibrate_frame(designs: list[RodDesign], C_F_solid: list, C_g_solid: list,
+                    names: tuple[str, ...] = FAMILY_FIT, start: FrameCalibration = CALIBRATION) -> FrameCalibration:
+    """Fit the frame constants ``names`` to solid results (one or more designs), the others as in ``start``.
 
     Calibrating on one design of a family (same tubes, bend, sleeves) and sweeping its L1 / L2 keeps the
-    local physics fixed while the frame moves the lever arms (rods 4# -> 5#, 6#: within 0.21 %).
+    local physics fixed while the frame moves the lever arms (docs/fea.md: rods 4# -> 5#, 6#).
     """
     from scipy.optimize import least_squares
 
+    def cal_of(x):
+        return replace(start, **dict(zip(names, (float(v) for v in x))))
+
     def resid(x):
-        cal = FrameCalibration(*x)
+        cal = cal_of(x)
         return np.concatenate([frame_errors(d, f, g, cal) for d, f, g in zip(designs, C_F_solid, C_g_solid)])
+    x0 = np.array([getattr(start, n) for n in names], dtype=float)
+    hi = np.array([3.0 if n.startswith("bend_scale") else 10.0 for n in names])
+    lo = np.array([0.1 if n.startswith("bend_scale") else 0.0 for n in names])
     best = None
-    for x0 in ([CALIBRATION.sleeve_end, CALIBRATION.bend_scale_in, CALIBRATION.bend_scale_out],
-               [0.3, 0.8, 0.5], [0.1, 1.0, 1.0], [0.5, 0.6, 0.8]):   # kinks (k >= 1, clipped zones): multi-start
-        r = least_squares(resid, x0=x0, bounds=([0.0, 0.1, 0.1], [5.0, 3.0, 3.0]), x_scale=[0.1, 0.3, 0.3])
+    for f in (1.0, 0.6, 1.5):         # kinks (k >= 1, clipped zones): multi-start
+        r = least_squares(resid, x0=np.clip(x0 * f, lo, hi), bounds=(lo, hi), x_scale=np.maximum(0.1 * x0, 0.05))
         if best is None or r.cost < best.cost:
             best = r
-    return FrameCalibration(*[float(v) for v in best.x])
+    return cal_of(best.x)

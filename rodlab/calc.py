@@ -71,10 +71,12 @@ def _gauss(n: int):
 
 
 def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces: int = 8):
-    """Quadrature points along all segments: (seg index, local u, weight)."""
+    """Quadrature points along all segments: (seg index, local u, weight); ``arc_pieces`` per 90 deg of arc."""
     idx, u, w = [], [], []
     for k, seg in enumerate(segs):
-        pieces = arc_pieces if seg.kind is SegmentKind.ARC else 1
+        pieces = 1
+        if seg.kind is SegmentKind.ARC:
+            pieces = max(1, int(np.ceil(arc_pieces * (seg.length_mm / seg.radius_mm) / (0.5 * np.pi) - 1e-9)))
         xg, wg = _gauss(n_arc if seg.kind is SegmentKind.ARC else n_line)
         h = seg.length_mm / pieces
         p = np.repeat(np.arange(pieces), xg.size)
@@ -84,29 +86,49 @@ def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces
     return np.concatenate(idx), np.concatenate(u), np.concatenate(w)
 
 
-def _distal_moments(segs, idx, u, tip_mass_kg, tip_com_F):
-    """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point."""
-    xg, wg = _gauss(24)
-    tot_m = np.zeros(len(segs))
-    tot_q = np.zeros((len(segs), 3))
-    for k, seg in enumerate(segs):
-        ww = wg * seg.length_mm * seg.mass_per_mm
-        tot_m[k] = ww.sum()
-        tot_q[k] = ww @ seg.point(xg * seg.length_mm)
+class _Centreline:
+    """All segments' geometry as arrays, for positions, tangents and first moments at many points at once
+    (the same formulas as :class:`Segment`, vectorised over segments)."""
+
+    def __init__(self, segs: list[Segment]):
+        self.start = np.array([s.start_F for s in segs], dtype=float)
+        self.t0 = np.array([s.direction for s in segs], dtype=float)
+        self.n = np.stack([self.t0[:, 2], np.zeros(len(segs)), -self.t0[:, 0]], axis=1)
+        self.arc = np.array([s.kind is SegmentKind.ARC for s in segs])
+        self.R = np.array([s.radius_mm if s.kind is SegmentKind.ARC else 1.0 for s in segs])
+        self.L = np.array([s.length_mm for s in segs])
+
+    def point(self, idx, u):
+        arc, R = self.arc[idx], self.R[idx]
+        a = u / R
+        c_t = np.where(arc, R * np.sin(a), u)
+        c_n = np.where(arc, R * (1.0 - np.cos(a)), 0.0)
+        return self.start[idx] + c_t[:, None] * self.t0[idx] + c_n[:, None] * self.n[idx]
+
+    def tangent(self, idx, u):
+        arc, a = self.arc[idx], u / self.R[idx]
+        return (np.where(arc, np.cos(a), 1.0)[:, None] * self.t0[idx]
+                + np.where(arc, np.sin(a), 0.0)[:, None] * self.n[idx])
+
+    def point_integral(self, idx, u):
+        """``int_u^L point ds`` [mm^2], shape=(n, 3)."""
+        arc, R, L = self.arc[idx], self.R[idx], self.L[idx]
+        span, a, b = L - u, u / R, L / R
+        c_t = np.where(arc, R * R * (np.cos(a) - np.cos(b)), 0.5 * (L * L - u * u))
+        c_n = np.where(arc, R * (span - R * (np.sin(b) - np.sin(a))), 0.0)
+        return span[:, None] * self.start[idx] + c_t[:, None] * self.t0[idx] + c_n[:, None] * self.n[idx]
+
+
+def _distal_moments(segs, cl: _Centreline, idx, u, tip_mass_kg, tip_com_F):
+    """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point (exact)."""
+    mpm = np.array([seg.mass_per_mm for seg in segs])
+    all_k = np.arange(len(segs))
+    tot_m = mpm * cl.L
+    tot_q = cl.point_integral(all_k, np.zeros(len(segs))) * mpm[:, None]
     suf_m = np.concatenate([np.cumsum(tot_m[::-1])[::-1][1:], [0.0]]) + tip_mass_kg
     suf_q = np.concatenate([np.cumsum(tot_q[::-1], axis=0)[::-1][1:], np.zeros((1, 3))]) + tip_mass_kg * tip_com_F
-    W = np.empty(u.size)
-    Q = np.empty((u.size, 3))
-    for k, seg in enumerate(segs):
-        sel = np.nonzero(idx == k)[0]
-        if sel.size == 0:
-            continue
-        span = seg.length_mm - u[sel]                               # (n,)
-        uu = u[sel, None] + xg[None, :] * span[:, None]             # (n, 24)
-        ww = wg[None, :] * span[:, None] * seg.mass_per_mm          # (n, 24)
-        pts = seg.point(uu.ravel()).reshape(sel.size, xg.size, 3)
-        W[sel] = ww.sum(1) + suf_m[k]
-        Q[sel] = np.einsum("nk,nkc->nc", ww, pts) + suf_q[k]
+    W = (cl.L[idx] - u) * mpm[idx] + suf_m[idx]
+    Q = cl.point_integral(idx, u) * mpm[idx, None] + suf_q[idx]
     return W, Q
 
 
@@ -116,26 +138,23 @@ def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: fl
     """C_F and C_g of a cantilever tree of ``segs`` (clamped at the first) by the unit-load method.
 
     tip_F : load point (ball centre) in {F} [mm]; tip_mass_kg / tip_com_F : rigid tip mass and its COM;
-    shear / axial : include Timoshenko shear / axial flexibility; bend_flex : factors on the arcs' bending;
-    shear_factor / torsion_factor : factors on all shear / torsion flexibility (frame-model calibration).
+    shear / axial : include Timoshenko shear / axial flexibility; bend_flex : factors on the arcs' bending
+    (a segment's own ``bend_flex`` overrides it); shear_factor / torsion_factor : factors on all shear /
+    torsion flexibility (frame-model calibration).
     """
     idx, u, w = _quadrature(segs)
-    r = np.empty((u.size, 3))
-    t = np.empty((u.size, 3))
-    for k, seg in enumerate(segs):
-        sel = idx == k
-        r[sel] = seg.point(u[sel])
-        t[sel] = seg.tangent(u[sel])
+    cl = _Centreline(segs)
+    r = cl.point(idx, u)
+    t = cl.tangent(idx, u)
     props = np.array([[s.EI, s.GJ, s.EA, s.kGA] for s in segs])[idx]
     EI, GJ, EA, kGA = props.T
     tt = t[:, :, None] * t[:, None, :]
     eye = np.eye(3)[None]
     # bending flexibility: in-plane (moment about the bend-plane normal y) and out-of-plane factors on arcs
-    arc = np.array([s.kind is SegmentKind.ARC for s in segs])[idx]
     ey = np.array([0.0, 1.0, 0.0])
     n = np.cross(t, ey)
-    k_in = np.where(arc, bend_flex[0], 1.0)
-    k_out = np.where(arc, bend_flex[1], 1.0)
+    flex = np.array([(s.bend_flex or bend_flex) if s.kind is SegmentKind.ARC else (1.0, 1.0) for s in segs])[idx]
+    k_in, k_out = flex[:, 0], flex[:, 1]
     yy = np.broadcast_to(np.outer(ey, ey), tt.shape)
     nn = n[:, :, None] * n[:, None, :]
     Km_inv = (torsion_factor * tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy
@@ -147,7 +166,7 @@ def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: fl
         Kf_inv = Kf_inv + shear_factor * (eye - tt) / kGA[:, None, None]
     Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
     CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
-    W, Q = _distal_moments(segs, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
+    W, Q = _distal_moments(segs, cl, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
     Mg = G0 * _skew(Q - W[:, None] * r)                  # moment of distal weight per unit g0 along e_j
     Ng = G0 * W[:, None, None] * np.eye(3)[None]
     Cg = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mg) + np.einsum("q,qab,qbj->aj", w, Kf_inv, Ng)

@@ -89,6 +89,9 @@ class Segment:
     radius_mm: float = 0.0
     slack: tuple[Part, ...] = ()   #: parts whose mass counts but not their stiffness here (load-transfer zones)
     slack_torsion: tuple[Part, ...] | None = None   #: the same for torsion alone (None: as ``slack``)
+    #: ARC only: factors (in-plane, out-of-plane) on the bending compliance here (pipe-bend ovalisation);
+    #: None = the factors the caller passes for all arcs
+    bend_flex: tuple[float, float] | None = None
 
     def _stiff(self):
         return [l for l in self.layers if l.part not in self.slack]

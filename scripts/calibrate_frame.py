@@ -35,9 +35,60 @@ OFF_GRID = {
     "E": {"L1_mm": 400.0, "L2_mm": 300.0, "gamma_deg": 90.0,
           "tube": {"material": "al_7075", "outer_diameter_mm": 25.0, "wall_mm": 2.5},
           "bend": {"radius_mm": 50.0}, "rings": {"material": "steel_304"}},
+    # added 2026-11-23: thin titanium / steel / aluminium walls, UD and rolled carbon with steel bends, other
+    # angles, rings and holders. F-J fitted; K-O held out (L's error led to the von Karman bend factor);
+    # P-T blind: solved and compared once, after the model and its constants were frozen
+    "F": {"L1_mm": 280.0, "L2_mm": 420.0, "gamma_deg": 100.0,
+          "tube": {"material": "ti_6al4v", "outer_diameter_mm": 22.0, "wall_mm": 1.5},
+          "bend": {"radius_mm": 35.0}},
+    "G": {"L1_mm": 320.0, "L2_mm": 350.0, "gamma_deg": 120.0,
+          "tube": {"material": "cfrp", "outer_diameter_mm": 25.0, "wall_mm": 2.0},
+          "bend": {"material": "steel_304", "radius_mm": 50.0}, "rings": {"length_mm": 30.0}},
+    "H": {"L1_mm": 180.0, "L2_mm": 600.0, "gamma_deg": 80.0,
+          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 20.0, "wall_mm": 1.5},
+          "bend": {"material": "steel_304", "radius_mm": 30.0},
+          "pipe_holder": {"material": "steel_304", "outer_diameter_mm": 40.0}},
+    "I": {"L1_mm": 450.0, "L2_mm": 250.0, "gamma_deg": 150.0,
+          "tube": {"material": "al_6061", "outer_diameter_mm": 30.0, "wall_mm": 3.0},
+          "bend": {"radius_mm": 60.0}},
+    "J": {"L1_mm": 250.0, "L2_mm": 400.0, "gamma_deg": 90.0,
+          "tube": {"material": "steel_304", "outer_diameter_mm": 16.0, "wall_mm": 1.0},
+          "bend": {"radius_mm": 25.0}},
+    "K": {"L1_mm": 260.0, "L2_mm": 520.0, "gamma_deg": 95.0,
+          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 28.0, "wall_mm": 2.0},
+          "bend": {"material": "ti_6al4v", "radius_mm": 45.0}, "rings": {"material": "ti_6al4v", "length_mm": 45.0}},
+    "L": {"L1_mm": 380.0, "L2_mm": 300.0, "gamma_deg": 65.0,
+          "tube": {"material": "steel_304", "outer_diameter_mm": 22.0, "wall_mm": 2.5},
+          "bend": {"radius_mm": 45.0}, "rings": {"material": "al_7075"}},
+    "M": {"L1_mm": 230.0, "L2_mm": 450.0, "gamma_deg": 125.0,
+          "tube": {"material": "cfrp", "outer_diameter_mm": 22.0, "wall_mm": 2.0},
+          "bend": {"material": "al_7075", "radius_mm": 40.0}, "rings": {"material": "al_7075", "length_mm": 35.0}},
+    "N": {"L1_mm": 300.0, "L2_mm": 380.0, "gamma_deg": 90.0,
+          "tube": {"material": "al_6061", "outer_diameter_mm": 20.0, "wall_mm": 1.5},
+          "bend": {"radius_mm": 32.0}},
+    "O": {"L1_mm": 420.0, "L2_mm": 450.0, "gamma_deg": 110.0,
+          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 25.0, "wall_mm": 2.5},
+          "bend": {"material": "steel_304", "radius_mm": 40.0}, "rings": {"material": "steel_304", "length_mm": 40.0}},
+    "P": {"L1_mm": 340.0, "L2_mm": 560.0, "gamma_deg": 100.0,
+          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 30.0, "wall_mm": 2.0},
+          "bend": {"material": "al_7075", "radius_mm": 55.0}, "rings": {"length_mm": 50.0}},
+    "Q": {"L1_mm": 200.0, "L2_mm": 350.0, "gamma_deg": 70.0,
+          "tube": {"material": "ti_6al4v", "outer_diameter_mm": 18.0, "wall_mm": 1.2},
+          "bend": {"radius_mm": 30.0}, "rings": {"material": "ti_6al4v", "length_mm": 30.0}},
+    "R": {"L1_mm": 450.0, "L2_mm": 400.0, "gamma_deg": 140.0,
+          "tube": {"material": "cfrp", "outer_diameter_mm": 25.0, "wall_mm": 1.5},
+          "bend": {"material": "steel_304", "radius_mm": 45.0}, "rings": {"material": "al_7075", "length_mm": 60.0}},
+    "S": {"L1_mm": 280.0, "L2_mm": 480.0, "gamma_deg": 90.0,
+          "tube": {"material": "al_7075", "outer_diameter_mm": 25.0, "wall_mm": 1.5},
+          "bend": {"radius_mm": 40.0}, "rings": {"material": "al_7075"}},
+    "T": {"L1_mm": 320.0, "L2_mm": 420.0, "gamma_deg": 110.0,
+          "tube": {"material": "steel_304", "outer_diameter_mm": 20.0, "wall_mm": 2.0},
+          "bend": {"radius_mm": 35.0}, "rings": {"material": "steel_304", "length_mm": 25.0},
+          "pipe_holder": {"material": "steel_304", "outer_diameter_mm": 34.0, "length_mm": 50.0}},
 }
-CALIBRATION_SET = ["rod1", "rod4", "A", "B"]
-VALIDATION_SET = ["rod2", "rod3", "rod5", "rod6", "C", "D", "E"]
+CALIBRATION_SET = ["rod1", "rod2", "rod3", "rod4", "rod5", "rod6", "A", "B", "C", "D", "E", "F", "G", "H", "I", "J",
+                   "rod1_L1_200_L2_600", "rod4_L1_420_L2_330"]
+VALIDATION_SET = ["K", "L", "M", "N", "O", "P", "Q", "R", "S", "T"]
 #: off-grid members of the paper's two families (same sections, other L1 / L2): per-family calibration
 FAMILY_OFF_GRID = {"rod1_L1_200_L2_600": ("rod1", 200.0, 600.0), "rod4_L1_420_L2_330": ("rod4", 420.0, 330.0)}
 FAMILIES = {"rod1": ["rod2", "rod3", "rod1_L1_200_L2_600"], "rod4": ["rod5", "rod6", "rod4_L1_420_L2_330"]}
@@ -57,7 +108,7 @@ def solve_references(missing_only: bool = False) -> dict:
     from fea import solid_compliance
     from geometry import mesh_rod
     out = json.loads(REF.read_text()) if missing_only and REF.exists() else {}
-    for name in CALIBRATION_SET + VALIDATION_SET + list(FAMILY_OFF_GRID):
+    for name in dict.fromkeys(CALIBRATION_SET + VALIDATION_SET + list(FAMILY_OFF_GRID)):
         if name in out:
             continue
         comp, res = solid_compliance(design(name), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
@@ -74,11 +125,16 @@ def rel_errors(name, ref, cal) -> np.ndarray:
     return frame_errors(design(name), ref["C_F"], ref["C_g"], cal)
 
 
+#: the constants of the global fit (shear and torsion stay at theory, 1)
+GLOBAL_FIT = ("sleeve_end", "holder_end", "torsion_end", "bend_scale_in", "bend_scale_out", "bend_end",
+              "bend_restraint")
+
+
 def fit(refs: dict):
     from fea.frame import calibrate_frame
     names = CALIBRATION_SET
     return calibrate_frame([design(n) for n in names], [refs[n]["C_F"] for n in names],
-                           [refs[n]["C_g"] for n in names])
+                           [refs[n]["C_g"] for n in names], names=GLOBAL_FIT)
 
 
 def main() -> int:
@@ -100,12 +156,14 @@ def main() -> int:
         for n in [base] + others:
             e = rel_errors(n, refs[n], fam)
             print(f"  {n:18s} max |err| {100 * np.abs(e).max():5.2f} %  rms {100 * np.sqrt(np.mean(e ** 2)):5.2f} %")
-    for label, cset in (("uncalibrated (ASME k, fully effective sleeves)", FrameCalibration()), ("in use", CALIBRATION)):
+    for label, cset in (("uncalibrated (ASME k on the whole arc, fully effective sleeves)", FrameCalibration()),
+                        ("in use", CALIBRATION)):
         print(f"-- {label}")
         for n in CALIBRATION_SET + VALIDATION_SET:
             e = rel_errors(n, refs[n], cset)
             tag = "cal" if n in CALIBRATION_SET else "VAL"
-            print(f"  {tag} {n:5s} max |err| {100 * np.abs(e).max():5.2f} %  rms {100 * np.sqrt(np.mean(e ** 2)):5.2f} %")
+            rms = 100 * np.sqrt(np.mean(e ** 2))
+            print(f"  {tag} {n:18s} max |err| {100 * np.abs(e).max():5.2f} %  rms {rms:5.2f} %")
     return 0
 
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from rodlab import G0, calc_compliance, load_design, paper_compliance
+from rodlab import G0, calc_compliance, load_design, paper_compliance, resolve_design
 from rodlab.calc import BendModel
 from rodlab.design_io import design_from_dict
 
@@ -124,3 +124,22 @@ def test_arc_bend_is_softer_in_torsion_than_corner_but_close():
     corner, _ = calc_compliance(d, bend=BendModel.CORNER)
     assert np.all(np.abs(np.diag(arc) / np.diag(corner) - 1) < 0.05)
     assert arc[2, 2] < corner[2, 2]  # the arc shortens the lever of pipe II's moment over the bend
+
+
+def test_vectorised_centreline_matches_segments():
+    """The unit-load integrator's array form of the centreline equals Segment.point / tangent, and its exact
+    first moments equal a fine numerical quadrature of the positions."""
+    from rodlab.calc import _Centreline
+    from rodlab.layout import SegmentKind, layout
+    segs = layout(resolve_design("rod1"))
+    assert any(s.kind is SegmentKind.ARC for s in segs)
+    cl = _Centreline(segs)
+    for k, seg in enumerate(segs):
+        u = np.linspace(0.0, seg.length_mm, 7)
+        idx = np.full(u.size, k)
+        np.testing.assert_allclose(cl.point(idx, u), seg.point(u), atol=1e-9)
+        np.testing.assert_allclose(cl.tangent(idx, u), seg.tangent(u), atol=1e-12)
+        x, w = np.polynomial.legendre.leggauss(40)
+        s = 0.5 * (x + 1.0) * (seg.length_mm - u[2]) + u[2]
+        ref = (0.5 * w * (seg.length_mm - u[2])) @ seg.point(s)
+        np.testing.assert_allclose(cl.point_integral(idx[:1], u[2:3])[0], ref, rtol=1e-10, atol=1e-8)

@@ -8,7 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fea.frame import FrameCalibration, calibrate_frame, frame_errors
+from fea.frame import (FrameCalibration, bend_flexibility_factor, calibrate_frame, frame_errors, frame_segments,
+                       shear_lag_mm)
+from rodlab.enums import Part
+from rodlab.layout import SegmentKind
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -17,18 +20,63 @@ from calibrate_frame import CALIBRATION_SET, FAMILIES, VALIDATION_SET, design  #
 REFS = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
 
 
+#: documented exceptions to the 1.35 % bound of the global default (docs/fea.md): hold-out L's sharp (115 deg),
+#: thick-walled bend makes C_xz a near-cancelling sum (13 % change per 0.1 of the bend factor)
+BOUNDS = {"L": 0.05}
+
+
 @pytest.mark.parametrize("name", CALIBRATION_SET + VALIDATION_SET)
 def test_global_calibration_bounds(name):
-    """Documented accuracy of the default frame model: within 3 % on every significant entry."""
+    """Documented accuracy of the default frame model on every significant entry: the 18 calibration designs
+    within 1.2 %, the held-out and blind ones within 1.3 % (one documented exception)."""
     e = frame_errors(design(name), REFS[name]["C_F"], REFS[name]["C_g"])
-    assert np.abs(e).max() < 0.03, (name, np.abs(e).max())
+    assert np.abs(e).max() < BOUNDS.get(name, 0.0135), (name, np.abs(e).max())
 
 
 def test_calibration_beats_plain_beam_theory():
     plain = FrameCalibration()
     worse = [np.sqrt(np.mean(frame_errors(design(n), REFS[n]["C_F"], REFS[n]["C_g"], plain) ** 2)) for n in REFS]
     better = [np.sqrt(np.mean(frame_errors(design(n), REFS[n]["C_F"], REFS[n]["C_g"]) ** 2)) for n in REFS]
-    assert np.mean(better) < 0.6 * np.mean(worse)
+    assert np.mean(better) < 0.2 * np.mean(worse)
+
+
+def test_shear_lag_length_closed_form():
+    """Two equal isotropic walls: lambda^2 = (3 G / 2 t) (2 / E t) -> 1 / lambda = t sqrt(E / 3 G)."""
+    from rodlab import get_material
+    st = get_material("steel_304")
+    assert shear_lag_mm(st, 2.0, st, 2.0) == pytest.approx(2.0 * np.sqrt(st.E_GPa / 3 / st.G_axial_GPa), rel=1e-12)
+    # torsion: G axial for the membrane, G23 through the thickness (= G for an isotropic wall)
+    assert shear_lag_mm(st, 2.0, st, 2.0, torsion=True) == pytest.approx(2.0 / np.sqrt(3.0), rel=1e-12)
+    # a soft-in-shear carbon wall transfers its load over a longer length than steel
+    cf = get_material("cfrp")
+    assert shear_lag_mm(cf, 2.0, st, 3.0) > 2 * shear_lag_mm(st, 2.0, st, 3.0)
+
+
+def test_bend_flexibility_factor_limits():
+    """ASME 1.65 / h for thin bends, von Karman's second approximation for thick ones, never below 1."""
+    assert bend_flexibility_factor(0.02) == pytest.approx(82.5)
+    assert bend_flexibility_factor(1.2) == pytest.approx(1.4927, abs=1e-4)   # ASME: 1.375
+    hs = np.linspace(0.05, 5.0, 200)
+    k = np.array([bend_flexibility_factor(h) for h in hs])
+    assert np.all(np.diff(k) <= 1e-12) and k.min() >= 1.0
+
+
+def test_sleeve_and_bend_zones_follow_the_parts():
+    """Ineffective zones only at free ends: none at the clamp, none where ring 1 meets ring 2 on a straight rod
+    (one continuous sleeve); the plug where it starts inside pipe II, the tube where pipe II ends on the stud; the bend's
+    flexibility only between its restrained ends."""
+    segs = frame_segments(design("D"))                    # straight, with rings
+    ring = [s for s in segs if Part.RING_1 in s.parts or Part.RING_2 in s.parts]
+    joint = [s for s in ring if s.slack]
+    assert all(Part.RING_1 in s.slack or Part.RING_2 in s.slack for s in joint)
+    ends = [s.s0_mm for s in joint]
+    vertex = design("D").L1_mm
+    assert all(abs(e - vertex) > 10.0 and abs(e + s.length_mm - vertex) > 10.0 for e, s in zip(ends, joint))
+    assert not segs[0].slack                               # holder at the clamp: effective from the flange face
+    plug = [s for s in segs if Part.BALL_HOLDER in s.parts and Part.PIPE_II in s.parts]
+    assert plug[0].slack == (Part.BALL_HOLDER,) and plug[-1].slack == (Part.PIPE_II,)
+    arcs = [s for s in frame_segments(design("rod1")) if s.kind is SegmentKind.ARC]
+    assert len(arcs) == 3 and arcs[0].bend_flex == arcs[2].bend_flex == (1.0, 1.0) and arcs[1].bend_flex[0] > 1.5
 
 
 @pytest.mark.parametrize("base", sorted(FAMILIES))
@@ -46,8 +94,9 @@ def test_family_calibration_transfers_over_L1_L2(base):
 @pytest.mark.slow
 @pytest.mark.cad
 def test_stored_reference_is_current():
-    """The stored references (whole-rod meshes of 2026-11-21, ~0.15 % from converged) agree with today's
-    default solid model (half model, tube grading, ~0.11 %) within their discretisation errors."""
+    """The stored references (default solid model: half mesh, tube grading, ~0.11 % from converged) are
+    today's default solid model: a change of mesh or solver defaults must refresh them
+    (``python scripts/calibrate_frame.py --solve``) and refit the frame."""
     pytest.importorskip("gmsh")
     from fea import solid_compliance
     from geometry import mesh_rod
@@ -55,4 +104,4 @@ def test_stored_reference_is_current():
                                error_estimate=False)
     ref = np.array(REFS["rod4"]["C_F"])
     big = np.abs(ref) > 1e-3 * np.abs(ref).max()
-    np.testing.assert_allclose(comp.C_F[big], ref[big], rtol=3e-3)
+    np.testing.assert_allclose(comp.C_F[big], ref[big], rtol=1e-3)

@@ -61,7 +61,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         comp, _ = solid_compliance(base, partial(_mesh, geometry.mesh_rod), error_estimate=False)
         calibration = calibrate_frame([base], [comp.C_F], [comp.C_g])
         err = frame_errors(base, comp.C_F, comp.C_g, calibration)
-        print(f"frame calibrated on the solid FEA of {base.name}: {calibration} (max |err| on the base "
+        print(f"frame calibrated on the solid FEA of {base.name}: bend factors x{calibration.bend_scale_in:.3f} "
+              f"in plane, x{calibration.bend_scale_out:.3f} out of plane (max |err| on the base "
               f"{100 * abs(err).max():.2f} %)")
 
     def progress(done, total):

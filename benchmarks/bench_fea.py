@@ -18,18 +18,19 @@ from pathlib import Path
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "fea.md"
 NOTES = ["## Notes", "",
-         "- **Goal partly met**: 0.11 % (goal 0.15 %) at ~1.1 GB (goal 2 GB), >= 5x faster than CalculiX on the",
-         "  same discretisation; but ~6-9 s, not 5 s, on this 2-core VM. Since the previous benchmark (whole rod,",
-         "  215k DOFs, 11.5 s, 0.14 %): the symmetry half-model (two half-size factorisations sharing one",
-         "  analysis; exact, not an approximation), grading restricted to the tubes with a finer bend (the error",
-         "  sat at the sleeve ends and in the ovalising bend: 91k DOFs now reach 0.11 %), gmsh's 1-D size",
-         "  integration at 1e-3 instead of 1e-9 (1.2 s of the mesh), assembly in 2000-element chunks.",
-         "- What remains is two CHOLMOD factorisations (~1.5-2 s each for 91k DOFs, ~10 GFlop/s on 2 threads)",
-         "  and the mesh (~2 s: CAD, OCC fragment, gmsh, second-order nodes). This VM's host backs guest memory",
-         "  lazily: fresh memory costs ~3-4 s per GB (measured: first touch of 1 GB 3.7 s, re-touch 0.14 s), so",
-         "  each stage's new peak memory costs time; timings of one run vary by +-30 %. Routes that remain:",
-         "  swept quadratic hexahedra through the thin tube walls (far fewer DOFs), running the two",
-         "  factorisations in two processes, substructuring the stiff holders and the ball.",
+         "- **Goal partly met**: 0.11 % (goal 0.15 %) at ~0.9 GB (goal 2 GB), >= 5x faster than CalculiX on the",
+         "  same discretisation, the FEA itself ~4.4-5 s; but ~7 s from the design (mesh ~2 s + FEA), not 5 s,",
+         "  on this 2-core VM. 2026-11-23: METIS on the node graph with K assembled in that numbering (the",
+         "  two factorisations ~25 % faster, smaller factor), clamp and plane held in place instead of sliced",
+         "  copies (-160 MB): 9.1 -> 7.0 s, 1075 -> 916 MB. 2026-11-22: the symmetry half-model (two half-size",
+         "  factorisations sharing one analysis; exact), grading restricted to the tubes with a finer bend",
+         "  (91k DOFs reach 0.11 %), gmsh's 1-D size integration at 1e-3, assembly in 2000-element chunks.",
+         "- What remains is two CHOLMOD factorisations (~1.3-1.5 s each for 91k DOFs on 2 threads) and the",
+         "  mesh (~2 s: CAD, OCC fragment, gmsh, second-order nodes). This VM's host backs guest memory lazily:",
+         "  fresh memory costs ~3-4 s per GB (first touch of 1 GB 2.9-4 s, re-touch 0.14 s; touching 20 GB",
+         "  beforehand does not help, the guest's DAMON reclaim hands it back), so each new memory peak costs",
+         "  time; one run varies by +-30 %. Routes that remain: swept quadratic hexahedra through the thin tube",
+         "  walls (far fewer DOFs), substructuring the stiff holders and the ball.",
          "- Without scikit-sparse (SuperLU fallback) the factorisation takes ~4-6x longer.", ""]
 
 _SOLID = r"""

@@ -39,9 +39,12 @@ from rodlab.materials import Material
 
 from .elasticity import NU23_DEFAULT
 
-__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "FAMILY_FIT", "asme_bend_flexibility",
+__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "FAMILY_FIT", "FRAME_REVISION", "asme_bend_flexibility",
            "bend_flexibility_factor", "shear_lag_mm", "frame_compliance", "frame_segments", "calibrate_frame",
            "frame_errors"]
+
+#: revision of the frame model's physics: part of the sweep cache key, so a changed model never reuses old results
+FRAME_REVISION = 2
 
 _SLEEVES = (Part.PIPE_HOLDER, Part.RING_1, Part.RING_2, Part.BALL_HOLDER)
 

@@ -26,10 +26,10 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.units import G0, kg_m3_to_kg_mm3
 
-from .assembly import assemble_body_force, assemble_stiffness, scalar_basis, vector_dofs
+from .assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis, vector_dofs
 from .elasticity import element_tensors
 from .errors import FeaError
-from .solver import PatternSolver, hold_dofs
+from .solver import HeldSystem, PatternSolver, available_backend, node_ordering
 
 __all__ = ["SolidResult", "solve_compliance", "mirror_displacements", "ANTISYMMETRIC_CASES"]
 
@@ -109,9 +109,17 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     C = element_tensors(materials, rod_mesh.part_index, rod_mesh.tube_axis)
     timings["basis_and_materials"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    K = assemble_stiffness(basis, C)
+    backend = backend or available_backend()
+    pattern = block_pattern(basis)
+    nodes = node_ordering(pattern[0], pattern[1], basis.N, backend)   # None: the solver orders (SuperLU)
+    timings["ordering"] = time.perf_counter() - t1
+    t1 = time.perf_counter()
+    K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes)   # in the solver's numbering
+    del pattern
     timings["assembly"] = time.perf_counter() - t1
     N = int(3 * basis.N)
+    # solver numbering -> mesh numbering of the DOFs
+    dof = np.arange(N) if nodes is None else (3 * nodes[:, None] + np.arange(3)).ravel()
 
     # loads -------------------------------------------------------------------------------
     t1 = time.perf_counter()
@@ -135,10 +143,11 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     fixed_scalar = basis.get_dofs(rod_mesh.flange_facets).all()
     if fixed_scalar.size == 0:
         raise FeaError("the flange face has no DOFs to clamp; the mesh lost its flange_face", key="flange_face")
-    fixed = (3 * fixed_scalar[:, None] + np.arange(3)).ravel()
-    free = np.setdiff1d(np.arange(N), fixed)
-    Kff = K[free][:, free].tocsc()
-    solver = PatternSolver(Kff, backend)
+    fixed = np.zeros(N, dtype=bool)
+    fixed[(3 * fixed_scalar[:, None] + np.arange(3)).ravel()] = True
+    system = HeldSystem(K)                                  # clamp and plane held in place: no sliced copies
+    del K
+    solver = PatternSolver(system.pattern, backend, ordering_method="amd" if nodes is None else "natural")
     timings["analyze"] = time.perf_counter() - t1
     if half:
         plane = basis.get_dofs(rod_mesh.symmetry_facets).all()
@@ -149,16 +158,16 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     U = np.zeros((N, 6))
     timings["factorize"] = timings["solve"] = 0.0
     for cases, comps in groups:
-        held = np.zeros(N, dtype=bool)
+        held = fixed.copy()
         held[(3 * plane[:, None] + np.asarray(comps, dtype=np.int64)).ravel()] = True
-        held = held[free]
+        held = held[dof]
         t1 = time.perf_counter()
-        solve = solver.factor(hold_dofs(Kff, held) if held.any() else Kff)
+        solve = solver.factor(system.matrix(held))
         timings["factorize"] += time.perf_counter() - t1
         t1 = time.perf_counter()
-        B = loads[free][:, cases]
+        B = loads[np.ix_(dof, cases)]
         B[held] = 0.0
-        U[np.ix_(free, cases)] = solve(B)
+        U[np.ix_(dof, cases)] = solve(B)
         timings["solve"] += time.perf_counter() - t1
 
     # ball-centre displacement ----------------------------------------------------------------

@@ -47,9 +47,9 @@ def parse_range(text: str, name: str) -> np.ndarray:
 
 
 def _key(design_summary: dict, model: str, calibration=None) -> str:
-    from .frame import CALIBRATION
-    blob = json.dumps({"d": design_summary, "m": model, "v": __version__, "cal": repr(calibration or CALIBRATION)},
-                      sort_keys=True)
+    from .frame import CALIBRATION, FRAME_REVISION
+    blob = json.dumps({"d": design_summary, "m": model, "v": __version__, "cal": repr(calibration or CALIBRATION),
+                       "frame": FRAME_REVISION}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 

@@ -63,6 +63,9 @@ class BendFlexibility:
                 raise ValueError(f"bend flexibility {k} must be a positive number, got {v!r}")
 
 
+_CAL_FIELDS = ("sleeve_end", "bend_scale_in", "bend_scale_out", "shear", "torsion", "holder_end", "torsion_end",
+               "bend_end", "bend_restraint")
+
 @dataclass(frozen=True)
 class FrameCalibration:
     """Calibrated constants of the frame model (dimensionless).
@@ -85,6 +88,14 @@ class FrameCalibration:
     torsion_end: float = 0.0
     bend_end: float = 0.0
     bend_restraint: float = 0.0
+
+    def __post_init__(self) -> None:
+        for k in _CAL_FIELDS:
+            v = getattr(self, k)
+            positive = k in ("bend_scale_in", "bend_scale_out", "shear", "torsion")
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and (v > 0 if positive else v >= 0)):
+                raise ValueError(f"frame calibration {k} must be a {'positive' if positive else 'non-negative'} "
+                                 f"number, got {v!r}")
 
 
 #: Global default, fitted against the solid model on 18 designs (the six paper rods, off-grid designs of
@@ -261,7 +272,17 @@ def calibrate_frame(designs: list[RodDesign], C_F_solid: list, C_g_solid: list,
     Calibrating on one design of a family (same tubes, bend, sleeves) and sweeping its L1 / L2 keeps the
     local physics fixed while the frame moves the lever arms (docs/fea.md: rods 4# -> 5#, 6#).
     """
+    from difflib import get_close_matches
+
     from scipy.optimize import least_squares
+    for n in names:
+        if n not in _CAL_FIELDS:
+            near = get_close_matches(n, _CAL_FIELDS, n=1)
+            raise ValueError(f"unknown frame constant {n!r}; expected one of {', '.join(_CAL_FIELDS)}"
+                             + (f". Did you mean {near[0]!r}?" if near else ""))
+    if not (len(designs) == len(C_F_solid) == len(C_g_solid) and designs):
+        raise ValueError(f"need one solid C_F and C_g per design, got {len(designs)} designs, {len(C_F_solid)} C_F, "
+                         f"{len(C_g_solid)} C_g")
 
     def cal_of(x):
         return replace(start, **dict(zip(names, (float(v) for v in x))))

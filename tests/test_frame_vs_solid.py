@@ -105,3 +105,14 @@ def test_stored_reference_is_current():
     ref = np.array(REFS["rod4"]["C_F"])
     big = np.abs(ref) > 1e-3 * np.abs(ref).max()
     np.testing.assert_allclose(comp.C_F[big], ref[big], rtol=1e-3)
+
+
+def test_calibration_input_errors():
+    with pytest.raises(ValueError, match="bend_scale_in must be a positive"):
+        FrameCalibration(bend_scale_in=0.0)
+    with pytest.raises(ValueError, match="sleeve_end must be a non-negative"):
+        FrameCalibration(sleeve_end=float("nan"))
+    with pytest.raises(ValueError, match="Did you mean 'bend_scale_in'"):
+        calibrate_frame([design("rod4")], [REFS["rod4"]["C_F"]], [REFS["rod4"]["C_g"]], names=("bend_scale_inn",))
+    with pytest.raises(ValueError, match="one solid C_F and C_g per design"):
+        calibrate_frame([design("rod4")], [], [])

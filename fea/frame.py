@@ -39,9 +39,9 @@ from rodlab.materials import Material
 
 from .elasticity import NU23_DEFAULT
 
-__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "FAMILY_FIT", "FRAME_REVISION", "asme_bend_flexibility",
-           "bend_flexibility_factor", "shear_lag_mm", "frame_compliance", "frame_segments", "calibrate_frame",
-           "frame_errors"]
+__all__ = ["BendFlexibility", "FrameCalibration", "CALIBRATION", "FAMILY_FIT", "FRAME_REVISION",
+           "asme_bend_flexibility", "bend_flexibility_factor", "shear_lag_mm", "frame_compliance", "frame_segments",
+           "calibrate_frame", "frame_errors"]
 
 #: revision of the frame model's physics: part of the sweep cache key, so a changed model never reuses old results
 FRAME_REVISION = 2
@@ -66,6 +66,7 @@ class BendFlexibility:
 _CAL_FIELDS = ("sleeve_end", "bend_scale_in", "bend_scale_out", "shear", "torsion", "holder_end", "torsion_end",
                "bend_end", "bend_restraint")
 
+
 @dataclass(frozen=True)
 class FrameCalibration:
     """Calibrated constants of the frame model (dimensionless).
@@ -73,7 +74,7 @@ class FrameCalibration:
     sleeve_end : ineffective zone at each free end of a ring or plug, in units of the shear-lag length 1 / lambda
     holder_end : the same at the free end of the pipe holder (thick, clamped flange adapter)
     torsion_end : the same for torsion, in units of the torsional shear-lag length
-    bend_scale_in / _out : multipliers on the ASME flexibility factor in the arc's middle (in-/out-of-plane)
+    bend_scale_in / _out : multipliers on the pipe-bend factor k(h) in the arc's middle (in-/out-of-plane)
     bend_end : zone at each end of the arc held round by the rings, in units of r_m rho^bend_restraint
     bend_restraint : exponent of the restraint ratio rho (hoop stiffness of ring + tube over the bend wall's)
     shear / torsion : multipliers on the Timoshenko shear and the torsion flexibility (1 = theory)
@@ -207,7 +208,7 @@ def _restraint(design: RodDesign, tube) -> float:
 
 
 def _bend_pieces(design: RodDesign, seg: Segment, cal: FrameCalibration) -> list[Segment]:
-    k = asme_bend_flexibility(design, FrameCalibration())          # unscaled ASME k
+    k = asme_bend_flexibility(design, FrameCalibration())          # unscaled k(h)
     k_in, k_out = max(1.0, cal.bend_scale_in * k.in_plane), max(1.0, cal.bend_scale_out * k.out_of_plane)
     b = design.bend
     r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0

@@ -24,7 +24,8 @@ REF = Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_reference.js
 OFF_GRID = {
     "A": {"L1_mm": 220.0, "L2_mm": 480.0, "gamma_deg": 110.0,
           "tube": {"material": "cfrp", "outer_diameter_mm": 22.0, "wall_mm": 1.5},
-          "bend": {"material": "steel_304", "radius_mm": 40.0}, "rings": {"outer_diameter_mm": 28.0, "length_mm": 40.0}},
+          "bend": {"material": "steel_304", "radius_mm": 40.0},
+          "rings": {"outer_diameter_mm": 28.0, "length_mm": 40.0}},
     "B": {"L1_mm": 350.0, "L2_mm": 380.0, "gamma_deg": 75.0,
           "tube": {"material": "steel_304", "outer_diameter_mm": 18.0, "wall_mm": 1.5}, "bend": {"radius_mm": 30.0}},
     "C": {"L1_mm": 250.0, "L2_mm": 550.0, "gamma_deg": 135.0,

@@ -63,8 +63,8 @@ def test_bend_flexibility_factor_limits():
 
 def test_sleeve_and_bend_zones_follow_the_parts():
     """Ineffective zones only at free ends: none at the clamp, none where ring 1 meets ring 2 on a straight rod
-    (one continuous sleeve); the plug where it starts inside pipe II, the tube where pipe II ends on the stud; the bend's
-    flexibility only between its restrained ends."""
+    (one continuous sleeve); the plug where it starts inside pipe II, the tube where pipe II ends on the stud;
+    the bend's flexibility only between its restrained ends."""
     segs = frame_segments(design("D"))                    # straight, with rings
     ring = [s for s in segs if Part.RING_1 in s.parts or Part.RING_2 in s.parts]
     joint = [s for s in ring if s.slack]

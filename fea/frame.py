@@ -208,8 +208,7 @@ def _restraint(design: RodDesign, tube) -> float:
 
 
 def _bend_pieces(design: RodDesign, seg: Segment, cal: FrameCalibration) -> list[Segment]:
-    k = asme_bend_flexibility(design, FrameCalibration())          # unscaled k(h)
-    k_in, k_out = max(1.0, cal.bend_scale_in * k.in_plane), max(1.0, cal.bend_scale_out * k.out_of_plane)
+    k = asme_bend_flexibility(design, cal)                  # the scaled factors of the arc's middle
     b = design.bend
     r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0
     L = seg.length_mm
@@ -218,7 +217,7 @@ def _bend_pieces(design: RodDesign, seg: Segment, cal: FrameCalibration) -> list
 
     def piece(a, c):
         middle = e0 < 0.5 * (a + c) < L - e1
-        return {"bend_flex": (k_in, k_out) if middle else (1.0, 1.0)}
+        return {"bend_flex": (k.in_plane, k.out_of_plane) if middle else (1.0, 1.0)}
     return _split(seg, [e0, L - e1], piece)
 
 

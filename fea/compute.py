@@ -122,14 +122,18 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
     if kwargs:
         raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
     if model is FeaModel.FRAME:
-        from .frame import CALIBRATION, FRAME_REVISION
+        from .frame import CALIBRATION, FRAME_REVISION, frame_range_notes
         cal = calibration or CALIBRATION
         k = asme_bend_flexibility(design, cal)
         CF, Cg = frame_compliance(design, cal=cal)
+        notes = [] if calibration is not None else frame_range_notes(design)
+        for note in notes:
+            log.info("frame model of %s: %s; check it with the solid model", design.name, note)
         return RodCompliance.from_design(design, CF, Cg, Method.FEA, {
             "generator": "rodlab beam frame (Timoshenko, unit-load method)", "model": "frame",
             "frame_revision": FRAME_REVISION,
             "bend_flexibility": {"in_plane": k.in_plane, "out_of_plane": k.out_of_plane,
                                  "applies_to": "the arc between its restrained ends"},
-            "calibration": dict(asdict(cal), family=calibration is not None)})
+            "calibration": dict(asdict(cal), family=calibration is not None),
+            "outside_calibrated_range": notes})
     return calc_rod_compliance(design)

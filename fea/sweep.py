@@ -66,7 +66,8 @@ def _evaluate(base: RodDesign, L1: float, L2: float, model: str, mesher, calibra
         comp = compute_compliance(d, FeaModel(model), mesher=mesher, **opts)
     except Exception as e:  # noqa: BLE001 - a failing design is a row, never fatal
         return dict(row, status="failed", message=f"{type(e).__name__}: {e}")
-    row.update(status="ok", message="", c_rod_um=comp.c_rod_um, mass_kg=comp.mass_kg,
+    notes = comp.provenance.get("outside_calibrated_range") or []
+    row.update(status="ok", message="; ".join(notes), c_rod_um=comp.c_rod_um, mass_kg=comp.mass_kg,
                x_tool_mm=float(d.tool_mm[0]), z_tool_mm=float(d.tool_mm[2]))
     for i in range(3):
         for j in range(3):

@@ -15,22 +15,25 @@ from rodlab.layout import SegmentKind
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "scripts"))
-from calibrate_frame import CALIBRATION_SET, FAMILIES, VALIDATION_SET, design  # noqa: E402
+from calibrate_frame import CALIBRATION_SET, FAMILIES, PROBE_SET, THIN_SET, VALIDATION_SET, design  # noqa: E402
 
 REFS = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
 
 
-#: documented exceptions to the 1.35 % bound of the global default (docs/fea.md): hold-out L's sharp (115 deg),
-#: thick-walled bend makes C_xz a near-cancelling sum (13 % change per 0.1 of the bend factor)
-BOUNDS = {"L": 0.05}
+#: documented exceptions to the 2 % bound of the global default (docs/fea.md): hold-out L's sharp (115 deg),
+#: thick-walled bend makes C_xz a near-cancelling sum (13 % change per 0.1 of the bend factor); blind Y's
+#: 1 mm titanium wall (r_m / t = 9.5, h = 0.36) lies outside the calibrated range (bend r_m / t <= 7.9,
+#: h >= 0.43) and is flagged
+BOUNDS = {"L": 0.03, "Y": 0.03}
 
 
-@pytest.mark.parametrize("name", CALIBRATION_SET + VALIDATION_SET)
+@pytest.mark.parametrize("name", CALIBRATION_SET + PROBE_SET + VALIDATION_SET)
 def test_global_calibration_bounds(name):
     """Documented accuracy of the default frame model on every significant entry: the 18 calibration designs
-    within 1.2 %, the held-out and blind ones within 1.3 % (one documented exception)."""
+    within 1.2 %, the 39 part probes within 1.9 %, the held-out and blind designs within 1.7 % (two documented
+    exceptions)."""
     e = frame_errors(design(name), REFS[name]["C_F"], REFS[name]["C_g"])
-    assert np.abs(e).max() < BOUNDS.get(name, 0.0135), (name, np.abs(e).max())
+    assert np.abs(e).max() < BOUNDS.get(name, 0.02), (name, np.abs(e).max())
 
 
 def test_calibration_beats_plain_beam_theory():
@@ -79,6 +82,43 @@ def test_sleeve_and_bend_zones_follow_the_parts():
     assert len(arcs) == 3 and arcs[0].bend_flex == arcs[2].bend_flex == (1.0, 1.0) and arcs[1].bend_flex[0] > 1.5
 
 
+def test_bend_ends_held_by_rings_saturate():
+    """The arc's restrained ends grow with the hoop stiffness of ring + tube (none, a short or a 40 mm aluminium
+    ring: the same hoop restraint; a steel ring 6 mm thick: longer) but stay below ``bend_end r_m`` (a ring far
+    stiffer than the bend wall holds the end no rounder than a rigid one); a soft carbon tube with no ring
+    hardly holds a steel bend at all."""
+    from fea.frame import CALIBRATION
+
+    def end(name):
+        return [s for s in frame_segments(design(name)) if s.kind is SegmentKind.ARC][0].length_mm
+    none, short, al, steel = (end(n) for n in ("bend_steel_no_rings", "bend_steel_rings_20", "bend_steel_1.5_R40",
+                                                "bend_steel_st34_40"))
+    r_m = (22.0 - 1.5) / 2.0
+    assert al == pytest.approx(short)
+    assert 0 < none < al < steel < CALIBRATION.bend_end * r_m
+    assert end("bend_cfrp_steel_no_rings") < 0.1 * none
+
+
+def test_holder_zone_closed_form():
+    """Pipe-holder zone = holder_end (E / E_t)^a (r_m / t)^b / lambda of the tube: longer for a thinner carbon
+    wall, in shear-lag units too."""
+    from fea.frame import CALIBRATION as cal
+    zones = {}
+    for name in ("holder_cfrp_1.0_al37", "holder_cfrp_2.0_al37"):
+        d = design(name)
+        tube, holder = d.pipe_I, d.pipe_holder
+        t2 = (holder.outer_diameter_mm - tube.outer_diameter_mm) / 2.0
+        lam = shear_lag_mm(tube.material, tube.wall_mm, holder.material, t2)
+        r_m = (tube.outer_diameter_mm - tube.wall_mm) / 2.0
+        c = (cal.holder_end * (tube.material.E_GPa / tube.material.E_t_GPa) ** cal.holder_orthotropy
+             * (r_m / tube.wall_mm) ** cal.holder_slenderness)
+        segs = frame_segments(d)
+        zone = sum(s.length_mm for s in segs if Part.PIPE_HOLDER in s.slack)
+        assert zone == pytest.approx(min(c * lam, 0.45 * holder.length_mm), rel=1e-9)
+        zones[name] = zone / lam
+    assert zones["holder_cfrp_1.0_al37"] > 1.1 * zones["holder_cfrp_2.0_al37"]
+
+
 @pytest.mark.parametrize("base", sorted(FAMILIES))
 def test_family_calibration_transfers_over_L1_L2(base):
     """Calibrated on one solid run of the base design, the frame predicts the other L1 / L2 of the family
@@ -112,7 +152,42 @@ def test_calibration_input_errors():
         FrameCalibration(bend_scale_in=0.0)
     with pytest.raises(ValueError, match="sleeve_end must be a non-negative"):
         FrameCalibration(sleeve_end=float("nan"))
+    assert FrameCalibration(holder_slenderness=-0.2).holder_slenderness == -0.2      # exponents take any sign
+    with pytest.raises(ValueError, match="holder_orthotropy must be a finite"):
+        FrameCalibration(holder_orthotropy=float("inf"))
     with pytest.raises(ValueError, match="Did you mean 'bend_scale_in'"):
         calibrate_frame([design("rod4")], [REFS["rod4"]["C_F"]], [REFS["rod4"]["C_g"]], names=("bend_scale_inn",))
     with pytest.raises(ValueError, match="one solid C_F and C_g per design"):
         calibrate_frame([design("rod4")], [], [])
+
+
+def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
+    """The designs the calibration was fitted on lie inside the calibrated range; thin-walled bends (blind Y,
+    2.8 % off; the thin probes) do not, and the compliance file, the CLI and a sweep row say so."""
+    import json as _json
+
+    from fea import compute_compliance
+    from fea.frame import frame_range_notes
+    from fea.sweep import run_sweep
+    from calibrate_frame import OFF_GRID
+    from rodlab.cli import main
+    for n in CALIBRATION_SET + PROBE_SET:
+        assert frame_range_notes(design(n)) == [], n
+    for n in THIN_SET:              # measured 1-4.4 % off (docs/fea.md): each one is flagged
+        assert frame_range_notes(design(n)), n
+    notes = frame_range_notes(design("Y"))
+    assert len(notes) == 2 and "bend r_m / t = 9.50" in notes[0] and "bend h" in notes[1]
+    assert compute_compliance(design("Y"), "frame").provenance["outside_calibrated_range"] == notes
+    spec = OFF_GRID["Y"]
+    text = 'format = "rodlab.rod/1"\nname = "Y"\n'
+    text += "".join(f"{k} = {v}\n" for k, v in spec.items() if not isinstance(v, dict))
+    for table, keys in ((k, v) for k, v in spec.items() if isinstance(v, dict)):
+        text += f"[{table}]\n" + "".join(f"{k} = {_json.dumps(v)}\n" for k, v in keys.items())
+    path = tmp_path / "y.rod.toml"
+    path.write_text(text)
+    out = tmp_path / "y.compliance.json"
+    assert main(["fea", str(path), "--model", "frame", "-o", str(out)]) == 0
+    assert "note: bend r_m / t = 9.50" in capsys.readouterr().out
+    assert _json.loads(out.read_text())["provenance"]["outside_calibrated_range"] == notes
+    df = run_sweep(design("Y"), [330.0], [400.0], use_dask=False, cache_dir=tmp_path / "cache")
+    assert df["status"].tolist() == ["ok"] and "bend r_m / t" in df["message"][0]

@@ -65,6 +65,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
         if args.png or args.size is not None or args.no_symmetry:
             raise RodlabError("--png, --size and --no-symmetry apply to --model solid only")
         comp = compute_compliance(design, args.model)
+        for note in comp.provenance.get("outside_calibrated_range") or []:
+            print(f"  note: {note}; check this design with --model solid")
     path = write_compliance(comp, args.output)
     np.set_printoptions(precision=6, suppress=True)
     print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")

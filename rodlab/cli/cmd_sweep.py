@@ -90,6 +90,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         best = ok.loc[ok["c_rod_um"].idxmin()]
         print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
               f"mass = {1e3 * best['mass_kg']:.0f} g")
+    for note in sorted({m for m in ok["message"] if isinstance(m, str) and m}):
+        print(f"  note: {note}; check a design with --model solid")
     print(f"  wrote {out} and {png}")
     return 0
 

@@ -113,7 +113,8 @@ class FrameCalibration:
 
 
 #: Global default, fitted against the solid model on 18 designs (the six paper rods, off-grid designs of
-#: other materials, sections, bends and parts; scripts/calibrate_frame.py); errors in docs/fea.md.
+#: other materials, sections, bends and parts) and 39 part probes (scripts/calibrate_frame.py,
+#: scripts/frame_probes.py); errors in docs/fea.md.
 CALIBRATION = FrameCalibration(sleeve_end=1.422, bend_scale_in=0.907, bend_scale_out=0.866, holder_end=0.602,
                                torsion_end=0.497, bend_end=1.516, bend_restraint=2.121, holder_orthotropy=0.061,
                                holder_slenderness=0.262)
@@ -264,7 +265,7 @@ CALIBRATED_RANGE = {"tube_slenderness": (3.9, 10.5), "bend_slenderness": (3.9, 7
 def frame_range_notes(design: RodDesign) -> list[str]:
     """Where ``design`` lies outside :data:`CALIBRATED_RANGE` of the default calibration (empty if inside):
     the frame still evaluates, but validate such a design with ``--model solid`` (docs/fea.md: a 1 mm
-    titanium bend, r_m / t = 9.5, h = 0.36, was 2.8 % off)."""
+    titanium bend, r_m / t = 9.5, h = 0.35, was 2.8 % off)."""
     notes = []
 
     def check(key, value, what):

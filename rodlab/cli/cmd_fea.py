@@ -66,7 +66,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
             raise RodlabError("--png, --size and --no-symmetry apply to --model solid only")
         comp = compute_compliance(design, args.model)
         for note in comp.provenance.get("outside_calibrated_range") or []:
-            print(f"  note: {note}; check this design with --model solid")
+            print(f"  note: {note}; check this design with --model solid, or calibrate the frame on it "
+                  "(rodlab sweep --calibrate)")
     path = write_compliance(comp, args.output)
     np.set_printoptions(precision=6, suppress=True)
     print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")

@@ -91,7 +91,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
               f"mass = {1e3 * best['mass_kg']:.0f} g")
     for note in sorted({m for m in ok["message"] if isinstance(m, str) and m}):
-        print(f"  note: {note}; check a design with --model solid")
+        print(f"  note: {note}; rerun with --calibrate (one solid FEA of the base design fits the frame to it)")
     print(f"  wrote {out} and {png}")
     return 0
 

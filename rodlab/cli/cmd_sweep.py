@@ -83,7 +83,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     else:
         atomic_write_text(out, df.to_csv(index=False))
     png = Path(args.png) if args.png else out.with_suffix(".png")
-    plot_sweep(df, png, title=f"{args.model} model, base design {base.name}")
+    label = f"{args.model} model" + (" calibrated on its solid FEA" if args.calibrate else "")
+    plot_sweep(df, png, title=f"{label}, base design {base.name}")
     ok = df[df["status"] == "ok"]
     print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")
     if len(ok):

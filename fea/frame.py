@@ -148,16 +148,20 @@ def bend_flexibility_factor(h: float) -> float:
     return max(1.0, 1.65 / h, karman)
 
 
+def _bend_rm_h(design: RodDesign) -> tuple[float, float]:
+    """The bend's mean wall radius r_m [mm] and pipe-bend characteristic h = t R / r_m^2 [-]."""
+    b = design.bend
+    r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0
+    return r_m, b.wall_mm * b.radius_mm / r_m ** 2
+
+
 def asme_bend_flexibility(design: RodDesign, cal: FrameCalibration = CALIBRATION) -> BendFlexibility:
     """Pipe-bend flexibility factors of the design's bend (:func:`bend_flexibility_factor`) scaled by the
     calibration: the factors of the arc between its restrained ends (1 if straight; ``FrameCalibration()``
     gives the plain factor)."""
     if not design.has_bend:
         return BendFlexibility(1.0, 1.0)
-    b = design.bend
-    t = b.wall_mm
-    r_m = (b.outer_diameter_mm - t) / 2.0
-    k = bend_flexibility_factor(t * b.radius_mm / r_m ** 2)
+    k = bend_flexibility_factor(_bend_rm_h(design)[1])
     return BendFlexibility(max(1.0, cal.bend_scale_in * k), max(1.0, cal.bend_scale_out * k))
 
 
@@ -232,8 +236,7 @@ def _held(rho: float, cal: FrameCalibration) -> float:
 
 def _bend_pieces(design: RodDesign, seg: Segment, cal: FrameCalibration) -> list[Segment]:
     k = asme_bend_flexibility(design, cal)                  # the scaled factors of the arc's middle
-    b = design.bend
-    r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0
+    r_m = _bend_rm_h(design)[0]
     L = seg.length_mm
     e0, e1 = (min(cal.bend_end * r_m * _held(_restraint(design, tube), cal), 0.5 * L)
               for tube in (design.pipe_I, design.pipe_II))
@@ -275,10 +278,9 @@ def frame_range_notes(design: RodDesign) -> list[str]:
     for label, t in (("pipe_I", design.pipe_I), ("pipe_II", design.pipe_II)):
         check("tube_slenderness", (t.outer_diameter_mm - t.wall_mm) / 2.0 / t.wall_mm, f"{label} r_m / t")
     if design.has_bend:
-        b = design.bend
-        r_m = (b.outer_diameter_mm - b.wall_mm) / 2.0
-        check("bend_slenderness", r_m / b.wall_mm, "bend r_m / t")
-        check("bend_h", b.wall_mm * b.radius_mm / r_m ** 2, "bend h = t R / r_m^2")
+        r_m, h = _bend_rm_h(design)
+        check("bend_slenderness", r_m / design.bend.wall_mm, "bend r_m / t")
+        check("bend_h", h, "bend h = t R / r_m^2")
     return notes
 
 

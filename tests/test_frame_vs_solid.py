@@ -170,6 +170,7 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     from fea.frame import frame_range_notes
     from fea.sweep import run_sweep
     from calibrate_frame import OFF_GRID
+    from conftest import write_toml
     from rodlab.cli import main
     for n in CALIBRATION_SET + PROBE_SET:
         assert frame_range_notes(design(n)) == [], n
@@ -178,13 +179,7 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     notes = frame_range_notes(design("Y"))
     assert len(notes) == 2 and "bend r_m / t = 9.50" in notes[0] and "bend h" in notes[1]
     assert compute_compliance(design("Y"), "frame").provenance["outside_calibrated_range"] == notes
-    spec = OFF_GRID["Y"]
-    text = 'format = "rodlab.rod/1"\nname = "Y"\n'
-    text += "".join(f"{k} = {v}\n" for k, v in spec.items() if not isinstance(v, dict))
-    for table, keys in ((k, v) for k, v in spec.items() if isinstance(v, dict)):
-        text += f"[{table}]\n" + "".join(f"{k} = {_json.dumps(v)}\n" for k, v in keys.items())
-    path = tmp_path / "y.rod.toml"
-    path.write_text(text)
+    path = write_toml(tmp_path / "y.rod.toml", dict({"format": "rodlab.rod/1", "name": "Y"}, **OFF_GRID["Y"]))
     out = tmp_path / "y.compliance.json"
     assert main(["fea", str(path), "--model", "frame", "-o", str(out)]) == 0
     assert "note: bend r_m / t = 9.50" in capsys.readouterr().out

@@ -14,6 +14,8 @@ import logging
 import numpy as np
 import scipy.sparse as sp
 
+from .errors import FeaError
+
 __all__ = ["available_backend", "PatternSolver", "HeldSystem", "node_ordering"]
 
 log = logging.getLogger(__name__)
@@ -34,23 +36,43 @@ def _superlu(Kc: sp.csc_matrix):
     return lambda B: lu.solve(np.asarray(B))
 
 
-def node_ordering(brow: np.ndarray, bcol: np.ndarray, n_nodes: int, backend: str | None = None):
-    """A fill-reducing permutation of the mesh nodes (new -> old), shape=(n_nodes,), from the node graph
-    (block rows / columns of the stiffness), or None when the backend orders the matrix itself (SuperLU).
+def _graph_ordering(G: sp.csc_matrix) -> np.ndarray:
+    """Fill-reducing ordering (new -> old) of a symmetric graph: CHOLMOD's nested dissection, AMD without METIS."""
+    from sksparse.cholmod import CholmodError, analyze
+    try:
+        return np.asarray(analyze(G, ordering_method="nesdis").P(), dtype=np.int64)
+    except CholmodError as e:
+        log.info("nested-dissection ordering unavailable (%s); using AMD", e)
+        return np.asarray(analyze(G, ordering_method="amd").P(), dtype=np.int64)
 
-    Ordering the node graph instead of the 3x larger DOF graph keeps each node's three DOFs together (larger
-    supernodes) and lets CHOLMOD afford METIS: on rod 1# (91k DOFs) the two factorisations take ~25 % less time
-    than with AMD on the DOF graph, for ~0.35 s of ordering. AMD if METIS is not available.
+
+def node_ordering(basis, backend: str | None = None):
+    """A fill-reducing permutation of the nodes of ``basis`` (new -> old), shape=(basis.N,), or None when the
+    backend orders the matrix itself (SuperLU).
+
+    The mesh's vertices are ordered on the vertex graph (the tetrahedra's edges); each edge node of a P2 mesh is
+    placed right after the earlier of its two end vertices, i.e. in the subdomain of an interior end vertex, in
+    the separator when both ends are on it. Ordering nodes instead of the 3x larger DOF graph keeps each node's
+    three DOFs together (larger supernodes); ordering the vertices only (~1/6 of a P2 mesh's nodes) costs ~0.07 s
+    on rod 1# instead of ~0.3 s for METIS on the whole node graph, for ~7 % fewer factorisation flops.
     """
     if (backend or available_backend()) != "cholmod":
         return None
-    from sksparse.cholmod import CholmodError, analyze
-    G = sp.csc_matrix((np.ones(brow.size), (brow, bcol)), shape=(n_nodes, n_nodes))
-    try:
-        return np.asarray(analyze(G, ordering_method="metis").P(), dtype=np.int64)
-    except CholmodError as e:
-        log.info("METIS ordering unavailable (%s); using AMD", e)
-        return np.asarray(analyze(G, ordering_method="amd").P(), dtype=np.int64)
+    mesh = basis.mesh
+    nv = mesh.nvertices
+    edges = mesh.edges                                           # (2, n_edges) vertex pairs
+    G = sp.coo_matrix((np.ones(edges.shape[1]), (edges[0], edges[1])), shape=(nv, nv))
+    G = (G + G.T + sp.identity(nv)).tocsc()
+    if basis.N == nv:                                            # P1: the nodes are the vertices
+        return _graph_ordering(G)
+    ed = basis.element_dofs
+    if basis.N != nv + edges.shape[1] or ed.shape[0] != 10 or not np.array_equal(ed[4:], nv + mesh.t2e):
+        raise FeaError(f"node_ordering: expected a P1 or P2 tetrahedral basis, got {ed.shape[0]} nodes per "
+                       f"element and {basis.N} nodes on {nv} vertices", key="mesh")
+    pos = np.empty(nv)
+    pos[_graph_ordering(G)] = np.arange(nv)
+    key = np.concatenate([pos, np.minimum(pos[edges[0]], pos[edges[1]]) + 0.5])
+    return np.argsort(key, kind="stable").astype(np.int64)
 
 
 class HeldSystem:
@@ -59,7 +81,9 @@ class HeldSystem:
     index arrays and one data buffer. A right-hand side must be zero on the held DOFs; their solution is then
     zero.
 
-    K : symmetric sparse matrix, shape=(n, n); its CSR arrays are used as CSC (the transpose, = K).
+    K : symmetric sparse matrix, shape=(n, n); its CSR arrays are used as CSC (the transpose, = K). Or, for
+    CHOLMOD only, its upper triangle as CSR (:func:`~fea.assembly.assemble_stiffness` ``upper=True``): read
+    as CSC that is the lower triangle, the only part CHOLMOD reads.
     """
 
     def __init__(self, K: sp.spmatrix):

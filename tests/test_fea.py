@@ -171,6 +171,13 @@ def test_node_ordered_assembly_and_held_system():
     dof = (3 * nodes[:, None] + np.arange(3)).ravel()
     Kp = assemble_stiffness(basis, C, pattern=block_pattern(basis), node_order=nodes)
     assert abs(Kp - K[dof][:, dof]).max() < 1e-12 * abs(K).max()
+    # upper=True: the blocks on and above the block diagonal only (the lower triangle when read as CSC)
+    Ku = assemble_stiffness(basis, C, pattern=block_pattern(basis), node_order=nodes, upper=True)
+    P = Kp.tocoo()
+    up = P.row // 3 <= P.col // 3
+    ref_u = sp.csr_matrix((P.data[up], (P.row[up], P.col[up])), shape=P.shape)
+    assert Ku.nnz == ref_u.nnz and Ku.nnz < 0.6 * Kp.nnz
+    assert abs(Ku - ref_u).max() < 1e-12 * abs(K).max()
     held = np.zeros(K.shape[0], dtype=bool)
     held[(3 * basis.get_dofs(rm.flange_facets).all()[:, None] + np.arange(3)).ravel()] = True
     held[3 * basis.get_dofs(rm.symmetry_facets).all() + 1] = True

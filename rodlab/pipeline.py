@@ -166,15 +166,23 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     with stage("sweep"):
         from fea.sweep import run_sweep
         from fea.sweep_plot import plot_sweep
+        calibration, title = None, "frame model around rod 1#"
+        if summary["stages"]["fea"]["model"] == "solid":   # that solid run fits the frame's bend factors
+            from fea.frame import calibrate_frame
+            calibration = calibrate_frame([design], [fea.C_F], [fea.C_g])
+            title = "frame model calibrated on rod 1#'s solid FEA"
         df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,
-                       cache_dir=out / "sweep" / "cache")
+                       cache_dir=out / "sweep" / "cache", calibration=calibration)
         (out / "sweep").mkdir(parents=True, exist_ok=True)
         df.to_csv(out / "sweep" / "sweep.csv", index=False)
-        plot_sweep(df, out / "sweep" / "sweep.png", title="frame model around rod 1#")
+        plot_sweep(df, out / "sweep" / "sweep.png", title=title)
         ok = df[df["status"] == "ok"]
         best = ok.loc[ok["c_rod_um"].idxmin()]
         summary["files"]["sweep"] = "sweep/sweep.png"
-        summary["stages"]["sweep"] = {"designs": int(len(df)), "ok": int(len(ok)),
+        summary["stages"]["sweep"] = {"designs": int(len(df)), "ok": int(len(ok)), "model": title,
+                                      "frame_calibration": None if calibration is None else {
+                                          "bend_scale_in": calibration.bend_scale_in,
+                                          "bend_scale_out": calibration.bend_scale_out},
                                       "stiffest": {"L1_mm": float(best["L1_mm"]), "L2_mm": float(best["L2_mm"]),
                                                    "c_rod_um": float(best["c_rod_um"])}}
     summary["timings_s"] = timings

@@ -27,7 +27,7 @@ def register(sub) -> None:
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--calibrate", action="store_true",
-                   help="frame: calibrate it on one solid FEA of the base design first (cad extra; ~10 s); the "
+                   help="frame: calibrate it on one solid FEA of the base design first (cad extra; ~5 s); the "
                         "family's sections stay fixed over L1 x L2, so the local corrections carry over")
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
     p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")

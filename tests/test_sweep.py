@@ -98,3 +98,12 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
             mine = np.array([[row[col.format(i + 1, j + 1)] for j in range(3)] for i in range(3)])
             big = np.abs(ref) > 0.02 * np.abs(ref).max()
             assert np.abs(mine[big] / ref[big] - 1).max() < 0.008, (name, key)
+
+
+def test_family_partner_is_the_farthest_valid_grid_design():
+    from fea.family import family_partner
+    base = resolve_design("rod1")                              # L1 300, L2 450
+    p = family_partner(base, [100.0, 200.0, 300.0], [450.0, 500.0, 600.0])
+    assert (p.L1_mm, p.L2_mm) == (200.0, 600.0)               # L1 = 100 is too short for the parts: skipped
+    assert family_partner(base, [300.0], [450.0]) is None
+    assert family_partner(base, [305.0], [455.0]) is None      # too close to separate joints from the bend

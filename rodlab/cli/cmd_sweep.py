@@ -27,8 +27,9 @@ def register(sub) -> None:
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--calibrate", action="store_true",
-                   help="frame: calibrate it on one solid FEA of the base design first (cad extra; ~5 s); the "
-                        "family's sections stay fixed over L1 x L2, so the local corrections carry over")
+                   help="frame: calibrate it on solid FEA of the base design and of the grid's design farthest "
+                        "from it first (cad extra; ~10 s): the family's joints stay the same over L1 x L2, so the "
+                        "fitted bend factors and load-transfer zones carry over")
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
     p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
     p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
@@ -54,17 +55,20 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if args.model != "frame":
             raise RodlabError("--calibrate applies to --model frame")
         from fea import solid_compliance
-        from fea.frame import calibrate_frame, frame_errors
+        from fea.family import calibrate_family, family_partner
 
         from .cmd_geometry import require_cad
         geometry = require_cad()
-        comp, _ = solid_compliance(base, partial(_mesh, geometry.mesh_rod), error_estimate=False)
-        calibration = calibrate_frame([base], [comp.C_F], [comp.C_g])
-        err = frame_errors(base, comp.C_F, comp.C_g, calibration)
-        print(f"frame calibrated on the solid FEA of {base.name}: bend factors x{calibration.bend_scale_in:.3f} "
-              f"in plane, x{calibration.bend_scale_out:.3f} out of plane (max |err| on the base "
-              f"{100 * abs(err).max():.2f} %)")
 
+        def solve(d):
+            comp, _ = solid_compliance(d, partial(_mesh, geometry.mesh_rod), error_estimate=False)
+            return comp.C_F, comp.C_g
+        partner = family_partner(base, L1s, L2s)
+        fam = calibrate_family(base, solve, partner)
+        calibration = fam.calibration
+        print(f"frame calibrated on the solid FEA of {' and '.join(d.name for d in fam.designs)}: "
+              + ", ".join(f"{n} {getattr(calibration, n):.3f}" for n in fam.names)
+              + " (max |err| there " + ", ".join(f"{100 * e:.2f} %" for e in fam.max_err) + ")")
     def progress(done, total):
         bar = "#" * int(30 * done / max(total, 1))
         print(f"\r  [{bar:<30}] {done}/{total} designs", end="", file=sys.stderr, flush=True)
@@ -92,7 +96,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
               f"mass = {1e3 * best['mass_kg']:.0f} g")
     for note in sorted({m for m in ok["message"] if isinstance(m, str) and m}):
-        print(f"  note: {note}; rerun with --calibrate (one solid FEA of the base design fits the frame to it)")
+        print(f"  note: {note}; rerun with --calibrate (solid FEA of two designs fits the frame to this family)")
     print(f"  wrote {out} and {png}")
     return 0
 

@@ -114,7 +114,7 @@ def family_errors(refs: dict) -> dict:
     """Per family: max error on variant v1 of the frame calibrated on the base alone (two bend factors) and on
     the base and v0 (:data:`fea.family.FAMILY_FIT_TWO`), and of the global calibration."""
     from fea.family import calibrate_family
-    from fea.frame import frame_errors
+    from fea.frame import CALIBRATION, frame_errors
     ds = refs["designs"]
     out = {}
     for base in refs["families"]:
@@ -129,7 +129,6 @@ def family_errors(refs: dict) -> dict:
             return float(np.abs(frame_errors(design(v1, ds[v1]["spec"]), ds[v1]["C_F"], ds[v1]["C_g"], cal)).max())
         one = calibrate_family(design(base, ds[base]["spec"]), solve_stored)
         two = calibrate_family(design(base, ds[base]["spec"]), solve_stored, design(v0, ds[v0]["spec"]))
-        from fea.frame import CALIBRATION
         out[base] = {"global": err(CALIBRATION), "base_only": err(one.calibration), "two_designs": err(two.calibration)}
     return out
 

@@ -74,9 +74,10 @@ def test_sweep_cli_writes_table_and_plot(tmp_path, capsys):
 
 @pytest.mark.cad
 def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
-    """``rodlab sweep --calibrate``: one solid FEA of the base (4#) fits the frame's bend factors, and the
-    family's other paper rods (5#, 6#: same sections, other L1 / L2) then agree with their own solid FEA
-    (fea/data/solid_reference.json) within 0.8 % on every significant entry (docs/fea.md: 0.73 %)."""
+    """``rodlab sweep --calibrate``: solid FEA of the base (4#) and of the grid's farthest design (L1 = 150,
+    L2 = 600 mm) fit the frame's bend factors and load-transfer zones, and the family's other paper rods (5#,
+    6#: same parts, other L1 / L2) then agree with their own solid FEA (fea/data/solid_reference.json) within
+    0.8 % on every significant entry."""
     import json
     from pathlib import Path
 
@@ -88,7 +89,7 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
     assert main(["sweep", "--base", "rod4", "--L1", "150,375", "--L2", "525,600", "--serial", "--calibrate",
                  "-o", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "frame calibrated on the solid FEA of 4#" in text
+    assert "frame calibrated on the solid FEA of 4# and 4# 150-600" in text
     df = pd.read_csv(out)
     for name in ("rod5", "rod6"):
         d = resolve_design(name)

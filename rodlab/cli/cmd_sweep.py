@@ -69,6 +69,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"frame calibrated on the solid FEA of {' and '.join(d.name for d in fam.designs)}: "
               + ", ".join(f"{n} {getattr(calibration, n):.3f}" for n in fam.names)
               + " (max |err| there " + ", ".join(f"{100 * e:.2f} %" for e in fam.max_err) + ")")
+
     def progress(done, total):
         bar = "#" * int(30 * done / max(total, 1))
         print(f"\r  [{bar:<30}] {done}/{total} designs", end="", file=sys.stderr, flush=True)

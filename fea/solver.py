@@ -53,7 +53,7 @@ def node_ordering(basis, backend: str | None = None):
     The mesh's vertices are ordered on the vertex graph (the tetrahedra's edges); each edge node of a P2 mesh is
     placed right after the earlier of its two end vertices, i.e. in the subdomain of an interior end vertex, in
     the separator when both ends are on it. Ordering nodes instead of the 3x larger DOF graph keeps each node's
-    three DOFs together (larger supernodes); ordering the vertices only (~1/6 of a P2 mesh's nodes) costs ~0.07 s
+    three DOFs together (larger supernodes); ordering the vertices only (~1/6 of a P2 mesh's nodes) costs ~0.03 s
     on rod 1# instead of ~0.3 s for METIS on the whole node graph, for ~7 % fewer factorisation flops.
     """
     if (backend or available_backend()) != "cholmod":

@@ -168,8 +168,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         from fea.sweep_plot import plot_sweep
         calibration, title = None, "frame model around rod 1#"
         if summary["stages"]["fea"]["model"] == "solid":   # that solid run fits the frame's bend factors
-            from fea.frame import calibrate_frame
-            calibration = calibrate_frame([design], [fea.C_F], [fea.C_g])
+            from fea.family import calibrate_family
+            calibration = calibrate_family(design, lambda d: (fea.C_F, fea.C_g)).calibration
             title = "frame model calibrated on rod 1#'s solid FEA"
         df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,
                        cache_dir=out / "sweep" / "cache", calibration=calibration)

@@ -64,7 +64,7 @@ def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, h
 
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
-                     symmetry: bool = True):
+                     symmetry: bool = True, tip_moments: bool = False):
     """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
 
     ``mesher(design, size_mm, grading, half) -> RodMesh`` makes the meshes (``geometry.mesh_rod`` in the CLI:
@@ -84,7 +84,8 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     t0 = time.perf_counter()
     rm = mesher(design, h, grading, symmetry)
     t_mesh = time.perf_counter() - t0
-    res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend)
+    res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
+                           tip_moments=tip_moments)
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),
             "dofs": res.dofs, "solver": res.backend,

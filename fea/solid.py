@@ -31,12 +31,14 @@ from .elasticity import element_tensors
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, available_backend, node_ordering
 
-__all__ = ["SolidResult", "solve_compliance", "mirror_displacements", "ANTISYMMETRIC_CASES"]
+__all__ = ["SolidResult", "solve_compliance", "mirror_displacements", "section_rigid_motion", "mirror_nodes",
+           "ANTISYMMETRIC_CASES"]
 
 log = logging.getLogger(__name__)
 
-#: load cases (columns F_x, F_y, F_z, g_x, g_y, g_z) across the bend plane y_T = 0: antisymmetric fields
-ANTISYMMETRIC_CASES = (1, 4)
+#: load cases (columns F_x, F_y, F_z, g_x, g_y, g_z and, with ``tip_moments``, M_x, M_y, M_z) across the bend
+#: plane y_T = 0: antisymmetric fields (F_y, g_y; the moments about x and z are pseudo-vectors: M_x, M_z)
+ANTISYMMETRIC_CASES = (1, 4, 6, 8)
 _FLIP = {False: np.array([1.0, -1.0, 1.0]), True: np.array([-1.0, 1.0, -1.0])}  # image of (u_x, u_y, u_z)
 
 
@@ -46,8 +48,11 @@ class SolidResult:
 
     C_F [mm/N] and C_g [mm/g0], shape=(3, 3), in {T}; ``symmetry_defect`` = max|C_F - C_F^T| / max|C_F|;
     ``dofs``; ``timings_s`` per stage; ``backend`` of the linear solver; ``mass_kg`` of the mesh;
-    ``ball_rotation`` [rad per unit load], shape=(3, 6); ``displacements`` (optional, shape=(3N, 6), on the
-    mesh solved: the half for a half mesh, see :func:`mirror_displacements`); ``mass_kg`` is the whole rod's.
+    ``ball_rotation`` [rad per unit load], shape=(3, n_cases); ``displacements`` (optional, shape=(3N, n_cases),
+    on the mesh solved: the half for a half mesh, see :func:`mirror_displacements`); ``mass_kg`` is the whole
+    rod's. ``n_cases`` = 6 (F_x, F_y, F_z [N], g_x, g_y, g_z [g0]), or 9 with ``tip_moments`` (+ M_x, M_y, M_z
+    [N mm] about the ball centre); ``ball_motion`` = ball-centre translation [mm] and rotation [rad] per unit
+    load, shape=(6, n_cases).
     """
 
     C_F: np.ndarray
@@ -60,6 +65,7 @@ class SolidResult:
     ball_rotation: np.ndarray | None = None
     displacements: np.ndarray | None = None
     rod_mesh: object | None = None
+    ball_motion: np.ndarray | None = None
 
 
 def _rigid_fit(X: np.ndarray, U: np.ndarray):
@@ -77,10 +83,12 @@ def _rigid_fit(X: np.ndarray, U: np.ndarray):
     return sol[:3], sol[3:]
 
 
-def _ball_loads(x_q: np.ndarray, w: np.ndarray, half: bool):
+def _ball_loads(x_q: np.ndarray, w: np.ndarray, half: bool, moments: bool = False):
     """Body-force densities on the ball (quadrature points ``x_q`` (3, nb, nq) [mm], weights ``w`` (nb, nq)) whose
-    resultant is a unit force along x, y, z and whose moment about the ball centre (the {T} origin) is zero.
-    A half ball's volume, centroid and inertia are those of the whole ball (the half and its mirror image)."""
+    resultant is a unit force along x, y, z and whose moment about the ball centre (the {T} origin) is zero;
+    with ``moments`` three more: zero resultant, a unit moment [N mm] about x, y, z (``omega x (x - c)``,
+    ``J omega = e_j``). A half ball's volume, centroid and inertia are those of the whole ball (the half and its
+    mirror image)."""
     pts = [(x_q, w)] + ([(x_q * np.array([1.0, -1.0, 1.0])[:, None, None], w)] if half else [])
     V = sum(ww.sum() for _, ww in pts)
     c = sum((xx * ww).sum(axis=(1, 2)) for xx, ww in pts) / V    # the seat shifts it off the centre
@@ -94,12 +102,17 @@ def _ball_loads(x_q: np.ndarray, w: np.ndarray, half: bool):
         F = np.eye(3)[j]
         omega = -np.linalg.solve(J, np.cross(c, F))         # cancels the moment of F/V about the centre
         out.append(F[:, None, None] / V + np.cross(omega[:, None, None], r, axis=0))
+    for j in range(3 if moments else 0):
+        omega = np.linalg.solve(J, np.eye(3)[j])
+        out.append(np.cross(omega[:, None, None], r, axis=0))
     return out
 
 
 def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = False,
-                     backend: str | None = None) -> SolidResult:
-    """Solve the six load cases on ``rod_mesh`` (a :class:`geometry.RodMesh` of ``design``, whole or half)."""
+                     backend: str | None = None, tip_moments: bool = False) -> SolidResult:
+    """Solve the six load cases on ``rod_mesh`` (a :class:`geometry.RodMesh` of ``design``, whole or half);
+    ``tip_moments`` adds three unit moments at the ball centre (columns 6-8; same factorisations), which the
+    joint calibration of the frame model needs (:mod:`fea.joints`)."""
     t0 = time.perf_counter()
     timings = {}
     mesh = rod_mesh.mesh
@@ -127,12 +140,14 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     x_q = basis.mapping.F(basis.X)                          # (3, ne, nq) global quadrature points
     dens = np.array([kg_m3_to_kg_mm3(m.density_kg_m3) for m in materials])[rod_mesh.part_index]
     ne, nq = basis.dx.shape
-    loads = np.zeros((N, 6))
+    n_cases = 9 if tip_moments else 6
+    loads = np.zeros((N, n_cases))
     ball = np.nonzero(rod_mesh.part_index == rod_mesh.parts.index(Part.BALL))[0]
-    for j, fb in enumerate(_ball_loads(x_q[:, ball, :], basis.dx[ball], half)):
+    for j, fb in enumerate(_ball_loads(x_q[:, ball, :], basis.dx[ball], half, tip_moments)):
         f = np.zeros((3, ne, nq))
         f[:, ball, :] = fb
-        loads[:, j] = assemble_body_force(basis, f)
+        loads[:, j if j < 3 else j + 3] = assemble_body_force(basis, f)
+    for j in range(3):
         g = np.zeros((3, ne, nq))
         g[j] = (dens * G0)[:, None]
         loads[:, 3 + j] = assemble_body_force(basis, g)
@@ -152,11 +167,12 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     timings["analyze"] = time.perf_counter() - t1
     if half:
         plane = basis.get_dofs(rod_mesh.symmetry_facets).all()
-        groups = [([0, 2, 3, 5], [1]), (list(ANTISYMMETRIC_CASES), [0, 2])]   # (cases, held components)
+        anti = [k for k in ANTISYMMETRIC_CASES if k < n_cases]
+        groups = [([k for k in range(n_cases) if k not in anti], [1]), (anti, [0, 2])]   # (cases, held comps)
     else:
         plane = np.zeros(0, dtype=np.int64)
-        groups = [(list(range(6)), [])]
-    U = np.zeros((N, 6))
+        groups = [(list(range(n_cases)), [])]
+    U = np.zeros((N, n_cases))
     timings["factorize"] = timings["solve"] = 0.0
     for cases, comps in groups:
         held = fixed.copy()
@@ -174,25 +190,45 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     # ball-centre displacement ----------------------------------------------------------------
     bdofs = np.unique(basis.element_dofs[:, ball])
     X = basis.doflocs[:, bdofs].T
-    Ub = U[(3 * bdofs[:, None] + np.arange(3)).ravel()].reshape(len(bdofs), 3, 6)
-    if half:                                                # the ball's mirror image moves as the field's image
-        flips = np.stack([_FLIP[k in ANTISYMMETRIC_CASES] for k in range(6)], axis=1)   # (3, 6)
-        X = np.concatenate([X, X * _FLIP[False]])
-        Ub = np.concatenate([Ub, Ub * flips])
-    t, theta = _rigid_fit(X, Ub)
+    t, theta = section_rigid_motion(X, U[(3 * bdofs[:, None] + np.arange(3)).ravel()], half)
     CF = t[:, :3]
-    Cg = t[:, 3:]
+    Cg = t[:, 3:6]
     defect = float(np.abs(CF - CF.T).max() / np.abs(CF).max())
     timings["total"] = time.perf_counter() - t0
     log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, N, " (half mesh, two solves)" if half else "",
              solver.backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return SolidResult(CF, Cg, defect, N, mass, timings, solver.backend, theta,
-                       U if keep_displacements else None, rod_mesh)
+                       U if keep_displacements else None, rod_mesh, np.vstack([t, theta]))
+
+
+def _flips(n_cases: int) -> np.ndarray:
+    """Image of (u_x, u_y, u_z) across y_T = 0 for each load case's field, shape=(3, n_cases)."""
+    return np.stack([_FLIP[k in ANTISYMMETRIC_CASES] for k in range(n_cases)], axis=1)
+
+
+def mirror_nodes(X: np.ndarray, U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes of a half mesh and their mirror images about y_T = 0: positions ``X`` shape=(n, 3) [mm] and
+    displacements ``U`` shape=(3 n, n_cases) -> shapes (2 n, 3) and (2 n, 3, n_cases), each load case's
+    field symmetric or antisymmetric (:data:`ANTISYMMETRIC_CASES`)."""
+    n_cases = U.shape[1]
+    Ub = U.reshape(len(X), 3, n_cases)
+    return np.concatenate([X, X * _FLIP[False]]), np.concatenate([Ub, Ub * _flips(n_cases)])
+
+
+def section_rigid_motion(X: np.ndarray, U: np.ndarray, half: bool):
+    """Least-squares rigid motion of a set of nodes: positions ``X`` shape=(n, 3) [mm] in {T}, displacements
+    ``U`` shape=(3 n, n_cases) (x, y, z per node) -> translation of the {T} origin [mm] and rotation [rad],
+    each shape=(3, n_cases). On a half mesh the nodes' mirror images count too."""
+    if half:
+        X, Ub = mirror_nodes(X, U)
+    else:
+        Ub = U.reshape(len(X), 3, U.shape[1])
+    return _rigid_fit(X, Ub)
 
 
 def mirror_displacements(rod_mesh, U: np.ndarray, whole) -> np.ndarray:
-    """Displacements ``U`` (3 N_half, 6) of a half mesh carried onto ``whole = rod_mesh.mirrored()``
-    (3 N_whole, 6): each node takes its own value (y_T >= 0) or its image's, flipped as its load case's field
+    """Displacements ``U`` (3 N_half, n_cases) of a half mesh carried onto ``whole = rod_mesh.mirrored()``
+    (3 N_whole, n_cases): each node takes its own value (y_T >= 0) or its image's, flipped as its load case's field
     is symmetric or antisymmetric about ``y_T = 0``."""
     from scipy.spatial import cKDTree
 
@@ -200,7 +236,7 @@ def mirror_displacements(rod_mesh, U: np.ndarray, whole) -> np.ndarray:
     dist, src = cKDTree(xh.T).query((xw * np.array([[1.0], [-1.0], [1.0]]) ** (xw[1] < 0)).T)
     if dist.max() > 1e-6 * np.ptp(xh).max():
         raise FeaError("the whole mesh is not the mirror image of the half mesh", key="whole")
-    flips = np.stack([_FLIP[k in ANTISYMMETRIC_CASES] for k in range(6)], axis=1)     # (3, 6)
-    Uw = U.reshape(-1, 3, 6)[src]
-    Uw[xw[1] < 0] *= flips
-    return Uw.reshape(-1, 6)
+    n_cases = U.shape[1]
+    Uw = U.reshape(-1, 3, n_cases)[src]
+    Uw[xw[1] < 0] *= _flips(n_cases)
+    return Uw.reshape(-1, n_cases)

@@ -132,6 +132,30 @@ def _distal_moments(segs, cl: _Centreline, idx, u, tip_mass_kg, tip_com_F):
     return W, Q
 
 
+def _flexibility(segs: list[Segment], idx, t, bend_flex, shear: bool, axial: bool, shear_factor: float,
+                 torsion_factor: float):
+    """Section compliances at the quadrature points: force ``Kf^-1`` [1/N] and moment ``Km^-1``
+    [1/(N mm^2)], each shape=(n, 3, 3) in {F}, along the local tangents ``t`` shape=(n, 3)."""
+    props = np.array([[s.EI, s.GJ, s.EA, s.kGA] for s in segs])[idx]
+    EI, GJ, EA, kGA = props.T
+    tt = t[:, :, None] * t[:, None, :]
+    # bending flexibility: in-plane (moment about the bend-plane normal y) and out-of-plane factors on arcs
+    ey = np.array([0.0, 1.0, 0.0])
+    n = np.cross(t, ey)
+    flex = np.array([(s.bend_flex or bend_flex) if s.kind is SegmentKind.ARC else (1.0, 1.0) for s in segs])[idx]
+    k_in, k_out = flex[:, 0], flex[:, 1]
+    yy = np.broadcast_to(np.outer(ey, ey), tt.shape)
+    nn = n[:, :, None] * n[:, None, :]
+    Km_inv = (torsion_factor * tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy
+              + (k_out / EI)[:, None, None] * nn)
+    Kf_inv = np.zeros_like(tt)
+    if axial:
+        Kf_inv = Kf_inv + tt / EA[:, None, None]
+    if shear:
+        Kf_inv = Kf_inv + shear_factor * (np.eye(3)[None] - tt) / kGA[:, None, None]
+    return Kf_inv, Km_inv
+
+
 def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: float, shear: bool, axial: bool,
                tip_com_F: np.ndarray | None = None, bend_flex: tuple[float, float] = (1.0, 1.0),
                shear_factor: float = 1.0, torsion_factor: float = 1.0):
@@ -146,24 +170,7 @@ def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: fl
     cl = _Centreline(segs)
     r = cl.point(idx, u)
     t = cl.tangent(idx, u)
-    props = np.array([[s.EI, s.GJ, s.EA, s.kGA] for s in segs])[idx]
-    EI, GJ, EA, kGA = props.T
-    tt = t[:, :, None] * t[:, None, :]
-    eye = np.eye(3)[None]
-    # bending flexibility: in-plane (moment about the bend-plane normal y) and out-of-plane factors on arcs
-    ey = np.array([0.0, 1.0, 0.0])
-    n = np.cross(t, ey)
-    flex = np.array([(s.bend_flex or bend_flex) if s.kind is SegmentKind.ARC else (1.0, 1.0) for s in segs])[idx]
-    k_in, k_out = flex[:, 0], flex[:, 1]
-    yy = np.broadcast_to(np.outer(ey, ey), tt.shape)
-    nn = n[:, :, None] * n[:, None, :]
-    Km_inv = (torsion_factor * tt / GJ[:, None, None] + (k_in / EI)[:, None, None] * yy
-              + (k_out / EI)[:, None, None] * nn)
-    Kf_inv = np.zeros_like(tt)
-    if axial:
-        Kf_inv = Kf_inv + tt / EA[:, None, None]
-    if shear:
-        Kf_inv = Kf_inv + shear_factor * (eye - tt) / kGA[:, None, None]
+    Kf_inv, Km_inv = _flexibility(segs, idx, t, bend_flex, shear, axial, shear_factor, torsion_factor)
     Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
     CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
     W, Q = _distal_moments(segs, cl, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)

@@ -5,8 +5,10 @@ The solid model consumes a :class:`rodlab.fem_mesh.RodMesh` (made by ``geometry`
 from .compute import DEFAULT_GRADING, FeaModel, compute_compliance, default_solid_size_mm, solid_compliance
 from .errors import FeaError
 from .frame import BendFlexibility, asme_bend_flexibility, frame_compliance
+from .joints import JointCalibration, calibrate_joints, joint_frame_compliance
 from .solid import SolidResult, mirror_displacements, solve_compliance
 
 __all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "DEFAULT_GRADING",
            "FeaError", "BendFlexibility", "asme_bend_flexibility", "frame_compliance", "SolidResult",
-           "solve_compliance", "mirror_displacements"]
+           "solve_compliance", "mirror_displacements", "JointCalibration", "calibrate_joints",
+           "joint_frame_compliance"]

@@ -113,7 +113,10 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
 
 def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME, mesher=None,
                        **kwargs) -> RodCompliance:
-    """Compliance of ``design`` by ``model`` (``solid`` needs a ``mesher``, see :func:`solid_compliance`)."""
+    """Compliance of ``design`` by ``model`` (``solid`` needs a ``mesher``, see :func:`solid_compliance`).
+
+    ``calibration`` (frame only): a :class:`fea.frame.FrameCalibration` (constants) or a
+    :class:`fea.joints.JointCalibration` (one solid run of the design's family, :mod:`fea.family`)."""
     model = FeaModel(model)
     if model is FeaModel.SOLID:
         if mesher is None:
@@ -124,6 +127,18 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
         raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
     if model is FeaModel.FRAME:
         from .frame import CALIBRATION, FRAME_REVISION, frame_range_notes
+        from .joints import JointCalibration, joint_frame_compliance
+        if isinstance(calibration, JointCalibration):
+            CF, Cg = joint_frame_compliance(design, calibration)
+            b = calibration.base
+            return RodCompliance.from_design(design, CF, Cg, Method.FEA, {
+                "generator": "rodlab beam frame (Timoshenko, unit-load method), joint-calibrated on solid FEA",
+                "model": "frame", "frame_revision": FRAME_REVISION,
+                "joint_calibration": {"solid_design": b.name, "L1_mm": b.L1_mm, "L2_mm": b.L2_mm,
+                                      "margins_mm": list(calibration.margins_mm),
+                                      "block_asymmetry": calibration.asymmetry,
+                                      "span_residual": calibration.span_residual},
+                "outside_calibrated_range": []})
         cal = calibration or CALIBRATION
         k = asme_bend_flexibility(design, cal)
         CF, Cg = frame_compliance(design, cal=cal)

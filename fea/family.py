@@ -2,81 +2,66 @@
 
 The global calibration (:data:`fea.frame.CALIBRATION`) is a compromise over many materials and joints; on
 random designs it can be several per cent off (docs/fea.md). Within a family the joints are the same and only
-the lever arms change, so a few solid runs pin the family's own constants:
+the free tube lengths change, so one solid run of one member, cut at its free tubes, gives each joint's own
+flexibility (:mod:`fea.joints`), which every other member takes over: within 0.35 % on the paper's families
+and 10 hard random families (``scripts/frame_random_blind.py``).
 
-- one solid run (the base design) fits the two bend factors (:data:`fea.frame.FAMILY_FIT`): enough on the
-  paper's families (within 0.73 %), not on families whose mismatch lies in the joints (up to 4 % on random
-  ones);
-- two solid runs far apart in L1 x L2 (the base and the sweep's design farthest from it) fit the bend factors
-  and the holder and sleeve load-transfer zones (:data:`FAMILY_FIT_TWO`): the changed lever arms separate the
-  joints from the bend. On 10 random families chosen for their large errors this left at most 1.1 % on a
-  third member (``scripts/frame_random_blind.py``).
+:func:`calibration_member` picks the member to solve: the base, unless its free tubes are too short to cut
+``margin`` diameters from their ends (then the grid's nearest member that has them).
 """
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
 
 from rodlab.design import RodDesign
+from rodlab.enums import Part
 from rodlab.errors import RodlabError
 
-from .frame import FAMILY_FIT, FrameCalibration, calibrate_frame, frame_errors
+from .joints import DEFAULT_MARGIN, MIN_SPAN_MM, JointCalibration, calibrate_joints, free_spans
 
-__all__ = ["FAMILY_FIT_TWO", "FamilyCalibration", "family_partner", "calibrate_family"]
+__all__ = ["calibration_member", "calibrate_family"]
 
 log = logging.getLogger(__name__)
 
-#: the constants refitted from two solid runs of one family
-FAMILY_FIT_TWO = FAMILY_FIT + ("holder_end", "sleeve_end")
+
+def _fits(design: RodDesign, margin: float) -> bool:
+    """Both free tubes hold two sections ``margin`` diameters from their ends, ``MIN_SPAN_MM`` apart."""
+    spans = free_spans(design)
+    return all(p in spans and spans[p][1] - spans[p][0] >= 2 * margin * t.outer_diameter_mm + MIN_SPAN_MM
+               for p, t in ((Part.PIPE_I, design.pipe_I), (Part.PIPE_II, design.pipe_II)))
 
 
-@dataclass(frozen=True)
-class FamilyCalibration:
-    """A frame calibration fitted on solid runs of one family.
-
-    calibration : the fitted constants; names : which ones were fitted; designs : the solid-run designs;
-    max_err : largest relative error [-] of the calibrated frame on each of them (every entry above 2 % of
-    its matrix's largest, C_F and C_g).
-    """
-
-    calibration: FrameCalibration
-    names: tuple[str, ...]
-    designs: tuple[RodDesign, ...]
-    max_err: tuple[float, ...]
-
-
-def family_partner(base: RodDesign, L1s, L2s) -> RodDesign | None:
-    """The valid design of the L1 x L2 grid farthest from ``base`` (relative distance
-    ``|dL1| / L1 + |dL2| / L2``), or None if no grid design other than the base is valid."""
-    best, best_d = None, 0.0
+def calibration_member(base: RodDesign, L1s=(), L2s=(), margin: float = DEFAULT_MARGIN) -> RodDesign:
+    """The family member whose solid run calibrates the family: ``base`` if its free tubes are long enough
+    for the joint calibration's sections, else the valid L1 x L2 grid design nearest to it (relative distance
+    ``|dL1| / L1 + |dL2| / L2``) that is; ``base`` if none is (a coarser calibration, logged)."""
+    if _fits(base, margin):
+        return base
+    best, best_d = None, np.inf
     for L1 in np.asarray(L1s, dtype=float):
         for L2 in np.asarray(L2s, dtype=float):
-            dist = abs(L1 - base.L1_mm) / base.L1_mm + abs(L2 - base.L2_mm) / base.L2_mm
-            if dist <= best_d + 1e-12:
-                continue
             try:
                 d = replace(base, L1_mm=float(L1), L2_mm=float(L2), name=f"{base.name} {L1:g}-{L2:g}")
             except RodlabError:
                 continue
-            best, best_d = d, dist
-    if best is not None and best_d < 0.05:
-        return None                               # too close to the base to separate the joints from the bend
+            dist = abs(L1 - base.L1_mm) / base.L1_mm + abs(L2 - base.L2_mm) / base.L2_mm
+            if dist < best_d and _fits(d, margin):
+                best, best_d = d, dist
+    if best is None:
+        log.warning("no member of %s's family in the grid has free tubes of %g diameters at each end; "
+                    "calibrating on the base with shorter margins", base.name, margin)
+        return base
+    log.info("%s's free tubes are too short for the joint calibration: calibrating on %s", base.name, best.name)
     return best
 
 
-def calibrate_family(base: RodDesign, solve: Callable[[RodDesign], tuple[np.ndarray, np.ndarray]],
-                     partner: RodDesign | None = None) -> FamilyCalibration:
-    """Fit the frame to ``solve(design) -> (C_F, C_g)`` (solid FEA) of ``base`` and, if given, ``partner``
-    (another L1 x L2 member of the family, e.g. :func:`family_partner`): :data:`FAMILY_FIT_TWO` from both,
-    :data:`FAMILY_FIT` from the base alone."""
-    designs = (base,) if partner is None else (base, partner)
-    results = [solve(d) for d in designs]
-    names = FAMILY_FIT if partner is None else FAMILY_FIT_TWO
-    cal = calibrate_frame(list(designs), [r[0] for r in results], [r[1] for r in results], names=names)
-    errs = tuple(float(np.abs(frame_errors(d, r[0], r[1], cal)).max()) for d, r in zip(designs, results))
-    log.info("frame calibrated on %s: %s; max |err| %s", ", ".join(d.name for d in designs),
-             ", ".join(f"{n}={getattr(cal, n):.3f}" for n in names), ", ".join(f"{100 * e:.2f} %" for e in errs))
-    return FamilyCalibration(cal, names, designs, errs)
+def calibrate_family(member: RodDesign, solve: Callable[[RodDesign], object],
+                     margin: float = DEFAULT_MARGIN) -> JointCalibration:
+    """The joint calibration of ``member``'s family from ``solve(member)``: a :class:`fea.SolidResult` with the
+    tip moments and displacements (e.g. ``fea.solid_compliance(d, mesher, tip_moments=True,
+    keep_displacements=True)[1]``)."""
+    return calibrate_joints(member, solve(member), margin)

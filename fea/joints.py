@@ -39,7 +39,8 @@ from rodlab.units import G0
 from .errors import FeaError
 from .frame import CALIBRATION, FrameCalibration, frame_compliance, frame_segments
 
-__all__ = ["JointCalibration", "free_spans", "joint_margins", "calibrate_joints", "joints_from_motions",
+__all__ = ["JointCalibration", "free_spans", "joint_margins", "measure_sections", "calibrate_joints",
+           "joints_from_motions",
            "joint_frame_compliance", "span_basis", "DEFAULT_MARGIN", "WRENCH_CASES", "GRAVITY_CASES",
            "SECTION_TERMS"]
 
@@ -232,11 +233,11 @@ def joints_from_motions(base: RodDesign, section_motion: np.ndarray, tip_motion:
     return jc
 
 
-def calibrate_joints(base: RodDesign, solid, margin: float = DEFAULT_MARGIN,
-                     cal: FrameCalibration = CALIBRATION) -> JointCalibration:
-    """The joint calibration of ``base``'s family from its solid run ``solid`` (a :class:`fea.SolidResult`
-    solved with ``tip_moments=True, keep_displacements=True``); ``margin`` in tube diameters
-    (:func:`joint_margins`)."""
+def measure_sections(base: RodDesign, solid, margin: float = DEFAULT_MARGIN):
+    """What the joint calibration measures on ``base``'s solid run ``solid`` (a :class:`fea.SolidResult`
+    solved with ``tip_moments=True, keep_displacements=True``): the motions of its four sections, shape=(4, 6,
+    9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], and the margins [mm] (:func:`joint_margins` of
+    ``margin`` tube diameters)."""
     from .sections import solid_section_motions
 
     U, rm = solid.displacements, solid.rod_mesh
@@ -248,8 +249,14 @@ def calibrate_joints(base: RodDesign, solid, margin: float = DEFAULT_MARGIN,
     centres, axes = centreline_points(layout(base), [s for _, s in cuts])
     reach = {p: min(SECTION_REACH * t.outer_diameter_mm, 0.9 * margins[p])
              for p, t in zip(_TUBES, (base.pipe_I, base.pipe_II))}
-    motion = solid_section_motions(base, rm, U, cuts, centres, axes, reach)
-    return joints_from_motions(base, motion, solid.ball_motion, margins, cal)
+    return solid_section_motions(base, rm, U, cuts, centres, axes, reach), solid.ball_motion, margins
+
+
+def calibrate_joints(base: RodDesign, solid, margin: float = DEFAULT_MARGIN,
+                     cal: FrameCalibration = CALIBRATION) -> JointCalibration:
+    """The joint calibration of ``base``'s family from its solid run ``solid`` (:func:`measure_sections`,
+    :func:`joints_from_motions`); ``margin`` in tube diameters (:func:`joint_margins`)."""
+    return joints_from_motions(base, *measure_sections(base, solid, margin), cal)
 
 
 def joint_frame_compliance(design: RodDesign, jc: JointCalibration) -> tuple[np.ndarray, np.ndarray]:

@@ -91,7 +91,8 @@ def run_sweep(base: RodDesign, L1s, L2s, model: str = "frame", scheduler: str | 
     """Sweep L1 x L2 around ``base``; return a pandas DataFrame with :data:`SWEEP_COLUMNS`.
 
     ``model``: ``frame`` (default), ``calc`` or ``solid`` (needs ``mesher``, see :func:`fea.solid_compliance`).
-    ``calibration``: a :class:`fea.frame.FrameCalibration` for the frame (e.g. fitted on the base design's solid).
+    ``calibration``: for the frame, a :class:`fea.frame.FrameCalibration` (constants) or a
+    :class:`fea.joints.JointCalibration` (one solid run of the family, :func:`fea.family.calibrate_family`).
     """
     import pandas as pd
 

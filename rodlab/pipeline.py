@@ -85,12 +85,12 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
             import geometry
             from fea import solid_compliance
             from fea.plot import render_deformed
-            fea, res = solid_compliance(design,
+            fea, solid = solid_compliance(design,
                                         lambda d, h, g, half: geometry.mesh_rod(d, size_mm=h, grading=g, half=half),
-                                        error_estimate=False, keep_displacements=True)
-            U = res.displacements.copy()
+                                        error_estimate=False, keep_displacements=True, tip_moments=True)
+            U = solid.displacements.copy()
             U[:, 5] *= -1
-            render_deformed(res.rod_mesh, U, out / "fea" / "deformed.png", case=5,
+            render_deformed(solid.rod_mesh, U, out / "fea" / "deformed.png", case=5,
                             title="rod 1#: self-weight, gravity along -z_T", load_label="self-weight, 1 g0 along -z_T")
             summary["files"]["fea_deformed"] = "fea/deformed.png"
             model = "solid"
@@ -167,10 +167,10 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         from fea.sweep import run_sweep
         from fea.sweep_plot import plot_sweep
         calibration, title = None, "frame model around rod 1#"
-        if summary["stages"]["fea"]["model"] == "solid":   # that solid run fits the frame's bend factors
-            from fea.family import calibrate_family
-            calibration = calibrate_family(design, lambda d: (fea.C_F, fea.C_g)).calibration
-            title = "frame model calibrated on rod 1#'s solid FEA"
+        if summary["stages"]["fea"]["model"] == "solid":   # that solid run calibrates the frame's joints
+            from fea.joints import calibrate_joints
+            calibration = calibrate_joints(design, solid)
+            title = "frame model joint-calibrated on rod 1#'s solid FEA"
         df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,
                        cache_dir=out / "sweep" / "cache", calibration=calibration)
         (out / "sweep").mkdir(parents=True, exist_ok=True)
@@ -181,8 +181,9 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         summary["files"]["sweep"] = "sweep/sweep.png"
         summary["stages"]["sweep"] = {"designs": int(len(df)), "ok": int(len(ok)), "model": title,
                                       "frame_calibration": None if calibration is None else {
-                                          "bend_scale_in": calibration.bend_scale_in,
-                                          "bend_scale_out": calibration.bend_scale_out},
+                                          "joints_of": calibration.base.name,
+                                          "margins_mm": list(calibration.margins_mm),
+                                          "span_residual": calibration.span_residual},
                                       "stiffest": {"L1_mm": float(best["L1_mm"]), "L2_mm": float(best["L2_mm"]),
                                                    "c_rod_um": float(best["c_rod_um"])}}
     summary["timings_s"] = timings

@@ -3,12 +3,16 @@
     python scripts/frame_random_blind.py --solve 101 202   # draw 30 designs per seed, solve them (~4 min each)
     python scripts/frame_random_blind.py --families [NAME ...]   # two L1 / L2 variants of each (default: the
                                                                  # 10 worst under the global calibration; ~3 min)
+    python scripts/frame_random_blind.py --joints          # solve each family base with the tip moments and
+                                                           # store its section motions (joint calibration; ~1 min)
     python scripts/frame_random_blind.py                   # report from fea/data/solid_random_reference.json
 
 Each design draws its tube material, diameter and r_m / t, its bend material, wall, h = t R / r_m^2 and angle,
 rings (or none) and the pipe holder at random, and is kept only if the frame model calls it inside its
 calibrated range (:func:`fea.frame.frame_range_notes` is empty). None of them was used to fit anything. The
-solid references are stored so that ``tests/test_frame_vs_solid.py`` checks the figures in docs/fea.md.
+solid references are stored so that ``tests/test_frame_vs_solid.py`` checks the figures in docs/fea.md; for
+each family base also the joint calibration's measurements (:mod:`fea.joints`: the rigid motions of its four
+sections and of the tip under nine load cases), so that the test re-derives the calibration without a solid run.
 """
 from __future__ import annotations
 
@@ -110,26 +114,46 @@ def global_errors(refs: dict) -> dict:
             for n, r in refs["designs"].items() if "_v" not in n}
 
 
+def solve_joints(refs: dict) -> None:
+    """Solve each family base with the tip moments and store its joint calibration's measurements."""
+    from fea import solid_compliance
+    from fea.joints import measure_sections
+    from geometry import mesh_rod
+    refs.setdefault("joints", {})
+    for base in refs["families"]:
+        d = design(base, refs["designs"][base]["spec"])
+        _, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half),
+                                  error_estimate=False, keep_displacements=True, tip_moments=True)
+        sec, tip, margins = measure_sections(d, res)
+        refs["joints"][base] = {"section_motion": sec.tolist(), "tip_motion": tip.tolist(),
+                                "margins_mm": list(margins.values())}
+        atomic_write_json(REF, refs)
+        print(base, "joints stored", flush=True)
+
+
 def family_errors(refs: dict) -> dict:
-    """Per family: max error on variant v1 of the frame calibrated on the base alone (two bend factors) and on
-    the base and v0 (:data:`fea.family.FAMILY_FIT_TWO`), and of the global calibration."""
-    from fea.family import calibrate_family
-    from fea.frame import CALIBRATION, frame_errors
+    """Per family: max error [-] on its two variants of the frame joint-calibrated on the base's stored solid
+    measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
+    from fea.frame import frame_errors
+    from fea.joints import joint_frame_compliance, joints_from_motions
+    from rodlab.enums import Part
     ds = refs["designs"]
     out = {}
-    for base in refs["families"]:
-        v0, v1 = f"{base}_v0", f"{base}_v1"
-        if v1 not in ds:
-            continue
-
-        def solve_stored(d):
-            return ds[d.name]["C_F"], ds[d.name]["C_g"]
-
-        def err(cal):
-            return float(np.abs(frame_errors(design(v1, ds[v1]["spec"]), ds[v1]["C_F"], ds[v1]["C_g"], cal)).max())
-        one = calibrate_family(design(base, ds[base]["spec"]), solve_stored)
-        two = calibrate_family(design(base, ds[base]["spec"]), solve_stored, design(v0, ds[v0]["spec"]))
-        out[base] = {"global": err(CALIBRATION), "base_only": err(one.calibration), "two_designs": err(two.calibration)}
+    for base, j in refs.get("joints", {}).items():
+        b = design(base, ds[base]["spec"])
+        jc = joints_from_motions(b, np.array(j["section_motion"]), np.array(j["tip_motion"]),
+                                 dict(zip((Part.PIPE_I, Part.PIPE_II), j["margins_mm"])))
+        e_joint, e_glob = [], []
+        for v in (f"{base}_v0", f"{base}_v1"):
+            dv = design(v, ds[v]["spec"])
+            ref = (np.asarray(ds[v]["C_F"]), np.asarray(ds[v]["C_g"]))
+            errs = []
+            for mine, r in zip(joint_frame_compliance(dv, jc), ref):
+                big = np.abs(r) > 0.02 * np.abs(r).max()
+                errs.append(np.abs(mine[big] / r[big] - 1).max())
+            e_joint.append(float(max(errs)))
+            e_glob.append(float(np.abs(frame_errors(dv, *ref)).max()))
+        out[base] = {"joints": max(e_joint), "global": max(e_glob)}
     return out
 
 
@@ -137,6 +161,7 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--solve", type=int, nargs="*", help="seeds whose random designs to solve")
     ap.add_argument("--families", nargs="*", default=None, help="bases whose variants to solve (default: worst 10)")
+    ap.add_argument("--joints", action="store_true", help="solve the family bases for the joint calibration")
     args = ap.parse_args()
     refs = json.loads(REF.read_text()) if REF.exists() else {"designs": {}, "families": []}
     for seed in args.solve or []:
@@ -147,13 +172,15 @@ def main() -> int:
         for base in refs["families"]:
             solve(variant_specs(base, refs["designs"][base]["spec"]), refs)
         atomic_write_json(REF, refs)
+    if args.joints:
+        solve_joints(refs)
     g = global_errors(refs)
     m = np.array(list(g.values()))
     print(f"global calibration on {m.size} random designs: max {100 * m.max():.2f} %, median of the per-design "
           f"max {100 * np.median(m):.2f} %, > 1 %: {int(np.sum(m > 0.01))}, > 2 %: {int(np.sum(m > 0.02))}")
     for base, e in family_errors(refs).items():
-        print(f"  family {base}: third member {100 * e['global']:.2f} % global, {100 * e['base_only']:.2f} % "
-              f"calibrated on the base, {100 * e['two_designs']:.2f} % on the base and one variant")
+        print(f"  family {base}: variants {100 * e['global']:.2f} % global, {100 * e['joints']:.2f} % "
+              f"joint-calibrated on one solid run of the base")
     return 0
 
 

@@ -112,7 +112,8 @@ def test_solid_rod_mass_symmetry_and_provenance():
 @SOLID
 def test_half_model_equals_mirrored_whole():
     """The symmetry half-model (two solves, u_y or u_x,u_z held on y_T = 0) reproduces the whole rod meshed as
-    the half and its mirror image: C^F, C^g, mass and every nodal displacement of all six cases."""
+    the half and its mirror image: C^F, C^g, mass and every nodal displacement of all nine cases (the six and
+    the tip moments, M_x and M_z antisymmetric about the plane, M_y symmetric)."""
     from fea import mirror_displacements, solve_compliance
     d = resolve_design("rod1")                 # carbon: the mirrored fibre axes must map with the mesh
     pytest.importorskip("gmsh")
@@ -125,16 +126,21 @@ def test_half_model_equals_mirrored_whole():
     from fea.assembly import scalar_basis
     b = scalar_basis(whole.mesh)
     assert (b.mapping.detDF(b.X) > 0).all()                # images re-ordered: no inverted element
-    rh = solve_compliance(d, half, keep_displacements=True)
-    rw = solve_compliance(d, whole, keep_displacements=True)
+    rh = solve_compliance(d, half, keep_displacements=True, tip_moments=True)
+    rw = solve_compliance(d, whole, keep_displacements=True, tip_moments=True)
     assert rh.mass_kg == pytest.approx(rw.mass_kg, rel=1e-12)
     scale = np.abs(rw.C_F).max()
     np.testing.assert_allclose(rh.C_F, rw.C_F, atol=1e-7 * scale)
     np.testing.assert_allclose(rh.C_g, rw.C_g, atol=1e-7 * np.abs(rw.C_g).max())
     Uw = mirror_displacements(half, rh.displacements, whole)
     np.testing.assert_allclose(Uw, rw.displacements, atol=1e-7 * np.abs(rw.displacements).max())
+    np.testing.assert_allclose(rh.ball_motion, rw.ball_motion, atol=1e-7 * np.abs(rw.ball_motion).max())
     # a load across the plane (F_y) moves the tip sideways; the symmetric cases do not
     assert abs(rh.C_F[1, 1]) > 100 * max(abs(rh.C_F[0, 1]), abs(rh.C_F[2, 1]))
+    # Maxwell-Betti for the tip wrench: rotation per unit force = translation per unit moment, transposed
+    wrench = rh.ball_motion[:, [0, 1, 2, 6, 7, 8]]
+    assert np.abs(wrench - wrench.T).max() < 1e-5 * np.abs(wrench).max()
+    assert np.abs(wrench[3:, 3:]).max() > 0 and np.abs(wrench[3:, :3]).max() > 0
 
 
 @SOLID

@@ -12,7 +12,7 @@ def register(sub) -> None:
     p = sub.add_parser("demo", help="run the main job end to end on built-in defaults (rod 1#, TX90)",
                        description="Rod 1# -> CAD -> FEA -> simulated rig recording with a concealed effect -> rig fit "
                                    "-> diagnosis -> simulated TX90 campaign -> calibration with every compensation "
-                                   "method (Table 3) -> L1/L2 sweep (its frame calibrated on the solid FEA); all files "
+                                   "method (Table 3) -> L1/L2 sweep (its frame joint-calibrated on the solid FEA); all files "
                                    "under the output folder.")
     p.add_argument("-o", "--output", default="out/demo", help="run folder (default out/demo)")
     p.add_argument("--seed", type=int, default=7)

@@ -27,9 +27,9 @@ def register(sub) -> None:
     p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--calibrate", action="store_true",
-                   help="frame: calibrate it on solid FEA of the base design and of the grid's design farthest "
-                        "from it first (cad extra; ~10 s): the family's joints stay the same over L1 x L2, so the "
-                        "fitted bend factors and load-transfer zones carry over")
+                   help="frame: calibrate its joints on one solid FEA run of the family first (the base, or the "
+                        "grid's nearest design whose free tubes are long enough; cad extra; ~5-10 s): the joints "
+                        "stay the same over L1 x L2, so their measured flexibility carries over")
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
     p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
     p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
@@ -55,20 +55,18 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         if args.model != "frame":
             raise RodlabError("--calibrate applies to --model frame")
         from fea import solid_compliance
-        from fea.family import calibrate_family, family_partner
+        from fea.family import calibrate_family, calibration_member
 
         from .cmd_geometry import require_cad
         geometry = require_cad()
 
         def solve(d):
-            comp, _ = solid_compliance(d, partial(_mesh, geometry.mesh_rod), error_estimate=False)
-            return comp.C_F, comp.C_g
-        partner = family_partner(base, L1s, L2s)
-        fam = calibrate_family(base, solve, partner)
-        calibration = fam.calibration
-        print(f"frame calibrated on the solid FEA of {' and '.join(d.name for d in fam.designs)}: "
-              + ", ".join(f"{n} {getattr(calibration, n):.3f}" for n in fam.names)
-              + " (max |err| there " + ", ".join(f"{100 * e:.2f} %" for e in fam.max_err) + ")")
+            return solid_compliance(d, partial(_mesh, geometry.mesh_rod), error_estimate=False,
+                                    keep_displacements=True, tip_moments=True)[1]
+        calibration = calibrate_family(calibration_member(base, L1s, L2s), solve)
+        m1, m2 = calibration.margins_mm
+        print(f"frame joint-calibrated on the solid FEA of {calibration.base.name} (sections {m1:.1f} / {m2:.1f} mm "
+              f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %)")
 
     def progress(done, total):
         bar = "#" * int(30 * done / max(total, 1))
@@ -88,7 +86,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     else:
         atomic_write_text(out, df.to_csv(index=False))
     png = Path(args.png) if args.png else out.with_suffix(".png")
-    label = f"{args.model} model" + (" calibrated on its solid FEA" if args.calibrate else "")
+    label = f"{args.model} model" + (" joint-calibrated on solid FEA" if args.calibrate else "")
     plot_sweep(df, png, title=f"{label}, base design {base.name}")
     ok = df[df["status"] == "ok"]
     print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")
@@ -97,7 +95,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
               f"mass = {1e3 * best['mass_kg']:.0f} g")
     for note in sorted({m for m in ok["message"] if isinstance(m, str) and m}):
-        print(f"  note: {note}; rerun with --calibrate (solid FEA of two designs fits the frame to this family)")
+        print(f"  note: {note}; rerun with --calibrate (one solid FEA run calibrates the frame's joints for this "
+              f"family)")
     print(f"  wrote {out} and {png}")
     return 0
 

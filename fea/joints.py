@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rodlab.calc import _skew
+from rodlab.frames import skew as _skew
 from rodlab.chain import centreline_points, chain_flexibility, distal_weight_wrench, transport
 from rodlab.design import RodDesign
 from rodlab.enums import Part

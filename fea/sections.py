@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.calc import _skew
+from rodlab.frames import skew as _skew
 from rodlab.design import RodDesign
 from rodlab.enums import Part
 

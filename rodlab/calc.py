@@ -27,6 +27,7 @@ import numpy as np
 
 from .design import RodDesign
 from .enums import Part
+from .frames import skew as _skew
 from .errors import DesignError
 from .layout import Layer, Segment, SegmentKind, layout
 from .units import G0
@@ -40,14 +41,6 @@ class BendModel(str, Enum):
 
     ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
     CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    """Skew matrices of vectors, shape (..., 3) -> (..., 3, 3), ``skew(a) @ b = a x b``."""
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
-                     np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
 
 
 def pipes_only_segments(design: RodDesign) -> list[Segment]:

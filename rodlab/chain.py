@@ -28,7 +28,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .calc import _Centreline, _distal_moments, _flexibility, _quadrature, _skew
+from .calc import _Centreline, _distal_moments, _flexibility, _quadrature
+from .frames import skew as _skew
 from .layout import Segment
 from .units import G0
 

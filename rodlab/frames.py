@@ -8,7 +8,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rot_x", "rot_y", "rot_z", "pose_to_matrix", "matrix_to_pose", "rotation_from_abc"]
+__all__ = ["rot_x", "rot_y", "rot_z", "pose_to_matrix", "matrix_to_pose", "rotation_from_abc", "skew"]
+
+
+def skew(v) -> np.ndarray:
+    """Skew matrices of vectors, shape (..., 3) -> (..., 3, 3), ``skew(a) @ b = a x b``."""
+    v = np.asarray(v, dtype=float)
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
 
 
 def _c_s(angle_rad):

@@ -32,7 +32,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["load_design", "design_from_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
+__all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
 
 FORMAT_ROD = "rodlab.rod/1"
 
@@ -192,6 +192,31 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     stud = sleeve("ball_holder", "al_7075", min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
     return RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
                      source=None if path is None else Path(path))
+
+
+def design_to_dict(design: RodDesign) -> dict:
+    """``design`` as a ``rodlab.rod/1`` table that :func:`design_from_dict` reads back to an equal design: every
+    part explicit (``length_mm = 0`` for an absent one) and every material's numbers in ``[materials]`` (so a
+    file written today keeps its meaning if a built-in material is revised)."""
+    mats: dict[str, dict] = {}
+
+    def mat(m) -> str:
+        t = {"E_GPa": m.E_GPa, "nu": m.nu, "density_kg_m3": m.density_kg_m3}
+        t.update({k: getattr(m, k) for k in ("E_transverse_GPa", "G_GPa") if getattr(m, k) is not None})
+        mats[m.name] = t
+        return m.name
+
+    def tube(t) -> dict:
+        return {"material": mat(t.material), "outer_diameter_mm": t.outer_diameter_mm, "wall_mm": t.wall_mm}
+
+    def sleeve(t) -> dict:
+        return {"material": mat(t.material), "outer_diameter_mm": t.outer_diameter_mm, "length_mm": t.length_mm}
+    d = design
+    return {"format": FORMAT_ROD, "name": d.name, "L1_mm": d.L1_mm, "L2_mm": d.L2_mm, "gamma_deg": d.gamma_deg,
+            "pipe_I": tube(d.pipe_I), "pipe_II": tube(d.pipe_II),
+            "bend": dict(tube(d.bend), radius_mm=d.bend.radius_mm), "rings": sleeve(d.rings),
+            "pipe_holder": sleeve(d.pipe_holder), "ball_holder": sleeve(d.ball_holder),
+            "ball": {"material": mat(d.ball.material), "diameter_mm": d.ball.diameter_mm}, "materials": mats}
 
 
 def load_design(path: str | Path) -> RodDesign:

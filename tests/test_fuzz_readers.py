@@ -26,9 +26,16 @@ def _sources():
     import tempfile
     tmp = Path(tempfile.mkdtemp())
     comp = write_compliance(calc_rod_compliance(resolve_design("rod1")), tmp / "rod1.compliance.json")
+    from fea.joints import JointCalibration
+    from fea.joints_io import write_joints
+    rng = np.random.default_rng(0)
+    joints = write_joints(tmp / "rod1.joints.json", JointCalibration(
+        resolve_design("rod1"), (25.0, 25.0), 1e-4 * rng.normal(size=(5, 6, 6)), 1e-4 * rng.normal(size=(5, 6, 3)),
+        1e-6 * rng.normal(size=(2, 6))))
     out = {
         "design": (builtin_designs()["rod1"].read_bytes(), ".rod.toml"),
         "compliance": (comp.read_bytes(), ".compliance.json"),
+        "joints": (joints.read_bytes(), ".joints.json"),
         "robot": ((ROOT / "rodlab" / "data" / "robots" / "tx90.toml").read_bytes(), ".toml"),
         "profile": ((ROOT / "rodlab" / "data" / "rig" / "simulator.profile.toml").read_bytes(), ".toml"),
         "plan": ((ROOT / "rodlab" / "data" / "rig" / "paper.plan.toml").read_bytes(), ".toml"),
@@ -53,6 +60,9 @@ def _reader(kind):
     if kind == "compliance":
         from rodlab.compliance import read_compliance
         return read_compliance
+    if kind == "joints":
+        from fea.joints_io import read_joints
+        return read_joints
     if kind == "robot":
         from calibrate.robot import read_robot
         return read_robot

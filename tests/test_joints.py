@@ -182,3 +182,43 @@ def test_joint_calibration_on_the_solid_rod1_family():
             big = np.abs(ref) > 0.02 * np.abs(ref).max()
             errs.append(np.abs(mine[big] / ref[big] - 1).max())
         assert max(errs) < 0.002, (name, errs)
+
+
+def test_joints_file_round_trip_and_errors(tmp_path):
+    """A joint calibration written to *.joints.json reads back to the same compliance of every member; bad
+    files name the file and key (format, frame revision, shapes, margins, the design)."""
+    import json as _json
+
+    from fea.joints_io import read_joints, write_joints
+    truth = replace(CALIBRATION, sleeve_end=2.5, bend_scale_in=1.15, shear=1.3)
+    d = resolve_design("rod4")
+    margins = joint_margins(d)
+    jc = joints_from_motions(d, *_frame_truth_motions(d, truth, margins), margins)
+    path = write_joints(tmp_path / "rod4.joints.json", jc, {"note": "test"})
+    back = read_joints(path)
+    assert back.base == d and back.margins_mm == jc.margins_mm and repr(back) == repr(jc)
+    for L1, L2 in ((150.0, 525.0), (375.0, 600.0)):
+        m = replace(d, L1_mm=L1, L2_mm=L2)
+        for a, b in zip(joint_frame_compliance(m, back), joint_frame_compliance(m, jc)):
+            np.testing.assert_array_equal(a, b)
+    good = _json.loads(path.read_text())
+    for change, key in ((lambda t: t.update(format="rodlab.joint/1"), "format"),
+                        (lambda t: t.update(frame_revision=2), "frame_revision"),
+                        (lambda t: t.pop("D"), "D"),
+                        (lambda t: t.update(dH=[[0.0]]), "dH"),
+                        (lambda t: t["section"][0].__setitem__(0, "x"), "section"),
+                        (lambda t: t.update(margins_mm=[25.0, -1.0]), "margins_mm"),
+                        (lambda t: t["design"].update(L1_mm=-3.0), "design"),
+                        (lambda t: t.update(design=[1, 2]), "design"),
+                        (lambda t: t["frame_calibration"].update(sleeve_endd=1.0), "frame_calibration"),
+                        (lambda t: t.update(asymmetry="big"), "asymmetry")):
+        bad = _json.loads(_json.dumps(good))
+        change(bad)
+        p = tmp_path / "bad.joints.json"
+        p.write_text(_json.dumps(bad))
+        with pytest.raises(FeaError) as e:
+            read_joints(p)
+        assert str(p) in str(e.value) and f"`{key}`" in str(e.value), (key, str(e.value))
+    p.write_text(path.read_text()[:200])
+    with pytest.raises(FeaError, match="not JSON"):
+        read_joints(p)

@@ -30,6 +30,12 @@ def register(sub) -> None:
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: write the deformed shape (self-weight along -z_T) to this PNG")
+    p.add_argument("--joints-out", default=None, metavar="FILE",
+                   help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
+                        "frame runs and sweeps of the design's family (--joints)")
+    p.add_argument("--joints", default=None, metavar="FILE",
+                   help="frame: joint-calibrated by a *.joints.json of the design's family (same parts, any L1 / "
+                        "L2): within ~0.3 %% of the solid model")
     p.set_defaults(func=cmd_fea)
 
 
@@ -43,8 +49,12 @@ def cmd_fea(args: argparse.Namespace) -> int:
 
         def mesher(d, h, grading, half):
             return geometry.mesh_rod(d, size_mm=h, grading=grading, half=half)
+        if args.joints:
+            raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
+        joints = bool(args.joints_out)
         comp, res = solid_compliance(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
-                                     keep_displacements=bool(args.png), symmetry=not args.no_symmetry)
+                                     keep_displacements=bool(args.png) or joints, symmetry=not args.no_symmetry,
+                                     tip_moments=joints)
         prov = comp.provenance
         print(f"solid FEA of rod {design.name}: {prov['dofs']} DOFs ({prov['mesh']['elements']} curved tet10"
               f"{', half model' if res.rod_mesh.is_half else ''}), "
@@ -61,10 +71,23 @@ def cmd_fea(args: argparse.Namespace) -> int:
                                   title=f"rod {design.name}: self-weight, gravity along -z_T",
                                   load_label="self-weight, 1 g0 along -z_T")
             print(f"  wrote {out}")
+        if joints:
+            from fea.joints import calibrate_joints
+            from fea.joints_io import write_joints
+            jc = calibrate_joints(design, res)
+            out = write_joints(args.joints_out, jc, {"solid_dofs": prov["dofs"], "mesh_sha256": prov["mesh"]["sha256"]})
+            print(f"  joint calibration (sections {jc.margins_mm[0]:.1f} / {jc.margins_mm[1]:.1f} mm from the free "
+                  f"tubes' ends, span fit residual {100 * jc.span_residual:.2f} %): wrote {out}")
     else:
-        if args.png or args.size is not None or args.no_symmetry:
-            raise RodlabError("--png, --size and --no-symmetry apply to --model solid only")
-        comp = compute_compliance(design, args.model)
+        if args.png or args.size is not None or args.no_symmetry or args.joints_out:
+            raise RodlabError("--png, --size, --no-symmetry and --joints-out apply to --model solid only")
+        calibration = None
+        if args.joints:
+            if args.model != FeaModel.FRAME.value:
+                raise RodlabError("--joints applies to --model frame")
+            from fea.joints_io import read_joints
+            calibration = read_joints(args.joints)
+        comp = compute_compliance(design, args.model, **({"calibration": calibration} if calibration else {}))
         for note in comp.provenance.get("outside_calibrated_range") or []:
             print(f"  note: {note}; check this design with --model solid, or calibrate the frame on it "
                   "(rodlab sweep --calibrate)")

@@ -29,7 +29,11 @@ def register(sub) -> None:
     p.add_argument("--calibrate", action="store_true",
                    help="frame: calibrate its joints on one solid FEA run of the family first (the base, or the "
                         "grid's nearest design whose free tubes are long enough; cad extra; ~5-10 s): the joints "
-                        "stay the same over L1 x L2, so their measured flexibility carries over")
+                        "stay the same over L1 x L2, so their measured flexibility carries over; written to "
+                        "OUTPUT with .joints.json for --joints")
+    p.add_argument("--joints", default=None, metavar="FILE",
+                   help="frame: use a stored joint calibration of the family (*.joints.json, from an earlier "
+                        "--calibrate or rodlab fea --model solid --joints-out) instead of solving")
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
     p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
     p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
@@ -51,9 +55,16 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         mesher = partial(_mesh, geometry.mesh_rod)
     t0 = time.perf_counter()
     calibration = None
+    if (args.calibrate or args.joints) and args.model != "frame":
+        raise RodlabError(f"{'--calibrate' if args.calibrate else '--joints'} applies to --model frame")
+    if args.calibrate and args.joints:
+        raise RodlabError("give --calibrate (solve now) or --joints FILE (stored), not both")
+    if args.joints:
+        from fea.joints_io import read_joints
+        calibration = read_joints(args.joints)
+        calibration.check_member(base)
+        print(f"frame joint-calibrated by {args.joints} (solid FEA of {calibration.base.name})")
     if args.calibrate:
-        if args.model != "frame":
-            raise RodlabError("--calibrate applies to --model frame")
         from fea import solid_compliance
         from fea.family import calibrate_family, calibration_member
 
@@ -65,8 +76,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                                     keep_displacements=True, tip_moments=True)[1]
         calibration = calibrate_family(calibration_member(base, L1s, L2s), solve)
         m1, m2 = calibration.margins_mm
+        from fea.joints_io import write_joints
+        saved = write_joints(out.with_suffix(".joints.json"), calibration)
         print(f"frame joint-calibrated on the solid FEA of {calibration.base.name} (sections {m1:.1f} / {m2:.1f} mm "
-              f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %)")
+              f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %); "
+              f"saved to {saved} (reuse: --joints)")
 
     def progress(done, total):
         bar = "#" * int(30 * done / max(total, 1))
@@ -86,7 +100,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     else:
         atomic_write_text(out, df.to_csv(index=False))
     png = Path(args.png) if args.png else out.with_suffix(".png")
-    label = f"{args.model} model" + (" joint-calibrated on solid FEA" if args.calibrate else "")
+    label = f"{args.model} model" + (" joint-calibrated on solid FEA" if calibration is not None else "")
     plot_sweep(df, png, title=f"{label}, base design {base.name}")
     ok = df[df["status"] == "ok"]
     print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")

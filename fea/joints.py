@@ -32,7 +32,7 @@ from rodlab.frames import skew as _skew
 from rodlab.chain import centreline_points, chain_flexibility, distal_weight_wrench, transport
 from rodlab.design import RodDesign
 from rodlab.enums import Part
-from rodlab.layout import Layer, SegmentKind, layout
+from rodlab.layout import Layer, layout
 from rodlab.massprops import ball_mass_properties
 from rodlab.units import G0
 
@@ -91,12 +91,15 @@ def span_basis(axis: np.ndarray, length_mm: float, weight_N_per_mm: float = 0.0)
 
 
 def free_spans(design: RodDesign) -> dict[Part, tuple[float, float]]:
-    """Arc lengths from the flange [mm] where pipe I and pipe II are bare tube: ``{part: (start, end)}``."""
-    out = {}
-    for seg in layout(design):
-        if seg.kind is SegmentKind.LINE and len(seg.layers) == 1 and seg.layers[0].part in _TUBES:
-            out[seg.layers[0].part] = (seg.s0_mm, seg.s0_mm + seg.length_mm)
-    return out
+    """Arc lengths from the flange [mm] where pipe I and pipe II are bare tube: ``{part: (start, end)}`` (an
+    empty interval where a tube has no free length: its sleeves meet)."""
+    d = design
+    segs = layout(d)
+    total = segs[-1].s0_mm + segs[-1].length_mm
+    a1 = d.pipe_holder.length_mm if d.pipe_holder.present else 0.0
+    tail = d.plug_mm + d.ball_holder.length_mm + d.ball.radius_mm - d.seat_offset_mm if d.ball_holder.present else 0.0
+    b2 = total - tail
+    return {Part.PIPE_I: (a1, a1 + d.pipe_I_free_mm()), Part.PIPE_II: (b2 - d.pipe_II_free_mm(), b2)}
 
 
 def joint_margins(design: RodDesign, margin: float = DEFAULT_MARGIN) -> dict[Part, float]:

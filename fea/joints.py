@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 WRENCH_CASES = (0, 1, 2, 6, 7, 8)
 GRAVITY_CASES = (3, 4, 5)
 #: distance of a section from the end of its free tube, in tube outer diameters (chosen on the paper's two
-#: families; 0.8-2 diameters give the same accuracy within ~0.1 %, docs/fea.md)
+#: families; 0.8-2 diameters keep every tested member within 0.4 %, docs/fea.md)
 DEFAULT_MARGIN = 1.0
 #: half-length of the stretch of tube whose nodes give a section's motion, in tube outer diameters
 SECTION_REACH = 0.5

@@ -27,6 +27,8 @@ from rodlab.design_io import design_from_dict
 from rodlab.fileio import atomic_write_json
 
 REF = Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_random_reference.json"
+#: families drawn only to test the joint calibration blind (its margin was fixed before they were drawn)
+JOINT_BLIND = REF.with_name("solid_joint_blind_reference.json")
 N_PER_SEED = 30
 N_FAMILIES = 10
 #: the two L1 / L2 variants of a family base [mm] (v0: shorter L1, longer L2; v1: the opposite)
@@ -63,8 +65,9 @@ def design(name: str, spec: dict):
     return design_from_dict(dict({"format": "rodlab.rod/1", "name": name}, **spec))
 
 
-def random_specs(seed: int, n: int = N_PER_SEED) -> dict:
-    """``n`` valid, in-range random designs of ``seed``, named ``rnd{seed}_{i:02d}``."""
+def random_specs(seed: int, n: int = N_PER_SEED, in_range: bool = True) -> dict:
+    """``n`` valid random designs of ``seed``, named ``rnd{seed}_{i:02d}``; with ``in_range`` only those inside the
+    global frame calibration's range."""
     from fea.frame import frame_range_notes
     rng = np.random.default_rng(seed)
     out = {}
@@ -74,7 +77,7 @@ def random_specs(seed: int, n: int = N_PER_SEED) -> dict:
             d = design(name, spec)
         except Exception:           # an invalid draw (parts too long for L1, ...): draw again
             continue
-        if not frame_range_notes(d):
+        if not in_range or not frame_range_notes(d):
             out[name] = spec
     return out
 
@@ -93,7 +96,7 @@ def variant_specs(base: str, spec: dict) -> dict:
     return out
 
 
-def solve(specs: dict, refs: dict) -> None:
+def solve(specs: dict, refs: dict, path: Path = REF) -> None:
     from fea import solid_compliance
     from geometry import mesh_rod
     for name, spec in specs.items():
@@ -103,7 +106,7 @@ def solve(specs: dict, refs: dict) -> None:
                                                                                          half=half),
                                      error_estimate=False)
         refs["designs"][name] = {"spec": spec, "C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs}
-        atomic_write_json(REF, refs)
+        atomic_write_json(path, refs)
         print(name, res.dofs, flush=True)
 
 
@@ -114,20 +117,22 @@ def global_errors(refs: dict) -> dict:
             for n, r in refs["designs"].items() if "_v" not in n}
 
 
-def solve_joints(refs: dict) -> None:
+def solve_joints(refs: dict, path: Path = REF) -> None:
     """Solve each family base with the tip moments and store its joint calibration's measurements."""
     from fea import solid_compliance
     from fea.joints import measure_sections
     from geometry import mesh_rod
     refs.setdefault("joints", {})
     for base in refs["families"]:
+        if base in refs["joints"]:
+            continue
         d = design(base, refs["designs"][base]["spec"])
         _, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half),
                                   error_estimate=False, keep_displacements=True, tip_moments=True)
         sec, tip, margins = measure_sections(d, res)
         refs["joints"][base] = {"section_motion": sec.tolist(), "tip_motion": tip.tolist(),
                                 "margins_mm": list(margins.values())}
-        atomic_write_json(REF, refs)
+        atomic_write_json(path, refs)
         print(base, "joints stored", flush=True)
 
 
@@ -137,7 +142,7 @@ def family_errors(refs: dict) -> dict:
     from fea.frame import frame_errors
     from fea.joints import joint_frame_compliance, joints_from_motions
     from rodlab.enums import Part
-    ds = refs["designs"]
+    ds = refs.get("designs", {})
     out = {}
     for base, j in refs.get("joints", {}).items():
         b = design(base, ds[base]["spec"])
@@ -162,7 +167,18 @@ def main() -> int:
     ap.add_argument("--solve", type=int, nargs="*", help="seeds whose random designs to solve")
     ap.add_argument("--families", nargs="*", default=None, help="bases whose variants to solve (default: worst 10)")
     ap.add_argument("--joints", action="store_true", help="solve the family bases for the joint calibration")
+    ap.add_argument("--joint-blind", type=int, nargs=2, metavar=("SEED", "N"),
+                    help="draw N new random families of SEED to test the joint calibration blind")
     args = ap.parse_args()
+    if args.joint_blind:
+        seed, n = args.joint_blind
+        blind = json.loads(JOINT_BLIND.read_text()) if JOINT_BLIND.exists() else {"designs": {}, "families": []}
+        specs = random_specs(seed, n, in_range=False)
+        solve(specs, blind, JOINT_BLIND)
+        for base, spec in specs.items():
+            solve(variant_specs(base, spec), blind, JOINT_BLIND)
+        blind["families"] = sorted(set(blind["families"]) | set(specs))
+        solve_joints(blind, JOINT_BLIND)
     refs = json.loads(REF.read_text()) if REF.exists() else {"designs": {}, "families": []}
     for seed in args.solve or []:
         solve(random_specs(seed), refs)
@@ -178,9 +194,11 @@ def main() -> int:
     m = np.array(list(g.values()))
     print(f"global calibration on {m.size} random designs: max {100 * m.max():.2f} %, median of the per-design "
           f"max {100 * np.median(m):.2f} %, > 1 %: {int(np.sum(m > 0.01))}, > 2 %: {int(np.sum(m > 0.02))}")
-    for base, e in family_errors(refs).items():
-        print(f"  family {base}: variants {100 * e['global']:.2f} % global, {100 * e['joints']:.2f} % "
-              f"joint-calibrated on one solid run of the base")
+    for label, data in (("", refs), (" (joint blind)", json.loads(JOINT_BLIND.read_text())
+                                       if JOINT_BLIND.exists() else {})):
+        for base, e in family_errors(data).items():
+            print(f"  family {base}{label}: variants {100 * e['global']:.2f} % global, {100 * e['joints']:.2f} % "
+                  f"joint-calibrated on one solid run of the base")
     return 0
 
 

@@ -31,7 +31,7 @@ log = logging.getLogger(__name__)
 def _fits(design: RodDesign, margin: float) -> bool:
     """Both free tubes hold two sections ``margin`` diameters from their ends, ``MIN_SPAN_MM`` apart."""
     spans = free_spans(design)
-    return all(p in spans and spans[p][1] - spans[p][0] >= 2 * margin * t.outer_diameter_mm + MIN_SPAN_MM
+    return all(spans[p][1] - spans[p][0] >= 2 * margin * t.outer_diameter_mm + MIN_SPAN_MM
                for p, t in ((Part.PIPE_I, design.pipe_I), (Part.PIPE_II, design.pipe_II)))
 
 

@@ -29,7 +29,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from rodlab.frames import skew as _skew
-from rodlab.chain import centreline_points, chain_flexibility, distal_weight_wrench, transport
+from rodlab.chain import (ChainFlexibility, centreline_points, chain_flexibility, distal_weight_wrench, transport,
+                          weight_wrench)
 from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.layout import Layer, layout
@@ -278,15 +279,11 @@ def joint_frame_compliance(design: RodDesign, jc: JointCalibration) -> tuple[np.
     ball = ball_mass_properties(design)
     com = ball.com_T_mm + design.tool_mm
     pts = np.vstack([centreline_points(segs, s)[0], design.tool_mm[None, :]])   # distal point of each interval
-    G = np.zeros((5, 6, 3))
-    G[:4] = distal_weight_wrench(segs, s, ball.mass_kg, com)
-    G[4, :3] = G0 * ball.mass_kg * np.eye(3)
-    G[4, 3:] = G0 * ball.mass_kg * _skew(com - design.tool_mm)
+    G = np.concatenate([distal_weight_wrench(segs, s, ball.mass_kg, com),
+                        weight_wrench(ball.mass_kg, ball.mass_kg * com, design.tool_mm)])
     D, dH = jc.D.copy(), jc.dH.copy()
     for j, (i, geo) in enumerate(zip((1, 3), _span_geometry(design, cuts))):
         B, Bh = span_basis(*geo)
         D[i], dH[i] = np.tensordot(jc.section[j], B, 1), np.tensordot(jc.section[j], Bh, 1)
-    Ad = transport(design.tool_mm[None, :] - pts)
-    C6 = np.einsum("nai,nab,nbj->ij", Ad, D, Ad)
-    C6g = np.einsum("nai,nab->ib", Ad, np.einsum("nab,nbj->naj", D, G) + dH)
+    C6, C6g = ChainFlexibility(pts, D, G, dH, design.tool_mm).tip_compliance()
     return CF + 0.5 * (C6[:3, :3] + C6[:3, :3].T), Cg + C6g[:3]

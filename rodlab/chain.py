@@ -34,7 +34,7 @@ from .layout import Segment
 from .units import G0
 
 __all__ = ["ChainFlexibility", "split_at", "chain_flexibility", "transport", "centreline_points",
-           "distal_weight_wrench"]
+           "distal_weight_wrench", "weight_wrench"]
 
 
 @dataclass(frozen=True)
@@ -131,9 +131,7 @@ def chain_flexibility(segs: list[Segment], cuts_mm, tip_F: np.ndarray, tip_mass_
                              tip_com_F)
     Wd = np.append(Wd, tip_mass_kg)
     Qd = np.vstack([Qd.reshape(-1, 3), tip_mass_kg * np.asarray(tip_com_F, dtype=float)[None, :]])
-    G = np.zeros((n, 6, 3))
-    G[:, :3, :] = G0 * Wd[:, None, None] * np.eye(3)
-    G[:, 3:, :] = G0 * _skew(Qd - Wd[:, None] * points)
+    G = weight_wrench(Wd, Qd, points)
     qi = interval[idx]                                          # quadrature point -> interval
     S = _skew(points[qi] - r)                                   # moment arm of the distal wrench
     Fq = np.zeros((idx.size, 6, 6))
@@ -178,8 +176,15 @@ def distal_weight_wrench(segs: list[Segment], s_mm, tip_mass_kg: float, tip_com_
     idx, u = _locate(segs, s_mm)
     cl = _Centreline(segs)
     W, Q = _distal_moments(segs, cl, idx, u, tip_mass_kg, np.asarray(tip_com_F, dtype=float))
-    p = cl.point(idx, u)
-    G = np.zeros((idx.size, 6, 3))
+    return weight_wrench(W, Q, cl.point(idx, u))
+
+
+def weight_wrench(mass_kg, first_moment_kg_mm, points_F) -> np.ndarray:
+    """Wrench at ``points_F`` [mm] of masses ``mass_kg`` with first moments ``first_moment_kg_mm`` (about the
+    {F} origin), per g0 along x, y, z of {T}, shape=(n, 6, 3) [N, N mm]."""
+    W = np.atleast_1d(np.asarray(mass_kg, dtype=float))
+    Q = np.atleast_2d(np.asarray(first_moment_kg_mm, dtype=float))
+    G = np.zeros((W.size, 6, 3))
     G[:, :3, :] = G0 * W[:, None, None] * np.eye(3)
-    G[:, 3:, :] = G0 * _skew(Q - W[:, None] * p)
+    G[:, 3:, :] = G0 * _skew(Q - W[:, None] * np.atleast_2d(points_F))
     return G

@@ -1,63 +1,122 @@
-"""Numeric inverse kinematics: joint angles that put the ball at a point with a given rod orientation."""
+"""Numeric inverse kinematics for many configurations at once: joint angles that put the ball at a point.
+
+The ball position is what MultiCal constrains (the orientation of the rod is free), so the problem per
+configuration is 3 equations in n unknowns within the joint limits. All configurations are solved together by
+a projected Levenberg-Marquardt iteration: one forward-kinematics call over the whole batch per iteration
+(:func:`calibrate.kinematics.ball_positions`, vectorised), the analytic position Jacobian
+``dp/dq_i = z_{i-1} x (p - o_{i-1})`` and an n x n solve per configuration. Two stages, as a planner wants:
+
+1. pulled towards a seed configuration (``|p - target|^2 + w^2 |q - q_seed|^2``): different seeds give
+   different rod orientations;
+2. the position alone, started from stage 1, to ``pos_tol_mm``.
+"""
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["solve_ik"]
+__all__ = ["IkBatch", "solve_ik_positions", "solve_ik_position"]
+
+#: weight of the pull towards the seed in stage 1 [mm/rad]
+SEED_WEIGHT = 5.0
 
 
-def _axis_angle(R):
-    c = np.clip((np.trace(R) - 1) / 2, -1, 1)
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    s = np.linalg.norm(w)
-    ang = np.arccos(c)
-    return w / s * ang if s > 1e-12 else np.zeros(3)
+@dataclass(frozen=True)
+class IkBatch:
+    """Result of :func:`solve_ik_positions`.
+
+    q_rad : joint angles [rad], shape=(M, n) (the last iterate where ``ok`` is False);
+    ok : bool, shape=(M,): the ball is within ``pos_tol_mm`` of its target and the angles within the limits;
+    error_mm : distance of the ball from its target [mm], shape=(M,); iterations : LM iterations run
+    """
+
+    q_rad: np.ndarray
+    ok: np.ndarray
+    error_mm: np.ndarray
+    iterations: int
 
 
-def solve_ik(robot, params: ModelParams, target_W, R_target_W, rng, starts: int = 12, rod_mass_kg=0.0,
-             rod_com_T_mm=None, force_W_N=None, pos_tol_mm: float = 1e-4):
-    """Joint angles [rad], shape=(n,), or None: ball at ``target_W`` [mm] and tool axes ``R_target_W``."""
-    from scipy.optimize import least_squares
+def _residual_and_jacobian(robot, params: ModelParams, q, targets, loads):
+    """Ball position error [mm], shape=(M, 3), and its Jacobian in {W} [mm/rad], shape=(M, 3, n) (the joint
+    compliance's own dependence on q is neglected in the Jacobian, not in the residual)."""
+    rod_mass, com, force = loads
+    fr, _ = ball_positions(robot, params, q, rod_mass, com, force)
+    r = fr.pW - targets
+    J0 = np.cross(fr.z_prev, fr.p0[:, None, :] - fr.o_prev)            # (M, n, 3) in {0}
+    J = np.einsum("ij,mkj->mik", fr.R_W0, J0)                           # (M, 3, n) in {W}
+    return r, J
+
+
+def _lm(robot, params, q0, targets, loads, lo, hi, q_pull, weight, iterations, tol):
+    """Projected LM over the batch; ``q_pull`` None: position only. Returns q, |r|, iterations run."""
+    M, n = q0.shape
+    q = np.clip(q0, lo, hi)
+    lam = np.full(M, 1e-3)
+    eye = np.eye(n)
+
+    def cost_parts(qq):
+        r, J = _residual_and_jacobian(robot, params, qq, targets, loads)
+        c = np.einsum("mi,mi->m", r, r)
+        if q_pull is not None:
+            dq = qq - q_pull
+            c = c + weight ** 2 * np.einsum("mi,mi->m", dq, dq)
+        return r, J, c
+    r, J, cost = cost_parts(q)
+    active = np.ones(M, dtype=bool)
+    it = 0
+    for it in range(1, iterations + 1):
+        A = np.einsum("mik,mil->mkl", J, J)
+        g = np.einsum("mik,mi->mk", J, r)
+        if q_pull is not None:
+            A = A + weight ** 2 * eye
+            g = g + weight ** 2 * (q - q_pull)
+        diag = np.einsum("mkk->mk", A)
+        H = A + (lam[:, None] * np.maximum(diag, 1e-9))[:, :, None] * eye
+        step = -np.linalg.solve(H, g[..., None])[..., 0]
+        step[~active] = 0.0
+        q_new = np.clip(q + step, lo, hi)
+        r_new, J_new, cost_new = cost_parts(q_new)
+        better = (cost_new < cost) & active
+        q[better], r[better], J[better], cost[better] = q_new[better], r_new[better], J_new[better], cost_new[better]
+        lam = np.where(better, np.maximum(lam / 3.0, 1e-12), np.minimum(lam * 4.0, 1e8))
+        err = np.linalg.norm(r, axis=1)
+        small = np.abs(step).max(axis=1) < 1e-12
+        done = (err < tol) if q_pull is None else (small & better) | (lam >= 1e8)
+        active &= ~(done | (lam >= 1e8))
+        if not active.any():
+            break
+    return q, np.linalg.norm(r, axis=1), it
+
+
+def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_kg: float = 0.0,
+                       rod_com_T_mm=None, force_W_N=None, pos_tol_mm: float = 1e-4,
+                       iterations: int = 60) -> IkBatch:
+    """Joint angles near ``q_seed`` [rad], shape=(M, n), that put the ball at ``targets_W`` [mm], shape=(M, 3)
+    or (3,), with the rod's weight and a contact force ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting
+    the compliant joints of ``params``. All M problems are solved together (see the module docstring)."""
+    q_seed = np.atleast_2d(np.asarray(q_seed, float))
+    M, n = q_seed.shape
+    if n != robot.n:
+        raise ValueError(f"q_seed has {n} joints per row, the robot has {robot.n}")
+    targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
+    force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
+    loads = (rod_mass_kg, rod_com_T_mm, force)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-
-    def fun(q):
-        fr, _ = ball_positions(robot, params, q[None], rod_mass_kg, rod_com_T_mm,
-                               None if force_W_N is None else np.atleast_2d(force_W_N))
-        R = fr.R_W0 @ fr.T[0, robot.n, :3, :3]
-        return np.concatenate([fr.pW[0] - target_W, 200.0 * _axis_angle(R_target_W.T @ R)])
-    best = None
-    for _ in range(starts):
-        q0 = rng.uniform(lo * 0.8, hi * 0.8)
-        r = least_squares(fun, q0, bounds=(lo, hi), xtol=1e-12, ftol=1e-12, max_nfev=400)
-        if best is None or r.cost < best.cost:
-            best = r
-        if np.linalg.norm(r.fun[:3]) < pos_tol_mm and np.linalg.norm(r.fun[3:]) < 200 * 1e-6:
-            return r.x
-    if best is not None and np.linalg.norm(best.fun[:3]) < 10 * pos_tol_mm and np.linalg.norm(best.fun[3:]) < 200 * 1e-5:
-        return best.x
-    return None
+    seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
+    q, _, it1 = _lm(robot, params, seed, targets, loads, lo, hi, seed, SEED_WEIGHT, iterations, pos_tol_mm)
+    q, err, it2 = _lm(robot, params, q, targets, loads, lo, hi, None, 0.0, iterations, pos_tol_mm)
+    ok = (err < pos_tol_mm) & np.all((q >= lo) & (q <= hi), axis=1)
+    return IkBatch(q, ok, err, it1 + it2)
 
 
 def solve_ik_position(robot, params: ModelParams, target_W, q_seed, rod_mass_kg=0.0, rod_com_T_mm=None,
                       force_W_N=None, pos_tol_mm: float = 1e-4):
-    """Joint angles [rad] near ``q_seed`` that put the ball at ``target_W`` (the orientation is free), or None."""
-    from scipy.optimize import least_squares
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-    q_seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
-    F = None if force_W_N is None else np.atleast_2d(force_W_N)
-
-    def pos(q):
-        return ball_positions(robot, params, q[None], rod_mass_kg, rod_com_T_mm, F)[0].pW[0] - target_W
-
-    def jpos(q):                      # d p / d q_i = z_{i-1} x (p - o_{i-1}) (joint compliance neglected)
-        fr = ball_positions(robot, params, q[None], rod_mass_kg, rod_com_T_mm, F)[0]
-        return (np.cross(fr.z_prev[0], fr.p0[0] - fr.o_prev[0]) @ fr.R_W0.T).T
-
-    r = least_squares(lambda q: np.concatenate([pos(q), 5.0 * (q - q_seed)]), q_seed, bounds=(lo, hi),
-                      jac=lambda q: np.vstack([jpos(q), 5.0 * np.eye(q.size)]), max_nfev=100)
-    r = least_squares(pos, r.x, jac=jpos, bounds=(lo, hi), xtol=1e-12, ftol=1e-12, max_nfev=100)
-    if np.linalg.norm(r.fun) < pos_tol_mm:
-        return r.x
-    return None
+    """One configuration: joint angles [rad], shape=(n,), near ``q_seed`` that put the ball at ``target_W``
+    [mm], or None (see :func:`solve_ik_positions`)."""
+    res = solve_ik_positions(robot, params, np.asarray(target_W, float)[None], np.asarray(q_seed, float)[None],
+                             rod_mass_kg, rod_com_T_mm, None if force_W_N is None else np.atleast_2d(force_W_N),
+                             pos_tol_mm)
+    return res.q_rad[0] if res.ok[0] else None

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from .identify import Observations, register_base, _select
-from .ik import solve_ik_position
+from .ik import solve_ik_positions
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import catalogue
@@ -30,6 +30,28 @@ def observability(J: np.ndarray) -> dict:
             "parameters": m}
 
 
+def reachable_candidates(robot, params: ModelParams, fixture, k: int, candidates: int, rng, rod_mass_kg=0.0,
+                         rod_com_T_mm=None) -> dict:
+    """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array):
+    position IK from ``4 * candidates`` random seeds per position, every position in one batch."""
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    m = 4 * candidates
+    js = list(fixture.poses)
+    targets = np.repeat(np.array([fixture.transform(j)[:3, 3] for j in js]), m, axis=0)
+    seeds = rng.uniform(0.7 * lo, 0.7 * hi, (len(js) * m, robot.n))
+    res = solve_ik_positions(robot, params, targets, seeds, rod_mass_kg, rod_com_T_mm)
+    cands = {}
+    for i, j in enumerate(js):
+        got = res.q_rad[i * m:(i + 1) * m][res.ok[i * m:(i + 1) * m]][:candidates]
+        if len(got) < k:
+            from .errors import CalibrationError
+            raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
+                                   f"the datum point, {k} needed; move the fixture within reach",
+                                   key=f"positions.{j}")
+        cands[j] = got
+    return cands
+
+
 def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: int = 0, rod_mass_kg: float = 0.0,
                rod_com_T_mm=None, base_guess=None):
     """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices."""
@@ -42,22 +64,7 @@ def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: 
         T[:3, :3] = rotation_from_abc([-45.0, 35.26438968, 0.0])
         T[:3, 3] = [650.0, 0.0, 250.0]
         p = p.with_(base=matrix_to_pose(np.linalg.inv(T)))
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-    cands = {}
-    for j, pose in fixture.poses.items():
-        T = fixture.transform(j)
-        got = []
-        for _ in range(candidates * 4):
-            q = solve_ik_position(robot, p, T[:3, 3], rng.uniform(0.7 * lo, 0.7 * hi), rod_mass_kg, rod_com_T_mm)
-            if q is not None:
-                got.append(q)
-            if len(got) >= candidates:
-                break
-        if len(got) < k:
-            from .errors import CalibrationError
-            raise CalibrationError(f"clamping position {j}: only {len(got)} reachable rod orientations found, {k} "
-                                   f"needed; move the fixture within reach", key=f"positions.{j}")
-        cands[j] = np.array(got)
+    cands = reachable_candidates(robot, p, fixture, k, candidates, rng, rod_mass_kg, rod_com_T_mm)
     allq = np.concatenate(list(cands.values()))
     group = np.concatenate([[j] * len(v) for j, v in cands.items()])
     infos = catalogue(robot.n)

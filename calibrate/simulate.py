@@ -20,7 +20,7 @@ from rodlab.frames import matrix_to_pose, rotation_from_abc
 
 from .errors import CalibrationError
 from .identify import _deflection_offsets, Observations
-from .ik import solve_ik_position
+from .ik import solve_ik_positions
 from .kinematics import ModelParams, ball_positions
 
 __all__ = ["CampaignSpec", "simulate_campaign", "random_truth"]
@@ -67,6 +67,24 @@ def _joint_error(q: np.ndarray, periodic) -> np.ndarray:
     return out
 
 
+def _reach_position(robot, truth, rod, T_j, F_W, spec, rng, j) -> np.ndarray:
+    """``spec.orientations`` configurations [rad], shape=(k, n), with which the true robot brings the ball within
+    the alignment tolerance of clamping position ``j``'s datum point, each from a random seed (a different rod
+    orientation each time); position IK in batches of ``3 k`` seeds, at most ``60 k`` tries."""
+    k = spec.orientations
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    got = []
+    for _ in range(20):
+        seeds = rng.uniform(0.7 * lo, 0.7 * hi, (3 * k, robot.n))
+        targets = T_j[:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (3 * k, 3)) @ T_j[:3, :3].T
+        res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F_W)
+        got += list(res.q_rad[res.ok])
+        if len(got) >= k:
+            return np.array(got[:k])
+    raise CalibrationError(f"clamping position {j}: only {len(got)} of {k} rod orientations are reachable",
+                           key="positions")
+
+
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
                       rod_true: RodCompliance | None = None, fixture_error: dict | None = None,
                       periodic_joint_error: tuple | None = None, thermal_ppm_per_s: float = 0.0) -> dict:
@@ -111,35 +129,23 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     t = 0.0
     for j in range(1, spec.positions + 1):
         F_W = Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05])
-        got = 0
-        tries = 0
-        while got < spec.orientations and tries < 60 * spec.orientations:
-            tries += 1
-            # a different rod orientation each time: position-only IK pulled towards a random configuration
-            lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-            seed = rng.uniform(0.7 * lo, 0.7 * hi)
-            target = Ts[j][:3, 3] + Ts[j][:3, :3] @ rng.uniform(-spec.alignment_mm, spec.alignment_mm, 3)
-            q = solve_ik_position(robot, truth, target, seed, rod.mass_kg, rod.com_T_mm, F_W)
-            if q is None:
-                continue
-            got += 1
-            qt = _joint_error(q[None], periodic_joint_error)          # the angles the joints really take
-            obs = Observations(qt, np.zeros((1, 3)), F_W[None], rod.mass_kg, rod.com_T_mm)
-            fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F_W[None])
-            defl = _deflection_offsets(robot, truth, obs, rod_true)
-            pW = fr.pW[0] + defl[0]
-            xD = np.linalg.inv(Ts[j]) @ np.append(pW, 1.0)
-            xD = xD[:3] + rng.normal(0, spec.device_noise_mm, 3)
-            qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
-            t += rng.uniform(40, 120)
-            if thermal_ppm_per_s:
-                grow = thermal_ppm_per_s * 1e-6 * round(t) * (pW - fr.t_W0)
-                xD = xD + Ts[j][:3, :3].T @ grow
-            rows.append(f"{j},{got}," + ",".join(f"{v:.4f}" for v in qd) + "," + ",".join(f"{v:.4f}" for v in xD)
-                        + f",{t:.0f},{22.0:.2f}")
-        if got < spec.orientations:
-            raise CalibrationError(f"clamping position {j}: only {got} of {spec.orientations} rod orientations are "
-                                   f"reachable", key="positions")
+        q = _reach_position(robot, truth, rod, Ts[j], F_W, spec, rng, j)
+        qt = _joint_error(q, periodic_joint_error)                    # the angles the joints really take
+        m = len(q)
+        Fm = np.broadcast_to(F_W, (m, 3))
+        obs = Observations(qt, np.zeros((m, 3)), Fm, rod.mass_kg, rod.com_T_mm)
+        fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, Fm)
+        pW = fr.pW + _deflection_offsets(robot, truth, obs, rod_true)
+        Tinv = np.linalg.inv(Ts[j])
+        xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + rng.normal(0, spec.device_noise_mm, (m, 3))
+        qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
+        times = t + np.cumsum(rng.uniform(40, 120, m))
+        t = float(times[-1])
+        if thermal_ppm_per_s:
+            grow = thermal_ppm_per_s * 1e-6 * np.round(times)[:, None] * (pW - fr.t_W0)
+            xD = xD + grow @ Ts[j][:3, :3]
+        rows += [f"{j},{i + 1}," + ",".join(f"{v:.4f}" for v in qd[i]) + "," + ",".join(f"{v:.4f}" for v in xD[i])
+                 + f",{times[i]:.0f},{22.0:.2f}" for i in range(m)]
     atomic_write_text(out / "multical.campaign.csv",
                       "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
                       + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")

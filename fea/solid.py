@@ -124,11 +124,11 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     t1 = time.perf_counter()
     backend = backend or available_backend()
     pattern = block_pattern(basis)
-    nodes = node_ordering(basis, backend)                  # None: the solver orders (SuperLU)
+    nodes = node_ordering(basis, backend)                  # None: the solver orders (PARDISO's METIS, SuperLU)
     timings["ordering"] = time.perf_counter() - t1
     t1 = time.perf_counter()
-    # in the solver's numbering; CHOLMOD reads one triangle only: half the memory
-    K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes, upper=nodes is not None)
+    # in the solver's numbering; CHOLMOD and PARDISO read one triangle only: half the memory
+    K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes, upper=backend != "superlu")
     del pattern
     timings["assembly"] = time.perf_counter() - t1
     N = int(3 * basis.N)

@@ -1,33 +1,87 @@
 """Sparse SPD solves with one factorisation for many right-hand sides.
 
-Fast path: CHOLMOD (``scikit-sparse`` built against SuiteSparse, e.g. Debian's ``libsuitesparse-dev``).
-Pure-pip fallback: SciPy's SuperLU with a symmetric ordering (more memory and time; fine up to a few
-hundred thousand DOFs on 24 GB).
+Backends, in order of preference (:func:`available_backend`; ``RODLAB_SPARSE_SOLVER`` forces one):
+
+- ``pardiso``: Intel MKL PARDISO through ``pypardiso`` (a default dependency on x86-64; the MKL wheels come
+  from pip, no system library). Rod 1#'s two half problems: METIS analysis ~0.7 s once, ~0.3 s per
+  factorisation on 2 cores (docs/benchmarks/solvers.md).
+- ``cholmod``: CHOLMOD through ``scikit-sparse`` built against a system SuiteSparse (``libsuitesparse-dev``);
+  ~2x slower than PARDISO here, used when it is installed and PARDISO is not.
+- ``superlu``: SciPy's SuperLU with a symmetric ordering, the last fallback (~10x slower than PARDISO).
 
 :class:`PatternSolver` factorises several matrices of one sparsity pattern (the two half problems of a
-mirror-symmetric rod differ only in which DOFs of the plane are held) with one fill-reducing ordering.
+mirror-symmetric rod differ only in which DOFs of the plane are held) with one fill-reducing analysis.
 """
 from __future__ import annotations
 
 import logging
+import os
+from enum import Enum
 
 import numpy as np
 import scipy.sparse as sp
 
 from .errors import FeaError
 
-__all__ = ["available_backend", "PatternSolver", "HeldSystem", "node_ordering"]
+__all__ = ["SolverBackend", "available_backend", "backend_available", "PatternSolver", "HeldSystem",
+           "node_ordering", "SOLVER_ENV"]
 
 log = logging.getLogger(__name__)
 
+#: environment variable that forces a backend (``pardiso``, ``cholmod`` or ``superlu``)
+SOLVER_ENV = "RODLAB_SPARSE_SOLVER"
+
+
+class SolverBackend(str, Enum):
+    """Sparse direct solvers, fastest first."""
+
+    PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
+    CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
+    SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
+
+
+def _pardiso_library():
+    """pypardiso's handle on MKL's ``mkl_rt``, or None when either is missing."""
+    try:
+        import pypardiso
+        return pypardiso.PyPardisoSolver(mtype=2)
+    except Exception as e:  # ImportError, or mkl_rt not found / not loadable
+        log.debug("PARDISO unavailable: %s", e)
+        return None
+
+
+def backend_available(backend: SolverBackend | str) -> bool:
+    """Whether ``backend`` can run on this machine."""
+    b = SolverBackend(backend)
+    if b is SolverBackend.PARDISO:
+        return _pardiso_library() is not None
+    if b is SolverBackend.CHOLMOD:
+        try:
+            from sksparse.cholmod import cholesky  # noqa: F401
+            return True
+        except Exception:  # ImportError, or a broken shared library
+            return False
+    return True
+
 
 def available_backend() -> str:
-    """``"cholmod"`` when scikit-sparse imports, else ``"superlu"``."""
-    try:
-        from sksparse.cholmod import cholesky  # noqa: F401
-        return "cholmod"
-    except Exception:  # ImportError, or a broken shared library
-        return "superlu"
+    """The fastest backend that runs here (``pardiso``, ``cholmod``, ``superlu``), or the one named by the
+    environment variable ``RODLAB_SPARSE_SOLVER`` (an error when it cannot run)."""
+    forced = os.environ.get(SOLVER_ENV, "").strip().lower()
+    if forced:
+        try:
+            b = SolverBackend(forced)
+        except ValueError:
+            raise FeaError(f"{SOLVER_ENV}={forced!r} is not a solver; expected one of "
+                           f"{', '.join(m.value for m in SolverBackend)}", key=SOLVER_ENV) from None
+        if not backend_available(b):
+            raise FeaError(f"{SOLVER_ENV}={forced!r}: that solver is not installed here; unset the variable or "
+                           f"install it (pardiso: pip install pypardiso)", key=SOLVER_ENV)
+        return b.value
+    for b in SolverBackend:
+        if backend_available(b):
+            return b.value
+    return SolverBackend.SUPERLU.value
 
 
 def _superlu(Kc: sp.csc_matrix):
@@ -116,23 +170,93 @@ class HeldSystem:
         return self._csc(d)
 
 
-class PatternSolver:
-    """Factorise matrices that share one sparsity pattern with one fill-reducing ordering (CHOLMOD's
-    symbolic analysis is done once; each :meth:`factor` reuses it and, after the first, the factor's
-    memory). ``factor(A)`` returns ``solve(B)``, valid until the next ``factor`` call."""
+def _mkl_threads(libmkl) -> None:
+    """Let MKL use every core this process may run on (or ``MKL_NUM_THREADS``): gmsh's mesher sets the
+    process-wide OpenMP thread count to 1, which MKL would otherwise inherit (2x slower on 2 cores)."""
+    try:
+        n = int(os.environ.get("MKL_NUM_THREADS", "0")) or len(os.sched_getaffinity(0))
+    except (ValueError, AttributeError):
+        n = os.cpu_count() or 1
+    try:
+        libmkl.MKL_Set_Num_Threads(max(1, n))
+    except AttributeError:  # an MKL without the entry point: keep its default
+        pass
 
-    def __init__(self, pattern: sp.spmatrix, backend: str | None = None, ordering_method: str = "amd"):
-        self.backend = backend or available_backend()
-        self._symbolic = None
-        self._factor = None
-        if self.backend == "cholmod":
-            from sksparse.cholmod import analyze
-            # "natural" for a matrix already ordered (:func:`node_ordering`); AMD on the DOF graph otherwise
-            self._symbolic = analyze(sp.csc_matrix(pattern), ordering_method=ordering_method)
+
+class _Pardiso:
+    """MKL PARDISO for a real SPD matrix given by its upper triangle in CSR (the arrays of a CSC lower
+    triangle, as :class:`HeldSystem` stores it, are exactly that). The symbolic analysis (METIS) is done
+    once for the pattern; each :meth:`factor` is PARDISO's numerical phase only."""
+
+    def __init__(self, pattern: sp.csc_matrix):
+        ps = _pardiso_library()
+        if ps is None:
+            raise FeaError("the PARDISO solver is not available (pip install pypardiso)", key="solver")
+        self._ps = ps
+        n = pattern.shape[0]
+        row = np.repeat(np.arange(n, dtype=np.int64), np.diff(pattern.indptr))
+        self._keep = pattern.indices >= row                     # strictly the upper triangle (CSR rows)
+        cols = pattern.indices[self._keep]
+        ptr = np.concatenate([[0], np.cumsum(np.bincount(row[self._keep], minlength=n))])
+        self._U = sp.csr_matrix((pattern.data[self._keep].astype(np.float64), cols, ptr), shape=pattern.shape)
+        ps.iparm[:] = 0
+        ps.iparm[0] = 1        # iparm given
+        ps.iparm[1] = 3        # METIS nested dissection, OpenMP-parallel (0.5 s instead of 0.7 s on rod 1#)
+        ps.iparm[9] = 8        # pivot perturbation 1e-8 (SPD: unused)
+        ps.iparm[34] = 0       # one-based indices (pypardiso adds 1)
+        ps._check_A(self._U)   # sorted indices, no empty rows, CSR (no transpose)
+        self._call(11, self._U, np.zeros((n, 1)))
+
+    def _call(self, phase: int, U: sp.csr_matrix, B: np.ndarray) -> np.ndarray:
+        from pypardiso.pardiso_wrapper import PyPardisoError
+        _mkl_threads(self._ps.libmkl)
+        self._ps.set_phase(phase)
+        try:
+            return self._ps._call_pardiso(U, np.asfortranarray(B, dtype=np.float64))
+        except PyPardisoError as e:
+            raise FeaError(f"PARDISO failed in phase {phase} ({e}); the stiffness matrix is singular or not "
+                           f"positive definite: is every part connected to the clamp?", key="solver") from e
 
     def factor(self, A: sp.spmatrix):
         Ac = sp.csc_matrix(A)
-        if self.backend != "cholmod":
+        self._U.data[:] = Ac.data[self._keep]
+        self._call(22, self._U, np.zeros((Ac.shape[0], 1)))
+        U = self._U
+        return lambda B: self._call(33, U, np.asarray(B))
+
+    def __del__(self):
+        try:
+            self._ps.set_phase(-1)
+            self._ps._call_pardiso(self._U, np.zeros((self._U.shape[0], 1), order="F"))
+        except Exception:  # interpreter shutdown: nothing to release
+            pass
+
+
+class PatternSolver:
+    """Factorise matrices that share one sparsity pattern with one fill-reducing analysis (done once by
+    CHOLMOD or PARDISO; each :meth:`factor` reuses it and, for CHOLMOD after the first, the factor's
+    memory). ``factor(A)`` returns ``solve(B)``, valid until the next ``factor`` call.
+
+    PARDISO and CHOLMOD read one triangle only: ``pattern`` and every ``A`` may hold just the lower triangle
+    as CSC (:func:`~fea.assembly.assemble_stiffness` ``upper=True``); SuperLU needs the whole matrix."""
+
+    def __init__(self, pattern: sp.spmatrix, backend: str | None = None, ordering_method: str = "amd"):
+        self.backend = SolverBackend(backend or available_backend()).value
+        self._symbolic = None
+        self._factor = None
+        self._pardiso = None
+        if self.backend == SolverBackend.CHOLMOD:
+            from sksparse.cholmod import analyze
+            # "natural" for a matrix already ordered (:func:`node_ordering`); AMD on the DOF graph otherwise
+            self._symbolic = analyze(sp.csc_matrix(pattern), ordering_method=ordering_method)
+        elif self.backend == SolverBackend.PARDISO:
+            self._pardiso = _Pardiso(sp.csc_matrix(pattern))
+
+    def factor(self, A: sp.spmatrix):
+        if self._pardiso is not None:
+            return self._pardiso.factor(A)
+        Ac = sp.csc_matrix(A)
+        if self.backend != SolverBackend.CHOLMOD:
             return _superlu(Ac)
         if self._factor is None:
             self._factor = self._symbolic.cholesky(Ac)

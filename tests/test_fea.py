@@ -144,18 +144,37 @@ def test_half_model_equals_mirrored_whole():
 
 
 @SOLID
-def test_superlu_fallback_matches():
-    """The pure-pip fallback (SciPy SuperLU) solves the half model to the same C_F as CHOLMOD."""
+@pytest.mark.parametrize("backend", ["pardiso", "cholmod"])
+def test_fast_solvers_match_the_superlu_fallback(backend):
+    """Every installed fast backend (PARDISO reads the upper triangle with its own METIS ordering, CHOLMOD the
+    node-ordered lower one) solves the half model to the same C_F and C_g as SciPy's SuperLU on the full K."""
     from fea import solve_compliance
-    from fea.solver import available_backend
+    from fea.solver import backend_available
     pytest.importorskip("gmsh")
+    if not backend_available(backend):
+        pytest.skip(f"{backend} is not installed here")
     from geometry import mesh_rod
     d = resolve_design("rod5")
     rm = mesh_rod(d, size_mm=12.0, half=True)
     slu = solve_compliance(d, rm, backend="superlu")
     assert slu.backend == "superlu" and slu.symmetry_defect < 1e-6
-    if available_backend() == "cholmod":
-        np.testing.assert_allclose(slu.C_F, solve_compliance(d, rm).C_F, atol=1e-9 * np.abs(slu.C_F).max())
+    fast = solve_compliance(d, rm, backend=backend)
+    assert fast.backend == backend
+    np.testing.assert_allclose(fast.C_F, slu.C_F, atol=1e-9 * np.abs(slu.C_F).max())
+    np.testing.assert_allclose(fast.C_g, slu.C_g, atol=1e-9 * np.abs(slu.C_g).max())
+
+
+def test_the_default_solver_is_the_fastest_installed_and_can_be_forced(monkeypatch):
+    from fea.errors import FeaError
+    from fea.solver import SOLVER_ENV, SolverBackend, available_backend, backend_available
+    monkeypatch.delenv(SOLVER_ENV, raising=False)
+    first = next(b.value for b in SolverBackend if backend_available(b))
+    assert available_backend() == first
+    monkeypatch.setenv(SOLVER_ENV, "SuperLU")
+    assert available_backend() == "superlu"
+    monkeypatch.setenv(SOLVER_ENV, "mumps")
+    with pytest.raises(FeaError, match="pardiso, cholmod, superlu"):
+        available_backend()
 
 
 @SOLID

@@ -1,0 +1,69 @@
+"""Batched position IK (calibrate.ik): known-truth recovery over many configurations at once."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calibrate import resolve_robot
+from calibrate.ik import solve_ik_position, solve_ik_positions
+from calibrate.kinematics import ball_positions
+from calibrate.simulate import random_truth
+from rodlab import calc_rod_compliance, resolve_design
+
+
+@pytest.fixture(scope="module")
+def setup():
+    robot = resolve_robot("tx90")
+    rod = calc_rod_compliance(resolve_design("rod1"))
+    rng = np.random.default_rng(5)
+    truth = random_truth(robot, rod.tool_mm, rng)          # kinematic errors and compliant joints
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    return robot, rod, truth, rng, lo, hi
+
+
+def test_batch_reaches_targets_of_known_configurations(setup):
+    """Targets made by forward kinematics of known configurations (rod weight and a contact force deflect the
+    joints): the solver brings the ball back to each target within the tolerance, inside the limits."""
+    robot, rod, truth, rng, lo, hi = setup
+    F = np.array([1.1, 1.25, 1.05])
+    q_true = rng.uniform(0.6 * lo, 0.6 * hi, (120, robot.n))
+    targets = ball_positions(robot, truth, q_true, rod.mass_kg, rod.com_T_mm, np.tile(F, (120, 1)))[0].pW
+    seeds = rng.uniform(0.7 * lo, 0.7 * hi, (120, robot.n))
+    res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F)
+    assert res.ok.mean() > 0.85                                  # random far seeds: a few end in local minima
+    assert np.all(res.error_mm[res.ok] < 1e-4)
+    pW = ball_positions(robot, truth, res.q_rad[res.ok], rod.mass_kg, rod.com_T_mm,
+                        np.tile(F, (int(res.ok.sum()), 1)))[0].pW
+    np.testing.assert_allclose(pW, targets[res.ok], atol=1e-4)  # independently recomputed
+    assert np.all(res.q_rad >= lo - 1e-12) and np.all(res.q_rad <= hi + 1e-12)
+
+
+def test_seed_pull_gives_different_orientations_for_one_point(setup):
+    """One target from many seeds: different joint solutions (the rod orientations a planner chooses from)."""
+    robot, rod, truth, rng, lo, hi = setup
+    target = ball_positions(robot, truth, np.zeros((1, robot.n)) + 0.3, rod.mass_kg, rod.com_T_mm)[0].pW[0]
+    seeds = rng.uniform(0.7 * lo, 0.7 * hi, (40, robot.n))
+    res = solve_ik_positions(robot, truth, target, seeds, rod.mass_kg, rod.com_T_mm)
+    q = res.q_rad[res.ok]
+    assert len(q) >= 20
+    spread = np.rad2deg(q.max(axis=0) - q.min(axis=0))
+    assert spread[3:].min() > 30.0                              # the wrist takes many orientations
+
+
+def test_single_configuration_wrapper_equals_batch(setup):
+    robot, rod, truth, rng, lo, hi = setup
+    q_true = rng.uniform(0.5 * lo, 0.5 * hi, (3, robot.n))
+    targets = ball_positions(robot, truth, q_true)[0].pW
+    batch = solve_ik_positions(robot, truth, targets, q_true + 0.05)
+    for i in range(3):
+        one = solve_ik_position(robot, truth, targets[i], q_true[i] + 0.05)
+        assert batch.ok[i] and one is not None
+        np.testing.assert_allclose(one, batch.q_rad[i], atol=1e-9)
+
+
+def test_unreachable_target_is_reported_not_returned(setup):
+    robot, rod, truth, rng, lo, hi = setup
+    far = np.array([5000.0, 0.0, 0.0])                           # 5 m: beyond any TX90 configuration
+    res = solve_ik_positions(robot, truth, far, rng.uniform(lo, hi, (4, robot.n)))
+    assert not res.ok.any() and np.all(res.error_mm > 1000.0)
+    assert solve_ik_position(robot, truth, far, np.zeros(robot.n)) is None

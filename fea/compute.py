@@ -16,6 +16,7 @@ from enum import Enum
 import numpy as np
 
 from rodlab.calc import calc_rod_compliance
+from rodlab.progress import stages
 from rodlab.compliance import RodCompliance
 from rodlab.design import RodDesign
 from rodlab.enums import Method
@@ -62,6 +63,15 @@ def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, h
     return per_volume * vol / size_mm ** 3 * (1.0 if half else 2.0)
 
 
+def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
+    """The coarser solve of the Richardson error estimate."""
+    from .solid import solve_compliance
+    with bar.step("mesh (coarse)"):
+        rc = mesher(design, size_mm, grading, symmetry)
+    with bar.step("solve (coarse)"):
+        return solve_compliance(design, rc, backend=backend)
+
+
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
                      symmetry: bool = True, tip_moments: bool = False):
@@ -81,11 +91,16 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
         raise FeaError(f"the solid model of {design.name!r} at size {h:g} mm would need ~{est / 1e6:.1f} M DOFs "
                        f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "
                        f"volume. Use a larger --size (error grows) or --model frame", key="size")
-    t0 = time.perf_counter()
-    rm = mesher(design, h, grading, symmetry)
-    t_mesh = time.perf_counter() - t0
-    res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
-                           tip_moments=tip_moments)
+    names = ["mesh", "solve"] + (["mesh (coarse)", "solve (coarse)"] if error_estimate else [])
+    with stages(f"solid FEA of {design.name}", names) as bar:
+        with bar.step("mesh"):
+            t0 = time.perf_counter()
+            rm = mesher(design, h, grading, symmetry)
+            t_mesh = time.perf_counter() - t0
+        with bar.step("solve"):
+            res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
+                                   tip_moments=tip_moments)
+        coarse = _coarse_solve(design, mesher, 1.5 * h, grading, symmetry, backend, bar) if error_estimate else None
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),
             "dofs": res.dofs, "solver": res.backend,
@@ -95,9 +110,7 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
                                                             mesh=round(t_mesh, 3)),
             "materials": {"transverse_isotropy": "axis = local tube axis", "nu23_assumed": 0.4}}
     CF, Cg = res.C_F, res.C_g
-    if error_estimate:
-        rc = mesher(design, 1.5 * h, grading, symmetry)
-        coarse = solve_compliance(design, rc, backend=backend)
+    if coarse is not None:
         factor = 1.5 ** RICHARDSON_ORDER - 1.0
         errF = np.abs(CF - coarse.C_F) / factor
         errg = np.abs(Cg - coarse.C_g) / factor

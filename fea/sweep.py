@@ -133,7 +133,8 @@ def run_sweep(base: RodDesign, L1s, L2s, model: str = "frame", scheduler: str | 
         try:
             from dask.distributed import Client, LocalCluster, as_completed
         except ImportError:
-            log.info("dask is not installed (pip install 'rodlab[dist]'): running the sweep serially")
+            log.warning("Dask is not installed (pip install 'rodlab[dist]'): the sweep runs serially in this "
+                        "process")
         else:
             if scheduler:
                 client = Client(scheduler)

@@ -119,9 +119,14 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
     v = diag.extra["validation"]
     if case != "null":
         # the found physics is carried into the re-identification (and the joint correction to the
-        # validation points): the fit and the positioning error improve
-        assert diag.rms_after_mm < 0.5 * diag.rms_before_mm
-        assert v["after"]["mean_mm"] < 0.9 * v["before"]["mean_mm"], v
+        # validation points): the fit improves, and the positioning error does not get worse and ends near
+        # the validation instrument's floor (mean of a 3-D Gaussian error of 0.02 mm per axis: 0.032 mm; the
+        # injected effects are a few um, so how much 'before' sits above that floor depends on the draw)
+        # (a growth about the base proportional to time is partly a change of the link lengths, which the
+        # kinematic parameters absorb before diagnosis: what is left to explain varies with the draw)
+        assert diag.rms_after_mm < {"periodic": 0.5, "thermal": 0.85}[case] * diag.rms_before_mm
+        floor = CampaignSpec().instrument_noise_mm * np.sqrt(8 / np.pi)
+        assert v["after"]["mean_mm"] <= v["before"]["mean_mm"] and v["after"]["mean_mm"] < 1.15 * floor, v
     if case == "null":
         assert diag.verdict == "consistent", found
     elif case == "periodic":
@@ -131,7 +136,7 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
     else:
         assert found and found[0] == ("thermal_drift", "time"), found
         g = diag.findings[0].parameters["growth_ppm_per_s"]
-        assert 0.5 < g / 0.045 < 1.5
+        assert 0.8 < g / 0.045 < 1.2
 
 
 def test_subset_least_squares_matches_direct_fits():

@@ -150,13 +150,19 @@ def cmd_acquire(args: argparse.Namespace) -> int:
             raise RodlabError("no terminal to prompt the operator; use --non-interactive with a [loader]")
         input(f"\n{prompt} ")
 
-    def progress(st) -> None:
-        line = (f"  [{st.holds_done}/{st.holds_total}] {st.label} - {st.samples} samples, {st.garbage} garbage "
-                f"lines, {st.reconnects} reconnects")
-        print("\r" + line.ljust(110), end="", flush=True)
+    from ..progress import progress as bar_of
+    bar = bar_of(total=None, desc="rig acquisition", unit="hold")
+
+    def progress(st) -> None:                      # tqdm's estimate of the plan's remaining time from its rate
+        if bar.total != st.holds_total:
+            bar.total = st.holds_total
+        bar.update(st.holds_done - bar.n)
+        bar.set_postfix_str(f"{st.label}; {st.samples} samples, {st.garbage} garbage lines, {st.reconnects} "
+                            f"reconnects")
     try:
-        out = acquire(profile, plan, args.output, operator=None if args.non_interactive else operator,
-                      progress=progress, use_loader=args.non_interactive)
+        with bar:
+            out = acquire(profile, plan, args.output, operator=None if args.non_interactive else operator,
+                          progress=progress, use_loader=args.non_interactive)
     except KeyboardInterrupt:
         print(f"\ninterrupted: every sample so far is in {args.output}; re-run the same command to resume")
         return 130

@@ -82,13 +82,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
               f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %); "
               f"saved to {saved} (reuse: --joints)")
 
-    def progress(done, total):
-        bar = "#" * int(30 * done / max(total, 1))
-        print(f"\r  [{bar:<30}] {done}/{total} designs", end="", file=sys.stderr, flush=True)
-    df = run_sweep(base, L1s, L2s, model=args.model, scheduler=args.scheduler, workers=args.workers,
-                   cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
-                   progress=progress, calibration=calibration)
-    print(file=sys.stderr)
+    from ..progress import progress as bar_of
+    with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
+        def progress(done, total):
+            bar.update(done - bar.n)
+        df = run_sweep(base, L1s, L2s, model=args.model, scheduler=args.scheduler, workers=args.workers,
+                       cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
+                       progress=progress, calibration=calibration)
     if out.suffix == ".parquet":
         import io
         buf = io.BytesIO()

@@ -9,7 +9,7 @@ import argparse
 import logging
 import sys
 
-from .. import __version__
+from .. import __version__, progress
 from ..errors import RodlabError
 from . import cmd_calibrate, cmd_demo, cmd_design, cmd_diagnose, cmd_fea, cmd_geometry, cmd_rig, cmd_sweep
 
@@ -19,15 +19,31 @@ __all__ = ["build_parser", "main"]
 _COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_rig, cmd_calibrate, cmd_diagnose]
 
 
+def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
+    """-v, -q, --debug: accepted before the sub-command and after it (``rodlab fea ... --debug``)."""
+    kw = {"default": argparse.SUPPRESS} if suppress else {}
+    parser.add_argument("-v", "--verbose", action="count", help="more log output (-vv for debug)",
+                        **(kw or {"default": 0}))
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars", **kw)
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors", **kw)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rodlab",
         description="Design, simulate, measure and use long measuring rods for on-site robot calibration "
                     "(MultiCal).")
     parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)")
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    _global_options(parser, suppress=False)
+    common = argparse.ArgumentParser(add_help=False)
+    _global_options(common, suppress=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    add_parser = sub.add_parser
+
+    def add_with_common(name, **kw):
+        kw["parents"] = [*kw.get("parents", []), common]
+        return add_parser(name, **kw)
+    sub.add_parser = add_with_common
     for mod in _COMMAND_MODULES:
         mod.register(sub)
     return parser
@@ -38,6 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    progress.configure(sys.stderr.isatty() and not args.quiet)
     if not getattr(args, "func", None):
         parser.print_help()
         return 1

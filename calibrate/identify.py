@@ -262,6 +262,8 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     if len(free) > 3 * N:
         raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
     prior = np.zeros(len(infos), dtype=bool)
+    lower, upper = physical_bounds(infos, start)
+    x = np.clip(x, lower, upper)
     x_init = x.copy()                                   # priors are centred on the initial values
     free_all = list(free)
     # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
@@ -303,7 +305,11 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
             return Jm
 
         x0 = x_init[free]
-        res = least_squares(fun, x[free], jac=jac, method="trf" if robust else "lm",
+        lb, ub = lower[free], upper[free]
+        bounded = bool(np.isfinite(lb).any() or np.isfinite(ub).any())
+        z0 = np.clip(x[free], lb, ub)
+        res = least_squares(fun, z0, jac=jac, method="trf" if (robust or bounded) else "lm",
+                            bounds=(lb, ub) if bounded else (-np.inf, np.inf),
                             loss="soft_l1" if robust else "linear", f_scale=3 * noise_est, xtol=1e-12, ftol=1e-12,
                             gtol=1e-12, max_nfev=200 * len(free))
         x[free] = res.x
@@ -344,6 +350,23 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
                             [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
     out.warnings = trust_warnings(robot, out, expected_noise_mm)
     return out
+
+
+#: joint compliance a gearbox can have [rad/(N m)]: identified within [0, C_MAX] by construction (bounded LM)
+C_MAX = 1e-4
+
+
+def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of the internal parameter vector: a joint compliance stays within [0, :data:`C_MAX`] (a negative
+    compliance is not a gearbox); every other parameter is free."""
+    lo = np.full(len(infos), -np.inf)
+    hi = np.full(len(infos), np.inf)
+    for k, info in enumerate(infos):
+        if info.kind == "c":
+            s = INTERNAL_SCALE[info.unit]
+            lo[k] = (0.0 - start.c[info.index]) * s
+            hi[k] = (C_MAX - start.c[info.index]) * s
+    return lo, hi
 
 
 #: physical bounds of the identified errors; beyond them a result is flagged

@@ -53,3 +53,29 @@ def test_planning_beats_a_random_choice(robot, rod, examples):
     rng = np.random.default_rng(0)
     J = rng.normal(size=(90, 32))
     assert observability(J)["O2"] == pytest.approx(1 / observability(J)["condition"])
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsys, seed):
+    """A campaign with no effect, calibrated with its own compliance file, passes the trust checks (exit 0):
+    joint compliances are bounded to [0, C_MAX] by construction, so a weakly identified wrist compliance can
+    no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
+    from calibrate.identify import C_MAX
+    from rodlab.cli import main
+    from rodlab.compliance import write_compliance
+    robot = resolve_robot("tx90")
+    rod = calc_rod_compliance(resolve_design("rod1"))
+    write_compliance(rod, tmp_path / "rod.json")
+    assert main(["simulate-campaign", "--rod", str(tmp_path / "rod.json"), "--seed", str(seed), "-o",
+                 str(tmp_path)]) == 0
+    code = main(["calibrate", str(tmp_path / "multical.campaign.csv"), "--fixture",
+                 str(tmp_path / "multical.fixture.json"), "--rod", str(tmp_path / "rod.compliance.json"),
+                 "--validate", str(tmp_path / "multical.validation.csv"), "--json", str(tmp_path / "cal.json")])
+    out = capsys.readouterr().out
+    assert code == 0 and "NOT TRUSTED" not in out, out
+    cal = json.loads((tmp_path / "cal.json").read_text())
+    assert cal["trusted"] is True
+    values = [p["value"] for k, p in cal["parameters"].items() if k.startswith("c_")]
+    assert len(values) == robot.n and all(0.0 <= v <= C_MAX for v in values), values
+    truth = json.loads((tmp_path / "truth.json").read_text())
+    assert len(truth["c_rad_per_Nm"]) == robot.n

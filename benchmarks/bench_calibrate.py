@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
-from calibrate.jacobian import position_jacobian
-from calibrate.kinematics import ball_positions
-from calibrate.params import apply, catalogue
-from calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate.jacobian import position_jacobian
+from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.params import apply
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.fileio import atomic_write_text
 

@@ -45,8 +45,8 @@ _SOLID = r"""
 import json, resource, sys, time
 t0 = time.perf_counter()
 from rodlab import resolve_design
-from geometry import mesh_rod
-from fea import solid_compliance
+from rodlab.geometry import mesh_rod
+from rodlab.fea import solid_compliance
 import build123d, gmsh, skfem  # noqa: F401  (imported lazily by the mesher: counted apart, once per process)
 t_imp = time.perf_counter() - t0
 size, near, growth, bend, sym = (float(v) for v in sys.argv[1:6])
@@ -65,9 +65,9 @@ print(json.dumps({"C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": re
 _CCX = r"""
 import json, sys, time, numpy as np
 from rodlab import resolve_design
-from geometry import mesh_rod
-from fea import solve_compliance
-from fea.calculix import run_ccx_compliance
+from rodlab.geometry import mesh_rod
+from rodlab.fea import solve_compliance
+from rodlab.fea.calculix import run_ccx_compliance
 d = resolve_design("rod1")
 half = mesh_rod(d, size_mm=float(sys.argv[1]), grading=tuple(float(v) for v in sys.argv[2:5]), half=True)
 whole = half.mirrored()           # the same discretisation as the half model, for CalculiX and our whole solve
@@ -105,8 +105,8 @@ def run(code: str, *args) -> dict:
 def main() -> int:
     import numpy as np
     from rodlab import resolve_design
-    from fea.frame import frame_compliance
-    from fea.sweep import run_sweep
+    from rodlab.fea.frame import frame_compliance
+    from rodlab.fea.sweep import run_sweep
 
     lines = ["# Benchmark: FEA", "",
              f"`python benchmarks/bench_fea.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
@@ -185,7 +185,7 @@ def main() -> int:
               f"A fixed dense workload (20 Cholesky factorisations of 1500 x 1500, numpy's BLAS) took "
               f"{speed0:.2f} s before the runs and {machine_check():.2f} s after them: compare it between "
               "VMs and runs before comparing the times above.", ""]
-    from fea.compute import default_solid_size_mm  # noqa: F401  (documented defaults)
+    from rodlab.fea.compute import default_solid_size_mm  # noqa: F401  (documented defaults)
     OUT.parent.mkdir(parents=True, exist_ok=True)
     from rodlab.fileio import atomic_write_text
     atomic_write_text(OUT, "\n".join(lines + NOTES))

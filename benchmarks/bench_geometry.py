@@ -20,7 +20,7 @@ GOAL_S = 10.0
 
 def main() -> int:
     t_imp = time.perf_counter()
-    from geometry import build_cad, mesh_rod
+    from rodlab.geometry import build_cad, mesh_rod
     import build123d  # noqa: F401  (import cost reported separately)
     t_imp = time.perf_counter() - t_imp
     rows = []

@@ -40,11 +40,11 @@ def _err(C, ref) -> float:
 def main() -> int:
     import numpy as np
 
-    from fea import solid_compliance
-    from fea.frame import frame_compliance
-    from fea.joints import joint_frame_compliance, measure_sections, joints_from_motions
-    from fea.sweep import run_sweep
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.fea.frame import frame_compliance
+    from rodlab.fea.joints import joint_frame_compliance, measure_sections, joints_from_motions
+    from rodlab.fea.sweep import run_sweep
+    from rodlab.geometry import mesh_rod
     from rodlab import resolve_design
 
     def mesher(d, h, g, half):

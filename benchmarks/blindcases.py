@@ -16,8 +16,8 @@ import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.layout import layout
-from stiffness_rig.model import Hold, Protocol, RigModel
-from stiffness_rig.simulate import simulate_recording
+from rodlab.stiffness_rig.model import Hold, Protocol, RigModel
+from rodlab.stiffness_rig.simulate import simulate_recording
 
 __all__ = ["generate_cases", "BlindCase"]
 

@@ -1,5 +1,6 @@
 """Blind cases for the campaign diagnosis: nulls, a wrong fixture pose, a rod compliance off by a factor,
-gross alignment errors (outliers), a once-per-revolution joint error, thermal growth; generated with ``calibrate.simulate`` (never diagnosis code).
+gross alignment errors (outliers), a once-per-revolution joint error, thermal growth; generated with
+``calibrate.simulate`` (never diagnosis code).
 
     python benchmarks/campaign_blind.py [N] [SEED]   # prints and writes docs/benchmarks/campaign_blind.md
 """
@@ -14,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from calibrate import read_campaign, read_fixture, read_points, resolve_robot
-from calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.compliance import RodCompliance
 from rodlab.diagnose import diagnose_campaign

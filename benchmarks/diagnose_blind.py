@@ -20,7 +20,7 @@ from blindcases import generate_cases  # noqa: E402
 from rodlab import calc_rod_compliance, resolve_design  # noqa: E402
 from rodlab.diagnose import diagnose_rig  # noqa: E402
 from rodlab.fileio import atomic_write_text  # noqa: E402
-from stiffness_rig import read_recording  # noqa: E402
+from rodlab.stiffness_rig import read_recording  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind.md"
 OUT_WIDE = OUT.with_name("diagnose_blind_wide.md")
@@ -108,9 +108,10 @@ def main() -> int:
             results.append((d, time.perf_counter() - t0))
     sc = score(cases, results)
     times = [dt for _, dt in results]
+    wide_note = "; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg"
     lines = ["# Blind benchmark: rig diagnosis", "",
              f"`python benchmarks/diagnose_blind.py {n} {seed}{' wide' if wide else ''}`: {n} generated cases (rod 1#"
-             f"{'; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg' if wide else ''}), "
+             f"{wide_note if wide else ''}), "
              f"{time.strftime('%Y-%m-%d')}. Goals: false alarms <= 5 %, recall >= 90 % at SNR >= 5, wrong cause <= 5 %, "
              f"location >= 90 %, parameters within 1.35x, honest `unexplained` >= 80 %, fit after <= 1.5x noise, "
              f"<= 10 s per recording.", "",

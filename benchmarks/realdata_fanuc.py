@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from calibrate import ModelParams, Observations, identify, read_points, resolve_robot, validate
+from rodlab.calibrate import ModelParams, Observations, identify, read_points, resolve_robot, validate
 
 DATA = Path(__file__).parent / "data" / "boby2021"
 

@@ -11,5 +11,6 @@ from .robot import Robot, read_robot, resolve_robot
 from .validate import ErrorStats, validate
 
 __all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
-           "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool", "ModelParams", "ball_positions",
+           "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
+           "ModelParams", "ball_positions",
            "result_dict", "write_result", "Robot", "read_robot", "resolve_robot", "ErrorStats", "validate"]

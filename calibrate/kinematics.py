@@ -126,7 +126,7 @@ def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=Non
     n = robot.n
     g0 = np.asarray(robot.gravity_base, float)                       # m/s^2 in {0}
     # loads: link masses at their COMs (in frame i), the rod at its COM (in {T} = {n} axes at the ball)
-    pts, forces = [], []
+    pts = []
     for k in range(n):
         c = (fr.T[:, k + 1, :3, :3] @ robot.com_mm[k])[..., :] + fr.T[:, k + 1, :3, 3]
         pts.append((k, c, np.broadcast_to(robot.mass_kg[k] * g0, (N, 3))))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .identify import Observations, register_base, _select
+from .identify import _select
 from .ik import solve_ik_positions
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -66,7 +66,6 @@ def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: 
         p = p.with_(base=matrix_to_pose(np.linalg.inv(T)))
     cands = reachable_candidates(robot, p, fixture, k, candidates, rng, rod_mass_kg, rod_com_T_mm)
     allq = np.concatenate(list(cands.values()))
-    group = np.concatenate([[j] * len(v) for j, v in cands.items()])
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod_mass_kg, rod_com_T_mm)
     Jall = position_jacobian(fr, tau, infos, p.base)

@@ -50,7 +50,7 @@ def plot_error_distributions(args, rows, out) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from calibrate import ModelParams, read_points, resolve_robot, validate
+    from rodlab.calibrate import ModelParams, read_points, resolve_robot, validate
     robot = resolve_robot(args.robot)
     pts = read_points(args.validate, robot.n)
     data, labels = [validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]], ["nominal"]

@@ -26,7 +26,7 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.units import G0, kg_m3_to_kg_mm3
 
-from .assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis, vector_dofs
+from .assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, available_backend, node_ordering

@@ -17,8 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from .compliance import RodCompliance, read_compliance, write_compliance
-from .errors import RodlabError
+from .compliance import RodCompliance, write_compliance
 from .fileio import atomic_write_json, json_safe
 
 __all__ = ["run_demo", "STAGES"]
@@ -71,7 +70,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     cad = _have_cad()
     with stage("cad"):
         if cad:
-            import geometry
+            import rodlab.geometry as geometry
             c = geometry.build_cad(design)
             c.export_step(out / "cad" / "rod.step")
             c.write_mass_json(out / "cad" / "mass.json")
@@ -82,9 +81,9 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
             summary["stages"]["cad"] = {"skipped": "the CAD extra (build123d, gmsh) is not installed"}
     with stage("fea"):
         if cad:
-            import geometry
-            from fea import solid_compliance
-            from fea.plot import render_deformed
+            import rodlab.geometry as geometry
+            from rodlab.fea import solid_compliance
+            from rodlab.fea.plot import render_deformed
             fea, solid = solid_compliance(design,
                                         lambda d, h, g, half: geometry.mesh_rod(d, size_mm=h, grading=g, half=half),
                                         error_estimate=False, keep_displacements=True, tip_moments=True)
@@ -95,7 +94,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
             summary["files"]["fea_deformed"] = "fea/deformed.png"
             model = "solid"
         else:
-            from fea import compute_compliance
+            from rodlab.fea import compute_compliance
             fea = compute_compliance(design, "frame")
             model = "frame (the CAD extra is absent, so no solid FEA)"
         write_compliance(fea, out / "rod1.fea.compliance.json")
@@ -103,8 +102,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
                                     "c_rod_um": fea.c_rod_um,
                                     "calc_over_fea_diag": (np.diag(calc.C_F) / np.diag(fea.C_F)).tolist()}
     with stage("rig"):
-        from stiffness_rig.model import Protocol, RigModel, spring_compliance
-        from stiffness_rig.simulate import simulate_recording
+        from rodlab.stiffness_rig.model import Protocol, RigModel, spring_compliance
+        from rodlab.stiffness_rig.simulate import simulate_recording
         from .diagnose.rig import joint_places
         pt, ax = joint_places(design.tool_mm, design)["ring_1"]
         s_b, s_t = 4.0e-9, 1.6e-9                    # rad/(N mm): a compliant bond at ring 1
@@ -116,7 +115,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         summary["stages"]["rig"] = {"concealed_effect": "joint_compliance at ring_1",
                                     "s_bend_rad_per_Nm": s_b * 1e3, "s_torsion_rad_per_Nm": s_t * 1e3}
     with stage("fit"):
-        from stiffness_rig import fit_recording, plot_fit, read_recording
+        from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
         rec = read_recording(out / "rig" / "rod1.rig.csv")
         fit = fit_recording(rec, fea)
         meas = fit.compliance(fea, rec)
@@ -138,8 +137,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         summary["stages"]["diagnose"]["corrected_vs_true_max_rel"] = float(
             np.max(np.abs(corrected.C_F - C_true)) / np.max(np.abs(C_true)))
     with stage("campaign"):
-        from calibrate import resolve_robot
-        from calibrate.simulate import CampaignSpec, simulate_campaign
+        from rodlab.calibrate import resolve_robot
+        from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
         robot = resolve_robot("tx90")
         r_true = float((C_true[1, 1] + C_true[2, 2]) / (fea.C_F[1, 1] + fea.C_F[2, 2]))
         rod_true = RodCompliance(fea.rod, fea.method, C_true, r_true * fea.C_g, fea.mass_kg, fea.com_T_mm, fea.tool_mm,
@@ -147,7 +146,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         simulate_campaign(robot, fea, out / "campaign", CampaignSpec(seed=seed), rod_true=rod_true)
         summary["stages"]["campaign"] = {"robot": "tx90", "positions": 5, "orientations": 6, "points": 30}
     with stage("calibrate"):
-        from calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture,
+        from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture,
                                read_points, validate)
         camp = read_campaign(out / "campaign" / "multical.campaign.csv")
         fix = read_fixture(out / "campaign" / "multical.fixture.json")
@@ -164,11 +163,11 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         summary["files"]["fig10"] = "calibration/fig10.png"
         summary["stages"]["calibrate"] = {"table3": table}
     with stage("sweep"):
-        from fea.sweep import run_sweep
-        from fea.sweep_plot import plot_sweep
+        from rodlab.fea.sweep import run_sweep
+        from rodlab.fea.sweep_plot import plot_sweep
         calibration, title = None, "frame model around rod 1#"
         if summary["stages"]["fea"]["model"] == "solid":   # that solid run calibrates the frame's joints
-            from fea.joints import calibrate_joints
+            from rodlab.fea.joints import calibrate_joints
             calibration = calibrate_joints(design, solid)
             title = "frame model joint-calibrated on rod 1#'s solid FEA"
         df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,

@@ -58,7 +58,8 @@ def render_report(run_dir) -> str:
     parts.append("<h2>2. CAD</h2>" + ("<div class=grid>" + "".join(_img(run, v, f"CAD view {v}") for v in views) + "</div>"
                                         if views else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>"))
     fe = st["fea"]
-    parts.append(f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid><div>C_F {_matrix(fe['C_F_mm_per_N'], 'um/N')}"
+    parts.append(f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid>"
+                 f"<div>C_F {_matrix(fe['C_F_mm_per_N'], 'um/N')}"
                  f"</div><div>C_g {_matrix(fe['C_g_mm_per_g0'], 'um per g0')}</div></div>"
                  f"<p>c_rod (Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: {st['design']['c_rod_um_calc']:.1f} um). "
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])

@@ -140,8 +140,8 @@ def design(name):
 
 
 def solve_references(missing_only: bool = False) -> dict:
-    from fea import solid_compliance
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.geometry import mesh_rod
     out = json.loads(REF.read_text()) if missing_only and REF.exists() else {}
     for name in dict.fromkeys(CALIBRATION_SET + VALIDATION_SET + list(FAMILY_OFF_GRID) + PROBE_SET + THIN_SET):
         if name in out:
@@ -156,7 +156,7 @@ def solve_references(missing_only: bool = False) -> dict:
 
 
 def rel_errors(name, ref, cal) -> np.ndarray:
-    from fea.frame import frame_errors
+    from rodlab.fea.frame import frame_errors
     return frame_errors(design(name), ref["C_F"], ref["C_g"], cal)
 
 
@@ -166,7 +166,7 @@ GLOBAL_FIT = ("sleeve_end", "holder_end", "torsion_end", "bend_scale_in", "bend_
 
 
 def fit(refs: dict):
-    from fea.frame import calibrate_frame
+    from rodlab.fea.frame import calibrate_frame
     names = CALIBRATION_SET + PROBE_SET
     return calibrate_frame([design(n) for n in names], [refs[n]["C_F"] for n in names],
                            [refs[n]["C_g"] for n in names], names=GLOBAL_FIT)
@@ -181,10 +181,10 @@ def main() -> int:
         refs = solve_references(missing_only=args.solve_missing)
     else:
         refs = json.loads(REF.read_text())
-    from fea.frame import CALIBRATION, FrameCalibration
+    from rodlab.fea.frame import CALIBRATION, FrameCalibration
     cal = fit(refs)
     print(f"fitted: {cal}; in use: {CALIBRATION}")
-    from fea.frame import calibrate_frame
+    from rodlab.fea.frame import calibrate_frame
     for base, others in FAMILIES.items():
         fam = calibrate_frame([design(base)], [refs[base]["C_F"]], [refs[base]["C_g"]])
         print(f"-- family calibrated on {base} only: {fam}")

@@ -68,7 +68,7 @@ def design(name: str, spec: dict):
 def random_specs(seed: int, n: int = N_PER_SEED, in_range: bool = True) -> dict:
     """``n`` valid random designs of ``seed``, named ``rnd{seed}_{i:02d}``; with ``in_range`` only those inside the
     global frame calibration's range."""
-    from fea.frame import frame_range_notes
+    from rodlab.fea.frame import frame_range_notes
     rng = np.random.default_rng(seed)
     out = {}
     while len(out) < n:
@@ -97,8 +97,8 @@ def variant_specs(base: str, spec: dict) -> dict:
 
 
 def solve(specs: dict, refs: dict, path: Path = REF) -> None:
-    from fea import solid_compliance
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.geometry import mesh_rod
     for name, spec in specs.items():
         if name in refs["designs"]:
             continue
@@ -112,16 +112,16 @@ def solve(specs: dict, refs: dict, path: Path = REF) -> None:
 
 def global_errors(refs: dict) -> dict:
     """Largest relative error [-] of the globally calibrated frame on each random (non-variant) design."""
-    from fea.frame import frame_errors
+    from rodlab.fea.frame import frame_errors
     return {n: float(np.abs(frame_errors(design(n, r["spec"]), r["C_F"], r["C_g"])).max())
             for n, r in refs["designs"].items() if "_v" not in n}
 
 
 def solve_joints(refs: dict, path: Path = REF) -> None:
     """Solve each family base with the tip moments and store its joint calibration's measurements."""
-    from fea import solid_compliance
-    from fea.joints import measure_sections
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.fea.joints import measure_sections
+    from rodlab.geometry import mesh_rod
     refs.setdefault("joints", {})
     for base in refs["families"]:
         if base in refs["joints"]:
@@ -139,8 +139,8 @@ def solve_joints(refs: dict, path: Path = REF) -> None:
 def family_errors(refs: dict) -> dict:
     """Per family: max error [-] on its two variants of the frame joint-calibrated on the base's stored solid
     measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
-    from fea.frame import frame_errors
-    from fea.joints import joint_frame_compliance, joints_from_motions
+    from rodlab.fea.frame import frame_errors
+    from rodlab.fea.joints import joint_frame_compliance, joints_from_motions
     from rodlab.enums import Part
     ds = refs.get("designs", {})
     out = {}

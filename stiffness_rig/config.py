@@ -87,7 +87,7 @@ class _Reader:
 
     def keys(self, tbl, allowed, where):
         if not isinstance(tbl, dict):
-            raise self.err(f"expected a table", where)
+            raise self.err("expected a table", where)
         for k in tbl:
             if k not in allowed:
                 raise self.err(f"unknown key `{k}` in [{where}]; allowed: {sorted(allowed)}." + did_you_mean(k, allowed),

@@ -46,7 +46,6 @@ class GaugeClient:
                               key="device.port") from e
 
     def _reconnect(self, why: str) -> None:
-        import serial
         log.warning("gauge counter: %s; reconnecting to %s", why, self.profile.port)
         self.close()
         delay = 0.05

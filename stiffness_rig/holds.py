@@ -5,7 +5,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.enums import LoadAxis, Phase
 
 from .recording import RigRecording
 

@@ -87,7 +87,7 @@ def _float(cell: str, path, line: int, col: str, allow_empty: bool = False) -> f
     if cell.strip() == "":
         if allow_empty:
             return math.nan
-        raise RigError(f"empty cell; expected a number", path=path, line=line, key=col)
+        raise RigError("empty cell; expected a number", path=path, line=line, key=col)
     try:
         v = float(cell)
     except ValueError:

@@ -19,7 +19,6 @@ import tty
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 
 from rodlab.enums import LoadAxis, Phase
 

@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from calibrate import (CalibrationError, ModelParams, Observations, ball_positions, campaign_observations, identify,
+from rodlab.calibrate import (CalibrationError, ModelParams, Observations, ball_positions, campaign_observations, identify,
                        read_campaign, read_fixture, read_points, resolve_robot, result_dict, validate)
-from calibrate.jacobian import position_jacobian
-from calibrate.params import apply, catalogue
+from rodlab.calibrate.jacobian import position_jacobian
+from rodlab.calibrate.params import apply, catalogue
 from rodlab import read_compliance
 
 
@@ -131,7 +131,8 @@ def test_instrument_points_calibrate_another_robot(tmp_path):
     robot = resolve_robot(f)
     rng = np.random.default_rng(3)
     true = ModelParams.nominal(robot, [20.0, 10.0, 150.0], base=[1500.0, 200.0, -300.0, 0.5, -0.3, 30.0])
-    true = true.with_(d=true.d + rng.normal(0, 0.5, 6) * [1, 0, 1, 1, 1, 0], a=true.a + rng.normal(0, 0.5, 6) * [1, 1, 1, 1, 1, 0],
+    true = true.with_(d=true.d + rng.normal(0, 0.5, 6) * [1, 0, 1, 1, 1, 0],
+                      a=true.a + rng.normal(0, 0.5, 6) * [1, 1, 1, 1, 1, 0],
                       alpha=true.alpha + np.deg2rad(rng.normal(0, 0.05, 6)) * [1, 1, 1, 1, 1, 0],
                       theta_offset=true.theta_offset + np.deg2rad(rng.normal(0, 0.05, 6)) * [0, 1, 1, 1, 1, 1],
                       beta=true.beta + np.deg2rad([0, 0.04, 0, 0, 0, 0]))
@@ -141,7 +142,7 @@ def test_instrument_points_calibrate_another_robot(tmp_path):
     obs = Observations(q[:80], x[:80], np.zeros((80, 3)))
     res = identify(robot, obs, [20.0, 10.0, 150.0], None, freed={"tool_y"}, pinned={f"c_{i}": 0.0 for i in range(2, 7)})
     assert res.rms_mm < 0.015
-    from calibrate.campaign import PointSet
+    from rodlab.calibrate.campaign import PointSet
     test = PointSet(np.rad2deg(q[80:]), x[80:], np.array([20.0, 10.0, 150.0]), 0.0, np.zeros(3))
     after = validate(robot, res.params, test)[0]
     before = validate(robot, ModelParams.nominal(robot, [20.0, 10.0, 150.0]), test)[0]
@@ -150,7 +151,7 @@ def test_instrument_points_calibrate_another_robot(tmp_path):
 
 def test_base_and_tool_found_from_scratch(robot):
     """A tool guess 250 mm off (and no base) still converges: alternating registration + linear tool solve."""
-    from calibrate import register_base_and_tool
+    from rodlab.calibrate import register_base_and_tool
     rng = np.random.default_rng(11)
     true = ModelParams.nominal(robot, [-60.0, 140.0, 230.0], base=[2100.0, -400.0, 650.0, 1.0, -2.0, 157.0])
     q = np.deg2rad(rng.uniform(-70, 70, (40, 6)))

@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points,
+from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points,
                        resolve_robot, validate)
-from calibrate.plan import observability, plan_poses
-from calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab.calibrate.plan import observability, plan_poses
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
 
 
@@ -60,7 +60,7 @@ def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsy
     """A campaign with no effect, calibrated with its own compliance file, passes the trust checks (exit 0):
     joint compliances are bounded to [0, C_MAX] by construction, so a weakly identified wrist compliance can
     no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
-    from calibrate.identify import C_MAX
+    from rodlab.calibrate.identify import C_MAX
     from rodlab.cli import main
     from rodlab.compliance import write_compliance
     robot = resolve_robot("tx90")

@@ -11,7 +11,7 @@ import pytest
 
 from rodlab import load_design, read_compliance
 from rodlab.diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
-from stiffness_rig import read_recording
+from rodlab.stiffness_rig import read_recording
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,7 +39,7 @@ def test_rig_examples(examples, name):
 
 @pytest.mark.parametrize("name", ["campaign-null", "campaign-fixture_pose"])
 def test_campaign_examples(examples, name):
-    from calibrate import read_campaign, read_fixture, read_points, resolve_robot
+    from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
     ex = examples / name
     truth = json.loads((ex / "truth.json").read_text())
     diag, info = diagnose_campaign(resolve_robot("tx90"), read_campaign(ex / "multical.campaign.csv"),
@@ -102,8 +102,8 @@ def test_cli_diagnose(examples, tmp_path, capsys):
 def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
     """Effects injected by calibrate.simulate (not by diagnosis code): named at the right place; a null stays
     consistent (regression: the GLS refit of the identified parameters was once credited to a hypothesis)."""
-    from calibrate import read_campaign, read_fixture, resolve_robot
-    from calibrate.simulate import CampaignSpec, simulate_campaign
+    from rodlab.calibrate import read_campaign, read_fixture, resolve_robot
+    from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     from rodlab import calc_rod_compliance, resolve_design
     from rodlab.diagnose import diagnose_campaign
     robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
@@ -111,7 +111,7 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
           "thermal": {"thermal_ppm_per_s": 0.045}}[case]
     t = simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=21), **kw)
     assert (t["periodic_joint_error"] is not None) == (case == "periodic")
-    from calibrate import read_points
+    from rodlab.calibrate import read_points
     diag, _ = diagnose_campaign(robot, read_campaign(tmp_path / "multical.campaign.csv"),
                                 read_fixture(tmp_path / "multical.fixture.json"), rod,
                                 validate_points=read_points(tmp_path / "multical.validation.csv"))
@@ -182,8 +182,8 @@ def test_subset_least_squares_matches_direct_fits():
 ])
 def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     from rodlab import calc_rod_compliance, resolve_design
-    from stiffness_rig.model import Protocol, RigModel
-    from stiffness_rig.simulate import simulate_recording
+    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.simulate import simulate_recording
     design = resolve_design("rod1")
     sim = calc_rod_compliance(design)
     model = RigModel(sim.C_F, effects, noise_mm=0.0012, resolution_mm=0.001, seed=11)
@@ -200,8 +200,8 @@ def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
     """One hold shifted by 4 um in a short protocol (one repeat): no effect may absorb it; the hold is named
     and the rest diagnosed without it."""
     from rodlab import calc_rod_compliance, resolve_design
-    from stiffness_rig.model import Protocol, RigModel
-    from stiffness_rig.simulate import simulate_recording
+    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.simulate import simulate_recording
     design = resolve_design("rod1")
     sim = calc_rod_compliance(design)
     path = tmp_path / "r.rig.csv"

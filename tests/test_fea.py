@@ -6,10 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from fea.elasticity import _frames, element_tensors, rotate_tensor, stiffness_tensor_local
+from rodlab.fea.elasticity import _frames, element_tensors, rotate_tensor, stiffness_tensor_local
 from rodlab import calc_compliance, get_material, mass_properties, resolve_design
 from rodlab.design_io import design_from_dict
-from rodlab.materials import Material
 
 
 def _as6(C):
@@ -50,7 +49,7 @@ def test_transversely_isotropic_tensor_along_any_axis():
 
 
 def test_frame_model_is_symmetric_and_bend_softens():
-    from fea import BendFlexibility, frame_compliance
+    from rodlab.fea import BendFlexibility, frame_compliance
     d = resolve_design("rod1")
     CF, Cg = frame_compliance(d)
     np.testing.assert_allclose(CF, CF.T, atol=1e-15)
@@ -68,7 +67,7 @@ SOLID = pytest.mark.cad
 def _mesher():
     pytest.importorskip("build123d")
     pytest.importorskip("gmsh")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     return lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half)
 
 
@@ -84,7 +83,7 @@ def _straight(material):
 @pytest.mark.parametrize("material", ["steel_304", "cfrp"])
 def test_straight_tube_matches_timoshenko(material):
     """Default mesh order and size: bending + shear and axial tip compliance within 1 % of Timoshenko."""
-    from fea import solid_compliance
+    from rodlab.fea import solid_compliance
     d = _straight(material)
     comp, res = solid_compliance(d, _mesher(), error_estimate=False)
     CF, _ = calc_compliance(d, shear=True)
@@ -95,7 +94,7 @@ def test_straight_tube_matches_timoshenko(material):
 
 @SOLID
 def test_solid_rod_mass_symmetry_and_provenance():
-    from fea import solid_compliance
+    from rodlab.fea import solid_compliance
     d = resolve_design("rod4")
     comp, res = solid_compliance(d, _mesher(), size_mm=6.0, error_estimate=True)
     assert res.mass_kg == pytest.approx(mass_properties(d).mass_kg, rel=1e-4)
@@ -114,16 +113,16 @@ def test_half_model_equals_mirrored_whole():
     """The symmetry half-model (two solves, u_y or u_x,u_z held on y_T = 0) reproduces the whole rod meshed as
     the half and its mirror image: C^F, C^g, mass and every nodal displacement of all nine cases (the six and
     the tip moments, M_x and M_z antisymmetric about the plane, M_y symmetric)."""
-    from fea import mirror_displacements, solve_compliance
+    from rodlab.fea import mirror_displacements, solve_compliance
     d = resolve_design("rod1")                 # carbon: the mirrored fibre axes must map with the mesh
     pytest.importorskip("gmsh")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     half = mesh_rod(d, size_mm=12.0, half=True)
     assert half.is_half and half.symmetry_facets.size > 0
     assert np.abs(half.mesh.p[1]).min() == 0.0 and half.mesh.p[1].min() > -1e-9
     whole = half.mirrored()
     assert not whole.is_half and whole.mesh.p.shape[1] < 2 * half.mesh.p.shape[1]   # plane nodes shared
-    from fea.assembly import scalar_basis
+    from rodlab.fea.assembly import scalar_basis
     b = scalar_basis(whole.mesh)
     assert (b.mapping.detDF(b.X) > 0).all()                # images re-ordered: no inverted element
     rh = solve_compliance(d, half, keep_displacements=True, tip_moments=True)
@@ -148,12 +147,12 @@ def test_half_model_equals_mirrored_whole():
 def test_fast_solvers_match_the_superlu_fallback(backend):
     """Every installed fast backend (PARDISO reads the upper triangle with its own METIS ordering, CHOLMOD the
     node-ordered lower one) solves the half model to the same C_F and C_g as SciPy's SuperLU on the full K."""
-    from fea import solve_compliance
-    from fea.solver import backend_available
+    from rodlab.fea import solve_compliance
+    from rodlab.fea.solver import backend_available
     pytest.importorskip("gmsh")
     if not backend_available(backend):
         pytest.skip(f"{backend} is not installed here")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     d = resolve_design("rod5")
     rm = mesh_rod(d, size_mm=12.0, half=True)
     slu = solve_compliance(d, rm, backend="superlu")
@@ -165,8 +164,8 @@ def test_fast_solvers_match_the_superlu_fallback(backend):
 
 
 def test_the_default_solver_is_the_fastest_installed_and_can_be_forced(monkeypatch):
-    from fea.errors import FeaError
-    from fea.solver import SOLVER_ENV, SolverBackend, available_backend, backend_available
+    from rodlab.fea.errors import FeaError
+    from rodlab.fea.solver import SOLVER_ENV, SolverBackend, available_backend, backend_available
     monkeypatch.delenv(SOLVER_ENV, raising=False)
     first = next(b.value for b in SolverBackend if backend_available(b))
     assert available_backend() == first
@@ -182,11 +181,11 @@ def test_node_ordered_assembly_and_held_system():
     """K assembled in a node ordering equals the permuted K; a held system solves like the sliced one."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve
-    from fea.assembly import assemble_stiffness, block_pattern, scalar_basis
-    from fea.elasticity import element_tensors
-    from fea.solver import HeldSystem
+    from rodlab.fea.assembly import assemble_stiffness, block_pattern, scalar_basis
+    from rodlab.fea.elasticity import element_tensors
+    from rodlab.fea.solver import HeldSystem
     pytest.importorskip("gmsh")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     d = resolve_design("rod4")
     rm = mesh_rod(d, size_mm=14.0, half=True)
     basis = scalar_basis(rm.mesh)
@@ -217,11 +216,11 @@ def test_node_ordered_assembly_and_held_system():
 
 @SOLID
 def test_calculix_agrees(tmp_path):
-    from fea import solve_compliance
-    from fea.calculix import ccx_available, run_ccx_compliance
+    from rodlab.fea import solve_compliance
+    from rodlab.fea.calculix import ccx_available, run_ccx_compliance
     if ccx_available() is None:
         pytest.skip("CalculiX (ccx) is not installed")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     d = resolve_design("rod1")                 # carbon: exercises the per-element orientations
     rm = mesh_rod(d, size_mm=8.0)
     ours = solve_compliance(d, rm).C_F

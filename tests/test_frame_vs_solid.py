@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fea.frame import (FrameCalibration, bend_flexibility_factor, calibrate_frame, frame_errors, frame_segments,
+from rodlab.fea.frame import (FrameCalibration, bend_flexibility_factor, calibrate_frame, frame_errors, frame_segments,
                        shear_lag_mm)
 from rodlab.enums import Part
 from rodlab.layout import SegmentKind
@@ -87,7 +87,7 @@ def test_bend_ends_held_by_rings_saturate():
     ring: the same hoop restraint; a steel ring 6 mm thick: longer) but stay below ``bend_end r_m`` (a ring far
     stiffer than the bend wall holds the end no rounder than a rigid one); a soft carbon tube with no ring
     hardly holds a steel bend at all."""
-    from fea.frame import CALIBRATION
+    from rodlab.fea.frame import CALIBRATION
 
     def end(name):
         return [s for s in frame_segments(design(name)) if s.kind is SegmentKind.ARC][0].length_mm
@@ -102,7 +102,7 @@ def test_bend_ends_held_by_rings_saturate():
 def test_holder_zone_closed_form():
     """Pipe-holder zone = holder_end (E / E_t)^a (r_m / t)^b / lambda of the tube: longer for a thinner carbon
     wall, in shear-lag units too."""
-    from fea.frame import CALIBRATION as cal
+    from rodlab.fea.frame import CALIBRATION as cal
     zones = {}
     for name in ("holder_cfrp_1.0_al37", "holder_cfrp_2.0_al37"):
         d = design(name)
@@ -138,8 +138,8 @@ def test_stored_reference_is_current():
     today's default solid model: a change of mesh or solver defaults must refresh them
     (``python scripts/calibrate_frame.py --solve``) and refit the frame."""
     pytest.importorskip("gmsh")
-    from fea import solid_compliance
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.geometry import mesh_rod
     comp, _ = solid_compliance(design("rod4"), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
                                error_estimate=False)
     ref = np.array(REFS["rod4"]["C_F"])
@@ -166,9 +166,9 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     2.8 % off; the thin probes) do not, and the compliance file, the CLI and a sweep row say so."""
     import json as _json
 
-    from fea import compute_compliance
-    from fea.frame import frame_range_notes
-    from fea.sweep import run_sweep
+    from rodlab.fea import compute_compliance
+    from rodlab.fea.frame import frame_range_notes
+    from rodlab.fea.sweep import run_sweep
     from calibrate_frame import OFF_GRID
     from conftest import write_toml
     from rodlab.cli import main

@@ -26,8 +26,8 @@ def _sources():
     import tempfile
     tmp = Path(tempfile.mkdtemp())
     comp = write_compliance(calc_rod_compliance(resolve_design("rod1")), tmp / "rod1.compliance.json")
-    from fea.joints import JointCalibration
-    from fea.joints_io import write_joints
+    from rodlab.fea.joints import JointCalibration
+    from rodlab.fea.joints_io import write_joints
     rng = np.random.default_rng(0)
     joints = write_joints(tmp / "rod1.joints.json", JointCalibration(
         resolve_design("rod1"), (25.0, 25.0), 1e-4 * rng.normal(size=(5, 6, 6)), 1e-4 * rng.normal(size=(5, 6, 3)),
@@ -61,21 +61,21 @@ def _reader(kind):
         from rodlab.compliance import read_compliance
         return read_compliance
     if kind == "joints":
-        from fea.joints_io import read_joints
+        from rodlab.fea.joints_io import read_joints
         return read_joints
     if kind == "robot":
-        from calibrate.robot import read_robot
+        from rodlab.calibrate.robot import read_robot
         return read_robot
     if kind == "profile":
-        from stiffness_rig.config import read_profile
+        from rodlab.stiffness_rig.config import read_profile
         return read_profile
     if kind == "plan":
-        from stiffness_rig.config import read_plan
+        from rodlab.stiffness_rig.config import read_plan
         return read_plan
     if kind == "recording":
-        from stiffness_rig.recording import read_recording
+        from rodlab.stiffness_rig.recording import read_recording
         return read_recording
-    from calibrate.campaign import read_campaign, read_fixture, read_points
+    from rodlab.calibrate.campaign import read_campaign, read_fixture, read_points
     return {"campaign": read_campaign, "fixture": read_fixture, "validation": read_points}[kind]
 
 

@@ -7,7 +7,7 @@ import pytest
 pytest.importorskip("build123d")
 pytest.importorskip("gmsh")
 
-from geometry import GeometryError, build_cad, mesh_rod  # noqa: E402
+from rodlab.geometry import GeometryError, build_cad, mesh_rod  # noqa: E402
 from rodlab import Part, mass_properties, part_mass_properties, resolve_design  # noqa: E402
 from rodlab.design_io import design_from_dict  # noqa: E402
 
@@ -52,7 +52,7 @@ def test_exports(tmp_path):
 
 
 def test_renders_four_legible_views(tmp_path):
-    from geometry import render_views
+    from rodlab.geometry import render_views
     import matplotlib.image as mpimg
     paths = render_views(build_cad(resolve_design("rod1")), tmp_path)
     assert [p.name for p in paths] == ["view_iso.png", "view_xz.png", "view_xy.png", "view_yz.png"]

@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from calibrate import resolve_robot
-from calibrate.ik import solve_ik_position, solve_ik_positions
-from calibrate.kinematics import ball_positions
-from calibrate.simulate import random_truth
+from rodlab.calibrate import resolve_robot
+from rodlab.calibrate.ik import solve_ik_position, solve_ik_positions
+from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.simulate import random_truth
 from rodlab import calc_rod_compliance, resolve_design
 
 

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fea.errors import FeaError
-from fea.frame import CALIBRATION, frame_compliance, frame_segments
-from fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, calibrate_joints, free_spans,
+from rodlab.fea.errors import FeaError
+from rodlab.fea.frame import CALIBRATION, frame_compliance, frame_segments
+from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, calibrate_joints, free_spans,
                         joint_frame_compliance, joint_margins, joints_from_motions, span_basis)
 from rodlab.calc import unit_load_compliance
 from rodlab.chain import chain_flexibility, transport
@@ -69,7 +69,7 @@ def test_sectional_motion_recovers_beam_kinematics():
     """A stretch of tube moving as u = t(xi) + phi(xi) x rho (cubic in xi), plus a radial breathing that a beam
     has no DOF for: the fit returns t(0), phi(0) exactly (the section's nodes all round the tube, as a mesh
     and its mirror image have them), at a cut between node layers."""
-    from fea.sections import sectional_motion
+    from rodlab.fea.sections import sectional_motion
     rng = np.random.default_rng(3)
     axis = np.array([0.6, 0.0, -0.8])
     e2 = np.array([0.0, 1.0, 0.0])
@@ -149,7 +149,7 @@ def test_joint_calibration_input_errors():
 def test_short_base_tube_shortens_the_margins(caplog):
     """Rod 2#'s pipe I has 20 mm of free tube: its sections move closer to the joints (with a warning), and
     :func:`fea.family.calibration_member` picks a grid member with longer tubes instead."""
-    from fea.family import calibration_member
+    from rodlab.fea.family import calibration_member
     d2 = resolve_design("rod2")
     m = joint_margins(d2)
     assert m[Part.PIPE_I] == pytest.approx(7.5) and m[Part.PIPE_II] == pytest.approx(25.0)
@@ -165,8 +165,8 @@ def test_joint_calibration_on_the_solid_rod1_family():
     free pipe I: overlapping blocks), 3# and L1 = 200 / L2 = 600 mm within 0.2 % of their own solid FEA on
     every significant entry (fea/data/solid_reference.json; the global frame: 0.4-0.7 %)."""
     pytest.importorskip("gmsh")
-    from fea import solid_compliance
-    from geometry import mesh_rod
+    from rodlab.fea import solid_compliance
+    from rodlab.geometry import mesh_rod
     refs = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
     d = resolve_design("rod1")
     _, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half),
@@ -189,7 +189,7 @@ def test_joints_file_round_trip_and_errors(tmp_path):
     files name the file and key (format, frame revision, shapes, margins, the design)."""
     import json as _json
 
-    from fea.joints_io import read_joints, write_joints
+    from rodlab.fea.joints_io import read_joints, write_joints
     truth = replace(CALIBRATION, sleeve_end=2.5, bend_scale_in=1.15, shear=1.3)
     d = resolve_design("rod4")
     margins = joint_margins(d)

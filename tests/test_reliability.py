@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
-from fea import FeaError
-from fea.compute import estimated_dofs, solid_compliance
-from rodlab import read_compliance, resolve_design
+from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.fea import FeaError
+from rodlab.fea.compute import estimated_dofs, solid_compliance
+from rodlab import read_compliance
 from rodlab.design_io import design_from_dict
 
 
@@ -51,7 +51,7 @@ def test_thin_walls_are_refused_with_the_reason():
 @pytest.mark.parametrize("gamma", [45.0, 179.0])
 def test_extreme_bends_solve_with_an_error_estimate(gamma):
     pytest.importorskip("gmsh")
-    from geometry import mesh_rod
+    from rodlab.geometry import mesh_rod
     d = _design(gamma_deg=gamma, L1_mm=400.0, L2_mm=400.0, bend={"radius_mm": 30.0})
     comp, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half), size_mm=8.0,
                                  error_estimate=True)

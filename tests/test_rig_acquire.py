@@ -6,11 +6,11 @@ import pytest
 
 from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
-from stiffness_rig import DeviceError, RigError, fit_recording, read_recording
-from stiffness_rig.acquire import RecordingLock, acquire
-from stiffness_rig.config import Channel, RigPlan, RigProfile
-from stiffness_rig.model import Protocol, RigModel
-from stiffness_rig.simdevice import Faults, SimulatedRig
+from rodlab.stiffness_rig import DeviceError, RigError, fit_recording, read_recording
+from rodlab.stiffness_rig.acquire import RecordingLock, acquire
+from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
+from rodlab.stiffness_rig.model import Protocol, RigModel
+from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
 C = np.array([[0.0063, 0.0, -0.0151], [0.0, 0.2198, 0.0], [-0.0151, 0.0, 0.0666]])
 SIM = RodCompliance("1#", Method.CALC, C, 1.2 * C, 0.46, np.zeros(3), np.array([450.0, 0, 300]))

@@ -8,7 +8,7 @@ import pytest
 
 from rodlab import Method, read_compliance
 from rodlab.units import G0
-from stiffness_rig import RecordingWriter, RigError, fit_recording, read_recording
+from rodlab.stiffness_rig import RecordingWriter, RigError, fit_recording, read_recording
 
 
 @pytest.fixture

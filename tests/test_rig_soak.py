@@ -11,17 +11,17 @@ import time
 
 import numpy as np
 
-from stiffness_rig import read_recording
-from stiffness_rig.model import RigModel
-from stiffness_rig.simdevice import Faults, SimulatedRig
+from rodlab.stiffness_rig import read_recording
+from rodlab.stiffness_rig.model import RigModel
+from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
 C = np.array([[0.0063, 0.0, -0.0151], [0.0, 0.2198, 0.0], [-0.0151, 0.0, 0.0666]])
 
 SCRIPT = r"""
 import sys
-from stiffness_rig.acquire import acquire
-from stiffness_rig.config import Channel, RigPlan, RigProfile
-from stiffness_rig.model import Protocol
+from rodlab.stiffness_rig.acquire import acquire
+from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
+from rodlab.stiffness_rig.model import Protocol
 port, out = sys.argv[1], sys.argv[2]
 prof = RigProfile(port=port, protocol="query", retries=3, timeout_s=0.15, temperature_index=3,
                   channels=tuple(Channel(i, i, 1.0, 0.001) for i in range(3)),

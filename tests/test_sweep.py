@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fea.sweep import SWEEP_COLUMNS, parse_range, run_sweep
+from rodlab.fea.sweep import SWEEP_COLUMNS, parse_range, run_sweep
 from rodlab import FormatError, resolve_design
 
 
@@ -48,7 +48,7 @@ def test_sweep_cli_writes_table_and_plot(tmp_path, capsys):
     """``rodlab sweep``: the table's rows are the frame model of each L1 x L2 variant, a heat map is written,
     and bad options are one clear line (exit 2)."""
     import pandas as pd
-    from fea import compute_compliance
+    from rodlab.fea import compute_compliance
     from rodlab.cli import main
     out = tmp_path / "s.csv"
     assert main(["sweep", "--L1", "150,300", "--L2", "450,525", "--serial", "-o", str(out)]) == 0

@@ -71,8 +71,8 @@ def _parse_pins(items) -> dict:
 
 def run_calibration(args, rod: RodCompliance | None, label: str):
     """Identification (+ validation) of one campaign with one compliance file; returns (result, before, after)."""
-    from calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
-    from calibrate import resolve_robot, validate
+    from rodlab.calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
+    from rodlab.calibrate import resolve_robot, validate
     robot = resolve_robot(args.robot)
     camp = read_campaign(args.campaign, robot.n)
     fix = read_fixture(args.fixture)
@@ -90,7 +90,7 @@ def run_calibration(args, rod: RodCompliance | None, label: str):
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    from calibrate import result_dict, write_result
+    from rodlab.calibrate import result_dict, write_result
     if args.points:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
@@ -102,7 +102,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.json:
         print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
     if args.png:
-        from calibrate.plots import plot_residuals
+        from rodlab.calibrate.plots import plot_residuals
         print(f"wrote {plot_residuals(res, camp, args.png)}")
     if res.warnings:
         print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
@@ -132,8 +132,8 @@ def _print_result(res, before, after, label) -> None:
 
 
 def _calibrate_points(args) -> int:
-    from calibrate import Observations, ModelParams, identify, read_points, resolve_robot, result_dict, validate
-    from calibrate import write_result
+    from rodlab.calibrate import Observations, ModelParams, identify, read_points, resolve_robot, result_dict, validate
+    from rodlab.calibrate import write_result
     robot = resolve_robot(args.robot)
     pts = read_points(args.points, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
@@ -175,7 +175,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
               f"{res.rms_mm * 1e3:11.2f}")
     if args.png:
-        from calibrate.plots import plot_error_distributions
+        from rodlab.calibrate.plots import plot_error_distributions
         print(f"wrote {plot_error_distributions(args, rows, args.png)}")
     return 0
 
@@ -212,8 +212,8 @@ def register_more(sub) -> None:
 
 
 def cmd_simulate_campaign(args) -> int:
-    from calibrate import resolve_robot
-    from calibrate.simulate import CampaignSpec, simulate_campaign
+    from rodlab.calibrate import resolve_robot
+    from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     robot = resolve_robot(args.robot)
     rod = read_compliance(args.rod)
     rod_true = read_compliance(args.rod_true) if args.rod_true else None
@@ -233,8 +233,8 @@ def cmd_simulate_campaign(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from calibrate import read_fixture, resolve_robot
-    from calibrate.plan import plan_poses
+    from rodlab.calibrate import read_fixture, resolve_robot
+    from rodlab.calibrate.plan import plan_poses
     from rodlab.fileio import atomic_write_text
     robot = resolve_robot(args.robot)
     fix = read_fixture(args.fixture)

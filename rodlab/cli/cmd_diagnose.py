@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
@@ -37,7 +36,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         raise RodlabError("give either --rig REC.rig.csv --sim SIM.compliance.json or --campaign C.csv --fixture F.json "
                           "--rod ROD.compliance.json")
     if args.rig:
-        from stiffness_rig import read_recording
+        from rodlab.stiffness_rig import read_recording
         if not args.sim:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
         sim = read_compliance(args.sim)
@@ -55,7 +54,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if args.export:
             print(f"wrote {write_compliance(corrected_compliance(sim, diag, model), args.export)}")
     else:
-        from calibrate import read_campaign, read_fixture, read_points, resolve_robot
+        from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = resolve_robot(args.robot)

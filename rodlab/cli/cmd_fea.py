@@ -40,7 +40,7 @@ def register(sub) -> None:
 
 
 def cmd_fea(args: argparse.Namespace) -> int:
-    from fea import FeaModel, compute_compliance, solid_compliance
+    from rodlab.fea import FeaModel, compute_compliance, solid_compliance
     design = resolve_design(args.design)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
@@ -64,7 +64,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
             print(f"  estimated discretisation error: {100 * e['max_relative_C_F']:.3f} % of max|C_F|, "
                   f"{100 * e['max_relative_C_g']:.3f} % of max|C_g|")
         if args.png:
-            from fea.plot import render_deformed
+            from rodlab.fea.plot import render_deformed
             U = res.displacements.copy()
             U[:, 5] *= -1.0                                     # gravity along -z_T, as on a vertical flange
             out = render_deformed(res.rod_mesh, U, args.png, case=5,
@@ -72,8 +72,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
                                   load_label="self-weight, 1 g0 along -z_T")
             print(f"  wrote {out}")
         if joints:
-            from fea.joints import calibrate_joints
-            from fea.joints_io import write_joints
+            from rodlab.fea.joints import calibrate_joints
+            from rodlab.fea.joints_io import write_joints
             jc = calibrate_joints(design, res)
             out = write_joints(args.joints_out, jc, {"solid_dofs": prov["dofs"], "mesh_sha256": prov["mesh"]["sha256"]})
             print(f"  joint calibration (sections {jc.margins_mm[0]:.1f} / {jc.margins_mm[1]:.1f} mm from the free "
@@ -85,7 +85,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
         if args.joints:
             if args.model != FeaModel.FRAME.value:
                 raise RodlabError("--joints applies to --model frame")
-            from fea.joints_io import read_joints
+            from rodlab.fea.joints_io import read_joints
             calibration = read_joints(args.joints)
         comp = compute_compliance(design, args.model, **({"calibration": calibration} if calibration else {}))
         for note in comp.provenance.get("outside_calibrated_range") or []:

@@ -18,7 +18,7 @@ def require_cad():
     try:
         import build123d  # noqa: F401
         import gmsh  # noqa: F401
-        import geometry
+        import rodlab.geometry as geometry
     except ImportError as e:
         raise RodlabError(f"this command needs the CAD extra ({e.name} is missing): pip install 'rodlab[cad]'") from e
     return geometry

@@ -66,7 +66,7 @@ def register(sub) -> None:
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from stiffness_rig import fit_recording, plot_fit, read_recording
+    from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
     rec = read_recording(args.recording)
     sim = read_compliance(args.sim)
     fit = fit_recording(rec, sim, robust=args.robust)
@@ -85,14 +85,14 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")
     print(f"  wrote {write_compliance(comp, args.output)}")
     if args.png:
-        from stiffness_rig import plot_fit as _p  # noqa: F401
+        from rodlab.stiffness_rig import plot_fit as _p  # noqa: F401
         print(f"  wrote {plot_fit(fit, args.png, sim, title=f'rod {rec.rod}')}")
     return 0
 
 
 def parse_effects(specs: list[str]) -> dict:
     """``NAME[:key=value,...]`` -> {name: params}, defaults from :data:`stiffness_rig.simulate.EFFECT_DEFAULTS`."""
-    from stiffness_rig.simulate import EFFECT_DEFAULTS
+    from rodlab.stiffness_rig.simulate import EFFECT_DEFAULTS
 
     from ..errors import RodlabError, did_you_mean
     out = {}
@@ -116,8 +116,8 @@ def parse_effects(specs: list[str]) -> dict:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from stiffness_rig.model import Protocol, RigModel
-    from stiffness_rig.simulate import simulate_recording
+    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.simulate import simulate_recording
 
     from ..errors import RodlabError
     sim = read_compliance(args.sim)
@@ -140,8 +140,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_acquire(args: argparse.Namespace) -> int:
     import sys
-    from stiffness_rig.acquire import acquire
-    from stiffness_rig.config import read_plan, read_profile
+    from rodlab.stiffness_rig.acquire import acquire
+    from rodlab.stiffness_rig.config import read_plan, read_profile
     profile, plan = read_profile(args.profile), read_plan(args.plan)
 
     def operator(prompt: str) -> None:
@@ -174,8 +174,8 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     import time
     from pathlib import Path
 
-    from stiffness_rig.model import RigModel
-    from stiffness_rig.simdevice import Faults, SimulatedRig
+    from rodlab.stiffness_rig.model import RigModel
+    from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
     sim = read_compliance(args.sim)
     model = RigModel(sim.C_F, parse_effects(args.effect))
     dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,

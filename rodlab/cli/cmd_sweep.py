@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from functools import partial
 from pathlib import Path
@@ -41,8 +40,8 @@ def register(sub) -> None:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from fea.sweep import parse_range, run_sweep
-    from fea.sweep_plot import plot_sweep
+    from rodlab.fea.sweep import parse_range, run_sweep
+    from rodlab.fea.sweep_plot import plot_sweep
     base = resolve_design(args.base)
     L1s, L2s = parse_range(args.L1, "L1"), parse_range(args.L2, "L2")
     out = Path(args.output)
@@ -60,13 +59,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.calibrate and args.joints:
         raise RodlabError("give --calibrate (solve now) or --joints FILE (stored), not both")
     if args.joints:
-        from fea.joints_io import read_joints
+        from rodlab.fea.joints_io import read_joints
         calibration = read_joints(args.joints)
         calibration.check_member(base)
         print(f"frame joint-calibrated by {args.joints} (solid FEA of {calibration.base.name})")
     if args.calibrate:
-        from fea import solid_compliance
-        from fea.family import calibrate_family, calibration_member
+        from rodlab.fea import solid_compliance
+        from rodlab.fea.family import calibrate_family, calibration_member
 
         from .cmd_geometry import require_cad
         geometry = require_cad()
@@ -76,7 +75,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                                     keep_displacements=True, tip_moments=True)[1]
         calibration = calibrate_family(calibration_member(base, L1s, L2s), solve)
         m1, m2 = calibration.margins_mm
-        from fea.joints_io import write_joints
+        from rodlab.fea.joints_io import write_joints
         saved = write_joints(out.with_suffix(".joints.json"), calibration)
         print(f"frame joint-calibrated on the solid FEA of {calibration.base.name} (sections {m1:.1f} / {m2:.1f} mm "
               f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %); "

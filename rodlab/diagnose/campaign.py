@@ -48,8 +48,8 @@ def _correct_joints(q_rad: np.ndarray, corr: dict) -> np.ndarray:
 
 
 def _hypotheses(robot, res, obs, camp, rod):
-    from calibrate.kinematics import ball_positions
-    from calibrate.identify import _deflection_offsets
+    from rodlab.calibrate.kinematics import ball_positions
+    from rodlab.calibrate.identify import _deflection_offsets
     N = obs.x_W_mm.shape[0]
     fr, _ = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     hyps = []
@@ -87,9 +87,9 @@ def _hypotheses(robot, res, obs, camp, rod):
 def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
                       fixture_sigma=(0.01, 0.002)):
     """Diagnose a campaign; returns (report, info dict with the re-identified result)."""
-    from calibrate import ModelParams, campaign_observations, identify, validate
-    from calibrate.jacobian import position_jacobian
-    from calibrate.kinematics import ball_positions
+    from rodlab.calibrate import ModelParams, campaign_observations, identify, validate
+    from rodlab.calibrate.jacobian import position_jacobian
+    from rodlab.calibrate.kinematics import ball_positions
 
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, rod)
@@ -99,7 +99,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     J = position_jacobian(fr, tau, free_infos, res.params.base, obs.group).reshape(3 * N, -1)
     # whiten with the noise covariance (device noise + fixture-pose uncertainty per position): every
     # statistic below is then in units of the expected scatter (chi-square with known noise)
-    from calibrate.identify import noise_covariance
+    from rodlab.calibrate.identify import noise_covariance
     L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
     r_raw = res.residuals_mm.reshape(-1)
     n = r_raw.size
@@ -230,7 +230,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                   for f in findings if f.effect == "periodic_joint_error"}
     info = {"result_before": res, "joint_corrections_rad": joint_corr}
     if findings:
-        from calibrate.identify import Observations
+        from rodlab.calibrate.identify import Observations
         obs2 = campaign_observations(camp, fix, rod_used)
         # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
         obs2 = replace(obs2, q_rad=_correct_joints(obs2.q_rad, joint_corr))

@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
@@ -26,16 +25,20 @@ OUT = ROOT / "docs" / "benchmarks" / "speed.md"
 
 
 def _run(args: list[str], cwd: Path) -> tuple[float, float, str]:
-    """Wall time [s], peak RSS of the child [GB], and the last output line of ``rodlab ARGS``."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "rodlab", *args, "-q"], cwd=cwd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
+    """Wall time [s], peak RSS of that child process [GB], and the last output line of ``rodlab ARGS``."""
+    with tempfile.TemporaryFile("w+") as out:
+        t0 = time.perf_counter()
+        p = subprocess.Popen([sys.executable, "-m", "rodlab", "-q", *args], cwd=cwd, stdout=out,
+                             stderr=subprocess.STDOUT, text=True)
+        _, status, usage = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t0
+        p.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        text = out.read()
     if p.returncode not in (0, 3):
-        raise SystemExit(f"rodlab {' '.join(args)} failed ({p.returncode}):\n{p.stderr}")
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    lines = [ln for ln in (p.stdout + p.stderr).splitlines() if ln.strip()]
-    return wall, max(peak, before) / 1e6, lines[-1] if lines else ""
+        raise SystemExit(f"rodlab {' '.join(args)} failed ({p.returncode}):\n{text}")
+    lines = [ln for ln in text.splitlines() if ln.strip()]
+    return wall, usage.ru_maxrss / 1e6, lines[-1] if lines else ""
 
 
 def _cycle_seconds(tmp: Path) -> tuple[float, float]:

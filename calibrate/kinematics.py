@@ -115,35 +115,45 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     return Frames(T, z_prev, o_prev, xA, yB, o_i, p0, pW, R_W0, t_W0, theta)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b over the last axis (broadcast), without np.cross's per-call overhead."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
 def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=None,
                    force_W_N: np.ndarray | None = None) -> np.ndarray:
     """Static joint torques [N m], shape=(N, n): gravity on the links and the rod plus the contact force.
 
     The torque about joint i (axis z_{i-1} through o_{i-1}) of every load beyond it; the joint's gearbox
-    deflects in the direction of that torque (theta = ... + c tau).
+    deflects in the direction of that torque (theta = ... + c tau). With each load's force F_k at c_k on link
+    k: ``tau_i = z_i . (M_i - o_i x S_i)``, ``M_i = sum_{k>=i} c_k x F_k``, ``S_i = sum_{k>=i} F_k`` (suffix
+    sums over the links), vectorised over configurations and joints.
     """
     N = fr.T.shape[0]
     n = robot.n
     g0 = np.asarray(robot.gravity_base, float)                       # m/s^2 in {0}
-    # loads: link masses at their COMs (in frame i), the rod at its COM (in {T} = {n} axes at the ball)
-    pts = []
-    for k in range(n):
-        c = (fr.T[:, k + 1, :3, :3] @ robot.com_mm[k])[..., :] + fr.T[:, k + 1, :3, 3]
-        pts.append((k, c, np.broadcast_to(robot.mass_kg[k] * g0, (N, 3))))
+    # loads per link: the link's mass at its COM (in frame k + 1), the rod at its COM (in {T} = {n} axes at
+    # the ball) and the contact force at the ball (both on the last link)
+    R, t = fr.T[:, 1:, :3, :3], fr.T[:, 1:, :3, 3]                    # (N, n, 3, 3), (N, n, 3)
+    c = np.einsum("mkij,kj->mki", R, np.asarray(robot.com_mm, float)) + t
+    F = np.broadcast_to(np.asarray(robot.mass_kg, float)[:, None] * g0, (N, n, 3))
+    M = _cross(c, F)                                                 # moment about {0}'s origin [N mm]
+    S = F.copy()
     if rod_mass_kg > 0:
         com = np.zeros(3) if rod_com_T_mm is None else np.asarray(rod_com_T_mm, float)
-        c = fr.p0 + (fr.T[:, n, :3, :3] @ com)
-        pts.append((n - 1, c, np.broadcast_to(rod_mass_kg * g0, (N, 3))))
+        cr = fr.p0 + fr.T[:, n, :3, :3] @ com
+        Fr = np.broadcast_to(rod_mass_kg * g0, (N, 3))
+        M[:, n - 1] += _cross(cr, Fr)
+        S[:, n - 1] += Fr
     if force_W_N is not None:
-        F0 = np.atleast_2d(force_W_N) @ fr.R_W0                      # {W} -> {0}
-        pts.append((n - 1, fr.p0, np.broadcast_to(F0, (N, 3))))
-    tau = np.zeros((N, n))
-    for i in range(n):
-        z, o = fr.z_prev[:, i], fr.o_prev[:, i]
-        for k, c, F in pts:
-            if k >= i:
-                tau[:, i] += np.einsum("nj,nj->n", z, np.cross(c - o, F)) * 1e-3   # N mm -> N m
-    return tau
+        F0 = np.broadcast_to(np.atleast_2d(force_W_N) @ fr.R_W0, (N, 3))   # {W} -> {0}
+        M[:, n - 1] += _cross(fr.p0, F0)
+        S[:, n - 1] += F0
+    Msum = np.cumsum(M[:, ::-1], axis=1)[:, ::-1]                      # sum over k >= i
+    Ssum = np.cumsum(S[:, ::-1], axis=1)[:, ::-1]
+    return np.einsum("mij,mij->mi", fr.z_prev, Msum - _cross(fr.o_prev, Ssum)) * 1e-3   # N mm -> N m
 
 
 def ball_positions(robot, params: ModelParams, q_rad, rod_mass_kg=0.0, rod_com_T_mm=None, force_W_N=None,

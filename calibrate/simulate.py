@@ -67,22 +67,32 @@ def _joint_error(q: np.ndarray, periodic) -> np.ndarray:
     return out
 
 
-def _reach_position(robot, truth, rod, T_j, F_W, spec, rng, j) -> np.ndarray:
-    """``spec.orientations`` configurations [rad], shape=(k, n), with which the true robot brings the ball within
-    the alignment tolerance of clamping position ``j``'s datum point, each from a random seed (a different rod
-    orientation each time); position IK in batches of ``3 k`` seeds, at most ``60 k`` tries."""
+def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> dict:
+    """``spec.orientations`` configurations [rad] per clamping position (dict j -> (k, n) array) with which the
+    true robot brings the ball within the alignment tolerance of the datum point, each from a random seed (a
+    different rod orientation each time): position IK for every position in one batch of ``3 k`` seeds each,
+    repeated for the positions still short, at most ``60 k`` tries per position."""
     k = spec.orientations
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-    got = []
+    got = {j: [] for j in Ts}
     for _ in range(20):
-        seeds = rng.uniform(0.7 * lo, 0.7 * hi, (3 * k, robot.n))
-        targets = T_j[:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (3 * k, 3)) @ T_j[:3, :3].T
-        res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F_W)
-        got += list(res.q_rad[res.ok])
-        if len(got) >= k:
-            return np.array(got[:k])
-    raise CalibrationError(f"clamping position {j}: only {len(got)} of {k} rod orientations are reachable",
-                           key="positions")
+        short = [j for j in Ts if len(got[j]) < k]
+        if not short:
+            break
+        m = 3 * k
+        seeds = rng.uniform(0.7 * lo, 0.7 * hi, (len(short) * m, robot.n))
+        targets = np.concatenate([Ts[j][:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (m, 3))
+                                  @ Ts[j][:3, :3].T for j in short])
+        F = np.repeat(np.array([forces[j] for j in short]), m, axis=0)
+        res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F)
+        for i, j in enumerate(short):
+            sl = slice(i * m, (i + 1) * m)
+            got[j] += list(res.q_rad[sl][res.ok[sl]])
+    for j in Ts:
+        if len(got[j]) < k:
+            raise CalibrationError(f"clamping position {j}: only {len(got[j])} of {k} rod orientations are "
+                                   f"reachable", key="positions")
+    return {j: np.array(got[j][:k]) for j in Ts}
 
 
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
@@ -127,9 +137,11 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         poses[j] = matrix_to_pose(Tj)
     rows = []
     t = 0.0
+    forces = {j: Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05]) for j in Ts}
+    reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
     for j in range(1, spec.positions + 1):
-        F_W = Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05])
-        q = _reach_position(robot, truth, rod, Ts[j], F_W, spec, rng, j)
+        F_W = forces[j]
+        q = reached[j]
         qt = _joint_error(q, periodic_joint_error)                    # the angles the joints really take
         m = len(q)
         Fm = np.broadcast_to(F_W, (m, 3))

@@ -67,3 +67,27 @@ def test_unreachable_target_is_reported_not_returned(setup):
     res = solve_ik_positions(robot, truth, far, rng.uniform(lo, hi, (4, robot.n)))
     assert not res.ok.any() and np.all(res.error_mm > 1000.0)
     assert solve_ik_position(robot, truth, far, np.zeros(robot.n)) is None
+
+
+def test_static_torques_equal_the_sum_over_loads_beyond_each_joint(setup):
+    """The suffix-sum form equals the definition: tau_i = sum over every load k beyond joint i of
+    z_{i-1} . ((c_k - o_{i-1}) x F_k), written out load by load with np.cross."""
+    from rodlab.calibrate.kinematics import forward, static_torques
+    robot, rod, truth, rng, lo, hi = setup
+    q = rng.uniform(lo, hi, (25, robot.n))
+    fr = forward(truth, q)
+    F_W = rng.normal(size=(25, 3))
+    com = np.array([3.0, -2.0, -80.0])
+    tau = static_torques(robot, fr, 0.7, com, F_W)
+    g0 = np.asarray(robot.gravity_base, float)
+    n = robot.n
+    loads = [(k, fr.T[:, k + 1, :3, :3] @ robot.com_mm[k] + fr.T[:, k + 1, :3, 3], robot.mass_kg[k] * g0)
+             for k in range(n)]
+    loads += [(n - 1, fr.p0 + fr.T[:, n, :3, :3] @ com, 0.7 * g0), (n - 1, fr.p0, F_W @ fr.R_W0)]
+    ref = np.zeros_like(tau)
+    for i in range(n):
+        for k, c, F in loads:
+            if k >= i:
+                arm = c - fr.o_prev[:, i]
+                ref[:, i] += np.einsum("mj,mj->m", fr.z_prev[:, i], np.cross(arm, np.broadcast_to(F, arm.shape)))
+    np.testing.assert_allclose(tau, ref * 1e-3, atol=1e-12 * np.abs(ref).max())

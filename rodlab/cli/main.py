@@ -35,18 +35,21 @@ def build_parser() -> argparse.ArgumentParser:
                     "(MultiCal).")
     parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
     _global_options(parser, suppress=False)
-    common = argparse.ArgumentParser(add_help=False)
-    _global_options(common, suppress=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    add_parser = sub.add_parser
-
-    def add_with_common(name, **kw):
-        kw["parents"] = [*kw.get("parents", []), common]
-        return add_parser(name, **kw)
-    sub.add_parser = add_with_common
     for mod in _COMMAND_MODULES:
         mod.register(sub)
+    _add_global_options_below(parser)
     return parser
+
+
+def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
+    """Every sub-command (and sub-sub-command, ``rodlab rig simulate``) accepts -v, -q and --debug too."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sp in set(action.choices.values()):
+                if "--debug" not in sp._option_string_actions:
+                    _global_options(sp, suppress=True)
+                _add_global_options_below(sp)
 
 
 def main(argv: list[str] | None = None) -> int:

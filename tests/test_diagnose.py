@@ -220,3 +220,13 @@ def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
     found = [(f.effect, f.location) for f in diag.findings]
     assert diag.verdict == "unexplained" and ("unexplained", "step:12") in found, diag.summary()
     assert {e for e, _ in found if e != "unexplained"} == set(effects), diag.summary()
+
+
+def test_chi2_helpers_equal_scipy_stats():
+    """The diagnosers' chi-square functions (scipy.special, cheap to import) equal scipy.stats.chi2."""
+    from scipy.stats import chi2
+    from rodlab.diagnose.chi2 import chi2_median, chi2_sf
+    for x, k in [(0.5, 1), (3.2, 3), (40.0, 5), (1e-3, 2), (250.0, 30)]:
+        assert chi2_sf(x, k) == pytest.approx(chi2.sf(x, k), rel=1e-12, abs=1e-300)
+    for k in (1, 3, 7):
+        assert chi2_median(k) == pytest.approx(chi2.median(k), rel=1e-12)

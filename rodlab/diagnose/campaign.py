@@ -20,7 +20,7 @@ import logging
 from dataclasses import replace
 
 import numpy as np
-from scipy.stats import chi2
+from .chi2 import chi2_median, chi2_sf
 
 from .report import Diagnosis, Finding
 
@@ -112,7 +112,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     e0 = r0 - Jw @ np.linalg.lstsq(Jw, r0, rcond=None)[0]
     # robust (median per point): isolated outliers or one wrong position must not hide themselves
     per_point = (e0.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - J.shape[1], 1)
-    chi_red0 = float(np.median(per_point)) / float(chi2.median(3))
+    chi_red0 = float(np.median(per_point)) / float(chi2_median(3))
     birge = float(np.sqrt(max(chi_red0, 1.0)))
     log.debug("campaign diagnosis: robust reduced chi-square %.2f, Birge ratio %.2f", chi_red0, birge)
     L = L * birge
@@ -173,7 +173,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
             break
         cand.sort(key=lambda c: c[0])
         dbic, lr, eff, loc, names, H, expl, coef, rss2 = cand[0]
-        p = float(chi2.sf(max(lr, 0.0), H.shape[1]))
+        p = float(chi2_sf(max(lr, 0.0), H.shape[1]))
         if dbic > -DBIC_MIN or p > P_MAX:
             break
         cv2 = cv_error(cols_now + [H]) if eff != "outliers" else cv_now * (rss2 / max(rss, 1e-300))

@@ -19,7 +19,7 @@ import logging
 from dataclasses import fields
 
 import numpy as np
-from scipy.stats import chi2
+from .chi2 import chi2_sf
 
 from ..compliance import RodCompliance
 from ..enums import Phase
@@ -202,7 +202,7 @@ def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tupl
         _, rss_m = ls.fit(tuple(sorted(order[:m + 1])))
         lr = drop[j][0]
         evidence = {"delta_bic": float(-lr + term.n_params * np.log(n)), "lr_chi2": float(lr),
-                    "lr_p": float(chi2.sf(max(lr, 0.0), term.n_params)), "cv_sse_before": float(drop[j][1]),
+                    "lr_p": float(chi2_sf(max(lr, 0.0), term.n_params)), "cv_sse_before": float(drop[j][1]),
                     "cv_sse_after": float(cv_full)}
         location = term.location
         if term.effect == "joint_compliance":

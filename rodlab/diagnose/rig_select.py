@@ -12,7 +12,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from scipy.stats import chi2
+from .chi2 import chi2_sf
 
 from .rig_terms import RigData, Term, creep_term
 from .subset import SubsetLS
@@ -90,7 +90,7 @@ def select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: i
         key, c, rss = best
         dk = k_of(key) - k_of(cur)
         lr = (cur_rss - rss) / sigma ** 2
-        if -lr + dk * np.log(n) > -DBIC_MIN or chi2.sf(max(lr, 0.0), max(dk, 1)) > P_MAX:
+        if -lr + dk * np.log(n) > -DBIC_MIN or chi2_sf(max(lr, 0.0), max(dk, 1)) > P_MAX:
             continue
         cv = ls.cv_error(key)
         if np.isfinite(cur_cv) and not cv < cur_cv:
@@ -104,7 +104,7 @@ def select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: i
             rest = tuple(i for i in cur if i != j)
             _, rss_r = ls.fit(rest)
             lr = (rss_r - cur_rss) / sigma ** 2
-            ok = -lr + npar[j] * np.log(n) <= -DBIC_MIN and chi2.sf(max(lr, 0.0), npar[j]) <= P_MAX
+            ok = -lr + npar[j] * np.log(n) <= -DBIC_MIN and chi2_sf(max(lr, 0.0), npar[j]) <= P_MAX
             if not ok and (weakest is None or lr < weakest[1]):
                 weakest = (rest, lr, rss_r)
         if weakest is None:

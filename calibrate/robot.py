@@ -139,7 +139,8 @@ def resolve_robot(spec: str | Path) -> Robot:
         return read_robot(p)
     folder = resources.files("rodlab") / "data" / "robots"
     names = {Path(str(f)).stem: Path(str(f)) for f in folder.iterdir() if str(f).endswith(".toml")}
-    if str(spec) in names:
-        return read_robot(names[str(spec)])
+    key = str(spec).strip().lower()                     # built-in names are case-blind: TX90 is tx90
+    if key in names:
+        return read_robot(names[key])
     raise CalibrationError(f"no such robot file or built-in robot; built-ins: {sorted(names)}."
                            + did_you_mean(str(spec), names), path=spec)

@@ -62,6 +62,25 @@ class Protocol:
     measured: dict = field(default_factory=lambda: {"x": (0, 2), "y": (1, 2), "z": (0, 2),
                                                    "-x": (0, 2), "-y": (1, 2), "-z": (0, 2)})
 
+    def __post_init__(self) -> None:
+        from .errors import RigError
+        bad = [m for m in self.masses if not (np.isfinite(m) and m > 0)]
+        if not self.masses or bad:
+            raise RigError(f"masses must be positive numbers of kg, got {list(self.masses)}; give e.g. 0.5,1.0,1.5,2.0 "
+                           f"(the mass-0 hold is always recorded)", key="masses")
+        if list(self.masses) != sorted(self.masses):
+            raise RigError(f"masses must increase (they are loaded one after the other), got {list(self.masses)}",
+                           key="masses")
+        checks = {"repeats": (self.repeats, "a whole number >= 1", self.repeats >= 1 and int(self.repeats) == self.repeats),
+                  "hold_s": (self.hold_s, "a duration > 0 s", np.isfinite(self.hold_s) and self.hold_s > 0),
+                  "rate_Hz": (self.rate_Hz, "a rate > 0 Hz", np.isfinite(self.rate_Hz) and self.rate_Hz > 0),
+                  "gap_s": (self.gap_s, "a duration >= 0 s", np.isfinite(self.gap_s) and self.gap_s >= 0)}
+        for key, (value, expected, ok) in checks.items():
+            if not ok:
+                raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
+        for ax in self.axes:
+            LoadAxis.parse(ax, "load axis")
+
     def holds(self):
         """(axis, repeat, phase, mass) of every hold, in order."""
         out = []
@@ -108,6 +127,10 @@ class RigModel:
     rod_points: dict = field(default_factory=dict)   # joint name -> (point_T_mm, axis)
 
     def __post_init__(self) -> None:
+        from .errors import RigError
+        if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
+            raise RigError(f"the per-reading noise must be >= 0 mm, got {self.noise_mm!r} (--noise-um takes um, "
+                           f"e.g. 0.6)", key="noise")
         self.rng = np.random.default_rng(self.seed)
         self._creep = np.zeros(3)
         self._t_last = None

@@ -1,6 +1,7 @@
 """Write a stiffness-rig recording straight from the physical model (no serial link): ``rodlab rig simulate``."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +31,18 @@ def simulate_recording(model: RigModel, protocol: Protocol, path: str | Path, ro
             "load_N": "mass_kg * 9.80665", "generator": "rodlab rig simulate"}
     meta.update(extra_meta or {})
     p = Path(path)
-    if p.exists():
-        p.unlink()
+    tmp = p.with_name(f".{p.name}.{os.getpid()}.part")     # written whole, then renamed: never a partial file
+    try:
+        _write_samples(model, protocol, tmp, meta)
+        os.replace(tmp, p)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return p
+
+
+def _write_samples(model: RigModel, protocol: Protocol, p: Path, meta: dict) -> None:
+    """Every sample of ``protocol`` on ``model`` into a new recording ``p``."""
     dt = 1.0 / protocol.rate_Hz
     n = int(round(protocol.hold_s * protocol.rate_Hz))
     t = 0.0
@@ -58,4 +69,3 @@ def simulate_recording(model: RigModel, protocol: Protocol, path: str | Path, ro
                     x = np.round(x / model.resolution_mm) * model.resolution_mm
                 w.write(round(ts, 3), step, rep, phase, axis, mass, tuple(x), temp)
             t += n * dt + protocol.gap_s
-    return p

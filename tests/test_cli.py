@@ -43,3 +43,32 @@ def test_bad_input_is_one_line(tmp_path):
     r = subprocess.run([sys.executable, "-m", "rodlab", "info", str(tmp_path / "none.rod.toml")],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "not found" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_bad_rig_simulation_options_name_the_option_and_leave_no_file(tmp_path_factory, capsys):
+    """Negative noise, a negative or unordered mass, no repeats: exit 2 with the option named, nothing written
+    (the recording is written whole, then renamed); an existing recording is kept."""
+    sim = tmp_path_factory.mktemp("sim") / "rod1.compliance.json"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    tmp_path = tmp_path_factory.mktemp("out")
+    out = tmp_path / "rec.rig.csv"
+    for bad, key in [(["--noise-um", "-3"], "noise"), (["--masses=-1,2"], "masses"), (["--masses=2,1"], "masses"),
+                     (["--repeats", "0"], "repeats"), (["--rate-hz", "0"], "rate_Hz")]:
+        code = main(["rig", "simulate", "--sim", str(sim), *bad, "-o", str(out)])
+        err = capsys.readouterr().err
+        assert code == 2 and key in err and "Traceback" not in err, (bad, err)
+        assert not out.exists() and not list(tmp_path.iterdir()), bad
+    assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "-o", str(out)]) == 0
+    before = out.read_bytes()
+    assert main(["rig", "simulate", "--sim", str(sim), "--noise-um", "-1", "-o", str(out)]) == 2
+    assert out.read_bytes() == before and sorted(p.name for p in tmp_path.iterdir()) == ["rec.rig.csv"]
+
+
+def test_builtin_robot_names_are_case_blind_and_options_work_after_the_subcommand(tmp_path, capsys):
+    from rodlab.calibrate import resolve_robot
+    assert resolve_robot("TX90").n == resolve_robot("tx90").n == 6
+    from rodlab.cli.main import build_parser
+    args = build_parser().parse_args(["rig", "simulate", "--sim", "rod1", "-o", "x.csv", "--debug", "-q"])
+    assert args.debug and args.quiet
+    args = build_parser().parse_args(["--debug", "fea", "rod1", "-o", "x.json"])
+    assert args.debug and not args.quiet

@@ -22,6 +22,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from pages import write_page  # noqa: E402
 OUT = ROOT / "docs" / "benchmarks" / "solvers.md"
 
 #: candidate -> (module to import, distributions whose installed size counts, release / maintenance note)
@@ -161,11 +163,7 @@ def main() -> int:
     for name, wall, gb, res, diff, mb, note in rows:
         lines.append(f"| {name} | {f(wall, '.2f')} | {f(gb, '.2f')} | {f(res, '.1e')} | {f(diff, '.1e')} | "
                      f"{f(mb, '.0f')} | {note} |")
-    notes = ROOT / "benchmarks" / "solvers_notes.md"
-    if notes.exists():
-        lines += ["", notes.read_text().strip()]
-    OUT.write_text("\n".join(lines) + "\n")
-    print(f"wrote {OUT}")
+    write_page(OUT, lines, ROOT / "benchmarks" / "solvers_notes.md")
     return 0
 
 

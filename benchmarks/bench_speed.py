@@ -21,6 +21,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from pages import write_page  # noqa: E402
 OUT = ROOT / "docs" / "benchmarks" / "speed.md"
 
 
@@ -118,11 +120,7 @@ def main() -> int:
              "", "| what | command | wall [s] | peak [GB] | goal | |", "|---|---|---:|---:|---|---|"]
     for what, cmd, wall, gb, goal, verdict in rows:
         lines.append(f"| {what} | {cmd} | {wall:.2f} | {'' if gb != gb else f'{gb:.2f}'} | {goal} | {verdict} |")
-    notes = ROOT / "benchmarks" / "speed_notes.md"
-    if notes.exists():
-        lines += ["", notes.read_text().strip()]
-    OUT.write_text("\n".join(lines) + "\n")
-    print(f"wrote {OUT}")
+    write_page(OUT, lines, ROOT / "benchmarks" / "speed_notes.md")
     return 0
 
 

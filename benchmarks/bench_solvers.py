@@ -22,8 +22,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-from pages import write_page  # noqa: E402
+from pages import write_page  # noqa: E402  (beside this script, on sys.path when it runs)
 OUT = ROOT / "docs" / "benchmarks" / "solvers.md"
 
 #: candidate -> (module to import, distributions whose installed size counts, release / maintenance note)

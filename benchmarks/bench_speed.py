@@ -4,7 +4,7 @@ environment README command 1 creates, against the goals of the fresh-machine spe
     python benchmarks/bench_speed.py            # prints and writes docs/benchmarks/speed.md (~3 min)
     python benchmarks/bench_speed.py --quick    # skips the demo
 
-Each command runs in a fresh process (wall time, peak memory of the process tree). The campaign used by
+Each command runs in a fresh process (wall time, and the peak memory of that process). The campaign used by
 ``plan`` and ``calibrate`` is simulated first by ``rodlab simulate-campaign``, so nothing outside the
 repository is needed. The library cycle (simulate + identify + validate, 30 points, compensation on) is
 timed in-process, median of 5, since a design study runs thousands of them in one process.
@@ -21,8 +21,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
-from pages import write_page  # noqa: E402
+from pages import write_page  # noqa: E402  (beside this script, on sys.path when it runs)
 OUT = ROOT / "docs" / "benchmarks" / "speed.md"
 
 

@@ -307,8 +307,7 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         x0 = x_init[free]
         lb, ub = lower[free], upper[free]
         bounded = bool(np.isfinite(lb).any() or np.isfinite(ub).any())
-        z0 = np.clip(x[free], lb, ub)
-        res = least_squares(fun, z0, jac=jac, method="trf" if (robust or bounded) else "lm",
+        res = least_squares(fun, x[free], jac=jac, method="trf" if (robust or bounded) else "lm",
                             bounds=(lb, ub) if bounded else (-np.inf, np.inf),
                             loss="soft_l1" if robust else "linear", f_scale=3 * noise_est, xtol=1e-12, ftol=1e-12,
                             gtol=1e-12, max_nfev=200 * len(free))

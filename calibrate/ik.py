@@ -16,9 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import CalibrationError
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["IkBatch", "solve_ik_positions", "solve_ik_position"]
+__all__ = ["IkBatch", "solve_ik_positions", "solve_ik_position", "solve_ik_groups", "random_configurations"]
 
 #: weight of the pull towards the seed in stage 1 [mm/rad]
 SEED_WEIGHT = 5.0
@@ -100,7 +101,7 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_k
     q_seed = np.atleast_2d(np.asarray(q_seed, float))
     M, n = q_seed.shape
     if n != robot.n:
-        raise ValueError(f"q_seed has {n} joints per row, the robot has {robot.n}")
+        raise CalibrationError(f"q_seed has {n} joints per row, the robot has {robot.n}", key="q_seed")
     targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
     force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
     loads = (rod_mass_kg, rod_com_T_mm, force)
@@ -120,3 +121,26 @@ def solve_ik_position(robot, params: ModelParams, target_W, q_seed, rod_mass_kg=
                              rod_mass_kg, rod_com_T_mm, None if force_W_N is None else np.atleast_2d(force_W_N),
                              pos_tol_mm)
     return res.q_rad[0] if res.ok[0] else None
+
+
+def random_configurations(robot, rng, count: int, fraction: float = 0.7) -> np.ndarray:
+    """``count`` joint configurations [rad], shape=(count, n), uniform within ``fraction`` of each joint's
+    limits: the seeds from which the planner and the campaign simulator look for rod orientations."""
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    return rng.uniform(fraction * lo, fraction * hi, (count, robot.n))
+
+
+def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray, rod_mass_kg: float = 0.0,
+                    rod_com_T_mm=None, forces: dict | None = None) -> dict:
+    """Position IK of several groups of targets in one batch (a group: one clamping position).
+
+    targets : {group: (m_g, 3) [mm]}; seeds : (sum m_g, n) [rad], in the groups' order; forces : {group: (3,)
+    [N]} contact force of each group, or None. Returns {group: the configurations that reached their target,
+    (k_g, n) [rad], in seed order}."""
+    keys = list(targets)
+    sizes = [len(targets[j]) for j in keys]
+    F = None if forces is None else np.repeat(np.array([forces[j] for j in keys]), sizes, axis=0)
+    res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod_mass_kg,
+                             rod_com_T_mm, F)
+    edges = np.cumsum([0, *sizes])
+    return {j: res.q_rad[a:b][res.ok[a:b]] for j, a, b in zip(keys, edges[:-1], edges[1:])}

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from .identify import _select
-from .ik import solve_ik_positions
+from .errors import CalibrationError
+from .ik import random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import catalogue
@@ -34,17 +35,14 @@ def reachable_candidates(robot, params: ModelParams, fixture, k: int, candidates
                          rod_com_T_mm=None) -> dict:
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array):
     position IK from ``4 * candidates`` random seeds per position, every position in one batch."""
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     m = 4 * candidates
-    js = list(fixture.poses)
-    targets = np.repeat(np.array([fixture.transform(j)[:3, 3] for j in js]), m, axis=0)
-    seeds = rng.uniform(0.7 * lo, 0.7 * hi, (len(js) * m, robot.n))
-    res = solve_ik_positions(robot, params, targets, seeds, rod_mass_kg, rod_com_T_mm)
+    targets = {j: np.tile(fixture.transform(j)[:3, 3], (m, 1)) for j in fixture.poses}
+    seeds = random_configurations(robot, rng, len(targets) * m)
+    reached = solve_ik_groups(robot, params, targets, seeds, rod_mass_kg, rod_com_T_mm)
     cands = {}
-    for i, j in enumerate(js):
-        got = res.q_rad[i * m:(i + 1) * m][res.ok[i * m:(i + 1) * m]][:candidates]
+    for j, got in reached.items():
+        got = got[:candidates]
         if len(got) < k:
-            from .errors import CalibrationError
             raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
                                    f"the datum point, {k} needed; move the fixture within reach",
                                    key=f"positions.{j}")

@@ -20,7 +20,7 @@ from rodlab.frames import matrix_to_pose, rotation_from_abc
 
 from .errors import CalibrationError
 from .identify import _deflection_offsets, Observations
-from .ik import solve_ik_positions
+from .ik import random_configurations, solve_ik_groups
 from .kinematics import ModelParams, ball_positions
 
 __all__ = ["CampaignSpec", "simulate_campaign", "random_truth"]
@@ -73,21 +73,17 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
     different rod orientation each time): position IK for every position in one batch of ``3 k`` seeds each,
     repeated for the positions still short, at most ``60 k`` tries per position."""
     k = spec.orientations
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    m = 3 * k
     got = {j: [] for j in Ts}
     for _ in range(20):
         short = [j for j in Ts if len(got[j]) < k]
         if not short:
             break
-        m = 3 * k
-        seeds = rng.uniform(0.7 * lo, 0.7 * hi, (len(short) * m, robot.n))
-        targets = np.concatenate([Ts[j][:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (m, 3))
-                                  @ Ts[j][:3, :3].T for j in short])
-        F = np.repeat(np.array([forces[j] for j in short]), m, axis=0)
-        res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F)
-        for i, j in enumerate(short):
-            sl = slice(i * m, (i + 1) * m)
-            got[j] += list(res.q_rad[sl][res.ok[sl]])
+        seeds = random_configurations(robot, rng, len(short) * m)
+        targets = {j: Ts[j][:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (m, 3)) @ Ts[j][:3, :3].T
+                   for j in short}
+        for j, q in solve_ik_groups(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, forces).items():
+            got[j] += list(q)
     for j in Ts:
         if len(got[j]) < k:
             raise CalibrationError(f"clamping position {j}: only {len(got[j])} of {k} rod orientations are "

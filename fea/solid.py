@@ -29,7 +29,7 @@ from rodlab.units import G0, kg_m3_to_kg_mm3
 from .assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
-from .solver import HeldSystem, PatternSolver, available_backend, node_ordering
+from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering
 
 __all__ = ["SolidResult", "solve_compliance", "mirror_displacements", "section_rigid_motion", "mirror_nodes",
            "ANTISYMMETRIC_CASES"]
@@ -128,7 +128,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     timings["ordering"] = time.perf_counter() - t1
     t1 = time.perf_counter()
     # in the solver's numbering; CHOLMOD and PARDISO read one triangle only: half the memory
-    K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes, upper=backend != "superlu")
+    K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes, upper=backend != SolverBackend.SUPERLU)
     del pattern
     timings["assembly"] = time.perf_counter() - t1
     N = int(3 * basis.N)

@@ -205,14 +205,14 @@ class _Pardiso:
         ps.iparm[9] = 8        # pivot perturbation 1e-8 (SPD: unused)
         ps.iparm[34] = 0       # one-based indices (pypardiso adds 1)
         ps._check_A(self._U)   # sorted indices, no empty rows, CSR (no transpose)
-        self._call(11, self._U, np.zeros((n, 1)))
+        self._call(11, np.zeros((n, 1)))
 
-    def _call(self, phase: int, U: sp.csr_matrix, B: np.ndarray) -> np.ndarray:
+    def _call(self, phase: int, B: np.ndarray) -> np.ndarray:
         from pypardiso.pardiso_wrapper import PyPardisoError
         _mkl_threads(self._ps.libmkl)
         self._ps.set_phase(phase)
         try:
-            return self._ps._call_pardiso(U, np.asfortranarray(B, dtype=np.float64))
+            return self._ps._call_pardiso(self._U, np.asfortranarray(B, dtype=np.float64))
         except PyPardisoError as e:
             raise FeaError(f"PARDISO failed in phase {phase} ({e}); the stiffness matrix is singular or not "
                            f"positive definite: is every part connected to the clamp?", key="solver") from e
@@ -220,9 +220,8 @@ class _Pardiso:
     def factor(self, A: sp.spmatrix):
         Ac = sp.csc_matrix(A)
         self._U.data[:] = Ac.data[self._keep]
-        self._call(22, self._U, np.zeros((Ac.shape[0], 1)))
-        U = self._U
-        return lambda B: self._call(33, U, np.asarray(B))
+        self._call(22, np.zeros((Ac.shape[0], 1)))
+        return lambda B: self._call(33, np.asarray(B))
 
     def __del__(self):
         try:

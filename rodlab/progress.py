@@ -8,13 +8,11 @@ nothing when bars are off.
 from __future__ import annotations
 
 import contextlib
-import logging
 import sys
 from collections.abc import Iterable, Iterator
 
-__all__ = ["configure", "enabled", "progress", "stages", "Stages"]
+__all__ = ["configure", "progress", "stages", "Stages"]
 
-log = logging.getLogger(__name__)
 _ENABLED = False
 
 
@@ -22,11 +20,6 @@ def configure(enabled: bool) -> None:
     """Turn progress bars on or off for this process."""
     global _ENABLED
     _ENABLED = bool(enabled)
-
-
-def enabled() -> bool:
-    """Whether bars are shown."""
-    return _ENABLED
 
 
 class _Silent:
@@ -43,17 +36,8 @@ class _Silent:
     def update(self, n=1):
         self.n += n
 
-    def refresh(self):
-        pass
-
-    def set_description_str(self, s, refresh=True):
-        pass
-
     def set_postfix_str(self, s="", refresh=True):
         pass
-
-    def write(self, s):
-        log.info("%s", s)
 
     def close(self):
         pass
@@ -78,9 +62,8 @@ def progress(iterable: Iterable | None = None, *, total: int | None = None, desc
 class Stages:
     """Named steps of one computation on one bar: ``with s.step("factorise"): ...``."""
 
-    def __init__(self, bar, names: list[str]):
+    def __init__(self, bar):
         self._bar = bar
-        self._names = names
 
     @contextlib.contextmanager
     def step(self, name: str) -> Iterator[None]:
@@ -95,4 +78,4 @@ class Stages:
 def stages(desc: str, names: list[str]) -> Iterator[Stages]:
     """A bar of ``len(names)`` named steps (``desc`` on the left, the current step on the right)."""
     with progress(total=len(names), desc=desc, unit="step") as bar:
-        yield Stages(bar, names)
+        yield Stages(bar)

@@ -3,6 +3,7 @@
 Uses compliance files from the FEA and the rig (the core's :class:`rodlab.RodCompliance`), never their code.
 """
 from .campaign import Campaign, Fixture, PointSet, read_campaign, read_fixture, read_points
+from .compensation import Compensation, deflection_offsets
 from .errors import CalibrationError
 from .identify import CalibrationResult, Observations, campaign_observations, identify, register_base_and_tool
 from .kinematics import ModelParams, ball_positions
@@ -10,7 +11,7 @@ from .result import result_dict, write_result
 from .robot import Robot, read_robot, resolve_robot
 from .validate import ErrorStats, validate
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
+__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError", "Compensation", "deflection_offsets",
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",
            "result_dict", "write_result", "Robot", "read_robot", "resolve_robot", "ErrorStats", "validate"]

@@ -23,9 +23,9 @@ import numpy as np
 
 from rodlab.compliance import RodCompliance
 from rodlab.frames import pose_to_matrix
-from rodlab.units import G0
 
 from .campaign import Campaign, Fixture
+from .compensation import deflection_offsets
 from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -154,18 +154,6 @@ class CalibrationResult:
     warnings: list = field(default_factory=list)
 
 
-def _deflection_offsets(robot, params, obs: Observations, rod: RodCompliance | None) -> np.ndarray:
-    if rod is None or (not rod.C_F.any() and not rod.C_g.any()):
-        return np.zeros_like(obs.x_W_mm)
-    fr, _ = ball_positions(robot, params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-    n = robot.n
-    R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
-    g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)
-    F_T = np.einsum("nji,nj->ni", R_TW, obs.force_W_N)
-    dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
-    return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
-
-
 def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
     """Free parameters: structural rules, user pins / frees, then the preference-ordered rank analysis."""
     fixed = structural_fixed(robot, tool_mm, positions)
@@ -278,11 +266,10 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
 
+        model_at = _memo_model(robot, start, infos, x, free, obs)
+
         def fun(z):
-            xx = x.copy()
-            xx[free] = z
-            p = apply(start, infos, xx)
-            frr, _ = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+            xx, p, frr, _ = model_at(z)
             r = (frr.pW - target - _fixture_shift(infos, xx, obs)).ravel()
             if prior[free].any():
                 sel = prior[free]
@@ -291,10 +278,7 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
             return r
 
         def jac(z):
-            xx = x.copy()
-            xx[free] = z
-            p = apply(start, infos, xx)
-            frr, tt = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+            xx, p, frr, tt = model_at(z)
             Jm = position_jacobian(frr, tt, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
             if prior[free].any():
                 sel = np.nonzero(prior[free])[0]
@@ -313,7 +297,7 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
                             gtol=1e-12, max_nfev=200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
-        new_off = _deflection_offsets(robot, p, obs, rod)
+        new_off = deflection_offsets(robot, p, obs.q_rad, obs.force_W_N, rod)
         change = float(np.abs(new_off - offsets).max())
         offsets = new_off
         r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW
@@ -349,6 +333,24 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
                             [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
     out.warnings = trust_warnings(robot, out, expected_noise_mm)
     return out
+
+
+def _memo_model(robot, start: ModelParams, infos, x: np.ndarray, free: list, obs: Observations):
+    """``z -> (internal vector, params, frames, torques)`` with the free parameters set to ``z``, remembering
+    the last evaluation (the solver asks for the Jacobian at the point whose residual it just computed)."""
+    last: dict = {}
+
+    def model_at(z):
+        z = np.asarray(z, float)
+        if "z" in last and np.array_equal(last["z"], z):
+            return last["out"]
+        xx = x.copy()
+        xx[free] = z
+        p = apply(start, infos, xx)
+        frr, tt = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+        last["z"], last["out"] = z.copy(), (xx, p, frr, tt)
+        return last["out"]
+    return model_at
 
 
 #: joint compliance a gearbox can have [rad/(N m)]: identified within [0, C_MAX] by construction (bounded LM)
@@ -441,12 +443,14 @@ def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.
             if np.allclose(T, np.eye(4)):
                 continue                                   # the world position defines {W}
             m = np.nonzero(obs.group == j)[0]
-            G = np.zeros((3 * m.size, 6))
-            for r, idx in enumerate(m):
-                G[3 * r:3 * r + 3, :3] = np.eye(3) * st
-                d = obs.x_W_mm[idx] - T[:3, 3]
-                for a in range(3):
-                    G[3 * r:3 * r + 3, 3 + a] = np.cross(np.eye(3)[a], d) * sr
+            d = obs.x_W_mm[m] - T[:3, 3]                             # (k, 3)
+            G = np.zeros((m.size, 3, 6))
+            G[:, :, :3] = np.eye(3) * st
+            # column 3 + a: e_a x d, i.e. -skew(d) e_a
+            G[:, 0, 4], G[:, 0, 5] = d[:, 2] * sr, -d[:, 1] * sr
+            G[:, 1, 3], G[:, 1, 5] = -d[:, 2] * sr, d[:, 0] * sr
+            G[:, 2, 3], G[:, 2, 4] = d[:, 1] * sr, -d[:, 0] * sr
+            G = G.reshape(3 * m.size, 6)
             rows = (3 * m[:, None] + np.arange(3)).ravel()
             S[np.ix_(rows, rows)] += G @ G.T
     return S

@@ -94,10 +94,11 @@ def _lm(robot, params, q0, targets, loads, lo, hi, q_pull, weight, iterations, t
 
 def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_kg: float = 0.0,
                        rod_com_T_mm=None, force_W_N=None, pos_tol_mm: float = 1e-4,
-                       iterations: int = 60) -> IkBatch:
+                       iterations: int = 60, pull: bool = True) -> IkBatch:
     """Joint angles near ``q_seed`` [rad], shape=(M, n), that put the ball at ``targets_W`` [mm], shape=(M, 3)
     or (3,), with the rod's weight and a contact force ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting
-    the compliant joints of ``params``. All M problems are solved together (see the module docstring)."""
+    the compliant joints of ``params``. All M problems are solved together (see the module docstring).
+    ``pull=False`` skips stage 1, for seeds already near a solution (planned configurations)."""
     q_seed = np.atleast_2d(np.asarray(q_seed, float))
     M, n = q_seed.shape
     if n != robot.n:
@@ -107,7 +108,9 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_k
     loads = (rod_mass_kg, rod_com_T_mm, force)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
-    q, _, it1 = _lm(robot, params, seed, targets, loads, lo, hi, seed, SEED_WEIGHT, iterations, pos_tol_mm)
+    q, it1 = seed, 0
+    if pull:
+        q, _, it1 = _lm(robot, params, seed, targets, loads, lo, hi, seed, SEED_WEIGHT, iterations, pos_tol_mm)
     q, err, it2 = _lm(robot, params, q, targets, loads, lo, hi, None, 0.0, iterations, pos_tol_mm)
     ok = (err < pos_tol_mm) & np.all((q >= lo) & (q <= hi), axis=1)
     return IkBatch(q, ok, err, it1 + it2)

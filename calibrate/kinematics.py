@@ -68,7 +68,7 @@ class Frames:
 def _rows(theta, d, a, alpha, beta):
     """Row transforms, shape=(N, n, 4, 4), and the intermediate rotation after Rz(theta) Rx(alpha)."""
     ct, st = np.cos(theta), np.sin(theta)
-    ca, sa = np.cos(alpha), np.sin(alpha)
+    ca, sa = np.broadcast_to(np.cos(alpha), theta.shape), np.broadcast_to(np.sin(alpha), theta.shape)
     cb, sb = np.cos(beta), np.sin(beta)
     N, n = theta.shape
     T = np.zeros((N, n, 4, 4))
@@ -94,8 +94,7 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     theta = q + params.theta_offset[None, :]
     if tau_Nm is not None:
         theta = theta + params.c[None, :] * tau_Nm
-    rows, RzRx = _rows(theta, params.d[None, :] + 0 * theta, params.a[None, :] + 0 * theta,
-                       params.alpha[None, :] + 0 * theta, params.beta)
+    rows, RzRx = _rows(theta, params.d, params.a, params.alpha, params.beta)
     T = np.zeros((N, n + 1, 4, 4))
     T[:, 0] = np.eye(4)
     for i in range(n):
@@ -104,9 +103,8 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     z_prev = R_prev[..., :, 2]
     o_prev = T[:, :n, :3, 3]
     ct, st = np.cos(theta), np.sin(theta)
-    xA = R_prev @ np.stack([ct, st, np.zeros_like(ct)], -1)[..., None]
-    xA = xA[..., 0]
-    yB = (R_prev @ RzRx)[..., :, 1]
+    xA = R_prev[..., :, 0] * ct[..., None] + R_prev[..., :, 1] * st[..., None]
+    yB = (R_prev @ RzRx[..., :, 1:2])[..., 0]
     o_i = T[:, 1:, :3, 3]
     p0 = (T[:, n, :3, :3] @ params.tool[:, None])[..., 0] + T[:, n, :3, 3]
     TB = pose_to_matrix(params.base)
@@ -117,9 +115,13 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b over the last axis (broadcast), without np.cross's per-call overhead."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=None,

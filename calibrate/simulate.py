@@ -18,12 +18,13 @@ from rodlab.compliance import RodCompliance
 from rodlab.fileio import atomic_write_json, atomic_write_text
 from rodlab.frames import matrix_to_pose, rotation_from_abc
 
+from .campaign import Fixture
 from .errors import CalibrationError
-from .identify import _deflection_offsets, Observations
+from .compensation import deflection_offsets
 from .ik import random_configurations, solve_ik_groups
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["CampaignSpec", "simulate_campaign", "random_truth"]
+__all__ = ["CampaignSpec", "simulate_campaign", "random_truth", "standard_base", "fixture_layout", "standard_fixture"]
 
 
 @dataclass
@@ -54,6 +55,55 @@ def random_truth(robot, tool_mm, rng, scale=1.0) -> ModelParams:
     th = p.theta_offset + scale * np.deg2rad(rng.normal(0, 0.06, n))
     c = np.concatenate([[0.0], rng.uniform(3e-6, 6e-6, n - 1)])
     return p.with_(d=d, a=a, alpha=al, beta=be, theta_offset=th, c=c)
+
+
+#: {W} (the world clamping position's device frame) in the robot base {0}: 650 mm in front, 250 mm up [mm]
+WORLD_IN_BASE_MM = np.array([650.0, 0.0, 250.0])
+#: the device frames' tilt (ABC [deg]): Rx(-45) Ry(35.26), so z_D lies along (1, 1, 1)/sqrt(3), up
+DEVICE_TILT_ABC_DEG = np.array([-45.0, 35.26438968, 0.0])
+#: the sensors' contact force in {D_j} [N] of the simulated device
+CONTACT_FORCE_D_N = np.array([1.10, 1.25, 1.05])
+
+
+def standard_base() -> np.ndarray:
+    """Pose of the robot base {0} in {W} [mm, deg], shape=(6,): {W} 650 mm in front of the robot, 250 mm up,
+    the device frame tilted 54.7 deg (axes up at equal angles) — the simulator's and the planner's setup."""
+    return matrix_to_pose(_base_in_world())
+
+
+def _base_in_world() -> np.ndarray:
+    T_base_W = np.eye(4)
+    T_base_W[:3, :3] = rotation_from_abc(DEVICE_TILT_ABC_DEG)
+    T_base_W[:3, 3] = WORLD_IN_BASE_MM
+    return np.linalg.inv(T_base_W)
+
+
+def fixture_layout(positions: int, rng) -> tuple[int, dict]:
+    """The simulator's clamping positions: (the world position, {j: pose of {D_j} in {W}, 4 x 4}); the positions
+    on an ellipse 150 x 180 mm around {W} (80 mm up and down), each device turned by a random yaw (+-60 deg)."""
+    R_WD = rotation_from_abc(DEVICE_TILT_ABC_DEG)
+    T_W_base = _base_in_world()
+    wp = 1 + positions // 2
+    Ts = {}
+    for j in range(1, positions + 1):
+        if j == wp:
+            Ts[j] = np.eye(4)
+            continue
+        ang = 2 * np.pi * (j - 1) / max(positions - 1, 1)
+        off_base = np.array([150 * np.cos(ang), 180 * np.sin(ang), 80 * np.sin(2 * ang)])
+        yaw = rng.uniform(-60, 60)
+        Tb = np.eye(4)
+        Tb[:3, :3] = rotation_from_abc([0, 0, yaw]) @ R_WD
+        Tb[:3, 3] = WORLD_IN_BASE_MM + off_base
+        Ts[j] = T_W_base @ Tb
+    return wp, Ts
+
+
+def standard_fixture(positions: int = 5, seed: int = 0) -> Fixture:
+    """A fixture of the simulator's layout (:func:`fixture_layout`), poses exact, for planning and studies
+    without a fixture file."""
+    wp, Ts = fixture_layout(positions, np.random.default_rng(seed))
+    return Fixture({j: matrix_to_pose(T) for j, T in Ts.items()}, CONTACT_FORCE_D_N.copy(), wp)
 
 
 def _joint_error(q: np.ndarray, periodic) -> np.ndarray:
@@ -106,34 +156,12 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     out.mkdir(parents=True, exist_ok=True)
     rod_true = rod_true or rod
     truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale)
-    # base pose: {W} = {D_world} near the robot, the device frame tilted 54.7 deg (axes up at equal angles)
-    tilt = np.array([-45.0, 35.26438968, 0.0])                # Rx(-45) Ry(35.26): z_D along (1,1,1)/sqrt(3) up
-    R_WD = rotation_from_abc(tilt)                            # device axes in a level lab frame
-    world_in_base = np.array([650.0, 0.0, 250.0])
-    T_base_W = np.eye(4)
-    T_base_W[:3, :3] = R_WD
-    T_base_W[:3, 3] = world_in_base
-    T_W_base = np.linalg.inv(T_base_W)
-    truth = truth.with_(base=matrix_to_pose(T_W_base))
-    wp = 1 + spec.positions // 2
-    poses, Ts = {}, {}
-    for j in range(1, spec.positions + 1):
-        if j == wp:
-            Tj = np.eye(4)
-        else:
-            ang = 2 * np.pi * (j - 1) / max(spec.positions - 1, 1)
-            off_base = np.array([150 * np.cos(ang), 180 * np.sin(ang), 80 * np.sin(2 * ang)])
-            yaw = rng.uniform(-60, 60)
-            R_base = rotation_from_abc([0, 0, yaw]) @ R_WD
-            Tb = np.eye(4)
-            Tb[:3, :3] = R_base
-            Tb[:3, 3] = world_in_base + off_base
-            Tj = T_W_base @ Tb
-        Ts[j] = Tj
-        poses[j] = matrix_to_pose(Tj)
+    truth = truth.with_(base=standard_base())
+    wp, Ts = fixture_layout(spec.positions, rng)
+    poses = {j: matrix_to_pose(T) for j, T in Ts.items()}
     rows = []
     t = 0.0
-    forces = {j: Ts[j][:3, :3] @ np.array([1.10, 1.25, 1.05]) for j in Ts}
+    forces = {j: Ts[j][:3, :3] @ CONTACT_FORCE_D_N for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
     for j in range(1, spec.positions + 1):
         F_W = forces[j]
@@ -141,9 +169,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         qt = _joint_error(q, periodic_joint_error)                    # the angles the joints really take
         m = len(q)
         Fm = np.broadcast_to(F_W, (m, 3))
-        obs = Observations(qt, np.zeros((m, 3)), Fm, rod.mass_kg, rod.com_T_mm)
         fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, Fm)
-        pW = fr.pW + _deflection_offsets(robot, truth, obs, rod_true)
+        pW = fr.pW + deflection_offsets(robot, truth, qt, Fm, rod_true)
         Tinv = np.linalg.inv(Ts[j])
         xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + rng.normal(0, spec.device_noise_mm, (m, 3))
         qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg

@@ -177,6 +177,15 @@ class RodCompliance:
         return cls(other.rod, Method.NONE, np.zeros((3, 3)), np.zeros((3, 3)), other.mass_kg, other.com_T_mm,
                    other.tool_mm, 1.0, {"derived_from": other.provenance.get("method", str(other.method))})
 
+    def scaled(self, r: float, method: Method | str = Method.MEAS) -> "RodCompliance":
+        """The same rod ``r`` times as compliant (``C_F``, ``C_g`` scaled; paper Eq. 22 with ``r = r_rod``),
+        recorded as ``method`` with ``r_rod = r``."""
+        if not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
+            raise ComplianceError(f"the scale factor must be a finite number > 0, got {r!r}", key="r_rod")
+        prov = dict(self.provenance, scaled_from=str(self.method), scale_factor=float(r))
+        return RodCompliance(self.rod, method, self.C_F * r, self.C_g * r, self.mass_kg, self.com_T_mm,
+                             self.tool_mm, float(r), prov)
+
     # -- (de)serialisation -----------------------------------------------------------------
     def to_dict(self) -> dict:
         def sig(v, n=10):

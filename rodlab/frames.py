@@ -47,9 +47,16 @@ def rot_z(angle_rad) -> np.ndarray:
 
 
 def rotation_from_abc(abc_deg) -> np.ndarray:
-    """``Rx(a) @ Ry(b) @ Rz(c)`` from angles [deg], shape=(..., 3) -> (..., 3, 3)."""
+    """``Rx(a) @ Ry(b) @ Rz(c)`` from angles [deg], shape=(..., 3) -> (..., 3, 3) (the product written out:
+    one array fill instead of three stacked rotations, as the identification calls it thousands of times)."""
     abc = np.deg2rad(np.asarray(abc_deg, dtype=float))
-    return rot_x(abc[..., 0]) @ rot_y(abc[..., 1]) @ rot_z(abc[..., 2])
+    ca, cb, cc = np.cos(abc[..., 0]), np.cos(abc[..., 1]), np.cos(abc[..., 2])
+    sa, sb, sc = np.sin(abc[..., 0]), np.sin(abc[..., 1]), np.sin(abc[..., 2])
+    R = np.empty(abc.shape[:-1] + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 0, 2] = cb * cc, -cb * sc, sb
+    R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = ca * sc + sa * sb * cc, ca * cc - sa * sb * sc, -sa * cb
+    R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = sa * sc - ca * sb * cc, sa * cc + ca * sb * sc, ca * cb
+    return R
 
 
 def pose_to_matrix(pose) -> np.ndarray:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 
 import numpy as np
@@ -10,6 +11,8 @@ from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
 
 __all__ = ["register", "run_calibration"]
+
+log = logging.getLogger(__name__)
 
 
 def _common(p) -> None:
@@ -69,8 +72,10 @@ def _parse_pins(items) -> dict:
     return out
 
 
-def run_calibration(args, rod: RodCompliance | None, label: str):
-    """Identification (+ validation) of one campaign with one compliance file; returns (result, before, after)."""
+def run_calibration(args, rod: RodCompliance, compensation):
+    """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
+    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`); returns (robot, campaign,
+    result, before, after)."""
     from rodlab.calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
     from rodlab.calibrate import resolve_robot, validate
     robot = resolve_robot(args.robot)
@@ -78,7 +83,7 @@ def run_calibration(args, rod: RodCompliance | None, label: str):
     fix = read_fixture(args.fixture)
     base_rod = rod
     obs = campaign_observations(camp, fix, base_rod)
-    res = identify(robot, obs, base_rod.tool_mm, None if label == "none" else base_rod,
+    res = identify(robot, obs, base_rod.tool_mm, compensation.rod if compensation.active else None,
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable)
     before = after = None
@@ -95,9 +100,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
+    from rodlab.calibrate import Compensation
     rod = read_compliance(args.rod)
-    label = "none" if args.compensation == "none" else str(rod.method)
-    robot, camp, res, before, after = run_calibration(args, rod, label)
+    comp = Compensation.of(None if args.compensation == "none" else rod)
+    label = comp.label
+    robot, camp, res, before, after = run_calibration(args, rod, comp)
     _print_result(res, before, after, label)
     if args.json:
         print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
@@ -152,22 +159,37 @@ def _calibrate_points(args) -> int:
     return 0 if res.success else 2
 
 
-def cmd_compare(args: argparse.Namespace) -> int:
-    rows = []
-    results = {}
-    for item in args.rod:
+def _compare_runs(items) -> list:
+    """(name, rod file, compensation) per ``--rod LABEL=FILE``, led by no compensation; checked before any run.
+    A label is only a name: the file's matrices compensate whatever it is called (a file of method ``none``
+    compensates nothing, and says so)."""
+    from rodlab.calibrate import Compensation
+    runs = []
+    for item in items:
         label, eq, path = item.partition("=")
-        if not eq:
+        if not eq or not label.strip() or not path.strip():
             raise RodlabError(f"--rod {item!r}: expected LABEL=FILE (e.g. fea=rod1.fea.compliance.json)")
         rod = read_compliance(path)
-        runs = [("None", RodCompliance.none_like(rod), "none")] if not rows else []
-        runs.append((label, rod, label))
-        for name, r, lab in runs:
-            _, camp, res, before, after = run_calibration(args, r, lab)
-            rows.append((name, res, before, after))
-            results[name] = (res, after)
+        if not runs:
+            runs.append(("None", rod, Compensation.of(None)))
+        if label.strip().lower() == "none" and rod.method.value != "none":
+            raise RodlabError(f"--rod {item!r}: the label 'none' is the uncompensated run, which compare adds "
+                              f"itself, but {path} is a {rod.method} file; label it by its method "
+                              f"(e.g. {rod.method}={path})")
+        if rod.method.value == "none":
+            log.warning("--rod %s: a method-none file compensates nothing", item)
+        runs.append((label.strip(), rod, Compensation.of(rod, label.strip())))
+    return runs
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
     if not args.validate:
-        raise RodlabError("compare needs --validate (the statistics come from the validation points)")
+        raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
+                          "campaign's *.validation.csv")
+    rows = []
+    for name, rod, comp in _compare_runs(args.rod):
+        _, camp, res, before, after = run_calibration(args, rod, comp)
+        rows.append((name, res, before, after))
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
     before = rows[0][2]
     print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")

@@ -49,7 +49,7 @@ def _correct_joints(q_rad: np.ndarray, corr: dict) -> np.ndarray:
 
 def _hypotheses(robot, res, obs, camp, rod):
     from rodlab.calibrate.kinematics import ball_positions
-    from rodlab.calibrate.identify import _deflection_offsets
+    from rodlab.calibrate.compensation import deflection_offsets
     N = obs.x_W_mm.shape[0]
     fr, _ = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     hyps = []
@@ -60,7 +60,7 @@ def _hypotheses(robot, res, obs, camp, rod):
         H[camp.position == j, :, :] = np.eye(3)
         hyps.append(("fixture_pose", f"position:{int(j)}", ["dx_mm", "dy_mm", "dz_mm"], H.reshape(3 * N, 3),
                      "the recorded pose of this clamping position is off: all its points share one offset"))
-    defl = _deflection_offsets(robot, res.params, obs, rod) if rod is not None else None
+    defl = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod) if rod is not None else None
     if defl is None or not np.any(defl):
         defl = None
     if defl is not None:

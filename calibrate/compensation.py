@@ -1,0 +1,73 @@
+"""Rod-deflection compensation (paper Eqs. 10-19): the seam every compensation method goes through.
+
+A compensation maps configurations, the robot model and the rod to the ball-centre offsets ``dx^W`` [mm]
+that the rod's deflection adds to each measured point (Eq. 11); identification removes them from the
+measurements and the simulator adds the true rod's. The paper's methods None / Calc / FEA / Meas differ
+only in the data: the compliance file (``C_F``, ``C_g``, Eq. 19) the offsets are computed from, or none.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.enums import Method
+from rodlab.units import G0
+
+from .kinematics import ModelParams, ball_positions
+
+__all__ = ["Compensation", "deflection_offsets"]
+
+
+def deflection_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray,
+                       rod: RodCompliance | None) -> np.ndarray:
+    """Ball-centre offsets in {W} [mm], shape=(N, 3), of a rod with compliance ``rod`` on the robot ``params``
+    in configurations ``q_rad`` (N, n) under contact forces ``force_W_N`` (N, 3) in {W}: gravity and force in
+    {T} (the flange axes), Eq. 19 in {T}, rotated to {W} (Eq. 11). Zero without a rod or with zero matrices."""
+    q = np.atleast_2d(np.asarray(q_rad, float))
+    if rod is None or (not rod.C_F.any() and not rod.C_g.any()):
+        return np.zeros((q.shape[0], 3))
+    F = np.broadcast_to(np.asarray(force_W_N, float), (q.shape[0], 3))
+    fr, _ = ball_positions(robot, params, q, rod.mass_kg, rod.com_T_mm, F)
+    n = robot.n
+    R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
+    g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)
+    F_T = np.einsum("nji,nj->ni", R_TW, F)
+    dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
+    return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
+
+
+@dataclass(frozen=True)
+class Compensation:
+    """One compensation method as data.
+
+    label : the name shown in results and reports (e.g. ``fea``, ``meas``, ``corrected``)
+    rod : the compliance file whose ``C_F`` / ``C_g`` give the offsets; ``None`` = no compensation
+    """
+
+    label: str
+    rod: RodCompliance | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.label, str) or not self.label.strip():
+            raise ValueError(f"a compensation needs a non-empty label, got {self.label!r}")
+        if self.rod is not None and not isinstance(self.rod, RodCompliance):
+            raise TypeError(f"rod must be a RodCompliance or None, got {type(self.rod).__name__}")
+
+    @classmethod
+    def of(cls, rod: RodCompliance | None, label: str | None = None) -> "Compensation":
+        """The compensation a compliance file stands for, labelled by its method unless ``label`` is given;
+        a file of method ``none`` (zero matrices) is no compensation."""
+        if rod is None:
+            return cls(label or str(Method.NONE), None)
+        return cls(label or str(rod.method), None if rod.method is Method.NONE else rod)
+
+    @property
+    def active(self) -> bool:
+        """True when it changes the measurements (a rod with non-zero compliance)."""
+        return self.rod is not None and bool(self.rod.C_F.any() or self.rod.C_g.any())
+
+    def offsets(self, robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray) -> np.ndarray:
+        """Ball-centre offsets in {W} [mm], shape=(N, 3) (see :func:`deflection_offsets`)."""
+        return deflection_offsets(robot, params, q_rad, force_W_N, self.rod if self.active else None)

@@ -1,0 +1,315 @@
+"""Predicted calibration accuracy of a rod on a robot: Monte-Carlo over simulated MultiCal campaigns.
+
+One *replicate* is one campaign as it happens in practice (paper Section 5.2), simulated in memory:
+
+1. a true robot drawn from the priors (kinematic errors, joint compliances; :class:`Priors`) and a true rod
+   that differs from the simulated compliance (the ``reference`` file, FEA) by a factor ``r_rod`` drawn from
+   its prior (the paper measured 1.01-1.05 for steel rods, 1.23-2.30 for carbon);
+2. the planned rod orientations at every clamping position (:func:`calibrate.plan.plan_poses`) reached by
+   the true robot within the alignment tolerance; the device reads the deflected ball with its noise; the
+   recorded fixture poses carry their uncertainty;
+3. a validation set of random configurations measured by an external instrument (short rigid rod);
+4. identification with compensation once per method, the methods being data (:class:`Compensation`):
+   ``none``; ``calc`` (closed form) and ``fea`` (the reference), both off by the true ``r_rod``; ``meas``, the
+   rig's ``r_rod`` within its fit's uncertainty times the reference (paper Eq. 22); then validation.
+
+The error budget of each method splits its mean-square validation error (:class:`AccuracySummary`):
+``deflection`` — what the compensation leaves of the rod's deflection (this method minus calibrating with the
+true rod's compliance); ``identification`` — the campaign's noise and fixture uncertainty propagated through
+the identification, i.e. its observability (true rod, noisy campaign minus true rod, noise-free campaign);
+``noise`` — what remains with a perfect campaign: the validation instrument's own noise.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.enums import Method
+from rodlab.frames import pose_to_matrix
+
+from .campaign import Fixture, PointSet
+from .compensation import Compensation, deflection_offsets
+from .errors import CalibrationError
+from .identify import Observations, identify
+from .ik import solve_ik_positions
+from .kinematics import ModelParams, ball_positions
+from .simulate import random_truth
+from .validate import ErrorStats, validate
+
+__all__ = ["Priors", "ReplicateOutcome", "AccuracySummary", "BudgetShares", "run_replicate", "summarise",
+           "predict_accuracy", "VALIDATION_TOOL_MM"]
+
+#: the validation rod (short, rigid) of the simulated instrument: tool [mm], mass [kg], COM in {T} [mm]
+VALIDATION_TOOL_MM = (0.0, 0.0, 150.0)
+_VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
+
+
+@dataclass(frozen=True)
+class Priors:
+    """What a replicate draws, with the paper's values as defaults.
+
+    error_scale : scale of the kinematic errors (1 = ~0.5 mm / 0.05 deg per DH parameter) [-]
+    joint_compliance : uniform range of joints 2..n compliance [rad/(N m)]
+    device_noise_mm : MultiCal device noise per axis (1 sigma) [mm]
+    instrument_noise_mm : validation instrument noise per axis (1 sigma) [mm]
+    fixture_sigma : uncertainty of the recorded clamping poses (translation [mm], rotation [deg], 1 sigma)
+    alignment_mm : how far from the datum point the robot stops (uniform +- per axis) [mm]
+    r_rod : uniform range of the true / simulated compliance ratio of the rod [-] (Calc and FEA files are off
+        by it; steel 1.01-1.05, carbon 1.23-2.30 in the paper)
+    shape_sigma : how far the true compliance's shape departs from the simulated one (1 sigma of the entries
+        of ``S - I`` in ``C_true = r S C_sim S^T``: joints, anisotropy, bonds the model does not see) [-]
+    meas_sigma : relative uncertainty (1 sigma) of the rig's measurement (``C_F`` entries and r_rod) [-]
+    validation_points : configurations of the validation set
+    """
+
+    error_scale: float = 1.0
+    joint_compliance: tuple = (3e-6, 6e-6)
+    device_noise_mm: float = 0.003
+    instrument_noise_mm: float = 0.02
+    fixture_sigma: tuple = (0.01, 0.002)
+    alignment_mm: float = 0.15
+    r_rod: tuple = (1.01, 1.05)
+    shape_sigma: float = 0.05
+    meas_sigma: float = 0.01
+    validation_points: int = 100
+
+    def __post_init__(self) -> None:
+        for key in ("error_scale", "device_noise_mm", "instrument_noise_mm", "alignment_mm", "meas_sigma",
+                    "shape_sigma"):
+            v = getattr(self, key)
+            if not np.isfinite(v) or v < 0:
+                raise CalibrationError(f"must be a finite number >= 0, got {v!r}", key=key)
+        for key, (lo_ok, hi_ok) in (("joint_compliance", (0.0, 1e-4)), ("r_rod", (0.1, 10.0))):
+            lo, hi = (float(x) for x in getattr(self, key))
+            if not (lo_ok <= lo <= hi <= hi_ok):
+                raise CalibrationError(f"expected a range LOW <= HIGH within [{lo_ok:g}, {hi_ok:g}], got "
+                                       f"({lo:g}, {hi:g})", key=key)
+        if len(self.fixture_sigma) != 2 or min(self.fixture_sigma) < 0:
+            raise CalibrationError(f"expected (mm, deg) >= 0, got {self.fixture_sigma!r}", key="fixture_sigma")
+        if int(self.validation_points) < 10:
+            raise CalibrationError(f"at least 10 validation points, got {self.validation_points}",
+                                   key="validation_points")
+
+
+@dataclass(frozen=True)
+class ReplicateOutcome:
+    """One simulated campaign calibrated with every method.
+
+    seed : the replicate's seed; r_true : the rod's true / reference compliance ratio [-]
+    stats : {method: validation statistics after calibration}; ms_mm2 : {method: mean-square validation error
+    [mm^2]}; ms_true_rod_mm2 / ms_clean_mm2 : the same calibrated with the true rod, on the noisy / a noise-free
+    campaign [mm^2]; success : {method: identification converged}; before : validation of the nominal model
+    """
+
+    seed: int
+    r_true: float
+    stats: dict
+    ms_mm2: dict
+    ms_true_rod_mm2: float
+    ms_clean_mm2: float
+    success: dict
+    before: ErrorStats
+
+
+@dataclass(frozen=True)
+class BudgetShares:
+    """Shares of the mean-square validation error [-] (sum 1): deflection left after compensation,
+    identification (noise through observability), validation noise (see the module docstring)."""
+
+    deflection: float
+    identification: float
+    noise: float
+
+
+@dataclass(frozen=True)
+class AccuracySummary:
+    """Predicted validation errors of one method over the replicates [mm].
+
+    mean_mm, max_mm, median_mm : averages over replicates of each campaign's mean / max / median error;
+    mean_p05_mm, mean_p95_mm : the 5 % and 95 % points of the campaigns' mean error (the 90 % band);
+    rms_mm : root of the average mean-square error; budget : its shares; replicates, failed : counts
+    """
+
+    method: Method
+    mean_mm: float
+    max_mm: float
+    median_mm: float
+    mean_p05_mm: float
+    mean_p95_mm: float
+    rms_mm: float
+    budget: BudgetShares
+    replicates: int
+    failed: int = 0
+    means_mm: tuple = field(default=(), repr=False)
+
+
+def _draw_truth(robot, tool_mm, base, priors: Priors, rng) -> ModelParams:
+    truth = random_truth(robot, tool_mm, rng, priors.error_scale)
+    lo, hi = priors.joint_compliance
+    c = np.concatenate([[0.0], rng.uniform(lo, hi, robot.n - 1)])
+    return truth.with_(c=c, base=np.asarray(base, float))
+
+
+def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodCompliance, priors, rng):
+    """The true robot at every planned orientation, the ball within the alignment tolerance of the datum:
+    (q [rad], group, datum-to-W transforms, forces in {W}) for the orientations it reached."""
+    keys = sorted(plan_q)
+    Ts = {j: fixture.transform(j) for j in keys}
+    seeds = np.concatenate([plan_q[j] for j in keys])
+    group = np.concatenate([np.full(len(plan_q[j]), j) for j in keys])
+    a = priors.alignment_mm
+    targets = np.concatenate([Ts[j][:3, 3] + rng.uniform(-a, a, (len(plan_q[j]), 3)) @ Ts[j][:3, :3].T
+                              for j in keys])
+    forces = np.array([Ts[j][:3, :3] @ fixture.force_D_N for j in group])
+    res = solve_ik_positions(robot, truth, targets, seeds, reference.mass_kg, reference.com_T_mm, forces,
+                             pull=False)
+    return res.q_rad[res.ok], group[res.ok], Ts, forces[res.ok]
+
+
+def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng):
+    """(noisy observations, noise-free observations) of one simulated campaign in {W}."""
+    q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
+    if q.shape[0] < 6:
+        raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
+    fr, _ = ball_positions(robot, truth, q, reference.mass_kg, reference.com_T_mm, F)
+    pW = fr.pW + deflection_offsets(robot, truth, q, F, rod_true)
+    st, sr = priors.fixture_sigma
+    x_noisy = np.empty_like(pW)
+    for j in np.unique(group):
+        m = group == j
+        T = Ts[int(j)]
+        xD = (pW[m] - T[:3, 3]) @ T[:3, :3] + rng.normal(0, priors.device_noise_mm, (int(m.sum()), 3))
+        pose = np.asarray(fixture.poses[int(j)], float)
+        if int(j) != fixture.world_position:
+            pose = pose + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
+        Tr = pose_to_matrix(pose)
+        x_noisy[m] = xD @ Tr[:3, :3].T + Tr[:3, 3]
+    fixture_T = {int(j): Ts[int(j)] for j in np.unique(group)}
+
+    def obs(x):
+        return Observations(q, x, F, reference.mass_kg, reference.com_T_mm, group.copy(), None, fixture_T)
+    return obs(x_noisy), obs(pW)
+
+
+def _validation(robot, truth, priors: Priors, rng) -> tuple[PointSet, PointSet]:
+    """(measured, exact) validation points: random configurations within 60 % of the limits, short rigid rod."""
+    tool = np.asarray(VALIDATION_TOOL_MM, float)
+    vtrue = truth.with_(tool=tool + rng.normal(0, 0.05, 3))
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    vq = rng.uniform(lo * 0.6, hi * 0.6, (int(priors.validation_points), robot.n))
+    mass, com = _VALIDATION_MASS
+    fr, _ = ball_positions(robot, vtrue, vq, mass, np.asarray(com, float))
+    noisy = fr.pW + rng.normal(0, priors.instrument_noise_mm, fr.pW.shape)
+
+    def pts(x):
+        return PointSet(np.rad2deg(vq), x, tool, mass, np.asarray(com, float))
+    return pts(noisy), pts(fr.pW)
+
+
+def _congruent(rod: RodCompliance, r: float, sigma: float, method: Method, rng, C_g=None) -> RodCompliance:
+    """``r S C S^T`` for C_F and C_g (or the given ``C_g``), ``S = I + sigma N(0, 1)``: symmetric and positive
+    semi-definite like the original, its shape perturbed."""
+    S = np.eye(3) + sigma * rng.standard_normal((3, 3))
+    Cg = r * S @ rod.C_g @ S.T if C_g is None else C_g
+    return RodCompliance(rod.rod, method, r * S @ rod.C_F @ S.T, Cg, rod.mass_kg, rod.com_T_mm, rod.tool_mm,
+                         float(r), dict(rod.provenance, simulated_from=str(rod.method)))
+
+
+def _true_rod(reference: RodCompliance, priors: Priors, rng) -> tuple[float, RodCompliance]:
+    """(r_rod, the rod as it is): ``r`` from its prior, the shape within ``shape_sigma`` of the reference."""
+    r = float(rng.uniform(*priors.r_rod))
+    return r, _congruent(reference, r, priors.shape_sigma, Method.MEAS, rng)
+
+
+def _method_files(methods, reference: RodCompliance, calc: RodCompliance | None, true: RodCompliance,
+                  r_true: float, priors, rng):
+    """{method: Compensation} as the files stand to the true rod: calc and fea as computed; meas the rig's
+    ``C_F`` (the true one within ``meas_sigma``) and ``C_g = r_meas C_g,sim`` (paper Eq. 22)."""
+    r_meas = r_true * (1.0 + priors.meas_sigma * rng.standard_normal())
+    meas = _congruent(true, 1.0, priors.meas_sigma, Method.MEAS, rng, C_g=r_meas * reference.C_g)
+    out = {}
+    for m in methods:
+        if m is Method.NONE:
+            out[m] = Compensation.of(None)
+        elif m is Method.CALC:
+            if calc is None:
+                raise CalibrationError("method calc needs the closed-form compliance file", key="methods")
+            out[m] = Compensation.of(calc)
+        elif m is Method.FEA:
+            out[m] = Compensation.of(reference)
+        else:
+            out[m] = Compensation.of(meas)
+    return out
+
+
+def _calibrated_ms(robot, obs, tool_mm, comp: Compensation, pts: PointSet):
+    res = identify(robot, obs, tool_mm, comp.rod if comp.active else None, expected_noise_mm=None)
+    stats, err, _ = validate(robot, res.params, pts)
+    return stats, float(np.mean(err ** 2)), bool(res.success)
+
+
+def run_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
+                  calc: RodCompliance | None, methods, priors: Priors = Priors(), seed: int = 0,
+                  budget: bool = True) -> ReplicateOutcome:
+    """One replicate (see the module docstring). ``plan_q``: {position: (k, n) planned joint angles [rad]};
+    ``base``: nominal pose of {0} in {W} [mm, deg]; ``reference``: the rod's simulated (FEA) compliance file;
+    ``calc``: its closed-form file (for method calc); ``budget``: also calibrate with the true rod (two more
+    identifications) for the error budget."""
+    rng = np.random.default_rng(seed)
+    methods = [Method.parse(m, "method") for m in methods]
+    truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
+    r_true, rod_true = _true_rod(reference, priors, rng)
+    obs, obs_clean = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng)
+    pts, pts_exact = _validation(robot, truth, priors, rng)
+    files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)
+    stats, ms, ok = {}, {}, {}
+    for m, comp in files.items():
+        stats[m], ms[m], ok[m] = _calibrated_ms(robot, obs, reference.tool_mm, comp, pts)
+    ms_true = ms_clean = float("nan")
+    if budget:
+        exact = Compensation.of(rod_true, "true rod")
+        ms_true = _calibrated_ms(robot, obs, reference.tool_mm, exact, pts)[1]
+        ms_clean = _calibrated_ms(robot, obs_clean, reference.tool_mm, exact, pts)[1]
+    before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
+    return ReplicateOutcome(int(seed), r_true, stats, ms, ms_true, ms_clean, ok, before)
+
+
+def _shares(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:
+    if not np.isfinite(ms_true) or ms <= 0:
+        return BudgetShares(float("nan"), float("nan"), float("nan"))
+    parts = np.maximum([ms - ms_true, ms_true - ms_clean, ms_clean], 0.0)
+    parts = parts / max(parts.sum(), 1e-300)
+    return BudgetShares(*(float(p) for p in parts))
+
+
+def summarise(outcomes: list[ReplicateOutcome], methods) -> list[AccuracySummary]:
+    """One :class:`AccuracySummary` per method over the replicates."""
+    out = []
+    ms_true = np.nanmean([o.ms_true_rod_mm2 for o in outcomes]) if outcomes else float("nan")
+    ms_clean = np.nanmean([o.ms_clean_mm2 for o in outcomes]) if outcomes else float("nan")
+    for m in (Method.parse(x, "method") for x in methods):
+        got = [o for o in outcomes if m in o.stats]
+        means = np.array([o.stats[m].mean_mm for o in got])
+        if not got:
+            raise CalibrationError(f"no replicate has method {m}", key="methods")
+        ms = float(np.mean([o.ms_mm2[m] for o in got]))
+        out.append(AccuracySummary(
+            m, float(means.mean()), float(np.mean([o.stats[m].max_mm for o in got])),
+            float(np.mean([o.stats[m].median_mm for o in got])), float(np.percentile(means, 5)),
+            float(np.percentile(means, 95)), float(np.sqrt(ms)), _shares(ms, ms_true, ms_clean), len(got),
+            sum(not o.success[m] for o in got), tuple(float(v) for v in means)))
+    return out
+
+
+def predict_accuracy(robot, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
+                     calc: RodCompliance | None = None, methods=(Method.NONE, Method.FEA, Method.MEAS),
+                     priors: Priors = Priors(), replicates: int = 20, seed: int = 0,
+                     budget: bool = True) -> list[AccuracySummary]:
+    """Serial Monte-Carlo (``replicates`` campaigns, seeds ``seed .. seed + replicates - 1``); the study runs
+    :func:`run_replicate` as Dask tasks and :func:`summarise` on the results instead."""
+    outcomes = [run_replicate(robot, plan_q, fixture, base, reference, calc, methods, priors, seed + i, budget)
+                for i in range(int(replicates))]
+    return summarise(outcomes, methods)
+

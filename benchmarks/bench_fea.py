@@ -58,7 +58,7 @@ t_imp = time.perf_counter() - t0
 size, near, growth, bend, sym = (float(v) for v in sys.argv[1:6])
 d = resolve_design("rod1")
 t0 = time.perf_counter()
-comp, res = solid_compliance(d, lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half), size_mm=size,
+comp, res = solid_compliance(d, mesh_rod, size_mm=size,
                              grading=(near, growth, bend) if near < 1 else None, error_estimate=False,
                              symmetry=bool(sym))
 wall = time.perf_counter() - t0

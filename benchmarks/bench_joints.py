@@ -47,8 +47,7 @@ def main() -> int:
     from rodlab.geometry import mesh_rod
     from rodlab import resolve_design
 
-    def mesher(d, h, g, half):
-        return mesh_rod(d, size_mm=h, grading=g, half=half)
+    mesher = mesh_rod
 
     refs = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
     lines = ["# Benchmark: joint-calibrated frame", "",

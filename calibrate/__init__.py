@@ -11,7 +11,8 @@ from .result import result_dict, write_result
 from .robot import Robot, read_robot, resolve_robot
 from .validate import ErrorStats, validate
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError", "Compensation", "deflection_offsets",
+__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
+           "Compensation", "deflection_offsets",
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",
            "result_dict", "write_result", "Robot", "read_robot", "resolve_robot", "ErrorStats", "validate"]

@@ -12,6 +12,7 @@ from dataclasses import asdict
 import logging
 import time
 from enum import Enum
+from typing import Protocol
 
 import numpy as np
 
@@ -20,11 +21,12 @@ from rodlab.progress import stages
 from rodlab.compliance import RodCompliance
 from rodlab.design import RodDesign
 from rodlab.enums import Method
+from rodlab.fem_mesh import RodMesh
 
 from .errors import FeaError
 from .frame import asme_bend_flexibility, frame_compliance
 
-__all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
+__all__ = ["Mesher", "FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
            "DEFAULT_GRADING", "estimated_dofs", "MAX_DOFS"]
 
 log = logging.getLogger(__name__)
@@ -34,6 +36,12 @@ RICHARDSON_ORDER = 3.0
 #: Element size at the section changes in the tubes as a fraction of the size, growth per mm of distance, and
 #: the bend's size as a fraction of the size (see ``geometry.mesh_rod``).
 DEFAULT_GRADING = (0.3, 0.3, 0.7)
+
+
+class Mesher(Protocol):
+    """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it."""
+
+    def __call__(self, design: RodDesign, *, size_mm: float, grading, half: bool) -> RodMesh: ...
 
 
 class FeaModel(str, Enum):
@@ -67,7 +75,7 @@ def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
     """The coarser solve of the Richardson error estimate."""
     from .solid import solve_compliance
     with bar.step("mesh (coarse)"):
-        rc = mesher(design, size_mm, grading, symmetry)
+        rc = mesher(design, size_mm=size_mm, grading=grading, half=symmetry)
     with bar.step("solve (coarse)"):
         return solve_compliance(design, rc, backend=backend)
 
@@ -77,8 +85,8 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
                      symmetry: bool = True, tip_moments: bool = False):
     """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
 
-    ``mesher(design, size_mm, grading, half) -> RodMesh`` makes the meshes (``geometry.mesh_rod`` in the CLI:
-    the domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
+    ``mesher`` (:class:`Mesher`, called by keyword) makes the meshes: ``rodlab.geometry.mesh_rod`` as it is (the
+    domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
     ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
     """
     from .solid import solve_compliance
@@ -95,7 +103,7 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     with stages(f"solid FEA of {design.name}", names) as bar:
         with bar.step("mesh"):
             t0 = time.perf_counter()
-            rm = mesher(design, h, grading, symmetry)
+            rm = mesher(design, size_mm=h, grading=grading, half=symmetry)
             t_mesh = time.perf_counter() - t0
         with bar.step("solve"):
             res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,

@@ -202,7 +202,8 @@ def design_to_dict(design: RodDesign) -> dict:
 
     def mat(m) -> str:
         t = {"E_GPa": m.E_GPa, "nu": m.nu, "density_kg_m3": m.density_kg_m3}
-        t.update({k: getattr(m, k) for k in ("E_transverse_GPa", "G_GPa") if getattr(m, k) is not None})
+        t.update({k: getattr(m, k) for k in ("E_transverse_GPa", "G_GPa", "cte_ppm_K", "strength_MPa",
+                                             "shear_strength_MPa") if getattr(m, k) is not None})
         mats[m.name] = t
         return m.name
 

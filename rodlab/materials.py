@@ -30,7 +30,13 @@ Built-in values and their sources (room temperature, typical, not guaranteed):
   DP490 / Loctite EA 9466 technical data, cured).
 
 A design file may define its own materials (``[materials.NAME]``) with ``E_GPa``, ``nu``,
-``density_kg_m3`` and optionally ``E_transverse_GPa`` and ``G_GPa``.
+``density_kg_m3`` and optionally ``E_transverse_GPa``, ``G_GPa``, ``cte_ppm_K``, ``strength_MPa`` and
+``shear_strength_MPa`` (thermal growth and strength margins of ``rodlab study``).
+
+Thermal expansion (axial, 1e-6/K) and allowables (MPa), typical room-temperature values: UD carbon -0.4 /
+1200 (compression governs), rolled carbon 2.0 / 600, 304 stainless 17.3 / 215 (0.2 % yield), 7075-T6 23.4 /
+503, 6061-T6 23.6 / 276, Ti-6Al-4V 8.6 / 880, alumina 8.2 / 379 (flexural), zirconia 10.3 / 900, Si3N4 3.3 /
+800, epoxy 55 / 40 tensile and 25 MPa lap shear (DP490 on etched aluminium) — same sources as above.
 """
 from __future__ import annotations
 
@@ -57,6 +63,10 @@ class Material:
     density_kg_m3 : density [kg/m^3]
     E_transverse_GPa : modulus across the tube axis [GPa]; ``None`` = ``E_GPa``
     G_GPa : axial shear modulus [GPa]; ``None`` = ``E / (2 (1 + nu))``
+    cte_ppm_K : axial coefficient of thermal expansion [1e-6 / K] (along the tube); ``None`` = unknown
+    strength_MPa : allowable normal stress [MPa] (yield for metals, the lower of the axial tensile and
+        compressive strength for composites, the tensile / lap-shear strength for adhesives); ``None`` = unknown
+    shear_strength_MPa : allowable shear stress [MPa] (adhesives: lap-shear strength); ``None`` = unknown
     source : where the numbers come from (free text)
     """
 
@@ -66,10 +76,14 @@ class Material:
     density_kg_m3: float
     E_transverse_GPa: float | None = None
     G_GPa: float | None = None
+    cte_ppm_K: float | None = None
+    strength_MPa: float | None = None
+    shear_strength_MPa: float | None = None
     source: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
-        for key in ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa"):
+        for key in ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa", "cte_ppm_K", "strength_MPa",
+                    "shear_strength_MPa"):
             v = getattr(self, key)
             if v is None:
                 continue
@@ -83,7 +97,7 @@ class Material:
         if self.density_kg_m3 <= 0:
             raise DesignError(f"material `{self.name}`: density_kg_m3 must be > 0, got {self.density_kg_m3}",
                               key="density_kg_m3")
-        for key in ("E_transverse_GPa", "G_GPa"):
+        for key in ("E_transverse_GPa", "G_GPa", "strength_MPa", "shear_strength_MPa"):
             v = getattr(self, key)
             if v is not None and v <= 0:
                 raise DesignError(f"material `{self.name}`: {key} must be > 0, got {v}", key=key)
@@ -112,21 +126,27 @@ class Material:
 
 
 BUILTIN_MATERIALS: dict[str, Material] = {m.name: m for m in [
-    Material("cfrp", 125.0, 0.30, 1560.0, E_transverse_GPa=9.0, G_GPa=4.5,
+    Material("cfrp", 125.0, 0.30, 1560.0, E_transverse_GPa=9.0, G_GPa=4.5, cte_ppm_K=-0.4, strength_MPa=1200.0,
              source="pultruded/UD carbon-epoxy; Toray T700S data; Daniel & Ishai Table A.4"),
-    Material("cfrp_rolled", 70.0, 0.30, 1550.0, E_transverse_GPa=20.0, G_GPa=15.0,
-             source="roll-wrapped 0/+-45 carbon tube, manufacturers' data"),
-    Material("steel_304", 193.0, 0.29, 8000.0, source="ASM Handbook Vol. 1; AK Steel 304 bulletin"),
-    Material("al_7075", 71.7, 0.33, 2810.0, source="7075-T6, ASM / MatWeb"),
-    Material("al_6061", 68.9, 0.33, 2700.0, source="6061-T6, ASM / MatWeb"),
-    Material("ti_6al4v", 113.8, 0.342, 4430.0, source="Ti-6Al-4V grade 5, ASM / MatWeb"),
-    Material("alumina", 370.0, 0.22, 3950.0, source="99.8% Al2O3 ball grade, CoorsTek AD-998 / CeramTec data"),
-    Material("zirconia", 205.0, 0.31, 6050.0, source="3Y-TZP, CoorsTek YTZP"),
-    Material("si3n4", 310.0, 0.27, 3200.0, source="hot-pressed Si3N4, Kyocera SN-240"),
-    Material("epoxy", 3.0, 0.35, 1200.0, source="structural epoxy adhesive, DP490 / EA 9466 TDS"),
+    Material("cfrp_rolled", 70.0, 0.30, 1550.0, E_transverse_GPa=20.0, G_GPa=15.0, cte_ppm_K=2.0,
+             strength_MPa=600.0, source="roll-wrapped 0/+-45 carbon tube, manufacturers' data"),
+    Material("steel_304", 193.0, 0.29, 8000.0, cte_ppm_K=17.3, strength_MPa=215.0,
+             source="ASM Handbook Vol. 1; AK Steel 304 bulletin"),
+    Material("al_7075", 71.7, 0.33, 2810.0, cte_ppm_K=23.4, strength_MPa=503.0, source="7075-T6, ASM / MatWeb"),
+    Material("al_6061", 68.9, 0.33, 2700.0, cte_ppm_K=23.6, strength_MPa=276.0, source="6061-T6, ASM / MatWeb"),
+    Material("ti_6al4v", 113.8, 0.342, 4430.0, cte_ppm_K=8.6, strength_MPa=880.0,
+             source="Ti-6Al-4V grade 5, ASM / MatWeb"),
+    Material("alumina", 370.0, 0.22, 3950.0, cte_ppm_K=8.2, strength_MPa=379.0,
+             source="99.8% Al2O3 ball grade, CoorsTek AD-998 / CeramTec data"),
+    Material("zirconia", 205.0, 0.31, 6050.0, cte_ppm_K=10.3, strength_MPa=900.0, source="3Y-TZP, CoorsTek YTZP"),
+    Material("si3n4", 310.0, 0.27, 3200.0, cte_ppm_K=3.3, strength_MPa=800.0, source="hot-pressed Si3N4, Kyocera SN-240"),
+    Material("epoxy", 3.0, 0.35, 1200.0, cte_ppm_K=55.0, strength_MPa=40.0, shear_strength_MPa=25.0,
+             source="structural epoxy adhesive, DP490 / EA 9466 TDS"),
 ]}
 
-_MATERIAL_KEYS = ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa", "source")
+_MATERIAL_KEYS = ("E_GPa", "nu", "density_kg_m3", "E_transverse_GPa", "G_GPa", "cte_ppm_K", "strength_MPa",
+                  "shear_strength_MPa", "source")
+_NUMBER_KEYS = _MATERIAL_KEYS[:-1]
 _REQUIRED_KEYS = ("E_GPa", "nu", "density_kg_m3")
 
 
@@ -136,13 +156,13 @@ def material_from_table(name: str, table: Mapping, path=None) -> Material:
         raise DesignError(f"[materials.{name}] must be a table", path=path, key=f"materials.{name}")
     for key in table:
         if key not in _MATERIAL_KEYS:
-            raise DesignError(f"unknown key in [materials.{name}]; expected {list(_MATERIAL_KEYS[:5])}."
+            raise DesignError(f"unknown key in [materials.{name}]; expected {list(_NUMBER_KEYS)}."
                               + did_you_mean(key, _MATERIAL_KEYS), path=path, key=f"materials.{name}.{key}")
     for key in _REQUIRED_KEYS:
         if key not in table:
             raise DesignError(f"[materials.{name}] needs `{key}`", path=path, key=f"materials.{name}.{key}")
     kwargs = {}
-    for key in _MATERIAL_KEYS[:5]:
+    for key in _NUMBER_KEYS:
         if key in table:
             v = table[key]
             if isinstance(v, bool) or not isinstance(v, (int, float)):

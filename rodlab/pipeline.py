@@ -85,7 +85,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
             from rodlab.fea import solid_compliance
             from rodlab.fea.plot import render_deformed
             fea, solid = solid_compliance(design,
-                                        lambda d, h, g, half: geometry.mesh_rod(d, size_mm=h, grading=g, half=half),
+                                        geometry.mesh_rod,
                                         error_estimate=False, keep_displacements=True, tip_moments=True)
             U = solid.displacements.copy()
             U[:, 5] *= -1

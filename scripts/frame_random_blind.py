@@ -102,9 +102,7 @@ def solve(specs: dict, refs: dict, path: Path = REF) -> None:
     for name, spec in specs.items():
         if name in refs["designs"]:
             continue
-        comp, res = solid_compliance(design(name, spec), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g,
-                                                                                         half=half),
-                                     error_estimate=False)
+        comp, res = solid_compliance(design(name, spec), mesh_rod, error_estimate=False)
         refs["designs"][name] = {"spec": spec, "C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs}
         atomic_write_json(path, refs)
         print(name, res.dofs, flush=True)

@@ -68,7 +68,7 @@ def _mesher():
     pytest.importorskip("build123d")
     pytest.importorskip("gmsh")
     from rodlab.geometry import mesh_rod
-    return lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half)
+    return mesh_rod
 
 
 def _straight(material):

@@ -140,7 +140,7 @@ def test_stored_reference_is_current():
     pytest.importorskip("gmsh")
     from rodlab.fea import solid_compliance
     from rodlab.geometry import mesh_rod
-    comp, _ = solid_compliance(design("rod4"), lambda d, h, g, half: mesh_rod(d, size_mm=h, grading=g, half=half),
+    comp, _ = solid_compliance(design("rod4"), mesh_rod,
                                error_estimate=False)
     ref = np.array(REFS["rod4"]["C_F"])
     big = np.abs(ref) > 1e-3 * np.abs(ref).max()

@@ -45,10 +45,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
         from .cmd_geometry import require_cad
-        geometry = require_cad()
-
-        def mesher(d, h, grading, half):
-            return geometry.mesh_rod(d, size_mm=h, grading=grading, half=half)
+        mesher = require_cad().mesh_rod
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
         joints = bool(args.joints_out)

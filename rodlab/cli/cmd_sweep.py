@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import time
-from functools import partial
 from pathlib import Path
 
 from ..design_io import resolve_design
@@ -51,7 +50,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.model == "solid":
         from .cmd_geometry import require_cad
         geometry = require_cad()
-        mesher = partial(_mesh, geometry.mesh_rod)
+        mesher = geometry.mesh_rod
     t0 = time.perf_counter()
     calibration = None
     if (args.calibrate or args.joints) and args.model != "frame":
@@ -64,16 +63,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         calibration.check_member(base)
         print(f"frame joint-calibrated by {args.joints} (solid FEA of {calibration.base.name})")
     if args.calibrate:
-        from rodlab.fea import solid_compliance
-        from rodlab.fea.family import calibrate_family, calibration_member
+        from rodlab.study.family import solid_family_calibration
 
         from .cmd_geometry import require_cad
-        geometry = require_cad()
-
-        def solve(d):
-            return solid_compliance(d, partial(_mesh, geometry.mesh_rod), error_estimate=False,
-                                    keep_displacements=True, tip_moments=True)[1]
-        calibration = calibrate_family(calibration_member(base, L1s, L2s), solve)
+        require_cad()
+        calibration = solid_family_calibration(base, L1s, L2s)
         m1, m2 = calibration.margins_mm
         from rodlab.fea.joints_io import write_joints
         saved = write_joints(out.with_suffix(".joints.json"), calibration)
@@ -113,6 +107,3 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"  wrote {out} and {png}")
     return 0
 
-
-def _mesh(mesh_rod, design, size_mm, grading, half):
-    return mesh_rod(design, size_mm=size_mm, grading=grading, half=half)

@@ -9,9 +9,9 @@ from pathlib import Path
 from .errors import RodlabError
 from .fileio import atomic_write_text
 
-__all__ = ["write_report", "render_report"]
+__all__ = ["write_report", "render_report", "CSS", "img_tag"]
 
-_CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;margin:2em auto;
+CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;margin:2em auto;
 padding:0 1em;color:#222}h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
 table{border-collapse:collapse;margin:.6em 0}td,th{border:1px solid #ccc;padding:.25em .6em;text-align:right}
 th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%;border:1px solid #eee;
@@ -19,7 +19,8 @@ margin:.4em 0}.grid{display:grid;grid-template-columns:1fr 1fr;gap:.6em}.note{co
 code{background:#f4f4f4;padding:0 .2em}"""
 
 
-def _img(run: Path, rel: str | None, alt: str) -> str:
+def img_tag(run: Path, rel: str | None, alt: str) -> str:
+    """An ``<img>`` with the PNG ``run/rel`` embedded as a data URI (a note if it is missing)."""
     if not rel:
         return ""
     p = run / rel
@@ -43,7 +44,7 @@ def render_report(run_dir) -> str:
     st, files = s["stages"], s.get("files", {})
     d = s["design"]
     parts = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab run: rod {html.escape(d['name'])}"
-             f"</title><style>{_CSS}</style></head><body>",
+             f"</title><style>{CSS}</style></head><body>",
              f"<h1>rodlab run: rod {html.escape(d['name'])} on a TX90</h1>",
              "<p class=note>Rod 1# of Wan et al. (2023) from the built-in design; a simulated stiffness rig and a "
              "simulated MultiCal campaign stand in for the hardware. Stage times: "
@@ -55,7 +56,7 @@ def render_report(run_dir) -> str:
                  f"R {d['bend']['radius_mm']:g} mm</td></tr><tr><td>mass</td><td>{st['design']['mass_kg'] * 1e3:.1f} g</td></tr>"
                  "</table>")
     views = files.get("cad_views", [])
-    parts.append("<h2>2. CAD</h2>" + ("<div class=grid>" + "".join(_img(run, v, f"CAD view {v}") for v in views) + "</div>"
+    parts.append("<h2>2. CAD</h2>" + ("<div class=grid>" + "".join(img_tag(run, v, f"CAD view {v}") for v in views) + "</div>"
                                         if views else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>"))
     fe = st["fea"]
     parts.append(f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid>"
@@ -64,10 +65,10 @@ def render_report(run_dir) -> str:
                  f"<p>c_rod (Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: {st['design']['c_rod_um_calc']:.1f} um). "
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
                  + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
-                 " in docs/fea.md).</p>" + _img(run, files.get("fea_deformed"), "deformed shape"))
+                 " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
     ft = st["fit"]
     parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (Eq. 21) = "
-                 f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + _img(run, files.get("fig8"), "Fig. 8"))
+                 f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))
     dg = st["diagnose"]
     rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location']))}</td><td>"
                    + html.escape(", ".join(f"{k} = {v:.4g}" for k, v in f["parameters"].items() if isinstance(v, (int, float))))
@@ -78,17 +79,17 @@ def render_report(run_dir) -> str:
                  f"{html.escape(st['rig']['concealed_effect'])} (s_bend {st['rig']['s_bend_rad_per_Nm']:.3g}, s_torsion "
                  f"{st['rig']['s_torsion_rad_per_Nm']:.3g} rad/(N m)); the corrected compliance matches the true C_F to "
                  f"{dg['corrected_vs_true_max_rel']:.1e}.</p><table><tr><th>effect</th><th>location</th><th>parameters</th>"
-                 f"<th>rms um</th><th>physics</th></tr>{rows}</table>" + _img(run, files.get("diagnosis"), "diagnosis"))
+                 f"<th>rms um</th><th>physics</th></tr>{rows}</table>" + img_tag(run, files.get("diagnosis"), "diagnosis"))
     t3 = st["calibrate"]["table3"]
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['mean_mm']:.3f}</td><td>{v['max_mm']:.3f}</td>"
                    f"<td>{v['median_mm']:.3f}</td><td>{v['sd_mm']:.3f}</td></tr>" for k, v in t3.items())
     parts.append("<h2>6. Calibration (the paper's Table 3 and Fig. 10)</h2><table><tr><th>method</th><th>Mean/[mm]</th>"
                  f"<th>Max/[mm]</th><th>Median/[mm]</th><th>SD/[mm]</th></tr>{rows}</table>"
-                 + _img(run, files.get("fig10"), "Fig. 10"))
+                 + img_tag(run, files.get("fig10"), "Fig. 10"))
     sw = st["sweep"]
     parts.append(f"<h2>7. L1 / L2 sweep</h2><p>{sw['designs']} designs ({sw['ok']} valid); stiffest L1 = "
                  f"{sw['stiffest']['L1_mm']:g} mm, L2 = {sw['stiffest']['L2_mm']:g} mm, c_rod "
-                 f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + _img(run, files.get("sweep"), "sweep heat maps"))
+                 f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + img_tag(run, files.get("sweep"), "sweep heat maps"))
     parts.append("</body></html>")
     return "\n".join(parts)
 

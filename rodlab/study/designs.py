@@ -1,0 +1,97 @@
+"""The designs a study compares: an L1 x L2 grid around a base (with tube-material and tube-size variants) or a
+list of design files; an invalid combination is a candidate with its reason, never fatal."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, replace
+
+from rodlab.design import RodDesign
+from rodlab.errors import RodlabError
+from rodlab.materials import get_material
+
+__all__ = ["Candidate", "grid_candidates", "list_candidates", "parse_tube", "r_prior_of", "R_PRIOR_METAL",
+           "R_PRIOR_COMPOSITE"]
+
+#: true / simulated compliance of a built rod (paper Table 2): stainless steel 1.01-1.05, carbon 1.23-2.30
+R_PRIOR_METAL = (1.01, 1.05)
+R_PRIOR_COMPOSITE = (1.23, 2.30)
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One design of a study: ``design`` (None when ``invalid`` says why), its L1 / L2 [mm], tube material and
+    size (``OD x wall`` [mm]) for the table."""
+
+    label: str
+    L1_mm: float
+    L2_mm: float
+    material: str
+    tube: str
+    design: RodDesign | None = None
+    invalid: str = ""
+
+
+def parse_tube(text: str) -> tuple[float, float]:
+    """``ODxWALL`` [mm], e.g. ``25x2``."""
+    m = re.fullmatch(r"\s*([0-9.]+)\s*[xX*]\s*([0-9.]+)\s*", text)
+    if not m:
+        raise RodlabError(f"--tubes {text!r}: expected OUTERxWALL in mm, e.g. 25x2")
+    return float(m.group(1)), float(m.group(2))
+
+
+def _describe(d: RodDesign) -> tuple[str, str]:
+    t = d.pipe_I
+    return t.material.name, f"{t.outer_diameter_mm:g}x{t.wall_mm:g}"
+
+
+def _with_tube(base: RodDesign, material: str | None, tube: tuple[float, float] | None) -> RodDesign:
+    """``base`` with pipes I and II of another material and / or size (the bend, rings and holder follow the
+    size: same wall as the tubes, sleeves as much wider as before)."""
+    kw = {}
+    if material is not None:
+        mat = get_material(material, {m.name: m for m in (base.pipe_I.material, base.pipe_II.material)},
+                           key="materials")
+        kw = {"pipe_I": replace(base.pipe_I, material=mat), "pipe_II": replace(base.pipe_II, material=mat)}
+    d = replace(base, **kw) if kw else base
+    if tube is None:
+        return d
+    od, wall = tube
+    grow = od - d.pipe_I.outer_diameter_mm
+    return replace(d, pipe_I=replace(d.pipe_I, outer_diameter_mm=od, wall_mm=wall),
+                   pipe_II=replace(d.pipe_II, outer_diameter_mm=od, wall_mm=wall),
+                   bend=replace(d.bend, outer_diameter_mm=od, wall_mm=wall),
+                   rings=replace(d.rings, outer_diameter_mm=d.rings.outer_diameter_mm + grow),
+                   pipe_holder=replace(d.pipe_holder, outer_diameter_mm=d.pipe_holder.outer_diameter_mm + grow))
+
+
+def grid_candidates(base: RodDesign, L1s, L2s, materials=(None,), tubes=(None,)) -> list[Candidate]:
+    """Every L1 x L2 x material x tube variant of ``base``."""
+    out = []
+    for mat in materials or (None,):
+        for tube in tubes or (None,):
+            for L1 in L1s:
+                for L2 in L2s:
+                    out.append(_candidate(base, float(L1), float(L2), mat, tube))
+    return out
+
+
+def _candidate(base, L1, L2, mat, tube) -> Candidate:
+    label = f"{base.name} {L1:g}-{L2:g}" + (f" {mat}" if mat else "") + (f" {tube[0]:g}x{tube[1]:g}" if tube else "")
+    try:
+        d = replace(_with_tube(base, mat, tube), L1_mm=L1, L2_mm=L2, name=label)
+    except RodlabError as e:
+        m = mat or base.pipe_I.material.name
+        t = f"{tube[0]:g}x{tube[1]:g}" if tube else _describe(base)[1]
+        return Candidate(label, L1, L2, m, t, None, str(e))
+    return Candidate(label, L1, L2, *_describe(d), d)
+
+
+def list_candidates(designs: list[RodDesign]) -> list[Candidate]:
+    """One candidate per design (e.g. the six paper rods)."""
+    return [Candidate(d.name, d.L1_mm, d.L2_mm, *_describe(d), d) for d in designs]
+
+
+def r_prior_of(design: RodDesign, metal=R_PRIOR_METAL, composite=R_PRIOR_COMPOSITE) -> tuple[float, float]:
+    """The r_rod prior of a design: ``composite`` when its tubes are anisotropic (carbon), else ``metal``."""
+    iso = design.pipe_I.material.is_isotropic and design.pipe_II.material.is_isotropic
+    return tuple(metal) if iso else tuple(composite)

@@ -1,0 +1,122 @@
+"""What a study knows of one design before any campaign is simulated: its compliance files (the joint-
+calibrated frame as FEA, the closed form as Calc), mass and c_rod, the planned rod orientations with their
+observability on the robot, thermal growth, natural frequencies and strength margins."""
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.errors import RodlabError
+
+from .designs import Candidate
+
+__all__ = ["DesignSetup", "prepare_design", "Status"]
+
+log = logging.getLogger(__name__)
+
+
+class Status:
+    """Row status of a design (contract spelling)."""
+
+    OK = "ok"
+    INVALID = "invalid"          #: the design itself is not buildable (message says why)
+    UNREACHABLE = "unreachable"  #: the robot cannot use it (which position, which limit)
+    FAILED = "failed"            #: a computation failed (message)
+
+
+@dataclass
+class DesignSetup:
+    """One design's fixed quantities (see the module docstring); ``plan_q_rad`` {position: (k, n) [rad]}."""
+
+    label: str
+    L1_mm: float
+    L2_mm: float
+    material: str
+    tube: str
+    status: str
+    message: str = ""
+    fea: RodCompliance | None = None
+    calc: RodCompliance | None = None
+    compliance_model: str = ""
+    plan_q_rad: dict = field(default_factory=dict)
+    observability: dict = field(default_factory=dict)
+    r_prior: tuple = (1.0, 1.0)
+    thermal_um_per_K: tuple = (math.nan, math.nan, math.nan)
+    frequencies_Hz: tuple = (math.nan, math.nan, math.nan)
+    strength: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == Status.OK
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in ("label", "L1_mm", "L2_mm", "material", "tube", "status", "message",
+                                           "compliance_model", "observability", "strength")}
+        d.update(fea=self.fea.to_dict() if self.fea else None, calc=self.calc.to_dict() if self.calc else None,
+                 plan_q_rad={str(j): np.asarray(q).tolist() for j, q in self.plan_q_rad.items()},
+                 r_prior=list(self.r_prior), thermal_um_per_K=[float(v) for v in self.thermal_um_per_K],
+                 frequencies_Hz=[float(v) for v in self.frequencies_Hz])
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "DesignSetup":
+        kw = dict(d)
+        kw["fea"] = RodCompliance.from_dict(d["fea"]) if d.get("fea") else None
+        kw["calc"] = RodCompliance.from_dict(d["calc"]) if d.get("calc") else None
+        kw["plan_q_rad"] = {int(j): np.asarray(q, float) for j, q in d.get("plan_q_rad", {}).items()}
+        for k in ("r_prior", "thermal_um_per_K", "frequencies_Hz"):
+            kw[k] = tuple(float(v) for v in d[k])
+        return cls(**kw)
+
+
+def _compliance(design, joints):
+    from rodlab.calc import calc_rod_compliance
+    from rodlab.fea import compute_compliance
+    fea = compute_compliance(design, "frame", **({"calibration": joints} if joints is not None else {}))
+    model = "frame, joint-calibrated on solid FEA" if joints is not None else "frame (global calibration)"
+    return fea, calc_rod_compliance(design), model
+
+
+def _physics(design, force_N: float) -> dict:
+    from rodlab.fea.modal import frame_frequencies
+    from rodlab.strength import strength_margins, thermal_growth_um_per_K
+    sm = strength_margins(design, force_N)
+    return {"thermal_um_per_K": tuple(float(v) for v in thermal_growth_um_per_K(design)),
+            "frequencies_Hz": tuple(float(v) for v in frame_frequencies(design, modes=3)),
+            "strength": {"tube_stress_MPa": sm.tube_stress_MPa, "tube_margin": sm.tube_margin, "tube_at": sm.tube_at,
+                         "bond_stress_MPa": sm.bond_stress_MPa, "bond_margin": sm.bond_margin,
+                         "bond_at": sm.bond_at, "load_N": sm.force_N}}
+
+
+def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, joints=None, seed: int = 0,
+                   candidates: int = 30) -> DesignSetup:
+    """Everything of ``cand`` that does not depend on a replicate; a design the robot cannot use, or whose
+    computation fails, is a setup with that status and the reason (never an exception)."""
+    from rodlab.calibrate import CalibrationError
+    from rodlab.calibrate.plan import plan_poses
+    from rodlab.calibrate.simulate import standard_base
+
+    row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
+    if cand.design is None:
+        return DesignSetup(**row, status=Status.INVALID, message=cand.invalid)
+    d = cand.design
+    try:
+        fea, calc, model = _compliance(d, joints)
+        extras = _physics(d, float(np.linalg.norm(fixture.force_D_N)))
+    except (RodlabError, ValueError, np.linalg.LinAlgError) as e:
+        return DesignSetup(**row, status=Status.FAILED, message=f"{type(e).__name__}: {e}")
+    setup = DesignSetup(**row, status=Status.OK, fea=fea, calc=calc, compliance_model=model,
+                        r_prior=tuple(r_prior), **extras)
+    try:
+        q_deg, obs = plan_poses(robot, fixture, d.tool_mm, k=orientations, candidates=candidates, seed=seed,
+                                rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm, base_guess=standard_base())
+    except CalibrationError as e:
+        setup.status, setup.message = Status.UNREACHABLE, f"{robot.name} with this rod: {e}"
+        return setup
+    setup.plan_q_rad = {int(j): np.deg2rad(q) for j, q in q_deg.items()}
+    setup.observability = {k: float(v) for k, v in obs.items()}
+    return setup

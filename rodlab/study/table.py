@@ -1,0 +1,90 @@
+"""The study table: one row per design and method (``study.csv``), and the recommendation."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .prepare import DesignSetup
+from .run import StudyRun
+
+__all__ = ["STUDY_COLUMNS", "study_table", "recommend"]
+
+STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "message", "c_rod_um", "mass_kg",
+                 "com_x_mm", "com_z_mm", "reach_mm", "O1", "O2", "O3", "O4", "O5", "method", "mean_mm", "max_mm",
+                 "median_mm", "mean_p05_mm", "mean_p95_mm", "rms_mm", "share_deflection", "share_identification",
+                 "share_noise", "nominal_mean_mm", "r_rod_low", "r_rod_high", "replicates", "failed",
+                 "thermal_um_per_K", "thermal_x_um_per_K", "thermal_z_um_per_K", "f1_Hz", "f2_Hz", "f3_Hz",
+                 "tube_stress_MPa", "tube_margin", "bond_stress_MPa", "bond_margin", "compliance_model"]
+
+
+def _design_part(s: DesignSetup) -> dict:
+    row = {"design": s.label, "L1_mm": s.L1_mm, "L2_mm": s.L2_mm, "material": s.material, "tube": s.tube,
+           "status": s.status, "message": s.message, "compliance_model": s.compliance_model,
+           "r_rod_low": s.r_prior[0], "r_rod_high": s.r_prior[1]}
+    if s.fea is not None:
+        row.update(c_rod_um=s.fea.c_rod_um, mass_kg=s.fea.mass_kg, com_x_mm=float(s.fea.com_T_mm[0]),
+                   com_z_mm=float(s.fea.com_T_mm[2]), reach_mm=float(np.linalg.norm(s.fea.tool_mm)))
+        th = np.asarray(s.thermal_um_per_K, float)
+        row.update(thermal_um_per_K=float(np.linalg.norm(th)), thermal_x_um_per_K=float(th[0]),
+                   thermal_z_um_per_K=float(th[2]))
+        row.update({f"f{i + 1}_Hz": float(v) for i, v in enumerate(s.frequencies_Hz)})
+        row.update({k: s.strength.get(k) for k in ("tube_stress_MPa", "tube_margin", "bond_stress_MPa",
+                                                  "bond_margin")})
+    row.update({k: s.observability.get(k, math.nan) for k in ("O1", "O2", "O3", "O4", "O5")})
+    return row
+
+
+def study_table(run: StudyRun):
+    """A pandas DataFrame with :data:`STUDY_COLUMNS`: a row per design and method (one row, without a method,
+    for a design that is invalid, unreachable or failed)."""
+    import pandas as pd
+
+    from rodlab.calibrate.predict import summarise
+    rows = []
+    for s, outs in zip(run.setups, run.outcomes):
+        base = _design_part(s)
+        if not s.ok or not outs:
+            rows.append(dict(base, message=s.message or "no replicate succeeded"))
+            continue
+        nominal = float(np.mean([o.before.mean_mm for o in outs]))
+        for a in summarise(outs, run.spec.methods):
+            b = a.budget
+            rows.append(dict(base, method=str(a.method), mean_mm=a.mean_mm, max_mm=a.max_mm, median_mm=a.median_mm,
+                             mean_p05_mm=a.mean_p05_mm, mean_p95_mm=a.mean_p95_mm, rms_mm=a.rms_mm,
+                             share_deflection=b.deflection, share_identification=b.identification,
+                             share_noise=b.noise, nominal_mean_mm=nominal, replicates=a.replicates,
+                             failed=a.failed))
+    df = pd.DataFrame(rows)
+    for c in STUDY_COLUMNS:
+        if c not in df:
+            df[c] = np.nan
+    return df[STUDY_COLUMNS]
+
+
+def _method_for(df) -> str:
+    for m in ("meas", "fea", "calc", "none"):
+        if (df["method"] == m).any():
+            return m
+    return str(df["method"].dropna().iloc[0])
+
+
+def recommend(df) -> str:
+    """One line: the design to build and why. Among the designs whose predicted mean (with the best method
+    studied: Meas, else FEA, ...) lies within the 90 % band of the best one, the lightest."""
+    ok = df[(df["status"] == "ok") & df["method"].notna()]
+    if ok.empty:
+        reasons = "; ".join(sorted({f"{r.design}: {r.message}" for r in df.itertuples()})[:3])
+        return f"no design is usable on this robot ({reasons})"
+    m = _method_for(ok)
+    rows = ok[ok["method"] == m]
+    best = rows.loc[rows["mean_mm"].idxmin()]
+    close = rows[rows["mean_mm"] <= best["mean_p95_mm"]]
+    pick = close.loc[close["mass_kg"].idxmin()]
+    why = (f"predicted mean error {pick['mean_mm']:.3f} mm with {m} compensation (90 % band "
+           f"{pick['mean_p05_mm']:.3f}-{pick['mean_p95_mm']:.3f} mm), c_rod {pick['c_rod_um']:.0f} um, mass "
+           f"{pick['mass_kg']:.3f} kg")
+    if pick["design"] == best["design"]:
+        return f"build {pick['design']}: the most accurate of {len(rows)} designs; {why}"
+    return (f"build {pick['design']}: the lightest of the {len(close)} designs within the best one's band "
+            f"(best {best['design']}, {best['mean_mm']:.3f} mm); {why}")

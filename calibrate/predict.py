@@ -284,11 +284,16 @@ def _shares(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:
     return BudgetShares(*(float(p) for p in parts))
 
 
+def _finite_mean(values) -> float:
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else float("nan")
+
+
 def summarise(outcomes: list[ReplicateOutcome], methods) -> list[AccuracySummary]:
     """One :class:`AccuracySummary` per method over the replicates."""
     out = []
-    ms_true = np.nanmean([o.ms_true_rod_mm2 for o in outcomes]) if outcomes else float("nan")
-    ms_clean = np.nanmean([o.ms_clean_mm2 for o in outcomes]) if outcomes else float("nan")
+    ms_true, ms_clean = (_finite_mean([getattr(o, k) for o in outcomes]) for k in ("ms_true_rod_mm2", "ms_clean_mm2"))
     for m in (Method.parse(x, "method") for x in methods):
         got = [o for o in outcomes if m in o.stats]
         means = np.array([o.stats[m].mean_mm for o in got])

@@ -32,13 +32,13 @@ def _save(fig, path) -> Path:
     return atomic_write_bytes(path, buf.getvalue())
 
 
-def _pareto_panel(ax, rows, xcol, xlabel, xscale, method):
+def _pareto_panel(ax, rows, xcol, xlabel, xscale, method, more_is_better=False):
     x = rows[xcol].to_numpy(float) * xscale
     y = rows["mean_mm"].to_numpy(float)
     lo, hi = rows["mean_p05_mm"].to_numpy(float), rows["mean_p95_mm"].to_numpy(float)
     ax.errorbar(x, y, yerr=[y - lo, hi - y], fmt="o", ms=4, color=_COLORS.get(method, "C0"), alpha=0.55,
                 elinewidth=0.8, capsize=2, label=f"{method}: mean error, 90 % band")
-    front = pareto_mask(x, y)
+    front = pareto_mask(-x if more_is_better else x, y)
     order = np.argsort(x[front])
     ax.plot(x[front][order], y[front][order], "-", color="k", lw=1.2, label="Pareto front")
     for xi, yi, name in zip(x[front], y[front], rows["design"].to_numpy()[front]):
@@ -50,7 +50,8 @@ def _pareto_panel(ax, rows, xcol, xlabel, xscale, method):
 
 
 def plot_pareto(df, path, method: str, title: str = "") -> Path:
-    """Two panels: predicted mean error of ``method`` vs rod mass and vs reach (flange to ball), with bands."""
+    """Two panels: predicted mean error of ``method`` vs rod mass (less is better) and vs reach (flange to ball;
+    more is better: fixtures farther out, more varied orientations), with bands and the Pareto fronts."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -61,7 +62,8 @@ def plot_pareto(df, path, method: str, title: str = "") -> Path:
             ax.text(0.5, 0.5, "no usable design", ha="center", va="center", transform=ax.transAxes)
     else:
         _pareto_panel(axes[0], rows, "mass_kg", "rod mass [g]", 1e3, method)
-        _pareto_panel(axes[1], rows, "reach_mm", "reach: flange to ball centre [mm]", 1.0, method)
+        _pareto_panel(axes[1], rows, "reach_mm", "reach: flange to ball centre [mm] (more is better)", 1.0, method,
+                      more_is_better=True)
     bad = int((df.drop_duplicates("design")["status"] != "ok").sum())
     fig.suptitle(title + (f" — {bad} designs not usable (see study.csv)" if bad else ""), fontsize=11)
     return _save(fig, path)

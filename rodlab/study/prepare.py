@@ -69,7 +69,8 @@ class DesignSetup:
         kw["calc"] = RodCompliance.from_dict(d["calc"]) if d.get("calc") else None
         kw["plan_q_rad"] = {int(j): np.asarray(q, float) for j, q in d.get("plan_q_rad", {}).items()}
         for k in ("r_prior", "thermal_um_per_K", "frequencies_Hz"):
-            kw[k] = tuple(float(v) for v in d[k])
+            kw[k] = tuple(float("nan") if v is None else float(v) for v in d[k])
+        kw["strength"] = {k: float("nan") if v is None else v for k, v in d.get("strength", {}).items()}
         return cls(**kw)
 
 

@@ -20,10 +20,9 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
 
 from rodlab import __version__
-from rodlab.fileio import atomic_write_json
+from rodlab.fileio import atomic_write_json, json_safe
 
 from .designs import Candidate, r_prior_of
 from .prepare import DesignSetup, prepare_design
@@ -82,6 +81,10 @@ def outcome_to_dict(o) -> dict:
             "before": o.before.to_dict()}
 
 
+def _float(v) -> float:
+    return float("nan") if v is None else float(v)
+
+
 def outcome_from_dict(d: dict):
     from rodlab.calibrate.predict import ReplicateOutcome
     from rodlab.calibrate.validate import ErrorStats
@@ -89,7 +92,7 @@ def outcome_from_dict(d: dict):
     return ReplicateOutcome(int(d["seed"]), float(d["r_true"]),
                             {Method.parse(m): ErrorStats(**s) for m, s in d["stats"].items()},
                             {Method.parse(m): float(v) for m, v in d["ms_mm2"].items()},
-                            float(d["ms_true_rod_mm2"]), float(d["ms_clean_mm2"]),
+                            _float(d["ms_true_rod_mm2"]), _float(d["ms_clean_mm2"]),
                             {Method.parse(m): bool(v) for m, v in d["success"].items()}, ErrorStats(**d["before"]))
 
 
@@ -133,7 +136,7 @@ class _Cache:
     def put(self, key, name, value):
         p = self._path(key, name)
         if p is not None:
-            atomic_write_json(p, value)
+            atomic_write_json(p, json_safe(value))          # NaN (not computed) stored as null
 
 
 def _client(scheduler, workers):

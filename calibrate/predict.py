@@ -38,7 +38,7 @@ from .kinematics import ModelParams, ball_positions
 from .simulate import random_truth
 from .validate import ErrorStats, validate
 
-__all__ = ["Priors", "ReplicateOutcome", "AccuracySummary", "BudgetShares", "run_replicate", "summarise",
+__all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replicate", "ReplicateOutcome", "AccuracySummary", "BudgetShares", "run_replicate", "summarise",
            "predict_accuracy", "VALIDATION_TOOL_MM"]
 
 #: the validation rod (short, rigid) of the simulated instrument: tool [mm], mass [kg], COM in {T} [mm]
@@ -168,29 +168,52 @@ def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodComplianc
     return res.q_rad[res.ok], group[res.ok], Ts, forces[res.ok]
 
 
-def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng):
-    """(noisy observations, noise-free observations) of one simulated campaign in {W}."""
+@dataclass(frozen=True)
+class SimulatedCampaign:
+    """One simulated campaign: q_rad (N, n) commanded angles; group (N,) clamping position; x_D_mm (N, 3) the
+    device readings (with noise); x_W_true_mm (N, 3) the true ball centres in {W}; force_W_N (N, 3);
+    recorded_poses {j: (6,)} the fixture poses as recorded (with their uncertainty); true_T {j: 4 x 4}."""
+
+    q_rad: np.ndarray
+    group: np.ndarray
+    x_D_mm: np.ndarray
+    x_W_true_mm: np.ndarray
+    force_W_N: np.ndarray
+    recorded_poses: dict
+    true_T: dict
+    mass_kg: float
+    com_T_mm: np.ndarray
+
+    def observations(self, noisy: bool = True) -> Observations:
+        """What identification sees: the readings through the recorded poses (Eq. 2), or the exact points."""
+        x = np.empty_like(self.x_D_mm)
+        for j in np.unique(self.group):
+            m = self.group == j
+            Tr = pose_to_matrix(self.recorded_poses[int(j)])
+            x[m] = self.x_D_mm[m] @ Tr[:3, :3].T + Tr[:3, 3]
+        return Observations(self.q_rad, x if noisy else self.x_W_true_mm, self.force_W_N, self.mass_kg,
+                            self.com_T_mm, self.group.copy(), None, dict(self.true_T))
+
+
+def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng) -> SimulatedCampaign:
     q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
     fr, _ = ball_positions(robot, truth, q, reference.mass_kg, reference.com_T_mm, F)
     pW = fr.pW + deflection_offsets(robot, truth, q, F, rod_true)
     st, sr = priors.fixture_sigma
-    x_noisy = np.empty_like(pW)
+    xD = np.empty_like(pW)
+    recorded = {}
     for j in np.unique(group):
         m = group == j
         T = Ts[int(j)]
-        xD = (pW[m] - T[:3, 3]) @ T[:3, :3] + rng.normal(0, priors.device_noise_mm, (int(m.sum()), 3))
+        xD[m] = (pW[m] - T[:3, 3]) @ T[:3, :3] + rng.normal(0, priors.device_noise_mm, (int(m.sum()), 3))
         pose = np.asarray(fixture.poses[int(j)], float)
         if int(j) != fixture.world_position:
             pose = pose + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
-        Tr = pose_to_matrix(pose)
-        x_noisy[m] = xD @ Tr[:3, :3].T + Tr[:3, 3]
-    fixture_T = {int(j): Ts[int(j)] for j in np.unique(group)}
-
-    def obs(x):
-        return Observations(q, x, F, reference.mass_kg, reference.com_T_mm, group.copy(), None, fixture_T)
-    return obs(x_noisy), obs(pW)
+        recorded[int(j)] = pose
+    return SimulatedCampaign(q, group, xD, pW, F, recorded, {int(j): Ts[int(j)] for j in np.unique(group)},
+                             reference.mass_kg, reference.com_T_mm)
 
 
 def _validation(robot, truth, priors: Priors, rng) -> tuple[PointSet, PointSet]:
@@ -250,6 +273,34 @@ def _calibrated_ms(robot, obs, tool_mm, comp: Compensation, pts: PointSet):
     return stats, float(np.mean(err ** 2)), bool(res.success)
 
 
+@dataclass(frozen=True)
+class SimulatedReplicate:
+    """The draws of one replicate: truth, the true rod, the campaign, the validation points (measured and
+    exact) and the compensation of every method."""
+
+    truth: ModelParams
+    r_true: float
+    rod_true: RodCompliance
+    campaign: SimulatedCampaign
+    points: PointSet
+    points_exact: PointSet
+    files: dict
+
+
+def simulate_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
+                       calc: RodCompliance | None, methods, priors: Priors = Priors(), seed: int = 0
+                       ) -> SimulatedReplicate:
+    """The draws of replicate ``seed`` (see the module docstring); :func:`run_replicate` calibrates them."""
+    rng = np.random.default_rng(seed)
+    methods = [Method.parse(m, "method") for m in methods]
+    truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
+    r_true, rod_true = _true_rod(reference, priors, rng)
+    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng)
+    pts, pts_exact = _validation(robot, truth, priors, rng)
+    files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)
+    return SimulatedReplicate(truth, r_true, rod_true, camp, pts, pts_exact, files)
+
+
 def run_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
                   calc: RodCompliance | None, methods, priors: Priors = Priors(), seed: int = 0,
                   budget: bool = True) -> ReplicateOutcome:
@@ -257,23 +308,18 @@ def run_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCom
     ``base``: nominal pose of {0} in {W} [mm, deg]; ``reference``: the rod's simulated (FEA) compliance file;
     ``calc``: its closed-form file (for method calc); ``budget``: also calibrate with the true rod (two more
     identifications) for the error budget."""
-    rng = np.random.default_rng(seed)
-    methods = [Method.parse(m, "method") for m in methods]
-    truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
-    r_true, rod_true = _true_rod(reference, priors, rng)
-    obs, obs_clean = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng)
-    pts, pts_exact = _validation(robot, truth, priors, rng)
-    files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)
+    sim = simulate_replicate(robot, plan_q, fixture, base, reference, calc, methods, priors, seed)
+    obs, pts = sim.campaign.observations(), sim.points
     stats, ms, ok = {}, {}, {}
-    for m, comp in files.items():
+    for m, comp in sim.files.items():
         stats[m], ms[m], ok[m] = _calibrated_ms(robot, obs, reference.tool_mm, comp, pts)
     ms_true = ms_clean = float("nan")
     if budget:
-        exact = Compensation.of(rod_true, "true rod")
+        exact = Compensation.of(sim.rod_true, "true rod")
         ms_true = _calibrated_ms(robot, obs, reference.tool_mm, exact, pts)[1]
-        ms_clean = _calibrated_ms(robot, obs_clean, reference.tool_mm, exact, pts)[1]
+        ms_clean = _calibrated_ms(robot, sim.campaign.observations(noisy=False), reference.tool_mm, exact, pts)[1]
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
-    return ReplicateOutcome(int(seed), r_true, stats, ms, ms_true, ms_clean, ok, before)
+    return ReplicateOutcome(int(seed), sim.r_true, stats, ms, ms_true, ms_clean, ok, before)
 
 
 def _shares(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:

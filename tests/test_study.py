@@ -160,7 +160,8 @@ def test_study_command_end_to_end(tmp_path, capsys):
     for name in ("pareto.png", "heatmaps.png", "study.html"):
         assert (out / name).stat().st_size > 5000
     import json
-    assert json.loads((out / "study.json").read_text())["recommendation"].startswith("build")
+    rec = json.loads((out / "study.json").read_text())["recommendation"]
+    assert rec["text"].startswith("build") and rec["L1_mm"] in (250.0, 300.0) and rec["method"] == "meas"
     assert "Recommendation" in (out / "study.html").read_text()
 
 

@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from pathlib import Path
 
 from ..design_io import resolve_design
 from ..errors import RodlabError
-from ..fileio import atomic_write_json, atomic_write_text
+from ..fileio import atomic_write_json, atomic_write_text, json_safe
 
 __all__ = ["register"]
 
@@ -111,7 +112,8 @@ def _joints(cands, grid, use_solid: bool) -> tuple[dict, str]:
     families: dict = {}
     for c in cands:
         if c.design is not None:
-            families.setdefault((c.material, c.tube, c.design.summary()["bend"]["material"]), []).append(c)
+            parts = {k: v for k, v in c.design.summary().items() if k not in ("name", "L1_mm", "L2_mm")}
+            families.setdefault(json.dumps(parts, sort_keys=True), []).append(c)
     out = {}
     for members in families.values():
         base = members[0].design
@@ -152,7 +154,7 @@ def cmd_study(args: argparse.Namespace) -> int:
         run = run_study(cands, robot, fixture, spec, joints, args.cache or out / "cache", args.scheduler,
                         args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
     df = study_table(run)
-    line = recommend(df)
+    rec = recommend(df)
     atomic_write_text(out / "study.csv", df.to_csv(index=False))
     best_method = next((m for m in ("meas", "fea", "calc", "none") if m in methods), methods[0])
     title = f"{robot.name}, {args.replicates} simulated campaigns per design"
@@ -165,11 +167,12 @@ def cmd_study(args: argparse.Namespace) -> int:
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
               "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
-    write_study_report(out, df, line, figs, header)
-    atomic_write_json(out / "study.json", {"format": "rodlab.study/1", "recommendation": line, "spec": spec_dict(spec),
-                                           "robot": robot.name, "fixture": args.fixture, "compliance": model_note,
-                                           "designs": len(cands), "elapsed_s": elapsed})
-    print(f"recommendation: {line}")
+    write_study_report(out, df, rec.text, figs, header)
+    atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
+                                                     "spec": spec_dict(spec), "robot": robot.name,
+                                                     "fixture": args.fixture, "compliance": model_note,
+                                                     "designs": len(cands), "elapsed_s": elapsed}))
+    print(f"recommendation: {rec.text}")
     print(f"  wrote {out / 'study.csv'}, {', '.join(figs.values())}, study.html and study.json in {out} "
           f"({elapsed:.0f} s)")
     return 0

@@ -8,7 +8,7 @@ error budget, Pareto fronts, heat maps, a recommendation.
 from .designs import Candidate, grid_candidates, list_candidates, r_prior_of
 from .prepare import DesignSetup, prepare_design
 from .run import StudyRun, StudySpec, run_study
-from .table import STUDY_COLUMNS, recommend, study_table
+from .table import STUDY_COLUMNS, Recommendation, recommend, study_table
 
 __all__ = ["Candidate", "grid_candidates", "list_candidates", "r_prior_of", "DesignSetup", "prepare_design",
-           "StudyRun", "StudySpec", "run_study", "STUDY_COLUMNS", "recommend", "study_table"]
+           "StudyRun", "StudySpec", "run_study", "STUDY_COLUMNS", "Recommendation", "recommend", "study_table"]

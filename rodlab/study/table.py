@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .prepare import DesignSetup
 from .run import StudyRun
 
-__all__ = ["STUDY_COLUMNS", "study_table", "recommend"]
+__all__ = ["STUDY_COLUMNS", "study_table", "recommend", "Recommendation"]
 
 STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "message", "c_rod_um", "mass_kg",
                  "com_x_mm", "com_z_mm", "reach_mm", "O1", "O2", "O3", "O4", "O5", "method", "mean_mm", "max_mm",
@@ -69,13 +70,28 @@ def _method_for(df) -> str:
     return str(df["method"].dropna().iloc[0])
 
 
-def recommend(df) -> str:
-    """One line: the design to build and why. Among the designs whose predicted mean (with the best method
-    studied: Meas, else FEA, ...) lies within the 90 % band of the best one, the lightest."""
+@dataclass(frozen=True)
+class Recommendation:
+    """The design to build: its label and lengths [mm], the method its prediction is for, and the sentence."""
+
+    design: str | None
+    L1_mm: float
+    L2_mm: float
+    method: str | None
+    text: str
+
+    def to_dict(self) -> dict:
+        return {"design": self.design, "L1_mm": self.L1_mm, "L2_mm": self.L2_mm, "method": self.method,
+                "text": self.text}
+
+
+def recommend(df) -> Recommendation:
+    """The design to build and why. Among the designs whose predicted mean (with the best method studied:
+    Meas, else FEA, ...) lies within the 90 % band of the best one, the lightest."""
     ok = df[(df["status"] == "ok") & df["method"].notna()]
     if ok.empty:
         reasons = "; ".join(sorted({f"{r.design}: {r.message}" for r in df.itertuples()})[:3])
-        return f"no design is usable on this robot ({reasons})"
+        return Recommendation(None, math.nan, math.nan, None, f"no design is usable on this robot ({reasons})")
     m = _method_for(ok)
     rows = ok[ok["method"] == m]
     best = rows.loc[rows["mean_mm"].idxmin()]
@@ -85,6 +101,8 @@ def recommend(df) -> str:
            f"{pick['mean_p05_mm']:.3f}-{pick['mean_p95_mm']:.3f} mm), c_rod {pick['c_rod_um']:.0f} um, mass "
            f"{pick['mass_kg']:.3f} kg")
     if pick["design"] == best["design"]:
-        return f"build {pick['design']}: the most accurate of {len(rows)} designs; {why}"
-    return (f"build {pick['design']}: the lightest of the {len(close)} designs within the best one's band "
-            f"(best {best['design']}, {best['mean_mm']:.3f} mm); {why}")
+        text = f"build {pick['design']}: the most accurate of {len(rows)} designs; {why}"
+    else:
+        text = (f"build {pick['design']}: the lightest of the {len(close)} designs within the best one's band "
+                f"(best {best['design']}, {best['mean_mm']:.3f} mm); {why}")
+    return Recommendation(str(pick["design"]), float(pick["L1_mm"]), float(pick["L2_mm"]), m, text)

@@ -52,7 +52,7 @@ def main() -> None:
              "| run | time [s] | goal [s] | tasks | tasks / s / worker |", "|---|---|---|---|---|",
              f"| fresh cache | {cold:.0f} | {GOAL_S:.0f} | {tasks} | {tasks / cold / WORKERS:.2f} |",
              f"| everything cached (resume) | {warm:.1f} | | 0 | |", "",
-             f"A replicate task (one simulated campaign calibrated {4 + 2} times and validated) runs at about "
+             f"A replicate task (one simulated campaign calibrated 5 times and validated 6 times) runs at about "
              f"{tasks / cold / WORKERS:.2f} tasks per second per worker here: a cluster of W workers does this study in "
              f"~{cold * WORKERS:.0f} / W s."]
     write_page(HERE.parent / "docs" / "benchmarks" / "study.md", lines, HERE / "study_notes.md")

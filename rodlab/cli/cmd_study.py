@@ -49,7 +49,7 @@ def register(sub) -> None:
     p.add_argument("--error-scale", type=float, default=1.0, help="robot kinematic errors (1 = ~0.5 mm, 0.05 deg)")
     p.add_argument("--device-noise", type=float, default=0.003, help="MultiCal device noise, 1 sigma [mm]")
     p.add_argument("--instrument-noise", type=float, default=0.02, help="validation instrument noise, 1 sigma [mm]")
-    p.add_argument("--no-budget", action="store_true", help="skip the error budget (two fewer fits per replicate)")
+    p.add_argument("--no-budget", action="store_true", help="skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",
                    help="use the frame's global calibration instead of one solid FEA run per design family")
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
@@ -102,9 +102,31 @@ def _check_numbers(args) -> None:
         raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
 
 
-def _joints(cands, grid, use_solid: bool) -> tuple[dict, str]:
+def _family_joints(base, L1s, L2s, cache: Path):
+    """The family's joint calibration, solved once and kept in ``cache/joints`` (keyed by the solid-run
+    design's identity), so a re-run or a resumed study does not solve again."""
+    import hashlib
+
+    from rodlab.fea.family import calibration_member
+    from rodlab.fea.joints_io import read_joints, write_joints
+    from rodlab.study.family import solid_family_calibration
+    from rodlab.design_io import design_to_dict
+    member = calibration_member(base, L1s, L2s)
+    key = hashlib.sha256(json.dumps(design_to_dict(member), sort_keys=True, default=str).encode()).hexdigest()[:20]
+    path = cache / "joints" / f"{key}.joints.json"
+    if path.exists():
+        try:
+            return read_joints(path)
+        except RodlabError:
+            pass
+    jc = solid_family_calibration(member)
+    write_joints(path, jc)
+    return jc
+
+
+def _joints(cands, grid, use_solid: bool, cache: Path) -> tuple[dict, str]:
     """{label: JointCalibration} per design family (one solid run each), or {} with the reason."""
-    from rodlab.study.family import cad_available, solid_family_calibration
+    from rodlab.study.family import cad_available
     if not use_solid:
         return {}, "frame with its global calibration (--no-calibrate)"
     if not cad_available():
@@ -119,7 +141,7 @@ def _joints(cands, grid, use_solid: bool) -> tuple[dict, str]:
         base = members[0].design
         L1s = sorted({c.L1_mm for c in members}) if grid else []
         L2s = sorted({c.L2_mm for c in members}) if grid else []
-        jc = solid_family_calibration(base, L1s, L2s)
+        jc = _family_joints(base, L1s, L2s, cache)
         for c in members:
             out[c.label] = jc
     return out, f"frame joint-calibrated on {len(families)} solid FEA run(s), one per design family"
@@ -147,11 +169,12 @@ def cmd_study(args: argparse.Namespace) -> int:
     cands, grid = _candidates(args)
     out = Path(args.output)
     t0 = time.perf_counter()
-    joints, model_note = _joints(cands, grid, not args.no_calibrate)
+    cache = Path(args.cache) if args.cache else out / "cache"
+    joints, model_note = _joints(cands, grid, not args.no_calibrate, cache)
     print(f"{len(cands)} designs on {robot.name}, {args.replicates} replicates x {len(methods)} methods; "
           f"compliance: {model_note}")
     with bar_of(total=len(cands) * (1 + args.replicates), desc="study", unit="task") as bar:
-        run = run_study(cands, robot, fixture, spec, joints, args.cache or out / "cache", args.scheduler,
+        run = run_study(cands, robot, fixture, spec, joints, cache, args.scheduler,
                         args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
     df = study_table(run)
     rec = recommend(df)

@@ -36,8 +36,8 @@ log = logging.getLogger(__name__)
 class StudySpec:
     """How a study predicts: ``methods`` (contract spellings), ``replicates`` per design, ``orientations``
     per clamping position, ``priors`` (:class:`rodlab.calibrate.predict.Priors`; its ``r_rod`` is replaced per
-    design by ``r_prior_metal`` / ``r_prior_composite``), ``seed``, ``budget`` (the error budget's two extra
-    identifications per replicate)."""
+    design by ``r_prior_metal`` / ``r_prior_composite``), ``seed``, ``budget`` (the error budget's extra
+    identification per replicate)."""
 
     methods: tuple = ("none", "calc", "fea", "meas")
     replicates: int = 20
@@ -65,11 +65,22 @@ def _priors(spec: StudySpec, setup_or_prior):
     return replace(base, r_rod=tuple(setup_or_prior))
 
 
+def joints_identity(joints) -> str | None:
+    """What a family's joint calibration is made from (its solid-run design and the frame constants), not its
+    numbers: a repeated solid run differs in the last digits (threaded sparse solver), which must not
+    invalidate a cache."""
+    if joints is None:
+        return None
+    from rodlab.design_io import design_to_dict
+    return json.dumps({"base": design_to_dict(joints.base), "calibration": repr(joints.calibration)},
+                      sort_keys=True, default=str)
+
+
 def _key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
     from rodlab.design_io import design_to_dict
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
-            "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": repr(joints),
+            "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": joints_identity(joints),
             "v": __version__}
     return hashlib.sha256(json.dumps(blob, sort_keys=True, default=str).encode()).hexdigest()[:20]
 
@@ -147,7 +158,8 @@ def _client(scheduler, workers):
             logging.getLogger(name).setLevel(logging.WARNING)
     if scheduler:
         return Client(scheduler), None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}   # small matrices
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, env=one)
     return Client(cluster), cluster
 
 

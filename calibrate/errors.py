@@ -1,10 +1,10 @@
 """Exceptions of the calibrate package."""
 from __future__ import annotations
 
-from rodlab.errors import FormatError
+from rodlab.errors import LocatedError
 
 __all__ = ["CalibrationError"]
 
 
-class CalibrationError(FormatError):
+class CalibrationError(LocatedError):
     """A campaign, robot file or calibration that cannot be used or trusted (says what and why)."""

@@ -1,10 +1,10 @@
 """Exceptions of the fea package."""
 from __future__ import annotations
 
-from rodlab.errors import FormatError
+from rodlab.errors import LocatedError
 
 __all__ = ["FeaError"]
 
 
-class FeaError(FormatError):
+class FeaError(LocatedError):
     """An analysis that cannot be run or trusted (names the parameter and the fix)."""

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from enum import Enum
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase"]
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus"]
 
 
 class _StrEnum(str, Enum):
@@ -82,3 +82,12 @@ class Phase(_StrEnum):
 
     LOAD = "load"
     UNLOAD = "unload"
+
+
+class DesignStatus(_StrEnum):
+    """What became of a design in a sweep or study (the ``status`` column)."""
+
+    OK = "ok"
+    INVALID = "invalid"          #: the design itself cannot be built (the message says why)
+    UNREACHABLE = "unreachable"  #: the robot cannot use it (which clamping position, which limit)
+    FAILED = "failed"            #: a computation failed (the message)

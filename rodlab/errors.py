@@ -14,6 +14,7 @@ from pathlib import Path
 
 __all__ = [
     "RodlabError",
+    "LocatedError",
     "FormatError",
     "DesignError",
     "ComplianceError",
@@ -31,8 +32,8 @@ class RodlabError(ValueError):
     """Base of every rodlab error caused by input (files, parameters, designs)."""
 
 
-class FormatError(RodlabError):
-    """A file does not follow its contract format.
+class LocatedError(RodlabError):
+    """An error that says where: the file, line and key (or parameter) at fault, each where known.
 
     Attributes
     ----------
@@ -57,6 +58,10 @@ class FormatError(RodlabError):
             where.append(f"key `{key}`")
         prefix = ", ".join(where)
         super().__init__(f"{prefix}: {message}" if prefix else message)
+
+
+class FormatError(LocatedError):
+    """A file does not follow its contract format (names the file, line and key)."""
 
 
 class DesignError(FormatError):

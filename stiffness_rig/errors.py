@@ -1,12 +1,12 @@
 """Exceptions of the stiffness_rig package."""
 from __future__ import annotations
 
-from rodlab.errors import FormatError
+from rodlab.errors import LocatedError
 
 __all__ = ["RigError", "DeviceError"]
 
 
-class RigError(FormatError):
+class RigError(LocatedError):
     """A recording, profile or plan that cannot be used (names the file, line and column)."""
 
 

@@ -5,13 +5,14 @@ import numpy as np
 import pytest
 
 from rodlab.fea.sweep import SWEEP_COLUMNS, parse_range, run_sweep
-from rodlab import FormatError, resolve_design
+from rodlab import resolve_design
+from rodlab.errors import LocatedError
 
 
 def test_parse_range():
     np.testing.assert_allclose(parse_range("150:250:50", "L1"), [150, 200, 250])
     np.testing.assert_allclose(parse_range("300,350", "L2"), [300, 350])
-    with pytest.raises(FormatError, match="L1"):
+    with pytest.raises(LocatedError, match="L1"):
         parse_range("150:100:10", "L1")
 
 

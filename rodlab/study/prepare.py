@@ -10,22 +10,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab.compliance import RodCompliance
+from rodlab.enums import DesignStatus
 from rodlab.errors import RodlabError
 
 from .designs import Candidate
 
-__all__ = ["DesignSetup", "prepare_design", "Status"]
+__all__ = ["DesignSetup", "prepare_design"]
 
 log = logging.getLogger(__name__)
-
-
-class Status:
-    """Row status of a design (contract spelling)."""
-
-    OK = "ok"
-    INVALID = "invalid"          #: the design itself is not buildable (message says why)
-    UNREACHABLE = "unreachable"  #: the robot cannot use it (which position, which limit)
-    FAILED = "failed"            #: a computation failed (message)
 
 
 @dataclass
@@ -37,7 +29,7 @@ class DesignSetup:
     L2_mm: float
     material: str
     tube: str
-    status: str
+    status: DesignStatus
     message: str = ""
     fea: RodCompliance | None = None
     calc: RodCompliance | None = None
@@ -49,13 +41,17 @@ class DesignSetup:
     frequencies_Hz: tuple = (math.nan, math.nan, math.nan)
     strength: dict = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        self.status = DesignStatus.parse(self.status, "design status")
+
     @property
     def ok(self) -> bool:
-        return self.status == Status.OK
+        return self.status is DesignStatus.OK
 
     def to_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in ("label", "L1_mm", "L2_mm", "material", "tube", "status", "message",
+        d = {k: getattr(self, k) for k in ("label", "L1_mm", "L2_mm", "material", "tube", "message",
                                            "compliance_model", "observability", "strength")}
+        d["status"] = str(self.status)
         d.update(fea=self.fea.to_dict() if self.fea else None, calc=self.calc.to_dict() if self.calc else None,
                  plan_q_rad={str(j): np.asarray(q).tolist() for j, q in self.plan_q_rad.items()},
                  r_prior=list(self.r_prior), thermal_um_per_K=[float(v) for v in self.thermal_um_per_K],
@@ -103,20 +99,20 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
 
     row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
     if cand.design is None:
-        return DesignSetup(**row, status=Status.INVALID, message=cand.invalid)
+        return DesignSetup(**row, status=DesignStatus.INVALID, message=cand.invalid)
     d = cand.design
     try:
         fea, calc, model = _compliance(d, joints)
         extras = _physics(d, float(np.linalg.norm(fixture.force_D_N)))
     except (RodlabError, ValueError, np.linalg.LinAlgError) as e:
-        return DesignSetup(**row, status=Status.FAILED, message=f"{type(e).__name__}: {e}")
-    setup = DesignSetup(**row, status=Status.OK, fea=fea, calc=calc, compliance_model=model,
+        return DesignSetup(**row, status=DesignStatus.FAILED, message=f"{type(e).__name__}: {e}")
+    setup = DesignSetup(**row, status=DesignStatus.OK, fea=fea, calc=calc, compliance_model=model,
                         r_prior=tuple(r_prior), **extras)
     try:
         q_deg, obs = plan_poses(robot, fixture, d.tool_mm, k=orientations, candidates=candidates, seed=seed,
                                 rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm, base_guess=standard_base())
     except CalibrationError as e:
-        setup.status, setup.message = Status.UNREACHABLE, f"{robot.name} with this rod: {e}"
+        setup.status, setup.message = DesignStatus.UNREACHABLE, f"{robot.name} with this rod: {e}"
         return setup
     setup.plan_q_rad = {int(j): np.deg2rad(q) for j, q in q_deg.items()}
     setup.observability = {k: float(v) for k, v in obs.items()}

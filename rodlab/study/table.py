@@ -21,7 +21,7 @@ STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "mess
 
 def _design_part(s: DesignSetup) -> dict:
     row = {"design": s.label, "L1_mm": s.L1_mm, "L2_mm": s.L2_mm, "material": s.material, "tube": s.tube,
-           "status": s.status, "message": s.message, "compliance_model": s.compliance_model,
+           "status": str(s.status), "message": s.message, "compliance_model": s.compliance_model,
            "r_rod_low": s.r_prior[0], "r_rod_high": s.r_prior[1]}
     if s.fea is not None:
         row.update(c_rod_um=s.fea.c_rod_um, mass_kg=s.fea.mass_kg, com_x_mm=float(s.fea.com_T_mm[0]),

@@ -45,7 +45,7 @@ def main() -> None:
     tasks = designs * (1 + REPLICATES)
     lines = ["# Benchmark: rodlab study at scale", "",
              f"`python benchmarks/bench_study.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
-             f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}; the environment of README command 1.", "",
+             f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}; the environment it runs in (see below).", "",
              f"`rodlab study rod1 --L1 {L1} --L2 {L2} --replicates {REPLICATES} --workers {WORKERS}`: {designs} designs "
              f"({usable} usable on the TX90), 4 methods, error budget on; one solid FEA run calibrates the family's "
              "joints first.", "",

@@ -125,7 +125,7 @@ def solve_joints(refs: dict, path: Path = REF) -> None:
         if base in refs["joints"]:
             continue
         d = design(base, refs["designs"][base]["spec"])
-        _, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half),
+        _, res = solid_compliance(d, mesh_rod,
                                   error_estimate=False, keep_displacements=True, tip_moments=True)
         sec, tip, margins = measure_sections(d, res)
         refs["joints"][base] = {"section_motion": sec.tolist(), "tip_motion": tip.tolist(),

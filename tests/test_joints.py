@@ -169,7 +169,7 @@ def test_joint_calibration_on_the_solid_rod1_family():
     from rodlab.geometry import mesh_rod
     refs = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
     d = resolve_design("rod1")
-    _, res = solid_compliance(d, lambda dd, h, g, half: mesh_rod(dd, size_mm=h, grading=g, half=half),
+    _, res = solid_compliance(d, mesh_rod,
                               error_estimate=False, keep_displacements=True, tip_moments=True)
     jc = calibrate_joints(d, res)
     assert jc.margins_mm == (25.0, 25.0) and jc.asymmetry < 5e-3 and jc.span_residual < 2e-3

@@ -15,6 +15,7 @@ from .ik import random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import catalogue
+from .simulate import standard_base
 
 __all__ = ["observability", "plan_poses"]
 
@@ -56,12 +57,7 @@ def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: 
     rng = np.random.default_rng(seed)
     p = ModelParams.nominal(robot, tool_mm, base=base_guess)
     if base_guess is None:
-        # a base that puts {W} 650 mm in front of the robot, 250 mm up, device tilted as in the paper
-        from rodlab.frames import matrix_to_pose, rotation_from_abc
-        T = np.eye(4)
-        T[:3, :3] = rotation_from_abc([-45.0, 35.26438968, 0.0])
-        T[:3, 3] = [650.0, 0.0, 250.0]
-        p = p.with_(base=matrix_to_pose(np.linalg.inv(T)))
+        p = p.with_(base=standard_base())      # {W} 650 mm in front, 250 mm up, device tilted as in the paper
     cands = reachable_candidates(robot, p, fixture, k, candidates, rng, rod_mass_kg, rod_com_T_mm)
     allq = np.concatenate(list(cands.values()))
     infos = catalogue(robot.n)

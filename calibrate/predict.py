@@ -173,28 +173,27 @@ def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodComplianc
 @dataclass(frozen=True)
 class SimulatedCampaign:
     """One simulated campaign: q_rad (N, n) commanded angles; group (N,) clamping position; x_D_mm (N, 3) the
-    device readings (with noise); x_W_true_mm (N, 3) the true ball centres in {W}; force_W_N (N, 3);
+    device readings (with noise); force_W_N (N, 3);
     recorded_poses {j: (6,)} the fixture poses as recorded (with their uncertainty); true_T {j: 4 x 4}."""
 
     q_rad: np.ndarray
     group: np.ndarray
     x_D_mm: np.ndarray
-    x_W_true_mm: np.ndarray
     force_W_N: np.ndarray
     recorded_poses: dict
     true_T: dict
     mass_kg: float
     com_T_mm: np.ndarray
 
-    def observations(self, noisy: bool = True) -> Observations:
-        """What identification sees: the readings through the recorded poses (Eq. 2), or the exact points."""
+    def observations(self) -> Observations:
+        """What identification sees: the readings through the recorded poses (Eq. 2)."""
         x = np.empty_like(self.x_D_mm)
         for j in np.unique(self.group):
             m = self.group == j
             Tr = pose_to_matrix(self.recorded_poses[int(j)])
             x[m] = self.x_D_mm[m] @ Tr[:3, :3].T + Tr[:3, 3]
-        return Observations(self.q_rad, x if noisy else self.x_W_true_mm, self.force_W_N, self.mass_kg,
-                            self.com_T_mm, self.group.copy(), None, dict(self.true_T))
+        return Observations(self.q_rad, x, self.force_W_N, self.mass_kg, self.com_T_mm, self.group.copy(), None,
+                            dict(self.true_T))
 
 
 def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng) -> SimulatedCampaign:
@@ -214,7 +213,7 @@ def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng) -
         if int(j) != fixture.world_position:
             pose = pose + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
         recorded[int(j)] = pose
-    return SimulatedCampaign(q, group, xD, pW, F, recorded, {int(j): Ts[int(j)] for j in np.unique(group)},
+    return SimulatedCampaign(q, group, xD, F, recorded, {int(j): Ts[int(j)] for j in np.unique(group)},
                              reference.mass_kg, reference.com_T_mm)
 
 

@@ -27,15 +27,6 @@ log = logging.getLogger(__name__)
 STAGES = ["design", "cad", "fea", "rig", "fit", "diagnose", "campaign", "calibrate", "sweep"]
 
 
-def _have_cad() -> bool:
-    try:
-        import build123d  # noqa: F401
-        import gmsh  # noqa: F401
-        return True
-    except ImportError:
-        return False
-
-
 def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: int = 7,
              sweep_grid=(np.arange(150, 451, 50.0), np.arange(300, 651, 50.0))) -> dict:
     """Run every stage; returns the summary (also written to ``out_dir/run.json``)."""
@@ -67,7 +58,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         write_compliance(calc, out / "rod1.calc.compliance.json")
         summary["design"] = design.summary()
         summary["stages"]["design"] = {"mass_kg": calc.mass_kg, "c_rod_um_calc": calc.c_rod_um}
-    cad = _have_cad()
+    from .study.family import cad_available
+    cad = cad_available()
     with stage("cad"):
         if cad:
             import rodlab.geometry as geometry

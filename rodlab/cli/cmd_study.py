@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -102,56 +101,12 @@ def _check_numbers(args) -> None:
         raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
 
 
-def _family_joints(base, L1s, L2s, cache: Path):
-    """The family's joint calibration, solved once and kept in ``cache/joints`` (keyed by the solid-run
-    design's identity), so a re-run or a resumed study does not solve again."""
-    import hashlib
-
-    from rodlab.fea.family import calibration_member
-    from rodlab.fea.joints_io import read_joints, write_joints
-    from rodlab.study.family import solid_family_calibration
-    from rodlab.design_io import design_to_dict
-    member = calibration_member(base, L1s, L2s)
-    key = hashlib.sha256(json.dumps(design_to_dict(member), sort_keys=True, default=str).encode()).hexdigest()[:20]
-    path = cache / "joints" / f"{key}.joints.json"
-    if path.exists():
-        try:
-            return read_joints(path)
-        except RodlabError:
-            pass
-    jc = solid_family_calibration(member)
-    write_joints(path, jc)
-    return jc
-
-
-def _joints(cands, grid, use_solid: bool, cache: Path) -> tuple[dict, str]:
-    """{label: JointCalibration} per design family (one solid run each), or {} with the reason."""
-    from rodlab.study.family import cad_available
-    if not use_solid:
-        return {}, "frame with its global calibration (--no-calibrate)"
-    if not cad_available():
-        return {}, "frame with its global calibration (the cad extra for the solid run is not installed)"
-    families: dict = {}
-    for c in cands:
-        if c.design is not None:
-            parts = {k: v for k, v in c.design.summary().items() if k not in ("name", "L1_mm", "L2_mm")}
-            families.setdefault(json.dumps(parts, sort_keys=True), []).append(c)
-    out = {}
-    for members in families.values():
-        base = members[0].design
-        L1s = sorted({c.L1_mm for c in members}) if grid else []
-        L2s = sorted({c.L2_mm for c in members}) if grid else []
-        jc = _family_joints(base, L1s, L2s, cache)
-        for c in members:
-            out[c.label] = jc
-    return out, f"frame joint-calibrated on {len(families)} solid FEA run(s), one per design family"
-
-
 def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.calibrate import read_fixture, resolve_robot
     from rodlab.calibrate.predict import Priors
     from rodlab.calibrate.simulate import standard_fixture
     from rodlab.study import StudySpec, recommend, run_study, study_table
+    from rodlab.study.family import family_joints
     from rodlab.study.plots import plot_heatmaps, plot_pareto
     from rodlab.study.report import write_study_report
     from rodlab.study.run import spec_dict
@@ -170,7 +125,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     out = Path(args.output)
     t0 = time.perf_counter()
     cache = Path(args.cache) if args.cache else out / "cache"
-    joints, model_note = _joints(cands, grid, not args.no_calibrate, cache)
+    joints, model_note = family_joints(cands, grid is not None, not args.no_calibrate, cache)
     print(f"{len(cands)} designs on {robot.name}, {args.replicates} replicates x {len(methods)} methods; "
           f"compliance: {model_note}")
     with bar_of(total=len(cands) * (1 + args.replicates), desc="study", unit="task") as bar:

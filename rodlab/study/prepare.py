@@ -95,7 +95,6 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
     computation fails, is a setup with that status and the reason (never an exception)."""
     from rodlab.calibrate import CalibrationError
     from rodlab.calibrate.plan import plan_poses
-    from rodlab.calibrate.simulate import standard_base
 
     row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
     if cand.design is None:
@@ -110,7 +109,7 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
                         r_prior=tuple(r_prior), **extras)
     try:
         q_deg, obs = plan_poses(robot, fixture, d.tool_mm, k=orientations, candidates=candidates, seed=seed,
-                                rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm, base_guess=standard_base())
+                                rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm)
     except CalibrationError as e:
         setup.status, setup.message = DesignStatus.UNREACHABLE, f"{robot.name} with this rod: {e}"
         return setup

@@ -70,7 +70,8 @@ def plot_pareto(df, path, method: str, title: str = "") -> Path:
 
 
 def plot_heatmaps(df, path, title: str = "") -> Path | None:
-    """Predicted mean error over L1 x L2, one panel per method (None unless the designs form a grid)."""
+    """Predicted mean error over L1 x L2, one panel per method, each on its own colour scale (the designs are
+    compared within a method; the methods' levels differ several-fold); None unless the designs form a grid."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -78,19 +79,17 @@ def plot_heatmaps(df, path, title: str = "") -> Path | None:
     methods = [m for m in ("none", "calc", "fea", "meas") if (df["method"] == m).any()]
     if L1.size < 2 or L2.size < 2 or not methods or df["design"].nunique() != L1.size * L2.size:
         return None
-    vals = df.loc[df["method"].isin(methods), "mean_mm"].to_numpy(float)
-    vmin, vmax = np.nanmin(vals), np.nanmax(vals)
-    fig, axes = plt.subplots(1, len(methods), figsize=(4.2 * len(methods), 4.0), constrained_layout=True,
+    fig, axes = plt.subplots(1, len(methods), figsize=(4.8 * len(methods), 4.0), constrained_layout=True,
                              squeeze=False)
     for ax, m in zip(axes[0], methods):
         Z = np.full((L2.size, L1.size), np.nan)
         for r in df[df["method"] == m].itertuples():
             Z[np.searchsorted(L2, r.L2_mm), np.searchsorted(L1, r.L1_mm)] = r.mean_mm
         ax.set_facecolor("#dddddd")
-        pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap="viridis_r", vmin=vmin, vmax=vmax)
-        ax.set_title(f"{m}", fontsize=10)
+        pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap="viridis_r")     # own scale: compare designs
+        fig.colorbar(pc, ax=ax, label="predicted mean error [mm]")
+        ax.set_title(f"{m} compensation", fontsize=10)
         ax.set_xlabel("L1 [mm]")
         ax.set_ylabel("L2 [mm]")
-    fig.colorbar(pc, ax=axes[0].tolist(), label="predicted mean error [mm]")
     fig.suptitle(title + " — grey: not usable", fontsize=11)
     return _save(fig, path)

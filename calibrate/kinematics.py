@@ -139,7 +139,7 @@ def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=Non
     # loads per link: the link's mass at its COM (in frame k + 1), the rod at its COM (in {T} = {n} axes at
     # the ball) and the contact force at the ball (both on the last link)
     R, t = fr.T[:, 1:, :3, :3], fr.T[:, 1:, :3, 3]                    # (N, n, 3, 3), (N, n, 3)
-    c = np.einsum("mkij,kj->mki", R, np.asarray(robot.com_mm, float)) + t
+    c = (R @ np.asarray(robot.com_mm, float)[:, :, None])[..., 0] + t
     F = np.broadcast_to(np.asarray(robot.mass_kg, float)[:, None] * g0, (N, n, 3))
     M = _cross(c, F)                                                 # moment about {0}'s origin [N mm]
     S = F.copy()

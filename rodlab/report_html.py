@@ -90,8 +90,33 @@ def render_report(run_dir) -> str:
     parts.append(f"<h2>7. L1 / L2 sweep</h2><p>{sw['designs']} designs ({sw['ok']} valid); stiffest L1 = "
                  f"{sw['stiffest']['L1_mm']:g} mm, L2 = {sw['stiffest']['L2_mm']:g} mm, c_rod "
                  f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + img_tag(run, files.get("sweep"), "sweep heat maps"))
+    if "study" in st:
+        parts.append(_study_section(run, st["study"], files))
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _pct(share) -> str:
+    return "—" if share is None or share != share else f"{100 * share:.0f}"
+
+
+def _study_section(run: Path, sy: dict, files: dict) -> str:
+    """8. The study: predicted calibration accuracy of the paper's carbon rods per method."""
+    rows = "".join(
+        f"<tr><td>{html.escape(str(r['design']))}</td><td>{r['c_rod_um']:.0f}</td><td>{r['mass_kg'] * 1e3:.0f}</td>"
+        f"<td>{html.escape(str(r['method']))}</td><td>{r['mean_mm']:.3f}</td><td>{r['mean_p05_mm']:.3f}-"
+        f"{r['mean_p95_mm']:.3f}</td><td>{r['max_mm']:.3f}</td><td>{_pct(r['share_deflection'])} / "
+        f"{_pct(r['share_identification'])} / {_pct(r['share_noise'])}</td></tr>" for r in sy["rows"])
+    return (f"<h2>8. Which rod? Predicted calibration accuracy (rodlab study)</h2><p><b>Recommendation.</b> "
+            f"{html.escape(sy['recommendation'])}</p><p class=note>{len(sy['designs'])} designs "
+            f"({html.escape(', '.join(sy['designs']))}) on the TX90, {sy['replicates']} simulated campaigns each "
+            f"(a design study uses 20: <code>rodlab study</code>); compliance: {html.escape(sy['compliance'])}. "
+            "Mean validation error after calibration, its 5-95 % band over the campaigns, and the error budget: the "
+            "shares of the mean-square error from the rod's deflection left after compensation, the identification "
+            "and the validation instrument's noise. The whole study: <code>study/study.html</code>.</p>"
+            "<table><tr><th>design</th><th>c_rod um</th><th>mass g</th><th>method</th><th>mean mm</th>"
+            f"<th>90 % band mm</th><th>max mm</th><th>budget % (defl. / ident. / noise)</th></tr>{rows}</table>"
+            + img_tag(run, files.get("study_pareto"), "study Pareto fronts"))
 
 
 def write_report(run_dir, out=None) -> Path:

@@ -21,7 +21,7 @@ def run(tmp_path_factory):
 def test_demo_stages_and_results(run):
     s = json.loads((run / "run.json").read_text())
     st = s["stages"]
-    assert set(st) == {"design", "cad", "fea", "rig", "fit", "diagnose", "campaign", "calibrate", "sweep"}
+    assert set(st) == {"design", "cad", "fea", "rig", "fit", "diagnose", "campaign", "calibrate", "sweep", "study"}
     d = st["diagnose"]
     assert d["verdict"] == "explained"
     assert [(f["effect"], f["location"]) for f in d["findings"]] == [("joint_compliance", "ring_1")]
@@ -38,6 +38,21 @@ def test_demo_stages_and_results(run):
         df = pd.read_csv(run / "sweep" / "sweep.csv")
         row = df[(df["L1_mm"] == 300.0) & (df["L2_mm"] == 450.0)].iloc[0]
         assert row["c_rod_um"] == pytest.approx(st["fea"]["c_rod_um"], rel=0.002)
+
+
+def test_demo_study_of_the_carbon_rods(run):
+    """The demo's study: every rod is predicted more accurate with measured compensation than without, and
+    compensation gains most on the softest rod (3#), as the paper's Section 5.3 finds."""
+    sy = json.loads((run / "run.json").read_text())["stages"]["study"]
+    assert sy["designs"] == ["1#", "2#", "3#"]
+    mean = {(r["design"], r["method"]): r["mean_mm"] for r in sy["rows"]}
+    assert len(mean) == 12
+    for d in sy["designs"]:
+        assert mean[(d, "meas")] < mean[(d, "none")]
+        assert mean[(d, "meas")] <= mean[(d, "fea")]
+    assert mean[("3#", "none")] - mean[("3#", "meas")] > mean[("1#", "none")] - mean[("1#", "meas")]
+    assert sy["recommendation"].startswith("build ")
+    assert (run / "study" / "study.html").exists() and (run / "study" / "study.csv").exists()
 
 
 def test_report_is_self_contained(run):

@@ -47,6 +47,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     sw = st["sweep"]["stiffest"]
     print(f"sweep: {st['sweep']['designs']} designs; stiffest L1 = {sw['L1_mm']:g}, L2 = {sw['L2_mm']:g} mm "
           f"(c_rod {sw['c_rod_um']:.0f} um)")
+    print(f"study of {', '.join(st['study']['designs'])}: {st['study']['recommendation']}")
     if not args.no_report:
         from ..report_html import write_report
         print(f"wrote {write_report(args.output)}")

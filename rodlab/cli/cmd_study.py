@@ -7,7 +7,6 @@ from pathlib import Path
 
 from ..design_io import resolve_design
 from ..errors import RodlabError
-from ..fileio import atomic_write_json, atomic_write_text, json_safe
 
 __all__ = ["register"]
 
@@ -105,11 +104,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.calibrate import read_fixture, resolve_robot
     from rodlab.calibrate.predict import Priors
     from rodlab.calibrate.simulate import standard_fixture
-    from rodlab.study import StudySpec, recommend, run_study, study_table
+    from rodlab.study import StudySpec, run_study, write_study_outputs
     from rodlab.study.family import family_joints
-    from rodlab.study.plots import plot_heatmaps, plot_pareto
-    from rodlab.study.report import write_study_report
-    from rodlab.study.run import spec_dict
 
     from ..progress import progress as bar_of
     _check_numbers(args)
@@ -131,26 +127,12 @@ def cmd_study(args: argparse.Namespace) -> int:
     with bar_of(total=len(cands) * (1 + args.replicates), desc="study", unit="task") as bar:
         run = run_study(cands, robot, fixture, spec, joints, cache, args.scheduler,
                         args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
-    df = study_table(run)
-    rec = recommend(df)
-    atomic_write_text(out / "study.csv", df.to_csv(index=False))
-    best_method = next((m for m in ("meas", "fea", "calc", "none") if m in methods), methods[0])
-    title = f"{robot.name}, {args.replicates} simulated campaigns per design"
-    figs = {"Pareto fronts: predicted accuracy vs mass and vs reach": plot_pareto(df, out / "pareto.png",
-                                                                                 best_method, title).name}
-    heat = plot_heatmaps(df, out / "heatmaps.png", title) if grid else None
-    if heat is not None:
-        figs["Predicted mean error over L1 x L2"] = heat.name
     elapsed = time.perf_counter() - t0
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
               "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
-    write_study_report(out, df, rec.text, figs, header)
-    atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
-                                                     "spec": spec_dict(spec), "robot": robot.name,
-                                                     "fixture": args.fixture, "compliance": model_note,
-                                                     "designs": len(cands), "elapsed_s": elapsed}))
-    print(f"recommendation: {rec.text}")
-    print(f"  wrote {out / 'study.csv'}, {', '.join(figs.values())}, study.html and study.json in {out} "
-          f"({elapsed:.0f} s)")
+    res = write_study_outputs(out, run, robot.name, grid is not None, header,
+                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
+    print(f"recommendation: {res.recommendation.text}")
+    print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     return 0

@@ -1,0 +1,56 @@
+"""A finished study's files: ``study.csv``, ``pareto.png``, ``heatmaps.png`` (grids), ``study.html``,
+``study.json`` — written by ``rodlab study`` and by the demo's study stage alike."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from rodlab.fileio import atomic_write_json, atomic_write_text, json_safe
+
+from .plots import plot_heatmaps, plot_pareto
+from .report import write_study_report
+from .run import StudyRun, spec_dict
+from .table import Recommendation, recommend, study_table
+
+__all__ = ["StudyOutputs", "write_study_outputs", "best_method"]
+
+#: the method a design's headline accuracy is quoted for: the best compensation studied
+_PREFERENCE = ("meas", "fea", "calc", "none")
+
+
+@dataclass(frozen=True)
+class StudyOutputs:
+    """What :func:`write_study_outputs` wrote: the study table (one row per design and method), the
+    recommendation, the figures ({caption: file name in the folder}) and the files."""
+
+    table: object
+    recommendation: Recommendation
+    figures: dict
+    files: tuple
+
+
+def best_method(methods) -> str:
+    """The headline method of a study: Meas, else FEA, Calc, None among those studied."""
+    return next((m for m in _PREFERENCE if m in methods), tuple(methods)[0])
+
+
+def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, header: dict,
+                        extra_json: dict | None = None) -> StudyOutputs:
+    """Write the study's files into ``out_dir`` (atomically each); ``header`` {label: text} heads the page,
+    ``extra_json`` is merged into ``study.json``."""
+    out = Path(out_dir)
+    df = study_table(run)
+    rec = recommend(df)
+    atomic_write_text(out / "study.csv", df.to_csv(index=False))
+    title = f"{robot_name}, {run.spec.replicates} simulated campaigns per design"
+    pareto = plot_pareto(df, out / "pareto.png", best_method(run.spec.methods), title)
+    figs = {"Pareto fronts: predicted accuracy vs mass and vs reach": pareto.name}
+    heat = plot_heatmaps(df, out / "heatmaps.png", title) if grid else None
+    if heat is not None:
+        figs["Predicted mean error over L1 x L2"] = heat.name
+    write_study_report(out, df, rec.text, figs, header)
+    atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
+                                                     "spec": spec_dict(run.spec), "robot": robot_name,
+                                                     "designs": len(run.setups), **(extra_json or {})}))
+    files = ("study.csv", *figs.values(), "study.html", "study.json")
+    return StudyOutputs(df, rec, figs, files)

@@ -152,6 +152,7 @@ class CalibrationResult:
     iterations: int = 0
     condition: float = float("nan")
     warnings: list = field(default_factory=list)
+    residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
 
 
 def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
@@ -326,7 +327,10 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     msg = res.message if res is not None else "not run"
     out = CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, noise_est, corr,
                             [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
-    out.warnings = trust_warnings(robot, out, expected_noise_mm)
+    if expected_noise_mm:
+        from .residual_test import residual_test
+        out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
+    out.warnings = trust_warnings(robot, out)
     return out
 
 
@@ -386,15 +390,17 @@ def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
 ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
 
 
-def trust_warnings(robot, res: "CalibrationResult", expected_noise_mm: float | None) -> list[str]:
-    """Reasons not to trust a calibration: no convergence, residuals far above the noise, parameters beyond
+def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
+    """Reasons not to trust a calibration: no convergence, residuals the noise model does not explain
+    (:mod:`calibrate.residual_test`, the test ``rodlab diagnose --campaign`` uses too), parameters beyond
     physical bounds."""
     w = []
     if not res.success:
         w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
-    if expected_noise_mm and res.rms_mm > 5.0 * expected_noise_mm:
-        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are far above the expected noise "
-                 f"({expected_noise_mm * 1e3:.1f} um): physics is missing; run `rodlab diagnose --campaign`")
+    test = res.residual_check
+    if test is not None and test.missing:
+        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; physics is "
+                 f"missing: run `rodlab diagnose --campaign` on the same files to find which")
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":

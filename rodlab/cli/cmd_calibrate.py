@@ -111,12 +111,42 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.png:
         from rodlab.calibrate.plots import plot_residuals
         print(f"wrote {plot_residuals(res, camp, args.png)}")
+    _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
         print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
         for w in res.warnings:
             print(f"  - {w}", file=sys.stderr)
+        if res.residual_check is not None and res.residual_check.missing:
+            _print_suspects(robot, camp, args, rod, comp)
         return 3
     return 0
+
+
+def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
+    """With ``--compensation none`` and a file that has matrices: how far the uncompensated rod deflects."""
+    if comp.active or not (rod.C_F.any() or rod.C_g.any()):
+        return
+    import numpy as np
+
+    from rodlab.calibrate import campaign_observations, deflection_offsets, read_fixture
+    obs = campaign_observations(camp, read_fixture(args.fixture), rod)
+    off = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod)
+    print(f"note: the rod's deflection is not compensated; by {args.rod} it moves the ball up to "
+          f"{np.linalg.norm(off, axis=1).max() * 1e3:.0f} um in this campaign (--compensation file compensates it)")
+
+
+def _print_suspects(robot, camp, args, rod, comp) -> None:
+    """The campaign diagnosis (the same residual test, then the hypotheses) and what to do about each."""
+    from rodlab.calibrate import read_fixture
+    from rodlab.compliance import RodCompliance
+    from rodlab.diagnose import diagnose_campaign
+    from rodlab.diagnose.advice import remedy
+    used = comp.rod if comp.active else RodCompliance.none_like(rod)
+    diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used)
+    print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
+    for f in diag.findings:
+        where = f" at {f.location}" if f.location else ""
+        print(f"  - {f.effect}{where}: {remedy(f)}", file=sys.stderr)
 
 
 def _print_result(res, before, after, label) -> None:

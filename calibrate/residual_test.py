@@ -1,0 +1,74 @@
+"""Is physics missing? One test of an identification's residuals against the noise model, shared by
+``rodlab calibrate`` (its trust verdict) and ``rodlab diagnose --campaign`` (its "consistent" verdict).
+
+The noise model is the one the identification's standard errors use (:func:`calibrate.identify.noise_covariance`):
+device noise per reading plus the uncertainty of each recorded clamping pose, correlated among the points of
+a position. The residuals are whitened with it and projected off the identified parameters' Jacobian (the
+generalised-least-squares refit: what the parameters can absorb is not evidence of missing physics); their
+sum of squares is chi-square with ``3 N - P`` degrees of freedom if the model is complete. Physics is missing
+when the tail probability is below :data:`P_MISSING`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["ResidualTest", "residual_test", "P_MISSING"]
+
+#: tail probability below which the residuals are not noise (the diagnosers' likelihood-ratio level too)
+P_MISSING = 1e-3
+
+
+@dataclass(frozen=True)
+class ResidualTest:
+    """The residual chi-square test of one identification.
+
+    chi2 : whitened, projected sum of squares [-]; dof : ``3 N - P``; reduced : chi2 / dof; p_value : P(X > chi2)
+    for X ~ chi-square(dof); noise_mm : device noise assumed [mm]; fixture_sigma : clamping-pose uncertainty
+    assumed ([mm], [deg]); missing : p_value < :data:`P_MISSING`
+    """
+
+    chi2: float
+    dof: int
+    reduced: float
+    p_value: float
+    noise_mm: float
+    fixture_sigma: tuple
+    missing: bool
+
+    def describe(self) -> str:
+        """One sentence: the statistic, the noise model and the verdict."""
+        return (f"reduced chi-square {self.reduced:.2f} over {self.dof} degrees of freedom (p = {self.p_value:.2g}) "
+                f"under the noise model: device {self.noise_mm * 1e3:.1f} um per reading, clamping poses "
+                f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
+
+
+def whitened_projection(r_mm: np.ndarray, J: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Residuals ``r_mm`` (3N,) whitened by the covariance ``S`` (3N, 3N) and projected off ``J`` (3N, P)."""
+    L = np.linalg.cholesky(S)
+    r = np.linalg.solve(L, r_mm)
+    Jw = np.linalg.solve(L, J)
+    return r - Jw @ np.linalg.lstsq(Jw, r, rcond=None)[0]
+
+
+def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> ResidualTest:
+    """The test of ``res`` (a :class:`calibrate.identify.CalibrationResult` of ``obs``) with device noise
+    ``noise_mm`` [mm] and clamping-pose uncertainty ``fixture_sigma`` ([mm], [deg])."""
+    from scipy.special import chdtrc
+
+    from .identify import noise_covariance
+    from .jacobian import position_jacobian
+    from .kinematics import ball_positions
+
+    if not (np.isfinite(noise_mm) and noise_mm > 0):
+        raise ValueError(f"noise_mm must be > 0, got {noise_mm!r}")
+    N = obs.x_W_mm.shape[0]
+    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    free = [i for i in res.infos if i.name in res.free]
+    J = position_jacobian(fr, tau, free, res.params.base, obs.group).reshape(3 * N, -1)
+    e = whitened_projection(res.residuals_mm.reshape(-1), J, noise_covariance(obs, noise_mm, fixture_sigma))
+    dof = max(3 * N - J.shape[1], 1)
+    chi2 = float(e @ e)
+    p = float(chdtrc(dof, chi2))
+    return ResidualTest(chi2, dof, chi2 / dof, p, float(noise_mm), tuple(fixture_sigma), p < P_MISSING)

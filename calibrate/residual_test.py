@@ -44,9 +44,9 @@ class ResidualTest:
                 f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
 
 
-def whitened_projection(r_mm: np.ndarray, J: np.ndarray, S: np.ndarray) -> np.ndarray:
-    """Residuals ``r_mm`` (3N,) whitened by the covariance ``S`` (3N, 3N) and projected off ``J`` (3N, P)."""
-    L = np.linalg.cholesky(S)
+def whitened_projection(r_mm: np.ndarray, J: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """Residuals ``r_mm`` (3N,) whitened by the Cholesky factor ``L`` (3N, 3N) of their covariance and
+    projected off ``J`` (3N, P)."""
     r = np.linalg.solve(L, r_mm)
     Jw = np.linalg.solve(L, J)
     return r - Jw @ np.linalg.lstsq(Jw, r, rcond=None)[0]
@@ -67,7 +67,8 @@ def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002))
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     free = [i for i in res.infos if i.name in res.free]
     J = position_jacobian(fr, tau, free, res.params.base, obs.group).reshape(3 * N, -1)
-    e = whitened_projection(res.residuals_mm.reshape(-1), J, noise_covariance(obs, noise_mm, fixture_sigma))
+    L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
+    e = whitened_projection(res.residuals_mm.reshape(-1), J, L)
     dof = max(3 * N - J.shape[1], 1)
     chi2 = float(e @ e)
     p = float(chdtrc(dof, chi2))

@@ -35,7 +35,7 @@ def test_residual_test_is_chi_square_under_the_noise_model(examples):
     S = noise_covariance(obs, 0.003)
     rng = np.random.default_rng(0)
     Lc = np.linalg.cholesky(S)
-    chi = [float(np.sum(whitened_projection(Lc @ rng.standard_normal(S.shape[0]), J, S) ** 2)) for _ in range(200)]
+    chi = [float(np.sum(whitened_projection(Lc @ rng.standard_normal(S.shape[0]), J, Lc) ** 2)) for _ in range(200)]
     dof = S.shape[0] - J.shape[1]
     assert abs(np.mean(chi) / dof - 1.0) < 0.05
     bad = examples / "campaign-fixture_pose"

@@ -123,10 +123,11 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     from rodlab.calibrate.jacobian import position_jacobian
     from rodlab.calibrate.kinematics import ball_positions
 
-    from rodlab.calibrate.residual_test import residual_test
+    from rodlab.calibrate.residual_test import whitened_projection
     obs = campaign_observations(camp, fix, rod)
-    res = identify(robot, obs, rod.tool_mm, rod)
-    first_test = residual_test(robot, res, obs, noise_mm, fixture_sigma)
+    # the identification runs the residual test `rodlab calibrate` trusts by, with this noise model
+    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma)
+    first_test = res.residual_check
     N = obs.x_W_mm.shape[0]
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     free_infos = [i for i in res.infos if i.name in res.free]
@@ -141,9 +142,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     # errors of the robot, the fixture, the device) shows only as chi-square above its degrees of freedom.
     # Hypotheses are then tested against the inflated scatter: an effect must stand out of what the
     # campaign's own residuals allow, not only out of the datasheet noise.
-    r0 = np.linalg.solve(L, r_raw)
-    Jw = np.linalg.solve(L, J)
-    e0 = r0 - Jw @ np.linalg.lstsq(Jw, r0, rcond=None)[0]
+    e0 = whitened_projection(r_raw, J, L)
     # robust (median per point): isolated outliers or one wrong position must not hide themselves
     per_point = (e0.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - J.shape[1], 1)
     chi_red0 = float(np.median(per_point)) / float(chi2_median(3))
@@ -282,10 +281,11 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
             obs2 = Observations(obs2.q_rad[keep], obs2.x_W_mm[keep], obs2.force_W_N[keep], obs2.rod_mass_kg,
                                 obs2.rod_com_T_mm, obs2.group[keep], [l for l, k in zip(camp.labels(), keep) if k],
                                 obs2.fixture_T)
-        res2 = identify(robot, obs2, rod.tool_mm, rod_used, freed=freed)
+        res2 = identify(robot, obs2, rod.tool_mm, rod_used, freed=freed, expected_noise_mm=noise_mm,
+                        fixture_sigma=fixture_sigma)
         info["result_after"] = res2
         rms_after = res2.rms_mm
-        final_test = residual_test(robot, res2, obs2, noise_mm, fixture_sigma)
+        final_test = res2.residual_check
     else:
         rms_after = res.rms_mm
         final_test = first_test

@@ -45,31 +45,42 @@ def plot_residuals(res, camp, out_dir) -> Path:
     return _save(fig, Path(out_dir) / "residuals.png")
 
 
-def plot_error_distributions(args, rows, out) -> Path:
-    """Histogram-like distributions (box plots) of the validation errors per method."""
+def plot_error_distributions(errors_mm: dict, out, title: str = "") -> Path:
+    """Validation position errors per model (the paper's Fig. 10 / 11): box plots of the calibrated models
+    and the cumulative distribution of every model, nominal included (log scale: the nominal model's errors
+    are millimetres, the calibrated ones tenths).
+
+    errors_mm : {label: shape=(M,) [mm]}, ``"nominal"`` first if present; out : a folder (the figure is
+    ``error_distributions.png``) or a ``*.png`` path.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from rodlab.calibrate import ModelParams, read_points, resolve_robot, validate
-    robot = resolve_robot(args.robot)
-    pts = read_points(args.validate, robot.n)
-    data, labels = [validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]], ["nominal"]
-    for name, res, _, _ in rows:
-        data.append(validate(robot, res.params, pts)[1])
-        labels.append(name)
+    if not errors_mm:
+        raise ValueError("errors_mm: expected at least one model's validation errors")
+    calibrated = {k: np.asarray(v, float) for k, v in errors_mm.items() if k != "nominal"}
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), constrained_layout=True)
-    axes[0].boxplot(data[1:], tick_labels=labels[1:], showmeans=True)
+    colour = {label: f"C{i}" for i, label in enumerate(errors_mm)}
+    if calibrated:
+        box = axes[0].boxplot(list(calibrated.values()), tick_labels=list(calibrated), showmeans=True,
+                              patch_artist=True)
+        for patch, label in zip(box["boxes"], calibrated):
+            patch.set(facecolor=colour[label], alpha=0.35)
     axes[0].set_ylabel("validation position error [mm]")
-    axes[0].set_title("after calibration, per compensation method", fontsize=10)
-    bins = np.linspace(0, max(float(np.max(d)) for d in data[1:]) * 1.05, 25)
-    for d, lab in zip(data[1:], labels[1:]):
-        axes[1].hist(d, bins=bins, histtype="step", lw=1.2, label=f"{lab}: mean {d.mean():.3f} mm")
+    axes[0].set_title("after calibration (box: quartiles, triangle: mean)", fontsize=10)
+    for label, e in errors_mm.items():
+        e = np.sort(np.asarray(e, float))
+        axes[1].step(e, np.arange(1, e.size + 1) / e.size, where="post", lw=1.4, color=colour[label],
+                     ls="--" if label == "nominal" else "-",
+                     label=f"{label}: mean {e.mean():.3f}, max {e.max():.3f} mm")
+    axes[1].set_xscale("log")
     axes[1].set_xlabel("validation position error [mm]")
-    axes[1].set_ylabel("points")
-    axes[1].legend(fontsize=8)
+    axes[1].set_ylabel("fraction of points with a smaller error")
+    axes[1].set_ylim(0, 1.02)
+    axes[1].legend(fontsize=8, loc="upper left")
     for a in axes:
-        a.grid(True, lw=0.3)
-    fig.suptitle(f"validation errors on {len(data[0])} points (nominal model: mean {data[0].mean():.3f} mm)",
-                 fontsize=11)
+        a.grid(True, lw=0.3, which="both")
+    n = len(next(iter(errors_mm.values())))
+    fig.suptitle(title or f"validation errors on {n} points", fontsize=11)
     p = Path(out)
     return _save(fig, p / "error_distributions.png" if p.suffix != ".png" else p)

@@ -15,6 +15,7 @@ Defaults for optional parts (documented in ``docs/formats.md``; ``OD`` = pipe I'
 """
 from __future__ import annotations
 
+import logging
 import math
 import re
 import sys
@@ -35,6 +36,8 @@ else:  # pragma: no cover
 __all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
 
 FORMAT_ROD = "rodlab.rod/1"
+
+log = logging.getLogger(__name__)
 
 _TOP_KEYS = ("format", "name", "L1_mm", "L2_mm", "gamma_deg", "tube", "pipe_I", "pipe_II", "ball",
              "bend", "rings", "pipe_holder", "ball_holder", "materials")
@@ -221,7 +224,8 @@ def design_to_dict(design: RodDesign) -> dict:
 
 
 def load_design(path: str | Path) -> RodDesign:
-    """Read and validate a ``*.rod.toml`` file."""
+    """Read and validate a ``*.rod.toml`` file: the design's own rules, then :mod:`rodlab.design_range` (a rod
+    that would hang is refused; keys outside the checked range are logged as warnings with file and line)."""
     p = Path(path)
     text = read_text_checked(p, FormatError)
     try:
@@ -229,7 +233,16 @@ def load_design(path: str | Path) -> RodDesign:
     except tomllib.TOMLDecodeError as e:
         m = re.search(r"line (\d+)", str(e))
         raise FormatError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
-    return design_from_dict(data, p, text)
+    design = design_from_dict(data, p, text)
+    from .design_range import check_design, range_warnings
+    try:
+        check_design(design)
+    except DesignError as e:
+        raise DesignError(e.detail, path=p, line=_line_of(text, None, e.key), key=e.key) from e
+    for w in range_warnings(design):
+        line = _line_of(text, None, w.key)
+        log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())
+    return design
 
 
 def builtin_designs() -> dict[str, Path]:

@@ -24,7 +24,11 @@ __all__ = [
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
     """Return `` Did you mean `x`?`` for the closest of ``choices``, or ``""``."""
-    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
+    word, choices = str(word), [str(c) for c in choices]
+    folded = [c for c in choices if c.casefold() == word.casefold()]
+    # a key given without its unit suffix (``L1`` for ``L1_mm``, ``hold`` for ``hold_s``)
+    stem = [c for c in choices if c.casefold().startswith(word.casefold() + "_")] if word else []
+    close = folded or (stem if len(stem) == 1 else []) or difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
     return f" Did you mean `{close[0]}`?" if close else ""
 
 

@@ -4,7 +4,8 @@
 - Resumable: after each hold a comment line ``# hold K/N complete: step S`` is appended (the contract reader
   skips comment lines); a re-run of the same command continues with the hold after the last complete one.
   An interrupted hold keeps its samples and is recorded again under a new step number. The zero reading of
-  each series is kept as ``# zero AXIS: x, y, z`` so a resumed series keeps its zero.
+  each series is kept as ``# zero AXIS: x, y, z`` so a resumed series keeps its zero. Only the same plan,
+  rate and device may continue a file (:mod:`.resume`); the lock file is removed when the run ends.
 - Every load axis's series starts with a mass-0 hold; its settled mean is the zero that all readings of the
   series are referred to (the contract: relative to the unloaded reading at the start of the series).
 - A hold starts once the live readings stay within ``settle_tolerance_mm`` for ``settle_window_s`` (or after
@@ -17,7 +18,6 @@ import fcntl
 import logging
 import math
 import os
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,15 +28,12 @@ import numpy as np
 from .config import RigPlan, RigProfile
 from .device import GaugeClient
 from .errors import RigError
-from .recording import RecordingWriter, read_recording
+from .recording import RecordingWriter
+from .resume import ResumePoint, identity_meta, resume_point
 
 __all__ = ["AcquisitionStatus", "acquire", "RecordingLock"]
 
 log = logging.getLogger(__name__)
-
-_DONE = re.compile(r"^# hold (\d+)/(\d+) complete: step (\d+)")
-_ZERO = re.compile(r"^# zero (\S+): (.+)$")
-
 
 @dataclass
 class AcquisitionStatus:
@@ -56,18 +53,31 @@ class RecordingLock:
     def __init__(self, recording: Path) -> None:
         self.path = Path(str(recording) + ".lock")
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
+        for _ in range(10):                       # the holder may remove the file between our open and lock
+            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(self._fd)
+                raise RigError("another acquisition is writing this recording (it holds the lock); wait for it or "
+                               "choose another output file", path=recording) from None
+            if self._same_file():
+                break
             os.close(self._fd)
-            raise RigError("another acquisition is writing this recording (it holds the lock); wait for it or "
-                           "choose another output file", path=recording) from None
         os.ftruncate(self._fd, 0)
         os.write(self._fd, f"{os.getpid()}\n".encode())
 
+    def _same_file(self) -> bool:
+        try:
+            return os.stat(self.path).st_ino == os.fstat(self._fd).st_ino
+        except FileNotFoundError:
+            return False
+
     def release(self) -> None:
+        """Remove the lock file and release the lock (removed first: no one can lock a file about to go)."""
         if self._fd is not None:
+            if self._same_file():
+                os.unlink(self.path)
             fcntl.flock(self._fd, fcntl.LOCK_UN)
             os.close(self._fd)
             self._fd = None
@@ -79,124 +89,132 @@ class RecordingLock:
         self.release()
 
 
-def _resume_state(path: Path):
-    """(holds completed, last step, last time, zeros per axis) of an existing recording."""
-    done, last_step, last_time, zeros = 0, 0, -1.0, {}
-    if not path.exists() or path.stat().st_size == 0:
-        return done, last_step, last_time, zeros
-    text = path.read_text(encoding="utf-8", errors="replace")
-    for line in text.splitlines():
-        m = _DONE.match(line)
-        if m:
-            done = int(m.group(1))
-        z = _ZERO.match(line)
-        if z:
-            zeros[z.group(1)] = np.array([float(v) for v in z.group(2).split(",")])
-    if any(not ln.startswith("#") and ln.strip() and ln[0].isdigit() for ln in text.splitlines()):
-        rec = read_recording(path)
-        last_step, last_time = int(rec.step.max()), float(rec.time_s.max())
-    return done, last_step, last_time, zeros
-
-
 def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Callable[[str], None] | None = None,
             progress: Callable[[AcquisitionStatus], None] | None = None, client: GaugeClient | None = None,
             use_loader: bool | None = None) -> Path:
-    """Record ``plan`` into ``out``; resumes an interrupted recording of the same plan.
+    """Record ``plan`` into ``out``; resumes an interrupted recording of the same plan, rate and device.
 
     ``operator(prompt)`` is called before each hold when there is no commandable loader (it returns when the
     weight hangs); with ``use_loader`` (default: when the profile has a ``[loader]``) the loader is commanded.
+    A file of another plan, rate or device is refused (:func:`.resume.resume_point`).
     """
     out = Path(out)
-    holds = plan.protocol.holds()
-    n_total = len(holds)
     use_loader = profile.loader_command is not None if use_loader is None else use_loader
     if not use_loader and operator is None:
         raise RigError("no loader in the profile and no operator prompt: run interactively or add [loader]",
                        path=profile.path, key="loader")
     with RecordingLock(out):
-        done, step, last_time, zeros = _resume_state(out)
-        if done >= n_total:
-            log.info("%s: the plan is already complete (%d holds)", out, n_total)
+        start = resume_point(out, profile, plan)
+        if start.complete:
+            log.info("%s: the plan is already complete (%d holds)", out, start.holds_total)
             return out
         own_client = client is None
         client = client or GaugeClient(profile)
-        meta = {"rod": plan.rod, "sample_rate_Hz": f"{plan.protocol.rate_Hz:g}", "load_N": "mass_kg * 9.80665",
+        meta = {"rod": plan.rod, **identity_meta(profile, plan), "load_N": "mass_kg * 9.80665",
                 "plan": str(plan.path or ""), "profile": str(profile.path or ""), "generator": "rodlab rig acquire"}
         writer = RecordingWriter(out, meta, with_temp=profile.temperature_index is not None, fsync_every=20,
                                  decimals=6)                   # raw gauge resolution kept (nm)
-        if done:
-            writer._fh.write(f"# resumed after hold {done}/{n_total}\n")
-        t0 = time.monotonic() - (last_time + 1.0 if last_time >= 0 else 0.0)
-        dt = 1.0 / plan.protocol.rate_Hz
-        n_hold = int(round(plan.protocol.hold_s * plan.protocol.rate_Hz))
-        samples = 0
         try:
-            for k in range(done, n_total):
-                axis, rep, phase, mass = holds[k]
-                step += 1
-                label = f"hold {k + 1}/{n_total}: {mass:g} kg on {axis.value} ({phase}, repeat {rep})"
-                if use_loader:
-                    client.command_loader(axis.value, str(phase), mass)
-                else:
-                    operator(f"{'Hang' if mass > 0 else 'Remove all weights:'} {mass:g} kg on the {axis.value} "
-                             f"hanger ({phase}, repeat {rep}) then press Enter" if mass > 0 else
-                             f"Remove all weights ({axis.value} series, {phase}) then press Enter")
-                measured = plan.protocol.measured.get(axis.value, (0, 1, 2))
-                new_series = (mass == 0.0 and phase.value == "load" and rep == 1) or axis.value not in zeros
-                buffered = []
-                window = max(int(round(plan.settle_window_s * plan.protocol.rate_Hz)), 2)
-                t_start = time.monotonic()
-                tick = time.monotonic()
-
-                def sample():
-                    nonlocal tick
-                    tick += dt
-                    pause = tick - time.monotonic()
-                    if pause > 0:
-                        time.sleep(pause)
-                    else:
-                        tick = time.monotonic()
-                    x, temp = client.read()
-                    return time.monotonic() - t0, x, temp
-
-                def emit(t, x, temp):
-                    nonlocal samples
-                    rel = x - zeros.get(axis.value, np.zeros(3))
-                    disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan
-                                 for c in range(3))
-                    writer.write(t, step, rep, phase, axis, mass, disp, temp)
-                    samples += 1
-
-                # settle
-                recent = []
-                while True:
-                    t, x, temp = sample()
-                    recent.append(x)
-                    if new_series:
-                        buffered.append((t, x, temp))
-                    else:
-                        emit(t, x, temp)
-                    if len(recent) >= window:
-                        w = np.array(recent[-window:])[:, list(measured)]
-                        if np.nanmax(np.ptp(w, axis=0)) <= plan.settle_tolerance_mm:
-                            break
-                    if time.monotonic() - t_start > plan.settle_timeout_s:
-                        log.warning("%s did not settle within %.0f s (tolerance %.3g mm); recording anyway",
-                                    label, plan.settle_timeout_s, plan.settle_tolerance_mm)
-                        break
-                if new_series:
-                    zeros[axis.value] = np.nanmean(np.array(recent[-window:]), axis=0)
-                    writer._fh.write(f"# zero {axis.value}: " + ", ".join(f"{v:.6f}" for v in zeros[axis.value]) + "\n")
-                    for item in buffered:
-                        emit(*item)
-                for _ in range(n_hold):
-                    emit(*sample())
-                writer._fh.write(f"# hold {k + 1}/{n_total} complete: step {step}\n")
-                writer._sync()
-                if progress:
-                    progress(AcquisitionStatus(k + 1, n_total, label, samples, client.garbage, client.reconnects))
+            if start.holds_done:
+                writer.comment(f"resumed after hold {start.holds_done}/{start.holds_total}")
+            _Session(plan, client, writer, start, operator if not use_loader else None, progress).run()
         finally:
             writer.close()
             if own_client:
                 client.close()
     return out
+
+
+class _Session:
+    """One run of the plan's remaining holds into an open recording."""
+
+    def __init__(self, plan: RigPlan, client: GaugeClient, writer: RecordingWriter, start: ResumePoint,
+                 operator, progress) -> None:
+        self.plan, self.client, self.writer = plan, client, writer
+        self.operator, self.progress = operator, progress
+        self.start = start
+        self.zeros = dict(start.zeros or {})
+        self.step = start.last_step
+        self.samples = 0
+        self.dt = 1.0 / plan.protocol.rate_Hz
+        self.t0 = time.monotonic() - (start.last_time_s + 1.0 if start.last_time_s >= 0 else 0.0)
+        self.tick = time.monotonic()
+
+    def run(self) -> None:
+        holds = self.plan.protocol.holds()
+        for k in range(self.start.holds_done, len(holds)):
+            axis, rep, phase, mass = holds[k]
+            self.step += 1
+            label = f"hold {k + 1}/{len(holds)}: {mass:g} kg on {axis.value} ({phase}, repeat {rep})"
+            self._set_load(axis, rep, phase, mass)
+            self._record_hold(axis, rep, phase, mass, label)
+            self.writer.comment(f"hold {k + 1}/{len(holds)} complete: step {self.step}")
+            self.writer.sync()
+            if self.progress:
+                self.progress(AcquisitionStatus(k + 1, len(holds), label, self.samples, self.client.garbage,
+                                                self.client.reconnects))
+
+    def _set_load(self, axis, rep, phase, mass) -> None:
+        if self.operator is None:
+            self.client.command_loader(axis.value, str(phase), mass)
+        elif mass > 0:
+            self.operator(f"Hang {mass:g} kg on the {axis.value} hanger ({phase}, repeat {rep}) then press Enter")
+        else:
+            self.operator(f"Remove all weights ({axis.value} series, {phase}) then press Enter")
+
+    def _sample(self):
+        """One reading at the plan's rate: (time [s], gauges [mm] shape=(3,), temperature [degC])."""
+        self.tick += self.dt
+        pause = self.tick - time.monotonic()
+        if pause > 0:
+            time.sleep(pause)
+        else:
+            self.tick = time.monotonic()
+        x, temp = self.client.read()
+        return time.monotonic() - self.t0, x, temp
+
+    def _emit(self, hold, t, x, temp) -> None:
+        axis, rep, phase, mass = hold
+        measured = self.plan.protocol.measured.get(axis.value, (0, 1, 2))
+        rel = x - self.zeros.get(axis.value, np.zeros(3))
+        disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan for c in range(3))
+        self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp)
+        self.samples += 1
+
+    def _record_hold(self, axis, rep, phase, mass, label) -> None:
+        """Settle (samples recorded too; a new series' zero is their settled mean), then ``hold_s`` seconds."""
+        hold = (axis, rep, phase, mass)
+        new_series = (mass == 0.0 and phase.value == "load" and rep == 1) or axis.value not in self.zeros
+        settled = self._settle(hold, label, buffer=new_series)
+        if new_series:
+            recent, buffered = settled
+            self.zeros[axis.value] = np.nanmean(np.array(recent), axis=0)
+            self.writer.comment(f"zero {axis.value}: " + ", ".join(f"{v:.6f}" for v in self.zeros[axis.value]))
+            for item in buffered:
+                self._emit(hold, *item)
+        for _ in range(int(round(self.plan.protocol.hold_s * self.plan.protocol.rate_Hz))):
+            self._emit(hold, *self._sample())
+
+    def _settle(self, hold, label, buffer: bool):
+        """Read until the measured gauges stay within the tolerance for the window (or the timeout); returns
+        (the last window's readings, the buffered samples) when ``buffer`` (a new series has no zero yet)."""
+        plan = self.plan
+        measured = list(plan.protocol.measured.get(hold[0].value, (0, 1, 2)))
+        window = max(int(round(plan.settle_window_s * plan.protocol.rate_Hz)), 2)
+        recent, buffered = [], []
+        t_start = time.monotonic()
+        while True:
+            t, x, temp = self._sample()
+            recent.append(x)
+            if buffer:
+                buffered.append((t, x, temp))
+            else:
+                self._emit(hold, t, x, temp)
+            if len(recent) >= window and np.nanmax(np.ptp(np.array(recent[-window:])[:, measured], axis=0)) <= \
+                    plan.settle_tolerance_mm:
+                break
+            if time.monotonic() - t_start > plan.settle_timeout_s:
+                log.warning("%s did not settle within %.0f s (tolerance %.3g mm); recording anyway",
+                            label, plan.settle_timeout_s, plan.settle_tolerance_mm)
+                break
+        return recent[-window:], buffered

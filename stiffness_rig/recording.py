@@ -256,6 +256,17 @@ class RecordingWriter:
         if self._since_sync >= self.fsync_every:
             self._sync()
 
+    def comment(self, text: str) -> None:
+        """Append a ``# text`` line (the reader skips comment lines among the samples)."""
+        if "\n" in text:
+            raise ValueError(f"a comment is one line, got {text!r}")
+        self._fh.write(f"# {text}\n")
+        self._fh.flush()
+
+    def sync(self) -> None:
+        """Flush and fsync what was written."""
+        self._sync()
+
     def _sync(self) -> None:
         self._fh.flush()
         os.fsync(self._fh.fileno())

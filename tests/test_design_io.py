@@ -102,6 +102,8 @@ RULES = [
     ("material nu", _set(("materials", "cfrp_tube", "nu"), 0.7), "materials.cfrp_tube.nu", "nu"),
     ("material key", _set(("materials", "cfrp_tube", "density"), 1.0), "materials.cfrp_tube.density",
      "density_kg_m3"),
+    ("bare L1 key", _set(("L1",), 300.0), "L1", "Did you mean `L1_mm`"),
+    ("hangs rather than reaches", _set(("L2_mm",), 45000.0), "L2_mm", "hang rather than reach"),
 ]
 
 
@@ -119,6 +121,36 @@ def test_validation_rule(tmp_path, rod1_dict, label, mutate, key, words):
         assert err.line is not None, str(err)
         line = path.read_text().splitlines()[err.line - 1]
         assert key.split(".")[-1] in line or line.startswith("["), (err.line, line)
+
+
+def test_range_warnings_name_key_range_and_line(tmp_path, rod1_dict, caplog):
+    """Inside the checked range a design loads silently; outside it, a warning per key with the range and the
+    file's line; a long rod also gets the linear model's second-order error (sag^2 / reach)."""
+    import logging
+
+    from rodlab.design_range import VERIFIED_RANGE, linear_model_error_mm, range_warnings
+    with caplog.at_level(logging.WARNING, logger="rodlab.design_io"):
+        load_design(write_toml(tmp_path / "ok.rod.toml", rod1_dict))
+    assert not caplog.records
+    rod1_dict["L2_mm"] = 4500.0
+    path = write_toml(tmp_path / "long.rod.toml", rod1_dict)
+    with caplog.at_level(logging.WARNING, logger="rodlab.design_io"):
+        d = load_design(path)
+    text = caplog.text
+    line = next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if ln.startswith("L2_mm"))
+    lo, hi, _ = VERIFIED_RANGE["L2_mm"]
+    assert f"{path}, line {line}, key `L2_mm` = 4500 mm lies outside {lo:g}-{hi:g} mm" in text
+    sag, err = linear_model_error_mm(d)
+    assert err == pytest.approx(sag ** 2 / float((d.tool_mm ** 2).sum()) ** 0.5)
+    assert 100.0 < sag < 1000.0 and "sags" in text          # a 4.5 m carbon tube sags by decimetres
+    assert [w.key for w in range_warnings(d)] == ["L2_mm", "L2_mm"]
+    rod1_dict["L2_mm"], rod1_dict["gamma_deg"] = 300.0, 40.0      # ball in front of the flange, sharp bend
+    assert [w.key for w in range_warnings(load_design(write_toml(tmp_path / "g.rod.toml", rod1_dict)))] == [
+        "gamma_deg"]
+    rod1_dict["L2_mm"], rod1_dict["gamma_deg"] = 450.0, 30.0      # ball 89.7 mm behind the flange plane
+    warnings = range_warnings(load_design(write_toml(tmp_path / "b.rod.toml", rod1_dict)))
+    assert [w.key for w in warnings] == ["gamma_deg", "gamma_deg"]
+    assert "89.7 mm behind the flange plane" in warnings[1].describe()
 
 
 def test_missing_required_and_toml_syntax(tmp_path, rod1_dict):

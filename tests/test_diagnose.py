@@ -52,6 +52,27 @@ def test_campaign_examples(examples, name):
         v = diag.extra["validation"]
         assert v["after"]["mean_mm"] <= 1.15 * truth["floor"]["oracle"]["mean"]
         assert v["after"]["mean_mm"] < v["before"]["mean_mm"]
+        assert info.after is not None and info.after.rms_mm == diag.rms_after_mm
+    else:
+        assert info.after is None and diag.rms_after_mm == diag.rms_before_mm
+    # the figures' numbers are the report's: per-point validation errors give its statistics
+    for key in ("nominal", "before", "after"):
+        assert np.mean(info.validation_errors_mm[key]) == pytest.approx(diag.extra["validation"][key]["mean_mm"])
+
+
+def test_cli_campaign_figures(examples, tmp_path, capsys):
+    """diagnose --campaign --png writes the residual figure and the validation distributions; calibrate --png
+    --validate writes the residuals and the error distribution its help promises."""
+    from rodlab.cli import main
+    ex = examples / "campaign-fixture_pose"
+    files = ["--fixture", str(ex / "multical.fixture.json"), "--rod", str(ex / "rod1.compliance.json"),
+             "--validate", str(ex / "multical.validation.csv")]
+    assert main(["diagnose", "--campaign", str(ex / "multical.campaign.csv"), *files, "--png", str(tmp_path / "d")]) == 0
+    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == ["diagnosis_campaign.png", "error_distributions.png"]
+    main(["calibrate", str(ex / "multical.campaign.csv"), *files, "--png", str(tmp_path / "c")])
+    assert sorted(p.name for p in (tmp_path / "c").iterdir()) == ["error_distributions.png", "residuals.png"]
+    for p in [*(tmp_path / "d").iterdir(), *(tmp_path / "c").iterdir()]:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 20_000
 
 
 def test_report_follows_the_contract(examples, tmp_path):

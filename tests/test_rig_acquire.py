@@ -1,6 +1,8 @@
 """Acquisition over a real pseudo-terminal (pyserial against the simulator, no mocks)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,7 @@ from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
 from rodlab.stiffness_rig.model import Protocol, RigModel
 from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
+ROOT_DATA = Path(__file__).resolve().parents[1] / "rodlab" / "data" / "rig"
 C = np.array([[0.0063, 0.0, -0.0151], [0.0, 0.2198, 0.0], [-0.0151, 0.0, 0.0666]])
 SIM = RodCompliance("1#", Method.CALC, C, 1.2 * C, 0.46, np.zeros(3), np.array([450.0, 0, 300]))
 
@@ -67,9 +70,50 @@ def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
     assert out.read_text().count("complete: step") == len(plan.protocol.holds())
     # a finished plan is not recorded again
     size = out.stat().st_size
-    with SimulatedRig(model, tmp_path / "tty2") as dev:
+    with SimulatedRig(model, tmp_path / "tty") as dev:
         acquire(_profile(dev.port), plan, out, use_loader=True)
     assert out.stat().st_size == size
+    assert not (tmp_path / "r.rig.csv.lock").exists()       # the lock goes with the run
+
+
+@pytest.mark.parametrize("change,key", [
+    (lambda prof, plan: (prof, RigPlan("1#", Protocol(axes=("y",), masses=(2.0,), repeats=1, hold_s=0.5, rate_Hz=20.0),
+                                       settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=3.0)),
+     "plan_hash"),
+    (lambda prof, plan: (prof, RigPlan("1#", Protocol(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5,
+                                                      rate_Hz=10.0))), "sample_rate_Hz"),
+    (lambda prof, plan: (RigProfile(**{**prof.__dict__, "port": prof.port + "-other"}), plan), "device"),
+    (lambda prof, plan: (RigProfile(**{**prof.__dict__, "channels": tuple(Channel(i, i, -1.0, 0.001)
+                                                                           for i in range(3))}), plan), "device_hash"),
+], ids=["other plan", "other rate", "other port", "other wiring"])
+def test_resume_with_another_plan_rate_or_device_is_refused(tmp_path, change, key):
+    """A re-run into a partly recorded file with another plan, rate or device changes nothing on disk and says
+    what to do; the same plan resumes after the last complete hold."""
+    from rodlab.stiffness_rig.resume import resume_point
+    model, out, plan = RigModel(C, seed=8), tmp_path / "r.rig.csv", _plan()
+
+    def stop_after_two(st):
+        if st.holds_done == 2:
+            raise KeyboardInterrupt
+    with SimulatedRig(model, tmp_path / "tty") as dev:
+        prof = _profile(dev.port)
+        with pytest.raises(KeyboardInterrupt):
+            acquire(prof, plan, out, use_loader=True, progress=stop_after_two)
+        recorded = out.read_bytes()
+        prof2, plan2 = change(prof, plan)
+        with pytest.raises(RigError) as ei:
+            acquire(prof2, plan2, out, use_loader=True)
+        assert ei.value.key == key and str(out) in str(ei.value) and "--new-file" in str(ei.value)
+        assert out.read_bytes() == recorded and not (tmp_path / "r.rig.csv.lock").exists()
+        start = resume_point(out, prof, plan)
+        assert (start.holds_done, start.holds_total, start.resuming) == (2, len(plan.protocol.holds()), True)
+
+
+def test_failed_port_open_leaves_nothing_behind(tmp_path):
+    out = tmp_path / "r.rig.csv"
+    with pytest.raises(DeviceError, match="cannot open"):
+        acquire(_profile(str(tmp_path / "no-such-tty")), _plan(), out, use_loader=True)
+    assert sorted(tmp_path.iterdir()) == []
 
 
 def test_second_process_is_refused(tmp_path):
@@ -102,3 +146,63 @@ def test_stream_protocol_with_checksums(tmp_path):
                       use_loader=True)
     fit = fit_recording(read_recording(out), None)
     assert fit.C_F_meas[2, 2] == pytest.approx(C[2, 2], rel=0.02)
+
+
+def _write_plan(path, masses, rate_Hz):
+    path.write_text(f'format = "rodlab.rigplan/1"\nrod = "1#"\naxes = ["y"]\nmasses_kg = {list(masses)}\nrepeats = 1\n'
+                    f'hold_s = 0.3\nrate_Hz = {rate_Hz}\n[settle]\nwindow_s = 0.2\ntolerance_mm = 0.004\n'
+                    f'timeout_s = 3.0\n')
+    return path
+
+
+def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
+    """The console says where a resume starts; another plan is refused with exit 2 naming --new-file; --new-file
+    records beside the file; a simulator ended by SIGTERM removes its pty link."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from rodlab.cli import main
+    from rodlab.compliance import write_compliance
+    from rodlab.stiffness_rig.config import read_plan, read_profile
+    link = tmp_path / "tty"
+    sim = write_compliance(SIM, tmp_path / "sim.compliance.json")
+    server = subprocess.Popen([sys.executable, "-m", "rodlab", "rig", "simulator", "--sim", str(sim), "--link", str(link)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        for _ in range(200):
+            if link.is_symlink():
+                break
+            time.sleep(0.05)
+        profile = tmp_path / "rig.profile.toml"
+        text = (ROOT_DATA / "simulator.profile.toml").read_text().replace('"/tmp/rodlab-rig"', f'"{link}"')
+        profile.write_text(text)
+        plan = _write_plan(tmp_path / "a.plan.toml", (1.0, 2.0), 20.0)
+        out = tmp_path / "r.rig.csv"
+
+        def stop_after_two(st):
+            if st.holds_done == 2:
+                raise KeyboardInterrupt
+        with pytest.raises(KeyboardInterrupt):
+            acquire(read_profile(profile), read_plan(plan), out, use_loader=True, progress=stop_after_two)
+        n_holds = len(read_plan(plan).protocol.holds())
+        args = ["rig", "acquire", "--profile", str(profile), "-o", str(out), "--non-interactive", "-q"]
+        other = _write_plan(tmp_path / "b.plan.toml", (2.0,), 10.0)
+        recorded = out.read_bytes()
+        assert main([*args, "--plan", str(other)]) == 2
+        err = capsys.readouterr().err
+        assert "sample_rate_Hz" in err and "--new-file" in err and str(out) in err
+        assert out.read_bytes() == recorded
+        assert main([*args, "--plan", str(plan)]) == 0
+        assert f"resuming after hold 2/{n_holds}" in capsys.readouterr().out
+        assert main([*args, "--plan", str(other), "--new-file"]) == 0
+        assert "recording into" in capsys.readouterr().out
+        assert read_recording(tmp_path / "r-2.rig.csv").meta["sample_rate_Hz"] == "10"
+        assert out.read_text().count("complete: step") == n_holds
+        assert not list(tmp_path.glob("*.lock"))
+    finally:
+        server.send_signal(signal.SIGTERM)
+        server.wait(timeout=10)
+    assert server.returncode == 0 and not os.path.lexists(link)

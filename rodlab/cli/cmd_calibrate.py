@@ -42,7 +42,8 @@ def register(sub) -> None:
                         "rod-deflection compensation")
     p.add_argument("--points", default=None, help="calibrate from instrument points (*.validation.csv format)")
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
-    p.add_argument("--png", default=None, help="folder for figures (residuals per position, error distribution)")
+    p.add_argument("--png", default=None,
+                   help="folder for figures: residuals per position; with --validate the validation error distribution")
     _common(p)
     p.set_defaults(func=cmd_calibrate)
 
@@ -109,8 +110,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.json:
         print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
     if args.png:
-        from rodlab.calibrate.plots import plot_residuals
+        from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
         print(f"wrote {plot_residuals(res, camp, args.png)}")
+        if args.validate:
+            errors = _validation_errors(args, [(f"calibrated ({label})", res.params)])
+            print(f"wrote {plot_error_distributions(errors, args.png)}")
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
         print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
@@ -228,8 +232,19 @@ def cmd_compare(args: argparse.Namespace) -> int:
               f"{res.rms_mm * 1e3:11.2f}")
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions
-        print(f"wrote {plot_error_distributions(args, rows, args.png)}")
+        errors = _validation_errors(args, [(name, res.params) for name, res, _, _ in rows])
+        print(f"wrote {plot_error_distributions(errors, args.png, 'validation errors per compensation method')}")
     return 0
+
+
+def _validation_errors(args, runs) -> dict:
+    """{"nominal": errors, label: errors, ...} [mm] at the points of ``--validate``."""
+    from rodlab.calibrate import ModelParams, read_points, resolve_robot, validate
+    robot = resolve_robot(args.robot)
+    pts = read_points(args.validate, robot.n)
+    out = {"nominal": validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]}
+    out.update({label: validate(robot, params, pts)[1] for label, params in runs})
+    return out
 
 
 def register_more(sub) -> None:

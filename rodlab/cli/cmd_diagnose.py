@@ -59,7 +59,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = resolve_robot(args.robot)
         pts = read_points(args.validate, robot.n) if args.validate else None
-        diag, info = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
+        diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
                                        read_compliance(args.rod), args.noise_um * 1e-3, pts)
         print(diag.summary())
         if "validation" in diag.extra:
@@ -67,6 +67,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             print(f"  validation mean / max [mm]: nominal {v['nominal']['mean_mm']:.3f} / {v['nominal']['max_mm']:.3f}, "
                   f"calibrated {v['before']['mean_mm']:.3f} / {v['before']['max_mm']:.3f}, with the found physics "
                   f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
+        if args.png:
+            from ..diagnose.plots import plot_campaign_diagnosis
+            for p in plot_campaign_diagnosis(diag, fits, args.png, args.noise_um * 1e-3):
+                print(f"wrote {p}")
     if args.json:
         print(f"wrote {diag.write(args.json)}")
     return 0

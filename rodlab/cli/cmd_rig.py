@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 
 import numpy as np
 
@@ -50,6 +51,8 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="*.rig.csv (appended to; resumable)")
     p.add_argument("--non-interactive", action="store_true",
                    help="command the loader of the profile instead of prompting the operator")
+    p.add_argument("--new-file", action="store_true",
+                   help="never continue an existing file: record into the next free name beside it (run-2.rig.csv)")
     p.set_defaults(func=cmd_acquire)
     p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
@@ -142,7 +145,18 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     import sys
     from rodlab.stiffness_rig.acquire import acquire
     from rodlab.stiffness_rig.config import read_plan, read_profile
+    from rodlab.stiffness_rig.resume import next_free_name, resume_point
     profile, plan = read_profile(args.profile), read_plan(args.plan)
+    output = args.output
+    if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
+        output = str(next_free_name(output))
+        print(f"{args.output} exists; recording into {output}")
+    start = resume_point(output, profile, plan)              # refuses another plan, rate or device up front
+    if start.complete:
+        print(f"{output} already holds all {start.holds_total} holds of this plan; nothing to record")
+        return 0
+    if start.resuming:
+        print(f"resuming after hold {start.holds_done}/{start.holds_total} (plan {plan.path}, {output})")
 
     def operator(prompt: str) -> None:
         if not sys.stdin or not sys.stdin.isatty():
@@ -161,10 +175,10 @@ def cmd_acquire(args: argparse.Namespace) -> int:
                             f"reconnects")
     try:
         with bar:
-            out = acquire(profile, plan, args.output, operator=None if args.non_interactive else operator,
+            out = acquire(profile, plan, output, operator=None if args.non_interactive else operator,
                           progress=progress, use_loader=args.non_interactive)
     except KeyboardInterrupt:
-        print(f"\ninterrupted: every sample so far is in {args.output}; re-run the same command to resume")
+        print(f"\ninterrupted: every sample so far is in {output}; re-run the same command (-o {output}) to resume")
         return 130
     print(f"\nwrote {out}")
     return 0
@@ -180,6 +194,12 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     model = RigModel(sim.C_F, parse_effects(args.effect))
     dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                        faults=Faults(garbage=args.garbage))
+    import signal
+
+    def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
+        raise KeyboardInterrupt
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, stop)
     with dev:
         print(f"simulated rig of rod {sim.rod} on {dev.port} ({args.protocol}, 3 gauges in um + temperature; "
               f"loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop", flush=True)

@@ -6,6 +6,7 @@ line on stderr with exit code 2; never a traceback. ``--debug`` shows tracebacks
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import sys
 
@@ -63,6 +64,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 1
     try:
+        _check_outputs(args)
         return int(args.func(args) or 0)
     except RodlabError as e:
         if args.debug:
@@ -74,12 +76,57 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as e:
         if args.debug:
             raise
-        where = f" {e.filename}" if getattr(e, "filename", None) else ""
-        print(f"rodlab {args.command}: error:{where}: {e.strerror or e}", file=sys.stderr)
+        print(f"rodlab {args.command}: error: {_os_error_text(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"rodlab {args.command}: interrupted", file=sys.stderr)
         return 130
+
+
+#: argparse destinations that name something the command writes
+_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out")
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Before any work: two outputs must not share a path, and no part of an output's folder may be a file
+    (else the first output would be written and the second fail, leaving a partial result)."""
+    from pathlib import Path
+
+    from ..errors import RodlabError
+    seen: dict[Path, str] = {}
+    for dest in _OUTPUT_DESTS:
+        value = getattr(args, dest, None)
+        if not isinstance(value, str) or not value:
+            continue
+        option = "--" + dest.replace("_", "-")
+        path = Path(value).expanduser().absolute()
+        if path in seen:
+            raise RodlabError(f"{option} {value}: the same path as {seen[path]}; give each output its own path")
+        seen[path] = option
+        for parent in path.parents:
+            if parent.exists():
+                if not parent.is_dir():
+                    raise RodlabError(f"{option} {value}: {parent} is a file, not a folder; choose another "
+                                      f"output path")
+                break
+
+
+#: errno -> what it means for a user's paths, and the fix
+_OS_ADVICE = {
+    errno.EEXIST: "a file is in the way where a folder is needed; choose another output path or move the file",
+    errno.ENOTDIR: "a part of the path is a file, not a folder; choose another output path",
+    errno.EISDIR: "this is a folder; give a file name",
+    errno.ENOENT: "no such file or folder; check the path",
+    errno.EACCES: "permission denied; choose a folder you can write to",
+    errno.EROFS: "the file system is read-only; choose another output path",
+    errno.ENOSPC: "the disk is full; free space or write elsewhere (nothing partial was kept)",
+}
+
+
+def _os_error_text(e: OSError) -> str:
+    """``PATH: what went wrong; the fix`` for an operating-system error."""
+    where = f"{e.filename}: " if getattr(e, "filename", None) else ""
+    return where + _OS_ADVICE.get(e.errno, str(e.strerror or e))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -17,19 +17,47 @@ position), ``rod_deflection`` (compensation off by a factor: residuals follow R_
 from __future__ import annotations
 
 import logging
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from .chi2 import chi2_median, chi2_sf
 
 from .report import Diagnosis, Finding
 
-__all__ = ["diagnose_campaign"]
+__all__ = ["diagnose_campaign", "CampaignFits"]
 
 log = logging.getLogger(__name__)
 
 DBIC_MIN = 10.0
 P_MAX = 1e-3
+
+
+@dataclass
+class CampaignFits:
+    """The identifications behind a campaign diagnosis (for figures and reports).
+
+    Attributes
+    ----------
+    before : the :class:`~rodlab.calibrate.CalibrationResult` of the campaign as given
+    after : the identification with the found physics, or ``None`` when nothing was found
+    kept : shape=(N,) bool, the campaign points ``after`` used (isolated outliers dropped)
+    labels : shape=(N,) point labels; position : shape=(N,) int, clamping position of each point
+    joint_corrections_rad : {joint index (0-based): (a_sin, a_cos) [rad]} of periodic joint errors found
+    validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
+    """
+
+    before: object
+    after: object | None
+    kept: np.ndarray
+    labels: list
+    position: np.ndarray
+    joint_corrections_rad: dict
+    validation_errors_mm: dict | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.labels)
+        if self.kept.shape != (n,) or self.position.shape != (n,):
+            raise ValueError(f"kept and position must have shape ({n},), got {self.kept.shape}, {self.position.shape}")
 
 
 def _rms(L, fit, cols) -> float:
@@ -118,8 +146,8 @@ def _hypotheses(robot, res, obs, camp, rod):
 
 def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
                       fixture_sigma=(0.01, 0.002)):
-    """Diagnose a campaign; returns (report, info dict with the re-identified result)."""
-    from rodlab.calibrate import ModelParams, campaign_observations, identify, validate
+    """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it."""
+    from rodlab.calibrate import campaign_observations, identify
     from rodlab.calibrate.jacobian import position_jacobian
     from rodlab.calibrate.kinematics import ball_positions
 
@@ -264,7 +292,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                                      rod.tool_mm, rod.r_rod * k, dict(rod.provenance, diagnosis_scale=k))
     joint_corr = {int(f.location.split(":")[1]) - 1: (f.parameters["amp_sin_rad"], f.parameters["amp_cos_rad"])
                   for f in findings if f.effect == "periodic_joint_error"}
-    info = {"result_before": res, "joint_corrections_rad": joint_corr}
+    res2 = None
     if findings:
         from rodlab.calibrate.identify import Observations
         obs2 = campaign_observations(camp, fix, rod_used)
@@ -283,7 +311,6 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                                 obs2.fixture_T)
         res2 = identify(robot, obs2, rod.tool_mm, rod_used, freed=freed, expected_noise_mm=noise_mm,
                         fixture_sigma=fixture_sigma)
-        info["result_after"] = res2
         rms_after = res2.rms_mm
         final_test = res2.residual_check
     else:
@@ -303,13 +330,27 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                                 final_rms, final_rms, {"position_rms_mm": pos_rms}))
         verdict = "unexplained"
     extra = {"residual_test": {"before": _test_dict(first_test), "after": _test_dict(final_test)}}
+    fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position), joint_corr)
     if validate_points is not None:
-        b = validate(robot, res.params, validate_points)[0]
-        vp_after = validate_points
-        if joint_corr:
-            vp_after = replace(validate_points, q_deg=np.rad2deg(_correct_joints(np.deg2rad(validate_points.q_deg),
-                                                                                 joint_corr)))
-        a = validate(robot, info.get("result_after", res).params, vp_after)[0]
-        nominal = validate(robot, ModelParams.nominal(robot, validate_points.tool_mm), validate_points)[0]
-        extra["validation"] = {"nominal": nominal.to_dict(), "before": b.to_dict(), "after": a.to_dict()}
-    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), info
+        fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
+        extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}
+    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
+
+
+def _validation_errors(robot, fits: CampaignFits, points) -> dict:
+    """Position errors at the validation points: nominal model, identified, identified with the found physics
+    (joint angles corrected as a controller would)."""
+    from rodlab.calibrate import ModelParams, validate
+    after_points = points
+    if fits.joint_corrections_rad:
+        after_points = replace(points, q_deg=np.rad2deg(_correct_joints(np.deg2rad(points.q_deg),
+                                                                        fits.joint_corrections_rad)))
+    after = fits.after if fits.after is not None else fits.before
+    return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
+            "before": validate(robot, fits.before.params, points)[1],
+            "after": validate(robot, after.params, after_points)[1]}
+
+
+def _stats(errors_mm: np.ndarray) -> dict:
+    from rodlab.calibrate.validate import error_stats
+    return error_stats(errors_mm).to_dict()

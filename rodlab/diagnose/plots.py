@@ -8,7 +8,7 @@ import numpy as np
 
 from ..fileio import atomic_write_bytes
 
-__all__ = ["plot_rig_diagnosis"]
+__all__ = ["plot_rig_diagnosis", "plot_campaign_diagnosis"]
 
 
 def plot_rig_diagnosis(model: dict, out_dir, title: str = "") -> list[Path]:
@@ -51,3 +51,61 @@ def plot_rig_diagnosis(model: dict, out_dir, title: str = "") -> list[Path]:
     fig.savefig(buf, dpi=110)
     plt.close(fig)
     return [atomic_write_bytes(Path(out_dir) / "diagnosis_rig.png", buf.getvalue())]
+
+
+def plot_campaign_diagnosis(diag, fits, out_dir, noise_mm: float) -> list[Path]:
+    """``diagnosis_campaign.png``: residual length of every point before (the identified model) and after (with
+    the found physics), grouped by clamping position, the findings marked; with validation points, the
+    validation error distribution of the nominal, identified and corrected models (``error_distributions.png``)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    before = np.linalg.norm(fits.before.residuals_mm, axis=1) * 1e3
+    after = np.full(before.shape, np.nan)
+    if fits.after is not None:
+        after[fits.kept] = np.linalg.norm(fits.after.residuals_mm, axis=1) * 1e3
+    x = np.arange(before.size)
+    fig, ax = plt.subplots(figsize=(13, 4.8), constrained_layout=True)
+    _shade_positions(ax, fits, diag)
+    ax.plot(x, before, "o", ms=4, color="tab:red", label=f"identified model: rms {diag.rms_before_mm * 1e3:.1f} um")
+    if fits.after is not None:
+        ax.plot(x, after, "s", ms=4, mfc="none", color="tab:blue",
+                label=f"with the found physics: rms {diag.rms_after_mm * 1e3:.1f} um")
+        dropped = ~fits.kept
+        if dropped.any():
+            ax.plot(x[dropped], before[dropped], "x", ms=10, mew=2, color="k", label="dropped as outlier")
+    ax.axhline(noise_mm * 1e3 * np.sqrt(3), color="k", lw=0.8, ls=":",
+               label=f"expected length from device noise ({noise_mm * 1e3:.1f} um per reading)")
+    ax.set_yscale("log")
+    from matplotlib.ticker import FuncFormatter
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if str(f"{v:g}")[0] in "25" else ""))
+    ax.set_xticks(x)
+    ax.set_xticklabels(fits.labels, rotation=90, fontsize=6)
+    ax.set_ylabel("residual length per point [um]")
+    names = ", ".join(f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings) or "nothing"
+    fig.suptitle(f"campaign diagnosis: {diag.verdict}; found {names}", fontsize=10)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(True, lw=0.3, which="both")
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=110)
+    plt.close(fig)
+    out = [atomic_write_bytes(Path(out_dir) / "diagnosis_campaign.png", buf.getvalue())]
+    if fits.validation_errors_mm is not None:
+        from rodlab.calibrate.plots import plot_error_distributions
+        e = fits.validation_errors_mm
+        out.append(plot_error_distributions({"nominal": e["nominal"], "identified": e["before"],
+                                             "with the found physics": e["after"]}, out_dir,
+                                            "validation errors: the found physics modelled"))
+    return out
+
+
+def _shade_positions(ax, fits, diag) -> None:
+    """Alternate grey bands per clamping position; a position a finding names is shaded orange."""
+    named = {f.location.split(":")[1] for f in diag.findings if (f.location or "").startswith("position:")}
+    for j in np.unique(fits.position):
+        m = np.nonzero(fits.position == j)[0]
+        colour = "moccasin" if str(j) in named else ("0.92" if j % 2 else "white")
+        ax.axvspan(m.min() - 0.5, m.max() + 0.5, color=colour, zorder=0)
+        ax.text(m.mean(), 0.98, f"position {j}", transform=ax.get_xaxis_transform(), ha="center", va="top",
+                fontsize=8)

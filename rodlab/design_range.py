@@ -1,0 +1,132 @@
+"""Where the rod models hold: the design range they were checked on, and rods no model here describes.
+
+Two kinds of rule about the whole design (single-part rules, such as a ring that does not fit over its tube,
+live in :class:`~rodlab.design.RodDesign`):
+
+- **refused** (:class:`~rodlab.errors.DesignError`, raised by :func:`check_design`): a rod that would hang
+  rather than reach, its self-weight sag above ``SAG_LIMIT`` of its reach: every compliance in rodlab
+  (closed form, frame, solid FEA, Eqs. 15-18) is linear, valid for deflections small against the length.
+  (Parts that cannot be assembled, such as a bend too tight for L1, are :class:`~rodlab.design.RodDesign`'s
+  own rules; with them pipe II cannot run through the flange.)
+
+- **warned** (:func:`range_warnings`): a key outside ``VERIFIED_RANGE`` (the designs on which the frame
+  model was checked against solid FEA: ``fea/data/solid_reference.json`` and
+  ``docs/benchmarks/frame_range.md``), the ball behind the flange plane (pipe II reaching back beside the
+  robot's wrist: a clearance to check on the robot), or a second-order error of the linear models, about
+  ``delta^2 / reach`` for a self-weight sag ``delta``, above ``LINEAR_WARN_MM`` (the order of a laser
+  tracker's noise).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .design import RodDesign
+from .errors import DesignError
+
+__all__ = ["VERIFIED_RANGE", "SAG_LIMIT", "LINEAR_WARN_MM", "RangeWarning", "range_warnings",
+           "check_design", "linear_model_error_mm"]
+
+#: key -> (low, high, unit): where the frame model was checked against solid FEA (the six paper rods, the
+#: calibration / probe / held-out sets, and the corners in docs/benchmarks/frame_range.md: within 1 % of each
+#: matrix's largest entry; the short rods' small axial entries within 5 %)
+VERIFIED_RANGE: dict[str, tuple[float, float, str]] = {
+    "L1_mm": (150.0, 1200.0, "mm"),
+    "L2_mm": (250.0, 2000.0, "mm"),
+    "gamma_deg": (60.0, 180.0, "deg"),
+}
+#: self-weight sag, as a fraction of the reach, above which a design is refused
+SAG_LIMIT = 0.25
+#: ... and above which it is warned about [mm] (a laser tracker's noise is a few um to 10 um)
+LINEAR_WARN_MM = 0.01
+
+
+@dataclass(frozen=True)
+class RangeWarning:
+    """A design key outside the range the models were checked on.
+
+    Attributes
+    ----------
+    key : the design key (``L2_mm``); value : its value in the design
+    low, high : the checked range of the key (same unit); unit : ``mm`` or ``deg``
+    reason : what is not verified or not reliable there
+    """
+
+    key: str
+    value: float
+    low: float
+    high: float
+    unit: str
+    reason: str
+
+    @property
+    def outside(self) -> bool:
+        return not self.low <= self.value <= self.high
+
+    def describe(self) -> str:
+        where = (f"lies outside {self.low:g}-{self.high:g} {self.unit}" if self.outside else
+                 f"(checked range {self.low:g}-{self.high:g} {self.unit})")
+        return f"key `{self.key}` = {self.value:g} {self.unit} {where}: {self.reason}"
+
+
+def linear_model_error_mm(design: RodDesign) -> tuple[float, float]:
+    """(self-weight sag [mm], second-order error of the linear models ``sag^2 / reach`` [mm]) by the closed form."""
+    from .calc import calc_compliance
+    _, Cg = calc_compliance(design)
+    sag = float(max(np.linalg.norm(Cg @ g) for g in np.eye(3)))        # worst gravity direction, mm per g0
+    reach = float(np.linalg.norm(design.tool_mm))
+    return sag, sag * sag / max(reach, 1e-9)
+
+
+def _longer_key(design: RodDesign) -> str:
+    return "L2_mm" if design.L2_mm >= design.L1_mm else "L1_mm"
+
+
+def check_design(design: RodDesign) -> None:
+    """Refuse a rod beyond linear theory (the rules on parts and lengths are :class:`~rodlab.design.RodDesign`'s
+    own)."""
+    sag, _ = linear_model_error_mm(design)
+    reach = float(np.linalg.norm(design.tool_mm))
+    if sag > SAG_LIMIT * reach:
+        key = _longer_key(design)
+        raise DesignError(
+            f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight, "
+            f"{sag / reach:.3g} x its reach of {reach:.0f} mm (limit {SAG_LIMIT:g}); it would hang rather than reach "
+            f"and the linear compliance models do not describe it; shorten the rod or stiffen its tubes (rods "
+            f"checked: {_range_text()})", key=key)
+
+
+def _range_text() -> str:
+    return ", ".join(f"{k} {lo:g}-{hi:g} {u}" for k, (lo, hi, u) in VERIFIED_RANGE.items())
+
+
+def range_warnings(design: RodDesign) -> list[RangeWarning]:
+    """Keys outside :data:`VERIFIED_RANGE`, the ball behind the flange plane, and a linear-model error above
+    :data:`LINEAR_WARN_MM`."""
+    out = []
+    for key, (lo, hi, unit) in VERIFIED_RANGE.items():
+        v = float(getattr(design, key))
+        if not lo <= v <= hi:
+            out.append(RangeWarning(key, v, lo, hi, unit, "the frame model was not checked against solid FEA "
+                                    "there; check this design with `rodlab fea --model solid`"))
+    z_ball = float(design.tool_mm[2])
+    if z_ball < 0.0:
+        lo, hi, unit = VERIFIED_RANGE["gamma_deg"]
+        out.append(RangeWarning("gamma_deg", design.gamma_deg, lo, hi, unit,
+                                f"the ball centre lies {-z_ball:.1f} mm behind the flange plane (L1 - L2 cos(gamma) "
+                                f"< 0): pipe II reaches back beside the robot's wrist; check its clearance on your "
+                                f"robot over the wrist's range, or increase gamma_deg / L1_mm"))
+    sag, err = linear_model_error_mm(design)
+    if err > LINEAR_WARN_MM:
+        key = _longer_key(design)
+        lo, hi, unit = VERIFIED_RANGE[key]
+        out.append(RangeWarning(key, float(getattr(design, key)), lo, hi, unit,
+                                f"the rod sags {sag:.3g} mm under its own weight, so the linear compliance models "
+                                f"are off by about {_length(err)} (more than {LINEAR_WARN_MM * 1e3:.0f} um, a "
+                                f"tracker's noise)"))
+    return out
+
+
+def _length(mm: float) -> str:
+    return f"{mm * 1e3:.0f} um" if mm < 1.0 else f"{mm:.3g} mm"

@@ -1,0 +1,139 @@
+"""Resuming a recording: only the same plan, at the same rate, from the same device, may continue a file.
+
+An acquisition writes into the recording's header what it records (``plan_hash``: the rod, the holds in
+order, hold time, rate and settle rule), how fast (``sample_rate_Hz``) and from what (``device``: the port,
+``device_hash``: the port, protocol and channel wiring). A re-run into a file that already holds samples
+continues it only when all of these match; anything else is refused with what to do (``--new-file``, which
+records into the next free name beside it, or another ``-o``), so two plans are never mixed in one file.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .config import RigPlan, RigProfile
+from .errors import RigError
+from .recording import read_recording
+
+__all__ = ["ResumePoint", "plan_hash", "device_hash", "identity_meta", "resume_point", "next_free_name"]
+
+_DONE = re.compile(r"^# hold (\d+)/(\d+) complete: step (\d+)")
+_ZERO = re.compile(r"^# zero (\S+): (.+)$")
+_META = re.compile(r"^#\s*([A-Za-z_][\w]*)\s*:\s*(.*)$")
+
+
+def _digest(obj) -> str:
+    return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def plan_hash(plan: RigPlan) -> str:
+    """16 hex digits of what a plan records: rod, holds in order, hold time, rate, settle rule, gauges read."""
+    pr = plan.protocol
+    return _digest({"rod": plan.rod, "holds": [[a.value, r, str(ph), m] for a, r, ph, m in pr.holds()],
+                    "hold_s": pr.hold_s, "rate_Hz": pr.rate_Hz,
+                    "measured": {k: list(v) for k, v in sorted(pr.measured.items())},
+                    "settle": [plan.settle_window_s, plan.settle_tolerance_mm, plan.settle_timeout_s]})
+
+
+def device_hash(profile: RigProfile) -> str:
+    """16 hex digits of the wiring: port, protocol, and each channel's index, axis, sign and scale."""
+    return _digest({"port": profile.port, "protocol": profile.protocol,
+                    "channels": [[c.index, c.axis, c.sign, c.scale_mm] for c in profile.channels],
+                    "temperature": profile.temperature_index})
+
+
+def identity_meta(profile: RigProfile, plan: RigPlan) -> dict:
+    """The header entries a resume is checked against."""
+    return {"sample_rate_Hz": f"{plan.protocol.rate_Hz:g}", "plan_hash": plan_hash(plan), "device": profile.port,
+            "device_hash": device_hash(profile)}
+
+
+@dataclass
+class ResumePoint:
+    """Where an acquisition into a file starts.
+
+    Attributes
+    ----------
+    holds_done : holds already complete in the file (0 for a new file); holds_total : holds in the plan
+    last_step : last step number in the file; last_time_s : last sample time [s] (-1 without samples)
+    zeros : per load axis, the zero reading [mm] of its series, shape=(3,)
+    """
+
+    holds_done: int
+    holds_total: int
+    last_step: int = 0
+    last_time_s: float = -1.0
+    zeros: dict | None = None
+
+    @property
+    def complete(self) -> bool:
+        return self.holds_done >= self.holds_total
+
+    @property
+    def resuming(self) -> bool:
+        return 0 < self.holds_done < self.holds_total
+
+
+def _header(text: str) -> dict:
+    meta = {}
+    for line in text.splitlines():
+        if not line.startswith("#"):
+            break
+        m = _META.match(line)
+        if m:
+            meta[m.group(1)] = m.group(2).strip()
+    return meta
+
+
+def _check_identity(path: Path, recorded: dict, expected: dict) -> None:
+    """Refuse a resume whose plan, rate or device differs from the file's."""
+    what = {"sample_rate_Hz": "sample rate [Hz]", "device": "device port", "device_hash": "device wiring (protocol, "
+            "channels)", "plan_hash": "plan (rod, holds, hold time, settle rule)"}
+    fix = ("rodlab never mixes two recordings in one file: record into a new file beside it with --new-file, or "
+           "choose another -o; to continue this one, re-run it with the plan, rate and profile it was started with")
+    for key, label in what.items():
+        if key not in recorded:
+            raise RigError(f"this recording has no `{key}` in its header (written by another program or an older "
+                           f"rodlab), so a resume cannot be checked against it; {fix}", path=path, key=key)
+        if recorded[key] != expected[key]:
+            raise RigError(f"the recording was started with another {label}: {recorded[key]!r} in the file, "
+                           f"{expected[key]!r} now; {fix}", path=path, key=key)
+
+
+def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> ResumePoint:
+    """Where an acquisition of ``plan`` into ``path`` starts; refuses a file of another plan, rate or device."""
+    path = Path(path)
+    total = len(plan.protocol.holds())
+    if not path.exists() or path.stat().st_size == 0:
+        return ResumePoint(0, total, zeros={})
+    text = path.read_text(encoding="utf-8", errors="replace")
+    _check_identity(path, _header(text), identity_meta(profile, plan))
+    done, zeros = 0, {}
+    for line in text.splitlines():
+        m = _DONE.match(line)
+        if m:
+            done = int(m.group(1))
+        z = _ZERO.match(line)
+        if z:
+            zeros[z.group(1)] = np.array([float(v) for v in z.group(2).split(",")])
+    point = ResumePoint(done, total, zeros=zeros)
+    if any(ln.strip() and ln[0].isdigit() for ln in text.splitlines()):
+        rec = read_recording(path, text)
+        point.last_step, point.last_time_s = int(rec.step.max()), float(rec.time_s.max())
+    return point
+
+
+def next_free_name(path: str | Path) -> Path:
+    """``run.rig.csv`` -> the first of ``run-2.rig.csv``, ``run-3.rig.csv``, ... that does not exist."""
+    path = Path(path)
+    name = path.name
+    stem, ext = (name[: -len(".rig.csv")], ".rig.csv") if name.endswith(".rig.csv") else (path.stem, path.suffix)
+    k = 2
+    while (candidate := path.with_name(f"{stem}-{k}{ext}")).exists():
+        k += 1
+    return candidate

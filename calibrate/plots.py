@@ -67,7 +67,7 @@ def plot_error_distributions(errors_mm: dict, out, title: str = "") -> Path:
         for patch, label in zip(box["boxes"], calibrated):
             patch.set(facecolor=colour[label], alpha=0.35)
     axes[0].set_ylabel("validation position error [mm]")
-    axes[0].set_title("after calibration (box: quartiles, triangle: mean)", fontsize=10)
+    axes[0].set_title("after calibration (box: quartiles, line: median, triangle: mean)", fontsize=10)
     for label, e in errors_mm.items():
         e = np.sort(np.asarray(e, float))
         axes[1].step(e, np.arange(1, e.size + 1) / e.size, where="post", lw=1.4, color=colour[label],

@@ -10,9 +10,28 @@ from rodlab.enums import Phase
 from rodlab.fileio import atomic_write_bytes
 from rodlab.units import G0
 
-__all__ = ["plot_fit"]
+__all__ = ["plot_fit", "format_pm", "format_zero"]
 
 _AX = "xyz"
+
+
+def format_pm(value: float, se: float, unit: str) -> str:
+    """``219.80 +- 0.0031 um/N``: the standard error to two significant digits, the value to the same place."""
+    if not (np.isfinite(value) and np.isfinite(se)) or se <= 0:
+        return f"{value:.4g} {unit}"
+    digits = max(int(-np.floor(np.log10(se))) + 1, 0)
+    return f"{value:.{digits}f} +- {se:.{digits}f} {unit}"
+
+
+def format_zero(z_kg: float) -> str:
+    """A zero-load crossing in grams, two significant digits (``-0.042 g``, ``-6.0 g``, ``+12 g``); ``n/a`` when
+    undefined (a branch not recorded, or a cross term with no slope)."""
+    if not np.isfinite(z_kg):
+        return "n/a"
+    g = z_kg * 1e3
+    if g == 0.0:
+        return "0 g"
+    return f"{g:+.{max(1 - int(np.floor(np.log10(abs(g)))), 0)}f} g"
 
 
 def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
@@ -53,14 +72,14 @@ def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
             mm = np.linspace(0, h.mass_kg[sel].max(), 50)
             a = ln.intercept_mm[str(phase)]
             ax.plot(mm, 1e3 * (a + ln.slope_mm_per_N * mm * G0 * ln.axis.sign), "-", color=colour, lw=1,
-                    label=f"fit, {phase}: zero at {ln.zero_load_kg[str(phase)]:+.3f} kg")
+                    label=f"fit, {phase}: zero load at {format_zero(ln.zero_load_kg[str(phase)])}")
         if sim is not None:
             mm = np.linspace(0, h.mass_kg[sel].max(), 50)
             ax.plot(mm, 1e3 * sim.C_F[ln.component, ln.axis.index] * mm * G0 * ln.axis.sign, "k--", lw=1,
                     label=f"simulated ({sim.method})")
         c = f"c{ln.component + 1}{ln.axis.index + 1}"
-        ax.set_title(f"load along {ln.axis.value}_T: {c} = {ln.slope_mm_per_N * 1e3:.2f} +- "
-                     f"{ln.se_mm_per_N * 1e3:.2f} um/N", fontsize=10)
+        ax.set_title(f"load along {ln.axis.value}_T: {c} = "
+                     f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N')}", fontsize=10)
         ax.set_xlabel("load mass [kg] (hanger included)")
         ax.set_ylabel(f"ball displacement along {_AX[ln.component]}_T [um]")
         ax.grid(True, lw=0.3)

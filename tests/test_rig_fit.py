@@ -112,3 +112,13 @@ def test_writer_appends_and_cuts_a_torn_line(tmp_path):
         w.write(1.1, 2, 1, "load", "y", 0.5, (float("nan"), 1.0, 0.0), 20.0)
     rec = read_recording(p)
     assert rec.n == 4 and np.isnan(rec.disp_mm[:, 0]).all() and rec.temp_C is not None
+
+
+def test_fig8_numbers_read_at_a_glance():
+    """Standard errors keep two significant digits (not '+- 0.00'); zero crossings in grams, never '-0.000 kg'
+    or '+nan'."""
+    from rodlab.stiffness_rig.plot import format_pm, format_zero
+    assert format_pm(219.8012, 0.00312, "um/N") == "219.8012 +- 0.0031 um/N"
+    assert format_pm(6.2792, 0.028, "um/N") == "6.279 +- 0.028 um/N"
+    assert [format_zero(z) for z in (-4.2e-5, -0.006, 0.0123, 0.0, float("nan"))] == [
+        "-0.042 g", "-6.0 g", "+12 g", "0 g", "n/a"]

@@ -10,6 +10,7 @@ import numpy as np
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
 
+from .argtypes import count, nonneg_float, seed
 __all__ = ["register", "run_calibration"]
 
 log = logging.getLogger(__name__)
@@ -255,12 +256,12 @@ def register_more(sub) -> None:
     p.add_argument("--robot", default="tx90")
     p.add_argument("--rod", required=True, help="the rod's compliance file (nominal)")
     p.add_argument("--rod-true", default=None, help="the rod as it really is (default: --rod)")
-    p.add_argument("--positions", type=int, default=5)
-    p.add_argument("--orientations", type=int, default=6)
-    p.add_argument("--noise-um", type=float, default=3.0, help="device noise [um]")
+    p.add_argument("--positions", type=count, default=5)
+    p.add_argument("--orientations", type=count, default=6)
+    p.add_argument("--noise-um", type=nonneg_float, default=3.0, help="device noise [um]")
     p.add_argument("--fixture-error", action="append", default=[], metavar="J:dx,dy,dz",
                    help="a wrong recorded pose: offset [mm] added to position J")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)
 
@@ -271,9 +272,9 @@ def register_more(sub) -> None:
     p.add_argument("--robot", default="tx90")
     p.add_argument("--fixture", required=True)
     p.add_argument("--rod", required=True, help="a compliance file (tool, mass) or a *.rod.toml design")
-    p.add_argument("-k", type=int, default=6, help="orientations per position")
-    p.add_argument("--candidates", type=int, default=24)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-k", type=count, default=6, help="orientations per position")
+    p.add_argument("--candidates", type=count, default=24)
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
     p.set_defaults(func=cmd_plan)
 

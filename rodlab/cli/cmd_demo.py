@@ -5,6 +5,7 @@ import argparse
 import sys
 import time
 
+from .argtypes import seed
 __all__ = ["register"]
 
 
@@ -15,7 +16,7 @@ def register(sub) -> None:
                                    "method (Table 3) -> L1/L2 sweep (its frame joint-calibrated on the solid FEA); all files "
                                    "under the output folder.")
     p.add_argument("-o", "--output", default="out/demo", help="run folder (default out/demo)")
-    p.add_argument("--seed", type=int, default=7)
+    p.add_argument("--seed", type=seed, default=7)
     p.add_argument("--no-report", action="store_true", help="do not write report.html")
     p.set_defaults(func=cmd_demo)
     p = sub.add_parser("report", help="one self-contained HTML page of a run folder",

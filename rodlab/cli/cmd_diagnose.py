@@ -6,6 +6,7 @@ import argparse
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
 
+from .argtypes import pos_float
 __all__ = ["register"]
 
 
@@ -23,7 +24,7 @@ def register(sub) -> None:
     p.add_argument("--robot", default="tx90", help="campaign: robot name or file")
     p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
-    p.add_argument("--noise-um", type=float, default=3.0, help="campaign: device noise [um] (default 3)")
+    p.add_argument("--noise-um", type=pos_float, default=3.0, help="campaign: device noise [um] (default 3)")
     p.add_argument("--json", help="write the contract's diagnosis report")
     p.add_argument("--png", help="folder for figures")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")

@@ -10,6 +10,7 @@ from ..compliance import write_compliance
 from ..design_io import resolve_design
 from ..errors import RodlabError
 
+from .argtypes import pos_float
 __all__ = ["register"]
 
 
@@ -22,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("design", help="a *.rod.toml file, or a built-in design: rod1 .. rod6")
     p.add_argument("-o", "--output", required=True, help="output *.compliance.json")
     p.add_argument("--model", choices=["solid", "frame", "calc"], default="solid")
-    p.add_argument("--size", type=float, default=None, help="solid: element size far from the section changes "
+    p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
                    "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
                    "changes, at most 2.1 x wall in the bend)")
     p.add_argument("--no-error-estimate", action="store_true",

@@ -8,6 +8,7 @@ from pathlib import Path
 from ..design_io import resolve_design
 from ..errors import RodlabError
 
+from .argtypes import pos_float
 __all__ = ["register", "require_cad"]
 
 _DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6"
@@ -40,7 +41,7 @@ def register(sub) -> None:
                                    "ball; gmsh 4.1 format.")
     p.add_argument("design", help=_DESIGN_HELP)
     p.add_argument("-o", "--output", required=True, help="output .msh file")
-    p.add_argument("--size", type=float, default=None,
+    p.add_argument("--size", type=pos_float, default=None,
                    help="element size [mm] (default: 2 x the thinnest wall for order 2, wall/2 for order 1)")
     p.add_argument("--order", type=int, choices=[1, 2], default=2, help="element order (2: curved quadratic)")
     p.set_defaults(func=cmd_mesh)

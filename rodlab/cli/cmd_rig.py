@@ -9,6 +9,7 @@ import numpy as np
 
 from ..compliance import read_compliance, write_compliance
 
+from .argtypes import count, nonneg_float, pos_float, seed
 __all__ = ["register"]
 
 
@@ -35,11 +36,11 @@ def register(sub) -> None:
                    help="add an effect, e.g. friction:F_f_N=0.3 or creep:phi=0.03,tau_s=5 (repeatable)")
     p.add_argument("--axes", default="y,z,x", help="load axes in order (default y,z,x)")
     p.add_argument("--masses", default="0.5,1.0,1.5,2.0", help="masses [kg] (default 0.5,1.0,1.5,2.0)")
-    p.add_argument("--repeats", type=int, default=5)
-    p.add_argument("--hold-s", type=float, default=8.0)
-    p.add_argument("--rate-hz", type=float, default=10.0)
-    p.add_argument("--noise-um", type=float, default=0.6, help="per-reading noise SD [um]")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--repeats", type=count, default=5)
+    p.add_argument("--hold-s", type=pos_float, default=8.0)
+    p.add_argument("--rate-hz", type=pos_float, default=10.0)
+    p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
     p = rsub.add_parser("acquire", help="record a plan from the rig (prompts the operator or commands a loader)",
@@ -62,8 +63,8 @@ def register(sub) -> None:
     p.add_argument("--protocol", choices=["query", "stream"], default="query")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]")
     p.add_argument("--checksum", choices=["none", "xor"], default="none")
-    p.add_argument("--garbage", type=float, default=0.0, help="probability of a garbage line per answer")
-    p.add_argument("--seconds", type=float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
+    p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
+    p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     p.set_defaults(func=cmd_simulator)
     rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
 
@@ -78,11 +79,14 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, noise {fit.noise_mm * 1e3:.2f} um per reading")
-    print(f"  {'load':>5} {'comp':>4} {'slope um/N':>12} {'+-':>7} {'zero load kg (load / unload)':>30} {'sim um/N':>9}")
+    from rodlab.stiffness_rig.plot import format_pm, format_zero
+    print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
     for ln in fit.lines:
         z = ln.zero_load_kg
-        print(f"  {ln.axis.value:>5} {'xyz'[ln.component]:>4} {ln.slope_mm_per_N * 1e3:12.3f} {ln.se_mm_per_N * 1e3:7.3f} "
-              f"{z['load']:+14.4f} / {z['unload']:+8.4f} {sim.C_F[ln.component, ln.axis.index] * 1e3:12.3f}")
+        zeros = f"{format_zero(z['load'])} / {format_zero(z['unload'])}"
+        print(f"  {ln.axis.value:>5} {'xyz'[ln.component]:>4} "
+              f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
+              f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")

@@ -8,6 +8,7 @@ from pathlib import Path
 from ..design_io import resolve_design
 from ..errors import RodlabError
 
+from .argtypes import count, nonneg_float, seed
 __all__ = ["register"]
 
 _METHODS = ("none", "calc", "fea", "meas")
@@ -33,25 +34,25 @@ def register(sub) -> None:
     p.add_argument("--fixture", default=None,
                    help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
                         "{W}, 650 mm in front of the robot)")
-    p.add_argument("--replicates", type=int, default=20, help="simulated campaigns per design (default 20)")
+    p.add_argument("--replicates", type=count, default=20, help="simulated campaigns per design (default 20)")
     p.add_argument("--methods", default=",".join(_METHODS), help="compensation methods (default none,calc,fea,meas)")
-    p.add_argument("--orientations", type=int, default=6, help="rod orientations per clamping position (default 6)")
-    p.add_argument("--seed", type=int, default=0, help="first replicate's seed (the same draws for every design)")
+    p.add_argument("--orientations", type=count, default=6, help="rod orientations per clamping position (default 6)")
+    p.add_argument("--seed", type=seed, default=0, help="first replicate's seed (the same draws for every design)")
     p.add_argument("--r-prior-metal", default="1.01:1.05", metavar="LOW:HIGH",
                    help="true/simulated compliance of metal rods (paper: 1.01-1.05)")
     p.add_argument("--r-prior-composite", default="1.23:2.30", metavar="LOW:HIGH",
                    help="the same for carbon (anisotropic) tubes (paper: 1.23-2.30)")
-    p.add_argument("--shape-sigma", type=float, default=0.05,
+    p.add_argument("--shape-sigma", type=nonneg_float, default=0.05,
                    help="how far the true compliance's shape departs from the model's (default 0.05)")
-    p.add_argument("--meas-sigma", type=float, default=0.01, help="the rig measurement's relative uncertainty")
-    p.add_argument("--error-scale", type=float, default=1.0, help="robot kinematic errors (1 = ~0.5 mm, 0.05 deg)")
-    p.add_argument("--device-noise", type=float, default=0.003, help="MultiCal device noise, 1 sigma [mm]")
-    p.add_argument("--instrument-noise", type=float, default=0.02, help="validation instrument noise, 1 sigma [mm]")
+    p.add_argument("--meas-sigma", type=nonneg_float, default=0.01, help="the rig measurement's relative uncertainty")
+    p.add_argument("--error-scale", type=nonneg_float, default=1.0, help="robot kinematic errors (1 = ~0.5 mm, 0.05 deg)")
+    p.add_argument("--device-noise", type=nonneg_float, default=0.003, help="MultiCal device noise, 1 sigma [mm]")
+    p.add_argument("--instrument-noise", type=nonneg_float, default=0.02, help="validation instrument noise, 1 sigma [mm]")
     p.add_argument("--no-budget", action="store_true", help="skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",
                    help="use the frame's global calibration instead of one solid FEA run per design family")
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
-    p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
+    p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--cache", default=None, help="cache folder (default OUTPUT/cache)")
     p.add_argument("-o", "--output", required=True, help="output folder")

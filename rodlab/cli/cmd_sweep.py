@@ -9,6 +9,7 @@ from ..design_io import resolve_design
 from ..errors import RodlabError
 from ..fileio import atomic_write_bytes, atomic_write_text
 
+from .argtypes import count
 __all__ = ["register"]
 
 
@@ -22,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("--base", default="rod1", help="base design (file or built-in; default rod1)")
     p.add_argument("--model", choices=["frame", "calc", "solid"], default="frame")
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
-    p.add_argument("--workers", type=int, default=2, help="workers of the local cluster (default 2)")
+    p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--calibrate", action="store_true",
                    help="frame: calibrate its joints on one solid FEA run of the family first (the base, or the "

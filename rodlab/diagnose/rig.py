@@ -188,7 +188,7 @@ def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tupl
         rest = tuple(i for i in S if i != j)
         _, rss_r = ls.fit(rest)
         drop[j] = ((rss_r - rss) / sigma ** 2, ls.cv_error(rest))
-    order = sorted(S, key=lambda j: -drop[j][0])
+    order = _explaining_order(ls, S)
     cols = ls.columns(S)
     Gn = ls.G[np.ix_(cols, cols)] * np.outer(ls.norms[cols], ls.norms[cols])
     se_all = np.sqrt(np.clip(np.diag(sigma ** 2 * np.linalg.pinv(Gn)), 0, None))
@@ -294,3 +294,14 @@ def _report_params(term: Term, val, se) -> tuple[dict, dict]:
     if term.effect == "creep":
         params["tau_s"] = float(getattr(term, "extra_tau", np.nan))
     return params, iv
+
+
+def _explaining_order(ls, S: tuple) -> list:
+    """The selected terms in the order they explain the residual: each next term is the one that, added to
+    those before it, lowers the residual most (a term that only helps others never leads)."""
+    order, rest = [], list(S)
+    while rest:
+        j = min(rest, key=lambda i: ls.fit(tuple(sorted(order + [i])))[1])
+        order.append(j)
+        rest.remove(j)
+    return order

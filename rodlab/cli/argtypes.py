@@ -1,0 +1,53 @@
+"""argparse value types that refuse what no command can use (negative counts and seeds, NaN, inf), so the
+error names the option (``argument --seed: expected an integer >= 0, got '-1'``) before any work starts."""
+from __future__ import annotations
+
+import argparse
+import math
+
+__all__ = ["seed", "count", "nonneg_float", "pos_float"]
+
+
+def _int(text: str, low: int, what: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if v < low or v > 2**32 - 1:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return v
+
+
+def _float(text: str, positive: bool) -> float:
+    what = "a finite number > 0" if positive else "a finite number >= 0"
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+    if not math.isfinite(v) or v < 0 or (positive and v == 0):
+        raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+    return v
+
+
+def seed(text: str) -> int:
+    """A random seed: an integer 0 .. 2^32 - 1."""
+    return _int(text, 0, "an integer seed from 0 to 4294967295")
+
+
+def count(text: str) -> int:
+    """A number of things: an integer >= 1."""
+    return _int(text, 1, "a whole number >= 1")
+
+
+def nonneg_float(text: str) -> float:
+    return _float(text, False)
+
+
+def pos_float(text: str) -> float:
+    return _float(text, True)
+
+
+seed.__name__ = "seed"
+count.__name__ = "count"
+nonneg_float.__name__ = "number >= 0"
+pos_float.__name__ = "number > 0"

@@ -1,8 +1,9 @@
 """Blind cases for the campaign diagnosis: nulls, a wrong fixture pose, a rod compliance off by a factor,
-gross alignment errors (outliers), a once-per-revolution joint error, thermal growth; generated with
+gross alignment errors (outliers), a once-per-revolution joint error, thermal growth, and the pair of a wrong
+fixture pose with outliers; generated with
 ``calibrate.simulate`` (never diagnosis code).
 
-    python benchmarks/campaign_blind.py [N] [SEED]   # prints and writes docs/benchmarks/campaign_blind.md
+    python benchmarks/campaign_blind.py [N] [SEED] [pairs]   # writes docs/benchmarks/campaign_blind[_pairs].md
 """
 from __future__ import annotations
 
@@ -33,8 +34,17 @@ NOTES = [
     "whose range is small (J2, J3) is partly absorbed by its offset, so its amplitude reads low.",
     "A null campaign once drew false alarms (thermal_drift, rod_deflection, periodic_joint_error on 5 of 8",
     "nulls): the first hypothesis was credited with what the generalised-least-squares refit of the identified",
-    "parameters gains over the unweighted identification. Fixed: the baseline is that refit.", ""]
+    "parameters gains over the unweighted identification. Fixed: the baseline is that refit.",
+    "The pair (a wrong fixture pose with two outliers, `pairs`) was answered `unexplained` naming neither: each",
+    "outlier point used up one of the three model terms, the Birge ratio (13x) estimated with the gross errors in",
+    "the residuals hid the fixture pose, and leave-one-point-out cross-validation predicted the dropped outliers.",
+    "Fixed: outliers are points, not terms (up to a tenth of the points); the Birge ratio is re-estimated after",
+    "each accepted term; both models are cross-validated on the same points (outliers left out). Still hard: an",
+    "outlier inside the badly clamped position itself (answered `unexplained` at that position).",
+    "Open: one null of `28 601 pairs` is `unexplained` (reduced chi-square 1.78 over 58 dof, p = 2e-4; the same",
+    "before the pair fix): a false alarm the residual test raises on this draw, cause not yet found.", ""]
 KINDS = ["null", "fixture_pose", "rod_deflection", "outliers", "periodic_joint_error", "thermal_drift"]
+PAIRS = ["fixture_pose+outliers"]
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
 
 
@@ -53,17 +63,19 @@ def _outliers(path: Path, rng, k: int):
 def main() -> int:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 12
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 500
+    pairs = len(sys.argv) > 3 and sys.argv[3] == "pairs"
+    kinds = KINDS + PAIRS if pairs else KINDS
     rng = np.random.default_rng(seed)
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(resolve_design("rod1"))
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(n):
-            kind = KINDS[i % len(KINDS)]
+            kind = kinds[i % len(kinds)]
             out = Path(tmp) / f"c{i}"
             truth = {"kind": kind, "effect": None if kind == "null" else kind}
             fe, rod_true, pje, therm = None, None, None, 0.0
-            if kind == "fixture_pose":
+            if kind.startswith("fixture_pose"):
                 j = int(rng.choice([1, 2, 4, 5]))
                 fe = {j: list(rng.normal(0, 0.12, 3))}
                 truth["location"] = f"position:{j}"
@@ -82,7 +94,7 @@ def main() -> int:
                 truth["location"] = "time"
                 truth["ppm_per_s"] = therm
             simulate_campaign(robot, rod, out, CampaignSpec(seed=int(rng.integers(1 << 30))), rod_true, fe, pje, therm)
-            if kind == "outliers":
+            if kind.endswith("outliers"):
                 truth["points"] = _outliers(out / "multical.campaign.csv", rng, 2)
             t0 = time.perf_counter()
             diag, _ = diagnose_campaign(robot, read_campaign(out / "multical.campaign.csv"),
@@ -91,7 +103,8 @@ def main() -> int:
             results.append((truth, diag, time.perf_counter() - t0))
     s = Counter()
     lines = ["# Blind benchmark: campaign diagnosis", "",
-             f"`python benchmarks/campaign_blind.py {n} {seed}`: simulated TX90 campaigns with rod 1# (5 x 6 points, "
+             f"`python benchmarks/campaign_blind.py {n} {seed}{' pairs' if pairs else ''}`: simulated TX90 campaigns "
+             "with rod 1# (5 x 6 points, "
              f"3 um device noise, fixture poses measured to 0.01 mm / 0.002 deg), {time.strftime('%Y-%m-%d')}.", "",
              "| case | truth | verdict | findings | validation mean before -> after [mm] | s |", "|---|---|---|---|---|---|"]
     for truth, diag, dt in results:
@@ -103,18 +116,22 @@ def main() -> int:
         if kind in ("fixture_pose", "periodic_joint_error", "thermal_drift"):
             first = [f for f in found if f[0] == kind]
             ok = ok and first[0][1] == truth["location"]
+        if kind == "fixture_pose+outliers":               # a pair: both named, the fixture at its position
+            ok = ("fixture_pose", truth["location"]) in found and "outliers" in eff
         s[f"{kind}_ok"] += bool(ok)
         v = diag.extra.get("validation", {})
         vb, va = v.get("before", {}).get("mean_mm", float("nan")), v.get("after", {}).get("mean_mm", float("nan"))
         desc = {"null": "none", "fixture_pose": truth.get("location"), "rod_deflection": f"k = {truth.get('k')}",
                 "outliers": ",".join(truth.get("points", [])),
+                "fixture_pose+outliers": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
                 "periodic_joint_error": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} deg",
                 "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s"}[kind]
         fstr = "; ".join(f"{e} {loc or ''}".strip() for e, loc in found) or "-"
         lines.append(f"| {kind} | {desc} | {diag.verdict} | {fstr} | {vb:.3f} -> {va:.3f} | {dt:.1f} |")
-    lines += ["", "Correct (null: consistent; effect: named first, fixture at the right position): "
-              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in KINDS if s[k]), ""] + NOTES
-    atomic_write_text(OUT, "\n".join(lines))
+    lines += ["", "Correct (null: consistent; effect: named first, fixture at the right position; the pair: both "
+              "named): "
+              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in kinds if s[k]), ""] + NOTES
+    atomic_write_text(OUT.with_name("campaign_blind_pairs.md") if pairs else OUT, "\n".join(lines))
     print("\n".join(lines))
     return 0
 

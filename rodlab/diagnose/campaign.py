@@ -60,6 +60,15 @@ class CampaignFits:
             raise ValueError(f"kept and position must have shape ({n},), got {self.kept.shape}, {self.position.shape}")
 
 
+def _birge_drop(e: np.ndarray, n: int, k: int, birge: float) -> float:
+    """Factor (>= 1) by which the Birge ratio falls once accepted terms are fitted: ``e`` are the whitened
+    residuals of the current model (k parameters), robust per-point reduced chi-square as at the start."""
+    per_point = (e.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - k, 1)
+    chi_red = float(np.median(per_point)) / float(chi2_median(3))
+    new = max(birge * float(np.sqrt(chi_red)), 1.0)
+    return max(birge / new, 1.0)
+
+
 def _rms(L, fit, cols) -> float:
     """rms per reading [mm] of the (unwhitened) residuals of the model with ``cols``."""
     e = L @ fit(cols)[2]
@@ -192,10 +201,13 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         e = r - A @ coef
         return coef, float(e @ e), e
 
-    def cv_error(cols):
-        """Leave-one-point-out prediction error (a position-specific term is still estimable)."""
+    def cv_error(cols, skip=()):
+        """Leave-one-point-out prediction error (a position-specific term is still estimable); points in
+        ``skip`` (dropped as outliers: their own columns absorb them) are not predicted."""
         total = 0.0
         for i in range(N):
+            if i in skip:
+                continue
             test = np.zeros(3 * N, dtype=bool)
             test[3 * i:3 * i + 3] = True
             A = np.column_stack([J] + cols) if cols else J
@@ -208,7 +220,22 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     # itself is unweighted): what that refit gains must not be credited to the first hypothesis
     rss = fit(cols_now)[1]
     cv_now = cv_error(cols_now)
-    for _ in range(max_terms):
+    # isolated outliers are points, not physics: they do not use up the terms (up to a tenth of the points)
+    max_outliers = max(2, N // 10)
+    while sum(e != "outliers" for e, _ in chosen) < max_terms:
+        if cols_now:
+            # the inflated scatter is re-estimated without what the accepted terms explain: a gross error
+            # (outliers, a wrong fixture pose) spreads through the identification into every residual and
+            # must not hide a second one behind a large Birge ratio
+            f = _birge_drop(fit(cols_now)[2], n, J.shape[1] + sum(c.shape[1] for c in cols_now), birge)
+            if f > 1.0:
+                birge /= f
+                L = L / f
+                r, J = r * f, J * f
+                hyps = [(e, l, nm, H * f, x) for (e, l, nm, H, x) in hyps]
+                cols_now = [c * f for c in cols_now]
+                rss, cv_now = rss * f * f, cv_now * f * f
+                log.debug("campaign diagnosis: Birge ratio re-estimated to %.2f", birge)
         cand = []
         for (eff, loc, names, H, expl) in hyps:
             if any(c[0] == eff and c[1] == loc for c in chosen):
@@ -220,7 +247,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         _, _, e_now = fit(cols_now)
         norms = np.linalg.norm((L @ e_now).reshape(N, 3), axis=1)
         order = [int(i) for i in np.argsort(-norms) if int(i) not in used_points]
-        if order:
+        if order and len(used_points) < max_outliers:
             i = order[0]
             H = np.zeros((N, 3, 3))
             H[i] = np.eye(3)
@@ -234,10 +261,16 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
             break
         cand.sort(key=lambda c: c[0])
         dbic, lr, eff, loc, names, H, expl, coef, rss2 = cand[0]
+        log.debug("campaign diagnosis: best %s %s dBIC %.1f; next %s", eff, loc, dbic,
+                  [(c[2], c[3], round(float(c[0]), 1)) for c in cand[1:4]])
         p = float(chi2_sf(max(lr, 0.0), H.shape[1]))
         if dbic > -DBIC_MIN or p > P_MAX:
             break
-        cv2 = cv_error(cols_now + [H]) if eff != "outliers" else cv_now * (rss2 / max(rss, 1e-300))
+        if eff == "outliers":
+            cv2 = cv_now * (rss2 / max(rss, 1e-300))
+        else:                             # both models predicted on the same points (outliers left out)
+            cv_now = cv_error(cols_now, used_points) if used_points else cv_now
+            cv2 = cv_error(cols_now + [H], used_points)
         if not cv2 < cv_now:
             break
         A = np.column_stack([J] + cols_now + [H])

@@ -2,22 +2,17 @@
 (the paper's Fig. 10 / 11)."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_bytes
+from rodlab.fileio import atomic_write_figure
 
 __all__ = ["plot_residuals", "plot_error_distributions"]
 
 
 def _save(fig, path) -> Path:
-    import matplotlib.pyplot as plt
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=120)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig)
 
 
 def plot_residuals(res, camp, out_dir) -> Path:

@@ -1,12 +1,11 @@
 """Heat maps with contours of a sweep (c_rod and mass over L1 x L2), the paper's rods marked."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_bytes
+from rodlab.fileio import atomic_write_figure
 
 __all__ = ["plot_sweep", "PAPER_RODS"]
 
@@ -44,7 +43,4 @@ def plot_sweep(df, path: str | Path, title: str = "") -> Path:
         ax.set_title(label, fontsize=10)
     n_bad = int((df["status"] != "ok").sum())
     fig.suptitle(title + (f" — {n_bad} invalid designs shown grey" if n_bad else ""), fontsize=11)
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=120)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig)

@@ -42,6 +42,18 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     return p
 
 
+def atomic_write_figure(path: str | Path, fig, dpi: int = 120, **savefig_kw) -> Path:
+    """Render a matplotlib figure to PNG in memory, close it, and write the file atomically (never a partial
+    image)."""
+    import io
+
+    import matplotlib.pyplot as plt
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=dpi, **savefig_kw)
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())
+
+
 def atomic_write_text(path: str | Path, text: str) -> Path:
     """Atomic UTF-8 text write (see :func:`atomic_write_bytes`)."""
     return atomic_write_bytes(path, text.encode("utf-8"))

@@ -211,19 +211,15 @@ def _study(out: Path, robot, design, calibration) -> dict:
 
 
 def _fig10(errors: dict, path: Path) -> Path:
-    import io
 
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from .fileio import atomic_write_bytes
+    from .fileio import atomic_write_figure
     fig, ax = plt.subplots(figsize=(8, 4.4), constrained_layout=True)
     ax.boxplot(list(errors.values()), tick_labels=list(errors), showmeans=True)
     ax.set_ylabel("validation position error [mm]")
     ax.set_title("MultiCal calibration of a simulated TX90 with rod 1#: error per compensation method "
                  "(the paper's Fig. 10)", fontsize=9)
     ax.grid(True, lw=0.3)
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=120)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig)

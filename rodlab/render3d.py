@@ -5,13 +5,12 @@ a legend. Used for the CAD views and the FEA deformed shapes, on headless machin
 """
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .fileio import atomic_write_bytes
+from .fileio import atomic_write_figure
 
 __all__ = ["TriangleSet", "VIEWS", "render_png"]
 
@@ -98,7 +97,4 @@ def render_png(sets: list[TriangleSet], path: str | Path, view: str = "iso", tit
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.8)
     if note:
         ax.text(0.0, -0.13 if labels else 0.0, note, transform=ax.transAxes, fontsize=8, va="top")
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig, dpi, bbox_inches="tight")

@@ -1,13 +1,12 @@
 """The paper's Fig. 8 for a recording: load-deflection per load axis, measured vs fitted vs simulated."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
 from rodlab.enums import Phase
-from rodlab.fileio import atomic_write_bytes
+from rodlab.fileio import atomic_write_figure
 from rodlab.units import G0
 
 __all__ = ["plot_fit", "format_pm", "format_zero"]
@@ -87,7 +86,4 @@ def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
     if fit.r_rod is not None:
         title = f"{title}  r_rod = {fit.r_rod:.4f} (Eq. 21)".strip()
     fig.suptitle(title, fontsize=11)
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=120)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig)

@@ -25,7 +25,7 @@ from rodlab.fileio import read_text_checked
 
 from .errors import RigError
 
-__all__ = ["RigRecording", "read_recording", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
+__all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
            "format_row"]
 
 FORMAT_RIG = "rodlab.rig/1"
@@ -104,12 +104,8 @@ def _int(cell: str, path, line: int, col: str) -> int:
     return int(v)
 
 
-def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
-    """Read a ``*.rig.csv``; every malformed cell or rule names its line and column."""
-    p = Path(path)
-    if text is None:
-        text = read_text_checked(p, RigError)
-    lines = text.splitlines()
+def _header(lines: list[str]) -> tuple[dict[str, str], int]:
+    """The ``# key: value`` lines before the CSV header, and the index of the first other line."""
     meta: dict[str, str] = {}
     i = 0
     while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
@@ -118,6 +114,21 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
             k, v = body.split(":", 1)
             meta[k.strip()] = v.strip()
         i += 1
+    return meta, i
+
+
+def read_header(text: str) -> dict[str, str]:
+    """The ``# key: value`` header of a recording's text (``rod``, ``format``, ``plan_hash``, ...)."""
+    return _header(text.splitlines())[0]
+
+
+def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
+    """Read a ``*.rig.csv``; every malformed cell or rule names its line and column."""
+    p = Path(path)
+    if text is None:
+        text = read_text_checked(p, RigError)
+    lines = text.splitlines()
+    meta, i = _header(lines)
     if meta.get("format") != FORMAT_RIG:
         raise RigError(f"expected a comment line '# format: {FORMAT_RIG}' before the header, got "
                        f"{meta.get('format')!r}", path=p, line=1, key="format")

@@ -18,13 +18,12 @@ import numpy as np
 
 from .config import RigPlan, RigProfile
 from .errors import RigError
-from .recording import read_recording
+from .recording import read_header, read_recording
 
 __all__ = ["ResumePoint", "plan_hash", "device_hash", "identity_meta", "resume_point", "next_free_name"]
 
 _DONE = re.compile(r"^# hold (\d+)/(\d+) complete: step (\d+)")
 _ZERO = re.compile(r"^# zero (\S+): (.+)$")
-_META = re.compile(r"^#\s*([A-Za-z_][\w]*)\s*:\s*(.*)$")
 
 
 def _digest(obj) -> str:
@@ -79,17 +78,6 @@ class ResumePoint:
         return 0 < self.holds_done < self.holds_total
 
 
-def _header(text: str) -> dict:
-    meta = {}
-    for line in text.splitlines():
-        if not line.startswith("#"):
-            break
-        m = _META.match(line)
-        if m:
-            meta[m.group(1)] = m.group(2).strip()
-    return meta
-
-
 def _check_identity(path: Path, recorded: dict, expected: dict) -> None:
     """Refuse a resume whose plan, rate or device differs from the file's."""
     what = {"sample_rate_Hz": "sample rate [Hz]", "device": "device port", "device_hash": "device wiring (protocol, "
@@ -112,7 +100,7 @@ def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> Resume
     if not path.exists() or path.stat().st_size == 0:
         return ResumePoint(0, total, zeros={})
     text = path.read_text(encoding="utf-8", errors="replace")
-    _check_identity(path, _header(text), identity_meta(profile, plan))
+    _check_identity(path, read_header(text), identity_meta(profile, plan))
     done, zeros = 0, {}
     for line in text.splitlines():
         m = _DONE.match(line)

@@ -152,15 +152,20 @@ def _argv(draw, command: str, out_dir: Path):
     return argv
 
 
-def _run(argv: list[str]) -> tuple[int, str, bool]:
-    """(exit code, stderr, whether argparse refused the arguments)."""
+def _run(argv: list[str], cwd: Path) -> tuple[int, str, bool]:
+    """(exit code, stderr, whether argparse refused the arguments), run in ``cwd`` (where default outputs go)."""
     from rodlab.cli import main
     err, out = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
-        try:
-            return main(argv), err.getvalue(), False
-        except SystemExit as e:                         # argparse: usage line + "error: argument ..."
-            return int(e.code or 0), err.getvalue(), True
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+            try:
+                return main(argv), err.getvalue(), False
+            except SystemExit as e:                     # argparse: usage line + "error: argument ..."
+                return int(e.code or 0), err.getvalue(), True
+    finally:
+        os.chdir(here)
 
 
 def _names_the_place(message: str, argv: list[str], command: str) -> bool:
@@ -185,7 +190,7 @@ def test_cli_fuzz(command, tmp_path_factory):
         (out_dir / "blocker").write_text("a regular file where a folder is expected\n")
         before = {p for p in out_dir.rglob("*")}
         argv = data.draw(_argv(command, out_dir))
-        code, err, by_argparse = _run(argv)
+        code, err, by_argparse = _run(argv, out_dir)
         counts["argparse" if by_argparse else str(code)] += 1
         assert "Traceback" not in err, (argv, err)
         assert code in (0, 1, 2, 3), (argv, code, err)

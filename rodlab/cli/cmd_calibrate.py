@@ -4,14 +4,15 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
-
 from .argtypes import count, nonneg_float, seed
-__all__ = ["register", "run_calibration"]
+
+__all__ = ["register", "run_calibration", "CalibrationRun"]
 
 log = logging.getLogger(__name__)
 
@@ -74,26 +75,57 @@ def _parse_pins(items) -> dict:
     return out
 
 
-def run_calibration(args, rod: RodCompliance, compensation):
+@dataclass
+class CalibrationRun:
+    """One campaign identified and, with ``--validate``, checked on the validation points.
+
+    Attributes
+    ----------
+    robot, campaign : what was read; result : the :class:`~rodlab.calibrate.CalibrationResult`
+    nominal_mm, calibrated_mm : shape=(M,) position error [mm] of each validation point with the nominal and
+        the identified model, or ``None`` without validation points
+    """
+
+    robot: object
+    campaign: object
+    result: object
+    nominal_mm: np.ndarray | None = None
+    calibrated_mm: np.ndarray | None = None
+
+    @property
+    def before(self):
+        """:class:`~rodlab.calibrate.validate.ErrorStats` of the nominal model (or ``None``)."""
+        return None if self.nominal_mm is None else _stats(self.nominal_mm)
+
+    @property
+    def after(self):
+        """... of the identified model (or ``None``)."""
+        return None if self.calibrated_mm is None else _stats(self.calibrated_mm)
+
+
+def _stats(errors_mm):
+    from rodlab.calibrate.validate import error_stats
+    return error_stats(errors_mm)
+
+
+def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
-    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`); returns (robot, campaign,
-    result, before, after)."""
+    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`)."""
     from rodlab.calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
     from rodlab.calibrate import resolve_robot, validate
     robot = resolve_robot(args.robot)
     camp = read_campaign(args.campaign, robot.n)
     fix = read_fixture(args.fixture)
-    base_rod = rod
-    obs = campaign_observations(camp, fix, base_rod)
-    res = identify(robot, obs, base_rod.tool_mm, compensation.rod if compensation.active else None,
+    obs = campaign_observations(camp, fix, rod)
+    res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable)
-    before = after = None
+    run = CalibrationRun(robot, camp, res)
     if args.validate:
         pts = read_points(args.validate, robot.n)
-        before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
-        after = validate(robot, res.params, pts)[0]
-    return robot, camp, res, before, after
+        run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
+        run.calibrated_mm = validate(robot, res.params, pts)[1]
+    return run
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
@@ -106,7 +138,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     rod = read_compliance(args.rod)
     comp = Compensation.of(None if args.compensation == "none" else rod)
     label = comp.label
-    robot, camp, res, before, after = run_calibration(args, rod, comp)
+    run = run_calibration(args, rod, comp)
+    robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
     if args.json:
         print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
@@ -114,7 +147,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
         print(f"wrote {plot_residuals(res, camp, args.png)}")
         if args.validate:
-            errors = _validation_errors(args, [(f"calibrated ({label})", res.params)])
+            errors = {"nominal": run.nominal_mm, f"calibrated ({label})": run.calibrated_mm}
             print(f"wrote {plot_error_distributions(errors, args.png)}")
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
@@ -221,31 +254,19 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if not args.validate:
         raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
                           "campaign's *.validation.csv")
-    rows = []
-    for name, rod, comp in _compare_runs(args.rod):
-        _, camp, res, before, after = run_calibration(args, rod, comp)
-        rows.append((name, res, before, after))
+    runs = [(name, run_calibration(args, rod, comp)) for name, rod, comp in _compare_runs(args.rod)]
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
-    before = rows[0][2]
+    before = runs[0][1].before
     print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
-    for name, res, _, after in rows:
+    for name, run in runs:
+        after = run.after
         print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
-              f"{res.rms_mm * 1e3:11.2f}")
+              f"{run.result.rms_mm * 1e3:11.2f}")
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions
-        errors = _validation_errors(args, [(name, res.params) for name, res, _, _ in rows])
+        errors = {"nominal": runs[0][1].nominal_mm} | {name: run.calibrated_mm for name, run in runs}
         print(f"wrote {plot_error_distributions(errors, args.png, 'validation errors per compensation method')}")
     return 0
-
-
-def _validation_errors(args, runs) -> dict:
-    """{"nominal": errors, label: errors, ...} [mm] at the points of ``--validate``."""
-    from rodlab.calibrate import ModelParams, read_points, resolve_robot, validate
-    robot = resolve_robot(args.robot)
-    pts = read_points(args.validate, robot.n)
-    out = {"nominal": validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]}
-    out.update({label: validate(robot, params, pts)[1] for label, params in runs})
-    return out
 
 
 def register_more(sub) -> None:

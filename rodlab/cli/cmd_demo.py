@@ -6,6 +6,7 @@ import sys
 import time
 
 from .argtypes import seed
+
 __all__ = ["register"]
 
 

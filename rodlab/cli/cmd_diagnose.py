@@ -5,8 +5,8 @@ import argparse
 
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
-
 from .argtypes import pos_float
+
 __all__ = ["register"]
 
 

@@ -9,8 +9,8 @@ import numpy as np
 from ..compliance import write_compliance
 from ..design_io import resolve_design
 from ..errors import RodlabError
-
 from .argtypes import pos_float
+
 __all__ = ["register"]
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from ..design_io import resolve_design
 from ..errors import RodlabError
-
 from .argtypes import pos_float
+
 __all__ = ["register", "require_cad"]
 
 _DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6"

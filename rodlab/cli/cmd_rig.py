@@ -8,8 +8,8 @@ import os
 import numpy as np
 
 from ..compliance import read_compliance, write_compliance
-
 from .argtypes import count, nonneg_float, pos_float, seed
+
 __all__ = ["register"]
 
 
@@ -189,6 +189,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 
 
 def cmd_simulator(args: argparse.Namespace) -> int:
+    import signal
     import time
     from pathlib import Path
 
@@ -198,8 +199,6 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     model = RigModel(sim.C_F, parse_effects(args.effect))
     dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                        faults=Faults(garbage=args.garbage))
-    import signal
-
     def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
         raise KeyboardInterrupt
     for sig in (signal.SIGTERM, signal.SIGHUP):

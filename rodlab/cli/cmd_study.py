@@ -7,8 +7,8 @@ from pathlib import Path
 
 from ..design_io import resolve_design
 from ..errors import RodlabError
-
 from .argtypes import count, nonneg_float, seed
+
 __all__ = ["register"]
 
 _METHODS = ("none", "calc", "fea", "meas")

@@ -8,8 +8,8 @@ from pathlib import Path
 from ..design_io import resolve_design
 from ..errors import RodlabError
 from ..fileio import atomic_write_bytes, atomic_write_text
-
 from .argtypes import count
+
 __all__ = ["register"]
 
 

@@ -91,8 +91,6 @@ def _check_outputs(args: argparse.Namespace) -> None:
     """Before any work: two outputs must not share a path, and no part of an output's folder may be a file
     (else the first output would be written and the second fail, leaving a partial result)."""
     from pathlib import Path
-
-    from ..errors import RodlabError
     seen: dict[Path, str] = {}
     for dest in _OUTPUT_DESTS:
         value = getattr(args, dest, None)

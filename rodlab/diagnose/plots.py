@@ -1,12 +1,11 @@
 """Diagnosis figures: residuals before / after by load and branch, against time, measured vs predicted."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..fileio import atomic_write_bytes
+from ..fileio import atomic_write_figure
 
 __all__ = ["plot_rig_diagnosis", "plot_campaign_diagnosis"]
 
@@ -47,10 +46,7 @@ def plot_rig_diagnosis(model: dict, out_dir, title: str = "") -> list[Path]:
     ax.set_title("measured vs predicted", fontsize=10)
     ax.grid(True, lw=0.3)
     fig.suptitle(title, fontsize=11)
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=110)
-    plt.close(fig)
-    return [atomic_write_bytes(Path(out_dir) / "diagnosis_rig.png", buf.getvalue())]
+    return [atomic_write_figure(Path(out_dir) / "diagnosis_rig.png", fig, 110)]
 
 
 def plot_campaign_diagnosis(diag, fits, out_dir, noise_mm: float) -> list[Path]:
@@ -87,10 +83,7 @@ def plot_campaign_diagnosis(diag, fits, out_dir, noise_mm: float) -> list[Path]:
     fig.suptitle(f"campaign diagnosis: {diag.verdict}; found {names}", fontsize=10)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(True, lw=0.3, which="both")
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=110)
-    plt.close(fig)
-    out = [atomic_write_bytes(Path(out_dir) / "diagnosis_campaign.png", buf.getvalue())]
+    out = [atomic_write_figure(Path(out_dir) / "diagnosis_campaign.png", fig, 110)]
     if fits.validation_errors_mm is not None:
         from rodlab.calibrate.plots import plot_error_distributions
         e = fits.validation_errors_mm

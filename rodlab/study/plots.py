@@ -2,12 +2,11 @@
 heat maps of the predicted mean error per method."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_bytes
+from rodlab.fileio import atomic_write_figure
 
 __all__ = ["plot_pareto", "plot_heatmaps", "pareto_mask"]
 
@@ -25,11 +24,7 @@ def pareto_mask(cost: np.ndarray, error: np.ndarray) -> np.ndarray:
 
 
 def _save(fig, path) -> Path:
-    import matplotlib.pyplot as plt
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=120)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return atomic_write_figure(path, fig)
 
 
 def _pareto_panel(ax, rows, xcol, xlabel, xscale, method, more_is_better=False):

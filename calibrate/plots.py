@@ -40,6 +40,10 @@ def plot_residuals(res, camp, out_dir) -> Path:
     return _save(fig, Path(out_dir) / "residuals.png")
 
 
+#: dash patterns of successive cumulative curves
+_DASHES = ("--", "-", (0, (5, 2)), (0, (1, 1.2)), (0, (4, 1.5, 1, 1.5)), (0, (8, 2)))
+
+
 def plot_error_distributions(errors_mm: dict, out, title: str = "") -> Path:
     """Validation position errors per model (the paper's Fig. 10 / 11): box plots of the calibrated models
     and the cumulative distribution of every model, nominal included (log scale: the nominal model's errors
@@ -63,10 +67,12 @@ def plot_error_distributions(errors_mm: dict, out, title: str = "") -> Path:
             patch.set(facecolor=colour[label], alpha=0.35)
     axes[0].set_ylabel("validation position error [mm]")
     axes[0].set_title("after calibration (box: quartiles, line: median, triangle: mean)", fontsize=10)
-    for label, e in errors_mm.items():
+    for i, (label, e) in enumerate(errors_mm.items()):
         e = np.sort(np.asarray(e, float))
-        axes[1].step(e, np.arange(1, e.size + 1) / e.size, where="post", lw=1.4, color=colour[label],
-                     ls="--" if label == "nominal" else "-",
+        # curves that coincide (e.g. Calc and Meas on a stiff rod) stay visible: each later one is thinner and
+        # drawn on top of the earlier ones, with its own dash pattern
+        axes[1].step(e, np.arange(1, e.size + 1) / e.size, where="post", lw=max(3.2 - 0.55 * i, 0.9),
+                     color=colour[label], ls=_DASHES[i % len(_DASHES)], zorder=2 + i,
                      label=f"{label}: mean {e.mean():.3f}, max {e.max():.3f} mm")
     axes[1].set_xscale("log")
     axes[1].set_xlabel("validation position error [mm]")

@@ -1,4 +1,8 @@
-"""Heat maps with contours of a sweep (c_rod and mass over L1 x L2), the paper's rods marked."""
+"""Heat maps with contours of a sweep (c_rod and mass over L1 x L2), chosen designs marked.
+
+The axes span the swept grid only (half a step beyond its outer designs); a marked design outside the grid is
+left out rather than stretching the axes to it.
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -13,10 +17,15 @@ __all__ = ["plot_sweep", "PAPER_RODS"]
 PAPER_RODS = {"1#/4#": (300.0, 450.0), "2#/5#": (150.0, 525.0), "3#/6#": (375.0, 600.0)}
 
 
-def plot_sweep(df, path: str | Path, title: str = "") -> Path:
-    """Two panels: c_rod [um] and mass [g] over L1 x L2; invalid designs hatched grey."""
+def plot_sweep(df, path: str | Path, title: str = "", marks: dict | None = None) -> Path:
+    """Two panels: c_rod [um] and mass [g] over L1 x L2; invalid designs grey.
+
+    ``marks``: {label: (L1_mm, L2_mm)} of designs to mark with a star (e.g. the base design, or the paper's
+    rods when their family is swept); those outside the grid are not drawn.
+    """
     import matplotlib
     matplotlib.use("Agg")
+    import matplotlib.patheffects as pe
     import matplotlib.pyplot as plt
 
     L1 = np.unique(df["L1_mm"].to_numpy(float))
@@ -35,12 +44,25 @@ def plot_sweep(df, path: str | Path, title: str = "") -> Path:
             if L1.size > 2 and L2.size > 2 and np.isfinite(Z).sum() > 4:
                 cs = ax.contour(L1, L2, Z, levels=8, colors="white", linewidths=0.6)
                 ax.clabel(cs, fontsize=7, fmt="%.0f")
-        for name, (a, b) in PAPER_RODS.items():
-            ax.plot(a, b, "r*", ms=11, mec="k")
-            ax.annotate(f"paper {name}", (a, b), xytext=(5, 5), textcoords="offset points", fontsize=8, color="r")
+        xlim, ylim = _extent(L1), _extent(L2)
+        for name, (a, b) in (marks or {}).items():
+            if xlim[0] <= a <= xlim[1] and ylim[0] <= b <= ylim[1]:
+                ax.plot(a, b, "*", ms=13, color="white", mec="k", zorder=5)
+                ax.annotate(name, (a, b), xytext=(6, 6), textcoords="offset points", fontsize=8, color="k",
+                            zorder=6, path_effects=[pe.withStroke(linewidth=2.5, foreground="white")])
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*ylim)
         ax.set_xlabel("L1 [mm] (flange to bend vertex)")
         ax.set_ylabel("L2 [mm] (bend vertex to ball centre)")
         ax.set_title(label, fontsize=10)
     n_bad = int((df["status"] != "ok").sum())
     fig.suptitle(title + (f" — {n_bad} invalid designs shown grey" if n_bad else ""), fontsize=11)
     return atomic_write_figure(path, fig)
+
+
+def _extent(v: np.ndarray) -> tuple[float, float]:
+    """The grid's span plus half a step each side (one value: +-5 %)."""
+    if v.size == 1:
+        return float(v[0]) * 0.95, float(v[0]) * 1.05
+    half = float(np.min(np.diff(v))) / 2
+    return float(v[0]) - half, float(v[-1]) + half

@@ -78,7 +78,8 @@ class RodCad:
         for p, name in zip(self.solids, parts):
             parts[name]["material"] = self.design.material_of(p).name
             parts[name]["volume_mm3"] = float(self.solids[p].volume)
-        return {"rod": self.design.name, "frame": "T (origin at the ball centre, axes of the flange frame {6})",
+        return {"format": "rodlab.mass/1", "rod": self.design.name,
+                "frame": "T (origin at the ball centre, axes of the flange frame {6})",
                 "parts": parts, "total": self.total_mass_properties().to_dict()}
 
     def write_mass_json(self, path: str | Path) -> Path:

@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 
 from .compliance import RodCompliance, write_compliance
-from .fileio import atomic_write_json, json_safe
+from .fileio import atomic_write_json, atomic_write_text, json_safe
 
 __all__ = ["run_demo", "STAGES"]
 
@@ -124,7 +124,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         diag.write(out / "diagnosis.rig.json")
         corrected = corrected_compliance(fea, diag, model)
         write_compliance(corrected, out / "rod1.corrected.compliance.json")
-        plot_rig_diagnosis(model, out / "rig", title=f"rod 1#: {diag.verdict}")
+        plot_rig_diagnosis(model, out / "rig", diag, "1#")
         summary["files"]["diagnosis"] = "rig/diagnosis_rig.png"
         summary["stages"]["diagnose"] = json.loads(json.dumps(diag.to_dict()))
         summary["stages"]["diagnose"]["corrected_vs_true_max_rel"] = float(
@@ -144,20 +144,23 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         camp = read_campaign(out / "campaign" / "multical.campaign.csv")
         fix = read_fixture(out / "campaign" / "multical.fixture.json")
         pts = read_points(out / "campaign" / "multical.validation.csv")
-        table = {"nominal": validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0].to_dict()}
-        errors = {}
+        nominal_stats, nominal_err, _ = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)
+        table = {"nominal": nominal_stats.to_dict()}
+        errors = {"nominal": nominal_err.tolist()}
         for label, rod in (("None", RodCompliance.none_like(fea)), ("Calc", calc), ("FEA", fea), ("Meas", meas),
                            ("Corrected", corrected)):
             res = identify(robot, campaign_observations(camp, fix, rod), fea.tool_mm, None if label == "None" else rod)
             st, err, _ = validate(robot, res.params, pts)
             table[label] = dict(st.to_dict(), fit_rms_um=res.rms_mm * 1e3)
             errors[label] = err.tolist()
-        _fig10(errors, out / "calibration" / "fig10.png")
+        from rodlab.calibrate.plots import plot_error_distributions
+        plot_error_distributions(errors, out / "calibration" / "fig10.png", "MultiCal calibration of a simulated "
+                                 "TX90 with rod 1#: validation error per compensation method (the paper's Fig. 10)")
         summary["files"]["fig10"] = "calibration/fig10.png"
         summary["stages"]["calibrate"] = {"table3": table}
     with stage("sweep"):
         from rodlab.fea.sweep import run_sweep
-        from rodlab.fea.sweep_plot import plot_sweep
+        from rodlab.fea.sweep_plot import PAPER_RODS, plot_sweep
         calibration, title = None, "frame model around rod 1#"
         if summary["stages"]["fea"]["model"] == "solid":   # that solid run calibrates the frame's joints
             from rodlab.fea.joints import calibrate_joints
@@ -166,8 +169,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,
                        cache_dir=out / "sweep" / "cache", calibration=calibration)
         (out / "sweep").mkdir(parents=True, exist_ok=True)
-        df.to_csv(out / "sweep" / "sweep.csv", index=False)
-        plot_sweep(df, out / "sweep" / "sweep.png", title=title)
+        atomic_write_text(out / "sweep" / "sweep.csv", df.to_csv(index=False))
+        plot_sweep(df, out / "sweep" / "sweep.png", title=title, marks={f"paper {k}": v for k, v in PAPER_RODS.items()})
         ok = df[df["status"] == "ok"]
         best = ok.loc[ok["c_rod_um"].idxmin()]
         summary["files"]["sweep"] = "sweep/sweep.png"
@@ -208,18 +211,3 @@ def _study(out: Path, robot, design, calibration) -> dict:
     rows = res.table[res.table["method"].notna()][cols]
     return {"designs": [c.label for c in cands], "replicates": spec.replicates, "compliance": note,
             "recommendation": res.recommendation.text, "rows": rows.to_dict(orient="records")}
-
-
-def _fig10(errors: dict, path: Path) -> Path:
-
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from .fileio import atomic_write_figure
-    fig, ax = plt.subplots(figsize=(8, 4.4), constrained_layout=True)
-    ax.boxplot(list(errors.values()), tick_labels=list(errors), showmeans=True)
-    ax.set_ylabel("validation position error [mm]")
-    ax.set_title("MultiCal calibration of a simulated TX90 with rod 1#: error per compensation method "
-                 "(the paper's Fig. 10)", fontsize=9)
-    ax.grid(True, lw=0.3)
-    return atomic_write_figure(path, fig)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,6 +12,7 @@ import numpy as np
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
 from .argtypes import count, nonneg_float, seed
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register", "run_calibration", "CalibrationRun"]
 
@@ -25,6 +27,7 @@ def _common(p) -> None:
     p.add_argument("--free", action="append", default=[], metavar="NAME",
                    help="free a parameter the defaults hold, e.g. fixture_2_x (repeatable)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss (gross alignment errors lose weight)")
+    add_report_option(p)
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these points cannot identify at nominal (and report them) instead of "
                         "refusing the data set; for instrument data not planned for this model")
@@ -57,6 +60,7 @@ def register(sub) -> None:
     p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
                    help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")
     p.add_argument("--png", default=None, help="error distributions per method (the paper's Fig. 10)")
+    p.add_argument("--json", default=None, help="write the table (format rodlab.comparison/1, docs/formats.md)")
     _common(p)
     p.set_defaults(func=cmd_compare)
     register_more(sub)
@@ -129,7 +133,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    from rodlab.calibrate import result_dict, write_result
+    from rodlab.calibrate import result_dict
     if args.points:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
@@ -141,14 +145,16 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     run = run_calibration(args, rod, comp)
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
-    if args.json:
-        print(f"wrote {write_result(args.json, result_dict(robot, res, label, before, after))}")
+    written = _write_result(args, result_dict(robot, res, label, before, after))
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
-        print(f"wrote {plot_residuals(res, camp, args.png)}")
+        written.append(plot_residuals(res, camp, args.png))
+        print(f"wrote {written[-1]}")
         if args.validate:
             errors = {"nominal": run.nominal_mm, f"calibrated ({label})": run.calibrated_mm}
-            print(f"wrote {plot_error_distributions(errors, args.png)}")
+            written.append(plot_error_distributions(errors, args.png))
+            print(f"wrote {written[-1]}")
+    write_command_report(args, written, _report_folder(args))
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
         print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
@@ -158,6 +164,24 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             _print_suspects(robot, camp, args, rod, comp)
         return 3
     return 0
+
+
+def _write_result(args, result: dict) -> list:
+    """The result file when ``--json`` is given, else the result in memory (for ``--report``)."""
+    from rodlab.calibrate import write_result
+    if args.json:
+        path = write_result(args.json, result)
+        print(f"wrote {path}")
+        return [path]
+    from ..report import Source
+    return [Source(result["format"], result)]
+
+
+def _report_folder(args) -> Path:
+    """Where ``--report`` goes by default: beside the JSON, else in the figure folder, else here."""
+    if getattr(args, "json", None):
+        return Path(args.json).parent
+    return Path(args.png) if getattr(args, "png", None) else Path(".")
 
 
 def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
@@ -208,7 +232,6 @@ def _print_result(res, before, after, label) -> None:
 
 def _calibrate_points(args) -> int:
     from rodlab.calibrate import Observations, ModelParams, identify, read_points, resolve_robot, result_dict, validate
-    from rodlab.calibrate import write_result
     robot = resolve_robot(args.robot)
     pts = read_points(args.points, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
@@ -222,8 +245,8 @@ def _calibrate_points(args) -> int:
         before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]
         after = validate(robot, res.params, test)[0]
     _print_result(res, before, after, "instrument points")
-    if args.json:
-        print(f"wrote {write_result(args.json, result_dict(robot, res, 'none', before, after))}")
+    write_command_report(args, _write_result(args, result_dict(robot, res, "none", before, after)),
+                         _report_folder(args))
     return 0 if res.success else 2
 
 
@@ -262,11 +285,30 @@ def cmd_compare(args: argparse.Namespace) -> int:
         after = run.after
         print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
               f"{run.result.rms_mm * 1e3:11.2f}")
+    written = _write_comparison(args, runs)
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions
         errors = {"nominal": runs[0][1].nominal_mm} | {name: run.calibrated_mm for name, run in runs}
-        print(f"wrote {plot_error_distributions(errors, args.png, 'validation errors per compensation method')}")
+        written.append(plot_error_distributions(errors, args.png, "validation errors per compensation method"))
+        print(f"wrote {written[-1]}")
+    write_command_report(args, written, _report_folder(args) if args.json or not args.png else Path(args.png).parent)
     return 0
+
+
+def _write_comparison(args, runs: list) -> list:
+    """The Table 3 of this campaign as ``rodlab.comparison/1`` (to ``--json``, else in memory for the report)."""
+    from ..report import FORMAT_COMPARISON, Source
+    methods = {"nominal": runs[0][1].before.to_dict()}
+    for name, run in runs:
+        methods[name] = dict(run.after.to_dict(), fit_rms_um=run.result.rms_mm * 1e3, trusted=not run.result.warnings)
+    data = {"format": FORMAT_COMPARISON, "robot": runs[0][1].robot.name, "campaign": str(args.campaign),
+            "fixture": str(args.fixture), "validation": str(args.validate), "methods": methods}
+    if not args.json:
+        return [Source(FORMAT_COMPARISON, data)]
+    from ..fileio import atomic_write_json, json_safe
+    path = atomic_write_json(args.json, json_safe(data))
+    print(f"wrote {path}")
+    return [path]
 
 
 def register_more(sub) -> None:

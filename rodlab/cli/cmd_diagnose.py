@@ -6,6 +6,7 @@ import argparse
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
 from .argtypes import pos_float
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -28,11 +29,13 @@ def register(sub) -> None:
     p.add_argument("--json", help="write the contract's diagnosis report")
     p.add_argument("--png", help="folder for figures")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
+    add_report_option(p)
     p.set_defaults(func=cmd_diagnose)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
+    written: list = []
     if bool(args.rig) == bool(args.campaign):
         raise RodlabError("give either --rig REC.rig.csv --sim SIM.compliance.json or --campaign C.csv --fixture F.json "
                           "--rod ROD.compliance.json")
@@ -50,10 +53,12 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(diag.summary())
         if args.png:
             from ..diagnose.plots import plot_rig_diagnosis
-            for p in plot_rig_diagnosis(model, args.png, title=f"rod {rec.rod}: {diag.verdict}"):
+            for p in plot_rig_diagnosis(model, args.png, diag, rec.rod):
+                written.append(p)
                 print(f"wrote {p}")
         if args.export:
-            print(f"wrote {write_compliance(corrected_compliance(sim, diag, model), args.export)}")
+            written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
+            print(f"wrote {written[-1]}")
     else:
         from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
         if not (args.fixture and args.rod):
@@ -71,7 +76,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if args.png:
             from ..diagnose.plots import plot_campaign_diagnosis
             for p in plot_campaign_diagnosis(diag, fits, args.png, args.noise_um * 1e-3):
+                written.append(p)
                 print(f"wrote {p}")
     if args.json:
-        print(f"wrote {diag.write(args.json)}")
+        written.insert(0, diag.write(args.json))
+        print(f"wrote {written[0]}")
+    else:
+        from ..report import Source
+        written.insert(0, Source(diag.to_dict()["format"], diag.to_dict()))
+    from pathlib import Path
+    folder = Path(args.json).parent if args.json else Path(args.png) if args.png else Path(".")
+    write_command_report(args, written, folder)
     return 0

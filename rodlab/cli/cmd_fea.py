@@ -10,6 +10,7 @@ from ..compliance import write_compliance
 from ..design_io import resolve_design
 from ..errors import RodlabError
 from .argtypes import pos_float
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -37,6 +38,7 @@ def register(sub) -> None:
     p.add_argument("--joints", default=None, metavar="FILE",
                    help="frame: joint-calibrated by a *.joints.json of the design's family (same parts, any L1 / "
                         "L2): within ~0.3 %% of the solid model")
+    add_report_option(p)
     p.set_defaults(func=cmd_fea)
 
 
@@ -93,4 +95,6 @@ def cmd_fea(args: argparse.Namespace) -> int:
     np.set_printoptions(precision=6, suppress=True)
     print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")
     print(f"  c_rod = {comp.c_rod_um:.1f} um ({time.perf_counter() - t0:.1f} s); wrote {path}")
+    written = [path] + [p for p in (args.png, args.joints_out) if p]
+    write_command_report(args, written, path.parent)
     return 0

@@ -8,6 +8,7 @@ from pathlib import Path
 from ..design_io import resolve_design
 from ..errors import RodlabError
 from .argtypes import pos_float
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register", "require_cad"]
 
@@ -33,6 +34,7 @@ def register(sub) -> None:
     p.add_argument("design", help=_DESIGN_HELP)
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.add_argument("--no-png", action="store_true", help="skip the PNG views")
+    add_report_option(p)
     p.set_defaults(func=cmd_cad)
 
     p = sub.add_parser("mesh", help="mesh the rod for FEA (gmsh, one physical volume per part)",
@@ -61,6 +63,7 @@ def cmd_cad(args: argparse.Namespace) -> int:
           f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm ({time.perf_counter() - t0:.1f} s)")
     for p in written:
         print(f"  wrote {p}")
+    write_command_report(args, written, out)
     return 0
 
 

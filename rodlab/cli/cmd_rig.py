@@ -9,6 +9,7 @@ import numpy as np
 
 from ..compliance import read_compliance, write_compliance
 from .argtypes import count, nonneg_float, pos_float, seed
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -26,6 +27,7 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
     p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
+    add_report_option(p)
     p.set_defaults(func=cmd_fit)
     p = rsub.add_parser("simulate", help="write a recording from the rig's physical model (no hardware)",
                         description="Simulate the stiffness rig on a rod with a known compliance and optional "
@@ -90,10 +92,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")
-    print(f"  wrote {write_compliance(comp, args.output)}")
+    written = [write_compliance(comp, args.output)]
+    print(f"  wrote {written[0]}")
     if args.png:
-        from rodlab.stiffness_rig import plot_fit as _p  # noqa: F401
-        print(f"  wrote {plot_fit(fit, args.png, sim, title=f'rod {rec.rod}')}")
+        written.append(plot_fit(fit, args.png, sim, title=f"rod {rec.rod}"))
+        print(f"  wrote {written[-1]}")
+    write_command_report(args, written, written[0].parent)
     return 0
 
 

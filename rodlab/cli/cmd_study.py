@@ -8,6 +8,7 @@ from pathlib import Path
 from ..design_io import resolve_design
 from ..errors import RodlabError
 from .argtypes import count, nonneg_float, seed
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -56,6 +57,7 @@ def register(sub) -> None:
     p.add_argument("--serial", action="store_true", help="do not use Dask")
     p.add_argument("--cache", default=None, help="cache folder (default OUTPUT/cache)")
     p.add_argument("-o", "--output", required=True, help="output folder")
+    add_report_option(p)
     p.set_defaults(func=cmd_study)
 
 
@@ -136,4 +138,5 @@ def cmd_study(args: argparse.Namespace) -> int:
                               {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
+    write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)
     return 0

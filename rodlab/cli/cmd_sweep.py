@@ -9,6 +9,7 @@ from ..design_io import resolve_design
 from ..errors import RodlabError
 from ..fileio import atomic_write_bytes, atomic_write_text
 from .argtypes import count
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -36,6 +37,7 @@ def register(sub) -> None:
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
     p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
     p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
+    add_report_option(p)
     p.set_defaults(func=cmd_sweep)
 
 
@@ -95,7 +97,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         atomic_write_text(out, df.to_csv(index=False))
     png = Path(args.png) if args.png else out.with_suffix(".png")
     label = f"{args.model} model" + (" joint-calibrated on solid FEA" if calibration is not None else "")
-    plot_sweep(df, png, title=f"{label}, base design {base.name}")
+    plot_sweep(df, png, title=f"{label}, base design {base.name}", marks={f"base {base.name}": (base.L1_mm, base.L2_mm)})
     ok = df[df["status"] == "ok"]
     print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")
     if len(ok):
@@ -106,5 +108,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         print(f"  note: {note}; rerun with --calibrate (one solid FEA run calibrates the frame's joints for this "
               f"family)")
     print(f"  wrote {out} and {png}")
+    from ..report import FORMAT_SWEEP, Source
+    written = [Source(FORMAT_SWEEP, df, out), png] + ([saved] if args.calibrate else [])
+    write_command_report(args, written, out.parent)
     return 0
 

@@ -57,6 +57,7 @@ def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     progress.configure(sys.stderr.isatty() and not args.quiet)
@@ -84,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 #: argparse destinations that name something the command writes
-_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out")
+_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

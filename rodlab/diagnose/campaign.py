@@ -44,6 +44,8 @@ class CampaignFits:
     labels : shape=(N,) point labels; position : shape=(N,) int, clamping position of each point
     joint_corrections_rad : {joint index (0-based): (a_sin, a_cos) [rad]} of periodic joint errors found
     validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
+    q_deg : shape=(N, n) joint angles of the campaign points [deg]
+    time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
     """
 
     before: object
@@ -53,11 +55,17 @@ class CampaignFits:
     position: np.ndarray
     joint_corrections_rad: dict
     validation_errors_mm: dict | None = None
+    q_deg: np.ndarray | None = None
+    time_s: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.labels)
         if self.kept.shape != (n,) or self.position.shape != (n,):
             raise ValueError(f"kept and position must have shape ({n},), got {self.kept.shape}, {self.position.shape}")
+        if self.q_deg is not None and (self.q_deg.ndim != 2 or self.q_deg.shape[0] != n):
+            raise ValueError(f"q_deg must have shape ({n}, n_joints), got {self.q_deg.shape}")
+        if self.time_s is not None and self.time_s.shape != (n,):
+            raise ValueError(f"time_s must have shape ({n},), got {self.time_s.shape}")
 
 
 def _birge_drop(e: np.ndarray, n: int, k: int, birge: float) -> float:
@@ -363,7 +371,9 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                                 final_rms, final_rms, {"position_rms_mm": pos_rms}))
         verdict = "unexplained"
     extra = {"residual_test": {"before": _test_dict(first_test), "after": _test_dict(final_test)}}
-    fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position), joint_corr)
+    fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position), joint_corr,
+                        q_deg=np.asarray(camp.q_deg, float),
+                        time_s=None if camp.time_s is None else np.asarray(camp.time_s, float))
     if validate_points is not None:
         fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}

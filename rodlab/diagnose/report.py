@@ -52,6 +52,7 @@ class Diagnosis:
         return atomic_write_json(path, self.to_dict())
 
     def summary(self) -> str:
+        from .wording import confirmation, evidence_text
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
         for i, f in enumerate(self.findings, 1):
@@ -61,10 +62,8 @@ class Diagnosis:
             if ps:
                 lines.append(f"     {ps}")
             ev = f.evidence
-            lines.append(f"     rms {f.rms_before_mm * 1e3:.2f} -> {f.rms_after_mm * 1e3:.2f} um; delta BIC "
-                         f"{ev.get('delta_bic', float('nan')):.1f}; LR p {ev.get('lr_p', float('nan')):.2g}")
+            lines.append(f"     {evidence_text(f)}")
             if ev.get("alternatives"):
                 lines.append("     the data fit about as well with: " + "; ".join(ev["alternatives"]))
-            if ev.get("separate_by"):
-                lines.append(f"     to separate the places: {ev['separate_by']}")
+            lines.append(f"     {'to confirm' if self.subject == 'rig' else 'next step'}: {confirmation(f)}")
         return "\n".join(lines)

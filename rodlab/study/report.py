@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 from rodlab.fileio import atomic_write_text
-from rodlab.report_html import CSS, img_tag
+from rodlab.report.html import CSS, img_tag
 
 __all__ = ["write_study_report"]
 

@@ -1,46 +1,32 @@
-"""One self-contained HTML page of a run folder (``rodlab report``): figures embedded as data URIs."""
+"""The demo's page (``run.json``, format ``rodlab.run/1``): the main job end to end on one page."""
 from __future__ import annotations
 
-import base64
 import html
 import json
 from pathlib import Path
 
-from .errors import RodlabError
-from .fileio import atomic_write_text
+from ..errors import RodlabError
+from .html import CSS, img_tag, matrix_table
 
-__all__ = ["write_report", "render_report", "CSS", "img_tag"]
+__all__ = ["render_run", "is_run_folder", "read_run"]
 
-CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;margin:2em auto;
-padding:0 1em;color:#222}h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}
-table{border-collapse:collapse;margin:.6em 0}td,th{border:1px solid #ccc;padding:.25em .6em;text-align:right}
-th{background:#f3f3f3}td:first-child,th:first-child{text-align:left}img{max-width:100%;border:1px solid #eee;
-margin:.4em 0}.grid{display:grid;grid-template-columns:1fr 1fr;gap:.6em}.note{color:#555;font-size:.92em}
-code{background:#f4f4f4;padding:0 .2em}"""
+#: scale of the CAD views on the page: the four views side by side at one pixel scale
+_CAD_SCALE = 0.5
 
 
-def img_tag(run: Path, rel: str | None, alt: str) -> str:
-    """An ``<img>`` with the PNG ``run/rel`` embedded as a data URI (a note if it is missing)."""
-    if not rel:
-        return ""
-    p = run / rel
-    if not p.exists():
-        return f"<p class='note'>missing figure {html.escape(rel)}</p>"
-    data = base64.b64encode(p.read_bytes()).decode("ascii")
-    return f"<img alt='{html.escape(alt)}' src='data:image/png;base64,{data}'>"
+def is_run_folder(run_dir) -> bool:
+    return (Path(run_dir) / "run.json").is_file()
 
 
-def _matrix(m, unit, scale=1e3) -> str:
-    rows = "".join("<tr>" + "".join(f"<td>{round(v * scale, 3) + 0.0:+.3f}</td>" for v in row) + "</tr>" for row in m)
-    return f"<table><tr><th colspan=3>{html.escape(unit)}</th></tr>{rows}</table>"
+def _cad_views(run: Path, views: list) -> str:
+    return "<div class=views>" + "".join(f"<figure>{img_tag(run, v, f'CAD view {v}', _CAD_SCALE)}</figure>"
+                                         for v in views) + "</div>"
 
 
-def render_report(run_dir) -> str:
+def render_run(run_dir) -> str:
+    """The demo folder ``run_dir`` (with ``run.json``) as one HTML page."""
     run = Path(run_dir)
-    try:
-        s = json.loads((run / "run.json").read_text())
-    except FileNotFoundError as e:
-        raise RodlabError(f"{run}: no run.json here; run `rodlab demo -o {run}` first") from e
+    s = read_run(run)
     st, files = s["stages"], s.get("files", {})
     d = s["design"]
     parts = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab run: rod {html.escape(d['name'])}"
@@ -56,12 +42,13 @@ def render_report(run_dir) -> str:
                  f"R {d['bend']['radius_mm']:g} mm</td></tr><tr><td>mass</td><td>{st['design']['mass_kg'] * 1e3:.1f} g</td></tr>"
                  "</table>")
     views = files.get("cad_views", [])
-    parts.append("<h2>2. CAD</h2>" + ("<div class=grid>" + "".join(img_tag(run, v, f"CAD view {v}") for v in views) + "</div>"
-                                        if views else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>"))
+    parts.append("<h2>2. CAD</h2>" + (_cad_views(run, views) if views
+                                        else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>"))
     fe = st["fea"]
     parts.append(f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid>"
-                 f"<div>C_F {_matrix(fe['C_F_mm_per_N'], 'um/N')}"
-                 f"</div><div>C_g {_matrix(fe['C_g_mm_per_g0'], 'um per g0')}</div></div>"
+                 f"<div><b>C_F</b>: ball displacement per tip force {matrix_table(fe['C_F_mm_per_N'], 'um/N', 'force')}"
+                 f"</div><div><b>C_g</b>: ball displacement under the rod's own weight, per unit of gravity along each "
+                 f"axis {matrix_table(fe['C_g_mm_per_g0'], 'um per g0', 'gravity')}</div></div>"
                  f"<p>c_rod (Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: {st['design']['c_rod_um_calc']:.1f} um). "
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
                  + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
@@ -72,14 +59,16 @@ def render_report(run_dir) -> str:
     dg = st["diagnose"]
     rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location']))}</td><td>"
                    + html.escape(", ".join(f"{k} = {v:.4g}" for k, v in f["parameters"].items() if isinstance(v, (int, float))))
-                   + f"</td><td>{f['rms_before_mm'] * 1e3:.2f} -> {f['rms_after_mm'] * 1e3:.2f}</td><td>"
+                   + f"</td><td>{html.escape(_evidence(f))}</td><td>"
                    f"{html.escape(f['explanation'])}</td></tr>" for f in dg["findings"])
     parts.append(f"<h2>5. Diagnosis</h2><p>Verdict <b>{html.escape(dg['verdict'])}</b>; noise {dg['noise_mm'] * 1e3:.2f} um; "
                  f"rms {dg['rms_before_mm'] * 1e3:.2f} -> {dg['rms_after_mm'] * 1e3:.2f} um. The rig truth was: "
                  f"{html.escape(st['rig']['concealed_effect'])} (s_bend {st['rig']['s_bend_rad_per_Nm']:.3g}, s_torsion "
-                 f"{st['rig']['s_torsion_rad_per_Nm']:.3g} rad/(N m)); the corrected compliance matches the true C_F to "
-                 f"{dg['corrected_vs_true_max_rel']:.1e}.</p><table><tr><th>effect</th><th>location</th><th>parameters</th>"
-                 f"<th>rms um</th><th>physics</th></tr>{rows}</table>" + img_tag(run, files.get("diagnosis"), "diagnosis"))
+                 f"{st['rig']['s_torsion_rad_per_Nm']:.3g} rad/(N m)); the corrected compliance differs from the true "
+                 f"C_F by at most {100 * dg['corrected_vs_true_max_rel']:.1e} % of its largest entry.</p>"
+                 "<table><tr><th>effect</th><th>location</th><th>parameters</th>"
+                 f"<th>what it explains</th><th>physics</th></tr>{rows}</table>"
+                 + img_tag(run, files.get("diagnosis"), "diagnosis"))
     t3 = st["calibrate"]["table3"]
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['mean_mm']:.3f}</td><td>{v['max_mm']:.3f}</td>"
                    f"<td>{v['median_mm']:.3f}</td><td>{v['sd_mm']:.3f}</td></tr>" for k, v in t3.items())
@@ -119,5 +108,15 @@ def _study_section(run: Path, sy: dict, files: dict) -> str:
             + img_tag(run, files.get("study_pareto"), "study Pareto fronts"))
 
 
-def write_report(run_dir, out=None) -> Path:
-    return atomic_write_text(Path(out) if out else Path(run_dir) / "report.html", render_report(run_dir))
+def _evidence(f: dict) -> str:
+    from ..diagnose.report import Finding
+    from ..diagnose.wording import evidence_text
+    return evidence_text(Finding(f["effect"], f["location"], f["explanation"], f["parameters"], f["intervals_95"],
+                                 f["rms_before_mm"], f["rms_after_mm"], f["evidence"]))
+
+
+def read_run(run: Path) -> dict:
+    try:
+        return json.loads((run / "run.json").read_text())
+    except FileNotFoundError as e:
+        raise RodlabError(f"{run}: no run.json here; run `rodlab demo -o {run}` first") from e

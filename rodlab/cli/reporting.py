@@ -1,0 +1,41 @@
+"""``--report [HTML]`` on every command that writes results: one self-contained page of what it just wrote."""
+from __future__ import annotations
+
+import argparse
+import shlex
+from pathlib import Path
+
+__all__ = ["add_report_option", "write_command_report"]
+
+
+def add_report_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--report", nargs="?", const="", default=None, metavar="HTML",
+                   help="also write a self-contained HTML report of this run (default: COMMAND.report.html beside "
+                        "the results); `rodlab report DIR` renders a whole folder")
+
+
+def write_command_report(args: argparse.Namespace, written: list, folder: Path) -> Path | None:
+    """Write the report of ``written`` (paths of results and PNGs, or in-memory report Sources) when
+    ``--report`` was given; ``folder`` is where it goes by default."""
+    if getattr(args, "report", None) is None:
+        return None
+    from ..report import Source, classify, write_sources_report
+    sources, figures = [], []
+    for item in written:
+        if isinstance(item, Source):
+            sources.append(item)
+        elif Path(item).suffix == ".png":
+            figures.append(Path(item))
+        elif (src := classify(Path(item))) is not None:
+            sources.append(src)
+    command = " ".join(str(c) for c in (args.command, getattr(args, "rig_command", None)) if c)
+    out = Path(args.report) if args.report else Path(folder) / f"{command.replace(' ', '-')}.report.html"
+    line = "rodlab " + " ".join(shlex.quote(a) for a in getattr(args, "argv", []) or [])
+    path = write_sources_report(out, sources, figures, f"rodlab {command}", f"Command: <code>{_esc(line)}</code>")
+    print(f"wrote {path}")
+    return path
+
+
+def _esc(s: str) -> str:
+    import html
+    return html.escape(s)

@@ -1,0 +1,229 @@
+"""One report section per result format: the registry ``rodlab report`` and every command's ``--report`` use.
+
+A section renderer takes a :class:`Source` (the result's content and where it was written) and returns HTML;
+``SECTIONS`` maps a format key to its title, place on the page and the figures it owns (file names that,
+found beside the result, are shown in its section). Adding a format is one function and one registry entry.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from .html import esc, fmt, matrix_table, table
+
+__all__ = ["Source", "Section", "SECTIONS", "FORMAT_SWEEP", "FORMAT_MASS", "FORMAT_COMPARISON"]
+
+#: formats rodlab writes that carry no ``format`` key of their own (recognised by name / columns)
+FORMAT_SWEEP = "rodlab.sweep/1"
+FORMAT_MASS = "rodlab.mass/1"
+FORMAT_COMPARISON = "rodlab.comparison/1"
+
+
+@dataclass
+class Source:
+    """A result for a report.
+
+    format : the contract format key (``rodlab.calibration/1`` ...); data : its content (a dict, or a pandas
+    DataFrame for tables); path : the file it was written to, or None when rendered from memory.
+    """
+
+    format: str
+    data: object
+    path: Path | None = None
+
+    def label(self, base: Path | None) -> str:
+        """The file's path relative to ``base`` (the report's folder) when below it, else its name."""
+        if self.path is None:
+            return "(not written)"
+        try:
+            return str(self.path.resolve().relative_to(base.resolve())) if base else self.path.name
+        except ValueError:
+            return str(self.path)
+
+
+@dataclass(frozen=True)
+class Section:
+    """title : heading; order : place on the page (design first, calibration last); render : Source -> HTML;
+    figures : file names (or ``*`` suffix patterns) shown in this section when found beside the result."""
+
+    title: str
+    order: int
+    render: Callable[[Source], str]
+    figures: tuple = field(default_factory=tuple)
+
+
+def _kv(rows: list[tuple[str, str]]) -> str:
+    return table(["quantity", "value"], [list(r) for r in rows])
+
+
+def _compliance(src: Source) -> str:
+    d = src.data
+    prov = d.get("provenance") or {}
+    com = ", ".join(f"{round(v, 1) + 0.0:.1f}" for v in d["com_T_mm"])
+    tool = ", ".join(f"{round(v, 1) + 0.0:.1f}" for v in d["tool_mm"])
+    rows = [("rod / method", f"{d['rod']} / {d['method']}"),
+            ("model", str(prov.get("model") or prov.get("generator") or "—")),
+            ("r_rod (Eq. 21)", fmt(d.get("r_rod"), ".4f")), ("c_rod (Eq. 23)", f"{fmt(d.get('c_rod_um'), '.1f')} um"),
+            ("mass", f"{d['mass_kg'] * 1e3:.1f} g"), ("centre of mass in {T}", f"{com} mm"),
+            ("tool vector (flange to ball) in {6}", f"{tool} mm")]
+    if prov.get("sparse_solver"):
+        rows.append(("sparse solver", str(prov["sparse_solver"])))
+    return (_kv(rows) + "<div class=grid><div><b>C_F</b>: ball displacement per tip force"
+            + matrix_table(d["C_F_mm_per_N"], "um/N", "force") + "</div><div><b>C_g</b>: ball displacement under the "
+            "rod's own weight per unit of gravity along each axis" + matrix_table(d["C_g_mm_per_g0"], "um per g0",
+                                                                                 "gravity") + "</div></div>")
+
+
+def _verdict(trusted: bool, warnings: list) -> str:
+    if trusted:
+        return "<p class=good>TRUSTED: the residuals are the device's noise; the parameters may be loaded.</p>"
+    items = "".join(f"<li>{esc(w)}</li>" for w in warnings)
+    return f"<p class=bad>NOT TRUSTED: do not load these parameters into the robot.</p><ul>{items}</ul>"
+
+
+def _stats_rows(validation: dict) -> list[list]:
+    return [[k, fmt(v["mean_mm"], ".3f"), fmt(v["max_mm"], ".3f"), fmt(v["median_mm"], ".3f"), fmt(v["sd_mm"], ".3f"),
+             v.get("points", "—")] for k, v in validation.items()]
+
+
+def _calibration(src: Source) -> str:
+    d = src.data
+    fit = d.get("fit", {})
+    parts = [_verdict(bool(d.get("trusted")), fit.get("warnings", [])),
+             _kv([("robot", d["robot"]), ("compensation", str(d["compensation"])), ("points", str(d["points"])),
+                  ("residual rms", f"{d['residual_rms_mm'] * 1e3:.2f} um"),
+                  ("condition number", fmt(fit.get("condition"), ".3g")),
+                  ("solver", f"{fit.get('message', '—')} ({fit.get('nfev', '—')} evaluations)")])]
+    if d.get("validation"):
+        parts.append("<h3>Validation (positioning error at independent points)</h3>"
+                     + table(["model", "mean mm", "max mm", "median mm", "SD mm", "points"],
+                             _stats_rows(d["validation"])))
+    rows = [[k, fmt(p["value"], ".6g"), fmt(p.get("sigma"), ".3g"), p.get("unit", ""), p.get("status", "")]
+            for k, p in d["parameters"].items() if p.get("status") != "fixed"]
+    fixed = [f"{k} = {p['value']:g} {p.get('unit', '')}" for k, p in d["parameters"].items()
+             if p.get("status") == "fixed"]
+    parts.append("<h3>Parameters</h3><p class=note>sigma: one standard deviation from the fit; regularised: held "
+                 "near its prior because the campaign hardly sees it.</p>"
+                 + table(["parameter", "value", "sigma", "unit", "status"], rows))
+    if fixed:
+        parts.append(f"<p class=note>Held at their nominal values ({len(fixed)}): " + esc(", ".join(fixed)) + ".</p>")
+    if d.get("unidentifiable"):
+        parts.append("<details><summary>Why they are held</summary><ul>"
+                     + "".join(f"<li>{esc(u)}</li>" for u in d["unidentifiable"]) + "</ul></details>")
+    return "".join(parts)
+
+
+def _finding_rows(findings: list, subject: str) -> list[list]:
+    from ..diagnose.report import Finding
+    from ..diagnose.wording import confirmation, evidence_text
+    rows = []
+    for f in findings:
+        fi = Finding(f["effect"], f["location"], f["explanation"], f["parameters"], f.get("intervals_95", {}),
+                     f["rms_before_mm"], f["rms_after_mm"], f.get("evidence", {}))
+        params = ", ".join(f"{k} = {v:.4g}" + (f" [{fi.intervals[k][0]:.3g}, {fi.intervals[k][1]:.3g}]"
+                                                if k in fi.intervals else "")
+                           for k, v in fi.parameters.items() if isinstance(v, (int, float)))
+        rows.append([f["effect"] + (f" at {f['location']}" if f["location"] else ""), params or "—",
+                     evidence_text(fi), fi.explanation, confirmation(fi)])
+    return rows
+
+
+def _diagnosis(src: Source) -> str:
+    d = src.data
+    subject = d["subject"]
+    parts = [f"<p>Verdict <b>{esc(d['verdict'])}</b> ({esc(subject)}): noise {d['noise_mm'] * 1e3:.2f} um per "
+             f"reading; rms of the residuals {d['rms_before_mm'] * 1e3:.2f} -> {d['rms_after_mm'] * 1e3:.2f} um with "
+             "the findings modelled.</p>"]
+    if d["findings"]:
+        parts.append(table(["finding", "fitted parameters [95 % interval]", "what it explains, how sure", "physics",
+                            "to confirm" if subject == "rig" else "next step"],
+                           _finding_rows(d["findings"], subject), left=5))
+    else:
+        parts.append("<p>No finding: the recording is explained by the simulated model and the noise.</p>")
+    if d.get("validation"):
+        names = {"nominal": "nominal", "before": "calibrated as given", "after": "with the found physics"}
+        v = {names.get(k, k): s for k, s in d["validation"].items()}
+        parts.append("<h3>Validation</h3>" + table(["model", "mean mm", "max mm", "median mm", "SD mm", "points"],
+                                                   _stats_rows(v)))
+    return "".join(parts)
+
+
+def _comparison(src: Source) -> str:
+    d = src.data
+    rows = [[k, fmt(v["mean_mm"], ".3f"), fmt(v["max_mm"], ".3f"), fmt(v["median_mm"], ".3f"), fmt(v["sd_mm"], ".3f"),
+             fmt(v.get("fit_rms_um"), ".2f"), {True: "yes", False: "NO"}.get(v.get("trusted"), "—")]
+            for k, v in d["methods"].items()]
+    return (f"<p>{esc(d['robot'])}, campaign <code>{esc(d.get('campaign', ''))}</code>; the paper's Table 3 for this "
+            "campaign: validation error after calibrating with each compensation method.</p>"
+            + table(["method", "Mean mm", "Max mm", "Median mm", "SD mm", "fit rms um", "trusted"], rows))
+
+
+def _study(src: Source) -> str:
+    d = src.data
+    rec = d.get("recommendation") or {}
+    parts = [f"<p><b>Recommendation.</b> {esc(rec.get('text', '—'))}</p>",
+             f"<p class=note>{esc(d.get('designs'))} designs on {esc(d.get('robot'))}; compliance: "
+             f"{esc(d.get('compliance', '—'))}. The full study page is <code>study.html</code> beside this file.</p>"]
+    csv = src.path.parent / "study.csv" if src.path else None
+    if csv is not None and csv.exists():
+        import pandas as pd
+        df = pd.read_csv(csv)
+        ok = df[df["method"].notna()].sort_values("mean_mm").head(20)
+        rows = [[r.design, r.method, fmt(r.mean_mm, ".3f"), f"{fmt(r.mean_p05_mm, '.3f')}-{fmt(r.mean_p95_mm, '.3f')}",
+                 fmt(r.max_mm, ".3f"), fmt(r.c_rod_um, ".0f"), fmt(r.mass_kg * 1e3, ".0f")] for r in ok.itertuples()]
+        parts.append("<h3>The 20 most accurate (design, method) pairs</h3>"
+                     + table(["design", "method", "mean mm", "90 % band mm", "max mm", "c_rod um", "mass g"], rows, 2))
+    return "".join(parts)
+
+
+def _sweep(src: Source) -> str:
+    df = src.data
+    ok = df[df["status"] == "ok"]
+    parts = [f"<p>{len(df)} designs, {len(ok)} valid.</p>"]
+    if len(ok):
+        stiff, light = ok.loc[ok["c_rod_um"].idxmin()], ok.loc[ok["mass_kg"].idxmin()]
+        parts.append(_kv([("stiffest", f"L1 = {stiff['L1_mm']:g} mm, L2 = {stiff['L2_mm']:g} mm: c_rod "
+                                       f"{stiff['c_rod_um']:.0f} um, {stiff['mass_kg'] * 1e3:.0f} g"),
+                          ("lightest", f"L1 = {light['L1_mm']:g} mm, L2 = {light['L2_mm']:g} mm: c_rod "
+                                       f"{light['c_rod_um']:.0f} um, {light['mass_kg'] * 1e3:.0f} g")]))
+    bad = df[df["status"] != "ok"]
+    if len(bad):
+        parts.append(table(["L1 mm", "L2 mm", "status", "why"],
+                           [[f"{r.L1_mm:g}", f"{r.L2_mm:g}", r.status, r.message] for r in bad.head(20).itertuples()],
+                           left=4))
+    return "".join(parts)
+
+
+def _mass(src: Source) -> str:
+    d = src.data
+    def com(v):
+        return ", ".join(f"{round(c, 1) + 0.0:.1f}" for c in v["com_T_mm"])
+    rows = [[p, v.get("material", "—"), f"{v['mass_kg'] * 1e3:.1f}", com(v)] for p, v in d["parts"].items()]
+    t = d["total"]
+    rows.append(["total", "", f"{t['mass_kg'] * 1e3:.1f}", com(t)])
+    return (f"<p>Rod {esc(d.get('rod', '—'))}; frame: {esc(d.get('frame', 'T'))}.</p>"
+            + table(["part", "material", "mass g", "centre of mass in {T} [mm]"], rows, 2))
+
+
+def _joints(src: Source) -> str:
+    d = src.data
+    margins = ", ".join(f"{m:g}" for m in d.get("margins_mm", []))
+    return _kv([("calibrated on", str(d["design"].get("name", "—"))), ("tube margins [mm]", margins or "—"),
+                ("frame revision", str(d.get("frame_revision", "—"))),
+                ("span residual", fmt(d.get("span_residual"), ".3g"))])
+
+
+#: format key -> its section
+SECTIONS: dict[str, Section] = {
+    FORMAT_MASS: Section("Rod CAD: parts and mass", 10, _mass, ("view_iso.png", "view_xz.png", "view_xy.png",
+                                                               "view_yz.png")),
+    "rodlab.compliance/1": Section("Compliance file", 20, _compliance, ("deformed.png", "fig8.png")),
+    "rodlab.joints/1": Section("Joint calibration of the beam frame", 25, _joints),
+    FORMAT_SWEEP: Section("L1 x L2 sweep", 30, _sweep, ("*sweep.png",)),
+    "rodlab.study/1": Section("Design study: predicted calibration accuracy", 40, _study, ("pareto.png", "heatmaps.png")),
+    "rodlab.diagnosis/1": Section("Diagnosis", 60, _diagnosis, ("diagnosis_rig.png", "diagnosis_campaign.png",
+                                                                 "error_distributions.png")),
+    "rodlab.calibration/1": Section("Calibration", 50, _calibration, ("residuals.png", "error_distributions.png")),
+    FORMAT_COMPARISON: Section("Compensation methods compared (Table 3)", 55, _comparison, ("*fig10.png",)),
+}

@@ -26,6 +26,7 @@ def user_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("user")
     sim = d / "fea" / "rod1.compliance.json"
     assert _run("fea", "rod1", "--model", "frame", "-o", sim, "--report") == 0
+    assert _run("compliance", "rod2", "-o", d / "calc" / "rod2.compliance.json", "--report") == 0
     rec = d / "data" / "r.rig.csv"
     assert _run("rig", "simulate", "--sim", sim, "--effect", "friction", "--seed", 3, "-o", rec) == 0
     assert _run("rig", "fit", rec, "--sim", sim, "-o", d / "rig" / "rod1.meas.json", "--png", d / "rig" / "fig8.png",
@@ -50,6 +51,7 @@ def user_run(tmp_path_factory):
 #: report page -> section titles it must show, figures it must embed
 _PAGES = {
     "fea/fea.report.html": (["Compliance file"], 0),
+    "calc/compliance.report.html": (["Compliance file", "2# / calc"], 0),
     "rig/rig-fit.report.html": (["Compliance file"], 1),
     "rigdiag/diagnose.report.html": (["Diagnosis"], 1),
     "cal/calibrate.report.html": (["Calibration", "NOT TRUSTED"], 2),
@@ -81,10 +83,10 @@ def test_folder_report_renders_every_result_once(user_run):
     titles = re.findall(r"<h2>\d+\. ([^<(]+)", html)
     for t in ("Compliance file", "L1 x L2 sweep", "Calibration", "Compensation methods compared", "Diagnosis"):
         assert any(x.strip() == t for x in titles), (t, titles)
-    # the rig diagnosis (the campaign's was not written: its figures are shown at the end), and the frame, meas
-    # and campaign's own compliance files
+    # the rig diagnosis (the campaign's was not written: its figures are shown at the end), and the frame, calc,
+    # meas and campaign's own compliance files
     assert sum(x.strip() == "Diagnosis" for x in titles) == 1 and "<h2>Figures</h2>" in html
-    assert sum(x.strip() == "Compliance file" for x in titles) == 3
+    assert sum(x.strip() == "Compliance file" for x in titles) == 4
     # sections in the order design -> compliance -> sweep -> calibration -> comparison -> diagnosis
     order = [x.strip() for x in titles]
     assert order.index("L1 x L2 sweep") < order.index("Calibration") < order.index("Diagnosis")

@@ -11,6 +11,7 @@ from ..compliance import RodCompliance, write_compliance
 from ..design_io import resolve_design
 from ..enums import Method
 from ..massprops import mass_properties, part_mass_properties
+from .reporting import add_report_option, write_command_report
 
 __all__ = ["register"]
 
@@ -36,6 +37,7 @@ def register(sub) -> None:
                    help="bend model of the closed form: arc (curved beam) or corner (sharp-corner idealisation)")
     p.add_argument("--shear", action="store_true", help="add Timoshenko shear flexibility")
     p.add_argument("-o", "--output", help="output file (default: NAME.compliance.json in the current folder)")
+    add_report_option(p)
     p.set_defaults(func=cmd_compliance)
 
 
@@ -89,4 +91,5 @@ def cmd_compliance(args: argparse.Namespace) -> int:
         out = f"rod{out}"
     path = write_compliance(comp, out)
     print(f"wrote {path}: method {comp.method}, c_rod = {comp.c_rod_um:.1f} um, mass = {comp.mass_kg * 1e3:.1f} g")
+    write_command_report(args, [path], path.parent)
     return 0

@@ -14,10 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from blindcases import generate_cases  # noqa: E402
-
-from rodlab import calc_rod_compliance, resolve_design  # noqa: E402
+from rodlab import calc_rod_compliance, resolve_design
+from rodlab.stiffness_rig.blind import generate_cases
 from rodlab.diagnose import diagnose_rig  # noqa: E402
 from rodlab.fileio import atomic_write_text  # noqa: E402
 from rodlab.stiffness_rig import read_recording  # noqa: E402

@@ -15,46 +15,23 @@ from __future__ import annotations
 
 import argparse
 import logging
-import time
-from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
-from rodlab.calibrate import ModelParams, Observations, identify, read_points, resolve_robot, validate
+from rodlab.calibrate import read_points, resolve_robot
+from rodlab.calibrate.holdout import fit_and_validate, interleaved
 
 DATA = Path(__file__).parent / "data" / "boby2021"
 
 
-def _obs(pts):
-    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))
-
-
-def _subset(pts, sel):
-    return replace(pts, q_deg=pts.q_deg[sel], x_W_mm=pts.x_W_mm[sel])
-
-
-def run() -> list[dict]:
+def run() -> list:
+    """The interleaved split of each reflector, then fit on N2 and validate on N1 and N3."""
     robot = resolve_robot("r2000ic165f")
     pts = {n: read_points(DATA / f"r2000ic_{n}.validation.csv") for n in ("N1", "N2", "N3")}
     rows = []
-
-    def one(label, fit, tests):
-        t0 = time.perf_counter()
-        res = identify(robot, _obs(fit), fit.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True,
-                       find_tool=True, expected_noise_mm=None)
-        dt = time.perf_counter() - t0
-        for tname, test in tests:
-            before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]
-            after = validate(robot, res.params, test)[0]
-            rows.append(dict(protocol=label, test=tname, fit_points=len(fit.q_deg), test_points=len(test.q_deg),
-                             fit_rms_mm=res.rms_mm, before=before, after=after, seconds=dt,
-                             held=[u.split(" ")[0] for u in res.unidentifiable if "in this campaign" in u]))
-
     for name, p in pts.items():
-        idx = np.arange(len(p.q_deg))
-        one("interleaved", _subset(p, idx % 2 == 0), [(name + " odd poses", _subset(p, idx % 2 == 1))])
-    one("other tool", pts["N2"], [("N1", pts["N1"]), ("N3", pts["N3"])])
+        fit, test = interleaved(p)
+        rows += fit_and_validate(robot, "interleaved", fit, [(name + " odd poses", test)])
+    rows += fit_and_validate(robot, "other tool", pts["N2"], [("N1", pts["N1"]), ("N3", pts["N3"])])
     return rows
 
 
@@ -69,15 +46,15 @@ def main(argv=None) -> int:
               "calibrated mean / max [mm] | time [s] |")
         print("|---|---|---|---|---|---|---|")
         for r in rows:
-            print(f"| {r['protocol']} | {r['test']} | {r['fit_points']} / {r['test_points']} | {r['fit_rms_mm']:.3f} | "
-                  f"{r['before'].mean_mm:.3f} / {r['before'].max_mm:.3f} | {r['after'].mean_mm:.3f} / "
-                  f"{r['after'].max_mm:.3f} | {r['seconds']:.2f} |")
+            print(f"| {r.protocol} | {r.test} | {r.fit_points} / {r.test_points} | {r.fit_rms_mm:.3f} | "
+                  f"{r.before.mean_mm:.3f} / {r.before.max_mm:.3f} | {r.after.mean_mm:.3f} / "
+                  f"{r.after.max_mm:.3f} | {r.seconds:.2f} |")
     else:
         for r in rows:
-            print(f"{r['protocol']:<12} {r['test']:<14} fit {r['fit_points']:3d} rms {r['fit_rms_mm']:.3f} mm | "
-                  f"nominal mean {r['before'].mean_mm:.3f} max {r['before'].max_mm:.3f} | calibrated mean "
-                  f"{r['after'].mean_mm:.3f} max {r['after'].max_mm:.3f} mm | {r['seconds']:.2f} s | held "
-                  f"{', '.join(r['held'])}")
+            print(f"{r.protocol:<12} {r.test:<14} fit {r.fit_points:3d} rms {r.fit_rms_mm:.3f} mm | "
+                  f"nominal mean {r.before.mean_mm:.3f} max {r.before.max_mm:.3f} | calibrated mean "
+                  f"{r.after.mean_mm:.3f} max {r.after.max_mm:.3f} mm | {r.seconds:.2f} s | held "
+                  f"{', '.join(r.held)}")
     return 0
 
 

@@ -114,7 +114,7 @@ class FrameCalibration:
 
 #: Global default, fitted against the solid model on 18 designs (the six paper rods, off-grid designs of
 #: other materials, sections, bends and parts) and 39 part probes (scripts/calibrate_frame.py,
-#: scripts/frame_probes.py); errors in docs/fea.md.
+#: the probes of fea/data/reference_designs.json); errors in docs/fea.md.
 CALIBRATION = FrameCalibration(sleeve_end=1.422, bend_scale_in=0.907, bend_scale_out=0.866, holder_end=0.602,
                                torsion_end=0.497, bend_end=1.516, bend_restraint=2.121, holder_orthotropy=0.061,
                                holder_slenderness=0.262)

@@ -4,8 +4,9 @@
     python scripts/calibrate_frame.py --solve-missing   # only the references not stored yet
     python scripts/calibrate_frame.py           # fit on the calibration set and the part probes, report the rest
 
-The solid references (graded curved-P2 mesh at the default size) are stored in
-``fea/data/solid_reference.json`` so that tests can compare the frame model with them cheaply.
+The designs are versioned data (``fea/data/reference_designs.json``, read by
+:mod:`rodlab.fea.reference_designs`); the solid references (graded curved-P2 mesh at the default size) are
+stored in ``fea/data/solid_reference.json`` so that tests can compare the frame model with them cheaply.
 """
 from __future__ import annotations
 
@@ -16,127 +17,19 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design_io import design_from_dict, resolve_design
 from rodlab.fileio import atomic_write_json
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from frame_probes import PROBES, THIN_PROBES  # noqa: E402
+from rodlab.fea.reference_designs import reference_design as design
+from rodlab.fea.reference_designs import reference_sets
 
 REF = Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_reference.json"
-
-OFF_GRID = {
-    "A": {"L1_mm": 220.0, "L2_mm": 480.0, "gamma_deg": 110.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 22.0, "wall_mm": 1.5},
-          "bend": {"material": "steel_304", "radius_mm": 40.0},
-          "rings": {"outer_diameter_mm": 28.0, "length_mm": 40.0}},
-    "B": {"L1_mm": 350.0, "L2_mm": 380.0, "gamma_deg": 75.0,
-          "tube": {"material": "steel_304", "outer_diameter_mm": 18.0, "wall_mm": 1.5}, "bend": {"radius_mm": 30.0}},
-    "C": {"L1_mm": 250.0, "L2_mm": 550.0, "gamma_deg": 135.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 25.0, "wall_mm": 2.0},
-          "bend": {"material": "al_7075", "radius_mm": 45.0}},
-    "D": {"L1_mm": 200.0, "L2_mm": 500.0, "gamma_deg": 180.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 20.0, "wall_mm": 2.0}},
-    "E": {"L1_mm": 400.0, "L2_mm": 300.0, "gamma_deg": 90.0,
-          "tube": {"material": "al_7075", "outer_diameter_mm": 25.0, "wall_mm": 2.5},
-          "bend": {"radius_mm": 50.0}, "rings": {"material": "steel_304"}},
-    # added 2026-11-23: thin titanium / steel / aluminium walls, UD and rolled carbon with steel bends, other
-    # angles, rings and holders. F-J fitted; K-O held out (L's error led to the von Karman bend factor);
-    # P-T blind: solved and compared once, after the model and its constants were frozen
-    "F": {"L1_mm": 280.0, "L2_mm": 420.0, "gamma_deg": 100.0,
-          "tube": {"material": "ti_6al4v", "outer_diameter_mm": 22.0, "wall_mm": 1.5},
-          "bend": {"radius_mm": 35.0}},
-    "G": {"L1_mm": 320.0, "L2_mm": 350.0, "gamma_deg": 120.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 25.0, "wall_mm": 2.0},
-          "bend": {"material": "steel_304", "radius_mm": 50.0}, "rings": {"length_mm": 30.0}},
-    "H": {"L1_mm": 180.0, "L2_mm": 600.0, "gamma_deg": 80.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 20.0, "wall_mm": 1.5},
-          "bend": {"material": "steel_304", "radius_mm": 30.0},
-          "pipe_holder": {"material": "steel_304", "outer_diameter_mm": 40.0}},
-    "I": {"L1_mm": 450.0, "L2_mm": 250.0, "gamma_deg": 150.0,
-          "tube": {"material": "al_6061", "outer_diameter_mm": 30.0, "wall_mm": 3.0},
-          "bend": {"radius_mm": 60.0}},
-    "J": {"L1_mm": 250.0, "L2_mm": 400.0, "gamma_deg": 90.0,
-          "tube": {"material": "steel_304", "outer_diameter_mm": 16.0, "wall_mm": 1.0},
-          "bend": {"radius_mm": 25.0}},
-    "K": {"L1_mm": 260.0, "L2_mm": 520.0, "gamma_deg": 95.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 28.0, "wall_mm": 2.0},
-          "bend": {"material": "ti_6al4v", "radius_mm": 45.0}, "rings": {"material": "ti_6al4v", "length_mm": 45.0}},
-    "L": {"L1_mm": 380.0, "L2_mm": 300.0, "gamma_deg": 65.0,
-          "tube": {"material": "steel_304", "outer_diameter_mm": 22.0, "wall_mm": 2.5},
-          "bend": {"radius_mm": 45.0}, "rings": {"material": "al_7075"}},
-    "M": {"L1_mm": 230.0, "L2_mm": 450.0, "gamma_deg": 125.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 22.0, "wall_mm": 2.0},
-          "bend": {"material": "al_7075", "radius_mm": 40.0}, "rings": {"material": "al_7075", "length_mm": 35.0}},
-    "N": {"L1_mm": 300.0, "L2_mm": 380.0, "gamma_deg": 90.0,
-          "tube": {"material": "al_6061", "outer_diameter_mm": 20.0, "wall_mm": 1.5},
-          "bend": {"radius_mm": 32.0}},
-    "O": {"L1_mm": 420.0, "L2_mm": 450.0, "gamma_deg": 110.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 25.0, "wall_mm": 2.5},
-          "bend": {"material": "steel_304", "radius_mm": 40.0}, "rings": {"material": "steel_304", "length_mm": 40.0}},
-    "P": {"L1_mm": 340.0, "L2_mm": 560.0, "gamma_deg": 100.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 30.0, "wall_mm": 2.0},
-          "bend": {"material": "al_7075", "radius_mm": 55.0}, "rings": {"length_mm": 50.0}},
-    "Q": {"L1_mm": 200.0, "L2_mm": 350.0, "gamma_deg": 70.0,
-          "tube": {"material": "ti_6al4v", "outer_diameter_mm": 18.0, "wall_mm": 1.2},
-          "bend": {"radius_mm": 30.0}, "rings": {"material": "ti_6al4v", "length_mm": 30.0}},
-    "R": {"L1_mm": 450.0, "L2_mm": 400.0, "gamma_deg": 140.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 25.0, "wall_mm": 1.5},
-          "bend": {"material": "steel_304", "radius_mm": 45.0}, "rings": {"material": "al_7075", "length_mm": 60.0}},
-    "S": {"L1_mm": 280.0, "L2_mm": 480.0, "gamma_deg": 90.0,
-          "tube": {"material": "al_7075", "outer_diameter_mm": 25.0, "wall_mm": 1.5},
-          "bend": {"radius_mm": 40.0}, "rings": {"material": "al_7075"}},
-    "T": {"L1_mm": 320.0, "L2_mm": 420.0, "gamma_deg": 110.0,
-          "tube": {"material": "steel_304", "outer_diameter_mm": 20.0, "wall_mm": 2.0},
-          "bend": {"radius_mm": 35.0}, "rings": {"material": "steel_304", "length_mm": 25.0},
-          "pipe_holder": {"material": "steel_304", "outer_diameter_mm": 34.0, "length_mm": 50.0}},
-    # blind, second round (2026-11-23): designed, solved and compared once after frame revision 3 (part probes,
-    # saturating bend restraint, holder correction) was frozen; no ring (U, Z), steel rings (V), steel / Ti
-    # holders (W, X), a 1 mm titanium wall (Y)
-    "U": {"L1_mm": 300.0, "L2_mm": 450.0, "gamma_deg": 95.0,
-          "tube": {"material": "steel_304", "outer_diameter_mm": 20.0, "wall_mm": 1.5},
-          "bend": {"radius_mm": 35.0}, "rings": {"length_mm": 0.0}},
-    "V": {"L1_mm": 260.0, "L2_mm": 520.0, "gamma_deg": 115.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 24.0, "wall_mm": 1.8},
-          "bend": {"material": "steel_304", "radius_mm": 42.0},
-          "rings": {"material": "steel_304", "outer_diameter_mm": 32.0, "length_mm": 50.0}},
-    "W": {"L1_mm": 380.0, "L2_mm": 360.0, "gamma_deg": 80.0,
-          "tube": {"material": "al_7075", "outer_diameter_mm": 22.0, "wall_mm": 2.0},
-          "bend": {"radius_mm": 38.0}, "pipe_holder": {"material": "steel_304", "outer_diameter_mm": 36.0}},
-    "X": {"L1_mm": 220.0, "L2_mm": 600.0, "gamma_deg": 100.0,
-          "tube": {"material": "cfrp_rolled", "outer_diameter_mm": 22.0, "wall_mm": 1.5},
-          "bend": {"material": "ti_6al4v", "radius_mm": 36.0}, "rings": {"material": "ti_6al4v", "length_mm": 35.0},
-          "pipe_holder": {"material": "ti_6al4v", "outer_diameter_mm": 34.0, "length_mm": 45.0}},
-    "Y": {"L1_mm": 330.0, "L2_mm": 400.0, "gamma_deg": 130.0,
-          "tube": {"material": "ti_6al4v", "outer_diameter_mm": 20.0, "wall_mm": 1.0},
-          "bend": {"radius_mm": 32.0}, "rings": {"length_mm": 36.0}},
-    "Z": {"L1_mm": 280.0, "L2_mm": 380.0, "gamma_deg": 90.0,
-          "tube": {"material": "cfrp", "outer_diameter_mm": 22.0, "wall_mm": 2.0},
-          "bend": {"material": "steel_304", "radius_mm": 40.0, "wall_mm": 2.0}, "rings": {"length_mm": 0.0}},
-}
-CALIBRATION_SET = ["rod1", "rod2", "rod3", "rod4", "rod5", "rod6", "A", "B", "C", "D", "E", "F", "G", "H", "I", "J",
-                   "rod1_L1_200_L2_600", "rod4_L1_420_L2_330"]
-VALIDATION_SET = ["K", "L", "M", "N", "O", "P", "Q", "R", "S", "T", "U", "V", "W", "X", "Y", "Z"]
-#: part probes (one joint each; scripts/frame_probes.py), fitted with the calibration set
-PROBE_SET = list(PROBES)
-#: thin-walled bends outside the calibrated range (not fitted; reported, and flagged by the frame)
-THIN_SET = list(THIN_PROBES)
-#: off-grid members of the paper's two families (same sections, other L1 / L2): per-family calibration
-FAMILY_OFF_GRID = {"rod1_L1_200_L2_600": ("rod1", 200.0, 600.0), "rod4_L1_420_L2_330": ("rod4", 420.0, 330.0),
-                   "Y_L1_260_L2_480": ("Y", 260.0, 480.0)}
-#: Y (1 mm titanium bend) lies outside the global calibration's range: its family shows what --calibrate recovers
-FAMILIES = {"rod1": ["rod2", "rod3", "rod1_L1_200_L2_600"], "rod4": ["rod5", "rod6", "rod4_L1_420_L2_330"],
-            "Y": ["Y_L1_260_L2_480"]}
-
-
-def design(name):
-    if name in FAMILY_OFF_GRID:
-        from dataclasses import replace
-        base, L1, L2 = FAMILY_OFF_GRID[name]
-        return replace(design(base), L1_mm=L1, L2_mm=L2, name=name)
-    spec = OFF_GRID.get(name) or PROBES.get(name) or THIN_PROBES.get(name)
-    if spec is not None:
-        return design_from_dict(dict({"format": "rodlab.rod/1", "name": name}, **spec))
-    return resolve_design(name)
+_SETS = reference_sets()
+CALIBRATION_SET, VALIDATION_SET = _SETS["calibration"], _SETS["validation"]
+#: part probes (one joint each), fitted with the calibration set; thin walls: not fitted, reported
+PROBE_SET, THIN_SET = _SETS["probes"], _SETS["thin"]
+#: per-family calibration: each base with its members (off-grid ones: the same parts at other L1 / L2)
+FAMILIES = _SETS["families"]
+FAMILY_OFF_GRID = [m for members in FAMILIES.values() for m in members if "_L1_" in m]
 
 
 def solve_references(missing_only: bool = False) -> dict:

@@ -23,7 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design_io import design_from_dict
+from rodlab.fea.reference_designs import family_errors, spec_design as design
+from rodlab.fea.reference_designs import random_global_errors as global_errors
 from rodlab.fileio import atomic_write_json
 
 REF = Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_random_reference.json"
@@ -59,10 +60,6 @@ def random_spec(rng) -> dict:
                            "outer_diameter_mm": od + round(rng.uniform(8, 16)),
                            "length_mm": float(round(rng.uniform(30, 50)))}
     return spec
-
-
-def design(name: str, spec: dict):
-    return design_from_dict(dict({"format": "rodlab.rod/1", "name": name}, **spec))
 
 
 def random_specs(seed: int, n: int = N_PER_SEED, in_range: bool = True) -> dict:
@@ -108,13 +105,6 @@ def solve(specs: dict, refs: dict, path: Path = REF) -> None:
         print(name, res.dofs, flush=True)
 
 
-def global_errors(refs: dict) -> dict:
-    """Largest relative error [-] of the globally calibrated frame on each random (non-variant) design."""
-    from rodlab.fea.frame import frame_errors
-    return {n: float(np.abs(frame_errors(design(n, r["spec"]), r["C_F"], r["C_g"])).max())
-            for n, r in refs["designs"].items() if "_v" not in n}
-
-
 def solve_joints(refs: dict, path: Path = REF) -> None:
     """Solve each family base with the tip moments and store its joint calibration's measurements."""
     from rodlab.fea import solid_compliance
@@ -132,32 +122,6 @@ def solve_joints(refs: dict, path: Path = REF) -> None:
                                 "margins_mm": list(margins.values())}
         atomic_write_json(path, refs)
         print(base, "joints stored", flush=True)
-
-
-def family_errors(refs: dict) -> dict:
-    """Per family: max error [-] on its two variants of the frame joint-calibrated on the base's stored solid
-    measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
-    from rodlab.fea.frame import frame_errors
-    from rodlab.fea.joints import joint_frame_compliance, joints_from_motions
-    from rodlab.enums import Part
-    ds = refs.get("designs", {})
-    out = {}
-    for base, j in refs.get("joints", {}).items():
-        b = design(base, ds[base]["spec"])
-        jc = joints_from_motions(b, np.array(j["section_motion"]), np.array(j["tip_motion"]),
-                                 dict(zip((Part.PIPE_I, Part.PIPE_II), j["margins_mm"])))
-        e_joint, e_glob = [], []
-        for v in (f"{base}_v0", f"{base}_v1"):
-            dv = design(v, ds[v]["spec"])
-            ref = (np.asarray(ds[v]["C_F"]), np.asarray(ds[v]["C_g"]))
-            errs = []
-            for mine, r in zip(joint_frame_compliance(dv, jc), ref):
-                big = np.abs(r) > 0.02 * np.abs(r).max()
-                errs.append(np.abs(mine[big] / r[big] - 1).max())
-            e_joint.append(float(max(errs)))
-            e_glob.append(float(np.abs(frame_errors(dv, *ref)).max()))
-        out[base] = {"joints": max(e_joint), "global": max(e_glob)}
-    return out
 
 
 def main() -> int:

@@ -1,9 +1,6 @@
 """The frame model against stored solid-FEA references (fea/data/solid_reference.json)."""
 from __future__ import annotations
 
-import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,11 +10,15 @@ from rodlab.fea.frame import (FrameCalibration, bend_flexibility_factor, calibra
 from rodlab.enums import Part
 from rodlab.layout import SegmentKind
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "scripts"))
-from calibrate_frame import CALIBRATION_SET, FAMILIES, PROBE_SET, THIN_SET, VALIDATION_SET, design  # noqa: E402
+from rodlab.fea.reference_designs import (family_errors, random_global_errors, random_references, reference_design,
+                                          reference_sets, reference_spec, solid_references)
 
-REFS = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
+design = reference_design
+_SETS = reference_sets()
+CALIBRATION_SET, VALIDATION_SET, PROBE_SET, THIN_SET = (_SETS[k] for k in ("calibration", "validation", "probes",
+                                                                           "thin"))
+FAMILIES = _SETS["families"]
+REFS = solid_references()
 
 
 #: documented exceptions to the 2 % bound of the global default (docs/fea.md): hold-out L's sharp (115 deg),
@@ -169,7 +170,6 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     from rodlab.fea import compute_compliance
     from rodlab.fea.frame import frame_range_notes
     from rodlab.fea.sweep import run_sweep
-    from calibrate_frame import OFF_GRID
     from conftest import write_toml
     from rodlab.cli import main
     for n in CALIBRATION_SET + PROBE_SET:
@@ -179,7 +179,7 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     notes = frame_range_notes(design("Y"))
     assert len(notes) == 2 and "bend r_m / t = 9.50" in notes[0] and "bend h" in notes[1]
     assert compute_compliance(design("Y"), "frame").provenance["outside_calibrated_range"] == notes
-    path = write_toml(tmp_path / "y.rod.toml", dict({"format": "rodlab.rod/1", "name": "Y"}, **OFF_GRID["Y"]))
+    path = write_toml(tmp_path / "y.rod.toml", dict({"format": "rodlab.rod/1", "name": "Y"}, **reference_spec("Y")))
     out = tmp_path / "y.compliance.json"
     assert main(["fea", str(path), "--model", "frame", "-o", str(out)]) == 0
     assert "note: bend r_m / t = 9.50" in capsys.readouterr().out
@@ -194,9 +194,8 @@ def test_random_blind_designs_and_family_calibration():
     (docs/fea.md); joint-calibrated on one solid run of a family's base (``rodlab sweep --calibrate``, its
     stored section motions), both L1 / L2 variants of each of 10 of the worst families are within 0.4 %,
     where the global default is 1.4-5.2 % off."""
-    from frame_random_blind import family_errors, global_errors
-    refs = json.loads((ROOT / "fea" / "data" / "solid_random_reference.json").read_text())
-    g = np.array(list(global_errors(refs).values()))
+    refs = random_references()
+    g = np.array(list(random_global_errors(refs).values()))
     assert g.size == 60
     assert np.median(g) < 0.008 and g.max() < 0.035
     fam = family_errors(refs)

@@ -228,10 +228,8 @@ def test_joint_calibration_on_blind_random_families():
     """8 random families drawn after the method and its margin were fixed (seed 303, in or out of the global
     frame's range; ``scripts/frame_random_blind.py --joint-blind 303 8``): each base's stored solid section
     motions calibrate the frame, and both L1 / L2 variants agree with their own solid FEA within 0.3 %."""
-    import sys
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from frame_random_blind import JOINT_BLIND, family_errors
-    fam = family_errors(json.loads(JOINT_BLIND.read_text()))
+    from rodlab.fea.reference_designs import family_errors, joint_blind_references
+    fam = family_errors(joint_blind_references())
     assert len(fam) == 8
     joints = np.array([e["joints"] for e in fam.values()])
     assert joints.max() < 0.003

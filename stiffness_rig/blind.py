@@ -1,4 +1,7 @@
-"""Blind cases for the rig diagnosis, generated from the rig's physical model (never from diagnosis code).
+"""Blind cases for a rig diagnosis, generated from the rig's physical model (never from diagnosis code).
+
+Used by ``benchmarks/diagnose_blind.py`` and the tests to score ``rodlab diagnose --rig`` on recordings it has
+never seen; the diagnosis never imports this module (a test checks it).
 
 Each case: a recording on disk plus its truth (effects, locations, parameters, SNR). Effects are sized to
 a peak change of the readings of ``snr`` x the per-sample noise, as the contract examples are. Mix: ~30 %
@@ -16,8 +19,8 @@ import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.layout import layout
-from rodlab.stiffness_rig.model import Hold, Protocol, RigModel
-from rodlab.stiffness_rig.simulate import simulate_recording
+from .model import Hold, Protocol, RigModel
+from .simulate import simulate_recording
 
 __all__ = ["generate_cases", "BlindCase"]
 

@@ -98,7 +98,8 @@ def _calibration(src: Source) -> str:
     if d.get("validation"):
         parts.append("<h3>Validation (positioning error at independent points)</h3>"
                      + table(["model", "mean mm", "max mm", "median mm", "SD mm", "points"],
-                             _stats_rows(d["validation"])))
+                             _stats_rows({{"before": "nominal", "after": "calibrated"}.get(k, k): v
+                                          for k, v in d["validation"].items()})))
     rows = [[k, fmt(p["value"], ".6g"), fmt(p.get("sigma"), ".3g"), p.get("unit", ""), p.get("status", "")]
             for k, p in d["parameters"].items() if p.get("status") != "fixed"]
     fixed = [f"{k} = {p['value']:g} {p.get('unit', '')}" for k, p in d["parameters"].items()

@@ -12,7 +12,7 @@ import numpy as np
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
 from .argtypes import count, nonneg_float, seed
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, default_folder, write_command_report
 
 __all__ = ["register", "run_calibration", "CalibrationRun"]
 
@@ -154,7 +154,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             errors = {"nominal": run.nominal_mm, f"calibrated ({label})": run.calibrated_mm}
             written.append(plot_error_distributions(errors, args.png))
             print(f"wrote {written[-1]}")
-    write_command_report(args, written, _report_folder(args))
+    write_command_report(args, written, default_folder(args))
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
         print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
@@ -175,13 +175,6 @@ def _write_result(args, result: dict) -> list:
         return [path]
     from ..report import Source
     return [Source(result["format"], result)]
-
-
-def _report_folder(args) -> Path:
-    """Where ``--report`` goes by default: beside the JSON, else in the figure folder, else here."""
-    if getattr(args, "json", None):
-        return Path(args.json).parent
-    return Path(args.png) if getattr(args, "png", None) else Path(".")
 
 
 def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
@@ -246,7 +239,7 @@ def _calibrate_points(args) -> int:
         after = validate(robot, res.params, test)[0]
     _print_result(res, before, after, "instrument points")
     write_command_report(args, _write_result(args, result_dict(robot, res, "none", before, after)),
-                         _report_folder(args))
+                         default_folder(args))
     return 0 if res.success else 2
 
 
@@ -291,7 +284,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         errors = {"nominal": runs[0][1].nominal_mm} | {name: run.calibrated_mm for name, run in runs}
         written.append(plot_error_distributions(errors, args.png, "validation errors per compensation method"))
         print(f"wrote {written[-1]}")
-    write_command_report(args, written, _report_folder(args) if args.json or not args.png else Path(args.png).parent)
+    write_command_report(args, written, default_folder(args) if args.json or not args.png else Path(args.png).parent)
     return 0
 
 

@@ -6,7 +6,7 @@ import argparse
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
 from .argtypes import pos_float
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, default_folder, write_command_report
 
 __all__ = ["register"]
 
@@ -83,8 +83,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(f"wrote {written[0]}")
     else:
         from ..report import Source
-        written.insert(0, Source(diag.to_dict()["format"], diag.to_dict()))
-    from pathlib import Path
-    folder = Path(args.json).parent if args.json else Path(args.png) if args.png else Path(".")
-    write_command_report(args, written, folder)
+        report = diag.to_dict()
+        written.insert(0, Source(report["format"], report))
+    write_command_report(args, written, default_folder(args))
     return 0

@@ -5,7 +5,7 @@ import argparse
 import shlex
 from pathlib import Path
 
-__all__ = ["add_report_option", "write_command_report"]
+__all__ = ["add_report_option", "write_command_report", "default_folder"]
 
 
 def add_report_option(p: argparse.ArgumentParser) -> None:
@@ -20,6 +20,7 @@ def write_command_report(args: argparse.Namespace, written: list, folder: Path) 
     if getattr(args, "report", None) is None:
         return None
     from ..report import Source, classify, write_sources_report
+    from ..report.html import esc
     sources, figures = [], []
     for item in written:
         if isinstance(item, Source):
@@ -31,11 +32,14 @@ def write_command_report(args: argparse.Namespace, written: list, folder: Path) 
     command = " ".join(str(c) for c in (args.command, getattr(args, "rig_command", None)) if c)
     out = Path(args.report) if args.report else Path(folder) / f"{command.replace(' ', '-')}.report.html"
     line = "rodlab " + " ".join(shlex.quote(a) for a in getattr(args, "argv", []) or [])
-    path = write_sources_report(out, sources, figures, f"rodlab {command}", f"Command: <code>{_esc(line)}</code>")
+    path = write_sources_report(out, sources, figures, f"rodlab {command}", f"Command: <code>{esc(line)}</code>")
     print(f"wrote {path}")
     return path
 
 
-def _esc(s: str) -> str:
-    import html
-    return html.escape(s)
+def default_folder(args: argparse.Namespace) -> Path:
+    """Where ``--report`` goes by default when the results are a JSON and / or a figure folder: beside the
+    JSON, else in the figure folder, else here."""
+    if getattr(args, "json", None):
+        return Path(args.json).parent
+    return Path(args.png) if getattr(args, "png", None) else Path(".")

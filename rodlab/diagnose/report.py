@@ -25,6 +25,12 @@ class Finding:
     rms_after_mm: float
     evidence: dict = field(default_factory=dict)
 
+    @classmethod
+    def from_dict(cls, f: dict) -> "Finding":
+        """A finding as read back from a diagnosis report (the inverse of :meth:`to_dict`)."""
+        return cls(f["effect"], f["location"], f["explanation"], f["parameters"], f.get("intervals_95", {}),
+                   f["rms_before_mm"], f["rms_after_mm"], f.get("evidence", {}))
+
     def to_dict(self) -> dict:
         params = dict(self.parameters)
         return {"effect": self.effect, "location": self.location, "explanation": self.explanation,

@@ -111,8 +111,7 @@ def _study_section(run: Path, sy: dict, files: dict) -> str:
 def _evidence(f: dict) -> str:
     from ..diagnose.report import Finding
     from ..diagnose.wording import evidence_text
-    return evidence_text(Finding(f["effect"], f["location"], f["explanation"], f["parameters"], f["intervals_95"],
-                                 f["rms_before_mm"], f["rms_after_mm"], f["evidence"]))
+    return evidence_text(Finding.from_dict(f))
 
 
 def read_run(run: Path) -> dict:

@@ -120,8 +120,7 @@ def _finding_rows(findings: list, subject: str) -> list[list]:
     from ..diagnose.wording import confirmation, evidence_text
     rows = []
     for f in findings:
-        fi = Finding(f["effect"], f["location"], f["explanation"], f["parameters"], f.get("intervals_95", {}),
-                     f["rms_before_mm"], f["rms_after_mm"], f.get("evidence", {}))
+        fi = Finding.from_dict(f)
         params = ", ".join(f"{k} = {v:.4g}" + (f" [{fi.intervals[k][0]:.3g}, {fi.intervals[k][1]:.3g}]"
                                                 if k in fi.intervals else "")
                            for k, v in fi.parameters.items() if isinstance(v, (int, float)))

@@ -48,13 +48,15 @@ def interleaved(points: PointSet) -> tuple[PointSet, PointSet]:
     return subset(points, idx % 2 == 0), subset(points, idx % 2 == 1)
 
 
-def fit_and_validate(robot, protocol: str, fit: PointSet, tests: list[tuple[str, PointSet]]) -> list[HoldoutRow]:
-    """Identify ``robot`` on ``fit`` (kinematics, base, tool; what the data cannot identify held at nominal) and
+def fit_and_validate(robot, protocol: str, fit: PointSet, tests: list[tuple[str, PointSet]],
+                     pinned: dict | None = None) -> list[HoldoutRow]:
+    """Identify ``robot`` on ``fit`` (kinematics, base, tool, joint compliances; what the data cannot identify
+    held at nominal; ``pinned`` name -> value held, e.g. every ``c_i = 0`` for a kinematic-only model) and
     validate on each named test set."""
     obs = Observations(np.deg2rad(fit.q_deg), fit.x_W_mm, np.zeros_like(fit.x_W_mm))
     t0 = time.perf_counter()
-    res = identify(robot, obs, fit.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True, find_tool=True,
-                   expected_noise_mm=None)
+    res = identify(robot, obs, fit.tool_mm, None, pinned=dict(pinned or {}), freed={"tool_y"},
+                   fix_unidentifiable=True, find_tool=True, expected_noise_mm=None)
     seconds = time.perf_counter() - t0
     held = [u.split(" ")[0] for u in res.unidentifiable if "in this campaign" in u]
     rows = []

@@ -6,9 +6,10 @@ industrial robot", Robotics and Computer-Integrated Manufacturing, 2021). One ro
 positions [mm] of three reflectors (SMR N1, N2, N3) on the end-effector, measured by a laser tracker, then
 joint values [deg] from the controller (in the stored copy: six zero columns, then J1..J6).
 
-The robot is a FANUC R-2000iC/165F (see ``rodlab/data/robots/r2000ic165f.toml`` and docs/calibrate.md for
-how this was established from the data). The controller's joints become the model's joints:
-``q = (J1, J2, -(J2 + J3), -J4, -J5, -J6)``. Each reflector becomes one ``*.validation.csv`` (the
+The robot is a FANUC R-2000iC/165F (see ``rodlab/data/robots/r2000ic165f.urdf`` and docs/calibrate.md for
+how this was established from the data). The controller's joints become the URDF's joints (the
+ROS-Industrial layout; FANUC reports J3 relative to the horizontal): ``q = (J1, J2, J2 + J3, J4, J5, J6)``.
+Each reflector becomes one ``*.validation.csv`` (the
 contract's instrument-point format) with a rough tool guess; ``rodlab calibrate --points`` finds the real
 tool and base.
 
@@ -26,7 +27,7 @@ from rodlab.fileio import atomic_write_text
 
 HEADER = """# Laser-tracker points of a FANUC R-2000iC/165F, reflector {name} (public data of R. A. Boby and
 # A. Klimchik, github.com/RABKKK/LaserTrackerPoseData4KinIdent, N1N2N3Jval.csv; converted by
-# scripts/convert_boby2021.py). q = (J1, J2, -(J2+J3), -J4, -J5, -J6) [deg]; x, y, z in the tracker frame.
+# scripts/convert_boby2021.py). q = (J1, J2, J2+J3, J4, J5, J6) [deg] (ROS-I); x, y, z in the tracker frame.
 # The tool below is a rough guess (reflector ~200 mm in front of the flange); calibration finds it.
 # tool_mm: 0, 0, 200
 # rod_mass_kg: 0
@@ -35,10 +36,9 @@ HEADER = """# Laser-tracker points of a FANUC R-2000iC/165F, reflector {name} (p
 
 
 def controller_to_model(J_deg: np.ndarray) -> np.ndarray:
-    """FANUC controller joints (J3 relative to the horizontal) to the model's q, shape=(N, 6) [deg]."""
-    J = np.asarray(J_deg, float)
-    q = J * np.array([1.0, 1.0, -1.0, -1.0, -1.0, -1.0])
-    q[:, 2] = -(J[:, 1] + J[:, 2])
+    """FANUC controller joints (J3 relative to the horizontal) to the URDF's q, shape=(N, 6) [deg]."""
+    q = np.array(J_deg, float)
+    q[:, 2] += q[:, 1]
     return q
 
 

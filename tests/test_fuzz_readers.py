@@ -64,7 +64,7 @@ def _reader(kind):
         from rodlab.fea.joints_io import read_joints
         return read_joints
     if kind == "robot":
-        from rodlab.calibrate.robot import read_robot
+        from rodlab.calibrate.robot_formats import read_robot
         return read_robot
     if kind == "profile":
         from rodlab.stiffness_rig.config import read_profile

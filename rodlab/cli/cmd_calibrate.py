@@ -13,6 +13,7 @@ from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
+from .robotargs import add_robot_options, robot_from_args
 
 __all__ = ["register", "run_calibration", "CalibrationRun"]
 
@@ -20,7 +21,7 @@ log = logging.getLogger(__name__)
 
 
 def _common(p) -> None:
-    p.add_argument("--robot", default="tx90", help="built-in robot name (tx90) or a robot file")
+    add_robot_options(p)
     p.add_argument("--validate", default=None, help="validation points (*.validation.csv) for the paper's statistics")
     p.add_argument("--pin", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a parameter at a value (contract units), e.g. c_6=0 (repeatable)")
@@ -116,8 +117,8 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
     deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`)."""
     from rodlab.calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
-    from rodlab.calibrate import resolve_robot, validate
-    robot = resolve_robot(args.robot)
+    from rodlab.calibrate import validate
+    robot = robot_from_args(args)
     camp = read_campaign(args.campaign, robot.n)
     fix = read_fixture(args.fixture)
     obs = campaign_observations(camp, fix, rod)
@@ -224,8 +225,8 @@ def _print_result(res, before, after, label) -> None:
 
 
 def _calibrate_points(args) -> int:
-    from rodlab.calibrate import Observations, ModelParams, identify, read_points, resolve_robot, result_dict, validate
-    robot = resolve_robot(args.robot)
+    from rodlab.calibrate import Observations, ModelParams, identify, read_points, result_dict, validate
+    robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
                        pts.rod_com_T_mm)
@@ -309,7 +310,7 @@ def register_more(sub) -> None:
                        description="The project's own test data: a truth robot (random kinematic errors, joint "
                                    "compliances), a fixture, a rod, noise; writes the contract's campaign, fixture, "
                                    "validation and compliance files and a truth.json.")
-    p.add_argument("--robot", default="tx90")
+    add_robot_options(p)
     p.add_argument("--rod", required=True, help="the rod's compliance file (nominal)")
     p.add_argument("--rod-true", default=None, help="the rod as it really is (default: --rod)")
     p.add_argument("--positions", type=count, default=5)
@@ -325,7 +326,7 @@ def register_more(sub) -> None:
                        description="Reachable rod orientations at every clamping position (numeric IK within the "
                                    "joint limits), chosen to maximise the observability index O1; prints O1-O5 and "
                                    "writes the joint angles for the robot program.")
-    p.add_argument("--robot", default="tx90")
+    add_robot_options(p)
     p.add_argument("--fixture", required=True)
     p.add_argument("--rod", required=True, help="a compliance file (tool, mass) or a *.rod.toml design")
     p.add_argument("-k", type=count, default=6, help="orientations per position")
@@ -336,9 +337,8 @@ def register_more(sub) -> None:
 
 
 def cmd_simulate_campaign(args) -> int:
-    from rodlab.calibrate import resolve_robot
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-    robot = resolve_robot(args.robot)
+    robot = robot_from_args(args)
     rod = read_compliance(args.rod)
     rod_true = read_compliance(args.rod_true) if args.rod_true else None
     errs = {}
@@ -357,10 +357,10 @@ def cmd_simulate_campaign(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from rodlab.calibrate import read_fixture, resolve_robot
+    from rodlab.calibrate import read_fixture
     from rodlab.calibrate.plan import plan_poses
     from rodlab.fileio import atomic_write_text
-    robot = resolve_robot(args.robot)
+    robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if str(args.rod).endswith(".toml"):
         from ..calc import calc_rod_compliance

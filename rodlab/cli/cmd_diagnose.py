@@ -7,6 +7,7 @@ from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
 from .argtypes import pos_float
 from .reporting import add_report_option, default_folder, write_command_report
+from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 
 __all__ = ["register"]
 
@@ -22,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("--sim", help="rig: the simulated compliance file")
     p.add_argument("--campaign", help="*.campaign.csv")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
-    p.add_argument("--robot", default="tx90", help="campaign: robot name or file")
+    add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
     p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
     p.add_argument("--noise-um", type=pos_float, default=3.0, help="campaign: device noise [um] (default 3)")
@@ -60,10 +61,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
             print(f"wrote {written[-1]}")
     else:
-        from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+        from rodlab.calibrate import read_campaign, read_fixture, read_points
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
-        robot = resolve_robot(args.robot)
+        robot = robot_from_args(args)
         pts = read_points(args.validate, robot.n) if args.validate else None
         diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
                                        read_compliance(args.rod), args.noise_um * 1e-3, pts)

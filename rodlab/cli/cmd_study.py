@@ -9,6 +9,7 @@ from ..design_io import resolve_design
 from ..errors import RodlabError
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, write_command_report
+from .robotargs import add_robot_options, robot_from_args
 
 __all__ = ["register"]
 
@@ -31,7 +32,7 @@ def register(sub) -> None:
     p.add_argument("--L2", default=None, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--materials", default=None, help="tube-material variants of the base, e.g. cfrp,steel_304")
     p.add_argument("--tubes", default=None, help="tube-size variants of the base, OUTERxWALL [mm], e.g. 25x2,30x1.5")
-    p.add_argument("--robot", default="tx90", help="built-in robot (tx90, r2000ic165f) or a robot file")
+    add_robot_options(p)
     p.add_argument("--fixture", default=None,
                    help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
                         "{W}, 650 mm in front of the robot)")
@@ -104,7 +105,7 @@ def _check_numbers(args) -> None:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    from rodlab.calibrate import read_fixture, resolve_robot
+    from rodlab.calibrate import read_fixture
     from rodlab.calibrate.predict import Priors
     from rodlab.calibrate.simulate import standard_fixture
     from rodlab.study import StudySpec, run_study, write_study_outputs
@@ -113,7 +114,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     from ..progress import progress as bar_of
     _check_numbers(args)
     methods = _methods(args.methods)
-    robot = resolve_robot(args.robot)
+    robot = robot_from_args(args)
     fixture = read_fixture(args.fixture) if args.fixture else standard_fixture()
     priors = Priors(error_scale=args.error_scale, device_noise_mm=args.device_noise,
                     instrument_noise_mm=args.instrument_noise, shape_sigma=args.shape_sigma,

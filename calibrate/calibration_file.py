@@ -1,0 +1,104 @@
+"""Reading a calibration result back (contract ``rodlab.calibration/1``) and the model it describes."""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CalibrationError
+from .kinematics import ModelParams
+from .result import FORMAT_CALIBRATION
+
+__all__ = ["CalibratedParameter", "CalibrationFile", "read_calibration", "calibrated_params"]
+
+
+@dataclass(frozen=True)
+class CalibratedParameter:
+    """One parameter of a result: value and 1-sigma in ``unit`` (contract units), and how it was treated
+    (``identified`` / ``regularised`` / ``fixed`` / ``pinned``)."""
+
+    value: float
+    sigma: float
+    unit: str
+    status: str
+
+
+@dataclass(frozen=True)
+class CalibrationFile:
+    """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters."""
+
+    path: Path
+    robot: str
+    compensation: str
+    trusted: bool
+    residual_rms_mm: float
+    parameters: dict
+
+
+def read_calibration(path) -> CalibrationFile:
+    """Read a result file; errors name the file and key and say what is expected."""
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError as e:
+        raise CalibrationError("file not found", path=p) from e
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        line = getattr(e, "lineno", None)
+        raise CalibrationError(f"not a JSON calibration result: {e}", path=p, line=line) from e
+    if not isinstance(data, dict) or data.get("format") != FORMAT_CALIBRATION:
+        got = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" (written by `rodlab calibrate --json`), "
+                               f"got {got!r}", path=p, key="format")
+    params = {}
+    for name, v in (data.get("parameters") or {}).items():
+        try:
+            params[name] = CalibratedParameter(float(v["value"]), float(v.get("sigma") or 0.0), str(v["unit"]),
+                                               str(v.get("status", "")))
+        except (KeyError, TypeError, ValueError) as e:
+            raise CalibrationError(f"expected {{\"value\": number, \"sigma\": number, \"unit\": text}}, got {v!r}",
+                                   path=p, key=f"parameters.{name}") from e
+    if not params:
+        raise CalibrationError("no parameters", path=p, key="parameters")
+    return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
+                           bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params)
+
+
+def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
+    """The identified model (internal units) of ``robot``; parameters absent from the file stay nominal."""
+    n = robot.n
+    joints = {int(k.split("_")[1]) for k in cal.parameters if k.startswith("dtheta_") and k[7:].isdigit()}
+    if joints != set(range(1, n + 1)):
+        raise CalibrationError(f"this result does not describe a {n}-joint robot (robot {robot.name!r}); export "
+                               f"with the robot the calibration used (it says {cal.robot!r})", path=cal.path,
+                               key="parameters")
+    _check_description(robot, cal)
+    p = ModelParams.nominal(robot, np.zeros(3))
+
+    def get(name, default):
+        return cal.parameters[name].value if name in cal.parameters else default
+
+    rows = {k: np.array([get(f"{k}_{i + 1}", float(v[i])) for i in range(n)])
+            for k, v in (("d", robot.d_mm), ("a", robot.a_mm), ("alpha", robot.alpha_deg), ("beta", robot.beta_deg),
+                         ("dtheta", np.zeros(n)), ("c", np.zeros(n)))}
+    return ModelParams(np.deg2rad(robot.theta_offset_deg + rows["dtheta"]), rows["d"], rows["a"],
+                       np.deg2rad(rows["alpha"]), np.deg2rad(rows["beta"]), rows["c"],
+                       np.array([get(f"base_{k}", 0.0) for k in "xyzabc"]),
+                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]))
+
+
+def _check_description(robot, cal: CalibrationFile) -> None:
+    """Rows the calibration held at nominal must be this description's nominal: else it is another robot file
+    (a URDF's rows differ from a hand-written DH table of the same arm)."""
+    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
+    for name, v in cal.parameters.items():
+        kind, _, idx = name.rpartition("_")
+        if v.status != "fixed" or kind not in nominal or not idx.isdigit():
+            continue
+        expected = float(nominal[kind][int(idx) - 1])
+        if abs(v.value - expected) > 1e-6 * max(1.0, abs(expected)):
+            raise CalibrationError(f"{name} was held at {v.value:g} {v.unit} by the calibration, but this robot "
+                                   f"description has {expected:g}: the result was made with another description "
+                                   f"of the robot; export with the one the calibration used", path=cal.path,
+                                   key=f"parameters.{name}")

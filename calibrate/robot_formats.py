@@ -1,0 +1,67 @@
+"""Robot descriptions rodlab reads, one reader per file kind (the registry), and the built-in robots.
+
+Adding a format is one reader module and one entry in :data:`ROBOT_READERS` (suffix -> reader). A reader takes
+the path and the chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a :class:`Robot`.
+Built-in robots are the files in ``rodlab/data/robots`` (each names its source), by file stem.
+"""
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Callable
+
+from rodlab.errors import did_you_mean
+
+from .errors import CalibrationError
+from .robot import Robot
+from .robot_toml import read_robot_toml
+from .robot_urdf import read_urdf
+
+__all__ = ["ROBOT_READERS", "read_robot", "resolve_robot", "builtin_robots"]
+
+
+def _toml(path, base_link=None, tip_link=None) -> Robot:
+    if base_link or tip_link:
+        raise CalibrationError("--base-link / --tip-link choose a chain in a URDF; a TOML robot file is one chain",
+                               path=path, key="base_link" if base_link else "tip_link")
+    return read_robot_toml(path)
+
+
+#: file suffix -> reader(path, base_link, tip_link)
+ROBOT_READERS: dict[str, Callable[..., Robot]] = {".toml": _toml, ".urdf": read_urdf}
+
+
+def read_robot(path, base_link: str | None = None, tip_link: str | None = None) -> Robot:
+    """Read a robot file of any registered kind, chosen by its suffix (a file without one is sniffed)."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix not in ROBOT_READERS and p.is_file():
+        head = p.read_text(encoding="utf-8", errors="replace")[:2000].lstrip()
+        suffix = ".urdf" if head.startswith("<") else ".toml"
+    if suffix not in ROBOT_READERS:
+        raise CalibrationError(f"unknown robot file kind {p.suffix!r}; rodlab reads {sorted(ROBOT_READERS)}", path=p)
+    return ROBOT_READERS[suffix](p, base_link, tip_link)
+
+
+def builtin_robots() -> dict[str, Path]:
+    """Built-in robot name -> its file (TOML before URDF when both exist)."""
+    folder = resources.files("rodlab") / "data" / "robots"
+    out = {}
+    for f in sorted(folder.iterdir(), key=lambda f: (Path(str(f)).suffix != ".toml", str(f))):
+        p = Path(str(f))
+        if p.suffix in ROBOT_READERS:
+            out.setdefault(p.stem.lower(), p)
+    return out
+
+
+def resolve_robot(spec: str | Path, base_link: str | None = None, tip_link: str | None = None) -> Robot:
+    """A robot file path (any registered kind), or a built-in name (``tx90``, case-blind)."""
+    p = Path(spec)
+    if p.exists() or p.suffix.lower() in ROBOT_READERS:
+        return read_robot(p, base_link, tip_link)
+    names = builtin_robots()
+    key = str(spec).strip().lower()
+    if key in names:
+        return read_robot(names[key], base_link, tip_link)
+    raise CalibrationError(f"no such robot file or built-in robot; built-ins: {sorted(names)}."
+                           + did_you_mean(str(spec), names), path=spec)

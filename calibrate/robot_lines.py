@@ -1,0 +1,191 @@
+"""Any serial chain to the calibrator's model: joint axes as lines at the zero configuration -> DH rows.
+
+Every robot description (URDF, DH, modified DH) is first reduced to a :class:`ZeroChain`: the joint axes as
+lines in the description's base frame at q = 0, the tip frame (flange / ``tool0``) and the links' masses. The
+rows of the calibrator's model ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)`` then follow
+from the common normals of consecutive axes (Denavit-Hartenberg; ``beta = 0`` nominally):
+
+- ``z_{i-1}`` runs along joint i's axis *in the description's positive direction*, so the model's joint
+  angle is the description's (``theta_i = q_i + theta_offset_i``) and no sign table is needed;
+- non-parallel consecutive axes: ``x_i`` along their common normal (``z_{i-1} x z_i`` where they
+  intersect), ``d_i`` and ``a_i`` the normal's foot and length;
+- parallel consecutive axes: the normal is not unique; it is taken through ``o_{i-1}`` (``d_i = 0``) and the
+  row is one where the calibrator identifies Hayati's ``beta_i`` instead of ``d_i``;
+- the last row ends on the tip frame: ``z_n`` along the tip's z, ``x_n`` along the tip's x when the tip's z
+  lies on the last axis (the usual flange), so ``{n}`` is the tip frame;
+- ``{0}``: ``z_0`` on joint 1's axis through the foot of the base origin, ``x_0`` the base x projected.
+
+The conversion is exact: the model's forward kinematics equals the description's for every configuration
+(tested to 1e-6 mm), with ``base_T_0`` (pose of {0} in the base frame) and ``n_T_tip`` (tip in {n}).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ZeroChain", "DhRows", "dh_rows", "row_matrix", "chain_matrices"]
+
+_PARALLEL = 1e-9     # |z_{i-1} x z_i| below which two axes are parallel
+_ON_AXIS = 1e-9      # mm: a common normal shorter than this is an intersection
+
+
+@dataclass(frozen=True)
+class ZeroChain:
+    """A serial chain of revolute joints at q = 0, in the description's base frame.
+
+    Attributes (n = number of joints)
+    ---------------------------------
+    name : robot name; source : where the description came from (file, data sheet)
+    axis_point_mm : shape=(n, 3) [mm], a point on joint i's axis; axis_dir : shape=(n, 3), unit direction
+        (positive rotation by the right hand)
+    tip_T : shape=(4, 4) [mm], the tip frame (flange / tool0) at q = 0
+    limits_deg : shape=(n, 2); link_mass_kg : shape=(n,), the mass moved by joint i and not by joint i + 1;
+    link_com_mm : shape=(n, 3) [mm], its centre of mass at q = 0; gravity : shape=(3,) [m/s^2]
+    """
+
+    name: str
+    axis_point_mm: np.ndarray
+    axis_dir: np.ndarray
+    tip_T: np.ndarray
+    limits_deg: np.ndarray
+    link_mass_kg: np.ndarray
+    link_com_mm: np.ndarray
+    gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.80665]))
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        n = int(np.shape(self.axis_point_mm)[0])
+        shapes = {"axis_point_mm": (n, 3), "axis_dir": (n, 3), "tip_T": (4, 4), "limits_deg": (n, 2),
+                  "link_mass_kg": (n,), "link_com_mm": (n, 3), "gravity": (3,)}
+        for k, shape in shapes.items():
+            if np.shape(getattr(self, k)) != shape:
+                raise ValueError(f"ZeroChain.{k} must have shape {shape}, got {np.shape(getattr(self, k))}")
+        norms = np.linalg.norm(self.axis_dir, axis=1)
+        if np.any(np.abs(norms - 1.0) > 1e-9):
+            raise ValueError(f"ZeroChain.axis_dir must be unit vectors, got norms {norms}")
+        if n < 2:
+            raise ValueError(f"a serial chain needs at least 2 revolute joints, got {n}")
+
+
+@dataclass(frozen=True)
+class DhRows:
+    """The model's nominal rows and the frames that tie it to its description.
+
+    theta_offset_deg, d_mm, a_mm, alpha_deg, beta_deg : shape=(n,); base_T_0 : {0} in the base frame [mm];
+    n_T_tip : the tip frame in {n} [mm]; frames_T : shape=(n + 1, 4, 4), {0}..{n} in the base frame at q = 0;
+    com_mm : shape=(n, 3), link i's centre of mass in {i}
+    """
+
+    theta_offset_deg: np.ndarray
+    d_mm: np.ndarray
+    a_mm: np.ndarray
+    alpha_deg: np.ndarray
+    beta_deg: np.ndarray
+    base_T_0: np.ndarray
+    n_T_tip: np.ndarray
+    frames_T: np.ndarray
+    com_mm: np.ndarray
+
+
+def row_matrix(theta, d, a, alpha, beta=0.0) -> np.ndarray:
+    """``Rz(theta) Tz(d) Tx(a) Rx(alpha) Ry(beta)`` [rad, mm], one 4x4."""
+    ct, st, ca, sa, cb, sb = (math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha),
+                              math.cos(beta), math.sin(beta))
+    RzRx = np.array([[ct, -st * ca, st * sa], [st, ct * ca, -ct * sa], [0.0, sa, ca]])
+    T = np.eye(4)
+    T[:3, :3] = RzRx @ np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+    T[:3, 3] = (a * ct, a * st, d)
+    return T
+
+
+def chain_matrices(theta_deg, d, a, alpha_deg, beta_deg) -> np.ndarray:
+    """Frames {0}..{n} of one configuration's rows (theta includes q), shape=(n + 1, 4, 4)."""
+    out = [np.eye(4)]
+    for row in zip(np.deg2rad(theta_deg), d, a, np.deg2rad(alpha_deg), np.deg2rad(beta_deg)):
+        out.append(out[-1] @ row_matrix(*row))
+    return np.array(out)
+
+
+def _frame(origin, x, z) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 0], T[:3, 2] = x, z
+    T[:3, 1] = np.cross(z, x)
+    T[:3, 3] = origin
+    return T
+
+
+def _unit(v) -> np.ndarray:
+    return np.asarray(v, float) / np.linalg.norm(v)
+
+
+def _perpendicular(hint, z, fallback) -> np.ndarray:
+    """``hint`` with its z component removed (``fallback`` when hint lies along z)."""
+    for v in (hint, fallback, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])):
+        w = np.asarray(v, float) - np.dot(v, z) * z
+        if np.linalg.norm(w) > 1e-6:
+            return _unit(w)
+    raise AssertionError("unreachable: two orthogonal fallbacks")
+
+
+def _common_normal(o, z, p, u, last: bool):
+    """Feet ``(c1, c2)`` of the common normal from line (o, z) to line (p, u), and whether they are parallel."""
+    w = np.cross(z, u)
+    if np.linalg.norm(w) < _PARALLEL:
+        c1 = o + np.dot(p - o, z) * z if last else o       # the flange at the end / Hayati's d = 0
+        return c1, p + np.dot(c1 - p, u) * u, True
+    r = p - o
+    zu = np.dot(z, u)
+    den = 1.0 - zu * zu
+    s = (np.dot(r, z) - zu * np.dot(r, u)) / den
+    t = (zu * np.dot(r, z) - np.dot(r, u)) / den
+    return o + s * z, p + t * u, False
+
+
+def _signed_angle(v1, v2, axis) -> float:
+    return math.atan2(float(np.dot(np.cross(v1, v2), axis)), float(np.dot(v1, v2)))
+
+
+def _first_frame(chain: ZeroChain) -> np.ndarray:
+    z0 = _unit(chain.axis_dir[0])
+    p = chain.axis_point_mm[0]
+    origin = p - np.dot(p, z0) * z0                    # the foot of the base origin on axis 1
+    return _frame(origin, _perpendicular([1.0, 0.0, 0.0], z0, [0.0, 1.0, 0.0]), z0)
+
+
+def dh_rows(chain: ZeroChain) -> DhRows:
+    """The nominal rows of the calibrator's model for ``chain`` (exact; see the module docstring)."""
+    n = chain.axis_dir.shape[0]
+    frames = [_first_frame(chain)]
+    rows = np.zeros((n, 4))
+    tip_o, tip_x, tip_z = chain.tip_T[:3, 3], chain.tip_T[:3, 0], chain.tip_T[:3, 2]
+    for i in range(n):
+        prev = frames[-1]
+        o, x_prev, z = prev[:3, 3], prev[:3, 0], prev[:3, 2]
+        last = i == n - 1
+        p, u = (tip_o, _unit(tip_z)) if last else (chain.axis_point_mm[i + 1], _unit(chain.axis_dir[i + 1]))
+        c1, c2, parallel = _common_normal(o, z, p, u, last)
+        a = float(np.linalg.norm(c2 - c1))
+        if a > _ON_AXIS:
+            x = (c2 - c1) / a
+        elif not parallel:                             # intersecting axes: the sign nearest the previous x
+            x = _unit(np.cross(z, u))
+            x = -x if np.dot(x, x_prev) < -1e-9 else x
+        else:
+            x = _perpendicular(tip_x if last else x_prev, z, x_prev)
+        rows[i] = (_signed_angle(x_prev, x, z), float(np.dot(c1 - o, z)), a, _signed_angle(z, u, x))
+        frames.append(_frame(c1 + a * x, x, u))
+    return _assemble(chain, rows, frames)
+
+
+def _assemble(chain: ZeroChain, rows: np.ndarray, frames: list) -> DhRows:
+    F = np.array(frames)
+    base_T_0 = F[0]
+    # the frames as the rows rebuild them (exact up to round-off; the rows define the model)
+    rebuilt = base_T_0 @ chain_matrices(np.rad2deg(rows[:, 0]), rows[:, 1], rows[:, 2], np.rad2deg(rows[:, 3]),
+                                         np.zeros(len(rows)))
+    n_T_tip = np.linalg.inv(rebuilt[-1]) @ chain.tip_T
+    com = np.einsum("nij,nj->ni", np.linalg.inv(rebuilt[1:]), np.c_[chain.link_com_mm, np.ones(len(rows))])[:, :3]
+    return DhRows(np.rad2deg(rows[:, 0]), rows[:, 1].copy(), rows[:, 2].copy(), np.rad2deg(rows[:, 3]),
+                  np.zeros(len(rows)), base_T_0, n_T_tip, rebuilt, com)

@@ -1,0 +1,179 @@
+"""Robot files in TOML (``rodlab.robot/1`` and ``/2``): DH or modified-DH (Craig) rows, limits, link masses.
+
+``rodlab.robot/1``: the calibrator's own rows (DH with Hayati's ``beta_deg``), read as they are.
+``rodlab.robot/2`` adds ``convention = "dh" | "mdh"`` (default ``"dh"``), ``source`` (where the numbers come
+from), ``flange_pose`` (the flange in the last row's frame [mm, deg], default zeros) and a joint ``name``:
+
+- ``dh``  (classic): ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) [Ry(beta_i)]``, joint i about
+  ``z_{i-1}``; rows are used as they are;
+- ``mdh`` (Craig): ``T_{i-1,i} = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``, joint i about ``z_i``;
+  row i holds ``alpha_deg = alpha_{i-1}``, ``a_mm = a_{i-1}``, ``theta_offset_deg``, ``d_mm`` and ``com_mm``
+  in frame i (at joint i). Converted exactly to the calibrator's rows through the joint axes
+  (:mod:`calibrate.robot_lines`).
+Errors name the file, line and key.
+"""
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.errors import did_you_mean
+from rodlab.frames import pose_to_matrix
+
+from .errors import CalibrationError
+from .robot import Robot, robot_from_chain
+from .robot_lines import ZeroChain, chain_matrices
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["read_robot_toml", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS"]
+
+FORMAT_ROBOT = "rodlab.robot/2"
+FORMATS_ROBOT = ("rodlab.robot/1", "rodlab.robot/2")
+CONVENTIONS = ("dh", "mdh")
+_ROW_KEYS = ("theta_offset_deg", "d_mm", "a_mm", "alpha_deg", "beta_deg", "limits_deg", "mass_kg", "com_mm")
+_DEFAULTS = {"beta_deg": 0.0, "theta_offset_deg": 0.0, "limits_deg": [-180.0, 180.0], "mass_kg": 0.0,
+             "com_mm": [0.0, 0.0, 0.0]}
+_TOP_KEYS = ("format", "name", "gravity_base", "joint", "convention", "source", "flange_pose")
+
+
+def _line(text, idx, key):
+    """Line of ``key`` in the ``idx``-th ``[[joint]]`` table (or at the top level for ``idx = None``)."""
+    count = -1
+    for i, raw in enumerate(text.splitlines(), start=1):
+        if raw.strip().startswith("[[joint]]"):
+            count += 1
+        if (count == idx or (idx is None and count == -1)) and re.match(rf"^\s*{key}\s*=", raw):
+            return i
+    return None
+
+
+def _load(p: Path) -> tuple[str, dict]:
+    try:
+        text = p.read_text(encoding="utf-8")
+        return text, tomllib.loads(text)
+    except FileNotFoundError as e:
+        raise CalibrationError("file not found", path=p) from e
+    except (OSError, UnicodeDecodeError) as e:
+        raise CalibrationError(f"cannot read: {e}", path=p) from e
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise CalibrationError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+
+
+def _numbers(v, shape, where) -> np.ndarray:
+    items = v if isinstance(v, list) else [v]
+    ok = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in items)
+    arr = np.asarray(v, dtype=float) if ok else None
+    if arr is None or arr.shape != shape or not np.all(np.isfinite(arr)):
+        raise CalibrationError(f"expected {'a number' if not shape else f'{shape[0]} numbers'}, got {v!r}", **where)
+    return arr
+
+
+def _header(p: Path, text: str, data: dict) -> tuple[str, str]:
+    fmt = data.get("format")
+    if fmt not in FORMATS_ROBOT:
+        raise CalibrationError(f"expected format = \"{FORMAT_ROBOT}\" (or \"{FORMATS_ROBOT[0]}\"), got {fmt!r}",
+                               path=p, key="format", line=_line(text, None, "format"))
+    for k in data:
+        if k not in _TOP_KEYS:
+            raise CalibrationError("unknown key." + did_you_mean(k, _TOP_KEYS), path=p, key=k,
+                                   line=_line(text, None, k))
+    convention = data.get("convention", "dh")
+    if fmt == FORMATS_ROBOT[0] and any(k in data for k in ("convention", "source", "flange_pose")):
+        raise CalibrationError(f"`convention`, `source` and `flange_pose` need format = \"{FORMAT_ROBOT}\"", path=p,
+                               key="format", line=_line(text, None, "format"))
+    if convention not in CONVENTIONS:
+        raise CalibrationError(f"expected one of {list(CONVENTIONS)}, got {convention!r}", path=p,
+                               key="convention", line=_line(text, None, "convention"))
+    return convention, str(data.get("source", ""))
+
+
+def _joint_rows(p: Path, text: str, joints, convention: str) -> tuple[dict, list]:
+    if not isinstance(joints, list) or len(joints) < 2:
+        raise CalibrationError("expected at least two [[joint]] tables", path=p, key="joint")
+    cols, names = {k: [] for k in _ROW_KEYS}, []
+    for i, j in enumerate(joints):
+        for k in j:
+            if k not in _ROW_KEYS + ("name",):
+                raise CalibrationError(f"unknown key in joint {i + 1}." + did_you_mean(k, _ROW_KEYS + ("name",)),
+                                       path=p, line=_line(text, i, k), key=f"joint[{i + 1}].{k}")
+        if convention == "mdh" and j.get("beta_deg", 0.0) != 0.0:
+            raise CalibrationError("beta_deg is not part of the modified-DH convention; give the rows in "
+                                   "convention = \"dh\" to use Hayati's beta", path=p,
+                                   line=_line(text, i, "beta_deg"), key=f"joint[{i + 1}].beta_deg")
+        names.append(str(j.get("name", f"joint_{i + 1}")))
+        for k in _ROW_KEYS:
+            cols[k].append(_row_value(p, text, i, k, j.get(k, _DEFAULTS.get(k))))
+    return {k: np.array(v) for k, v in cols.items()}, names
+
+
+def _row_value(p, text, i, k, v) -> np.ndarray:
+    where = {"path": p, "line": _line(text, i, k), "key": f"joint[{i + 1}].{k}"}
+    if v is None:
+        raise CalibrationError(f"joint {i + 1} needs `{k}`", path=p, key=f"joint[{i + 1}].{k}")
+    arr = _numbers(v, {"limits_deg": (2,), "com_mm": (3,)}.get(k, ()), where)
+    if k == "limits_deg" and not arr[0] < arr[1]:
+        raise CalibrationError(f"limits must be [lower, upper] with lower < upper, got {v}", **where)
+    if k == "mass_kg" and arr < 0:
+        raise CalibrationError("mass must be >= 0", **where)
+    return arr
+
+
+def _gravity(p, text, data) -> np.ndarray:
+    where = {"path": p, "key": "gravity_base", "line": _line(text, None, "gravity_base")}
+    g = _numbers(data.get("gravity_base", [0.0, 0.0, -9.80665]), (3,), where)
+    if np.linalg.norm(g) == 0:
+        raise CalibrationError("gravity_base must be 3 finite numbers [m/s^2], not all zero", **where)
+    return g
+
+
+def _mdh_chain(name, cols, flange_T, gravity, source) -> ZeroChain:
+    """Frames of the modified-DH rows at q = 0: joint i turns about z_i through o_i."""
+    n = len(cols["d_mm"])
+    T, frames = np.eye(4), []
+    for i in range(n):
+        al, a = np.deg2rad(cols["alpha_deg"][i]), cols["a_mm"][i]
+        th, d = np.deg2rad(cols["theta_offset_deg"][i]), cols["d_mm"][i]
+        Rx = np.eye(4)
+        Rx[1:3, 1:3] = [[np.cos(al), -np.sin(al)], [np.sin(al), np.cos(al)]]
+        Rx[0, 3] = a
+        Rz = np.eye(4)
+        Rz[:2, :2] = [[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]]
+        Rz[2, 3] = d
+        T = T @ Rx @ Rz
+        frames.append(T)
+    F = np.array(frames)
+    com = np.einsum("nij,nj->ni", F, np.c_[cols["com_mm"], np.ones(n)])[:, :3]
+    return ZeroChain(name, F[:, :3, 3].copy(), F[:, :3, 2].copy(), F[-1] @ flange_T, cols["limits_deg"],
+                     cols["mass_kg"], com, gravity, source)
+
+
+def read_robot_toml(path) -> Robot:
+    """Read a robot TOML file (see the module docstring); errors name the file, line and key."""
+    p = Path(path)
+    text, data = _load(p)
+    convention, source = _header(p, text, data)
+    cols, names = _joint_rows(p, text, data.get("joint"), convention)
+    gravity = _gravity(p, text, data)
+    flange = pose_to_matrix(_numbers(data.get("flange_pose", [0.0] * 6), (6,),
+                                     {"path": p, "key": "flange_pose", "line": _line(text, None, "flange_pose")}))
+    name = str(data.get("name", p.stem))
+    if convention == "mdh":
+        return robot_from_chain(_mdh_chain(name, cols, flange, gravity, source or str(p)), names, path=p)
+    return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=flange,
+                 joint_names=tuple(names), source=source or str(p))
+
+
+def dh_zero_chain(robot: Robot) -> ZeroChain:
+    """The chain of a robot's own rows at q = 0 in {0} (for tests and conversions back and forth)."""
+    F = chain_matrices(robot.theta_offset_deg, robot.d_mm, robot.a_mm, robot.alpha_deg, robot.beta_deg)
+    com = np.einsum("nij,nj->ni", F[1:], np.c_[robot.com_mm, np.ones(robot.n)])[:, :3]
+    return ZeroChain(robot.name, F[:-1, :3, 3].copy(), F[:-1, :3, 2].copy(), F[-1] @ robot.n_T_tip,
+                     robot.limits_deg, robot.mass_kg, com, robot.gravity_base, robot.source)

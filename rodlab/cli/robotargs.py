@@ -1,0 +1,21 @@
+"""The robot options every command that models a robot shares: ``--robot``, ``--base-link``, ``--tip-link``."""
+from __future__ import annotations
+
+__all__ = ["add_robot_options", "robot_from_args"]
+
+ROBOT_HELP = ("built-in robot (tx90, r2000ic165f), a robot TOML file (DH or modified-DH rows) or a URDF "
+              "(xacro expanded)")
+
+
+def add_robot_options(p, default: str | None = "tx90", help: str = ROBOT_HELP) -> None:
+    p.add_argument("--robot", default=default, help=help)
+    p.add_argument("--base-link", default=None, metavar="LINK",
+                   help="URDF robots: the chain's first link (default: the root link, e.g. base_link)")
+    p.add_argument("--tip-link", default=None, metavar="LINK",
+                   help="URDF robots: the chain's last link (default: tool0, else the deepest leaf)")
+
+
+def robot_from_args(args):
+    """The robot the options name (a URDF's chain between --base-link and --tip-link)."""
+    from rodlab.calibrate import resolve_robot
+    return resolve_robot(args.robot, getattr(args, "base_link", None), getattr(args, "tip_link", None))

@@ -1,0 +1,254 @@
+"""Robots from URDF, DH and modified-DH descriptions, converted exactly; calibrated URDF / YAML / CSV exports."""
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from rodlab.calibrate import ModelParams, builtin_robots, read_robot, resolve_robot
+from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.kinematics import forward
+from rodlab.frames import pose_to_matrix
+
+yourdfpy = pytest.importorskip("yourdfpy")
+
+
+def _rpy_matrix(r, p, y):
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _random_urdf(rng, n=6, parallel=(1,), fixed_between=(3,)) -> str:
+    """A URDF with rotated joint frames, skew axes, a parallel pair (joint k+1 || k+2), a fixed link with mass in
+    the chain and a lateral tool0 offset: nothing lines up with DH on purpose."""
+    links = ['<link name="base_link"/>']
+    joints = []
+    parent = "base_link"
+    axes = [rng.normal(size=3) for _ in range(n)]
+    for i in range(n):
+        child = f"link_{i + 1}"
+        xyz = rng.uniform(-0.4, 0.4, 3)
+        rpy = rng.uniform(-1.0, 1.0, 3) if i - 1 not in parallel else np.zeros(3)
+        if i - 1 in parallel:
+            axes[i] = axes[i - 1].copy()              # same axis in the (unrotated) child frame: parallel axes
+        ax = axes[i] / np.linalg.norm(axes[i])
+        m, c = rng.uniform(1, 30), rng.uniform(-0.2, 0.2, 3)
+        links.append(f'<link name="{child}"><inertial><origin xyz="{c[0]} {c[1]} {c[2]}" rpy="0 0 0"/>'
+                     f'<mass value="{m}"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>')
+        joints.append(f'<joint name="j{i + 1}" type="revolute"><origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}" '
+                      f'rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/><parent link="{parent}"/><child link="{child}"/>'
+                      f'<axis xyz="{ax[0]} {ax[1]} {ax[2]}"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>')
+        parent = child
+        if i in fixed_between:
+            links.append(f'<link name="spacer_{i + 1}"><inertial><origin xyz="0.1 0 0" rpy="0 0 0"/><mass value="4"/>'
+                         '<inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>')
+            joints.append(f'<joint name="fix{i + 1}" type="fixed"><origin xyz="0.05 0.02 0.1" rpy="0.3 0.1 -0.2"/>'
+                          f'<parent link="{parent}"/><child link="spacer_{i + 1}"/></joint>')
+            parent = f"spacer_{i + 1}"
+    links.append('<link name="tool0"/>')
+    joints.append(f'<joint name="flange" type="fixed"><origin xyz="0.03 -0.02 0.12" rpy="0.2 -0.4 0.7"/>'
+                  f'<parent link="{parent}"/><child link="tool0"/></joint>')
+    return '<?xml version="1.0"?>\n<robot name="skew">' + "".join(links + joints) + "</robot>\n"
+
+
+def _tip_in_base(robot, q):
+    fr = forward(ModelParams.nominal(robot, np.zeros(3)), q)
+    return robot.base_T_0 @ fr.T[:, -1] @ robot.n_T_tip
+
+
+def _yourdfpy_fk(path, q, frame_to, frame_from):
+    m = yourdfpy.URDF.load(str(path), load_meshes=False)
+    out = []
+    for qq in q:
+        m.update_cfg(qq)
+        out.append(m.get_transform(frame_to, frame_from))
+    T = np.array(out)
+    T[:, :3, 3] *= 1000.0
+    return T
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_urdf_model_has_the_urdf_forward_kinematics(tmp_path, seed):
+    """The converted model's tip frame equals the parser's own forward kinematics to 1e-6 mm (and rotation)."""
+    rng = np.random.default_rng(seed)
+    path = tmp_path / "skew.urdf"
+    path.write_text(_random_urdf(rng))
+    robot = read_robot(path)
+    q = rng.uniform(-3, 3, (25, 6))
+    ours, theirs = _tip_in_base(robot, q), _yourdfpy_fk(path, q, "tool0", "base_link")
+    assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
+    assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
+    assert 1 in robot.parallel_rows()                  # joints 2 and 3 parallel: Hayati's beta on row 2
+    assert robot.joint_names == tuple(f"j{i}" for i in range(1, 7))
+
+
+def test_urdf_masses_are_lumped_onto_the_joint_that_moves_them(tmp_path):
+    """Total mass and the first moment of every moving link (fixed spacer folded in) are kept."""
+    rng = np.random.default_rng(5)
+    path = tmp_path / "skew.urdf"
+    path.write_text(_random_urdf(rng))
+    robot = read_robot(path)
+    m = yourdfpy.URDF.load(str(path), load_meshes=False)
+    total = sum(lk.inertial.mass for lk in m.robot.links if lk.inertial is not None)
+    assert robot.mass_kg.sum() == pytest.approx(total)
+    # first moment at q = 0 in the base link, from the parser's frames
+    moment = np.zeros(3)
+    for lk in m.robot.links:
+        if lk.inertial is not None:
+            T = m.get_transform(lk.name, "base_link")
+            moment += lk.inertial.mass * (T[:3, :3] @ lk.inertial.origin[:3, 3] + T[:3, 3]) * 1000.0
+    fr = forward(ModelParams.nominal(robot, np.zeros(3)), np.zeros((1, 6)))
+    ours = sum(robot.mass_kg[i] * (robot.base_T_0 @ fr.T[0, i + 1] @ np.r_[robot.com_mm[i], 1.0])[:3]
+               for i in range(6))
+    assert np.allclose(ours, moment, atol=1e-6)
+
+
+def test_builtin_fanuc_urdf_matches_its_data_sheet_rows():
+    """The built-in URDF (ROS-Industrial layout) is the data-sheet model: DH rows 670/312/1075/225/1280/215."""
+    robot = resolve_robot("r2000ic165f")
+    assert str(robot.path).endswith(".urdf") and "tool0" in robot.source
+    assert np.allclose(np.abs(robot.d_mm), [670, 0, 0, 1280, 0, 215], atol=1e-9)
+    assert np.allclose(robot.a_mm, [312, 1075, 225, 0, 0, 0], atol=1e-9)
+    assert robot.parallel_rows() == [1]
+    assert np.allclose(robot.n_T_tip, np.eye(4), atol=1e-12)      # {6} is tool0
+    q = np.random.default_rng(3).uniform(-2, 2, (20, 6))
+    theirs = _yourdfpy_fk(robot.path, q, "tool0", "base_link")
+    assert np.abs(_tip_in_base(robot, q)[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
+
+
+def _mdh_fk(rows, q, flange):
+    """Craig's modified DH, written out independently: T_{i-1,i} = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)."""
+    out = []
+    for qq in q:
+        T = np.eye(4)
+        for (al, a, th, d), qi in zip(rows, qq):
+            A = pose_to_matrix([a, 0, 0, al, 0, 0]) @ pose_to_matrix([0, 0, d, 0, 0, math.degrees(qi) + th])
+            T = T @ A
+        out.append(T @ flange)
+    return np.array(out)
+
+
+def test_modified_dh_table_is_converted_exactly(tmp_path):
+    """A PUMA-560-like modified-DH table (Craig): the model's flange frame equals the table's."""
+    rows = [(0, 0, 0, 0), (-90, 0, 0, 243.5), (0, 431.8, 0, -93.4), (90, -20.3, 0, 433.1), (-90, 0, 0, 0),
+            (90, 0, 0, 0)]
+    flange = [0, 0, 56.25, 0, 0, 0]
+    text = ['format = "rodlab.robot/2"', 'convention = "mdh"', 'name = "puma"', 'source = "Craig, Table 3.4"',
+            f"flange_pose = {flange}"]
+    for al, a, th, d in rows:
+        text += ["[[joint]]", f"alpha_deg = {al}", f"a_mm = {a}", f"theta_offset_deg = {th}", f"d_mm = {d}"]
+    path = tmp_path / "puma.toml"
+    path.write_text("\n".join(text) + "\n")
+    robot = read_robot(path)
+    q = np.random.default_rng(0).uniform(-3, 3, (30, 6))
+    theirs = _mdh_fk(rows, q, pose_to_matrix(flange))
+    ours = _tip_in_base(robot, q)
+    assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
+    assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
+    assert robot.source == "Craig, Table 3.4" and robot.parallel_rows() == [1]
+
+
+def test_dh_rows_are_read_as_written_and_convert_to_themselves():
+    """Classic DH (the TX90 of the paper) needs no conversion; its axes rebuild the same kinematics."""
+    from rodlab.calibrate.robot import robot_from_chain
+    from rodlab.calibrate.robot_toml import dh_zero_chain
+    tx90 = resolve_robot("tx90")
+    assert tx90.d_mm[0] == 150.0 and tx90.source.startswith("Wan et al.")
+    again = robot_from_chain(dh_zero_chain(tx90))
+    q = np.random.default_rng(1).uniform(-3, 3, (30, 6))
+    assert np.abs(_tip_in_base(tx90, q) - _tip_in_base(again, q)).max() < 1e-9
+    assert again.parallel_rows() == tx90.parallel_rows() == [1]
+
+
+def test_robot_file_errors_name_the_problem(tmp_path):
+    bad = tmp_path / "bad.urdf"
+    bad.write_text('<?xml version="1.0"?>\n<robot name="x">\n  <link name="a">\n</robot>\n')
+    with pytest.raises(CalibrationError, match=r"bad.urdf, line \d+: not valid XML"):
+        read_robot(bad)
+    xacro = tmp_path / "arm.urdf"
+    xacro.write_text('<robot xmlns:xacro="http://wiki.ros.org/xacro"><xacro:macro name="m"/></robot>')
+    with pytest.raises(CalibrationError, match="xacro file: expand it first"):
+        read_robot(xacro)
+    urdf = tmp_path / "skew.urdf"
+    urdf.write_text(_random_urdf(np.random.default_rng(0)))
+    with pytest.raises(CalibrationError, match="no link named 'tool1'.*tool0"):
+        read_robot(urdf, tip_link="tool1")
+    with pytest.raises(CalibrationError, match="choose a chain in a URDF"):
+        resolve_robot("tx90", base_link="base_link")
+    slide = tmp_path / "slide.urdf"
+    slide.write_text(_random_urdf(np.random.default_rng(0)).replace('name="j3" type="revolute"',
+                                                                     'name="j3" type="prismatic"'))
+    with pytest.raises(CalibrationError, match="j3.*prismatic"):
+        read_robot(slide)
+    sniffed = tmp_path / "arm.xml"                      # an existing URDF is not "not valid TOML"
+    sniffed.write_text(urdf.read_text())
+    assert read_robot(sniffed).n == 6
+
+
+def _calibration_file(tmp_path, robot, rng):
+    """A result file of a perturbed model (what `rodlab calibrate --json` writes)."""
+    from rodlab.calibrate.params import catalogue, structural_fixed
+    from rodlab.fileio import atomic_write_json
+    fixed = structural_fixed(robot, np.array([10.0, 0.0, 150.0]))
+    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
+    params = {}
+    for info in catalogue(robot.n):
+        if info.name in fixed:
+            v = float(nominal[info.kind][info.index]) if info.kind in nominal else 0.0
+        elif info.kind in nominal:
+            v = float(nominal[info.kind][info.index]) + rng.normal(scale=0.3)
+        elif info.kind == "c":
+            v = abs(rng.normal(scale=1e-6))
+        else:
+            v = rng.normal(scale=200.0 if info.unit == "mm" else 5.0)
+        params[info.name] = {"value": v, "sigma": 0.01, "unit": info.unit,
+                             "status": "fixed" if info.name in fixed else "identified"}
+    path = tmp_path / "cal.json"
+    atomic_write_json(path, {"format": "rodlab.calibration/1", "robot": robot.name, "compensation": "none",
+                             "trusted": True, "parameters": params, "residual_rms_mm": 0.01})
+    return path
+
+
+def test_export_writes_a_urdf_with_the_calibrated_kinematics(tmp_path):
+    """`rodlab export --urdf`: the written URDF, read by the parser, puts rodlab_tcp where the calibrated model
+    puts the tool point (<= 1 um); the YAML and the DH CSV carry the values and sigmas."""
+    import yaml
+
+    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.cli.main import main
+    urdf = tmp_path / "skew.urdf"
+    urdf.write_text(_random_urdf(np.random.default_rng(7)))
+    robot = read_robot(urdf)
+    cal_path = _calibration_file(tmp_path, robot, np.random.default_rng(8))
+    assert main(["export", str(cal_path), "--urdf", str(urdf), "-o", str(tmp_path / "out" / "cal.urdf")]) == 0
+    params = calibrated_params(robot, read_calibration(cal_path))
+    q = np.random.default_rng(9).uniform(-3, 3, (20, 6))
+    theirs = _yourdfpy_fk(tmp_path / "out" / "cal.urdf", q, "rodlab_tcp", "rodlab_measurement")
+    model = forward(params.with_(c=np.zeros(6)), q).pW
+    assert np.abs(theirs[:, :3, 3] - model).max() < 1e-3
+    nominal = forward(ModelParams.nominal(robot, params.tool, params.base), q).pW
+    assert np.abs(nominal - model).max() > 1.0        # the check above is not trivially true
+    text = (tmp_path / "out" / "cal.urdf").read_text()
+    assert "Joint compliance cannot be expressed in URDF" in text
+    data = yaml.safe_load((tmp_path / "out" / "cal.yaml").read_text())
+    assert set(data["kinematics"]) == set(robot.joint_names)
+    assert data["joint_compliance"]["j2"]["value"] == pytest.approx(params.c[1])
+    assert data["parameters"]["a_3"]["sigma"] == 0.01
+    with open(tmp_path / "out" / "cal.dh.csv") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    assert [r["name"] for r in rows] == list(robot.joint_names)
+    assert float(rows[2]["a_calibrated"]) == pytest.approx(params.a[2])
+    assert float(rows[2]["a_nominal"]) == pytest.approx(robot.a_mm[2])
+
+
+def test_export_refuses_a_result_of_another_robot_description(tmp_path, capsys):
+    from rodlab.cli.main import main
+    cal_path = _calibration_file(tmp_path, resolve_robot("tx90"), np.random.default_rng(0))
+    assert main(["export", str(cal_path), "--urdf", str(builtin_robots()["r2000ic165f"]), "-o",
+                 str(tmp_path / "x.urdf")]) == 2
+    assert "another description of the robot" in capsys.readouterr().err
+    assert not (tmp_path / "x.urdf").exists()

@@ -252,3 +252,15 @@ def test_export_refuses_a_result_of_another_robot_description(tmp_path, capsys):
                  str(tmp_path / "x.urdf")]) == 2
     assert "another description of the robot" in capsys.readouterr().err
     assert not (tmp_path / "x.urdf").exists()
+
+
+def test_the_documented_minimal_robot_file_reads(tmp_path):
+    """docs/formats.md's minimal robot file is a valid robot (the docs cannot drift from the reader)."""
+    from pathlib import Path
+    text = (Path(__file__).resolve().parents[1] / "docs" / "formats.md").read_text()
+    section = text.split("## Robot file", 1)[1]
+    block = section.split("```toml\n", 1)[1].split("```", 1)[0]
+    path = tmp_path / "two.toml"
+    path.write_text(block)
+    robot = read_robot(path)
+    assert robot.n == 2 and robot.source == "my sketch"

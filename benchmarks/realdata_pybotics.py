@@ -1,0 +1,144 @@
+"""Held-out accuracy on public real tracker data: rodlab from the robot's URDF beside a kinematic-only model and
+pybotics, on the same splits.
+
+Data: benchmarks/data/boby2021 (FANUC R-2000iC/165F, three reflectors; see realdata_fanuc.py). The robot:
+the built-in URDF ``r2000ic165f`` (ROS-Industrial layout). Per split (interleaved halves of every reflector;
+fit on N2, validate on N1 and N3) and per model, the validation errors after the base and tool are refitted
+on the validation set (paper Section 5.2):
+
+  nominal          the URDF as it is;
+  rodlab           kinematics (Hayati beta on the parallel J2/J3 pair), base, tool, joint compliances;
+  kinematic only   the same with every joint compliance held at 0;
+  pybotics         pybotics 3 (modified DH, its OptimizationHandler and scipy least_squares, as in its own
+                   example; benchmarks/pybotics_side.py), from the same starting base and tool.
+
+pybotics pins numpy<2, so it runs in its own venv: created on first use in benchmarks/.cache/pybotics-venv
+(``pip install pybotics``), or give ``--python`` an interpreter that has it. Without it the pybotics column is
+skipped with the reason.
+
+    python benchmarks/realdata_pybotics.py [--markdown] [--python PY]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.calibrate import ModelParams, read_points, register_base_and_tool, resolve_robot
+from rodlab.calibrate.holdout import fit_and_validate, interleaved
+from rodlab.calibrate.identify import Observations
+from rodlab.calibrate.kinematics import forward
+from rodlab.calibrate.robot_lines import row_matrix
+from rodlab.calibrate.validate import error_stats
+from rodlab.frames import pose_to_matrix
+
+HERE = Path(__file__).parent
+DATA = HERE / "data" / "boby2021"
+VENV = HERE / ".cache" / "pybotics-venv"
+
+
+def splits():
+    pts = {n: read_points(DATA / f"r2000ic_{n}.validation.csv") for n in ("N1", "N2", "N3")}
+    out = []
+    for name, p in pts.items():
+        fit, test = interleaved(p)
+        out.append(("interleaved", fit, [(name + " odd poses", test)]))
+    out.append(("other tool", pts["N2"], [("N1", pts["N1"]), ("N3", pts["N3"])]))
+    return out
+
+
+def pybotics_python(given: str | None) -> tuple[str | None, str]:
+    """An interpreter with pybotics, or None and why not."""
+    if given:
+        return given, ""
+    py = VENV / "bin" / "python"
+    if not py.exists():
+        try:
+            venv.create(VENV, with_pip=True)
+            subprocess.run([str(py), "-m", "pip", "install", "-q", "pybotics"], check=True, capture_output=True,
+                           timeout=600)
+        except (subprocess.SubprocessError, OSError) as e:
+            return None, f"could not install pybotics in {VENV}: {e}"
+    return str(py), ""
+
+
+def _mdh_job(robot):
+    """The nominal DH rows as pybotics MDH rows: [Rz Tz]_1 [Tx Rx Rz Tz]_2..n, the last Tx Rx in the tool."""
+    mdh = [[0.0, 0.0, np.deg2rad(robot.theta_offset_deg[0]), robot.d_mm[0]]]
+    for i in range(1, robot.n):
+        mdh.append([np.deg2rad(robot.alpha_deg[i - 1]), robot.a_mm[i - 1], np.deg2rad(robot.theta_offset_deg[i]),
+                    robot.d_mm[i]])
+    last = row_matrix(0.0, 0.0, robot.a_mm[-1], np.deg2rad(robot.alpha_deg[-1]), np.deg2rad(robot.beta_deg[-1]))
+    return mdh, last
+
+
+def _start(robot, pts, last):
+    """Base and tool registered on the nominal model: the same start for pybotics as for rodlab."""
+    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))
+    base, tool, _ = register_base_and_tool(robot, ModelParams.nominal(robot, pts.tool_mm), obs)
+    T = np.eye(4)
+    T[:3, 3] = tool
+    return {"world": pose_to_matrix(base).tolist(), "tool": (last @ T).tolist(),
+            "q": np.deg2rad(pts.q_deg).tolist(), "p": pts.x_W_mm.tolist()}, base, tool
+
+
+def run_pybotics(python: str, robot, fit, tests) -> dict:
+    mdh, last = _mdh_job(robot)
+    fit_job, base, tool = _start(robot, fit, last)
+    q = np.deg2rad(fit.q_deg[:5])
+    check = forward(ModelParams.nominal(robot, tool, base), q).pW
+    job = {"mdh": mdh, "world": fit_job["world"], "tool": fit_job["tool"], "fit": fit_job,
+           "check": [[a.tolist(), b.tolist()] for a, b in zip(q, check)],
+           "tests": {name: _start(robot, t, last)[0] for name, t in tests}}
+    res = subprocess.run([python, str(HERE / "pybotics_side.py")], input=json.dumps(job), capture_output=True,
+                         text=True, timeout=1200)
+    if res.returncode != 0:
+        raise RuntimeError(f"pybotics side failed: {res.stderr.strip()[-2000:]}")
+    return json.loads(res.stdout)
+
+
+def run(python: str | None) -> tuple[list, str]:
+    robot = resolve_robot("r2000ic165f")
+    py, why = pybotics_python(python)
+    pinned = {f"c_{i + 1}": 0.0 for i in range(robot.n)}
+    rows = []
+    for protocol, fit, tests in splits():
+        full = fit_and_validate(robot, protocol, fit, tests)
+        kin = fit_and_validate(robot, protocol, fit, tests, pinned=pinned)
+        pyb = run_pybotics(py, robot, fit, tests) if py else None
+        for k, (name, _) in enumerate(tests):
+            other = error_stats(np.array(pyb["tests"][name])) if pyb else None
+            rows.append((protocol, name, full[k], kin[k], other))
+    return rows, why
+
+
+def _cell(s) -> str:
+    return "-" if s is None else f"{s.mean_mm:.3f} / {s.max_mm:.3f}"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--python", default=None, help="an interpreter with pybotics installed")
+    a = ap.parse_args(argv)
+    logging.basicConfig(level=logging.ERROR)
+    rows, why = run(a.python)
+    if why:
+        print(f"pybotics skipped: {why}", file=sys.stderr)
+    print("| protocol | validated on | nominal | rodlab | kinematic only | pybotics |")
+    print("|---|---|---|---|---|---|")
+    for protocol, name, full, kin, pyb in rows:
+        print(f"| {protocol} | {name} | {_cell(full.before)} | {_cell(full.after)} | {_cell(kin.after)} | "
+              f"{_cell(pyb)} |")
+    print("\n(mean / max error [mm] on the validation points, base and tool refitted on them)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -58,7 +58,7 @@ def fit_and_validate(robot, protocol: str, fit: PointSet, tests: list[tuple[str,
     res = identify(robot, obs, fit.tool_mm, None, pinned=dict(pinned or {}), freed={"tool_y"},
                    fix_unidentifiable=True, find_tool=True, expected_noise_mm=None)
     seconds = time.perf_counter() - t0
-    held = [u.split(" ")[0] for u in res.unidentifiable if "in this campaign" in u]
+    held = [u.split(" ")[0] for u in res.unidentifiable if "combined with" in u and "in this" in u]
     rows = []
     for name, test in tests:
         before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]

@@ -180,7 +180,7 @@ def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, pos
         if np.linalg.norm(r) < np.sqrt(tol) * 10 and info.name not in freed:
             coef, *_ = np.linalg.lstsq(A[:, kept] / norms[kept], v, rcond=None)
             big = [infos[kept[m]].name for m in np.argsort(-np.abs(coef)) if abs(coef[m]) > 0.1][:4]
-            reasons[info.name] = f"combined with {', '.join(big)} in this campaign"
+            reasons[info.name] = f"combined with {', '.join(big)} in this {_data_name(positions)}"
             continue
         kept.append(k)
         Q = np.column_stack([Q, r / np.linalg.norm(r)])
@@ -243,10 +243,12 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         log.warning("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
     elif deficient:
         lines = "; ".join(f"{nm} {why}" for nm, why in list(deficient.items())[:8])
+        more = ("Add clamping positions or rod orientations (more varied joint angles)" if obs.group is not None
+                else "Measure more poses spread over the workspace (every joint moved, varied configurations)")
         raise CalibrationError(
-            f"this campaign cannot identify {len(deficient)} parameter(s): {lines}. Add clamping positions or rod "
-            f"orientations (more varied joint angles), hold them with --pin NAME=VALUE, or hold all of them at "
-            f"nominal with --fix-unidentifiable", key="campaign")
+            f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
+            f"parameter(s): {lines}. {more}, hold them with --pin NAME=VALUE, or hold all of them at nominal with "
+            f"--fix-unidentifiable", key="campaign" if obs.group is not None else "points")
     if len(free) > 3 * N:
         raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
     prior = np.zeros(len(infos), dtype=bool)
@@ -399,8 +401,11 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
         w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
     test = res.residual_check
     if test is not None and test.missing:
-        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; physics is "
-                 f"missing: run `rodlab diagnose --campaign` on the same files to find which")
+        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; " + (
+            "physics is missing: run `rodlab diagnose --campaign` on the same files to find which" if test.clamping
+            else "either the instrument is noisier than stated (check --noise-um against its specification) or the "
+                 "model misses physics (backlash, non-geometric errors): `rodlab diagnose --points` on the same "
+                 "files shows the residuals per joint, workspace region and time"))
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":
@@ -414,6 +419,11 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
         if info.kind == "c" and not (-1e-6 <= v <= 1e-4):
             w.append(f"{info.name} = {v:.3g} rad/(N m) is outside [0, 1e-4]: not a plausible gearbox compliance")
     return w
+
+
+def _data_name(positions) -> str:
+    """What the user measured: a MultiCal campaign (clamping positions) or instrument points."""
+    return "campaign" if len(positions) else "data set"
 
 
 def _fixture_shift(infos, x, obs) -> np.ndarray:

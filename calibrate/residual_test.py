@@ -36,12 +36,17 @@ class ResidualTest:
     noise_mm: float
     fixture_sigma: tuple
     missing: bool
+    clamping: bool = True
+
 
     def describe(self) -> str:
         """One sentence: the statistic, the noise model and the verdict."""
-        return (f"reduced chi-square {self.reduced:.2f} over {self.dof} degrees of freedom (p = {self.p_value:.2g}) "
-                f"under the noise model: device {self.noise_mm * 1e3:.1f} um per reading, clamping poses "
-                f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
+        head = (f"reduced chi-square {self.reduced:.2f} over {self.dof} degrees of freedom (p = {self.p_value:.2g}) "
+                f"under the noise model: ")
+        if not self.clamping:
+            return head + f"instrument {self.noise_mm * 1e3:.1f} um per coordinate"
+        return head + (f"device {self.noise_mm * 1e3:.1f} um per reading, clamping poses "
+                       f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
 
 
 def whitened_projection(r_mm: np.ndarray, J: np.ndarray, L: np.ndarray) -> np.ndarray:
@@ -72,4 +77,5 @@ def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002))
     dof = max(3 * N - J.shape[1], 1)
     chi2 = float(e @ e)
     p = float(chdtrc(dof, chi2))
-    return ResidualTest(chi2, dof, chi2 / dof, p, float(noise_mm), tuple(fixture_sigma), p < P_MISSING)
+    return ResidualTest(chi2, dof, chi2 / dof, p, float(noise_mm), tuple(fixture_sigma), p < P_MISSING,
+                        obs.group is not None)

@@ -11,13 +11,18 @@ import numpy as np
 
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
-from .argtypes import count, nonneg_float, seed
+from .argtypes import count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args
 
 __all__ = ["register", "run_calibration", "CalibrationRun"]
 
 log = logging.getLogger(__name__)
+
+#: default noise [um] per coordinate: the MultiCal device (paper), and a laser tracker at 2-5 m (typical
+#: specification U = 15 um + 6 um/m, i.e. about 25 um at 1 sigma per coordinate)
+DEVICE_NOISE_UM = 3.0
+TRACKER_NOISE_UM = 25.0
 
 
 def _common(p) -> None:
@@ -28,6 +33,10 @@ def _common(p) -> None:
     p.add_argument("--free", action="append", default=[], metavar="NAME",
                    help="free a parameter the defaults hold, e.g. fixture_2_x (repeatable)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss (gross alignment errors lose weight)")
+    p.add_argument("--noise-um", type=pos_float, default=None,
+                   help="the measuring instrument's noise per coordinate [um], 1 sigma, that the trust verdict "
+                        f"judges the residuals against (default: {DEVICE_NOISE_UM:g} um for a MultiCal campaign, "
+                        f"{TRACKER_NOISE_UM:g} um for --points: a laser tracker at a few metres)")
     add_report_option(p)
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these points cannot identify at nominal (and report them) instead of "
@@ -124,7 +133,8 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
-                   fix_unidentifiable=args.fix_unidentifiable)
+                   fix_unidentifiable=args.fix_unidentifiable,
+                   expected_noise_mm=(getattr(args, "noise_um", None) or DEVICE_NOISE_UM) * 1e-3)
     run = CalibrationRun(robot, camp, res)
     if args.validate:
         pts = read_points(args.validate, robot.n)
@@ -158,13 +168,17 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     write_command_report(args, written, default_folder(args))
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
-        print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
-        for w in res.warnings:
-            print(f"  - {w}", file=sys.stderr)
+        _print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.missing:
             _print_suspects(robot, camp, args, rod, comp)
         return 3
     return 0
+
+
+def _print_not_trusted(res) -> None:
+    print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
+    for w in res.warnings:
+        print(f"  - {w}", file=sys.stderr)
 
 
 def _write_result(args, result: dict) -> list:
@@ -218,6 +232,9 @@ def _print_result(res, before, after, label) -> None:
         else:
             print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
     print(f"  held fixed: {len(res.unidentifiable)} (see --json for why)")
+    if res.residual_check is not None:
+        verdict = "NOT noise" if res.residual_check.missing else "consistent with noise"
+        print(f"  residuals {verdict}: {res.residual_check.describe()}")
     if before is not None:
         print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")
         for name, st in (("before (nominal)", before), ("after", after)):
@@ -230,9 +247,10 @@ def _calibrate_points(args) -> int:
     pts = read_points(args.points, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
                        pts.rod_com_T_mm)
+    noise_mm = (args.noise_um or TRACKER_NOISE_UM) * 1e-3
     res = identify(robot, obs, pts.tool_mm, None, pinned=_parse_pins(args.pin), freed=set(args.free) | {"tool_y"},
-                   robust=args.robust, fix_unidentifiable=args.fix_unidentifiable,
-                   find_tool=True)
+                   robust=args.robust, fix_unidentifiable=args.fix_unidentifiable, find_tool=True,
+                   expected_noise_mm=noise_mm)
     before = after = None
     if args.validate:
         test = read_points(args.validate, robot.n)
@@ -241,7 +259,14 @@ def _calibrate_points(args) -> int:
     _print_result(res, before, after, "instrument points")
     write_command_report(args, _write_result(args, result_dict(robot, res, "none", before, after)),
                          default_folder(args))
-    return 0 if res.success else 2
+    if res.warnings:
+        _print_not_trusted(res)
+        from ..diagnose.points import diagnose_points
+        print("suspects (`rodlab diagnose --points`):", file=sys.stderr)
+        print("\n".join("  " + line for line in diagnose_points(robot, pts, res, noise_mm).summary().splitlines()),
+              file=sys.stderr)
+        return 3
+    return 0
 
 
 def _compare_runs(items) -> list:

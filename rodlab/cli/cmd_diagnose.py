@@ -22,11 +22,15 @@ def register(sub) -> None:
     p.add_argument("--rig", help="*.rig.csv recording")
     p.add_argument("--sim", help="rig: the simulated compliance file")
     p.add_argument("--campaign", help="*.campaign.csv")
+    p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
+                                    "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
     p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
-    p.add_argument("--noise-um", type=pos_float, default=3.0, help="campaign: device noise [um] (default 3)")
+    p.add_argument("--noise-um", type=pos_float, default=None,
+                   help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
+                        "(default 25, a laser tracker)")
     p.add_argument("--json", help="write the contract's diagnosis report")
     p.add_argument("--png", help="folder for figures")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
@@ -37,9 +41,11 @@ def register(sub) -> None:
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
     written: list = []
-    if bool(args.rig) == bool(args.campaign):
-        raise RodlabError("give either --rig REC.rig.csv --sim SIM.compliance.json or --campaign C.csv --fixture F.json "
-                          "--rod ROD.compliance.json")
+    if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
+        raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
+                          "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")
+    if args.points:
+        return _diagnose_points(args)
     if args.rig:
         from rodlab.stiffness_rig import read_recording
         if not args.sim:
@@ -67,7 +73,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         robot = robot_from_args(args)
         pts = read_points(args.validate, robot.n) if args.validate else None
         diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
-                                       read_compliance(args.rod), args.noise_um * 1e-3, pts)
+                                       read_compliance(args.rod), (args.noise_um or 3.0) * 1e-3, pts)
         print(diag.summary())
         if "validation" in diag.extra:
             v = diag.extra["validation"]
@@ -76,7 +82,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                   f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
         if args.png:
             from ..diagnose.plots import plot_campaign_diagnosis
-            for p in plot_campaign_diagnosis(diag, fits, args.png, args.noise_um * 1e-3):
+            for p in plot_campaign_diagnosis(diag, fits, args.png, (args.noise_um or 3.0) * 1e-3):
                 written.append(p)
                 print(f"wrote {p}")
     if args.json:
@@ -87,4 +93,28 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         report = diag.to_dict()
         written.insert(0, Source(report["format"], report))
     write_command_report(args, written, default_folder(args))
+    return 0
+
+
+def _diagnose_points(args) -> int:
+    """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
+    import numpy as np
+
+    from rodlab.calibrate import Observations, identify, read_points
+
+    from ..diagnose.points import diagnose_points
+    from ..fileio import atomic_write_json, json_safe
+    robot = robot_from_args(args)
+    pts = read_points(args.points, robot.n)
+    noise_mm = (args.noise_um or 25.0) * 1e-3
+    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
+                       pts.rod_com_T_mm)
+    res = identify(robot, obs, pts.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True, find_tool=True,
+                   expected_noise_mm=noise_mm)
+    diag = diagnose_points(robot, pts, res, noise_mm)
+    print(diag.summary())
+    written: list = []
+    if args.json:
+        written.append(atomic_write_json(args.json, json_safe(diag.to_dict())))
+        print(f"wrote {written[-1]}")
     return 0

@@ -1,0 +1,91 @@
+"""Instrument points as a first-class workflow: the noise is an input, the trust verdict and exit codes match
+campaign mode, and `rodlab diagnose --points` names joint-, direction- and order-dependent residuals."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rodlab.calibrate import ModelParams, resolve_robot
+from rodlab.calibrate.kinematics import forward
+from rodlab.cli.main import main
+
+
+def _write_points(path, robot, seed, noise_mm=0.025, lost_motion_deg=0.0, n=120):
+    """Tracker points of a truth robot (random geometric errors) at random poses in random order; optional
+    lost motion of joint 1: the joint stops short by ``lost_motion_deg`` in the direction it came from."""
+    rng = np.random.default_rng(seed)
+    lo, hi = robot.limits_deg[:, 0], robot.limits_deg[:, 1]
+    q_deg = rng.uniform(np.maximum(lo, -150), np.minimum(hi, 150), (n, robot.n))
+    nom = ModelParams.nominal(robot, np.array([30.0, 20.0, 150.0]), np.array([2500.0, -300.0, 400.0, 0.3, -0.2, 40]))
+    truth = nom.with_(d=nom.d + rng.normal(0, 0.3, robot.n), a=nom.a + rng.normal(0, 0.3, robot.n),
+                      alpha=nom.alpha + np.deg2rad(rng.normal(0, 0.02, robot.n)),
+                      theta_offset=nom.theta_offset + np.deg2rad(rng.normal(0, 0.02, robot.n)))
+    q_eff = q_deg.copy()
+    step = np.sign(np.diff(q_deg[:, 0], prepend=q_deg[0, 0] - 1.0))
+    q_eff[:, 0] -= lost_motion_deg * step
+    x = forward(truth, np.deg2rad(q_eff)).pW + rng.normal(0, noise_mm, (n, 3))
+    rows = "\n".join(",".join(f"{v:.6f}" for v in (*qq, *xx)) for qq, xx in zip(q_deg, x))
+    cols = ",".join([f"q{i + 1}" for i in range(robot.n)] + ["x_mm", "y_mm", "z_mm"])
+    path.write_text("# simulated tracker points\n# tool_mm: 30, 20, 150\n# rod_mass_kg: 0\n# rod_com_T_mm: 0, 0, 0\n"
+                    f"{cols}\n{rows}\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return resolve_robot("r2000ic165f")
+
+
+def test_clean_tracker_points_are_trusted_with_the_tracker_noise(tmp_path, capsys, robot):
+    pts = _write_points(tmp_path / "p.validation.csv", robot, seed=1)
+    assert main(["calibrate", "--points", str(pts), "--robot", "r2000ic165f", "--fix-unidentifiable",
+                 "--json", str(tmp_path / "cal.json")]) == 0
+    out = capsys.readouterr()
+    assert "residuals consistent with noise" in out.out and "instrument 25.0 um per coordinate" in out.out
+    assert "NOT TRUSTED" not in out.err
+    # the same points judged against the MultiCal device's 3 um: not noise, exit 3 as in campaign mode
+    assert main(["calibrate", "--points", str(pts), "--robot", "r2000ic165f", "--fix-unidentifiable",
+                 "--noise-um", "3"]) == 3
+    err = capsys.readouterr().err
+    assert "NOT TRUSTED" in err and "check --noise-um" in err and "diagnose --campaign" not in err
+
+
+def test_lost_motion_is_not_trusted_and_diagnosed_at_its_joint(tmp_path, capsys, robot):
+    pts = _write_points(tmp_path / "p.validation.csv", robot, seed=2, lost_motion_deg=0.01)
+    assert main(["calibrate", "--points", str(pts), "--robot", "r2000ic165f", "--fix-unidentifiable"]) == 3
+    err = capsys.readouterr().err
+    assert "NOT TRUSTED" in err and "lost_motion (joint 1)" in err
+    assert main(["diagnose", "--points", str(pts), "--robot", "r2000ic165f", "--json",
+                 str(tmp_path / "d.json")]) == 0
+    import json
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["findings"][0]["effect"] == "lost_motion" and d["findings"][0]["where"] == "joint 1"
+    assert not d["consistent"]
+
+
+@pytest.mark.parametrize("seed", [3, 4, 5, 6])
+def test_noise_only_points_have_no_findings(tmp_path, robot, seed):
+    """No false alarm: points with nothing but the stated noise give no finding (p < 1e-3 per candidate)."""
+    from rodlab.calibrate import Observations, identify, read_points
+    from rodlab.diagnose.points import diagnose_points
+    path = _write_points(tmp_path / "p.validation.csv", robot, seed=seed)
+    pts = read_points(path, robot.n)
+    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))
+    res = identify(robot, obs, pts.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True, find_tool=True,
+                   expected_noise_mm=0.025)
+    diag = diagnose_points(robot, pts, res, 0.025)
+    assert diag.findings == () and diag.consistent, diag.summary()
+
+
+def test_points_that_cannot_identify_speak_of_poses(tmp_path, capsys, robot):
+    """A refusal of point data speaks of poses and workspace, not of clamping positions."""
+    pts = _write_points(tmp_path / "p.validation.csv", robot, seed=7, n=40)
+    text = pts.read_text().splitlines()
+    body = [line.split(",") for line in text[5:]]
+    for row in body:
+        row[1] = "10.000000"                           # joint 2 never moves
+    pts.write_text("\n".join(text[:5] + [",".join(r) for r in body]) + "\n")
+    assert main(["calibrate", "--points", str(pts), "--robot", "r2000ic165f"]) == 2
+    err = capsys.readouterr().err
+    assert "these points cannot identify" in err and "poses spread over the workspace" in err
+    assert "clamping" not in err

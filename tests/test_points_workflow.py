@@ -56,7 +56,9 @@ def test_lost_motion_is_not_trusted_and_diagnosed_at_its_joint(tmp_path, capsys,
     err = capsys.readouterr().err
     assert "NOT TRUSTED" in err and "lost_motion (joint 1)" in err
     assert main(["diagnose", "--points", str(pts), "--robot", "r2000ic165f", "--json",
-                 str(tmp_path / "d.json")]) == 0
+                 str(tmp_path / "d.json"), "--report", str(tmp_path / "d.html")]) == 0
+    html = (tmp_path / "d.html").read_text()
+    assert "Diagnosis of instrument points" in html and "lost_motion" in html and "Workspace regions" in html
     import json
     d = json.loads((tmp_path / "d.json").read_text())
     assert d["findings"][0]["effect"] == "lost_motion" and d["findings"][0]["where"] == "joint 1"

@@ -113,8 +113,12 @@ def _diagnose_points(args) -> int:
                    expected_noise_mm=noise_mm)
     diag = diagnose_points(robot, pts, res, noise_mm)
     print(diag.summary())
-    written: list = []
+    report = json_safe(diag.to_dict())
     if args.json:
-        written.append(atomic_write_json(args.json, json_safe(diag.to_dict())))
+        written = [atomic_write_json(args.json, report)]
         print(f"wrote {written[-1]}")
+    else:
+        from ..report import Source
+        written = [Source(report["format"], report)]
+    write_command_report(args, written, default_folder(args))
     return 0

@@ -149,6 +149,23 @@ def _diagnosis(src: Source) -> str:
     return "".join(parts)
 
 
+def _points_diagnosis(src: Source) -> str:
+    d = src.data
+    verdict = "consistent with the instrument's noise" if d["consistent"] else "NOT explained by the noise"
+    parts = [f"<p>{d['points']} poses: residual rms {d['residual_rms_mm'] * 1e3:.1f} um per coordinate against "
+             f"{d['noise_mm'] * 1e3:.1f} um of instrument noise (reduced chi-square {d['reduced_chi2']:.1f}): "
+             f"<b>{esc(verdict)}</b>.</p>"]
+    if d["findings"]:
+        parts.append(table(["finding", "where", "share of the residual", "p", "meaning"],
+                           [[f["effect"], f["where"], f"{f['explained_share']:.0%}", f"{f['p_value']:.1e}",
+                             f["meaning"]] for f in d["findings"]], left=5))
+    if d["regions"]:
+        parts.append("<h3>Workspace regions</h3>" + table(
+            ["region", "poses", "rms um"], [[r["region"], r["points"], f"{r['rms_mm'] * 1e3:.0f}"]
+                                            for r in d["regions"]], left=1))
+    return "".join(parts)
+
+
 def _comparison(src: Source) -> str:
     d = src.data
     rows = [[k, fmt(v["mean_mm"], ".3f"), fmt(v["max_mm"], ".3f"), fmt(v["median_mm"], ".3f"), fmt(v["sd_mm"], ".3f"),
@@ -224,6 +241,7 @@ SECTIONS: dict[str, Section] = {
     "rodlab.study/1": Section("Design study: predicted calibration accuracy", 40, _study, ("pareto.png", "heatmaps.png")),
     "rodlab.diagnosis/1": Section("Diagnosis", 60, _diagnosis, ("diagnosis_rig.png", "diagnosis_campaign.png",
                                                                  "error_distributions.png")),
+    "rodlab.points_diagnosis/1": Section("Diagnosis of instrument points", 61, _points_diagnosis),
     "rodlab.calibration/1": Section("Calibration", 50, _calibration, ("residuals.png", "error_distributions.png")),
     FORMAT_COMPARISON: Section("Compensation methods compared (Table 3)", 55, _comparison, ("*fig10.png",)),
 }

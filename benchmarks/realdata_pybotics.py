@@ -32,8 +32,8 @@ import numpy as np
 
 from rodlab.calibrate import ModelParams, read_points, register_base_and_tool, resolve_robot
 from rodlab.calibrate.holdout import fit_and_validate, interleaved
-from rodlab.calibrate.identify import Observations
 from rodlab.calibrate.kinematics import forward
+from rodlab.calibrate.points import points_observations
 from rodlab.calibrate.robot_lines import row_matrix
 from rodlab.calibrate.validate import error_stats
 from rodlab.frames import pose_to_matrix
@@ -80,8 +80,7 @@ def _mdh_job(robot):
 
 def _start(robot, pts, last):
     """Base and tool registered on the nominal model: the same start for pybotics as for rodlab."""
-    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))
-    base, tool, _ = register_base_and_tool(robot, ModelParams.nominal(robot, pts.tool_mm), obs)
+    base, tool, _ = register_base_and_tool(robot, ModelParams.nominal(robot, pts.tool_mm), points_observations(pts))
     T = np.eye(4)
     T[:3, 3] = tool
     return {"world": pose_to_matrix(base).tolist(), "tool": (last @ T).tolist(),

@@ -9,8 +9,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .campaign import PointSet
-from .identify import Observations, identify
 from .params import ModelParams
+from .points import identify_points
 from .validate import ErrorStats, validate
 
 __all__ = ["HoldoutRow", "subset", "interleaved", "fit_and_validate"]
@@ -53,10 +53,8 @@ def fit_and_validate(robot, protocol: str, fit: PointSet, tests: list[tuple[str,
     """Identify ``robot`` on ``fit`` (kinematics, base, tool, joint compliances; what the data cannot identify
     held at nominal; ``pinned`` name -> value held, e.g. every ``c_i = 0`` for a kinematic-only model) and
     validate on each named test set."""
-    obs = Observations(np.deg2rad(fit.q_deg), fit.x_W_mm, np.zeros_like(fit.x_W_mm))
     t0 = time.perf_counter()
-    res = identify(robot, obs, fit.tool_mm, None, pinned=dict(pinned or {}), freed={"tool_y"},
-                   fix_unidentifiable=True, find_tool=True, expected_noise_mm=None)
+    res = identify_points(robot, fit, None, pinned=pinned, fix_unidentifiable=True)
     seconds = time.perf_counter() - t0
     held = [u.split(" ")[0] for u in res.unidentifiable if "combined with" in u and "in this" in u]
     rows = []

@@ -23,6 +23,7 @@ import numpy as np
 
 from rodlab.compliance import RodCompliance
 from rodlab.frames import pose_to_matrix
+from rodlab.units import DEVICE_NOISE_MM
 
 from .campaign import Campaign, Fixture
 from .compensation import deflection_offsets
@@ -190,7 +191,7 @@ def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, pos
 def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
              freed: set | None = None, robust: bool = False, max_compensation: int = 6,
              fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
-             expected_noise_mm: float | None = 0.003, fix_unidentifiable: bool = False,
+             expected_noise_mm: float | None = DEVICE_NOISE_MM, fix_unidentifiable: bool = False,
              find_tool: bool = False) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .robot_lines import ZeroChain, dh_rows
+from .robot_lines import ZeroChain, chain_matrices, dh_rows
 
-__all__ = ["Robot", "robot_from_chain"]
+__all__ = ["Robot", "robot_from_chain", "dh_zero_chain"]
 
 
 @dataclass(frozen=True)
@@ -78,3 +78,11 @@ def robot_from_chain(chain: ZeroChain, joint_names=(), path=None) -> Robot:
                  np.asarray(chain.limits_deg, float), np.asarray(chain.link_mass_kg, float), rows.com_mm,
                  gravity_base=gravity_0, path=None if path is None else Path(path), base_T_0=rows.base_T_0,
                  n_T_tip=rows.n_T_tip, joint_names=tuple(joint_names), source=chain.source)
+
+
+def dh_zero_chain(robot: Robot) -> ZeroChain:
+    """The chain of a robot's own rows at q = 0 in {0} (for tests and conversions back and forth)."""
+    F = chain_matrices(robot.theta_offset_deg, robot.d_mm, robot.a_mm, robot.alpha_deg, robot.beta_deg)
+    com = np.einsum("nij,nj->ni", F[1:], np.c_[robot.com_mm, np.ones(robot.n)])[:, :3]
+    return ZeroChain(robot.name, F[:-1, :3, 3].copy(), F[:-1, :3, 2].copy(), F[-1] @ robot.n_T_tip,
+                     robot.limits_deg, robot.mass_kg, com, robot.gravity_base, robot.source)

@@ -25,7 +25,7 @@ from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
-from .robot_lines import ZeroChain, chain_matrices
+from .robot_lines import ZeroChain
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -138,16 +138,9 @@ def _mdh_chain(name, cols, flange_T, gravity, source) -> ZeroChain:
     """Frames of the modified-DH rows at q = 0: joint i turns about z_i through o_i."""
     n = len(cols["d_mm"])
     T, frames = np.eye(4), []
-    for i in range(n):
-        al, a = np.deg2rad(cols["alpha_deg"][i]), cols["a_mm"][i]
-        th, d = np.deg2rad(cols["theta_offset_deg"][i]), cols["d_mm"][i]
-        Rx = np.eye(4)
-        Rx[1:3, 1:3] = [[np.cos(al), -np.sin(al)], [np.sin(al), np.cos(al)]]
-        Rx[0, 3] = a
-        Rz = np.eye(4)
-        Rz[:2, :2] = [[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]]
-        Rz[2, 3] = d
-        T = T @ Rx @ Rz
+    for i in range(n):                                  # Rx(alpha) Tx(a) = Tx(a) Rx(alpha): one pose each
+        T = T @ pose_to_matrix([cols["a_mm"][i], 0, 0, cols["alpha_deg"][i], 0, 0]) \
+              @ pose_to_matrix([0, 0, cols["d_mm"][i], 0, 0, cols["theta_offset_deg"][i]])
         frames.append(T)
     F = np.array(frames)
     com = np.einsum("nij,nj->ni", F, np.c_[cols["com_mm"], np.ones(n)])[:, :3]
@@ -170,10 +163,3 @@ def read_robot_toml(path) -> Robot:
     return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=flange,
                  joint_names=tuple(names), source=source or str(p))
 
-
-def dh_zero_chain(robot: Robot) -> ZeroChain:
-    """The chain of a robot's own rows at q = 0 in {0} (for tests and conversions back and forth)."""
-    F = chain_matrices(robot.theta_offset_deg, robot.d_mm, robot.a_mm, robot.alpha_deg, robot.beta_deg)
-    com = np.einsum("nij,nj->ni", F[1:], np.c_[robot.com_mm, np.ones(robot.n)])[:, :3]
-    return ZeroChain(robot.name, F[:-1, :3, 3].copy(), F[:-1, :3, 2].copy(), F[-1] @ robot.n_T_tip,
-                     robot.limits_deg, robot.mass_kg, com, robot.gravity_base, robot.source)

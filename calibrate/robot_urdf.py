@@ -73,11 +73,10 @@ def _pose(joint, q: float = 0.0) -> np.ndarray:
     T = np.array(joint.origin if joint.origin is not None else np.eye(4), float)
     T[:3, 3] *= 1000.0
     if joint.type in _MOVING and q != 0.0:
+        from scipy.spatial.transform import Rotation
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
-        axis = axis / np.linalg.norm(axis)
-        K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
         R = np.eye(4)
-        R[:3, :3] = np.eye(3) + np.sin(q) * K + (1 - np.cos(q)) * K @ K
+        R[:3, :3] = Rotation.from_rotvec(axis / np.linalg.norm(axis) * q).as_matrix()
         T = T @ R
     return T
 

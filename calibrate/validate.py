@@ -8,10 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .campaign import PointSet
-from .identify import Observations, register_base
+from .identify import register_base
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import ParamInfo, apply
+from .points import points_observations
 
 __all__ = ["ErrorStats", "validate", "error_stats"]
 
@@ -42,7 +43,7 @@ def validate(robot, model: ModelParams, pts: PointSet) -> tuple[ErrorStats, np.n
     from scipy.optimize import least_squares
 
     start = model.with_(tool=np.asarray(pts.tool_mm, float))
-    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg, pts.rod_com_T_mm)
+    obs = points_observations(pts)
     start = start.with_(base=register_base(robot, start, obs))
     infos = [ParamInfo(f"base_{k}", "base_t", i, "mm") for i, k in enumerate("xyz")]
     infos += [ParamInfo(f"base_{k}", "base_r", i, "deg") for i, k in enumerate("abc")]

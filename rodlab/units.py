@@ -16,10 +16,17 @@ __all__ = [
     "deg2rad",
     "rad2deg",
     "um_from_mm",
+    "DEVICE_NOISE_MM",
+    "TRACKER_NOISE_MM",
 ]
 
 #: Standard gravity [m/s^2]; loads in the contract are ``mass_kg * G0`` newtons.
 G0: float = 9.80665
+
+#: Default measurement noise per coordinate [mm], 1 sigma: the MultiCal device (paper), and a laser tracker at
+#: 2-5 m (typical specification U = 15 um + 6 um/m, about 25 um at 1 sigma per coordinate).
+DEVICE_NOISE_MM: float = 0.003
+TRACKER_NOISE_MM: float = 0.025
 
 
 def gpa_to_mpa(value_gpa: float) -> float:

@@ -154,8 +154,7 @@ def test_modified_dh_table_is_converted_exactly(tmp_path):
 
 def test_dh_rows_are_read_as_written_and_convert_to_themselves():
     """Classic DH (the TX90 of the paper) needs no conversion; its axes rebuild the same kinematics."""
-    from rodlab.calibrate.robot import robot_from_chain
-    from rodlab.calibrate.robot_toml import dh_zero_chain
+    from rodlab.calibrate.robot import dh_zero_chain, robot_from_chain
     tx90 = resolve_robot("tx90")
     assert tx90.d_mm[0] == 150.0 and tx90.source.startswith("Wan et al.")
     again = robot_from_chain(dh_zero_chain(tx90))

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..compliance import RodCompliance, read_compliance
 from ..errors import RodlabError
+from ..units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args
@@ -19,10 +20,6 @@ __all__ = ["register", "run_calibration", "CalibrationRun"]
 
 log = logging.getLogger(__name__)
 
-#: default noise [um] per coordinate: the MultiCal device (paper), and a laser tracker at 2-5 m (typical
-#: specification U = 15 um + 6 um/m, i.e. about 25 um at 1 sigma per coordinate)
-DEVICE_NOISE_UM = 3.0
-TRACKER_NOISE_UM = 25.0
 
 
 def _common(p) -> None:
@@ -35,8 +32,8 @@ def _common(p) -> None:
     p.add_argument("--robust", action="store_true", help="soft-L1 loss (gross alignment errors lose weight)")
     p.add_argument("--noise-um", type=pos_float, default=None,
                    help="the measuring instrument's noise per coordinate [um], 1 sigma, that the trust verdict "
-                        f"judges the residuals against (default: {DEVICE_NOISE_UM:g} um for a MultiCal campaign, "
-                        f"{TRACKER_NOISE_UM:g} um for --points: a laser tracker at a few metres)")
+                        f"judges the residuals against (default: {DEVICE_NOISE_MM * 1e3:g} um for a MultiCal "
+                        f"campaign, {TRACKER_NOISE_MM * 1e3:g} um for --points: a laser tracker at a few metres)")
     add_report_option(p)
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these points cannot identify at nominal (and report them) instead of "
@@ -134,7 +131,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable,
-                   expected_noise_mm=(getattr(args, "noise_um", None) or DEVICE_NOISE_UM) * 1e-3)
+                   expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
     run = CalibrationRun(robot, camp, res)
     if args.validate:
         pts = read_points(args.validate, robot.n)
@@ -242,15 +239,13 @@ def _print_result(res, before, after, label) -> None:
 
 
 def _calibrate_points(args) -> int:
-    from rodlab.calibrate import Observations, ModelParams, identify, read_points, result_dict, validate
+    from rodlab.calibrate import ModelParams, read_points, result_dict, validate
+    from rodlab.calibrate.points import identify_points
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
-    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
-                       pts.rod_com_T_mm)
-    noise_mm = (args.noise_um or TRACKER_NOISE_UM) * 1e-3
-    res = identify(robot, obs, pts.tool_mm, None, pinned=_parse_pins(args.pin), freed=set(args.free) | {"tool_y"},
-                   robust=args.robust, fix_unidentifiable=args.fix_unidentifiable, find_tool=True,
-                   expected_noise_mm=noise_mm)
+    noise_mm = args.noise_um * 1e-3 if args.noise_um else TRACKER_NOISE_MM
+    res = identify_points(robot, pts, noise_mm, pinned=_parse_pins(args.pin), freed=args.free, robust=args.robust,
+                          fix_unidentifiable=args.fix_unidentifiable)
     before = after = None
     if args.validate:
         test = read_points(args.validate, robot.n)

@@ -5,6 +5,7 @@ import argparse
 
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
+from ..units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import pos_float
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
@@ -71,9 +72,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = robot_from_args(args)
+        noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
         pts = read_points(args.validate, robot.n) if args.validate else None
         diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
-                                       read_compliance(args.rod), (args.noise_um or 3.0) * 1e-3, pts)
+                                       read_compliance(args.rod), noise_mm, pts)
         print(diag.summary())
         if "validation" in diag.extra:
             v = diag.extra["validation"]
@@ -82,7 +84,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                   f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
         if args.png:
             from ..diagnose.plots import plot_campaign_diagnosis
-            for p in plot_campaign_diagnosis(diag, fits, args.png, (args.noise_um or 3.0) * 1e-3):
+            for p in plot_campaign_diagnosis(diag, fits, args.png, noise_mm):
                 written.append(p)
                 print(f"wrote {p}")
     if args.json:
@@ -98,19 +100,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
-    import numpy as np
-
-    from rodlab.calibrate import Observations, identify, read_points
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.points import identify_points
 
     from ..diagnose.points import diagnose_points
     from ..fileio import atomic_write_json, json_safe
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
-    noise_mm = (args.noise_um or 25.0) * 1e-3
-    obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
-                       pts.rod_com_T_mm)
-    res = identify(robot, obs, pts.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True, find_tool=True,
-                   expected_noise_mm=noise_mm)
+    noise_mm = args.noise_um * 1e-3 if args.noise_um else TRACKER_NOISE_MM
+    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True)
     diag = diagnose_points(robot, pts, res, noise_mm)
     print(diag.summary())
     report = json_safe(diag.to_dict())

@@ -1,0 +1,32 @@
+"""Instrument points (a tracker's, a CMM's): their observations and their identification.
+
+The points are measured in the instrument's frame with a target whose place on the flange is only roughly
+known, so base and tool are found from scratch and the tool's azimuth about the last axis is free
+(``tool_y``); the residuals are judged against the instrument's noise (default :data:`TRACKER_NOISE_MM`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from rodlab.units import TRACKER_NOISE_MM
+
+from .campaign import PointSet
+from .identify import CalibrationResult, Observations, identify
+
+__all__ = ["points_observations", "identify_points"]
+
+
+def points_observations(pts: PointSet) -> Observations:
+    """The identification's observations of instrument points (no contact force, the file's payload)."""
+    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
+                        pts.rod_com_T_mm)
+
+
+def identify_points(robot, pts: PointSet, expected_noise_mm: float | None = TRACKER_NOISE_MM, *,
+                    pinned: dict | None = None, freed=(), robust: bool = False,
+                    fix_unidentifiable: bool = False) -> CalibrationResult:
+    """Identify ``robot`` from instrument points: base and tool from scratch, ``tool_y`` free; ``None`` noise
+    skips the residual test."""
+    return identify(robot, points_observations(pts), pts.tool_mm, None, pinned=dict(pinned or {}),
+                    freed=set(freed) | {"tool_y"}, robust=robust, fix_unidentifiable=fix_unidentifiable,
+                    find_tool=True, expected_noise_mm=expected_noise_mm)

@@ -1,10 +1,16 @@
 """Held-out accuracy on public real tracker data: rodlab from the robot's URDF beside a kinematic-only model and
 pybotics, on the same splits.
 
-Data: benchmarks/data/boby2021 (FANUC R-2000iC/165F, three reflectors; see realdata_fanuc.py). The robot:
-the built-in URDF ``r2000ic165f`` (ROS-Industrial layout). Per split (interleaved halves of every reflector;
-fit on N2, validate on N1 and N3) and per model, the validation errors after the base and tool are refitted
-on the validation set (paper Section 5.2):
+Data sets (``--data``, default all):
+
+  fanuc  benchmarks/data/boby2021: FANUC R-2000iC/165F, three reflectors (see realdata_fanuc.py), the built-in
+         URDF ``r2000ic165f``; splits: interleaved halves of every reflector; fit on N2, validate on N1 and N3.
+  ur10   benchmarks/data/landgraf2021: Universal Robots UR10, a T-Mac measured by a laser tracker in three
+         campaigns B, C, D (scripts/convert_landgraf2021.py), the built-in URDF ``ur10``; splits: interleaved
+         halves of every series; fit on C (random poses), validate on B and D (other campaigns).
+
+Per split and per model, the validation errors after the base and tool are refitted on the validation set
+(paper Section 5.2):
 
   nominal          the URDF as it is;
   rodlab           kinematics (Hayati beta on the parallel J2/J3 pair), base, tool, joint compliances;
@@ -16,7 +22,7 @@ pybotics pins numpy<2, so it runs in its own venv: created on first use in bench
 (``pip install pybotics``), or give ``--python`` an interpreter that has it. Without it the pybotics column is
 skipped with the reason.
 
-    python benchmarks/realdata_pybotics.py [--markdown] [--python PY]
+    python benchmarks/realdata_pybotics.py [--data fanuc|ur10|all] [--python PY]
 """
 from __future__ import annotations
 
@@ -25,6 +31,7 @@ import json
 import logging
 import subprocess
 import sys
+import time
 import venv
 from pathlib import Path
 
@@ -39,18 +46,31 @@ from rodlab.calibrate.validate import error_stats
 from rodlab.frames import pose_to_matrix
 
 HERE = Path(__file__).parent
-DATA = HERE / "data" / "boby2021"
 VENV = HERE / ".cache" / "pybotics-venv"
 
 
-def splits():
-    pts = {n: read_points(DATA / f"r2000ic_{n}.validation.csv") for n in ("N1", "N2", "N3")}
+def _interleaved(pts: dict) -> list:
     out = []
     for name, p in pts.items():
         fit, test = interleaved(p)
         out.append(("interleaved", fit, [(name + " odd poses", test)]))
-    out.append(("other tool", pts["N2"], [("N1", pts["N1"]), ("N3", pts["N3"])]))
     return out
+
+
+def fanuc_splits():
+    data = HERE / "data" / "boby2021"
+    pts = {n: read_points(data / f"r2000ic_{n}.validation.csv") for n in ("N1", "N2", "N3")}
+    return _interleaved(pts) + [("other tool", pts["N2"], [("N1", pts["N1"]), ("N3", pts["N3"])])]
+
+
+def ur10_splits():
+    data = HERE / "data" / "landgraf2021"
+    pts = {n: read_points(data / f"ur10_{n}.validation.csv") for n in ("B", "C", "D")}
+    return _interleaved(pts) + [("other campaign", pts["C"], [("B", pts["B"]), ("D", pts["D"])])]
+
+
+#: data set -> (built-in robot, its splits)
+DATASETS = {"fanuc": ("r2000ic165f", fanuc_splits), "ur10": ("ur10", ur10_splits)}
 
 
 def pybotics_python(given: str | None) -> tuple[str | None, str]:
@@ -102,8 +122,9 @@ def run_pybotics(python: str, robot, fit, tests) -> dict:
     return json.loads(res.stdout)
 
 
-def run(python: str | None) -> tuple[list, str]:
-    robot = resolve_robot("r2000ic165f")
+def run(python: str | None, dataset: str = "fanuc") -> tuple[list, str]:
+    name, splits = DATASETS[dataset]
+    robot = resolve_robot(name)
     py, why = pybotics_python(python)
     pinned = {f"c_{i + 1}": 0.0 for i in range(robot.n)}
     rows = []
@@ -123,18 +144,21 @@ def _cell(s) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--data", choices=[*DATASETS, "all"], default="all")
     ap.add_argument("--python", default=None, help="an interpreter with pybotics installed")
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
-    rows, why = run(a.python)
-    if why:
-        print(f"pybotics skipped: {why}", file=sys.stderr)
-    print("| protocol | validated on | nominal | rodlab | kinematic only | pybotics |")
-    print("|---|---|---|---|---|---|")
-    for protocol, name, full, kin, pyb in rows:
-        print(f"| {protocol} | {name} | {_cell(full.before)} | {_cell(full.after)} | {_cell(kin.after)} | "
-              f"{_cell(pyb)} |")
+    for dataset in DATASETS if a.data == "all" else [a.data]:
+        t0 = time.perf_counter()
+        rows, why = run(a.python, dataset)
+        if why:
+            print(f"pybotics skipped: {why}", file=sys.stderr)
+        print(f"\n{dataset} (robot {DATASETS[dataset][0]}, {time.perf_counter() - t0:.0f} s)\n")
+        print("| protocol | validated on | nominal | rodlab | kinematic only | pybotics |")
+        print("|---|---|---|---|---|---|")
+        for protocol, name, full, kin, pyb in rows:
+            print(f"| {protocol} | {name} | {_cell(full.before)} | {_cell(full.after)} | {_cell(kin.after)} | "
+                  f"{_cell(pyb)} |")
     print("\n(mean / max error [mm] on the validation points, base and tool refitted on them)")
     return 0
 

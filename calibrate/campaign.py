@@ -70,7 +70,7 @@ class PointSet:
     rod_com_T_mm: np.ndarray
     temp_C: float | None = None
     path: Path | None = None
-
+    sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
 
 def _read_text(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
@@ -212,7 +212,27 @@ def read_points(path, n_joints: int = 6) -> PointSet:
     com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)
     temp = float(vec("temp_C", 1)[0]) if "temp_C" in meta else None
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = _table(p, text, qs + ["x_mm", "y_mm", "z_mm"], [])
+    header, rows = _table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS))
     q = np.array([[r[c] for c in qs] for _, r in rows])
     x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
-    return PointSet(q, x, tool, mass, com, temp, p)
+    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows))
+
+
+#: optional per-point uncertainty columns of a points file: one standard deviation per coordinate [mm]
+SIGMA_COLUMNS = ("sigma_x_mm", "sigma_y_mm", "sigma_z_mm")
+
+
+def _point_sigmas(p: Path, header: list[str], rows) -> np.ndarray | None:
+    """The per-point uncertainties (N, 3) [mm], all three columns or none, each > 0."""
+    present = [c for c in SIGMA_COLUMNS if c in header]
+    if not present:
+        return None
+    if len(present) != 3:
+        missing = [c for c in SIGMA_COLUMNS if c not in header]
+        raise CalibrationError(f"per-point uncertainty needs all of {list(SIGMA_COLUMNS)}; missing {missing}. Add "
+                               f"them or drop {present}", path=p, key=missing[0])
+    for k, r in rows:
+        for c in SIGMA_COLUMNS:
+            if not r[c] > 0:
+                raise CalibrationError(f"expected a standard deviation > 0 [mm], got {r[c]:g}", path=p, line=k, key=c)
+    return np.array([[r[c] for c in SIGMA_COLUMNS] for _, r in rows])

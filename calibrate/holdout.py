@@ -39,7 +39,8 @@ class HoldoutRow:
 
 def subset(points: PointSet, mask: np.ndarray) -> PointSet:
     """The points selected by the boolean (or index) ``mask``."""
-    return replace(points, q_deg=points.q_deg[mask], x_W_mm=points.x_W_mm[mask])
+    return replace(points, q_deg=points.q_deg[mask], x_W_mm=points.x_W_mm[mask],
+                   sigma_mm=None if points.sigma_mm is None else points.sigma_mm[mask])
 
 
 def interleaved(points: PointSet) -> tuple[PointSet, PointSet]:

@@ -43,7 +43,9 @@ class Observations:
     """What the identification fits: joint angles, measured ball centres in {W}, and the loads.
 
     q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
-    group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,)
+    group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,);
+    sigma_mm (N, 3) stated standard uncertainty of each measured coordinate [mm] (instrument points), or None
+    for one noise level for all
     """
 
     q_rad: np.ndarray
@@ -55,6 +57,12 @@ class Observations:
     labels: list | None = None
     fixture_T: dict | None = None          # group -> 4x4 pose of {D_j} in {W}
     x_D_mm: np.ndarray | None = None
+    sigma_mm: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.sigma_mm is not None and np.shape(self.sigma_mm) != np.shape(self.x_W_mm):
+            raise ValueError(f"sigma_mm must have the shape of x_W_mm {np.shape(self.x_W_mm)}, got "
+                             f"{np.shape(self.sigma_mm)}")
 
 
 def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
@@ -463,9 +471,17 @@ def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
 
 def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> np.ndarray:
     """Covariance of the measured points [mm^2], shape=(3N, 3N): device noise plus the uncertainty of each
-    recorded clamping pose (translation [mm], rotation [deg]), correlated among the points of a position."""
+    recorded clamping pose (translation [mm], rotation [deg]), correlated among the points of a position.
+
+    With per-point uncertainties (``obs.sigma_mm``) the noise of each coordinate is proportional to its stated
+    sigma, scaled so that its rms over the data set is ``noise_mm`` (pass the stated rms to use them as they
+    are, an estimated level to keep only their shape)."""
     N = obs.x_W_mm.shape[0]
-    S = noise_mm ** 2 * np.eye(3 * N)
+    if obs.sigma_mm is not None:
+        s = obs.sigma_mm.reshape(-1)
+        S = np.diag((s * noise_mm / np.sqrt(np.mean(s ** 2))) ** 2)
+    else:
+        S = noise_mm ** 2 * np.eye(3 * N)
     if obs.group is not None and obs.fixture_T is not None:
         st, sr = fixture_sigma[0], np.deg2rad(fixture_sigma[1])
         for j, T in obs.fixture_T.items():

@@ -13,13 +13,24 @@ from rodlab.units import TRACKER_NOISE_MM
 from .campaign import PointSet
 from .identify import CalibrationResult, Observations, identify
 
-__all__ = ["points_observations", "identify_points"]
+__all__ = ["points_observations", "identify_points", "stated_noise_mm"]
 
 
 def points_observations(pts: PointSet) -> Observations:
     """The identification's observations of instrument points (no contact force, the file's payload)."""
     return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
-                        pts.rod_com_T_mm)
+                        pts.rod_com_T_mm, sigma_mm=pts.sigma_mm)
+
+
+def stated_noise_mm(pts: PointSet, noise_mm: float | None) -> tuple[PointSet, float]:
+    """The points and the noise level to judge them by: a level the user states (``noise_mm``, replacing any
+    per-point columns); else the rms of the file's per-point uncertainties; else :data:`TRACKER_NOISE_MM`."""
+    from dataclasses import replace
+    if noise_mm:
+        return replace(pts, sigma_mm=None), float(noise_mm)
+    if pts.sigma_mm is not None:
+        return pts, float(np.sqrt(np.mean(pts.sigma_mm ** 2)))
+    return pts, TRACKER_NOISE_MM
 
 
 def identify_points(robot, pts: PointSet, expected_noise_mm: float | None = TRACKER_NOISE_MM, *,

@@ -10,7 +10,7 @@ from rodlab.calibrate.kinematics import forward
 from rodlab.cli.main import main
 
 
-def _write_points(path, robot, seed, noise_mm=0.025, lost_motion_deg=0.0, n=120):
+def _write_points(path, robot, seed, noise_mm=0.025, lost_motion_deg=0.0, n=120, sigma_column=None):
     """Tracker points of a truth robot (random geometric errors) at random poses in random order; optional
     lost motion of joint 1: the joint stops short by ``lost_motion_deg`` in the direction it came from."""
     rng = np.random.default_rng(seed)
@@ -23,9 +23,14 @@ def _write_points(path, robot, seed, noise_mm=0.025, lost_motion_deg=0.0, n=120)
     q_eff = q_deg.copy()
     step = np.sign(np.diff(q_deg[:, 0], prepend=q_deg[0, 0] - 1.0))
     q_eff[:, 0] -= lost_motion_deg * step
-    x = forward(truth, np.deg2rad(q_eff)).pW + rng.normal(0, noise_mm, (n, 3))
-    rows = "\n".join(",".join(f"{v:.6f}" for v in (*qq, *xx)) for qq, xx in zip(q_deg, x))
-    cols = ",".join([f"q{i + 1}" for i in range(robot.n)] + ["x_mm", "y_mm", "z_mm"])
+    sig = np.full((n, 3), noise_mm) if sigma_column is None else sigma_column(rng, n)
+    x = forward(truth, np.deg2rad(q_eff)).pW + rng.normal(0, 1, (n, 3)) * sig
+    if sigma_column is None:
+        rows = "\n".join(",".join(f"{v:.6f}" for v in (*qq, *xx)) for qq, xx in zip(q_deg, x))
+    else:
+        rows = "\n".join(",".join(f"{v:.6f}" for v in (*qq, *xx, *ss)) for qq, xx, ss in zip(q_deg, x, sig))
+    cols = ",".join([f"q{i + 1}" for i in range(robot.n)] + ["x_mm", "y_mm", "z_mm"] + (
+        [] if sigma_column is None else ["sigma_x_mm", "sigma_y_mm", "sigma_z_mm"]))
     path.write_text("# simulated tracker points\n# tool_mm: 30, 20, 150\n# rod_mass_kg: 0\n# rod_com_T_mm: 0, 0, 0\n"
                     f"{cols}\n{rows}\n")
     return path
@@ -91,3 +96,43 @@ def test_points_that_cannot_identify_speak_of_poses(tmp_path, capsys, robot):
     err = capsys.readouterr().err
     assert "these points cannot identify" in err and "poses spread over the workspace" in err
     assert "clamping" not in err
+
+
+def _far_and_near(rng, n):
+    """A tracker's per-point uncertainty: a third of the points far and noisy (80 um), the rest near (8 um)."""
+    s = np.full((n, 3), 0.008)
+    s[rng.permutation(n)[: n // 3]] = 0.080
+    return s
+
+
+def test_per_point_uncertainty_columns_are_the_noise_model(tmp_path, capsys, robot):
+    """Points whose noise differs point by point (stated in sigma_*_mm columns) are judged by those sigmas:
+    consistent with noise; one scalar level (their near-point 8 um) calls the same residuals not noise."""
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.points import identify_points, stated_noise_mm
+    path = _write_points(tmp_path / "p.validation.csv", robot, seed=11, n=150, sigma_column=_far_and_near)
+    pts, noise = stated_noise_mm(read_points(path, robot.n), None)
+    assert pts.sigma_mm.shape == (150, 3) and noise == pytest.approx(np.sqrt(np.mean(pts.sigma_mm ** 2)))
+    stated = identify_points(robot, pts, noise, fix_unidentifiable=True).residual_check
+    assert not stated.missing and 0.7 < stated.reduced < 1.3
+    scalar_pts, scalar = stated_noise_mm(pts, 0.008)
+    assert scalar_pts.sigma_mm is None and scalar == 0.008
+    assert identify_points(robot, scalar_pts, scalar, fix_unidentifiable=True).residual_check.missing
+    assert main(["calibrate", "--points", str(path), "--robot", "r2000ic165f", "--fix-unidentifiable"]) == 0
+    assert "residuals consistent with noise" in capsys.readouterr().out
+
+
+def test_per_point_uncertainty_columns_are_checked(tmp_path, capsys, robot):
+    path = _write_points(tmp_path / "p.validation.csv", robot, seed=12, n=20, sigma_column=_far_and_near)
+    text = path.read_text()
+    (tmp_path / "partial.csv").write_text(text.replace(",sigma_z_mm", "").replace(",0.080000\n", "\n")
+                                          .replace(",0.008000\n", "\n"))
+    assert main(["calibrate", "--points", str(tmp_path / "partial.csv"), "--robot", "r2000ic165f"]) == 2
+    err = capsys.readouterr().err
+    assert "sigma_z_mm" in err and "partial.csv" in err
+    lines = text.splitlines()
+    lines[-1] = ",".join(lines[-1].split(",")[:-1] + ["0"])
+    (tmp_path / "zero.csv").write_text("\n".join(lines) + "\n")
+    assert main(["calibrate", "--points", str(tmp_path / "zero.csv"), "--robot", "r2000ic165f"]) == 2
+    err = capsys.readouterr().err
+    assert f"line {len(lines)}" in err and "sigma_z_mm" in err and "> 0" in err

@@ -120,6 +120,36 @@ def test_builtin_fanuc_urdf_matches_its_data_sheet_rows():
     assert np.abs(_tip_in_base(robot, q)[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
 
 
+def _ur_dh_fk(q):
+    """Universal Robots' published UR10 DH (standard convention) in UR's "base" frame, written out independently."""
+    d = [127.3, 0, 0, 163.941, 115.7, 92.2]
+    a = [0, -612.0, -572.3, 0, 0, 0]
+    alpha = [math.pi / 2, 0, 0, math.pi / 2, -math.pi / 2, 0]
+    out = []
+    for qq in q:
+        T = np.eye(4)
+        for th, di, ai, al in zip(qq, d, a, alpha):
+            ct, st, ca, sa = math.cos(th), math.sin(th), math.cos(al), math.sin(al)
+            T = T @ np.array([[ct, -st * ca, st * sa, ai * ct], [st, ct * ca, -ct * sa, ai * st], [0, sa, ca, di],
+                              [0, 0, 0, 1]])
+        out.append(T)
+    return np.array(out)
+
+
+def test_builtin_ur10_urdf_is_universal_robots_dh_model():
+    """The built-in UR10 URDF (ur_description layout) has UR's DH kinematics: tool0 in the 'base' frame equals the
+    DH flange frame, J2 / J3 / J4 parallel (Hayati rows 2 and 3)."""
+    robot = resolve_robot("ur10")
+    q = np.random.default_rng(4).uniform(-3, 3, (25, 6))
+    base_in_base_link = _yourdfpy_fk(robot.path, q[:1], "base", "base_link")[0]
+    ours = np.linalg.inv(base_in_base_link) @ _tip_in_base(robot, q)
+    theirs = _ur_dh_fk(q)
+    assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
+    assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
+    assert robot.parallel_rows() == [1, 2]
+    assert robot.mass_kg.sum() == pytest.approx(7.1 + 12.7 + 4.27 + 2.0 + 2.0 + 0.365)
+
+
 def _mdh_fk(rows, q, flange):
     """Craig's modified DH, written out independently: T_{i-1,i} = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)."""
     out = []

@@ -33,7 +33,8 @@ def _common(p) -> None:
     p.add_argument("--noise-um", type=pos_float, default=None,
                    help="the measuring instrument's noise per coordinate [um], 1 sigma, that the trust verdict "
                         f"judges the residuals against (default: {DEVICE_NOISE_MM * 1e3:g} um for a MultiCal "
-                        f"campaign, {TRACKER_NOISE_MM * 1e3:g} um for --points: a laser tracker at a few metres)")
+                        f"campaign; for --points the file's sigma_*_mm columns, else {TRACKER_NOISE_MM * 1e3:g} um: a laser "
+                        f"tracker at a few metres). Given, it replaces the per-point columns")
     add_report_option(p)
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these points cannot identify at nominal (and report them) instead of "
@@ -240,10 +241,9 @@ def _print_result(res, before, after, label) -> None:
 
 def _calibrate_points(args) -> int:
     from rodlab.calibrate import ModelParams, read_points, result_dict, validate
-    from rodlab.calibrate.points import identify_points
+    from rodlab.calibrate.points import identify_points, stated_noise_mm
     robot = robot_from_args(args)
-    pts = read_points(args.points, robot.n)
-    noise_mm = args.noise_um * 1e-3 if args.noise_um else TRACKER_NOISE_MM
+    pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     res = identify_points(robot, pts, noise_mm, pinned=_parse_pins(args.pin), freed=args.free, robust=args.robust,
                           fix_unidentifiable=args.fix_unidentifiable)
     before = after = None

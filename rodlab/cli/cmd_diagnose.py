@@ -5,7 +5,7 @@ import argparse
 
 from ..compliance import read_compliance, write_compliance
 from ..errors import RodlabError
-from ..units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
+from ..units import DEVICE_NOISE_MM
 from .argtypes import pos_float
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
@@ -31,7 +31,7 @@ def register(sub) -> None:
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
     p.add_argument("--noise-um", type=pos_float, default=None,
                    help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
-                        "(default 25, a laser tracker)")
+                        "(default: the file's sigma_*_mm columns, else 25, a laser tracker)")
     p.add_argument("--json", help="write the contract's diagnosis report")
     p.add_argument("--png", help="folder for figures")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
@@ -101,13 +101,13 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
     from rodlab.calibrate import read_points
-    from rodlab.calibrate.points import identify_points
+    from rodlab.calibrate.points import identify_points, stated_noise_mm
 
     from ..diagnose.points import diagnose_points
     from ..fileio import atomic_write_json, json_safe
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
-    noise_mm = args.noise_um * 1e-3 if args.noise_um else TRACKER_NOISE_MM
+    pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True)
     diag = diagnose_points(robot, pts, res, noise_mm)
     print(diag.summary())

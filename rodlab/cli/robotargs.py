@@ -3,7 +3,7 @@ from __future__ import annotations
 
 __all__ = ["add_robot_options", "robot_from_args"]
 
-ROBOT_HELP = ("built-in robot (tx90, r2000ic165f), a robot TOML file (DH or modified-DH rows) or a URDF "
+ROBOT_HELP = ("built-in robot (tx90, r2000ic165f, ur10), a robot TOML file (DH or modified-DH rows) or a URDF "
               "(xacro expanded)")
 
 

@@ -95,7 +95,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
                                     "c_rod_um": fea.c_rod_um,
                                     "calc_over_fea_diag": (np.diag(calc.C_F) / np.diag(fea.C_F)).tolist()}
     with stage("rig"):
-        from rodlab.stiffness_rig.model import Protocol, RigModel, spring_compliance
+        from rodlab.stiffness_rig.model import LoadSchedule, RigModel, spring_compliance
         from rodlab.stiffness_rig.simulate import simulate_recording
         from .diagnose.rig import joint_places
         pt, ax = joint_places(design.tool_mm, design)["ring_1"]
@@ -103,7 +103,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
         concealed = {"joint_compliance": {"point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nmm": s_b,
                                           "s_torsion_rad_per_Nmm": s_t}}
         C_true = fea.C_F + spring_compliance(pt, ax, s_b, s_t)
-        simulate_recording(RigModel(fea.C_F, concealed, noise_mm=0.0006, seed=seed), Protocol(),
+        simulate_recording(RigModel(fea.C_F, concealed, noise_mm=0.0006, seed=seed), LoadSchedule(),
                            out / "rig" / "rod1.rig.csv", rod="1#")
         summary["stages"]["rig"] = {"concealed_effect": "joint_compliance at ring_1",
                                     "s_bend_rad_per_Nm": s_b * 1e3, "s_torsion_rad_per_Nm": s_t * 1e3}

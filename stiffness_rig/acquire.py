@@ -14,7 +14,7 @@
 """
 from __future__ import annotations
 
-import fcntl
+import contextlib
 import logging
 import math
 import os
@@ -48,39 +48,31 @@ class AcquisitionStatus:
 
 
 class RecordingLock:
-    """Exclusive advisory lock on ``<recording>.lock`` (released on close or process death)."""
+    """Exclusive lock on ``<recording>.lock`` (filelock: fcntl on POSIX, msvcrt on Windows; released on close or
+    process death), the lock file removed when released."""
 
     def __init__(self, recording: Path) -> None:
+        from filelock import FileLock, Timeout
+
         self.path = Path(str(recording) + ".lock")
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        for _ in range(10):                       # the holder may remove the file between our open and lock
-            self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                os.close(self._fd)
-                raise RigError("another acquisition is writing this recording (it holds the lock); wait for it or "
-                               "choose another output file", path=recording) from None
-            if self._same_file():
-                break
-            os.close(self._fd)
-        os.ftruncate(self._fd, 0)
-        os.write(self._fd, f"{os.getpid()}\n".encode())
-
-    def _same_file(self) -> bool:
+        self._lock = FileLock(str(self.path))
         try:
-            return os.stat(self.path).st_ino == os.fstat(self._fd).st_ino
-        except FileNotFoundError:
-            return False
+            self._lock.acquire(timeout=0)
+        except Timeout:
+            self._lock = None
+            raise RigError("another acquisition is writing this recording (it holds the lock); wait for it or "
+                           "choose another output file", path=recording) from None
 
     def release(self) -> None:
-        """Remove the lock file and release the lock (removed first: no one can lock a file about to go)."""
-        if self._fd is not None:
-            if self._same_file():
-                os.unlink(self.path)
-            fcntl.flock(self._fd, fcntl.LOCK_UN)
-            os.close(self._fd)
-            self._fd = None
+        """Release the lock and remove its file (on POSIX removed first: no one can lock a file about to go;
+        on Windows the open file cannot be removed, filelock removes it on release)."""
+        if self._lock is not None:
+            if os.name == "posix":
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(self.path)
+            self._lock.release()
+            self._lock = None
 
     def __enter__(self):
         return self
@@ -136,12 +128,12 @@ class _Session:
         self.zeros = dict(start.zeros or {})
         self.step = start.last_step
         self.samples = 0
-        self.dt = 1.0 / plan.protocol.rate_Hz
+        self.dt = 1.0 / plan.schedule.rate_Hz
         self.t0 = time.monotonic() - (start.last_time_s + 1.0 if start.last_time_s >= 0 else 0.0)
         self.tick = time.monotonic()
 
     def run(self) -> None:
-        holds = self.plan.protocol.holds()
+        holds = self.plan.schedule.holds()
         for k in range(self.start.holds_done, len(holds)):
             axis, rep, phase, mass = holds[k]
             self.step += 1
@@ -175,7 +167,7 @@ class _Session:
 
     def _emit(self, hold, t, x, temp) -> None:
         axis, rep, phase, mass = hold
-        measured = self.plan.protocol.measured.get(axis.value, (0, 1, 2))
+        measured = self.plan.schedule.measured.get(axis.value, (0, 1, 2))
         rel = x - self.zeros.get(axis.value, np.zeros(3))
         disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan for c in range(3))
         self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp)
@@ -192,15 +184,15 @@ class _Session:
             self.writer.comment(f"zero {axis.value}: " + ", ".join(f"{v:.6f}" for v in self.zeros[axis.value]))
             for item in buffered:
                 self._emit(hold, *item)
-        for _ in range(int(round(self.plan.protocol.hold_s * self.plan.protocol.rate_Hz))):
+        for _ in range(int(round(self.plan.schedule.hold_s * self.plan.schedule.rate_Hz))):
             self._emit(hold, *self._sample())
 
     def _settle(self, hold, label, buffer: bool):
         """Read until the measured gauges stay within the tolerance for the window (or the timeout); returns
         (the last window's readings, the buffered samples) when ``buffer`` (a new series has no zero yet)."""
         plan = self.plan
-        measured = list(plan.protocol.measured.get(hold[0].value, (0, 1, 2)))
-        window = max(int(round(plan.settle_window_s * plan.protocol.rate_Hz)), 2)
+        measured = list(plan.schedule.measured.get(hold[0].value, (0, 1, 2)))
+        window = max(int(round(plan.settle_window_s * plan.schedule.rate_Hz)), 2)
         recent, buffered = [], []
         t_start = time.monotonic()
         while True:

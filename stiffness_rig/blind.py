@@ -19,7 +19,7 @@ import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.layout import layout
-from .model import Hold, Protocol, RigModel
+from .model import Hold, LoadSchedule, RigModel
 from .simulate import simulate_recording
 
 __all__ = ["generate_cases", "BlindCase"]
@@ -100,19 +100,19 @@ def _scale(effects, keys, factor):
     return out
 
 
-def _wide_protocol(rng) -> Protocol:
+def _wide_schedule(rng) -> LoadSchedule:
     """Protocols beyond the standard batches: 1-5 repeats, loads along negative axes, holds of 3-30 s sampled
     at 2-20 Hz, gaps of 2-20 s between holds, up to 5 kg."""
     axes = tuple(("-" if rng.random() < 0.3 else "") + a for a in rng.permutation(["y", "z", "x"]))
     hold = float(rng.choice([3.0, 5.0, 8.0, 15.0, 30.0]))
     rate = float(rng.choice([2.0, 5.0] if hold >= 15 else [5.0, 10.0, 20.0]))
     masses = [(0.5, 1.0, 1.5, 2.0), (1.0, 2.5, 5.0), (0.2, 0.4, 0.6, 0.8, 1.0), (1.0, 2.0, 3.0)][int(rng.integers(4))]
-    return Protocol(axes=axes, repeats=int(rng.integers(1, 6)), hold_s=hold, rate_Hz=rate,
+    return LoadSchedule(axes=axes, repeats=int(rng.integers(1, 6)), hold_s=hold, rate_Hz=rate,
                     gap_s=float(rng.choice([2.0, 4.0, 10.0, 20.0])), masses=masses)
 
 
 def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False) -> list[BlindCase]:
-    """``n`` blind cases; ``wide``: draw the protocols from :func:`_wide_protocol` (other repeats, signs, hold
+    """``n`` blind cases; ``wide``: draw the load schedules from :func:`_wide_schedule` (other repeats, signs, hold
     times, sample rates, gaps and loads) instead of the standard ones."""
     rng = np.random.default_rng(seed)
     design = resolve_design(rod)
@@ -125,7 +125,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
         u = rng.random()
         kind = "null" if u < 0.3 else "single" if u < 0.7 else "pair" if u < 0.82 else "decoy" if u < 0.9 else "oolib"
         noise = float(rng.choice([0.0003, 0.0006, 0.0012]))
-        proto = _wide_protocol(rng) if wide else Protocol(
+        proto = _wide_schedule(rng) if wide else LoadSchedule(
             axes=tuple(rng.permutation(["y", "z", "x"])), repeats=int(rng.integers(3, 6)),
             hold_s=float(rng.choice([5.0, 8.0])),
             masses=[(0.5, 1.0, 1.5, 2.0), (0.4, 0.8, 1.2, 1.6, 2.0), (1.0, 2.0, 3.0)][int(rng.integers(3))])

@@ -48,7 +48,7 @@ from rodlab.errors import did_you_mean
 from rodlab.fileio import read_text_checked
 
 from .errors import RigError
-from .model import Protocol
+from .model import LoadSchedule
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -209,10 +209,10 @@ def read_profile(path) -> RigProfile:
 
 @dataclass(frozen=True)
 class RigPlan:
-    """What to record: the protocol, the settle rule [s, mm], the rod's name."""
+    """What to record: the load schedule, the settle rule [s, mm], the rod's name."""
 
     rod: str
-    protocol: Protocol
+    schedule: LoadSchedule
     settle_window_s: float = 1.0
     settle_tolerance_mm: float = 0.003
     settle_timeout_s: float = 30.0
@@ -240,14 +240,14 @@ def read_plan(path) -> RigPlan:
         raise r.err("masses_kg must increase (the loading branch)", "masses_kg")
     settle = data.get("settle", {})
     r.keys(settle, {"window_s", "tolerance_mm", "timeout_s"}, "settle")
-    measured = dict(Protocol().measured)
+    measured = dict(LoadSchedule().measured)
     meas = data.get("measured", {})
     r.keys(meas, [a.value for a in LoadAxis], "measured")
     for k, v in meas.items():
         if not isinstance(v, list) or any(c not in ("x", "y", "z") for c in v):
             raise r.err("each entry lists measured components, e.g. y = [\"y\", \"z\"]", f"measured.{k}")
         measured[k] = tuple("xyz".index(c) for c in v)
-    proto = Protocol(axes=tuple(axes), masses=tuple(float(m) for m in masses),
+    proto = LoadSchedule(axes=tuple(axes), masses=tuple(float(m) for m in masses),
                      repeats=r.num(data, "repeats", "", 5, integer=True), hold_s=r.num(data, "hold_s", "", 8.0),
                      rate_Hz=r.num(data, "rate_Hz", "", 10.0), measured=measured)
     return RigPlan(rod, proto, r.num(settle, "window_s", "settle", 1.0), r.num(settle, "tolerance_mm", "settle", 0.003),

@@ -25,7 +25,7 @@ import numpy as np
 from rodlab.enums import LoadAxis, Phase
 from rodlab.units import G0
 
-__all__ = ["Protocol", "RigModel", "spring_compliance", "Hold"]
+__all__ = ["LoadSchedule", "RigModel", "spring_compliance", "Hold"]
 
 
 def spring_compliance(point_T_mm, axis, s_bend: float, s_torsion: float) -> np.ndarray:
@@ -48,8 +48,8 @@ def spring_compliance(point_T_mm, axis, s_bend: float, s_torsion: float) -> np.n
 
 
 @dataclass
-class Protocol:
-    """Load protocol: per load axis a mass-0 hold, then ``repeats`` x (loading up the ``masses``, unloading
+class LoadSchedule:
+    """Load schedule of a stiffness test: per load axis a mass-0 hold, then ``repeats`` x (loading up the ``masses``, unloading
     back to 0); ``hold_s`` [s] sampled at ``rate_Hz``; ``gap_s`` [s] between holds (weights being moved).
     ``measured``: per load axis the two measured components (default: load axis + one perpendicular)."""
 

@@ -32,7 +32,7 @@ def _digest(obj) -> str:
 
 def plan_hash(plan: RigPlan) -> str:
     """16 hex digits of what a plan records: rod, holds in order, hold time, rate, settle rule, gauges read."""
-    pr = plan.protocol
+    pr = plan.schedule
     return _digest({"rod": plan.rod, "holds": [[a.value, r, str(ph), m] for a, r, ph, m in pr.holds()],
                     "hold_s": pr.hold_s, "rate_Hz": pr.rate_Hz,
                     "measured": {k: list(v) for k, v in sorted(pr.measured.items())},
@@ -48,7 +48,7 @@ def device_hash(profile: RigProfile) -> str:
 
 def identity_meta(profile: RigProfile, plan: RigPlan) -> dict:
     """The header entries a resume is checked against."""
-    return {"sample_rate_Hz": f"{plan.protocol.rate_Hz:g}", "plan_hash": plan_hash(plan), "device": profile.port,
+    return {"sample_rate_Hz": f"{plan.schedule.rate_Hz:g}", "plan_hash": plan_hash(plan), "device": profile.port,
             "device_hash": device_hash(profile)}
 
 
@@ -96,7 +96,7 @@ def _check_identity(path: Path, recorded: dict, expected: dict) -> None:
 def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> ResumePoint:
     """Where an acquisition of ``plan`` into ``path`` starts; refuses a file of another plan, rate or device."""
     path = Path(path)
-    total = len(plan.protocol.holds())
+    total = len(plan.schedule.holds())
     if not path.exists() or path.stat().st_size == 0:
         return ResumePoint(0, total, zeros={})
     text = path.read_text(encoding="utf-8", errors="replace")

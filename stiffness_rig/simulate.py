@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import Hold, Protocol, RigModel
+from .model import Hold, LoadSchedule, RigModel
 from .recording import RecordingWriter
 
 __all__ = ["simulate_recording", "EFFECT_DEFAULTS"]
@@ -24,16 +24,16 @@ EFFECT_DEFAULTS = {
 }
 
 
-def simulate_recording(model: RigModel, protocol: Protocol, path: str | Path, rod: str = "rod",
+def simulate_recording(model: RigModel, schedule: LoadSchedule, path: str | Path, rod: str = "rod",
                        extra_meta: dict | None = None) -> Path:
-    """Run ``protocol`` on ``model`` and write every sample to ``path`` (contract ``rodlab.rig/1``)."""
-    meta = {"rod": rod, "sample_rate_Hz": f"{protocol.rate_Hz:g}", "resolution_mm": f"{model.resolution_mm:g}",
+    """Run the load ``schedule`` on ``model`` and write every sample to ``path`` (contract ``rodlab.rig/1``)."""
+    meta = {"rod": rod, "sample_rate_Hz": f"{schedule.rate_Hz:g}", "resolution_mm": f"{model.resolution_mm:g}",
             "load_N": "mass_kg * 9.80665", "generator": "rodlab rig simulate"}
     meta.update(extra_meta or {})
     p = Path(path)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.part")     # written whole, then renamed: never a partial file
     try:
-        _write_samples(model, protocol, tmp, meta)
+        _write_samples(model, schedule, tmp, meta)
         os.replace(tmp, p)
     finally:
         if tmp.exists():
@@ -41,17 +41,17 @@ def simulate_recording(model: RigModel, protocol: Protocol, path: str | Path, ro
     return p
 
 
-def _write_samples(model: RigModel, protocol: Protocol, p: Path, meta: dict) -> None:
-    """Every sample of ``protocol`` on ``model`` into a new recording ``p``."""
-    dt = 1.0 / protocol.rate_Hz
-    n = int(round(protocol.hold_s * protocol.rate_Hz))
+def _write_samples(model: RigModel, schedule: LoadSchedule, p: Path, meta: dict) -> None:
+    """Every sample of ``schedule`` on ``model`` into a new recording ``p``."""
+    dt = 1.0 / schedule.rate_Hz
+    n = int(round(schedule.hold_s * schedule.rate_Hz))
     t = 0.0
     current_axis = None
     offset = np.zeros(3)
     with RecordingWriter(p, meta, with_temp=True, fsync_every=10_000) as w:
-        for step, (axis, rep, phase, mass) in enumerate(protocol.holds(), start=1):
+        for step, (axis, rep, phase, mass) in enumerate(schedule.holds(), start=1):
             hold = Hold(step, axis, rep, phase, mass, t)
-            measured = protocol.measured.get(axis.value, (axis.index,))
+            measured = schedule.measured.get(axis.value, (axis.index,))
             if axis is not current_axis:            # rod remounted; gauges zeroed on the unloaded reading
                 current_axis = axis
                 model._creep = np.zeros(3)
@@ -68,4 +68,4 @@ def _write_samples(model: RigModel, protocol: Protocol, p: Path, meta: dict) -> 
                 if model.resolution_mm > 0:
                     x = np.round(x / model.resolution_mm) * model.resolution_mm
                 w.write(round(ts, 3), step, rep, phase, axis, mass, tuple(x), temp)
-            t += n * dt + protocol.gap_s
+            t += n * dt + schedule.gap_s

@@ -203,14 +203,14 @@ def test_subset_least_squares_matches_direct_fits():
 ])
 def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     from rodlab import calc_rod_compliance, resolve_design
-    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
     design = resolve_design("rod1")
     sim = calc_rod_compliance(design)
     model = RigModel(sim.C_F, effects, noise_mm=0.0012, resolution_mm=0.001, seed=11)
     path = tmp_path / "r.rig.csv"
     kw = dict(axes=("z", "x", "y"), repeats=4, hold_s=5.0, masses=(0.5, 1.0, 1.5, 2.0))
-    simulate_recording(model, Protocol(**{**kw, **protocol}), path, rod=design.name)
+    simulate_recording(model, LoadSchedule(**{**kw, **protocol}), path, rod=design.name)
     diag, _ = diagnose_rig(read_recording(path), sim, design)
     assert diag.verdict == "explained", diag.summary()
     assert {f.effect for f in diag.findings} == expected, diag.summary()
@@ -221,13 +221,13 @@ def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
     """One hold shifted by 4 um in a short protocol (one repeat): no effect may absorb it; the hold is named
     and the rest diagnosed without it."""
     from rodlab import calc_rod_compliance, resolve_design
-    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
     design = resolve_design("rod1")
     sim = calc_rod_compliance(design)
     path = tmp_path / "r.rig.csv"
     simulate_recording(RigModel(sim.C_F, effects, noise_mm=0.0003, resolution_mm=0.0001, seed=4),
-                       Protocol(axes=("y", "z", "x"), repeats=1, hold_s=5.0), path, rod=design.name)
+                       LoadSchedule(axes=("y", "z", "x"), repeats=1, hold_s=5.0), path, rod=design.name)
     lines = path.read_text().splitlines()
     head = [l for l in lines if l.startswith("#") or l.startswith("time_s")]
     rows = [l.split(",") for l in lines if l and not l.startswith("#") and not l.startswith("time_s")]

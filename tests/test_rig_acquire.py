@@ -11,7 +11,7 @@ from rodlab.enums import Method
 from rodlab.stiffness_rig import DeviceError, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.acquire import RecordingLock, acquire
 from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
-from rodlab.stiffness_rig.model import Protocol, RigModel
+from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
 ROOT_DATA = Path(__file__).resolve().parents[1] / "rodlab" / "data" / "rig"
@@ -26,7 +26,7 @@ def _profile(port, protocol="query", checksum="none", retries=5):
 
 
 def _plan(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5):
-    return RigPlan("1#", Protocol(axes=axes, masses=masses, repeats=repeats, hold_s=hold_s, rate_Hz=20.0),
+    return RigPlan("1#", LoadSchedule(axes=axes, masses=masses, repeats=repeats, hold_s=hold_s, rate_Hz=20.0),
                    settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=3.0)
 
 
@@ -66,8 +66,8 @@ def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
     assert after.startswith(before)                       # nothing already recorded changed
     rec = read_recording(out)
     assert rec.n > part.n and np.all(np.diff(rec.time_s) > 0)
-    assert len(rec.steps()) == len(plan.protocol.holds())
-    assert out.read_text().count("complete: step") == len(plan.protocol.holds())
+    assert len(rec.steps()) == len(plan.schedule.holds())
+    assert out.read_text().count("complete: step") == len(plan.schedule.holds())
     # a finished plan is not recorded again
     size = out.stat().st_size
     with SimulatedRig(model, tmp_path / "tty") as dev:
@@ -77,10 +77,10 @@ def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
 
 
 @pytest.mark.parametrize("change,key", [
-    (lambda prof, plan: (prof, RigPlan("1#", Protocol(axes=("y",), masses=(2.0,), repeats=1, hold_s=0.5, rate_Hz=20.0),
+    (lambda prof, plan: (prof, RigPlan("1#", LoadSchedule(axes=("y",), masses=(2.0,), repeats=1, hold_s=0.5, rate_Hz=20.0),
                                        settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=3.0)),
      "plan_hash"),
-    (lambda prof, plan: (prof, RigPlan("1#", Protocol(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5,
+    (lambda prof, plan: (prof, RigPlan("1#", LoadSchedule(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5,
                                                       rate_Hz=10.0))), "sample_rate_Hz"),
     (lambda prof, plan: (RigProfile(**{**prof.__dict__, "port": prof.port + "-other"}), plan), "device"),
     (lambda prof, plan: (RigProfile(**{**prof.__dict__, "channels": tuple(Channel(i, i, -1.0, 0.001)
@@ -106,7 +106,7 @@ def test_resume_with_another_plan_rate_or_device_is_refused(tmp_path, change, ke
         assert ei.value.key == key and str(out) in str(ei.value) and "--new-file" in str(ei.value)
         assert out.read_bytes() == recorded and not (tmp_path / "r.rig.csv.lock").exists()
         start = resume_point(out, prof, plan)
-        assert (start.holds_done, start.holds_total, start.resuming) == (2, len(plan.protocol.holds()), True)
+        assert (start.holds_done, start.holds_total, start.resuming) == (2, len(plan.schedule.holds()), True)
 
 
 def test_failed_port_open_leaves_nothing_behind(tmp_path):
@@ -187,7 +187,7 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
                 raise KeyboardInterrupt
         with pytest.raises(KeyboardInterrupt):
             acquire(read_profile(profile), read_plan(plan), out, use_loader=True, progress=stop_after_two)
-        n_holds = len(read_plan(plan).protocol.holds())
+        n_holds = len(read_plan(plan).schedule.holds())
         args = ["rig", "acquire", "--profile", str(profile), "-o", str(out), "--non-interactive", "-q"]
         other = _write_plan(tmp_path / "b.plan.toml", (2.0,), 10.0)
         recorded = out.read_bytes()

@@ -21,12 +21,12 @@ SCRIPT = r"""
 import sys
 from rodlab.stiffness_rig.acquire import acquire
 from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
-from rodlab.stiffness_rig.model import Protocol
+from rodlab.stiffness_rig.model import LoadSchedule
 port, out = sys.argv[1], sys.argv[2]
 prof = RigProfile(port=port, protocol="query", retries=3, timeout_s=0.15, temperature_index=3,
                   channels=tuple(Channel(i, i, 1.0, 0.001) for i in range(3)),
                   loader_command="LOAD {axis} {phase} {mass_kg:.4f}\r\n")
-plan = RigPlan("1#", Protocol(axes=("y", "z"), masses=(1.0, 2.0), repeats=2, hold_s=0.5, rate_Hz=20.0),
+plan = RigPlan("1#", LoadSchedule(axes=("y", "z"), masses=(1.0, 2.0), repeats=2, hold_s=0.5, rate_Hz=20.0),
                settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=2.0)
 acquire(prof, plan, out, use_loader=True)
 """

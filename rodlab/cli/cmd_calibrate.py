@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 from pathlib import Path
 from dataclasses import dataclass
@@ -366,9 +367,11 @@ def cmd_simulate_campaign(args) -> int:
         j, _, v = it.partition(":")
         try:
             errs[int(j)] = [float(x) for x in v.split(",")]
-            assert len(errs[int(j)]) == 3
-        except (ValueError, AssertionError):
-            raise RodlabError(f"--fixture-error {it!r}: expected J:dx,dy,dz [mm]") from None
+        except ValueError:
+            errs[0] = []
+        if 0 in errs or len(errs[int(j)]) != 3 or not all(map(math.isfinite, errs[int(j)])):
+            raise RodlabError(f"--fixture-error {it!r}: expected J:dx,dy,dz (a position and three finite offsets "
+                              f"[mm]), e.g. 2:0.05,0,-0.02")
     spec = CampaignSpec(positions=args.positions, orientations=args.orientations, device_noise_mm=args.noise_um * 1e-3,
                         seed=args.seed)
     simulate_campaign(robot, rod, args.output, spec, rod_true, errs or None)

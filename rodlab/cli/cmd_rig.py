@@ -127,7 +127,7 @@ def parse_effects(specs: list[str]) -> dict:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from rodlab.stiffness_rig.model import Protocol, RigModel
+    from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
 
     from ..errors import RodlabError
@@ -141,7 +141,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             LoadAxis.parse(a, "load axis")
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
-    proto = Protocol(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
+    proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
     model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed)
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
                               extra_meta={"effects": json.dumps(effects) if effects else "none", "seed": args.seed})

@@ -51,6 +51,8 @@ def read_calibration(path) -> CalibrationFile:
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" (written by `rodlab calibrate --json`), "
                                f"got {got!r}", path=p, key="format")
+    from rodlab.schema import require_schema
+    require_schema(data, FORMAT_CALIBRATION, p, p.read_text(encoding="utf-8"), CalibrationError)
     params = {}
     for name, v in (data.get("parameters") or {}).items():
         try:

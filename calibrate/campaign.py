@@ -151,6 +151,8 @@ def read_fixture(path) -> Fixture:
         raise CalibrationError(f"not valid JSON: {e.msg}", path=p, line=e.lineno) from e
     if not isinstance(data, dict) or data.get("format") != "rodlab.fixture/1":
         raise CalibrationError("expected a JSON object with \"format\": \"rodlab.fixture/1\"", path=p, key="format")
+    from rodlab.schema import require_schema
+    require_schema(data, "rodlab.fixture/1", p, text, CalibrationError)
     for k in data:
         if k not in ("format", "world_position", "positions", "contact_force_N"):
             raise CalibrationError("unknown key." + did_you_mean(k, ["world_position", "positions",

@@ -246,6 +246,9 @@ def read_compliance(path: str | Path) -> RodCompliance:
         data = json.loads(text)
     except json.JSONDecodeError as e:
         raise ComplianceError(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
+    if isinstance(data, dict) and data.get("format") == FORMAT_COMPLIANCE:
+        from .schema import require_schema
+        require_schema(data, FORMAT_COMPLIANCE, p, text, ComplianceError)
     return RodCompliance.from_dict(data, p)
 
 

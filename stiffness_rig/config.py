@@ -179,8 +179,10 @@ def read_profile(path) -> RigProfile:
         sign = r.num(ch, "sign", "channel", 1.0, positive=False)
         if sign not in (1.0, -1.0):
             raise r.err(f"sign must be 1 or -1, got {sign}", "channel.sign")
-        channels.append(Channel(r.num(ch, "index", "channel", None, positive=False, integer=True), "xyz".index(ax),
-                                sign, r.num(ch, "scale_mm", "channel", 1.0)))
+        index = r.num(ch, "index", "channel", None, positive=False, integer=True)
+        if index < 0:
+            raise r.err(f"index is the value's place in the device line, from 0; got {index}", "channel.index")
+        channels.append(Channel(index, "xyz".index(ax), sign, r.num(ch, "scale_mm", "channel", 1.0)))
     if len({c.axis for c in channels}) != len(channels):
         raise r.err("two channels measure the same tool axis", "channel.axis")
     temp = data.get("temperature")
@@ -188,6 +190,8 @@ def read_profile(path) -> RigProfile:
     if temp is not None:
         r.keys(temp, {"index"}, "temperature")
         t_index = r.num(temp, "index", "temperature", None, positive=False, integer=True)
+        if t_index < 0:
+            raise r.err(f"index is the value's place in the device line, from 0; got {t_index}", "temperature.index")
     loader = data.get("loader")
     cmd, ack = None, "OK"
     if loader is not None:
@@ -236,8 +240,8 @@ def read_plan(path) -> RigPlan:
     if not isinstance(masses, list) or not masses or any(isinstance(m, bool) or not isinstance(m, (int, float))
                                                           or not m > 0 for m in masses):
         raise r.err("masses_kg must be a non-empty list of masses > 0 [kg]", "masses_kg")
-    if sorted(masses) != list(masses):
-        raise r.err("masses_kg must increase (the loading branch)", "masses_kg")
+    if any(b <= a for a, b in zip(masses, masses[1:])):
+        raise r.err("masses_kg must increase strictly (the loading branch), e.g. [0.5, 1.0, 1.5, 2.0]", "masses_kg")
     settle = data.get("settle", {})
     r.keys(settle, {"window_s", "tolerance_mm", "timeout_s"}, "settle")
     measured = dict(LoadSchedule().measured)

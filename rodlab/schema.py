@@ -1,0 +1,248 @@
+"""Machine-readable schemas of rodlab's file formats, and every problem a file has against its schema.
+
+The schemas ship in ``rodlab/schemas``: JSON Schema (draft 2020-12) for the JSON and TOML formats (a TOML
+file is checked as the table it parses to), and a small table schema for the CSV formats
+(:mod:`rodlab.schema_table`). :func:`check_file` names a file's format (from its ``format`` key, its
+``# format:`` comment or its suffix) and returns every schema problem at once, each with the line and key
+where it can be located, what was expected and a fix. The readers' own rules beyond the schema (a symmetric
+C_F, a fixture's world position among its positions, holds that keep their load) are run after the schema
+by ``rodlab validate``.
+"""
+from __future__ import annotations
+
+import json
+import re
+import sys
+from dataclasses import dataclass, field
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+from .errors import did_you_mean
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["FormatSpec", "FORMATS", "Problem", "FileCheck", "load_schema", "sniff_format", "check_file",
+           "data_problems", "require_schema"]
+
+
+@dataclass(frozen=True)
+class FormatSpec:
+    """One file format: its id, how it is stored (json, toml, csv), its schema file and usual suffixes."""
+
+    id: str
+    kind: str
+    schema_file: str
+    suffixes: tuple
+    title: str
+
+
+FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
+    FormatSpec("rodlab.rod/1", "toml", "rod.schema.json", (".rod.toml",), "rod design"),
+    FormatSpec("rodlab.compliance/1", "json", "compliance.schema.json", (".compliance.json",), "rod compliance"),
+    FormatSpec("rodlab.fixture/1", "json", "fixture.schema.json", (".fixture.json",), "device fixture"),
+    FormatSpec("rodlab.robot/2", "toml", "robot.schema.json", (".robot.toml",), "robot file"),
+    FormatSpec("rodlab.calibration/1", "json", "calibration.schema.json", (".cal.json",), "calibration result"),
+    FormatSpec("rodlab.diagnosis/1", "json", "diagnosis.schema.json", (".diagnosis.json",), "diagnosis report"),
+    FormatSpec("rodlab.points_diagnosis/1", "json", "points_diagnosis.schema.json", (".points_diagnosis.json",),
+               "diagnosis of instrument points"),
+    FormatSpec("rodlab.rigplan/1", "toml", "rigplan.schema.json", (".plan.toml",), "rig plan"),
+    FormatSpec("rodlab.rigprofile/1", "toml", "rigprofile.schema.json", (".profile.toml",), "rig profile"),
+    FormatSpec("rodlab.rig/1", "csv", "rig.table.json", (".rig.csv",), "rig recording"),
+    FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
+    FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
+               "instrument / validation points"),
+)}
+#: format ids a file may state that are checked with another id's schema
+ALIASES = {"rodlab.robot/1": "rodlab.robot/2"}
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with a file: where (line, key; each where known), what, and how to fix it."""
+
+    path: str
+    message: str
+    line: int | None = None
+    key: str | None = None
+    fix: str = ""
+
+    def __str__(self) -> str:
+        where = ", ".join([self.path] + ([f"line {self.line}"] if self.line else [])
+                          + ([f"key `{self.key}`"] if self.key else []))
+        return f"{where}: {self.message}" + (f". Fix: {self.fix}" if self.fix else "")
+
+
+@dataclass
+class FileCheck:
+    """The result of checking one file: its format (None if unknown) and every problem found."""
+
+    path: str
+    format: str | None
+    problems: list = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems
+
+
+@lru_cache(maxsize=None)
+def load_schema(format_id: str) -> dict:
+    """The schema of ``format_id`` (a JSON Schema, or a table schema for CSV formats)."""
+    spec = FORMATS[ALIASES.get(format_id, format_id)]
+    return json.loads(resources.files("rodlab.schemas").joinpath(spec.schema_file).read_text(encoding="utf-8"))
+
+
+def sniff_format(path: Path, text: str) -> str | None:
+    """The format a file states (``format`` key or ``# format:`` comment), else the one its suffix suggests."""
+    m = (re.search(r'"format"\s*:\s*"([^"]+)"', text) or re.search(r'(?m)^\s*format\s*=\s*"([^"]+)"', text)
+         or re.search(r"(?m)^#\s*format:\s*(\S+)", text))
+    if m:
+        return m.group(1)
+    name = path.name.lower()
+    for spec in FORMATS.values():
+        if any(name.endswith(s) for s in spec.suffixes):
+            return spec.id
+    return None
+
+
+def _locate(text: str, kind: str, where: list) -> int | None:
+    """The line of the key at path ``where`` (JSON: each key after the previous; TOML: table headers, array
+    tables by index, then ``key =``); ``None`` if not found."""
+    pos, table = 0, None
+    for part in where:
+        if isinstance(part, int):
+            if kind == "toml" and table is not None:
+                hits = [m.start() for m in re.finditer(rf"(?m)^\s*\[\[\s*{re.escape(table)}\s*\]\]", text)]
+                if part < len(hits):
+                    pos = hits[part]
+            continue
+        table = str(part)
+        pattern = (rf'"{re.escape(table)}"\s*:' if kind == "json"
+                   else rf"(?m)^\s*(\[+\s*{re.escape(table)}\s*\]+|{re.escape(table)}\s*=)")
+        m = re.compile(pattern).search(text, pos)
+        if not m:
+            return text.count("\n", 0, pos) + 1 if pos else None
+        pos = m.start() + (len(m.group(0)) - len(m.group(0).lstrip()) if kind == "toml" else 0)
+    return text.count("\n", 0, pos) + 1 if where else None
+
+
+def _dotted(where) -> str | None:
+    out = ""
+    for part in where:
+        out += f"[{part + 1}]" if isinstance(part, int) else (("." if out else "") + str(part))
+    return out or None
+
+
+def _explain(err) -> tuple[str, str, list]:
+    """(message, fix, path) of one jsonschema error, in rodlab's words."""
+    where = list(err.absolute_path)
+    v, inst, schema = err.validator, err.instance, err.schema
+    if v == "required":
+        missing = re.findall(r"'([^']+)' is a required property", err.message)
+        key = missing[0] if missing else "?"
+        present = [k for k in inst if k not in schema.get("properties", {})] if isinstance(inst, dict) else []
+        close = [k for k in present if did_you_mean(k, [key])]
+        return (f"missing required key `{key}`", f"rename `{close[0]}` to `{key}`" if close else
+                f"add `{key}` (see docs/formats.md)", where + [key])
+    if v == "additionalProperties":
+        allowed = sorted(schema.get("properties", {}))
+        extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
+        key = extra[0] if extra else "?"
+        hint = did_you_mean(key, allowed).strip()
+        return (f"unknown key `{key}`; allowed: {allowed}",
+                hint or "remove it or check its spelling", where + [key])
+    if v in ("const", "enum"):
+        choices = [schema["const"]] if v == "const" else schema["enum"]
+        hint = did_you_mean(inst, [str(c) for c in choices]).strip() if isinstance(inst, str) else ""
+        return f"expected one of {choices}, got {inst!r}", hint or f"use one of {choices}", where
+    if v == "type":
+        kinds = schema["type"] if isinstance(schema["type"], list) else [schema["type"]]
+        words = " or ".join(("an " if k[0] in "aeiou" else "a ") + k for k in kinds)
+        return f"expected {words}, got {inst!r}", f"write {words}", where
+    if v in ("minItems", "maxItems"):
+        lo, hi = schema.get("minItems", 0), schema.get("maxItems")
+        want = f"{lo}" if lo == hi else f"at least {lo}" if hi is None else f"{lo} to {hi}"
+        return f"expected {want} items, got {len(inst)}", "give the number of entries the format states", where
+    if v in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum"):
+        op = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}[v]
+        return f"expected a number {op} {schema[v]}, got {inst!r}", "correct the value (units are in the key)", where
+    if v == "anyOf" and isinstance(inst, dict) and not where:
+        return err.message, "give [tube], or both [pipe_I] and [pipe_II]", where
+    return err.message, "", where
+
+
+@lru_cache(maxsize=None)
+def _validator(format_id: str):
+    from jsonschema import Draft202012Validator
+    return Draft202012Validator(load_schema(format_id))
+
+
+def data_problems(data, format_id: str, path: str = "", text: str = "", kind: str = "json") -> list[Problem]:
+    """Every problem of the parsed ``data`` against the JSON Schema of ``format_id``."""
+    validator = _validator(ALIASES.get(format_id, format_id))
+    out = []
+    for err in validator.iter_errors(data):
+        message, fix, where = _explain(err)
+        located = where if err.validator != "required" else where[:-1]      # a missing key: its table's line
+        out.append(Problem(path, message, _locate(text, kind, located) if text else None, _dotted(where), fix))
+    return sorted(out, key=lambda p: (p.line or 0, p.key or ""))
+
+
+def _parse(p: Path, text: str, kind: str):
+    """(data, problem) of a JSON or TOML text."""
+    try:
+        return (json.loads(text) if kind == "json" else tomllib.loads(text)), None
+    except json.JSONDecodeError as e:
+        return None, Problem(str(p), f"not valid JSON: {e.msg} (column {e.colno})", e.lineno, None,
+                             "correct the syntax at that place")
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        return None, Problem(str(p), f"not valid TOML: {e}", int(m.group(1)) if m else None, None,
+                             "correct the syntax at that place")
+
+
+def check_file(path, format_id: str | None = None) -> FileCheck:
+    """Every schema problem of the file at ``path`` (its format sniffed unless ``format_id`` is given)."""
+    from .schema_table import table_problems
+
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return FileCheck(str(p), None, [Problem(str(p), "file not found", fix="check the path")])
+    except (OSError, UnicodeDecodeError) as e:
+        return FileCheck(str(p), None, [Problem(str(p), f"cannot be read as UTF-8 text: {e}",
+                                                fix="give a text file rodlab writes or reads")])
+    fid = format_id or sniff_format(p, text)
+    if fid is None or ALIASES.get(fid, fid) not in FORMATS:
+        known = sorted(FORMATS) + sorted(ALIASES)
+        return FileCheck(str(p), fid, [Problem(str(p), f"unknown format {fid!r}" if fid else
+                                               "cannot tell the format (no `format` key, no known suffix)",
+                                               key="format",
+                                               fix=(did_you_mean(fid, known).strip() if fid else "") or
+                                               f"state one of {known} with --format")])
+    spec = FORMATS[ALIASES.get(fid, fid)]
+    if spec.kind == "csv":
+        return FileCheck(str(p), fid, table_problems(text, load_schema(fid), str(p)))
+    data, problem = _parse(p, text, spec.kind)
+    if problem is not None:
+        return FileCheck(str(p), fid, [problem])
+    return FileCheck(str(p), fid, data_problems(data, fid, str(p), text, spec.kind))
+
+
+def require_schema(data, format_id: str, path, text: str, error_cls, kind: str = "json") -> None:
+    """Raise ``error_cls`` (a :class:`~rodlab.errors.LocatedError`) listing every problem of ``data`` against
+    the schema of ``format_id``, located at the first; nothing if there is none. The readers call it first."""
+    problems = data_problems(data, format_id, str(path) if path is not None else "", text or "", kind)
+    if not problems:
+        return
+    first = problems[0]
+    more = "".join(f"; {p.message} (" + ", ".join(([f"line {p.line}"] if p.line else []) +
+                                                  ([f"key `{p.key}`"] if p.key else [])) + ")"
+                   for p in problems[1:])
+    fix = f". Fix: {first.fix}" if first.fix else ""
+    raise error_cls(f"{first.message}{fix}{more}", path=path, line=first.line, key=first.key)

@@ -1,0 +1,157 @@
+"""The table schema of rodlab's CSV formats, and every problem a CSV text has against one.
+
+A table schema (``rodlab/schemas/*.table.json``) states the ``# key: value`` comment lines before the header
+(``comments``: type ``string`` or ``vector`` of ``size`` numbers, ``required``, ``const``) and the columns
+(``columns``: ``name``, ``type`` number / integer / string, ``required``, ``nullable`` for empty cells,
+``enum``, ``minimum`` / ``exclusiveMinimum``, ``unit``; a column with ``"joints": true`` and a name such as
+``q{i}`` stands for q1..qn, n being however many the header has). ``unique`` lists column groups whose values
+may not repeat; ``together`` groups of columns that are all present or all absent.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import re
+
+from .errors import did_you_mean
+from .schema import Problem
+
+__all__ = ["table_problems", "MAX_PROBLEMS"]
+
+#: problems listed per file before the rest are counted
+MAX_PROBLEMS = 50
+
+
+def _comments(lines: list[str]) -> tuple[dict, int]:
+    """``{key: (line, value)}`` of the leading comment lines and the index of the header line."""
+    meta, i = {}, 0
+    while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
+        body = lines[i].strip().lstrip("#").strip()
+        if ":" in body:
+            k, v = body.split(":", 1)
+            meta.setdefault(k.strip(), (i + 1, v.strip()))
+        i += 1
+    return meta, i
+
+
+def _comment_problems(meta: dict, spec: dict, path: str) -> list[Problem]:
+    out = []
+    for key, c in spec.items():
+        if key not in meta:
+            if c.get("required"):
+                out.append(Problem(path, f"missing comment line '# {key}: ...' before the header", 1, key,
+                                   f"add '# {key}: {c.get('const', '...')}'"))
+            continue
+        line, value = meta[key]
+        if "const" in c and value != c["const"]:
+            out.append(Problem(path, f"expected {c['const']!r}, got {value!r}", line, key, f"write {c['const']}"))
+        if c.get("type") == "vector":
+            try:
+                nums = [float(v) for v in value.split(",")]
+            except ValueError:
+                nums = None
+            if nums is None or len(nums) != c["size"] or not all(math.isfinite(v) for v in nums):
+                out.append(Problem(path, f"expected {c['size']} comma-separated finite numbers [{c.get('unit', '-')}], "
+                                   f"got {value!r}", line, key, f"write e.g. '# {key}: " +
+                                   ", ".join(["0"] * c["size"]) + "'"))
+    return out
+
+
+def _columns(header: list[str], schema: dict) -> dict:
+    """Column name -> its spec, the joint pattern expanded to the q-columns the header has (at least q1)."""
+    cols = {}
+    for c in schema["columns"]:
+        if c.get("joints"):
+            pat = re.compile("^" + re.escape(c["name"]).replace(r"\{i\}", r"([1-9][0-9]*)") + "$")
+            n = max([int(m.group(1)) for h in header if (m := pat.match(h))] or [1])
+            for i in range(1, n + 1):
+                cols[c["name"].replace("{i}", str(i))] = c
+        else:
+            cols[c["name"]] = c
+    return cols
+
+
+def _header_problems(header: list[str], cols: dict, schema: dict, path: str, line: int) -> list[Problem]:
+    out = []
+    for h in header:
+        if h not in cols:
+            out.append(Problem(path, f"unknown column {h!r}; expected {list(cols)}", line, h,
+                               did_you_mean(h, cols).strip() or "remove it or rename it"))
+    for name, c in cols.items():
+        if c.get("required") and name not in header:
+            out.append(Problem(path, f"missing column {name!r}", line, name, f"add the column {name}"))
+    for h in sorted({h for h in header if header.count(h) > 1}):
+        out.append(Problem(path, f"duplicated column {h!r}", line, h, "keep one"))
+    for group in schema.get("together", []):
+        have = [g for g in group if g in header]
+        if have and len(have) != len(group):
+            missing = [g for g in group if g not in header]
+            out.append(Problem(path, f"columns {group} go together; missing {missing}", line, missing[0],
+                               f"add {missing} or remove {have}"))
+    return out
+
+
+def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Problem | None:
+    s = cell.strip()
+    if not s:
+        return None if c.get("nullable") else Problem(path, "empty cell", line, name, "write a value")
+    if c["type"] == "string":
+        if "enum" in c and s not in c["enum"]:
+            return Problem(path, f"expected one of {c['enum']}, got {s!r}", line, name,
+                           did_you_mean(s, c["enum"]).strip() or f"use one of {c['enum']}")
+        return None
+    try:
+        v = float(s)
+    except ValueError:
+        return Problem(path, f"expected a number, got {s!r}", line, name, "write a number with a decimal point")
+    if not math.isfinite(v):
+        return Problem(path, f"expected a finite number, got {s!r}", line, name, "write a finite number")
+    if c["type"] == "integer" and v != int(v):
+        return Problem(path, f"expected an integer, got {s!r}", line, name, "write a whole number")
+    for k, op, bad in (("minimum", ">=", lambda a, b: a < b), ("exclusiveMinimum", ">", lambda a, b: a <= b)):
+        if k in c and bad(v, c[k]):
+            return Problem(path, f"expected a number {op} {c[k]} [{c.get('unit', '-')}], got {s!r}", line, name,
+                           "correct the value")
+    return None
+
+
+def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem]:
+    out, seen, rows = [], {}, 0
+    groups = [tuple(g) for g in schema.get("unique", []) if all(k in header for k in g)]
+    for k, row in enumerate(csv.reader(lines[start:]), start=start + 1):
+        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
+            continue
+        rows += 1
+        if len(row) != len(header):
+            out.append(Problem(path, f"expected {len(header)} cells, got {len(row)}", k, None,
+                               "one cell per header column (empty cells keep their commas)"))
+            continue
+        for name, cell in zip(header, row):
+            if name in cols and (p := _cell_problem(cell, cols[name], name, path, k)):
+                out.append(p)
+        for g in groups:
+            key = tuple(row[header.index(c)].strip() for c in g)
+            if (g, key) in seen:
+                out.append(Problem(path, f"{dict(zip(g, key))} appears twice (also on line {seen[(g, key)]})", k,
+                                   g[-1], "number every row uniquely"))
+            seen.setdefault((g, key), k)
+    if rows == 0:
+        out.append(Problem(path, "no data rows after the header", start, None, "add the measurements"))
+    return out
+
+
+def table_problems(text: str, schema: dict, path: str = "") -> list[Problem]:
+    """Every problem of the CSV ``text`` against the table ``schema`` (the first :data:`MAX_PROBLEMS`, then a
+    count of the rest)."""
+    lines = text.splitlines()
+    meta, i = _comments(lines)
+    out = _comment_problems(meta, schema.get("comments", {}), path)
+    if i >= len(lines):
+        return out + [Problem(path, "no header line", i or None, None, "add the column header line")]
+    header = [h.strip() for h in next(csv.reader([lines[i]]))]
+    cols = _columns(header, schema)
+    out += _header_problems(header, cols, schema, path, i + 1)
+    out += _row_problems(lines, i + 1, header, cols, schema, path)
+    if len(out) > MAX_PROBLEMS:
+        out = out[:MAX_PROBLEMS] + [Problem(path, f"... and {len(out) - MAX_PROBLEMS} more problems")]
+    return out

@@ -1,0 +1,120 @@
+"""The shipped schemas of rodlab's file formats and `rodlab validate`: every file rodlab ships or writes passes
+its schema and its reader; a broken file is refused by both, with every problem listed at once."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rodlab.cli.cmd_validate import READERS, validate_file
+from rodlab.cli.main import main
+from rodlab.schema import FORMATS, check_file, load_schema
+
+ROOT = Path(__file__).resolve().parents[1]
+SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("rodlab/data/robots/*.urdf"),
+                  *ROOT.glob("benchmarks/data/*/*.csv")])
+
+
+def test_schemas_are_valid_json_schemas_and_cover_every_format():
+    from jsonschema import Draft202012Validator
+    for fid, spec in FORMATS.items():
+        schema = load_schema(fid)
+        assert schema["$id"] == fid
+        if spec.kind != "csv":
+            Draft202012Validator.check_schema(schema)
+        assert fid in READERS
+    doc = (ROOT / "docs" / "formats.md").read_text()
+    assert all(fid in doc for fid in FORMATS), [f for f in FORMATS if f not in doc]
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=[p.name for p in SHIPPED])
+def test_every_shipped_file_is_valid(path):
+    check = validate_file(path)
+    assert check.ok and check.format is not None, [str(p) for p in check.problems]
+
+
+def test_files_rodlab_writes_are_valid(tmp_path, examples):
+    data = ROOT / "benchmarks" / "data" / "landgraf2021" / "ur10_D.validation.csv"
+    cal, diag = tmp_path / "cal.json", tmp_path / "d.json"
+    main(["calibrate", "--points", str(data), "--robot", "ur10", "--fix-unidentifiable", "--json", str(cal)])
+    main(["diagnose", "--points", str(data), "--robot", "ur10", "--json", str(diag)])
+    written = [cal, diag, *sorted(p for p in examples.rglob("*") if p.is_file() and "truth" not in p.name
+                                  and p.suffix in (".csv", ".json", ".toml"))]
+    for p in written:
+        check = validate_file(p)
+        assert check.ok and check.format, (p, [str(x) for x in check.problems])
+
+
+def _mutations(examples):
+    comp = json.loads((examples / "rod1.compliance.json").read_text())
+    fix = json.loads(next(examples.rglob("*.fixture.json")).read_text())
+    rod = (ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml").read_text()
+    plan = (ROOT / "rodlab" / "data" / "rig" / "quick.plan.toml").read_text()
+    camp = next(examples.rglob("*.campaign.csv")).read_text().splitlines()
+    prof = (ROOT / "rodlab" / "data" / "rig" / "simulator.profile.toml").read_text()
+    return {
+        "n.profile.toml": prof.replace("index = 1", "index = -1", 1),
+        "c.compliance.json": json.dumps({**comp, "method": "fem"}),
+        "d.compliance.json": json.dumps({**comp, "tool_mm": [1, 2]}),
+        "e.compliance.json": json.dumps({k: v for k, v in comp.items() if k != "mass_kg"}),
+        "f.fixture.json": json.dumps({**fix, "positions": {"1": [0, 0, 0, 0, 0]}, "world_position": 1}),
+        "g.fixture.json": json.dumps({**fix, "contact_force_N": [1, 2]}),
+        "r.rod.toml": rod.replace("L1_mm", "L1"),
+        "s.rod.toml": rod.replace("[ball]", "[ball]\ncolour = 1"),
+        "p.plan.toml": plan.replace('axes = ["y", "z"]', 'axes = ["y", "w"]'),
+        "q.plan.toml": plan.replace("repeats = 2", "repeats = 2.5"),
+        "a.campaign.csv": "\n".join(camp[:3] + [camp[3].replace(",", ",x", 1)] + camp[4:]),
+        "b.campaign.csv": "\n".join([camp[0].replace("x_mm", "x")] + camp[1:]),
+    }
+
+
+def test_schema_and_reader_agree_on_broken_files(tmp_path, examples):
+    """Each broken file is refused by its schema and, checked alone, by its reader: the schema is the reader's
+    contract, not a second opinion."""
+    for name, text in _mutations(examples).items():
+        p = tmp_path / name
+        p.write_text(text)
+        check = check_file(p)
+        assert not check.ok, name
+        with pytest.raises(ValueError):
+            READERS[check.format](p)
+
+
+def test_validate_lists_every_problem_with_line_key_and_fix(tmp_path, capsys, examples):
+    bad = tmp_path / "bad.campaign.csv"
+    camp = next(examples.rglob("*.campaign.csv")).read_text().splitlines()
+    rows = camp[1:6]
+    rows[1] = rows[1].replace(rows[1].split(",")[3], "abc", 1)
+    rows[3] = ",".join(rows[3].split(",")[:-2])
+    bad.write_text("\n".join([camp[0] + ",temp"] + [r + ",20" for r in rows]) + "\n")
+    good = ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml"
+    assert main(["validate", str(good), str(bad)]) == 2
+    out = capsys.readouterr()
+    assert f"{good}: rodlab.rod/1, valid" in out.out
+    err = out.err
+    assert "bad.campaign.csv: rodlab.campaign/1, 3 problem(s)" in err
+    assert "line 1, key `temp`: unknown column" in err and "Did you mean `temp_C`?" in err
+    assert "line 3, key `q2`: expected a number, got 'abc'" in err and "line 5: expected" in err
+    assert main(["validate", str(good)]) == 0
+
+
+def test_validate_names_unknown_formats_and_missing_files(tmp_path, capsys):
+    p = tmp_path / "x.json"
+    p.write_text('{"format": "rodlab.compliance/2"}')
+    assert main(["validate", str(p), str(tmp_path / "none.rod.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "unknown format 'rodlab.compliance/2'" in err and "Did you mean `rodlab.compliance/1`?" in err
+    assert "none.rod.toml: file not found" in err
+
+
+def test_reader_rules_beyond_the_schema_are_reported(tmp_path, capsys):
+    """A plan whose masses repeat passes the schema (no JSON Schema rule says "increasing") but not its reader:
+    validate reports the reader's problem with its line."""
+    plan = (ROOT / "rodlab" / "data" / "rig" / "quick.plan.toml").read_text()
+    p = tmp_path / "same.plan.toml"
+    p.write_text(plan.replace("masses_kg = [1.0, 2.0]", "masses_kg = [1.0, 1.0]"))
+    assert check_file(p).ok
+    check = validate_file(p)
+    assert not check.ok and check.problems[0].key == "masses_kg" and "strictly" in check.problems[0].message
+    assert check.problems[0].line == plan.splitlines().index("masses_kg = [1.0, 2.0]") + 1

@@ -56,6 +56,9 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
                "instrument / validation points"),
 )}
+#: rodlab's own output records without a schema (nothing reads them back): only their JSON syntax is checked
+UNCHECKED = {f"rodlab.{n}/1": "an output record of rodlab without a schema: only its JSON syntax is checked"
+             for n in ("run", "sweep", "study", "joints", "mass", "comparison", "reference_designs")}
 #: format ids a file may state that are checked with another id's schema
 ALIASES = {"rodlab.robot/1": "rodlab.robot/2"}
 
@@ -83,6 +86,7 @@ class FileCheck:
     path: str
     format: str | None
     problems: list = field(default_factory=list)
+    note: str = ""
 
     @property
     def ok(self) -> bool:
@@ -218,6 +222,9 @@ def check_file(path, format_id: str | None = None) -> FileCheck:
         return FileCheck(str(p), None, [Problem(str(p), f"cannot be read as UTF-8 text: {e}",
                                                 fix="give a text file rodlab writes or reads")])
     fid = format_id or sniff_format(p, text)
+    if fid in UNCHECKED and format_id is None:
+        _, problem = _parse(p, text, "json")
+        return FileCheck(str(p), fid, [problem] if problem else [], note=UNCHECKED[fid])
     if fid is None or ALIASES.get(fid, fid) not in FORMATS:
         known = sorted(FORMATS) + sorted(ALIASES)
         return FileCheck(str(p), fid, [Problem(str(p), f"unknown format {fid!r}" if fid else

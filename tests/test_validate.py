@@ -118,3 +118,13 @@ def test_reader_rules_beyond_the_schema_are_reported(tmp_path, capsys):
     check = validate_file(p)
     assert not check.ok and check.problems[0].key == "masses_kg" and "strictly" in check.problems[0].message
     assert check.problems[0].line == plan.splitlines().index("masses_kg = [1.0, 2.0]") + 1
+
+
+def test_output_records_without_a_schema_are_named_not_refused(tmp_path, capsys):
+    p = tmp_path / "run.json"
+    p.write_text('{"format": "rodlab.run/1", "steps": []}')
+    assert main(["validate", str(p)]) == 0
+    assert "rodlab.run/1, valid (an output record of rodlab without a schema" in capsys.readouterr().out
+    p.write_text('{"format": "rodlab.run/1", "steps": [}')
+    assert main(["validate", str(p)]) == 2
+    assert "not valid JSON" in capsys.readouterr().err

@@ -91,7 +91,7 @@ def cmd_validate(args) -> int:
         check = validate_file(f, args.format)
         fmt = check.format or "unknown format"
         if check.ok:
-            print(f"{f}: {fmt}, valid")
+            print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else ""))
             continue
         bad.append(f)
         print(f"{f}: {fmt}, {len(check.problems)} problem(s)", file=sys.stderr)

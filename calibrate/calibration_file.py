@@ -41,7 +41,8 @@ def read_calibration(path) -> CalibrationFile:
     """Read a result file; errors name the file and key and say what is expected."""
     p = Path(path)
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
+        text = p.read_text(encoding="utf-8")
+        data = json.loads(text)
     except FileNotFoundError as e:
         raise CalibrationError("file not found", path=p) from e
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
@@ -52,17 +53,9 @@ def read_calibration(path) -> CalibrationFile:
         raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" (written by `rodlab calibrate --json`), "
                                f"got {got!r}", path=p, key="format")
     from rodlab.schema import require_schema
-    require_schema(data, FORMAT_CALIBRATION, p, p.read_text(encoding="utf-8"), CalibrationError)
-    params = {}
-    for name, v in (data.get("parameters") or {}).items():
-        try:
-            params[name] = CalibratedParameter(float(v["value"]), float(v.get("sigma") or 0.0), str(v["unit"]),
-                                               str(v.get("status", "")))
-        except (KeyError, TypeError, ValueError) as e:
-            raise CalibrationError(f"expected {{\"value\": number, \"sigma\": number, \"unit\": text}}, got {v!r}",
-                                   path=p, key=f"parameters.{name}") from e
-    if not params:
-        raise CalibrationError("no parameters", path=p, key="parameters")
+    require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
+    params = {name: CalibratedParameter(float(v["value"]), float(v.get("sigma") or 0.0), str(v["unit"]),
+                                        str(v.get("status", ""))) for name, v in data["parameters"].items()}
     return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
                            bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params)
 

@@ -152,35 +152,19 @@ def read_fixture(path) -> Fixture:
     if not isinstance(data, dict) or data.get("format") != "rodlab.fixture/1":
         raise CalibrationError("expected a JSON object with \"format\": \"rodlab.fixture/1\"", path=p, key="format")
     from rodlab.schema import require_schema
-    require_schema(data, "rodlab.fixture/1", p, text, CalibrationError)
-    for k in data:
-        if k not in ("format", "world_position", "positions", "contact_force_N"):
-            raise CalibrationError("unknown key." + did_you_mean(k, ["world_position", "positions",
-                                                                    "contact_force_N"]), path=p, key=k)
-    poses = {}
-    raw = data.get("positions")
-    if not isinstance(raw, dict) or not raw:
-        raise CalibrationError("expected an object of poses {\"1\": [x, y, z, a, b, c], ...}", path=p, key="positions")
-    for k, v in raw.items():
-        try:
-            j = int(k)
-        except ValueError:
-            raise CalibrationError(f"position keys are integers, got {k!r}", path=p, key=f"positions.{k}") from None
-        arr = np.asarray(v, dtype=float) if isinstance(v, list) and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v) else None
-        if arr is None or arr.shape != (6,) or not np.all(np.isfinite(arr)):
-            raise CalibrationError(f"expected a pose [x, y, z, a, b, c] (mm, deg), got {v!r}", path=p,
-                                   key=f"positions.{k}")
-        poses[j] = arr
-    wp = data.get("world_position")
-    if not isinstance(wp, int) or wp not in poses:
+    require_schema(data, "rodlab.fixture/1", p, text, CalibrationError)       # keys, shapes, types
+    poses = {int(k): np.asarray(v, dtype=float) for k, v in data["positions"].items()}
+    for j, arr in poses.items():
+        if not np.all(np.isfinite(arr)):                        # JSON's NaN / Infinity pass a number schema
+            raise CalibrationError(f"expected a finite pose [x, y, z, a, b, c] (mm, deg), got {arr.tolist()}",
+                                   path=p, key=f"positions.{j}")
+    wp = data["world_position"]
+    if wp not in poses:
         raise CalibrationError(f"world_position must name one of the positions {sorted(poses)}, got {wp!r}",
                                path=p, key="world_position")
-    f = data.get("contact_force_N", [1.10, 1.25, 1.05])
-    fa = np.asarray(f, dtype=float) if isinstance(f, list) and all(
-        isinstance(x, (int, float)) and not isinstance(x, bool) for x in f) else None
-    if fa is None or fa.shape != (3,) or not np.all(np.isfinite(fa)):
-        raise CalibrationError(f"expected 3 numbers [N], got {f!r}", path=p, key="contact_force_N")
+    fa = np.asarray(data.get("contact_force_N", [1.10, 1.25, 1.05]), dtype=float)
+    if not np.all(np.isfinite(fa)):
+        raise CalibrationError(f"expected 3 finite numbers [N], got {fa.tolist()}", path=p, key="contact_force_N")
     return Fixture(poses, fa, wp, p)
 
 

@@ -23,10 +23,11 @@ from rodlab.stiffness_rig import read_recording  # noqa: E402
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind.md"
 OUT_WIDE = OUT.with_name("diagnose_blind_wide.md")
 
+#: the parameter scored per effect (the simulator and the diagnosis report use the same names and units)
 _PARAM = {"friction": ("F_f_N", "F_f_N", 1.0), "tare": ("tare_kg", "tare_kg", 1.0), "creep": ("phi", "phi", 1.0),
-          "nonlinearity": ("beta", "beta_per_10N", 1.0), "compliance_scale": ("r", "r", None),
-          "torsion_compliance": ("s_rad_per_Nmm", "s_rad_per_Nm", 1e3),
-          "joint_compliance": ("s_bend_rad_per_Nmm", "s_bend_rad_per_Nm", 1e3)}
+          "nonlinearity": ("beta_per_10N", "beta_per_10N", 1.0), "compliance_scale": ("r", "r", None),
+          "torsion_compliance": ("s_torsion_rad_per_Nm", "s_torsion_rad_per_Nm", 1.0),
+          "joint_compliance": ("s_bend_rad_per_Nm", "s_bend_rad_per_Nm", 1.0)}
 
 
 def score(cases, results) -> dict:

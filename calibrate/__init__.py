@@ -10,10 +10,11 @@ from .kinematics import ModelParams, ball_positions
 from .result import result_dict, write_result
 from .robot import Robot, robot_from_chain
 from .robot_formats import ROBOT_READERS, builtin_robots, read_robot, resolve_robot
+from .thermal import ThermalGrowth
 from .validate import ErrorStats, validate
 
 __all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
-           "Compensation", "deflection_offsets",
+           "Compensation", "deflection_offsets", "ThermalGrowth",
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",
            "result_dict", "write_result", "Robot", "robot_from_chain", "ROBOT_READERS", "builtin_robots", "read_robot",

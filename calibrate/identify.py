@@ -45,7 +45,7 @@ class Observations:
     q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
     group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,);
     sigma_mm (N, 3) stated standard uncertainty of each measured coordinate [mm] (instrument points), or None
-    for one noise level for all
+    for one noise level for all; temp_C (N,) temperature of each point [degC] or None (thermal compensation)
     """
 
     q_rad: np.ndarray
@@ -58,11 +58,14 @@ class Observations:
     fixture_T: dict | None = None          # group -> 4x4 pose of {D_j} in {W}
     x_D_mm: np.ndarray | None = None
     sigma_mm: np.ndarray | None = None
+    temp_C: np.ndarray | None = None
 
     def __post_init__(self):
         if self.sigma_mm is not None and np.shape(self.sigma_mm) != np.shape(self.x_W_mm):
             raise ValueError(f"sigma_mm must have the shape of x_W_mm {np.shape(self.x_W_mm)}, got "
                              f"{np.shape(self.sigma_mm)}")
+        if self.temp_C is not None and np.shape(self.temp_C) != (np.shape(self.x_W_mm)[0],):
+            raise ValueError(f"temp_C must have shape ({np.shape(self.x_W_mm)[0]},), got {np.shape(self.temp_C)}")
 
 
 def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
@@ -80,7 +83,7 @@ def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> O
         F[m] = T[:3, :3] @ fix.force_D_N
     return Observations(np.deg2rad(camp.q_deg), xW, F, rod.mass_kg, rod.com_T_mm, camp.position.copy(),
                         camp.labels(), {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
-                        camp.x_D_mm.copy())
+                        camp.x_D_mm.copy(), temp_C=None if camp.temp_C is None else camp.temp_C.copy())
 
 
 def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
@@ -200,7 +203,7 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
              freed: set | None = None, robust: bool = False, max_compensation: int = 6,
              fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
              expected_noise_mm: float | None = DEVICE_NOISE_MM, fix_unidentifiable: bool = False,
-             find_tool: bool = False) -> CalibrationResult:
+             find_tool: bool = False, also_compensate: tuple = ()) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
 
     fix_unidentifiable : parameters this data set cannot separate (beyond the structural rules) are held at
@@ -209,6 +212,9 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         not need it.
     find_tool : start from a tool point found from the data (:func:`register_base_and_tool`), for instrument
         points whose tool is only roughly known.
+    also_compensate : further compensations beside the rod's deflection, each with
+        ``offsets(robot, params, obs)`` -> ball-centre offsets in {W} [mm], shape=(N, 3) (e.g.
+        :class:`~rodlab.calibrate.thermal.ThermalGrowth`); removed from the measurements with the deflection.
     """
 
     N = obs.x_W_mm.shape[0]
@@ -305,6 +311,8 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         x[free] = res.x
         p = apply(start, infos, x)
         new_off = deflection_offsets(robot, p, obs.q_rad, obs.force_W_N, rod)
+        for extra in also_compensate:
+            new_off = new_off + extra.offsets(robot, p, obs)
         change = float(np.abs(new_off - offsets).max())
         offsets = new_off
         r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW

@@ -143,14 +143,17 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
 
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
                       rod_true: RodCompliance | None = None, fixture_error: dict | None = None,
-                      periodic_joint_error: tuple | None = None, thermal_ppm_per_s: float = 0.0) -> dict:
+                      periodic_joint_error: tuple | None = None, thermal_ppm_per_s: float = 0.0,
+                      rod_thermal=None, temp_K_per_s: float = 0.0) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
     and the rod file into ``out_dir``; return the truth. ``rod_true``: the rod as it really is (default:
     ``rod``); ``fixture_error``: {position: offset [mm]} added to the recorded pose (a wrong fixture pose);
     ``periodic_joint_error``: (joint 1-based, amplitude [deg], phase [deg]) — the joint really turns
     ``q + A sin(q + phase)`` (gear / encoder eccentricity; also in the validation points);
     ``thermal_ppm_per_s``: the arm grows during the campaign, positions scale about the base origin by
-    ``growth * time_s`` [ppm/s]."""
+    ``growth * time_s`` [ppm/s]; ``rod_thermal`` (:class:`~rodlab.calibrate.thermal.ThermalGrowth`) with
+    ``temp_K_per_s``: the room warms from 22 degC at that rate during the campaign and the rod's tool vector
+    grows with it (the ``temp_C`` column records it)."""
     rng = np.random.default_rng(spec.seed)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -176,11 +179,15 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
+        temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
+        if rod_thermal is not None:
+            grow_W = rod_thermal.offsets_at(robot, truth, qt, temps, Fm, rod.mass_kg, rod.com_T_mm)
+            xD = xD + grow_W @ Tinv[:3, :3].T
         if thermal_ppm_per_s:
             grow = thermal_ppm_per_s * 1e-6 * np.round(times)[:, None] * (pW - fr.t_W0)
             xD = xD + grow @ Ts[j][:3, :3]
         rows += [f"{j},{i + 1}," + ",".join(f"{v:.4f}" for v in qd[i]) + "," + ",".join(f"{v:.4f}" for v in xD[i])
-                 + f",{times[i]:.0f},{22.0:.2f}" for i in range(m)]
+                 + f",{times[i]:.0f},{temps[i]:.2f}" for i in range(m)]
     atomic_write_text(out / "multical.campaign.csv",
                       "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
                       + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")
@@ -218,6 +225,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
          "fixture_error_mm": {str(k): list(map(float, v)) for k, v in (fixture_error or {}).items()},
          "periodic_joint_error": list(periodic_joint_error) if periodic_joint_error else None,
          "thermal_ppm_per_s": float(thermal_ppm_per_s),
+         "rod_thermal_growth_T_mm_per_K": None if rod_thermal is None else rod_thermal.growth_T_mm_per_K.tolist(),
+         "temp_K_per_s": float(temp_K_per_s),
          "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0}
     atomic_write_json(out / "truth.json", t)
     return t

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from enum import Enum
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus"]
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect"]
 
 
 class _StrEnum(str, Enum):
@@ -91,3 +91,31 @@ class DesignStatus(_StrEnum):
     INVALID = "invalid"          #: the design itself cannot be built (the message says why)
     UNREACHABLE = "unreachable"  #: the robot cannot use it (which clamping position, which limit)
     FAILED = "failed"            #: a computation failed (the message)
+
+
+class RigEffect(_StrEnum):
+    """Effects of the subject ``rig`` (contract ``effects.md``, plus rodlab's additions): physics of the rod or
+    the stiffness rig left out of a simulated compliance. Each has one module in
+    :mod:`rodlab.stiffness_rig.effects` (forward model, parameters with units, hypothesis, wording)."""
+
+    FRICTION = "friction"
+    TARE = "tare"
+    COMPLIANCE_SCALE = "compliance_scale"
+    NONLINEARITY = "nonlinearity"
+    TORSION_COMPLIANCE = "torsion_compliance"
+    JOINT_COMPLIANCE = "joint_compliance"
+    CREEP = "creep"
+    CROSSTALK = "crosstalk"
+    DRIFT = "drift"
+    LOAD_HYSTERESIS = "load_hysteresis"   #: rodlab's addition: the branches split in proportion to the load
+
+
+class CampaignEffect(_StrEnum):
+    """Effects of the subject ``campaign`` (contract ``effects.md``): physics left out of the identified model."""
+
+    ROD_DEFLECTION = "rod_deflection"
+    FIXTURE_POSE = "fixture_pose"
+    PERIODIC_JOINT_ERROR = "periodic_joint_error"
+    THERMAL_DRIFT = "thermal_drift"
+    OUTLIERS = "outliers"
+

@@ -19,6 +19,7 @@ from typing import Callable
 import numpy as np
 
 from .compliance import RodCompliance, write_compliance
+from .enums import RigEffect
 from .fileio import atomic_write_json, atomic_write_text, json_safe
 
 __all__ = ["run_demo", "STAGES"]
@@ -95,18 +96,18 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
                                     "c_rod_um": fea.c_rod_um,
                                     "calc_over_fea_diag": (np.diag(calc.C_F) / np.diag(fea.C_F)).tolist()}
     with stage("rig"):
-        from rodlab.stiffness_rig.model import LoadSchedule, RigModel, spring_compliance
+        from rodlab.stiffness_rig.effects import joint_places
+        from rodlab.stiffness_rig.model import LoadSchedule, RigModel
         from rodlab.stiffness_rig.simulate import simulate_recording
-        from .diagnose.rig import joint_places
-        pt, ax = joint_places(design.tool_mm, design)["ring_1"]
-        s_b, s_t = 4.0e-9, 1.6e-9                    # rad/(N mm): a compliant bond at ring 1
-        concealed = {"joint_compliance": {"point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nmm": s_b,
-                                          "s_torsion_rad_per_Nmm": s_t}}
-        C_true = fea.C_F + spring_compliance(pt, ax, s_b, s_t)
-        simulate_recording(RigModel(fea.C_F, concealed, noise_mm=0.0006, seed=seed), LoadSchedule(),
-                           out / "rig" / "rod1.rig.csv", rod="1#")
-        summary["stages"]["rig"] = {"concealed_effect": "joint_compliance at ring_1",
-                                    "s_bend_rad_per_Nm": s_b * 1e3, "s_torsion_rad_per_Nm": s_t * 1e3}
+        # a compliant bond at ring 1 [rad/(N m)]
+        concealed = {"joint_compliance": {"location": "ring_1", "s_bend_rad_per_Nm": 4.0e-6,
+                                          "s_torsion_rad_per_Nm": 1.6e-6}}
+        rig_model = RigModel(fea.C_F, concealed, noise_mm=0.0006, seed=seed,
+                             places=joint_places(design.tool_mm, design))
+        C_true = rig_model.C_true
+        simulate_recording(rig_model, LoadSchedule(), out / "rig" / "rod1.rig.csv", rod="1#")
+        summary["stages"]["rig"] = {"concealed_effect": "joint_compliance at ring_1", **{
+            k: v for k, v in rig_model.effects[RigEffect.JOINT_COMPLIANCE].items() if k.startswith("s_")}}
     with stage("fit"):
         from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
         rec = read_recording(out / "rig" / "rod1.rig.csv")

@@ -1,4 +1,5 @@
-"""Generate docs/cli.md from the argparse parser (``--check`` exits 1 when stale; used by the tests)."""
+"""Generate docs/cli.md from the argparse parser, and the rig effect table of docs/formats.md from the effect
+registry (``--check`` exits 1 when either is stale; used by the tests)."""
 from __future__ import annotations
 
 import argparse
@@ -10,6 +11,16 @@ from rodlab.cli.main import build_parser
 from rodlab.fileio import write_generated
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
+FORMATS = DOC.with_name("formats.md")
+BEGIN, END = "<!-- rig-effects:begin (generated) -->", "<!-- rig-effects:end -->"
+
+
+def render_formats() -> str:
+    """docs/formats.md with the table between the markers taken from the rig effect registry."""
+    from rodlab.stiffness_rig.effects import vocabulary_markdown
+    text = FORMATS.read_text(encoding="utf-8")
+    a, b = text.index(BEGIN) + len(BEGIN), text.index(END)
+    return text[:a] + "\n" + vocabulary_markdown() + "\n" + text[b:]
 
 
 def render() -> str:
@@ -30,7 +41,7 @@ def render() -> str:
 
 if __name__ == "__main__":
     check = "--check" in sys.argv
-    status = write_generated(DOC, render(), check)
+    status = write_generated(DOC, render(), check) | write_generated(FORMATS, render_formats(), check)
     if not check:
-        print(f"wrote {DOC}")
+        print(f"wrote {DOC} and the rig effect table of {FORMATS}")
     sys.exit(status)

@@ -18,12 +18,13 @@ from pathlib import Path
 import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
-from rodlab.layout import layout
+from .effects import joint_places
 from .model import Hold, LoadSchedule, RigModel
 from .simulate import simulate_recording
 
 __all__ = ["generate_cases", "BlindCase"]
 
+#: the effects the blind cases draw from (the contract's vocabulary, in its order)
 LIBRARY = ["friction", "tare", "creep", "nonlinearity", "crosstalk", "drift", "compliance_scale",
            "torsion_compliance", "joint_compliance"]
 
@@ -32,17 +33,6 @@ LIBRARY = ["friction", "tare", "creep", "nonlinearity", "crosstalk", "drift", "c
 class BlindCase:
     path: Path
     truth: dict
-
-
-def _places(design):
-    segs = layout(design)
-    tool = design.tool_mm
-    ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)][0]
-    p2 = [s for s in segs if any(str(l.part) == "pipe_II" for l in s.layers)]
-    s2 = p2[len(p2) // 2]
-    return {"flange_clamp": (segs[0].start_F - tool, segs[0].direction),
-            "ring_1": (ring1.point([ring1.length_mm / 2])[0] - tool, ring1.direction),
-            "pipe_II": (s2.point([s2.length_mm / 2])[0] - tool, s2.direction)}
 
 
 def _unit_effect(name, rng, places):
@@ -54,23 +44,24 @@ def _unit_effect(name, rng, places):
     if name == "creep":
         return {"creep": {"phi": 0.01, "tau_s": float(rng.choice([2.0, 4.0, 8.0]))}}, None, ["phi"]
     if name == "nonlinearity":
-        return {"nonlinearity": {"beta": 0.01 * rng.choice([-1, 1])}}, None, ["beta"]
+        return {"nonlinearity": {"beta_per_10N": 0.01 * rng.choice([-1, 1])}}, None, ["beta_per_10N"]
     if name == "crosstalk":
-        return {"crosstalk": {"sensor": "z", "from": "y", "angle_rad": 0.01 * rng.choice([-1, 1])}}, "sensor:z", \
-            ["angle_rad"]
+        return {"crosstalk": {"sensor": "z", "eps_y_rad": 0.01 * rng.choice([-1, 1])}}, "sensor:z", ["eps_y_rad"]
     if name == "drift":
-        return {"drift": {"rate_mm_per_s": 1e-6 * rng.choice([-1, 1])}}, "time", ["rate_mm_per_s"]
+        rate = 1e-6 * rng.choice([-1, 1])
+        keys = [f"rate_{a}_mm_per_s" for a in "xyz"]
+        return {"drift": {k: rate for k in keys}}, "time", keys
     if name == "compliance_scale":
         return {"compliance_scale": {"r": 1.01}}, None, ["r"]
     if name == "torsion_compliance":
-        return {"torsion_compliance": {"s_rad_per_Nmm": 1e-9, "point_T_mm": list(places["flange_clamp"][0]),
-                                       "axis": [0, 0, 1]}}, "pipe_I", ["s_rad_per_Nmm"]
+        return {"torsion_compliance": {"s_torsion_rad_per_Nm": 1e-6, "point_T_mm": list(places["flange_clamp"][0]),
+                                       "axis": [0, 0, 1]}}, "pipe_I", ["s_torsion_rad_per_Nm"]
     loc = str(rng.choice(["flange_clamp", "ring_1", "pipe_II"]))
     pt, ax = places[loc]
     ratio = float(rng.uniform(0.2, 1.0))
-    return {"joint_compliance": {"point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nmm": 1e-9,
-                                 "s_torsion_rad_per_Nmm": ratio * 1e-9}}, loc, ["s_bend_rad_per_Nmm",
-                                                                                "s_torsion_rad_per_Nmm"]
+    return {"joint_compliance": {"location": loc, "point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nm": 1e-6,
+                                 "s_torsion_rad_per_Nm": ratio * 1e-6}}, loc, ["s_bend_rad_per_Nm",
+                                                                               "s_torsion_rad_per_Nm"]
 
 
 def _peak(C, effects, proto) -> float:
@@ -117,7 +108,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
     rng = np.random.default_rng(seed)
     design = resolve_design(rod)
     C = calc_rod_compliance(design).C_F
-    places = _places(design)
+    places = joint_places(design.tool_mm, design)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cases = []

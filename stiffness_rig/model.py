@@ -1,20 +1,8 @@
 """Physical model of the stiffness rig: what the gauges read while weights hang on the rod.
 
-The rod responds with a true compliance ``C_true`` (the simulated one, possibly altered by a structural
-effect); the rig adds its own physics. Effects (contract ``effects.md`` vocabulary, subject ``rig``):
-
-=================== ==========================================================================
-``friction``        Coulomb friction F_f [N] in the slides: the load reaching the rod is F - F_f while
-                    loading, F + F_f while unloading (the hold's direction of travel)
-``tare``            a dead load [kg] missing from ``mass_kg`` whenever the hanger is on
-``creep``           Kelvin-Voigt creep: extra deflection phi * C F approached with time constant tau [s]
-``nonlinearity``    load-dependent compliance C (1 + beta |F| / 10 N)
-``crosstalk``       a gauge tilted by angle eps [rad]: it reads cos(eps) own + sin(eps) another axis
-``drift``           zero drift: rate [mm/s] in time, or coefficient [mm/K] on temp_C
-``compliance_scale`` C_true = r C_sim
-``torsion_compliance`` extra torsion compliance s [rad/(N mm)] of pipe I
-``joint_compliance`` a rotational spring at a point of the rod (bending s_b, torsion s_t [rad/(N mm)])
-=================== ==========================================================================
+The rod responds with a true compliance (the simulated one, possibly altered by a structural effect); the rig
+adds its own physics. Every effect is one module of :mod:`rodlab.stiffness_rig.effects` (the registry
+``RIG_EFFECTS`` lists them with their parameters and units); :class:`RigModel` applies their hooks in order.
 """
 from __future__ import annotations
 
@@ -25,26 +13,9 @@ import numpy as np
 from rodlab.enums import LoadAxis, Phase
 from rodlab.units import G0
 
+from .effects import RIG_EFFECTS, RigState, complete_effects, spring_compliance
+
 __all__ = ["LoadSchedule", "RigModel", "spring_compliance", "Hold"]
-
-
-def spring_compliance(point_T_mm, axis, s_bend: float, s_torsion: float) -> np.ndarray:
-    """Extra C_F [mm/N] of a rotational spring at ``point_T_mm`` (in {T}) on a member along unit ``axis``.
-
-    A tip force F makes a moment (0 - point) x F about the spring; each compliant rotation axis e with
-    compliance s adds ``s (e x (0 - point))(e x (0 - point))^T``, i.e. ``s a a^T`` with ``a = e x r``.
-    """
-    r = -np.asarray(point_T_mm, dtype=float)           # from the spring to the ball centre (origin of {T})
-    t = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(t[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    b1 = np.cross(t, helper)
-    b1 /= np.linalg.norm(b1)
-    b2 = np.cross(t, b1)
-    C = np.zeros((3, 3))
-    for e, s in ((b1, s_bend), (b2, s_bend), (t, s_torsion)):
-        a = np.cross(e, r)
-        C += s * np.outer(a, a)
-    return C
 
 
 @dataclass
@@ -111,9 +82,11 @@ class Hold:
 class RigModel:
     """The rod on the rig with its effects; ``reading(...)`` gives what the gauges show.
 
-    C_sim : simulated C_F [mm/N]; effects : {effect id: parameters}; noise_mm : per-reading SD;
-    resolution_mm : gauge resolution (0 = none); seed : random seed; T0_C, temp_amplitude_K, temp_period_s :
-    the room temperature cycle.
+    C_sim : simulated C_F [mm/N], shape=(3, 3); effects : {effect ID: parameters} (names and units of
+    :data:`~rodlab.stiffness_rig.effects.RIG_EFFECTS`; missing ones take their defaults); noise_mm : per-reading
+    SD [mm]; resolution_mm : gauge resolution [mm] (0 = none); seed : random seed; T0_C, temp_amplitude_K,
+    temp_period_s : the room temperature cycle [degC, K, s]; places : {location: (point in {T} [mm], member
+    axis)} where joint springs can sit (:func:`~rodlab.stiffness_rig.effects.joint_places`)
     """
 
     C_sim: np.ndarray
@@ -124,78 +97,72 @@ class RigModel:
     T0_C: float = 21.0
     temp_amplitude_K: float = 1.0
     temp_period_s: float = 1800.0
-    rod_points: dict = field(default_factory=dict)   # joint name -> (point_T_mm, axis)
+    places: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         from .errors import RigError
         if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
             raise RigError(f"the per-reading noise must be >= 0 mm, got {self.noise_mm!r} (--noise-um takes um, "
                            f"e.g. 0.6)", key="noise")
+        self.effects = complete_effects(self.effects)
+        self._active = [(RIG_EFFECTS[e], p) for e, p in self.effects.items()]
         self.rng = np.random.default_rng(self.seed)
-        self._creep = np.zeros(3)
-        self._t_last = None
-        self._F_last = np.zeros(3)
+        self.state = RigState()
+        self.C_true = self._true_compliance()
 
-    @property
-    def C_true(self) -> np.ndarray:
+    def _true_compliance(self) -> np.ndarray:
         C = np.array(self.C_sim, dtype=float)
-        e = self.effects
-        if "compliance_scale" in e:
-            C = C * float(e["compliance_scale"]["r"])
-        if "torsion_compliance" in e:
-            p = e["torsion_compliance"]
-            C = C + spring_compliance(p.get("point_T_mm", [0, 0, 0]), p.get("axis", [0, 0, 1]), 0.0, float(p["s_rad_per_Nmm"]))
-        if "joint_compliance" in e:
-            p = e["joint_compliance"]
-            C = C + spring_compliance(p["point_T_mm"], p["axis"], float(p["s_bend_rad_per_Nmm"]),
-                                      float(p.get("s_torsion_rad_per_Nmm", 0.0)))
+        for eff, p in self._active:
+            C = eff.compliance(C, p, self.places)
         return C
+
+    def reset_series(self) -> None:
+        """The rod is remounted for a new series: no creep left."""
+        self.state.creep = np.zeros(3)
 
     def temperature(self, t: float) -> float:
         return self.T0_C + self.temp_amplitude_K * np.sin(2 * np.pi * t / self.temp_period_s)
 
     def force_on_rod(self, hold: Hold) -> np.ndarray:
         """Force on the ball in {T} [N] during ``hold`` (friction and tare included)."""
-        e = self.effects
         m = hold.mass_kg
-        if m > 0 and "tare" in e:
-            m += float(e["tare"]["tare_kg"])
+        for eff, p in self._active:
+            m = eff.mass(m, hold, p)
         F = m * G0
-        if "friction" in e and (hold.mass_kg > 0 or hold.phase is Phase.UNLOAD):
-            Ff = float(e["friction"]["F_f_N"])
-            F = F - Ff if hold.phase is Phase.LOAD else F + Ff
+        for eff, p in self._active:
+            F = eff.force(F, hold, p)
         vec = np.zeros(3)
         vec[hold.axis.index] = hold.axis.sign * F
         return vec
 
     def reading(self, t: float, hold: Hold, measured=(0, 1, 2)) -> tuple:
         """Gauge readings (x, y, z) [mm] at time ``t`` (NaN for unmeasured) and the temperature [degC]."""
-        e = self.effects
         F = self.force_on_rod(hold)
         C = self.C_true
-        if "nonlinearity" in e:
-            C = C * (1.0 + float(e["nonlinearity"]["beta"]) * np.linalg.norm(F) / 10.0)
+        for eff, p in self._active:
+            C = eff.load_compliance(C, F, hold, p)
         x = C @ F
-        if "creep" in e:
-            phi, tau = float(e["creep"]["phi"]), float(e["creep"]["tau_s"])
-            target = phi * (C @ F)
-            dt = 0.0 if self._t_last is None else max(t - self._t_last, 0.0)
-            self._creep = target + (self._creep - target) * np.exp(-dt / tau)
-            x = x + self._creep
-        self._t_last = t
-        if "crosstalk" in e:
-            p = e["crosstalk"]
-            i, j, eps = "xyz".index(p["sensor"]), "xyz".index(p["from"]), float(p["angle_rad"])
-            xi = np.cos(eps) * x[i] + np.sin(eps) * x[j]
-            x = x.copy()
-            x[i] = xi
+        for eff, p in self._active:
+            x = eff.deflection(x, C, F, t, self.state, p)
+        self.state.t_last = t
         temp = self.temperature(t)
-        if "drift" in e:
-            p = e["drift"]
-            x = x + float(p.get("rate_mm_per_s", 0.0)) * t + float(p.get("mm_per_K", 0.0)) * (temp - self.T0_C)
+        for eff, p in self._active:
+            x = eff.reading(x, t, temp - self.T0_C, p)
         x = x + self.rng.normal(0.0, self.noise_mm, 3)
         if self.resolution_mm > 0:
             x = np.round(x / self.resolution_mm) * self.resolution_mm
         out = np.full(3, np.nan)
         out[list(measured)] = x[list(measured)]
         return out, float(np.round(temp, 2))
+
+    def zero_reading(self, t: float, hold: Hold) -> np.ndarray:
+        """The noiseless, unquantised reading the gauges are zeroed on at the start of a series (the random
+        stream is left where it was)."""
+        saved = self.rng.bit_generator.state
+        noise, self.noise_mm = self.noise_mm, 0.0
+        res, self.resolution_mm = self.resolution_mm, 0.0
+        try:
+            return np.nan_to_num(self.reading(t, hold, (0, 1, 2))[0])
+        finally:
+            self.noise_mm, self.resolution_mm = noise, res
+            self.rng.bit_generator.state = saved

@@ -9,20 +9,7 @@ import numpy as np
 from .model import Hold, LoadSchedule, RigModel
 from .recording import RecordingWriter
 
-__all__ = ["simulate_recording", "EFFECT_DEFAULTS"]
-
-#: parameters used by ``rodlab rig simulate --effect NAME`` when none are given (typical magnitudes)
-EFFECT_DEFAULTS = {
-    "friction": {"F_f_N": 0.5},
-    "tare": {"tare_kg": 0.05},
-    "creep": {"phi": 0.02, "tau_s": 6.0},
-    "nonlinearity": {"beta": 0.01},
-    "crosstalk": {"sensor": "z", "from": "y", "angle_rad": 0.01},
-    "drift": {"rate_mm_per_s": 2e-6},
-    "compliance_scale": {"r": 1.2},
-    "torsion_compliance": {"s_rad_per_Nmm": 2e-7},
-}
-
+__all__ = ["simulate_recording"]
 
 def simulate_recording(model: RigModel, schedule: LoadSchedule, path: str | Path, rod: str = "rod",
                        extra_meta: dict | None = None) -> Path:
@@ -54,13 +41,8 @@ def _write_samples(model: RigModel, schedule: LoadSchedule, p: Path, meta: dict)
             measured = schedule.measured.get(axis.value, (axis.index,))
             if axis is not current_axis:            # rod remounted; gauges zeroed on the unloaded reading
                 current_axis = axis
-                model._creep = np.zeros(3)
-                saved = model.rng.bit_generator.state
-                noise, model.noise_mm = model.noise_mm, 0.0
-                res, model.resolution_mm = model.resolution_mm, 0.0
-                offset = np.nan_to_num(model.reading(t, hold, (0, 1, 2))[0])
-                model.noise_mm, model.resolution_mm = noise, res
-                model.rng.bit_generator.state = saved
+                model.reset_series()
+                offset = model.zero_reading(t, hold)
             for k in range(n):
                 ts = t + k * dt
                 x, temp = model.reading(ts, hold, measured)

@@ -193,7 +193,7 @@ def test_subset_least_squares_matches_direct_fits():
     # greedy selection once took slow creep for this pair (it mimics friction's branch split and the scale)
     ({"compliance_scale": {"r": 1.0029}, "friction": {"F_f_N": 0.021}}, {}, {"compliance_scale", "friction"}),
     # drift: the gauges are zeroed on one noisy, quantised reading; that zero error must not read as a spring
-    ({"drift": {"rate_mm_per_s": -1.5e-5}}, {}, {"drift"}),
+    ({"drift": {f"rate_{a}_mm_per_s": -1.5e-5 for a in "xyz"}}, {}, {"drift"}),
     ({"creep": {"phi": 0.01, "tau_s": 8.0}}, {}, {"creep"}),
     # a time constant between the grid's values at high SNR, long gaps, one repeat (no cross-validation), 5 kg:
     # the refined tau must not be patched with a compliance scale, friction or drift

@@ -54,6 +54,12 @@ def register(sub) -> None:
     p.add_argument("--compensation", choices=["none", "file"], default="file",
                    help="file: compensate with the rod file's matrices (its method: calc / fea / meas); none: no "
                         "rod-deflection compensation")
+    p.add_argument("--thermal", default=None, metavar="DESIGN",
+                   help="also compensate the rod's thermal growth: the tool vector grows by each member's axial CTE "
+                        "(the materials table) times its span, per kelvin of the campaign's temp_C column; DESIGN is "
+                        "the rod's *.rod.toml or a built-in name")
+    p.add_argument("--t-ref-c", type=float, default=20.0,
+                   help="temperature [degC] the rod's tool vector is stated at (default 20; with --thermal)")
     p.add_argument("--points", default=None, help="calibrate from instrument points (*.validation.csv format)")
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
     p.add_argument("--png", default=None,
@@ -131,6 +137,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     fix = read_fixture(args.fixture)
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
+                   also_compensate=_thermal(args, camp),
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable,
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
@@ -142,8 +149,27 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     return run
 
 
+def _thermal(args, camp) -> tuple:
+    """``--thermal DESIGN``: the rod's thermal growth as a further compensation (needs the campaign's temp_C)."""
+    if not getattr(args, "thermal", None):
+        return ()
+    from rodlab.calibrate import ThermalGrowth
+
+    from ..design_io import resolve_design
+    if camp.temp_C is None or not np.all(np.isfinite(camp.temp_C)):
+        raise RodlabError(f"{args.campaign}: --thermal needs the temperature of every point (a temp_C column [degC]); "
+                          f"record it or leave --thermal out")
+    growth = ThermalGrowth.of_design(resolve_design(args.thermal), args.t_ref_c)
+    log.info("thermal growth of the tool vector: %s um/K; temp_C %.2f..%.2f", np.round(growth.growth_T_mm_per_K * 1e3, 3),
+             np.min(camp.temp_C), np.max(camp.temp_C))
+    return (growth,)
+
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from rodlab.calibrate import result_dict
+    if args.points and args.thermal:
+        raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
+                          "points (--points) have no rod to grow: leave --thermal out")
     if args.points:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
@@ -151,7 +177,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from rodlab.calibrate import Compensation
     rod = read_compliance(args.rod)
     comp = Compensation.of(None if args.compensation == "none" else rod)
-    label = comp.label
+    label = comp.label + ("+thermal" if args.thermal else "")
     run = run_calibration(args, rod, comp)
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)

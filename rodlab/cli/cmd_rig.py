@@ -30,12 +30,16 @@ def register(sub) -> None:
     add_report_option(p)
     p.set_defaults(func=cmd_fit)
     p = rsub.add_parser("simulate", help="write a recording from the rig's physical model (no hardware)",
+                        formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Simulate the stiffness rig on a rod with a known compliance and optional "
-                                    "effects (friction, tare, creep, nonlinearity, crosstalk, drift, "
-                                    "compliance_scale, torsion_compliance), the contract's protocol by default.")
+                                    "effects, the contract's protocol by default. Effects and their parameters "
+                                    "(defaults: a typical magnitude):\n" + effects_help())
     p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
-                   help="add an effect, e.g. friction:F_f_N=0.3 or creep:phi=0.03,tau_s=5 (repeatable)")
+                   help="add an effect, e.g. friction:F_f_N=0.3, creep:phi=0.03,tau_s=5 or "
+                        "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6 (repeatable)")
+    p.add_argument("--design", default=None, help="the rod's design (*.rod.toml or a built-in name) to place "
+                                                  "joint springs exactly (default: guessed from the tool vector)")
     p.add_argument("--axes", default="y,z,x", help="load axes in order (default y,z,x)")
     p.add_argument("--masses", default="0.5,1.0,1.5,2.0", help="masses [kg] (default 0.5,1.0,1.5,2.0)")
     p.add_argument("--repeats", type=count, default=5)
@@ -63,7 +67,9 @@ def register(sub) -> None:
     p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
     p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
     p.add_argument("--protocol", choices=["query", "stream"], default="query")
-    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                   help="add an effect (as for rig simulate; repeatable)")
+    p.add_argument("--design", default=None, help="the rod's design, to place joint springs exactly")
     p.add_argument("--checksum", choices=["none", "xor"], default="none")
     p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
     p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
@@ -102,28 +108,53 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 
 def parse_effects(specs: list[str]) -> dict:
-    """``NAME[:key=value,...]`` -> {name: params}, defaults from :data:`stiffness_rig.simulate.EFFECT_DEFAULTS`."""
-    from rodlab.stiffness_rig.simulate import EFFECT_DEFAULTS
+    """``NAME[:key=value,...]`` -> {name: given parameters}; names, keys and values checked against the effect
+    registry (:data:`rodlab.stiffness_rig.effects.RIG_EFFECTS`), which fills in the defaults. Vectors take ``;``
+    between their numbers (``point_T_mm=0;0;235``)."""
+    from rodlab.stiffness_rig.effects import rig_effect
 
-    from ..errors import RodlabError, did_you_mean
+    from ..errors import RodlabError
     out = {}
     for spec in specs:
         name, _, rest = spec.partition(":")
-        name = name.strip()
-        if name not in EFFECT_DEFAULTS:
-            raise RodlabError(f"--effect {spec!r}: unknown effect {name!r}; known: {sorted(EFFECT_DEFAULTS)}."
-                              + did_you_mean(name, EFFECT_DEFAULTS))
-        params = dict(EFFECT_DEFAULTS[name])
+        try:
+            model = rig_effect(name.strip())
+        except RodlabError as e:
+            raise RodlabError(f"--effect {spec!r}: {e}") from None
+        given = {}
         for kv in filter(None, rest.split(",")):
             k, eq, v = kv.partition("=")
-            if not eq or k.strip() not in params:
-                raise RodlabError(f"--effect {spec!r}: expected key=value with keys {sorted(params)}")
-            try:
-                params[k.strip()] = v.strip() if isinstance(params[k.strip()], str) else float(v)
-            except ValueError as e:
-                raise RodlabError(f"--effect {spec!r}: {k} must be a number, got {v!r}") from e
-        out[name] = params
+            if not eq:
+                raise RodlabError(f"--effect {spec!r}: expected key=value, got {kv!r}; keys of {model.effect}: "
+                                  f"{[p.name for p in model.params]}")
+            given[k.strip()] = v.strip().replace(";", ",")
+        try:
+            model.complete(given)
+        except RodlabError as e:
+            raise RodlabError(f"--effect {spec!r}: {e}") from None
+        out[str(model.effect)] = given
     return out
+
+
+def effects_help() -> str:
+    """One line per rig effect: its ID, what it models and its parameters with units (from the registry)."""
+    from rodlab.stiffness_rig.effects import RIG_EFFECTS
+    lines = []
+    for e, m in RIG_EFFECTS.items():
+        keys = ", ".join(f"{p.name} [{p.unit}]" if p.kind != "str" else f"{p.name} ({'|'.join(p.choices)})"
+                         for p in m.params)
+        lines.append(f"  {e.value}: {m.physics}; {keys}")
+    return "\n".join(lines)
+
+
+def _places(sim, args) -> dict:
+    """Where joint springs sit on the rod: from ``--design`` when given, else guessed from the tool vector."""
+    from rodlab.stiffness_rig.effects import joint_places
+    design = None
+    if getattr(args, "design", None):
+        from ..design_io import resolve_design
+        design = resolve_design(args.design)
+    return joint_places(sim.tool_mm, design)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -142,10 +173,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
     proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
-    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed)
+    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args))
+    stated = {str(e): p for e, p in model.effects.items()}
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
-                              extra_meta={"effects": json.dumps(effects) if effects else "none", "seed": args.seed})
-    print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {effects or 'none'}")
+                              extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})
+    print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {stated or 'none'}")
     return 0
 
 
@@ -200,7 +232,7 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.model import RigModel
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
     sim = read_compliance(args.sim)
-    model = RigModel(sim.C_F, parse_effects(args.effect))
+    model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
     dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                        faults=Faults(garbage=args.garbage))
     def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed

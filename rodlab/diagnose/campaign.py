@@ -20,6 +20,9 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+from rodlab.enums import CampaignEffect
+from rodlab.hypothesis import Hypothesis
+
 from .chi2 import chi2_median, chi2_sf
 
 from .report import Diagnosis, Finding
@@ -117,9 +120,27 @@ def _uncompensated(robot, res, obs, rod):
     cols = [deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, replace(g, C_F=0 * g.C_F)),
             deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, replace(g, C_g=0 * g.C_g))]
     H = np.stack([c.reshape(-1) for c in cols], axis=1)
-    return ("rod_deflection", "uncompensated", ["k_gravity", "k_force"], H,
-            "the rod's deflection is not compensated (the compliance file has zero matrices): the residuals follow "
-            "a cantilever's deflection under its weight and the contact force")
+    return _hypothesis(CampaignEffect.ROD_DEFLECTION, "uncompensated", ["k_gravity", "k_force"], H,
+                       "the rod's deflection is not compensated (the compliance file has zero matrices): the residuals "
+                       "follow a cantilever's deflection under its weight and the contact force")
+
+
+def _hypothesis(effect, location, names, H, explanation, **kw) -> Hypothesis:
+    """A campaign hypothesis: columns over the 3 N coordinates of the residual, fitted without bounds."""
+    k = H.shape[1]
+    return Hypothesis(effect, location, names, H, np.full(k, -np.inf), np.full(k, np.inf), explanation, **kw)
+
+
+@dataclass
+class _Candidate:
+    """One hypothesis (or an outlier point) tried next: its delta BIC, likelihood ratio, whitened columns, and
+    the fit with it (coefficients of all columns, residual sum of squares)."""
+
+    dbic: float
+    lr: float
+    hyp: Hypothesis
+    coef: np.ndarray
+    rss: float
 
 
 def _hypotheses(robot, res, obs, camp, rod):
@@ -133,31 +154,32 @@ def _hypotheses(robot, res, obs, camp, rod):
             continue
         H = np.zeros((N, 3, 3))
         H[camp.position == j, :, :] = np.eye(3)
-        hyps.append(("fixture_pose", f"position:{int(j)}", ["dx_mm", "dy_mm", "dz_mm"], H.reshape(3 * N, 3),
-                     "the recorded pose of this clamping position is off: all its points share one offset"))
+        hyps.append(_hypothesis(CampaignEffect.FIXTURE_POSE, f"position:{int(j)}", ["dx_mm", "dy_mm", "dz_mm"],
+                                H.reshape(3 * N, 3),
+                                "the recorded pose of this clamping position is off: all its points share one offset"))
     defl = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod) if rod is not None else None
     if defl is None or not np.any(defl):
         defl = None
         if rod is not None:
             hyps.append(_uncompensated(robot, res, obs, rod))
     if defl is not None:
-        hyps.append(("rod_deflection", None, ["k_minus_1"], defl.reshape(3 * N, 1),
-                     "the rod's deflection is compensated with the wrong compliance: residuals follow "
-                     "R_T^W (C_g g^T + C_F F^T) scaled by a factor"))
+        hyps.append(_hypothesis(CampaignEffect.ROD_DEFLECTION, None, ["k"], defl.reshape(3 * N, 1),
+                                "the rod's deflection is compensated with the wrong compliance: residuals follow "
+                                "R_T^W (C_g g^T + C_F F^T) scaled by a factor", report_offset=[1.0]))
     for k in range(robot.n):
         g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
         q = obs.q_rad[:, k]
         H = np.stack([g * np.sin(q)[:, None], g * np.cos(q)[:, None]], axis=-1).reshape(3 * N, 2)
-        hyps.append(("periodic_joint_error", f"joint:{k + 1}", ["amp_sin_rad", "amp_cos_rad"], H,
-                     f"gear or encoder eccentricity of joint {k + 1}: an angle error once per revolution, "
-                     "periodic in q"))
+        hyps.append(_hypothesis(CampaignEffect.PERIODIC_JOINT_ERROR, f"joint:{k + 1}", ["amp_sin_rad", "amp_cos_rad"],
+                                H, f"gear or encoder eccentricity of joint {k + 1}: an angle error once per "
+                                   "revolution, periodic in q"))
     centre = fr.t_W0
     for key, vals in (("time", camp.time_s), ("temp", camp.temp_C)):
         if vals is not None and np.isfinite(vals).all() and np.ptp(vals) > 0:
             v = (vals - vals.min())[:, None]
             H = (v * (fr.pW - centre)).reshape(3 * N, 1) * 1e-6
-            hyps.append(("thermal_drift", key, [f"growth_ppm_per_{'s' if key == 'time' else 'K'}"], H,
-                         f"the links grow during the campaign: positions scale about the base with {key}"))
+            hyps.append(_hypothesis(CampaignEffect.THERMAL_DRIFT, key, [f"growth_ppm_per_{'s' if key == 'time' else 'K'}"],
+                                    H, f"the links grow during the campaign: positions scale about the base with {key}"))
     return hyps
 
 
@@ -197,7 +219,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     white = lambda A: np.linalg.solve(L, A)  # noqa: E731
     r = white(r_raw)
     J = white(J)
-    hyps = [(e, l, nm, white(H), x) for (e, l, nm, H, x) in _hypotheses(robot, res, obs, camp, rod)]
+    hyps = [replace(h, X=white(h.X)) for h in _hypotheses(robot, res, obs, camp, rod)]
     # point-wise outlier columns are handled separately (many candidates)
     chosen = []
     findings = []
@@ -230,7 +252,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     cv_now = cv_error(cols_now)
     # isolated outliers are points, not physics: they do not use up the terms (up to a tenth of the points)
     max_outliers = max(2, N // 10)
-    while sum(e != "outliers" for e, _ in chosen) < max_terms:
+    while sum(e != CampaignEffect.OUTLIERS for e, _ in chosen) < max_terms:
         if cols_now:
             # the inflated scatter is re-estimated without what the accepted terms explain: a gross error
             # (outliers, a wrong fixture pose) spreads through the identification into every residual and
@@ -240,17 +262,17 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                 birge /= f
                 L = L / f
                 r, J = r * f, J * f
-                hyps = [(e, l, nm, H * f, x) for (e, l, nm, H, x) in hyps]
+                hyps = [replace(h, X=h.X * f) for h in hyps]
                 cols_now = [c * f for c in cols_now]
                 rss, cv_now = rss * f * f, cv_now * f * f
                 log.debug("campaign diagnosis: Birge ratio re-estimated to %.2f", birge)
         cand = []
-        for (eff, loc, names, H, expl) in hyps:
-            if any(c[0] == eff and c[1] == loc for c in chosen):
+        for h in hyps:
+            if any(c[0] == h.effect and c[1] == h.location for c in chosen):
                 continue
-            coef, rss2, _ = fit(cols_now + [H])
+            coef, rss2, _ = fit(cols_now + [h.X])
             lr = rss - rss2
-            cand.append((-lr + H.shape[1] * np.log(n), lr, eff, loc, names, H, expl, coef, rss2))
+            cand.append(_Candidate(-lr + h.X.shape[1] * np.log(n), lr, h, coef, rss2))
         # outliers: the point with the largest residual
         _, _, e_now = fit(cols_now)
         norms = np.linalg.norm((L @ e_now).reshape(N, 3), axis=1)
@@ -263,14 +285,17 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
             coef, rss2, _ = fit(cols_now + [H])
             lr = rss - rss2
             # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
-            cand.append((-lr + 3 * np.log(n) + 2 * np.log(N), lr, "outliers", f"points:{camp.labels()[i]}",
-                         ["dx_mm", "dy_mm", "dz_mm"], H, "an isolated gross alignment error at this point", coef, rss2))
+            cand.append(_Candidate(-lr + 3 * np.log(n) + 2 * np.log(N), lr, _hypothesis(
+                CampaignEffect.OUTLIERS, f"points:{camp.labels()[i]}", ["dx_mm", "dy_mm", "dz_mm"], H,
+                "an isolated gross alignment error at this point"), coef, rss2))
         if not cand:
             break
-        cand.sort(key=lambda c: c[0])
-        dbic, lr, eff, loc, names, H, expl, coef, rss2 = cand[0]
+        cand.sort(key=lambda c: c.dbic)
+        best = cand[0]
+        dbic, lr, coef, rss2 = best.dbic, best.lr, best.coef, best.rss
+        eff, loc, H, expl = best.hyp.effect, best.hyp.location, best.hyp.X, best.hyp.explanation
         log.debug("campaign diagnosis: best %s %s dBIC %.1f; next %s", eff, loc, dbic,
-                  [(c[2], c[3], round(float(c[0]), 1)) for c in cand[1:4]])
+                  [(c.hyp.effect, c.hyp.location, round(float(c.dbic), 1)) for c in cand[1:4]])
         p = float(chi2_sf(max(lr, 0.0), H.shape[1]))
         if dbic > -DBIC_MIN or p > P_MAX:
             break
@@ -289,11 +314,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         if eff != "outliers" and float(np.max(np.abs(L @ (H @ val)))) < 2.0 * noise_mm * birge:
             break
         se = np.sqrt(np.clip(np.diag(cov)[k0:k0 + H.shape[1]], 0, None))
-        params = {nm: float(v) for nm, v in zip(names, val)}
-        iv = {nm: [float(v - 1.96 * s), float(v + 1.96 * s)] for nm, v, s in zip(names, val, se)}
-        if eff == "rod_deflection" and loc is None:
-            params = {"k": 1.0 + params["k_minus_1"]}
-            iv = {"k": [1.0 + iv["k_minus_1"][0], 1.0 + iv["k_minus_1"][1]]}
+        params, iv = best.hyp.reported(val, se)
         if eff == "outliers":
             used_points.append(int(camp.labels().index(loc.split(":")[1])))
             prev = [f for f in findings if f.effect == "outliers"]

@@ -12,10 +12,7 @@ def corrected_compliance(sim: RodCompliance, diag, model) -> RodCompliance:
     change of c22 + c33 (as Eq. 22 does for the measured file). Rig effects (friction, tare, drift, crosstalk,
     creep) belong to the rig, not the rod, and are left out."""
     C = sim.C_F.copy()
-    k = 0
-    for term in model["terms"]:
-        v = model["coef"][k:k + term.X.shape[1]]
-        k += term.X.shape[1]
+    for term, v in model.term_values():
         if term.dC:
             for val, dC in zip(v, term.dC):
                 C = C + val * dC

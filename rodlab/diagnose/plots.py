@@ -17,14 +17,14 @@ def _finding_names(diag) -> str:
                      + f" ({100 * explained_share(f):.0f} %)" for f in diag.findings) or "nothing"
 
 
-def plot_rig_diagnosis(model: dict, out_dir, diag, rod: str) -> list[Path]:
+def plot_rig_diagnosis(model, out_dir, diag, rod: str) -> list[Path]:
     """``diagnosis_rig.png``: residuals against load mass per load axis (one panel each, one colour per gauge,
     filled = loading, hollow = unloading) before and after modelling the findings, and both against time."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    d = model["data"]
-    before, after = model["base_resid"] * 1e3, model["resid"] * 1e3
+    d = model.data
+    before, after = model.base_resid * 1e3, model.resid * 1e3
     axes_present = [int(a) for a in np.unique(d.axis)]
     n = len(axes_present)
     mosaic = [[f"b{a}" for a in axes_present for _ in range(2)], [f"a{a}" for a in axes_present for _ in range(2)],

@@ -16,55 +16,54 @@
 from __future__ import annotations
 
 import logging
-from dataclasses import fields
+from dataclasses import dataclass
 
 import numpy as np
 from .chi2 import chi2_sf
 
 from ..compliance import RodCompliance
-from ..enums import Phase
-from ..units import G0
+from rodlab.stiffness_rig.effects import creep_hypothesis, joint_places
+from rodlab.stiffness_rig.samples import RigSamples, rig_samples
+
 from .report import Diagnosis, Finding
 from .rig_select import DBIC_MIN, alternatives, compatible, demean, refine_tau, select, subset_ls
-from .rig_terms import RigData, Term, creep_term, rig_terms
+from .rig_terms import rig_library
 
-__all__ = ["rig_data", "diagnose_rig", "joint_places"]
+__all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
 
 log = logging.getLogger(__name__)
 
 
 
-def rig_data(rec) -> RigData:
-    """Flatten a recording into one row per measured reading."""
-    rows = []
-    series_start, series_temp, hold_start = {}, {}, {}
-    first_step = {}
-    for i in range(rec.n):
-        ax = rec.load_axis[i]
-        if ax not in series_start:
-            series_start[ax] = rec.time_s[i]
-            series_temp[ax] = rec.temp_C[i] if rec.temp_C is not None else np.nan
-            first_step[ax] = rec.step[i]
-        hold_start.setdefault(rec.step[i], rec.time_s[i])
-    for c in range(3):
-        m = np.isfinite(rec.disp_mm[:, c])
-        idx = np.nonzero(m)[0]
-        for i in idx:
-            ax = rec.load_axis[i]
-            rows.append((rec.disp_mm[i, c], c, ax.index, ax.sign, rec.mass_kg[i] * G0 * ax.sign, rec.mass_kg[i],
-                         rec.phase[i] is Phase.UNLOAD, rec.step[i] == first_step[ax] and rec.mass_kg[i] == 0,
-                         rec.time_s[i] - hold_start[rec.step[i]], rec.time_s[i] - series_start[ax],
-                         (rec.temp_C[i] - series_temp[ax]) if rec.temp_C is not None else np.nan, rec.step[i],
-                         rec.repeat[i], rec.time_s[i]))
-    a = list(zip(*rows))
-    d = RigData(np.array(a[0]), np.array(a[1], int), np.array(a[2], int), np.array(a[3], float), np.array(a[4]),
-                np.array(a[5]), np.array(a[6], bool), np.array(a[7], bool), np.array(a[8]), np.array(a[9]),
-                np.array(a[10], float), np.array(a[11], int), np.array(a[12], int), np.array(a[13]))
-    d.temp_rel = d.temp
-    return d
+@dataclass
+class RigModelFit:
+    """The model a rig diagnosis chose, for export and figures.
+
+    terms : the chosen hypotheses (:class:`~rodlab.hypothesis.Hypothesis`); coef : their fitted internal
+    parameters, concatenated in ``terms`` order; resid : residual of every sample after the fit [mm];
+    base_resid : residual against the simulated compliance alone (gauge zeros removed) [mm]; data : the samples
+    (:class:`~rodlab.stiffness_rig.samples.RigSamples`); sigma : noise of one reading [mm]; hold_z2 : {step: sum of
+    squared z-scores of its hold means}; hold_offset_mm : {step: largest hold-mean residual [mm]}
+    """
+
+    terms: list
+    coef: np.ndarray
+    resid: np.ndarray
+    base_resid: np.ndarray
+    data: RigSamples
+    sigma: float
+    hold_z2: dict
+    hold_offset_mm: dict
+
+    def term_values(self):
+        """(hypothesis, its fitted internal parameters) of every chosen term."""
+        k = 0
+        for term in self.terms:
+            yield term, self.coef[k:k + term.X.shape[1]]
+            k += term.X.shape[1]
 
 
-def within_hold_noise(data: RigData) -> float:
+def within_hold_noise(data: RigSamples) -> float:
     """Pooled SD of readings about a straight line in time within each (hold, component)."""
     ss, dof = 0.0, 0
     keys = data.step * 4 + data.comp
@@ -80,53 +79,28 @@ def within_hold_noise(data: RigData) -> float:
     return float(np.sqrt(ss / max(dof, 1)))
 
 
-def joint_places(tool_mm, design=None) -> dict:
-    """Candidate places of a compliant joint, in {T}: (point, member axis)."""
-    tool = np.asarray(tool_mm, float)
-    if design is not None:
-        from ..layout import layout
-        segs = layout(design)
-        pts = {}
-        ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)]
-        pts["flange_clamp"] = (segs[0].start_F - tool, segs[0].direction)
-        if ring1:
-            pts["ring_1"] = (ring1[0].point([ring1[0].length_mm / 2])[0] - tool, ring1[0].direction)
-        p2 = [s for s in segs if any(str(l.part) == "pipe_II" for l in s.layers)]
-        if p2:
-            s = p2[len(p2) // 2]
-            pts["pipe_II"] = (s.point([s.length_mm / 2])[0] - tool, s.direction)
-        return pts
-    # without a design: an L-rod with pipe I along z, pipe II towards the ball
-    L1 = tool[2] if tool[0] > 0 else tool[2] / 2
-    u2 = tool - np.array([0.0, 0.0, L1])
-    u2 = u2 / max(np.linalg.norm(u2), 1e-9)
-    return {"flange_clamp": (-tool, np.array([0.0, 0.0, 1.0])),
-            "ring_1": (np.array([0.0, 0.0, 0.78 * L1]) - tool, np.array([0.0, 0.0, 1.0])),
-            "pipe_II": (np.array([0.0, 0.0, L1]) + 0.5 * np.linalg.norm(tool - [0, 0, L1]) * u2 - tool, u2)}
-
-
-def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tuple[Diagnosis, dict]:
+def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tuple[Diagnosis, RigModelFit]:
     """Diagnose ``rec`` against ``sim``; returns the report and the fitted model (for export and figures).
 
     A single hold far off all the others (a bumped gauge, a mislabelled load) is not physics of the rod or
     the rig: when one hold carries most of the lack of fit and leaving it out removes the lack of fit, the
     diagnosis is of the recording without it, and an ``unexplained`` finding names the hold.
     """
-    data = rig_data(rec)
+    data = rig_samples(rec)
     diag, model = _diagnose(data, sim, design, max_terms)
     if diag.verdict != "unexplained":
         return diag, model
-    z2 = model["hold_z2"]
+    z2 = model.hold_z2
     steps = np.array(sorted(z2))
     tot = np.array([z2[k] for k in steps])
     w = int(steps[np.argmax(tot)])
     if tot.max() < 100.0 or tot.max() < 0.5 * tot.sum():
         return diag, model
     keep = data.step != w
-    diag2, model2 = _diagnose(_subset(data, keep), sim, design, max_terms)
+    diag2, model2 = _diagnose(data.subset(keep), sim, design, max_terms)
     if diag2.verdict == "unexplained":
         return diag, model
-    off = model["hold_offset_mm"][w]
+    off = model.hold_offset_mm[w]
     diag2.findings.append(Finding(
         "unexplained", f"step:{w}", f"one hold is off all the others by {off * 1e3:.1f} um (largest component), "
         "which no effect of the rod or the rig produces (a bumped gauge or a mislabelled load); it was left out "
@@ -137,17 +111,11 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
     return diag2, model2
 
 
-def _subset(data: RigData, keep: np.ndarray) -> RigData:
-    out = RigData(*[getattr(data, f.name)[keep] for f in fields(RigData)])
-    out.temp_rel = out.temp
-    return out
-
-
-def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, dict]:
+def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, RigModelFit]:
     sigma = within_hold_noise(data)
     n = data.y.size
     base = sim.C_F[data.comp, data.axis] * data.F
-    library = rig_terms(data, sim.C_F, joint_places(sim.tool_mm, design), sim.tool_mm)
+    library = rig_library(data, sim.C_F, joint_places(sim.tool_mm, design), sim.tool_mm)
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
     groups = data.axis * 4 + data.comp
@@ -171,11 +139,11 @@ def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tupl
             tau = refine_tau(library, sub, j, data, base, r0, groups)
             if all(abs(np.log(tau / t)) > 0.01 for t in taus):
                 taus.append(tau)
-        if all(abs(np.log(t / library[j].extra_tau)) < 0.01 for t in taus):
+        if all(abs(np.log(t / library[j].settings["tau_s"])) < 0.01 for t in taus):
             break
         refined = []
         for tau in taus:
-            refined.append(creep_term(data, base, tau))
+            refined.append(creep_hypothesis(data, base, tau))
             refined[-1].X = demean(refined[-1].X, groups)
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
@@ -222,7 +190,7 @@ def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tupl
         alts_j = alternatives(library, ls, S, j, rss, sigma, n)
         if alts_j:
             evidence["alternatives"] = alts_j
-        params, intervals = _report_params(term, val, se)
+        params, intervals = term.reported(val, se)
         findings.append(Finding(term.effect, location, term.explanation, params, intervals,
                                 float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), evidence))
         rss_prev = rss_m
@@ -258,12 +226,11 @@ def _diagnose(data: RigData, sim: RodCompliance, design, max_terms: int) -> tupl
     steps_k = uk // 4
     hold_z2 = {int(k): float((z[steps_k == k] ** 2).sum()) for k in np.unique(steps_k)}
     hold_off = {int(k): float(mean_r[steps_k == k][np.argmax(np.abs(mean_r[steps_k == k]))]) for k in np.unique(steps_k)}
-    model = {"terms": chosen, "coef": coef, "resid": resid, "base_resid": r0, "data": data, "sigma": sigma,
-             "hold_z2": hold_z2, "hold_offset_mm": hold_off}
+    model = RigModelFit(chosen, coef, resid, r0, data, sigma, hold_z2, hold_off)
     return Diagnosis("rig", verdict, sigma, rms0, rms, findings, {"reduced_chi2_hold_means": chi_red}), model
 
 
-def _within_hold_autocorrelation(data: RigData, resid: np.ndarray) -> float:
+def _within_hold_autocorrelation(data: RigSamples, resid: np.ndarray) -> float:
     """Pooled lag-1 autocorrelation of the residuals within each (hold, component), linear trend removed."""
     num = den = 0.0
     keys = data.step * 4 + data.comp
@@ -278,22 +245,6 @@ def _within_hold_autocorrelation(data: RigData, resid: np.ndarray) -> float:
         num += float(e[1:] @ e[:-1])
         den += float(e @ e)
     return num / den if den > 0 else 0.0
-
-
-def _report_params(term: Term, val, se) -> tuple[dict, dict]:
-    params, iv = {}, {}
-    for name, v, s in zip(term.names, val, se):
-        lo, hi = v - 1.96 * s, v + 1.96 * s
-        if name == "r_minus_1":
-            name, v, lo, hi = "r", 1 + v, 1 + lo, 1 + hi
-        if name.endswith("_rad_per_Nmm"):
-            name = name.replace("_rad_per_Nmm", "_rad_per_Nm")
-            v, lo, hi = v * 1e3, lo * 1e3, hi * 1e3
-        params[name] = float(v)
-        iv[name] = [float(lo), float(hi)]
-    if term.effect == "creep":
-        params["tau_s"] = float(getattr(term, "extra_tau", np.nan))
-    return params, iv
 
 
 def _explaining_order(ls, S: tuple) -> list:

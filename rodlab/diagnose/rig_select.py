@@ -14,7 +14,9 @@ import logging
 import numpy as np
 from .chi2 import chi2_sf
 
-from .rig_terms import RigData, Term, creep_term
+from rodlab.hypothesis import Hypothesis
+from rodlab.stiffness_rig.effects import creep_hypothesis
+from rodlab.stiffness_rig.samples import RigSamples
 from .subset import SubsetLS
 
 __all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "DBIC_MIN", "P_MAX",
@@ -30,7 +32,7 @@ PTP_MIN = 1.0        # detection limit: peak-to-peak change of the readings of a
 BEAM = 8
 
 
-def compatible(library: list[Term], S: tuple, j: int) -> bool:
+def compatible(library: list[Hypothesis], S: tuple, j: int) -> bool:
     """At most one term per (effect, location), one creep and one drift term."""
     t = library[j]
     for i in S:
@@ -55,7 +57,7 @@ def _admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.
     return True
 
 
-def select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
+def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
     """Beam search over term subsets (width ``BEAM``). The best admissible subset of each size replaces the
     current model only if delta BIC <= -10, the likelihood-ratio p < 1e-3 and the cross-validated error drops;
     subsets need not nest, so a strong but wrong first term does not lock in the path. Then terms that are no
@@ -110,10 +112,40 @@ def select(library: list[Term], ls: SubsetLS, sigma: float, n: int, max_terms: i
         if weakest is None:
             break
         cur, cur_rss = weakest[0], weakest[2]
+    return _swap(library, ls, cur, sigma, n, groups, k_of)
+
+
+def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of) -> tuple:
+    """Replace one term of the final model by another while that lowers the BIC and keeps the model
+    admissible with a cross-validated error no worse: a beam whose early slots went to a look-alike (a new
+    hypothesis that resembles two others) can end on a neighbour of the best model of its size."""
+    def bic(S, rss):
+        return rss / sigma ** 2 + k_of(S) * np.log(n)
+
+    _, cur_rss = ls.fit(cur)
+    for _ in range(len(cur) + 1):
+        best = None
+        for j in cur:
+            rest = tuple(i for i in cur if i != j)
+            for i in range(len(library)):
+                if i in cur or not compatible(library, rest, i):
+                    continue
+                key = tuple(sorted(rest + (i,)))
+                c, rss = ls.fit(key)
+                if bic(key, rss) < bic(cur, cur_rss) - 1e-9 and (best is None or bic(key, rss) < bic(*best[:2])):
+                    if _admissible(library, ls, key, c, sigma, groups):
+                        best = (key, rss)
+        if best is None:
+            break
+        cv_new, cv_cur = ls.cv_error(best[0]), ls.cv_error(cur)
+        if np.isfinite(cv_cur) and not cv_new <= cv_cur * (1 + 1e-12):
+            break
+        log.info("swap: %s -> %s", [library[j].effect for j in cur], [library[j].effect for j in best[0]])
+        cur, cur_rss = best
     return cur
 
 
-def subset_ls(library: list[Term], r0: np.ndarray, folds) -> SubsetLS:
+def subset_ls(library: list[Hypothesis], r0: np.ndarray, folds) -> SubsetLS:
     blocks, p0 = [], 0
     for t in library:
         blocks.append(np.arange(p0, p0 + t.X.shape[1]))
@@ -122,17 +154,17 @@ def subset_ls(library: list[Term], r0: np.ndarray, folds) -> SubsetLS:
                     np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]), folds)
 
 
-def refine_tau(library, S: tuple, j: int, data: RigData, base, r0, groups) -> float:
+def refine_tau(library, S: tuple, j: int, data: RigSamples, base, r0, groups) -> float:
     """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau)."""
     from scipy.optimize import minimize_scalar
     others = [library[i] for i in S if i != j]
 
     def rss(log_tau):
-        term = creep_term(data, base, float(np.exp(log_tau)))
+        term = creep_hypothesis(data, base, float(np.exp(log_tau)))
         term.X = demean(term.X, groups)
         return subset_ls(others + [term], r0, None).fit(tuple(range(len(others) + 1)))[1]
 
-    t0 = np.log(library[j].extra_tau)
+    t0 = np.log(library[j].settings["tau_s"])
     res = minimize_scalar(rss, bounds=(t0 - 0.5 * np.log(2), t0 + 0.5 * np.log(2)), method="bounded",
                           options={"xatol": 0.01})
     return float(np.exp(res.x))
@@ -149,10 +181,7 @@ def alternatives(library, ls: SubsetLS, S: tuple, j: int, rss: float, sigma: flo
         _, rss_alt = ls.fit(tuple(sorted(rest + (i,))))
         dbic = (rss_alt - rss) / sigma ** 2 + (u.n_params - library[j].n_params) * np.log(n)
         if dbic < DBIC_MIN:
-            label = u.effect + (f" at {u.location}" if u.location else "")
-            if u.effect == "creep":
-                label += f" (tau {u.extra_tau:g} s)"
-            out.append(label)
+            out.append(u.label)
     return out
 
 

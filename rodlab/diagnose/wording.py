@@ -17,20 +17,12 @@ from .report import Finding
 
 __all__ = ["explained_share", "certainty", "confirmation", "evidence_text"]
 
-_RIG_CONFIRM = {
-    "friction": "load and unload to the same mass: the two readings should differ by the fitted 2 F_f; "
-                "lubricating or tapping the slides should shrink the split",
-    "tare": "weigh the hanger and loading frame and add it to mass_kg: the offset should vanish",
-    "creep": "hold one load 3-5 times longer: the deflection should keep growing with the fitted time constant",
-    "nonlinearity": "add smaller and larger masses on this axis: the residual should stay curved in the load",
-    "crosstalk": "check the gauge's alignment with a square or turn it on its mount: the cross reading should change",
-    "drift": "record the unloaded rod for as long as a run (log temp_C): its zero should move at the fitted rate",
-    "compliance_scale": "a coupon test of the tube material should give a modulus off by the fitted factor",
-    "torsion_compliance": "load along y_T only (twisting pipe I): the twist should exceed the model by the fitted "
-                          "factor while bending along x_T and z_T agrees",
-    "joint_compliance": "a dial gauge on each side of the named joint should show the angle jump there",
-    "unexplained": "repeat the named steps: structure that returns is physics, structure that moves is handling",
-}
+def _rig_confirm(effect: str) -> str | None:
+    """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`)."""
+    if effect == "unexplained":
+        return "repeat the named steps: structure that returns is physics, structure that moves is handling"
+    from rodlab.stiffness_rig.effects import RIG_EFFECTS
+    return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
 
 def explained_share(f: Finding) -> float:
@@ -61,8 +53,9 @@ def confirmation(f: Finding) -> str:
     """What would confirm the finding (rig) or what to do about it (campaign)."""
     if f.evidence.get("separate_by"):
         return f"to tell the candidates apart: {f.evidence['separate_by']}"
-    if f.effect in _RIG_CONFIRM and not (f.location or "").startswith(("position:", "points:", "joint:")):
-        return _RIG_CONFIRM[f.effect]
+    rig = _rig_confirm(f.effect)
+    if rig and not (f.location or "").startswith(("position:", "points:", "joint:")):
+        return rig
     from .advice import remedy
     return remedy(f)
 

@@ -1,0 +1,133 @@
+"""A diagnosis hypothesis: one effect at one place as columns linear in its parameters, and the parameter
+schema effects share between their simulator, their hypothesis and the diagnosis report.
+
+Domain packages build hypotheses from their effects (:mod:`rodlab.stiffness_rig.effects`); the application's
+diagnosers select among them. The columns multiply *internal* parameters (the units the physics is computed
+in); ``report_scale`` and ``report_offset`` turn a fitted internal value into the reported one, named as in the
+schema: ``reported = report_offset + report_scale * internal``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ParamSpec", "Hypothesis"]
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter of an effect, as the simulator takes it and the diagnosis reports it.
+
+    name : the key in effect parameters, simulator input and diagnosis report (e.g. ``s_bend_rad_per_Nm``)
+    unit : its unit as printed (``-`` for dimensionless)
+    doc : one sentence of meaning
+    default : the value ``rodlab rig simulate --effect NAME`` uses when none is given (a typical magnitude);
+        ``None``: not set by default (optional)
+    kind : ``float`` (a number), ``str`` (a choice among ``choices``) or ``vector`` (3 numbers in {T})
+    choices : allowed values of a ``str`` parameter
+    """
+
+    name: str
+    unit: str
+    doc: str
+    default: object = None
+    kind: str = "float"
+    choices: tuple = ()
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("float", "str", "vector"):
+            raise ValueError(f"ParamSpec {self.name}: kind must be float, str or vector, got {self.kind!r}")
+
+    def parse(self, value):
+        """The value of this parameter from its text or number; :class:`ValueError` saying what is expected."""
+        if self.kind == "str":
+            v = str(value).strip()
+            if self.choices and v not in self.choices:
+                from rodlab.errors import did_you_mean
+                raise ValueError(f"{self.name} must be one of {list(self.choices)}, got {v!r}."
+                                 + did_you_mean(v, self.choices))
+            return v
+        if self.kind == "vector":
+            parts = value.split(",") if isinstance(value, str) else list(value)
+            try:
+                vec = [float(x) for x in parts]
+            except (TypeError, ValueError):
+                vec = []
+            if len(vec) != 3 or not np.all(np.isfinite(vec)):
+                raise ValueError(f"{self.name} must be 3 finite numbers [{self.unit}] in {{T}}, got {value!r}")
+            return vec
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{self.name} must be a number [{self.unit}], got {value!r}") from None
+        if not np.isfinite(v):
+            raise ValueError(f"{self.name} must be a finite number [{self.unit}], got {value!r}")
+        return v
+
+
+@dataclass
+class Hypothesis:
+    """One candidate explanation: an effect at a location, as columns linear in its internal parameters.
+
+    effect : the effect ID (a ``RigEffect`` / ``CampaignEffect`` value)
+    location : the contract's location key (``ring_1``, ``sensor:z``, ``time``, ...) or None
+    names : reported parameter names, one per column (the schema's names)
+    X : shape=(n_samples, k), the change of each reading per unit internal parameter
+    lower, upper : shape=(k,), physical bounds of the internal parameters
+    explanation : the sentence of physics printed with a finding
+    dC : structural effects: the C_F increment [mm/N] per unit internal parameter, one per column, else None
+    hidden : parameters chosen from a grid rather than fitted linearly (counted in the BIC)
+    settings : those hidden parameters' values in report units (creep's ``tau_s``), reported beside the fit
+    report_scale, report_offset : shape=(k,), ``reported = report_offset + report_scale * internal``
+    """
+
+    effect: str
+    location: str | None
+    names: list
+    X: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    explanation: str
+    dC: list | None = None
+    hidden: int = 0
+    settings: dict = field(default_factory=dict)
+    report_scale: np.ndarray | None = None
+    report_offset: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        self.effect = str(self.effect)                 # the contract spelling (Enums print as their value)
+        self.X = np.asarray(self.X, float)
+        if self.X.ndim != 2:
+            raise ValueError(f"hypothesis {self.effect}: X must be (n_samples, k), got shape {self.X.shape}")
+        k = self.X.shape[1]
+        self.lower = np.asarray(self.lower, float).reshape(-1)
+        self.upper = np.asarray(self.upper, float).reshape(-1)
+        if len(self.names) != k or self.lower.shape != (k,) or self.upper.shape != (k,):
+            raise ValueError(f"hypothesis {self.effect}: {k} columns need {k} names and bounds, got "
+                             f"{len(self.names)} names, bounds {self.lower.shape}, {self.upper.shape}")
+        self.report_scale = np.ones(k) if self.report_scale is None else np.asarray(self.report_scale, float)
+        self.report_offset = np.zeros(k) if self.report_offset is None else np.asarray(self.report_offset, float)
+
+    @property
+    def n_params(self) -> int:
+        """Parameters counted in the BIC: the columns plus the hidden ones."""
+        return self.X.shape[1] + self.hidden
+
+    @property
+    def label(self) -> str:
+        """``effect at location`` with its settings, as alternatives are named."""
+        out = self.effect + (f" at {self.location}" if self.location else "")
+        if self.settings:
+            out += " (" + ", ".join(f"{k} {v:g}" for k, v in self.settings.items()) + ")"
+        return out
+
+    def reported(self, internal: np.ndarray, se: np.ndarray) -> tuple[dict, dict]:
+        """({name: value}, {name: [low, high]} 95 % intervals) in report units, settings included."""
+        params, intervals = {}, {}
+        for name, v, s, a, b in zip(self.names, internal, se, self.report_scale, self.report_offset):
+            lo, hi = v - 1.96 * s, v + 1.96 * s
+            params[name] = float(b + a * v)
+            intervals[name] = sorted([float(b + a * lo), float(b + a * hi)])
+        params.update({k: float(v) for k, v in self.settings.items()})
+        return params, intervals

@@ -1,0 +1,134 @@
+"""What every rig effect provides: its parameter schema, its forward model (hooks the rig model calls in a
+fixed order), its hypotheses for the diagnosis and its wording. One subclass per effect, one module each.
+
+Forward model of a reading (``RigModel.reading``), each hook applied by every active effect in registry order:
+
+1. ``compliance`` — the rod's true C_F from the simulated one (structural effects);
+2. ``mass`` then ``force`` — the load that reaches the ball (tare, friction);
+3. ``load_compliance`` — a compliance that depends on the load or the branch (nonlinearity, hysteresis);
+4. ``deflection`` — time-dependent deflection with state (creep);
+5. ``reading`` — what the gauges make of it (crosstalk, drift).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab.enums import RigEffect
+from rodlab.hypothesis import Hypothesis, ParamSpec
+
+from ..errors import RigError
+
+__all__ = ["RigEffectModel", "HypothesisContext", "RigState"]
+
+
+@dataclass(frozen=True)
+class HypothesisContext:
+    """What hypotheses are built from, besides the samples.
+
+    C_sim : simulated C_F [mm/N], shape=(3, 3); base : simulated displacement of every sample [mm], shape=(n,);
+    places : {location: (point in {T} [mm], member axis in {T})} of candidate compliant joints;
+    tool_mm : ball centre in {6} [mm], shape=(3,)
+    """
+
+    C_sim: np.ndarray
+    base: np.ndarray
+    places: dict
+    tool_mm: np.ndarray
+
+
+@dataclass
+class RigState:
+    """Mutable state of the forward model: creep deflection [mm] in {T} and the time of the last reading [s]."""
+
+    creep: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    t_last: float | None = None
+
+
+class RigEffectModel:
+    """One rig effect. Subclasses set the class attributes and override the hooks they need.
+
+    effect : its ID; params : its parameters (names and units shared by simulator, report and docs);
+    example : the parameters ``--effect NAME`` gives when no magnitude is stated; physics : what is left out
+    (help text); signature : how it shows in the data; confirm : the measurement that would confirm a finding;
+    structural : it changes the rod's compliance (kept in a corrected compliance file); locations : its
+    location keys in a diagnosis
+    """
+
+    effect: RigEffect
+    params: tuple = ()
+    example: dict = {}
+    physics: str = ""
+    signature: str = ""
+    confirm: str = ""
+    structural: bool = False
+    locations: tuple = ()
+
+    # -- parameters ------------------------------------------------------------------------------------------
+    def spec(self, name: str) -> ParamSpec:
+        for p in self.params:
+            if p.name == name:
+                return p
+        from rodlab.errors import did_you_mean
+        raise RigError(f"effect {self.effect}: unknown parameter {name!r}; its parameters are "
+                       f"{[p.name for p in self.params]}." + did_you_mean(name, [p.name for p in self.params]),
+                       key=f"{self.effect}.{name}")
+
+    def complete(self, given: dict) -> dict:
+        """The full parameters from those ``given``: defaults filled in, the example magnitude when no number
+        is given, every value checked (:class:`RigError` naming the effect and key)."""
+        out = {p.name: p.default for p in self.params if p.default is not None}
+        parsed = {}
+        for k, v in dict(given).items():
+            spec = self.spec(str(k))
+            try:
+                parsed[spec.name] = spec.parse(v)
+            except ValueError as e:
+                raise RigError(f"effect {self.effect}: {e}", key=f"{self.effect}.{spec.name}") from None
+        if not any(self.spec(k).kind == "float" for k in parsed):
+            out.update(self.example)
+        out.update(parsed)
+        self.check(out)
+        return out
+
+    def check(self, p: dict) -> None:
+        """Raise :class:`RigError` if the completed parameters ``p`` cannot be simulated."""
+
+    def value(self, p: dict, name: str) -> float:
+        return float(p.get(name, 0.0) or 0.0)
+
+    # -- forward model (identity unless overridden) ------------------------------------------------------------
+    def compliance(self, C: np.ndarray, p: dict, places: dict) -> np.ndarray:
+        return C
+
+    def mass(self, m: float, hold, p: dict) -> float:
+        return m
+
+    def force(self, F: float, hold, p: dict) -> float:
+        return F
+
+    def load_compliance(self, C: np.ndarray, F: np.ndarray, hold, p: dict) -> np.ndarray:
+        return C
+
+    def deflection(self, x: np.ndarray, C: np.ndarray, F: np.ndarray, t: float, state: RigState,
+                   p: dict) -> np.ndarray:
+        return x
+
+    def reading(self, x: np.ndarray, t: float, dtemp_K: float, p: dict) -> np.ndarray:
+        return x
+
+    # -- diagnosis ---------------------------------------------------------------------------------------------
+    def hypotheses(self, data, ctx: HypothesisContext) -> list[Hypothesis]:
+        """Candidate terms of this effect for the samples ``data`` (:class:`~rodlab.stiffness_rig.RigSamples`)."""
+        return []
+
+    def place(self, p: dict, places: dict, location: str) -> tuple:
+        """(point in {T}, axis) of a spring: ``point_T_mm`` / ``axis`` when given, else the named place."""
+        if "point_T_mm" in p and "axis" in p:
+            return np.asarray(p["point_T_mm"], float), np.asarray(p["axis"], float)
+        if location not in places:
+            raise RigError(f"effect {self.effect}: no place {location!r} on this rod (known: {sorted(places)}); give "
+                           f"point_T_mm and axis", key=f"{self.effect}.location")
+        pt, ax = places[location]
+        return np.asarray(p.get("point_T_mm", pt), float), np.asarray(p.get("axis", ax), float)

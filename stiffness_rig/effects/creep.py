@@ -1,0 +1,65 @@
+"""``creep``: Kelvin-Voigt creep of the tubes or bonds — extra deflection phi C F approached with time constant
+tau [s] after every change of load; it starts from zero at each series (the rod is remounted, gauges zeroed)."""
+from __future__ import annotations
+
+import numpy as np
+
+from rodlab.enums import RigEffect
+from rodlab.hypothesis import Hypothesis, ParamSpec
+
+from ..errors import RigError
+from .base import RigEffectModel
+
+__all__ = ["Creep", "creep_hypothesis", "CREEP_TAU_GRID_S"]
+
+#: time constants [s] of the creep hypotheses (a factor sqrt 2 apart); the chosen one is refined continuously
+CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 0.5), 3))
+
+
+class Creep(RigEffectModel):
+    effect = RigEffect.CREEP
+    params = (ParamSpec("phi", "-", "creep deflection at equilibrium over the elastic one"),
+              ParamSpec("tau_s", "s", "creep time constant", 6.0))
+    example = {"phi": 0.02}
+    physics = "viscoelastic creep of tubes or bonds"
+    signature = "deflection grows during a constant-load hold, faster at higher load"
+    confirm = "hold one load 3-5 times longer: the deflection should keep growing with the fitted time constant"
+
+    def check(self, p: dict) -> None:
+        if not p["tau_s"] > 0:
+            raise RigError(f"effect creep: tau_s must be > 0 s, got {p['tau_s']!r}", key="creep.tau_s")
+
+    def deflection(self, x, C, F, t, state, p):
+        phi, tau = self.value(p, "phi"), float(p["tau_s"])
+        target = phi * (C @ F)
+        dt = 0.0 if state.t_last is None else max(t - state.t_last, 0.0)
+        state.creep = target + (state.creep - target) * np.exp(-dt / tau)
+        return x + state.creep
+
+    def hypotheses(self, data, ctx) -> list[Hypothesis]:
+        return [creep_hypothesis(data, ctx.base, float(tau)) for tau in CREEP_TAU_GRID_S]
+
+
+def _kelvin_voigt(data, base: np.ndarray, tau: float) -> np.ndarray:
+    """Creep per unit phi of every sample, driven by the load history of each series: at every reading it
+    relaxes towards the current elastic deflection ``base`` with time constant ``tau`` [s]."""
+    out = np.zeros_like(base)
+    keys = data.axis * 4 + data.comp
+    for k in np.unique(keys):
+        idx = np.nonzero(keys == k)[0]
+        idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
+        x = 0.0
+        t_prev = data.t_abs[idx[0]]
+        for i in idx:
+            x = base[i] + (x - base[i]) * np.exp(-(data.t_abs[i] - t_prev) / tau)
+            t_prev = data.t_abs[i]
+            out[i] = x
+    return out
+
+
+def creep_hypothesis(data, base: np.ndarray, tau: float) -> Hypothesis:
+    """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter."""
+    return Hypothesis(RigEffect.CREEP, None, ["phi"], _kelvin_voigt(data, base, tau)[:, None], [0.0], [1.0],
+                      f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
+                      f"constant load (time constant {tau:.3g} s), more at higher load", hidden=1,
+                      settings={"tau_s": tau})

@@ -1,0 +1,134 @@
+"""The rig effect registry: every effect of the contract's vocabulary (and rodlab's additions) is one module
+that the simulator, ``rodlab rig simulate``, the diagnosis and docs/formats.md all take from, by one name and
+one set of parameter names."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab import calc_rod_compliance, resolve_design
+from rodlab.diagnose import diagnose_rig
+from rodlab.enums import Phase, RigEffect
+from rodlab.stiffness_rig import read_recording
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, vocabulary_markdown
+from rodlab.stiffness_rig.model import Hold, LoadSchedule, RigModel
+from rodlab.stiffness_rig.simulate import simulate_recording
+
+ROOT = Path(__file__).resolve().parents[1]
+CONTRACT = ROOT.parent / "shared" / "contract" / "effects.md"
+DESIGN = resolve_design("rod1")
+SIM = calc_rod_compliance(DESIGN)
+PLACES = joint_places(DESIGN.tool_mm, DESIGN)
+
+
+def _contract_rig_effects() -> list[str]:
+    text = CONTRACT.read_text() if CONTRACT.exists() else (ROOT / "docs" / "formats.md").read_text()
+    rig = text.split("## Subject `rig`")[1].split("## Subject")[0] if CONTRACT.exists() else \
+        text.split("subject `rig`")[1].split("subject `campaign`")[0]
+    return re.findall(r"^\| `([a-z_]+)` \|", rig, flags=re.M)
+
+
+def test_registry_covers_the_contract_vocabulary():
+    names = _contract_rig_effects()
+    assert len(names) >= 9
+    assert set(names) <= {e.value for e in RIG_EFFECTS}, set(names) - {e.value for e in RIG_EFFECTS}
+    assert set(RIG_EFFECTS) == set(RigEffect)
+    for e, m in RIG_EFFECTS.items():
+        assert m.effect is e and m.physics and m.signature and m.confirm and m.example
+
+
+def test_campaign_vocabulary_is_the_enum():
+    """The campaign effects of the contract are :class:`rodlab.enums.CampaignEffect` (the diagnoser's hypotheses
+    carry them; simulated and diagnosed in tests/test_diagnose.py and benchmarks/campaign_blind.py)."""
+    from rodlab.enums import CampaignEffect
+    text = CONTRACT.read_text() if CONTRACT.exists() else (ROOT / "docs" / "formats.md").read_text()
+    part = text.split("## Subject `campaign`")[1] if CONTRACT.exists() else \
+        text.split("subject `campaign`")[1].split("##")[0]
+    names = set(re.findall(r"^\| `([a-z_]+)` \|", part, flags=re.M)) - {"unexplained"}
+    assert names == {e.value for e in CampaignEffect}
+
+
+def test_docs_table_is_the_registry():
+    assert vocabulary_markdown() in (ROOT / "docs" / "formats.md").read_text(), \
+        "docs/formats.md is stale: run python scripts/gen_cli_docs.py"
+
+
+def _simulate(tmp_path, effects, seed=3, schedule=None):
+    model = RigModel(SIM.C_F, effects, noise_mm=0.0006, resolution_mm=0.0001, seed=seed, places=PLACES)
+    path = tmp_path / "r.rig.csv"
+    simulate_recording(model, schedule or LoadSchedule(repeats=3, hold_s=6.0), path, rod=DESIGN.name)
+    return model, read_recording(path)
+
+
+@pytest.mark.parametrize("effect", list(RIG_EFFECTS), ids=lambda e: e.value)
+def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, effect):
+    """Each effect at its example magnitude: the diagnosis names it, first, and reports its magnitude under the
+    simulator's parameter name, within 20 % of the truth."""
+    model, rec = _simulate(tmp_path, {effect.value: {}})
+    diag, _ = diagnose_rig(rec, SIM, DESIGN)
+    assert diag.findings and diag.findings[0].effect == effect.value, diag.summary()
+    f = diag.findings[0]
+    true = model.effects[effect]
+    schema = {p.name for p in RIG_EFFECTS[effect].params}
+    assert set(f.parameters) <= schema, set(f.parameters) - schema
+    shared = [k for k in f.parameters if isinstance(true.get(k), float) and true[k] != 0]
+    assert shared, (f.parameters, true)
+    for k in shared[:1]:
+        assert f.parameters[k] == pytest.approx(true[k], rel=0.2), (k, f.parameters, true)
+
+
+def test_load_hysteresis_splits_the_branches_in_proportion_to_the_load():
+    """Forward model: an unloading hold reads (1 + eta) times the loading hold at the same mass; no split at no
+    load (friction's split would be the same at every load)."""
+    eta = 0.03
+    model = RigModel(SIM.C_F, {"load_hysteresis": {"eta": eta}}, noise_mm=0.0, resolution_mm=0.0)
+    axis = LoadSchedule().holds()[0][0]
+    for m in (0.5, 1.0, 2.0):
+        up = model.reading(0.0, Hold(1, axis, 1, Phase.LOAD, m, 0.0))[0]
+        down = model.reading(0.0, Hold(2, axis, 1, Phase.UNLOAD, m, 0.0))[0]
+        assert np.allclose(down, (1 + eta) * up, rtol=1e-12, atol=0)
+    zero = model.reading(0.0, Hold(3, axis, 1, Phase.UNLOAD, 0.0, 0.0))[0]
+    assert np.allclose(zero, 0.0)
+
+
+def test_load_hysteresis_is_not_read_as_friction_or_creep(tmp_path):
+    """A small split (eta 0.2 %) with friction beside it: both found, each with its own magnitude."""
+    model, rec = _simulate(tmp_path, {"load_hysteresis": {"eta": 0.002}, "friction": {"F_f_N": 0.05}}, seed=8)
+    diag, _ = diagnose_rig(rec, SIM, DESIGN)
+    found = {f.effect: f for f in diag.findings}
+    assert set(found) == {"load_hysteresis", "friction"}, diag.summary()
+    assert found["load_hysteresis"].parameters["eta"] == pytest.approx(0.002, rel=0.15)
+    assert found["friction"].parameters["F_f_N"] == pytest.approx(0.05, rel=0.15)
+
+
+@pytest.mark.parametrize("spec, message", [
+    ({"friction": {"F_f": 1}}, "unknown parameter 'F_f'"),
+    ({"frcition": {}}, "Did you mean `friction`"),
+    ({"crosstalk": {"sensor": "z", "eps_z_rad": 0.01}}, "towards an axis other than the sensor"),
+    ({"joint_compliance": {"location": "ring_2"}}, "must be one of"),
+    ({"creep": {"phi": 0.01, "tau_s": 0}}, "tau_s must be > 0"),
+])
+def test_bad_effect_parameters_are_refused_with_the_key(spec, message):
+    from rodlab.stiffness_rig import RigError
+    with pytest.raises(RigError, match=message):
+        RigModel(SIM.C_F, spec)
+
+
+def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
+    """``rodlab rig simulate --effect`` takes joint springs by location and drift with temperature (both were
+    refused before the registry), and writes the completed parameters into the recording's header."""
+    from rodlab.cli.main import main
+    from rodlab.compliance import write_compliance
+    sim = write_compliance(SIM, tmp_path / "rod1.compliance.json")
+    out = tmp_path / "j.rig.csv"
+    assert main(["rig", "simulate", "--sim", str(sim), "--design", "rod1", "--repeats", "1", "--hold-s", "2",
+                 "--effect", "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6",
+                 "--effect", "drift:x_mm_per_K=1e-4", "-o", str(out)]) == 0
+    head = "".join(line for line in out.read_text().splitlines(True) if line.startswith("#"))
+    assert '"location": "pipe_II"' in head and '"s_bend_rad_per_Nm": 5e-06' in head and "x_mm_per_K" in head
+    assert main(["rig", "simulate", "--sim", str(sim), "--effect", "joint_compliance:s_bend=1",
+                 "-o", str(tmp_path / "bad.rig.csv")]) == 2
+    assert "unknown parameter 's_bend'" in capsys.readouterr().err and not (tmp_path / "bad.rig.csv").exists()

@@ -26,6 +26,8 @@ class ParamSpec:
         ``None``: not set by default (optional)
     kind : ``float`` (a number), ``str`` (a choice among ``choices``) or ``vector`` (3 numbers in {T})
     choices : allowed values of a ``str`` parameter
+    magnitude : a ``float`` that sizes the effect (when none is given, the effect's example sizes it); False for
+        a setting such as creep's time constant
     """
 
     name: str
@@ -34,6 +36,7 @@ class ParamSpec:
     default: object = None
     kind: str = "float"
     choices: tuple = ()
+    magnitude: bool = True
 
     def __post_init__(self) -> None:
         if self.kind not in ("float", "str", "vector"):
@@ -56,6 +59,8 @@ class ParamSpec:
                 vec = []
             if len(vec) != 3 or not np.all(np.isfinite(vec)):
                 raise ValueError(f"{self.name} must be 3 finite numbers [{self.unit}] in {{T}}, got {value!r}")
+            if self.unit == "-" and np.linalg.norm(vec) < 1e-9:
+                raise ValueError(f"{self.name} is a direction: it must not be zero, got {value!r}")
             return vec
         try:
             v = float(value)

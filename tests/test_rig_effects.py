@@ -110,11 +110,21 @@ def test_load_hysteresis_is_not_read_as_friction_or_creep(tmp_path):
     ({"crosstalk": {"sensor": "z", "eps_z_rad": 0.01}}, "towards an axis other than the sensor"),
     ({"joint_compliance": {"location": "ring_2"}}, "must be one of"),
     ({"creep": {"phi": 0.01, "tau_s": 0}}, "tau_s must be > 0"),
+    ({"joint_compliance": {"axis": [0, 0, 0], "point_T_mm": [0, 0, -100]}}, "must not be zero"),
+    ({"torsion_compliance": {}}, "where pipe I starts is unknown"),      # no places, no point: not silently 0
 ])
 def test_bad_effect_parameters_are_refused_with_the_key(spec, message):
     from rodlab.stiffness_rig import RigError
     with pytest.raises(RigError, match=message):
         RigModel(SIM.C_F, spec)
+
+
+def test_settings_alone_keep_the_example_magnitude():
+    """Giving only a setting (creep's time constant, the crosstalk gauge) keeps a visible example magnitude."""
+    creep = RigModel(SIM.C_F, {"creep": {"tau_s": 5}}).effects[RigEffect.CREEP]
+    assert creep["tau_s"] == 5.0 and creep["phi"] > 0
+    tilt = RigModel(SIM.C_F, {"crosstalk": {"sensor": "y"}}).effects[RigEffect.CROSSTALK]
+    assert tilt["sensor"] == "y" and tilt.get("eps_z_rad", 0) != 0 and "eps_y_rad" not in tilt
 
 
 def test_cli_simulates_every_effect_by_name(tmp_path, capsys):

@@ -137,7 +137,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     fix = read_fixture(args.fixture)
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
-                   also_compensate=_thermal(args, camp),
+                   also_compensate=_thermal(args, camp, rod),
                    pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable,
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
@@ -149,7 +149,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     return run
 
 
-def _thermal(args, camp) -> tuple:
+def _thermal(args, camp, rod) -> tuple:
     """``--thermal DESIGN``: the rod's thermal growth as a further compensation (needs the campaign's temp_C)."""
     if not getattr(args, "thermal", None):
         return ()
@@ -159,7 +159,11 @@ def _thermal(args, camp) -> tuple:
     if camp.temp_C is None or not np.all(np.isfinite(camp.temp_C)):
         raise RodlabError(f"{args.campaign}: --thermal needs the temperature of every point (a temp_C column [degC]); "
                           f"record it or leave --thermal out")
-    growth = ThermalGrowth.of_design(resolve_design(args.thermal), args.t_ref_c)
+    design = resolve_design(args.thermal)
+    if np.linalg.norm(np.asarray(design.tool_mm) - rod.tool_mm) > 1.0:
+        print(f"warning: --thermal {args.thermal}: its tool vector {np.round(design.tool_mm, 1).tolist()} mm is not "
+              f"the rod file's {np.round(rod.tool_mm, 1).tolist()} mm; is it the same rod?", file=sys.stderr)
+    growth = ThermalGrowth.of_design(design, args.t_ref_c)
     log.info("thermal growth of the tool vector: %s um/K; temp_C %.2f..%.2f", np.round(growth.growth_T_mm_per_K * 1e3, 3),
              np.min(camp.temp_C), np.max(camp.temp_C))
     return (growth,)

@@ -85,12 +85,16 @@ class RigEffectModel:
             try:
                 parsed[spec.name] = spec.parse(v)
             except ValueError as e:
-                raise RigError(f"effect {self.effect}: {e}", key=f"{self.effect}.{spec.name}") from None
-        if not any(self.spec(k).kind == "float" for k in parsed):
-            out.update(self.example)
+                raise RigError(str(e), key=f"{self.effect}.{spec.name}") from None
+        if not any(self.spec(k).kind == "float" and self.spec(k).magnitude for k in parsed):
+            out.update(self.example_for({**out, **parsed}))
         out.update(parsed)
         self.check(out)
         return out
+
+    def example_for(self, p: dict) -> dict:
+        """The example magnitude for parameters ``p`` that size nothing yet."""
+        return dict(self.example)
 
     def check(self, p: dict) -> None:
         """Raise :class:`RigError` if the completed parameters ``p`` cannot be simulated."""

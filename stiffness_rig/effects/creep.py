@@ -19,7 +19,7 @@ CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 
 class Creep(RigEffectModel):
     effect = RigEffect.CREEP
     params = (ParamSpec("phi", "-", "creep deflection at equilibrium over the elastic one"),
-              ParamSpec("tau_s", "s", "creep time constant", 6.0))
+              ParamSpec("tau_s", "s", "creep time constant", 6.0, magnitude=False))
     example = {"phi": 0.02}
     physics = "viscoelastic creep of tubes or bonds"
     signature = "deflection grows during a constant-load hold, faster at higher load"

@@ -25,6 +25,10 @@ class Crosstalk(RigEffectModel):
     confirm = "check the gauge's alignment with a square or turn it on its mount: the cross reading should change"
     locations = ("sensor:x", "sensor:y", "sensor:z")
 
+    def example_for(self, p: dict) -> dict:
+        """A 0.01 rad tilt towards y, or towards z for the y gauge."""
+        return {"eps_z_rad" if p.get("sensor", "z") == "y" else "eps_y_rad": 0.01}
+
     def _tilt(self, p: dict) -> tuple[int, int, float]:
         i = _AXES.index(p["sensor"])
         tilts = [(j, float(p[f"eps_{a}_rad"])) for j, a in enumerate(_AXES) if f"eps_{a}_rad" in p]

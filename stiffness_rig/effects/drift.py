@@ -18,9 +18,11 @@ class Drift(RigEffectModel):
     effect = RigEffect.DRIFT
     params = (tuple(ParamSpec(f"rate_{a}_mm_per_s", "mm/s", f"zero drift of the {a} gauge in time") for a in _AXES)
               + tuple(ParamSpec(f"{a}_mm_per_K", "mm/K", f"zero drift of the {a} gauge with temp_C") for a in _AXES))
+    # 1e-5 mm/s: ~5 um over a standard series, clearly above a gauge's ~0.6 um noise (a visible example)
     example = {f"rate_{a}_mm_per_s": 1e-5 for a in _AXES}
     physics = "thermal or electronic zero drift"
-    signature = "an offset that follows time or temp_C, independent of the load"
+    signature = ("an offset that follows the time since the series start (`time`) or temp_C (`temp`, when it varies "
+                 "by more than 0.05 K), independent of the load")
     confirm = "record the unloaded rod for as long as a run (log temp_C): its zero should move at the fitted rate"
     locations = ("time", "temp")
 

@@ -25,7 +25,10 @@ class JointCompliance(RigEffectModel):
               ParamSpec("axis", "-", "the member's axis in {T} (default: the location's)", kind="vector"))
     example = {"s_bend_rad_per_Nm": 4e-6, "s_torsion_rad_per_Nm": 1.6e-6}
     physics = "a compliant joint (bond, clamp, thread) modelled as rigid"
-    signature = "excess compliance whose pattern over C_F fits a rotational spring at one place"
+    signature = ("excess compliance whose pattern over C_F fits a rotational spring at one place; where the data "
+                 "cannot tell two places apart the location names the group (`ring_1|flange_clamp`) and "
+                 "`evidence.separate_by` the measurement that would; no torsion term when the member points at "
+                 "the ball")
     confirm = "a dial gauge on each side of the named joint should show the angle jump there"
     structural = True
     locations = PLACES

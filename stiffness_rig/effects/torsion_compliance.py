@@ -7,6 +7,7 @@ import numpy as np
 from rodlab.enums import RigEffect
 from rodlab.hypothesis import Hypothesis, ParamSpec
 
+from ..errors import RigError
 from .base import RigEffectModel
 from .springs import spring_columns, spring_compliance, spring_matrices
 
@@ -29,7 +30,13 @@ class TorsionCompliance(RigEffectModel):
     locations = ("pipe_I",)
 
     def compliance(self, C, p, places):
-        pt = p.get("point_T_mm", places["flange_clamp"][0] if "flange_clamp" in places else np.zeros(3))
+        if "point_T_mm" in p:
+            pt = p["point_T_mm"]
+        elif "flange_clamp" in places:
+            pt = places["flange_clamp"][0]
+        else:
+            raise RigError("effect torsion_compliance: where pipe I starts is unknown; give point_T_mm (the flange "
+                           "in {T}, i.e. minus the tool vector) or the rod's places", key="torsion_compliance.point_T_mm")
         return C + spring_compliance(pt, p.get("axis", _Z), 0.0, self.value(p, "s_torsion_rad_per_Nm") * 1e-3)
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:

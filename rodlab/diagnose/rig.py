@@ -2,7 +2,8 @@
 
 1. Screen: the noise of one reading from the within-hold scatter (detrended per hold; never from a model
    fit); the simulated model's residuals.
-2. Attribute: a beam search over subsets of the hypothesis library (:mod:`.rig_terms`), each term fitted
+2. Attribute: a beam search over subsets of the hypothesis library (every rig effect's
+   hypotheses, :mod:`rodlab.stiffness_rig.effects`), each term fitted
    with physical bounds (:mod:`.rig_select`, :mod:`.subset`). A larger model replaces the current one only
    if delta BIC <= -10 (known noise), the likelihood-ratio test gives p < 1e-3 and the leave-one-repeat-out
    prediction error drops; every term must change the readings of a series by >= 1 noise SD peak to peak and
@@ -22,12 +23,11 @@ import numpy as np
 from .chi2 import chi2_sf
 
 from ..compliance import RodCompliance
-from rodlab.stiffness_rig.effects import creep_hypothesis, joint_places
+from rodlab.stiffness_rig.effects import HypothesisContext, creep_hypothesis, joint_places, rig_hypotheses
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
 from .report import Diagnosis, Finding
 from .rig_select import DBIC_MIN, alternatives, compatible, demean, refine_tau, select, subset_ls
-from .rig_terms import rig_library
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
 
@@ -115,7 +115,8 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> t
     sigma = within_hold_noise(data)
     n = data.y.size
     base = sim.C_F[data.comp, data.axis] * data.F
-    library = rig_library(data, sim.C_F, joint_places(sim.tool_mm, design), sim.tool_mm)
+    library = rig_hypotheses(data, HypothesisContext(np.asarray(sim.C_F, float), base,
+                                                     joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)))
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
     groups = data.axis * 4 + data.comp

@@ -1,4 +1,4 @@
-"""Model selection of the rig diagnosis: which subset of the hypothesis library (:mod:`.rig_terms`) the
+"""Model selection of the rig diagnosis: which subset of the hypothesis library (:mod:`rodlab.stiffness_rig.effects`) the
 recording supports.
 
 Beam search over term subsets with bounded least squares from the Gram matrix (:mod:`.subset`); a larger

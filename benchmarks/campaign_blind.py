@@ -19,8 +19,7 @@ import numpy as np
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
-from rodlab.compliance import RodCompliance
-from rodlab.diagnose import diagnose_campaign
+from rodlab.app.diagnose import diagnose_campaign
 from rodlab.fileio import atomic_write_text
 
 NOTES = [
@@ -74,26 +73,27 @@ def main() -> int:
             kind = kinds[i % len(kinds)]
             out = Path(tmp) / f"c{i}"
             truth = {"kind": kind, "effect": None if kind == "null" else kind}
-            fe, rod_true, pje, therm = None, None, None, 0.0
+            effects = []                                  # (name, parameters) of the campaign effect registry
             if kind.startswith("fixture_pose"):
                 j = int(rng.choice([1, 2, 4, 5]))
-                fe = {j: list(rng.normal(0, 0.12, 3))}
+                effects.append(("fixture_pose", {"position": j, "offset_mm": list(rng.normal(0, 0.12, 3))}))
                 truth["location"] = f"position:{j}"
             if kind == "rod_deflection":
                 k = float(rng.choice([0.6, 1.5, 2.0]))
-                rod_true = RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm,
-                                         rod.tool_mm, k)
+                effects.append(("rod_deflection", {"k": k}))
                 truth["k"] = k
             if kind == "periodic_joint_error":
                 k = int(rng.integers(1, 7))
-                pje = (k, float(rng.choice([-1, 1]) * rng.uniform(0.002, 0.008)), float(rng.uniform(0, 360)))
+                amp, phase = float(rng.choice([-1, 1]) * rng.uniform(0.002, 0.008)), float(rng.uniform(0, 360))
+                effects.append(("periodic_joint_error", {"joint": k, "amp_deg": amp, "phase_deg": phase}))
                 truth["location"] = f"joint:{k}"
-                truth["amp_deg"] = pje[1]
+                truth["amp_deg"] = amp
             if kind == "thermal_drift":
                 therm = float(rng.uniform(0.01, 0.05))
+                effects.append(("thermal_drift", {"growth_ppm_per_s": therm}))
                 truth["location"] = "time"
                 truth["ppm_per_s"] = therm
-            simulate_campaign(robot, rod, out, CampaignSpec(seed=int(rng.integers(1 << 30))), rod_true, fe, pje, therm)
+            simulate_campaign(robot, rod, out, CampaignSpec(seed=int(rng.integers(1 << 30))), effects=effects)
             if kind.endswith("outliers"):
                 truth["points"] = _outliers(out / "multical.campaign.csv", rng, 2)
             t0 = time.perf_counter()

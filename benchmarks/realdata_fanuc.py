@@ -2,7 +2,7 @@
 
 Data: benchmarks/data/boby2021 (converted by scripts/convert_boby2021.py from the public data set of Boby
 & Klimchik; 59 distinct poses, single-joint sweeps of all six joints about one configuration, three
-reflectors on the end-effector). The model: rodlab/data/robots/r2000ic165f.urdf (datasheet dimensions, ROS-Industrial layout).
+reflectors on the end-effector). The model: calibrate/robots/r2000ic165f.urdf (datasheet dimensions, ROS-Industrial layout).
 
 Protocols (base and tool are refitted on every validation set, paper Section 5.2):
   interleaved   fit on the even poses of every sweep, validate on the odd ones (same reflector);

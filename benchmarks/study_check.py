@@ -41,7 +41,7 @@ def _designs():
 
 
 def _end_to_end(folder: Path, method: str) -> float:
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     rod = folder / ("fea.compliance.json" if method == "none" else f"{method}.compliance.json")
     argv = ["calibrate", str(folder / "campaign.csv"), "--fixture", str(folder / "fixture.json"), "--rod", str(rod),
             "--validate", str(folder / "validation.csv"), "--json", str(folder / f"{method}.result.json"), "-q"]
@@ -62,7 +62,7 @@ def main() -> None:
     from rodlab.calibrate.replicate_io import write_replicate
     from rodlab.calibrate.simulate import standard_base, standard_fixture
     from rodlab.fea import compute_compliance
-    from rodlab.study import r_prior_of
+    from rodlab.app.study import r_prior_of
     robot, fixture, base = resolve_robot("tx90"), standard_fixture(), standard_base()
     lines = ["# Check: predicted accuracy vs end-to-end `rodlab calibrate` on the same draws", "",
              f"`python benchmarks/study_check.py` on {platform.machine()}, {os.cpu_count()} cores, Python "

@@ -217,34 +217,77 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         :class:`~rodlab.calibrate.thermal.ThermalGrowth`); removed from the measurements with the deflection.
     """
 
+    _check_observations(obs)
+    pinned, freed = dict(pinned or {}), set(freed or ())
+    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
+    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
+    infos = catalogue(robot.n, positions)
+    _check_names([i.name for i in infos], pinned, freed)
+    start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
+    x = _pinned_vector(infos, start, pinned)
+    free, reasons = _free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
+                                     fix_unidentifiable)
+    lower, upper = physical_bounds(infos, start)
+    x = np.clip(x, lower, upper)
+    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
+    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
+    rough = [k for k in free if infos[k].kind == "c"] if rod is not None and (rod.C_F.any() or rod.C_g.any()) \
+        else []
+    st = _compensate(robot, obs, rod, start, infos, x, free, rough, (lower, upper), robust, max_compensation,
+                     fixture_sigma, also_compensate)
+    out = _result(robot, obs, start, infos, reasons, st, fixture_sigma)
+    if expected_noise_mm:
+        from .residual_test import residual_test
+        out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
+    out.warnings = trust_warnings(robot, out)
+    return out
+
+
+def _check_observations(obs: Observations) -> None:
     N = obs.x_W_mm.shape[0]
     if N < 6:
         raise CalibrationError(f"{N} points cannot identify a robot; a MultiCal campaign has ~30 (5 positions x 6 "
                                f"orientations)", key="points")
     if not np.all(np.isfinite(obs.x_W_mm)) or not np.all(np.isfinite(obs.q_rad)):
         raise CalibrationError("the measurements contain NaN or inf", key="points")
-    pinned, freed = dict(pinned or {}), set(freed or ())
-    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
-    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
-    infos = catalogue(robot.n, positions)
-    names = [i.name for i in infos]
+
+
+def _check_names(names: list, pinned: dict, freed: set) -> None:
     for nm in list(pinned) + list(freed):
         if nm not in names:
             from rodlab.errors import did_you_mean
             raise CalibrationError(f"unknown parameter {nm!r}." + did_you_mean(nm, names), key="parameters")
+
+
+def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool):
+    """The model the fit starts from (nominal with the base registered to the points, or ``initial``) and the
+    tool [mm] (found from the data with ``find_tool``)."""
     start = initial or ModelParams.nominal(robot, tool_mm)
     if initial is None and find_tool:
         base0, tool0, rms0 = register_base_and_tool(robot, start, obs)
         log.info("base and tool from scratch: tool %s mm, registration rms %.3f mm", np.round(tool0, 2), rms0)
-        start = start.with_(base=base0, tool=tool0)
-        tool_mm = tool0
-    elif initial is None:
+        return start.with_(base=base0, tool=tool0), tool0
+    if initial is None:
         start = start.with_(base=register_base(robot, start, obs))
+    return start, tool_mm
+
+
+def _pinned_vector(infos, start: ModelParams, pinned: dict) -> np.ndarray:
+    """The internal parameter vector: zero (the start) except the pinned values."""
+    names = [i.name for i in infos]
     x = np.zeros(len(infos))
     for nm, v in pinned.items():
         k = names.index(nm)
         x[k] = (v - _value(start, infos[k], 0.0)) * INTERNAL_SCALE[infos[k].unit] if infos[k].kind in (
             "base_t", "base_r", "tool") else v * INTERNAL_SCALE[infos[k].unit]
+    return x
+
+
+def _free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, freed, positions,
+                     fix_unidentifiable: bool) -> tuple[list, dict]:
+    """The parameters to fit and why the others are held; refuses a data set that cannot identify what it
+    must (unless ``fix_unidentifiable``), naming the parameters and the remedy."""
+    N = obs.x_W_mm.shape[0]
     fr, tau = ball_positions(robot, apply(start, infos, x), obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm,
                              obs.force_W_N)
     J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
@@ -266,48 +309,71 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
             f"--fix-unidentifiable", key="campaign" if obs.group is not None else "points")
     if len(free) > 3 * N:
         raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
+    return free, reasons
+
+
+@dataclass
+class _Compensated:
+    """The state the compensation loop ends in: internal parameters ``x``, which of them carry a prior, the
+    compensation offsets in {W} [mm] (N, 3), the residual scatter [mm], the last solver result, the passes run
+    and the parameters fitted in the last pass."""
+
+    x: np.ndarray
+    prior: np.ndarray
+    offsets: np.ndarray
+    noise_est: float
+    res: object
+    passes: int
+    free: list
+
+
+def _residual_functions(robot, start, infos, x, free, obs, target, prior, x0, noise_est):
+    """The pure residual and its analytic Jacobian for one pass: ball positions minus the compensated
+    measurements (fixture offsets applied), and the priors of the weak parameters scaled by the scatter."""
+    model_at = _memo_model(robot, start, infos, x, free, obs)
+    scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
+
+    def fun(z):
+        xx, p, frr, _ = model_at(z)
+        r = (frr.pW - target - _fixture_shift(infos, xx, obs)).ravel()
+        if prior[free].any():
+            sel = prior[free]
+            r = np.concatenate([r, noise_est * (z[sel] - x0[sel]) / scale[sel]])
+        return r
+
+    def jac(z):
+        xx, p, frr, tt = model_at(z)
+        Jm = position_jacobian(frr, tt, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+        if prior[free].any():
+            sel = np.nonzero(prior[free])[0]
+            Jp = np.zeros((sel.size, len(free)))
+            Jp[np.arange(sel.size), sel] = noise_est / scale[sel]
+            Jm = np.vstack([Jm, Jp])
+        return Jm
+
+    return fun, jac
+
+
+def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robust, max_compensation,
+                fixture_sigma, also_compensate) -> _Compensated:
+    """Identification and compensation alternate until the offsets stop changing (paper Eqs. 11-19): each pass
+    fits the model to the measurements minus the offsets, then recomputes the offsets with the new model;
+    parameters too weak for the data get a prior (once) and are refitted."""
+    N = obs.x_W_mm.shape[0]
+    lower, upper = bounds
+    x = x.copy()
     prior = np.zeros(len(infos), dtype=bool)
-    lower, upper = physical_bounds(infos, start)
-    x = np.clip(x, lower, upper)
     x_init = x.copy()                                   # priors are centred on the initial values
-    free_all = list(free)
-    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
-    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
-    rough = [k for k in free_all if infos[k].kind == "c"] if rod is not None and (rod.C_F.any() or rod.C_g.any()) \
-        else []
     offsets = np.zeros_like(obs.x_W_mm)
     noise_est = 0.01
     res = None
     it = 0
+    free = list(free_all)
     for it in range(1, max_compensation + 1):
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
-
-        model_at = _memo_model(robot, start, infos, x, free, obs)
-
-        def fun(z):
-            xx, p, frr, _ = model_at(z)
-            r = (frr.pW - target - _fixture_shift(infos, xx, obs)).ravel()
-            if prior[free].any():
-                sel = prior[free]
-                scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
-                r = np.concatenate([r, noise_est * (z[sel] - x0[sel]) / scale[sel]])
-            return r
-
-        def jac(z):
-            xx, p, frr, tt = model_at(z)
-            Jm = position_jacobian(frr, tt, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
-            if prior[free].any():
-                sel = np.nonzero(prior[free])[0]
-                scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
-                Jp = np.zeros((sel.size, len(free)))
-                Jp[np.arange(sel.size), sel] = noise_est / scale[sel]
-                Jm = np.vstack([Jm, Jp])
-            return Jm
-
-        x0 = x_init[free]
-        lb, ub = lower[free], upper[free]
-        res = _solve(fun, jac, x[free], lb, ub, robust, 3 * noise_est, 200 * len(free))
+        fun, jac = _residual_functions(robot, start, infos, x, free, obs, target, prior, x_init[free], noise_est)
+        res = _solve(fun, jac, x[free], lower[free], upper[free], robust, 3 * noise_est, 200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
         new_off = deflection_offsets(robot, p, obs.q_rad, obs.force_W_N, rod)
@@ -328,10 +394,16 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         log.info("compensation pass %d: offset change %.2e mm, rms %.4f mm, %d weak", it, change, noise_est, len(newly))
         if change < 1e-5 and not newly and len(free) == len(free_all):
             break
+    return _Compensated(x, prior, offsets, noise_est, res, it, free)
+
+
+def _result(robot, obs, start, infos, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:
+    """The calibration result: values, standard deviations and status of every parameter, residuals."""
+    x, free = st.x, st.free
     p = apply(start, infos, x)
     fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-    resid = (obs.x_W_mm - offsets + _fixture_shift(infos, x, obs)) - fr.pW
-    sig, corr, cond = _sigmas(robot, p, infos, free, obs, noise_est, fixture_sigma, full=True)
+    resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW
+    sig, corr, cond = _sigmas(robot, p, infos, free, obs, st.noise_est, fixture_sigma, full=True)
     values, sigma, status = {}, {}, {}
     for k, info in enumerate(infos):
         values[info.name] = _value(p, info, x[k])
@@ -339,18 +411,14 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
         sigma[info.name] = 0.0
     for s, k in zip(sig, free):
         sigma[infos[k].name] = float(s / INTERNAL_SCALE[infos[k].unit])
-        status[infos[k].name] = "regularised" if prior[k] else "identified"
+        status[infos[k].name] = "regularised" if st.prior[k] else "identified"
     unid = [f"{nm} ({why})" for nm, why in reasons.items() if status.get(nm) == "fixed"]
     rms = float(np.sqrt(np.mean(resid ** 2)))
+    res = st.res
     ok = bool(res.success) if res is not None else False
     msg = res.message if res is not None else "not run"
-    out = CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, noise_est, corr,
-                            [infos[k].name for k in free], offsets, ok, str(msg), int(res.nfev), it, cond)
-    if expected_noise_mm:
-        from .residual_test import residual_test
-        out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
-    out.warnings = trust_warnings(robot, out)
-    return out
+    return CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, st.noise_est, corr,
+                             [infos[k].name for k in free], st.offsets, ok, str(msg), int(res.nfev), st.passes, cond)
 
 
 def _solve(fun, jac, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, robust: bool, f_scale: float, max_nfev: int):

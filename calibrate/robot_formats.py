@@ -2,7 +2,7 @@
 
 Adding a format is one reader module and one entry in :data:`ROBOT_READERS` (suffix -> reader). A reader takes
 the path and the chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a :class:`Robot`.
-Built-in robots are the files in ``rodlab/data/robots`` (each names its source), by file stem.
+Built-in robots are the files in ``calibrate/robots`` (each names its source), by file stem.
 """
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def read_robot(path, base_link: str | None = None, tip_link: str | None = None) 
 
 def builtin_robots() -> dict[str, Path]:
     """Built-in robot name -> its file (TOML before URDF when both exist)."""
-    folder = resources.files("rodlab") / "data" / "robots"
+    folder = resources.files("rodlab.calibrate") / "robots"
     out = {}
     for f in sorted(folder.iterdir(), key=lambda f: (Path(str(f)).suffix != ".toml", str(f))):
         p = Path(str(f))

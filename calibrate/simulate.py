@@ -9,7 +9,7 @@ configurations is measured by an external instrument with a short rigid rod.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +21,7 @@ from rodlab.frames import matrix_to_pose, rotation_from_abc
 from .campaign import Fixture
 from .errors import CalibrationError
 from .compensation import deflection_offsets
+from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
 from .ik import random_configurations, solve_ik_groups
 from .kinematics import ModelParams, ball_positions
 
@@ -106,17 +107,6 @@ def standard_fixture(positions: int = 5, seed: int = 0) -> Fixture:
     return Fixture({j: matrix_to_pose(T) for j, T in Ts.items()}, CONTACT_FORCE_D_N.copy(), wp)
 
 
-def _joint_error(q: np.ndarray, periodic) -> np.ndarray:
-    """Angles the joints really take [rad], shape=(N, n): ``q`` plus a once-per-revolution error of one joint,
-    ``periodic`` = (joint 1-based, amplitude [deg], phase [deg]) or None."""
-    if not periodic:
-        return q
-    k, amp, ph = int(periodic[0]) - 1, np.deg2rad(periodic[1]), np.deg2rad(periodic[2])
-    out = np.array(q, float, copy=True)
-    out[..., k] += amp * np.sin(out[..., k] + ph)
-    return out
-
-
 def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> dict:
     """``spec.orientations`` configurations [rad] per clamping position (dict j -> (k, n) array) with which the
     true robot brings the ball within the alignment tolerance of the datum point, each from a random seed (a
@@ -142,91 +132,169 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
 
 
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
-                      rod_true: RodCompliance | None = None, fixture_error: dict | None = None,
-                      periodic_joint_error: tuple | None = None, thermal_ppm_per_s: float = 0.0,
-                      rod_thermal=None, temp_K_per_s: float = 0.0) -> dict:
+                      rod_true: RodCompliance | None = None, effects=None, rod_thermal=None,
+                      temp_K_per_s: float = 0.0) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
-    and the rod file into ``out_dir``; return the truth. ``rod_true``: the rod as it really is (default:
-    ``rod``); ``fixture_error``: {position: offset [mm]} added to the recorded pose (a wrong fixture pose);
-    ``periodic_joint_error``: (joint 1-based, amplitude [deg], phase [deg]) — the joint really turns
-    ``q + A sin(q + phase)`` (gear / encoder eccentricity; also in the validation points);
-    ``thermal_ppm_per_s``: the arm grows during the campaign, positions scale about the base origin by
-    ``growth * time_s`` [ppm/s]; ``rod_thermal`` (:class:`~rodlab.calibrate.thermal.ThermalGrowth`) with
-    ``temp_K_per_s``: the room warms from 22 degC at that rate during the campaign and the rod's tool vector
-    grows with it (the ``temp_C`` column records it)."""
+    and the rod file into ``out_dir``; return the truth.
+
+    rod_true : the rod as it really is (default: ``rod``, the file the calibrator is given);
+    effects : physics the calibrator's model leaves out, ``{name: parameters}`` or ``[(name, parameters), ...]``
+        (an effect may repeat in the list form) with the names and parameters of
+        :data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS` (e.g. ``{"fixture_pose": {"position": 2,
+        "offset_mm": [0.1, 0, 0]}}``; missing magnitudes take the effect's example);
+    rod_thermal, temp_K_per_s : (:class:`~rodlab.calibrate.thermal.ThermalGrowth`) the room warms from 22 degC
+        at that rate during the campaign and the rod's tool vector grows with it (the ``temp_C`` column records
+        it)."""
+    active = complete_campaign_effects(effects)
+    for m, p in active:
+        m.check_layout(spec.positions, spec.positions * spec.orientations, p)
     rng = np.random.default_rng(spec.seed)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rod_true = rod_true or rod
-    truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale)
-    truth = truth.with_(base=standard_base())
+    for m, p in active:
+        rod_true = m.true_rod(rod_true, p)
+    truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale).with_(base=standard_base())
     wp, Ts = fixture_layout(spec.positions, rng)
-    poses = {j: matrix_to_pose(T) for j, T in Ts.items()}
-    rows = []
-    t = 0.0
+    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s)
+    xD, corrupted = _corrupt(readings, spec, active)
+    readings = replace(readings, xD=xD)
+    _write_campaign(out / "multical.campaign.csv", robot, readings)
+    recorded = _recorded_fixture(Ts, wp, spec, rng, active)
+    atomic_write_json(out / "multical.fixture.json", {"format": "rodlab.fixture/1", "world_position": wp,
+                                                      "positions": recorded, "contact_force_N": [1.10, 1.25, 1.05]})
+    _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
+    from rodlab.compliance import write_compliance
+    write_compliance(rod, out / "rod.compliance.json")
+    t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, rod_thermal, temp_K_per_s)
+    atomic_write_json(out / "truth.json", t)
+    return t
+
+
+@dataclass
+class _Readings:
+    """The campaign as recorded: position, joint angles as read [deg], device readings in {D} [mm], time [s],
+    temperature [degC], one row per point."""
+
+    position: np.ndarray
+    q_deg: np.ndarray
+    xD: np.ndarray
+    time_s: np.ndarray
+    temp_C: np.ndarray
+
+    def labels(self) -> list:
+        counts: dict = {}
+        out = []
+        for j in self.position:
+            counts[int(j)] = counts.get(int(j), 0) + 1
+            out.append(f"{int(j)}.{counts[int(j)]}")
+        return out
+
+
+def _true_angles(q: np.ndarray, active) -> np.ndarray:
+    for m, p in active:
+        q = m.joint_angles(q, p)
+    return q
+
+
+def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s) -> _Readings:
+    """What the device reads at every clamping position: the true robot with the true rod deflected by its
+    weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
     forces = {j: Ts[j][:3, :3] @ CONTACT_FORCE_D_N for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
+    cols: dict = {"position": [], "q_deg": [], "xD": [], "time_s": [], "temp_C": []}
+    t = 0.0
     for j in range(1, spec.positions + 1):
-        F_W = forces[j]
         q = reached[j]
-        qt = _joint_error(q, periodic_joint_error)                    # the angles the joints really take
+        qt = _true_angles(q, active)                                   # the angles the joints really take
         m = len(q)
-        Fm = np.broadcast_to(F_W, (m, 3))
+        Fm = np.broadcast_to(forces[j], (m, 3))
         fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, Fm)
         pW = fr.pW + deflection_offsets(robot, truth, qt, Fm, rod_true)
         Tinv = np.linalg.inv(Ts[j])
         xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + rng.normal(0, spec.device_noise_mm, (m, 3))
-        qd = np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
         temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
         if rod_thermal is not None:
             grow_W = rod_thermal.offsets_at(robot, truth, qt, temps, Fm, rod.mass_kg, rod.com_T_mm)
             xD = xD + grow_W @ Tinv[:3, :3].T
-        if thermal_ppm_per_s:
-            grow = thermal_ppm_per_s * 1e-6 * np.round(times)[:, None] * (pW - fr.t_W0)
-            xD = xD + grow @ Ts[j][:3, :3]
-        rows += [f"{j},{i + 1}," + ",".join(f"{v:.4f}" for v in qd[i]) + "," + ",".join(f"{v:.4f}" for v in xD[i])
-                 + f",{times[i]:.0f},{temps[i]:.2f}" for i in range(m)]
-    atomic_write_text(out / "multical.campaign.csv",
-                      "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
+        for eff, p in active:
+            grow = eff.reading_offset_W(pW, times, fr.t_W0, p)
+            if grow is not None:
+                xD = xD + grow @ Ts[j][:3, :3]
+        cols["position"].append(np.full(m, j))
+        cols["q_deg"].append(np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg)
+        cols["xD"].append(xD)
+        cols["time_s"].append(times)
+        cols["temp_C"].append(temps)
+    return _Readings(**{k: np.concatenate(v) for k, v in cols.items()})
+
+
+def _corrupt(readings: _Readings, spec, active) -> tuple[np.ndarray, dict]:
+    """Gross errors of single readings (outliers), from a generator of their own: the other draws of the
+    campaign stay those of the same seed without them."""
+    xD, done = readings.xD, {}
+    rng = np.random.default_rng([spec.seed, 1])
+    for m, p in active:
+        xD, info = m.corrupt(xD, readings.labels(), rng, p)
+        done.update(info)
+    return xD, done
+
+
+def _write_campaign(path: Path, robot, r: _Readings) -> None:
+    labels = r.labels()
+    rows = [f"{j},{lab.split('.')[1]}," + ",".join(f"{v:.4f}" for v in q) + "," + ",".join(f"{v:.4f}" for v in x)
+            + f",{ts:.0f},{tc:.2f}" for j, lab, q, x, ts, tc in zip(r.position, labels, r.q_deg, r.xD, r.time_s, r.temp_C)]
+    atomic_write_text(path, "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
                       + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")
+
+
+def _recorded_fixture(Ts: dict, wp: int, spec, rng, active) -> dict:
+    """The clamping poses as the fixture file records them: measured to the fixture noise (the world position
+    exactly), and as the effects misrecord them."""
     rec = {}
     st, sr = spec.fixture_noise_mm_deg
-    for j, pz in poses.items():
-        pr = np.array(pz, float)
+    for j, T in Ts.items():
+        pr = np.array(matrix_to_pose(T), float)
         if j != wp:
             pr = pr + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
-        if fixture_error and j in fixture_error:
-            pr[:3] += np.asarray(fixture_error[j], float)
+        for m, p in active:
+            pr = m.recorded_fixture(j, pr, p)
         rec[str(j)] = [round(float(v), 6) for v in pr]
-    atomic_write_json(out / "multical.fixture.json", {"format": "rodlab.fixture/1", "world_position": wp,
-                                                      "positions": rec, "contact_force_N": [1.10, 1.25, 1.05]})
-    # validation: short rigid rod, random reachable configurations
+    return rec
+
+
+def _write_validation(path: Path, robot, truth, spec, rng, active) -> None:
+    """Validation: random reachable configurations measured by an external instrument with a short rigid rod."""
     vt = np.array([0.0, 0.0, 150.0])
     vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
-    fr, _ = ball_positions(robot, vtrue, _joint_error(vq, periodic_joint_error), 0.3, [0, 0, -60])
+    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), 0.3, [0, 0, -60])
     vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
     lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
              ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]
     lines += [",".join(f"{v:.4f}" for v in np.rad2deg(q)) + "," + ",".join(f"{v:.3f}" for v in x)
               for q, x in zip(vq, vx)]
-    atomic_write_text(out / "multical.validation.csv", "\n".join(lines) + "\n")
-    from rodlab.compliance import write_compliance
-    write_compliance(rod, out / "rod.compliance.json")
+    atomic_write_text(path, "\n".join(lines) + "\n")
+
+
+def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, rod_thermal, temp_K_per_s) -> dict:
+    """``truth.json``: the true model, fixture poses and every simulated effect with its parameters."""
     t = {"format": "rodlab.truth.campaign/1", "seed": spec.seed, "spec": spec.__dict__,
          "true_base_pose_W": truth.base.tolist(), "true_tool_mm": truth.tool.tolist(),
          "dtheta_deg": np.rad2deg(truth.theta_offset - np.deg2rad(robot.theta_offset_deg)).tolist(),
          "d_mm": truth.d.tolist(), "a_mm": truth.a.tolist(), "alpha_deg": np.rad2deg(truth.alpha).tolist(),
          "beta_deg": np.rad2deg(truth.beta).tolist(), "c_rad_per_Nm": truth.c.tolist(),
-         "true_fixture_poses_W": {str(j): p.tolist() for j, p in poses.items()},
-         "fixture_error_mm": {str(k): list(map(float, v)) for k, v in (fixture_error or {}).items()},
-         "periodic_joint_error": list(periodic_joint_error) if periodic_joint_error else None,
-         "thermal_ppm_per_s": float(thermal_ppm_per_s),
-         "rod_thermal_growth_T_mm_per_K": None if rod_thermal is None else rod_thermal.growth_T_mm_per_K.tolist(),
-         "temp_K_per_s": float(temp_K_per_s),
-         "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0}
-    atomic_write_json(out / "truth.json", t)
+         "true_fixture_poses_W": {str(j): matrix_to_pose(T).tolist() for j, T in Ts.items()}}
+    for m in CAMPAIGN_EFFECTS.values():                 # every effect's truth keys, empty when not simulated
+        t.update(m.truth(None))
+    for m, p in active:
+        for k, v in m.truth(p).items():
+            t[k] = {**t[k], **v} if isinstance(v, dict) and isinstance(t.get(k), dict) else v
+    t.update({"rod_thermal_growth_T_mm_per_K": None if rod_thermal is None else rod_thermal.growth_T_mm_per_K.tolist(),
+              "temp_K_per_s": float(temp_K_per_s),
+              "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0,
+              "effects": [{"effect": str(m.effect), **p} for m, p in active], **corrupted})
     return t

@@ -9,8 +9,10 @@ from .joints import JointCalibration, calibrate_joints, joint_frame_compliance
 from .modal import chain_frequencies, frame_frequencies
 from .modal_solid import SolidModes, solid_frequencies
 from .solid import SolidResult, mirror_displacements, solve_compliance
+from .solid_run import SolidRun, run_solid
 
 __all__ = ["FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "DEFAULT_GRADING",
            "FeaError", "BendFlexibility", "asme_bend_flexibility", "frame_compliance", "SolidResult",
            "solve_compliance", "mirror_displacements", "JointCalibration", "calibrate_joints",
-           "joint_frame_compliance", "frame_frequencies", "chain_frequencies", "SolidModes", "solid_frequencies"]
+           "joint_frame_compliance", "frame_frequencies", "chain_frequencies", "SolidModes", "solid_frequencies",
+           "SolidRun", "run_solid"]

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import logging
 from dataclasses import replace
-from typing import Callable
 
 import numpy as np
 
@@ -21,9 +20,9 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.errors import RodlabError
 
-from .joints import DEFAULT_MARGIN, MIN_SPAN_MM, JointCalibration, calibrate_joints, free_spans
+from .joints import DEFAULT_MARGIN, MIN_SPAN_MM, free_spans
 
-__all__ = ["calibration_member", "calibrate_family"]
+__all__ = ["calibration_member"]
 
 log = logging.getLogger(__name__)
 
@@ -57,11 +56,3 @@ def calibration_member(base: RodDesign, L1s=(), L2s=(), margin: float = DEFAULT_
         return base
     log.info("%s's free tubes are too short for the joint calibration: calibrating on %s", base.name, best.name)
     return best
-
-
-def calibrate_family(member: RodDesign, solve: Callable[[RodDesign], object],
-                     margin: float = DEFAULT_MARGIN) -> JointCalibration:
-    """The joint calibration of ``member``'s family from ``solve(member)``: a :class:`fea.SolidResult` with the
-    tip moments and displacements (e.g. ``fea.solid_compliance(d, mesher, tip_moments=True,
-    keep_displacements=True)[1]``)."""
-    return calibrate_joints(member, solve(member), margin)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ParamSpec", "Hypothesis"]
+__all__ = ["ParamSpec", "Hypothesis", "EffectSchema", "location_parts"]
 
 
 @dataclass(frozen=True)
@@ -24,7 +24,8 @@ class ParamSpec:
     doc : one sentence of meaning
     default : the value ``rodlab rig simulate --effect NAME`` uses when none is given (a typical magnitude);
         ``None``: not set by default (optional)
-    kind : ``float`` (a number), ``str`` (a choice among ``choices``) or ``vector`` (3 numbers in {T})
+    kind : ``float`` (a number), ``int`` (a whole number >= 1: a joint, a position, a count), ``str`` (a choice
+        among ``choices``) or ``vector`` (3 numbers)
     choices : allowed values of a ``str`` parameter
     magnitude : a ``float`` that sizes the effect (when none is given, the effect's example sizes it); False for
         a setting such as creep's time constant
@@ -39,8 +40,8 @@ class ParamSpec:
     magnitude: bool = True
 
     def __post_init__(self) -> None:
-        if self.kind not in ("float", "str", "vector"):
-            raise ValueError(f"ParamSpec {self.name}: kind must be float, str or vector, got {self.kind!r}")
+        if self.kind not in ("float", "int", "str", "vector"):
+            raise ValueError(f"ParamSpec {self.name}: kind must be float, int, str or vector, got {self.kind!r}")
 
     def parse(self, value):
         """The value of this parameter from its text or number; :class:`ValueError` saying what is expected."""
@@ -58,10 +59,18 @@ class ParamSpec:
             except (TypeError, ValueError):
                 vec = []
             if len(vec) != 3 or not np.all(np.isfinite(vec)):
-                raise ValueError(f"{self.name} must be 3 finite numbers [{self.unit}] in {{T}}, got {value!r}")
+                raise ValueError(f"{self.name} must be 3 finite numbers [{self.unit}], got {value!r}")
             if self.unit == "-" and np.linalg.norm(vec) < 1e-9:
                 raise ValueError(f"{self.name} is a direction: it must not be zero, got {value!r}")
             return vec
+        if self.kind == "int":
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                v = float("nan")
+            if not (np.isfinite(v) and v == int(v) and v >= 1):
+                raise ValueError(f"{self.name} must be a whole number >= 1, got {value!r}")
+            return int(v)
         try:
             v = float(value)
         except (TypeError, ValueError):
@@ -136,3 +145,65 @@ class Hypothesis:
             intervals[name] = sorted([float(b + a * lo), float(b + a * hi)])
         params.update({k: float(v) for k, v in self.settings.items()})
         return params, intervals
+
+
+def location_parts(location: str | None) -> tuple[str, str]:
+    """A location key split into its kind and its value: ``position:3`` -> (``position``, ``3``),
+    ``points:2.4,5.1`` -> (``points``, ``2.4,5.1``), ``time`` -> (``time``, ``""``)."""
+    kind, _, value = str(location or "").partition(":")
+    return kind, value
+
+
+class EffectSchema:
+    """The parameter schema of one effect: its parameters (:class:`ParamSpec`), the example magnitude used when
+    none is given, completion and checking of given parameters. Rig and campaign effects share it; each
+    package's base class sets :meth:`fail` to raise its own error."""
+
+    effect: str = ""
+    params: tuple = ()
+    example: dict = {}
+
+    def fail(self, message: str, key: str) -> None:
+        """Raise the package's error for parameter ``key`` of this effect."""
+        raise ValueError(message)
+
+    def spec(self, name: str) -> ParamSpec:
+        for p in self.params:
+            if p.name == name:
+                return p
+        from rodlab.errors import did_you_mean
+        names = [p.name for p in self.params]
+        self.fail(f"effect {self.effect}: unknown parameter {name!r}; its parameters are {names}."
+                  + did_you_mean(name, names), f"{self.effect}.{name}")
+
+    def complete(self, given: dict) -> dict:
+        """The full parameters from those ``given``: defaults filled in, the example magnitude when no number
+        is given, every value checked (the package's error naming the effect and key)."""
+        out = {p.name: p.default for p in self.params if p.default is not None}
+        parsed = {}
+        for k, v in dict(given).items():
+            spec = self.spec(str(k))
+            try:
+                parsed[spec.name] = spec.parse(v)
+            except ValueError as e:
+                self.fail(str(e), f"{self.effect}.{spec.name}")
+        if not any(self.spec(k).kind == "float" and self.spec(k).magnitude for k in parsed):
+            out.update(self.example_for({**out, **parsed}))
+        out.update(parsed)
+        self.check(out)
+        return out
+
+    def example_for(self, p: dict) -> dict:
+        """The example magnitude for parameters ``p`` that size nothing yet."""
+        return dict(self.example)
+
+    def check(self, p: dict) -> None:
+        """Fail if the completed parameters ``p`` cannot be simulated."""
+
+    def value(self, p: dict, name: str) -> float:
+        return float(p.get(name, 0.0) or 0.0)
+
+    def params_markdown(self) -> str:
+        """The parameters as a docs table cell: names with units (choices for a setting)."""
+        return ", ".join(f"`{p.name}` ({' / '.join(p.choices)})" if p.kind == "str" else f"`{p.name}` [{p.unit}]"
+                         for p in self.params)

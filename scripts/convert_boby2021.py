@@ -6,7 +6,7 @@ industrial robot", Robotics and Computer-Integrated Manufacturing, 2021). One ro
 positions [mm] of three reflectors (SMR N1, N2, N3) on the end-effector, measured by a laser tracker, then
 joint values [deg] from the controller (in the stored copy: six zero columns, then J1..J6).
 
-The robot is a FANUC R-2000iC/165F (see ``rodlab/data/robots/r2000ic165f.urdf`` and docs/calibrate.md for
+The robot is a FANUC R-2000iC/165F (see ``calibrate/robots/r2000ic165f.urdf`` and docs/calibrate.md for
 how this was established from the data). The controller's joints become the URDF's joints (the
 ROS-Industrial layout; FANUC reports J3 relative to the horizontal): ``q = (J1, J2, J2 + J3, J4, J5, J6)``.
 Each reflector becomes one ``*.validation.csv`` (the

@@ -43,7 +43,7 @@ JOINTS = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_j
           "wrist_3_joint"]
 HEADER = """# Laser-tracker points of a Universal Robots UR10 (CB3), series {series} ({name}): public data of
 # C. Landgraf et al., github.com/christianlandgraf/ipa-robot-accuracy (MIT), converted by
-# scripts/convert_landgraf2021.py. q [deg] are the URDF's joints (rodlab/data/robots/ur10.urdf); x, y, z [mm]
+# scripts/convert_landgraf2021.py. q [deg] are the URDF's joints (calibrate/robots/ur10.urdf); x, y, z [mm]
 # the T-Mac position in the tracker frame; sigma_* [mm] the tracker's standard deviation of each point.
 # The tool below is the T-Mac's nominal offset; calibration finds the real one.
 # tool_mm: 0, 0, 109

@@ -1,5 +1,5 @@
-"""Generate docs/cli.md from the argparse parser, and the rig effect table of docs/formats.md from the effect
-registry (``--check`` exits 1 when either is stale; used by the tests)."""
+"""Generate docs/cli.md from the argparse parser, and the rig and campaign effect tables of docs/formats.md
+from the effect registries (``--check`` exits 1 when either is stale; used by the tests)."""
 from __future__ import annotations
 
 import argparse
@@ -7,20 +7,25 @@ import os
 import sys
 from pathlib import Path
 
-from rodlab.cli.main import build_parser
+from rodlab.app.cli.main import build_parser
 from rodlab.fileio import write_generated
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 FORMATS = DOC.with_name("formats.md")
-BEGIN, END = "<!-- rig-effects:begin (generated) -->", "<!-- rig-effects:end -->"
+TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
+          "campaign-effects": "rodlab.calibrate.effects:campaign_vocabulary_markdown"}
 
 
 def render_formats() -> str:
-    """docs/formats.md with the table between the markers taken from the rig effect registry."""
-    from rodlab.stiffness_rig.effects import vocabulary_markdown
+    """docs/formats.md with the tables between the markers taken from the effect registries."""
+    import importlib
     text = FORMATS.read_text(encoding="utf-8")
-    a, b = text.index(BEGIN) + len(BEGIN), text.index(END)
-    return text[:a] + "\n" + vocabulary_markdown() + "\n" + text[b:]
+    for name, target in TABLES.items():
+        module, func = target.split(":")
+        begin, end = f"<!-- {name}:begin (generated) -->", f"<!-- {name}:end -->"
+        a, b = text.index(begin) + len(begin), text.index(end)
+        text = text[:a] + "\n" + getattr(importlib.import_module(module), func)() + "\n" + text[b:]
+    return text
 
 
 def render() -> str:
@@ -43,5 +48,5 @@ if __name__ == "__main__":
     check = "--check" in sys.argv
     status = write_generated(DOC, render(), check) | write_generated(FORMATS, render_formats(), check)
     if not check:
-        print(f"wrote {DOC} and the rig effect table of {FORMATS}")
+        print(f"wrote {DOC} and the effect tables of {FORMATS}")
     sys.exit(status)

@@ -238,8 +238,8 @@ def read_plan(path) -> RigPlan:
             raise r.err(f"unknown load axis {a!r}; expected one of {[x.value for x in LoadAxis]}", "axes")
     masses = data.get("masses_kg", [0.5, 1.0, 1.5, 2.0])
     if not isinstance(masses, list) or not masses or any(isinstance(m, bool) or not isinstance(m, (int, float))
-                                                          or not m > 0 for m in masses):
-        raise r.err("masses_kg must be a non-empty list of masses > 0 [kg]", "masses_kg")
+                                                          or not (m > 0 and m < float("inf")) for m in masses):
+        raise r.err("masses_kg must be a non-empty list of finite masses > 0 [kg]", "masses_kg")
     if any(b <= a for a, b in zip(masses, masses[1:])):
         raise r.err("masses_kg must increase strictly (the loading branch), e.g. [0.5, 1.0, 1.5, 2.0]", "masses_kg")
     settle = data.get("settle", {})

@@ -61,7 +61,7 @@ def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsy
     joint compliances are bounded to [0, C_MAX] by construction, so a weakly identified wrist compliance can
     no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
     from rodlab.calibrate.identify import C_MAX
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     from rodlab.compliance import write_compliance
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(resolve_design("rod1"))

@@ -5,7 +5,7 @@ import json
 import subprocess
 import sys
 
-from rodlab.cli import main
+from rodlab.app.cli import main
 
 
 def test_help_lists_subcommands(capsys):
@@ -75,7 +75,7 @@ def test_bad_rig_simulation_options_name_the_option_and_leave_no_file(tmp_path_f
 def test_builtin_robot_names_are_case_blind_and_options_work_after_the_subcommand(tmp_path, capsys):
     from rodlab.calibrate import resolve_robot
     assert resolve_robot("TX90").n == resolve_robot("tx90").n == 6
-    from rodlab.cli.main import build_parser
+    from rodlab.app.cli.main import build_parser
     args = build_parser().parse_args(["rig", "simulate", "--sim", "rod1", "-o", "x.csv", "--debug", "-q"])
     assert args.debug and args.quiet
     args = build_parser().parse_args(["--debug", "fea", "rod1", "-o", "x.json"])

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from rodlab.pipeline import run_demo
-from rodlab.report import write_folder_report as write_report
+from rodlab.app.pipeline import run_demo
+from rodlab.app.report import write_folder_report as write_report
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rodlab import load_design, read_compliance
-from rodlab.diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
+from rodlab.app.diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
 from rodlab.stiffness_rig import read_recording
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,7 +63,7 @@ def test_campaign_examples(examples, name):
 def test_cli_campaign_figures(examples, tmp_path, capsys):
     """diagnose --campaign --png writes the residual figure and the validation distributions; calibrate --png
     --validate writes the residuals and the error distribution its help promises."""
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     ex = examples / "campaign-fixture_pose"
     files = ["--fixture", str(ex / "multical.fixture.json"), "--rod", str(ex / "rod1.compliance.json"),
              "--validate", str(ex / "multical.validation.csv")]
@@ -88,10 +88,10 @@ def test_report_follows_the_contract(examples, tmp_path):
 
 
 def test_diagnosis_never_imports_the_blind_generator():
-    code = ("import sys, rodlab.diagnose, rodlab.cli.cmd_diagnose; "
+    code = ("import sys, rodlab.app.diagnose, rodlab.app.cli.cmd_diagnose; "
             "assert 'rodlab.stiffness_rig.blind' not in sys.modules")
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
-    for f in (ROOT / "rodlab" / "diagnose").glob("*.py"):
+    for f in (ROOT / "rodlab" / "app" / "diagnose").glob("*.py"):
         assert "stiffness_rig.blind" not in f.read_text() and "generate_cases" not in f.read_text(), f
 
 
@@ -112,7 +112,7 @@ def test_fixed_seed_blind_batch(tmp_path):
 
 
 def test_cli_diagnose(examples, tmp_path, capsys):
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     assert main(["diagnose", "--rig", str(examples / "rig-friction.rig.csv"), "--sim",
                  str(examples / "rod1.compliance.json"), "--json", str(tmp_path / "d.json"), "--png", str(tmp_path)]) == 0
     assert "friction" in capsys.readouterr().out and (tmp_path / "diagnosis_rig.png").exists()
@@ -126,11 +126,11 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
     from rodlab.calibrate import read_campaign, read_fixture, resolve_robot
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     from rodlab import calc_rod_compliance, resolve_design
-    from rodlab.diagnose import diagnose_campaign
+    from rodlab.app.diagnose import diagnose_campaign
     robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
-    kw = {"null": {}, "periodic": {"periodic_joint_error": (4, 0.006, 30.0)},
-          "thermal": {"thermal_ppm_per_s": 0.045}}[case]
-    t = simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=21), **kw)
+    effects = {"null": {}, "periodic": {"periodic_joint_error": {"joint": 4, "amp_deg": 0.006, "phase_deg": 30.0}},
+               "thermal": {"thermal_drift": {"growth_ppm_per_s": 0.045}}}[case]
+    t = simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=21), effects=effects)
     assert (t["periodic_joint_error"] is not None) == (case == "periodic")
     from rodlab.calibrate import read_points
     diag, _ = diagnose_campaign(robot, read_campaign(tmp_path / "multical.campaign.csv"),
@@ -165,7 +165,7 @@ def test_subset_least_squares_matches_direct_fits():
     refitting without each fold."""
     from scipy.optimize import lsq_linear
 
-    from rodlab.diagnose.subset import SubsetLS
+    from rodlab.app.diagnose.subset import SubsetLS
     rng = np.random.default_rng(3)
     n = 400
     X = rng.normal(size=(n, 5)) * np.array([1.0, 1e-3, 10.0, 1.0, 1e2])
@@ -246,7 +246,7 @@ def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
 def test_chi2_helpers_equal_scipy_stats():
     """The diagnosers' chi-square functions (scipy.special, cheap to import) equal scipy.stats.chi2."""
     from scipy.stats import chi2
-    from rodlab.diagnose.chi2 import chi2_median, chi2_sf
+    from rodlab.app.diagnose.chi2 import chi2_median, chi2_sf
     for x, k in [(0.5, 1), (3.2, 3), (40.0, 5), (1e-3, 2), (250.0, 30)]:
         assert chi2_sf(x, k) == pytest.approx(chi2.sf(x, k), rel=1e-12, abs=1e-300)
     for k in (1, 3, 7):
@@ -264,7 +264,8 @@ def test_wrong_fixture_pose_with_outliers_names_both(tmp_path):
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     from rodlab import calc_rod_compliance, resolve_design
     robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
-    simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=33), fixture_error={2: [-0.15, 0.12, -0.08]})
+    simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=33),
+                      effects={"fixture_pose": {"position": 2, "offset_mm": [-0.15, 0.12, -0.08]}})
     path = tmp_path / "multical.campaign.csv"
     rows = list(csv.reader(path.read_text().splitlines()))
     bad = {}

@@ -231,7 +231,7 @@ def test_calculix_agrees(tmp_path):
 
 @SOLID
 def test_cli_fea_models(tmp_path, capsys):
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     for model in ("frame", "calc"):
         out = tmp_path / f"{model}.json"
         assert main(["fea", "rod2", "--model", model, "-o", str(out)]) == 0

@@ -171,7 +171,7 @@ def test_designs_outside_the_calibrated_range_are_flagged(tmp_path, capsys):
     from rodlab.fea.frame import frame_range_notes
     from rodlab.fea.sweep import run_sweep
     from conftest import write_toml
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     for n in CALIBRATION_SET + PROBE_SET:
         assert frame_range_notes(design(n)) == [], n
     for n in THIN_SET:              # measured 1-4.4 % off (docs/fea.md): each one is flagged

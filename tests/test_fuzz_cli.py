@@ -50,9 +50,9 @@ def _pool(folder: Path) -> dict[str, list[Path]]:
     from rodlab.design_io import builtin_designs, resolve_design
     valid = {"design": builtin_designs()["rod1"],
              "compliance": write_compliance(calc_rod_compliance(resolve_design("rod1")), folder / "rod1.compliance.json"),
-             "robot": ROOT / "rodlab" / "data" / "robots" / "tx90.toml",
-             "profile": ROOT / "rodlab" / "data" / "rig" / "simulator.profile.toml",
-             "plan": ROOT / "rodlab" / "data" / "rig" / "quick.plan.toml"}
+             "robot": ROOT / "calibrate" / "robots" / "tx90.toml",
+             "profile": ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml",
+             "plan": ROOT / "stiffness_rig" / "plans" / "quick.plan.toml"}
     if SHARED.is_dir():
         valid["recording"] = shutil.copy(SHARED / "rig-null.rig.csv", folder / "rig-null.rig.csv")
         for name in ("campaign", "fixture", "validation"):
@@ -79,7 +79,7 @@ ALL_FILES = [p for files in POOL.values() for p in files]
 
 
 def _commands():
-    from rodlab.cli.main import build_parser
+    from rodlab.app.cli.main import build_parser
     out = {}
 
     def walk(parser, prefix):
@@ -154,7 +154,7 @@ def _argv(draw, command: str, out_dir: Path):
 
 def _run(argv: list[str], cwd: Path) -> tuple[int, str, bool]:
     """(exit code, stderr, whether argparse refused the arguments), run in ``cwd`` (where default outputs go)."""
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     err, out = io.StringIO(), io.StringIO()
     here = os.getcwd()
     os.chdir(cwd)

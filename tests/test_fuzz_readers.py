@@ -36,9 +36,9 @@ def _sources():
         "design": (builtin_designs()["rod1"].read_bytes(), ".rod.toml"),
         "compliance": (comp.read_bytes(), ".compliance.json"),
         "joints": (joints.read_bytes(), ".joints.json"),
-        "robot": ((ROOT / "rodlab" / "data" / "robots" / "tx90.toml").read_bytes(), ".toml"),
-        "profile": ((ROOT / "rodlab" / "data" / "rig" / "simulator.profile.toml").read_bytes(), ".toml"),
-        "plan": ((ROOT / "rodlab" / "data" / "rig" / "paper.plan.toml").read_bytes(), ".toml"),
+        "robot": ((ROOT / "calibrate" / "robots" / "tx90.toml").read_bytes(), ".toml"),
+        "profile": ((ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml").read_bytes(), ".toml"),
+        "plan": ((ROOT / "stiffness_rig" / "plans" / "paper.plan.toml").read_bytes(), ".toml"),
     }
     if SHARED.is_dir():
         rig = (SHARED / "rig-null.rig.csv").read_text().splitlines()

@@ -7,7 +7,7 @@ import pytest
 
 from rodlab.calibrate import ModelParams, resolve_robot
 from rodlab.calibrate.kinematics import forward
-from rodlab.cli.main import main
+from rodlab.app.cli.main import main
 
 
 def _write_points(path, robot, seed, noise_mm=0.025, lost_motion_deg=0.0, n=120, sigma_column=None):
@@ -74,7 +74,7 @@ def test_lost_motion_is_not_trusted_and_diagnosed_at_its_joint(tmp_path, capsys,
 def test_noise_only_points_have_no_findings(tmp_path, robot, seed):
     """No false alarm: points with nothing but the stated noise give no finding (p < 1e-3 per candidate)."""
     from rodlab.calibrate import Observations, identify, read_points
-    from rodlab.diagnose.points import diagnose_points
+    from rodlab.app.diagnose.points import diagnose_points
     path = _write_points(tmp_path / "p.validation.csv", robot, seed=seed)
     pts = read_points(path, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))

@@ -24,7 +24,7 @@ def test_untrusted_calibration_is_flagged(examples):
 
 
 def test_cli_refuses_untrusted(examples, tmp_path, capsys):
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     ex = examples / "campaign-fixture_pose"
     rc = main(["calibrate", str(ex / "multical.campaign.csv"), "--fixture", str(ex / "multical.fixture.json"),
                "--rod", str(ex / "rod1.compliance.json"), "--json", str(tmp_path / "c.json")])

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from rodlab.cli.main import main
+from rodlab.app.cli.main import main
 
 
 def _run(*argv) -> int:
@@ -111,8 +111,8 @@ def test_report_of_nothing_is_refused(tmp_path, capsys):
 
 
 def test_evidence_is_said_in_an_engineers_words():
-    from rodlab.diagnose.report import Finding
-    from rodlab.diagnose.wording import certainty, confirmation, evidence_text, explained_share
+    from rodlab.app.diagnose.report import Finding
+    from rodlab.app.diagnose.wording import certainty, confirmation, evidence_text, explained_share
     f = Finding("friction", None, "", {"F_f_N": 0.3}, {}, 0.002, 0.001,
                 {"lr_p": 1e-9, "cv_sse_before": 2.0, "cv_sse_after": 1.0})
     assert explained_share(f) == pytest.approx(0.75)
@@ -133,7 +133,7 @@ def test_sweep_axes_span_the_grid_only():
 
 
 def test_campaign_fits_check_their_shapes():
-    from rodlab.diagnose.campaign import CampaignFits
+    from rodlab.app.diagnose.campaign import CampaignFits
     with pytest.raises(ValueError, match="q_deg"):
         CampaignFits(None, None, np.ones(3, bool), ["1.1", "1.2", "1.3"], np.ones(3, int), {}, q_deg=np.zeros((2, 6)))
 

@@ -14,7 +14,7 @@ from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
-ROOT_DATA = Path(__file__).resolve().parents[1] / "rodlab" / "data" / "rig"
+ROOT_DATA = Path(__file__).resolve().parents[1] / "stiffness_rig" / "plans"
 C = np.array([[0.0063, 0.0, -0.0151], [0.0, 0.2198, 0.0], [-0.0151, 0.0, 0.0666]])
 SIM = RodCompliance("1#", Method.CALC, C, 1.2 * C, 0.46, np.zeros(3), np.array([450.0, 0, 300]))
 
@@ -164,7 +164,7 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
     import sys
     import time
 
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     from rodlab.compliance import write_compliance
     from rodlab.stiffness_rig.config import read_plan, read_profile
     link = tmp_path / "tty"

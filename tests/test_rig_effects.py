@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance, resolve_design
-from rodlab.diagnose import diagnose_rig
+from rodlab.app.diagnose import diagnose_rig
 from rodlab.enums import Phase, RigEffect
 from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, vocabulary_markdown
@@ -130,7 +130,7 @@ def test_settings_alone_keep_the_example_magnitude():
 def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
     """``rodlab rig simulate --effect`` takes joint springs by location and drift with temperature (both were
     refused before the registry), and writes the completed parameters into the recording's header."""
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     from rodlab.compliance import write_compliance
     sim = write_compliance(SIM, tmp_path / "rod1.compliance.json")
     out = tmp_path / "j.rig.csv"

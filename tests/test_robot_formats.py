@@ -248,7 +248,7 @@ def test_export_writes_a_urdf_with_the_calibrated_kinematics(tmp_path):
     import yaml
 
     from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     urdf = tmp_path / "skew.urdf"
     urdf.write_text(_random_urdf(np.random.default_rng(7)))
     robot = read_robot(urdf)
@@ -275,7 +275,7 @@ def test_export_writes_a_urdf_with_the_calibrated_kinematics(tmp_path):
 
 
 def test_export_refuses_a_result_of_another_robot_description(tmp_path, capsys):
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     cal_path = _calibration_file(tmp_path, resolve_robot("tx90"), np.random.default_rng(0))
     assert main(["export", str(cal_path), "--urdf", str(builtin_robots()["r2000ic165f"]), "-o",
                  str(tmp_path / "x.urdf")]) == 2

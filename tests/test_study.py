@@ -109,14 +109,14 @@ def test_strength_grows_with_the_contact_force():
 
 
 def _candidates():
-    from rodlab.study import grid_candidates
+    from rodlab.app.study import grid_candidates
     base = resolve_design("rod4")
     return grid_candidates(base, [250.0, 300.0], [450.0])
 
 
 def test_dask_cluster_gives_the_serial_results(tmp_path):
     pytest.importorskip("dask.distributed")
-    from rodlab.study import StudySpec, run_study, study_table
+    from rodlab.app.study import StudySpec, run_study, study_table
     spec = StudySpec(methods=("none", "fea"), replicates=2, priors=Priors(validation_points=20), budget=False)
     robot, fixture = resolve_robot("tx90"), standard_fixture()
     serial = study_table(run_study(_candidates(), robot, fixture, spec, use_dask=False))
@@ -129,7 +129,7 @@ def test_dask_cluster_gives_the_serial_results(tmp_path):
 
 
 def test_invalid_and_unreachable_designs_are_rows_with_reasons():
-    from rodlab.study import grid_candidates, prepare_design
+    from rodlab.app.study import grid_candidates, prepare_design
     base = resolve_design("rod4")
     bad = grid_candidates(base, [40.0], [450.0])[0]
     assert bad.design is None and bad.invalid
@@ -145,8 +145,8 @@ def test_invalid_and_unreachable_designs_are_rows_with_reasons():
 def test_study_command_end_to_end(tmp_path, capsys):
     import pandas as pd
 
-    from rodlab.cli.main import main
-    from rodlab.study import STUDY_COLUMNS
+    from rodlab.app.cli.main import main
+    from rodlab.app.study import STUDY_COLUMNS
     out = tmp_path / "s"
     rc = main(["study", "rod4", "--L1", "250,300", "--L2", "450,500", "--replicates", "2", "--methods", "none,meas",
                "--no-calibrate", "--no-budget", "--serial", "-q", "-o", str(out)])
@@ -172,7 +172,7 @@ def test_study_command_end_to_end(tmp_path, capsys):
     (["--tubes", "25-2"], "--tubes"),
 ])
 def test_study_bad_options_name_the_option(tmp_path, capsys, argv, msg):
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     try:
         rc = main(["study", "rod4", "--L1", "300", "--serial", "-o", str(tmp_path / "x"), *argv])
     except SystemExit as e:                          # argparse refuses a count < 1 itself

@@ -50,7 +50,7 @@ def test_sweep_cli_writes_table_and_plot(tmp_path, capsys):
     and bad options are one clear line (exit 2)."""
     import pandas as pd
     from rodlab.fea import compute_compliance
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     out = tmp_path / "s.csv"
     assert main(["sweep", "--L1", "150,300", "--L2", "450,525", "--serial", "-o", str(out)]) == 0
     text = capsys.readouterr().out
@@ -82,7 +82,7 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
     from pathlib import Path
 
     import pandas as pd
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     pytest.importorskip("gmsh")
     refs = json.loads((Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_reference.json").read_text())
     out = tmp_path / "s.csv"

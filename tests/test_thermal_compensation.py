@@ -76,7 +76,7 @@ def test_thermal_compensation_gives_what_a_constant_temperature_gives(warm_campa
 
 
 def test_cli_thermal_needs_temperatures(tmp_path, warm_campaign, capsys):
-    from rodlab.cli.main import main
+    from rodlab.app.cli.main import main
     robot, rod, th, out = warm_campaign
     args = ["calibrate", str(out / "multical.campaign.csv"), "--fixture", str(out / "multical.fixture.json"),
             "--rod", str(out / "rod.compliance.json"), "--thermal", "rod4", "--json", str(tmp_path / "cal.json")]

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from rodlab.cli.cmd_validate import READERS, validate_file
-from rodlab.cli.main import main
+from rodlab.app.cli.cmd_validate import READERS, validate_file
+from rodlab.app.cli.main import main
 from rodlab.schema import FORMATS, check_file, load_schema
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("rodlab/data/robots/*.urdf"),
+SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("calibrate/robots/*.urdf"),
                   *ROOT.glob("benchmarks/data/*/*.csv")])
 
 
@@ -50,9 +50,9 @@ def _mutations(examples):
     comp = json.loads((examples / "rod1.compliance.json").read_text())
     fix = json.loads(next(examples.rglob("*.fixture.json")).read_text())
     rod = (ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml").read_text()
-    plan = (ROOT / "rodlab" / "data" / "rig" / "quick.plan.toml").read_text()
+    plan = (ROOT / "stiffness_rig" / "plans" / "quick.plan.toml").read_text()
     camp = next(examples.rglob("*.campaign.csv")).read_text().splitlines()
-    prof = (ROOT / "rodlab" / "data" / "rig" / "simulator.profile.toml").read_text()
+    prof = (ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml").read_text()
     return {
         "n.profile.toml": prof.replace("index = 1", "index = -1", 1),
         "c.compliance.json": json.dumps({**comp, "method": "fem"}),
@@ -111,7 +111,7 @@ def test_validate_names_unknown_formats_and_missing_files(tmp_path, capsys):
 def test_reader_rules_beyond_the_schema_are_reported(tmp_path, capsys):
     """A plan whose masses repeat passes the schema (no JSON Schema rule says "increasing") but not its reader:
     validate reports the reader's problem with its line."""
-    plan = (ROOT / "rodlab" / "data" / "rig" / "quick.plan.toml").read_text()
+    plan = (ROOT / "stiffness_rig" / "plans" / "quick.plan.toml").read_text()
     p = tmp_path / "same.plan.toml"
     p.write_text(plan.replace("masses_kg = [1.0, 2.0]", "masses_kg = [1.0, 1.0]"))
     assert check_file(p).ok
@@ -128,3 +128,16 @@ def test_output_records_without_a_schema_are_named_not_refused(tmp_path, capsys)
     p.write_text('{"format": "rodlab.run/1", "steps": [}')
     assert main(["validate", str(p)]) == 2
     assert "not valid JSON" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("masses", ["[0.5, inf]", "[nan, 1.0]"])
+def test_plan_refuses_infinite_or_nan_masses_naming_file_and_key(tmp_path, masses):
+    """Found by the reader fuzzing: an infinite mass passed the plan reader and failed later without the file."""
+    from rodlab.stiffness_rig.config import read_plan
+    from rodlab.stiffness_rig.errors import RigError
+    plan = (ROOT / "stiffness_rig" / "plans" / "quick.plan.toml").read_text()
+    p = tmp_path / "m.plan.toml"
+    p.write_text(plan.replace("masses_kg = [1.0, 2.0]", f"masses_kg = {masses}"))
+    with pytest.raises(RigError) as e:
+        read_plan(p)
+    assert e.value.key == "masses_kg" and "m.plan.toml" in str(e.value) and "finite" in str(e.value)

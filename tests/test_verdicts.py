@@ -48,7 +48,7 @@ def test_residual_test_is_chi_square_under_the_noise_model(examples):
 def test_untrusted_calibration_names_the_suspect_and_the_fix(examples, capsys):
     """The displaced clamping position: calibrate exits 3, names fixture_pose at position 1 and the options
     that identify it; re-run with them, the result is trusted."""
-    from rodlab.cli import main
+    from rodlab.app.cli import main
     ex = examples / "campaign-fixture_pose"
     args = ["calibrate", str(ex / "multical.campaign.csv"), "--fixture", str(ex / "multical.fixture.json"),
             "--rod", str(ex / "rod1.compliance.json")]
@@ -64,8 +64,8 @@ def test_uncompensated_rod_is_one_story(examples, tmp_path, capsys):
     """No compensation on a clean campaign: calibrate is trusted (its residuals pass the noise model) and
     notes the rod's uncompensated deflection; diagnose, given the method-none file, names rod_deflection
     (uncompensated), never `consistent`, and its compensation improves the validation."""
-    from rodlab.cli import main
-    from rodlab.diagnose import diagnose_campaign
+    from rodlab.app.cli import main
+    from rodlab.app.diagnose import diagnose_campaign
     from rodlab.calibrate import read_points
     ex = examples / "campaign-null"
     rod = read_compliance(ex / "rod1.compliance.json")
@@ -83,8 +83,8 @@ def test_uncompensated_rod_is_one_story(examples, tmp_path, capsys):
 
 
 def test_every_campaign_effect_has_a_remedy():
-    from rodlab.diagnose.advice import remedy
-    from rodlab.diagnose.report import Finding
+    from rodlab.app.diagnose.advice import remedy
+    from rodlab.app.diagnose.report import Finding
     for eff, loc, params in (("fixture_pose", "position:2", {}), ("rod_deflection", None, {"k": 1.3}),
                              ("rod_deflection", "uncompensated", {}), ("outliers", "points:3,7", {}),
                              ("periodic_joint_error", "joint:2", {}), ("thermal_drift", "time", {}),

@@ -59,8 +59,7 @@ def vocabulary_markdown() -> str:
     rows = ["| effect | physics left out | signature in the data | location | parameters (simulator and report) |",
             "|---|---|---|---|---|"]
     for e, m in RIG_EFFECTS.items():
-        params = ", ".join(f"`{p.name}` [{p.unit}]" if p.kind != "str" else f"`{p.name}` ({' / '.join(p.choices)})"
-                           for p in m.params)
+        params = m.params_markdown()
         where = ", ".join(f"`{loc}`" for loc in m.locations) or "`null`"
         rows.append(f"| `{e.value}` | {m.physics} | {m.signature} | {where} | {params} |")
     return "\n".join(rows)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab.enums import RigEffect
-from rodlab.hypothesis import Hypothesis, ParamSpec
+from rodlab.hypothesis import EffectSchema, Hypothesis
 
 from ..errors import RigError
 
@@ -46,7 +46,7 @@ class RigState:
     t_last: float | None = None
 
 
-class RigEffectModel:
+class RigEffectModel(EffectSchema):
     """One rig effect. Subclasses set the class attributes and override the hooks they need.
 
     effect : its ID; params : its parameters (names and units shared by simulator, report and docs);
@@ -65,42 +65,8 @@ class RigEffectModel:
     structural: bool = False
     locations: tuple = ()
 
-    # -- parameters ------------------------------------------------------------------------------------------
-    def spec(self, name: str) -> ParamSpec:
-        for p in self.params:
-            if p.name == name:
-                return p
-        from rodlab.errors import did_you_mean
-        raise RigError(f"effect {self.effect}: unknown parameter {name!r}; its parameters are "
-                       f"{[p.name for p in self.params]}." + did_you_mean(name, [p.name for p in self.params]),
-                       key=f"{self.effect}.{name}")
-
-    def complete(self, given: dict) -> dict:
-        """The full parameters from those ``given``: defaults filled in, the example magnitude when no number
-        is given, every value checked (:class:`RigError` naming the effect and key)."""
-        out = {p.name: p.default for p in self.params if p.default is not None}
-        parsed = {}
-        for k, v in dict(given).items():
-            spec = self.spec(str(k))
-            try:
-                parsed[spec.name] = spec.parse(v)
-            except ValueError as e:
-                raise RigError(str(e), key=f"{self.effect}.{spec.name}") from None
-        if not any(self.spec(k).kind == "float" and self.spec(k).magnitude for k in parsed):
-            out.update(self.example_for({**out, **parsed}))
-        out.update(parsed)
-        self.check(out)
-        return out
-
-    def example_for(self, p: dict) -> dict:
-        """The example magnitude for parameters ``p`` that size nothing yet."""
-        return dict(self.example)
-
-    def check(self, p: dict) -> None:
-        """Raise :class:`RigError` if the completed parameters ``p`` cannot be simulated."""
-
-    def value(self, p: dict, name: str) -> float:
-        return float(p.get(name, 0.0) or 0.0)
+    def fail(self, message: str, key: str) -> None:
+        raise RigError(message, key=key)
 
     # -- forward model (identity unless overridden) ------------------------------------------------------------
     def compliance(self, C: np.ndarray, p: dict, places: dict) -> np.ndarray:

@@ -1,0 +1,139 @@
+"""What every campaign effect provides: its parameter schema, its part of the campaign simulator (the truth),
+its hypotheses for the diagnosis, how a finding is carried into the re-identification, its wording and its
+remedy. One subclass per effect, one module each.
+
+Simulator hooks, each applied by every active effect in registry order (:func:`rodlab.calibrate.simulate_campaign`):
+
+1. ``true_rod`` — the rod as it really is (the compliance file the calibrator is given stays the nominal one);
+2. ``joint_angles`` — the angles the joints really take for the commanded ones (campaign and validation);
+3. ``reading_offset_W`` — an offset of the measured ball position in {W} that grows with the campaign's time;
+4. ``recorded_fixture`` — the clamping pose as the fixture file records it;
+5. ``corrupt`` — gross errors of single readings in {D}, drawn from a generator of their own.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rodlab.enums import CampaignEffect
+from rodlab.hypothesis import EffectSchema, Hypothesis
+
+from ..errors import CalibrationError
+
+__all__ = ["CampaignEffectModel", "CampaignContext", "Refit", "hypothesis"]
+
+
+@dataclass(frozen=True)
+class CampaignContext:
+    """What campaign hypotheses are built from: the identified model and the campaign it was fitted to.
+
+    robot : the robot model; result : the identification (:class:`~rodlab.calibrate.CalibrationResult`);
+    obs : its observations (:class:`~rodlab.calibrate.identify.Observations`, {W} [mm], [rad], [N]);
+    position : shape=(N,) clamping position of each point; labels : N point labels ``position.point``;
+    time_s, temp_C : shape=(N,) or None, the campaign's time [s] and temperature [degC] columns;
+    rod : the compliance file the campaign was calibrated with (None: no rod);
+    frames : the identified model's ball-position frames at the campaign points
+    (:func:`~rodlab.calibrate.kinematics.ball_positions`)
+    """
+
+    robot: object
+    result: object
+    obs: object
+    position: np.ndarray
+    labels: list
+    time_s: np.ndarray | None
+    temp_C: np.ndarray | None
+    rod: object
+    frames: object
+
+    @property
+    def n_points(self) -> int:
+        return int(self.obs.x_W_mm.shape[0])
+
+
+@dataclass
+class Refit:
+    """What the re-identification with the found physics takes from the findings.
+
+    rod : the compliance file to compensate with; freed : parameter names freed (fixture offsets);
+    keep : shape=(N,) bool, points kept (outliers dropped); joint_corrections_rad : {joint index (0-based):
+    (a_sin, a_cos) [rad]} once-per-revolution errors added to the joint angles (also at validation points);
+    obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
+    points referred back to the campaign start)
+    """
+
+    rod: object
+    freed: set = field(default_factory=set)
+    keep: np.ndarray | None = None
+    joint_corrections_rad: dict = field(default_factory=dict)
+    obs_edits: list = field(default_factory=list)
+
+
+def hypothesis(effect, location, names, H, explanation, **kw) -> Hypothesis:
+    """A campaign hypothesis: columns over the 3 N coordinates of the residual, fitted without bounds."""
+    k = H.shape[1]
+    return Hypothesis(effect, location, names, H, np.full(k, -np.inf), np.full(k, np.inf), explanation, **kw)
+
+
+class CampaignEffectModel(EffectSchema):
+    """One campaign effect. Subclasses set the class attributes and override the hooks they need.
+
+    effect : its ID; params : its simulator parameters (names and units shared with docs and CLI); example :
+    the parameters ``--effect NAME`` gives when no magnitude is stated; physics : what is left out; signature :
+    how it shows in the residuals; locations : its location keys in a diagnosis; reported : the parameters a
+    finding reports (Markdown, for the docs table); per_point : its candidates are
+    single points that do not use up the diagnosis' model terms (outliers)
+    """
+
+    effect: CampaignEffect
+    physics: str = ""
+    signature: str = ""
+    locations: tuple = ()
+    reported: str = ""
+    per_point: bool = False
+
+    def fail(self, message: str, key: str) -> None:
+        raise CalibrationError(message, key=key)
+
+    # -- simulator (identity unless overridden) -----------------------------------------------------------------
+    def check_layout(self, positions: int, points: int, p: dict) -> None:
+        """Fail if the parameters do not fit a campaign of ``positions`` clamping positions and ``points``
+        points (checked before anything is written)."""
+
+    def true_rod(self, rod, p: dict):
+        return rod
+
+    def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
+        return q_rad
+
+    def reading_offset_W(self, pW: np.ndarray, time_s: np.ndarray, base_W: np.ndarray, p: dict):
+        """Offset [mm] in {W} of the measured points ``pW`` (m, 3) at times ``time_s``, or None."""
+        return None
+
+    def recorded_fixture(self, j: int, pose: np.ndarray, p: dict) -> np.ndarray:
+        return pose
+
+    def corrupt(self, xD: np.ndarray, labels: list, rng: np.random.Generator, p: dict) -> tuple[np.ndarray, dict]:
+        """Readings (N, 3) in {D} with gross errors, and what was done (for the truth file)."""
+        return xD, {}
+
+    def truth(self, p: dict) -> dict:
+        """Keys this effect adds to ``truth.json`` besides its parameters (older truth keys)."""
+        return {}
+
+    # -- diagnosis ------------------------------------------------------------------------------------------------
+    def hypotheses(self, ctx: CampaignContext) -> list[Hypothesis]:
+        """Candidate terms of this effect for the identified campaign ``ctx``."""
+        return []
+
+    def point_hypothesis(self, i: int, ctx: CampaignContext) -> Hypothesis | None:
+        """per_point effects: the candidate at point ``i`` (columns not whitened)."""
+        return None
+
+    def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
+        """Carry a finding (its location and reported parameters) into the re-identification ``fit``."""
+
+    def remedy(self, location: str, parameters: dict) -> str:
+        """One sentence: what to do about a finding of this effect."""
+        return f"see docs/diagnose.md for {self.effect}"

@@ -1,0 +1,93 @@
+"""``rod_deflection``: the rod's deflection is compensated with the wrong compliance (or not at all)."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.enums import CampaignEffect
+from rodlab.hypothesis import ParamSpec
+
+from ..compensation import deflection_offsets
+from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+
+__all__ = ["RodDeflection", "generic_rod"]
+
+
+def generic_rod(rod: RodCompliance) -> RodCompliance:
+    """A stand-in compliance for a rod known only by its tool vector and mass (a file with method ``none``):
+    the built-in steel rod 4# with L1 / L2 taken from the tool vector's z / x, its closed form. Only its
+    shape serves: the hypothesis scales its gravity and force parts separately."""
+    from rodlab.calc import calc_rod_compliance
+    from rodlab.design_io import resolve_design
+    x, _, z = (float(v) for v in rod.tool_mm)
+    d = replace(resolve_design("rod4"), L1_mm=min(max(z, 120.0), 900.0), L2_mm=min(max(abs(x), 150.0), 900.0),
+                name="generic")
+    c = calc_rod_compliance(d)
+    return replace(rod, method=c.method, C_F=c.C_F, C_g=c.C_g * (rod.mass_kg / c.mass_kg if c.mass_kg > 0 else 1.0))
+
+
+def scaled_rod(rod: RodCompliance, k: float, **provenance) -> RodCompliance:
+    """``rod`` with both compliances (and r_rod) times ``k``."""
+    return RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm, rod.tool_mm,
+                         rod.r_rod * k, dict(rod.provenance, **provenance) if provenance else rod.provenance)
+
+
+class RodDeflection(CampaignEffectModel):
+    effect = CampaignEffect.ROD_DEFLECTION
+    params = (ParamSpec("k", "-", "the true rod's compliance over the file's (both C_F and C_g)"),)
+    example = {"k": 1.5}
+    physics = "the compliance file does not match the rod (wrong method, wrong r_rod, another rod) or is zero"
+    signature = "the residuals follow R_T^W (C_g g + C_F F), the compensated deflection, scaled"
+    locations = ("null", "uncompensated")
+    reported = ("`k` [-] (the true compliance over the file's); at `uncompensated` (the file's matrices are zero; "
+                "shape of a generic steel rod fitted to the tool vector): `k_gravity`, `k_force` [-]")
+
+    def check(self, p: dict) -> None:
+        if not p["k"] > 0:
+            self.fail(f"effect {self.effect}: k must be > 0 (a compliance ratio), got {p['k']}", f"{self.effect}.k")
+
+    def true_rod(self, rod, p: dict):
+        k = float(p["k"])
+        return RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm, rod.tool_mm,
+                             rod.r_rod * k)
+
+    def hypotheses(self, ctx: CampaignContext) -> list:
+        rod, obs = ctx.rod, ctx.obs
+        if rod is None:
+            return []
+        N = ctx.n_points
+        defl = deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, rod)
+        if not np.any(defl):
+            return [self._uncompensated(ctx)]
+        return [hypothesis(self.effect, None, ["k"], defl.reshape(3 * N, 1),
+                           "the rod's deflection is compensated with the wrong compliance: residuals follow "
+                           "R_T^W (C_g g^T + C_F F^T) scaled by a factor", report_offset=[1.0])]
+
+    def _uncompensated(self, ctx: CampaignContext):
+        """The compliance file's matrices are zero: the residuals follow a rod's deflection (gravity and
+        contact-force parts scaled separately) that nothing compensated."""
+        g, obs = generic_rod(ctx.rod), ctx.obs
+        cols = [deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(g, C_F=0 * g.C_F)),
+                deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(g, C_g=0 * g.C_g))]
+        H = np.stack([c.reshape(-1) for c in cols], axis=1)
+        return hypothesis(self.effect, "uncompensated", ["k_gravity", "k_force"], H,
+                          "the rod's deflection is not compensated (the compliance file has zero matrices): the "
+                          "residuals follow a cantilever's deflection under its weight and the contact force")
+
+    def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
+        if location == "uncompensated":
+            g = generic_rod(ctx.rod)
+            fit.rod = replace(g, C_F=g.C_F * parameters["k_force"], C_g=g.C_g * parameters["k_gravity"])
+        else:
+            k = parameters["k"]
+            fit.rod = scaled_rod(ctx.rod, k, diagnosis_scale=k)
+
+    def remedy(self, location: str, parameters: dict) -> str:
+        k = parameters.get("k")
+        if k is None:
+            return ("the rod's deflection is not compensated: calibrate with the rod's compliance file "
+                    "(`--rod FILE --compensation file`; `rodlab fea` or `rodlab rig fit` make one)")
+        return (f"the compliance file is off by a factor {k:.3g}: measure the rod on the stiffness rig "
+                "(`rodlab rig fit` writes a measured file) and calibrate with that file")

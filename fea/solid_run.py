@@ -1,0 +1,60 @@
+"""One solid run and what is made from it: the compliance, the frame's joint calibration, the deformed-shape
+figure. ``rodlab fea --model solid``, the demo and the design study's family calibration all call
+:func:`run_solid` (they only parse, call and print)."""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rodlab.compliance import RodCompliance
+from rodlab.design import RodDesign
+
+from .compute import Mesher, solid_compliance
+from .joints import JointCalibration, calibrate_joints
+from .solid import SolidResult
+
+__all__ = ["SolidRun", "run_solid"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class SolidRun:
+    """A solid FEA run of one design.
+
+    compliance : C_F [mm/N] and C_g [mm/g0] in {T} (method ``fea``); result : the solid solution (mesh,
+    displacements of the unit load cases when kept); joints : the frame's joint calibration on this run, or
+    None when not asked; figures : the figures written, in order
+    """
+
+    compliance: RodCompliance
+    result: SolidResult
+    joints: JointCalibration | None = None
+    figures: list[Path] = field(default_factory=list)
+
+
+def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None, error_estimate: bool = True,
+              symmetry: bool = True, joints: bool = False, deformed_png: str | Path | None = None,
+              backend: str | None = None) -> SolidRun:
+    """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`); with ``joints``
+    calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.calibrate_joints`); with
+    ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange)."""
+    comp, res = solid_compliance(design, mesher, size_mm=size_mm, error_estimate=error_estimate,
+                                 keep_displacements=bool(deformed_png) or joints, symmetry=symmetry,
+                                 tip_moments=joints, backend=backend)
+    run = SolidRun(comp, res)
+    if deformed_png:
+        run.figures.append(_deformed_figure(design, res, deformed_png))
+    if joints:
+        run.joints = calibrate_joints(design, res)
+        log.info("joint calibration of %s: span fit residual %.2f %%", design.name, 100 * run.joints.span_residual)
+    return run
+
+
+def _deformed_figure(design: RodDesign, res: SolidResult, path) -> Path:
+    from .plot import render_deformed
+    U = res.displacements.copy()
+    U[:, 5] *= -1.0                                     # gravity along -z_T, as on a vertical flange
+    return render_deformed(res.rod_mesh, U, path, case=5, title=f"rod {design.name}: self-weight, gravity along -z_T",
+                           load_label="self-weight, 1 g0 along -z_T")

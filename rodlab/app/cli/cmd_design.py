@@ -1,0 +1,95 @@
+"""``rodlab info`` and ``rodlab compliance``: inspect a design, compute its closed-form compliance."""
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from ...calc import BendModel, calc_rod_compliance
+from ...compliance import RodCompliance, write_compliance
+from ...design_io import resolve_design
+from ...enums import Method
+from ...massprops import mass_properties, part_mass_properties
+from .reporting import add_report_option, write_command_report
+
+__all__ = ["register"]
+
+_DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6 (the paper's rods 1# .. 6#)"
+
+
+def register(sub) -> None:
+    p = sub.add_parser("info", help="print a rod design, its parts, mass, centre of mass and c_rod",
+                       description="Print a rod design: parts, mass properties (analytic) and the closed-form "
+                                   "compliance with c_rod (paper Eq. 23).")
+    p.add_argument("design", help=_DESIGN_HELP)
+    p.add_argument("--json", action="store_true", help="print machine-readable JSON instead of text")
+    p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser("compliance", help="compute a rod's compliance file (closed form)",
+                       description="Compute C_F and C_g of a rod design and write a *.compliance.json "
+                                   "(contract rodlab.compliance/1). For finite elements use `rodlab fea`.")
+    p.add_argument("design", help=_DESIGN_HELP)
+    p.add_argument("--method", choices=["calc", "none"], default="calc",
+                   help="calc: closed-form Euler-Bernoulli frame (paper Eqs. 15/17 generalised); "
+                        "none: zero matrices (no compensation)")
+    p.add_argument("--bend", choices=[m.value for m in BendModel], default="arc",
+                   help="bend model of the closed form: arc (curved beam) or corner (sharp-corner idealisation)")
+    p.add_argument("--shear", action="store_true", help="add Timoshenko shear flexibility")
+    p.add_argument("-o", "--output", help="output file (default: NAME.compliance.json in the current folder)")
+    add_report_option(p)
+    p.set_defaults(func=cmd_compliance)
+
+
+def _fmt_matrix(a: np.ndarray, unit: str) -> str:
+    rows = ["  [" + "  ".join(f"{v:+.6f}" for v in row) + "]" for row in a]
+    return "\n".join(rows) + f"   {unit}"
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    design = resolve_design(args.design)
+    parts = part_mass_properties(design)
+    total = mass_properties(design)
+    comp = calc_rod_compliance(design)
+    if args.json:
+        out = {"design": design.summary(), "tool_mm": design.tool_mm.tolist(),
+               "parts": {str(p): m.to_dict() for p, m in parts.items()}, "total": total.to_dict(),
+               "calc": comp.to_dict()}
+        print(json.dumps(out, indent=1))
+        return 0
+    s = design.summary()
+    print(f"rod {design.name}" + (f"  ({design.source})" if design.source else ""))
+    print(f"  L1 = {design.L1_mm:g} mm, L2 = {design.L2_mm:g} mm, gamma = {design.gamma_deg:g} deg; "
+          f"tool point in {{6}} = [{', '.join(f'{v:.3f}' for v in design.tool_mm)}] mm")
+    print(f"  {'part':<12} {'material':<12} {'OD mm':>7} {'wall/len mm':>11} {'mass g':>9}  COM in {{T}} mm")
+    rows = {"pipe_I": s["pipe_I"], "pipe_II": s["pipe_II"], "bend": s["bend"], "ring_1": s["rings"],
+            "ring_2": s["rings"], "pipe_holder": s["pipe_holder"], "ball_holder": s["ball_holder"],
+            "ball": s["ball"]}
+    for part, mp in parts.items():
+        info = rows[str(part)]
+        size = info.get("wall_mm", info.get("length_mm", ""))
+        od = info.get("outer_diameter_mm", info.get("diameter_mm"))
+        com = ", ".join(f"{round(v, 2) + 0.0:8.2f}" for v in mp.com_T_mm)
+        print(f"  {str(part):<12} {info['material']:<12} {od:>7g} {size!s:>11} {1e3 * mp.mass_kg:>9.2f}  [{com}]")
+    print(f"  total mass {total.mass_kg * 1e3:.2f} g, COM in {{T}} = "
+          f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm")
+    print("  closed-form C_F (force on ball -> ball displacement, {T}):")
+    print(_fmt_matrix(comp.C_F, "mm/N"))
+    print("  closed-form C_g (gravity in {T} -> ball displacement):")
+    print(_fmt_matrix(comp.C_g, "mm/g0"))
+    print(f"  c_rod (Eq. 23) = {comp.c_rod_um:.1f} um")
+    return 0
+
+
+def cmd_compliance(args: argparse.Namespace) -> int:
+    design = resolve_design(args.design)
+    comp = calc_rod_compliance(design, bend=BendModel(args.bend), shear=args.shear)
+    if args.method == Method.NONE.value:
+        comp = RodCompliance.none_like(comp)
+    out = args.output or f"{design.name.replace('#', '')}.compliance.json"
+    if not args.output and not out[0].isalpha():
+        out = f"rod{out}"
+    path = write_compliance(comp, out)
+    print(f"wrote {path}: method {comp.method}, c_rod = {comp.c_rod_um:.1f} um, mass = {comp.mass_kg * 1e3:.1f} g")
+    write_command_report(args, [path], path.parent)
+    return 0

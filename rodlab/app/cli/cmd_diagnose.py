@@ -1,0 +1,122 @@
+"""``rodlab diagnose``: name the physics that simulation and recordings disagree on."""
+from __future__ import annotations
+
+import argparse
+
+from ...compliance import read_compliance, write_compliance
+from ...errors import RodlabError
+from ...units import DEVICE_NOISE_MM
+from .argtypes import pos_float
+from .reporting import add_report_option, default_folder, write_command_report
+from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("diagnose", help="locate and explain the mismatch between simulation and recordings",
+                       description="Rig: a recording against the simulated compliance of its rod. Campaign: "
+                                   "calibration residuals against the identified model. Findings use the effect "
+                                   "vocabulary of the contract (friction, tare, creep, nonlinearity, crosstalk, "
+                                   "drift, compliance_scale, torsion_compliance, joint_compliance; fixture_pose, "
+                                   "rod_deflection, periodic_joint_error, thermal_drift, outliers; unexplained).")
+    p.add_argument("--rig", help="*.rig.csv recording")
+    p.add_argument("--sim", help="rig: the simulated compliance file")
+    p.add_argument("--campaign", help="*.campaign.csv")
+    p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
+                                    "joint angle, approach direction, measurement order and workspace region")
+    p.add_argument("--fixture", help="campaign: *.fixture.json")
+    add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
+    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
+    p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
+    p.add_argument("--noise-um", type=pos_float, default=None,
+                   help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
+                        "(default: the file's sigma_*_mm columns, else 25, a laser tracker)")
+    p.add_argument("--json", help="write the contract's diagnosis report")
+    p.add_argument("--png", help="folder for figures")
+    p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
+    add_report_option(p)
+    p.set_defaults(func=cmd_diagnose)
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
+    written: list = []
+    if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
+        raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
+                          "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")
+    if args.points:
+        return _diagnose_points(args)
+    if args.rig:
+        from rodlab.stiffness_rig import read_recording
+        if not args.sim:
+            raise RodlabError("--rig needs --sim SIM.compliance.json")
+        sim = read_compliance(args.sim)
+        design = None
+        if args.rod:
+            from ...design_io import resolve_design
+            design = resolve_design(args.rod)
+        rec = read_recording(args.rig)
+        diag, model = diagnose_rig(rec, sim, design)
+        print(diag.summary())
+        if args.png:
+            from ..diagnose.plots import plot_rig_diagnosis
+            for p in plot_rig_diagnosis(model, args.png, diag, rec.rod):
+                written.append(p)
+                print(f"wrote {p}")
+        if args.export:
+            written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
+            print(f"wrote {written[-1]}")
+    else:
+        from rodlab.calibrate import read_campaign, read_fixture, read_points
+        if not (args.fixture and args.rod):
+            raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
+        robot = robot_from_args(args)
+        noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
+        pts = read_points(args.validate, robot.n) if args.validate else None
+        diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
+                                       read_compliance(args.rod), noise_mm, pts)
+        print(diag.summary())
+        if "validation" in diag.extra:
+            v = diag.extra["validation"]
+            print(f"  validation mean / max [mm]: nominal {v['nominal']['mean_mm']:.3f} / {v['nominal']['max_mm']:.3f}, "
+                  f"calibrated {v['before']['mean_mm']:.3f} / {v['before']['max_mm']:.3f}, with the found physics "
+                  f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
+        if args.png:
+            from ..diagnose.plots import plot_campaign_diagnosis
+            for p in plot_campaign_diagnosis(diag, fits, args.png, noise_mm):
+                written.append(p)
+                print(f"wrote {p}")
+    if args.json:
+        written.insert(0, diag.write(args.json))
+        print(f"wrote {written[0]}")
+    else:
+        from ..report import Source
+        report = diag.to_dict()
+        written.insert(0, Source(report["format"], report))
+    write_command_report(args, written, default_folder(args))
+    return 0
+
+
+def _diagnose_points(args) -> int:
+    """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.points import identify_points, stated_noise_mm
+
+    from ..diagnose.points import diagnose_points
+    from ...fileio import atomic_write_json, json_safe
+    robot = robot_from_args(args)
+    pts = read_points(args.points, robot.n)
+    pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
+    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True)
+    diag = diagnose_points(robot, pts, res, noise_mm)
+    print(diag.summary())
+    report = json_safe(diag.to_dict())
+    if args.json:
+        written = [atomic_write_json(args.json, report)]
+        print(f"wrote {written[-1]}")
+    else:
+        from ..report import Source
+        written = [Source(report["format"], report)]
+    write_command_report(args, written, default_folder(args))
+    return 0

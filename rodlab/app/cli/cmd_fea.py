@@ -1,0 +1,93 @@
+"""``rodlab fea``: compliance of a design by the solid FEA, the frame model or the closed form."""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from ...compliance import write_compliance
+from ...design_io import resolve_design
+from ...errors import RodlabError
+from .argtypes import pos_float
+from .reporting import add_report_option, write_command_report
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("fea", help="compute C_F and C_g by solid FEA (reference), beam frame or closed form",
+                       description="Compute the compliance file of a rod design. solid: 3-D elasticity on the CAD "
+                                   "mesh (scikit-fem, curved P2, transversely-isotropic carbon; needs the cad "
+                                   "extra); frame: Timoshenko beam frame with pipe-bend flexibility (fast); "
+                                   "calc: the closed form.")
+    p.add_argument("design", help="a *.rod.toml file, or a built-in design: rod1 .. rod6")
+    p.add_argument("-o", "--output", required=True, help="output *.compliance.json")
+    p.add_argument("--model", choices=["solid", "frame", "calc"], default="solid")
+    p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
+                   "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
+                   "changes, at most 2.1 x wall in the bend)")
+    p.add_argument("--no-error-estimate", action="store_true",
+                   help="solid: skip the second (coarser) solve for the Richardson error estimate")
+    p.add_argument("--no-symmetry", action="store_true",
+                   help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
+    p.add_argument("--png", default=None, help="solid: write the deformed shape (self-weight along -z_T) to this PNG")
+    p.add_argument("--joints-out", default=None, metavar="FILE",
+                   help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
+                        "frame runs and sweeps of the design's family (--joints)")
+    p.add_argument("--joints", default=None, metavar="FILE",
+                   help="frame: joint-calibrated by a *.joints.json of the design's family (same parts, any L1 / "
+                        "L2): within ~0.3 %% of the solid model")
+    add_report_option(p)
+    p.set_defaults(func=cmd_fea)
+
+
+def cmd_fea(args: argparse.Namespace) -> int:
+    from rodlab.fea import FeaModel, compute_compliance
+    design = resolve_design(args.design)
+    t0 = time.perf_counter()
+    if args.model == FeaModel.SOLID.value:
+        from .cmd_geometry import require_cad
+        mesher = require_cad().mesh_rod
+        if args.joints:
+            raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
+        from rodlab.fea import run_solid
+        run = run_solid(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
+                        symmetry=not args.no_symmetry, joints=bool(args.joints_out), deformed_png=args.png)
+        comp, res = run.compliance, run.result
+        prov = comp.provenance
+        print(f"solid FEA of rod {design.name}: {prov['dofs']} DOFs ({prov['mesh']['elements']} curved tet10"
+              f"{', half model' if res.rod_mesh.is_half else ''}), "
+              f"solver {prov['solver']}, symmetry defect of C_F {prov['symmetry_defect_C_F']:.1e}")
+        if "discretisation_error" in prov:
+            e = prov["discretisation_error"]
+            print(f"  estimated discretisation error: {100 * e['max_relative_C_F']:.3f} % of max|C_F|, "
+                  f"{100 * e['max_relative_C_g']:.3f} % of max|C_g|")
+        for fig in run.figures:
+            print(f"  wrote {fig}")
+        if run.joints is not None:
+            from rodlab.fea.joints_io import write_joints
+            jc = run.joints
+            out = write_joints(args.joints_out, jc, {"solid_dofs": prov["dofs"], "mesh_sha256": prov["mesh"]["sha256"]})
+            print(f"  joint calibration (sections {jc.margins_mm[0]:.1f} / {jc.margins_mm[1]:.1f} mm from the free "
+                  f"tubes' ends, span fit residual {100 * jc.span_residual:.2f} %): wrote {out}")
+    else:
+        if args.png or args.size is not None or args.no_symmetry or args.joints_out:
+            raise RodlabError("--png, --size, --no-symmetry and --joints-out apply to --model solid only")
+        calibration = None
+        if args.joints:
+            if args.model != FeaModel.FRAME.value:
+                raise RodlabError("--joints applies to --model frame")
+            from rodlab.fea.joints_io import read_joints
+            calibration = read_joints(args.joints)
+        comp = compute_compliance(design, args.model, **({"calibration": calibration} if calibration else {}))
+        for note in comp.provenance.get("outside_calibrated_range") or []:
+            print(f"  note: {note}; check this design with --model solid, or calibrate the frame on it "
+                  "(rodlab sweep --calibrate)")
+    path = write_compliance(comp, args.output)
+    np.set_printoptions(precision=6, suppress=True)
+    print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")
+    print(f"  c_rod = {comp.c_rod_um:.1f} um ({time.perf_counter() - t0:.1f} s); wrote {path}")
+    written = [path] + [p for p in (args.png, args.joints_out) if p]
+    write_command_report(args, written, path.parent)
+    return 0

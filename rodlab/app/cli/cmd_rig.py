@@ -1,0 +1,224 @@
+"""``rodlab rig fit|simulate|acquire``: the stiffness rig (core install only; no CAD stack needed)."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+import numpy as np
+
+from ...compliance import read_compliance, write_compliance
+from .argtypes import count, nonneg_float, pos_float, seed
+from .reporting import add_report_option, write_command_report
+from .effectargs import effects_help, parse_effect_specs
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    rig = sub.add_parser("rig", help="stiffness rig: acquire, simulate and fit recordings",
+                         description="The stiffness rig of the paper (Fig. 7): hang weights on the rod, record the "
+                                     "ball's displacement, fit the compliance.")
+    rsub = rig.add_subparsers(dest="rig_command", metavar="RIG_COMMAND")
+    p = rsub.add_parser("fit", help="fit a recording: measured C_F, r_rod (Eq. 21), measured compliance file",
+                        description="Hold averages, one line per load axis and branch, intercepts in kg, measured "
+                                    "C_F, r_rod against the simulated compliance, C_g = r_rod C_g_sim (Eq. 22).")
+    p.add_argument("recording", help="*.rig.csv")
+    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc)")
+    p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
+    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
+    p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
+    add_report_option(p)
+    p.set_defaults(func=cmd_fit)
+    p = rsub.add_parser("simulate", help="write a recording from the rig's physical model (no hardware)",
+                        formatter_class=argparse.RawDescriptionHelpFormatter,
+                        description="Simulate the stiffness rig on a rod with a known compliance and optional "
+                                    "effects, the contract's protocol by default. Effects and their parameters "
+                                    "(defaults: a typical magnitude):\n" + rig_effects_help())
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                   help="add an effect, e.g. friction:F_f_N=0.3, creep:phi=0.03,tau_s=5 or "
+                        "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6 (repeatable)")
+    p.add_argument("--design", default=None, help="the rod's design (*.rod.toml or a built-in name) to place "
+                                                  "joint springs exactly (default: guessed from the tool vector)")
+    p.add_argument("--axes", default="y,z,x", help="load axes in order (default y,z,x)")
+    p.add_argument("--masses", default="0.5,1.0,1.5,2.0", help="masses [kg] (default 0.5,1.0,1.5,2.0)")
+    p.add_argument("--repeats", type=count, default=5)
+    p.add_argument("--hold-s", type=pos_float, default=8.0)
+    p.add_argument("--rate-hz", type=pos_float, default=10.0)
+    p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("-o", "--output", required=True, help="*.rig.csv")
+    p.set_defaults(func=cmd_simulate)
+    p = rsub.add_parser("acquire", help="record a plan from the rig (prompts the operator or commands a loader)",
+                        description="Run an acquisition plan on the rig described by the profile; every sample is "
+                                    "appended and flushed as it arrives; re-running the same command resumes after "
+                                    "the last complete hold.")
+    p.add_argument("--profile", required=True, help="rig profile TOML (port, protocol, channels)")
+    p.add_argument("--plan", required=True, help="acquisition plan TOML (axes, masses, repeats, holds)")
+    p.add_argument("-o", "--output", required=True, help="*.rig.csv (appended to; resumable)")
+    p.add_argument("--non-interactive", action="store_true",
+                   help="command the loader of the profile instead of prompting the operator")
+    p.add_argument("--new-file", action="store_true",
+                   help="never continue an existing file: record into the next free name beside it (run-2.rig.csv)")
+    p.set_defaults(func=cmd_acquire)
+    p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
+                        description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
+                                    "commandable loader on a pty, published at --link; point a profile's port at it.")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--protocol", choices=["query", "stream"], default="query")
+    p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
+                   help="add an effect (as for rig simulate; repeatable)")
+    p.add_argument("--design", default=None, help="the rod's design, to place joint springs exactly")
+    p.add_argument("--checksum", choices=["none", "xor"], default="none")
+    p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
+    p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
+    p.set_defaults(func=cmd_simulator)
+    rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+    rec = read_recording(args.recording)
+    sim = read_compliance(args.sim)
+    fit = fit_recording(rec, sim, robust=args.robust)
+    if not fit.success:
+        from ...errors import RodlabError
+        raise RodlabError(f"{args.recording}: {fit.message}")
+    comp = fit.compliance(sim, rec)
+    print(f"rod {rec.rod}: {len(fit.holds)} holds, noise {fit.noise_mm * 1e3:.2f} um per reading")
+    from rodlab.stiffness_rig.plot import format_pm, format_zero
+    print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
+    for ln in fit.lines:
+        z = ln.zero_load_kg
+        zeros = f"{format_zero(z['load'])} / {format_zero(z['unload'])}"
+        print(f"  {ln.axis.value:>5} {'xyz'[ln.component]:>4} "
+              f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
+              f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
+    print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
+    np.set_printoptions(precision=6, suppress=True)
+    print(f"  measured C_F [mm/N] =\n{comp.C_F}")
+    written = [write_compliance(comp, args.output)]
+    print(f"  wrote {written[0]}")
+    if args.png:
+        written.append(plot_fit(fit, args.png, sim, title=f"rod {rec.rod}"))
+        print(f"  wrote {written[-1]}")
+    write_command_report(args, written, written[0].parent)
+    return 0
+
+
+def parse_effects(specs: list[str]) -> dict:
+    """``NAME[:key=value,...]`` -> {name: given parameters}, checked against the rig effect registry
+    (:data:`rodlab.stiffness_rig.effects.RIG_EFFECTS`)."""
+    from rodlab.stiffness_rig.effects import rig_effect
+    return dict(parse_effect_specs(specs, rig_effect))
+
+
+def rig_effects_help() -> str:
+    from rodlab.stiffness_rig.effects import RIG_EFFECTS
+    return effects_help(RIG_EFFECTS)
+
+
+def _places(sim, args) -> dict:
+    """Where joint springs sit on the rod: from ``--design`` when given, else guessed from the tool vector."""
+    from rodlab.stiffness_rig.effects import joint_places
+    design = None
+    if getattr(args, "design", None):
+        from ...design_io import resolve_design
+        design = resolve_design(args.design)
+    return joint_places(sim.tool_mm, design)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from rodlab.stiffness_rig.model import LoadSchedule, RigModel
+    from rodlab.stiffness_rig.simulate import simulate_recording
+
+    from ...errors import RodlabError
+    sim = read_compliance(args.sim)
+    effects = parse_effects(args.effect)
+    try:
+        masses = tuple(float(m) for m in args.masses.split(","))
+        axes = tuple(a.strip() for a in args.axes.split(","))
+        from ...enums import LoadAxis
+        for a in axes:
+            LoadAxis.parse(a, "load axis")
+    except ValueError as e:
+        raise RodlabError(f"--masses / --axes: {e}") from e
+    proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
+    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args))
+    stated = {str(e): p for e, p in model.effects.items()}
+    path = simulate_recording(model, proto, args.output, rod=sim.rod,
+                              extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})
+    print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {stated or 'none'}")
+    return 0
+
+
+def cmd_acquire(args: argparse.Namespace) -> int:
+    import sys
+    from rodlab.stiffness_rig.acquire import acquire
+    from rodlab.stiffness_rig.config import read_plan, read_profile
+    from rodlab.stiffness_rig.resume import next_free_name, resume_point
+    profile, plan = read_profile(args.profile), read_plan(args.plan)
+    output = args.output
+    if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
+        output = str(next_free_name(output))
+        print(f"{args.output} exists; recording into {output}")
+    start = resume_point(output, profile, plan)              # refuses another plan, rate or device up front
+    if start.complete:
+        print(f"{output} already holds all {start.holds_total} holds of this plan; nothing to record")
+        return 0
+    if start.resuming:
+        print(f"resuming after hold {start.holds_done}/{start.holds_total} (plan {plan.path}, {output})")
+
+    def operator(prompt: str) -> None:
+        if not sys.stdin or not sys.stdin.isatty():
+            from ...errors import RodlabError
+            raise RodlabError("no terminal to prompt the operator; use --non-interactive with a [loader]")
+        input(f"\n{prompt} ")
+
+    from ...progress import progress as bar_of
+    bar = bar_of(total=None, desc="rig acquisition", unit="hold")
+
+    def progress(st) -> None:                      # tqdm's estimate of the plan's remaining time from its rate
+        if bar.total != st.holds_total:
+            bar.total = st.holds_total
+        bar.update(st.holds_done - bar.n)
+        bar.set_postfix_str(f"{st.label}; {st.samples} samples, {st.garbage} garbage lines, {st.reconnects} "
+                            f"reconnects")
+    try:
+        with bar:
+            out = acquire(profile, plan, output, operator=None if args.non_interactive else operator,
+                          progress=progress, use_loader=args.non_interactive)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: every sample so far is in {output}; re-run the same command (-o {output}) to resume")
+        return 130
+    print(f"\nwrote {out}")
+    return 0
+
+
+def cmd_simulator(args: argparse.Namespace) -> int:
+    import signal
+    import time
+    from pathlib import Path
+
+    from rodlab.stiffness_rig.model import RigModel
+    from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
+    sim = read_compliance(args.sim)
+    model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
+    dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
+                       faults=Faults(garbage=args.garbage))
+    def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
+        raise KeyboardInterrupt
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, stop)
+    with dev:
+        print(f"simulated rig of rod {sim.rod} on {dev.port} ({args.protocol}, 3 gauges in um + temperature; "
+              f"loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop", flush=True)
+        t0 = time.monotonic()
+        try:
+            while not args.seconds or time.monotonic() - t0 < args.seconds:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            pass
+    return 0

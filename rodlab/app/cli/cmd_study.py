@@ -1,0 +1,143 @@
+"""``rodlab study``: from rod designs to the calibration accuracy each will give on a robot."""
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ...design_io import resolve_design
+from ...errors import RodlabError
+from .argtypes import count, nonneg_float, seed
+from .reporting import add_report_option, write_command_report
+from .robotargs import add_robot_options, robot_from_args
+
+__all__ = ["register"]
+
+_METHODS = ("none", "calc", "fea", "meas")
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "study", help="predict each rod design's calibration accuracy on a robot (Monte-Carlo; Pareto, budget)",
+        description="For every design (an L1 x L2 grid around one base, with tube-material and tube-size variants, "
+                    "or a list of designs): compliance (the frame, joint-calibrated on one solid FEA run per family), "
+                    "mass, c_rod, thermal growth, natural frequencies, strength margins; pose planning on the robot "
+                    "(O1..O5); then N simulated MultiCal campaigns, each calibrated with every compensation method and "
+                    "validated, give the predicted accuracy with its 90 %% band and error budget. Writes study.csv, "
+                    "pareto.png, heatmaps.png (grids), study.html and study.json into OUTPUT; prints a "
+                    "recommendation. Cached per design and replicate: a re-run resumes.")
+    p.add_argument("designs", nargs="+", help="*.rod.toml files or built-in names (rod1 .. rod6); with --L1/--L2 "
+                                              "one base design")
+    p.add_argument("--L1", default=None, help="START:STOP:STEP or a,b,c [mm] (a grid around the base)")
+    p.add_argument("--L2", default=None, help="START:STOP:STEP or a,b,c [mm]")
+    p.add_argument("--materials", default=None, help="tube-material variants of the base, e.g. cfrp,steel_304")
+    p.add_argument("--tubes", default=None, help="tube-size variants of the base, OUTERxWALL [mm], e.g. 25x2,30x1.5")
+    add_robot_options(p)
+    p.add_argument("--fixture", default=None,
+                   help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
+                        "{W}, 650 mm in front of the robot)")
+    p.add_argument("--replicates", type=count, default=20, help="simulated campaigns per design (default 20)")
+    p.add_argument("--methods", default=",".join(_METHODS), help="compensation methods (default none,calc,fea,meas)")
+    p.add_argument("--orientations", type=count, default=6, help="rod orientations per clamping position (default 6)")
+    p.add_argument("--seed", type=seed, default=0, help="first replicate's seed (the same draws for every design)")
+    p.add_argument("--r-prior-metal", default="1.01:1.05", metavar="LOW:HIGH",
+                   help="true/simulated compliance of metal rods (paper: 1.01-1.05)")
+    p.add_argument("--r-prior-composite", default="1.23:2.30", metavar="LOW:HIGH",
+                   help="the same for carbon (anisotropic) tubes (paper: 1.23-2.30)")
+    p.add_argument("--shape-sigma", type=nonneg_float, default=0.05,
+                   help="how far the true compliance's shape departs from the model's (default 0.05)")
+    p.add_argument("--meas-sigma", type=nonneg_float, default=0.01, help="the rig measurement's relative uncertainty")
+    p.add_argument("--error-scale", type=nonneg_float, default=1.0, help="robot kinematic errors (1 = ~0.5 mm, 0.05 deg)")
+    p.add_argument("--device-noise", type=nonneg_float, default=0.003, help="MultiCal device noise, 1 sigma [mm]")
+    p.add_argument("--instrument-noise", type=nonneg_float, default=0.02, help="validation instrument noise, 1 sigma [mm]")
+    p.add_argument("--no-budget", action="store_true", help="skip the error budget (one fit fewer per replicate)")
+    p.add_argument("--no-calibrate", action="store_true",
+                   help="use the frame's global calibration instead of one solid FEA run per design family")
+    p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
+    p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
+    p.add_argument("--serial", action="store_true", help="do not use Dask")
+    p.add_argument("--cache", default=None, help="cache folder (default OUTPUT/cache)")
+    p.add_argument("-o", "--output", required=True, help="output folder")
+    add_report_option(p)
+    p.set_defaults(func=cmd_study)
+
+
+def _range2(text: str, name: str) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in text.split(":"))
+    except ValueError:
+        raise RodlabError(f"--{name} {text!r}: expected LOW:HIGH, e.g. 1.01:1.05") from None
+    if not (0.1 <= lo <= hi <= 10):
+        raise RodlabError(f"--{name} {text!r}: expected 0.1 <= LOW <= HIGH <= 10")
+    return lo, hi
+
+
+def _methods(text: str) -> tuple:
+    ms = tuple(m.strip().lower() for m in text.split(",") if m.strip())
+    bad = [m for m in ms if m not in _METHODS]
+    if bad or not ms:
+        raise RodlabError(f"--methods {text!r}: expected a comma list of {', '.join(_METHODS)}")
+    return ms
+
+
+def _candidates(args):
+    from rodlab.fea.sweep import parse_range
+    from rodlab.app.study.designs import grid_candidates, list_candidates, parse_tube
+    grid = args.L1 is not None or args.L2 is not None or args.materials or args.tubes
+    if not grid:
+        return list_candidates([resolve_design(d) for d in args.designs]), None
+    if len(args.designs) != 1:
+        raise RodlabError("--L1/--L2/--materials/--tubes vary one base design; give exactly one")
+    base = resolve_design(args.designs[0])
+    L1s = parse_range(args.L1, "L1") if args.L1 else [base.L1_mm]
+    L2s = parse_range(args.L2, "L2") if args.L2 else [base.L2_mm]
+    mats = [m.strip() for m in args.materials.split(",")] if args.materials else [None]
+    tubes = [parse_tube(t) for t in args.tubes.split(",")] if args.tubes else [None]
+    return grid_candidates(base, L1s, L2s, mats, tubes), (L1s, L2s)
+
+
+def _check_numbers(args) -> None:
+    for name in ("replicates", "orientations", "workers"):
+        if getattr(args, name) < 1:
+            raise RodlabError(f"--{name} must be >= 1, got {getattr(args, name)}")
+    if args.orientations < 2:
+        raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
+
+
+def cmd_study(args: argparse.Namespace) -> int:
+    from rodlab.calibrate import read_fixture
+    from rodlab.calibrate.predict import Priors
+    from rodlab.calibrate.simulate import standard_fixture
+    from rodlab.app.study import StudySpec, run_study, write_study_outputs
+    from rodlab.app.study.family import family_joints
+
+    from ...progress import progress as bar_of
+    _check_numbers(args)
+    methods = _methods(args.methods)
+    robot = robot_from_args(args)
+    fixture = read_fixture(args.fixture) if args.fixture else standard_fixture()
+    priors = Priors(error_scale=args.error_scale, device_noise_mm=args.device_noise,
+                    instrument_noise_mm=args.instrument_noise, shape_sigma=args.shape_sigma,
+                    meas_sigma=args.meas_sigma)
+    spec = StudySpec(methods, args.replicates, args.orientations, priors, _range2(args.r_prior_metal, "r-prior-metal"),
+                     _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget)
+    cands, grid = _candidates(args)
+    out = Path(args.output)
+    t0 = time.perf_counter()
+    cache = Path(args.cache) if args.cache else out / "cache"
+    joints, model_note = family_joints(cands, grid is not None, not args.no_calibrate, cache)
+    print(f"{len(cands)} designs on {robot.name}, {args.replicates} replicates x {len(methods)} methods; "
+          f"compliance: {model_note}")
+    with bar_of(total=len(cands) * (1 + args.replicates), desc="study", unit="task") as bar:
+        run = run_study(cands, robot, fixture, spec, joints, cache, args.scheduler,
+                        args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
+    elapsed = time.perf_counter() - t0
+    header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
+              "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
+              "compliance": model_note, "time": f"{elapsed:.0f} s"}
+    res = write_study_outputs(out, run, robot.name, grid is not None, header,
+                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
+    print(f"recommendation: {res.recommendation.text}")
+    print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
+    write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)
+    return 0

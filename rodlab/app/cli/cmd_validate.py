@@ -1,0 +1,104 @@
+"""``rodlab validate``: name a file's format and report every problem at once (schema, then the reader's rules)."""
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+from ...errors import LocatedError
+from ...schema import FORMATS, FileCheck, Problem, check_file
+
+__all__ = ["register", "READERS", "validate_file"]
+
+
+def _joints(path) -> int:
+    """The number of q-columns of a CSV file's header (the reader's n_joints)."""
+    text = Path(path).read_text(encoding="utf-8")
+    header = next((ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
+    return max(1, len([h for h in header.split(",") if re.fullmatch(r"\s*q[1-9][0-9]*\s*", h)]))
+
+
+def _read_campaign(path):
+    from rodlab.calibrate import read_campaign
+    return read_campaign(path, _joints(path))
+
+
+def _read_points(path):
+    from rodlab.calibrate import read_points
+    return read_points(path, _joints(path))
+
+
+def _lazy(module: str, name: str):
+    def read(path):
+        import importlib
+        return getattr(importlib.import_module(module), name)(path)
+    return read
+
+
+#: format id -> the reader whose rules go beyond the schema (None: the schema is all there is)
+READERS = {
+    "rodlab.rod/1": _lazy("rodlab.design_io", "load_design"),
+    "rodlab.compliance/1": _lazy("rodlab.compliance", "read_compliance"),
+    "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),
+    "rodlab.robot/1": _lazy("rodlab.calibrate", "read_robot"),
+    "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),
+    "urdf": _lazy("rodlab.calibrate", "read_robot"),
+    "rodlab.calibration/1": _lazy("rodlab.calibrate.calibration_file", "read_calibration"),
+    "rodlab.rigplan/1": _lazy("rodlab.stiffness_rig.config", "read_plan"),
+    "rodlab.rigprofile/1": _lazy("rodlab.stiffness_rig.config", "read_profile"),
+    "rodlab.rig/1": _lazy("rodlab.stiffness_rig", "read_recording"),
+    "rodlab.campaign/1": _read_campaign,
+    "rodlab.points/1": _read_points,
+    "rodlab.diagnosis/1": None,
+    "rodlab.points_diagnosis/1": None,
+}
+
+
+def validate_file(path, format_id: str | None = None) -> FileCheck:
+    """The schema check of ``path`` and, if it passes, its reader's rules (a reader refuses at its first
+    problem; the schema lists all of its own)."""
+    if format_id == "urdf" or (format_id is None and str(path).lower().endswith(".urdf")):
+        check = FileCheck(str(path), "urdf")
+    else:
+        check = check_file(path, format_id)
+    if check.ok and check.format in READERS and READERS[check.format] is not None:
+        try:
+            READERS[check.format](path)
+        except LocatedError as e:
+            check.problems.append(Problem(e.path or str(path), e.detail, e.line, e.key))
+        except ValueError as e:
+            check.problems.append(Problem(str(path), str(e)))
+    return check
+
+
+def register(sub) -> None:
+    p = sub.add_parser("validate", help="check files against rodlab's formats; every problem at once",
+                       description="Names each file's format (its `format` key, its `# format:` line or its "
+                                   "suffix) and reports every problem against the format's schema (shipped in "
+                                   "rodlab/schemas; docs/formats.md) with file, line, key, what was expected "
+                                   "and the fix; a file that passes its schema is then read by its reader, "
+                                   "whose own rules (a symmetric C_F, holds that keep their load, ...) it must "
+                                   "also pass. Exit 0 if every file is valid, 2 otherwise.")
+    p.add_argument("files", nargs="+", help="files to check")
+    p.add_argument("--format", default=None, choices=sorted(FORMATS) + ["rodlab.robot/1", "urdf"],
+                   help="check as this format instead of the one the file names")
+    p.set_defaults(func=cmd_validate)
+
+
+def cmd_validate(args) -> int:
+    bad = []
+    for f in args.files:
+        check = validate_file(f, args.format)
+        fmt = check.format or "unknown format"
+        if check.ok:
+            print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else ""))
+            continue
+        bad.append(f)
+        print(f"{f}: {fmt}, {len(check.problems)} problem(s)", file=sys.stderr)
+        for prob in check.problems:
+            print(f"  {prob}", file=sys.stderr)
+    if bad:
+        print(f"rodlab validate: error: {len(bad)} of {len(args.files)} file(s) not valid: {', '.join(bad)}",
+              file=sys.stderr)
+        return 2
+    return 0

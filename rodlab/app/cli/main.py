@@ -1,0 +1,133 @@
+"""``rodlab`` entry point: argparse sub-commands, logging set-up, and error reporting.
+
+Every input error (:class:`~rodlab.errors.RodlabError`) and OS error is printed as one clear
+line on stderr with exit code 2; never a traceback. ``--debug`` shows tracebacks.
+"""
+from __future__ import annotations
+
+import argparse
+import errno
+import logging
+import sys
+
+from ... import __version__, progress
+from ...errors import RodlabError
+from . import (cmd_calibrate, cmd_demo, cmd_design, cmd_diagnose, cmd_export, cmd_fea, cmd_geometry, cmd_rig, cmd_study,
+               cmd_sweep, cmd_validate)
+
+__all__ = ["build_parser", "main"]
+
+#: Modules that add sub-commands: each has ``register(subparsers)``.
+_COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_study, cmd_rig, cmd_calibrate,
+                    cmd_diagnose, cmd_export, cmd_validate]
+
+
+def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
+    """-v, -q, --debug: accepted before the sub-command and after it (``rodlab fea ... --debug``)."""
+    kw = {"default": argparse.SUPPRESS} if suppress else {}
+    parser.add_argument("-v", "--verbose", action="count", help="more log output (-vv for debug)",
+                        **(kw or {"default": 0}))
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars", **kw)
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors", **kw)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rodlab",
+        description="Design, simulate, measure and use long measuring rods for on-site robot calibration "
+                    "(MultiCal).")
+    parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
+    _global_options(parser, suppress=False)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for mod in _COMMAND_MODULES:
+        mod.register(sub)
+    _add_global_options_below(parser)
+    return parser
+
+
+def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
+    """Every sub-command (and sub-sub-command, ``rodlab rig simulate``) accepts -v, -q and --debug too."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sp in set(action.choices.values()):
+                if "--debug" not in sp._option_string_actions:
+                    _global_options(sp, suppress=True)
+                _add_global_options_below(sp)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
+    level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    progress.configure(sys.stderr.isatty() and not args.quiet)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return 1
+    try:
+        _check_outputs(args)
+        return int(args.func(args) or 0)
+    except RodlabError as e:
+        if args.debug:
+            raise
+        print(f"rodlab {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:                 # output piped into `head` and closed: not an error
+        return 0
+    except OSError as e:
+        if args.debug:
+            raise
+        print(f"rodlab {args.command}: error: {_os_error_text(e)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"rodlab {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+#: argparse destinations that name something the command writes
+_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report")
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Before any work: two outputs must not share a path, and no part of an output's folder may be a file
+    (else the first output would be written and the second fail, leaving a partial result)."""
+    from pathlib import Path
+    seen: dict[Path, str] = {}
+    for dest in _OUTPUT_DESTS:
+        value = getattr(args, dest, None)
+        if not isinstance(value, str) or not value:
+            continue
+        option = "--" + dest.replace("_", "-")
+        path = Path(value).expanduser().absolute()
+        if path in seen:
+            raise RodlabError(f"{option} {value}: the same path as {seen[path]}; give each output its own path")
+        seen[path] = option
+        for parent in path.parents:
+            if parent.exists():
+                if not parent.is_dir():
+                    raise RodlabError(f"{option} {value}: {parent} is a file, not a folder; choose another "
+                                      f"output path")
+                break
+
+
+#: errno -> what it means for a user's paths, and the fix
+_OS_ADVICE = {
+    errno.EEXIST: "a file is in the way where a folder is needed; choose another output path or move the file",
+    errno.ENOTDIR: "a part of the path is a file, not a folder; choose another output path",
+    errno.EISDIR: "this is a folder; give a file name",
+    errno.ENOENT: "no such file or folder; check the path",
+    errno.EACCES: "permission denied; choose a folder you can write to",
+    errno.EROFS: "the file system is read-only; choose another output path",
+    errno.ENOSPC: "the disk is full; free space or write elsewhere (nothing partial was kept)",
+}
+
+
+def _os_error_text(e: OSError) -> str:
+    """``PATH: what went wrong; the fix`` for an operating-system error."""
+    where = f"{e.filename}: " if getattr(e, "filename", None) else ""
+    return where + _OS_ADVICE.get(e.errno, str(e.strerror or e))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,31 @@
+"""What to do about a campaign finding: the ``rodlab calibrate`` options or the measurement that removes it.
+
+``rodlab calibrate`` prints these when its residual test (:mod:`calibrate.residual_test`) says physics is
+missing: it runs the campaign diagnosis (the same test, then the hypotheses) and names each suspect with
+its remedy (each campaign effect's module states it: :mod:`rodlab.calibrate.effects`), so an untrusted result
+always says what to do next.
+"""
+from __future__ import annotations
+
+from .report import Finding
+
+__all__ = ["remedy"]
+
+
+def _unexplained(f: Finding) -> str:
+    return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "
+            f"{f.location or 'the worst position'}, and compare with the simulated campaign of "
+            "`rodlab simulate-campaign`")
+
+
+def remedy(f: Finding) -> str:
+    """One sentence: what to do about ``f`` (an effect of the campaign vocabulary: its module's remedy)."""
+    if f.effect == "unexplained":
+        return _unexplained(f)
+    from rodlab.calibrate.effects import campaign_effect
+    from rodlab.errors import RodlabError
+    try:
+        model = campaign_effect(f.effect)
+    except RodlabError:
+        return f"see docs/diagnose.md for {f.effect}"
+    return model.remedy(f.location, f.parameters)

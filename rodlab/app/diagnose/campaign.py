@@ -1,0 +1,362 @@
+"""Diagnosis of a MultiCal campaign: residuals of the identified model against physics left out.
+
+The identification's residuals r and Jacobian J are augmented with the columns H of each hypothesis; the
+gain is the part of r that H explains beyond what the identified parameters already absorb (the
+projection on the complement of J). Selection as for the rig (delta BIC <= -10 with the known device noise,
+likelihood-ratio p < 1e-3, leave-one-point-out cross-validation), then the campaign is identified again
+with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers, joint angles
+corrected by the fitted once-per-revolution errors — also at the validation points, as a controller would —
+and measured points referred back to the campaign start for thermal growth) to show the fit (and, with
+validation points, the positioning error) improve.
+
+Hypotheses come from the campaign effect registry (:data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS`, one
+module per effect of ``contract/effects.md``, subject ``campaign``): ``fixture_pose`` (offset of one clamping
+position), ``rod_deflection`` (compensation off by a factor: residuals follow R_T^W (C_g g + C_F F)),
+``periodic_joint_error`` (first harmonic of joint K: sin / cos q_K along the joint's motion),
+``thermal_drift`` (link growth with time_s / temp_C), ``outliers`` (isolated gross alignment errors: per-point
+candidates that do not use up the model terms). Each effect also says how its finding enters the
+re-identification (:class:`~rodlab.calibrate.effects.Refit`).
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
+                                      correct_joints)
+from rodlab.hypothesis import Hypothesis, location_parts
+
+from .chi2 import chi2_median, chi2_sf
+from .report import Diagnosis, Finding
+
+__all__ = ["diagnose_campaign", "CampaignFits"]
+
+log = logging.getLogger(__name__)
+
+DBIC_MIN = 10.0
+P_MAX = 1e-3
+
+
+@dataclass
+class CampaignFits:
+    """The identifications behind a campaign diagnosis (for figures and reports).
+
+    Attributes
+    ----------
+    before : the :class:`~rodlab.calibrate.CalibrationResult` of the campaign as given
+    after : the identification with the found physics, or ``None`` when nothing was found
+    kept : shape=(N,) bool, the campaign points ``after`` used (isolated outliers dropped)
+    labels : shape=(N,) point labels; position : shape=(N,) int, clamping position of each point
+    joint_corrections_rad : {joint index (0-based): (a_sin, a_cos) [rad]} of periodic joint errors found
+    validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
+    q_deg : shape=(N, n) joint angles of the campaign points [deg]
+    time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
+    """
+
+    before: object
+    after: object | None
+    kept: np.ndarray
+    labels: list
+    position: np.ndarray
+    joint_corrections_rad: dict
+    validation_errors_mm: dict | None = None
+    q_deg: np.ndarray | None = None
+    time_s: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.labels)
+        if self.kept.shape != (n,) or self.position.shape != (n,):
+            raise ValueError(f"kept and position must have shape ({n},), got {self.kept.shape}, {self.position.shape}")
+        if self.q_deg is not None and (self.q_deg.ndim != 2 or self.q_deg.shape[0] != n):
+            raise ValueError(f"q_deg must have shape ({n}, n_joints), got {self.q_deg.shape}")
+        if self.time_s is not None and self.time_s.shape != (n,):
+            raise ValueError(f"time_s must have shape ({n},), got {self.time_s.shape}")
+
+
+def _birge_drop(e: np.ndarray, n: int, k: int, birge: float) -> float:
+    """Factor (>= 1) by which the Birge ratio falls once accepted terms are fitted: ``e`` are the whitened
+    residuals of the current model (k parameters), robust per-point reduced chi-square as at the start."""
+    per_point = (e.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - k, 1)
+    chi_red = float(np.median(per_point)) / float(chi2_median(3))
+    new = max(birge * float(np.sqrt(chi_red)), 1.0)
+    return max(birge / new, 1.0)
+
+
+def _test_dict(t) -> dict:
+    return {"reduced_chi2": t.reduced, "dof": t.dof, "p_value": t.p_value, "physics_missing": t.missing}
+
+
+@dataclass
+class _Candidate:
+    """One hypothesis (or an outlier point) tried next: its delta BIC, likelihood ratio, whitened columns, and
+    the fit with it (coefficients of all columns, residual sum of squares)."""
+
+    dbic: float
+    lr: float
+    hyp: Hypothesis
+    coef: np.ndarray
+    rss: float
+
+
+class _Selection:
+    """Forward selection of hypotheses on the whitened residuals of the identified campaign.
+
+    The residuals r and the Jacobian J of the free parameters are whitened with the noise covariance (device
+    noise + fixture-pose uncertainty per position) times the Birge ratio: a campaign has no repeats, so scatter
+    the noise model leaves out shows only as chi-square above its degrees of freedom, and an effect must stand
+    out of what the campaign's own residuals allow. The ratio is robust (median per point: isolated outliers or
+    one wrong position must not hide themselves) and re-estimated after each accepted term.
+    """
+
+    def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma):
+        from rodlab.calibrate.identify import noise_covariance
+        from rodlab.calibrate.jacobian import position_jacobian
+        from rodlab.calibrate.residual_test import whitened_projection
+        res, obs, fr = ctx.result, ctx.obs, ctx.frames
+        self.ctx, self.noise_mm, self.N = ctx, noise_mm, ctx.n_points
+        free_infos = [i for i in res.infos if i.name in res.free]
+        J = position_jacobian(fr, tau, free_infos, res.params.base, obs.group).reshape(3 * self.N, -1)
+        L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
+        self.r_raw = res.residuals_mm.reshape(-1)
+        self.n = self.r_raw.size
+        e0 = whitened_projection(self.r_raw, J, L)
+        per_point = (e0.reshape(-1, 3) ** 2).sum(axis=1) * self.n / max(self.n - J.shape[1], 1)
+        chi_red0 = float(np.median(per_point)) / float(chi2_median(3))
+        self.birge = float(np.sqrt(max(chi_red0, 1.0)))
+        log.debug("campaign diagnosis: robust reduced chi-square %.2f, Birge ratio %.2f", chi_red0, self.birge)
+        self.L = L * self.birge
+        self.r, self.J = self.white(self.r_raw), self.white(J)
+        self.hyps = [replace(h, X=self.white(h.X)) for h in campaign_hypotheses(ctx)]
+        self.cols: list = []
+        self.chosen: list = []           # (effect, location) accepted, outliers included
+        self.used_points: list[int] = []
+        self.findings: list[Finding] = []
+        # the baseline is the generalised-least-squares refit of the identified parameters (the identification
+        # itself is unweighted): what that refit gains must not be credited to the first hypothesis
+        self.rss = self.fit(self.cols)[1]
+        self.cv = self.cv_error(self.cols)
+
+    def white(self, A):
+        return np.linalg.solve(self.L, A)
+
+    def fit(self, cols):
+        A = np.column_stack([self.J] + cols) if cols else self.J
+        coef, *_ = np.linalg.lstsq(A, self.r, rcond=None)
+        e = self.r - A @ coef
+        return coef, float(e @ e), e
+
+    def rms(self, cols) -> float:
+        """rms per reading [mm] of the (unwhitened) residuals of the model with ``cols``."""
+        e = self.L @ self.fit(cols)[2]
+        return float(np.sqrt(np.mean(e ** 2)))
+
+    def cv_error(self, cols, skip=()):
+        """Leave-one-point-out prediction error (a position-specific term is still estimable); points in
+        ``skip`` (dropped as outliers: their own columns absorb them) are not predicted."""
+        total = 0.0
+        A = np.column_stack([self.J] + cols) if cols else self.J
+        for i in range(self.N):
+            if i in skip:
+                continue
+            test = np.zeros(3 * self.N, dtype=bool)
+            test[3 * i:3 * i + 3] = True
+            coef, *_ = np.linalg.lstsq(A[~test], self.r[~test], rcond=None)
+            total += float(((self.r[test] - A[test] @ coef) ** 2).sum())
+        return total
+
+    def rescale(self) -> None:
+        """Re-estimate the inflated scatter without what the accepted terms explain: a gross error (outliers, a
+        wrong fixture pose) spreads through the identification into every residual and must not hide a
+        second one behind a large Birge ratio."""
+        f = _birge_drop(self.fit(self.cols)[2], self.n, self.J.shape[1] + sum(c.shape[1] for c in self.cols),
+                        self.birge)
+        if f > 1.0:
+            self.birge /= f
+            self.L = self.L / f
+            self.r, self.J = self.r * f, self.J * f
+            self.hyps = [replace(h, X=h.X * f) for h in self.hyps]
+            self.cols = [c * f for c in self.cols]
+            self.rss, self.cv = self.rss * f * f, self.cv * f * f
+            log.debug("campaign diagnosis: Birge ratio re-estimated to %.2f", self.birge)
+
+    def _candidate(self, h: Hypothesis, penalty: float) -> _Candidate:
+        coef, rss2, _ = self.fit(self.cols + [h.X])
+        lr = self.rss - rss2
+        return _Candidate(-lr + penalty, lr, h, coef, rss2)
+
+    def candidates(self, max_outliers: int) -> list[_Candidate]:
+        """Every hypothesis not yet accepted, and the point with the largest residual as an outlier."""
+        cand = [self._candidate(h, h.X.shape[1] * np.log(self.n)) for h in self.hyps
+                if not any(c[0] == h.effect and c[1] == h.location for c in self.chosen)]
+        norms = np.linalg.norm((self.L @ self.fit(self.cols)[2]).reshape(self.N, 3), axis=1)
+        order = [int(i) for i in np.argsort(-norms) if int(i) not in self.used_points]
+        if order and len(self.used_points) < max_outliers:
+            for model in CAMPAIGN_EFFECTS.values():
+                h = model.point_hypothesis(order[0], self.ctx) if model.per_point else None
+                if h is not None:
+                    # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
+                    cand.append(self._candidate(replace(h, X=self.white(h.X)),
+                                                3 * np.log(self.n) + 2 * np.log(self.N)))
+        return sorted(cand, key=lambda c: c.dbic)
+
+    def try_accept(self, best: _Candidate) -> bool:
+        """Accept ``best`` if it passes delta BIC, the likelihood-ratio test, cross-validation and the detection
+        limit; record its finding. False: the selection ends."""
+        h, per_point = best.hyp, campaign_effect(best.hyp.effect).per_point
+        p = float(chi2_sf(max(best.lr, 0.0), h.X.shape[1]))
+        if best.dbic > -DBIC_MIN or p > P_MAX:
+            return False
+        if per_point:
+            cv2 = self.cv * (best.rss / max(self.rss, 1e-300))
+        else:                             # both models predicted on the same points (outliers left out)
+            self.cv = self.cv_error(self.cols, self.used_points) if self.used_points else self.cv
+            cv2 = self.cv_error(self.cols + [h.X], self.used_points)
+        if not cv2 < self.cv:
+            return False
+        A = np.column_stack([self.J] + self.cols + [h.X])
+        k0 = self.J.shape[1] + sum(c.shape[1] for c in self.cols)
+        val = best.coef[k0:k0 + h.X.shape[1]]
+        # detection limit: an effect that moves no point by 2 device-noise SDs is not reported
+        if not per_point and float(np.max(np.abs(self.L @ (h.X @ val)))) < 2.0 * self.noise_mm * self.birge:
+            return False
+        se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A))[k0:k0 + h.X.shape[1]], 0, None))
+        self._record(best, p, cv2, *h.reported(val, se))
+        return True
+
+    def _record(self, best: _Candidate, p: float, cv2: float, params: dict, iv: dict) -> None:
+        h = best.hyp
+        merged = campaign_effect(h.effect).per_point and self._merge_point(h)
+        if not merged:
+            before = self.rms(self.cols) if self.cols else float(np.sqrt(np.mean(self.r_raw ** 2)))
+            self.findings.append(Finding(h.effect, h.location, h.explanation, params, iv, before,
+                                         self.rms(self.cols + [h.X]),
+                                         {"delta_bic": float(best.dbic), "lr_chi2": float(best.lr), "lr_p": p,
+                                          "cv_sse_before": float(self.cv), "cv_sse_after": float(cv2)}))
+        self.chosen.append((h.effect, h.location))
+        self.cols.append(h.X)
+        self.rss, self.cv = best.rss, cv2
+
+    def _merge_point(self, h: Hypothesis) -> bool:
+        """A per-point finding: note the point; True if it joined an earlier finding of its effect (one finding
+        lists the points)."""
+        lab = location_parts(h.location)[1]
+        self.used_points.append(int(self.ctx.labels.index(lab)))
+        prev = [f for f in self.findings if f.effect == h.effect]
+        if not prev:
+            return False
+        prev[0].location += "," + lab
+        prev[0].rms_after_mm = self.rms(self.cols + [h.X])
+        return True
+
+    def run(self, max_terms: int) -> None:
+        """Select until ``max_terms`` physical terms (outliers are points, not physics: up to a tenth of the
+        points besides) or until the best candidate fails."""
+        max_outliers = max(2, self.N // 10)
+        while sum(not campaign_effect(e).per_point for e, _ in self.chosen) < max_terms:
+            if self.cols:
+                self.rescale()
+            cand = self.candidates(max_outliers)
+            if not cand:
+                break
+            best = cand[0]
+            log.debug("campaign diagnosis: best %s %s dBIC %.1f; next %s", best.hyp.effect, best.hyp.location,
+                      best.dbic, [(c.hyp.effect, c.hyp.location, round(float(c.dbic), 1)) for c in cand[1:4]])
+            if not self.try_accept(best):
+                break
+
+
+def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
+    """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
+    result and the :class:`Refit` it used."""
+    from rodlab.calibrate import campaign_observations, identify
+    from rodlab.calibrate.identify import Observations
+    fit = Refit(rod=rod, keep=np.ones(ctx.n_points, dtype=bool))
+    for f in findings:
+        campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
+    obs2 = campaign_observations(camp, fix, fit.rod)
+    # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
+    obs2 = replace(obs2, q_rad=correct_joints(obs2.q_rad, fit.joint_corrections_rad))
+    for edit in fit.obs_edits:
+        obs2 = edit(obs2)
+    keep = fit.keep
+    if not keep.all():
+        obs2 = Observations(obs2.q_rad[keep], obs2.x_W_mm[keep], obs2.force_W_N[keep], obs2.rod_mass_kg,
+                            obs2.rod_com_T_mm, obs2.group[keep], [lab for lab, k in zip(ctx.labels, keep) if k],
+                            obs2.fixture_T)
+    res2 = identify(robot, obs2, rod.tool_mm, fit.rod, freed=fit.freed, expected_noise_mm=noise_mm,
+                    fixture_sigma=fixture_sigma)
+    return res2, fit
+
+
+def _unexplained(sel: _Selection, camp, final_test) -> Finding:
+    """The finding that says what the found physics leaves: residuals above the expected scatter, at the
+    position where they are largest."""
+    final_rms = sel.rms(sel.cols)
+    e = (sel.L @ sel.fit(sel.cols)[2]).reshape(sel.N, 3)
+    pos_rms = {int(j): float(np.sqrt(np.mean(e[camp.position == j] ** 2))) for j in np.unique(camp.position)}
+    worst = max(pos_rms, key=pos_rms.get)
+    return Finding("unexplained", f"position:{worst}",
+                   f"residuals {final_rms * 1e3:.1f} um remain above the expected scatter (device "
+                   f"{sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}) with no modelled cause",
+                   {"rms_mm": final_rms, "reduced_chi2": final_test.reduced}, {}, final_rms, final_rms,
+                   {"position_rms_mm": pos_rms})
+
+
+def _context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
+    """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
+    from rodlab.calibrate.kinematics import ball_positions
+    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    return CampaignContext(robot, res, obs, np.asarray(camp.position), camp.labels(), camp.time_s, camp.temp_C, rod,
+                           fr), tau
+
+
+def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
+                      fixture_sigma=(0.01, 0.002)):
+    """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it."""
+    from rodlab.calibrate import campaign_observations, identify
+    obs = campaign_observations(camp, fix, rod)
+    # the identification runs the residual test `rodlab calibrate` trusts by, with this noise model
+    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma)
+    ctx, tau = _context(robot, res, obs, camp, rod)
+    sel = _Selection(ctx, tau, noise_mm, fixture_sigma)
+    sel.run(max_terms)
+    findings = sel.findings
+    res2, refit = (None, None)
+    if findings:
+        res2, refit = _reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
+    final_test = res2.residual_check if res2 is not None else res.residual_check
+    verdict = "consistent" if not findings else "explained"
+    if final_test.missing:                 # the test `rodlab calibrate` trusts by: one story between the two
+        findings.append(_unexplained(sel, camp, final_test))
+        verdict = "unexplained"
+    extra = {"residual_test": {"before": _test_dict(res.residual_check), "after": _test_dict(final_test)}}
+    keep = refit.keep if refit is not None else np.ones(ctx.n_points, dtype=bool)
+    fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position),
+                        refit.joint_corrections_rad if refit is not None else {},
+                        q_deg=np.asarray(camp.q_deg, float),
+                        time_s=None if camp.time_s is None else np.asarray(camp.time_s, float))
+    if validate_points is not None:
+        fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
+        extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}
+    rms_after = res2.rms_mm if res2 is not None else res.rms_mm
+    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
+
+
+def _validation_errors(robot, fits: CampaignFits, points) -> dict:
+    """Position errors at the validation points: nominal model, identified, identified with the found physics
+    (joint angles corrected as a controller would)."""
+    from rodlab.calibrate import ModelParams, validate
+    after_points = points
+    if fits.joint_corrections_rad:
+        after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
+                                                                       fits.joint_corrections_rad)))
+    after = fits.after if fits.after is not None else fits.before
+    return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
+            "before": validate(robot, fits.before.params, points)[1],
+            "after": validate(robot, after.params, after_points)[1]}
+
+
+def _stats(errors_mm: np.ndarray) -> dict:
+    from rodlab.calibrate.validate import error_stats
+    return error_stats(errors_mm).to_dict()

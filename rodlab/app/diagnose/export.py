@@ -1,0 +1,23 @@
+"""The corrected compliance: the simulated model with the structural physics the diagnosis found."""
+from __future__ import annotations
+
+from ...compliance import RodCompliance
+from ...enums import Method
+
+__all__ = ["corrected_compliance"]
+
+
+def corrected_compliance(sim: RodCompliance, diag, model) -> RodCompliance:
+    """``sim`` plus the fitted structural terms (compliance scale, torsion, joint springs); C_g scaled by the
+    change of c22 + c33 (as Eq. 22 does for the measured file). Rig effects (friction, tare, drift, crosstalk,
+    creep) belong to the rig, not the rod, and are left out."""
+    C = sim.C_F.copy()
+    for term, v in model.term_values():
+        if term.dC:
+            for val, dC in zip(v, term.dC):
+                C = C + val * dC
+    C = 0.5 * (C + C.T)
+    r = float((C[1, 1] + C[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2]))
+    return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm,
+                         r * sim.r_rod, {"generator": "rodlab diagnose --export", "simulated": sim.provenance,
+                                         "findings": [f.to_dict() for f in diag.findings]})

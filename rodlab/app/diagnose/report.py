@@ -1,0 +1,75 @@
+"""The diagnosis report (contract ``rodlab.diagnosis/1``) and its findings."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ...fileio import atomic_write_json, json_safe
+
+__all__ = ["Finding", "Diagnosis", "FORMAT_DIAGNOSIS"]
+
+FORMAT_DIAGNOSIS = "rodlab.diagnosis/1"
+
+
+@dataclass
+class Finding:
+    """One effect: ID and location (contract vocabulary), one sentence of physics, fitted parameters with
+    95 % intervals, the fit before / after adding it, and the evidence (delta BIC, LR test, CV)."""
+
+    effect: str
+    location: str | None
+    explanation: str
+    parameters: dict
+    intervals: dict
+    rms_before_mm: float
+    rms_after_mm: float
+    evidence: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, f: dict) -> "Finding":
+        """A finding as read back from a diagnosis report (the inverse of :meth:`to_dict`)."""
+        return cls(f["effect"], f["location"], f["explanation"], f["parameters"], f.get("intervals_95", {}),
+                   f["rms_before_mm"], f["rms_after_mm"], f.get("evidence", {}))
+
+    def to_dict(self) -> dict:
+        params = dict(self.parameters)
+        return {"effect": self.effect, "location": self.location, "explanation": self.explanation,
+                "parameters": params, "intervals_95": self.intervals, "rms_before_mm": self.rms_before_mm,
+                "rms_after_mm": self.rms_after_mm, "evidence": self.evidence}
+
+
+@dataclass
+class Diagnosis:
+    subject: str
+    verdict: str
+    noise_mm: float
+    rms_before_mm: float
+    rms_after_mm: float
+    findings: list
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return json_safe({"format": FORMAT_DIAGNOSIS, "subject": self.subject, "verdict": self.verdict,
+                          "noise_mm": self.noise_mm, "rms_before_mm": self.rms_before_mm,
+                          "rms_after_mm": self.rms_after_mm, "findings": [f.to_dict() for f in self.findings],
+                          **self.extra})
+
+    def write(self, path: str | Path) -> Path:
+        return atomic_write_json(path, self.to_dict())
+
+    def summary(self) -> str:
+        from .wording import confirmation, evidence_text
+        lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
+                 f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
+        for i, f in enumerate(self.findings, 1):
+            ps = ", ".join(f"{k} = {v:.4g} [{f.intervals[k][0]:.3g}, {f.intervals[k][1]:.3g}]"
+                           for k, v in f.parameters.items() if isinstance(v, (int, float)) and k in f.intervals)
+            lines.append(f"  {i}. {f.effect}" + (f" at {f.location}" if f.location else "") + f": {f.explanation}")
+            if ps:
+                lines.append(f"     {ps}")
+            ev = f.evidence
+            lines.append(f"     {evidence_text(f)}")
+            if ev.get("alternatives"):
+                lines.append("     the data fit about as well with: " + "; ".join(ev["alternatives"]))
+            lines.append(f"     {'to confirm' if self.subject == 'rig' else 'next step'}: {confirmation(f)}")
+        return "\n".join(lines)

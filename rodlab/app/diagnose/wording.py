@@ -1,0 +1,68 @@
+"""A finding's evidence in an engineer's words: what it explains, how sure, and what would confirm it.
+
+The statistics behind a finding (delta BIC, the likelihood-ratio test, cross-validated squared error) stay in
+the diagnosis report for whoever wants them; what is printed and put in reports is
+
+- the share of the residual's mean square the finding explains, with the rms before -> after in um;
+- how sure: ``decisive`` when the likelihood-ratio p-value is below 1e-6 and cross-validation agrees,
+  ``strong`` below 1e-3, otherwise ``weak``; the chance that noise alone made the improvement is stated;
+- what would confirm it: a measurement or a change that should remove the finding (campaign findings reuse
+  :func:`rodlab.app.diagnose.advice.remedy`).
+"""
+from __future__ import annotations
+
+import math
+
+from .report import Finding
+
+__all__ = ["explained_share", "certainty", "confirmation", "evidence_text"]
+
+def _rig_confirm(effect: str) -> str | None:
+    """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`)."""
+    if effect == "unexplained":
+        return "repeat the named steps: structure that returns is physics, structure that moves is handling"
+    from rodlab.stiffness_rig.effects import RIG_EFFECTS
+    return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
+
+
+def explained_share(f: Finding) -> float:
+    """Share of the residual's mean square the finding removes: ``1 - (rms_after / rms_before)^2``."""
+    if not f.rms_before_mm > 0:
+        return float("nan")
+    return 1.0 - (f.rms_after_mm / f.rms_before_mm) ** 2
+
+
+def certainty(f: Finding) -> str:
+    """``decisive`` / ``strong`` / ``weak`` with the probability that noise alone explains the improvement."""
+    p = f.evidence.get("lr_p")
+    cv_ok = f.evidence.get("cv_sse_after", 0.0) < f.evidence.get("cv_sse_before", 1.0)
+    if p is None or not math.isfinite(p):
+        return "not tested" if f.effect != "unexplained" else "the structure is significant; its cause is not modelled"
+    chance = "below 1e-300" if p == 0 else f"{p:.1g}"
+    if p < 1e-6 and cv_ok:
+        level = "decisive"
+    elif p < 1e-3 and cv_ok:
+        level = "strong"
+    else:
+        level = "weak"
+    cv = "" if cv_ok else ", and it does not predict held-out points better"
+    return f"{level} (chance that noise alone gives this improvement: {chance}{cv})"
+
+
+def confirmation(f: Finding) -> str:
+    """What would confirm the finding (rig) or what to do about it (campaign)."""
+    if f.evidence.get("separate_by"):
+        return f"to tell the candidates apart: {f.evidence['separate_by']}"
+    rig = _rig_confirm(f.effect)
+    if rig and not (f.location or "").startswith(("position:", "points:", "joint:")):
+        return rig
+    from .advice import remedy
+    return remedy(f)
+
+
+def evidence_text(f: Finding) -> str:
+    """One line: explains X % of the residual (rms a -> b um); how sure."""
+    share = explained_share(f)
+    pct = "—" if share != share else f"{100 * share:.0f} %" if share < 0.995 else f"{100 * share:.1f} %"
+    return (f"explains {pct} of the residual's mean square (rms {f.rms_before_mm * 1e3:.2f} -> "
+            f"{f.rms_after_mm * 1e3:.2f} um); {certainty(f)}")

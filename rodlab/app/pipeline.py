@@ -1,0 +1,209 @@
+"""The main job end to end (``rodlab demo``): design -> CAD -> FEA -> rig -> diagnosis -> calibration -> sweep.
+
+Rod 1# of the paper from the built-in design; its CAD (STEP, PNG views) and solid FEA compliance (the frame
+model when the CAD extra is absent, said so); a simulated stiffness-rig recording of the same rod with one
+concealed effect (a compliant bond at ring 1, the kind of physics the paper suspected in its carbon rods);
+the rig fit (r_rod, Fig. 8); the diagnosis and the corrected compliance; a simulated TX90 MultiCal campaign
+of the real rod; calibrations with none / calc / fea / meas / corrected compensation (the paper's Table 3,
+Fig. 10); an L1 / L2 sweep; a small `rodlab study` of the paper's three carbon rods (predicted
+calibration accuracy per method). Everything is written under the run folder with ``run.json`` for the report.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..compliance import RodCompliance, write_compliance
+from ..enums import RigEffect
+from ..fileio import atomic_write_json, atomic_write_text, json_safe
+
+__all__ = ["run_demo", "STAGES"]
+
+log = logging.getLogger(__name__)
+
+STAGES = ["design", "cad", "fea", "rig", "fit", "diagnose", "campaign", "calibrate", "sweep", "study"]
+
+
+def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: int = 7,
+             sweep_grid=(np.arange(150, 451, 50.0), np.arange(300, 651, 50.0))) -> dict:
+    """Run every stage; returns the summary (also written to ``out_dir/run.json``)."""
+    from ..calc import calc_rod_compliance
+    from ..design_io import resolve_design
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    say = progress or (lambda stage, msg: log.info("%s: %s", stage, msg))
+    summary: dict = {"format": "rodlab.run/1", "stages": {}, "files": {}}
+    timings = {}
+
+    def stage(name):
+        class _S:
+            def __enter__(self_):
+                self_.t = time.perf_counter()
+                say(name, "started")
+
+            def __exit__(self_, et, ev, tb):
+                timings[name] = time.perf_counter() - self_.t
+                if et is None:
+                    say(name, f"done in {timings[name]:.1f} s")
+                return False
+        return _S()
+
+    with stage("design"):
+        design = resolve_design("rod1")
+        calc = calc_rod_compliance(design)
+        write_compliance(calc, out / "rod1.calc.compliance.json")
+        summary["design"] = design.summary()
+        summary["stages"]["design"] = {"mass_kg": calc.mass_kg, "c_rod_um_calc": calc.c_rod_um}
+    from .study.family import cad_available
+    cad = cad_available()
+    with stage("cad"):
+        if cad:
+            import rodlab.geometry as geometry
+            c = geometry.build_cad(design)
+            c.export_step(out / "cad" / "rod.step")
+            c.write_mass_json(out / "cad" / "mass.json")
+            views = geometry.render_views(c, out / "cad")
+            summary["files"]["cad_views"] = [str(p.relative_to(out)) for p in views]
+            summary["stages"]["cad"] = {"parts": len(c.solids), "mass_kg": c.total_mass_properties().mass_kg}
+        else:
+            summary["stages"]["cad"] = {"skipped": "the CAD extra (build123d, gmsh) is not installed"}
+    with stage("fea"):
+        if cad:
+            import rodlab.geometry as geometry
+            from rodlab.fea import run_solid
+            # one solid run: the compliance, the deformed shape, and the joints that calibrate the sweep's frame
+            solid_run = run_solid(design, geometry.mesh_rod, error_estimate=False, joints=True,
+                                  deformed_png=out / "fea" / "deformed.png")
+            fea = solid_run.compliance
+            summary["files"]["fea_deformed"] = "fea/deformed.png"
+            model = "solid"
+        else:
+            from rodlab.fea import compute_compliance
+            fea = compute_compliance(design, "frame")
+            model = "frame (the CAD extra is absent, so no solid FEA)"
+        write_compliance(fea, out / "rod1.fea.compliance.json")
+        summary["stages"]["fea"] = {"model": model, "C_F_mm_per_N": fea.C_F.tolist(), "C_g_mm_per_g0": fea.C_g.tolist(),
+                                    "c_rod_um": fea.c_rod_um,
+                                    "calc_over_fea_diag": (np.diag(calc.C_F) / np.diag(fea.C_F)).tolist()}
+    with stage("rig"):
+        from rodlab.stiffness_rig.effects import joint_places
+        from rodlab.stiffness_rig.model import LoadSchedule, RigModel
+        from rodlab.stiffness_rig.simulate import simulate_recording
+        # a compliant bond at ring 1 [rad/(N m)]
+        concealed = {"joint_compliance": {"location": "ring_1", "s_bend_rad_per_Nm": 4.0e-6,
+                                          "s_torsion_rad_per_Nm": 1.6e-6}}
+        rig_model = RigModel(fea.C_F, concealed, noise_mm=0.0006, seed=seed,
+                             places=joint_places(design.tool_mm, design))
+        C_true = rig_model.C_true
+        simulate_recording(rig_model, LoadSchedule(), out / "rig" / "rod1.rig.csv", rod="1#")
+        summary["stages"]["rig"] = {"concealed_effect": "joint_compliance at ring_1", **{
+            k: v for k, v in rig_model.effects[RigEffect.JOINT_COMPLIANCE].items() if k.startswith("s_")}}
+    with stage("fit"):
+        from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+        rec = read_recording(out / "rig" / "rod1.rig.csv")
+        fit = fit_recording(rec, fea)
+        meas = fit.compliance(fea, rec)
+        write_compliance(meas, out / "rod1.meas.compliance.json")
+        plot_fit(fit, out / "rig" / "fig8.png", fea, title="rod 1#")
+        summary["files"]["fig8"] = "rig/fig8.png"
+        summary["stages"]["fit"] = {"r_rod": fit.r_rod, "noise_um": fit.noise_mm * 1e3,
+                                    "C_F_meas_mm_per_N": meas.C_F.tolist()}
+    with stage("diagnose"):
+        from .diagnose import corrected_compliance, diagnose_rig
+        from .diagnose.plots import plot_rig_diagnosis
+        diag, model = diagnose_rig(rec, fea, design)
+        diag.write(out / "diagnosis.rig.json")
+        corrected = corrected_compliance(fea, diag, model)
+        write_compliance(corrected, out / "rod1.corrected.compliance.json")
+        plot_rig_diagnosis(model, out / "rig", diag, "1#")
+        summary["files"]["diagnosis"] = "rig/diagnosis_rig.png"
+        summary["stages"]["diagnose"] = json.loads(json.dumps(diag.to_dict()))
+        summary["stages"]["diagnose"]["corrected_vs_true_max_rel"] = float(
+            np.max(np.abs(corrected.C_F - C_true)) / np.max(np.abs(C_true)))
+    with stage("campaign"):
+        from rodlab.calibrate import resolve_robot
+        from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+        robot = resolve_robot("tx90")
+        r_true = float((C_true[1, 1] + C_true[2, 2]) / (fea.C_F[1, 1] + fea.C_F[2, 2]))
+        rod_true = RodCompliance(fea.rod, fea.method, C_true, r_true * fea.C_g, fea.mass_kg, fea.com_T_mm, fea.tool_mm,
+                                 r_true)
+        simulate_campaign(robot, fea, out / "campaign", CampaignSpec(seed=seed), rod_true=rod_true)
+        summary["stages"]["campaign"] = {"robot": "tx90", "positions": 5, "orientations": 6, "points": 30}
+    with stage("calibrate"):
+        from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture,
+                               read_points, validate)
+        camp = read_campaign(out / "campaign" / "multical.campaign.csv")
+        fix = read_fixture(out / "campaign" / "multical.fixture.json")
+        pts = read_points(out / "campaign" / "multical.validation.csv")
+        nominal_stats, nominal_err, _ = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)
+        table = {"nominal": nominal_stats.to_dict()}
+        errors = {"nominal": nominal_err.tolist()}
+        for label, rod in (("None", RodCompliance.none_like(fea)), ("Calc", calc), ("FEA", fea), ("Meas", meas),
+                           ("Corrected", corrected)):
+            res = identify(robot, campaign_observations(camp, fix, rod), fea.tool_mm, None if label == "None" else rod)
+            st, err, _ = validate(robot, res.params, pts)
+            table[label] = dict(st.to_dict(), fit_rms_um=res.rms_mm * 1e3)
+            errors[label] = err.tolist()
+        from rodlab.calibrate.plots import plot_error_distributions
+        plot_error_distributions(errors, out / "calibration" / "fig10.png", "MultiCal calibration of a simulated "
+                                 "TX90 with rod 1#: validation error per compensation method (the paper's Fig. 10)")
+        summary["files"]["fig10"] = "calibration/fig10.png"
+        summary["stages"]["calibrate"] = {"table3": table}
+    with stage("sweep"):
+        from rodlab.fea.sweep import run_sweep
+        from rodlab.fea.sweep_plot import PAPER_RODS, plot_sweep
+        calibration, title = None, "frame model around rod 1#"
+        if summary["stages"]["fea"]["model"] == "solid":   # that solid run calibrates the frame's joints
+            calibration = solid_run.joints
+            title = "frame model joint-calibrated on rod 1#'s solid FEA"
+        df = run_sweep(design, sweep_grid[0], sweep_grid[1], model="frame", use_dask=False,
+                       cache_dir=out / "sweep" / "cache", calibration=calibration)
+        (out / "sweep").mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out / "sweep" / "sweep.csv", df.to_csv(index=False))
+        plot_sweep(df, out / "sweep" / "sweep.png", title=title, marks={f"paper {k}": v for k, v in PAPER_RODS.items()})
+        ok = df[df["status"] == "ok"]
+        best = ok.loc[ok["c_rod_um"].idxmin()]
+        summary["files"]["sweep"] = "sweep/sweep.png"
+        summary["stages"]["sweep"] = {"designs": int(len(df)), "ok": int(len(ok)), "model": title,
+                                      "frame_calibration": None if calibration is None else {
+                                          "joints_of": calibration.base.name,
+                                          "margins_mm": list(calibration.margins_mm),
+                                          "span_residual": calibration.span_residual},
+                                      "stiffest": {"L1_mm": float(best["L1_mm"]), "L2_mm": float(best["L2_mm"]),
+                                                   "c_rod_um": float(best["c_rod_um"])}}
+    with stage("study"):
+        summary["stages"]["study"] = _study(out / "study", robot, design, calibration)
+        summary["files"]["study_pareto"] = "study/pareto.png"
+    summary["timings_s"] = timings
+    atomic_write_json(out / "run.json", json_safe(summary))
+    return summary
+
+
+#: the demo's study: the paper's three carbon rods, a few simulated campaigns each (``rodlab study`` uses 20)
+DEMO_STUDY_RODS, DEMO_STUDY_REPLICATES = ("rod1", "rod2", "rod3"), 5
+
+
+def _study(out: Path, robot, design, calibration) -> dict:
+    """Predicted calibration accuracy of rods 1#-3# on the TX90 (serial; rod 1#'s joint calibration serves the
+    family); the study's files in ``out``, its rows for the report."""
+    from rodlab.calibrate.simulate import standard_fixture
+    from ..design_io import resolve_design
+    from .study import StudySpec, list_candidates, run_study, write_study_outputs
+    cands = list_candidates([design] + [resolve_design(r) for r in DEMO_STUDY_RODS[1:]])
+    spec = StudySpec(replicates=DEMO_STUDY_REPLICATES)
+    run = run_study(cands, robot, standard_fixture(), spec, {c.label: calibration for c in cands},
+                    out / "cache", use_dask=False)
+    note = "frame joint-calibrated on rod 1#'s solid FEA" if calibration is not None else "frame model"
+    res = write_study_outputs(out, run, robot.name, False, {"designs": ", ".join(c.label for c in cands),
+                                                            "replicates": spec.replicates, "compliance": note})
+    cols = ["design", "c_rod_um", "mass_kg", "O1", "method", "mean_mm", "mean_p05_mm", "mean_p95_mm", "max_mm",
+            "share_deflection", "share_identification", "share_noise"]
+    rows = res.table[res.table["method"].notna()][cols]
+    return {"designs": [c.label for c in cands], "replicates": spec.replicates, "compliance": note,
+            "recommendation": res.recommendation.text, "rows": rows.to_dict(orient="records")}

@@ -1,0 +1,80 @@
+"""The joint-calibrated frame of a design family: one solid FEA run calibrates the frame's joints, which then
+carry over to every L1 x L2 member (docs/fea.md). Shared by ``rodlab sweep --calibrate`` and ``rodlab study``."""
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+from pathlib import Path
+
+from rodlab.design import RodDesign
+from rodlab.errors import RodlabError
+
+__all__ = ["solid_family_calibration", "cad_available", "family_joints"]
+
+log = logging.getLogger(__name__)
+
+
+def cad_available() -> bool:
+    """True when the cad extra (build123d, gmsh) is importable."""
+    try:
+        import build123d  # noqa: F401
+        import gmsh  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def solid_family_calibration(base: RodDesign, L1s=(), L2s=()):
+    """A :class:`rodlab.fea.joints.JointCalibration` of ``base``'s family from one solid run of its calibration
+    member (``base``, or the grid's nearest design whose free tubes are long enough); needs the cad extra."""
+    import rodlab.geometry as geometry
+    from rodlab.fea import run_solid
+    from rodlab.fea.family import calibration_member
+    member = calibration_member(base, L1s, L2s)
+    log.info("joint calibration of %s's family on a solid run of %s", base.name, member.name)
+    return run_solid(member, geometry.mesh_rod, error_estimate=False, joints=True).joints
+
+
+def _family_joints(base, L1s, L2s, cache: Path):
+    """The family's joint calibration, solved once and kept in ``cache/joints`` (keyed by the solid-run
+    design's identity), so a re-run or a resumed study does not solve again."""
+    from rodlab.design_io import design_to_dict
+    from rodlab.fea.family import calibration_member
+    from rodlab.fea.joints_io import read_joints, write_joints
+    member = calibration_member(base, L1s, L2s)
+    key = hashlib.sha256(json.dumps(design_to_dict(member), sort_keys=True, default=str).encode()).hexdigest()[:20]
+    path = cache / "joints" / f"{key}.joints.json"
+    if path.exists():
+        try:
+            return read_joints(path)
+        except RodlabError:
+            pass
+    jc = solid_family_calibration(member)
+    write_joints(path, jc)
+    return jc
+
+
+def family_joints(cands, grid: bool, use_solid: bool, cache: Path) -> tuple[dict, str]:
+    """{candidate label: JointCalibration} per design family (the designs that differ only in L1 / L2; one solid
+    run each, kept in ``cache``), or {} when ``use_solid`` is off or the cad extra is missing; and a note on the
+    compliance model used. ``grid``: the candidates form an L1 x L2 grid (the family's calibration member may
+    then be another grid design whose free tubes are long enough)."""
+    if not use_solid:
+        return {}, "frame with its global calibration (--no-calibrate)"
+    if not cad_available():
+        return {}, "frame with its global calibration (the cad extra for the solid run is not installed)"
+    families: dict = {}
+    for c in cands:
+        if c.design is not None:
+            parts = {k: v for k, v in c.design.summary().items() if k not in ("name", "L1_mm", "L2_mm")}
+            families.setdefault(json.dumps(parts, sort_keys=True), []).append(c)
+    out = {}
+    for members in families.values():
+        base = members[0].design
+        L1s = sorted({c.L1_mm for c in members}) if grid else []
+        L2s = sorted({c.L2_mm for c in members}) if grid else []
+        jc = _family_joints(base, L1s, L2s, cache)
+        for c in members:
+            out[c.label] = jc
+    return out, f"frame joint-calibrated on {len(families)} solid FEA run(s), one per design family"

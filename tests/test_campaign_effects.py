@@ -1,0 +1,132 @@
+"""The campaign effect registry: every campaign effect of the contract's vocabulary is one module that the
+simulator, ``rodlab simulate-campaign --effect``, the diagnosis, the remedies and docs/formats.md take from,
+by one name."""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab import calc_rod_compliance, resolve_design
+from rodlab.app.diagnose import diagnose_campaign
+from rodlab.app.diagnose.advice import remedy
+from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect, campaign_vocabulary_markdown
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab.enums import CampaignEffect
+from rodlab.errors import RodlabError
+
+ROOT = Path(__file__).resolve().parents[1]
+CONTRACT = ROOT.parent / "shared" / "contract" / "effects.md"
+ROBOT = resolve_robot("tx90")
+ROD = calc_rod_compliance(resolve_design("rod1"))
+
+#: a clearly detectable magnitude of each effect, and where the diagnosis must put it
+CASES = {
+    "fixture_pose": ({"position": 2, "offset_mm": [0.15, -0.12, 0.08]}, "position:2"),
+    "rod_deflection": ({"k": 1.6}, None),
+    "periodic_joint_error": ({"joint": 3, "amp_deg": 0.007, "phase_deg": 40.0}, "joint:3"),
+    "thermal_drift": ({"growth_ppm_per_s": 0.045}, "time"),
+    "outliers": ({"count": 2, "min_mm": 0.2, "max_mm": 0.4}, "points"),
+}
+
+
+def test_registry_is_the_contract_vocabulary():
+    names = {e.value for e in CampaignEffect}
+    if CONTRACT.exists():
+        part = CONTRACT.read_text().split("## Subject `campaign`")[1].split("Where the data")[0]
+        assert set(re.findall(r"^\| `([a-z_]+)` \|", part, flags=re.M)) == names
+    assert set(CAMPAIGN_EFFECTS) == set(CampaignEffect) and set(CASES) == names
+    for e, m in CAMPAIGN_EFFECTS.items():
+        assert m.effect is e and m.physics and m.signature and m.locations and m.reported and m.params
+
+
+def test_docs_table_is_the_registry():
+    assert campaign_vocabulary_markdown() in (ROOT / "docs" / "formats.md").read_text(), \
+        "docs/formats.md is stale: run python scripts/gen_cli_docs.py"
+
+
+def _diagnose(folder: Path):
+    return diagnose_campaign(ROBOT, read_campaign(folder / "multical.campaign.csv"),
+                             read_fixture(folder / "multical.fixture.json"), ROD,
+                             validate_points=read_points(folder / "multical.validation.csv"))[0]
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
+    """Simulated through the registry, named first by the diagnosis at the true place, with its magnitude
+    where the reported parameter is the simulator's; the remedy names what to do."""
+    params, where = CASES[name]
+    truth = simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=41), effects={name: params})
+    assert truth["effects"] == [{"effect": name, **campaign_effect(name).complete(params)}]
+    diag = _diagnose(tmp_path)
+    f = diag.findings[0]
+    assert f.effect == name, diag.summary()
+    if name == "outliers":
+        assert sorted(f.location.split(":")[1].split(",")) == sorted(truth["outlier_points"])
+    else:
+        assert f.location == where
+    if name == "rod_deflection":
+        assert f.parameters["k"] == pytest.approx(1.6, rel=0.1)
+    if name == "thermal_drift":
+        assert f.parameters["growth_ppm_per_s"] == pytest.approx(0.045, rel=0.25)
+    if name == "periodic_joint_error":
+        amp = np.rad2deg(np.hypot(f.parameters["amp_sin_rad"], f.parameters["amp_cos_rad"]))
+        assert amp == pytest.approx(0.007, rel=0.4)
+    assert diag.rms_after_mm < diag.rms_before_mm
+    assert len(remedy(f)) > 40 and "docs/diagnose.md" not in remedy(f)
+
+
+def test_no_effect_and_an_empty_list_give_the_same_campaign(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    simulate_campaign(ROBOT, ROD, a, CampaignSpec(seed=7, positions=3, orientations=4, validation_points=5))
+    simulate_campaign(ROBOT, ROD, b, CampaignSpec(seed=7, positions=3, orientations=4, validation_points=5), effects=[])
+    for f in ("multical.campaign.csv", "multical.fixture.json", "multical.validation.csv"):
+        assert (a / f).read_bytes() == (b / f).read_bytes()
+
+
+def test_outliers_leave_the_other_readings_unchanged(tmp_path):
+    """Gross errors come from a generator of their own: every other reading is that of the same seed."""
+    spec = CampaignSpec(seed=7, positions=3, orientations=4, validation_points=5)
+    simulate_campaign(ROBOT, ROD, tmp_path / "a", spec)
+    t = simulate_campaign(ROBOT, ROD, tmp_path / "b", spec, effects={"outliers": {"count": 3}})
+    rows_a = (tmp_path / "a" / "multical.campaign.csv").read_text().splitlines()[1:]
+    rows_b = (tmp_path / "b" / "multical.campaign.csv").read_text().splitlines()[1:]
+    changed = [ra.split(",")[0] + "." + ra.split(",")[1] for ra, rb in zip(rows_a, rows_b) if ra != rb]
+    assert sorted(changed) == sorted(t["outlier_points"]) and len(changed) == 3
+
+
+@pytest.mark.parametrize("effects, key", [
+    ({"fixture_pose": {"position": 9}}, "fixture_pose.position"),
+    ({"periodic_joint_error": {"joint": 0}}, "periodic_joint_error.joint"),
+    ({"rod_deflection": {"k": -1}}, "rod_deflection.k"),
+    ({"outliers": {"count": 999}}, "outliers.count"),
+    ({"thermal_drift": {"rate": 1}}, "thermal_drift.rate"),
+    ({"wobble": {}}, "effect"),
+])
+def test_bad_effects_are_refused_before_anything_is_written(tmp_path, effects, key):
+    with pytest.raises(RodlabError) as e:
+        simulate_campaign(ROBOT, ROD, tmp_path / "c", CampaignSpec(seed=1), effects=effects)
+    assert e.value.key == key
+    assert not (tmp_path / "c").exists()
+
+
+def test_cli_simulates_campaign_effects_by_name(tmp_path, capsys):
+    from rodlab.app.cli import main
+    rod = tmp_path / "rod.compliance.json"
+    from rodlab.compliance import write_compliance
+    write_compliance(ROD, rod)
+    out = tmp_path / "camp"
+    assert main(["simulate-campaign", "--rod", str(rod), "--positions", "3", "--orientations", "4", "-o", str(out),
+                 "--effect", "periodic_joint_error:joint=2,amp_deg=0.01", "--fixture-error", "3:0.1,0,0"]) == 0
+    truth = json.loads((out / "truth.json").read_text())
+    assert [e["effect"] for e in truth["effects"]] == ["fixture_pose", "periodic_joint_error"]
+    assert truth["periodic_joint_error"] == [2, 0.01, 0.0] and truth["fixture_error_mm"] == {"3": [0.1, 0.0, 0.0]}
+    assert "effect periodic_joint_error: joint=2" in capsys.readouterr().out
+    bad = tmp_path / "bad"
+    assert main(["simulate-campaign", "--rod", str(rod), "-o", str(bad), "--effect", "thermal_drift:rate=1"]) == 2
+    err = capsys.readouterr().err
+    assert "thermal_drift" in err and "growth_ppm_per_s" in err and not bad.exists()

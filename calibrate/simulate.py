@@ -131,13 +131,14 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
     return {j: np.array(got[j][:k]) for j in Ts}
 
 
-def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(),
+def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(), *,
                       rod_true: RodCompliance | None = None, effects=None, rod_thermal=None,
                       temp_K_per_s: float = 0.0) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
     and the rod file into ``out_dir``; return the truth.
 
-    rod_true : the rod as it really is (default: ``rod``, the file the calibrator is given);
+    rod_true : the rod as it really is (default: ``rod``, the file the calibrator is given; a ``rod_deflection``
+        effect scales it further);
     effects : physics the calibrator's model leaves out, ``{name: parameters}`` or ``[(name, parameters), ...]``
         (an effect may repeat in the list form) with the names and parameters of
         :data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS` (e.g. ``{"fixture_pose": {"position": 2,
@@ -147,10 +148,9 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         it)."""
     active = complete_campaign_effects(effects)
     for m, p in active:
-        m.check_layout(spec.positions, spec.positions * spec.orientations, p)
+        m.check_layout(spec.positions, spec.positions * spec.orientations, robot.n, p)
     rng = np.random.default_rng(spec.seed)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     rod_true = rod_true or rod
     for m, p in active:
         rod_true = m.true_rod(rod_true, p)
@@ -159,6 +159,7 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s)
     xD, corrupted = _corrupt(readings, spec, active)
     readings = replace(readings, xD=xD)
+    out.mkdir(parents=True, exist_ok=True)             # after every check and the reachability of the poses
     _write_campaign(out / "multical.campaign.csv", robot, readings)
     recorded = _recorded_fixture(Ts, wp, spec, rng, active)
     atomic_write_json(out / "multical.fixture.json", {"format": "rodlab.fixture/1", "world_position": wp,

@@ -80,6 +80,16 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
     assert len(remedy(f)) > 40 and "docs/diagnose.md" not in remedy(f)
 
 
+def test_two_wrong_fixture_poses_are_both_simulated_and_recorded(tmp_path):
+    spec = CampaignSpec(seed=7, positions=3, orientations=4, validation_points=5)
+    t = simulate_campaign(ROBOT, ROD, tmp_path, spec, effects=[("fixture_pose", {"position": 1, "offset_mm": [0.1, 0, 0]}),
+                                                               ("fixture_pose", {"position": 3, "offset_mm": [0, 0.2, 0]})])
+    assert t["fixture_error_mm"] == {"1": [0.1, 0.0, 0.0], "3": [0.0, 0.2, 0.0]}
+    rec = json.loads((tmp_path / "multical.fixture.json").read_text())["positions"]
+    true = t["true_fixture_poses_W"]
+    assert rec["3"][1] - true["3"][1] == pytest.approx(0.2, abs=0.05)    # fixture noise 0.01 mm
+
+
 def test_no_effect_and_an_empty_list_give_the_same_campaign(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     simulate_campaign(ROBOT, ROD, a, CampaignSpec(seed=7, positions=3, orientations=4, validation_points=5))
@@ -106,6 +116,11 @@ def test_outliers_leave_the_other_readings_unchanged(tmp_path):
     ({"outliers": {"count": 999}}, "outliers.count"),
     ({"thermal_drift": {"rate": 1}}, "thermal_drift.rate"),
     ({"wobble": {}}, "effect"),
+    ({"periodic_joint_error": {"amp_deg": 0.01}}, "periodic_joint_error.joint"),       # where is missing
+    ({"periodic_joint_error": {"joint": 9}}, "periodic_joint_error.joint"),            # the TX90 has 6
+    ({"outliers": {"min_mm": 0.5}}, "outliers.min_mm"),                                # above the example's max
+    ([("thermal_drift", {}), ("thermal_drift", {})], "thermal_drift"),
+    ([("fixture_pose", {"position": 2}), ("fixture_pose", {"position": 2})], "fixture_pose"),
 ])
 def test_bad_effects_are_refused_before_anything_is_written(tmp_path, effects, key):
     with pytest.raises(RodlabError) as e:

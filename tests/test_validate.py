@@ -12,7 +12,8 @@ from rodlab.app.cli.main import main
 from rodlab.schema import FORMATS, check_file, load_schema
 
 ROOT = Path(__file__).resolve().parents[1]
-SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("calibrate/robots/*.urdf"),
+SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("calibrate/robots/*.toml"),
+                  *ROOT.glob("stiffness_rig/plans/*.toml"), *ROOT.glob("calibrate/robots/*.urdf"),
                   *ROOT.glob("benchmarks/data/*/*.csv")])
 
 

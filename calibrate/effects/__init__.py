@@ -23,7 +23,8 @@ __all__ = ["CAMPAIGN_EFFECTS", "campaign_effect", "complete_campaign_effects", "
            "CampaignEffectModel", "CampaignContext", "Refit", "hypothesis", "correct_joints", "generic_rod",
            "campaign_vocabulary_markdown"]
 
-#: every campaign effect, in the order the simulator applies them and the diagnosis lists its hypotheses
+#: every campaign effect, in the order the simulator applies them and the diagnosis lists its hypotheses (the
+#: order also breaks ties between equally good hypotheses: append new effects at the end)
 CAMPAIGN_EFFECTS: dict[CampaignEffect, CampaignEffectModel] = {m.effect: m for m in (
     FixturePose(), RodDeflection(), PeriodicJointError(), ThermalDrift(), Outliers())}
 
@@ -42,6 +43,11 @@ def complete_campaign_effects(effects) -> list[tuple[CampaignEffectModel, dict]]
     items = list(effects.items()) if hasattr(effects, "items") else list(effects or [])
     done = [(campaign_effect(name), given) for name, given in items]
     done = [(m, m.complete(given or {})) for m, given in done]
+    for i, (m, p) in enumerate(done):
+        for m2, p2 in done[:i]:
+            if m2 is m and (not m.repeatable or m.same_place(p, p2)):
+                raise CalibrationError(f"effect {m.effect} is given twice{' at the same place' if m.repeatable else ''}"
+                                       f"; give it once", key=str(m.effect))
     order = list(CAMPAIGN_EFFECTS)
     return sorted(done, key=lambda mp: order.index(mp[0].effect))
 

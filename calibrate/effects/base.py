@@ -57,15 +57,15 @@ class Refit:
     """What the re-identification with the found physics takes from the findings.
 
     rod : the compliance file to compensate with; freed : parameter names freed (fixture offsets);
-    keep : shape=(N,) bool, points kept (outliers dropped); joint_corrections_rad : {joint index (0-based):
+    keep : shape=(N,) bool, points kept (outliers dropped), required; joint_corrections_rad : {joint index (0-based):
     (a_sin, a_cos) [rad]} once-per-revolution errors added to the joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
     points referred back to the campaign start)
     """
 
     rod: object
+    keep: np.ndarray
     freed: set = field(default_factory=set)
-    keep: np.ndarray | None = None
     joint_corrections_rad: dict = field(default_factory=dict)
     obs_edits: list = field(default_factory=list)
 
@@ -92,14 +92,36 @@ class CampaignEffectModel(EffectSchema):
     locations: tuple = ()
     reported: str = ""
     per_point: bool = False
+    required: tuple = ()        #: parameters that must be given whenever any is (where the effect is)
+    repeatable: bool = False    #: may be simulated more than once (at different places)
+
+    def complete(self, given: dict) -> dict:
+        """As :meth:`EffectSchema.complete`; a parameter neither given nor defaulted takes the example's value,
+        and a place (``required``) must be given with any other parameter."""
+        given = dict(given)
+        for name in self.required:
+            if given and name not in given:
+                self.fail(f"effect {self.effect}: give {name} with the other parameters (e.g. {name}="
+                          f"{self.example.get(name)})", f"{self.effect}.{name}")
+        if given:                 # a parameter neither given nor defaulted takes the example's value
+            given = {**{k: v for k, v in self.example.items() if k not in given}, **given}
+        out = super().complete(given)
+        absent = [p.name for p in self.params if p.name not in out]
+        if absent:
+            self.fail(f"effect {self.effect}: no value for {absent}", f"{self.effect}.{absent[0]}")
+        return out
+
+    def same_place(self, p: dict, q: dict) -> bool:
+        """Whether two repeats of a repeatable effect act at the same place."""
+        return True
 
     def fail(self, message: str, key: str) -> None:
         raise CalibrationError(message, key=key)
 
     # -- simulator (identity unless overridden) -----------------------------------------------------------------
-    def check_layout(self, positions: int, points: int, p: dict) -> None:
+    def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
         """Fail if the parameters do not fit a campaign of ``positions`` clamping positions and ``points``
-        points (checked before anything is written)."""
+        points of a robot with ``n_joints`` joints (checked before anything is written)."""
 
     def true_rod(self, rod, p: dict):
         return rod
@@ -118,8 +140,9 @@ class CampaignEffectModel(EffectSchema):
         """Readings (N, 3) in {D} with gross errors, and what was done (for the truth file)."""
         return xD, {}
 
-    def truth(self, p: dict) -> dict:
-        """Keys this effect adds to ``truth.json`` besides its parameters (older truth keys)."""
+    def truth(self, p: dict | None) -> dict:
+        """Keys this effect adds to ``truth.json`` besides its parameters (older truth keys); ``p`` None: the
+        values when the effect is not simulated."""
         return {}
 
     # -- diagnosis ------------------------------------------------------------------------------------------------

@@ -22,10 +22,16 @@ class FixturePose(CampaignEffectModel):
     locations = ("position:J",)
     reported = "`dx_mm`, `dy_mm`, `dz_mm` [mm, {W}]"
 
-    def check_layout(self, positions: int, points: int, p: dict) -> None:
+    required = ("position",)
+    repeatable = True
+
+    def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
         if not 1 <= int(p["position"]) <= positions:
             self.fail(f"effect {self.effect}: position {p['position']} is not one of the campaign's positions "
                       f"1..{positions}", f"{self.effect}.position")
+
+    def same_place(self, p: dict, q: dict) -> bool:
+        return int(p["position"]) == int(q["position"])
 
     def recorded_fixture(self, j: int, pose: np.ndarray, p: dict) -> np.ndarray:
         if j != int(p["position"]):

@@ -28,7 +28,7 @@ class Outliers(CampaignEffectModel):
             self.fail(f"effect {self.effect}: need 0 <= min_mm <= max_mm, got {p['min_mm']}, {p['max_mm']}",
                       f"{self.effect}.min_mm")
 
-    def check_layout(self, positions: int, points: int, p: dict) -> None:
+    def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
         if int(p["count"]) > points:
             self.fail(f"effect {self.effect}: count {p['count']} exceeds the campaign's {points} points",
                       f"{self.effect}.count")

@@ -31,6 +31,13 @@ class PeriodicJointError(CampaignEffectModel):
     locations = ("joint:K",)
     reported = "`amp_sin_rad`, `amp_cos_rad` [rad]: joint K turns `q + a_s sin q + a_c cos q`"
 
+    required = ("joint",)
+
+    def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
+        if not 1 <= int(p["joint"]) <= n_joints:
+            self.fail(f"effect {self.effect}: joint {p['joint']} is not one of the robot's joints 1..{n_joints}",
+                      f"{self.effect}.joint")
+
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
         k, amp, ph = int(p["joint"]) - 1, np.deg2rad(p["amp_deg"]), np.deg2rad(p["phase_deg"])
         out = np.array(q_rad, float, copy=True)

@@ -49,9 +49,7 @@ class RodDeflection(CampaignEffectModel):
             self.fail(f"effect {self.effect}: k must be > 0 (a compliance ratio), got {p['k']}", f"{self.effect}.k")
 
     def true_rod(self, rod, p: dict):
-        k = float(p["k"])
-        return RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm, rod.tool_mm,
-                             rod.r_rod * k)
+        return scaled_rod(rod, float(p["k"]))
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         rod, obs = ctx.rod, ctx.obs

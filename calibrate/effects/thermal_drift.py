@@ -42,7 +42,8 @@ class ThermalDrift(CampaignEffectModel):
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
         # refer the measured points to the campaign start: undo the growth about the robot base
         vals = ctx.time_s if location == "time" else ctx.temp_C
-        g = next(iter(parameters.values())) * 1e-6 * (vals - vals.min())
+        rate = parameters["growth_ppm_per_s" if location == "time" else "growth_ppm_per_K"]
+        g = rate * 1e-6 * (vals - vals.min())
         centre = ctx.frames.t_W0
         fit.obs_edits.append(lambda obs: replace(obs, x_W_mm=obs.x_W_mm - g[:, None] * (obs.x_W_mm - centre)))
 

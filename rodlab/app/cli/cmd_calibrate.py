@@ -418,7 +418,7 @@ def cmd_simulate_campaign(args) -> int:
     effects += parse_effect_specs(args.effect, campaign_effect)
     spec = CampaignSpec(positions=args.positions, orientations=args.orientations, device_noise_mm=args.noise_um * 1e-3,
                         seed=args.seed)
-    truth = simulate_campaign(robot, rod, args.output, spec, rod_true, effects)
+    truth = simulate_campaign(robot, rod, args.output, spec, rod_true=rod_true, effects=effects)
     print(f"wrote a {args.positions} x {args.orientations} campaign of {robot.name} with rod {rod.rod} to {args.output}")
     for e in truth["effects"]:
         names = [p.name for p in campaign_effect(e["effect"]).params]

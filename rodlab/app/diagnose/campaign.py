@@ -271,7 +271,7 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
     result and the :class:`Refit` it used."""
     from rodlab.calibrate import campaign_observations, identify
     from rodlab.calibrate.identify import Observations
-    fit = Refit(rod=rod, keep=np.ones(ctx.n_points, dtype=bool))
+    fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
     obs2 = campaign_observations(camp, fix, fit.rod)

@@ -174,22 +174,18 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
 
 @dataclass
 class _Readings:
-    """The campaign as recorded: position, joint angles as read [deg], device readings in {D} [mm], time [s],
-    temperature [degC], one row per point."""
+    """The campaign as recorded: position, point index within it, joint angles as read [deg], device readings
+    in {D} [mm], time [s], temperature [degC], one row per point."""
 
     position: np.ndarray
+    point: np.ndarray
     q_deg: np.ndarray
     xD: np.ndarray
     time_s: np.ndarray
     temp_C: np.ndarray
 
     def labels(self) -> list:
-        counts: dict = {}
-        out = []
-        for j in self.position:
-            counts[int(j)] = counts.get(int(j), 0) + 1
-            out.append(f"{int(j)}.{counts[int(j)]}")
-        return out
+        return [f"{j}.{i}" for j, i in zip(self.position, self.point)]     # as Campaign.labels
 
 
 def _true_angles(q: np.ndarray, active) -> np.ndarray:
@@ -203,7 +199,7 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, t
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
     forces = {j: Ts[j][:3, :3] @ CONTACT_FORCE_D_N for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
-    cols: dict = {"position": [], "q_deg": [], "xD": [], "time_s": [], "temp_C": []}
+    cols: dict = {"position": [], "point": [], "q_deg": [], "xD": [], "time_s": [], "temp_C": []}
     t = 0.0
     for j in range(1, spec.positions + 1):
         q = reached[j]
@@ -225,6 +221,7 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, t
             if grow is not None:
                 xD = xD + grow @ Ts[j][:3, :3]
         cols["position"].append(np.full(m, j))
+        cols["point"].append(np.arange(1, m + 1))
         cols["q_deg"].append(np.round(np.rad2deg(q) / spec.q_resolution_deg) * spec.q_resolution_deg)
         cols["xD"].append(xD)
         cols["time_s"].append(times)
@@ -244,9 +241,8 @@ def _corrupt(readings: _Readings, spec, active) -> tuple[np.ndarray, dict]:
 
 
 def _write_campaign(path: Path, robot, r: _Readings) -> None:
-    labels = r.labels()
-    rows = [f"{j},{lab.split('.')[1]}," + ",".join(f"{v:.4f}" for v in q) + "," + ",".join(f"{v:.4f}" for v in x)
-            + f",{ts:.0f},{tc:.2f}" for j, lab, q, x, ts, tc in zip(r.position, labels, r.q_deg, r.xD, r.time_s, r.temp_C)]
+    rows = [f"{j},{i}," + ",".join(f"{v:.4f}" for v in q) + "," + ",".join(f"{v:.4f}" for v in x)
+            + f",{ts:.0f},{tc:.2f}" for j, i, q, x, ts, tc in zip(r.position, r.point, r.q_deg, r.xD, r.time_s, r.temp_C)]
     atomic_write_text(path, "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
                       + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")
 

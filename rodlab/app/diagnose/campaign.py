@@ -74,11 +74,17 @@ class CampaignFits:
             raise ValueError(f"time_s must have shape ({n},), got {self.time_s.shape}")
 
 
+def _robust_reduced_chi2(e: np.ndarray, n: int, k: int) -> float:
+    """Reduced chi-square of whitened residuals ``e`` (n readings, k parameters), robust: the median over the
+    points, so isolated outliers or one wrong position cannot hide themselves."""
+    per_point = (e.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - k, 1)
+    return float(np.median(per_point)) / float(chi2_median(3))
+
+
 def _birge_drop(e: np.ndarray, n: int, k: int, birge: float) -> float:
     """Factor (>= 1) by which the Birge ratio falls once accepted terms are fitted: ``e`` are the whitened
     residuals of the current model (k parameters), robust per-point reduced chi-square as at the start."""
-    per_point = (e.reshape(-1, 3) ** 2).sum(axis=1) * n / max(n - k, 1)
-    chi_red = float(np.median(per_point)) / float(chi2_median(3))
+    chi_red = _robust_reduced_chi2(e, n, k)
     new = max(birge * float(np.sqrt(chi_red)), 1.0)
     return max(birge / new, 1.0)
 
@@ -120,9 +126,7 @@ class _Selection:
         L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))
         self.r_raw = res.residuals_mm.reshape(-1)
         self.n = self.r_raw.size
-        e0 = whitened_projection(self.r_raw, J, L)
-        per_point = (e0.reshape(-1, 3) ** 2).sum(axis=1) * self.n / max(self.n - J.shape[1], 1)
-        chi_red0 = float(np.median(per_point)) / float(chi2_median(3))
+        chi_red0 = _robust_reduced_chi2(whitened_projection(self.r_raw, J, L), self.n, J.shape[1])
         self.birge = float(np.sqrt(max(chi_red0, 1.0)))
         log.debug("campaign diagnosis: robust reduced chi-square %.2f, Birge ratio %.2f", chi_red0, self.birge)
         self.L = L * self.birge

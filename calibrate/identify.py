@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab.compliance import RodCompliance
-from rodlab.frames import pose_to_matrix
+from rodlab.frames import abc_rate_axes, pose_to_matrix, skew
 from rodlab.units import DEVICE_NOISE_MM
 
 from .campaign import Campaign, Fixture
@@ -143,7 +143,9 @@ class CalibrationResult:
     params : the identified :class:`ModelParams`; values / sigma : {name: value in contract units};
     status : {name: identified | fixed | regularised}; unidentifiable : reasons; residuals_mm : (N, 3);
     rms_mm : per scalar reading; noise_mm : estimate; correlation : (P, P) of the free parameters;
-    offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations
+    offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations;
+    warnings : reasons not to trust the result (:func:`trust_warnings`); cautions : what a trusted result
+    should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None
     """
 
     params: ModelParams
@@ -165,6 +167,7 @@ class CalibrationResult:
     condition: float = float("nan")
     warnings: list = field(default_factory=list)
     residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
+    cautions: list = field(default_factory=list)
 
 
 def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
@@ -239,7 +242,9 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     if expected_noise_mm:
         from .residual_test import residual_test
         out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
+    from .trust import trust_cautions, trust_warnings
     out.warnings = trust_warnings(robot, out)
+    out.cautions = trust_cautions(out)
     return out
 
 
@@ -473,39 +478,6 @@ def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-#: physical bounds of the identified errors; beyond them a result is flagged
-ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
-
-
-def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
-    """Reasons not to trust a calibration: no convergence, residuals the noise model does not explain
-    (:mod:`calibrate.residual_test`, the test ``rodlab diagnose --campaign`` uses too), parameters beyond
-    physical bounds."""
-    w = []
-    if not res.success:
-        w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
-    test = res.residual_check
-    if test is not None and test.missing:
-        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; " + (
-            "physics is missing: run `rodlab diagnose --campaign` on the same files to find which" if test.clamping
-            else "either the instrument is noisier than stated (check --noise-um against its specification) or the "
-                 "model misses physics (backlash, non-geometric errors): `rodlab diagnose --points` on the same "
-                 "files shows the residuals per joint, workspace region and time"))
-    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
-    for info in res.infos:
-        if res.status[info.name] == "fixed":
-            continue
-        v = res.values[info.name]
-        if info.kind in ERROR_BOUNDS:
-            err = v if info.kind == "dtheta" else v - nominal[info.kind][info.index]
-            if abs(err) > ERROR_BOUNDS[info.kind]:
-                w.append(f"{info.name} moved {err:+.3g} {info.unit} from nominal (bound {ERROR_BOUNDS[info.kind]:g}): "
-                         f"not a plausible manufacturing error")
-        if info.kind == "c" and not (-1e-6 <= v <= 1e-4):
-            w.append(f"{info.name} = {v:.3g} rad/(N m) is outside [0, 1e-4]: not a plausible gearbox compliance")
-    return w
-
-
 def _data_name(positions) -> str:
     """What the user measured: a MultiCal campaign (clamping positions) or instrument points."""
     return "campaign" if len(positions) else "data set"
@@ -547,7 +519,10 @@ def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
 
 def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> np.ndarray:
     """Covariance of the measured points [mm^2], shape=(3N, 3N): device noise plus the uncertainty of each
-    recorded clamping pose (translation [mm], rotation [deg]), correlated among the points of a position.
+    recorded clamping pose, correlated among the points of a position. ``fixture_sigma`` = (standard
+    uncertainty of each recorded x, y, z [mm], of each recorded angle a, b, c [deg]): the angles' uncertainty
+    reaches the orientation through the rates of ``Rx(a) Ry(b) Rz(c)`` (:func:`rodlab.frames.abc_rate_axes`),
+    larger along one axis near b = +-90 deg.
 
     With per-point uncertainties (``obs.sigma_mm``) the noise of each coordinate is proportional to its stated
     sigma, scaled so that its rms over the data set is ``noise_mm`` (pass the stated rms to use them as they
@@ -567,10 +542,9 @@ def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.
             d = obs.x_W_mm[m] - T[:3, 3]                             # (k, 3)
             G = np.zeros((m.size, 3, 6))
             G[:, :, :3] = np.eye(3) * st
-            # column 3 + a: e_a x d, i.e. -skew(d) e_a
-            G[:, 0, 4], G[:, 0, 5] = d[:, 2] * sr, -d[:, 1] * sr
-            G[:, 1, 3], G[:, 1, 5] = -d[:, 2] * sr, d[:, 0] * sr
-            G[:, 2, 3], G[:, 2, 4] = d[:, 1] * sr, -d[:, 0] * sr
+            # the recorded angles a, b, c each uncertain by sr: rotation vector E (da, db, dc), moving the
+            # point by omega x d = -skew(d) omega
+            G[:, :, 3:] = -skew(d) @ abc_rate_axes(T[:3, :3]) * sr
             G = G.reshape(3 * m.size, 6)
             rows = (3 * m[:, None] + np.arange(3)).ravel()
             S[np.ix_(rows, rows)] += G @ G.T

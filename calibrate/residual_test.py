@@ -14,10 +14,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ResidualTest", "residual_test", "P_MISSING"]
+__all__ = ["ResidualTest", "residual_test", "P_MISSING", "BIRGE_MATERIAL"]
 
 #: tail probability below which the residuals are not noise (the diagnosers' likelihood-ratio level too)
 P_MISSING = 1e-3
+#: Birge ratio sqrt(chi2 / dof) above which missing physics matters for the parameters: below it the scatter
+#: the model leaves out is at most about the noise model's own (sqrt(1.5^2 - 1) = 1.1 times), so its pull on
+#: each parameter is of the order of the standard errors, which are computed from the residuals' scatter anyway
+BIRGE_MATERIAL = 1.5
 
 
 @dataclass(frozen=True)
@@ -38,6 +42,18 @@ class ResidualTest:
     missing: bool
     clamping: bool = True
 
+    @property
+    def birge(self) -> float:
+        return float(np.sqrt(max(self.reduced, 0.0)))
+
+    @property
+    def material(self) -> bool:
+        return self.missing and self.birge > BIRGE_MATERIAL
+
+    def to_dict(self) -> dict:
+        """The test as the calibration result and the diagnosis report record it."""
+        return {"reduced_chi2": self.reduced, "dof": self.dof, "p_value": self.p_value, "birge_ratio": self.birge,
+                "physics_missing": self.missing, "material": self.material}
 
     def describe(self) -> str:
         """One sentence: the statistic, the noise model and the verdict."""

@@ -26,7 +26,9 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
            "unidentifiable": res.unidentifiable, "residual_rms_mm": res.rms_mm, "points": int(res.residuals_mm.shape[0]),
            "fit": {"success": res.success, "message": res.message, "nfev": res.nfev,
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,
-                   "warnings": res.warnings}}
+                   "warnings": res.warnings, "cautions": res.cautions}}
+    if res.residual_check is not None:
+        out["fit"]["residual_test"] = res.residual_check.to_dict()
     if before is not None and after is not None:
         out["validation"] = {"before": before.to_dict(), "after": after.to_dict()}
     if extra:

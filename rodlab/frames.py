@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rot_x", "rot_y", "rot_z", "pose_to_matrix", "matrix_to_pose", "rotation_from_abc", "skew"]
+__all__ = ["rot_x", "rot_y", "rot_z", "pose_to_matrix", "matrix_to_pose", "rotation_from_abc", "skew",
+           "abc_rate_axes"]
 
 
 def skew(v) -> np.ndarray:
@@ -57,6 +58,19 @@ def rotation_from_abc(abc_deg) -> np.ndarray:
     R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = ca * sc + sa * sb * cc, ca * cc - sa * sb * sc, -sa * cb
     R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = sa * sc - ca * sb * cc, sa * cc + ca * sb * sc, ca * cb
     return R
+
+
+def abc_rate_axes(R) -> np.ndarray:
+    """World axes of the angle rates of ``R = Rx(a) Ry(b) Rz(c)``, shape=(..., 3, 3) -> (..., 3, 3): the rotation
+    vector of small changes (da, db, dc) [rad] is ``E @ (da, db, dc)``, with columns ``x``, ``Rx(a) y`` and
+    ``R z`` (how the uncertainty of recorded angles a, b, c becomes an uncertainty of the orientation)."""
+    R = np.asarray(R, dtype=float)
+    a = np.arctan2(-R[..., 1, 2], R[..., 2, 2])
+    E = np.zeros(R.shape[:-2] + (3, 3))
+    E[..., 0, 0] = 1.0
+    E[..., 1, 1], E[..., 2, 1] = np.cos(a), np.sin(a)
+    E[..., :, 2] = R[..., :, 2]
+    return E
 
 
 def pose_to_matrix(pose) -> np.ndarray:

@@ -201,7 +201,14 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         if res.residual_check is not None and res.residual_check.missing:
             _print_suspects(robot, camp, args, rod, comp)
         return 3
+    _print_cautions(res)
     return 0
+
+
+def _print_cautions(res) -> None:
+    """A trusted result's cautions (residuals slightly above the noise model)."""
+    for c in res.cautions:
+        print(f"caution (trusted): {c}", file=sys.stderr)
 
 
 def _print_not_trusted(res) -> None:
@@ -262,7 +269,8 @@ def _print_result(res, before, after, label) -> None:
             print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
     print(f"  held fixed: {len(res.unidentifiable)} (see --json for why)")
     if res.residual_check is not None:
-        verdict = "NOT noise" if res.residual_check.missing else "consistent with noise"
+        t = res.residual_check
+        verdict = "NOT noise" if t.material else "slightly above noise" if t.missing else "consistent with noise"
         print(f"  residuals {verdict}: {res.residual_check.describe()}")
     if before is not None:
         print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")
@@ -292,6 +300,7 @@ def _calibrate_points(args) -> int:
         print("\n".join("  " + line for line in diagnose_points(robot, pts, res, noise_mm).summary().splitlines()),
               file=sys.stderr)
         return 3
+    _print_cautions(res)
     return 0
 
 

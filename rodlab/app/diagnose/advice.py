@@ -13,6 +13,10 @@ __all__ = ["remedy"]
 
 
 def _unexplained(f: Finding) -> str:
+    if f.parameters.get("spread") == "even":
+        return ("no structure left: if the device's specification allows a scatter of "
+                f"{f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise check the device's "
+                "mounting and the fixture for play")
     return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "
             f"{f.location or 'the worst position'}, and compare with the simulated campaign of "
             "`rodlab simulate-campaign`")

@@ -1,7 +1,7 @@
 """Score the rig diagnosis on blind cases: false alarms, recall by SNR, wrong cause, location, parameters,
 honesty on out-of-library effects, fit after.
 
-    python benchmarks/diagnose_blind.py [N] [SEED] [wide]   # prints and writes docs/benchmarks/diagnose_blind.md
+    python benchmarks/diagnose_blind.py [N] [SEED] [wide|variants]   # writes docs/benchmarks/diagnose_blind[_MODE].md
 """
 from __future__ import annotations
 
@@ -21,7 +21,6 @@ from rodlab.fileio import atomic_write_text  # noqa: E402
 from rodlab.stiffness_rig import read_recording  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind.md"
-OUT_WIDE = OUT.with_name("diagnose_blind_wide.md")
 
 #: the parameter scored per effect (the simulator and the diagnosis report use the same names and units)
 _PARAM = {"friction": ("F_f_N", "F_f_N", 1.0), "tare": ("tare_kg", "tare_kg", 1.0), "creep": ("phi", "phi", 1.0),
@@ -62,8 +61,12 @@ def score(cases, results) -> dict:
                 s["loc_ok"] += e["location"] in (hit[0].location or "").split("|")
             if hit and e["effect"] in _PARAM:
                 tk, fk, conv = _PARAM[e["effect"]]
+                if tk not in e["parameters"]:          # another form of the effect (variants): scored by name only
+                    continue
                 tv = e["parameters"][tk]
                 fv = hit[0].parameters.get(fk)
+                if fv is None:                          # found in another form (e.g. quadratic for linear)
+                    continue
                 if e["effect"] == "compliance_scale":
                     tv, fv = tv - 1.0, fv - 1.0
                 elif conv is not None:
@@ -95,11 +98,14 @@ def score(cases, results) -> dict:
 def main() -> int:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 60
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 1000
-    wide = len(sys.argv) > 3 and sys.argv[3] == "wide"
+    mode = sys.argv[3] if len(sys.argv) > 3 else ""
+    if mode not in ("", "wide", "variants"):
+        raise SystemExit(f"the third argument is wide or variants, got {mode!r}")
+    wide, variants = mode == "wide", mode == "variants"
     sim = calc_rod_compliance(resolve_design("rod1"))
     design = resolve_design("rod1")
     with tempfile.TemporaryDirectory() as tmp:
-        cases = generate_cases(tmp, n, seed, wide=wide)
+        cases = generate_cases(tmp, n, seed, wide=wide, variants=variants)
         results = []
         for c in cases:
             t0 = time.perf_counter()
@@ -107,10 +113,12 @@ def main() -> int:
             results.append((d, time.perf_counter() - t0))
     sc = score(cases, results)
     times = [dt for _, dt in results]
-    wide_note = "; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg"
+    note = {"wide": "; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg",
+            "variants": "; variants: nonlinearity linear, quadratic or on one axis; an effect beside a bumped hold; "
+                        "outside effects also a gauge slip and a saturating gauge"}.get(mode, "")
     lines = ["# Blind benchmark: rig diagnosis", "",
-             f"`python benchmarks/diagnose_blind.py {n} {seed}{' wide' if wide else ''}`: {n} generated cases (rod 1#"
-             f"{wide_note if wide else ''}), "
+             f"`python benchmarks/diagnose_blind.py {n} {seed}{' ' + mode if mode else ''}`: {n} generated cases "
+             f"(rod 1#{note}), "
              f"{time.strftime('%Y-%m-%d')}. Goals: false alarms <= 5 %, recall >= 90 % at SNR >= 5, wrong cause <= 5 %, "
              f"location >= 90 %, parameters within 1.35x, honest `unexplained` >= 80 %, fit after <= 1.5x noise, "
              f"<= 10 s per recording.", "",
@@ -128,7 +136,7 @@ def main() -> int:
               f"| time per recording | median {np.median(times):.2f} s, max {max(times):.2f} s |", "",
               "Confusion (true effect -> first matching finding, or the strongest finding, or none):", ""]
     lines += [f"- {k}: {v}" for k, v in sc["confusion"].items()]
-    atomic_write_text(OUT_WIDE if wide else OUT, "\n".join(lines) + "\n")
+    atomic_write_text(OUT.with_name(f"diagnose_blind_{mode}.md") if mode else OUT, "\n".join(lines) + "\n")
     print("\n".join(lines))
     print(json.dumps(sc["counts"]))
     return 0

@@ -35,8 +35,17 @@ class BlindCase:
     truth: dict
 
 
-def _unit_effect(name, rng, places):
-    """(effects dict for a unit magnitude, location, scalable keys)."""
+def _unit_effect(name, rng, places, variants: bool = False):
+    """(effects dict for a unit magnitude, location, scalable keys); ``variants``: other forms of an effect than
+    the diagnosis's first hypothesis (a nonlinearity quadratic in the load, or on one load axis only)."""
+    if name == "nonlinearity" and variants:
+        form = str(rng.choice(["linear", "quadratic", "axis"]))
+        sign = float(rng.choice([-1, 1]))
+        if form == "quadratic":
+            return {"nonlinearity": {"beta2_per_100N2": 0.01 * sign}}, None, ["beta2_per_100N2"]
+        if form == "axis":
+            axis = str(rng.choice(list("xyz")))
+            return {"nonlinearity": {"beta_per_10N": 0.01 * sign, "axis": axis}}, axis, ["beta_per_10N"]
     if name == "friction":
         return {"friction": {"F_f_N": 1.0}}, None, ["F_f_N"]
     if name == "tare":
@@ -102,9 +111,12 @@ def _wide_schedule(rng) -> LoadSchedule:
                     gap_s=float(rng.choice([2.0, 4.0, 10.0, 20.0])), masses=masses)
 
 
-def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False) -> list[BlindCase]:
+def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False,
+                   variants: bool = False) -> list[BlindCase]:
     """``n`` blind cases; ``wide``: draw the load schedules from :func:`_wide_schedule` (other repeats, signs, hold
-    times, sample rates, gaps and loads) instead of the standard ones."""
+    times, sample rates, gaps and loads) instead of the standard ones; ``variants``: other forms of the effects
+    (:func:`_unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
+    slips once, a gauge that saturates)."""
     rng = np.random.default_rng(seed)
     design = resolve_design(rod)
     C = calc_rod_compliance(design).C_F
@@ -124,7 +136,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
         names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
                                                                            replace=False))
         for name in names:
-            unit, loc, keys = _unit_effect(name, rng, places)
+            unit, loc, keys = _unit_effect(name, rng, places, variants)
             snr = float(np.exp(rng.uniform(np.log(3), np.log(60))))
             pk = _peak(C, unit, proto)
             scaled = _scale(unit, keys, snr * noise / pk)
@@ -140,8 +152,11 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
             truth_effects = []
             expected = "consistent|unexplained"
         if kind == "oolib":
-            _out_of_library(path, rng, noise)
+            _out_of_library(path, rng, noise, variants)
             expected = "unexplained"
+        if variants and kind == "single" and rng.random() < 0.25:   # the effect beside a bumped hold
+            _decoy(path, rng)
+            kind = "single+decoy"
         truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise,
                  "protocol": {"axes": list(proto.axes), "repeats": proto.repeats, "masses": list(proto.masses),
                               "hold_s": proto.hold_s, "rate_Hz": proto.rate_Hz, "gap_s": proto.gap_s}}
@@ -171,16 +186,31 @@ def _decoy(path, rng):
     _rewrite(path, fn)
 
 
-def _out_of_library(path, rng, noise):
-    """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library."""
-    which = rng.choice(["quadratic", "hum"])
+def _out_of_library(path, rng, noise, variants: bool = False):
+    """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library; with ``variants`` also a
+    gauge that slips once (a step of 15 noise SDs from a random time on, one gauge) or saturates (readings
+    clipped at 70 % of that gauge's largest)."""
+    which = rng.choice(["quadratic", "hum", "slip", "saturation"] if variants else ["quadratic", "hum"])
+    t_slip, col = 0.0, 6
+    if which in ("slip", "saturation"):            # (drawn only then: the older batches keep their draws)
+        t_end = float(path.read_text().splitlines()[-1].split(",")[0])
+        t_slip, col = float(rng.uniform(0.3, 0.7)) * t_end, int(rng.choice([6, 7, 8]))
 
     def fn(rows):
+        vmax = max((abs(float(r[col])) for r in rows if r[col]), default=0.0)
         for r in rows:
             t = float(r[0])
             for c in (6, 7, 8):
-                if r[c]:
-                    v = float(r[c])
-                    v = v + (0.004 * v * v if which == "quadratic" else 20 * noise * np.sin(2 * np.pi * t / 3.7))
-                    r[c] = f"{v:.4f}"
+                if not r[c]:
+                    continue
+                v = float(r[c])
+                if which == "quadratic":
+                    v += 0.004 * v * v
+                elif which == "hum":
+                    v += 20 * noise * np.sin(2 * np.pi * t / 3.7)
+                elif which == "slip" and c == col and t >= t_slip:
+                    v += 15 * noise
+                elif which == "saturation" and c == col:
+                    v = float(np.clip(v, -0.7 * vmax, 0.7 * vmax))
+                r[c] = f"{v:.4f}"
     _rewrite(path, fn)

@@ -94,6 +94,38 @@ def test_load_hysteresis_splits_the_branches_in_proportion_to_the_load():
     assert np.allclose(zero, 0.0)
 
 
+@pytest.mark.parametrize("params, axis_hit", [({"beta2_per_100N2": 0.02}, None),
+                                               ({"beta_per_10N": 0.02, "axis": "y"}, "y")])
+def test_nonlinearity_forms_scale_the_compliance_as_stated(params, axis_hit):
+    """Forward model of the quadratic and the one-axis forms: the reading at load F is (1 + beta |F| / 10 N +
+    beta2 F^2 / 100 N^2) times the linear one, on the stated axis only (a load along -y counts as y)."""
+    from rodlab.enums import LoadAxis
+    from rodlab.units import G0
+    lin = RigModel(SIM.C_F, {}, noise_mm=0.0, resolution_mm=0.0)
+    eff = RIG_EFFECTS[RigEffect.NONLINEARITY].complete(params)
+    model = RigModel(SIM.C_F, {"nonlinearity": eff}, noise_mm=0.0, resolution_mm=0.0)
+    for axis in (LoadAxis.X, LoadAxis.NEG_Y, LoadAxis.Z):
+        for m in (1.0, 2.0):
+            hold = Hold(1, axis, 1, Phase.LOAD, m, 0.0)
+            f = m * G0
+            factor = 1.0 + params.get("beta_per_10N", 0.0) * f / 10 + params.get("beta2_per_100N2", 0.0) * f * f / 100
+            if axis_hit is not None and axis.value.lstrip("-") != axis_hit:
+                factor = 1.0
+            assert np.allclose(model.reading(0.0, hold)[0], factor * lin.reading(0.0, hold)[0], rtol=1e-12, atol=0)
+
+
+def test_blind_variants_draw_other_forms_and_outside_effects(tmp_path):
+    """The widened generator (``variants``) draws the quadratic and the one-axis nonlinearity."""
+    from rodlab.stiffness_rig.blind import generate_cases
+    forms = set()
+    for seed in range(3):
+        for c in generate_cases(tmp_path / f"v{seed}", 40, seed=100 + seed, variants=True):
+            for e in c.truth["effects"]:
+                if e["effect"] == "nonlinearity":
+                    forms.add("quadratic" if "beta2_per_100N2" in e["parameters"] else e["parameters"].get("axis"))
+    assert "quadratic" in forms and forms & {"x", "y", "z"}
+
+
 def test_load_hysteresis_is_not_read_as_friction_or_creep(tmp_path):
     """A small split (eta 0.2 %) with friction beside it: both found, each with its own magnitude."""
     model, rec = _simulate(tmp_path, {"load_hysteresis": {"eta": 0.002}, "friction": {"F_f_N": 0.05}}, seed=8)

@@ -139,8 +139,10 @@ def main() -> int:
     s = Counter()
     lines = ["# Blind benchmark: campaign diagnosis", "",
              f"`python benchmarks/campaign_blind.py {n} {seed}{' ' + mode if mode else ''}`: simulated TX90 campaigns "
-             "with rod 1# (5 x 6 points, "
-             f"3 um device noise, fixture poses measured to 0.01 mm / 0.002 deg), {time.strftime('%Y-%m-%d')}.", "",
+             "with rod 1# ("
+             + ("4-6 positions x 5-8 orientations, 2-5 um device noise (per case, in brackets)" if mode == "wide"
+                else "5 x 6 points, 3 um device noise")
+             + f", fixture poses measured to 0.01 mm / 0.002 deg), {time.strftime('%Y-%m-%d')}.", "",
              "| case | truth | verdict | findings | validation mean before -> after [mm] | s |", "|---|---|---|---|---|---|"]
     for truth, diag, dt in results:
         found = [(f.effect, f.location) for f in diag.findings]

@@ -61,7 +61,7 @@ def score(cases, results) -> dict:
                 s["loc_ok"] += e["location"] in (hit[0].location or "").split("|")
             if hit and e["effect"] in _PARAM:
                 tk, fk, conv = _PARAM[e["effect"]]
-                if tk not in e["parameters"]:          # another form of the effect (variants): scored by name only
+                if tk not in e["parameters"] or "axis" in e["parameters"]:   # another form (variants): by name
                     continue
                 tv = e["parameters"][tk]
                 fv = hit[0].parameters.get(fk)

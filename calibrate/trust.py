@@ -15,7 +15,8 @@ ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
 
 
 def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
-    """Reasons not to trust a calibration: no convergence, residuals the noise model does not explain
+    """Reasons not to trust a calibration: no convergence, residuals the noise model does not explain by a
+    material margin (Birge ratio above :data:`~calibrate.residual_test.BIRGE_MATERIAL`)
     (:mod:`calibrate.residual_test`, the test ``rodlab diagnose --campaign`` uses too), parameters beyond
     physical bounds."""
     w = []

@@ -63,7 +63,9 @@ def rotation_from_abc(abc_deg) -> np.ndarray:
 def abc_rate_axes(R) -> np.ndarray:
     """World axes of the angle rates of ``R = Rx(a) Ry(b) Rz(c)``, shape=(..., 3, 3) -> (..., 3, 3): the rotation
     vector of small changes (da, db, dc) [rad] is ``E @ (da, db, dc)``, with columns ``x``, ``Rx(a) y`` and
-    ``R z`` (how the uncertainty of recorded angles a, b, c becomes an uncertainty of the orientation)."""
+    ``R z`` (how the uncertainty of recorded angles a, b, c becomes an uncertainty of the orientation). ``a`` is
+    recovered from R as :func:`matrix_to_pose` does (b in [-90, 90] deg); for angles recorded with |b| > 90 deg
+    the middle column changes sign, which leaves a covariance ``E S E^T`` unchanged."""
     R = np.asarray(R, dtype=float)
     a = np.arctan2(-R[..., 1, 2], R[..., 2, 2])
     E = np.zeros(R.shape[:-2] + (3, 3))

@@ -27,6 +27,20 @@ def examples() -> Path:
     return EXAMPLES
 
 
+@pytest.fixture(scope="session")
+def tx90():
+    """The built-in TX90 robot model."""
+    from rodlab.calibrate import resolve_robot
+    return resolve_robot("tx90")
+
+
+@pytest.fixture(scope="session")
+def rod1_calc():
+    """Rod 1#'s closed-form compliance file (read-only)."""
+    from rodlab import calc_rod_compliance, resolve_design
+    return calc_rod_compliance(resolve_design("rod1"))
+
+
 @pytest.fixture
 def rod1_dict() -> dict:
     """Parsed rod 1# design, to be modified by a test."""

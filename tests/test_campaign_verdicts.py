@@ -9,21 +9,20 @@ import json
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, resolve_design
-from rodlab.calibrate import read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate import read_campaign, read_fixture
 from rodlab.calibrate.residual_test import BIRGE_MATERIAL, ResidualTest
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab.compliance import write_compliance
 
 
-@pytest.fixture(scope="module")
-def robot():
-    return resolve_robot("tx90")
+@pytest.fixture
+def robot(tx90):
+    return tx90
 
 
-@pytest.fixture(scope="module")
-def rod():
-    return calc_rod_compliance(resolve_design("rod1"))
+@pytest.fixture
+def rod(rod1_calc):
+    return rod1_calc
 
 
 def _calibrate(folder, *extra):
@@ -55,9 +54,10 @@ def test_slightly_noisier_device_is_trusted_with_a_caution(tmp_path, capsys, rob
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     folder = _campaign(robot, rod, tmp_path, 0.0042, seed=4)        # reduced chi-square 1.81 on this draw
-    assert _calibrate(folder) == 0
+    assert _calibrate(folder, "--report", str(folder / "cal.html")) == 0
     err = capsys.readouterr().err
     assert "caution (trusted)" in err and "NOT TRUSTED" not in err
+    assert "TRUSTED, with cautions" in (folder / "cal.html").read_text()
     cal = json.loads((folder / "cal.json").read_text())
     test = cal["fit"]["residual_test"]
     assert cal["trusted"] is True and test["physics_missing"] and not test["material"]

@@ -115,15 +115,16 @@ def test_nonlinearity_forms_scale_the_compliance_as_stated(params, axis_hit):
 
 
 def test_blind_variants_draw_other_forms_and_outside_effects(tmp_path):
-    """The widened generator (``variants``) draws the quadratic and the one-axis nonlinearity."""
+    """The widened generator (``variants``) draws the quadratic and the one-axis nonlinearity, and an effect
+    beside a bumped hold."""
     from rodlab.stiffness_rig.blind import generate_cases
-    forms = set()
-    for seed in range(3):
-        for c in generate_cases(tmp_path / f"v{seed}", 40, seed=100 + seed, variants=True):
-            for e in c.truth["effects"]:
-                if e["effect"] == "nonlinearity":
-                    forms.add("quadratic" if "beta2_per_100N2" in e["parameters"] else e["parameters"].get("axis"))
-    assert "quadratic" in forms and forms & {"x", "y", "z"}
+    forms, kinds = set(), set()
+    for c in generate_cases(tmp_path, 60, seed=5000, variants=True):
+        kinds.add(c.truth["kind"])
+        for e in c.truth["effects"]:
+            if e["effect"] == "nonlinearity":
+                forms.add("quadratic" if "beta2_per_100N2" in e["parameters"] else e["parameters"].get("axis", "all"))
+    assert "quadratic" in forms and forms & {"x", "y", "z"} and "single+decoy" in kinds
 
 
 def test_load_hysteresis_is_not_read_as_friction_or_creep(tmp_path):

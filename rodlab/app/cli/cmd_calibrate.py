@@ -198,7 +198,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
         _print_not_trusted(res)
-        if res.residual_check is not None and res.residual_check.missing:
+        if res.residual_check is not None and res.residual_check.material:
             _print_suspects(robot, camp, args, rod, comp)
         return 3
     _print_cautions(res)
@@ -248,7 +248,8 @@ def _print_suspects(robot, camp, args, rod, comp) -> None:
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     used = comp.rod if comp.active else RodCompliance.none_like(rod)
-    diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used)
+    noise_mm = args.noise_um * 1e-3 if args.noise_um else 0.003
+    diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=noise_mm)
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""

@@ -14,7 +14,7 @@ __all__ = ["remedy"]
 
 def _unexplained(f: Finding) -> str:
     if f.parameters.get("spread") == "even":
-        return ("no structure left: if the device's specification allows a scatter of "
+        return ("no structure left: if the device's specification allows a scatter of at least "
                 f"{f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise check the device's "
                 "mounting and the fixture for play")
     return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "

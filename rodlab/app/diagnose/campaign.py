@@ -101,10 +101,11 @@ class _Selection:
     """Forward selection of hypotheses on the whitened residuals of the identified campaign.
 
     The residuals r and the Jacobian J of the free parameters are whitened with the noise covariance (device
-    noise + fixture-pose uncertainty per position) times the Birge ratio: a campaign has no repeats, so scatter
-    the noise model leaves out shows only as chi-square above its degrees of freedom, and an effect must stand
-    out of what the campaign's own residuals allow. The ratio is robust (median per point: isolated outliers or
-    one wrong position must not hide themselves) and re-estimated after each accepted term.
+    noise + fixture-pose uncertainty per position; its symmetric square root, so each whitened reading stays its
+    point) times the Birge ratio: a campaign has no repeats, so scatter the noise model leaves out shows only as
+    chi-square above its degrees of freedom, and an effect must stand out of what the campaign's own residuals
+    allow. The ratio starts from a robust (Tukey biweight) fit, so gross errors cannot inflate it and hide
+    themselves, and falls (median per point) as accepted terms explain the residuals.
     """
 
     def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma):
@@ -304,12 +305,14 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
     ew = sel.fit(sel.cols)[2]
     e_mm = (sel.L @ ew).reshape(sel.N, 3)
     pos_rms = {int(j): float(np.sqrt(np.mean(e_mm[camp.position == j] ** 2))) for j in np.unique(camp.position)}
-    worst, p_even = _largest_share(ew.reshape(sel.N, 3), np.asarray(camp.position))
+    kept = np.ones(sel.N, dtype=bool)
+    kept[sel.used_points] = False                  # dropped outliers: their own columns absorb them
+    worst, p_even = _largest_share(ew.reshape(sel.N, 3)[kept], np.asarray(camp.position)[kept])
     even = p_even > 0.01
     scatter_um = sel.noise_mm * final_test.birge * 1e3
     where = (f"spread evenly over the positions (largest share at position {worst}, p = {p_even:.2g}): no "
-             f"structure; a device noisier than stated ({scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
-             "would give this" if even else f"largest at position {worst}, with no modelled cause")
+             f"structure; a device noisier than stated (at least {scatter_um:.1f} um instead of "
+             f"{sel.noise_mm * 1e3:.1f} um) would give this" if even else f"largest at position {worst}, with no modelled cause")
     return Finding("unexplained", f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
@@ -345,7 +348,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it."""
     from rodlab.calibrate import campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
-    # the identification runs the residual test `rodlab calibrate` trusts by, with this noise model
+    # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma)
     ctx, tau = _context(robot, res, obs, camp, rod)
     sel = _Selection(ctx, tau, noise_mm, fixture_sigma)
@@ -356,7 +359,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         res2, refit = _reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
     final_test = res2.residual_check if res2 is not None else res.residual_check
     verdict = "consistent" if not findings else "explained"
-    if final_test.missing:                 # the test `rodlab calibrate` trusts by: one story between the two
+    if final_test.missing:                 # calibrate's residual test: one story between the two
         findings.append(_unexplained(sel, camp, final_test))
         verdict = "unexplained"
     extra = {"residual_test": {"before": res.residual_check.to_dict(), "after": final_test.to_dict()}}

@@ -17,7 +17,9 @@ from .chi2 import chi2_median
 
 __all__ = ["RobustFit", "robust_fit", "median_reduced_chi2"]
 
-#: Tukey biweight tuning constant (95 % efficiency at the normal), applied to a point's residual norm
+#: Tukey biweight tuning constant (the 1-D 95 %-efficiency value), applied to a point's residual norm per
+#: coordinate, sqrt(d^2 / 3) / s: a point is set aside beyond 4.685 sigma rms per coordinate (chi-square(3) of
+#: 66, p ~ 1e-13) — only gross errors, never the tail of the noise
 TUKEY_C = 4.685
 
 
@@ -60,7 +62,8 @@ def robust_fit(A: np.ndarray, r: np.ndarray, iterations: int = 30) -> RobustFit:
         s2 = max(float(np.median(d2)) / chi2_median(3), 1e-300)
         u = np.sqrt(d2 / s2 / 3.0) / TUKEY_C
         w_new = np.where(u < 1.0, (1.0 - u ** 2) ** 2, 0.0)
-        if np.allclose(w_new, w, atol=1e-6):
-            break
+        converged = np.allclose(w_new, w, atol=1e-6)
         w = w_new
+        if converged:
+            break
     return RobustFit(w, e, median_reduced_chi2(e, n, k))

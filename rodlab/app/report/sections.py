@@ -75,7 +75,10 @@ def _compliance(src: Source) -> str:
                                                                                  "gravity") + "</div></div>")
 
 
-def _verdict(trusted: bool, warnings: list) -> str:
+def _verdict(trusted: bool, warnings: list, cautions: list = ()) -> str:
+    if trusted and cautions:
+        items = "".join(f"<li>{esc(c)}</li>" for c in cautions)
+        return f"<p class=good>TRUSTED, with cautions: the parameters may be loaded.</p><ul>{items}</ul>"
     if trusted:
         return "<p class=good>TRUSTED: the residuals are the device's noise; the parameters may be loaded.</p>"
     items = "".join(f"<li>{esc(w)}</li>" for w in warnings)
@@ -90,7 +93,7 @@ def _stats_rows(validation: dict) -> list[list]:
 def _calibration(src: Source) -> str:
     d = src.data
     fit = d.get("fit", {})
-    parts = [_verdict(bool(d.get("trusted")), fit.get("warnings", [])),
+    parts = [_verdict(bool(d.get("trusted")), fit.get("warnings", []), fit.get("cautions", [])),
              _kv([("robot", d["robot"]), ("compensation", str(d["compensation"])), ("points", str(d["points"])),
                   ("residual rms", f"{d['residual_rms_mm'] * 1e3:.2f} um"),
                   ("condition number", fmt(fit.get("condition"), ".3g")),

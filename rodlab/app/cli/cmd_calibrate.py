@@ -199,7 +199,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if res.warnings:
         _print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.material:
-            _print_suspects(robot, camp, args, rod, comp)
+            _print_suspects(robot, camp, args, rod, comp, res.residual_check)
         return 3
     _print_cautions(res)
     return 0
@@ -241,15 +241,16 @@ def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
           f"{np.linalg.norm(off, axis=1).max() * 1e3:.0f} um in this campaign (--compensation file compensates it)")
 
 
-def _print_suspects(robot, camp, args, rod, comp) -> None:
-    """The campaign diagnosis (the same residual test, then the hypotheses) and what to do about each."""
+def _print_suspects(robot, camp, args, rod, comp, test) -> None:
+    """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses) and
+    what to do about each."""
     from rodlab.calibrate import read_fixture
     from rodlab.compliance import RodCompliance
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     used = comp.rod if comp.active else RodCompliance.none_like(rod)
-    noise_mm = args.noise_um * 1e-3 if args.noise_um else 0.003
-    diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=noise_mm)
+    diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=test.noise_mm,
+                                fixture_sigma=test.fixture_sigma)
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""

@@ -121,12 +121,13 @@ class _Selection:
         L = (V * np.sqrt(w)) @ V.T
         self.r_raw = res.residuals_mm.reshape(-1)
         self.n = self.r_raw.size
+        r0, J0 = np.linalg.solve(L, self.r_raw), np.linalg.solve(L, J)
         # the scatter of the points without the gross errors a least-squares fit would smear over all
-        chi_red0 = robust_fit(np.linalg.solve(L, J), np.linalg.solve(L, self.r_raw)).reduced_chi2
+        chi_red0 = robust_fit(J0, r0).reduced_chi2
         self.birge = float(np.sqrt(max(chi_red0, 1.0)))
         log.debug("campaign diagnosis: robust reduced chi-square %.2f, Birge ratio %.2f", chi_red0, self.birge)
         self.L = L * self.birge
-        self.r, self.J = self.white(self.r_raw), self.white(J)
+        self.r, self.J = r0 / self.birge, J0 / self.birge
         self.hyps = [replace(h, X=self.white(h.X)) for h in campaign_hypotheses(ctx)]
         self.cols: list = []
         self.chosen: list = []           # (effect, location) accepted, outliers included

@@ -115,9 +115,8 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     joint calibration of the frame model needs (:mod:`fea.joints`)."""
     t0 = time.perf_counter()
     timings = {}
-    mesh = rod_mesh.mesh
     half = rod_mesh.is_half
-    basis = scalar_basis(mesh)
+    basis = scalar_basis(rod_mesh.mesh)
     materials = [design.material_of(p) for p in rod_mesh.parts]
     C = element_tensors(materials, rod_mesh.part_index, rod_mesh.tube_axis)
     timings["basis_and_materials"] = time.perf_counter() - t0
@@ -131,19 +130,39 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     K = assemble_stiffness(basis, C, pattern=pattern, node_order=nodes, upper=backend != SolverBackend.SUPERLU)
     del pattern
     timings["assembly"] = time.perf_counter() - t1
-    N = int(3 * basis.N)
-    # solver numbering -> mesh numbering of the DOFs
-    dof = np.arange(N) if nodes is None else (3 * nodes[:, None] + np.arange(3)).ravel()
-
-    # loads -------------------------------------------------------------------------------
     t1 = time.perf_counter()
+    n_cases = 9 if tip_moments else 6
+    loads, mass = _load_cases(basis, rod_mesh, materials, n_cases)
+    timings["loads"] = time.perf_counter() - t1
+    U, solver_backend = _clamped_solve(basis, rod_mesh, K, loads, backend, nodes, timings)
+    del K
+    # ball-centre displacement
+    ball = np.nonzero(rod_mesh.part_index == rod_mesh.parts.index(Part.BALL))[0]
+    bdofs = np.unique(basis.element_dofs[:, ball])
+    X = basis.doflocs[:, bdofs].T
+    t, theta = section_rigid_motion(X, U[(3 * bdofs[:, None] + np.arange(3)).ravel()], half)
+    CF = t[:, :3]
+    Cg = t[:, 3:6]
+    defect = float(np.abs(CF - CF.T).max() / np.abs(CF).max())
+    timings["total"] = time.perf_counter() - t0
+    log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, U.shape[0], " (half mesh, two solves)" if half else "",
+             solver_backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
+    return SolidResult(CF, Cg, defect, U.shape[0], mass, timings, solver_backend, theta,
+                       U if keep_displacements else None, rod_mesh, np.vstack([t, theta]))
+
+
+def _load_cases(basis, rod_mesh, materials, n_cases: int) -> tuple[np.ndarray, float]:
+    """Load vectors (mesh numbering, shape=(3N, n_cases)): unit forces at the ball centre, self-weight of 1 g0
+    along x, y, z, and (9 cases) unit moments at the ball centre; and the rod's mass [kg] (the whole rod's
+    on a half mesh)."""
+    half = rod_mesh.is_half
+    N = int(3 * basis.N)
     x_q = basis.mapping.F(basis.X)                          # (3, ne, nq) global quadrature points
     dens = np.array([kg_m3_to_kg_mm3(m.density_kg_m3) for m in materials])[rod_mesh.part_index]
     ne, nq = basis.dx.shape
-    n_cases = 9 if tip_moments else 6
     loads = np.zeros((N, n_cases))
     ball = np.nonzero(rod_mesh.part_index == rod_mesh.parts.index(Part.BALL))[0]
-    for j, fb in enumerate(_ball_loads(x_q[:, ball, :], basis.dx[ball], half, tip_moments)):
+    for j, fb in enumerate(_ball_loads(x_q[:, ball, :], basis.dx[ball], half, n_cases == 9)):
         f = np.zeros((3, ne, nq))
         f[:, ball, :] = fb
         loads[:, j if j < 3 else j + 3] = assemble_body_force(basis, f)
@@ -152,20 +171,27 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
         g[j] = (dens * G0)[:, None]
         loads[:, 3 + j] = assemble_body_force(basis, g)
     mass = float((basis.dx * dens[:, None]).sum()) * (2.0 if half else 1.0)
-    timings["loads"] = time.perf_counter() - t1
+    return loads, mass
 
-    # clamp and solve: one problem, or the symmetric and the antisymmetric half ---------------
+
+def _clamped_solve(basis, rod_mesh, K, loads: np.ndarray, backend, nodes, timings: dict) -> tuple[np.ndarray, str]:
+    """Clamp the flange face and solve every load case (``K`` in the solver's numbering ``nodes``): one
+    problem, or on a half mesh the symmetric and the antisymmetric half with the plane held accordingly.
+    Returns the displacements (mesh numbering, shape of ``loads``) and the solver backend used; adds the
+    analyse / factorise / solve times to ``timings``."""
     t1 = time.perf_counter()
+    N, n_cases = loads.shape
+    # solver numbering -> mesh numbering of the DOFs
+    dof = np.arange(N) if nodes is None else (3 * nodes[:, None] + np.arange(3)).ravel()
     fixed_scalar = basis.get_dofs(rod_mesh.flange_facets).all()
     if fixed_scalar.size == 0:
         raise FeaError("the flange face has no DOFs to clamp; the mesh lost its flange_face", key="flange_face")
     fixed = np.zeros(N, dtype=bool)
     fixed[(3 * fixed_scalar[:, None] + np.arange(3)).ravel()] = True
     system = HeldSystem(K)                                  # clamp and plane held in place: no sliced copies
-    del K
     solver = PatternSolver(system.pattern, backend, ordering_method="amd" if nodes is None else "natural")
     timings["analyze"] = time.perf_counter() - t1
-    if half:
+    if rod_mesh.is_half:
         plane = basis.get_dofs(rod_mesh.symmetry_facets).all()
         anti = [k for k in ANTISYMMETRIC_CASES if k < n_cases]
         groups = [([k for k in range(n_cases) if k not in anti], [1]), (anti, [0, 2])]   # (cases, held comps)
@@ -186,19 +212,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
         B[held] = 0.0
         U[np.ix_(dof, cases)] = solve(B)
         timings["solve"] += time.perf_counter() - t1
-
-    # ball-centre displacement ----------------------------------------------------------------
-    bdofs = np.unique(basis.element_dofs[:, ball])
-    X = basis.doflocs[:, bdofs].T
-    t, theta = section_rigid_motion(X, U[(3 * bdofs[:, None] + np.arange(3)).ravel()], half)
-    CF = t[:, :3]
-    Cg = t[:, 3:6]
-    defect = float(np.abs(CF - CF.T).max() / np.abs(CF).max())
-    timings["total"] = time.perf_counter() - t0
-    log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, N, " (half mesh, two solves)" if half else "",
-             solver.backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
-    return SolidResult(CF, Cg, defect, N, mass, timings, solver.backend, theta,
-                       U if keep_displacements else None, rod_mesh, np.vstack([t, theta]))
+    return U, solver.backend
 
 
 def _flips(n_cases: int) -> np.ndarray:

@@ -98,67 +98,84 @@ def run_sweep(base: RodDesign, L1s, L2s, model: str = "frame", scheduler: str | 
     import pandas as pd
 
     pairs = sweep_designs(base, L1s, L2s)
-    cache = Path(cache_dir) if cache_dir else None
-    rows: dict[tuple, dict] = {}
-    todo = []
-    summary = base.summary()
-    for L1, L2 in pairs:
-        key = _key(dict(summary, L1_mm=L1, L2_mm=L2, name=None), model, calibration)
-        f = cache / f"{key}.json" if cache else None
-        if f is not None and f.exists():
-            try:
-                rows[(L1, L2)] = dict(json.loads(f.read_text()), design_hash=key)
-                continue
-            except (OSError, ValueError):
-                log.warning("ignoring unreadable cache entry %s", f)
-        todo.append((L1, L2, key))
-    n_total, n_done = len(pairs), len(rows)
-    if progress:
-        progress(n_done, n_total)
-
-    def store(result_rows, keys):
-        nonlocal n_done
-        for r, key in zip(result_rows, keys):
-            r["design_hash"] = key
-            rows[(r["L1_mm"], r["L2_mm"])] = r
-            if cache is not None:
-                atomic_write_json(cache / f"{key}.json", {k: v for k, v in r.items() if k != "design_hash"})
-        n_done += len(result_rows)
-        if progress:
-            progress(n_done, n_total)
-
+    store = _SweepStore(Path(cache_dir) if cache_dir else None, len(pairs), progress)
+    todo = store.load_cached(base, pairs, model, calibration)
     size = batch or (1 if model == "solid" else 25)
     chunks = [todo[i:i + size] for i in range(0, len(todo), size)]
-    client = None
-    if todo and use_dask:
-        try:
-            from dask.distributed import Client, LocalCluster, as_completed
-        except ImportError:
-            log.warning("Dask is not installed (pip install 'rodlab[dist]'): the sweep runs serially in this "
-                        "process")
-        else:
-            if scheduler:
-                client = Client(scheduler)
-            else:
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
-                client = Client(cluster)
-            try:
-                futures = {client.submit(_evaluate_batch, base, [(a, b) for a, b, _ in ch], model, mesher,
-                                         calibration, pure=False): ch for ch in chunks}
-                for fut in as_completed(futures):
-                    store(fut.result(), [k for _, _, k in futures[fut]])
-            finally:
-                if not scheduler:
-                    client.close()
-                    cluster.close()
-                else:
-                    client.close()
-            chunks = []
+    if todo and use_dask and _run_on_dask(chunks, store, base, model, mesher, calibration, scheduler, workers):
+        chunks = []
     for ch in chunks:
-        store(_evaluate_batch(base, [(a, b) for a, b, _ in ch], model, mesher, calibration), [k for _, _, k in ch])
+        store.add(_evaluate_batch(base, [(a, b) for a, b, _ in ch], model, mesher, calibration), [k for _, _, k in ch])
+    rows = store.rows
     df = pd.DataFrame([rows[p] for p in pairs])
     for c in SWEEP_COLUMNS:
         if c not in df:
             df[c] = np.nan if c not in ("status", "message", "design_hash") else ""
     return df[SWEEP_COLUMNS]
+
+
+class _SweepStore:
+    """The sweep's rows as they arrive, each written to the cache (one JSON per design, by its hash) and
+    counted for ``progress(done, total)``."""
+
+    def __init__(self, cache: Path | None, n_total: int, progress) -> None:
+        self.cache, self.n_total, self.progress = cache, n_total, progress
+        self.rows: dict[tuple, dict] = {}
+        self.n_done = 0
+
+    def load_cached(self, base: RodDesign, pairs, model: str, calibration) -> list[tuple[float, float, str]]:
+        """Take every design already in the cache; returns the (L1, L2, key) still to evaluate."""
+        todo = []
+        summary = base.summary()
+        for L1, L2 in pairs:
+            key = _key(dict(summary, L1_mm=L1, L2_mm=L2, name=None), model, calibration)
+            f = self.cache / f"{key}.json" if self.cache else None
+            if f is not None and f.exists():
+                try:
+                    self.rows[(L1, L2)] = dict(json.loads(f.read_text()), design_hash=key)
+                    self.n_done += 1
+                    continue
+                except (OSError, ValueError):
+                    log.warning("ignoring unreadable cache entry %s", f)
+            todo.append((L1, L2, key))
+        self._report()
+        return todo
+
+    def add(self, result_rows, keys) -> None:
+        for r, key in zip(result_rows, keys):
+            r["design_hash"] = key
+            self.rows[(r["L1_mm"], r["L2_mm"])] = r
+            if self.cache is not None:
+                atomic_write_json(self.cache / f"{key}.json", {k: v for k, v in r.items() if k != "design_hash"})
+        self.n_done += len(result_rows)
+        self._report()
+
+    def _report(self) -> None:
+        if self.progress:
+            self.progress(self.n_done, self.n_total)
+
+
+def _run_on_dask(chunks, store: _SweepStore, base, model, mesher, calibration, scheduler, workers) -> bool:
+    """Evaluate the chunks on a Dask cluster (``scheduler``'s, or a local one of ``workers`` processes);
+    False when Dask is not installed (the caller runs them serially)."""
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        log.warning("Dask is not installed (pip install 'rodlab[dist]'): the sweep runs serially in this process")
+        return False
+    cluster = None
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        futures = {client.submit(_evaluate_batch, base, [(a, b) for a, b, _ in ch], model, mesher,
+                                 calibration, pure=False): ch for ch in chunks}
+        for fut in as_completed(futures):
+            store.add(fut.result(), [k for _, _, k in futures[fut]])
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return True

@@ -180,7 +180,6 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
 
     Raises :class:`~geometry.errors.GeometryError` on a mesh with inverted elements or missing parts.
     """
-    import build123d as bd
     import gmsh
 
     if order not in (1, 2):
@@ -199,88 +198,116 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             gmsh.option.setNumber("General.NumThreads", 1)
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.model.add(f"rod_{design.name}")
-            src = []
-            for part, solid in solids.items():
-                f = os.path.join(tmp, f"{part.value}.brep")
-                bd.export_brep(solid, f)
-                vols = [dt for dt in gmsh.model.occ.importShapes(f, highestDimOnly=True) if dt[0] == 3]
-                src.append((part, vols))
-            objects = [dt for _, vols in src for dt in vols]
-            _, out_map = gmsh.model.occ.fragment(objects, [])
-            gmsh.model.occ.synchronize()
-            part_vols: dict[Part, list[int]] = {}
-            k = 0
-            for part, vols in src:
-                for _ in vols:
-                    part_vols.setdefault(part, []).extend(t for d, t in out_map[k] if d == 3)
-                    k += 1
-            for part in solids:
-                if not part_vols.get(part):
-                    raise GeometryError(f"part {part} vanished when the parts were fused; check its dimensions",
-                                        key=str(part))
-            tag_of = {}
-            for i, part in enumerate(solids):
-                tag_of[part] = gmsh.model.addPhysicalGroup(3, sorted(set(part_vols[part])), tag=i + 1,
-                                                           name=str(part))
-            z0 = -design.tool_mm[2]
-            x0 = -design.tool_mm[0]
-            eps = 1e-3
-            flange = [t for d, t in gmsh.model.getEntitiesInBoundingBox(
-                x0 - 1e3, -1e3, z0 - eps, x0 + 1e3, 1e3, z0 + eps, dim=2)]
-            if not flange:
-                raise GeometryError("no flange face found at the flange plane", key="pipe_I")
-            gmsh.model.addPhysicalGroup(2, flange, name="flange_face")
-            ball_surf = sorted({t for v in part_vols[Part.BALL]
-                                for d, t in gmsh.model.getBoundary([(3, v)], oriented=False)
-                                if gmsh.model.getType(2, t) == "Sphere"})
-            gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
-            if half:
-                cut = [t for d, t in gmsh.model.getEntitiesInBoundingBox(-1e4, -eps, -1e4, 1e4, eps, 1e4, dim=2)]
-                if not cut:
-                    raise GeometryError("the half mesh has no face on the symmetry plane y_T = 0", key="half")
-                gmsh.model.addPhysicalGroup(2, cut, name="symmetry_face")
+            part_vols = _import_parts(solids, tmp)
+            _physical_groups(design, solids, part_vols, half)
             if grading is not None:
                 graded = sorted({v for p in GRADED_PARTS for v in part_vols.get(p, [])})
                 _grading_field(design, grading[0] * h, h, grading[1], graded, part_vols.get(Part.BEND, []),
                                grading[2] * h)
-            gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-            gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h * (grading[0] if grading else 1.0))
-            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
-            # the 1-D mesher integrates the size field along each curve; gmsh's default precision (1e-9) spent
-            # ~1.2 s of rod 1#'s ~2.5 s mesh on it with the distance field; 1e-3 moves nodes by < 0.1 % of h
-            gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-3)
-            gmsh.option.setNumber("Mesh.ElementOrder", order)
-            gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
-            gmsh.option.setNumber("Mesh.HighOrderOptimize", 1 if order == 2 else 0)   # untangle curved P2
-            gmsh.option.setNumber("Mesh.Algorithm", 6)      # Frontal-Delaunay surfaces
-            gmsh.option.setNumber("Mesh.Algorithm3D", 10)   # HXT: ~25 % faster than Delaunay, same quality
+            _mesh_options(h, order, grading)
             t0 = time.perf_counter()
             gmsh.model.mesh.generate(3)
             log.info("gmsh generate: %.2f s", time.perf_counter() - t0)
             node_tags, coords, _ = gmsh.model.mesh.getNodes()
-            coords = coords.reshape(-1, 3)
-            etype = 11 if order == 2 else 4
-            conn, part_idx, etags = [], [], []
-            for i, part in enumerate(solids):
-                for v in sorted(set(part_vols[part])):
-                    types, tags, nodes = gmsh.model.mesh.getElements(3, v)
-                    for ty, tg, nd in zip(types, tags, nodes):
-                        if ty != etype:
-                            raise GeometryError(f"unexpected gmsh element type {ty} in {part}")
-                        conn.append(nd.reshape(len(tg), -1))
-                        part_idx.append(np.full(len(tg), i))
-                        etags.append(tg)
-            conn = np.concatenate(conn)
-            part_idx = np.concatenate(part_idx)
-            etags = np.concatenate(etags)
-            qual = gmsh.model.mesh.getElementQualities(etags, "minSICN")
+            conn, part_idx, qual = _elements(solids, part_vols, order)
             if msh_path is not None:
                 out = os.path.join(tmp, "rod.msh")
                 gmsh.write(out)
                 atomic_write_bytes(msh_path, Path(out).read_bytes())
         finally:
             gmsh.finalize()
-    return _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half)
+    return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half)
+
+
+def _import_parts(solids: dict, tmp: str) -> dict:
+    """Import each part's solid into gmsh and fragment them into one conforming model; returns
+    {part: its gmsh volume tags} (a part may split into several volumes)."""
+    import build123d as bd
+    import gmsh
+
+    src = []
+    for part, solid in solids.items():
+        f = os.path.join(tmp, f"{part.value}.brep")
+        bd.export_brep(solid, f)
+        vols = [dt for dt in gmsh.model.occ.importShapes(f, highestDimOnly=True) if dt[0] == 3]
+        src.append((part, vols))
+    objects = [dt for _, vols in src for dt in vols]
+    _, out_map = gmsh.model.occ.fragment(objects, [])
+    gmsh.model.occ.synchronize()
+    part_vols: dict[Part, list[int]] = {}
+    k = 0
+    for part, vols in src:
+        for _ in vols:
+            part_vols.setdefault(part, []).extend(t for d, t in out_map[k] if d == 3)
+            k += 1
+    for part in solids:
+        if not part_vols.get(part):
+            raise GeometryError(f"part {part} vanished when the parts were fused; check its dimensions",
+                                key=str(part))
+    return part_vols
+
+
+def _physical_groups(design: RodDesign, solids: dict, part_vols: dict, half: bool) -> None:
+    """One volume group per part (tag = its index + 1), and the surface groups the FEA needs: the flange face
+    (clamp), the ball's sphere (load), and on a half mesh the cut face on ``y_T = 0``."""
+    import gmsh
+
+    for i, part in enumerate(solids):
+        gmsh.model.addPhysicalGroup(3, sorted(set(part_vols[part])), tag=i + 1, name=str(part))
+    z0 = -design.tool_mm[2]
+    x0 = -design.tool_mm[0]
+    eps = 1e-3
+    flange = [t for d, t in gmsh.model.getEntitiesInBoundingBox(
+        x0 - 1e3, -1e3, z0 - eps, x0 + 1e3, 1e3, z0 + eps, dim=2)]
+    if not flange:
+        raise GeometryError("no flange face found at the flange plane", key="pipe_I")
+    gmsh.model.addPhysicalGroup(2, flange, name="flange_face")
+    ball_surf = sorted({t for v in part_vols[Part.BALL]
+                        for d, t in gmsh.model.getBoundary([(3, v)], oriented=False)
+                        if gmsh.model.getType(2, t) == "Sphere"})
+    gmsh.model.addPhysicalGroup(2, ball_surf, name="ball")
+    if half:
+        cut = [t for d, t in gmsh.model.getEntitiesInBoundingBox(-1e4, -eps, -1e4, 1e4, eps, 1e4, dim=2)]
+        if not cut:
+            raise GeometryError("the half mesh has no face on the symmetry plane y_T = 0", key="half")
+        gmsh.model.addPhysicalGroup(2, cut, name="symmetry_face")
+
+
+def _mesh_options(h: float, order: int, grading) -> None:
+    """gmsh's size, order and algorithm options for the rod."""
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 0.05 * h * (grading[0] if grading else 1.0))
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 12)
+    # the 1-D mesher integrates the size field along each curve; gmsh's default precision (1e-9) spent
+    # ~1.2 s of rod 1#'s ~2.5 s mesh on it with the distance field; 1e-3 moves nodes by < 0.1 % of h
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-3)
+    gmsh.option.setNumber("Mesh.ElementOrder", order)
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
+    gmsh.option.setNumber("Mesh.HighOrderOptimize", 1 if order == 2 else 0)   # untangle curved P2
+    gmsh.option.setNumber("Mesh.Algorithm", 6)      # Frontal-Delaunay surfaces
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)   # HXT: ~25 % faster than Delaunay, same quality
+
+
+def _elements(solids: dict, part_vols: dict, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tetrahedra of the generated mesh: (connectivity in gmsh node tags, shape=(ne, 4 or 10); the part
+    index of each; its minimum scaled inverse condition number)."""
+    import gmsh
+
+    etype = 11 if order == 2 else 4
+    conn, part_idx, etags = [], [], []
+    for i, part in enumerate(solids):
+        for v in sorted(set(part_vols[part])):
+            types, tags, nodes = gmsh.model.mesh.getElements(3, v)
+            for ty, tg, nd in zip(types, tags, nodes):
+                if ty != etype:
+                    raise GeometryError(f"unexpected gmsh element type {ty} in {part}")
+                conn.append(nd.reshape(len(tg), -1))
+                part_idx.append(np.full(len(tg), i))
+                etags.append(tg)
+    etags = np.concatenate(etags)
+    return np.concatenate(conn), np.concatenate(part_idx), gmsh.model.mesh.getElementQualities(etags, "minSICN")
 
 
 def _half_solids(solids: dict) -> dict:

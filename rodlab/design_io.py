@@ -132,7 +132,30 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     name = data.get("name", Path(str(path)).name.split(".")[0] if path else "rod")
     if not isinstance(name, str) or not name.strip():
         raise c.err(f"name must be a non-empty string, got {name!r}", None, "name")
+    materials = _materials(data, c)
+    L1 = c.number(data, None, "L1_mm")
+    L2 = c.number(data, None, "L2_mm")
+    gamma = c.number(data, None, "gamma_deg")
+    if "tube" not in data and not ("pipe_I" in data and "pipe_II" in data):
+        raise c.err("missing [tube] (or both [pipe_I] and [pipe_II])", None, "tube")
+    c.check_keys(data.get("tube", {}), "tube", _TUBE_KEYS)
+    p1, p2 = _tube(data, c, "pipe_I", materials), _tube(data, c, "pipe_II", materials)
+    od = p1.outer_diameter_mm
+    ball_t = data.get("ball", {})
+    c.check_keys(ball_t, "ball", _BALL_KEYS)
+    ball = BallSpec(c.material(ball_t.get("material", "alumina"), "ball", materials),
+                    c.number(ball_t, "ball", "diameter_mm", 30.0))
+    bend = _bend(data, c, p1, materials)
+    rings = _sleeve(data, c, "rings", materials, "al_7075", od + 6.0, 2.0 * od)
+    holder = _sleeve(data, c, "pipe_holder", materials, "al_7075", od + 15.0, 40.0)
+    stud = _sleeve(data, c, "ball_holder", materials, "al_7075",
+                   min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
+    return RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
+                     source=None if path is None else Path(path))
 
+
+def _materials(data: Mapping, c: _Ctx) -> dict[str, Material]:
+    """The design's own materials (``[materials.NAME]`` tables), by name."""
     materials: dict[str, Material] = {}
     mats = data.get("materials", {})
     c.check_keys(mats, "materials", list(mats) if isinstance(mats, Mapping) else [])
@@ -142,59 +165,45 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
         except DesignError as e:
             sub = e.key.split(".")[-1] if e.key and e.key.count(".") >= 2 else None
             raise c.err(e.detail, f"materials.{mname}", sub) from e
+    return materials
 
-    L1 = c.number(data, None, "L1_mm")
-    L2 = c.number(data, None, "L2_mm")
-    gamma = c.number(data, None, "gamma_deg")
 
-    if "tube" not in data and not ("pipe_I" in data and "pipe_II" in data):
-        raise c.err("missing [tube] (or both [pipe_I] and [pipe_II])", None, "tube")
-    base = data.get("tube", {})
-    c.check_keys(base, "tube", _TUBE_KEYS)
+def _tube(data: Mapping, c: _Ctx, label: str, materials: dict) -> TubeSpec:
+    """Pipe ``label``: ``[tube]`` with ``[label]``'s keys over it; errors name the table the value came from."""
+    over = data.get(label, {})
+    c.check_keys(over, label, _TUBE_KEYS)
+    merged = dict(data.get("tube", {}))
+    merged.update(over)
+    src = label if any(k in over for k in _TUBE_KEYS) else "tube"
+    for k in _TUBE_KEYS:
+        if k not in merged:
+            raise c.err(f"missing `{k}` for {label} (give it in [tube] or [{label}])", "tube", None)
+    tbl = label if "material" in over else "tube"
+    mat = c.material(merged["material"], tbl, materials)
+    od = c.number(merged, label if "outer_diameter_mm" in over else "tube", "outer_diameter_mm")
+    wall = c.number(merged, label if "wall_mm" in over else "tube", "wall_mm")
+    return TubeSpec(mat, od, wall, key=label if "wall_mm" in over else src)
 
-    def tube(label: str) -> TubeSpec:
-        over = data.get(label, {})
-        c.check_keys(over, label, _TUBE_KEYS)
-        merged = dict(base)
-        merged.update(over)
-        src = label if any(k in over for k in _TUBE_KEYS) else "tube"
-        for k in _TUBE_KEYS:
-            if k not in merged:
-                raise c.err(f"missing `{k}` for {label} (give it in [tube] or [{label}])", "tube", None)
-        tbl = label if "material" in over else "tube"
-        mat = c.material(merged["material"], tbl, materials)
-        od = c.number(merged, label if "outer_diameter_mm" in over else "tube", "outer_diameter_mm")
-        wall = c.number(merged, label if "wall_mm" in over else "tube", "wall_mm")
-        return TubeSpec(mat, od, wall, key=label if "wall_mm" in over else src)
 
-    p1, p2 = tube("pipe_I"), tube("pipe_II")
-    od = p1.outer_diameter_mm
-
-    ball_t = data.get("ball", {})
-    c.check_keys(ball_t, "ball", _BALL_KEYS)
-    ball_mat = c.material(ball_t.get("material", "alumina"), "ball", materials)
-    ball = BallSpec(ball_mat, c.number(ball_t, "ball", "diameter_mm", 30.0))
-
+def _bend(data: Mapping, c: _Ctx, p1: TubeSpec, materials: dict) -> BendSpec:
+    """The bend: pipe I's material and section unless ``[bend]`` says otherwise; radius 2 x its diameter."""
     bend_t = data.get("bend", {})
     c.check_keys(bend_t, "bend", _BEND_KEYS)
     bend_mat = c.material(bend_t["material"], "bend", materials) if "material" in bend_t else p1.material
     bod = c.number(bend_t, "bend", "outer_diameter_mm", p1.outer_diameter_mm)
     bwall = c.number(bend_t, "bend", "wall_mm", p1.wall_mm)
     brad = c.number(bend_t, "bend", "radius_mm", 2.0 * bod)
+    return BendSpec(bend_mat, bod, bwall, key="bend", radius_mm=brad)
 
-    def sleeve(label, dflt_mat, dflt_od, dflt_len) -> SleeveSpec:
-        t = data.get(label, {})
-        c.check_keys(t, label, _SLEEVE_KEYS)
-        mat = c.material(t["material"], label, materials) if "material" in t else get_material(dflt_mat)
-        return SleeveSpec(mat, c.number(t, label, "outer_diameter_mm", dflt_od),
-                          c.number(t, label, "length_mm", dflt_len), key=label)
 
-    bend = BendSpec(bend_mat, bod, bwall, key="bend", radius_mm=brad)
-    rings = sleeve("rings", "al_7075", od + 6.0, 2.0 * od)
-    holder = sleeve("pipe_holder", "al_7075", od + 15.0, 40.0)
-    stud = sleeve("ball_holder", "al_7075", min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
-    return RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
-                     source=None if path is None else Path(path))
+def _sleeve(data: Mapping, c: _Ctx, label: str, materials: dict, dflt_mat: str, dflt_od: float,
+            dflt_len: float) -> SleeveSpec:
+    """A sleeve-like part (rings, holders) from ``[label]`` with the given defaults."""
+    t = data.get(label, {})
+    c.check_keys(t, label, _SLEEVE_KEYS)
+    mat = c.material(t["material"], label, materials) if "material" in t else get_material(dflt_mat)
+    return SleeveSpec(mat, c.number(t, label, "outer_diameter_mm", dflt_od),
+                      c.number(t, label, "length_mm", dflt_len), key=label)
 
 
 def design_to_dict(design: RodDesign) -> dict:

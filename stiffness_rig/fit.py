@@ -126,58 +126,19 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     """Fit every (load axis, measured component) of ``rec``; Eq. 21 when ``sim`` is given."""
     holds = hold_averages(rec)
     noise = holds.noise_mm()
-    lines = []
-    acc: dict[tuple[int, int], list] = {}
-    resid_all = []
-    # the first hold of each series (mass 0, no hanger) is the zero reference of the series: it carries no
-    # information on the slope, and no friction is engaged there, so it is not a point of either branch
-    first = {}
-    for i, a in enumerate(holds.axis):
-        first.setdefault(a, i)
-    reference = np.zeros(len(holds), dtype=bool)
-    for a, i in first.items():
-        reference[i] = holds.mass_kg[i] == 0.0
+    lines, resid_all = [], []
+    reference = _reference_holds(holds)
     for axis in sorted(set(holds.axis), key=lambda a: a.value):
-        sel = np.array([a is axis for a in holds.axis]) & ~reference
-        h = holds.select(sel)
-        F = h.mass_kg * G0 * axis.sign                       # force component along the axis index [N]
-        is_unload = np.array([p is Phase.UNLOAD for p in h.phase])
+        h = holds.select(np.array([a is axis for a in holds.axis]) & ~reference)
         for c in range(3):
-            y = h.mean_mm[:, c]
-            ok = np.isfinite(y)
-            if ok.sum() < 3 or np.ptp(F[ok]) <= 0:
-                continue
-            Fo, yo, uo = F[ok], y[ok], is_unload[ok]
-            two = uo.any() and (~uo).any()
-            X = np.column_stack([~uo, uo, Fo]).astype(float) if two else np.column_stack([np.ones_like(Fo), Fo])
-            coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
-            res = yo - X @ coef
-            dof = max(len(yo) - X.shape[1], 1)
-            s2 = float(res @ res / dof)
-            cov = s2 * np.linalg.pinv(X.T @ X)
-            slope, se = float(coef[-1]), float(np.sqrt(cov[-1, -1]))
-            icpt = {"load": float(coef[0]), "unload": float(coef[1]) if two else float(coef[0])}
-            significant = abs(slope) > 3 * se and abs(slope) > 0
-            zero = {k: (float(-v / (slope * G0 * axis.sign)) if significant else float("nan"))
-                    for k, v in icpt.items()}
-            branch = {}
-            for name, m in (("load", ~uo), ("unload", uo)):
-                if m.sum() >= 2 and np.ptp(Fo[m]) > 0:
-                    b, a = np.polyfit(Fo[m], yo[m], 1)
-                    branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
-                                    "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
-            lines.append(LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo)))
-            acc.setdefault((c, axis.index), []).append((slope, se))
-            resid_all.append(res)
+            fitted = _fit_line(h, axis, c, robust, noise)
+            if fitted is not None:
+                lines.append(fitted[0])
+                resid_all.append(fitted[1])
     if not lines:
         raise RigError("no load axis has a measured component with at least 3 holds at different loads",
                        path=rec.path, key="mass_kg")
-    M = np.full((3, 3), np.nan)
-    S = np.full((3, 3), np.nan)
-    for (c, i), vals in acc.items():
-        w = np.array([1 / max(se, 1e-12) ** 2 for _, se in vals])
-        M[c, i] = float(np.sum(w * np.array([s for s, _ in vals])) / w.sum())
-        S[c, i] = float(1 / np.sqrt(w.sum()))
+    M, S = _combine_lines(lines)
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all))
     if sim is not None:
         try:
@@ -187,3 +148,61 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     if fit.success:
         fit.message = f"{len(lines)} lines fitted; noise {noise * 1e3:.2f} um per reading"
     return fit
+
+
+def _reference_holds(holds) -> np.ndarray:
+    """The first hold of each series when it is at mass 0 (no hanger): the zero reference of the series. It
+    carries no information on the slope, and no friction is engaged there, so it is not a point of either
+    branch."""
+    first = {}
+    for i, a in enumerate(holds.axis):
+        first.setdefault(a, i)
+    reference = np.zeros(len(holds), dtype=bool)
+    for a, i in first.items():
+        reference[i] = holds.mass_kg[i] == 0.0
+    return reference
+
+
+def _fit_line(h, axis, c: int, robust: bool, noise: float):
+    """The load-deflection line of component ``c`` of the holds ``h`` of one load axis (one intercept per
+    branch when both load and unload holds exist), and its residuals [mm]; None with < 3 usable holds."""
+    F = h.mass_kg * G0 * axis.sign                       # force component along the axis index [N]
+    is_unload = np.array([p is Phase.UNLOAD for p in h.phase])
+    y = h.mean_mm[:, c]
+    ok = np.isfinite(y)
+    if ok.sum() < 3 or np.ptp(F[ok]) <= 0:
+        return None
+    Fo, yo, uo = F[ok], y[ok], is_unload[ok]
+    two = uo.any() and (~uo).any()
+    X = np.column_stack([~uo, uo, Fo]).astype(float) if two else np.column_stack([np.ones_like(Fo), Fo])
+    coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
+    res = yo - X @ coef
+    dof = max(len(yo) - X.shape[1], 1)
+    s2 = float(res @ res / dof)
+    cov = s2 * np.linalg.pinv(X.T @ X)
+    slope, se = float(coef[-1]), float(np.sqrt(cov[-1, -1]))
+    icpt = {"load": float(coef[0]), "unload": float(coef[1]) if two else float(coef[0])}
+    significant = abs(slope) > 3 * se and abs(slope) > 0
+    zero = {k: (float(-v / (slope * G0 * axis.sign)) if significant else float("nan")) for k, v in icpt.items()}
+    branch = {}
+    for name, m in (("load", ~uo), ("unload", uo)):
+        if m.sum() >= 2 and np.ptp(Fo[m]) > 0:
+            b, a = np.polyfit(Fo[m], yo[m], 1)
+            branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
+                            "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
+    return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo)), res
+
+
+def _combine_lines(lines: list) -> tuple[np.ndarray, np.ndarray]:
+    """The measured compliance matrix [mm/N] and its standard errors, shape=(3, 3) (NaN where not measured):
+    the inverse-variance mean of the slopes of every line of the same (component, load axis index)."""
+    acc: dict[tuple[int, int], list] = {}
+    for ln in lines:
+        acc.setdefault((ln.component, ln.axis.index), []).append((ln.slope_mm_per_N, ln.se_mm_per_N))
+    M = np.full((3, 3), np.nan)
+    S = np.full((3, 3), np.nan)
+    for (c, i), vals in acc.items():
+        w = np.array([1 / max(se, 1e-12) ** 2 for _, se in vals])
+        M[c, i] = float(np.sum(w * np.array([s for s, _ in vals])) / w.sum())
+        S[c, i] = float(1 / np.sqrt(w.sum()))
+    return M, S

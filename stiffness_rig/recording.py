@@ -122,6 +122,43 @@ def read_header(text: str) -> dict[str, str]:
     return _header(text.splitlines())[0]
 
 
+def _check_header(header: list[str], p: Path, line: int) -> None:
+    """Every column known, every required one present, none twice."""
+    for col in header:
+        if col not in COLUMNS + OPTIONAL_COLUMNS:
+            raise RigError(f"unknown column {col!r}; expected {list(COLUMNS + OPTIONAL_COLUMNS)}."
+                           + did_you_mean(col, COLUMNS + OPTIONAL_COLUMNS), path=p, line=line, key=col)
+    for col in COLUMNS:
+        if col not in header:
+            raise RigError(f"missing column {col!r}", path=p, line=line, key=col)
+    if len(set(header)) != len(header):
+        dup = [c for c in header if header.count(c) > 1][0]
+        raise RigError(f"duplicated column {dup!r}", path=p, line=line, key=dup)
+
+
+def _row(row: list[str], ix: dict, p: Path, k: int, has_temp: bool) -> tuple:
+    """One sample line ``k``: (line, time, step, repeat, phase, load axis, mass, [dx, dy, dz], temp)."""
+    t = _float(row[ix["time_s"]], p, k, "time_s")
+    step = _int(row[ix["step"]], p, k, "step")
+    rep = _int(row[ix["repeat"]], p, k, "repeat")
+    try:
+        ph = Phase(row[ix["phase"]].strip())
+    except ValueError:
+        raise RigError(f"expected 'load' or 'unload', got {row[ix['phase']]!r}", path=p, line=k,
+                       key="phase") from None
+    try:
+        ax = LoadAxis(row[ix["load_axis"]].strip())
+    except ValueError:
+        raise RigError(f"unknown load axis {row[ix['load_axis']]!r}; expected one of "
+                       f"{[a.value for a in LoadAxis]}", path=p, line=k, key="load_axis") from None
+    m = _float(row[ix["mass_kg"]], p, k, "mass_kg")
+    if m < 0:
+        raise RigError(f"mass must be >= 0, got {m}", path=p, line=k, key="mass_kg")
+    disp = [_float(row[ix[c]], p, k, c, allow_empty=True) for c in ("disp_x_mm", "disp_y_mm", "disp_z_mm")]
+    temp = _float(row[ix["temp_C"]], p, k, "temp_C", allow_empty=True) if has_temp else math.nan
+    return (k, t, step, rep, ph, ax, m, disp, temp)
+
+
 def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     """Read a ``*.rig.csv``; every malformed cell or rule names its line and column."""
     p = Path(path)
@@ -138,16 +175,7 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
         raise RigError("no header line", path=p, line=i + 1)
     header_line = i + 1
     header = [h.strip() for h in next(csv.reader([lines[i]]))]
-    for col in header:
-        if col not in COLUMNS + OPTIONAL_COLUMNS:
-            raise RigError(f"unknown column {col!r}; expected {list(COLUMNS + OPTIONAL_COLUMNS)}."
-                           + did_you_mean(col, COLUMNS + OPTIONAL_COLUMNS), path=p, line=header_line, key=col)
-    for col in COLUMNS:
-        if col not in header:
-            raise RigError(f"missing column {col!r}", path=p, line=header_line, key=col)
-    if len(set(header)) != len(header):
-        dup = [c for c in header if header.count(c) > 1][0]
-        raise RigError(f"duplicated column {dup!r}", path=p, line=header_line, key=dup)
+    _check_header(header, p, header_line)
     ix = {c: header.index(c) for c in header}
     has_temp = "temp_C" in ix
     rows = []
@@ -158,25 +186,7 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
             continue
         if len(row) != len(header):
             raise RigError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
-        t = _float(row[ix["time_s"]], p, k, "time_s")
-        step = _int(row[ix["step"]], p, k, "step")
-        rep = _int(row[ix["repeat"]], p, k, "repeat")
-        try:
-            ph = Phase(row[ix["phase"]].strip())
-        except ValueError:
-            raise RigError(f"expected 'load' or 'unload', got {row[ix['phase']]!r}", path=p, line=k,
-                           key="phase") from None
-        try:
-            ax = LoadAxis(row[ix["load_axis"]].strip())
-        except ValueError:
-            raise RigError(f"unknown load axis {row[ix['load_axis']]!r}; expected one of "
-                           f"{[a.value for a in LoadAxis]}", path=p, line=k, key="load_axis") from None
-        m = _float(row[ix["mass_kg"]], p, k, "mass_kg")
-        if m < 0:
-            raise RigError(f"mass must be >= 0, got {m}", path=p, line=k, key="mass_kg")
-        disp = [_float(row[ix[c]], p, k, c, allow_empty=True) for c in ("disp_x_mm", "disp_y_mm", "disp_z_mm")]
-        temp = _float(row[ix["temp_C"]], p, k, "temp_C", allow_empty=True) if has_temp else math.nan
-        rows.append((k, t, step, rep, ph, ax, m, disp, temp))
+        rows.append(_row(row, ix, p, k, has_temp))
     if not rows:
         raise RigError("no samples after the header", path=p, line=header_line)
     _check_holds(rows, p)

@@ -20,6 +20,14 @@ def register(sub) -> None:
                          description="The stiffness rig of the paper (Fig. 7): hang weights on the rod, record the "
                                      "ball's displacement, fit the compliance.")
     rsub = rig.add_subparsers(dest="rig_command", metavar="RIG_COMMAND")
+    _register_fit(rsub)
+    _register_simulate(rsub)
+    _register_acquire(rsub)
+    _register_simulator(rsub)
+    rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
+
+
+def _register_fit(rsub) -> None:
     p = rsub.add_parser("fit", help="fit a recording: measured C_F, r_rod (Eq. 21), measured compliance file",
                         description="Hold averages, one line per load axis and branch, intercepts in kg, measured "
                                     "C_F, r_rod against the simulated compliance, C_g = r_rod C_g_sim (Eq. 22).")
@@ -30,6 +38,9 @@ def register(sub) -> None:
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
     add_report_option(p)
     p.set_defaults(func=cmd_fit)
+
+
+def _register_simulate(rsub) -> None:
     p = rsub.add_parser("simulate", help="write a recording from the rig's physical model (no hardware)",
                         formatter_class=argparse.RawDescriptionHelpFormatter,
                         description="Simulate the stiffness rig on a rod with a known compliance and optional "
@@ -50,6 +61,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
+
+
+def _register_acquire(rsub) -> None:
     p = rsub.add_parser("acquire", help="record a plan from the rig (prompts the operator or commands a loader)",
                         description="Run an acquisition plan on the rig described by the profile; every sample is "
                                     "appended and flushed as it arrives; re-running the same command resumes after "
@@ -62,6 +76,9 @@ def register(sub) -> None:
     p.add_argument("--new-file", action="store_true",
                    help="never continue an existing file: record into the next free name beside it (run-2.rig.csv)")
     p.set_defaults(func=cmd_acquire)
+
+
+def _register_simulator(rsub) -> None:
     p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
                                     "commandable loader on a pty, published at --link; point a profile's port at it.")
@@ -75,7 +92,6 @@ def register(sub) -> None:
     p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
     p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     p.set_defaults(func=cmd_simulator)
-    rig.set_defaults(func=lambda a: (rig.print_help(), 1)[1])
 
 
 def cmd_fit(args: argparse.Namespace) -> int:

@@ -55,7 +55,29 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         geometry = require_cad()
         mesher = geometry.mesh_rod
     t0 = time.perf_counter()
-    calibration = None
+    calibration, saved = _frame_calibration(args, base, L1s, L2s, out)
+    from ...progress import progress as bar_of
+    with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
+        def progress(done, total):
+            bar.update(done - bar.n)
+        df = run_sweep(base, L1s, L2s, model=args.model, scheduler=args.scheduler, workers=args.workers,
+                       cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
+                       progress=progress, calibration=calibration)
+    _write_table(df, out)
+    png = Path(args.png) if args.png else out.with_suffix(".png")
+    label = f"{args.model} model" + (" joint-calibrated on solid FEA" if calibration is not None else "")
+    plot_sweep(df, png, title=f"{label}, base design {base.name}", marks={f"base {base.name}": (base.L1_mm, base.L2_mm)})
+    _print_summary(df, time.perf_counter() - t0)
+    print(f"  wrote {out} and {png}")
+    from ..report import FORMAT_SWEEP, Source
+    written = [Source(FORMAT_SWEEP, df, out), png] + ([saved] if saved is not None else [])
+    write_command_report(args, written, out.parent)
+    return 0
+
+
+def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
+    """The frame's joint calibration the sweep uses: read (``--joints``), solved now and saved beside the
+    output (``--calibrate``), or none. Returns (calibration or None, the saved file or None)."""
     if (args.calibrate or args.joints) and args.model != "frame":
         raise RodlabError(f"{'--calibrate' if args.calibrate else '--joints'} applies to --model frame")
     if args.calibrate and args.joints:
@@ -65,26 +87,25 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         calibration = read_joints(args.joints)
         calibration.check_member(base)
         print(f"frame joint-calibrated by {args.joints} (solid FEA of {calibration.base.name})")
-    if args.calibrate:
-        from rodlab.app.study.family import solid_family_calibration
+        return calibration, None
+    if not args.calibrate:
+        return None, None
+    from rodlab.app.study.family import solid_family_calibration
+    from rodlab.fea.joints_io import write_joints
 
-        from .cmd_geometry import require_cad
-        require_cad()
-        calibration = solid_family_calibration(base, L1s, L2s)
-        m1, m2 = calibration.margins_mm
-        from rodlab.fea.joints_io import write_joints
-        saved = write_joints(out.with_suffix(".joints.json"), calibration)
-        print(f"frame joint-calibrated on the solid FEA of {calibration.base.name} (sections {m1:.1f} / {m2:.1f} mm "
-              f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %); "
-              f"saved to {saved} (reuse: --joints)")
+    from .cmd_geometry import require_cad
+    require_cad()
+    calibration = solid_family_calibration(base, L1s, L2s)
+    m1, m2 = calibration.margins_mm
+    saved = write_joints(out.with_suffix(".joints.json"), calibration)
+    print(f"frame joint-calibrated on the solid FEA of {calibration.base.name} (sections {m1:.1f} / {m2:.1f} mm "
+          f"from the ends of the free tubes; span fit residual {100 * calibration.span_residual:.2f} %); "
+          f"saved to {saved} (reuse: --joints)")
+    return calibration, saved
 
-    from ...progress import progress as bar_of
-    with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
-        def progress(done, total):
-            bar.update(done - bar.n)
-        df = run_sweep(base, L1s, L2s, model=args.model, scheduler=args.scheduler, workers=args.workers,
-                       cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
-                       progress=progress, calibration=calibration)
+
+def _write_table(df, out: Path) -> None:
+    """The sweep table as CSV or Parquet (by the suffix), atomically."""
     if out.suffix == ".parquet":
         import io
         buf = io.BytesIO()
@@ -95,11 +116,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         atomic_write_bytes(out, buf.getvalue())
     else:
         atomic_write_text(out, df.to_csv(index=False))
-    png = Path(args.png) if args.png else out.with_suffix(".png")
-    label = f"{args.model} model" + (" joint-calibrated on solid FEA" if calibration is not None else "")
-    plot_sweep(df, png, title=f"{label}, base design {base.name}", marks={f"base {base.name}": (base.L1_mm, base.L2_mm)})
+
+
+def _print_summary(df, seconds: float) -> None:
     ok = df[df["status"] == "ok"]
-    print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {time.perf_counter() - t0:.1f} s")
+    print(f"{len(df)} designs ({len(ok)} ok, {len(df) - len(ok)} invalid/failed) in {seconds:.1f} s")
     if len(ok):
         best = ok.loc[ok["c_rod_um"].idxmin()]
         print(f"  stiffest: L1 = {best['L1_mm']:g}, L2 = {best['L2_mm']:g} mm, c_rod = {best['c_rod_um']:.1f} um, "
@@ -107,9 +128,4 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     for note in sorted({m for m in ok["message"] if isinstance(m, str) and m}):
         print(f"  note: {note}; rerun with --calibrate (one solid FEA run calibrates the frame's joints for this "
               f"family)")
-    print(f"  wrote {out} and {png}")
-    from ..report import FORMAT_SWEEP, Source
-    written = [Source(FORMAT_SWEEP, df, out), png] + ([saved] if args.calibrate else [])
-    write_command_report(args, written, out.parent)
-    return 0
 

@@ -2,8 +2,9 @@
 
 The identification's residuals r and Jacobian J are augmented with the columns H of each hypothesis; the
 gain is the part of r that H explains beyond what the identified parameters already absorb (the
-projection on the complement of J). Selection as for the rig (delta BIC <= -10 with the known device noise,
-likelihood-ratio p < 1e-3, leave-one-point-out cross-validation), then the campaign is identified again
+projection on the complement of J). Selection under the acceptance rule the rig diagnosis uses (:mod:`.criteria`:
+delta BIC <= -10 with the known device noise, likelihood-ratio p <= 1e-3, leave-one-point-out
+cross-validation, a detection limit), then the campaign is identified again
 with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers, joint angles
 corrected by the fitted once-per-revolution errors — also at the validation points, as a controller would —
 and measured points referred back to the campaign start for thermal growth) to show the fit (and, with
@@ -27,7 +28,7 @@ from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, 
                                       correct_joints)
 from rodlab.hypothesis import Hypothesis, location_parts
 
-from .chi2 import chi2_sf
+from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 
@@ -35,8 +36,6 @@ __all__ = ["diagnose_campaign", "CampaignFits"]
 
 log = logging.getLogger(__name__)
 
-DBIC_MIN = 10.0
-P_MAX = 1e-3
 #: significant candidates tried in turn at each step when the best fails cross-validation
 FALLBACKS = 4
 
@@ -87,11 +86,10 @@ def _birge_drop(e: np.ndarray, n: int, k: int, birge: float) -> float:
 
 @dataclass
 class _Candidate:
-    """One hypothesis (or an outlier point) tried next: its delta BIC, likelihood ratio, whitened columns, and
+    """One hypothesis (or an outlier point) tried next: its :class:`~.criteria.Evidence`, whitened columns, and
     the fit with it (coefficients of all columns, residual sum of squares)."""
 
-    dbic: float
-    lr: float
+    ev: Evidence
     hyp: Hypothesis
     coef: np.ndarray
     rss: float
@@ -183,13 +181,12 @@ class _Selection:
 
     def _candidate(self, h: Hypothesis, penalty: float) -> _Candidate:
         coef, rss2, _ = self.fit(self.cols + [h.X])
-        lr = self.rss - rss2
-        return _Candidate(-lr + penalty, lr, h, coef, rss2)
+        return _Candidate(evidence(self.rss - rss2, h.X.shape[1], penalty), h, coef, rss2)
 
     def candidates(self, max_outliers: int) -> list[_Candidate]:
         """Every hypothesis not yet accepted, and the point with the largest robust residual as an outlier (a
         least-squares fit smears a gross error onto its neighbours and can point at an innocent point)."""
-        cand = [self._candidate(h, h.X.shape[1] * np.log(self.n)) for h in self.hyps
+        cand = [self._candidate(h, bic_penalty(h.X.shape[1], self.n)) for h in self.hyps
                 if not any(c[0] == h.effect and c[1] == h.location for c in self.chosen)]
         A = np.column_stack([self.J] + self.cols) if self.cols else self.J
         norms = np.linalg.norm(robust_fit(A, self.r).residuals, axis=1)
@@ -201,23 +198,22 @@ class _Selection:
                     # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
                     cand.append(self._candidate(replace(h, X=self.white(h.X)),
                                                 3 * np.log(self.n) + 2 * np.log(self.N)))
-        return sorted(cand, key=lambda c: c.dbic)
+        return sorted(cand, key=lambda c: c.ev.dbic)
 
     def try_accept(self, best: _Candidate) -> bool:
         """Accept ``best`` if it passes delta BIC, the likelihood-ratio test, cross-validation and the detection
         limit; record its finding. False: the selection ends."""
         h, per_point = best.hyp, campaign_effect(best.hyp.effect).per_point
-        p = float(chi2_sf(max(best.lr, 0.0), h.X.shape[1]))
-        if best.dbic > -DBIC_MIN or p > P_MAX:
+        if not best.ev.significant:
             log.debug("campaign diagnosis: %s %s not significant (dBIC %.1f, p %.2g)", h.effect, h.location,
-                      best.dbic, p)
+                      best.ev.dbic, best.ev.p)
             return False
         if per_point:
             cv2 = self.cv * (best.rss / max(self.rss, 1e-300))
         else:                             # both models predicted on the same points (outliers left out)
             self.cv = self.cv_error(self.cols, self.used_points) if self.used_points else self.cv
             cv2 = self.cv_error(self.cols + [h.X], self.used_points)
-        if not cv2 < self.cv:
+        if not cv_improves(self.cv, cv2):
             log.debug("campaign diagnosis: %s %s does not predict left-out points better (%.4g -> %.4g)",
                       h.effect, h.location, self.cv, cv2)
             return False
@@ -229,18 +225,18 @@ class _Selection:
             log.debug("campaign diagnosis: %s %s below the detection limit", h.effect, h.location)
             return False
         se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A))[k0:k0 + h.X.shape[1]], 0, None))
-        self._record(best, p, cv2, *h.reported(val, se))
+        self._record(best, cv2, *h.reported(val, se))
         return True
 
-    def _record(self, best: _Candidate, p: float, cv2: float, params: dict, iv: dict) -> None:
+    def _record(self, best: _Candidate, cv2: float, params: dict, iv: dict) -> None:
         h = best.hyp
         merged = campaign_effect(h.effect).per_point and self._merge_point(h)
         if not merged:
             before = self.rms(self.cols) if self.cols else float(np.sqrt(np.mean(self.r_raw ** 2)))
             self.findings.append(Finding(h.effect, h.location, h.explanation, params, iv, before,
                                          self.rms(self.cols + [h.X]),
-                                         {"delta_bic": float(best.dbic), "lr_chi2": float(best.lr), "lr_p": p,
-                                          "cv_sse_before": float(self.cv), "cv_sse_after": float(cv2)}))
+                                         dict(best.ev.to_dict(), cv_sse_before=float(self.cv),
+                                              cv_sse_after=float(cv2))))
         self.chosen.append((h.effect, h.location))
         self.cols.append(h.X)
         self.rss, self.cv = best.rss, cv2
@@ -268,10 +264,10 @@ class _Selection:
             if not cand:
                 break
             log.debug("campaign diagnosis: best %s %s dBIC %.1f; next %s", cand[0].hyp.effect, cand[0].hyp.location,
-                      cand[0].dbic, [(c.hyp.effect, c.hyp.location, round(float(c.dbic), 1)) for c in cand[1:4]])
+                      cand[0].ev.dbic, [(c.hyp.effect, c.hyp.location, round(c.ev.dbic, 1)) for c in cand[1:4]])
             # the significant candidates in order: one that fails cross-validation or the detection limit (a
             # flexible term absorbing part of a gross error) gives way to the next
-            if not any(self.try_accept(c) for c in cand[:FALLBACKS] if c.dbic <= -DBIC_MIN):
+            if not any(self.try_accept(c) for c in cand[:FALLBACKS] if c.ev.dbic <= -DBIC_MIN):
                 break
 
 

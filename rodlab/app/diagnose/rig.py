@@ -20,14 +20,14 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from .chi2 import chi2_sf
 
 from ...compliance import RodCompliance
 from rodlab.stiffness_rig.effects import HypothesisContext, creep_hypothesis, joint_places, rig_hypotheses
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
+from .criteria import DBIC_MIN, bic_penalty, evidence
 from .report import Diagnosis, Finding
-from .rig_select import DBIC_MIN, alternatives, compatible, demean, refine_tau, select, subset_ls
+from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
 
@@ -112,25 +112,42 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
 
 
 def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, RigModelFit]:
+    """Screen, attribute, locate and explain one recording (the steps of the module docstring)."""
     sigma = within_hold_noise(data)
     n = data.y.size
     base = sim.C_F[data.comp, data.axis] * data.F
-    library = rig_hypotheses(data, HypothesisContext(np.asarray(sim.C_F, float), base,
-                                                     joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)))
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
     groups = data.axis * 4 + data.comp
     r0 = demean(data.y - base, groups)
+    library = rig_hypotheses(data, HypothesisContext(np.asarray(sim.C_F, float), base,
+                                                     joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)))
     for t in library:
         t.X = demean(t.X, groups)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
-    ls = subset_ls(library, r0, folds)
-    rms0 = float(np.sqrt(r0 @ r0 / n))
-    S = select(library, ls, sigma, n, max_terms, groups)
+    library, ls, S = _select_refining_creep(library, subset_ls(library, r0, folds), data, base, r0, groups,
+                                            sigma, max_terms, folds)
+    coef, rss = ls.fit(S)
+    findings = _findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
+    resid = ls.residual(S, coef)
+    rms = float(np.sqrt(rss / n))
+    lack = _lack_of_fit(data, resid, sigma)
+    verdict = "consistent" if not findings else "explained"
+    for finding in lack.findings(rms, sigma):
+        findings.append(finding)
+        verdict = "unexplained"
+    model = RigModelFit([library[j] for j in S], coef, resid, r0, data, sigma, lack.hold_z2(), lack.hold_offset_mm())
+    return Diagnosis("rig", verdict, sigma, float(np.sqrt(r0 @ r0 / n)), rms, findings,
+                     {"reduced_chi2_hold_means": lack.chi_red}), model
+
+
+def _select_refining_creep(library, ls, data: RigSamples, base, r0, groups, sigma: float, max_terms: int, folds):
+    """Select a model; creep's time constant was picked from a grid: refine it continuously in the chosen model
+    and in each of its sub-models that keep creep, then select again among the refined ones (a grid mismatch
+    at high SNR must not be patched with extra terms such as a compliance scale). Returns (library, its
+    :class:`SubsetLS`, the chosen term indices)."""
+    S = select(library, ls, sigma, r0.size, max_terms, groups)
     for _ in range(2):
-        # creep's time constant was picked from a grid: refine it continuously in the chosen model and in
-        # each of its sub-models that keep creep, then select again among the refined ones (a grid mismatch
-        # at high SNR must not be patched with extra terms such as a compliance scale)
         creep = [j for j in S if library[j].effect == "creep"]
         if not creep:
             break
@@ -148,8 +165,14 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> t
             refined[-1].X = demean(refined[-1].X, groups)
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
-        S = select(library, ls, sigma, n, max_terms, groups)
-    coef, rss = ls.fit(S)
+        S = select(library, ls, sigma, r0.size, max_terms, groups)
+    return library, ls, S
+
+
+def _findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: float) -> list[Finding]:
+    """One finding per chosen term, in the order the terms explain the residual: parameters with 95 %
+    intervals, the drop-one likelihood ratio as evidence, the places and effects the data cannot tell apart."""
+    n = ls.r.size
     cv_full = ls.cv_error(S)
     # strength of each term: the likelihood ratio of dropping it from the final model
     drop = {}
@@ -157,78 +180,103 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> t
         rest = tuple(i for i in S if i != j)
         _, rss_r = ls.fit(rest)
         drop[j] = ((rss_r - rss) / sigma ** 2, ls.cv_error(rest))
-    order = _explaining_order(ls, S)
     cols = ls.columns(S)
     Gn = ls.G[np.ix_(cols, cols)] * np.outer(ls.norms[cols], ls.norms[cols])
     se_all = np.sqrt(np.clip(np.diag(sigma ** 2 * np.linalg.pinv(Gn)), 0, None))
     offsets = dict(zip(S, np.cumsum([0] + [library[j].X.shape[1] for j in S])[:-1]))
     findings = []
-    rss_prev = float(r0 @ r0)
+    rss_prev = rss0
+    order = _explaining_order(ls, S)
     for m, j in enumerate(order):
         term = library[j]
         kj = term.X.shape[1]
         val, se = coef[offsets[j]:offsets[j] + kj], se_all[offsets[j]:offsets[j] + kj]
         _, rss_m = ls.fit(tuple(sorted(order[:m + 1])))
-        lr = drop[j][0]
-        evidence = {"delta_bic": float(-lr + term.n_params * np.log(n)), "lr_chi2": float(lr),
-                    "lr_p": float(chi2_sf(max(lr, 0.0), term.n_params)), "cv_sse_before": float(drop[j][1]),
-                    "cv_sse_after": float(cv_full)}
+        ev = dict(evidence(drop[j][0], term.n_params, bic_penalty(term.n_params, n)).to_dict(),
+                  cv_sse_before=float(drop[j][1]), cv_sse_after=float(cv_full))
         location = term.location
-        if term.effect == "joint_compliance":
-            # ambiguity among places: another place fits within delta BIC 10
-            alts = []
-            for i, u in enumerate(library):
-                if u.effect == "joint_compliance" and i != j:
-                    alt = tuple(sorted([x for x in S if x != j] + [i]))
-                    if len(set(alt)) == len(alt) and all(compatible(library, tuple(x for x in alt if x != y), y)
-                                                         for y in alt):
-                        if (ls.fit(alt)[1] - rss) / sigma ** 2 < DBIC_MIN:
-                            alts.append(u.location)
-            if alts:
-                location = "|".join([term.location] + alts)
-                evidence["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): "
-                                           "the lever from each place to the ball differs in each")
+        places = _other_places(library, ls, S, j, rss, sigma) if term.effect == "joint_compliance" else []
+        if places:
+            location = "|".join([term.location] + places)
+            ev["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): "
+                                       "the lever from each place to the ball differs in each")
         alts_j = alternatives(library, ls, S, j, rss, sigma, n)
         if alts_j:
-            evidence["alternatives"] = alts_j
+            ev["alternatives"] = alts_j
         params, intervals = term.reported(val, se)
         findings.append(Finding(term.effect, location, term.explanation, params, intervals,
-                                float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), evidence))
+                                float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), ev))
         rss_prev = rss_m
-    chosen = [library[j] for j in S]
-    resid = ls.residual(S, coef)
-    rms = float(np.sqrt(rss / n))
-    # lack of fit of the hold means: structure the library does not explain
+    return findings
+
+
+def _other_places(library, ls, S: tuple, j: int, rss: float, sigma: float) -> list[str]:
+    """Ambiguity among places: the other joint-spring places that, put in place of term ``j``, fit within
+    delta BIC 10."""
+    alts = []
+    for i, u in enumerate(library):
+        if u.effect == "joint_compliance" and i != j:
+            alt = tuple(sorted([x for x in S if x != j] + [i]))
+            if len(set(alt)) == len(alt) and all(compatible(library, tuple(x for x in alt if x != y), y)
+                                                 for y in alt):
+                if (ls.fit(alt)[1] - rss) / sigma ** 2 < DBIC_MIN:
+                    alts.append(u.location)
+    return alts
+
+
+@dataclass
+class _LackOfFit:
+    """The hold means' residuals after the chosen model: structure the library does not explain.
+
+    keys : shape=(m,) the (hold, component) keys ``step * 4 + comp``; mean_r : shape=(m,) mean residual of each
+    [mm]; z : shape=(m,) its z-score; chi_red : mean z^2; rho : pooled lag-1 autocorrelation within the holds
+    """
+
+    keys: np.ndarray
+    mean_r: np.ndarray
+    z: np.ndarray
+    chi_red: float
+    rho: float
+
+    def findings(self, rms: float, sigma: float) -> list[Finding]:
+        """``unexplained`` findings: correlated readings within the holds; hold means above the noise."""
+        out = []
+        if self.rho > 0.3:
+            out.append(Finding("unexplained", "within_hold", "the readings within the holds are correlated in time "
+                               f"(lag-1 autocorrelation {self.rho:.2f}; white gauge noise gives ~0): a disturbance "
+                               "such as vibration, hum or a sliding contact that no modelled effect explains",
+                               {"lag1_autocorrelation": self.rho}, {}, rms, rms, {}))
+        if self.chi_red > 4.0 or rms > 1.5 * sigma:
+            worst = self.keys[np.argmax(np.abs(self.z))]
+            step_w, comp_w = worst // 4, worst % 4
+            loc = f"axis:{'xyz'[comp_w]}"
+            bad_steps = np.unique(self.keys[np.abs(self.z) > 4] // 4)
+            if bad_steps.size:
+                loc += f", step:{bad_steps.min()}-{bad_steps.max()}"
+            out.append(Finding("unexplained", loc, "structure above the noise that no modelled effect explains "
+                                                   f"(reduced chi-square of hold means {self.chi_red:.1f})",
+                               {"reduced_chi2": self.chi_red}, {}, rms, rms, {"worst_hold": int(step_w)}))
+        return out
+
+    def hold_z2(self) -> dict:
+        """{step: sum of squared z-scores of its hold means}"""
+        steps = self.keys // 4
+        return {int(k): float((self.z[steps == k] ** 2).sum()) for k in np.unique(steps)}
+
+    def hold_offset_mm(self) -> dict:
+        """{step: its largest hold-mean residual [mm]}"""
+        steps = self.keys // 4
+        return {int(k): float(self.mean_r[steps == k][np.argmax(np.abs(self.mean_r[steps == k]))])
+                for k in np.unique(steps)}
+
+
+def _lack_of_fit(data: RigSamples, resid: np.ndarray, sigma: float) -> _LackOfFit:
     keys = data.step * 4 + data.comp
     uk, inv = np.unique(keys, return_inverse=True)
     cnt = np.bincount(inv)
     mean_r = np.bincount(inv, weights=resid) / cnt
     z = mean_r * np.sqrt(cnt) / sigma
-    chi_red = float(np.mean(z ** 2))
-    rho = _within_hold_autocorrelation(data, resid)
-    verdict = "consistent" if not findings else "explained"
-    if rho > 0.3:
-        findings.append(Finding("unexplained", "within_hold", "the readings within the holds are correlated in time "
-                                f"(lag-1 autocorrelation {rho:.2f}; white gauge noise gives ~0): a disturbance such as "
-                                "vibration, hum or a sliding contact that no modelled effect explains",
-                                {"lag1_autocorrelation": rho}, {}, rms, rms, {}))
-        verdict = "unexplained"
-    if chi_red > 4.0 or rms > 1.5 * sigma:
-        worst = uk[np.argmax(np.abs(z))]
-        step_w, comp_w = worst // 4, worst % 4
-        loc = f"axis:{'xyz'[comp_w]}"
-        bad_steps = np.unique(uk[np.abs(z) > 4] // 4)
-        if bad_steps.size:
-            loc += f", step:{bad_steps.min()}-{bad_steps.max()}"
-        findings.append(Finding("unexplained", loc, "structure above the noise that no modelled effect explains "
-                                                    f"(reduced chi-square of hold means {chi_red:.1f})",
-                                {"reduced_chi2": chi_red}, {}, rms, rms, {"worst_hold": int(step_w)}))
-        verdict = "unexplained"
-    steps_k = uk // 4
-    hold_z2 = {int(k): float((z[steps_k == k] ** 2).sum()) for k in np.unique(steps_k)}
-    hold_off = {int(k): float(mean_r[steps_k == k][np.argmax(np.abs(mean_r[steps_k == k]))]) for k in np.unique(steps_k)}
-    model = RigModelFit(chosen, coef, resid, r0, data, sigma, hold_z2, hold_off)
-    return Diagnosis("rig", verdict, sigma, rms0, rms, findings, {"reduced_chi2_hold_means": chi_red}), model
+    return _LackOfFit(uk, mean_r, z, float(np.mean(z ** 2)), _within_hold_autocorrelation(data, resid))
 
 
 def _within_hold_autocorrelation(data: RigSamples, resid: np.ndarray) -> float:

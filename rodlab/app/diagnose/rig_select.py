@@ -2,8 +2,9 @@
 recording supports.
 
 Beam search over term subsets with bounded least squares from the Gram matrix (:mod:`.subset`); a larger
-model replaces the current one only if delta BIC <= -10 (known noise), the likelihood-ratio p < 1e-3 and the
-leave-one-repeat-out prediction error drops; every term must change the readings of a series by at least
+model replaces the current one only under the acceptance rule shared with the campaign diagnosis
+(:mod:`.criteria`: delta BIC <= -10 with the known noise, the likelihood-ratio p <= 1e-3, the
+leave-one-repeat-out prediction error drops); every term must change the readings of a series by at least
 ``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test. Creep's time constant is refined
 continuously (:func:`refine_tau`). The gauge zero of each series is projected out (:func:`demean`).
 """
@@ -12,20 +13,17 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from .chi2 import chi2_sf
 
 from rodlab.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
+from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence
 from .subset import SubsetLS
 
-__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "DBIC_MIN", "P_MAX",
-           "PTP_MIN", "BEAM"]
+__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "PTP_MIN", "BEAM"]
 
 log = logging.getLogger(__name__)
 
-DBIC_MIN = 10.0
-P_MAX = 1e-3
 PTP_MIN = 1.0        # detection limit: peak-to-peak change of the readings of a series [noise SDs]
 
 
@@ -91,11 +89,10 @@ def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_te
             continue
         key, c, rss = best
         dk = k_of(key) - k_of(cur)
-        lr = (cur_rss - rss) / sigma ** 2
-        if -lr + dk * np.log(n) > -DBIC_MIN or chi2_sf(max(lr, 0.0), max(dk, 1)) > P_MAX:
+        if not evidence((cur_rss - rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant:
             continue
         cv = ls.cv_error(key)
-        if np.isfinite(cur_cv) and not cv < cur_cv:
+        if not cv_improves(cur_cv, cv):
             log.info("%s rejected: cross-validated error does not drop", [library[j].effect for j in key])
             continue
         cur, cur_rss, cur_cv = key, rss, cv
@@ -106,8 +103,7 @@ def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_te
             rest = tuple(i for i in cur if i != j)
             _, rss_r = ls.fit(rest)
             lr = (rss_r - cur_rss) / sigma ** 2
-            ok = -lr + npar[j] * np.log(n) <= -DBIC_MIN and chi2_sf(max(lr, 0.0), npar[j]) <= P_MAX
-            if not ok and (weakest is None or lr < weakest[1]):
+            if not evidence(lr, npar[j], bic_penalty(npar[j], n)).significant and (weakest is None or lr < weakest[1]):
                 weakest = (rest, lr, rss_r)
         if weakest is None:
             break

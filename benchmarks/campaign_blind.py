@@ -1,14 +1,13 @@
-"""Blind cases for the campaign diagnosis: nulls, a wrong fixture pose, a rod compliance off by a factor,
+"""Score the campaign diagnosis on blind cases: nulls, a wrong fixture pose, a rod compliance off by a factor,
 gross alignment errors (outliers), a once-per-revolution joint error, thermal growth, and the pair of a wrong
-fixture pose with outliers; generated with
-``calibrate.simulate`` (never diagnosis code).
+fixture pose with outliers. The cases come from :mod:`rodlab.calibrate.blind` (the simulator, never diagnosis
+code), defined in ``calibrate/blind_cases.toml``.
 
     python benchmarks/campaign_blind.py [N] [SEED] [pairs|wide]   # writes docs/benchmarks/campaign_blind[_MODE].md
     CAMPAIGN_BLIND_DEBUG=K python ...                         # the selection's log for case K (0-based)
 """
 from __future__ import annotations
 
-import csv
 import logging
 import os
 import sys
@@ -17,12 +16,10 @@ import time
 from collections import Counter
 from pathlib import Path
 
-import numpy as np
-
-from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
-from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.app.diagnose import diagnose_campaign
+from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases
 from rodlab.fileio import atomic_write_text
 
 NOTES = [
@@ -57,28 +54,7 @@ NOTES = [
     "`rodlab calibrate` trusts the result with a caution (Birge ratio 1.34 <= 1.5).",
     "`wide` also draws the protocol per case (4-6 clamping positions x 5-8 orientations, device noise 2-5 um,",
     "stated to the diagnosis) and the misclamped position among all but the world one.", ""]
-KINDS = ["null", "fixture_pose", "rod_deflection", "outliers", "periodic_joint_error", "thermal_drift"]
-PAIRS = ["fixture_pose+outliers"]
-WIDE = PAIRS + ["fixture_pose+outlier_inside"]      # `wide`: also an outlier inside the misclamped position
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
-
-
-def _outliers(path: Path, rng, k: int, inside: int | None = None):
-    """Add ``k`` gross alignment errors to random points (with ``inside``: the first at that position)."""
-    rows = list(csv.reader(path.read_text().splitlines()))
-    if inside is None:
-        idx = rng.choice(np.arange(1, len(rows)), size=k, replace=False)
-    else:
-        at = [i for i in range(1, len(rows)) if rows[i][0] == str(inside)]
-        rest = [i for i in range(1, len(rows)) if rows[i][0] != str(inside)]
-        idx = [int(rng.choice(at))] + [int(i) for i in rng.choice(rest, size=k - 1, replace=False)]
-    labels = []
-    for i in idx:
-        for c in (-5, -4, -3):
-            rows[i][c] = f"{float(rows[i][c]) + rng.choice([-1, 1]) * rng.uniform(0.15, 0.4):.4f}"
-        labels.append(f"{rows[i][0]}.{rows[i][1]}")
-    path.write_text("\n".join(",".join(r) for r in rows) + "\n")
-    return labels
 
 
 def main() -> int:
@@ -86,56 +62,20 @@ def main() -> int:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 12
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 500
     mode = sys.argv[3] if len(sys.argv) > 3 else ""
-    kinds = KINDS + {"pairs": PAIRS, "wide": WIDE}.get(mode, [])
-    rng = np.random.default_rng(seed)
+    kinds = blind_definitions().kinds_of(mode)
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(resolve_design("rod1"))
     results = []
     with tempfile.TemporaryDirectory() as tmp:
-        for i in range(n):
-            kind = kinds[i % len(kinds)]
-            out = Path(tmp) / f"c{i}"
-            truth = {"kind": kind, "effect": None if kind == "null" else kind}
-            effects = []                                  # (name, parameters) of the campaign effect registry
-            protocol = {}
-            if mode == "wide":                            # other protocols and device noise, stated to diagnose
-                protocol = {"positions": int(rng.integers(4, 7)), "orientations": int(rng.integers(5, 9)),
-                            "device_noise_mm": round(float(rng.uniform(0.002, 0.005)), 4)}
-            npos = protocol.get("positions", 5)
-            if kind.startswith("fixture_pose"):           # any position but the world one (1 + npos // 2)
-                j = int(rng.choice([p for p in range(1, npos + 1) if p != 1 + npos // 2]))
-                effects.append(("fixture_pose", {"position": j, "offset_mm": list(rng.normal(0, 0.12, 3))}))
-                truth["location"] = f"position:{j}"
-            if kind == "rod_deflection":
-                k = float(rng.choice([0.6, 1.5, 2.0]))
-                effects.append(("rod_deflection", {"k": k}))
-                truth["k"] = k
-            if kind == "periodic_joint_error":
-                k = int(rng.integers(1, 7))
-                amp, phase = float(rng.choice([-1, 1]) * rng.uniform(0.002, 0.008)), float(rng.uniform(0, 360))
-                effects.append(("periodic_joint_error", {"joint": k, "amp_deg": amp, "phase_deg": phase}))
-                truth["location"] = f"joint:{k}"
-                truth["amp_deg"] = amp
-            if kind == "thermal_drift":
-                therm = float(rng.uniform(0.01, 0.05))
-                effects.append(("thermal_drift", {"growth_ppm_per_s": therm}))
-                truth["location"] = "time"
-                truth["ppm_per_s"] = therm
-            spec = CampaignSpec(seed=int(rng.integers(1 << 30)), **protocol)
-            truth["protocol"] = f"{spec.positions}x{spec.orientations}, {spec.device_noise_mm * 1e3:.1f} um"
-            simulate_campaign(robot, rod, out, spec, effects=effects)
-            if kind.endswith("outliers"):
-                truth["points"] = _outliers(out / "multical.campaign.csv", rng, 2)
-            if kind.endswith("outlier_inside"):                # one of the two inside the misclamped position
-                truth["points"] = _outliers(out / "multical.campaign.csv", rng, 2,
-                                            int(truth["location"].split(":")[1]))
+        for i, case in enumerate(generate_campaign_cases(robot, rod, tmp, n, seed, mode)):
             t0 = time.perf_counter()
             logging.getLogger("rodlab").setLevel(logging.DEBUG if str(i) == os.environ.get("CAMPAIGN_BLIND_DEBUG")
                                                  else logging.WARNING)
-            diag, _ = diagnose_campaign(robot, read_campaign(out / "multical.campaign.csv"),
-                                        read_fixture(out / "multical.fixture.json"), rod, noise_mm=spec.device_noise_mm,
-                                        validate_points=read_points(out / "multical.validation.csv"))
-            results.append((truth, diag, time.perf_counter() - t0))
+            folder = case.folder
+            diag, _ = diagnose_campaign(robot, read_campaign(folder / "multical.campaign.csv"),
+                                        read_fixture(folder / "multical.fixture.json"), rod, noise_mm=case.noise_mm,
+                                        validate_points=read_points(folder / "multical.validation.csv"))
+            results.append((case.truth, diag, time.perf_counter() - t0))
     s = Counter()
     lines = ["# Blind benchmark: campaign diagnosis", "",
              f"`python benchmarks/campaign_blind.py {n} {seed}{' ' + mode if mode else ''}`: simulated TX90 campaigns "

@@ -55,6 +55,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
                "instrument / validation points"),
+    FormatSpec("rodlab.blind_rig/1", "toml", "blind_rig.schema.json", (), "rig blind-case definitions"),
+    FormatSpec("rodlab.blind_campaign/1", "toml", "blind_campaign.schema.json", (), "campaign blind-case definitions"),
 )}
 #: rodlab's own output records without a schema (nothing reads them back): only their JSON syntax is checked
 UNCHECKED = {f"rodlab.{n}/1": "an output record of rodlab without a schema: only its JSON syntax is checked"
@@ -125,9 +127,11 @@ def _locate(text: str, kind: str, where: list) -> int | None:
                     pos = hits[part]
             continue
         table = str(part)
-        pattern = (rf'"{re.escape(table)}"\s*:' if kind == "json"
-                   else rf"(?m)^\s*(\[+\s*{re.escape(table)}\s*\]+|{re.escape(table)}\s*=)")
-        m = re.compile(pattern).search(text, pos)
+        if kind == "json":
+            m = re.compile(rf'"{re.escape(table)}"\s*:').search(text, pos)
+        else:      # a table header first: a key of that name inside an earlier table is another key
+            m = (re.compile(rf"(?m)^\s*\[+\s*{re.escape(table)}\s*\]+").search(text, pos)
+                 or re.compile(rf"(?m)^\s*{re.escape(table)}\s*=").search(text, pos))
         if not m:
             return text.count("\n", 0, pos) + 1 if pos else None
         pos = m.start() + (len(m.group(0)) - len(m.group(0).lstrip()) if kind == "toml" else 0)

@@ -7,22 +7,34 @@ Each case: a recording on disk plus its truth (effects, locations, parameters, S
 a peak change of the readings of ``snr`` x the per-sample noise, as the contract examples are. Mix: ~30 %
 nulls, single effects (SNR 3-60), pairs, other noise levels and protocols, decoys (a bumped hold, a
 mislabelled load) and effects outside the library (gauge non-linearity, a step slip, mains hum), for which
-the honest answer is ``unexplained``.
+the honest answer is ``unexplained``. The mix, noise levels, SNR range, protocols, decoys and outside effects
+are defined in ``stiffness_rig/blind_cases.toml`` (:func:`blind_definitions`).
 """
 from __future__ import annotations
 
 import json
+import sys
 from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
 from .effects import joint_places
+from .errors import RigError
 from .model import Hold, LoadSchedule, RigModel
 from .simulate import simulate_recording
 
-__all__ = ["generate_cases", "BlindCase"]
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["generate_cases", "BlindCase", "blind_definitions", "read_blind_definitions", "FORMAT_BLIND"]
+
+FORMAT_BLIND = "rodlab.blind_rig/1"
 
 #: the effects the blind cases draw from (the contract's vocabulary, in its order)
 LIBRARY = ["friction", "tare", "creep", "nonlinearity", "crosstalk", "drift", "compliance_scale",
@@ -31,8 +43,32 @@ LIBRARY = ["friction", "tare", "creep", "nonlinearity", "crosstalk", "drift", "c
 
 @dataclass
 class BlindCase:
+    """One blind recording (``path``) and its truth (kind, effects with location, parameters and SNR, the
+    expected verdict, noise, protocol)."""
+
     path: Path
     truth: dict
+
+
+def read_blind_definitions(path) -> dict:
+    """Blind-case definitions from ``path`` (``rodlab.blind_rig/1``): {table: {key: value}}; every schema
+    problem named at once (file, line, key)."""
+    from rodlab.fileio import read_text_checked
+    from rodlab.schema import require_schema
+    p = Path(path)
+    text = read_text_checked(p, RigError)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise RigError(f"not valid TOML: {e}", path=p) from e
+    require_schema(data, FORMAT_BLIND, p, text, RigError, kind="toml")
+    return data
+
+
+@lru_cache(maxsize=None)
+def blind_definitions() -> dict:
+    """The shipped definitions (``stiffness_rig/blind_cases.toml``)."""
+    return read_blind_definitions(Path(str(resources.files("rodlab.stiffness_rig").joinpath("blind_cases.toml"))))
 
 
 def _unit_effect(name, rng, places, variants: bool = False):
@@ -51,7 +87,8 @@ def _unit_effect(name, rng, places, variants: bool = False):
     if name == "tare":
         return {"tare": {"tare_kg": 0.1}}, None, ["tare_kg"]
     if name == "creep":
-        return {"creep": {"phi": 0.01, "tau_s": float(rng.choice([2.0, 4.0, 8.0]))}}, None, ["phi"]
+        return {"creep": {"phi": 0.01, "tau_s": float(rng.choice(blind_definitions()["draws"]["creep_tau_s"]))}}, None, \
+            ["phi"]
     if name == "nonlinearity":
         return {"nonlinearity": {"beta_per_10N": 0.01 * rng.choice([-1, 1])}}, None, ["beta_per_10N"]
     if name == "crosstalk":
@@ -65,9 +102,10 @@ def _unit_effect(name, rng, places, variants: bool = False):
     if name == "torsion_compliance":
         return {"torsion_compliance": {"s_torsion_rad_per_Nm": 1e-6, "point_T_mm": list(places["flange_clamp"][0]),
                                        "axis": [0, 0, 1]}}, "pipe_I", ["s_torsion_rad_per_Nm"]
-    loc = str(rng.choice(["flange_clamp", "ring_1", "pipe_II"]))
+    draws = blind_definitions()["draws"]
+    loc = str(rng.choice(draws["joint_places"]))
     pt, ax = places[loc]
-    ratio = float(rng.uniform(0.2, 1.0))
+    ratio = float(rng.uniform(*draws["torsion_over_bend"]))
     return {"joint_compliance": {"location": loc, "point_T_mm": list(pt), "axis": list(ax), "s_bend_rad_per_Nm": 1e-6,
                                  "s_torsion_rad_per_Nm": ratio * 1e-6}}, loc, ["s_bend_rad_per_Nm",
                                                                                "s_torsion_rad_per_Nm"]
@@ -101,14 +139,31 @@ def _scale(effects, keys, factor):
 
 
 def _wide_schedule(rng) -> LoadSchedule:
-    """Protocols beyond the standard batches: 1-5 repeats, loads along negative axes, holds of 3-30 s sampled
-    at 2-20 Hz, gaps of 2-20 s between holds, up to 5 kg."""
-    axes = tuple(("-" if rng.random() < 0.3 else "") + a for a in rng.permutation(["y", "z", "x"]))
-    hold = float(rng.choice([3.0, 5.0, 8.0, 15.0, 30.0]))
-    rate = float(rng.choice([2.0, 5.0] if hold >= 15 else [5.0, 10.0, 20.0]))
-    masses = [(0.5, 1.0, 1.5, 2.0), (1.0, 2.5, 5.0), (0.2, 0.4, 0.6, 0.8, 1.0), (1.0, 2.0, 3.0)][int(rng.integers(4))]
-    return LoadSchedule(axes=axes, repeats=int(rng.integers(1, 6)), hold_s=hold, rate_Hz=rate,
-                    gap_s=float(rng.choice([2.0, 4.0, 10.0, 20.0])), masses=masses)
+    """Protocols beyond the standard batches (``[wide]``: 1-5 repeats, loads along negative axes, holds of 3-30 s
+    sampled at 2-20 Hz, gaps of 2-20 s between holds, up to 5 kg)."""
+    w = blind_definitions()["wide"]
+    axes = tuple(("-" if rng.random() < w["negative_axis"] else "") + a for a in rng.permutation(["y", "z", "x"]))
+    hold = float(rng.choice(w["hold_s"]))
+    rate = float(rng.choice(w["rate_Hz_long"] if hold >= w["long_hold_s"] else w["rate_Hz"]))
+    masses = tuple(w["masses_kg"][int(rng.integers(len(w["masses_kg"])))])
+    return LoadSchedule(axes=axes, repeats=int(rng.integers(w["repeats"][0], w["repeats"][1] + 1)), hold_s=hold,
+                        rate_Hz=rate, gap_s=float(rng.choice(w["gap_s"])), masses=masses)
+
+
+def _standard_schedule(rng) -> LoadSchedule:
+    """The load schedules of the standard batches (``[standard]``)."""
+    st = blind_definitions()["standard"]
+    return LoadSchedule(axes=tuple(rng.permutation(["y", "z", "x"])),
+                        repeats=int(rng.integers(st["repeats"][0], st["repeats"][1] + 1)),
+                        hold_s=float(rng.choice(st["hold_s"])),
+                        masses=tuple(st["masses_kg"][int(rng.integers(len(st["masses_kg"])))]))
+
+
+def _kind(u: float) -> str:
+    """The kind of a case from a uniform draw ``u`` (``[mix]``: cumulative bounds)."""
+    mix = blind_definitions()["mix"]
+    return ("null" if u < mix["null"] else "single" if u < mix["single"] else "pair" if u < mix["pair"]
+            else "decoy" if u < mix["decoy"] else "oolib")
 
 
 def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False,
@@ -118,6 +173,8 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
     (:func:`_unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
     slips once, a gauge that saturates)."""
     rng = np.random.default_rng(seed)
+    defs = blind_definitions()
+    draws = defs["draws"]
     design = resolve_design(rod)
     C = calc_rod_compliance(design).C_F
     places = joint_places(design.tool_mm, design)
@@ -125,25 +182,21 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
     out.mkdir(parents=True, exist_ok=True)
     cases = []
     for i in range(n):
-        u = rng.random()
-        kind = "null" if u < 0.3 else "single" if u < 0.7 else "pair" if u < 0.82 else "decoy" if u < 0.9 else "oolib"
-        noise = float(rng.choice([0.0003, 0.0006, 0.0012]))
-        proto = _wide_schedule(rng) if wide else LoadSchedule(
-            axes=tuple(rng.permutation(["y", "z", "x"])), repeats=int(rng.integers(3, 6)),
-            hold_s=float(rng.choice([5.0, 8.0])),
-            masses=[(0.5, 1.0, 1.5, 2.0), (0.4, 0.8, 1.2, 1.6, 2.0), (1.0, 2.0, 3.0)][int(rng.integers(3))])
+        kind = _kind(rng.random())
+        noise = float(rng.choice(draws["noise_mm"]))
+        proto = _wide_schedule(rng) if wide else _standard_schedule(rng)
         effects, truth_effects = {}, []
         names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
                                                                            replace=False))
         for name in names:
             unit, loc, keys = _unit_effect(name, rng, places, variants)
-            snr = float(np.exp(rng.uniform(np.log(3), np.log(60))))
+            snr = float(np.exp(rng.uniform(*np.log(draws["snr"]))))
             pk = _peak(C, unit, proto)
             scaled = _scale(unit, keys, snr * noise / pk)
             effects.update(scaled)
             truth_effects.append({"effect": name, "location": loc, "snr": snr, "parameters": scaled[name]})
         model = RigModel(C, effects, noise_mm=noise, resolution_mm=0.001 if noise >= 0.0006 else 0.0001,
-                         seed=int(rng.integers(1 << 30)), temp_amplitude_K=float(rng.uniform(0.2, 2.0)))
+                         seed=int(rng.integers(1 << 30)), temp_amplitude_K=float(rng.uniform(*draws["temp_amplitude_K"])))
         path = out / f"case{i:03d}.rig.csv"
         simulate_recording(model, proto, path, rod=design.name)
         expected = "consistent" if not truth_effects else "explained"
@@ -154,7 +207,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
         if kind == "oolib":
             _out_of_library(path, rng, noise, variants)
             expected = "unexplained"
-        if variants and kind == "single" and rng.random() < 0.25:   # the effect beside a bumped hold
+        if variants and kind == "single" and rng.random() < draws["variants_decoy"]:   # beside a bumped hold
             _decoy(path, rng)
             kind = "single+decoy"
         truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise,
@@ -175,6 +228,8 @@ def _rewrite(path, fn):
 
 def _decoy(path, rng):
     """A bumped hold (one hold shifted by a few um) - one isolated outlier hold."""
+    bump = blind_definitions()["decoy"]["bump_mm"]
+
     def fn(rows):
         steps = sorted({int(r[1]) for r in rows})
         s = int(rng.choice(steps[5:]))
@@ -182,7 +237,7 @@ def _decoy(path, rng):
             if int(r[1]) == s:
                 for c in (6, 7, 8):
                     if r[c]:
-                        r[c] = f"{float(r[c]) + 0.004:.4f}"
+                        r[c] = f"{float(r[c]) + bump:.4f}"
     _rewrite(path, fn)
 
 
@@ -190,11 +245,12 @@ def _out_of_library(path, rng, noise, variants: bool = False):
     """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library; with ``variants`` also a
     gauge that slips once (a step of 15 noise SDs from a random time on, one gauge) or saturates (readings
     clipped at 70 % of that gauge's largest)."""
+    o = blind_definitions()["outside"]
     which = rng.choice(["quadratic", "hum", "slip", "saturation"] if variants else ["quadratic", "hum"])
     t_slip, col = 0.0, 6
     if which in ("slip", "saturation"):            # (drawn only then: the older batches keep their draws)
         t_end = float(path.read_text().splitlines()[-1].split(",")[0])
-        t_slip, col = float(rng.uniform(0.3, 0.7)) * t_end, int(rng.choice([6, 7, 8]))
+        t_slip, col = float(rng.uniform(*o["slip_time"])) * t_end, int(rng.choice([6, 7, 8]))
 
     def fn(rows):
         vmax = max((abs(float(r[col])) for r in rows if r[col]), default=0.0)
@@ -205,12 +261,12 @@ def _out_of_library(path, rng, noise, variants: bool = False):
                     continue
                 v = float(r[c])
                 if which == "quadratic":
-                    v += 0.004 * v * v
+                    v += o["quadratic_per_mm"] * v * v
                 elif which == "hum":
-                    v += 20 * noise * np.sin(2 * np.pi * t / 3.7)
+                    v += o["hum_noise_sd"] * noise * np.sin(2 * np.pi * t / o["hum_period_s"])
                 elif which == "slip" and c == col and t >= t_slip:
-                    v += 15 * noise
+                    v += o["slip_noise_sd"] * noise
                 elif which == "saturation" and c == col:
-                    v = float(np.clip(v, -0.7 * vmax, 0.7 * vmax))
+                    v = float(np.clip(v, -o["saturation"] * vmax, o["saturation"] * vmax))
                 r[c] = f"{v:.4f}"
     _rewrite(path, fn)

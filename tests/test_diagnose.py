@@ -89,10 +89,63 @@ def test_report_follows_the_contract(examples, tmp_path):
 
 def test_diagnosis_never_imports_the_blind_generator():
     code = ("import sys, rodlab.app.diagnose, rodlab.app.cli.cmd_diagnose; "
-            "assert 'rodlab.stiffness_rig.blind' not in sys.modules")
+            "assert 'rodlab.stiffness_rig.blind' not in sys.modules; "
+            "assert 'rodlab.calibrate.blind' not in sys.modules")
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
     for f in (ROOT / "rodlab" / "app" / "diagnose").glob("*.py"):
-        assert "stiffness_rig.blind" not in f.read_text() and "generate_cases" not in f.read_text(), f
+        text = f.read_text()
+        assert "stiffness_rig.blind" not in text and "calibrate.blind" not in text and "generate_" not in text, f
+
+
+def test_blind_campaign_definitions_draw_registry_effects(tmp_path, tx90, rod1_calc):
+    """The blind campaign kinds are the registry's effects (or pairs of them); each generated case carries the
+    truth it was simulated with: the misclamped position is not the world one, moved points are in the file."""
+    from rodlab.calibrate import read_campaign, read_fixture
+    from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases
+    from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
+    defs = blind_definitions()
+    for mode in ("", *defs.modes):
+        for kind in defs.kinds_of(mode):
+            assert kind == "null" or all(k.replace("outlier_inside", "outliers") in CAMPAIGN_EFFECTS
+                                         for k in kind.split("+")), kind
+    with pytest.raises(ValueError, match="unknown blind-case mode"):
+        defs.kinds_of("widest")
+    cases = generate_campaign_cases(tx90, rod1_calc, tmp_path, 8, 11, "pairs")
+    assert [c.truth["kind"] for c in cases] == defs.kinds_of("pairs") + defs.kinds_of("pairs")[:1]
+    pose, pair = cases[1], cases[6]
+    world = read_fixture(pose.folder / "multical.fixture.json").world_position
+    assert pose.truth["location"] != f"position:{world}"
+    labels = read_campaign(pair.folder / "multical.campaign.csv").labels()
+    assert len(pair.truth["points"]) == defs.magnitudes["outliers"] and set(pair.truth["points"]) <= set(labels)
+
+
+def test_blind_rig_definitions_are_consistent(tmp_path):
+    """The shipped rig blind-case definitions: increasing mix bounds inside (0, 1), the places the simulator
+    knows, and a truth file per generated case that repeats the drawn protocol."""
+    from rodlab.stiffness_rig.blind import blind_definitions, generate_cases
+    from rodlab.stiffness_rig.effects import joint_places
+    from rodlab import resolve_design
+    d = blind_definitions()
+    bounds = [d["mix"][k] for k in ("null", "single", "pair", "decoy")]
+    assert 0 < bounds[0] and bounds == sorted(bounds) and bounds[-1] < 1
+    design = resolve_design("rod1")
+    assert set(d["draws"]["joint_places"]) <= set(joint_places(design.tool_mm, design))
+    (case,) = generate_cases(tmp_path, 1, seed=3, wide=True)
+    truth = json.loads(case.path.with_name(case.path.name.replace(".rig.csv", ".truth.json")).read_text())
+    assert truth["noise_mm"] in d["draws"]["noise_mm"] and truth["protocol"]["hold_s"] in d["wide"]["hold_s"]
+    assert read_recording(case.path).meta["rod"] == design.name
+
+
+def test_bad_blind_definitions_are_refused_naming_line_and_key(tmp_path):
+    from rodlab.stiffness_rig import RigError
+    from rodlab.stiffness_rig.blind import read_blind_definitions
+    text = (ROOT / "stiffness_rig" / "blind_cases.toml").read_text()
+    bad = tmp_path / "blind_cases.toml"
+    bad.write_text(text.replace("snr = [3.0, 60.0]", "snr = [3.0]").replace("bump_mm = 0.004", "bump_um = 4"))
+    with pytest.raises(RigError) as e:
+        read_blind_definitions(bad)
+    line = 1 + text.splitlines().index(next(ln for ln in text.splitlines() if ln.startswith("snr =")))
+    assert e.value.key == "draws.snr" and e.value.line == line and "bump_um" in str(e.value)
 
 
 def test_fixed_seed_blind_batch(tmp_path):

@@ -14,7 +14,7 @@ from rodlab.schema import FORMATS, check_file, load_schema
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("calibrate/robots/*.toml"),
                   *ROOT.glob("stiffness_rig/plans/*.toml"), *ROOT.glob("calibrate/robots/*.urdf"),
-                  *ROOT.glob("benchmarks/data/*/*.csv")])
+                  *ROOT.glob("benchmarks/data/*/*.csv"), *ROOT.glob("*/blind_cases.toml")])
 
 
 def test_schemas_are_valid_json_schemas_and_cover_every_format():

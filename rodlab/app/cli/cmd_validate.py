@@ -49,6 +49,8 @@ READERS = {
     "rodlab.rig/1": _lazy("rodlab.stiffness_rig", "read_recording"),
     "rodlab.campaign/1": _read_campaign,
     "rodlab.points/1": _read_points,
+    "rodlab.blind_rig/1": _lazy("rodlab.stiffness_rig.blind", "read_blind_definitions"),
+    "rodlab.blind_campaign/1": _lazy("rodlab.calibrate.blind", "read_blind_definitions"),
     "rodlab.diagnosis/1": None,
     "rodlab.points_diagnosis/1": None,
 }

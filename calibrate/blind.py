@@ -9,7 +9,6 @@ them. ``benchmarks/campaign_blind.py`` diagnoses and scores these cases.
 from __future__ import annotations
 
 import csv
-import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
@@ -19,11 +18,6 @@ import numpy as np
 
 from .errors import CalibrationError
 from .simulate import CampaignSpec, simulate_campaign
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["CampaignCase", "BlindDefinitions", "blind_definitions", "read_blind_definitions",
            "generate_campaign_cases", "FORMAT_BLIND"]
@@ -54,15 +48,8 @@ class BlindDefinitions:
 def read_blind_definitions(path) -> BlindDefinitions:
     """Blind-case definitions from ``path`` (``rodlab.blind_campaign/1``); every schema problem named at once
     (file, line, key)."""
-    from rodlab.fileio import read_text_checked
-    from rodlab.schema import require_schema
-    p = Path(path)
-    text = read_text_checked(p, CalibrationError)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise CalibrationError(f"not valid TOML: {e}", path=p) from e
-    require_schema(data, FORMAT_BLIND, p, text, CalibrationError, kind="toml")
+    from rodlab.schema import read_toml_checked
+    data, _ = read_toml_checked(path, FORMAT_BLIND, CalibrationError)
     return BlindDefinitions(tuple(data["kinds"]), dict(data["modes"]), dict(data["magnitudes"]), dict(data["wide"]))
 
 

@@ -26,7 +26,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["FormatSpec", "FORMATS", "Problem", "FileCheck", "load_schema", "sniff_format", "check_file",
-           "data_problems", "require_schema"]
+           "data_problems", "require_schema", "read_toml_checked"]
 
 
 @dataclass(frozen=True)
@@ -116,9 +116,10 @@ def sniff_format(path: Path, text: str) -> str | None:
 
 
 def _locate(text: str, kind: str, where: list) -> int | None:
-    """The line of the key at path ``where`` (JSON: each key after the previous; TOML: table headers, array
-    tables by index, then ``key =``); ``None`` if not found."""
-    pos, table = 0, None
+    """The line of the key at path ``where`` (JSON: each key after the previous; TOML: the table header of the
+    dotted path so far, array tables by index, else ``key =`` inside the current table); ``None`` if not
+    found."""
+    pos, table, names = 0, None, []
     for part in where:
         if isinstance(part, int):
             if kind == "toml" and table is not None:
@@ -126,16 +127,28 @@ def _locate(text: str, kind: str, where: list) -> int | None:
                 if part < len(hits):
                     pos = hits[part]
             continue
-        table = str(part)
-        if kind == "json":
-            m = re.compile(rf'"{re.escape(table)}"\s*:').search(text, pos)
-        else:      # a table header first: a key of that name inside an earlier table is another key
-            m = (re.compile(rf"(?m)^\s*\[+\s*{re.escape(table)}\s*\]+").search(text, pos)
-                 or re.compile(rf"(?m)^\s*{re.escape(table)}\s*=").search(text, pos))
+        names.append(str(part))
+        table = ".".join(names)
+        m = _find_key(text, kind, str(part), table, pos)
         if not m:
             return text.count("\n", 0, pos) + 1 if pos else None
         pos = m.start() + (len(m.group(0)) - len(m.group(0).lstrip()) if kind == "toml" else 0)
     return text.count("\n", 0, pos) + 1 if where else None
+
+
+def _find_key(text: str, kind: str, key: str, dotted: str, pos: int):
+    """The match of ``key`` from ``pos``: JSON ``"key":``; TOML the header ``[dotted]`` / ``[[dotted]]``, else
+    ``key =`` before the next table header (a same-named key of a later table is another key)."""
+    if kind == "json":
+        return re.compile(rf'"{re.escape(key)}"\s*:').search(text, pos)
+    header = re.compile(rf"(?m)^\s*\[+\s*{re.escape(dotted)}\s*\]+").search(text, pos)
+    if header:
+        return header
+    start = len(text) - len(text[pos:].lstrip())              # the current table's header, or its first line
+    if text.startswith("[", start):
+        start = text.find("\n", start) + 1 or len(text)
+    nxt = re.compile(r"(?m)^[ \t]*\[").search(text, start)
+    return re.compile(rf"(?m)^\s*{re.escape(key)}\s*=").search(text, pos, nxt.start() if nxt else len(text))
 
 
 def _dotted(where) -> str | None:
@@ -257,3 +270,19 @@ def require_schema(data, format_id: str, path, text: str, error_cls, kind: str =
                    for p in problems[1:])
     fix = f". Fix: {first.fix}" if first.fix else ""
     raise error_cls(f"{first.message}{fix}{more}", path=path, line=first.line, key=first.key)
+
+
+def read_toml_checked(path, format_id: str, error_cls) -> tuple[dict, str]:
+    """Read a TOML file of ``format_id`` and check it against its schema: (table, text). Raises ``error_cls``
+    naming the file (unreadable, not TOML: with the line) or every schema problem at once."""
+    from .fileio import read_text_checked
+    p = Path(path)
+    text = read_text_checked(p, error_cls)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise error_cls(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+    require_schema(data, format_id, p, text, error_cls, kind="toml")
+    return data, text
+

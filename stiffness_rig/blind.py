@@ -13,7 +13,6 @@ are defined in ``stiffness_rig/blind_cases.toml`` (:func:`blind_definitions`).
 from __future__ import annotations
 
 import json
-import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
@@ -26,11 +25,6 @@ from .effects import joint_places
 from .errors import RigError
 from .model import Hold, LoadSchedule, RigModel
 from .simulate import simulate_recording
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["generate_cases", "BlindCase", "blind_definitions", "read_blind_definitions", "FORMAT_BLIND"]
 
@@ -53,15 +47,8 @@ class BlindCase:
 def read_blind_definitions(path) -> dict:
     """Blind-case definitions from ``path`` (``rodlab.blind_rig/1``): {table: {key: value}}; every schema
     problem named at once (file, line, key)."""
-    from rodlab.fileio import read_text_checked
-    from rodlab.schema import require_schema
-    p = Path(path)
-    text = read_text_checked(p, RigError)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise RigError(f"not valid TOML: {e}", path=p) from e
-    require_schema(data, FORMAT_BLIND, p, text, RigError, kind="toml")
+    from rodlab.schema import read_toml_checked
+    data, _ = read_toml_checked(path, FORMAT_BLIND, RigError)
     return data
 
 
@@ -173,8 +160,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
     (:func:`_unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
     slips once, a gauge that saturates)."""
     rng = np.random.default_rng(seed)
-    defs = blind_definitions()
-    draws = defs["draws"]
+    draws = blind_definitions()["draws"]
     design = resolve_design(rod)
     C = calc_rod_compliance(design).C_F
     places = joint_places(design.tool_mm, design)

@@ -146,6 +146,10 @@ def test_bad_blind_definitions_are_refused_naming_line_and_key(tmp_path):
         read_blind_definitions(bad)
     line = 1 + text.splitlines().index(next(ln for ln in text.splitlines() if ln.startswith("snr =")))
     assert e.value.key == "draws.snr" and e.value.line == line and "bump_um" in str(e.value)
+    bad.write_text(text.replace("decoy = 0.9", "decoy = \"x\""))          # a key named like a later table
+    with pytest.raises(RigError) as e:
+        read_blind_definitions(bad)
+    assert e.value.key == "mix.decoy" and "decoy = " in text.splitlines()[e.value.line - 1]
 
 
 def test_fixed_seed_blind_batch(tmp_path):

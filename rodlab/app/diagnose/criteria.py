@@ -7,7 +7,8 @@ A larger model replaces the current one only if
    likelihood-ratio test gives p <= :data:`P_MAX`;
 2. it predicts left-out data better (:func:`cv_improves`: leave-one-repeat-out on the rig, leave-one-point-out
    in a campaign);
-3. it is above the detection limit (each diagnoser says what a noise SD of change means for its data).
+3. it is above the detection limit, which each diagnoser sets for its data (rig: ``rig_select.PTP_MIN`` noise
+   SDs peak to peak in a series; campaign: 2 device-noise SDs at some point).
 
 The two diagnosers search differently because their data differ, and apply this same rule at every step:
 the rig (many readings, repeats, physical bounds on every parameter) runs a bounded beam search over subsets of

@@ -18,20 +18,14 @@ from __future__ import annotations
 import logging
 import math
 import re
-import sys
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 
 from .design import BallSpec, BendSpec, RodDesign, SleeveSpec, TubeSpec
 from .errors import DesignError, FormatError, did_you_mean
-from .fileio import read_text_checked
+from .fileio import read_toml
 from .materials import Material, get_material, material_from_table
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
 
@@ -236,12 +230,7 @@ def load_design(path: str | Path) -> RodDesign:
     """Read and validate a ``*.rod.toml`` file: the design's own rules, then :mod:`rodlab.design_range` (a rod
     that would hang is refused; keys outside the checked range are logged as warnings with file and line)."""
     p = Path(path)
-    text = read_text_checked(p, FormatError)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        raise FormatError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+    data, text = read_toml(p, FormatError)
     design = design_from_dict(data, p, text)
     from .design_range import check_design, range_warnings
     try:

@@ -107,6 +107,23 @@ def read_text_checked(path, error_cls) -> str:
         raise error_cls(f"not UTF-8 text ({e.reason})", path=p, line=raw[:e.start].count(b"\n") + 1) from e
 
 
+def read_toml(path, error_cls) -> tuple[dict, str]:
+    """A TOML file's table and text, or ``error_cls`` naming the file: unreadable (:func:`read_text_checked`)
+    or not valid TOML (with the line the parser names)."""
+    import sys
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+    p = Path(path)
+    text = read_text_checked(p, error_cls)
+    try:
+        return tomllib.loads(text), text
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"line (\d+)", str(e))
+        raise error_cls(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+
+
 def write_generated(path: str | Path, text: str, check: bool = False) -> int:
     """For the scripts that generate docs: write ``text`` to ``path`` atomically, or with ``check`` only
     compare (exit status 0 when the file is current, 1 when it must be regenerated)."""

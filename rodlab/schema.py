@@ -275,14 +275,8 @@ def require_schema(data, format_id: str, path, text: str, error_cls, kind: str =
 def read_toml_checked(path, format_id: str, error_cls) -> tuple[dict, str]:
     """Read a TOML file of ``format_id`` and check it against its schema: (table, text). Raises ``error_cls``
     naming the file (unreadable, not TOML: with the line) or every schema problem at once."""
-    from .fileio import read_text_checked
-    p = Path(path)
-    text = read_text_checked(p, error_cls)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        raise error_cls(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
-    require_schema(data, format_id, p, text, error_cls, kind="toml")
+    from .fileio import read_toml
+    data, text = read_toml(path, error_cls)
+    require_schema(data, format_id, path, text, error_cls, kind="toml")
     return data, text
 

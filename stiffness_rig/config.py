@@ -39,21 +39,15 @@ Plan (``rodlab.rigplan/1``)::
 from __future__ import annotations
 
 import re
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from rodlab.enums import LoadAxis
 from rodlab.errors import did_you_mean
-from rodlab.fileio import read_text_checked
+from rodlab.fileio import read_toml
 
 from .errors import RigError
 from .model import LoadSchedule
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
 
@@ -62,13 +56,7 @@ FORMAT_PLAN = "rodlab.rigplan/1"
 
 
 def _load_toml(path) -> tuple[dict, str]:
-    p = Path(path)
-    text = read_text_checked(p, RigError)
-    try:
-        return tomllib.loads(text), text
-    except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        raise RigError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+    return read_toml(Path(path), RigError)
 
 
 def _line(text: str, key: str) -> int | None:

@@ -30,7 +30,8 @@ class ResidualTest:
 
     chi2 : whitened, projected sum of squares [-]; dof : ``3 N - P``; reduced : chi2 / dof; p_value : P(X > chi2)
     for X ~ chi-square(dof); noise_mm : device noise assumed [mm]; fixture_sigma : clamping-pose uncertainty
-    assumed ([mm], [deg]); missing : p_value < :data:`P_MISSING`
+    assumed ([mm], [deg]); missing : p_value < :data:`P_MISSING`; clamping : the noise model has clamping poses
+    (a MultiCal campaign); source : what the noise is of otherwise (``instrument``, ``seat``, ``ball bar``)
     """
 
     chi2: float
@@ -41,6 +42,7 @@ class ResidualTest:
     fixture_sigma: tuple
     missing: bool
     clamping: bool = True
+    source: str = "instrument"             # what the noise is of, without clamping poses (the wording)
 
     @property
     def birge(self) -> float:
@@ -60,7 +62,8 @@ class ResidualTest:
         head = (f"reduced chi-square {self.reduced:.2f} over {self.dof} degrees of freedom (p = {self.p_value:.2g}) "
                 f"under the noise model: ")
         if not self.clamping:
-            return head + f"instrument {self.noise_mm * 1e3:.1f} um per coordinate"
+            per = "per reading" if "length" in self.source else "per coordinate"
+            return head + f"{self.source} {self.noise_mm * 1e3:.1f} um {per}"
         return head + (f"device {self.noise_mm * 1e3:.1f} um per reading, clamping poses "
                        f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
 

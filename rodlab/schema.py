@@ -55,6 +55,7 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
                "instrument / validation points"),
+    FormatSpec("rodlab.sockets/1", "csv", "sockets.table.json", (".sockets.csv",), "ball-in-socket / ball-bar readings"),
     FormatSpec("rodlab.blind_rig/1", "toml", "blind_rig.schema.json", (), "rig blind-case definitions"),
     FormatSpec("rodlab.blind_campaign/1", "toml", "blind_campaign.schema.json", (), "campaign blind-case definitions"),
 )}

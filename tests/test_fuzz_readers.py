@@ -40,6 +40,9 @@ def _sources():
         "profile": ((ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml").read_bytes(), ".toml"),
         "plan": ((ROOT / "stiffness_rig" / "plans" / "paper.plan.toml").read_bytes(), ".toml"),
     }
+    mukca = ROOT / "benchmarks" / "data" / "mukca2025" / "kuka_14.sockets.csv"
+    if mukca.exists():
+        out["sockets"] = ("\n".join(mukca.read_text().splitlines()[:60]).encode() + b"\n", ".sockets.csv")
     if SHARED.is_dir():
         rig = (SHARED / "rig-null.rig.csv").read_text().splitlines()
         out["recording"] = ("\n".join(rig[:400]).encode() + b"\n", ".rig.csv")
@@ -75,6 +78,9 @@ def _reader(kind):
     if kind == "recording":
         from rodlab.stiffness_rig.recording import read_recording
         return read_recording
+    if kind == "sockets":
+        from rodlab.calibrate.sockets import read_sockets
+        return lambda p: read_sockets(p, 7)
     from rodlab.calibrate.campaign import read_campaign, read_fixture, read_points
     return {"campaign": read_campaign, "fixture": read_fixture, "validation": read_points}[kind]
 

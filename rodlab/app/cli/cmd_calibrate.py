@@ -17,7 +17,8 @@ from .argtypes import count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args
 
-__all__ = ["register", "run_calibration", "CalibrationRun"]
+__all__ = ["register", "run_calibration", "CalibrationRun", "print_parameters", "parse_pins", "print_not_trusted",
+           "print_cautions", "write_result_file"]
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +62,12 @@ def register(sub) -> None:
     p.add_argument("--t-ref-c", type=float, default=20.0,
                    help="temperature [degC] the rod's tool vector is stated at (default 20; with --thermal)")
     p.add_argument("--points", default=None, help="calibrate from instrument points (*.validation.csv format)")
+    p.add_argument("--sockets", default=None,
+                   help="calibrate from ball-in-socket or ball-bar readings (*.sockets.csv): no instrument, the "
+                        "sockets' places fitted jointly across the artefact's placements")
+    p.add_argument("--fit-placements", default=None, metavar="LIST",
+                   help="with --sockets: fit on these placements (e.g. 1,3) and check the model on the file's "
+                        "others (consistency and distortion on placements the fit never saw)")
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
     p.add_argument("--png", default=None,
                    help="folder for figures: residuals per position; with --validate the validation error distribution")
@@ -81,7 +88,7 @@ def register(sub) -> None:
     register_more(sub)
 
 
-def _parse_pins(items) -> dict:
+def parse_pins(items) -> dict:
     out = {}
     for it in items:
         k, eq, v = it.partition("=")
@@ -138,7 +145,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    also_compensate=_thermal(args, camp, rod),
-                   pinned=_parse_pins(args.pin), freed=set(args.free), robust=args.robust,
+                   pinned=parse_pins(args.pin), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable,
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
     run = CalibrationRun(robot, camp, res)
@@ -174,6 +181,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.points and args.thermal:
         raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
                           "points (--points) have no rod to grow: leave --thermal out")
+    if args.sockets:
+        from .cmd_sockets import calibrate_sockets
+        return calibrate_sockets(args)
     if args.points:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
@@ -185,7 +195,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     run = run_calibration(args, rod, comp)
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
-    written = _write_result(args, result_dict(robot, res, label, before, after))
+    written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
         written.append(plot_residuals(res, camp, args.png))
@@ -197,27 +207,27 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     write_command_report(args, written, default_folder(args))
     _note_uncompensated(robot, res, camp, args, rod, comp)
     if res.warnings:
-        _print_not_trusted(res)
+        print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.material:
             _print_suspects(robot, camp, args, rod, comp, res.residual_check)
         return 3
-    _print_cautions(res)
+    print_cautions(res)
     return 0
 
 
-def _print_cautions(res) -> None:
+def print_cautions(res) -> None:
     """A trusted result's cautions (residuals slightly above the noise model)."""
     for c in res.cautions:
         print(f"caution (trusted): {c}", file=sys.stderr)
 
 
-def _print_not_trusted(res) -> None:
+def print_not_trusted(res) -> None:
     print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
     for w in res.warnings:
         print(f"  - {w}", file=sys.stderr)
 
 
-def _write_result(args, result: dict) -> list:
+def write_result_file(args, result: dict) -> list:
     """The result file when ``--json`` is given, else the result in memory (for ``--report``)."""
     from rodlab.calibrate import write_result
     if args.json:
@@ -261,6 +271,15 @@ def _print_result(res, before, after, label) -> None:
     print(f"identification ({label} compensation): {len(res.free)} parameters from {res.residuals_mm.shape[0]} "
           f"points, residual rms {res.rms_mm * 1e3:.2f} um per reading, {res.iterations} compensation passes, "
           f"{res.message}")
+    print_parameters(res)
+    if before is not None:
+        print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")
+        for name, st in (("before (nominal)", before), ("after", after)):
+            print(f"    {name:<34} {st.mean_mm:6.3f} {st.max_mm:7.3f} {st.median_mm:7.3f} {st.sd_mm:7.3f}")
+
+
+def print_parameters(res) -> None:
+    """The free parameters (value, sigma, unit, status), how many are held, and the residual test."""
     print(f"  {'parameter':<14} {'value':>14} {'sigma':>12}  unit       status")
     for nm in res.free:
         info = next(i for i in res.infos if i.name == nm)
@@ -274,10 +293,6 @@ def _print_result(res, before, after, label) -> None:
         t = res.residual_check
         verdict = "NOT noise" if t.material else "slightly above noise" if t.missing else "consistent with noise"
         print(f"  residuals {verdict}: {res.residual_check.describe()}")
-    if before is not None:
-        print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")
-        for name, st in (("before (nominal)", before), ("after", after)):
-            print(f"    {name:<34} {st.mean_mm:6.3f} {st.max_mm:7.3f} {st.median_mm:7.3f} {st.sd_mm:7.3f}")
 
 
 def _calibrate_points(args) -> int:
@@ -285,7 +300,7 @@ def _calibrate_points(args) -> int:
     from rodlab.calibrate.points import identify_points, stated_noise_mm
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
-    res = identify_points(robot, pts, noise_mm, pinned=_parse_pins(args.pin), freed=args.free, robust=args.robust,
+    res = identify_points(robot, pts, noise_mm, pinned=parse_pins(args.pin), freed=args.free, robust=args.robust,
                           fix_unidentifiable=args.fix_unidentifiable)
     before = after = None
     if args.validate:
@@ -293,16 +308,16 @@ def _calibrate_points(args) -> int:
         before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]
         after = validate(robot, res.params, test)[0]
     _print_result(res, before, after, "instrument points")
-    write_command_report(args, _write_result(args, result_dict(robot, res, "none", before, after)),
+    write_command_report(args, write_result_file(args, result_dict(robot, res, "none", before, after)),
                          default_folder(args))
     if res.warnings:
-        _print_not_trusted(res)
+        print_not_trusted(res)
         from ..diagnose.points import diagnose_points
         print("suspects (`rodlab diagnose --points`):", file=sys.stderr)
         print("\n".join("  " + line for line in diagnose_points(robot, pts, res, noise_mm).summary().splitlines()),
               file=sys.stderr)
         return 3
-    _print_cautions(res)
+    print_cautions(res)
     return 0
 
 

@@ -28,6 +28,11 @@ def _read_points(path):
     return read_points(path, _joints(path))
 
 
+def _read_sockets(path):
+    from rodlab.calibrate.sockets import read_sockets
+    return read_sockets(path, _joints(path))
+
+
 def _lazy(module: str, name: str):
     def read(path):
         import importlib
@@ -49,6 +54,7 @@ READERS = {
     "rodlab.rig/1": _lazy("rodlab.stiffness_rig", "read_recording"),
     "rodlab.campaign/1": _read_campaign,
     "rodlab.points/1": _read_points,
+    "rodlab.sockets/1": _read_sockets,
     "rodlab.blind_rig/1": _lazy("rodlab.stiffness_rig.blind", "read_blind_definitions"),
     "rodlab.blind_campaign/1": _lazy("rodlab.calibrate.blind", "read_blind_definitions"),
     "rodlab.diagnosis/1": None,

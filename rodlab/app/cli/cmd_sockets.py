@@ -1,0 +1,130 @@
+"""``rodlab calibrate --sockets``: identify a robot from ball-in-socket or ball-bar readings (no instrument)."""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+from ...errors import RodlabError
+from .cmd_calibrate import parse_pins, print_cautions, print_not_trusted, print_parameters, write_result_file
+from .reporting import default_folder, write_command_report
+from .robotargs import robot_from_args
+
+__all__ = ["calibrate_sockets", "SocketRun"]
+
+
+@dataclass(frozen=True)
+class SocketRun:
+    """One socket calibration: the robot, the readings fitted and checked, the fit, and the checks.
+
+    checks : {label: {"nominal": SocketCheck, "calibrated": SocketCheck}} for the fitted readings ("fit")
+    and, when there are any, the readings the fit never saw ("held out")
+    """
+
+    robot: object
+    fitted: object
+    held_out: object | None
+    fit: object
+    checks: dict
+
+
+def _placements(text: str | None, readings) -> list[int]:
+    """``--fit-placements 1,3``: placements the file has; all of them without the option."""
+    have = sorted(set(readings.placement.tolist()))
+    if text is None:
+        return have
+    try:
+        chosen = sorted({int(t) for t in text.split(",") if t.strip()})
+    except ValueError:
+        raise RodlabError(f"--fit-placements {text!r}: expected placement numbers separated by commas, e.g. 1,3") \
+            from None
+    missing = [j for j in chosen if j not in have]
+    if missing or not chosen:
+        raise RodlabError(f"--fit-placements {text!r}: {readings.path} has placements {have}; "
+                          f"{'not ' + str(missing) if missing else 'choose at least one'}")
+    return chosen
+
+
+def _readings(args, robot):
+    """The fitted readings, the held-out ones (the file's other placements, or a --validate sockets file)."""
+    from dataclasses import replace
+
+    from rodlab.calibrate.sockets import read_sockets
+    readings = read_sockets(args.sockets, robot.n)
+    if args.noise_um:
+        key = "length_sigma_mm" if readings.ball_bar else "seat_sigma_mm"
+        readings = replace(readings, **{key: args.noise_um * 1e-3})
+    chosen = _placements(args.fit_placements, readings)
+    rest = sorted(set(readings.placement.tolist()) - set(chosen))
+    held = readings.subset(rest) if rest else None
+    if args.validate:
+        if held is not None:
+            raise RodlabError("--validate and --fit-placements both name readings to check on; use one")
+        if not str(args.validate).endswith(".sockets.csv"):
+            raise RodlabError(f"--validate {args.validate}: with --sockets the check is on other socket readings "
+                              f"(a *.sockets.csv); instrument points check a --points calibration")
+        held = read_sockets(args.validate, robot.n)
+    return readings.subset(chosen), held
+
+
+def run_sockets(args) -> SocketRun:
+    """Read, fit, and check the nominal and the calibrated model on the fitted and the held-out readings."""
+    from rodlab.calibrate.socket_check import check_sockets
+    from rodlab.calibrate.socket_fit import identify_sockets, socket_start
+    if args.thermal or args.points or args.campaign:
+        raise RodlabError("--sockets is a calibration of its own: leave out the campaign, --points and --thermal")
+    robot = robot_from_args(args)
+    fitted, held = _readings(args, robot)
+    fit = identify_sockets(robot, fitted, pinned=parse_pins(args.pin), freed=args.free,
+                           fix_unidentifiable=args.fix_unidentifiable, robust=args.robust)
+    checks = {}
+    for label, r in (("fit", fitted), ("held out", held)):
+        if r is not None:
+            checks[label] = {"nominal": check_sockets(robot, socket_start(robot, r), r),
+                             "calibrated": check_sockets(robot, fit.result.params, r)}
+    return SocketRun(robot, fitted, held, fit, checks)
+
+
+def _print(run: SocketRun) -> None:
+    r, res = run.fitted, run.fit.result
+    kind = "ball-bar" if r.ball_bar else "ball-in-socket"
+    print(f"identification ({kind} readings): {len(res.free)} parameters and {len(run.fit.centres_mm)} "
+          f"{'pivot' if r.ball_bar else 'socket'} centres from {r.n} readings at {len(set(r.placement.tolist()))} "
+          f"placement(s), {len(r.distances)} known distance(s); residual rms {res.rms_mm * 1e3:.1f} um per "
+          f"{'length' if r.ball_bar else 'coordinate'}, {res.message}")
+    print_parameters(res)
+    print("  consistency (ball spread about its socket) and distortion (socket distance error) [mm]")
+    print(f"    {'readings':<10} {'model':<11} {'spread mean':>11} {'rms':>7} {'max':>7}   {'distance rms':>12} {'max':>7}")
+    for label, pair in run.checks.items():
+        for model, c in pair.items():
+            print(f"    {label:<10} {model:<11} {c.spread_mm.mean():11.3f} {c.spread_rms_mm:7.3f} {c.spread_max_mm:7.3f}"
+                  f"   {c.distance_rms_mm:12.3f} {c.distance_max_mm:7.3f}")
+
+
+def _extra(args, run: SocketRun) -> dict:
+    """The result file's ``sockets`` record: the file, placements, centres, and the checks."""
+    fit = run.fit
+    return {"sockets": {
+        "file": str(args.sockets), "ball_bar": run.fitted.ball_bar,
+        "fit_placements": sorted(set(run.fitted.placement.tolist())),
+        "centres_mm": {f"{p}.{s}": c.tolist() for (p, s), c in fit.centres_mm.items()},
+        "centre_sigma_mm": {f"{p}.{s}": c.tolist() for (p, s), c in fit.centre_sigma_mm.items()},
+        "distance_residuals_mm": fit.distance_residuals_mm.tolist(),
+        "checks": {label: {m: c.to_dict() for m, c in pair.items()} for label, pair in run.checks.items()}}}
+
+
+def calibrate_sockets(args) -> int:
+    """The command: fit, print, write the result (``--json``, ``--report``), exit 3 when not trusted."""
+    from rodlab.calibrate import result_dict
+    run = run_sockets(args)
+    _print(run)
+    res = run.fit.result
+    written = write_result_file(args, result_dict(run.robot, res, "none", extra=_extra(args, run)))
+    write_command_report(args, written, default_folder(args))
+    if res.warnings:
+        print_not_trusted(res)
+        return 3
+    print_cautions(res)
+    if "held out" not in run.checks:
+        print("note: every placement was fitted; --fit-placements checks the model on placements the fit never saw",
+              file=sys.stderr)
+    return 0

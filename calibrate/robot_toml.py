@@ -158,6 +158,8 @@ def read_robot_toml(path) -> Robot:
     flange = pose_to_matrix(_numbers(data.get("flange_pose", [0.0] * 6), (6,),
                                      {"path": p, "key": "flange_pose", "line": _line(text, None, "flange_pose")}))
     name = str(data.get("name", p.stem))
+    from rodlab.schema import require_schema
+    require_schema(data, "rodlab.robot/2", p, text, CalibrationError, kind="toml")    # anything the rules above miss
     if convention == "mdh":
         return robot_from_chain(_mdh_chain(name, cols, flange, gravity, source or str(p)), names, path=p)
     return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=flange,

@@ -232,6 +232,8 @@ def load_design(path: str | Path) -> RodDesign:
     p = Path(path)
     data, text = read_toml(p, FormatError)
     design = design_from_dict(data, p, text)
+    from .schema import require_schema
+    require_schema(data, "rodlab.rod/1", p, text, FormatError, kind="toml")     # anything the rules above miss
     from .design_range import check_design, range_warnings
     try:
         check_design(design)

@@ -59,6 +59,12 @@ def _load_toml(path) -> tuple[dict, str]:
     return read_toml(Path(path), RigError)
 
 
+def _schema(data: dict, format_id: str, path, text: str) -> None:
+    """The format's schema, after the reader's own rules: anything they let through is refused too."""
+    from rodlab.schema import require_schema
+    require_schema(data, format_id, Path(path), text, RigError, kind="toml")
+
+
 def _line(text: str, key: str) -> int | None:
     for i, raw in enumerate(text.splitlines(), start=1):
         if re.match(rf"^\s*{re.escape(key)}\s*=", raw):
@@ -186,6 +192,7 @@ def read_profile(path) -> RigProfile:
         r.keys(loader, {"command", "ack"}, "loader")
         cmd = r.string(loader, "command", "loader").encode().decode("unicode_escape")
         ack = r.string(loader, "ack", "loader", "OK")
+    _schema(data, FORMAT_PROFILE, path, text)
     return RigProfile(
         port=r.string(dev, "port", "device"), protocol=r.string(dev, "protocol", "device", "query", ("query", "stream")),
         channels=tuple(channels), baudrate=r.num(dev, "baudrate", "device", 9600, integer=True),
@@ -242,5 +249,6 @@ def read_plan(path) -> RigPlan:
     proto = LoadSchedule(axes=tuple(axes), masses=tuple(float(m) for m in masses),
                      repeats=r.num(data, "repeats", "", 5, integer=True), hold_s=r.num(data, "hold_s", "", 8.0),
                      rate_Hz=r.num(data, "rate_Hz", "", 10.0), measured=measured)
+    _schema(data, FORMAT_PLAN, path, text)
     return RigPlan(rod, proto, r.num(settle, "window_s", "settle", 1.0), r.num(settle, "tolerance_mm", "settle", 0.003),
                    r.num(settle, "timeout_s", "settle", 30.0), Path(path))

@@ -9,9 +9,11 @@ socket (ball bar: per pivot). Whitened residuals, each divided by its stated sta
 
 The base pose is the frame the centres are fitted in (any rigid motion of the base moves every centre with
 it): it is held at the description's, and the centres are reported in {0}. Without a known distance (or a
-ball bar's length) the overall scale is not observable either; the rank analysis of
-:func:`calibrate.identify._select` then names the length it holds. The tool's azimuth about the last axis is
-free (``tool_y``), ``dtheta_n`` held, as for instrument points.
+ball bar's length) the overall scale is not observable either, and a fit would shrink the robot (the seat
+residuals scale with it): the longest row's length is then held, by rule, with that reason. Joint compliances
+of a chain without link masses are held (no torque). The tool's azimuth about the last axis is free
+(``tool_y``), ``dtheta_n`` held, as for instrument points. With ``robust``, the verdict and the standard
+errors still count every reading in full (the loss changes the estimate, not the test).
 """
 from __future__ import annotations
 
@@ -28,11 +30,13 @@ from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fi
 from .residual_test import P_MISSING, ResidualTest
 from .sockets import SocketReadings
 
-__all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE"]
+__all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE", "SCALE_HELD"]
 
 log = logging.getLogger(__name__)
 
 BASE_GAUGE = "held: the sockets' places are unknown, so the base pose is only the frame they are fitted in"
+SCALE_HELD = ("held: it sets the overall scale, which no known socket distance (# distance_mm) or ball-bar length "
+              "fixes in these readings")
 
 
 @dataclass(frozen=True)
@@ -165,20 +169,36 @@ def _functions(robot, start, infos, x, free, prob: _Problem, prior: np.ndarray, 
     return fun, jac
 
 
+def _rule_held(robot, infos, prob: _Problem, pinned: dict) -> dict:
+    """Parameters these readings cannot see by construction, with the reason: the base (gauge); the joint
+    compliances of a chain without link masses (no torque); without a known distance or a ball bar's lengths,
+    one length, the longest row's, which sets the overall scale."""
+    held = {f"base_{k}": BASE_GAUGE for k in "xyzabc"}
+    if not np.any(robot.mass_kg):
+        held |= {f"c_{i + 1}": "the robot description has no link masses (<inertial>): no joint torque to see a "
+                               "compliance by" for i in range(robot.n)}
+    if not prob.pairs.size and not prob.readings.ball_bar:
+        structural = structural_fixed(robot, np.zeros(3))
+        lengths = [(abs(float(v[i])), f"{k}_{i + 1}") for k, v in (("d", robot.d_mm), ("a", robot.a_mm))
+                   for i in range(robot.n) if f"{k}_{i + 1}" not in structural]
+        held[max(lengths)[1]] = SCALE_HELD
+    return {nm: why for nm, why in held.items() if nm not in pinned}
+
+
 def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, freed: set, fix_unidentifiable: bool):
-    """The parameters to fit: structural rules, the base as gauge, then the rank analysis of the robot's columns
-    projected off the centres' (what a centre absorbs is not information about the robot)."""
+    """The parameters to fit: structural rules, the rules of socket data (:func:`_rule_held`), then the rank
+    analysis of the robot's columns projected off the centres' (what a centre absorbs is not information about
+    the robot)."""
     fun, jac = _functions(robot, start, infos, np.zeros(len(infos)), list(range(len(infos))), prob,
                           np.zeros(len(infos), bool), np.zeros(len(infos)))
     J = jac(np.concatenate([np.zeros(len(infos)), C0.ravel()]))
     Jr, Jc = J[:, :len(infos)], J[:, len(infos):]
     Jp = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]
-    held = {f"base_{k}": 0.0 for k in "xyzabc"} | dict(pinned)
-    free, reasons = _select(robot, start.tool, infos, Jp, held, freed | {"tool_y"})
-    for k in "xyzabc":
-        if f"base_{k}" not in pinned:
-            reasons[f"base_{k}"] = BASE_GAUGE
-    structural = set(structural_fixed(robot, start.tool)) | {f"dtheta_{robot.n}"}
+    rules = _rule_held(robot, infos, prob, pinned)
+    free, reasons = _select(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
+                            freed | {"tool_y"})
+    reasons |= rules
+    structural = set(structural_fixed(robot, start.tool)) | {f"dtheta_{robot.n}"} | set(rules)
     deficient = {nm: why for nm, why in reasons.items()
                  if nm not in structural and why.startswith(("combined", "has no"))}
     if deficient and not fix_unidentifiable:
@@ -187,17 +207,18 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
                                f"{_remedy(deficient, prob)}", path=prob.readings.path, key="sockets")
     if deficient:
         log.warning("held at nominal (not identifiable from these socket readings): %s", ", ".join(deficient))
+    if not free:
+        raise CalibrationError("these socket readings identify no parameter of the robot: record the ball in each "
+                               "socket in varied arm configurations", path=prob.readings.path, key="sockets")
     return free, reasons
 
 
 def _remedy(deficient: dict, prob: _Problem) -> str:
     """What to do about parameters the readings cannot identify, in the terms of the data at hand."""
     out = []
-    if any(nm.startswith("c_") and why.startswith("has no") for nm, why in deficient.items()):
-        out.append("a joint compliance c_i needs a torque: the robot description has no link masses (<inertial>) "
-                   "loading it")
-    if not prob.pairs.size and not prob.readings.ball_bar:
-        out.append("state a known socket distance (# distance_mm), without which the overall scale is not seen")
+    if any(nm.startswith("c_") for nm in deficient):
+        out.append("a joint compliance c_i is seen only through the torque on its joint (the links' and the "
+                   "ball's weight): vary the arm's configurations more, or hold it with --pin c_i=0")
     out.append("record more varied arm configurations per socket and placements spread over the workspace, hold "
                "them with --pin NAME=VALUE, or hold all of them at nominal with --fix-unidentifiable")
     text = "; ".join(out)
@@ -328,6 +349,10 @@ def _residual_warnings(res: CalibrationResult) -> list[str]:
     t = res.residual_check
     if not t.material:
         return []
+    if "length" in t.source:
+        return [f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {t.describe()}; either the ball bar reads "
+                f"less exactly than stated (# length_sigma_mm, or --noise-um) or the model misses physics (joint "
+                f"backlash, the bar's pivot moving)"]
     return [f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {t.describe()}; either the ball sits less "
             f"exactly than stated (# seat_sigma_mm, or --noise-um) or the model misses physics (joint backlash, the "
             f"arm bending under the hand that pushed the ball in, a worn socket)"]

@@ -119,7 +119,8 @@ _KEYS = ("distance_mm", "tool_mm", "seat_sigma_mm", "distance_sigma_mm", "length
 
 
 def _meta(p: Path, text: str) -> dict:
-    """``# key: value`` lines before the header: {key: (line, value)}; unknown keys are refused."""
+    """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key is refused,
+    other comments (``# Source: ...``) are ignored."""
     meta = {}
     for k, line in enumerate(text.splitlines(), start=1):
         s = line.strip()
@@ -131,9 +132,12 @@ def _meta(p: Path, text: str) -> dict:
             continue
         key = m.group(1)
         if key not in _KEYS:
-            from rodlab.errors import did_you_mean
-            raise CalibrationError(f"unknown key {key!r}; a sockets file knows {list(_KEYS)}." +
-                                   did_you_mean(key, list(_KEYS)), path=p, line=k, key=key)
+            import difflib
+            near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.8)
+            if near:                                      # a misspelt key, not a comment of the user's
+                raise CalibrationError(f"unknown key {key!r}; did you mean {near[0]!r}? A sockets file knows "
+                                       f"{list(_KEYS)}", path=p, line=k, key=key)
+            continue
         if key in meta:
             raise CalibrationError(f"{key!r} is given twice (also on line {meta[key][0]})", path=p, line=k, key=key)
         meta[key] = (k, m.group(2).strip())

@@ -26,7 +26,9 @@ log = logging.getLogger(__name__)
 
 def _common(p) -> None:
     add_robot_options(p)
-    p.add_argument("--validate", default=None, help="validation points (*.validation.csv) for the paper's statistics")
+    p.add_argument("--validate", default=None,
+                   help="validation points (*.validation.csv) for the paper's statistics; with --sockets, other "
+                        "socket readings (*.sockets.csv) to check the model's consistency and distortion on")
     p.add_argument("--pin", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a parameter at a value (contract units), e.g. c_6=0 (repeatable)")
     p.add_argument("--free", action="append", default=[], metavar="NAME",
@@ -36,7 +38,8 @@ def _common(p) -> None:
                    help="the measuring instrument's noise per coordinate [um], 1 sigma, that the trust verdict "
                         f"judges the residuals against (default: {DEVICE_NOISE_MM * 1e3:g} um for a MultiCal "
                         f"campaign; for --points the file's sigma_*_mm columns, else {TRACKER_NOISE_MM * 1e3:g} um: a laser "
-                        f"tracker at a few metres). Given, it replaces the per-point columns")
+                        f"tracker at a few metres; for --sockets the file's seat_sigma_mm / length_sigma_mm). Given, "
+                        f"it replaces the per-point columns or the file's sigma")
     add_report_option(p)
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these points cannot identify at nominal (and report them) instead of "

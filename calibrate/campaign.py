@@ -86,6 +86,21 @@ def _num(cell, p, line, col):
     return v
 
 
+def leading_comments(text: str) -> list[tuple[int, str, str]]:
+    """The ``# key: value`` lines before a CSV header, as (line, key, value), both stripped; blank lines and
+    comments without a colon are skipped."""
+    out = []
+    for k, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s and not s.startswith("#"):
+            break
+        body = s.lstrip("#").strip()
+        if ":" in body:
+            key, val = body.split(":", 1)
+            out.append((k, key.strip(), val.strip()))
+    return out
+
+
 def _table(p: Path, text: str, required: list[str], optional: list[str]):
     lines = text.splitlines()
     i = 0
@@ -170,17 +185,7 @@ def read_fixture(path) -> Fixture:
 
 def read_points(path, n_joints: int = 6) -> PointSet:
     p, text = _read_text(path)
-    meta = {}
-    for k, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if not s.startswith("#"):
-            if s:
-                break
-            continue
-        body = s.lstrip("#").strip()
-        if ":" in body:
-            key, val = body.split(":", 1)
-            meta[key.strip()] = (k, val.strip())
+    meta = {key: (k, val) for k, key, val in leading_comments(text)}
     def vec(key, n):
         if key not in meta:
             raise CalibrationError(f"missing comment line '# {key}: ...'", path=p, line=1, key=key)

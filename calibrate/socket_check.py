@@ -19,7 +19,7 @@ import numpy as np
 from .kinematics import ModelParams, ball_positions
 from .sockets import SocketReadings
 
-__all__ = ["SocketCheck", "check_sockets"]
+__all__ = ["SocketCheck", "check_sockets", "socket_centres"]
 
 
 @dataclass(frozen=True)
@@ -74,24 +74,23 @@ def _pivot(P: np.ndarray, L: np.ndarray, iterations: int = 20) -> np.ndarray:
     return c
 
 
+def socket_centres(pW: np.ndarray, readings: SocketReadings) -> np.ndarray:
+    """Each socket's centre [mm], shape=(G, 3) in the order of ``readings.groups()``, from the ball positions
+    ``pW`` (N, 3) of one model alone: a seat's the mean, a ball bar's pivot the sphere of the read lengths."""
+    g = readings.group_index()
+    C = np.empty((len(readings.groups()), 3))
+    for k in range(len(C)):
+        m = g == k
+        C[k] = _pivot(pW[m], readings.length_mm[m]) if readings.ball_bar else pW[m].mean(0)
+    return C
+
+
 def check_sockets(robot, params: ModelParams, readings: SocketReadings) -> SocketCheck:
     """Consistency and distortion of ``params`` on ``readings`` (see the module docstring)."""
-    fr, _ = ball_positions(robot, params, readings.q_rad)
-    p = fr.pW
-    g = readings.group_index()
-    keys = readings.groups()
-    C = np.empty((len(keys), 3))
-    spread = np.empty(readings.n)
-    for k in range(len(keys)):
-        m = g == k
-        if readings.ball_bar:
-            C[k] = _pivot(p[m], readings.length_mm[m])
-            spread[m] = np.abs(np.linalg.norm(p[m] - C[k], axis=1) - readings.length_mm[m])
-        else:
-            C[k] = p[m].mean(0)
-            spread[m] = np.linalg.norm(p[m] - C[k], axis=1)
-    index = {key: k for k, key in enumerate(keys)}
-    errors = [np.linalg.norm(C[index[(pl, d.a)]] - C[index[(pl, d.b)]]) - d.mm
-              for pl in dict.fromkeys(readings.placement.tolist()) for d in readings.distances
-              if (pl, d.a) in index and (pl, d.b) in index]
-    return SocketCheck(spread, np.array(errors, float), tuple(dict.fromkeys(readings.placement.tolist())))
+    p = ball_positions(robot, params, readings.q_rad)[0].pW
+    C = socket_centres(p, readings)
+    rho = np.linalg.norm(p - C[readings.group_index()], axis=1)
+    spread = np.abs(rho - readings.length_mm) if readings.ball_bar else rho
+    pairs, stated = readings.distance_pairs()
+    errors = np.linalg.norm(C[pairs[:, 0]] - C[pairs[:, 1]], axis=1) - stated
+    return SocketCheck(spread, errors, tuple(dict.fromkeys(readings.placement.tolist())))

@@ -23,11 +23,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import CalibrationError
-from .identify import CalibrationResult, _select, _solve
+from .identify import CalibrationResult, _check_names, _pinned_vector, _select, _solve
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .residual_test import P_MISSING, ResidualTest
+from .socket_check import socket_centres
 from .sockets import SocketReadings
 
 __all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE", "SCALE_HELD"]
@@ -70,37 +71,13 @@ class _Problem:
 
     @classmethod
     def of(cls, r: SocketReadings) -> "_Problem":
-        groups = r.groups()
-        index = {g: k for k, g in enumerate(groups)}
-        pairs, dist = [], []
-        for pl in dict.fromkeys(r.placement.tolist()):
-            for d in r.distances:
-                if (pl, d.a) in index and (pl, d.b) in index:
-                    pairs.append((index[(pl, d.a)], index[(pl, d.b)]))
-                    dist.append(d.mm)
-        return cls(r, r.group_index(), np.array(pairs, int).reshape(-1, 2), np.array(dist, float))
+        return cls(r, r.group_index(), *r.distance_pairs())
 
 
 def socket_start(robot, readings: SocketReadings) -> ModelParams:
     """The nominal model the fit starts from: the file's tool, else the description's tip point; base 0."""
     tool = readings.tool_mm if readings.tool_mm is not None else np.asarray(robot.n_T_tip, float)[:3, 3]
     return ModelParams.nominal(robot, tool)
-
-
-def initial_centres(pW: np.ndarray, prob: _Problem) -> np.ndarray:
-    """Centres [mm], shape=(G, 3): the mean ball position of each socket; a ball bar's pivot by an algebraic
-    sphere fit (``|p|^2 - 2 p.c + |c|^2 = L^2``, linear in c and |c|^2)."""
-    C = np.empty((prob.G, 3))
-    L = prob.readings.length_mm
-    for g in range(prob.G):
-        m = prob.group == g
-        if L is None:
-            C[g] = pW[m].mean(0)
-            continue
-        A = np.c_[-2 * pW[m], np.ones(m.sum())]
-        b = L[m] ** 2 - np.sum(pW[m] ** 2, axis=1)
-        C[g] = np.linalg.lstsq(A, b, rcond=None)[0][:3]
-    return C
 
 
 def _blocks(robot, p: ModelParams, q_rad, C: np.ndarray, prob: _Problem, infos_free: list, with_jac: bool):
@@ -169,7 +146,7 @@ def _functions(robot, start, infos, x, free, prob: _Problem, prior: np.ndarray, 
     return fun, jac
 
 
-def _rule_held(robot, infos, prob: _Problem, pinned: dict) -> dict:
+def _rule_held(robot, prob: _Problem, pinned: dict) -> dict:
     """Parameters these readings cannot see by construction, with the reason: the base (gauge); the joint
     compliances of a chain without link masses (no torque); without a known distance or a ball bar's lengths,
     one length, the longest row's, which sets the overall scale."""
@@ -194,7 +171,7 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     J = jac(np.concatenate([np.zeros(len(infos)), C0.ravel()]))
     Jr, Jc = J[:, :len(infos)], J[:, len(infos):]
     Jp = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]
-    rules = _rule_held(robot, infos, prob, pinned)
+    rules = _rule_held(robot, prob, pinned)
     free, reasons = _select(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
                             freed | {"tool_y"})
     reasons |= rules
@@ -236,12 +213,12 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     loss that lets readings beyond about 3 sigma lose weight (a ball not fully seated)."""
     pinned, freed = dict(pinned or {}), set(freed)
     infos = catalogue(robot.n)
-    _check_names(infos, pinned, freed)
+    _check_names([i.name for i in infos], pinned, freed)
     prob = _Problem.of(readings)
     start = socket_start(robot, readings)
-    x = _pinned(infos, start, pinned)
+    x = _pinned_vector(infos, start, pinned)
     fr, _ = ball_positions(robot, apply(start, infos, x), readings.q_rad)
-    C = initial_centres(fr.pW, prob)
+    C = socket_centres(fr.pW, readings)
     free, reasons = _free_parameters(robot, start, infos, prob, C, pinned, freed, fix_unidentifiable)
     _check_size(readings, prob, free)
     prior = np.zeros(len(infos), bool)
@@ -261,19 +238,6 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
         log.info("socket fit: %d weakly identified parameter(s) get a prior: %s", len(weak),
                  ", ".join(infos[k].name for k in weak))
     return _fit_result(robot, start, infos, x, free, prior, reasons, prob, sol, C)
-
-
-def _check_names(infos, pinned: dict, freed: set) -> None:
-    names = [i.name for i in infos]
-    for nm in list(pinned) + list(freed):
-        if nm not in names:
-            from rodlab.errors import did_you_mean
-            raise CalibrationError(f"unknown parameter {nm!r}." + did_you_mean(nm, names), key="parameters")
-
-
-def _pinned(infos, start: ModelParams, pinned: dict) -> np.ndarray:
-    from .identify import _pinned_vector
-    return _pinned_vector(infos, start, pinned)
 
 
 def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:

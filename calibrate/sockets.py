@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .campaign import _read_text, _table
+from .campaign import _read_text, _table, leading_comments
 from .errors import CalibrationError
 
 __all__ = ["SocketDistance", "SocketReadings", "read_sockets", "write_sockets", "SEAT_SIGMA_MM", "DISTANCE_SIGMA_MM",
@@ -106,6 +106,14 @@ class SocketReadings:
         index = {g: k for k, g in enumerate(self.groups())}
         return np.array([index[g] for g in zip(self.placement.tolist(), self.socket.tolist())], int)
 
+    def distance_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """The known distances as they apply: (K, 2) indices into :meth:`groups` of the two sockets, one row per
+        placement and pair whose two sockets both have readings there, and (K,) the stated distances [mm]."""
+        index = {g: k for k, g in enumerate(self.groups())}
+        rows = [((index[(pl, d.a)], index[(pl, d.b)]), d.mm) for pl in dict.fromkeys(self.placement.tolist())
+                for d in self.distances if (pl, d.a) in index and (pl, d.b) in index]
+        return np.array([r[0] for r in rows], int).reshape(-1, 2), np.array([r[1] for r in rows], float)
+
     def subset(self, placements) -> "SocketReadings":
         """The readings of some placements only (a fit on some, a check on the others)."""
         from dataclasses import replace
@@ -122,15 +130,9 @@ def _meta(p: Path, text: str) -> dict:
     """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key is refused,
     other comments (``# Source: ...``) are ignored."""
     meta = {}
-    for k, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if s and not s.startswith("#"):
-            break
-        body = s.lstrip("#").strip()
-        m = re.match(r"^([A-Za-z_]+)\s*:(.*)$", body)
-        if not m:
+    for k, key, value in leading_comments(text):
+        if not re.fullmatch(r"[A-Za-z_]+", key):
             continue
-        key = m.group(1)
         if key not in _KEYS:
             import difflib
             near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.8)
@@ -140,7 +142,7 @@ def _meta(p: Path, text: str) -> dict:
             continue
         if key in meta:
             raise CalibrationError(f"{key!r} is given twice (also on line {meta[key][0]})", path=p, line=k, key=key)
-        meta[key] = (k, m.group(2).strip())
+        meta[key] = (k, value)
     return meta
 
 

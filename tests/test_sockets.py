@@ -151,7 +151,9 @@ def test_real_panda_data_matches_the_sources_own_calibration(tmp_path, capsys):
     the stated seat play; its held-out consistency equals that of the source's own calibrated URDF."""
     args = ["calibrate", "--sockets", str(DATA / "panda_7.sockets.csv"), "--robot", str(DATA / "panda.urdf"),
             "--tip-link", "ball_link", "--fix-unidentifiable", "--fit-placements", "1"]
-    assert main(args + ["--json", str(tmp_path / "cal.json")]) == 3            # 50 um stated, ~200 um seen
+    assert main(args + ["--json", str(tmp_path / "cal.json"), "--report"]) == 3    # 50 um stated, ~200 um seen
+    html = (tmp_path / "calibrate.report.html").read_text()
+    assert "Consistency and distortion" in html and "held out" in html
     assert "seat 50.0 um per coordinate" in capsys.readouterr().err
     data = json.loads((tmp_path / "cal.json").read_text())
     held = data["sockets"]["checks"]["held out"]

@@ -90,6 +90,18 @@ def _stats_rows(validation: dict) -> list[list]:
              v.get("points", "—")] for k, v in validation.items()]
 
 
+def _socket_checks(sockets: dict) -> str:
+    """``--sockets``: each model's consistency and distortion on the fitted and the held-out placements."""
+    rows = [[label, model, ", ".join(map(str, c["placements"])), c["readings"], fmt(c["spread_mean_mm"], ".3f"),
+             fmt(c["spread_max_mm"], ".3f"), fmt(c["distance_rms_mm"], ".3f"), fmt(c["distance_max_mm"], ".3f")]
+            for label, pair in sockets.get("checks", {}).items() for model, c in pair.items()]
+    return ("<h3>Consistency and distortion (socket readings)</h3><p class=note>spread: distance of each ball "
+            "position from its socket's centre, located from that model's ball positions alone; distance: the model's "
+            "socket distance minus the stated one. Held-out placements were not used by the fit.</p>"
+            + table(["readings", "model", "placements", "readings n", "spread mean mm", "spread max mm",
+                     "distance rms mm", "distance max mm"], rows))
+
+
 def _calibration(src: Source) -> str:
     d = src.data
     fit = d.get("fit", {})
@@ -103,6 +115,8 @@ def _calibration(src: Source) -> str:
                      + table(["model", "mean mm", "max mm", "median mm", "SD mm", "points"],
                              _stats_rows({{"before": "nominal", "after": "calibrated"}.get(k, k): v
                                           for k, v in d["validation"].items()})))
+    if d.get("sockets"):
+        parts.append(_socket_checks(d["sockets"]))
     rows = [[k, fmt(p["value"], ".6g"), fmt(p.get("sigma"), ".3g"), p.get("unit", ""), p.get("status", "")]
             for k, p in d["parameters"].items() if p.get("status") != "fixed"]
     fixed = [f"{k} = {p['value']:g} {p.get('unit', '')}" for k, p in d["parameters"].items()

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .robot_lines import ZeroChain, chain_matrices, dh_rows
+from .robot_lines import NEAR_PARALLEL_DEG, ZeroChain, chain_matrices, dh_rows
 
 __all__ = ["Robot", "robot_from_chain", "dh_zero_chain"]
 
@@ -66,8 +66,10 @@ class Robot:
         return int(np.shape(self.theta_offset_deg)[0])
 
     def parallel_rows(self) -> list[int]:
-        """Rows (0-based) whose joint axis is parallel to the next one (alpha = 0, next row exists)."""
-        return [i for i in range(self.n - 1) if abs(math.remainder(self.alpha_deg[i], 180.0)) < 1e-6]
+        """Rows (0-based) whose joint axis is parallel to the next one, within ``NEAR_PARALLEL_DEG`` (the tilt
+        ``Rx(alpha) Ry(beta)`` turns z by less; Hayati's rows), the next row existing."""
+        tilt = np.cos(np.deg2rad(self.alpha_deg)) * np.cos(np.deg2rad(self.beta_deg))
+        return [i for i in range(self.n - 1) if abs(tilt[i]) > math.cos(math.radians(NEAR_PARALLEL_DEG))]
 
 
 def robot_from_chain(chain: ZeroChain, joint_names=(), path=None) -> Robot:

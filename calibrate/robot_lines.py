@@ -3,14 +3,17 @@
 Every robot description (URDF, DH, modified DH) is first reduced to a :class:`ZeroChain`: the joint axes as
 lines in the description's base frame at q = 0, the tip frame (flange / ``tool0``) and the links' masses. The
 rows of the calibrator's model ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)`` then follow
-from the common normals of consecutive axes (Denavit-Hartenberg; ``beta = 0`` nominally):
+from the common normals of consecutive axes (Denavit-Hartenberg; ``beta = 0`` except on Hayati's rows):
 
 - ``z_{i-1}`` runs along joint i's axis *in the description's positive direction*, so the model's joint
   angle is the description's (``theta_i = q_i + theta_offset_i``) and no sign table is needed;
 - non-parallel consecutive axes: ``x_i`` along their common normal (``z_{i-1} x z_i`` where they
   intersect), ``d_i`` and ``a_i`` the normal's foot and length;
-- parallel consecutive axes: the normal is not unique; it is taken through ``o_{i-1}`` (``d_i = 0``) and the
-  row is one where the calibrator identifies Hayati's ``beta_i`` instead of ``d_i``;
+- parallel or nearly parallel consecutive axes (within ``NEAR_PARALLEL_DEG``): the common normal is not unique
+  or lies far away (two axes 2e-4 deg apart in a URDF give a normal kilometres off), so the row is Hayati's:
+  ``x_i`` from ``o_{i-1}`` (``d_i = 0``) to where joint i + 1's axis crosses the plane normal to ``z_{i-1}``,
+  ``alpha_i`` and ``beta_i`` the small tilt between the axes; the calibrator identifies ``beta_i`` there
+  instead of ``d_i``;
 - the last row ends on the tip frame: ``z_n`` along the tip's z, ``x_n`` along the tip's x when the tip's z
   lies on the last axis (the usual flange), so ``{n}`` is the tip frame;
 - ``{0}``: ``z_0`` on joint 1's axis through the foot of the base origin, ``x_0`` the base x projected.
@@ -25,9 +28,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ZeroChain", "DhRows", "dh_rows", "row_matrix", "chain_matrices"]
+__all__ = ["ZeroChain", "DhRows", "dh_rows", "end_row", "row_matrix", "chain_matrices", "NEAR_PARALLEL_DEG"]
 
-_PARALLEL = 1e-9     # |z_{i-1} x z_i| below which two axes are parallel
+#: two consecutive joint axes closer than this [deg] get a Hayati row (d = 0, alpha and beta the tilt)
+NEAR_PARALLEL_DEG = 1.0
+_NEAR_PARALLEL = math.sin(math.radians(NEAR_PARALLEL_DEG))
 _ON_AXIS = 1e-9      # mm: a common normal shorter than this is an intersection
 
 
@@ -129,18 +134,46 @@ def _perpendicular(hint, z, fallback) -> np.ndarray:
     raise AssertionError("unreachable: two orthogonal fallbacks")
 
 
-def _common_normal(o, z, p, u, last: bool):
-    """Feet ``(c1, c2)`` of the common normal from line (o, z) to line (p, u), and whether they are parallel."""
-    w = np.cross(z, u)
-    if np.linalg.norm(w) < _PARALLEL:
-        c1 = o + np.dot(p - o, z) * z if last else o       # the flange at the end / Hayati's d = 0
-        return c1, p + np.dot(c1 - p, u) * u, True
+def _common_normal(o, z, p, u):
+    """Feet ``(c1, c2)`` of the common normal from line (o, z) to line (p, u), which are not nearly parallel."""
     r = p - o
     zu = np.dot(z, u)
     den = 1.0 - zu * zu
     s = (np.dot(r, z) - zu * np.dot(r, u)) / den
     t = (zu * np.dot(r, z) - np.dot(r, u)) / den
-    return o + s * z, p + t * u, False
+    return o + s * z, p + t * u
+
+
+def _normal_row(frame, p, u):
+    """The DH row (theta, d, a, alpha, beta = 0) from ``frame`` to the line (p, u), and the next frame."""
+    o, x_prev, z = frame[:3, 3], frame[:3, 0], frame[:3, 2]
+    c1, c2 = _common_normal(o, z, p, u)
+    a = float(np.linalg.norm(c2 - c1))
+    if a > _ON_AXIS:
+        x = (c2 - c1) / a
+    else:                                              # intersecting axes: the sign nearest the previous x
+        x = _unit(np.cross(z, u))
+        x = -x if np.dot(x, x_prev) < -1e-9 else x
+    row = (_signed_angle(x_prev, x, z), float(np.dot(c1 - o, z)), a, _signed_angle(z, u, x), 0.0)
+    return row, _frame(c1 + a * x, x, u)
+
+
+def _hayati_row(frame, p, u, hint, last: bool):
+    """Hayati's row to a (nearly) parallel line (p, u): ``d = 0`` (the last row: the foot of the tip), ``x``
+    towards where the line crosses the plane normal to ``z`` there, ``Rx(alpha) Ry(beta)`` turning ``z`` onto ``u``."""
+    o, x_prev, z = frame[:3, 3], frame[:3, 0], frame[:3, 2]
+    c1 = o + np.dot(p - o, z) * z if last else o       # the flange at the end
+    c2 = p - np.dot(p - c1, z) / np.dot(u, z) * u      # the line through the plane at c1 normal to z
+    a = float(np.linalg.norm(c2 - c1))
+    x = (c2 - c1) / a if a > _ON_AXIS else _perpendicular(hint, z, x_prev)
+    y = np.cross(z, x)
+    alpha = math.atan2(0.0 - float(np.dot(u, y)), float(np.dot(u, z)))   # 0.0 - : +pi, not -pi
+    beta = math.asin(float(np.clip(np.dot(u, x), -1.0, 1.0)))
+    row = (_signed_angle(x_prev, x, z), float(np.dot(c1 - o, z)), a, alpha, beta)
+    nxt = np.eye(4)
+    nxt[:3, :3] = np.c_[x, y, z] @ row_matrix(0.0, 0.0, 0.0, alpha, beta)[:3, :3]
+    nxt[:3, 3] = c2
+    return row, nxt
 
 
 def _signed_angle(v1, v2, axis) -> float:
@@ -154,28 +187,31 @@ def _first_frame(chain: ZeroChain) -> np.ndarray:
     return _frame(origin, _perpendicular([1.0, 0.0, 0.0], z0, [0.0, 1.0, 0.0]), z0)
 
 
+def _next_row(frame, p, u, hint, last: bool):
+    """The row from ``frame`` to the line (p, u) (the next axis, or the tip's z for the last row)."""
+    if np.linalg.norm(np.cross(frame[:3, 2], u)) < _NEAR_PARALLEL:
+        return _hayati_row(frame, p, u, hint, last)
+    return _normal_row(frame, p, u)
+
+
+def end_row(prev_T: np.ndarray, tip_T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The last row ``(theta, d, a, alpha, beta)`` [rad, mm] from frame {n-1} to a tip frame (both 4x4, one
+    frame at q = 0), ending ``{n}`` on the tip when the tip's z lies on the last axis; and ``{n}`` itself."""
+    row, frame = _next_row(prev_T, tip_T[:3, 3], _unit(tip_T[:3, 2]), tip_T[:3, 0], True)
+    return np.asarray(row, float), frame
+
+
 def dh_rows(chain: ZeroChain) -> DhRows:
     """The nominal rows of the calibrator's model for ``chain`` (exact; see the module docstring)."""
     n = chain.axis_dir.shape[0]
     frames = [_first_frame(chain)]
-    rows = np.zeros((n, 4))
-    tip_o, tip_x, tip_z = chain.tip_T[:3, 3], chain.tip_T[:3, 0], chain.tip_T[:3, 2]
-    for i in range(n):
-        prev = frames[-1]
-        o, x_prev, z = prev[:3, 3], prev[:3, 0], prev[:3, 2]
-        last = i == n - 1
-        p, u = (tip_o, _unit(tip_z)) if last else (chain.axis_point_mm[i + 1], _unit(chain.axis_dir[i + 1]))
-        c1, c2, parallel = _common_normal(o, z, p, u, last)
-        a = float(np.linalg.norm(c2 - c1))
-        if a > _ON_AXIS:
-            x = (c2 - c1) / a
-        elif not parallel:                             # intersecting axes: the sign nearest the previous x
-            x = _unit(np.cross(z, u))
-            x = -x if np.dot(x, x_prev) < -1e-9 else x
-        else:
-            x = _perpendicular(tip_x if last else x_prev, z, x_prev)
-        rows[i] = (_signed_angle(x_prev, x, z), float(np.dot(c1 - o, z)), a, _signed_angle(z, u, x))
-        frames.append(_frame(c1 + a * x, x, u))
+    rows = np.zeros((n, 5))
+    for i in range(n - 1):
+        rows[i], frame = _next_row(frames[-1], chain.axis_point_mm[i + 1], _unit(chain.axis_dir[i + 1]),
+                                   frames[-1][:3, 0], False)
+        frames.append(frame)
+    rows[-1], frame = end_row(frames[-1], chain.tip_T)
+    frames.append(frame)
     return _assemble(chain, rows, frames)
 
 
@@ -184,8 +220,8 @@ def _assemble(chain: ZeroChain, rows: np.ndarray, frames: list) -> DhRows:
     base_T_0 = F[0]
     # the frames as the rows rebuild them (exact up to round-off; the rows define the model)
     rebuilt = base_T_0 @ chain_matrices(np.rad2deg(rows[:, 0]), rows[:, 1], rows[:, 2], np.rad2deg(rows[:, 3]),
-                                         np.zeros(len(rows)))
+                                         np.rad2deg(rows[:, 4]))
     n_T_tip = np.linalg.inv(rebuilt[-1]) @ chain.tip_T
     com = np.einsum("nij,nj->ni", np.linalg.inv(rebuilt[1:]), np.c_[chain.link_com_mm, np.ones(len(rows))])[:, :3]
     return DhRows(np.rad2deg(rows[:, 0]), rows[:, 1].copy(), rows[:, 2].copy(), np.rad2deg(rows[:, 3]),
-                  np.zeros(len(rows)), base_T_0, n_T_tip, rebuilt, com)
+                  np.rad2deg(rows[:, 4]), base_T_0, n_T_tip, rebuilt, com)

@@ -5,7 +5,10 @@
 from), ``flange_pose`` (the flange in the last row's frame [mm, deg], default zeros) and a joint ``name``:
 
 - ``dh``  (classic): ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) [Ry(beta_i)]``, joint i about
-  ``z_{i-1}``; rows are used as they are;
+  ``z_{i-1}``; rows are used as they are, except that a ``flange_pose`` is folded into the last row (its
+  ``theta_offset``, ``d``, ``a``, ``alpha``, ``beta`` and ``com_mm``) so that ``{n}`` is the flange frame, in
+  which tool vectors and a rod's matrices are given (exact; a flange off the last axis keeps the rest in
+  ``n_T_tip``);
 - ``mdh`` (Craig): ``T_{i-1,i} = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``, joint i about ``z_i``;
   row i holds ``alpha_deg = alpha_{i-1}``, ``a_mm = a_{i-1}``, ``theta_offset_deg``, ``d_mm`` and ``com_mm``
   in frame i (at joint i). Converted exactly to the calibrator's rows through the joint axes
@@ -25,7 +28,7 @@ from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
-from .robot_lines import ZeroChain
+from .robot_lines import ZeroChain, chain_matrices, end_row, row_matrix
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -162,6 +165,23 @@ def read_robot_toml(path) -> Robot:
     require_schema(data, "rodlab.robot/2", p, text, CalibrationError, kind="toml")    # anything the rules above miss
     if convention == "mdh":
         return robot_from_chain(_mdh_chain(name, cols, flange, gravity, source or str(p)), names, path=p)
-    return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=flange,
+    cols, n_T_tip = _end_on_flange(cols, flange)
+    return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=n_T_tip,
                  joint_names=tuple(names), source=source or str(p))
+
+
+def _end_on_flange(cols: dict, flange_T: np.ndarray) -> tuple[dict, np.ndarray]:
+    """DH rows with the flange folded into the last row (``{n}`` = the flange frame when the flange's z lies on
+    the last axis) and what is left of the flange in the new {n}; the rows unchanged without a flange."""
+    if np.allclose(flange_T, np.eye(4), rtol=0.0, atol=1e-12):
+        return cols, np.eye(4)
+    F = chain_matrices(cols["theta_offset_deg"], cols["d_mm"], cols["a_mm"], cols["alpha_deg"], cols["beta_deg"])
+    row, _ = end_row(F[-2], F[-1] @ flange_T)
+    n_new = F[-2] @ row_matrix(*row)
+    out = {k: np.array(v, float) for k, v in cols.items()}
+    for k, v in zip(("theta_offset_deg", "d_mm", "a_mm", "alpha_deg", "beta_deg"),
+                    (np.degrees(row[0]), row[1], row[2], np.degrees(row[3]), np.degrees(row[4]))):
+        out[k][-1] = v
+    out["com_mm"][-1] = (np.linalg.inv(n_new) @ F[-1] @ np.r_[out["com_mm"][-1], 1.0])[:3]
+    return out, np.linalg.inv(n_new) @ F[-1] @ flange_T
 

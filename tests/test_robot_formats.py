@@ -22,9 +22,9 @@ def _rpy_matrix(r, p, y):
                      [-sp, cp * sr, cp * cr]])
 
 
-def _random_urdf(rng, n=6, parallel=(1,), fixed_between=(3,)) -> str:
-    """A URDF with rotated joint frames, skew axes, a parallel pair (joint k+1 || k+2), a fixed link with mass in
-    the chain and a lateral tool0 offset: nothing lines up with DH on purpose."""
+def _random_urdf(rng, n=6, parallel=(1,), fixed_between=(3,), tilt_rad=0.0, flange_rpy="0.2 -0.4 0.7") -> str:
+    """A URDF with rotated joint frames, skew axes, a parallel pair (joint k+1 || k+2, or ``tilt_rad`` apart), a
+    fixed link with mass in the chain and a lateral tool0 offset: nothing lines up with DH on purpose."""
     links = ['<link name="base_link"/>']
     joints = []
     parent = "base_link"
@@ -35,6 +35,9 @@ def _random_urdf(rng, n=6, parallel=(1,), fixed_between=(3,)) -> str:
         rpy = rng.uniform(-1.0, 1.0, 3) if i - 1 not in parallel else np.zeros(3)
         if i - 1 in parallel:
             axes[i] = axes[i - 1].copy()              # same axis in the (unrotated) child frame: parallel axes
+            if tilt_rad:
+                w = np.cross(axes[i], rng.normal(size=3))
+                axes[i] = axes[i] / np.linalg.norm(axes[i]) + math.tan(tilt_rad) * w / np.linalg.norm(w)
         ax = axes[i] / np.linalg.norm(axes[i])
         m, c = rng.uniform(1, 30), rng.uniform(-0.2, 0.2, 3)
         links.append(f'<link name="{child}"><inertial><origin xyz="{c[0]} {c[1]} {c[2]}" rpy="0 0 0"/>'
@@ -50,7 +53,7 @@ def _random_urdf(rng, n=6, parallel=(1,), fixed_between=(3,)) -> str:
                           f'<parent link="{parent}"/><child link="spacer_{i + 1}"/></joint>')
             parent = f"spacer_{i + 1}"
     links.append('<link name="tool0"/>')
-    joints.append(f'<joint name="flange" type="fixed"><origin xyz="0.03 -0.02 0.12" rpy="0.2 -0.4 0.7"/>'
+    joints.append(f'<joint name="flange" type="fixed"><origin xyz="0.03 -0.02 0.12" rpy="{flange_rpy}"/>'
                   f'<parent link="{parent}"/><child link="tool0"/></joint>')
     return '<?xml version="1.0"?>\n<robot name="skew">' + "".join(links + joints) + "</robot>\n"
 
@@ -84,6 +87,25 @@ def test_urdf_model_has_the_urdf_forward_kinematics(tmp_path, seed):
     assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
     assert 1 in robot.parallel_rows()                  # joints 2 and 3 parallel: Hayati's beta on row 2
     assert robot.joint_names == tuple(f"j{i}" for i in range(1, 7))
+
+
+@pytest.mark.parametrize("tilt_deg", [2e-4, 0.5])
+def test_nearly_parallel_axes_get_a_hayati_row(tmp_path, tilt_deg):
+    """Axes 2e-4 deg apart (a rounded rpy in a real URDF) or 0.5 deg apart: a Hayati row (d = 0, the tilt in
+    alpha and beta), not a common normal kilometres away. The conversion stays exact and the row is one where
+    beta is identified."""
+    rng = np.random.default_rng(7)
+    path = tmp_path / "tilted.urdf"
+    path.write_text(_random_urdf(rng, tilt_rad=math.radians(tilt_deg)))
+    robot = read_robot(path)
+    q = rng.uniform(-3, 3, (25, 6))
+    ours, theirs = _tip_in_base(robot, q), _yourdfpy_fk(path, q, "tool0", "base_link")
+    assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
+    assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
+    assert robot.parallel_rows() == [1] and robot.d_mm[1] == 0.0
+    tilt = np.degrees(np.arccos(np.cos(np.radians(robot.alpha_deg[1])) * np.cos(np.radians(robot.beta_deg[1]))))
+    assert tilt == pytest.approx(tilt_deg, rel=1e-3)
+    assert np.abs(robot.d_mm).max() < 1500 and np.abs(robot.a_mm).max() < 1500   # no far-away normal
 
 
 def test_urdf_masses_are_lumped_onto_the_joint_that_moves_them(tmp_path):
@@ -180,6 +202,53 @@ def test_modified_dh_table_is_converted_exactly(tmp_path):
     assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
     assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
     assert robot.source == "Craig, Table 3.4" and robot.parallel_rows() == [1]
+
+
+def test_a_flange_tilted_off_the_last_axis_still_ends_the_model_on_the_flange(tmp_path):
+    """A flange 1e-3 deg off the last axis (a rounded or calibrated description): a Hayati last row, {n} is the
+    flange frame (was: a common normal far away, d_n of metres)."""
+    rows = [(0, 0, 0, 0), (-90, 0, 0, 243.5), (0, 431.8, 0, -93.4), (90, -20.3, 0, 433.1), (-90, 0, 0, 0),
+            (90, 0, 0, 0)]
+    flange = [0, 0, 56.25, 1e-3, 2e-3, 30]
+    text = ['format = "rodlab.robot/2"', 'convention = "mdh"', f"flange_pose = {flange}"]
+    for al, a, th, d in rows:
+        text += ["[[joint]]", f"alpha_deg = {al}", f"a_mm = {a}", f"theta_offset_deg = {th}", f"d_mm = {d}"]
+    path = tmp_path / "tilted_flange.toml"
+    path.write_text("\n".join(text) + "\n")
+    robot = read_robot(path)
+    q = np.random.default_rng(3).uniform(-3, 3, (30, 6))
+    assert np.abs(_tip_in_base(robot, q) - _mdh_fk(rows, q, pose_to_matrix(flange))).max() < 1e-6
+    assert np.abs(robot.n_T_tip - np.eye(4)).max() < 1e-8 and robot.d_mm[-1] == pytest.approx(56.25)
+
+
+def _dh_fk(tx90, q, flange):
+    out = []
+    for qq in q:
+        T = np.eye(4)
+        for th, d, a, al, qi in zip(tx90.theta_offset_deg, tx90.d_mm, tx90.a_mm, tx90.alpha_deg, qq):
+            T = T @ pose_to_matrix([0, 0, d, 0, 0, th + math.degrees(qi)]) @ pose_to_matrix([a, 0, 0, al, 0, 0])
+        out.append(T @ flange)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("flange", [[0, 0, 100, 0, 0, 90], [5, -3, 100, 10, 0, 90]])
+def test_a_dh_flange_pose_is_folded_into_the_last_row(tmp_path, flange):
+    """A classic-DH file with a flange_pose: {n} becomes the flange frame (tool vectors and a rod's matrices are
+    given there), rows 1..n-1 stay as written, the kinematics are exact; a flange off the last axis keeps its
+    offset in n_T_tip."""
+    tx90 = resolve_robot("tx90")
+    text = ['format = "rodlab.robot/2"', f"flange_pose = {flange}"]
+    for th, d, a, al in zip(tx90.theta_offset_deg, tx90.d_mm, tx90.a_mm, tx90.alpha_deg):
+        text += ["[[joint]]", f"theta_offset_deg = {th}", f"d_mm = {d}", f"a_mm = {a}", f"alpha_deg = {al}"]
+    path = tmp_path / "tx90_flange.toml"
+    path.write_text("\n".join(text) + "\n")
+    robot = read_robot(path)
+    q = np.random.default_rng(4).uniform(-3, 3, (30, 6))
+    assert np.abs(_tip_in_base(robot, q) - _dh_fk(tx90, q, pose_to_matrix(flange))).max() < 1e-6
+    assert np.array_equal(robot.d_mm[:-1], tx90.d_mm[:-1]) and np.array_equal(robot.a_mm[:-1], tx90.a_mm[:-1])
+    if flange[:2] == [0, 0] and flange[3:5] == [0, 0]:
+        assert np.abs(robot.n_T_tip - np.eye(4)).max() < 1e-9
+        assert robot.d_mm[-1] == pytest.approx(tx90.d_mm[-1] + 100)
 
 
 def test_dh_rows_are_read_as_written_and_convert_to_themselves():

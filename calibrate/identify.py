@@ -17,7 +17,7 @@
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from rodlab.units import DEVICE_NOISE_MM
 
 from .campaign import Campaign, Fixture
 from .compensation import deflection_offsets
+from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -66,6 +67,19 @@ class Observations:
                              f"{np.shape(self.sigma_mm)}")
         if self.temp_C is not None and np.shape(self.temp_C) != (np.shape(self.x_W_mm)[0],):
             raise ValueError(f"temp_C must have shape ({np.shape(self.x_W_mm)[0]},), got {np.shape(self.temp_C)}")
+
+    def subset(self, keep: np.ndarray) -> "Observations":
+        """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""
+        keep = np.asarray(keep, bool)
+        if keep.shape != (self.x_W_mm.shape[0],):
+            raise ValueError(f"keep must have shape ({self.x_W_mm.shape[0]},), got {keep.shape}")
+
+        def cut(a):
+            return None if a is None else np.asarray(a)[keep]
+        return replace(self, q_rad=self.q_rad[keep], x_W_mm=self.x_W_mm[keep], force_W_N=self.force_W_N[keep],
+                       group=cut(self.group), x_D_mm=cut(self.x_D_mm), sigma_mm=cut(self.sigma_mm),
+                       temp_C=cut(self.temp_C),
+                       labels=None if self.labels is None else [lab for lab, k in zip(self.labels, keep) if k])
 
 
 def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
@@ -556,8 +570,10 @@ def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
     fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
     S = noise_covariance(obs, noise, fixture_sigma)
-    JtJ_inv = np.linalg.pinv(J.T @ J)
+    C = parameter_covariance(J)                        # (J^T J)^-1, inf where the data see nothing
+    JtJ_inv = np.nan_to_num(C, nan=0.0, posinf=0.0)
     cov = JtJ_inv @ J.T @ S @ J @ JtJ_inv
+    cov[np.isinf(np.diag(C)), np.isinf(np.diag(C))] = np.inf
     sig = np.sqrt(np.clip(np.diag(cov), 0, None))
     if not full:
         return sig

@@ -57,7 +57,12 @@ class SocketCheck:
         return {"placements": list(self.placements), "readings": int(self.spread_mm.size),
                 "spread_mean_mm": float(self.spread_mm.mean()), "spread_rms_mm": self.spread_rms_mm,
                 "spread_max_mm": self.spread_max_mm, "distance_errors_mm": self.distance_error_mm.tolist(),
-                "distance_rms_mm": self.distance_rms_mm, "distance_max_mm": self.distance_max_mm}
+                "distance_rms_mm": _or_none(self.distance_rms_mm), "distance_max_mm": _or_none(self.distance_max_mm)}
+
+
+def _or_none(v: float) -> float | None:
+    """JSON has no NaN: no known distance in these readings is ``null``."""
+    return v if np.isfinite(v) else None
 
 
 def _pivot(P: np.ndarray, L: np.ndarray, iterations: int = 20) -> np.ndarray:

@@ -11,9 +11,11 @@ The base pose is the frame the centres are fitted in (any rigid motion of the ba
 it): it is held at the description's, and the centres are reported in {0}. Without a known distance (or a
 ball bar's length) the overall scale is not observable either, and a fit would shrink the robot (the seat
 residuals scale with it): the longest row's length is then held, by rule, with that reason. Joint compliances
-of a chain without link masses are held (no torque). The tool's azimuth about the last axis is free
-(``tool_y``), ``dtheta_n`` held, as for instrument points. With ``robust``, the verdict and the standard
-errors still count every reading in full (the loss changes the estimate, not the test).
+of a chain without link masses are held (no torque), and so is any parameter a change of its plausible size
+would move the readings by less than one standard uncertainty in all (a wrist joint's compliance). The tool's
+azimuth about the last axis is free (``tool_y``), ``dtheta_n`` held, as for instrument points. With
+``robust``, the verdict and the standard errors still count every reading in full (the loss changes the
+estimate, not the test).
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .covariance import correlation, parameter_covariance
 from .errors import CalibrationError
 from .identify import CalibrationResult, _check_names, _pinned_vector, _select, _solve
 from .jacobian import position_jacobian
@@ -172,6 +175,7 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     Jr, Jc = J[:, :len(infos)], J[:, len(infos):]
     Jp = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]
     rules = _rule_held(robot, prob, pinned)
+    rules |= _negligible(infos, Jp, set(rules) | set(pinned) | freed)
     free, reasons = _select(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
                             freed | {"tool_y"})
     reasons |= rules
@@ -190,6 +194,17 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     return free, reasons
 
 
+def _negligible(infos, Jp: np.ndarray, skip: set) -> dict:
+    """Parameters that a change of their plausible size (``PRIOR_SCALE``) moves the readings by less than one
+    standard uncertainty in all (whitened columns ``Jp``): nothing to fit, held at nominal with that reason
+    (a joint compliance whose joint carries almost no torque, e.g. the last joint under a light gripper)."""
+    scale = np.array([PRIOR_SCALE[i.unit] * INTERNAL_SCALE[i.unit] for i in infos])
+    effect = np.linalg.norm(Jp, axis=0) * scale
+    return {i.name: f"too little effect on these readings: a change of {PRIOR_SCALE[i.unit]:g} {i.unit} moves "
+                    f"them by {effect[k]:.2g} standard uncertainties in all" for k, i in enumerate(infos)
+            if 0.0 < effect[k] < 1.0 and i.name not in skip}
+
+
 def _remedy(deficient: dict, prob: _Problem) -> str:
     """What to do about parameters the readings cannot identify, in the terms of the data at hand."""
     out = []
@@ -203,8 +218,9 @@ def _remedy(deficient: dict, prob: _Problem) -> str:
 
 
 def _covariance(J: np.ndarray, reduced: float) -> np.ndarray:
-    """Parameter covariance of a whitened problem, scaled by the residuals' reduced chi-square (at least 1)."""
-    return np.linalg.pinv(J.T @ J) * max(reduced, 1.0)
+    """Parameter covariance of a whitened problem, scaled by the residuals' reduced chi-square (at least 1);
+    see :func:`calibrate.covariance.parameter_covariance` (a direction the readings do not see: infinite)."""
+    return parameter_covariance(J) * max(reduced, 1.0)
 
 
 def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = None, freed=(),
@@ -267,8 +283,10 @@ def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, so
     status = {i.name: "fixed" for i in infos} | {infos[k].name: "regularised" if prior[k] else "identified"
                                                  for k in free}
     resid_mm, seat_rms = _residuals_mm(robot, p, C, prob)
-    corr = cov[:P, :P] / np.outer(sig[:P], sig[:P]) if P else np.zeros((0, 0))
-    Jn = sol.jac[:, :P] / np.maximum(np.linalg.norm(sol.jac[:, :P], axis=0), 1e-300)
+    corr = correlation(cov[:P, :P])
+    Jr, Jc = sol.jac[:, :P], sol.jac[:, P:]
+    Jr = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]       # what the centres absorb is not seen
+    Jn = Jr / np.maximum(np.linalg.norm(Jr, axis=0), 1e-300)
     out = CalibrationResult(p, infos, values, sigma, status,
                             [f"{nm} ({why})" for nm, why in reasons.items() if status.get(nm) == "fixed"],
                             resid_mm, seat_rms, _stated_noise(r) * np.sqrt(chi2 / dof), corr,

@@ -1,6 +1,7 @@
 """``rodlab calibrate --sockets``: identify a robot from ball-in-socket or ball-bar readings (no instrument)."""
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import dataclass
 
@@ -92,12 +93,20 @@ def _print(run: SocketRun) -> None:
           f"placement(s), {len(r.distances)} known distance(s); residual rms {res.rms_mm * 1e3:.1f} um per "
           f"{'length' if r.ball_bar else 'coordinate'}, {res.message}")
     print_parameters(res)
-    print("  consistency (ball spread about its socket) and distortion (socket distance error) [mm]")
-    print(f"    {'readings':<10} {'model':<11} {'spread mean':>11} {'rms':>7} {'max':>7}   {'distance rms':>12} {'max':>7}")
+    with_distance = bool(r.distances)
+    print("  consistency (ball spread about its socket)" + (" and distortion (socket distance error)"
+                                                             if with_distance else "") + " [mm]")
+    print(f"    {'readings':<10} {'model':<11} {'spread mean':>11} {'rms':>7} {'max':>7}"
+          + (f"   {'distance rms':>12} {'max':>7}" if with_distance else ""))
     for label, pair in run.checks.items():
         for model, c in pair.items():
             print(f"    {label:<10} {model:<11} {c.spread_mm.mean():11.3f} {c.spread_rms_mm:7.3f} {c.spread_max_mm:7.3f}"
-                  f"   {c.distance_rms_mm:12.3f} {c.distance_max_mm:7.3f}")
+                  + (f"   {_num(c.distance_rms_mm, 12)} {_num(c.distance_max_mm, 7)}" if with_distance else ""))
+
+
+def _num(v: float, width: int) -> str:
+    """A table cell [mm]; ``-`` where these readings have no known distance."""
+    return f"{v:{width}.3f}" if math.isfinite(v) else f"{'-':>{width}}"
 
 
 def _extra(args, run: SocketRun) -> dict:

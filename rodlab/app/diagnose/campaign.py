@@ -275,7 +275,6 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
     result and the :class:`Refit` it used."""
     from rodlab.calibrate import campaign_observations, identify
-    from rodlab.calibrate.identify import Observations
     fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
@@ -284,11 +283,8 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
     obs2 = replace(obs2, q_rad=correct_joints(obs2.q_rad, fit.joint_corrections_rad))
     for edit in fit.obs_edits:
         obs2 = edit(obs2)
-    keep = fit.keep
-    if not keep.all():
-        obs2 = Observations(obs2.q_rad[keep], obs2.x_W_mm[keep], obs2.force_W_N[keep], obs2.rod_mass_kg,
-                            obs2.rod_com_T_mm, obs2.group[keep], [lab for lab, k in zip(ctx.labels, keep) if k],
-                            obs2.fixture_T)
+    if not fit.keep.all():
+        obs2 = obs2.subset(fit.keep)
     res2 = identify(robot, obs2, rod.tool_mm, fit.rod, freed=fit.freed, expected_noise_mm=noise_mm,
                     fixture_sigma=fixture_sigma)
     return res2, fit

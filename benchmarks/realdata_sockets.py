@@ -1,4 +1,4 @@
-"""Ball-in-socket calibration on public real data (MUKCa: Franka Panda, KUKA iiwa14), checked on placements the
+"""Ball-in-socket calibration on public real data (MUKCa: Franka Panda, KUKA iiwa14, Kinova Gen3 lite), checked on placements the
 fit never saw, against the nominal model and, where the source publishes its own calibrated model with the
 placement it was fitted on, against that model (MUKCa's optimiser).
 
@@ -24,7 +24,9 @@ SPLITS = [("panda_6", "panda.urdf", [1], "panda_6_mukca_calibrated.urdf"),
           ("panda_7", "panda.urdf", [1], "panda_7_mukca_calibrated.urdf"),
           ("panda_2", "panda.urdf", [1, 3, 5, 7, 9], None),
           ("panda_3", "panda.urdf", [1, 3, 5], None),
-          ("kuka_14", "iiwa14.urdf", [1, 3], None)]
+          ("kuka_14", "iiwa14.urdf", [1, 3], None),
+          ("dinova_1", "gen3lite.urdf", [1, 3], None),
+          ("dinova_2", "gen3lite.urdf", [1, 3], None)]
 
 
 def _cell(c) -> str:

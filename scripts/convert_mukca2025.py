@@ -7,6 +7,9 @@ table; the robot's ball (the URDF's ``ball_link``) is hand-guided into socket 0 
 each, in different arm configurations, and the joint angles are recorded:
 
   data/<robot>/<placement>/hole_0.csv, hole_1.csv    one configuration per line, joint angles [rad], no header
+  data/<robot>/<placement>/comments.txt               (some) the operator's notes, kept as header comments
+
+(panda_*: Franka Panda, kuka_14: KUKA iiwa 14, dinova_*: Kinova Gen3 lite on the DINOVA mobile base.)
 
 Each robot becomes one ``<robot>.sockets.csv`` (placements numbered in name order, listed in the header;
 source socket 0 -> socket 1, 1 -> 2). The seat's play is stated as 0.05 mm per coordinate: a printed ball in a
@@ -30,7 +33,8 @@ from rodlab.fileio import atomic_write_text
 
 #: robot data folder -> (the source's URDF, joints)
 ROBOTS = {"panda_2": ("panda.urdf", 7), "panda_3": ("panda.urdf", 7), "panda_6": ("panda.urdf", 7),
-          "panda_7": ("panda.urdf", 7), "kuka_14": ("iiwa14.urdf", 7)}
+          "panda_7": ("panda.urdf", 7), "kuka_14": ("iiwa14.urdf", 7), "dinova_1": ("gen3lite.urdf", 6),
+          "dinova_2": ("gen3lite.urdf", 6)}
 DISTANCE_MM = 50.0
 SEAT_SIGMA_MM = 0.05
 HEADER = """# Ball-in-socket readings of {robot} (MUKCa artefact: two sockets {distance:g} mm apart), public data of
@@ -55,6 +59,18 @@ def _readings(folder: Path, n: int) -> list[np.ndarray]:
     return out
 
 
+def _operator_notes(folders: list[Path], robot: str, sums: list[str]) -> list[str]:
+    """The source's comments.txt per placement as header comments (colons dropped: not ``# key: value`` lines)."""
+    out = []
+    for j, folder in enumerate(folders, start=1):
+        path = folder / "comments.txt"
+        note = " ".join(path.read_text(encoding="utf-8").split()).replace(":", " -") if path.is_file() else ""
+        if note:
+            out.append(f"# Operator's note, placement {j} ({folder.name}) - {note}\n")
+            sums.append(f"{hashlib.sha256(path.read_bytes()).hexdigest()}  data/{robot}/{folder.name}/comments.txt")
+    return out
+
+
 def convert(src: Path, robot: str, out_dir: Path) -> tuple[Path, list[str]]:
     """One robot's folders to ``<robot>.sockets.csv``; returns the file and the sha256 of every source file."""
     urdf, n = ROBOTS[robot]
@@ -69,6 +85,7 @@ def convert(src: Path, robot: str, out_dir: Path) -> tuple[Path, list[str]]:
                         f"data/{robot}/{folder.name}/hole_{s - 1}.csv")
     head = HEADER.format(robot=robot, distance=DISTANCE_MM, urdf=urdf, seat=SEAT_SIGMA_MM,
                          placements=", ".join(f"{j}={f.name}" for j, f in enumerate(folders, start=1)))
+    head += "".join(_operator_notes(folders, robot, sums))
     table = "placement,socket," + ",".join(f"q{i + 1}" for i in range(n))
     path = atomic_write_text(out_dir / f"{robot}.sockets.csv", head + table + "\n" + "\n".join(rows) + "\n")
     atomic_write_text(out_dir / urdf, (src / "urdf" / urdf).read_text(encoding="utf-8"))

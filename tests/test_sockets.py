@@ -164,3 +164,22 @@ def test_real_panda_data_matches_the_sources_own_calibration(tmp_path, capsys):
                - held["calibrated"]["spread_mean_mm"]) < 0.02
     assert main(args + ["--noise-um", "300"]) == 0                              # the play the data show
     assert main(["validate", str(DATA / "panda_7.sockets.csv")]) == 0
+
+
+@pytest.mark.skipif(not (DATA / "dinova_2.sockets.csv").exists(), reason="MUKCa data not converted")
+def test_real_kinova_with_backlash_is_not_trusted_and_nothing_unseen_is_fitted():
+    """MUKCa's Kinova Gen3 lite (joints with backlash, axes 2 and 3 2e-4 deg from parallel in its URDF): the
+    rows are sane, compliances of joints with almost no torque are held with the reason (they ran off to
+    554 rad/(N m) with a zero sigma before), every fitted sigma is finite, the verdict is NOT TRUSTED and the
+    model still improves on placements it never saw."""
+    robot = read_robot(DATA / "gen3lite.urdf", tip_link="ball_link")
+    assert np.abs(robot.d_mm).max() < 500 and robot.parallel_rows() == [1]
+    readings = read_sockets(DATA / "dinova_2.sockets.csv", robot.n)
+    res = identify_sockets(robot, readings.subset([1, 3]), fix_unidentifiable=True).result
+    held = [u for u in res.unidentifiable if u.startswith("c_6") or u.startswith("c_5")]
+    assert len(held) == 2 and all("too little effect" in u for u in held)
+    assert all(np.isfinite(res.sigma[n]) and res.sigma[n] > 0 for n in res.free)
+    assert res.warnings and res.residual_check.p_value < 1e-6
+    test = readings.subset([2, 4])
+    assert check_sockets(robot, res.params, test).spread_mm.mean() < \
+        0.8 * check_sockets(robot, socket_start(robot, test), test).spread_mm.mean()

@@ -257,6 +257,9 @@ def test_subset_least_squares_matches_direct_fits():
     ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"gap_s": 20.0, "repeats": 3}, {"creep"}),
     ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"repeats": 1}, {"creep"}),
     ({"creep": {"phi": 0.02, "tau_s": 10.0}}, {"masses": (1.0, 2.5, 5.0), "axes": ("-y", "-z", "-x")}, {"creep"}),
+    # a stiffness that changes with the square of the load: once fitted by the linear form plus a compensating
+    # compliance scale and tare
+    ({"nonlinearity": {"beta2_per_100N2": -0.002}}, {"masses": (0.5, 1.0, 2.0, 3.0)}, {"nonlinearity"}),
 ])
 def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     from rodlab import calc_rod_compliance, resolve_design

@@ -33,10 +33,17 @@ class Nonlinearity(RigEffectModel):
         return C * (1.0 + self.value(p, "beta_per_10N") * f / 10.0 + self.value(p, "beta2_per_100N2") * f * f / 100.0)
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        """One hypothesis, linear in |F| on every axis. A quadratic or one-axis form fits a gauge's own
-        non-linearity (a reading scaled by 1 + k v) as well, and took two of five such out-of-library cases of
-        ``diagnose_blind.py 60 1000`` from `unexplained`: the simulator has those forms, the library does not."""
+        """Two forms, one term each (one per effect and location, so never both): linear in |F| and quadratic
+        in F, on every axis. A quadratic load non-linearity fitted by the linear form left compensating
+        ``compliance_scale`` and ``tare`` findings (2 of 5 wrong causes of ``diagnose_blind.py 60 5000 variants``).
+        The one-axis form is not in the library: a gauge's own non-linearity (a reading scaled by 1 + k v) looks
+        the same on that axis's main gauge, and with it 2 of 7 such out-of-library cases of ``60 7000
+        variants`` lost their honest ``unexplained``."""
         return [Hypothesis(self.effect, None, ["beta_per_10N"], (ctx.base * np.abs(data.F) / 10.0)[:, None],
                            [-1.0], [1.0],
                            "a load-dependent stiffness bends the load-deflection line: the slope changes with the "
-                           "load")]
+                           "load"),
+                Hypothesis(self.effect, None, ["beta2_per_100N2"], (ctx.base * data.F ** 2 / 100.0)[:, None],
+                           [-1.0], [1.0],
+                           "a load-dependent stiffness bends the load-deflection line: the slope changes with the "
+                           "square of the load")]

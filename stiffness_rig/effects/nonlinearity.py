@@ -21,6 +21,7 @@ class Nonlinearity(RigEffectModel):
                         "that grows with the square of the load (optional)"),
               ParamSpec("axis", "-", "the load axis whose compliance changes, or all of them", "all", kind="str",
                         choices=("all",) + tuple(_AXES), magnitude=False))
+    locations = ("null", "x", "y", "z")      # every load axis, or the one load axis whose stiffness changes
     example = {"beta_per_10N": 0.01}
     physics = "load-dependent stiffness"
     signature = "the slope changes with the load magnitude; residuals curved in the load"
@@ -33,12 +34,12 @@ class Nonlinearity(RigEffectModel):
         return C * (1.0 + self.value(p, "beta_per_10N") * f / 10.0 + self.value(p, "beta2_per_100N2") * f * f / 100.0)
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        """Two forms, one term each (one per effect and location, so never both): linear in |F| and quadratic
-        in F, on every axis. A quadratic load non-linearity fitted by the linear form left compensating
-        ``compliance_scale`` and ``tare`` findings (2 of 5 wrong causes of ``diagnose_blind.py 60 5000 variants``).
-        The one-axis form is not in the library: a gauge's own non-linearity (a reading scaled by 1 + k v) looks
-        the same on that axis's main gauge, and with it 2 of 7 such out-of-library cases of ``60 7000
-        variants`` lost their honest ``unexplained``."""
+        """The simulator's forms, each one term (the selection takes at most one): linear in |F| and quadratic in
+        F on every axis, and linear on one load axis (location ``x``, ``y``, ``z``, where the recording loads
+        more than one). Fitted by the linear form alone, a quadratic one came with a compensating
+        ``compliance_scale`` and ``tare``, a one-axis one with a joint spring. A gauge's own non-linearity looks
+        like the one-axis form on that axis's main gauge; the diagnosis models it beside these
+        (:mod:`rodlab.app.diagnose.rig_outside`) so that it is not forced onto this effect."""
         return [Hypothesis(self.effect, None, ["beta_per_10N"], (ctx.base * np.abs(data.F) / 10.0)[:, None],
                            [-1.0], [1.0],
                            "a load-dependent stiffness bends the load-deflection line: the slope changes with the "
@@ -46,4 +47,11 @@ class Nonlinearity(RigEffectModel):
                 Hypothesis(self.effect, None, ["beta2_per_100N2"], (ctx.base * data.F ** 2 / 100.0)[:, None],
                            [-1.0], [1.0],
                            "a load-dependent stiffness bends the load-deflection line: the slope changes with the "
-                           "square of the load")]
+                           "square of the load")] + self._one_axis(data, ctx)
+
+    def _one_axis(self, data, ctx) -> list[Hypothesis]:
+        axes = sorted(set(data.axis.tolist()))
+        return [Hypothesis(self.effect, _AXES[a], ["beta_per_10N"],
+                           (ctx.base * np.abs(data.F) / 10.0 * (data.axis == a))[:, None], [-1.0], [1.0],
+                           f"the stiffness changes with the load along {_AXES[a]} only (a bearing, a contact or a "
+                           f"tube that stiffens or softens under that load)") for a in axes] if len(axes) > 1 else []

@@ -27,6 +27,7 @@ from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
 from .criteria import DBIC_MIN, bic_penalty, evidence
 from .report import Diagnosis, Finding
+from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
@@ -122,6 +123,7 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> t
     r0 = demean(data.y - base, groups)
     library = rig_hypotheses(data, HypothesisContext(np.asarray(sim.C_F, float), base,
                                                      joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)))
+    library += outside_hypotheses(data, base)
     for t in library:
         t.X = demean(t.X, groups)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
@@ -132,7 +134,8 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> t
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))
     lack = _lack_of_fit(data, resid, sigma)
-    verdict = "consistent" if not findings else "explained"
+    verdict = "consistent" if not findings else "unexplained" if any(f.effect == OUTSIDE for f in findings) \
+        else "explained"
     for finding in lack.findings(rms, sigma):
         findings.append(finding)
         verdict = "unexplained"

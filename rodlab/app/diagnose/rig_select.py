@@ -31,11 +31,12 @@ BEAM = 8
 
 
 def compatible(library: list[Hypothesis], S: tuple, j: int) -> bool:
-    """At most one term per (effect, location), one creep and one drift term."""
+    """At most one term per (effect, location), one creep, one drift and one nonlinearity term (its forms are
+    alternatives, not parts: two one-axis forms plus crosstalk once composed a gauge's own non-linearity)."""
     t = library[j]
     for i in S:
         u = library[i]
-        if u.effect == t.effect and (u.location == t.location or t.effect in ("creep", "drift")):
+        if u.effect == t.effect and (u.location == t.location or t.effect in ("creep", "drift", "nonlinearity")):
             return False
     return True
 

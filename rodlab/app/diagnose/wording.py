@@ -17,10 +17,13 @@ from .report import Finding
 
 __all__ = ["explained_share", "certainty", "confirmation", "evidence_text"]
 
-def _rig_confirm(effect: str) -> str | None:
-    """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`)."""
+def _rig_confirm(effect: str, location: str | None = None) -> str | None:
+    """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
+    for physics outside the vocabulary :func:`.rig_outside.confirm_outside`."""
     if effect == "unexplained":
-        return "repeat the named steps: structure that returns is physics, structure that moves is handling"
+        from .rig_outside import confirm_outside
+        return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
+                                             "that moves is handling")
     from rodlab.stiffness_rig.effects import RIG_EFFECTS
     return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
@@ -53,7 +56,7 @@ def confirmation(f: Finding) -> str:
     """What would confirm the finding (rig) or what to do about it (campaign)."""
     if f.evidence.get("separate_by"):
         return f"to tell the candidates apart: {f.evidence['separate_by']}"
-    rig = _rig_confirm(f.effect)
+    rig = _rig_confirm(f.effect, f.location)
     if rig and not (f.location or "").startswith(("position:", "points:", "joint:")):
         return rig
     from .advice import remedy

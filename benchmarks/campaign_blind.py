@@ -22,10 +22,27 @@ from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_r
 from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases
 from rodlab.fileio import atomic_write_text
 
+def _span(v, unit: str = "", scale: float = 1.0) -> str:
+    """``[a, b]`` as ``a-b unit``, a number as itself (the definitions' ranges in a sentence)."""
+    a, b = (v if isinstance(v, (list, tuple)) else (v, v))
+    text = f"{a * scale:g}" if a == b else f"{a * scale:g}-{b * scale:g}"
+    return f"{text} {unit}".strip()
+
+
+def magnitudes_note() -> list[str]:
+    """The injected magnitudes and the wide protocol, read from ``calibrate/blind_cases.toml``."""
+    m, w = blind_definitions().magnitudes, blind_definitions().wide
+    return [f"Magnitudes (calibrate/blind_cases.toml): fixture offsets N(0, {m['fixture_offset_sd_mm']:g} mm) per "
+            f"axis; rod compliance x{'/'.join(f'{k:g}' for k in m['rod_k'])}; {m['outliers']:g} outliers of "
+            f"{_span(m['outlier_mm'], 'mm')}; a once-per-revolution error of {_span(m['periodic_amp_deg'], 'deg')} "
+            f"on a random joint; arm growth {_span(m['thermal_ppm_per_s'], 'ppm/s')}. `wide` also draws the "
+            f"protocol per case ({_span(w['positions'])} clamping positions x {_span(w['orientations'])} "
+            f"orientations, device noise {_span(w['device_noise_mm'], 'um', 1e3)}, stated to the diagnosis) and "
+            "the misclamped position among all but the world one."]
+
+
 NOTES = [
-    "Magnitudes: fixture offsets N(0, 0.12 mm) per axis; rod compliance x0.6/1.5/2.0; two 0.15-0.4 mm outliers; a",
-    "once-per-revolution error of 0.002-0.008 deg on a random joint; arm growth 0.01-0.05 ppm/s (0.3-2 K over the",
-    "campaign for steel). Detection limit of thermal drift: the growth moves each clamping position by a nearly",
+    "Detection limit of thermal drift: the growth moves each clamping position by a nearly",
     "constant offset that the kinematic parameters absorb; only its change within a position (~0.4 ppm per 500 s",
     "position at 0.013 ppm/s, ~3 um) is evidence, so growth below ~0.02 ppm/s stays `consistent` — correctly at",
     "the noise. A periodic joint error is carried into the re-identification as a joint-angle correction",
@@ -51,9 +68,7 @@ NOTES = [
     "draw has a standard deviation 1.32 times the stated 3 um over its 90 readings (p = 1.6e-5); across 240",
     "other null seeds the residual test's p-values are uniform (p < 0.05 in 15/240, none below 1e-3). Diagnose",
     "now says the excess is spread evenly over the positions (a device noisier than stated, 4.0 um) and",
-    "`rodlab calibrate` trusts the result with a caution (Birge ratio 1.34 <= 1.5).",
-    "`wide` also draws the protocol per case (4-6 clamping positions x 5-8 orientations, device noise 2-5 um,",
-    "stated to the diagnosis) and the misclamped position among all but the world one.", ""]
+    "`rodlab calibrate` trusts the result with a caution (Birge ratio 1.34 <= 1.5).", ""]
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
 
 
@@ -110,7 +125,7 @@ def main() -> int:
         lines.append(f"| {kind} | {desc} | {diag.verdict} | {fstr} | {vb:.3f} -> {va:.3f} | {dt:.1f} |")
     lines += ["", "Correct (null: consistent; effect: named first, fixture at the right position; the pair: both "
               "named): "
-              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in kinds if s[k]), ""] + NOTES
+              + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in kinds if s[k]), ""] + magnitudes_note() + NOTES
     atomic_write_text(OUT.with_name(f"campaign_blind_{mode}.md") if mode else OUT, "\n".join(lines))
     print("\n".join(lines))
     return 0

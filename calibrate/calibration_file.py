@@ -54,10 +54,18 @@ def read_calibration(path) -> CalibrationFile:
                                f"got {got!r}", path=p, key="format")
     from rodlab.schema import require_schema
     require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
-    params = {name: CalibratedParameter(float(v["value"]), float(v.get("sigma") or 0.0), str(v["unit"]),
-                                        str(v.get("status", ""))) for name, v in data["parameters"].items()}
+    params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
+              for name, v in data["parameters"].items()}
     return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
                            bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params)
+
+
+def _sigma(v: dict) -> float:
+    """A parameter's standard error: absent (a held parameter) is 0; ``null`` is what JSON makes of an infinite
+    one (a direction the data do not see), read back as ``inf``."""
+    if "sigma" not in v:
+        return 0.0
+    return float("inf") if v["sigma"] is None else float(v["sigma"])
 
 
 def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:

@@ -26,7 +26,7 @@ def parameter_covariance(J: np.ndarray, rcond: float = 1e-10) -> np.ndarray:
     seen = s > rcond * max(s[0], 1e-300) if s.size else np.zeros(0, bool)
     V = Vt[seen].T
     cov = (V / s[seen] ** 2) @ V.T / np.outer(norms, norms)
-    unseen = (Vt[~seen] ** 2).sum(axis=0) > 1e-6 if (~seen).any() else np.zeros(P, bool)
+    unseen = 1.0 - (Vt[seen] ** 2).sum(axis=0) > 1e-6     # a component outside what the data see (also M < P)
     if unseen.any():
         cov[unseen, :] = np.nan
         cov[:, unseen] = np.nan

@@ -14,8 +14,8 @@ from the common normals of consecutive axes (Denavit-Hartenberg; ``beta = 0`` ex
   ``x_i`` from ``o_{i-1}`` (``d_i = 0``) to where joint i + 1's axis crosses the plane normal to ``z_{i-1}``,
   ``alpha_i`` and ``beta_i`` the small tilt between the axes; the calibrator identifies ``beta_i`` there
   instead of ``d_i``;
-- the last row ends on the tip frame: ``z_n`` along the tip's z, ``x_n`` along the tip's x when the tip's z
-  lies on the last axis (the usual flange), so ``{n}`` is the tip frame;
+- the last row ends on the tip frame (:func:`end_row`): for a flange on the last axis, tilted or not, ``{n}``
+  is the tip frame exactly; a tip off the axis keeps a turn about z in ``n_T_tip``;
 - ``{0}``: ``z_0`` on joint 1's axis through the foot of the base origin, ``x_0`` the base x projected.
 
 The conversion is exact: the model's forward kinematics equals the description's for every configuration
@@ -33,6 +33,8 @@ __all__ = ["ZeroChain", "DhRows", "dh_rows", "end_row", "row_matrix", "chain_mat
 #: two consecutive joint axes closer than this [deg] get a Hayati row (d = 0, alpha and beta the tilt)
 NEAR_PARALLEL_DEG = 1.0
 _NEAR_PARALLEL = math.sin(math.radians(NEAR_PARALLEL_DEG))
+_END_TILT_COS = math.cos(math.radians(45.0))   # a tip z within 45 deg of the last axis: a flange on it
+_ON_TIP_AXIS = 1e-6  # mm: a tip origin this close to the last axis lies on it
 _ON_AXIS = 1e-9      # mm: a common normal shorter than this is an intersection
 
 
@@ -196,9 +198,35 @@ def _next_row(frame, p, u, hint, last: bool):
 
 def end_row(prev_T: np.ndarray, tip_T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The last row ``(theta, d, a, alpha, beta)`` [rad, mm] from frame {n-1} to a tip frame (both 4x4, one
-    frame at q = 0), ending ``{n}`` on the tip when the tip's z lies on the last axis; and ``{n}`` itself."""
-    row, frame = _next_row(prev_T, tip_T[:3, 3], _unit(tip_T[:3, 2]), tip_T[:3, 0], True)
+    frame at q = 0), and ``{n}`` itself. A tip whose z is within 45 deg of the last axis: ``{n}`` *is* the tip
+    frame when the tip's origin lies on the axis (``Rz(theta) Rx(alpha) Ry(beta)`` its rotation exactly), and
+    otherwise has the tip's origin and z (Hayati's row; what is left is a turn about z, in ``n_T_tip``)."""
+    o, z = prev_T[:3, 3], prev_T[:3, 2]
+    p, u = tip_T[:3, 3], _unit(tip_T[:3, 2])
+    if abs(float(np.dot(u, z))) < _END_TILT_COS:
+        row, frame = _normal_row(prev_T, p, u)
+    elif np.linalg.norm((p - o) - np.dot(p - o, z) * z) < _ON_TIP_AXIS:
+        theta, alpha, beta = _zxy_angles(prev_T[:3, :3].T @ tip_T[:3, :3])
+        row = (theta, float(np.dot(p - o, z)), 0.0, alpha, beta)
+        frame = prev_T @ row_matrix(*row)
+    else:
+        row, frame = _hayati_row(prev_T, p, u, tip_T[:3, 0], True)
     return np.asarray(row, float), frame
+
+
+def _zxy_angles(R: np.ndarray) -> tuple[float, float, float]:
+    """``(theta, alpha, beta)`` with ``R = Rz(theta) Rx(alpha) Ry(beta)``, of the two solutions the one with
+    ``|beta| <= 90 deg`` (a flange turned over is ``alpha = 180``, as the common normal gives it), angles in
+    (-180, 180] deg."""
+    theta, alpha = math.atan2(-R[0, 1], R[1, 1]), math.asin(float(np.clip(R[2, 1], -1.0, 1.0)))
+    beta = math.atan2(-R[2, 0], R[2, 2])
+    if abs(beta) > math.pi / 2:                       # Rz(t + pi) Rx(pi - a) Ry(b + pi) is the same rotation
+        theta, alpha, beta = theta + math.pi, math.pi - alpha, beta + math.pi
+
+    def wrap(x: float) -> float:
+        y = math.remainder(x, 2 * math.pi)
+        return math.pi if y <= -math.pi + 1e-12 else y
+    return wrap(theta), wrap(alpha), wrap(beta)
 
 
 def dh_rows(chain: ZeroChain) -> DhRows:

@@ -35,3 +35,24 @@ def test_subset_keeps_every_per_point_field():
     assert sub.x_W_mm.shape == (4, 3) and sub.labels == ["p0", "p2", "p3", "p5"]
     assert np.array_equal(sub.temp_C, obs.temp_C[keep]) and sub.sigma_mm.shape == (4, 3)
     assert np.array_equal(sub.group, [0, 0, 1, 1]) and sub.rod_mass_kg == 1.5
+
+
+def test_fewer_readings_than_parameters_leave_some_unseen():
+    """Two readings cannot fix four parameters: the null space (absent from a thin SVD) is unseen too."""
+    J = np.random.default_rng(2).normal(size=(2, 4))
+    assert np.isinf(np.diag(parameter_covariance(J))).sum() >= 2
+
+
+def test_an_infinite_sigma_survives_the_result_file(tmp_path):
+    """JSON writes an infinite standard error as null; reading it back must not give 0 (the best known)."""
+    import json
+    from rodlab.calibrate.calibration_file import read_calibration
+    doc = {"format": "rodlab.calibration/1", "robot": "tx90", "compensation": "calc", "trusted": False,
+           "parameters": {"d_2": {"value": 0.1, "sigma": None, "unit": "mm", "status": "identified"},
+                          "a_2": {"value": 0.2, "sigma": 0.01, "unit": "mm", "status": "identified"},
+                          "d_1": {"value": 0.0, "unit": "mm", "status": "fixed"}}}
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps(doc))
+    cal = read_calibration(path)
+    assert np.isinf(cal.parameters["d_2"].sigma) and cal.parameters["a_2"].sigma == 0.01
+    assert cal.parameters["d_1"].sigma == 0.0

@@ -231,7 +231,8 @@ def _dh_fk(tx90, q, flange):
     return np.array(out)
 
 
-@pytest.mark.parametrize("flange", [[0, 0, 100, 0, 0, 90], [5, -3, 100, 10, 0, 90]])
+@pytest.mark.parametrize("flange", [[0, 0, 100, 0, 0, 90], [0, 0, 100, 10, 5, 30], [0, 0, 80, 180, 0, 0],
+                                    [5, -3, 100, 10, 0, 90], [5, 0, 100, 0, 1.5, 0]])
 def test_a_dh_flange_pose_is_folded_into_the_last_row(tmp_path, flange):
     """A classic-DH file with a flange_pose: {n} becomes the flange frame (tool vectors and a rod's matrices are
     given there), rows 1..n-1 stay as written, the kinematics are exact; a flange off the last axis keeps its
@@ -246,9 +247,12 @@ def test_a_dh_flange_pose_is_folded_into_the_last_row(tmp_path, flange):
     q = np.random.default_rng(4).uniform(-3, 3, (30, 6))
     assert np.abs(_tip_in_base(robot, q) - _dh_fk(tx90, q, pose_to_matrix(flange))).max() < 1e-6
     assert np.array_equal(robot.d_mm[:-1], tx90.d_mm[:-1]) and np.array_equal(robot.a_mm[:-1], tx90.a_mm[:-1])
-    if flange[:2] == [0, 0] and flange[3:5] == [0, 0]:
+    if flange[:2] == [0, 0]:                            # on the last axis, tilted or not: {n} is the flange
         assert np.abs(robot.n_T_tip - np.eye(4)).max() < 1e-9
-        assert robot.d_mm[-1] == pytest.approx(tx90.d_mm[-1] + 100)
+        assert robot.d_mm[-1] == pytest.approx(tx90.d_mm[-1] + flange[2])
+    else:                                               # off the axis: its origin and z, a turn about z left
+        assert np.abs(robot.n_T_tip[:3, 3]).max() < 1e-9
+        assert np.abs(robot.n_T_tip[:3, 2] - [0, 0, 1]).max() < 1e-9
 
 
 def test_dh_rows_are_read_as_written_and_convert_to_themselves():

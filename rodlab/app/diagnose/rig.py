@@ -89,7 +89,7 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
     """
     data = rig_samples(rec)
     diag, model = _diagnose(data, sim, design, max_terms)
-    if diag.verdict != "unexplained":
+    if not _lacks_fit(diag):
         return diag, model
     z2 = model.hold_z2
     steps = np.array(sorted(z2))
@@ -99,7 +99,7 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
         return diag, model
     keep = data.step != w
     diag2, model2 = _diagnose(data.subset(keep), sim, design, max_terms)
-    if diag2.verdict == "unexplained":
+    if _lacks_fit(diag2):
         return diag, model
     off = model.hold_offset_mm[w]
     diag2.findings.append(Finding(
@@ -110,6 +110,12 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3) -> tu
     diag2.verdict = "unexplained"
     diag2.extra["excluded_steps"] = [w]
     return diag2, model2
+
+
+def _lacks_fit(diag: Diagnosis) -> bool:
+    """Structure is left that nothing modelled explains (a physics outside the vocabulary that *was* modelled,
+    such as a gauge's non-linearity, is not lack of fit)."""
+    return any(f.effect == OUTSIDE and not f.evidence.get("outside_vocabulary") for f in diag.findings)
 
 
 def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, RigModelFit]:
@@ -206,6 +212,8 @@ def _findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: float
         alts_j = alternatives(library, ls, S, j, rss, sigma, n)
         if alts_j:
             ev["alternatives"] = alts_j
+        if term.effect == OUTSIDE:
+            ev["outside_vocabulary"] = True
         params, intervals = term.reported(val, se)
         findings.append(Finding(term.effect, location, term.explanation, params, intervals,
                                 float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), ev))

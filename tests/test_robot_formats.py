@@ -184,40 +184,38 @@ def _mdh_fk(rows, q, flange):
     return np.array(out)
 
 
+_PUMA = [(0, 0, 0, 0), (-90, 0, 0, 243.5), (0, 431.8, 0, -93.4), (90, -20.3, 0, 433.1), (-90, 0, 0, 0),
+         (90, 0, 0, 0)]
+
+
+def _puma_file(path, flange, header=()):
+    """A PUMA-560-like modified-DH table (Craig, Table 3.4) with ``flange_pose = flange``."""
+    text = ['format = "rodlab.robot/2"', 'convention = "mdh"', *header, f"flange_pose = {flange}"]
+    for al, a, th, d in _PUMA:
+        text += ["[[joint]]", f"alpha_deg = {al}", f"a_mm = {a}", f"theta_offset_deg = {th}", f"d_mm = {d}"]
+    path.write_text("\n".join(text) + "\n")
+    return path
+
+
 def test_modified_dh_table_is_converted_exactly(tmp_path):
     """A PUMA-560-like modified-DH table (Craig): the model's flange frame equals the table's."""
-    rows = [(0, 0, 0, 0), (-90, 0, 0, 243.5), (0, 431.8, 0, -93.4), (90, -20.3, 0, 433.1), (-90, 0, 0, 0),
-            (90, 0, 0, 0)]
     flange = [0, 0, 56.25, 0, 0, 0]
-    text = ['format = "rodlab.robot/2"', 'convention = "mdh"', 'name = "puma"', 'source = "Craig, Table 3.4"',
-            f"flange_pose = {flange}"]
-    for al, a, th, d in rows:
-        text += ["[[joint]]", f"alpha_deg = {al}", f"a_mm = {a}", f"theta_offset_deg = {th}", f"d_mm = {d}"]
-    path = tmp_path / "puma.toml"
-    path.write_text("\n".join(text) + "\n")
-    robot = read_robot(path)
+    robot = read_robot(_puma_file(tmp_path / "puma.toml", flange, ['name = "puma"', 'source = "Craig, Table 3.4"']))
     q = np.random.default_rng(0).uniform(-3, 3, (30, 6))
-    theirs = _mdh_fk(rows, q, pose_to_matrix(flange))
+    theirs = _mdh_fk(_PUMA, q, pose_to_matrix(flange))
     ours = _tip_in_base(robot, q)
     assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
     assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
     assert robot.source == "Craig, Table 3.4" and robot.parallel_rows() == [1]
 
 
-def test_a_flange_tilted_off_the_last_axis_still_ends_the_model_on_the_flange(tmp_path):
-    """A flange 1e-3 deg off the last axis (a rounded or calibrated description): a Hayati last row, {n} is the
-    flange frame (was: a common normal far away, d_n of metres)."""
-    rows = [(0, 0, 0, 0), (-90, 0, 0, 243.5), (0, 431.8, 0, -93.4), (90, -20.3, 0, 433.1), (-90, 0, 0, 0),
-            (90, 0, 0, 0)]
-    flange = [0, 0, 56.25, 1e-3, 2e-3, 30]
-    text = ['format = "rodlab.robot/2"', 'convention = "mdh"', f"flange_pose = {flange}"]
-    for al, a, th, d in rows:
-        text += ["[[joint]]", f"alpha_deg = {al}", f"a_mm = {a}", f"theta_offset_deg = {th}", f"d_mm = {d}"]
-    path = tmp_path / "tilted_flange.toml"
-    path.write_text("\n".join(text) + "\n")
-    robot = read_robot(path)
+@pytest.mark.parametrize("flange", [[0, 0, 56.25, 1e-3, 2e-3, 30], [0, 0, 56.25, 12, -7, 30]])
+def test_a_flange_tilted_off_the_last_axis_still_ends_the_model_on_the_flange(tmp_path, flange):
+    """A flange tilted off the last axis, by 1e-3 deg (a rounded or calibrated description) or by 12 deg: {n} is
+    the flange frame exactly (was: a common normal far away, d_n of metres)."""
+    robot = read_robot(_puma_file(tmp_path / "tilted_flange.toml", flange))
     q = np.random.default_rng(3).uniform(-3, 3, (30, 6))
-    assert np.abs(_tip_in_base(robot, q) - _mdh_fk(rows, q, pose_to_matrix(flange))).max() < 1e-6
+    assert np.abs(_tip_in_base(robot, q) - _mdh_fk(_PUMA, q, pose_to_matrix(flange))).max() < 1e-6
     assert np.abs(robot.n_T_tip - np.eye(4)).max() < 1e-8 and robot.d_mm[-1] == pytest.approx(56.25)
 
 

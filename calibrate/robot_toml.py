@@ -177,11 +177,11 @@ def _end_on_flange(cols: dict, flange_T: np.ndarray) -> tuple[dict, np.ndarray]:
         return cols, np.eye(4)
     F = chain_matrices(cols["theta_offset_deg"], cols["d_mm"], cols["a_mm"], cols["alpha_deg"], cols["beta_deg"])
     row, _ = end_row(F[-2], F[-1] @ flange_T)
-    n_new = F[-2] @ row_matrix(*row)
+    new_T_old = np.linalg.inv(F[-2] @ row_matrix(*row)) @ F[-1]      # the old {n} in the new one
     out = {k: np.array(v, float) for k, v in cols.items()}
     for k, v in zip(("theta_offset_deg", "d_mm", "a_mm", "alpha_deg", "beta_deg"),
                     (np.degrees(row[0]), row[1], row[2], np.degrees(row[3]), np.degrees(row[4]))):
         out[k][-1] = v
-    out["com_mm"][-1] = (np.linalg.inv(n_new) @ F[-1] @ np.r_[out["com_mm"][-1], 1.0])[:3]
-    return out, np.linalg.inv(n_new) @ F[-1] @ flange_T
+    out["com_mm"][-1] = (new_T_old @ np.r_[out["com_mm"][-1], 1.0])[:3]
+    return out, new_T_old @ flange_T
 

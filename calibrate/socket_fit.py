@@ -172,8 +172,7 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     fun, jac = _functions(robot, start, infos, np.zeros(len(infos)), list(range(len(infos))), prob,
                           np.zeros(len(infos), bool), np.zeros(len(infos)))
     J = jac(np.concatenate([np.zeros(len(infos)), C0.ravel()]))
-    Jr, Jc = J[:, :len(infos)], J[:, len(infos):]
-    Jp = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]
+    Jp = _off_centres(J, len(infos))
     rules = _rule_held(robot, prob, pinned)
     rules |= _negligible(infos, Jp, set(rules) | set(pinned) | freed)
     free, reasons = _select(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
@@ -192,6 +191,13 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
         raise CalibrationError("these socket readings identify no parameter of the robot: record the ball in each "
                                "socket in varied arm configurations", path=prob.readings.path, key="sockets")
     return free, reasons
+
+
+def _off_centres(J: np.ndarray, P: int) -> np.ndarray:
+    """The first ``P`` (robot) columns of ``J`` projected off the centres' columns after them: what a centre
+    absorbs is not information about the robot."""
+    Jr, Jc = J[:, :P], J[:, P:]
+    return Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]
 
 
 def _negligible(infos, Jp: np.ndarray, skip: set) -> dict:
@@ -284,8 +290,7 @@ def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, so
                                                  for k in free}
     resid_mm, seat_rms = _residuals_mm(robot, p, C, prob)
     corr = correlation(cov[:P, :P])
-    Jr, Jc = sol.jac[:, :P], sol.jac[:, P:]
-    Jr = Jr - Jc @ np.linalg.lstsq(Jc, Jr, rcond=None)[0]       # what the centres absorb is not seen
+    Jr = _off_centres(sol.jac, P)
     Jn = Jr / np.maximum(np.linalg.norm(Jr, axis=0), 1e-300)
     out = CalibrationResult(p, infos, values, sigma, status,
                             [f"{nm} ({why})" for nm, why in reasons.items() if status.get(nm) == "fixed"],

@@ -108,37 +108,41 @@ def run(code: str, *args) -> dict:
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def main() -> int:
-    import numpy as np
-    from rodlab import resolve_design
-    from rodlab.fea.frame import frame_compliance
-    from rodlab.fea.sweep import run_sweep
+#: the solid-model rows: label, run(_SOLID, size, ...) arguments
+_ROWS = (("**default**: half model, graded, size 6 mm (1.8 mm at section changes, bend 4.2 mm)",
+          (6.0, 0.3, 0.3, 0.7, 1)),
+         ("the same settings on the whole rod (`symmetry=False`)", (6.0, 0.3, 0.3, 0.7, 0)),
+         ("half model, graded, size 7 mm", (7.0, 0.3, 0.3, 0.7, 1)),
+         ("half model, uniform 4 mm (2 x wall)", (4.0, 1.0, 0.0, 1.0, 1)))
 
-    lines = ["# Benchmark: FEA", "",
-             f"`python benchmarks/bench_fea.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
-             f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}.", ""]
-    machine_check()                                   # the first call in a process is slower
-    speed0 = machine_check()
-    # the rows first (the reference's large runs leave memory the next runs must fetch again)
+
+def _measure_rows() -> list:
+    """Each row's run; the goal's row (default) as the median of 5, since one run varies by +-20 %."""
     measured = []
-    for label, args in (("**default**: half model, graded, size 6 mm (1.8 mm at section changes, bend 4.2 mm)",
-                         (6.0, 0.3, 0.3, 0.7, 1)),
-                        ("the same settings on the whole rod (`symmetry=False`)", (6.0, 0.3, 0.3, 0.7, 0)),
-                        ("half model, graded, size 7 mm", (7.0, 0.3, 0.3, 0.7, 1)),
-                        ("half model, uniform 4 mm (2 x wall)", (4.0, 1.0, 0.0, 1.0, 1))):
-        if args == (6.0, 0.3, 0.3, 0.7, 1):             # the goal's row: one run varies by +-20 %; median of 5
+    for label, args in _ROWS:
+        if args == _ROWS[0][1]:
             runs = sorted((run(_SOLID, *args) for _ in range(5)), key=lambda r: r["wall_s"])
             r = dict(runs[2], wall_range=(runs[0]["wall_s"], runs[-1]["wall_s"]))
         else:
             r = run(_SOLID, *args)
         measured.append((label, r))
         print(label, r["dofs"], r["wall_s"])
-    # reference: Richardson extrapolation of uniform 2.5 mm and 2.0 mm half meshes (observed order 3.4)
+    return measured
+
+
+def _reference():
+    """Richardson extrapolation of uniform 2.5 mm and 2.0 mm half meshes (observed order 3.4): (C, run a, run b)."""
+    import numpy as np
     ra, rb = run(_SOLID, 2.5, 1.0, 0.0, 1.0, 1), run(_SOLID, 2.0, 1.0, 0.0, 1.0, 1)
-    p = 3.4
-    f = (2.5 / 2.0) ** p - 1.0
+    f = (2.5 / 2.0) ** 3.4 - 1.0
     ref = {k: (np.array(rb[k]) + (np.array(rb[k]) - np.array(ra[k])) / f).tolist() for k in ("C_F", "C_g")}
     print("reference", ra["dofs"], rb["dofs"])
+    return ref, ra, rb
+
+
+def _errors(measured, ref) -> list:
+    """(label, run, C_F error, C_g error) over the entries larger than 0.1 % of the largest."""
+    import numpy as np
     rows = []
     for label, r in measured:
         CF, CR = np.array(r["C_F"]), np.array(ref["C_F"])
@@ -147,30 +151,46 @@ def main() -> int:
         gerr = float(np.max(np.abs(np.array(r["C_g"])[big] / np.array(ref["C_g"])[big] - 1)))
         rows.append((label, r, err, gerr))
         print(label, r["dofs"], r["wall_s"], err)
-    lines += ["## Solid C_F + C_g of rod 1# (six load cases)", "",
-              f"Reference: Richardson extrapolation (order 3.4) of uniform 2.5 mm ({ra['dofs']} DOFs) and 2.0 mm "
-              f"({rb['dofs']} DOFs, {rb['wall_s']:.0f} s) half meshes. Error = largest relative difference over the "
-              f"entries larger than 0.1 % of the matrix's largest.", "",
-              "Wall time from the design to C_F and C_g, imports excluded (build123d, gmsh and scikit-fem load "
-              f"once per process: {rows[0][1]['import_s']:.1f} s here).", "",
-              "| mesh | DOFs | wall s (mesh + FEA) | assembly s | factorise s | peak MB | solver | C_F err | C_g err |",
-              "|---|---|---|---|---|---|---|---|---|"]
+    return rows
+
+
+def _solid_section(rows, ra, rb) -> list[str]:
+    lines = ["## Solid C_F + C_g of rod 1# (six load cases)", "",
+             f"Reference: Richardson extrapolation (order 3.4) of uniform 2.5 mm ({ra['dofs']} DOFs) and 2.0 mm "
+             f"({rb['dofs']} DOFs, {rb['wall_s']:.0f} s) half meshes. Error = largest relative difference over the "
+             f"entries larger than 0.1 % of the matrix's largest.", "",
+             "Wall time from the design to C_F and C_g, imports excluded (build123d, gmsh and scikit-fem load "
+             f"once per process: {rows[0][1]['import_s']:.1f} s here).", "",
+             "| mesh | DOFs | wall s (mesh + FEA) | assembly s | factorise s | peak MB | solver | C_F err | C_g err |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for label, r, err, gerr in rows:
         t = r["timings"]
         spread = (f" (median of 5: {r['wall_range'][0]:.1f}-{r['wall_range'][1]:.1f})" if "wall_range" in r else "")
         lines.append(f"| {label} | {r['dofs']} | {r['wall_s']:.1f} ({t['mesh']:.1f} + {t['total']:.1f}){spread} | "
                      f"{t['assembly']:.2f} | {t['factorize']:.2f} | {r['peak_MB']:.0f} | {r['solver']} | "
                      f"{100 * err:.3f} % | {100 * gerr:.3f} % |")
+    return lines
+
+
+def _calculix_section() -> list[str]:
     c = run(_CCX, 6.0, 0.3, 0.3, 0.7)
-    lines += ["", "## CalculiX on the same discretisation", "",
-              f"The default half mesh mirrored into the whole rod ({c['dofs_whole']} DOFs; our half model solves "
-              f"the same discretisation exactly: largest difference {c['half_vs_whole']:.1e} of max |C_F|). ccx "
-              f"(C3D10, `*RIGID BODY` ball, three `*STEP`s for C_F only) {c['t_ccx_s']:.1f} s; rodlab "
-              f"{c['t_ours_solve_s']:.1f} s for all six load cases on the half model ({c['dofs']} DOFs), "
-              f"{c['t_whole_solve_s']:.1f} s on the whole mesh: "
-              f"{c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x faster for three load cases, "
-              f"{2 * c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x for the six; largest difference in C_F "
-              f"{100 * c['max_rel_diff']:.3f} %.", ""]
+    return ["", "## CalculiX on the same discretisation", "",
+            f"The default half mesh mirrored into the whole rod ({c['dofs_whole']} DOFs; our half model solves "
+            f"the same discretisation exactly: largest difference {c['half_vs_whole']:.1e} of max |C_F|). ccx "
+            f"(C3D10, `*RIGID BODY` ball, three `*STEP`s for C_F only) {c['t_ccx_s']:.1f} s; rodlab "
+            f"{c['t_ours_solve_s']:.1f} s for all six load cases on the half model ({c['dofs']} DOFs), "
+            f"{c['t_whole_solve_s']:.1f} s on the whole mesh: "
+            f"{c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x faster for three load cases, "
+            f"{2 * c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x for the six; largest difference in C_F "
+            f"{100 * c['max_rel_diff']:.3f} %.", ""]
+
+
+def _frame_section() -> list[str]:
+    """The frame model per design (mean of 300) and a 1000-design frame sweep on 2 Dask workers."""
+    import numpy as np
+    from rodlab import resolve_design
+    from rodlab.fea.frame import frame_compliance
+    from rodlab.fea.sweep import run_sweep
     d = resolve_design("rod1")
     frame_compliance(d)
     n = 300
@@ -178,22 +198,35 @@ def main() -> int:
     for _ in range(n):
         frame_compliance(d)
     t_frame = (time.perf_counter() - t0) / n * 1e3
-    L1 = np.linspace(150, 450, 40)
-    L2 = np.linspace(300, 650, 25)
     t0 = time.perf_counter()
-    df = run_sweep(d, L1, L2, model="frame", workers=2, batch=50)
+    df = run_sweep(d, np.linspace(150, 450, 40), np.linspace(300, 650, 25), model="frame", workers=2, batch=50)
     t_sweep = time.perf_counter() - t0
-    lines += ["## Frame model and sweeps", "",
-              f"- frame model: {t_frame:.2f} ms per design (goal <= 5 ms)",
-              f"- {len(df)}-design frame sweep on a 2-worker Dask LocalCluster: {t_sweep:.1f} s including the "
-              f"cluster start (goal <= 30 s)", "",
-              "## Machine check", "",
-              f"A fixed dense workload (20 Cholesky factorisations of 1500 x 1500, numpy's BLAS) took "
-              f"{speed0:.2f} s before the runs and {machine_check():.2f} s after them: compare it between "
-              "VMs and runs before comparing the times above.", ""]
-    from rodlab.fea.compute import default_solid_size_mm  # noqa: F401  (documented defaults)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
+    return ["## Frame model and sweeps", "",
+            f"- frame model: {t_frame:.2f} ms per design (goal <= 5 ms)",
+            f"- {len(df)}-design frame sweep on a 2-worker Dask LocalCluster: {t_sweep:.1f} s including the "
+            f"cluster start (goal <= 30 s)", ""]
+
+
+def _machine_section(speed0: float) -> list[str]:
+    return ["## Machine check", "",
+            f"A fixed dense workload (20 Cholesky factorisations of 1500 x 1500, numpy's BLAS) took "
+            f"{speed0:.2f} s before the runs and {machine_check():.2f} s after them: compare it between "
+            "VMs and runs before comparing the times above.", ""]
+
+
+def main() -> int:
     from rodlab.fileio import atomic_write_text
+    lines = ["# Benchmark: FEA", "",
+             f"`python benchmarks/bench_fea.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
+             f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}.", ""]
+    machine_check()                                   # the first call in a process is slower
+    speed0 = machine_check()
+    # the rows first (the reference's large runs leave memory the next runs must fetch again)
+    measured = _measure_rows()
+    ref, ra, rb = _reference()
+    lines += _solid_section(_errors(measured, ref), ra, rb)
+    lines += _calculix_section() + _frame_section() + _machine_section(speed0)
+    OUT.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(OUT, "\n".join(lines + NOTES))
     print("\n".join(lines))
     return 0

@@ -72,12 +72,8 @@ NOTES = [
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
 
 
-def main() -> int:
-    logging.basicConfig(format="%(message)s")
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 12
-    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 500
-    mode = sys.argv[3] if len(sys.argv) > 3 else ""
-    kinds = blind_definitions().kinds_of(mode)
+def _run(n: int, seed: int, mode: str) -> list:
+    """Generate the cases and diagnose each: [(truth, diagnosis, seconds)]."""
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(resolve_design("rod1"))
     results = []
@@ -91,6 +87,45 @@ def main() -> int:
                                         read_fixture(folder / "multical.fixture.json"), rod, noise_mm=case.noise_mm,
                                         validate_points=read_points(folder / "multical.validation.csv"))
             results.append((case.truth, diag, time.perf_counter() - t0))
+    return results
+
+
+def _correct(truth: dict, diag, found: list) -> bool:
+    """Null: consistent; effect: named first, a located one at its place; the pair: both named."""
+    kind = truth["kind"]
+    eff = [f[0] for f in found if f[0] != "unexplained"]
+    ok = (kind == "null" and diag.verdict == "consistent") or (kind != "null" and eff and eff[0] == kind)
+    if kind in ("fixture_pose", "periodic_joint_error", "thermal_drift"):
+        first = [f for f in found if f[0] == kind]
+        ok = ok and first[0][1] == truth["location"]
+    if kind.startswith("fixture_pose+outlier"):       # a pair: both named, the fixture at its position
+        ok = ("fixture_pose", truth["location"]) in found and "outliers" in eff
+    return bool(ok)
+
+
+def _row(truth: dict, diag, dt: float, mode: str, found: list) -> str:
+    kind = truth["kind"]
+    v = diag.extra.get("validation", {})
+    vb, va = v.get("before", {}).get("mean_mm", float("nan")), v.get("after", {}).get("mean_mm", float("nan"))
+    desc = {"null": "none", "fixture_pose": truth.get("location"), "rod_deflection": f"k = {truth.get('k')}",
+            "outliers": ",".join(truth.get("points", [])),
+            "fixture_pose+outliers": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
+            "fixture_pose+outlier_inside": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
+            "periodic_joint_error": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} deg",
+            "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s"}[kind]
+    if mode == "wide":
+        desc += f" ({truth['protocol']})"
+    fstr = "; ".join(f"{e} {loc or ''}".strip() for e, loc in found) or "-"
+    return f"| {kind} | {desc} | {diag.verdict} | {fstr} | {vb:.3f} -> {va:.3f} | {dt:.1f} |"
+
+
+def main() -> int:
+    logging.basicConfig(format="%(message)s")
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 12
+    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 500
+    mode = sys.argv[3] if len(sys.argv) > 3 else ""
+    kinds = blind_definitions().kinds_of(mode)
+    results = _run(n, seed, mode)
     s = Counter()
     lines = ["# Blind benchmark: campaign diagnosis", "",
              f"`python benchmarks/campaign_blind.py {n} {seed}{' ' + mode if mode else ''}`: simulated TX90 campaigns "
@@ -101,28 +136,9 @@ def main() -> int:
              "| case | truth | verdict | findings | validation mean before -> after [mm] | s |", "|---|---|---|---|---|---|"]
     for truth, diag, dt in results:
         found = [(f.effect, f.location) for f in diag.findings]
-        eff = [f[0] for f in found if f[0] != "unexplained"]
-        kind = truth["kind"]
-        s[kind] += 1
-        ok = (kind == "null" and diag.verdict == "consistent") or (kind != "null" and eff and eff[0] == kind)
-        if kind in ("fixture_pose", "periodic_joint_error", "thermal_drift"):
-            first = [f for f in found if f[0] == kind]
-            ok = ok and first[0][1] == truth["location"]
-        if kind.startswith("fixture_pose+outlier"):       # a pair: both named, the fixture at its position
-            ok = ("fixture_pose", truth["location"]) in found and "outliers" in eff
-        s[f"{kind}_ok"] += bool(ok)
-        v = diag.extra.get("validation", {})
-        vb, va = v.get("before", {}).get("mean_mm", float("nan")), v.get("after", {}).get("mean_mm", float("nan"))
-        desc = {"null": "none", "fixture_pose": truth.get("location"), "rod_deflection": f"k = {truth.get('k')}",
-                "outliers": ",".join(truth.get("points", [])),
-                "fixture_pose+outliers": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
-                "fixture_pose+outlier_inside": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
-                "periodic_joint_error": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} deg",
-                "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s"}[kind]
-        if mode == "wide":
-            desc += f" ({truth['protocol']})"
-        fstr = "; ".join(f"{e} {loc or ''}".strip() for e, loc in found) or "-"
-        lines.append(f"| {kind} | {desc} | {diag.verdict} | {fstr} | {vb:.3f} -> {va:.3f} | {dt:.1f} |")
+        s[truth["kind"]] += 1
+        s[f"{truth['kind']}_ok"] += _correct(truth, diag, found)
+        lines.append(_row(truth, diag, dt, mode, found))
     lines += ["", "Correct (null: consistent; effect: named first, fixture at the right position; the pair: both "
               "named): "
               + ", ".join(f"{k} {s[k + '_ok']}/{s[k]}" for k in kinds if s[k]), ""] + magnitudes_note() + NOTES

@@ -29,6 +29,56 @@ _PARAM = {"friction": ("F_f_N", "F_f_N", 1.0), "tare": ("tare_kg", "tare_kg", 1.
           "joint_compliance": ("s_bend_rad_per_Nm", "s_bend_rad_per_Nm", 1.0)}
 
 
+def _param_error(e: dict, hit) -> float | None:
+    """max(found / true, true / found) of the effect's scored parameter (inf: wrong sign), or None when it is
+    not scored (another form of the effect, or no such parameter)."""
+    tk, fk, conv = _PARAM[e["effect"]]
+    if tk not in e["parameters"] or "axis" in e["parameters"]:   # another form (variants): by name
+        return None
+    tv = e["parameters"][tk]
+    fv = hit.parameters.get(fk)
+    if fv is None:                          # found in another form (e.g. quadratic for linear)
+        return None
+    if e["effect"] == "compliance_scale":
+        tv, fv = tv - 1.0, fv - 1.0
+    elif conv is not None:
+        tv = tv * conv
+    if fv and tv and np.sign(fv) == np.sign(tv):
+        return max(abs(fv / tv), abs(tv / fv))
+    return np.inf
+
+
+def _score_kind(s: Counter, t: dict, diag, found) -> None:
+    """Nulls (false alarms), outside effects (honest ``unexplained``), decoys (not read as an effect)."""
+    if t["kind"] == "null":
+        s["nulls"] += 1
+        s["false_alarms"] += diag.verdict != "consistent"
+    if t["kind"] == "oolib":
+        s["oolib"] += 1
+        s["honest"] += diag.verdict == "unexplained"
+    if t["kind"] == "decoy":
+        s["decoys"] += 1
+        s["decoy_ok"] += diag.verdict in ("consistent", "unexplained") and not found
+
+
+def _score_effects(s: Counter, t: dict, found, by_band: dict, confusion: Counter, perr: list) -> None:
+    """Recall by SNR band, confusion, joint locations and parameter errors of each injected effect."""
+    for e in t["effects"]:
+        band = "3-5" if e["snr"] < 5 else "5-10" if e["snr"] < 10 else "10-20" if e["snr"] < 20 else ">=20"
+        b = by_band.setdefault(band, Counter())
+        b["n"] += 1
+        hit = [f for f in found if f.effect == e["effect"]]
+        b["found"] += bool(hit)
+        confusion[(e["effect"], hit[0].effect if hit else (found[0].effect if found else "none"))] += 1
+        if hit and e["effect"] in ("joint_compliance",):
+            s["loc_n"] += 1
+            s["loc_ok"] += e["location"] in (hit[0].location or "").split("|")
+        if hit and e["effect"] in _PARAM:
+            err = _param_error(e, hit[0])
+            if err is not None:
+                perr.append(err)
+
+
 def score(cases, results) -> dict:
     s = Counter()
     by_band = {}
@@ -38,61 +88,25 @@ def score(cases, results) -> dict:
     for case, (diag, dt) in zip(cases, results):
         t = case.truth
         found = [f for f in diag.findings if f.effect != "unexplained"]
-        found_ids = {f.effect for f in found}
-        true_ids = {e["effect"] for e in t["effects"]}
-        if t["kind"] == "null":
-            s["nulls"] += 1
-            s["false_alarms"] += diag.verdict != "consistent"
-        if t["kind"] == "oolib":
-            s["oolib"] += 1
-            s["honest"] += diag.verdict == "unexplained"
-        if t["kind"] == "decoy":
-            s["decoys"] += 1
-            s["decoy_ok"] += diag.verdict in ("consistent", "unexplained") and not found
-        for e in t["effects"]:
-            band = "3-5" if e["snr"] < 5 else "5-10" if e["snr"] < 10 else "10-20" if e["snr"] < 20 else ">=20"
-            b = by_band.setdefault(band, Counter())
-            b["n"] += 1
-            hit = [f for f in found if f.effect == e["effect"]]
-            b["found"] += bool(hit)
-            confusion[(e["effect"], hit[0].effect if hit else (found[0].effect if found else "none"))] += 1
-            if hit and e["effect"] in ("joint_compliance",):
-                s["loc_n"] += 1
-                s["loc_ok"] += e["location"] in (hit[0].location or "").split("|")
-            if hit and e["effect"] in _PARAM:
-                tk, fk, conv = _PARAM[e["effect"]]
-                if tk not in e["parameters"] or "axis" in e["parameters"]:   # another form (variants): by name
-                    continue
-                tv = e["parameters"][tk]
-                fv = hit[0].parameters.get(fk)
-                if fv is None:                          # found in another form (e.g. quadratic for linear)
-                    continue
-                if e["effect"] == "compliance_scale":
-                    tv, fv = tv - 1.0, fv - 1.0
-                elif conv is not None:
-                    tv = tv * conv
-                if fv and tv and np.sign(fv) == np.sign(tv):
-                    perr.append(max(abs(fv / tv), abs(tv / fv)))
-                else:
-                    perr.append(np.inf)
+        _score_kind(s, t, diag, found)
+        _score_effects(s, t, found, by_band, confusion, perr)
         if t["effects"]:
             s["with_effects"] += 1
-            s["wrong_cause"] += bool(found_ids - true_ids)
+            s["wrong_cause"] += bool({f.effect for f in found} - {e["effect"] for e in t["effects"]})
         if t["kind"] in ("single", "pair", "null") and diag.verdict != "unexplained":
             fit_ratio.append(diag.rms_after_mm / diag.noise_mm)
-    out = {"counts": dict(s), "recall_by_snr": {k: v["found"] / v["n"] for k, v in sorted(by_band.items())},
-           "n_by_snr": {k: v["n"] for k, v in sorted(by_band.items())},
-           "recall_snr_ge5": (sum(v["found"] for k, v in by_band.items() if k != "3-5")
-                              / max(sum(v["n"] for k, v in by_band.items() if k != "3-5"), 1)),
-           "false_alarm_rate": s["false_alarms"] / max(s["nulls"], 1),
-           "wrong_cause_rate": s["wrong_cause"] / max(s["with_effects"], 1),
-           "location_accuracy": s["loc_ok"] / max(s["loc_n"], 1),
-           "params_within_1.35": float(np.mean(np.array(perr) <= 1.35)) if perr else float("nan"),
-           "honest_unexplained": s["honest"] / max(s["oolib"], 1),
-           "decoys_not_misread": s["decoy_ok"] / max(s["decoys"], 1),
-           "fit_after_over_noise_max": float(max(fit_ratio)) if fit_ratio else float("nan"),
-           "confusion": {f"{a} -> {b}": v for (a, b), v in sorted(confusion.items())}}
-    return out
+    return {"counts": dict(s), "recall_by_snr": {k: v["found"] / v["n"] for k, v in sorted(by_band.items())},
+            "n_by_snr": {k: v["n"] for k, v in sorted(by_band.items())},
+            "recall_snr_ge5": (sum(v["found"] for k, v in by_band.items() if k != "3-5")
+                               / max(sum(v["n"] for k, v in by_band.items() if k != "3-5"), 1)),
+            "false_alarm_rate": s["false_alarms"] / max(s["nulls"], 1),
+            "wrong_cause_rate": s["wrong_cause"] / max(s["with_effects"], 1),
+            "location_accuracy": s["loc_ok"] / max(s["loc_n"], 1),
+            "params_within_1.35": float(np.mean(np.array(perr) <= 1.35)) if perr else float("nan"),
+            "honest_unexplained": s["honest"] / max(s["oolib"], 1),
+            "decoys_not_misread": s["decoy_ok"] / max(s["decoys"], 1),
+            "fit_after_over_noise_max": float(max(fit_ratio)) if fit_ratio else float("nan"),
+            "confusion": {f"{a} -> {b}": v for (a, b), v in sorted(confusion.items())}}
 
 
 def main() -> int:

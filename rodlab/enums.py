@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from enum import Enum
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect"]
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial"]
 
 
 class _StrEnum(str, Enum):
@@ -119,3 +119,11 @@ class CampaignEffect(_StrEnum):
     THERMAL_DRIFT = "thermal_drift"
     OUTLIERS = "outliers"
 
+
+
+class Trial(_StrEnum):
+    """How one candidate model fares in a diagnoser's selection step (:mod:`rodlab.app.diagnose.search`)."""
+
+    ACCEPT = "accept"        #: it passed the acceptance rule and is now the model
+    NEXT = "next"            #: it failed a check that the next-ranked candidate may pass: try that one
+    END_STEP = "end_step"    #: it failed in a way the lower-ranked candidates cannot mend: no model this step

@@ -2,13 +2,13 @@
 
 The identification's residuals r and Jacobian J are augmented with the columns H of each hypothesis; the
 gain is the part of r that H explains beyond what the identified parameters already absorb (the
-projection on the complement of J). Selection under the acceptance rule the rig diagnosis uses (:mod:`.criteria`:
-delta BIC <= -10 with the known device noise, likelihood-ratio p <= 1e-3, leave-one-point-out
-cross-validation, a detection limit), then the campaign is identified again
-with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers, joint angles
-corrected by the fitted once-per-revolution errors — also at the validation points, as a controller would —
-and measured points referred back to the campaign start for thermal growth) to show the fit (and, with
-validation points, the positioning error) improve.
+projection on the complement of J). Selection by the diagnosers' one routine (:mod:`.search`) under the
+acceptance rule the rig diagnosis uses (:mod:`.criteria`: delta BIC <= -10 with the known device noise,
+likelihood-ratio p <= 1e-3, leave-one-point-out cross-validation, a detection limit), then the campaign is
+identified again with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers,
+joint angles corrected by the fitted once-per-revolution errors — also at the validation points, as a
+controller would — and measured points referred back to the campaign start for thermal growth) to show the fit
+(and, with validation points, the positioning error) improve.
 
 Hypotheses come from the campaign effect registry (:data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS`, one
 module per effect of ``contract/effects.md``, subject ``campaign``): ``fixture_pose`` (offset of one clamping
@@ -26,11 +26,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
+from rodlab.enums import Trial
 from rodlab.hypothesis import Hypothesis, location_parts
 
 from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
+from .search import search
 
 __all__ = ["diagnose_campaign", "CampaignFits"]
 
@@ -106,11 +108,12 @@ class _Selection:
     themselves, and falls (median per point) as accepted terms explain the residuals.
     """
 
-    def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma):
+    def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma, max_terms: int):
         from rodlab.calibrate.identify import noise_covariance
         from rodlab.calibrate.jacobian import position_jacobian
         res, obs, fr = ctx.result, ctx.obs, ctx.frames
         self.ctx, self.noise_mm, self.N = ctx, noise_mm, ctx.n_points
+        self.max_terms, self.max_outliers = max_terms, max(2, self.N // 10)
         free_infos = [i for i in res.infos if i.name in res.free]
         J = position_jacobian(fr, tau, free_infos, res.params.base, obs.group).reshape(3 * self.N, -1)
         # the symmetric square root of the covariance: each whitened reading stays that reading (a Cholesky
@@ -253,22 +256,38 @@ class _Selection:
         prev[0].rms_after_mm = self.rms(self.cols + [h.X])
         return True
 
-    def run(self, max_terms: int) -> None:
-        """Select until ``max_terms`` physical terms (outliers are points, not physics: up to a tenth of the
-        points besides) or until the best candidate fails."""
-        max_outliers = max(2, self.N // 10)
-        while sum(not campaign_effect(e).per_point for e, _ in self.chosen) < max_terms:
-            if self.cols:
-                self.rescale()
-            cand = self.candidates(max_outliers)
-            if not cand:
-                break
+    # --- the campaign's SearchSpace (.search): extend the current model by one hypothesis or one outlier point
+    tries = FALLBACKS
+    keep_growing = False
+
+    def exhausted(self) -> bool:
+        """``max_terms`` physical terms are in (outliers are points, not physics)."""
+        return sum(not campaign_effect(e).per_point for e, _ in self.chosen) >= self.max_terms
+
+    def grow(self) -> list[_Candidate]:
+        """Re-estimate the scatter with what is accepted, then rank the next candidates."""
+        if self.cols:
+            self.rescale()
+        cand = self.candidates(self.max_outliers)
+        if cand:
             log.debug("campaign diagnosis: best %s %s dBIC %.1f; next %s", cand[0].hyp.effect, cand[0].hyp.location,
                       cand[0].ev.dbic, [(c.hyp.effect, c.hyp.location, round(c.ev.dbic, 1)) for c in cand[1:4]])
-            # the significant candidates in order: one that fails cross-validation or the detection limit (a
-            # flexible term absorbing part of a gross error) gives way to the next
-            if not any(self.try_accept(c) for c in cand[:FALLBACKS] if c.ev.dbic <= -DBIC_MIN):
-                break
+        return cand
+
+    def trial(self, candidate: _Candidate) -> Trial:
+        """The significant candidates in order: one that fails cross-validation or the detection limit (a
+        flexible term absorbing part of a gross error) gives way to the next."""
+        if candidate.ev.dbic > -DBIC_MIN:
+            return Trial.NEXT
+        return Trial.ACCEPT if self.try_accept(candidate) else Trial.NEXT
+
+    def finish(self) -> None:
+        return None
+
+    def run(self) -> None:
+        """Select until ``max_terms`` physical terms (up to a tenth of the points as outliers besides) or until
+        no candidate passes."""
+        search(self, self.max_terms + self.max_outliers + 1)
 
 
 def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
@@ -344,8 +363,8 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma)
     ctx, tau = _context(robot, res, obs, camp, rod)
-    sel = _Selection(ctx, tau, noise_mm, fixture_sigma)
-    sel.run(max_terms)
+    sel = _Selection(ctx, tau, noise_mm, fixture_sigma, max_terms)
+    sel.run()
     findings = sel.findings
     res2, refit = (None, None)
     if findings:

@@ -10,11 +10,11 @@ A larger model replaces the current one only if
 3. it is above the detection limit, which each diagnoser sets for its data (rig: ``rig_select.PTP_MIN`` noise
    SDs peak to peak in a series; campaign: 2 device-noise SDs at some point).
 
-The two diagnosers search differently because their data differ, and apply this same rule at every step:
-the rig (many readings, repeats, physical bounds on every parameter) runs a bounded beam search over subsets of
-its library from one Gram matrix (:mod:`.rig_select`); a campaign (a few dozen points, no repeats, scatter
-known only up to a Birge ratio) runs forward selection on whitened residuals (:mod:`.campaign`). Both report
-the same evidence keys (:meth:`Evidence.to_dict`).
+Both diagnosers run the same selection routine (:mod:`.search`) and apply this rule at every step; what differs
+is the search space, because their data differ: the rig (many readings, repeats, physical bounds on every
+parameter) keeps a beam of subsets of its library from one Gram matrix (:mod:`.rig_select`); a campaign (a few
+dozen points, no repeats, scatter known only up to a Birge ratio) extends its current model on whitened
+residuals (:mod:`.campaign`). Both report the same evidence keys (:meth:`Evidence.to_dict`).
 """
 from __future__ import annotations
 

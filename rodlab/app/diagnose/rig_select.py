@@ -1,12 +1,13 @@
 """Model selection of the rig diagnosis: which subset of the hypothesis library (:mod:`rodlab.stiffness_rig.effects`) the
 recording supports.
 
-Beam search over term subsets with bounded least squares from the Gram matrix (:mod:`.subset`); a larger
-model replaces the current one only under the acceptance rule shared with the campaign diagnosis
-(:mod:`.criteria`: delta BIC <= -10 with the known noise, the likelihood-ratio p <= 1e-3, the
-leave-one-repeat-out prediction error drops); every term must change the readings of a series by at least
-``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test. Creep's time constant is refined
-continuously (:func:`refine_tau`). The gauge zero of each series is projected out (:func:`demean`).
+Beam search over term subsets with bounded least squares from the Gram matrix (:mod:`.subset`), run by the
+diagnosers' one selection routine (:mod:`.search`); a larger model replaces the current one only under the
+acceptance rule shared with the campaign diagnosis (:mod:`.criteria`: delta BIC <= -10 with the known noise,
+the likelihood-ratio p <= 1e-3, the leave-one-repeat-out prediction error drops); every term must change the
+readings of a series by at least ``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test.
+Creep's time constant is refined continuously (:func:`refine_tau`). The gauge zero of each series is projected
+out (:func:`demean`).
 """
 from __future__ import annotations
 
@@ -14,10 +15,12 @@ import logging
 
 import numpy as np
 
+from rodlab.enums import Trial
 from rodlab.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
 from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence
+from .search import search
 from .subset import SubsetLS
 
 __all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "PTP_MIN", "BEAM"]
@@ -57,59 +60,83 @@ def _admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.
 
 
 def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
-    """Beam search over term subsets (width ``BEAM``). The best admissible subset of each size replaces the
-    current model only if delta BIC <= -10, the likelihood-ratio p < 1e-3 and the cross-validated error drops;
-    subsets need not nest, so a strong but wrong first term does not lock in the path. Then terms that are no
-    longer needed in the final model (drop-one test) are removed."""
-    npar = [t.n_params for t in library]
+    """Beam search over term subsets (width ``BEAM``) by the diagnosers' selection routine (:func:`.search.search`).
+    The best admissible subset of each size replaces the current model only if delta BIC <= -10, the
+    likelihood-ratio p < 1e-3 and the cross-validated error drops; subsets need not nest, so a strong but wrong
+    first term does not lock in the path. Then terms that are no longer needed in the final model (drop-one
+    test) are removed, and terms swapped while that lowers the BIC."""
+    space = _RigSpace(library, ls, sigma, n, groups)
+    search(space, max_terms)
+    return space.cur
 
-    def k_of(S):
-        return sum(npar[j] for j in S)
 
-    cur = ()
-    _, cur_rss = ls.fit(cur)
-    cur_cv = ls.cv_error(cur)
-    beam = [()]
-    for _ in range(max_terms):
+class _RigSpace:
+    """The rig's :class:`~.search.SearchSpace`: a beam of the best subsets of each size; candidates are
+    ``(subset, coefficients, rss)``."""
+
+    tries = 4 * BEAM
+    keep_growing = True
+
+    def __init__(self, library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, groups) -> None:
+        self.library, self.ls, self.sigma, self.n, self.groups = library, ls, sigma, n, groups
+        self.npar = [t.n_params for t in library]
+        self.cur: tuple = ()
+        self.cur_rss = ls.fit(self.cur)[1]
+        self.cur_cv = ls.cv_error(self.cur)
+        self.beam: list[tuple] = [()]
+
+    def k_of(self, S: tuple) -> int:
+        return sum(self.npar[j] for j in S)
+
+    def exhausted(self) -> bool:
+        return False
+
+    def grow(self) -> list:
+        """Every compatible one-term extension of the beam, fitted and ranked by BIC; the beam moves to the best
+        ``BEAM`` of them."""
         cands = {}
-        for S in beam:
-            for j in range(len(library)):
-                if j in S or not compatible(library, S, j):
+        for S in self.beam:
+            for j in range(len(self.library)):
+                if j in S or not compatible(self.library, S, j):
                     continue
                 key = tuple(sorted(S + (j,)))
                 if key not in cands:
-                    c, rss = ls.fit(key)
-                    cands[key] = (rss / sigma ** 2 + k_of(key) * np.log(n), c, rss)
-        if not cands:
-            break
+                    c, rss = self.ls.fit(key)
+                    cands[key] = (rss / self.sigma ** 2 + self.k_of(key) * np.log(self.n), c, rss)
         ranked = sorted(cands.items(), key=lambda kv: kv[1][0])
-        beam = [key for key, _ in ranked[:BEAM]]
-        best = next(((key, c, rss) for key, (_, c, rss) in ranked[:4 * BEAM]
-                     if _admissible(library, ls, key, c, sigma, groups)), None)
-        if best is None:
-            continue
-        key, c, rss = best
-        dk = k_of(key) - k_of(cur)
-        if not evidence((cur_rss - rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant:
-            continue
-        cv = ls.cv_error(key)
-        if not cv_improves(cur_cv, cv):
-            log.info("%s rejected: cross-validated error does not drop", [library[j].effect for j in key])
-            continue
-        cur, cur_rss, cur_cv = key, rss, cv
-    # backward: remove the weakest term while its drop-one test fails
-    while cur:
-        weakest = None
-        for j in cur:
-            rest = tuple(i for i in cur if i != j)
-            _, rss_r = ls.fit(rest)
-            lr = (rss_r - cur_rss) / sigma ** 2
-            if not evidence(lr, npar[j], bic_penalty(npar[j], n)).significant and (weakest is None or lr < weakest[1]):
-                weakest = (rest, lr, rss_r)
-        if weakest is None:
-            break
-        cur, cur_rss = weakest[0], weakest[2]
-    return _swap(library, ls, cur, sigma, n, groups, k_of)
+        self.beam = [key for key, _ in ranked[:BEAM]]
+        return [(key, c, rss) for key, (_, c, rss) in ranked]
+
+    def trial(self, candidate) -> Trial:
+        """An inadmissible subset lets the next try; the best admissible one is the step's only chance."""
+        key, c, rss = candidate
+        if not _admissible(self.library, self.ls, key, c, self.sigma, self.groups):
+            return Trial.NEXT
+        dk = self.k_of(key) - self.k_of(self.cur)
+        if not evidence((self.cur_rss - rss) / self.sigma ** 2, dk, bic_penalty(dk, self.n)).significant:
+            return Trial.END_STEP
+        cv = self.ls.cv_error(key)
+        if not cv_improves(self.cur_cv, cv):
+            log.info("%s rejected: cross-validated error does not drop", [self.library[j].effect for j in key])
+            return Trial.END_STEP
+        self.cur, self.cur_rss, self.cur_cv = key, rss, cv
+        return Trial.ACCEPT
+
+    def finish(self) -> None:
+        """Drop-one test (remove the weakest term while it fails), then swaps (:func:`_swap`)."""
+        while self.cur:
+            weakest = None
+            for j in self.cur:
+                rest = tuple(i for i in self.cur if i != j)
+                _, rss_r = self.ls.fit(rest)
+                lr = (rss_r - self.cur_rss) / self.sigma ** 2
+                if not evidence(lr, self.npar[j], bic_penalty(self.npar[j], self.n)).significant \
+                        and (weakest is None or lr < weakest[1]):
+                    weakest = (rest, lr, rss_r)
+            if weakest is None:
+                break
+            self.cur, self.cur_rss = weakest[0], weakest[2]
+        self.cur = _swap(self.library, self.ls, self.cur, self.sigma, self.n, self.groups, self.k_of)
 
 
 def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of) -> tuple:

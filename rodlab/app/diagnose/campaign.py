@@ -33,6 +33,7 @@ from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
+from .spread import position_share_test
 
 __all__ = ["diagnose_campaign", "CampaignFits"]
 
@@ -118,7 +119,9 @@ class _Selection:
         J = position_jacobian(fr, tau, free_infos, res.params.base, obs.group).reshape(3 * self.N, -1)
         # the symmetric square root of the covariance: each whitened reading stays that reading (a Cholesky
         # factor would fold a position's first point into all its later rows, hiding a gross error there)
-        w, V = np.linalg.eigh(noise_covariance(obs, noise_mm, fixture_sigma))
+        self.cov = noise_covariance(obs, noise_mm, fixture_sigma)
+        self.cov_device = noise_covariance(obs, noise_mm, (0.0, 0.0))
+        w, V = np.linalg.eigh(self.cov)
         L = (V * np.sqrt(w)) @ V.T
         self.r_raw = res.residuals_mm.reshape(-1)
         self.n = self.r_raw.size
@@ -311,17 +314,20 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
 
 def _unexplained(sel: _Selection, camp, final_test) -> Finding:
     """The finding that says what the found physics leaves: residuals above the expected scatter, at the
-    position where they are largest, or spread evenly over the positions (no structure: a device noisier than
-    stated would give that)."""
+    position where they are least expected, or spread evenly over the positions (no structure: a device noisier than
+    stated would give that: :mod:`.spread`)."""
     final_rms = sel.rms(sel.cols)
     ew = sel.fit(sel.cols)[2]
     e_mm = (sel.L @ ew).reshape(sel.N, 3)
     pos_rms = {int(j): float(np.sqrt(np.mean(e_mm[camp.position == j] ** 2))) for j in np.unique(camp.position)}
     kept = np.ones(sel.N, dtype=bool)
     kept[sel.used_points] = False                  # dropped outliers: their own columns absorb them
-    worst, p_even = _largest_share(ew.reshape(sel.N, 3)[kept], np.asarray(camp.position)[kept])
+    A = np.column_stack([sel.J] + sel.cols)
+    device_scale, null_cov = _device_noise_null(sel, ew, A)
+    share = position_share_test(ew, A, np.asarray(camp.position), kept, null_cov)
+    worst, p_even = share.worst, share.p
     even = p_even > 0.01
-    scatter_um = sel.noise_mm * final_test.birge * 1e3
+    scatter_um = sel.noise_mm * device_scale * 1e3
     where = (f"spread evenly over the positions (largest share at position {worst}, p = {p_even:.2g}): no "
              f"structure; a device noisier than stated (at least {scatter_um:.1f} um instead of "
              f"{sel.noise_mm * 1e3:.1f} um) would give this" if even else f"largest at position {worst}, with no modelled cause")
@@ -333,18 +339,19 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
                    {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even})
 
 
-def _largest_share(e_white: np.ndarray, position: np.ndarray) -> tuple[int, float]:
-    """The position with the largest share of the whitened residual sum of squares, and the probability
-    (Bonferroni over the positions) of a share that large if the scatter were the same everywhere."""
-    from scipy.stats import beta
-    ss = (e_white ** 2).sum(axis=1)
-    total = float(ss.sum())
-    pos = np.unique(position)
-    shares = {int(j): float(ss[position == j].sum()) / max(total, 1e-300) for j in pos}
-    worst = max(shares, key=shares.get)
-    k, n = 3 * int((position == worst).sum()), 3 * position.size
-    p = float(beta.sf(shares[worst], k / 2, (n - k) / 2)) * len(pos)
-    return worst, min(p, 1.0)
+def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[float, np.ndarray]:
+    """The evenly spread excess "a device noisier than stated" predicts: the factor s (>= 1) on the device
+    noise that makes the expected residual sum of squares the observed one (the fixture poses' uncertainty as
+    stated), and the covariance of the whitened noise under it (shape=(3N, 3N))."""
+    Linv = np.linalg.inv(sel.L)
+    Dw = Linv @ sel.cov_device @ Linv.T
+    Fw = Linv @ (sel.cov - sel.cov_device) @ Linv.T
+    U, s, _ = np.linalg.svd(A, full_matrices=False)
+    Q = U[:, s > s[0] * 1e-10]
+    M = np.eye(A.shape[0]) - Q @ Q.T
+    s2 = (float(ew @ ew) - float(np.sum(M * Fw))) / max(float(np.sum(M * Dw)), 1e-300)
+    s2 = max(s2, 1.0)
+    return float(np.sqrt(s2)), s2 * Dw + Fw
 
 
 def _context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:

@@ -120,7 +120,6 @@ class CampaignEffect(_StrEnum):
     OUTLIERS = "outliers"
 
 
-
 class Trial(_StrEnum):
     """How one candidate model fares in a diagnoser's selection step (:mod:`rodlab.app.diagnose.search`)."""
 

@@ -60,6 +60,13 @@ def test_tries_and_max_steps_bound_the_search():
     assert many.accepted == ["x0", "x1", "x2"]
 
 
+def test_the_search_stops_when_the_model_is_as_large_as_allowed():
+    space = _Scripted([[("x%d" % i, Trial.ACCEPT)] for i in range(5)], keep_growing=True)
+    space.exhausted = lambda: len(space.accepted) >= 2
+    search(space, 10)
+    assert space.accepted == ["x0", "x1"] and space.finished
+
+
 class _Forward:
     """Forward selection of polynomial terms x^k by the shared rule (known noise)."""
 

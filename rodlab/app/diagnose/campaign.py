@@ -208,7 +208,7 @@ class _Selection:
 
     def try_accept(self, best: _Candidate) -> bool:
         """Accept ``best`` if it passes delta BIC, the likelihood-ratio test, cross-validation and the detection
-        limit; record its finding. False: the selection ends."""
+        limit; record its finding. False: the next candidate may try (:meth:`trial`)."""
         h, per_point = best.hyp, campaign_effect(best.hyp.effect).per_point
         if not best.ev.significant:
             log.debug("campaign diagnosis: %s %s not significant (dBIC %.1f, p %.2g)", h.effect, h.location,
@@ -289,7 +289,8 @@ class _Selection:
 
     def run(self) -> None:
         """Select until ``max_terms`` physical terms (up to a tenth of the points as outliers besides) or until
-        no candidate passes."""
+        no candidate passes. Every step accepts one term or ends the search, and outlier candidates are offered
+        only while fewer than ``max_outliers`` points are dropped, so the step bound never cuts it short."""
         search(self, self.max_terms + self.max_outliers + 1)
 
 
@@ -328,9 +329,12 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
     worst, p_even = share.worst, share.p
     even = p_even > 0.01
     scatter_um = sel.noise_mm * device_scale * 1e3
-    where = (f"spread evenly over the positions (largest share at position {worst}, p = {p_even:.2g}): no "
-             f"structure; a device noisier than stated (at least {scatter_um:.1f} um instead of "
-             f"{sel.noise_mm * 1e3:.1f} um) would give this" if even else f"largest at position {worst}, with no modelled cause")
+    noisier = (f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
+               "would give this" if device_scale > 1.0 + 1e-6 else
+               "the device noise as stated cannot give this: the fixture poses may be less certain than stated")
+    where = (f"spread evenly over the positions (least expected share at position {worst}, p = {p_even:.2g}): "
+             f"no structure; {noisier}" if even else
+             f"least expected at position {worst} (p = {p_even:.2g}), with no modelled cause")
     return Finding("unexplained", f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
@@ -347,7 +351,7 @@ def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[
     Dw = Linv @ sel.cov_device @ Linv.T
     Fw = Linv @ (sel.cov - sel.cov_device) @ Linv.T
     U, s, _ = np.linalg.svd(A, full_matrices=False)
-    Q = U[:, s > s[0] * 1e-10]
+    Q = U[:, s > s[0] * 1e-10] if s.size and s[0] > 0 else U[:, :0]
     M = np.eye(A.shape[0]) - Q @ Q.T
     s2 = (float(ew @ ew) - float(np.sum(M * Fw))) / max(float(np.sum(M * Dw)), 1e-300)
     s2 = max(s2, 1.0)

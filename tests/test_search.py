@@ -12,12 +12,12 @@ from rodlab.enums import Trial
 class _Scripted:
     """Candidates and outcomes given in advance; records what was tried."""
 
-    def __init__(self, steps, tries=10, keep_growing=False):
-        self.steps, self.tries, self.keep_growing = list(steps), tries, keep_growing
+    def __init__(self, steps, tries=10, keep_growing=False, limit=None):
+        self.steps, self.tries, self.keep_growing, self.limit = list(steps), tries, keep_growing, limit
         self.tried, self.accepted, self.finished = [], [], False
 
     def exhausted(self):
-        return False
+        return self.limit is not None and len(self.accepted) >= self.limit
 
     def grow(self):
         return self.steps.pop(0) if self.steps else []
@@ -61,8 +61,7 @@ def test_tries_and_max_steps_bound_the_search():
 
 
 def test_the_search_stops_when_the_model_is_as_large_as_allowed():
-    space = _Scripted([[("x%d" % i, Trial.ACCEPT)] for i in range(5)], keep_growing=True)
-    space.exhausted = lambda: len(space.accepted) >= 2
+    space = _Scripted([[("x%d" % i, Trial.ACCEPT)] for i in range(5)], keep_growing=True, limit=2)
     search(space, 10)
     assert space.accepted == ["x0", "x1"] and space.finished
 

@@ -33,7 +33,7 @@ from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
-from .spread import position_share_test
+from .spread import column_basis, position_share_test
 
 __all__ = ["diagnose_campaign", "CampaignFits"]
 
@@ -347,11 +347,9 @@ def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[
     """The evenly spread excess "a device noisier than stated" predicts: the factor s (>= 1) on the device
     noise that makes the expected residual sum of squares the observed one (the fixture poses' uncertainty as
     stated), and the covariance of the whitened noise under it (shape=(3N, 3N))."""
-    Linv = np.linalg.inv(sel.L)
-    Dw = Linv @ sel.cov_device @ Linv.T
-    Fw = Linv @ (sel.cov - sel.cov_device) @ Linv.T
-    U, s, _ = np.linalg.svd(A, full_matrices=False)
-    Q = U[:, s > s[0] * 1e-10] if s.size and s[0] > 0 else U[:, :0]
+    Dw = sel.white(sel.white(sel.cov_device).T)            # L is symmetric: L^-1 C L^-T
+    Fw = sel.white(sel.white(sel.cov - sel.cov_device).T)
+    Q = column_basis(A)
     M = np.eye(A.shape[0]) - Q @ Q.T
     s2 = (float(ew @ ew) - float(np.sum(M * Fw))) / max(float(np.sum(M * Dw)), 1e-300)
     s2 = max(s2, 1.0)

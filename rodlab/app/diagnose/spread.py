@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ShareTest", "position_share_test"]
+__all__ = ["ShareTest", "position_share_test", "column_basis"]
 
 #: Monte-Carlo draws of the null distribution (seeded: the same data give the same p)
 DRAWS = 20000
@@ -49,6 +49,13 @@ def _shares(ss: np.ndarray, rows_of: list[np.ndarray]) -> np.ndarray:
     return np.stack([ss[r].sum(axis=0) / total for r in rows_of])
 
 
+def column_basis(A: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the columns of ``A`` (3N, p), rank-revealing: ``I - Q Q^T`` is the fit's residual
+    projector."""
+    U, s, _ = np.linalg.svd(A, full_matrices=False)
+    return U[:, s > s[0] * 1e-10] if s.size and s[0] > 0 else U[:, :0]
+
+
 def _residual_draws(A: np.ndarray, Q: np.ndarray, rows: np.ndarray, null_cov: np.ndarray | None) -> np.ndarray:
     """``(I - H) z`` for :data:`DRAWS` draws of the null noise ``z`` (seeded), at the kept rows."""
     z = np.random.default_rng(0).standard_normal((A.shape[0], DRAWS))
@@ -69,19 +76,17 @@ def position_share_test(e_white: np.ndarray, A: np.ndarray, position: np.ndarray
     rows = np.repeat(np.asarray(kept, bool), 3)
     pos_rows = np.repeat(np.asarray(position), 3)[rows]
     e = np.asarray(e_white, float)[rows]
-    U, s, _ = np.linalg.svd(A, full_matrices=False)
-    Q = U[:, s > s[0] * 1e-10] if s.size and s[0] > 0 else U[:, :0]
+    Q = column_basis(A)
     lev = (Q[rows] ** 2).sum(axis=1)
     rows_of = [np.flatnonzero(pos_rows == j) for j in np.unique(pos_rows)]
     informative = [r for r in rows_of if r.size - lev[r].sum() > 1e-6 * r.size]
     positions = [int(pos_rows[r[0]]) for r in informative]
-    total = max(float(e @ e), 1e-300)
-    shares = {int(pos_rows[r[0]]): float((e[r] ** 2).sum()) / total for r in rows_of}
+    shares = {int(pos_rows[r[0]]): float(v) for r, v in zip(rows_of, _shares(e ** 2, rows_of))}
     if len(informative) < 2:
         return ShareTest(max(shares, key=shares.get) if shares else -1, 1.0, shares)
     sim = _shares(_residual_draws(A, Q, rows, null_cov) ** 2, informative)
     mean, sd = sim.mean(axis=1, keepdims=True), np.maximum(sim.std(axis=1, keepdims=True), 1e-300)
-    obs = (_shares(e ** 2, informative)[:, None] - mean)[:, 0] / sd[:, 0]
+    obs = (_shares(e ** 2, informative) - mean[:, 0]) / sd[:, 0]
     sim_max = ((sim - mean) / sd).max(axis=0)
     p = (1.0 + np.count_nonzero(sim_max >= obs.max())) / (1.0 + DRAWS)
     return ShareTest(positions[int(np.argmax(obs))], min(p, 1.0), shares)

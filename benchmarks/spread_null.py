@@ -1,7 +1,7 @@
 """Calibration of the campaign diagnosis's even-spread test (rodlab/app/diagnose/spread.py): how often it calls
 evenly spread noise "at a position" on simulated null campaigns, the device noise true / stated = FACTOR.
 
-    python benchmarks/spread_null.py [N] [FACTOR]     # N seeds from 1000 (default 600, 2.0); ~3.5 min for 600
+    python benchmarks/spread_null.py [N] [FACTOR]     # N seeds from 1000 (default 600, 2.0); about 4 min for 600
 
 It applies the test to the identified campaign's residuals directly (the diagnosis applies it only when the
 residual test fails, which at FACTOR 1 it rarely does). Results: docs/diagnose.md.

@@ -8,6 +8,9 @@ Data sets (``--data``, default all):
   ur10   benchmarks/data/landgraf2021: Universal Robots UR10, a T-Mac measured by a laser tracker in three
          campaigns B, C, D (scripts/convert_landgraf2021.py), the built-in URDF ``ur10``; splits: interleaved
          halves of every series; fit on C (random poses), validate on B and D (other campaigns).
+  ur5    benchmarks/data/jacobi2025: Universal Robots UR5, an SMR measured by a laser tracker on a 1,000-pose grid
+         and 20 random poses (scripts/convert_jacobi2025.py), the built-in URDF ``ur5``; splits: interleaved
+         halves of the grid; fit on the grid, validate on the random poses (the source's own split).
 
 Per split and per model, the validation errors after the base and tool are refitted on the validation set
 (paper Section 5.2):
@@ -22,7 +25,7 @@ pybotics pins numpy<2, so it runs in its own venv: created on first use in bench
 (``pip install pybotics``), or give ``--python`` an interpreter that has it. Without it the pybotics column is
 skipped with the reason.
 
-    python benchmarks/realdata_pybotics.py [--data fanuc|ur10|all] [--python PY]
+    python benchmarks/realdata_pybotics.py [--data fanuc|ur10|ur5|all] [--python PY]
 """
 from __future__ import annotations
 
@@ -69,8 +72,14 @@ def ur10_splits():
     return _interleaved(pts) + [("other campaign", pts["C"], [("B", pts["B"]), ("D", pts["D"])])]
 
 
+def ur5_splits():
+    data = HERE / "data" / "jacobi2025"
+    grid, rand = (read_points(data / f"ur5_{n}.validation.csv") for n in ("grid", "random"))
+    return _interleaved({"grid": grid}) + [("source's split", grid, [("random", rand)])]
+
+
 #: data set -> (built-in robot, its splits)
-DATASETS = {"fanuc": ("r2000ic165f", fanuc_splits), "ur10": ("ur10", ur10_splits)}
+DATASETS = {"fanuc": ("r2000ic165f", fanuc_splits), "ur10": ("ur10", ur10_splits), "ur5": ("ur5", ur5_splits)}
 
 
 def pybotics_python(given: str | None) -> tuple[str | None, str]:

@@ -142,10 +142,14 @@ def test_builtin_fanuc_urdf_matches_its_data_sheet_rows():
     assert np.abs(_tip_in_base(robot, q)[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
 
 
-def _ur_dh_fk(q):
-    """Universal Robots' published UR10 DH (standard convention) in UR's "base" frame, written out independently."""
-    d = [127.3, 0, 0, 163.941, 115.7, 92.2]
-    a = [0, -612.0, -572.3, 0, 0, 0]
+#: Universal Robots' published DH (d, a) [mm] of the UR10 and the UR5
+_UR_DH = {"ur10": ([127.3, 0, 0, 163.941, 115.7, 92.2], [0, -612.0, -572.3, 0, 0, 0]),
+          "ur5": ([89.159, 0, 0, 109.15, 94.65, 82.3], [0, -425.0, -392.25, 0, 0, 0])}
+
+
+def _ur_dh_fk(q, model="ur10"):
+    """Universal Robots' published DH (standard convention) in UR's "base" frame, written out independently."""
+    d, a = _UR_DH[model]
     alpha = [math.pi / 2, 0, 0, math.pi / 2, -math.pi / 2, 0]
     out = []
     for qq in q:
@@ -158,18 +162,20 @@ def _ur_dh_fk(q):
     return np.array(out)
 
 
-def test_builtin_ur10_urdf_is_universal_robots_dh_model():
-    """The built-in UR10 URDF (ur_description layout) has UR's DH kinematics: tool0 in the 'base' frame equals the
-    DH flange frame, J2 / J3 / J4 parallel (Hayati rows 2 and 3)."""
-    robot = resolve_robot("ur10")
+@pytest.mark.parametrize("model, mass_kg", [("ur10", 7.1 + 12.7 + 4.27 + 2.0 + 2.0 + 0.365),
+                                             ("ur5", 3.7 + 8.393 + 2.275 + 1.219 + 1.219 + 0.1879)])
+def test_builtin_ur_urdfs_are_universal_robots_dh_models(model, mass_kg):
+    """The built-in UR10 and UR5 URDFs (ur_description layout) have UR's DH kinematics: tool0 in the 'base' frame
+    equals the DH flange frame, J2 / J3 / J4 parallel (Hayati rows 2 and 3)."""
+    robot = resolve_robot(model)
     q = np.random.default_rng(4).uniform(-3, 3, (25, 6))
     base_in_base_link = _yourdfpy_fk(robot.path, q[:1], "base", "base_link")[0]
     ours = np.linalg.inv(base_in_base_link) @ _tip_in_base(robot, q)
-    theirs = _ur_dh_fk(q)
+    theirs = _ur_dh_fk(q, model)
     assert np.abs(ours[:, :3, 3] - theirs[:, :3, 3]).max() < 1e-6
     assert np.abs(ours[:, :3, :3] - theirs[:, :3, :3]).max() < 1e-9
     assert robot.parallel_rows() == [1, 2]
-    assert robot.mass_kg.sum() == pytest.approx(7.1 + 12.7 + 4.27 + 2.0 + 2.0 + 0.365)
+    assert robot.mass_kg.sum() == pytest.approx(mass_kg)
 
 
 def _mdh_fk(rows, q, flange):

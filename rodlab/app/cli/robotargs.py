@@ -3,8 +3,8 @@ from __future__ import annotations
 
 __all__ = ["add_robot_options", "robot_from_args"]
 
-ROBOT_HELP = ("built-in robot (tx90, r2000ic165f, ur10), a robot TOML file (DH or modified-DH rows) or a URDF "
-              "(xacro expanded)")
+ROBOT_HELP = ("built-in robot (tx90, r2000ic165f, ur10, ur5), a robot TOML file (DH or modified-DH rows) or a "
+              "URDF (xacro expanded)")
 
 
 def add_robot_options(p, default: str | None = "tx90", help: str = ROBOT_HELP) -> None:

@@ -1,0 +1,100 @@
+"""Convert the public laser-tracker data set of P. Jacobi (UR5) to rodlab's instrument-point files.
+
+Source: github.com/pauljac7700/serial_robots_datasets (MIT licence; P. Jacobi, "A Hybrid Error Compensation
+Method for Enhancing the Pose Accuracy of Serial Industrial Robots", Master's thesis, Tsinghua University,
+2025). A Universal Robots UR5 carries a 1.5" SMR whose position a GTS3800 laser tracker measures
+(15 um + 6 um/m); the tracker's frame was registered to the robot's base before the data were taken:
+
+  UR5/3D_UR5_uncalibrated_grid_cleaned.csv     1000 poses on a grid over the workspace (calibration set)
+  UR5/3D_UR5_uncalibrated_random_cleaned.csv   20 random poses (the source's test set)
+
+Columns used: ``joint_1`` .. ``joint_6`` [deg], the commanded joints, which are the URDF's joints
+(calibrate/robots/ur5.urdf); ``x_t, y_t, z_t`` [mm], the target: the nominal forward kinematics of those
+joints with the source's tool-centre frame (the nominal model with base and tool registered reproduces them to
+0.01 mm), in UR's "base" frame; ``x_dif, y_dif, z_dif`` [mm], "the difference between the target and the
+actual position". The measured position written is target + difference (actual minus target, the usual
+sense): calibrated on the grid, that reading leaves 0.061 mm rms per coordinate against 0.064 mm for target
+minus difference. The Barrett WAM files of the source (a cable-driven arm, 2 mm repeatability, no URDF in
+rodlab) are not converted. The tool guess is the source's tool-centre frame, 30 mm along the flange's z.
+
+    python scripts/convert_jacobi2025.py SRC_DIR -o benchmarks/data/jacobi2025
+
+SRC_DIR is a checkout of the source repository (or a folder holding the two CSV files).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.fileio import atomic_write_text
+
+SETS = {"grid": "3D_UR5_uncalibrated_grid_cleaned.csv", "random": "3D_UR5_uncalibrated_random_cleaned.csv"}
+#: sha256 of the source files this script was written for (git commit 759068d of the source repository)
+SHA256 = {"grid": "3de63c38b4338a1fb23437a9c6ecb7e0441a9e132fc055544619b8c580f767c0",
+          "random": "3cd7a4aae072f9757ce9bd156e7470cc8caa89d8af9164c07390953ae808095a"}
+JOINTS = [f"joint_{i}" for i in range(1, 7)]
+HEADER = """# Laser-tracker points of a Universal Robots UR5, {name}: public data of P. Jacobi,
+# github.com/pauljac7700/serial_robots_datasets (MIT; {source}), converted by
+# scripts/convert_jacobi2025.py.
+# q [deg] are the URDF's joints (calibrate/robots/ur5.urdf); x, y, z [mm] the SMR position measured by a
+# GTS3800 laser tracker, in the robot's base frame as the source registered it (target + difference).
+# The tool below is the source's nominal tool-centre frame; calibration finds the real one.
+# tool_mm: 0, 0, 30
+# rod_mass_kg: 0
+# rod_com_T_mm: 0, 0, 0
+"""
+
+
+def _find(src: Path, name: str) -> Path:
+    hits = sorted(src.rglob(name))
+    if not hits:
+        raise SystemExit(f"{src}: no {name} below it; give a checkout of github.com/pauljac7700/"
+                         f"serial_robots_datasets")
+    return hits[0]
+
+
+def _column(rows: list[dict], key: str, path: Path) -> np.ndarray:
+    try:
+        return np.array([float(r[key]) for r in rows])
+    except KeyError:
+        raise SystemExit(f"{path}: no column {key!r}") from None
+    except ValueError as e:
+        raise SystemExit(f"{path}: column {key!r}: {e}") from None
+
+
+def convert_set(path: Path, name: str) -> str:
+    """The rodlab points file (text) of one source file."""
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    if digest != SHA256[name]:
+        print(f"warning: {path} differs from the file this script was written for (sha256 {digest})",
+              file=sys.stderr)
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    q = np.column_stack([_column(rows, j, path) for j in JOINTS])
+    target = np.column_stack([_column(rows, f"{c}_t", path) for c in "xyz"])
+    diff = np.column_stack([_column(rows, f"{c}_dif", path) for c in "xyz"])
+    x = target + diff
+    lines = [",".join([f"{v:.6f}" for v in qq] + [f"{v:.4f}" for v in xx]) for qq, xx in zip(q, x)]
+    head = HEADER.format(name=f"{name} poses", source=path.name)
+    return head + "q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n" + "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("source", type=Path, help="checkout of the source repository")
+    ap.add_argument("-o", "--out", type=Path, default=Path("benchmarks/data/jacobi2025"))
+    a = ap.parse_args(argv)
+    for name, file in SETS.items():
+        text = convert_set(_find(a.source, file), name)
+        p = atomic_write_text(a.out / f"ur5_{name}.validation.csv", text)
+        print(f"wrote {p}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

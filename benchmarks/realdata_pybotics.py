@@ -18,6 +18,8 @@ Per split and per model, the validation errors after the base and tool are refit
   nominal          the URDF as it is;
   rodlab           kinematics (Hayati beta on the parallel J2/J3 pair), base, tool, joint compliances;
   kinematic only   the same with every joint compliance held at 0;
+  rodlab + diag.   rodlab with the periodic joint errors that ``rodlab diagnose --points`` names on the fit set
+                   identified too (``--joint-harmonics``; the joints named in brackets, "-" when none is named);
   pybotics         pybotics 3 (modified DH, its OptimizationHandler and scipy least_squares, as in its own
                    example; benchmarks/pybotics_side.py), from the same starting base and tool.
 
@@ -131,6 +133,17 @@ def run_pybotics(python: str, robot, fit, tests) -> dict:
     return json.loads(res.stdout)
 
 
+def diagnosed_joints(robot, fit) -> tuple:
+    """The joints whose periodic error ``rodlab diagnose --points`` names on the fit set (the user's workflow:
+    diagnose, then calibrate with ``--joint-harmonics``)."""
+    from rodlab.app.diagnose.points import diagnose_points
+    from rodlab.calibrate.points import identify_points, stated_noise_mm
+    pts, noise = stated_noise_mm(fit, None)
+    res = identify_points(robot, pts, None, fix_unidentifiable=True)
+    found = diagnose_points(robot, pts, res, noise).findings
+    return tuple(sorted(int(f.where.split()[-1]) for f in found if f.effect == "periodic_joint_error"))
+
+
 def run(python: str | None, dataset: str = "fanuc") -> tuple[list, str]:
     name, splits = DATASETS[dataset]
     robot = resolve_robot(name)
@@ -140,10 +153,12 @@ def run(python: str | None, dataset: str = "fanuc") -> tuple[list, str]:
     for protocol, fit, tests in splits():
         full = fit_and_validate(robot, protocol, fit, tests)
         kin = fit_and_validate(robot, protocol, fit, tests, pinned=pinned)
+        joints = diagnosed_joints(robot, fit)
+        diag = fit_and_validate(robot, protocol, fit, tests, harmonics=joints) if joints else None
         pyb = run_pybotics(py, robot, fit, tests) if py else None
         for k, (name, _) in enumerate(tests):
             other = error_stats(np.array(pyb["tests"][name])) if pyb else None
-            rows.append((protocol, name, full[k], kin[k], other))
+            rows.append((protocol, name, full[k], kin[k], (joints, diag[k] if diag else None), other))
     return rows, why
 
 
@@ -163,11 +178,12 @@ def main(argv=None) -> int:
         if why:
             print(f"pybotics skipped: {why}", file=sys.stderr)
         print(f"\n{dataset} (robot {DATASETS[dataset][0]}, {time.perf_counter() - t0:.0f} s)\n")
-        print("| protocol | validated on | nominal | rodlab | kinematic only | pybotics |")
-        print("|---|---|---|---|---|---|")
-        for protocol, name, full, kin, pyb in rows:
+        print("| protocol | validated on | nominal | rodlab | kinematic only | rodlab + diagnosis | pybotics |")
+        print("|---|---|---|---|---|---|---|")
+        for protocol, name, full, kin, (joints, diag), pyb in rows:
+            named = f"{_cell(diag.after)} (J{', J'.join(map(str, joints))})" if diag else "- (none named)"
             print(f"| {protocol} | {name} | {_cell(full.before)} | {_cell(full.after)} | {_cell(kin.after)} | "
-                  f"{_cell(pyb)} |")
+                  f"{named} | {_cell(pyb)} |")
     print("\n(mean / max error [mm] on the validation points, base and tool refitted on them)")
     return 0
 

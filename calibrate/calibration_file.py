@@ -1,4 +1,5 @@
-"""Reading a calibration result back (contract ``rodlab.calibration/1``) and the model it describes."""
+"""Reading a calibration result back (contract ``rodlab.calibration/1``, or ``/2`` with periodic joint errors) and
+the model it describes."""
 from __future__ import annotations
 
 import json
@@ -8,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CalibrationError
-from .kinematics import ModelParams
-from .result import FORMAT_CALIBRATION
+from .kinematics import HARMONICS, ModelParams
+from .result import CALIBRATION_FORMATS, FORMAT_CALIBRATION
 
 __all__ = ["CalibratedParameter", "CalibrationFile", "read_calibration", "calibrated_params"]
 
@@ -48,10 +49,10 @@ def read_calibration(path) -> CalibrationFile:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         line = getattr(e, "lineno", None)
         raise CalibrationError(f"not a JSON calibration result: {e}", path=p, line=line) from e
-    if not isinstance(data, dict) or data.get("format") != FORMAT_CALIBRATION:
+    if not isinstance(data, dict) or data.get("format") not in CALIBRATION_FORMATS:
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
-        raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" (written by `rodlab calibrate --json`), "
-                               f"got {got!r}", path=p, key="format")
+        raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" or \"{CALIBRATION_FORMATS[1]}\" (written by "
+                               f"`rodlab calibrate --json`), got {got!r}", path=p, key="format")
     from rodlab.schema import require_schema
     require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
     params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
@@ -85,10 +86,11 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
     rows = {k: np.array([get(f"{k}_{i + 1}", float(v[i])) for i in range(n)])
             for k, v in (("d", robot.d_mm), ("a", robot.a_mm), ("alpha", robot.alpha_deg), ("beta", robot.beta_deg),
                          ("dtheta", np.zeros(n)), ("c", np.zeros(n)))}
+    h = np.deg2rad([[get(f"{t}_{i + 1}", 0.0) for t in HARMONICS] for i in range(n)])
     return ModelParams(np.deg2rad(robot.theta_offset_deg + rows["dtheta"]), rows["d"], rows["a"],
                        np.deg2rad(rows["alpha"]), np.deg2rad(rows["beta"]), rows["c"],
                        np.array([get(f"base_{k}", 0.0) for k in "xyzabc"]),
-                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]))
+                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h)
 
 
 def _check_description(robot, cal: CalibrationFile) -> None:

@@ -16,7 +16,7 @@ import numpy as np
 from rodlab.fileio import atomic_write_text
 
 from .calibration_file import CalibrationFile
-from .kinematics import ModelParams
+from .kinematics import HARMONICS, ModelParams
 
 __all__ = ["params_yaml", "dh_table_csv", "write_params_yaml", "write_dh_csv"]
 
@@ -55,6 +55,13 @@ def params_yaml(robot, cal: CalibrationFile, params: ModelParams, origins: dict 
         sp = cal.parameters.get(f"c_{i + 1}")
         out.write(f"  {name}: {{value: {_num(params.c[i])}, sigma: {_num(sp.sigma if sp else 0.0)}, "
                   f"unit: rad/(N m)}}\n")
+    if params.h.any():
+        out.write("joint_harmonics:   # theta_i = q_i + h1s sin q_i + h1c cos q_i + h2s sin 2q_i + h2c cos 2q_i [deg]; "
+                  "not expressible in URDF\n")
+        for i, name in enumerate(robot.joint_names):
+            if params.h[i].any():
+                terms = ", ".join(f"{t}: {_num(v)}" for t, v in zip(HARMONICS, np.rad2deg(params.h[i])))
+                out.write(f"  {name}: {{{terms}, unit: deg}}\n")
     out.write("parameters:   # every parameter of the identification\n")
     for name, v in cal.parameters.items():
         out.write(f"  {name}: {{value: {_num(v.value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}\n")

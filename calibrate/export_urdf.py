@@ -11,7 +11,8 @@ Ry(beta_i)`` and offsets then give the new joint origins exactly:
 
 and the joint axes stay as written. The measurement frame (the calibrated base pose) and the tool point
 become fixed joints: ``rodlab_measurement -> base_link`` and ``tip -> rodlab_tcp``. Joint compliance has no
-place in a URDF; the file says so and the compliances go to the YAML beside it.
+place in a URDF, nor has a periodic joint error (``rodlab.calibration/2``); the file says so and both go to the
+YAML beside it, and the read-back check compares with the model without them.
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ from rodlab.fileio import atomic_write_text
 from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
-from .kinematics import ModelParams, forward
+from .kinematics import HARMONICS, ModelParams, forward
 from .robot_lines import chain_matrices, row_matrix
 from .robot_urdf import UrdfChain, chain_poses, load_urdf, urdf_chain
 
@@ -98,15 +99,23 @@ def _add_frames(model, ch: UrdfChain, base: np.ndarray, tcp: np.ndarray) -> None
 
 def _note(robot, params: ModelParams, source: str) -> str:
     c = ", ".join(f"{nm}: {v:.4g}" for nm, v in zip(robot.joint_names, params.c))
-    return ("<!-- Calibrated by rodlab from " + source + ": joint origins corrected to the identified model; "
+    text = ("<!-- Calibrated by rodlab from " + source + ": joint origins corrected to the identified model; "
             f"{MEASUREMENT_LINK} is the measurement frame (calibrated base pose), {TCP_LINK} the calibrated tool "
             "point. Joint compliance cannot be expressed in URDF and is NOT in this file: theta_i = q_i + c_i tau_i "
-            f"with c [rad/(N m)] = {{{c}}} (also in the YAML written beside this file). -->")
+            f"with c [rad/(N m)] = {{{c}}} (also in the YAML written beside this file).")
+    if params.h.any():
+        terms = " + ".join(f"{t} {'sin' if f is np.sin else 'cos'}({k if k > 1 else ''}q_i)"
+                           for t, (k, f) in HARMONICS.items())
+        h = "; ".join(f"{nm}: " + ", ".join(f"{t} {v:.4g}" for t, v in zip(HARMONICS, np.rad2deg(row)))
+                      for nm, row in zip(robot.joint_names, params.h) if row.any())
+        text += (" Nor can the periodic joint errors, which are NOT in this file either: a controller adds "
+                 f"{terms} [deg] to each joint reading, with {h} (also in the YAML).")
+    return text + " -->"
 
 
 def write_calibrated_urdf(urdf_path, robot, params: ModelParams, out_path, q_check_rad, base_link=None,
                           tip_link=None, source: str = "a calibration") -> UrdfExport:
-    """Write the corrected URDF atomically, read it back and check its TCP against the model (c = 0)."""
+    """Write the corrected URDF atomically, read it back and check its TCP against the model (c = 0, h = 0)."""
     model = load_urdf(urdf_path)
     ch = urdf_chain(model, base_link, tip_link, path=urdf_path)
     if ch.revolute != tuple(robot.joint_names):
@@ -141,7 +150,7 @@ def _check(text: str, out: Path, params: ModelParams, q) -> float:
     finally:
         tmp.unlink(missing_ok=True)
     urdf_tcp = chain_poses(ch, q)[:, :3, 3]
-    model_tcp = forward(params.with_(c=np.zeros_like(params.c)), np.atleast_2d(q)).pW
+    model_tcp = forward(params.with_(c=np.zeros_like(params.c), h=np.zeros_like(params.h)), np.atleast_2d(q)).pW
     err = float(np.abs(urdf_tcp - model_tcp).max() * 1000.0)
     if not err <= 1.0:
         raise CalibrationError(f"the calibrated URDF read back differs from the model by {err:.3g} um (> 1 um); "

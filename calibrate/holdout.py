@@ -50,12 +50,12 @@ def interleaved(points: PointSet) -> tuple[PointSet, PointSet]:
 
 
 def fit_and_validate(robot, protocol: str, fit: PointSet, tests: list[tuple[str, PointSet]],
-                     pinned: dict | None = None) -> list[HoldoutRow]:
+                     pinned: dict | None = None, harmonics=()) -> list[HoldoutRow]:
     """Identify ``robot`` on ``fit`` (kinematics, base, tool, joint compliances; what the data cannot identify
-    held at nominal; ``pinned`` name -> value held, e.g. every ``c_i = 0`` for a kinematic-only model) and
-    validate on each named test set."""
+    held at nominal; ``pinned`` name -> value held, e.g. every ``c_i = 0`` for a kinematic-only model;
+    ``harmonics``: joints whose periodic errors are identified too) and validate on each named test set."""
     t0 = time.perf_counter()
-    res = identify_points(robot, fit, None, pinned=pinned, fix_unidentifiable=True)
+    res = identify_points(robot, fit, None, pinned=pinned, fix_unidentifiable=True, harmonics=harmonics)
     seconds = time.perf_counter() - t0
     held = [u.split(" ")[0] for u in res.unidentifiable if "combined with" in u and "in this" in u]
     rows = []

@@ -30,7 +30,7 @@ from .compensation import deflection_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
-from .kinematics import ModelParams, ball_positions
+from .kinematics import HARMONICS, ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
@@ -220,7 +220,7 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
              freed: set | None = None, robust: bool = False, max_compensation: int = 6,
              fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
              expected_noise_mm: float | None = DEVICE_NOISE_MM, fix_unidentifiable: bool = False,
-             find_tool: bool = False, also_compensate: tuple = ()) -> CalibrationResult:
+             find_tool: bool = False, also_compensate: tuple = (), harmonics: tuple = ()) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
 
     fix_unidentifiable : parameters this data set cannot separate (beyond the structural rules) are held at
@@ -232,13 +232,16 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     also_compensate : further compensations beside the rod's deflection, each with
         ``offsets(robot, params, obs)`` -> ball-centre offsets in {W} [mm], shape=(N, 3) (e.g.
         :class:`~rodlab.calibrate.thermal.ThermalGrowth`); removed from the measurements with the deflection.
+    harmonics : joints (1-based) whose periodic angle errors (first and second harmonic of the joint reading,
+        ``h1s_j .. h2c_j``) are identified too: gear or encoder eccentricity that ``rodlab diagnose`` named.
     """
 
     _check_observations(obs)
+    _check_harmonics(harmonics, robot.n)
     pinned, freed = dict(pinned or {}), set(freed or ())
     positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
     positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
-    infos = catalogue(robot.n, positions)
+    infos = catalogue(robot.n, positions, harmonics)
     _check_names([i.name for i in infos], pinned, freed)
     start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
     x = _pinned_vector(infos, start, pinned)
@@ -269,6 +272,13 @@ def _check_observations(obs: Observations) -> None:
                                f"orientations)", key="points")
     if not np.all(np.isfinite(obs.x_W_mm)) or not np.all(np.isfinite(obs.q_rad)):
         raise CalibrationError("the measurements contain NaN or inf", key="points")
+
+
+def _check_harmonics(harmonics, n: int) -> None:
+    bad = [j for j in harmonics if not (isinstance(j, (int, np.integer)) and 1 <= j <= n)]
+    if bad:
+        raise CalibrationError(f"joint harmonics: {bad} are not joints of this {n}-joint robot; give joint numbers "
+                               f"1..{n}, e.g. 1,4", key="harmonics")
 
 
 def _check_names(names: list, pinned: dict, freed: set) -> None:
@@ -522,6 +532,8 @@ def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
         return float(np.rad2deg(p.beta[i]))
     if k == "c":
         return float(p.c[i])
+    if k in HARMONICS:
+        return float(np.rad2deg(p.h[i, list(HARMONICS).index(k)]))
     if k == "base_t":
         return float(p.base[i])
     if k == "base_r":

@@ -5,7 +5,7 @@ import numpy as np
 
 from rodlab.frames import rot_x, rot_y
 
-from .kinematics import Frames, _cross
+from .kinematics import HARMONICS, Frames, _cross
 from .params import INTERNAL_SCALE, ParamInfo
 
 __all__ = ["position_jacobian"]
@@ -26,10 +26,13 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
     for k, info in enumerate(infos):
         i = info.index
         kind = info.kind
-        if kind in ("dtheta", "c"):
+        if kind in ("dtheta", "c") or kind in HARMONICS:
             col = _cross(fr.z_prev[:, i], p0 - fr.o_prev[:, i])
             if kind == "c":
                 col = col * tau[:, i:i + 1]
+            elif kind in HARMONICS:
+                order, f = HARMONICS[kind]
+                col = col * f(order * fr.q[:, i:i + 1])
         elif kind == "d":
             col = fr.z_prev[:, i]
         elif kind == "a":
@@ -52,6 +55,6 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
             continue
         else:  # pragma: no cover
             raise ValueError(kind)
-        scale = {"dtheta": np.pi / 180.0, "alpha": np.pi / 180.0, "beta": np.pi / 180.0}.get(kind, 1.0)
+        scale = np.pi / 180.0 if kind in ("dtheta", "alpha", "beta") or kind in HARMONICS else 1.0
         out[:, :, k] = (col @ R.T) * scale / INTERNAL_SCALE[info.unit]
     return out

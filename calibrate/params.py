@@ -1,8 +1,9 @@
 """The parameter vector of the calibration (paper Eq. 3) and the structural identifiability rules.
 
 Catalogue per joint i: ``dtheta_i`` [deg], ``d_i``, ``a_i`` [mm], ``alpha_i``, ``beta_i`` [deg], ``c_i``
-[rad/(N m)]; ``base_x, base_y, base_z`` [mm], ``base_a, base_b, base_c`` [deg] (pose of {0} in {W});
-``tool_x, tool_y, tool_z`` [mm] (ball centre in {n}). Internally the optimiser works in mm, mrad and
+[rad/(N m)]; on request, per chosen joint, the periodic joint errors ``h1s_i, h1c_i, h2s_i, h2c_i`` [deg];
+``base_x, base_y, base_z`` [mm], ``base_a, base_b, base_c`` [deg] (pose of {0} in {W}); ``tool_x, tool_y,
+tool_z`` [mm] (ball centre in {n}). Internally the optimiser works in mm, mrad and
 urad/(N m) so that every column has a similar scale.
 
 Structural rules (always true for a serial robot measured by ball positions):
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import ModelParams
+from .kinematics import HARMONICS, ModelParams
 
 __all__ = ["ParamInfo", "catalogue", "structural_fixed", "apply", "INTERNAL_SCALE", "PRIOR_SCALE"]
 
@@ -34,16 +35,18 @@ PRIOR_SCALE = {"mm": 2.0, "deg": 0.2, "rad/(N m)": 1e-5}
 @dataclass(frozen=True)
 class ParamInfo:
     name: str
-    kind: str          # dtheta | d | a | alpha | beta | c | base_t | base_r | tool
+    kind: str          # dtheta | d | a | alpha | beta | c | h1s | h1c | h2s | h2c | base_t | base_r | tool | fixture
     index: int         # joint index (0-based) or component
     unit: str
 
 
-def catalogue(n: int, positions=()) -> list[ParamInfo]:
+def catalogue(n: int, positions=(), harmonics=()) -> list[ParamInfo]:
     """All candidate parameters, in the preference order of the rank analysis.
 
     ``positions``: clamping positions whose translation offsets ``fixture_J_x/y/z`` (a correction to the
     recorded pose of {D_J}) exist as parameters; they are held fixed unless freed.
+    ``harmonics``: joints (1-based) whose periodic errors ``h1s_j .. h2c_j`` are parameters (after every
+    geometric and compliance parameter, so that the rank analysis gives way to those first).
     """
     out = [ParamInfo(f"base_{k}", "base_t", i, "mm") for i, k in enumerate("xyz")]
     out += [ParamInfo(f"base_{k}", "base_r", i, "deg") for i, k in enumerate("abc")]
@@ -54,6 +57,7 @@ def catalogue(n: int, positions=()) -> list[ParamInfo]:
                 ParamInfo(f"alpha_{j}", "alpha", i, "deg"), ParamInfo(f"d_{j}", "d", i, "mm"),
                 ParamInfo(f"beta_{j}", "beta", i, "deg")]
     out += [ParamInfo(f"c_{i + 1}", "c", i, "rad/(N m)") for i in range(n)]
+    out += [ParamInfo(f"{t}_{j}", t, j - 1, "deg") for j in sorted(set(harmonics)) for t in HARMONICS]
     for j in positions:
         out += [ParamInfo(f"fixture_{j}_{k}", "fixture", int(j), "mm") for k in "xyz"]
     return out
@@ -86,7 +90,7 @@ def apply(base: ModelParams, infos: list[ParamInfo], x_internal: np.ndarray) -> 
     """Model parameters: ``base`` plus the internal vector (errors for DH rows, absolute for c, base, tool)."""
     th, d, a, al, be = (base.theta_offset.copy(), base.d.copy(), base.a.copy(), base.alpha.copy(),
                         base.beta.copy())
-    c, bp, tool = base.c.copy(), base.base.copy(), base.tool.copy()
+    c, bp, tool, h = base.c.copy(), base.base.copy(), base.tool.copy(), base.h.copy()
     for info, v in zip(infos, x_internal):
         s = INTERNAL_SCALE[info.unit]
         val = v / s
@@ -103,6 +107,8 @@ def apply(base: ModelParams, infos: list[ParamInfo], x_internal: np.ndarray) -> 
             be[i] += np.deg2rad(val)
         elif k == "c":
             c[i] += val
+        elif k in HARMONICS:
+            h[i, list(HARMONICS).index(k)] += np.deg2rad(val)
         elif k == "base_t":
             bp[i] += val
         elif k == "base_r":
@@ -111,4 +117,4 @@ def apply(base: ModelParams, infos: list[ParamInfo], x_internal: np.ndarray) -> 
             tool["xyz".index(info.name[-1])] += val
         elif k == "fixture":
             pass                                        # applied to the measurements, not the model
-    return ModelParams(th, d, a, al, be, c, bp, tool)
+    return ModelParams(th, d, a, al, be, c, bp, tool, h)

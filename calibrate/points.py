@@ -35,9 +35,9 @@ def stated_noise_mm(pts: PointSet, noise_mm: float | None) -> tuple[PointSet, fl
 
 def identify_points(robot, pts: PointSet, expected_noise_mm: float | None = TRACKER_NOISE_MM, *,
                     pinned: dict | None = None, freed=(), robust: bool = False,
-                    fix_unidentifiable: bool = False) -> CalibrationResult:
+                    fix_unidentifiable: bool = False, harmonics=()) -> CalibrationResult:
     """Identify ``robot`` from instrument points: base and tool from scratch, ``tool_y`` free; ``None`` noise
-    skips the residual test."""
+    skips the residual test; ``harmonics``: joints whose periodic angle errors are identified too."""
     return identify(robot, points_observations(pts), pts.tool_mm, None, pinned=dict(pinned or {}),
                     freed=set(freed) | {"tool_y"}, robust=robust, fix_unidentifiable=fix_unidentifiable,
-                    find_tool=True, expected_noise_mm=expected_noise_mm)
+                    find_tool=True, expected_noise_mm=expected_noise_mm, harmonics=tuple(harmonics))

@@ -1,4 +1,4 @@
-"""The calibration result file (contract ``rodlab.calibration/1``)."""
+"""The calibration result file (contract ``rodlab.calibration/1``; ``/2`` when it carries periodic joint errors)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -6,22 +6,29 @@ from pathlib import Path
 from rodlab.fileio import atomic_write_json, json_safe
 
 from .identify import CalibrationResult
+from .kinematics import HARMONICS
 from .validate import ErrorStats
 
-__all__ = ["result_dict", "write_result", "FORMAT_CALIBRATION"]
+__all__ = ["result_dict", "write_result", "FORMAT_CALIBRATION", "FORMAT_CALIBRATION_HARMONICS", "CALIBRATION_FORMATS"]
 
 FORMAT_CALIBRATION = "rodlab.calibration/1"
+#: the same with the periodic joint-error parameters ``h1s_j .. h2c_j``: a new version, so that a reader of
+#: ``/1`` refuses the file instead of dropping a part of the model it does not know
+FORMAT_CALIBRATION_HARMONICS = "rodlab.calibration/2"
+CALIBRATION_FORMATS = (FORMAT_CALIBRATION, FORMAT_CALIBRATION_HARMONICS)
 
 
 def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorStats | None = None,
                 after: ErrorStats | None = None, extra: dict | None = None) -> dict:
     """Contract calibration result. DH ``d, a, alpha, beta`` are absolute values (nominal + error), ``dtheta``
-    the offset error; base / tool / fixture offsets absolute; ``c`` in rad/(N m)."""
+    the offset error; base / tool / fixture offsets absolute; ``c`` in rad/(N m); periodic joint errors in deg."""
     params = {}
     for info in res.infos:
         nm = info.name
         params[nm] = {"value": res.values[nm], "sigma": res.sigma[nm], "unit": info.unit, "status": res.status[nm]}
-    out = {"format": FORMAT_CALIBRATION, "robot": robot.name, "compensation": compensation, "trusted": not res.warnings,
+    harmonic = any(info.kind in HARMONICS for info in res.infos)
+    out = {"format": FORMAT_CALIBRATION_HARMONICS if harmonic else FORMAT_CALIBRATION, "robot": robot.name,
+           "compensation": compensation, "trusted": not res.warnings,
            "parameters": params,
            "unidentifiable": res.unidentifiable, "residual_rms_mm": res.rms_mm, "points": int(res.residuals_mm.shape[0]),
            "fit": {"success": res.success, "message": res.message, "nfev": res.nfev,

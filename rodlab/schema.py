@@ -63,7 +63,7 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
 UNCHECKED = {f"rodlab.{n}/1": "an output record of rodlab without a schema: only its JSON syntax is checked"
              for n in ("run", "sweep", "study", "joints", "mass", "comparison", "reference_designs")}
 #: format ids a file may state that are checked with another id's schema
-ALIASES = {"rodlab.robot/1": "rodlab.robot/2"}
+ALIASES = {"rodlab.robot/1": "rodlab.robot/2", "rodlab.calibration/2": "rodlab.calibration/1"}
 
 
 @dataclass(frozen=True)

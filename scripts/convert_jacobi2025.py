@@ -10,11 +10,14 @@ Method for Enhancing the Pose Accuracy of Serial Industrial Robots", Master's th
 
 Columns used: ``joint_1`` .. ``joint_6`` [deg], the commanded joints, which are the URDF's joints
 (calibrate/robots/ur5.urdf); ``x_t, y_t, z_t`` [mm], the target: the nominal forward kinematics of those
-joints with the source's tool-centre frame (the nominal model with base and tool registered reproduces them to
-0.01 mm), in UR's "base" frame; ``x_dif, y_dif, z_dif`` [mm], "the difference between the target and the
-actual position". The measured position written is target + difference (actual minus target, the usual
-sense): calibrated on the grid, that reading leaves 0.061 mm rms per coordinate against 0.064 mm for target
-minus difference. The Barrett WAM files of the source (a cable-driven arm, 2 mm repeatability, no URDF in
+joints with the source's tool-centre frame (UR's DH with a tool of about (0, 0.07, 31.0) mm reproduces them to
+0.007 mm rms, 0.04 mm at most), in UR's ``base`` frame (ur_description's ``base``, turned 180 deg about z from
+``base_link``: a calibration reads base_c near -180 deg); ``x_dif, y_dif, z_dif`` [mm], "the difference between
+the target and the actual position". The measured position written is target + difference: for every value
+of both files that sum is a number with six decimals, as the tracker's readings were recorded, and target
+minus difference is not (9 of 3,060): the difference was computed as measured minus target. The script
+checks this and warns if a file breaks it. The SMR and its nest (some 0.2 kg) are not in the source, so the
+payload is 0. The Barrett WAM files of the source (a cable-driven arm, 2 mm repeatability, no URDF in
 rodlab) are not converted. The tool guess is the source's tool-centre frame, 30 mm along the flange's z.
 
     python scripts/convert_jacobi2025.py SRC_DIR -o benchmarks/data/jacobi2025
@@ -42,7 +45,7 @@ HEADER = """# Laser-tracker points of a Universal Robots UR5, {name}: public dat
 # github.com/pauljac7700/serial_robots_datasets (MIT; {source}), converted by
 # scripts/convert_jacobi2025.py.
 # q [deg] are the URDF's joints (calibrate/robots/ur5.urdf); x, y, z [mm] the SMR position measured by a
-# GTS3800 laser tracker, in the robot's base frame as the source registered it (target + difference).
+# GTS3800 laser tracker, in UR's base frame as the source registered it (target + difference).
 # The tool below is the source's nominal tool-centre frame; calibration finds the real one.
 # tool_mm: 0, 0, 30
 # rod_mass_kg: 0
@@ -79,6 +82,10 @@ def convert_set(path: Path, name: str) -> str:
     target = np.column_stack([_column(rows, f"{c}_t", path) for c in "xyz"])
     diff = np.column_stack([_column(rows, f"{c}_dif", path) for c in "xyz"])
     x = target + diff
+    off_grid = int(np.sum(np.abs(x * 1e6 - np.round(x * 1e6)) > 1e-3))
+    if off_grid:
+        print(f"warning: {path}: {off_grid} of {x.size} values of target + difference are not six-decimal readings; "
+              f"check the sign of the difference columns", file=sys.stderr)
     lines = [",".join([f"{v:.6f}" for v in qq] + [f"{v:.4f}" for v in xx]) for qq, xx in zip(q, x)]
     head = HEADER.format(name=f"{name} poses", source=path.name)
     return head + "q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n" + "\n".join(lines) + "\n"

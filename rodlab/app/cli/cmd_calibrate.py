@@ -71,6 +71,10 @@ def register(sub) -> None:
     p.add_argument("--fit-placements", default=None, metavar="LIST",
                    help="with --sockets: fit on these placements (e.g. 1,3) and check the model on the file's "
                         "others (consistency and distortion on placements the fit never saw)")
+    p.add_argument("--joint-harmonics", default=None, metavar="LIST",
+                   help="also identify a periodic angle error of these joints (e.g. 1,4): first and second harmonic "
+                        "of the joint reading, h1s_j h1c_j h2s_j h2c_j [deg] (gear or encoder eccentricity, as "
+                        "`rodlab diagnose` names it); the result is then rodlab.calibration/2")
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
     p.add_argument("--png", default=None,
                    help="folder for figures: residuals per position; with --validate the validation error distribution")
@@ -89,6 +93,16 @@ def register(sub) -> None:
     _common(p)
     p.set_defaults(func=cmd_compare)
     register_more(sub)
+
+
+def parse_joint_list(text: str | None, flag: str = "--joint-harmonics") -> tuple:
+    """``"1,4"`` -> (1, 4); the robot's own check names joints it does not have."""
+    if not text:
+        return ()
+    try:
+        return tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
+    except ValueError:
+        raise RodlabError(f"{flag} {text!r}: expected joint numbers separated by commas, e.g. 1,4") from None
 
 
 def parse_pins(items) -> dict:
@@ -149,7 +163,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    also_compensate=_thermal(args, camp, rod),
                    pinned=parse_pins(args.pin), freed=set(args.free), robust=args.robust,
-                   fix_unidentifiable=args.fix_unidentifiable,
+                   fix_unidentifiable=args.fix_unidentifiable, harmonics=parse_joint_list(getattr(args, "joint_harmonics", None)),
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
     run = CalibrationRun(robot, camp, res)
     if args.validate:
@@ -184,6 +198,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.points and args.thermal:
         raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
                           "points (--points) have no rod to grow: leave --thermal out")
+    if args.sockets and args.joint_harmonics:
+        raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
+                          "no periodic joint errors: leave it out")
     if args.sockets:
         from .cmd_sockets import calibrate_sockets
         return calibrate_sockets(args)
@@ -304,7 +321,7 @@ def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     res = identify_points(robot, pts, noise_mm, pinned=parse_pins(args.pin), freed=args.free, robust=args.robust,
-                          fix_unidentifiable=args.fix_unidentifiable)
+                          fix_unidentifiable=args.fix_unidentifiable, harmonics=parse_joint_list(args.joint_harmonics))
     before = after = None
     if args.validate:
         test = read_points(args.validate, robot.n)

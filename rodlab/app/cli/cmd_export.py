@@ -68,8 +68,9 @@ def cmd_export(args) -> int:
         res = write_calibrated_urdf(args.urdf, robot, params, urdf_out, _check_configurations(args, robot),
                                     args.base_link, args.tip_link, source=Path(args.calibration).name)
         origins = res.origins
+        left_out = "joint compliance and periodic joint errors are" if params.h.any() else "joint compliance is"
         print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model over "
-              f"{res.configurations} configurations; joint compliance is not in the URDF, see the YAML)")
+              f"{res.configurations} configurations; {left_out} not in the URDF, see the YAML)")
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
     if not cal.trusted:

@@ -49,6 +49,7 @@ READERS = {
     "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),
     "urdf": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.calibration/1": _lazy("rodlab.calibrate.calibration_file", "read_calibration"),
+    "rodlab.calibration/2": _lazy("rodlab.calibrate.calibration_file", "read_calibration"),
     "rodlab.rigplan/1": _lazy("rodlab.stiffness_rig.config", "read_plan"),
     "rodlab.rigprofile/1": _lazy("rodlab.stiffness_rig.config", "read_profile"),
     "rodlab.rig/1": _lazy("rodlab.stiffness_rig", "read_recording"),

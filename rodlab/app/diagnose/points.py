@@ -134,7 +134,8 @@ def _candidates(q: np.ndarray, cols: np.ndarray):
         harmonics = np.c_[np.sin(q[:, j]), np.cos(q[:, j]), np.sin(2 * q[:, j]), np.cos(2 * q[:, j])]
         yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics),
                f"an angle error periodic in joint {j + 1}'s angle (gear eccentricity, encoder or transmission "
-               "error) that the geometric model cannot carry")
+               f"error) that the geometric model cannot carry: model it with `rodlab calibrate --joint-harmonics "
+               f"{j + 1}`")
         a = approach[:, j]
         if (a > 0).sum() >= 3 and (a < 0).sum() >= 3:
             yield ("lost_motion", f"joint {j + 1}", _through_joint(cols[:, j], a[:, None]),

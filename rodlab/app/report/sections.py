@@ -260,5 +260,6 @@ SECTIONS: dict[str, Section] = {
                                                                  "error_distributions.png")),
     "rodlab.points_diagnosis/1": Section("Diagnosis of instrument points", 61, _points_diagnosis),
     "rodlab.calibration/1": Section("Calibration", 50, _calibration, ("residuals.png", "error_distributions.png")),
+    "rodlab.calibration/2": Section("Calibration", 50, _calibration, ("residuals.png", "error_distributions.png")),
     FORMAT_COMPARISON: Section("Compensation methods compared (Table 3)", 55, _comparison, ("*fig10.png",)),
 }

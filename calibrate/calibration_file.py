@@ -3,7 +3,7 @@ the model it describes."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +28,9 @@ class CalibratedParameter:
 
 @dataclass(frozen=True)
 class CalibrationFile:
-    """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters."""
+    """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters; for a
+    ``/2`` result the periodic terms' references (joint -> 4 means) and the readings they were identified over
+    (joint -> (min, max) [deg])."""
 
     path: Path
     robot: str
@@ -36,6 +38,8 @@ class CalibrationFile:
     trusted: bool
     residual_rms_mm: float
     parameters: dict
+    harmonic_reference: dict = field(default_factory=dict)
+    harmonic_range_deg: dict = field(default_factory=dict)
 
 
 def read_calibration(path) -> CalibrationFile:
@@ -57,8 +61,27 @@ def read_calibration(path) -> CalibrationFile:
     require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
     params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
               for name, v in data["parameters"].items()}
+    ref, rng = _harmonics(data, params, p)
     return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
-                           bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params)
+                           bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params,
+                           ref, rng)
+
+
+def _harmonics(data: dict, params: dict, p: Path) -> tuple[dict, dict]:
+    """The ``/2`` block: {joint: reference} and {joint: (min, max)}; periodic parameters need it and ``/2``."""
+    joints = {int(name.rpartition("_")[2]) for name in params if name.rpartition("_")[0] in HARMONICS}
+    block = data.get("joint_harmonics", {})
+    if joints and data["format"] == FORMAT_CALIBRATION:
+        raise CalibrationError(f"periodic joint-error parameters of joints {sorted(joints)} in a \"{FORMAT_CALIBRATION}\" "
+                               f"file: they belong to \"{CALIBRATION_FORMATS[1]}\" (written by `rodlab calibrate "
+                               f"--joint-harmonics`)", path=p, key="format")
+    missing = sorted(j for j in joints if str(j) not in block)
+    if missing:
+        raise CalibrationError(f"periodic joint errors of joints {missing} have no reference in `joint_harmonics`; "
+                               f"write the file with `rodlab calibrate --joint-harmonics`", path=p,
+                               key="joint_harmonics")
+    return ({int(j): v["reference"] for j, v in block.items()},
+            {int(j): (v["q_min_deg"], v["q_max_deg"]) for j, v in block.items()})
 
 
 def _sigma(v: dict) -> float:
@@ -87,10 +110,11 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
             for k, v in (("d", robot.d_mm), ("a", robot.a_mm), ("alpha", robot.alpha_deg), ("beta", robot.beta_deg),
                          ("dtheta", np.zeros(n)), ("c", np.zeros(n)))}
     h = np.deg2rad([[get(f"{t}_{i + 1}", 0.0) for t in HARMONICS] for i in range(n)])
+    h_ref = np.array([cal.harmonic_reference.get(i + 1, [0.0] * len(HARMONICS)) for i in range(n)], float)
     return ModelParams(np.deg2rad(robot.theta_offset_deg + rows["dtheta"]), rows["d"], rows["a"],
                        np.deg2rad(rows["alpha"]), np.deg2rad(rows["beta"]), rows["c"],
                        np.array([get(f"base_{k}", 0.0) for k in "xyzabc"]),
-                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h)
+                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h, h_ref)
 
 
 def _check_description(robot, cal: CalibrationFile) -> None:

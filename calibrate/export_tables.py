@@ -56,16 +56,26 @@ def params_yaml(robot, cal: CalibrationFile, params: ModelParams, origins: dict 
         out.write(f"  {name}: {{value: {_num(params.c[i])}, sigma: {_num(sp.sigma if sp else 0.0)}, "
                   f"unit: rad/(N m)}}\n")
     if params.h.any():
-        out.write("joint_harmonics:   # theta_i = q_i + h1s sin q_i + h1c cos q_i + h2s sin 2q_i + h2c cos 2q_i [deg]; "
-                  "not expressible in URDF\n")
-        for i, name in enumerate(robot.joint_names):
-            if params.h[i].any():
-                terms = ", ".join(f"{t}: {_num(v)}" for t, v in zip(HARMONICS, np.rad2deg(params.h[i])))
-                out.write(f"  {name}: {{{terms}, unit: deg}}\n")
+        _harmonics_yaml(out, robot, cal, params)
     out.write("parameters:   # every parameter of the identification\n")
     for name, v in cal.parameters.items():
         out.write(f"  {name}: {{value: {_num(v.value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}\n")
     return out.getvalue()
+
+
+def _harmonics_yaml(out, robot, cal: CalibrationFile, params: ModelParams) -> None:
+    """``joint_harmonics:``: per joint its four terms with sigma, their references and the readings' range."""
+    out.write("joint_harmonics:   # theta_i = q_i + sum_k h_k (f_k(q_i) - reference_k), f = sin q, cos q, sin 2q, cos 2q; "
+              "[deg]; valid over q_min..q_max; not expressible in URDF\n")
+    for i, name in enumerate(robot.joint_names):
+        if not params.h[i].any():
+            continue
+        terms = ", ".join(f"{t}: {{value: {_num(v)}, sigma: {_num(cal.parameters[f'{t}_{i + 1}'].sigma)}}}"
+                          for t, v in zip(HARMONICS, np.rad2deg(params.h[i])) if f"{t}_{i + 1}" in cal.parameters)
+        lo, hi = cal.harmonic_range_deg.get(i + 1, (float("nan"), float("nan")))
+        ref = ", ".join(_num(v) for v in params.h_ref[i])
+        out.write(f"  {name}: {{{terms}, reference: [{ref}], q_min_deg: {_num(lo)}, q_max_deg: {_num(hi)}, "
+                  f"unit: deg}}\n")
 
 
 def _nominal_row(robot, i: int) -> dict:
@@ -81,8 +91,10 @@ def _calibrated_row(params: ModelParams, i: int) -> dict:
 def dh_table_csv(robot, cal: CalibrationFile, params: ModelParams) -> str:
     """One row per joint: nominal, calibrated and sigma of each DH quantity (and the compliance c)."""
     cols = ["joint", "name"] + [f"{k}_{what}" for k, _ in _ROW for what in ("nominal", "calibrated", "sigma")]
+    left_out = ("; the periodic joint errors of " + ", ".join(n for n, h in zip(robot.joint_names, params.h) if h.any())
+                + " are not in this table (see the YAML)") if params.h.any() else ""
     lines = [f"# {robot.name}: T_(i-1,i) = Rz(theta_offset_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i); units: "
-             + ", ".join(f"{k} [{u}]" for k, u in _ROW) + f"; from {cal.path.name}", ",".join(cols)]
+             + ", ".join(f"{k} [{u}]" for k, u in _ROW) + f"; from {cal.path.name}{left_out}", ",".join(cols)]
     for i, name in enumerate(robot.joint_names):
         nom, now = _nominal_row(robot, i), _calibrated_row(params, i)
         cells = [str(i + 1), name]

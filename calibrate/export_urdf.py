@@ -38,12 +38,15 @@ TCP_LINK = "rodlab_tcp"
 @dataclass(frozen=True)
 class UrdfExport:
     """A written calibrated URDF: its path, the check of the file read back against the model over the given
-    configurations (largest TCP position difference [um]), and the new joint origins (name -> 4x4 [mm])."""
+    configurations (largest TCP position difference [um]), the new joint origins (name -> 4x4 [mm]), and the
+    largest TCP effects [mm] over those configurations of what a URDF cannot hold: (joint compliance under the
+    links' own weight, periodic joint errors)."""
 
     path: Path
     configurations: int
     max_error_um: float
     origins: dict
+    omitted_max_mm: tuple = (0.0, 0.0)
 
 
 def _rz(theta) -> np.ndarray:
@@ -108,8 +111,10 @@ def _note(robot, params: ModelParams, source: str) -> str:
                            for t, (k, f) in HARMONICS.items())
         h = "; ".join(f"{nm}: " + ", ".join(f"{t} {v:.4g}" for t, v in zip(HARMONICS, np.rad2deg(row)))
                       for nm, row in zip(robot.joint_names, params.h) if row.any())
-        text += (" Nor can the periodic joint errors, which are NOT in this file either: a controller adds "
-                 f"{terms} [deg] to each joint reading, with {h} (also in the YAML).")
+        text += (" Nor can the periodic joint errors, which are NOT in this file either: the joint turns by its "
+                 f"reading plus {terms} [deg], each term less its mean over the calibration's readings (the YAML "
+                 f"gives the terms, those means and the range of readings they hold for), with {h}; a controller "
+                 "commanding an angle subtracts it.")
     return text + " -->"
 
 
@@ -137,7 +142,19 @@ def write_calibrated_urdf(urdf_path, robot, params: ModelParams, out_path, q_che
     out = Path(out_path)
     err = _check(text, out, params, q_check_rad)
     atomic_write_text(out, text)
-    return UrdfExport(out, int(np.atleast_2d(q_check_rad).shape[0]), err, dict(zip(ch.revolute, origins)))
+    return UrdfExport(out, int(np.atleast_2d(q_check_rad).shape[0]), err, dict(zip(ch.revolute, origins)),
+                      _omitted_mm(robot, params, q_check_rad))
+
+
+def _omitted_mm(robot, params: ModelParams, q) -> tuple[float, float]:
+    """Largest TCP effect [mm] of the joint compliance (no payload) and of the periodic joint errors: what the
+    URDF, the model's geometric part, leaves out."""
+    from .kinematics import ball_positions
+    q = np.atleast_2d(q)
+    no_h = params.with_(h=np.zeros_like(params.h))
+    compliance = ball_positions(robot, no_h, q)[0].pW - forward(no_h, q).pW
+    periodic = forward(params, q).pW - forward(no_h, q).pW
+    return tuple(float(np.linalg.norm(d, axis=1).max()) for d in (compliance, periodic))
 
 
 def _check(text: str, out: Path, params: ModelParams, q) -> float:

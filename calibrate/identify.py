@@ -30,7 +30,7 @@ from .compensation import deflection_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
-from .kinematics import HARMONICS, ModelParams, ball_positions
+from .kinematics import HARMONICS, ModelParams, ball_positions, harmonic_reference
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
@@ -159,7 +159,8 @@ class CalibrationResult:
     rms_mm : per scalar reading; noise_mm : estimate; correlation : (P, P) of the free parameters;
     offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations;
     warnings : reasons not to trust the result (:func:`trust_warnings`); cautions : what a trusted result
-    should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None
+    should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None;
+    harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over
     """
 
     params: ModelParams
@@ -182,6 +183,7 @@ class CalibrationResult:
     warnings: list = field(default_factory=list)
     residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
     cautions: list = field(default_factory=list)
+    harmonic_range_deg: dict = field(default_factory=dict)   # joint (1-based) -> (min, max) reading [deg] of the data
 
 
 def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
@@ -244,6 +246,8 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     infos = catalogue(robot.n, positions, harmonics)
     _check_names([i.name for i in infos], pinned, freed)
     start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
+    if harmonics:
+        start = start.with_(h_ref=harmonic_reference(obs.q_rad, harmonics))
     x = _pinned_vector(infos, start, pinned)
     free, reasons = _free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
                                      fix_unidentifiable)
@@ -256,6 +260,8 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     st = _compensate(robot, obs, rod, start, infos, x, free, rough, (lower, upper), robust, max_compensation,
                      fixture_sigma, also_compensate)
     out = _result(robot, obs, start, infos, reasons, st, fixture_sigma)
+    out.harmonic_range_deg = {j: (float(np.rad2deg(obs.q_rad[:, j - 1].min())), float(np.rad2deg(obs.q_rad[:, j - 1].max())))
+                              for j in sorted(set(harmonics))}
     if expected_noise_mm:
         from .residual_test import residual_test
         out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
@@ -278,14 +284,17 @@ def _check_harmonics(harmonics, n: int) -> None:
     bad = [j for j in harmonics if not (isinstance(j, (int, np.integer)) and 1 <= j <= n)]
     if bad:
         raise CalibrationError(f"joint harmonics: {bad} are not joints of this {n}-joint robot; give joint numbers "
-                               f"1..{n}, e.g. 1,4", key="harmonics")
+                               f"1..{n}, e.g. 1,4")
 
 
 def _check_names(names: list, pinned: dict, freed: set) -> None:
     for nm in list(pinned) + list(freed):
         if nm not in names:
             from rodlab.errors import did_you_mean
-            raise CalibrationError(f"unknown parameter {nm!r}." + did_you_mean(nm, names), key="parameters")
+            kind, _, j = nm.rpartition("_")
+            hint = (f" It is a periodic joint error: add joint {j} to --joint-harmonics." if kind in HARMONICS
+                    else did_you_mean(nm, names))
+            raise CalibrationError(f"unknown parameter {nm!r}." + hint, key="parameters")
 
 
 def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool):

@@ -5,7 +5,7 @@ import numpy as np
 
 from rodlab.frames import rot_x, rot_y
 
-from .kinematics import HARMONICS, Frames, _cross
+from .kinematics import HARMONICS, Frames, _cross, harmonic_basis
 from .params import INTERNAL_SCALE, ParamInfo
 
 __all__ = ["position_jacobian"]
@@ -31,8 +31,8 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
             if kind == "c":
                 col = col * tau[:, i:i + 1]
             elif kind in HARMONICS:
-                order, f = HARMONICS[kind]
-                col = col * f(order * fr.q[:, i:i + 1])
+                basis = fr.harmonic if fr.harmonic is not None else harmonic_basis(fr.q)
+                col = col * basis[:, i, list(HARMONICS).index(kind), None]
         elif kind == "d":
             col = fr.z_prev[:, i]
         elif kind == "a":

@@ -2,8 +2,10 @@
 
 Model (contract): ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)``,
 ``theta_i = q_i + theta_offset_i + dtheta_i + c_i tau_i``; ``p^W = T_0^W T_0^n [tool, 1]``, ``T_0^W = T(base)``.
-Extension (``rodlab.calibration/2``): a periodic error of the joint reading, ``+ h1s_i sin q_i + h1c_i cos q_i +
-h2s_i sin 2q_i + h2c_i cos 2q_i`` (gear or encoder eccentricity), zero unless identified.
+Extension (``rodlab.calibration/2``): a periodic error of the joint reading, ``+ h1s_i (sin q_i - m1s_i) + h1c_i
+(cos q_i - m1c_i) + h2s_i (sin 2q_i - m2s_i) + h2c_i (cos 2q_i - m2c_i)`` (gear or encoder eccentricity), zero
+unless identified; the ``m`` are each term's mean over the calibration's readings, so that the term has no
+constant part there and the geometric rows alone stay the best geometric model.
 Internal units: mm, rad, N, N m; arrays over N configurations.
 """
 from __future__ import annotations
@@ -14,7 +16,8 @@ import numpy as np
 
 from rodlab.frames import pose_to_matrix
 
-__all__ = ["ModelParams", "Frames", "HARMONICS", "harmonic_basis", "forward", "static_torques", "ball_positions"]
+__all__ = ["ModelParams", "Frames", "HARMONICS", "harmonic_basis", "harmonic_reference", "forward", "static_torques",
+           "ball_positions"]
 
 #: the periodic joint-error terms, in the column order of :attr:`ModelParams.h`: name -> (order, sin or cos)
 HARMONICS = {"h1s": (1, np.sin), "h1c": (1, np.cos), "h2s": (2, np.sin), "h2c": (2, np.cos)}
@@ -25,13 +28,24 @@ def harmonic_basis(q_rad: np.ndarray) -> np.ndarray:
     return np.stack([f(k * q_rad) for k, f in HARMONICS.values()], axis=-1)
 
 
+def harmonic_reference(q_rad: np.ndarray, joints) -> np.ndarray:
+    """:attr:`ModelParams.h_ref` for the readings ``q_rad`` (N, n): each term's mean for the 1-based ``joints``,
+    zeros elsewhere."""
+    ref = np.zeros((np.shape(q_rad)[1], len(HARMONICS)))
+    for j in joints:
+        ref[j - 1] = harmonic_basis(np.asarray(q_rad)[:, j - 1:j]).mean(axis=0)[0]
+    return ref
+
+
 @dataclass(frozen=True)
 class ModelParams:
     """Actual values of every model parameter (internal units).
 
     theta_offset, alpha, beta [rad], d, a [mm] : shape=(n,); c [rad/(N m)] : shape=(n,);
     base : pose of {0} in {W} [mm, deg] (contract pose vector), shape=(6,); tool : ball centre in {n} [mm];
-    h : periodic joint-angle errors [rad], shape=(n, 4), columns :data:`HARMONICS` (None: zeros)
+    h : periodic joint-angle errors [rad], shape=(n, 4), columns :data:`HARMONICS` (None: zeros);
+    h_ref : the mean of each term's function over the calibration's readings, shape=(n, 4) (None: zeros): the
+        model adds ``h * (f(q) - h_ref)``
     """
 
     theta_offset: np.ndarray
@@ -43,14 +57,17 @@ class ModelParams:
     base: np.ndarray
     tool: np.ndarray
     h: np.ndarray | None = None
+    h_ref: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.theta_offset)
-        h = np.zeros((n, len(HARMONICS))) if self.h is None else np.asarray(self.h, float)
-        if h.shape != (n, len(HARMONICS)):
-            raise ValueError(f"ModelParams.h: expected shape ({n}, {len(HARMONICS)}) (joints x harmonic terms), "
-                             f"got {h.shape}")
-        object.__setattr__(self, "h", h)
+        for name in ("h", "h_ref"):
+            v = getattr(self, name)
+            v = np.zeros((n, len(HARMONICS))) if v is None else np.asarray(v, float)
+            if v.shape != (n, len(HARMONICS)):
+                raise ValueError(f"ModelParams.{name}: expected shape ({n}, {len(HARMONICS)}) (joints x harmonic "
+                                 f"terms), got {v.shape}")
+            object.__setattr__(self, name, v)
 
     @classmethod
     def nominal(cls, robot, tool_mm, base=None) -> "ModelParams":
@@ -70,7 +87,9 @@ class Frames:
     T : shape=(N, n + 1, 4, 4), frames 0..n; z_prev, o_prev : joint axes and origins (frames i-1);
     xA : x axis after Rz(theta) (the a_i and alpha_i directions); yB : y axis after Rx(alpha) (beta_i);
     o_i : origins of frames i; p0 : ball centre in {0}, shape=(N, 3); pW : in {W}; R_W0 : shape=(3, 3);
-    theta : joint angles of the rows [rad]; q : the joint readings they came from [rad], shape=(N, n)
+    theta : joint angles of the rows [rad]; q : the joint readings they came from [rad], shape=(N, n);
+    harmonic : the periodic terms' functions of the readings less their reference, shape=(N, n, 4), or None
+        when the model has no periodic terms
     """
 
     T: np.ndarray
@@ -85,6 +104,7 @@ class Frames:
     t_W0: np.ndarray
     theta: np.ndarray
     q: np.ndarray
+    harmonic: np.ndarray | None = None
 
 
 def _rows(theta, d, a, alpha, beta):
@@ -114,8 +134,10 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     q = np.atleast_2d(q_rad)
     N, n = q.shape
     theta = q + params.theta_offset[None, :]
-    if params.h.any():
-        theta = theta + np.einsum("nk,Nnk->Nn", params.h, harmonic_basis(q))
+    harmonic = None
+    if params.h.any() or params.h_ref.any():
+        harmonic = harmonic_basis(q) - params.h_ref[None]
+        theta = theta + np.einsum("nk,Nnk->Nn", params.h, harmonic)
     if tau_Nm is not None:
         theta = theta + params.c[None, :] * tau_Nm
     rows, RzRx = _rows(theta, params.d, params.a, params.alpha, params.beta)
@@ -134,7 +156,7 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     TB = pose_to_matrix(params.base)
     R_W0, t_W0 = TB[:3, :3], TB[:3, 3]
     pW = p0 @ R_W0.T + t_W0
-    return Frames(T, z_prev, o_prev, xA, yB, o_i, p0, pW, R_W0, t_W0, theta, q)
+    return Frames(T, z_prev, o_prev, xA, yB, o_i, p0, pW, R_W0, t_W0, theta, q, harmonic)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -117,4 +117,4 @@ def apply(base: ModelParams, infos: list[ParamInfo], x_internal: np.ndarray) -> 
             tool["xyz".index(info.name[-1])] += val
         elif k == "fixture":
             pass                                        # applied to the measurements, not the model
-    return ModelParams(th, d, a, al, be, c, bp, tool, h)
+    return ModelParams(th, d, a, al, be, c, bp, tool, h, base.h_ref)

@@ -36,6 +36,9 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
                    "warnings": res.warnings, "cautions": res.cautions}}
     if res.residual_check is not None:
         out["fit"]["residual_test"] = res.residual_check.to_dict()
+    if harmonic:
+        out["joint_harmonics"] = {str(j): {"reference": res.params.h_ref[j - 1].tolist(), "q_min_deg": lo,
+                                           "q_max_deg": hi} for j, (lo, hi) in res.harmonic_range_deg.items()}
     if before is not None and after is not None:
         out["validation"] = {"before": before.to_dict(), "after": after.to_dict()}
     if extra:

@@ -46,7 +46,18 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
 
 def trust_cautions(res: "CalibrationResult") -> list[str]:
     """What a result that passes :func:`trust_warnings` should be read with: residuals significantly but only
-    slightly above the noise model (Birge ratio at most :data:`~calibrate.residual_test.BIRGE_MATERIAL`)."""
+    slightly above the noise model (Birge ratio at most :data:`~calibrate.residual_test.BIRGE_MATERIAL`), and
+    periodic joint errors identified over part of a turn."""
+    return _residual_caution(res) + _partial_turn_cautions(res)
+
+
+def _partial_turn_cautions(res: "CalibrationResult") -> list[str]:
+    return [f"joint {j}'s periodic error was identified over {lo:.0f}..{hi:.0f} deg of its reading: it describes "
+            f"the error there, not over the gear's whole turn; do not use it outside that range"
+            for j, (lo, hi) in sorted(res.harmonic_range_deg.items()) if hi - lo < 180.0]
+
+
+def _residual_caution(res: "CalibrationResult") -> list[str]:
     from .residual_test import BIRGE_MATERIAL
     test = res.residual_check
     if test is None or not test.missing or test.material:

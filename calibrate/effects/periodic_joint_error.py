@@ -50,7 +50,10 @@ class PeriodicJointError(CampaignEffectModel):
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         fr, N, out = ctx.frames, ctx.n_points, []
+        modelled = getattr(ctx.result, "harmonic_range_deg", {})     # joints the identification already carries
         for k in range(ctx.robot.n):
+            if k + 1 in modelled:
+                continue
             g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
             q = ctx.obs.q_rad[:, k]
             H = np.stack([g * np.sin(q)[:, None], g * np.cos(q)[:, None]], axis=-1).reshape(3 * N, 2)

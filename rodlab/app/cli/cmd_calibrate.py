@@ -97,12 +97,15 @@ def register(sub) -> None:
 
 def parse_joint_list(text: str | None, flag: str = "--joint-harmonics") -> tuple:
     """``"1,4"`` -> (1, 4); the robot's own check names joints it does not have."""
-    if not text:
+    if text is None:
         return ()
     try:
-        return tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
+        joints = tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
     except ValueError:
-        raise RodlabError(f"{flag} {text!r}: expected joint numbers separated by commas, e.g. 1,4") from None
+        joints = ()
+    if not joints:
+        raise RodlabError(f"{flag} {text!r}: expected joint numbers separated by commas, e.g. 1,4")
+    return joints
 
 
 def parse_pins(items) -> dict:
@@ -280,7 +283,7 @@ def _print_suspects(robot, camp, args, rod, comp, test) -> None:
     from rodlab.app.diagnose.advice import remedy
     used = comp.rod if comp.active else RodCompliance.none_like(rod)
     diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=test.noise_mm,
-                                fixture_sigma=test.fixture_sigma)
+                                fixture_sigma=test.fixture_sigma, harmonics=parse_joint_list(args.joint_harmonics))
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""

@@ -1,6 +1,7 @@
 """``rodlab export``: a calibration result in the forms controllers and ROS take (URDF, YAML, DH table CSV)."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +51,17 @@ def _check_configurations(args, robot) -> np.ndarray:
     return np.deg2rad(np.random.default_rng(args.seed).uniform(lo, hi, (200, robot.n)))
 
 
+def _warn_outside_range(cal, q_rad) -> None:
+    """The periodic joint errors hold over the readings they were identified on: say where the check left them."""
+    for j, (lo, hi) in sorted(cal.harmonic_range_deg.items()):
+        q = np.rad2deg(np.atleast_2d(q_rad)[:, j - 1])
+        out = int(np.sum((q < lo - 1e-9) | (q > hi + 1e-9)))
+        if out:
+            print(f"note: joint {j}'s periodic error was identified over {lo:.1f}..{hi:.1f} deg; {out} of {len(q)} "
+                  f"check configurations lie outside it, where it is an extrapolation (give --validate with "
+                  f"configurations of the robot's work)", file=sys.stderr)
+
+
 def cmd_export(args) -> int:
     from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
@@ -65,12 +77,17 @@ def cmd_export(args) -> int:
     origins = None
     if urdf_out is not None:
         from rodlab.calibrate.export_urdf import write_calibrated_urdf
-        res = write_calibrated_urdf(args.urdf, robot, params, urdf_out, _check_configurations(args, robot),
+        q_check = _check_configurations(args, robot)
+        res = write_calibrated_urdf(args.urdf, robot, params, urdf_out, q_check,
                                     args.base_link, args.tip_link, source=Path(args.calibration).name)
         origins = res.origins
-        left_out = "joint compliance and periodic joint errors are" if params.h.any() else "joint compliance is"
-        print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model over "
-              f"{res.configurations} configurations; {left_out} not in the URDF, see the YAML)")
+        c_mm, h_mm = res.omitted_max_mm
+        left_out = (f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload) and the periodic joint "
+                    f"errors (up to {h_mm:.3f} mm) are") if params.h.any() else \
+            f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload) is"
+        print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model's geometry "
+              f"over {res.configurations} configurations; {left_out} not in the URDF, see the YAML)")
+        _warn_outside_range(cal, q_check)
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
     if not cal.trusted:

@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ...errors import LocatedError
-from ...schema import FORMATS, FileCheck, Problem, check_file
+from ...schema import ALIASES, FORMATS, FileCheck, Problem, check_file
 
 __all__ = ["register", "READERS", "validate_file"]
 
@@ -89,7 +89,7 @@ def register(sub) -> None:
                                    "whose own rules (a symmetric C_F, holds that keep their load, ...) it must "
                                    "also pass. Exit 0 if every file is valid, 2 otherwise.")
     p.add_argument("files", nargs="+", help="files to check")
-    p.add_argument("--format", default=None, choices=sorted(FORMATS) + ["rodlab.robot/1", "urdf"],
+    p.add_argument("--format", default=None, choices=sorted(FORMATS) + sorted(ALIASES) + ["urdf"],
                    help="check as this format instead of the one the file names")
     p.set_defaults(func=cmd_validate)
 

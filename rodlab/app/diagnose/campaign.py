@@ -309,7 +309,7 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
     if not fit.keep.all():
         obs2 = obs2.subset(fit.keep)
     res2 = identify(robot, obs2, rod.tool_mm, fit.rod, freed=fit.freed, expected_noise_mm=noise_mm,
-                    fixture_sigma=fixture_sigma)
+                    fixture_sigma=fixture_sigma, harmonics=tuple(ctx.result.harmonic_range_deg))
     return res2, fit
 
 
@@ -365,12 +365,14 @@ def _context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
 
 
 def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
-                      fixture_sigma=(0.01, 0.002)):
-    """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it."""
+                      fixture_sigma=(0.01, 0.002), harmonics=()):
+    """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
+    whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
     from rodlab.calibrate import campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
-    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma)
+    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
+                   harmonics=tuple(harmonics))
     ctx, tau = _context(robot, res, obs, camp, rod)
     sel = _Selection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()

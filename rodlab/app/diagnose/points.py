@@ -119,8 +119,9 @@ def _through_joint(cols_j: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (cols_j[:, :, None] * f[:, None, :]).reshape(-1, f.shape[1])
 
 
-def _candidates(q: np.ndarray, cols: np.ndarray):
-    """(effect, where, design (3N, k), meaning) of every candidate explanation."""
+def _candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
+    """(effect, where, design (3N, k), meaning) of every candidate explanation; ``modelled``: joints whose periodic
+    error the identification already carries."""
     N, n = q.shape
     t = np.linspace(-1.0, 1.0, N)
     yield ("drift", "measurement order", np.kron(np.c_[t, t ** 2], np.eye(3)),
@@ -132,10 +133,12 @@ def _candidates(q: np.ndarray, cols: np.ndarray):
         if np.ptp(q[:, j]) < np.deg2rad(1.0):
             continue
         harmonics = np.c_[np.sin(q[:, j]), np.cos(q[:, j]), np.sin(2 * q[:, j]), np.cos(2 * q[:, j])]
-        yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics),
-               f"an angle error periodic in joint {j + 1}'s angle (gear eccentricity, encoder or transmission "
-               f"error) that the geometric model cannot carry: model it with `rodlab calibrate --joint-harmonics "
-               f"{j + 1}`")
+        flag = ",".join(str(k) for k in sorted({*modelled, j + 1}))
+        if j + 1 not in modelled:
+            yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics),
+                   f"an angle error periodic in joint {j + 1}'s angle (gear eccentricity, encoder or transmission "
+                   f"error) that the geometric model cannot carry: model it with `rodlab calibrate "
+                   f"--joint-harmonics {flag}`")
         a = approach[:, j]
         if (a > 0).sum() >= 3 and (a < 0).sum() >= 3:
             yield ("lost_motion", f"joint {j + 1}", _through_joint(cols[:, j], a[:, None]),
@@ -178,7 +181,8 @@ def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     from rodlab.calibrate.kinematics import forward
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
-    findings = _greedy(r.ravel(), list(_candidates(q, _joint_columns(res.params, q))))
+    modelled = tuple(getattr(res, "harmonic_range_deg", {}))
+    findings = _greedy(r.ravel(), list(_candidates(q, _joint_columns(res.params, q), modelled)))
     dof = max(r.size - len(res.free), 1)
     p0 = forward(res.params, q).p0
     return PointsDiagnosis(len(r), float(np.sqrt(np.mean(r ** 2))), float(noise_mm),

@@ -239,15 +239,18 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def print_cautions(res) -> None:
-    """A trusted result's cautions (residuals slightly above the noise model)."""
+    """A trusted result's cautions (residuals slightly above the noise model, partial-turn periodic terms)."""
     for c in res.cautions:
         print(f"caution (trusted): {c}", file=sys.stderr)
 
 
 def print_not_trusted(res) -> None:
+    """The reasons not to trust a result, and its cautions (which hold for a later, trusted fit too)."""
     print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
     for w in res.warnings:
         print(f"  - {w}", file=sys.stderr)
+    for c in res.cautions:
+        print(f"caution: {c}", file=sys.stderr)
 
 
 def write_result_file(args, result: dict) -> list:

@@ -26,15 +26,13 @@ SRC_DIR is a checkout of the source repository (or a folder holding the two CSV 
 """
 from __future__ import annotations
 
-import argparse
 import csv
-import hashlib
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from source_tables import column, convert_main, warn_if_changed
 
 SETS = {"grid": "3D_UR5_uncalibrated_grid_cleaned.csv", "random": "3D_UR5_uncalibrated_random_cleaned.csv"}
 #: sha256 of the source files this script was written for (git commit 759068d of the source repository)
@@ -53,34 +51,14 @@ HEADER = """# Laser-tracker points of a Universal Robots UR5, {name}: public dat
 """
 
 
-def _find(src: Path, name: str) -> Path:
-    hits = sorted(src.rglob(name))
-    if not hits:
-        raise SystemExit(f"{src}: no {name} below it; give a checkout of github.com/pauljac7700/"
-                         f"serial_robots_datasets")
-    return hits[0]
-
-
-def _column(rows: list[dict], key: str, path: Path) -> np.ndarray:
-    try:
-        return np.array([float(r[key]) for r in rows])
-    except KeyError:
-        raise SystemExit(f"{path}: no column {key!r}") from None
-    except ValueError as e:
-        raise SystemExit(f"{path}: column {key!r}: {e}") from None
-
-
 def convert_set(path: Path, name: str) -> str:
     """The rodlab points file (text) of one source file."""
-    digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    if digest != SHA256[name]:
-        print(f"warning: {path} differs from the file this script was written for (sha256 {digest})",
-              file=sys.stderr)
+    warn_if_changed(path, SHA256[name])
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
-    q = np.column_stack([_column(rows, j, path) for j in JOINTS])
-    target = np.column_stack([_column(rows, f"{c}_t", path) for c in "xyz"])
-    diff = np.column_stack([_column(rows, f"{c}_dif", path) for c in "xyz"])
+    q = np.column_stack([column(rows, j, path) for j in JOINTS])
+    target = np.column_stack([column(rows, f"{c}_t", path) for c in "xyz"])
+    diff = np.column_stack([column(rows, f"{c}_dif", path) for c in "xyz"])
     x = target + diff
     off_grid = int(np.sum(np.abs(x * 1e6 - np.round(x * 1e6)) > 1e-3))
     if off_grid:
@@ -92,15 +70,8 @@ def convert_set(path: Path, name: str) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("source", type=Path, help="checkout of the source repository")
-    ap.add_argument("-o", "--out", type=Path, default=Path("benchmarks/data/jacobi2025"))
-    a = ap.parse_args(argv)
-    for name, file in SETS.items():
-        text = convert_set(_find(a.source, file), name)
-        p = atomic_write_text(a.out / f"ur5_{name}.validation.csv", text)
-        print(f"wrote {p}")
-    return 0
+    return convert_main(argv, __doc__, "benchmarks/data/jacobi2025", SETS, "github.com/pauljac7700/serial_robots_datasets",
+                        convert_set, lambda key: f"ur5_{key}.validation.csv")
 
 
 if __name__ == "__main__":

@@ -23,15 +23,13 @@ SRC_DIR is a checkout of the source repository (or a folder holding the three CS
 """
 from __future__ import annotations
 
-import argparse
 import csv
-import hashlib
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from source_tables import column, convert_main, warn_if_changed
 
 SERIES = {"B": "measurements_joint_configurations.csv", "C": "measurements_random_poses.csv",
           "D": "measurements_iso_cubes.csv"}
@@ -53,36 +51,16 @@ HEADER = """# Laser-tracker points of a Universal Robots UR10 (CB3), series {ser
 """
 
 
-def _find(src: Path, name: str) -> Path:
-    hits = sorted(src.rglob(name))
-    if not hits:
-        raise SystemExit(f"{src}: no {name} below it; give a checkout of github.com/christianlandgraf/ipa-robot-"
-                         f"accuracy")
-    return hits[0]
-
-
-def _column(rows: list[dict], key: str, path: Path) -> np.ndarray:
-    try:
-        return np.array([float(r[key].replace(",", ".")) for r in rows])
-    except KeyError:
-        raise SystemExit(f"{path}: no column {key!r}") from None
-    except ValueError as e:
-        raise SystemExit(f"{path}: column {key!r}: {e}") from None
-
-
 def convert_series(path: Path, series: str) -> str:
     """The rodlab points file (text) of one source series."""
-    digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    if digest != SHA256[series]:
-        print(f"warning: {path} differs from the file this script was written for (sha256 {digest})",
-              file=sys.stderr)
+    warn_if_changed(path, SHA256[series])
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f, delimiter=";"))
-    q = np.rad2deg(np.column_stack([_column(rows, j, path) for j in JOINTS]))
-    x = np.column_stack([_column(rows, f"measurement_{c}", path) for c in "xyz"])
-    s = np.column_stack([_column(rows, f"measurement_std_{c}", path) for c in "xyz"])
+    q = np.rad2deg(np.column_stack([column(rows, j, path, decimal_comma=True) for j in JOINTS]))
+    x = np.column_stack([column(rows, f"measurement_{c}", path, decimal_comma=True) for c in "xyz"])
+    s = np.column_stack([column(rows, f"measurement_std_{c}", path, decimal_comma=True) for c in "xyz"])
     s = np.maximum(s, 1e-4)                 # a few rows state 0: the tracker's resolution instead
-    temp = float(np.mean(_column(rows, "measurement_temperature", path)))
+    temp = float(np.mean(column(rows, "measurement_temperature", path, decimal_comma=True)))
     lines = [",".join([f"{v:.5f}" for v in qq] + [f"{v:.4f}" for v in xx] + [f"{v:.4f}" for v in ss])
              for qq, xx, ss in zip(q, x, s)]
     head = HEADER.format(series=series, name=path.name, temp=temp)
@@ -91,15 +69,8 @@ def convert_series(path: Path, series: str) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("source", type=Path, help="checkout of the source repository")
-    ap.add_argument("-o", "--out", type=Path, default=Path("benchmarks/data/landgraf2021"))
-    a = ap.parse_args(argv)
-    for series, name in SERIES.items():
-        text = convert_series(_find(a.source, name), series)
-        p = atomic_write_text(a.out / f"ur10_{series}.validation.csv", text)
-        print(f"wrote {p}")
-    return 0
+    return convert_main(argv, __doc__, "benchmarks/data/landgraf2021", SERIES, "github.com/christianlandgraf/ipa-robot-accuracy",
+                        convert_series, lambda key: f"ur10_{key}.validation.csv")
 
 
 if __name__ == "__main__":

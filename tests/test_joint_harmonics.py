@@ -155,7 +155,7 @@ def test_version_1_files_with_periodic_terms_are_refused_and_version_2_is_valida
         read_calibration(bad)
     bad.unlink()
     html = write_folder_report(tmp_path).read_text()
-    assert "Calibration" in html and "h1s_4" in html
+    assert "Calibration" in html and "h1s_4" in html and "identified over joint 4 over" in html
 
 
 def test_unknown_joints_are_refused_with_the_valid_range(ur5):

@@ -82,6 +82,7 @@ def _verdict(trusted: bool, warnings: list, cautions: list = ()) -> str:
     if trusted:
         return "<p class=good>TRUSTED: the residuals are the device's noise; the parameters may be loaded.</p>"
     items = "".join(f"<li>{esc(w)}</li>" for w in warnings)
+    items += "".join(f"<li>caution: {esc(c)}</li>" for c in cautions)
     return f"<p class=bad>NOT TRUSTED: do not load these parameters into the robot.</p><ul>{items}</ul>"
 
 
@@ -124,6 +125,12 @@ def _calibration(src: Source) -> str:
     parts.append("<h3>Parameters</h3><p class=note>sigma: one standard deviation from the fit; regularised: held "
                  "near its prior because the campaign hardly sees it.</p>"
                  + table(["parameter", "value", "sigma", "unit", "status"], rows))
+    if d.get("joint_harmonics"):
+        spans = ", ".join(f"joint {j} over {v['q_min_deg']:.1f}..{v['q_max_deg']:.1f} deg"
+                          for j, v in d["joint_harmonics"].items())
+        parts.append("<p class=note>h1s_j .. h2c_j: the periodic error of joint j's reading, theta_j = q_j + ... + "
+                     "h (f(q_j) - its mean over the calibration's readings), f = sin q, cos q, sin 2q, cos 2q; "
+                     f"identified over {esc(spans)}: not to be used outside that range.</p>")
     if fixed:
         parts.append(f"<p class=note>Held at their nominal values ({len(fixed)}): " + esc(", ".join(fixed)) + ".</p>")
     if d.get("unidentifiable"):

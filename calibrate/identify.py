@@ -17,137 +17,25 @@
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from rodlab.compliance import RodCompliance
-from rodlab.frames import abc_rate_axes, pose_to_matrix, skew
 from rodlab.units import DEVICE_NOISE_MM
 
-from .campaign import Campaign, Fixture
 from .compensation import deflection_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import HARMONICS, ModelParams, ball_positions, harmonic_reference
+from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
            "register_base_and_tool", "noise_covariance"]
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class Observations:
-    """What the identification fits: joint angles, measured ball centres in {W}, and the loads.
-
-    q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
-    group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,);
-    sigma_mm (N, 3) stated standard uncertainty of each measured coordinate [mm] (instrument points), or None
-    for one noise level for all; temp_C (N,) temperature of each point [degC] or None (thermal compensation)
-    """
-
-    q_rad: np.ndarray
-    x_W_mm: np.ndarray
-    force_W_N: np.ndarray
-    rod_mass_kg: float = 0.0
-    rod_com_T_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    group: np.ndarray | None = None
-    labels: list | None = None
-    fixture_T: dict | None = None          # group -> 4x4 pose of {D_j} in {W}
-    x_D_mm: np.ndarray | None = None
-    sigma_mm: np.ndarray | None = None
-    temp_C: np.ndarray | None = None
-
-    def __post_init__(self):
-        if self.sigma_mm is not None and np.shape(self.sigma_mm) != np.shape(self.x_W_mm):
-            raise ValueError(f"sigma_mm must have the shape of x_W_mm {np.shape(self.x_W_mm)}, got "
-                             f"{np.shape(self.sigma_mm)}")
-        if self.temp_C is not None and np.shape(self.temp_C) != (np.shape(self.x_W_mm)[0],):
-            raise ValueError(f"temp_C must have shape ({np.shape(self.x_W_mm)[0]},), got {np.shape(self.temp_C)}")
-
-    def subset(self, keep: np.ndarray) -> "Observations":
-        """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""
-        keep = np.asarray(keep, bool)
-        if keep.shape != (self.x_W_mm.shape[0],):
-            raise ValueError(f"keep must have shape ({self.x_W_mm.shape[0]},), got {keep.shape}")
-
-        def cut(a):
-            return None if a is None else np.asarray(a)[keep]
-        return replace(self, q_rad=self.q_rad[keep], x_W_mm=self.x_W_mm[keep], force_W_N=self.force_W_N[keep],
-                       group=cut(self.group), x_D_mm=cut(self.x_D_mm), sigma_mm=cut(self.sigma_mm),
-                       temp_C=cut(self.temp_C),
-                       labels=None if self.labels is None else [lab for lab, k in zip(self.labels, keep) if k])
-
-
-def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
-    """Eq. 2: device readings to {W}; the contact force of each point in {W} (Eq. 12)."""
-    missing = sorted(set(camp.position.tolist()) - set(fix.poses))
-    if missing:
-        raise CalibrationError(f"clamping position(s) {missing} of the campaign are not in the fixture file "
-                               f"(it has {sorted(fix.poses)})", path=fix.path, key="positions")
-    xW = np.empty((camp.n, 3))
-    F = np.empty((camp.n, 3))
-    for j in np.unique(camp.position):
-        T = fix.transform(int(j))
-        m = camp.position == j
-        xW[m] = camp.x_D_mm[m] @ T[:3, :3].T + T[:3, 3]
-        F[m] = T[:3, :3] @ fix.force_D_N
-    return Observations(np.deg2rad(camp.q_deg), xW, F, rod.mass_kg, rod.com_T_mm, camp.position.copy(),
-                        camp.labels(), {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
-                        camp.x_D_mm.copy(), temp_C=None if camp.temp_C is None else camp.temp_C.copy())
-
-
-def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
-    """Base pose [mm, deg] by rigid registration (Kabsch) of nominal ball positions to the measured ones."""
-    from rodlab.frames import matrix_to_pose
-    fr, _ = ball_positions(robot, params.with_(base=np.zeros(6)), obs.q_rad)
-    P, Q = fr.p0, obs.x_W_mm
-    pc, qc = P.mean(0), Q.mean(0)
-    H = (P - pc).T @ (Q - qc)
-    U, S, Vt = np.linalg.svd(H)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
-    R = Vt.T @ D @ U.T
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = qc - R @ pc
-    return matrix_to_pose(T)
-
-
-def register_base_and_tool(robot, params: ModelParams, obs: Observations, iterations: int = 100,
-                           tol_mm: float = 1e-6) -> tuple[np.ndarray, np.ndarray, float]:
-    """Base pose and tool point from scratch, for instrument points whose tool is only roughly known.
-
-    Alternates the rigid registration of the nominal points (:func:`register_base`) with the linear
-    least-squares tool given the base (``R_B^T (x - b) - p_n = R_n t``). Returns (base [mm, deg] shape=(6,),
-    tool in {n} [mm] shape=(3,), rms distance [mm]); the better of this and the given tool is kept.
-    """
-    n = robot.n
-
-    def rms_of(p):
-        fr, _ = ball_positions(robot, p, obs.q_rad)
-        return float(np.sqrt(np.mean(np.sum((fr.pW - obs.x_W_mm) ** 2, axis=1))))
-
-    p = params.with_(base=register_base(robot, params, obs))
-    best = (p.base, p.tool, rms_of(p))
-    prev = np.inf
-    for _ in range(iterations):
-        fr, _ = ball_positions(robot, p.with_(base=np.zeros(6)), obs.q_rad)
-        TB = pose_to_matrix(p.base)
-        lhs = (obs.x_W_mm - TB[:3, 3]) @ TB[:3, :3] - fr.T[:, n, :3, 3]        # R_B^T (x - b) - p_n
-        A = fr.T[:, n, :3, :3].reshape(-1, 3)
-        tool, *_ = np.linalg.lstsq(A, lhs.reshape(-1), rcond=None)
-        p = p.with_(tool=tool)
-        p = p.with_(base=register_base(robot, p, obs))
-        r = rms_of(p)
-        if r < best[2]:
-            best = (p.base, p.tool, r)
-        if abs(prev - r) < tol_mm:
-            break
-        prev = r
-    return best
 
 
 @dataclass
@@ -550,40 +438,6 @@ def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
     if k == "fixture":
         return float(x_int)
     return float(p.tool["xyz".index(info.name[-1])])
-
-
-def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> np.ndarray:
-    """Covariance of the measured points [mm^2], shape=(3N, 3N): device noise plus the uncertainty of each
-    recorded clamping pose, correlated among the points of a position. ``fixture_sigma`` = (standard
-    uncertainty of each recorded x, y, z [mm], of each recorded angle a, b, c [deg]): the angles' uncertainty
-    reaches the orientation through the rates of ``Rx(a) Ry(b) Rz(c)`` (:func:`rodlab.frames.abc_rate_axes`),
-    larger along one axis near b = +-90 deg.
-
-    With per-point uncertainties (``obs.sigma_mm``) the noise of each coordinate is proportional to its stated
-    sigma, scaled so that its rms over the data set is ``noise_mm`` (pass the stated rms to use them as they
-    are, an estimated level to keep only their shape)."""
-    N = obs.x_W_mm.shape[0]
-    if obs.sigma_mm is not None:
-        s = obs.sigma_mm.reshape(-1)
-        S = np.diag((s * noise_mm / np.sqrt(np.mean(s ** 2))) ** 2)
-    else:
-        S = noise_mm ** 2 * np.eye(3 * N)
-    if obs.group is not None and obs.fixture_T is not None:
-        st, sr = fixture_sigma[0], np.deg2rad(fixture_sigma[1])
-        for j, T in obs.fixture_T.items():
-            if np.allclose(T, np.eye(4)):
-                continue                                   # the world position defines {W}
-            m = np.nonzero(obs.group == j)[0]
-            d = obs.x_W_mm[m] - T[:3, 3]                             # (k, 3)
-            G = np.zeros((m.size, 3, 6))
-            G[:, :, :3] = np.eye(3) * st
-            # the recorded angles a, b, c each uncertain by sr: rotation vector E (da, db, dc), moving the
-            # point by omega x d = -skew(d) omega
-            G[:, :, 3:] = -skew(d) @ abc_rate_axes(T[:3, :3]) * sr
-            G = G.reshape(3 * m.size, 6)
-            rows = (3 * m[:, None] + np.arange(3)).ravel()
-            S[np.ix_(rows, rows)] += G @ G.T
-    return S
 
 
 def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):

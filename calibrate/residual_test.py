@@ -81,7 +81,7 @@ def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002))
     ``noise_mm`` [mm] and clamping-pose uncertainty ``fixture_sigma`` ([mm], [deg])."""
     from scipy.special import chdtrc
 
-    from .identify import noise_covariance
+    from .observations import noise_covariance
     from .jacobian import position_jacobian
     from .kinematics import ball_positions
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .campaign import PointSet
-from .identify import register_base
+from .observations import register_base
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import ParamInfo, apply

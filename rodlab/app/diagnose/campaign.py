@@ -110,7 +110,7 @@ class _Selection:
     """
 
     def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma, max_terms: int):
-        from rodlab.calibrate.identify import noise_covariance
+        from rodlab.calibrate.observations import noise_covariance
         from rodlab.calibrate.jacobian import position_jacobian
         res, obs, fr = ctx.result, ctx.obs, ctx.frames
         self.ctx, self.noise_mm, self.N = ctx, noise_mm, ctx.n_points

@@ -179,15 +179,18 @@ def test_cli_export_and_errors(ur5, tmp_path, capsys):
     assert "periodic joint errors" in capsys.readouterr().out
     assert "Nor can the periodic joint errors" in out.read_text()
     assert "joint_harmonics:" in out.with_suffix(".yaml").read_text()
-    assert main(["calibrate", "--points", str(f), "--robot", "ur5", "--joint-harmonics", "1,x"]) == 2
-    assert "expected joint numbers" in capsys.readouterr().err
+    for bad in ("1,x", " , ", "0"):                         # argparse refuses these before any work
+        with pytest.raises(SystemExit) as e:
+            main(["calibrate", "--points", str(f), "--robot", "ur5", "--joint-harmonics", bad])
+        assert e.value.code == 2 and "expected joint numbers" in capsys.readouterr().err
     assert main(["calibrate", "--points", str(f), "--robot", "ur5", "--joint-harmonics", "9"]) == 2
     assert "1..6" in capsys.readouterr().err
-    assert main(["calibrate", "--points", str(f), "--robot", "ur5", "--joint-harmonics", " , "]) == 2
     assert main(["calibrate", "--points", str(f), "--robot", "ur5", "--pin", "h1s_4=0"]) == 2
     assert "add joint 4 to --joint-harmonics" in capsys.readouterr().err
     assert main(["calibrate", "--sockets", str(f), "--robot", "ur5", "--joint-harmonics", "4"]) == 2
     assert "--sockets" in capsys.readouterr().err
+    assert main(["diagnose", "--points", str(f), "--robot", "ur5", "--joint-harmonics", "4"]) == 0
+    assert "periodic_joint_error (joint 4)" not in capsys.readouterr().out
 
 
 def test_campaign_with_a_periodic_joint_error_is_calibrated_and_the_suspects_do_not_repeat_it(tx90, tmp_path,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-__all__ = ["seed", "count", "nonneg_float", "pos_float"]
+__all__ = ["seed", "count", "nonneg_float", "pos_float", "joint_list"]
 
 
 def _int(text: str, low: int, what: str) -> int:
@@ -51,3 +51,14 @@ seed.__name__ = "seed"
 count.__name__ = "count"
 nonneg_float.__name__ = "number >= 0"
 pos_float.__name__ = "number > 0"
+
+
+def joint_list(text: str) -> tuple:
+    """``"1,4"`` -> (1, 4): joint numbers (1-based; the robot's own check names joints it does not have)."""
+    try:
+        joints = tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
+    except ValueError:
+        joints = ()
+    if not joints or min(joints) < 1:
+        raise argparse.ArgumentTypeError(f"expected joint numbers separated by commas, e.g. 1,4; got {text!r}")
+    return joints

@@ -13,7 +13,7 @@ import numpy as np
 from ...compliance import RodCompliance, read_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
-from .argtypes import count, nonneg_float, pos_float, seed
+from .argtypes import count, joint_list, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args
 
@@ -71,7 +71,7 @@ def register(sub) -> None:
     p.add_argument("--fit-placements", default=None, metavar="LIST",
                    help="with --sockets: fit on these placements (e.g. 1,3) and check the model on the file's "
                         "others (consistency and distortion on placements the fit never saw)")
-    p.add_argument("--joint-harmonics", default=None, metavar="LIST",
+    p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
                    help="also identify a periodic angle error of these joints (e.g. 1,4): first and second harmonic "
                         "of the joint reading, h1s_j h1c_j h2s_j h2c_j [deg] (gear or encoder eccentricity, as "
                         "`rodlab diagnose` names it); the result is then rodlab.calibration/2")
@@ -93,19 +93,6 @@ def register(sub) -> None:
     _common(p)
     p.set_defaults(func=cmd_compare)
     register_more(sub)
-
-
-def parse_joint_list(text: str | None, flag: str = "--joint-harmonics") -> tuple:
-    """``"1,4"`` -> (1, 4); the robot's own check names joints it does not have."""
-    if text is None:
-        return ()
-    try:
-        joints = tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
-    except ValueError:
-        joints = ()
-    if not joints:
-        raise RodlabError(f"{flag} {text!r}: expected joint numbers separated by commas, e.g. 1,4")
-    return joints
 
 
 def parse_pins(items) -> dict:
@@ -166,7 +153,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    also_compensate=_thermal(args, camp, rod),
                    pinned=parse_pins(args.pin), freed=set(args.free), robust=args.robust,
-                   fix_unidentifiable=args.fix_unidentifiable, harmonics=parse_joint_list(getattr(args, "joint_harmonics", None)),
+                   fix_unidentifiable=args.fix_unidentifiable, harmonics=getattr(args, "joint_harmonics", ()),
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
     run = CalibrationRun(robot, camp, res)
     if args.validate:
@@ -286,7 +273,7 @@ def _print_suspects(robot, camp, args, rod, comp, test) -> None:
     from rodlab.app.diagnose.advice import remedy
     used = comp.rod if comp.active else RodCompliance.none_like(rod)
     diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=test.noise_mm,
-                                fixture_sigma=test.fixture_sigma, harmonics=parse_joint_list(args.joint_harmonics))
+                                fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""
@@ -327,7 +314,7 @@ def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     res = identify_points(robot, pts, noise_mm, pinned=parse_pins(args.pin), freed=args.free, robust=args.robust,
-                          fix_unidentifiable=args.fix_unidentifiable, harmonics=parse_joint_list(args.joint_harmonics))
+                          fix_unidentifiable=args.fix_unidentifiable, harmonics=args.joint_harmonics)
     before = after = None
     if args.validate:
         test = read_points(args.validate, robot.n)

@@ -6,7 +6,7 @@ import argparse
 from ...compliance import read_compliance, write_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
-from .argtypes import pos_float
+from .argtypes import joint_list, pos_float
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 
@@ -35,6 +35,9 @@ def register(sub) -> None:
     p.add_argument("--json", help="write the contract's diagnosis report")
     p.add_argument("--png", help="folder for figures")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
+    p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
+                   help="points / campaign: joints whose periodic errors the calibration already identifies (as "
+                        "`rodlab calibrate --joint-harmonics`); they are modelled, not suspects")
     add_report_option(p)
     p.set_defaults(func=cmd_diagnose)
 
@@ -75,7 +78,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
         pts = read_points(args.validate, robot.n) if args.validate else None
         diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
-                                       read_compliance(args.rod), noise_mm, pts)
+                                       read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
         print(diag.summary())
         if "validation" in diag.extra:
             v = diag.extra["validation"]
@@ -108,7 +111,8 @@ def _diagnose_points(args) -> int:
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
-    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True)
+    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,
+                          harmonics=args.joint_harmonics)
     diag = diagnose_points(robot, pts, res, noise_mm)
     print(diag.summary())
     report = json_safe(diag.to_dict())

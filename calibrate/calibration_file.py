@@ -69,9 +69,18 @@ def read_calibration(path) -> CalibrationFile:
 
 def _harmonics(data: dict, params: dict, p: Path) -> tuple[dict, dict]:
     """The ``/2`` block: {joint: reference} and {joint: (min, max)}; periodic parameters need it and ``/2``."""
-    joints = {int(name.rpartition("_")[2]) for name in params if name.rpartition("_")[0] in HARMONICS}
+    named = [name.rpartition("_") for name in params if name.rpartition("_")[0] in HARMONICS]
+    bad = [f"{k}_{j}" for k, _, j in named if not j.isdigit()]
+    if bad:
+        raise CalibrationError(f"parameters {bad}: a periodic joint error is named like h1s_4 (term, joint number)",
+                               path=p, key="parameters")
+    joints = {int(j) for _, _, j in named}
     block = data.get("joint_harmonics", {})
-    if joints and data["format"] == FORMAT_CALIBRATION:
+    reversed_ = [j for j, v in block.items() if v["q_min_deg"] > v["q_max_deg"]]
+    if reversed_:
+        raise CalibrationError(f"joint_harmonics of joints {reversed_}: q_min_deg is above q_max_deg", path=p,
+                               key="joint_harmonics")
+    if (joints or block) and data["format"] == FORMAT_CALIBRATION:
         raise CalibrationError(f"periodic joint-error parameters of joints {sorted(joints)} in a \"{FORMAT_CALIBRATION}\" "
                                f"file: they belong to \"{CALIBRATION_FORMATS[1]}\" (written by `rodlab calibrate "
                                f"--joint-harmonics`)", path=p, key="format")
@@ -101,6 +110,13 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
                                f"with the robot the calibration used (it says {cal.robot!r})", path=cal.path,
                                key="parameters")
     _check_description(robot, cal)
+    beyond = sorted({j for j in cal.harmonic_reference if not 1 <= j <= n} |
+                    {int(k.rpartition("_")[2]) for k in cal.parameters if k.rpartition("_")[0] in HARMONICS
+                     and not 1 <= int(k.rpartition("_")[2]) <= n})
+    if beyond:
+        raise CalibrationError(f"periodic joint errors of joints {beyond}, which this {n}-joint robot does not have; "
+                               f"export with the robot the calibration used (it says {cal.robot!r})", path=cal.path,
+                               key="joint_harmonics")
     p = ModelParams.nominal(robot, np.zeros(3))
 
     def get(name, default):

@@ -66,7 +66,7 @@ def params_yaml(robot, cal: CalibrationFile, params: ModelParams, origins: dict 
 def _harmonics_yaml(out, robot, cal: CalibrationFile, params: ModelParams) -> None:
     """``joint_harmonics:``: per joint its four terms with sigma, their references and the readings' range."""
     out.write("joint_harmonics:   # theta_i = q_i + sum_k h_k (f_k(q_i) - reference_k), f = sin q, cos q, sin 2q, cos 2q; "
-              "[deg]; valid over q_min..q_max; not expressible in URDF\n")
+              "h in deg, reference (the means of f) unitless; valid over q_min..q_max; not expressible in URDF\n")
     for i, name in enumerate(robot.joint_names):
         if not params.h[i].any():
             continue
@@ -74,8 +74,8 @@ def _harmonics_yaml(out, robot, cal: CalibrationFile, params: ModelParams) -> No
                           for t, v in zip(HARMONICS, np.rad2deg(params.h[i])) if f"{t}_{i + 1}" in cal.parameters)
         lo, hi = cal.harmonic_range_deg.get(i + 1, (float("nan"), float("nan")))
         ref = ", ".join(_num(v) for v in params.h_ref[i])
-        out.write(f"  {name}: {{{terms}, reference: [{ref}], q_min_deg: {_num(lo)}, q_max_deg: {_num(hi)}, "
-                  f"unit: deg}}\n")
+        out.write(f"  {name}: {{{terms}, unit: deg, reference: [{ref}], q_min_deg: {_num(lo)}, "
+                  f"q_max_deg: {_num(hi)}}}\n")
 
 
 def _nominal_row(robot, i: int) -> dict:

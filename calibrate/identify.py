@@ -134,8 +134,8 @@ def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None
     infos = catalogue(robot.n, positions, harmonics)
     _check_names([i.name for i in infos], pinned, freed)
     start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
-    if harmonics:
-        start = start.with_(h_ref=harmonic_reference(obs.q_rad, harmonics))
+    if harmonics or start.h.any():
+        start = _harmonic_start(start, obs.q_rad, harmonics)
     x = _pinned_vector(infos, start, pinned)
     free, reasons = _free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
                                      fix_unidentifiable)
@@ -173,6 +173,21 @@ def _check_harmonics(harmonics, n: int) -> None:
     if bad:
         raise CalibrationError(f"joint harmonics: {bad} are not joints of this {n}-joint robot; give joint numbers "
                                f"1..{n}, e.g. 1,4")
+
+
+def _harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelParams:
+    """The start model with the periodic terms of ``harmonics`` centred on these readings; an ``initial`` model's
+    terms keep their effect (the change of their means moves into the joint offsets)."""
+    carried = {int(j) + 1 for j in np.nonzero(start.h.any(axis=1))[0]} - set(harmonics)
+    if carried:
+        raise CalibrationError(f"the initial model has periodic errors of joints {sorted(carried)} that would be "
+                               f"dropped: list them in harmonics (--joint-harmonics) too")
+    ref, new = start.h_ref.copy(), harmonic_reference(q_rad, harmonics)
+    th = start.theta_offset.copy()
+    for j in harmonics:
+        th[j - 1] += start.h[j - 1] @ (new[j - 1] - ref[j - 1])
+        ref[j - 1] = new[j - 1]
+    return start.with_(h_ref=ref, theta_offset=th)
 
 
 def _check_names(names: list, pinned: dict, freed: set) -> None:

@@ -5,7 +5,7 @@ Model (contract): ``T_{i-1,i} = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_
 Extension (``rodlab.calibration/2``): a periodic error of the joint reading, ``+ h1s_i (sin q_i - m1s_i) + h1c_i
 (cos q_i - m1c_i) + h2s_i (sin 2q_i - m2s_i) + h2c_i (cos 2q_i - m2c_i)`` (gear or encoder eccentricity), zero
 unless identified; the ``m`` are each term's mean over the calibration's readings, so that the term has no
-constant part there and the geometric rows alone stay the best geometric model.
+constant part there and the geometric rows alone stay close to the best geometric model.
 Internal units: mm, rad, N, N m; arrays over N configurations.
 """
 from __future__ import annotations

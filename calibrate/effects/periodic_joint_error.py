@@ -68,5 +68,6 @@ class PeriodicJointError(CampaignEffectModel):
 
     def remedy(self, location: str, parameters: dict) -> str:
         return (f"joint {location_parts(location)[1]} has a once-per-revolution angle error the kinematic model "
-                "does not hold: have the gearbox / encoder checked, or identify it with the robot (`rodlab calibrate "
-                f"--joint-harmonics {location_parts(location)[1]}`) and compensate it in the controller")
+                "does not hold: have the gearbox / encoder checked, or identify it with the robot (add joint "
+                f"{location_parts(location)[1]} to `rodlab calibrate --joint-harmonics`) and compensate it in the "
+                "controller")

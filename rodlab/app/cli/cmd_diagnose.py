@@ -45,6 +45,9 @@ def register(sub) -> None:
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
     written: list = []
+    if args.rig and args.joint_harmonics:
+        raise RodlabError("--joint-harmonics is for --points or --campaign (a robot's joints); a rig recording has "
+                          "none: leave it out")
     if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
         raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
                           "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")

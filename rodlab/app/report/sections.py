@@ -126,11 +126,11 @@ def _calibration(src: Source) -> str:
                  "near its prior because the campaign hardly sees it.</p>"
                  + table(["parameter", "value", "sigma", "unit", "status"], rows))
     if d.get("joint_harmonics"):
-        spans = ", ".join(f"joint {j} over {v['q_min_deg']:.1f}..{v['q_max_deg']:.1f} deg"
+        spans = ", ".join(f"joint {j}: {v['q_min_deg']:.1f}..{v['q_max_deg']:.1f} deg"
                           for j, v in d["joint_harmonics"].items())
         parts.append("<p class=note>h1s_j .. h2c_j: the periodic error of joint j's reading, theta_j = q_j + ... + "
                      "h (f(q_j) - its mean over the calibration's readings), f = sin q, cos q, sin 2q, cos 2q; "
-                     f"identified over {esc(spans)}: not to be used outside that range.</p>")
+                     f"identified over the readings {esc(spans)}: not to be used outside that range.</p>")
     if fixed:
         parts.append(f"<p class=note>Held at their nominal values ({len(fixed)}): " + esc(", ".join(fixed)) + ".</p>")
     if d.get("unidentifiable"):

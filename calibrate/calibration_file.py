@@ -144,6 +144,7 @@ def _check_description(robot, cal: CalibrationFile) -> None:
         expected = float(nominal[kind][int(idx) - 1])
         if abs(v.value - expected) > 1e-6 * max(1.0, abs(expected)):
             raise CalibrationError(f"{name} was held at {v.value:g} {v.unit} by the calibration, but this robot "
-                                   f"description has {expected:g}: the result was made with another description "
-                                   f"of the robot; export with the one the calibration used", path=cal.path,
+                                   f"description ({robot.name!r}) has {expected:g}: the result was made with another "
+                                   f"description of the robot (it names {cal.robot!r}); export with the one the "
+                                   f"calibration used", path=cal.path,
                                    key=f"parameters.{name}")

@@ -1,7 +1,8 @@
 """Calibrated parameters for controllers and ROS: a YAML of values with 1-sigma, and the DH table as CSV.
 
-The YAML follows the layout ROS calibration packages write (``ur_calibration``'s ``kinematics:`` block of
-joint origins as ``x, y, z, roll, pitch, yaw`` in metres and radians, one entry per joint), with rodlab's own
+The YAML follows the idea of ROS calibration packages' files (``ur_calibration``'s ``kinematics:`` block of
+joint origins as ``x, y, z, roll, pitch, yaw`` in metres and radians, here one entry per URDF joint name, not
+its DH segments), with rodlab's own
 identified parameters (value, sigma, unit, status) and the joint compliances, which no URDF can carry. The CSV
 is one row per joint of the model's table (``T = Rz(theta) Tz(d) Tx(a) Rx(alpha) Ry(beta)``) with nominal,
 calibrated and sigma columns, for controllers that take a DH table.

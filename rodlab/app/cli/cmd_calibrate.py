@@ -15,7 +15,7 @@ from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, joint_list, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
-from .robotargs import add_robot_options, robot_from_args
+from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 
 __all__ = ["register", "run_calibration", "CalibrationRun", "print_parameters", "parse_pins", "print_not_trusted",
            "print_cautions", "write_result_file"]
@@ -25,7 +25,8 @@ log = logging.getLogger(__name__)
 
 
 def _common(p) -> None:
-    add_robot_options(p)
+    add_robot_options(p, default=None, help=ROBOT_HELP + "; default tx90 (the paper's robot) for a campaign, while "
+                                                         "instrument points and socket readings must name theirs")
     p.add_argument("--validate", default=None,
                    help="validation points (*.validation.csv) for the paper's statistics; with --sockets, other "
                         "socket readings (*.sockets.csv) to check the model's consistency and distortion on")
@@ -71,6 +72,10 @@ def register(sub) -> None:
     p.add_argument("--fit-placements", default=None, metavar="LIST",
                    help="with --sockets: fit on these placements (e.g. 1,3) and check the model on the file's "
                         "others (consistency and distortion on placements the fit never saw)")
+    p.add_argument("--kinematic-only", action="store_true",
+                   help="hold every joint compliance at 0: the geometry then carries the average gravity sag, the "
+                        "best model for a consumer that cannot add joint compliance (a URDF for ROS, most "
+                        "controllers)")
     p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
                    help="also identify a periodic angle error of these joints (e.g. 1,4): first and second harmonic "
                         "of the joint reading, h1s_j h1c_j h2s_j h2c_j [deg] (gear or encoder eccentricity, as "
@@ -93,6 +98,14 @@ def register(sub) -> None:
     _common(p)
     p.set_defaults(func=cmd_compare)
     register_more(sub)
+
+
+def _pins(args, n: int) -> dict:
+    """``--pin`` values, and with ``--kinematic-only`` every joint compliance at 0."""
+    pins = parse_pins(args.pin)
+    if getattr(args, "kinematic_only", False):
+        pins.update({f"c_{i}": 0.0 for i in range(2, n + 1)})
+    return pins
 
 
 def parse_pins(items) -> dict:
@@ -152,7 +165,7 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    also_compensate=_thermal(args, camp, rod),
-                   pinned=parse_pins(args.pin), freed=set(args.free), robust=args.robust,
+                   pinned=_pins(args, robot.n), freed=set(args.free), robust=args.robust,
                    fix_unidentifiable=args.fix_unidentifiable, harmonics=getattr(args, "joint_harmonics", ()),
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
     run = CalibrationRun(robot, camp, res)
@@ -188,6 +201,12 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.points and args.thermal:
         raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
                           "points (--points) have no rod to grow: leave --thermal out")
+    if args.robot is None:
+        if args.points or args.sockets:
+            raise RodlabError(f"{'--points' if args.points else '--sockets'}: name the robot that made these readings "
+                              "with --robot (a built-in name such as ur5, a robot TOML or a URDF); the tx90 default "
+                              "is only for MultiCal campaigns")
+        args.robot = "tx90"
     if args.sockets and args.joint_harmonics:
         raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
                           "no periodic joint errors: leave it out")
@@ -313,7 +332,7 @@ def _calibrate_points(args) -> int:
     from rodlab.calibrate.points import identify_points, stated_noise_mm
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
-    res = identify_points(robot, pts, noise_mm, pinned=parse_pins(args.pin), freed=args.free, robust=args.robust,
+    res = identify_points(robot, pts, noise_mm, pinned=_pins(args, robot.n), freed=args.free, robust=args.robust,
                           fix_unidentifiable=args.fix_unidentifiable, harmonics=args.joint_harmonics)
     before = after = None
     if args.validate:
@@ -358,6 +377,7 @@ def _compare_runs(items) -> list:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
+    args.robot = args.robot or "tx90"
     if not args.validate:
         raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
                           "campaign's *.validation.csv")

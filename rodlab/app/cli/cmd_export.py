@@ -67,11 +67,17 @@ def cmd_export(args) -> int:
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
         raise RodlabError("give --urdf (the URDF is the robot) or --robot, not both")
+    cal = read_calibration(args.calibration)
     if not args.urdf and not args.robot:
-        raise RodlabError("name the robot the calibration used: --robot NAME_OR_FILE, or --urdf ROBOT.urdf")
+        from rodlab.calibrate import builtin_robots
+        if cal.robot not in builtin_robots():
+            raise RodlabError(f"name the robot the calibration used ({cal.robot!r} is not built in): --robot "
+                              "NAME_OR_FILE, or --urdf ROBOT.urdf")
+        args.robot = cal.robot
     args.robot = args.robot or args.urdf
     robot = robot_from_args(args)
-    cal = read_calibration(args.calibration)
+    if not args.urdf and str(getattr(robot, "path", "") or "").lower().endswith(".urdf"):
+        args.urdf = str(robot.path)                     # a URDF robot: its own file is written back calibrated
     params = calibrated_params(robot, cal)
     urdf_out, yaml_out, csv_out = _outputs(args, robot)
     origins = None
@@ -82,12 +88,18 @@ def cmd_export(args) -> int:
                                     args.base_link, args.tip_link, source=Path(args.calibration).name)
         origins = res.origins
         c_mm, h_mm = res.omitted_max_mm
-        left_out = (f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload) and the periodic joint "
-                    f"errors (up to {h_mm:.3f} mm) are") if params.h.any() else \
-            f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload) is"
+        parts = ([f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload)"] if params.c.any() else []) + \
+            ([f"the periodic joint errors (up to {h_mm:.3f} mm)"] if params.h.any() else [])
+        left_out = f"; {' and '.join(parts)} {'are' if len(parts) > 1 else 'is'} not in the URDF, see the YAML" \
+            if parts else ""
         print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model's geometry "
-              f"over {res.configurations} configurations; {left_out} not in the URDF, see the YAML)")
+              f"over {res.configurations} configurations{left_out})")
         _warn_outside_range(cal, q_check)
+        if c_mm > 0.02:
+            print(f"note: a consumer of this URDF that does not add the joint compliance (ROS, most controllers) "
+                  f"gets up to {c_mm:.3f} mm more error than the calibrated model, because the calibrated geometry "
+                  f"leaves the gravity sag to the compliance; for such a consumer, calibrate again with "
+                  f"--kinematic-only and export that result", file=sys.stderr)
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
     if not cal.trusted:

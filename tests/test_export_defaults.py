@@ -1,0 +1,48 @@
+"""The calibrate / export defaults a calibration engineer meets first: instrument points name their robot, a
+built-in URDF robot is written back without --urdf, and a consumer that cannot add joint compliance is told
+how to get the geometry it needs (--kinematic-only)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rodlab.app.cli.main import main
+
+DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "jacobi2025"
+
+
+@pytest.fixture(scope="module")
+def ur5_points(tmp_path_factory) -> Path:
+    """Every fourth grid pose of the public UR5 tracker data (250 poses)."""
+    lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
+    rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]
+    path = tmp_path_factory.mktemp("ur5") / "ur5.validation.csv"
+    path.write_text("\n".join(head + rows) + "\n")
+    return path
+
+
+def test_points_without_a_robot_are_refused(ur5_points, capsys):
+    assert main(["calibrate", "--points", str(ur5_points), "--fix-unidentifiable"]) == 2
+    assert "name the robot that made these readings with --robot" in capsys.readouterr().err
+
+
+def test_kinematic_only_and_the_export_of_a_builtin_urdf_robot(ur5_points, tmp_path, capsys):
+    full, kin = tmp_path / "full.json", tmp_path / "kin.json"
+    for out, extra in ((full, []), (kin, ["--kinematic-only"])):
+        main(["calibrate", "--points", str(ur5_points), "--robot", "ur5", "--fix-unidentifiable", "--json", str(out),
+              *extra])
+    params = json.loads(kin.read_text())["parameters"]
+    assert all(params[f"c_{i}"]["value"] == 0.0 and params[f"c_{i}"]["status"] == "fixed" for i in range(2, 7))
+    assert json.loads(full.read_text())["parameters"]["c_2"]["value"] > 1e-6
+    capsys.readouterr()
+    assert main(["export", str(full), "-o", str(tmp_path / "full.urdf")]) == 0      # robot from the file, URDF too
+    io = capsys.readouterr()
+    assert (tmp_path / "full.urdf").exists() and "calibrate again with --kinematic-only" in io.err
+    assert main(["export", str(kin), "-o", str(tmp_path / "kin.urdf")]) == 0
+    io = capsys.readouterr()
+    assert (tmp_path / "kin.urdf").exists() and "--kinematic-only" not in io.err and "not in the URDF" not in io.out
+    assert main(["export", str(full), "--robot", "ur10", "-o", str(tmp_path / "x.urdf")]) == 2
+    assert "it names 'ur5'" in capsys.readouterr().err

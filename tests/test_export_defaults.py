@@ -46,3 +46,12 @@ def test_kinematic_only_and_the_export_of_a_builtin_urdf_robot(ur5_points, tmp_p
     assert (tmp_path / "kin.urdf").exists() and "--kinematic-only" not in io.err and "not in the URDF" not in io.out
     assert main(["export", str(full), "--robot", "ur10", "-o", str(tmp_path / "x.urdf")]) == 2
     assert "it names 'ur5'" in capsys.readouterr().err
+
+
+def test_points_png_draws_the_validation_error_distributions(ur5_points, tmp_path, capsys):
+    assert main(["calibrate", "--points", str(ur5_points), "--robot", "ur5", "--fix-unidentifiable",
+                 "--validate", str(DATA / "ur5_random.validation.csv"), "--png", str(tmp_path / "fig")]) in (0, 3)
+    assert (tmp_path / "fig" / "error_distributions.png").stat().st_size > 10_000
+    main(["calibrate", "--points", str(ur5_points), "--robot", "ur5", "--fix-unidentifiable", "--png",
+          str(tmp_path / "none")])
+    assert "give --validate" in capsys.readouterr().err and not (tmp_path / "none").exists()

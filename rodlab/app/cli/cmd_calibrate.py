@@ -335,13 +335,22 @@ def _calibrate_points(args) -> int:
     res = identify_points(robot, pts, noise_mm, pinned=_pins(args, robot.n), freed=args.free, robust=args.robust,
                           fix_unidentifiable=args.fix_unidentifiable, harmonics=args.joint_harmonics)
     before = after = None
+    errors = {}
     if args.validate:
         test = read_points(args.validate, robot.n)
-        before = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)[0]
-        after = validate(robot, res.params, test)[0]
+        before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
+        after, errors["calibrated"], _ = validate(robot, res.params, test)
     _print_result(res, before, after, "instrument points")
-    write_command_report(args, write_result_file(args, result_dict(robot, res, "none", before, after)),
-                         default_folder(args))
+    written = write_result_file(args, result_dict(robot, res, "none", before, after))
+    if args.png:
+        if not errors:
+            print("note: --png draws the validation error distributions of instrument points; give --validate",
+                  file=sys.stderr)
+        else:
+            from rodlab.calibrate.plots import plot_error_distributions
+            written.append(plot_error_distributions(errors, args.png))
+            print(f"wrote {written[-1]}")
+    write_command_report(args, written, default_folder(args))
     if res.warnings:
         print_not_trusted(res)
         from ..diagnose.points import diagnose_points

@@ -25,7 +25,7 @@ from rodlab.fileio import atomic_write_text
 from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
-from .kinematics import HARMONICS, ModelParams, forward
+from .kinematics import HARMONICS, ModelParams, ball_positions, forward
 from .robot_lines import chain_matrices, row_matrix
 from .robot_urdf import UrdfChain, chain_poses, load_urdf, urdf_chain
 
@@ -149,7 +149,6 @@ def write_calibrated_urdf(urdf_path, robot, params: ModelParams, out_path, q_che
 def _omitted_mm(robot, params: ModelParams, q) -> tuple[float, float]:
     """Largest TCP effect [mm] of the joint compliance (no payload) and of the periodic joint errors: what the
     URDF, the model's geometric part, leaves out."""
-    from .kinematics import ball_positions
     q = np.atleast_2d(q)
     no_h = params.with_(h=np.zeros_like(params.h))
     compliance = ball_positions(robot, no_h, q)[0].pW - forward(no_h, q).pW

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 if TYPE_CHECKING:
     from .identify import CalibrationResult
 
@@ -24,7 +22,7 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     w = []
     if not res.success:
         w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
-    readings = int(np.size(res.residuals_mm))
+    readings = res.residuals_mm.size
     if len(res.free) >= readings:
         w.append(f"{len(res.free)} parameters from {readings} readings leave no degree of freedom to test the fit "
                  "against: measure more points or identify fewer parameters (e.g. fewer --joint-harmonics)")

@@ -50,7 +50,7 @@ class PeriodicJointError(CampaignEffectModel):
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         fr, N, out = ctx.frames, ctx.n_points, []
-        modelled = getattr(ctx.result, "harmonic_range_deg", {})     # joints the identification already carries
+        modelled = ctx.result.harmonic_range_deg                 # joints the identification already carries
         for k in range(ctx.robot.n):
             if k + 1 in modelled:
                 continue

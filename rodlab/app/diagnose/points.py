@@ -128,14 +128,15 @@ def _candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
            "the error changes in the order the poses were measured: thermal growth of the arm or instrument drift "
            "(re-measure a reference pose during the session), or, when one joint was swept at a time, whatever "
            "differs between the sweeps")
+    from rodlab.calibrate.kinematics import harmonic_basis
     approach = _approach(q)
+    harmonics = harmonic_basis(q)                                  # (N, n, 4): the terms --joint-harmonics fits
     for j in range(n):
         if np.ptp(q[:, j]) < np.deg2rad(1.0):
             continue
-        harmonics = np.c_[np.sin(q[:, j]), np.cos(q[:, j]), np.sin(2 * q[:, j]), np.cos(2 * q[:, j])]
-        flag = ",".join(str(k) for k in sorted({*modelled, j + 1}))
         if j + 1 not in modelled:
-            yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics),
+            flag = ",".join(str(k) for k in sorted({*modelled, j + 1}))
+            yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics[:, j]),
                    f"an angle error periodic in joint {j + 1}'s angle (gear eccentricity, encoder or transmission "
                    f"error) that the geometric model cannot carry: model it with `rodlab calibrate "
                    f"--joint-harmonics {flag}`")
@@ -181,7 +182,7 @@ def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     from rodlab.calibrate.kinematics import forward
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
-    modelled = tuple(getattr(res, "harmonic_range_deg", {}))
+    modelled = tuple(res.harmonic_range_deg)
     findings = _greedy(r.ravel(), list(_candidates(q, _joint_columns(res.params, q), modelled)))
     dof = max(r.size - len(res.free), 1)
     p0 = forward(res.params, q).p0

@@ -133,6 +133,8 @@ class RodDesign:
     ball_holder : solid stud between pipe II and the ball
     ball : the precision ball
     source : the file the design was read from, if any
+    tolerances : the file's ``[tolerances]`` table as given ({dotted key: one standard deviation, a number in
+        the key's unit or ``"N%"``}); :func:`rodlab.tolerances.design_tolerances` adds the defaults
     """
 
     name: str
@@ -147,6 +149,7 @@ class RodDesign:
     ball_holder: SleeveSpec
     ball: BallSpec
     source: Path | None = field(default=None, compare=False)
+    tolerances: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         _check_pos("L1_mm", self.L1_mm, "L1_mm")

@@ -18,6 +18,7 @@ from __future__ import annotations
 import logging
 import math
 import re
+from dataclasses import replace
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
@@ -34,7 +35,7 @@ FORMAT_ROD = "rodlab.rod/1"
 log = logging.getLogger(__name__)
 
 _TOP_KEYS = ("format", "name", "L1_mm", "L2_mm", "gamma_deg", "tube", "pipe_I", "pipe_II", "ball",
-             "bend", "rings", "pipe_holder", "ball_holder", "materials")
+             "bend", "rings", "pipe_holder", "ball_holder", "materials", "tolerances")
 _TUBE_KEYS = ("material", "outer_diameter_mm", "wall_mm")
 _BEND_KEYS = ("material", "outer_diameter_mm", "wall_mm", "radius_mm")
 _SLEEVE_KEYS = ("material", "outer_diameter_mm", "length_mm")
@@ -144,8 +145,25 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     holder = _sleeve(data, c, "pipe_holder", materials, "al_7075", od + 15.0, 40.0)
     stud = _sleeve(data, c, "ball_holder", materials, "al_7075",
                    min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
-    return RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
-                     source=None if path is None else Path(path))
+    design = RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
+                       source=None if path is None else Path(path))
+    return _with_tolerances(design, data.get("tolerances", {}), c)
+
+
+def _with_tolerances(design: RodDesign, table, c: _Ctx) -> RodDesign:
+    """``design`` with its ``[tolerances]`` table, every key checked against the design (v1.1)."""
+    if not table:
+        return design
+    if not isinstance(table, Mapping):
+        raise c.err(f"expected a table, got {type(table).__name__}", "tolerances", None)
+    from .tolerances import check_tolerance_table
+    design = replace(design, tolerances=dict(table))
+    try:
+        check_tolerance_table(design, design.tolerances)
+    except DesignError as e:
+        key = (e.key or "").removeprefix("tolerances.")
+        raise c.err(e.detail, "tolerances", f'"{key}"' if "." in key else key) from e
+    return design
 
 
 def _materials(data: Mapping, c: _Ctx) -> dict[str, Material]:

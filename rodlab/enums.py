@@ -126,3 +126,16 @@ class Trial(_StrEnum):
     ACCEPT = "accept"        #: it passed the acceptance rule and is now the model
     NEXT = "next"            #: it failed a check that the next-ranked candidate may pass: try that one
     END_STEP = "end_step"    #: it failed in a way the lower-ranked candidates cannot mend: no model this step
+
+
+class SimAccuracy(_StrEnum):
+    """What a rig diagnosis takes the simulated compliance to be worth (``rodlab diagnose --sim-accuracy``)."""
+
+    EXACT = "exact"          #: the simulation is the rod (a re-check against an earlier measurement of it)
+    DESIGN = "design"        #: the design's tolerances plus the simulation method's own accuracy
+    RELATIVE = "relative"    #: one relative standard deviation per C_F entry (no design known)
+
+
+#: the finding of a rig diagnosis whose linear difference from the simulation the tolerances explain (effects v2):
+#: nothing was left out, the rod as built differs from the simulated design
+MODEL_FORM = "model_form"

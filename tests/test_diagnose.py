@@ -21,7 +21,7 @@ def test_rig_examples(examples, name):
     sim = read_compliance(examples / "rod1.compliance.json")
     truth = json.loads((examples / f"rig-{name}.truth.json").read_text())
     diag, model = diagnose_rig(read_recording(examples / f"rig-{name}.rig.csv"), sim,
-                               load_design(examples / "rods" / "rod1.rod.toml"))
+                               load_design(examples / "rods" / "rod1.rod.toml"), accuracy="exact")
     assert diag.verdict == truth["expected"]["verdict"]
     assert [f.effect for f in diag.findings] == truth["expected"]["effects"]
     assert [f.location for f in diag.findings] == truth["expected"]["locations"]
@@ -77,7 +77,7 @@ def test_cli_campaign_figures(examples, tmp_path, capsys):
 
 def test_report_follows_the_contract(examples, tmp_path):
     sim = read_compliance(examples / "rod1.compliance.json")
-    diag, _ = diagnose_rig(read_recording(examples / "rig-friction.rig.csv"), sim)
+    diag, _ = diagnose_rig(read_recording(examples / "rig-friction.rig.csv"), sim, accuracy="exact")
     d = json.loads(diag.write(tmp_path / "d.json").read_text())
     assert d["format"] == "rodlab.diagnosis/1" and d["subject"] == "rig" and d["verdict"] == "explained"
     for k in ("noise_mm", "rms_before_mm", "rms_after_mm", "findings"):
@@ -158,7 +158,7 @@ def test_fixed_seed_blind_batch(tmp_path):
     sim = calc_rod_compliance(resolve_design("rod1"))
     cases = generate_cases(tmp_path, 10, seed=7)
     for c in cases:
-        diag, _ = diagnose_rig(read_recording(c.path), sim, resolve_design("rod1"))
+        diag, _ = diagnose_rig(read_recording(c.path), sim, resolve_design("rod1"), accuracy="exact")
         t = c.truth
         if t["kind"] == "null":
             assert diag.verdict == "consistent", c.path
@@ -271,7 +271,7 @@ def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
     path = tmp_path / "r.rig.csv"
     kw = dict(axes=("z", "x", "y"), repeats=4, hold_s=5.0, masses=(0.5, 1.0, 1.5, 2.0))
     simulate_recording(model, LoadSchedule(**{**kw, **protocol}), path, rod=design.name)
-    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
     assert diag.verdict == "explained", diag.summary()
     assert {f.effect for f in diag.findings} == expected, diag.summary()
 
@@ -296,7 +296,7 @@ def test_a_load_nonlinearity_on_one_axis_is_named_with_its_axis(tmp_path, axis):
     load non-linearity is told from the z gauge's own; along y the y gauge reads nearly alone and the two are
     the same curve: either may lead, and the other must be named as the alternative."""
     path, sim, design = _paper_like_recording(tmp_path, {"nonlinearity": {"beta_per_10N": -0.005, "axis": axis}})
-    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
     [f] = diag.findings
     if axis == "z":
         assert diag.verdict == "explained" and (f.effect, f.location) == ("nonlinearity", "z"), diag.summary()
@@ -332,7 +332,7 @@ def test_a_gauge_that_is_not_linear_is_unexplained_at_that_gauge(tmp_path):
     (the same curve on the x load axis): the verdict is unexplained, at sensor:x."""
     path, sim, design = _paper_like_recording(tmp_path, {})
     _edit_readings(path, _nonlinear_x_gauge)
-    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
     assert diag.verdict == "unexplained", diag.summary()
     [f] = diag.findings
     assert (f.effect, f.location) == ("unexplained", "sensor:x") and f.evidence["outside_vocabulary"]
@@ -344,7 +344,7 @@ def test_a_bumped_hold_is_still_set_aside_beside_a_nonlinear_gauge(tmp_path):
     left out (the rule was switched off by any unexplained finding)."""
     path, sim, design = _paper_like_recording(tmp_path, {})
     _edit_readings(path, lambda cells, col: _nonlinear_x_gauge(cells, col, bump_step=14, bump_mm=0.02))
-    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
     assert diag.extra.get("excluded_steps") == [14], diag.summary()
     assert {(f.effect, f.location) for f in diag.findings} == {("unexplained", "sensor:x"),
                                                                ("unexplained", "step:14")}, diag.summary()
@@ -371,7 +371,7 @@ def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
                 if r[c]:
                     r[c] = f"{float(r[c]) + 0.004:.4f}"
     path.write_text("\n".join(head + [",".join(r) for r in rows]) + "\n")
-    diag, _ = diagnose_rig(read_recording(path), sim, design)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
     found = [(f.effect, f.location) for f in diag.findings]
     assert diag.verdict == "unexplained" and ("unexplained", "step:12") in found, diag.summary()
     assert {e for e, _ in found if e != "unexplained"} == set(effects), diag.summary()

@@ -68,7 +68,7 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, effect):
     """Each effect at its example magnitude: the diagnosis names it, first, and reports its magnitude under the
     simulator's parameter name, within 20 % of the truth."""
     model, rec = _simulate(tmp_path, {effect.value: {}})
-    diag, _ = diagnose_rig(rec, SIM, DESIGN)
+    diag, _ = diagnose_rig(rec, SIM, DESIGN, accuracy="exact")
     assert diag.findings and diag.findings[0].effect == effect.value, diag.summary()
     f = diag.findings[0]
     true = model.effects[effect]
@@ -130,7 +130,7 @@ def test_blind_variants_draw_other_forms_and_outside_effects(tmp_path):
 def test_load_hysteresis_is_not_read_as_friction_or_creep(tmp_path):
     """A small split (eta 0.2 %) with friction beside it: both found, each with its own magnitude."""
     model, rec = _simulate(tmp_path, {"load_hysteresis": {"eta": 0.002}, "friction": {"F_f_N": 0.05}}, seed=8)
-    diag, _ = diagnose_rig(rec, SIM, DESIGN)
+    diag, _ = diagnose_rig(rec, SIM, DESIGN, accuracy="exact")
     found = {f.effect: f for f in diag.findings}
     assert set(found) == {"load_hysteresis", "friction"}, diag.summary()
     assert found["load_hysteresis"].parameters["eta"] == pytest.approx(0.002, rel=0.15)

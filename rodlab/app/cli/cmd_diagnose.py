@@ -27,7 +27,13 @@ def register(sub) -> None:
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
-    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places); campaign: the *.compliance.json used")
+    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the --sim "
+                                 "file was made from, if it is still there); campaign: the *.compliance.json used")
+    p.add_argument("--sim-accuracy", type=sim_accuracy, default=None, metavar="ACC",
+                   help="rig: what the simulation is worth. Default: the design's tolerances ([tolerances] of the "
+                        "design file over documented defaults) and the simulation method's accuracy; a measured "
+                        "file: 1 %% per entry. `exact`: the simulation is the rod (a re-check against an earlier "
+                        "measurement); a number such as 0.05: that relative accuracy per C_F entry")
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
     p.add_argument("--noise-um", type=pos_float, default=None,
                    help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
@@ -40,6 +46,21 @@ def register(sub) -> None:
                         "`rodlab calibrate --joint-harmonics`); they are modelled, not suspects")
     add_report_option(p)
     p.set_defaults(func=cmd_diagnose)
+
+
+def sim_accuracy(text: str):
+    """``--sim-accuracy``: ``exact``, ``design`` or a relative accuracy in (0, 1]."""
+    word = text.strip().lower()
+    if word in ("exact", "design"):
+        return word
+    try:
+        value = float(word.rstrip("%")) / (100.0 if word.endswith("%") else 1.0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected exact, design or a relative accuracy such as 0.05 or 5%, got "
+                                         f"{text!r}") from None
+    if not 0 < value <= 1:
+        raise argparse.ArgumentTypeError(f"a relative accuracy lies in (0, 1] (0.05 = 5 %), got {text!r}")
+    return value
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
@@ -63,7 +84,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             from ...design_io import resolve_design
             design = resolve_design(args.rod)
         rec = read_recording(args.rig)
-        diag, model = diagnose_rig(rec, sim, design)
+        diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
         print(diag.summary())
         if args.png:
             from ..diagnose.plots import plot_rig_diagnosis

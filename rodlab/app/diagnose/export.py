@@ -9,9 +9,10 @@ __all__ = ["corrected_compliance"]
 
 def corrected_compliance(sim: RodCompliance, diag, model) -> RodCompliance:
     """``sim`` plus the fitted structural terms (compliance scale, torsion, joint springs); C_g scaled by the
-    change of c22 + c33 (as Eq. 22 does for the measured file). Rig effects (friction, tare, drift, crosstalk,
+    change of c22 + c33 (as Eq. 22 does for the measured file). Where the linear compliance was fitted freely
+    (the simulation not taken to be exact), that fit is the corrected C_F. Rig effects (friction, tare, drift, crosstalk,
     creep) belong to the rig, not the rod, and are left out."""
-    C = sim.C_F.copy()
+    C = sim.C_F.copy() if model.linear is None else model.linear.C_F.copy()
     for term, v in model.term_values():
         if term.dC:
             for val, dC in zip(v, term.dC):

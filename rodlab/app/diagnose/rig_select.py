@@ -178,14 +178,14 @@ def subset_ls(library: list[Hypothesis], r0: np.ndarray, folds) -> SubsetLS:
                     np.concatenate([t.lower for t in library]), np.concatenate([t.upper for t in library]), folds)
 
 
-def refine_tau(library, S: tuple, j: int, data: RigSamples, base, r0, groups) -> float:
-    """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau)."""
+def refine_tau(library, S: tuple, j: int, data: RigSamples, base, r0, prep) -> float:
+    """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau); ``prep`` projects a
+    new term's columns as the library's were (gauge zeros, and the free linear part where it is fitted)."""
     from scipy.optimize import minimize_scalar
     others = [library[i] for i in S if i != j]
 
     def rss(log_tau):
-        term = creep_hypothesis(data, base, float(np.exp(log_tau)))
-        term.X = demean(term.X, groups)
+        term = prep(creep_hypothesis(data, base, float(np.exp(log_tau))))
         return subset_ls(others + [term], r0, None).fit(tuple(range(len(others) + 1)))[1]
 
     t0 = np.log(library[j].settings["tau_s"])

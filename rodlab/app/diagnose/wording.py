@@ -13,9 +13,11 @@ from __future__ import annotations
 
 import math
 
+from rodlab.enums import MODEL_FORM
+
 from .report import Finding
 
-__all__ = ["explained_share", "certainty", "confirmation", "evidence_text"]
+__all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "form_resolution"]
 
 def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
@@ -54,6 +56,8 @@ def certainty(f: Finding) -> str:
 
 def confirmation(f: Finding) -> str:
     """What would confirm the finding (rig) or what to do about it (campaign)."""
+    if f.effect == MODEL_FORM:
+        return form_resolution(f)
     if f.evidence.get("separate_by"):
         return f"to tell the candidates apart: {f.evidence['separate_by']}"
     rig = _rig_confirm(f.effect, f.location)
@@ -65,7 +69,31 @@ def confirmation(f: Finding) -> str:
 
 def evidence_text(f: Finding) -> str:
     """One line: explains X % of the residual (rms a -> b um); how sure."""
+    if f.effect == MODEL_FORM:
+        ev = f.evidence
+        return (f"the simulation misses the readings by rms {f.rms_before_mm * 1e3:.2f} um, all of it the linear "
+                f"compliance; inside the envelope (chi-square {ev['envelope_chi2']:.2f} on {ev['envelope_dof']} "
+                f"entries, p = {ev['envelope_p']:.2g}) of {ev.get('envelope', 'the simulation')}")
     share = explained_share(f)
     pct = "—" if share != share else f"{100 * share:.0f} %" if share < 0.995 else f"{100 * share:.1f} %"
     return (f"explains {pct} of the residual's mean square (rms {f.rms_before_mm * 1e3:.2f} -> "
             f"{f.rms_after_mm * 1e3:.2f} um); {certainty(f)}")
+
+
+def form_resolution(f: Finding) -> str:
+    """What would resolve a compliant joint inside a ``model_form`` envelope: the size that stands out now, the
+    best fit, and the size a coupon test and a solid FEA would resolve; a direct measurement."""
+    rows = f.evidence.get("resolve") or []
+    if not rows:
+        return ("a joint or a softer member of this size cannot be told from the tolerances; re-check against this "
+                "measurement later (`rodlab diagnose --sim MEASURED.compliance.json --sim-accuracy exact`)")
+    parts = []
+    for r in rows:
+        txt = (f"{r['place']}: stands out above s_bend {r['detectable_s_bend_rad_per_Nm']:.2g} rad/(N m) (best fit "
+               f"{r['best_fit_s_bend_rad_per_Nm']:.2g} +- {r['sd_s_bend_rad_per_Nm']:.2g})")
+        if "detectable_with_coupon_and_solid_fea" in r:
+            txt += f", {r['detectable_with_coupon_and_solid_fea']:.2g} with a coupon test and a solid FEA"
+        parts.append(txt)
+    return ("a compliant joint inside this envelope is not located; " + "; ".join(parts) + ". A joint below these "
+            "is resolved by dial gauges on each side of it (the angle jump) or by re-checking the rod against this "
+            "measurement (`rodlab diagnose --sim MEASURED.compliance.json --sim-accuracy exact`)")

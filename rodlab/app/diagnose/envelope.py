@@ -1,0 +1,145 @@
+"""What a simulated compliance is worth: the envelope around it inside which the rod as built may lie.
+
+A simulation is never the rod. The envelope of a C_F entry combines (a) the design's tolerances
+(:mod:`rodlab.tolerances`: tube OD and wall, laminate E and G, bend radius, ring length), propagated through the
+compliance's sensitivities to them (the frame model, :func:`rodlab.sensitivity.compliance_sensitivity`), and (b) the
+simulation method's own accuracy against the solid FEA (:data:`rodlab.sensitivity.METHOD_ACCURACY`). Without a
+design the envelope is one relative standard deviation per entry; ``exact`` says the simulation is the rod (a
+re-check against an earlier measurement of the same rod).
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...compliance import RodCompliance, design_hash
+from ...enums import Method, SimAccuracy
+from ...errors import RodlabError
+from ...sensitivity import STRUCTURAL_ENTRIES, compliance_sensitivity, method_accuracy
+from ...tolerances import ToleranceParam, design_tolerances
+
+__all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
+
+log = logging.getLogger(__name__)
+
+#: relative standard deviation of a measured compliance file's entries when it states none (remounting the rod
+#: on the rig and re-fitting repeats C_F to about this)
+MEAS_RELATIVE = 0.01
+#: relative standard deviation per entry of a simulation whose design is unknown (a laminate's modulus alone
+#: scatters this much: :data:`rodlab.tolerances.DEFAULT_RULES`)
+GENERIC_RELATIVE = 0.15
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """How far the rod's C_F may lie from the simulated one.
+
+    kind : :class:`~rodlab.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
+    uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); dC : d C_F / d key [mm/N per key unit],
+    shape=(k, 3, 3); relative : {(m, n): relative standard deviation of the entry} (the method's own accuracy, or
+    the whole envelope without a design); source : one line saying what the envelope is made of
+    """
+
+    kind: SimAccuracy
+    C_sim: np.ndarray
+    params: tuple = ()
+    dC: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    relative: dict = field(default_factory=dict)
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", SimAccuracy.parse(self.kind, "simulation accuracy"))
+        if np.shape(self.C_sim) != (3, 3) or np.shape(self.dC) != (len(self.params), 3, 3):
+            raise ValueError(f"Envelope: C_sim (3, 3) and dC ({len(self.params)}, 3, 3) expected, got "
+                             f"{np.shape(self.C_sim)}, {np.shape(self.dC)}")
+
+    @property
+    def exact(self) -> bool:
+        return self.kind is SimAccuracy.EXACT
+
+    def jacobian(self, entries) -> np.ndarray:
+        """d C_F[entry] / d key [mm/N per key unit], shape=(len(entries), k)."""
+        return np.array([[d[m, n] for d in self.dC] for m, n in entries]).reshape(len(entries), len(self.params))
+
+    def prior_sd(self) -> np.ndarray:
+        """One standard deviation of each key [key unit], shape=(k,)."""
+        return np.array([p.sigma for p in self.params], float)
+
+    def covariance(self, entries) -> np.ndarray:
+        """Covariance of the rod's C_F entries about the simulated ones [(mm/N)^2]: tolerances through the
+        sensitivities plus the method's own accuracy, shape=(len(entries), len(entries))."""
+        J = self.jacobian(entries) * self.prior_sd()
+        rel = np.array([self.relative.get((m, n), 0.0) * abs(self.C_sim[m, n]) for m, n in entries])
+        return J @ J.T + np.diag(rel ** 2)
+
+    def tightened(self, material_rel: float, method_rel: dict) -> "Envelope":
+        """The envelope if the moduli were measured to ``material_rel`` and the simulation had the accuracy
+        ``method_rel`` (what a coupon test and a solid FEA would leave)."""
+        params = tuple(ToleranceParam(p.key, p.nominal, min(p.sigma, material_rel * abs(p.nominal)), p.source)
+                       if p.key.startswith("materials.") else p for p in self.params)
+        return Envelope(self.kind, self.C_sim, params, self.dC, dict(method_rel), self.source)
+
+
+def design_of(sim: RodCompliance, design=None):
+    """The design a simulated compliance was made from: ``design`` when given, else the file its provenance names
+    when that file still hashes to the recorded design; None otherwise."""
+    if design is not None:
+        return design
+    path = sim.provenance.get("design_file")
+    if not path or not Path(path).is_file():
+        return None
+    from ...design_io import load_design
+    try:
+        found = load_design(path)
+    except RodlabError:
+        return None
+    if sim.provenance.get("design_sha256") not in (None, design_hash(found)):
+        log.warning("%s changed since the compliance was simulated; its tolerances are not used", path)
+        return None
+    return found
+
+
+def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None = None) -> Envelope:
+    """The envelope around ``sim``: ``accuracy`` ``exact``, a relative standard deviation per entry (float), or
+    None / ``design``: from the design's tolerances and the method's accuracy (a measured file: its stated or a
+    1 % accuracy; a simulation without a known design: :data:`GENERIC_RELATIVE`)."""
+    C = np.asarray(sim.C_F, float)
+    if accuracy is not None and not isinstance(accuracy, str):
+        rel = float(accuracy)
+        return Envelope(SimAccuracy.RELATIVE, C, relative={e: rel for e in STRUCTURAL_ENTRIES},
+                        source=f"{rel:.1%} per C_F entry (stated)")
+    kind = SimAccuracy.parse(accuracy or "design", "simulation accuracy")
+    if kind is SimAccuracy.EXACT:
+        return Envelope(kind, C, source="the simulation is the rod (exact)")
+    if kind is SimAccuracy.RELATIVE:
+        raise RodlabError("--sim-accuracy relative needs a number: give the relative accuracy, e.g. 0.05 for 5 %")
+    if sim.method is Method.MEAS:
+        return Envelope(SimAccuracy.RELATIVE, C, relative={e: MEAS_RELATIVE for e in STRUCTURAL_ENTRIES},
+                        source=f"a measured compliance: {MEAS_RELATIVE:.0%} per entry (remounting and refitting)")
+    found = design_of(sim, design)
+    if found is None or sim.method is Method.NONE:
+        return Envelope(SimAccuracy.RELATIVE, C, relative={e: GENERIC_RELATIVE for e in STRUCTURAL_ENTRIES},
+                        source=f"no design known: {GENERIC_RELATIVE:.0%} per C_F entry (give --rod DESIGN.rod.toml "
+                               "for its tolerances)")
+    return _design_envelope(sim, found)
+
+
+def _design_envelope(sim: RodCompliance, design) -> Envelope:
+    """Tolerances of ``design`` through the frame model's sensitivities (scaled entry by entry to the simulated
+    compliance) plus the accuracy of the method that made ``sim``."""
+    from rodlab.fea.frame import frame_compliance
+    params = tuple(design_tolerances(design))
+    sens = compliance_sensitivity(design, [p.key for p in params], lambda d: frame_compliance(d)[0])
+    C = np.asarray(sim.C_F, float)
+    ratio = np.where(np.abs(sens.C_F) > 1e-12 * np.abs(sens.C_F).max(), C / np.where(sens.C_F == 0, 1, sens.C_F), 1.0)
+    method = str(sim.method)
+    model = sim.provenance.get("model")
+    rel = method_accuracy(method, model)
+    label = f"{method}" + (f" ({model})" if model else "")
+    keys = ", ".join(f"{p.key} {p.relative:.1%}" for p in params)
+    return Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, rel,
+                    f"design {design.name}: tolerances {keys}; {label} accuracy "
+                    + ", ".join(f"c{m + 1}{n + 1} {v:.1%}" for (m, n), v in rel.items()))

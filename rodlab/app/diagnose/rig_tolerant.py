@@ -1,0 +1,90 @@
+"""A rig diagnosis that holds when the simulation is off in form (the rod as built is never its simulation).
+
+1. The linear compliance the recording measures (the structural C_F entries, :mod:`.rig_linear`) is a free
+   nuisance of the reading model beside each series' gauge zero; every hypothesis that no linear compliance can
+   produce (friction, tare, creep, hysteresis, non-linearity, crosstalk, drift, the gauge non-linearity outside
+   the vocabulary) is built on the freely fitted compliance and selected as in the exact diagnosis, against the
+   residual with the linear part projected out.
+2. The fitted linear part, with its covariance, is judged against the simulation's envelope (:mod:`.rig_form`):
+   ``model_form`` inside it; a compliant joint, torsion or a uniform scale only outside it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from rodlab.compliance import RodCompliance
+from rodlab.enums import MODEL_FORM
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, HypothesisContext, joint_places
+from rodlab.stiffness_rig.samples import RigSamples
+
+from .envelope import Envelope
+from .report import Diagnosis
+from .rig_form import judge_linear
+from .rig_linear import Projector, fit_linear, linear_columns, measured_entries
+from .rig_outside import OUTSIDE, outside_hypotheses
+from .rig_select import demean, subset_ls
+from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings, within_hold_noise
+
+__all__ = ["diagnose_tolerant"]
+
+
+def _hypotheses(data: RigSamples, C: np.ndarray, places: dict, tool: np.ndarray, structural: bool) -> list:
+    """The structural effects' hypotheses (linear compliance changes) or the others, built on compliance ``C``."""
+    ctx = HypothesisContext(np.asarray(C, float), C[data.comp, data.axis] * data.F, places, tool)
+    return [h for m in RIG_EFFECTS.values() if m.structural == structural for h in m.hypotheses(data, ctx)]
+
+
+def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: int,
+                      env: Envelope) -> tuple[Diagnosis, RigModelFit]:
+    """Diagnose ``data`` against ``sim`` within the envelope ``env`` (the steps of the module docstring)."""
+    sigma = within_hold_noise(data)
+    n = data.y.size
+    groups = data.axis * 4 + data.comp
+    entries = measured_entries(data, sim.C_F)
+    L = linear_columns(data, entries)
+    prep = Prep(groups, Projector(groups, L))
+    lin0 = fit_linear(data, entries, L, data.y, sigma, sim.C_F)
+    places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
+    base = lin0.C_F[data.comp, data.axis] * data.F
+    r_sim = demean(data.y - sim.C_F[data.comp, data.axis] * data.F, groups)
+    r0 = prep.project(data.y)
+    library = [prep(t) for t in _hypotheses(data, lin0.C_F, places, tool, False) + outside_hypotheses(data, base)]
+    folds = data.repeat if np.unique(data.repeat).size >= 2 else None
+    library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data, base, r0, prep, sigma,
+                                           max_terms, folds)
+    coef, rss = ls.fit(S)
+    chosen = [library[j] for j in S]
+    findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
+    resid = ls.residual(S, coef)
+    lack = lack_of_fit(data, resid, sigma)
+    linear = fit_linear(data, entries, L, data.y - prep.fitted_change(chosen, coef), sigma, sim.C_F, lack.chi_red)
+    rms_sim, rms_lin, rms = (float(np.sqrt(v / n)) for v in (r_sim @ r_sim, r0 @ r0, rss))
+    judged = None
+    if entries:
+        causes = _hypotheses(data, np.asarray(sim.C_F, float), places, tool, True)
+        judged = judge_linear(linear, env, causes, (rms_sim, rms_lin))
+        findings += judged.findings
+    verdict = _verdict(findings)
+    for finding in lack.findings(rms, sigma):
+        findings.append(finding)
+        verdict = "unexplained"
+    model = RigModelFit(chosen, coef, resid, r_sim, data, sigma, lack.hold_z2(), lack.hold_offset_mm(), linear)
+    extra = {"reduced_chi2_hold_means": lack.chi_red, "simulation_accuracy": str(env.kind),
+             "envelope": env.source, "linear_part": _linear_dict(linear, sim)}
+    if judged is not None:
+        extra["linear_part"].update(judged.to_dict())
+    return Diagnosis("rig", verdict, sigma, rms_sim, rms, findings, extra), model
+
+
+def _verdict(findings: list) -> str:
+    """``model_form`` alone is nothing left out (consistent); any cause explains; ``unexplained`` wins."""
+    if any(f.effect == OUTSIDE for f in findings):
+        return "unexplained"
+    return "explained" if any(f.effect != MODEL_FORM for f in findings) else "consistent"
+
+
+def _linear_dict(linear, sim: RodCompliance) -> dict:
+    """The measured linear compliance for the report: entries, values, standard deviations, r_mn."""
+    return {"entries": [f"c{m + 1}{n + 1}" for m, n in linear.entries],
+            "C_F_mm_per_N": [float(c) for c in linear.C], "sd_mm_per_N": [float(s) for s in linear.sd()],
+            "r_mn": [float(c / sim.C_F[m, n]) for (m, n), c in zip(linear.entries, linear.C)]}

@@ -1,0 +1,193 @@
+"""The rod as built around its design: tolerances of a design's dotted keys (contract v1.1 ``[tolerances]``).
+
+A tolerance is one standard deviation of a key of the ``*.rod.toml`` file, absolute in the key's unit
+(``"tube.outer_diameter_mm" = 0.05``) or relative as a string (``"materials.cfrp_tube.E_GPa" = "15%"``). Keys the
+file does not list get the documented defaults below (:data:`DEFAULT_RULES`), by material class and part; a value
+of ``0`` in the file removes a default.
+
+Default tolerances (one standard deviation):
+
+=============================  ===================  =================================================================
+key                            default              why
+=============================  ===================  =================================================================
+``materials.M.E_GPa``          laminate 15 %,       M is the material of a tube or of the bend. A laminate's axial
+                               metal 3 %            modulus varies with fibre volume, lay-up angle and cure; the
+                                                    paper's own carbon rods are 23-130 % softer than simulated
+                                                    (Table 2 r_rod). Metals: handbook scatter.
+``materials.M.G_GPa``          laminate 20 %        only where the file gives G (a laminate's shear modulus, matrix
+                                                    dominated, scatters more than E)
+``tube.outer_diameter_mm``     0.05 mm              drawn / rolled tube, +-0.1 mm at two standard deviations
+``tube.wall_mm``               5 %                  +-10 % wall at two standard deviations
+``bend.radius_mm``             5 %                  a bent pipe's radius (present only with a bend)
+``rings.length_mm``            10 %                 the bonded length that carries load (adhesive fillets, seating)
+=============================  ===================  =================================================================
+
+``[pipe_I]`` / ``[pipe_II]`` tables that override the tube get the tube's defaults under their own keys.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .design import RodDesign
+from .errors import DesignError, did_you_mean
+
+__all__ = ["ToleranceParam", "design_tolerances", "parse_tolerance_value", "check_tolerance_table", "design_value",
+           "numeric_keys", "DEFAULT_RULES"]
+
+#: (key pattern, laminate sigma, metal sigma, why) of the documented defaults; ``M`` stands for a material name
+DEFAULT_RULES = (
+    ("materials.M.E_GPa", "15%", "3%", "modulus of a tube or bend material"),
+    ("materials.M.G_GPa", "20%", None, "shear modulus given by the file (laminates)"),
+    ("tube.outer_diameter_mm", 0.05, 0.05, "tube outer diameter"),
+    ("tube.wall_mm", "5%", "5%", "tube wall"),
+    ("bend.radius_mm", "5%", "5%", "bend radius"),
+    ("rings.length_mm", "10%", "10%", "bonded ring length"),
+)
+
+
+@dataclass(frozen=True)
+class ToleranceParam:
+    """One uncertain key of a design.
+
+    key : dotted key of the design file (``materials.cfrp_tube.E_GPa``); nominal : the design's value [key's
+    unit]; sigma : one standard deviation [key's unit]; source : ``file`` (the design's ``[tolerances]``) or
+    ``default`` (:data:`DEFAULT_RULES`)
+    """
+
+    key: str
+    nominal: float
+    sigma: float
+    source: str = "default"
+
+    def __post_init__(self) -> None:
+        for name in ("nominal", "sigma"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise DesignError(f"tolerance of {self.key}: {name} must be a finite number, got {v!r}", key=self.key)
+        if self.sigma < 0:
+            raise DesignError(f"tolerance of {self.key}: must be >= 0, got {self.sigma!r}", key=self.key)
+
+    @property
+    def relative(self) -> float:
+        """sigma / |nominal| [-]"""
+        return self.sigma / abs(self.nominal) if self.nominal else math.inf
+
+    def describe(self) -> str:
+        return f"{self.key} = {self.nominal:g} +- {self.sigma:.3g} ({self.relative:.1%}, {self.source})"
+
+
+def parse_tolerance_value(value, nominal: float, key: str) -> float:
+    """One standard deviation in the key's unit from a tolerance entry: a number (absolute) or ``"N%"``."""
+    if isinstance(value, str):
+        text = value.strip()
+        if not text.endswith("%"):
+            raise DesignError(f"expected a number (absolute, in the key's unit) or a percentage such as \"5%\", got "
+                              f"{value!r}", key=f"tolerances.{key}")
+        try:
+            pct = float(text[:-1])
+        except ValueError:
+            raise DesignError(f"expected a percentage such as \"5%\", got {value!r}", key=f"tolerances.{key}") from None
+        if not math.isfinite(pct) or pct < 0:
+            raise DesignError(f"a percentage must be finite and >= 0, got {value!r}", key=f"tolerances.{key}")
+        return abs(nominal) * pct / 100.0
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        raise DesignError(f"expected a number >= 0 (one standard deviation in the key's unit) or \"N%\", got "
+                          f"{value!r}", key=f"tolerances.{key}")
+    return float(value)
+
+
+def numeric_keys(design: RodDesign) -> dict[str, float]:
+    """Every numeric dotted key of ``design`` as a file would spell it, with its value: the top-level lengths,
+    ``tube.*`` (pipes that share the tube) or ``pipe_I.*`` / ``pipe_II.*``, the parts' keys and
+    ``materials.NAME.*`` of every material used."""
+    d = design
+    out = {"L1_mm": d.L1_mm, "L2_mm": d.L2_mm, "gamma_deg": d.gamma_deg}
+    for label, pipe in (("pipe_I", d.pipe_I), ("pipe_II", d.pipe_II)):
+        table = "tube" if pipe.key == "tube" else label
+        out.setdefault(f"{table}.outer_diameter_mm", pipe.outer_diameter_mm)
+        out.setdefault(f"{table}.wall_mm", pipe.wall_mm)
+        out[f"{label}.outer_diameter_mm"] = pipe.outer_diameter_mm
+        out[f"{label}.wall_mm"] = pipe.wall_mm
+    out.update({"bend.outer_diameter_mm": d.bend.outer_diameter_mm, "bend.wall_mm": d.bend.wall_mm,
+                "bend.radius_mm": d.bend.radius_mm, "ball.diameter_mm": d.ball.diameter_mm})
+    for label in ("rings", "pipe_holder", "ball_holder"):
+        part = getattr(d, label)
+        out[f"{label}.outer_diameter_mm"] = part.outer_diameter_mm
+        out[f"{label}.length_mm"] = part.length_mm
+    for m in _materials(d):
+        out[f"materials.{m.name}.E_GPa"] = m.E_GPa
+        out[f"materials.{m.name}.G_GPa"] = m.G_axial_GPa
+        out[f"materials.{m.name}.nu"] = m.nu
+        out[f"materials.{m.name}.density_kg_m3"] = m.density_kg_m3
+        if m.E_transverse_GPa is not None:
+            out[f"materials.{m.name}.E_transverse_GPa"] = m.E_transverse_GPa
+    return out
+
+
+def design_value(design: RodDesign, key: str) -> float:
+    """The value of the dotted ``key`` in ``design``; :class:`DesignError` naming the known keys otherwise."""
+    keys = numeric_keys(design)
+    if key not in keys:
+        raise DesignError(f"no numeric key {key!r} in design {design.name!r}." + did_you_mean(key, list(keys)),
+                          key=key)
+    return float(keys[key])
+
+
+def check_tolerance_table(design: RodDesign, table: dict) -> dict[str, float]:
+    """{key: one standard deviation} of a ``[tolerances]`` table, every key checked against the design."""
+    out = {}
+    for key, value in table.items():
+        nominal = design_value(design, key) if key in numeric_keys(design) else None
+        if nominal is None:
+            raise DesignError(f"unknown key {key!r}: a tolerance names a numeric key of the design file." +
+                              did_you_mean(key, list(numeric_keys(design))), key=f"tolerances.{key}")
+        out[key] = parse_tolerance_value(value, nominal, key)
+    return out
+
+
+def design_tolerances(design: RodDesign) -> list[ToleranceParam]:
+    """The design's uncertain keys: its ``[tolerances]`` over the documented defaults (:data:`DEFAULT_RULES`);
+    zero tolerances left out."""
+    given = check_tolerance_table(design, dict(design.tolerances))
+    params = {}
+    for key, sigma in _defaults(design).items():
+        params[key] = ToleranceParam(key, design_value(design, key), sigma, "default")
+    for key, sigma in given.items():
+        params[key] = ToleranceParam(key, design_value(design, key), sigma, "file")
+    return [p for p in params.values() if p.sigma > 0]
+
+
+def _materials(design: RodDesign) -> list:
+    """The materials of the tubes and the bend (the members whose stiffness the tolerances move), once each."""
+    seen = {}
+    parts = [design.pipe_I, design.pipe_II] + ([design.bend] if design.has_bend else [])
+    for part in parts:
+        seen.setdefault(part.material.name, part.material)
+    return list(seen.values())
+
+
+def _defaults(design: RodDesign) -> dict[str, float]:
+    """{key: sigma} of the documented defaults for ``design``."""
+    out = {}
+    for m in _materials(design):
+        laminate = not m.is_isotropic
+        for pattern, lam, metal, _ in DEFAULT_RULES[:2]:
+            rule = lam if laminate else metal
+            key = pattern.replace(".M.", f".{m.name}.")
+            if rule is None or (key.endswith("G_GPa") and m.G_GPa is None):
+                continue
+            out[key] = parse_tolerance_value(rule, design_value(design, key), key)
+    keys = numeric_keys(design)
+    tube_tables = sorted({"tube" if p.key == "tube" else lbl for lbl, p in (("pipe_I", design.pipe_I),
+                                                                           ("pipe_II", design.pipe_II))})
+    laminate_tube = not design.pipe_I.material.is_isotropic
+    for pattern, lam, metal, _ in DEFAULT_RULES[2:]:
+        table, name = pattern.split(".")
+        tables = tube_tables if table == "tube" else [table]
+        for t in tables:
+            key = f"{t}.{name}"
+            if key not in keys or keys[key] <= 0 or (t == "bend" and not design.has_bend):
+                continue
+            out[key] = parse_tolerance_value(lam if laminate_tube else metal, keys[key], key)
+    return out

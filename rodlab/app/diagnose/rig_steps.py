@@ -50,7 +50,8 @@ class RigModelFit:
     parameters, concatenated in ``terms`` order; resid : residual of every sample after the fit [mm];
     base_resid : residual against the simulated compliance alone (gauge zeros removed) [mm]; data : the samples
     (:class:`~rodlab.stiffness_rig.samples.RigSamples`); sigma : noise of one reading [mm]; hold_z2 : {step: sum of
-    squared z-scores of its hold means}; hold_offset_mm : {step: largest hold-mean residual [mm]}; linear : the freely fitted linear compliance
+    squared z-scores of its hold means}; hold_offset_mm : {step: largest hold-mean residual [mm]};
+    linear : the freely fitted linear compliance
     (:class:`~.rig_linear.LinearPart`) where the simulation was not taken to be exact, else None
     """
 

@@ -10,7 +10,7 @@ re-check against an earlier measurement of the same rod).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +40,10 @@ class Envelope:
     kind : :class:`~rodlab.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
     uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); dC : d C_F / d key [mm/N per key unit],
     shape=(k, 3, 3); relative : {(m, n): relative standard deviation of the entry} (the method's own accuracy, or
-    the whole envelope without a design); source : one line saying what the envelope is made of
+    the whole envelope without a design); source : one line saying what the envelope is made of; model : design ->
+    C_F [mm/N] (the frame) and design : the design, for the as-built fit (:meth:`entries_at`); ratio : simulated
+    over model C_F, entry by entry, shape=(3, 3) (the simulation's own form kept as the as-built keys move);
+    u_bounds : the range of each key's standardised deviation the design rules allow (within +-4), shape=(k, 2)
     """
 
     kind: SimAccuracy
@@ -49,6 +52,10 @@ class Envelope:
     dC: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
     relative: dict = field(default_factory=dict)
     source: str = ""
+    model: object = None
+    design: object = None
+    ratio: np.ndarray = field(default_factory=lambda: np.ones((3, 3)))
+    u_bounds: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", SimAccuracy.parse(self.kind, "simulation accuracy"))
@@ -75,12 +82,26 @@ class Envelope:
         rel = np.array([self.relative.get((m, n), 0.0) * abs(self.C_sim[m, n]) for m, n in entries])
         return J @ J.T + np.diag(rel ** 2)
 
+    def values(self, u: np.ndarray) -> dict:
+        """The as-built keys for standardised log deviations ``u`` (a key is ``nominal exp(u sigma / nominal)``:
+        moduli and sizes stay positive, and a compliance ~ 1/E is linear in u)."""
+        return {p.key: p.nominal * float(np.exp(ui * p.relative)) for p, ui in zip(self.params, u)}
+
+    def entries_at(self, u: np.ndarray, entries) -> np.ndarray:
+        """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
+        if self.model is None or not self.params:
+            return np.array([self.C_sim[m, n] for m, n in entries])
+        from ...sensitivity import with_values
+        C = np.asarray(self.model(with_values(self.design, self.values(u))), float) * self.ratio
+        return np.array([C[m, n] for m, n in entries])
+
     def tightened(self, material_rel: float, method_rel: dict) -> "Envelope":
         """The envelope if the moduli were measured to ``material_rel`` and the simulation had the accuracy
         ``method_rel`` (what a coupon test and a solid FEA would leave)."""
         params = tuple(ToleranceParam(p.key, p.nominal, min(p.sigma, material_rel * abs(p.nominal)), p.source)
                        if p.key.startswith("materials.") else p for p in self.params)
-        return Envelope(self.kind, self.C_sim, params, self.dC, dict(method_rel), self.source)
+        return Envelope(self.kind, self.C_sim, params, self.dC, dict(method_rel), self.source, self.model, self.design,
+                        self.ratio, self.u_bounds)
 
 
 def design_of(sim: RodCompliance, design=None):
@@ -131,15 +152,48 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
     """Tolerances of ``design`` through the frame model's sensitivities (scaled entry by entry to the simulated
     compliance) plus the accuracy of the method that made ``sim``."""
     from rodlab.fea.frame import frame_compliance
+
+    def model(d):
+        return frame_compliance(d)[0]
     params = tuple(design_tolerances(design))
-    sens = compliance_sensitivity(design, [p.key for p in params], lambda d: frame_compliance(d)[0])
+    sens = compliance_sensitivity(design, [p.key for p in params], model)
     C = np.asarray(sim.C_F, float)
     ratio = np.where(np.abs(sens.C_F) > 1e-12 * np.abs(sens.C_F).max(), C / np.where(sens.C_F == 0, 1, sens.C_F), 1.0)
     method = str(sim.method)
-    model = sim.provenance.get("model")
-    rel = method_accuracy(method, model)
-    label = f"{method}" + (f" ({model})" if model else "")
+    kind = sim.provenance.get("model")
+    rel = method_accuracy(method, kind)
+    label = f"{method}" + (f" ({kind})" if kind else "")
     keys = ", ".join(f"{p.key} {p.relative:.1%}" for p in params)
-    return Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, rel,
-                    f"design {design.name}: tolerances {keys}; {label} accuracy "
-                    + ", ".join(f"c{m + 1}{n + 1} {v:.1%}" for (m, n), v in rel.items()))
+    env = Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, rel,
+                   f"design {design.name}: tolerances {keys}; {label} accuracy "
+                   + ", ".join(f"c{m + 1}{n + 1} {v:.1%}" for (m, n), v in rel.items()), model, design, ratio)
+    return replace(env, u_bounds=_feasible_bounds(env))
+
+
+def _feasible_bounds(env: Envelope, reach: float = 4.0) -> np.ndarray:
+    """Per key, the standardised deviations within +-``reach`` for which the design rules accept the design (a bend
+    cannot be made tighter than 1.5 tube diameters, ...): bisection where the full reach is refused, with a 5 %
+    margin for keys moved together."""
+    from ...errors import DesignError
+    from ...sensitivity import with_values
+    k = len(env.params)
+    out = np.tile([-reach, reach], (k, 1))
+
+    def ok(i, u):
+        v = np.zeros(k)
+        v[i] = u
+        try:
+            with_values(env.design, env.values(v))
+            return True
+        except DesignError:
+            return False
+    for i in range(k):
+        for j, end in enumerate((-reach, reach)):
+            if ok(i, end):
+                continue
+            good, bad = 0.0, end
+            for _ in range(12):
+                mid = 0.5 * (good + bad)
+                good, bad = (mid, bad) if ok(i, mid) else (good, mid)
+            out[i, j] = 0.95 * good
+    return out

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import lsq_linear
+from scipy.optimize import least_squares, lsq_linear
 
 from rodlab.enums import MODEL_FORM
 from rodlab.hypothesis import Hypothesis
@@ -57,21 +57,86 @@ class FormJudgement:
                 "measurement_chi2": self.chi2_noise}
 
 
-class _Whitened:
-    """d and pattern columns whitened by the envelope covariance S (Cholesky)."""
+class _AsBuilt:
+    """The rod as built that best explains the measured entries: the maximum a posteriori of the tolerance keys
+    (standardised log deviations u ~ N(0, 1), :meth:`Envelope.entries_at`: the model of the perturbed design, not
+    a linearisation) with the method's accuracy and the measurement's covariance as the misfit's; its minimum
+    ``q`` (misfit + prior) is the chi-square with the tolerances integrated out (exactly so for a linear model).
+    Causes are judged by a Gauss-Newton step about that as-built rod: their columns added, u re-estimated."""
 
-    def __init__(self, d: np.ndarray, S: np.ndarray) -> None:
-        self.Linv = np.linalg.inv(np.linalg.cholesky(S + 1e-30 * np.eye(len(d))))
-        self.z = self.Linv @ d
-        self.q0 = float(self.z @ self.z)
+    def __init__(self, env: Envelope, linear: LinearPart) -> None:
+        self.env, self.E, self.C = env, linear.entries, linear.C
+        rel = np.array([env.relative.get(e, 0.0) * abs(env.C_sim[e]) for e in self.E])
+        self.Sigma = np.diag(rel ** 2) + linear.cov
+        self.W = np.linalg.inv(np.linalg.cholesky(self.Sigma + 1e-30 * np.eye(len(self.E))))
+        self.k = len(env.params) if env.model is not None else 0
+        self.u = np.zeros(self.k)
+        self.q = self._map()
+        self.J = self._jacobian(self.u)
 
-    def fit(self, B: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray, float]:
-        """Bounded GLS of d on the columns B: (coefficients, standard errors, chi-square drop)."""
-        A = self.Linv @ B
-        res = lsq_linear(A, self.z, bounds=(lower, upper), method="bvls")
-        r = self.z - A @ res.x
-        se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))
-        return res.x, se, self.q0 - float(r @ r)
+    def _residual(self, u):
+        return np.concatenate([self.W @ (self.env.entries_at(u, self.E) - self.C), u])
+
+    def _map(self) -> float:
+        if self.k:
+            b = self.env.u_bounds
+            res = least_squares(self._residual, np.zeros(self.k), bounds=(b[:, 0], b[:, 1]), diff_step=1e-4)
+            self.u = res.x
+        r = self._residual(self.u)
+        return float(r @ r)
+
+    def _jacobian(self, u) -> np.ndarray:
+        """d entries / d u at ``u`` [mm/N], shape=(len(E), k)."""
+        J = np.zeros((len(self.E), self.k))
+        base = self.env.entries_at(u, self.E)
+        for i in range(self.k):
+            du = np.zeros(self.k)
+            du[i] = -1e-3 if u[i] + 1e-3 > self.env.u_bounds[i, 1] else 1e-3     # stay where the design is valid
+            J[:, i] = (self.env.entries_at(u + du, self.E) - base) / du[i]
+        return J
+
+    def gap(self) -> np.ndarray:
+        """The measured entries less the as-built rod's [mm/N]."""
+        return self.C - self.env.entries_at(self.u, self.E)
+
+    def with_cause(self, B: np.ndarray, lower, upper) -> tuple[np.ndarray, np.ndarray, float]:
+        """Cause columns ``B`` [mm/N per coefficient] added, u re-estimated about the as-built rod (bounded
+        linear least squares): (coefficients, standard errors, chi-square drop)."""
+        k, p = self.k, B.shape[1]
+        A = np.block([[self.W @ self.J, self.W @ B], [np.eye(k), np.zeros((k, p))]])
+        z = np.concatenate([self.W @ self.gap(), -self.u])
+        lo = np.concatenate([np.full(k, -np.inf), lower])
+        hi = np.concatenate([np.full(k, np.inf), upper])
+        scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+        res = lsq_linear(A / scale, z, bounds=(lo * scale, hi * scale), method="bvls")
+        x = res.x / scale
+        r = z - A @ x
+        se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))[k:]
+        return x[k:], se, self.q - float(r @ r)
+
+    def refit_with_cause(self, B: np.ndarray, lower, upper, s0) -> tuple[np.ndarray, np.ndarray, float]:
+        """The cause's columns fitted together with the keys (nonlinear, from u = 0 and the Gauss-Newton
+        estimate ``s0``): (coefficients, standard errors, chi-square drop)."""
+        k, p = self.k, B.shape[1]
+        scale = np.maximum(np.abs(np.asarray(s0, float)), 1e-3 * np.maximum(np.abs(upper), 1e-12))
+
+        def res(x):
+            C = self.env.entries_at(x[:k], self.E) + B @ (x[k:] * scale)
+            return np.concatenate([self.W @ (C - self.C), x[:k]])
+        b = self.env.u_bounds if k else np.zeros((0, 2))
+        lo = np.concatenate([b[:, 0], np.asarray(lower, float) / scale])
+        hi = np.concatenate([b[:, 1], np.asarray(upper, float) / scale])
+        x0 = np.clip(np.concatenate([np.zeros(k), np.asarray(s0, float) / scale]), lo + 1e-12, hi - 1e-12)
+        fit = least_squares(res, x0, bounds=(lo, hi), diff_step=1e-4)
+        A = fit.jac
+        se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))[k:] * scale
+        r = res(fit.x)
+        return fit.x[k:] * scale, se, self.q - float(r @ r)
+
+    def covariance_S(self, J=None, Sigma=None) -> np.ndarray:
+        """Covariance of the entries about the as-built rod, the keys integrated out (linearised there)."""
+        J = self.J if J is None else J
+        return J @ J.T + (self.Sigma if Sigma is None else Sigma)
 
 
 def _patterns(h: Hypothesis, entries) -> np.ndarray:
@@ -82,28 +147,25 @@ def judge_linear(linear: LinearPart, env: Envelope, causes: list, rms: tuple) ->
     """``linear`` against ``env``; ``causes``: structural hypotheses (with ``dC``) that may explain a difference
     outside the envelope; ``rms``: (before, after) of the readings against the simulation and the linear part."""
     E = linear.entries
+    fit = _AsBuilt(env, linear)
     d = linear.C - np.array([env.C_sim[m, n] for m, n in E])
-    S = env.covariance(E) + linear.cov
-    w = _Whitened(d, S)
     qv = float(d @ np.linalg.pinv(linear.cov) @ d)
-    p0 = chi2_sf(w.q0, len(E))
-    out = FormJudgement([], w.q0, len(E), p0, qv)
+    p0 = chi2_sf(fit.q, len(E))
+    out = FormJudgement([], fit.q, len(E), p0, qv)
     if p0 >= P_MAX:
         if chi2_sf(qv, len(E)) < P_MAX:
-            out.findings.append(_model_form(linear, env, d, S, causes, rms, out))
+            out.findings.append(_model_form(linear, env, fit, causes, rms, out))
         return out
-    scored = sorted(((w.fit(_patterns(h, E), h.lower, h.upper), h) for h in causes), key=lambda t: -t[0][2])
+    scored = sorted(((fit.with_cause(_patterns(h, E), h.lower, h.upper), h) for h in causes), key=lambda t: -t[0][2])
     if scored and chi2_sf(scored[0][0][2], scored[0][1].n_params) <= P_MAX:
-        (val, se, lr), h = scored[0]
-        out.findings.append(_cause(h, val, se, lr, scored, rms, w.q0, len(E)))
-        rest = d - _patterns(h, E) @ val
-        q1 = w.q0 - lr
+        h = scored[0][1]
+        val, se, lr = fit.refit_with_cause(_patterns(h, E), h.lower, h.upper, scored[0][0][0])
+        out.findings.append(_cause(h, val, se, lr, scored, rms, fit.q, len(E)))
+        q1 = fit.q - lr
         if chi2_sf(q1, max(len(E) - h.X.shape[1], 1)) < P_MAX:
             out.findings.append(_outside(q1, len(E), rms, "beside the named cause"))
-        else:
-            out.findings.append(_model_form(linear, env, rest, S, [], rms, out))
         return out
-    out.findings.append(_outside(w.q0, len(E), rms, "and no local cause (joint, torsion, scale) explains it"))
+    out.findings.append(_outside(fit.q, len(E), rms, "and no local cause (joint, torsion, scale) explains it"))
     return out
 
 
@@ -133,8 +195,9 @@ def _outside(q: float, k: int, rms, why: str) -> Finding:
                    {"envelope_chi2": q, "envelope_dof": k})
 
 
-def _model_form(linear: LinearPart, env: Envelope, d, S, causes, rms, judged: FormJudgement) -> Finding:
-    """``model_form``: r_mn and the as-built keys (posterior given d), and the joint size that would stand out."""
+def _model_form(linear: LinearPart, env: Envelope, fit: _AsBuilt, causes, rms, judged: FormJudgement) -> Finding:
+    """``model_form``: r_mn and the as-built keys (the as-built fit, with its uncertainty), and the joint size
+    that would stand out."""
     E = linear.entries
     params, intervals = {}, {}
     sim = np.array([env.C_sim[m, n] for m, n in E])
@@ -142,21 +205,18 @@ def _model_form(linear: LinearPart, env: Envelope, d, S, causes, rms, judged: Fo
         name = f"r_{m + 1}{n + 1}"
         params[name] = float(c / cs)
         intervals[name] = sorted([float((c - 1.96 * s) / cs), float((c + 1.96 * s) / cs)])
-    if env.params:
-        P = np.diag(env.prior_sd() ** 2)
-        J = env.jacobian(E)
-        K = P @ J.T @ np.linalg.inv(S)
-        mean, cov = K @ d, P - K @ J @ P
-        unresolved = []
-        for p, mu, var in zip(env.params, mean, np.diag(cov)):
-            sd = float(np.sqrt(max(var, 0.0)))
-            if sd > INFORMED * p.sigma:             # the recording says nothing about this key
+    unresolved = []
+    if fit.k:
+        A = np.vstack([fit.W @ fit.J, np.eye(fit.k)])
+        sd_u = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))
+        for p, u, su in zip(env.params, fit.u, sd_u):
+            if su > INFORMED:                      # the recording says next to nothing about this key
                 unresolved.append(p.key)
                 continue
-            params[p.key] = float(p.nominal + mu)
-            intervals[p.key] = [float(p.nominal + mu - 1.96 * sd), float(p.nominal + mu + 1.96 * sd)]
-    ev = dict(judged.to_dict(), resolve=_resolution(env, E, S, linear, d, causes), envelope=env.source)
-    if env.params:
+            lo, mid, hi = (p.nominal * float(np.exp(v * p.relative)) for v in (u - 1.96 * su, u, u + 1.96 * su))
+            params[p.key], intervals[p.key] = mid, [lo, hi]
+    ev = dict(judged.to_dict(), resolve=_resolution(env, fit, causes), envelope=env.source)
+    if fit.k:
         ev["keys_not_resolved"] = unresolved
     text = ("consistent with the design within tolerance: the rod as built differs from the simulated design by no "
             "more than its tolerances and the simulation method's accuracy explain; r_mn = measured / simulated, "
@@ -165,22 +225,29 @@ def _model_form(linear: LinearPart, env: Envelope, d, S, causes, rms, judged: Fo
     return Finding(MODEL_FORM, None, text, params, intervals, rms[0], rms[1], ev)
 
 
-def _resolution(env: Envelope, E, S, linear: LinearPart, d, causes) -> list:
+def _resolution(env: Envelope, fit: _AsBuilt, causes) -> list:
     """For each joint place: the bending compliance that would stand out against this envelope (chi-square 10.8,
     p = 1e-3), the best fit here, and the same limit with the moduli measured by a coupon test and a solid FEA."""
-    tight = env.tightened(COUPON_RELATIVE, METHOD_ACCURACY["solid"]) if env.params else None
+    S = fit.covariance_S()
+    St = None
+    if fit.k:
+        shrink = np.array([min(1.0, COUPON_RELATIVE / p.relative) if p.key.startswith("materials.") else 1.0
+                           for p in env.params])
+        method = [(env.relative.get(e, 0.0) * env.C_sim[e]) ** 2 for e in fit.E]
+        solid = [(METHOD_ACCURACY["solid"].get(e, 0.0) * env.C_sim[e]) ** 2 for e in fit.E]
+        St = fit.covariance_S(fit.J * shrink, fit.Sigma - np.diag(method) + np.diag(solid))
+    gap = fit.gap()
     out = []
     for h in causes:
         if h.effect != "joint_compliance":
             continue
-        b = _patterns(h, E)[:, 0]
+        b = _patterns(h, fit.E)[:, 0]
         info = float(b @ np.linalg.solve(S, b))
-        est = float(b @ np.linalg.solve(S, d)) / info if info > 0 else 0.0
+        est = float(b @ np.linalg.solve(S, gap)) / info if info > 0 else 0.0
         row = {"place": h.location, "detectable_s_bend_rad_per_Nm": _limit(info) * h.report_scale[0],
                "best_fit_s_bend_rad_per_Nm": est * h.report_scale[0],
                "sd_s_bend_rad_per_Nm": h.report_scale[0] / np.sqrt(info) if info > 0 else float("inf")}
-        if tight is not None:
-            St = tight.covariance(E) + linear.cov
+        if St is not None:
             row["detectable_with_coupon_and_solid_fea"] = _limit(float(b @ np.linalg.solve(St, b))) * h.report_scale[0]
         out.append(row)
     return out

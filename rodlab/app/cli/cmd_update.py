@@ -1,0 +1,101 @@
+"""``rodlab update``: the rod as built, by fitting a design's uncertain keys to a measured compliance."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RodlabError
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("update", help="fit a design's uncertain keys to a measured compliance (the rod as built)",
+                       description="Model updating: fit the freed dotted keys of DESIGN (bounded, priors from its "
+                                   "[tolerances] and the documented defaults) so that the compliance model "
+                                   "reproduces the measured C_F; write the as-built design (your file with the "
+                                   "fitted values, the design's in comments); print each key with its uncertainty, "
+                                   "the correlations, the keys the measurement cannot separate (and which load, "
+                                   "gauge or measurement would), and r_mn before and after.")
+    p.add_argument("design", help="*.rod.toml design or a built-in name (rod1 ... rod6)")
+    p.add_argument("--measured", required=True,
+                   help="a measured *.compliance.json (rodlab rig fit) or a *.rig.csv recording (diagnosed first: "
+                        "friction, creep, drift ... are separated from the linear compliance)")
+    p.add_argument("--free", default=None, metavar="KEY[,KEY...]",
+                   help="dotted keys of the design file to fit (default: E_GPa and G_GPa of the tube material)")
+    p.add_argument("--model", choices=("frame", "calc"), default="frame",
+                   help="compliance model the keys are fitted through (default: the calibrated frame, ~1 %% of the "
+                        "solid FEA; calc: the closed form, 6-18 %%)")
+    p.add_argument("-o", "--output", required=True, help="the as-built design to write (*.rod.toml)")
+    p.set_defaults(func=cmd_update)
+
+
+def _default_free(design) -> list[str]:
+    m = design.pipe_I.material
+    keys = [f"materials.{m.name}.E_GPa"]
+    if m.G_GPa is not None:
+        keys.append(f"materials.{m.name}.G_GPa")
+    return keys
+
+
+def _measured(path: str, design):
+    """The measured entries from a compliance file or, for a recording, its diagnosed linear part."""
+    from ...compliance import RodCompliance, read_compliance
+    from ...sensitivity import STRUCTURAL_ENTRIES
+    from ..diagnose.envelope import MEAS_RELATIVE
+    from ..update import Measured, model_compliance
+    if path.endswith(".rig.csv"):
+        from rodlab.stiffness_rig import read_recording
+        from ..diagnose import diagnose_rig
+        from ...calc import calc_rod_compliance
+        C = model_compliance("frame")(design)
+        sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea", {"model": "frame"})
+        diag, model = diagnose_rig(read_recording(path), sim, design)
+        causes = [f.effect for f in diag.findings if f.effect not in ("model_form",)]
+        lin = model.linear
+        return Measured(lin.entries, lin.C, lin.cov, path), causes
+    comp = read_compliance(path)
+    E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
+    C = np.array([comp.C_F[e] for e in E])
+    return Measured(E, C, np.diag((MEAS_RELATIVE * C) ** 2), path), []
+
+
+def cmd_update(args: argparse.Namespace) -> int:
+    from ...design_edit import write_edited_design
+    from ...design_io import resolve_design
+    from ..update import update_design
+    design = resolve_design(args.design)
+    keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
+    measured, causes = _measured(args.measured, design)
+    if causes:
+        print("the recording also shows: " + ", ".join(causes) + " (separated from the linear compliance; see "
+              "`rodlab diagnose --rig`)")
+    res = update_design(design, measured, keys, args.model)
+    _print(res, args.model)
+    if design.source is None:
+        raise RodlabError("the design has no file to start from", key="design")
+    text = Path(design.source).read_text(encoding="utf-8")
+    header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
+              f"--model {args.model}\n")
+    out = write_edited_design(text, design, dict(zip(res.keys, res.x)), args.output, header)
+    print(f"wrote {out}")
+    return 0
+
+
+def _print(res, model: str) -> None:
+    print(f"fitted through the {model} model: chi-square of the {len(res.entries)} entries "
+          f"{res.chi2_before:.2f} -> {res.chi2_after:.2f}")
+    print(f"  {'key':34s} {'design':>10s} {'as built':>10s} {'+-':>9s}")
+    for k, v0, v, s in zip(res.keys, res.nominal, res.x, res.sigma):
+        print(f"  {k:34s} {v0:10.4g} {v:10.4g} {s:9.2g}  ({(v / v0 - 1):+.1%})")
+    if len(res.keys) > 1:
+        print("  correlations: " + "; ".join(f"{a} / {b} {res.corr[i, j]:+.2f}" for i, a in enumerate(res.keys)
+                                           for j, b in enumerate(res.keys) if j > i))
+    for a, b, c, how in res.inseparable:
+        print(f"  the measurement cannot separate {a} from {b} (together they move the measured entries alike, "
+              f"multiple correlation {c:.3f}; the priors split them): to separate them, {how}")
+    names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
+    print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
+    print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

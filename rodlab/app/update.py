@@ -1,0 +1,198 @@
+"""Model updating: fit a design's uncertain keys to a measured compliance (``rodlab update``).
+
+The structural-dynamics practice: the freed dotted keys of the design (``materials.cfrp_tube.E_GPa``,
+``tube.wall_mm``, ...) are fitted, bounded and with priors from the design's tolerances where it states them, so
+that the compliance model (the calibrated frame by default) reproduces the measured C_F entries within their
+uncertainty plus the model's own accuracy (:data:`rodlab.sensitivity.METHOD_ACCURACY`). The result says what
+each key became with its uncertainty, their correlations, which keys the measurement cannot separate and which
+extra measurement would, and the r_mn (measured / model, entry by entry) before and after.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..design import RodDesign
+from ..errors import RodlabError
+from ..massprops import mass_properties
+from ..sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
+from ..tolerances import design_tolerances, design_value
+
+__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR"]
+
+#: two freed keys whose estimates correlate beyond this are reported as not separable
+SEPARATE_CORR = 0.95
+#: prior of a freed key the design gives no tolerance for: this relative standard deviation (weak)
+WEAK_PRIOR = 0.5
+#: extra measurements that may separate keys: (what, standard uncertainty)
+_MASS_SD_KG = 0.001
+_ENTRY_REL = 0.005
+_CALIPER_MM = 0.01
+_COUPON_REL = 0.02
+
+
+@dataclass(frozen=True)
+class Measured:
+    """A measured linear compliance: entries (m, n); C [mm/N], shape=(k,); cov [(mm/N)^2], shape=(k, k); source."""
+
+    entries: tuple
+    C: np.ndarray
+    cov: np.ndarray
+    source: str
+
+    def __post_init__(self) -> None:
+        k = len(self.entries)
+        if k == 0 or np.shape(self.C) != (k,) or np.shape(self.cov) != (k, k):
+            raise RodlabError(f"a measured compliance needs at least one entry with its covariance; got {k} entries, "
+                              f"C {np.shape(self.C)}, cov {np.shape(self.cov)}")
+
+
+@dataclass
+class UpdateResult:
+    """The fitted keys (scipy-``OptimizeResult`` style).
+
+    keys; nominal, x, sigma : design values, fitted values, standard uncertainties [key units], shape=(k,);
+    corr : correlations, shape=(k, k); inseparable : [(key, the keys it cannot be told from, multiple correlation of
+    their data columns, what would separate them)];
+    r_before, r_after : measured / model per entry; entries; chi2_before, chi2_after : of the entries;
+    design : the design as built; success, message
+    """
+
+    keys: tuple
+    nominal: np.ndarray
+    x: np.ndarray
+    sigma: np.ndarray
+    corr: np.ndarray
+    inseparable: list
+    entries: tuple
+    r_before: np.ndarray
+    r_after: np.ndarray
+    chi2_before: float
+    chi2_after: float
+    design: RodDesign
+    success: bool
+    message: str
+
+
+def model_compliance(model: str):
+    """design -> C_F [mm/N] of the compliance model ``frame`` (calibrated beam frame) or ``calc`` (closed form)."""
+    if model == "frame":
+        from rodlab.fea.frame import frame_compliance
+        return lambda d: frame_compliance(d)[0]
+    if model == "calc":
+        from ..calc import calc_rod_compliance
+        return lambda d: calc_rod_compliance(d).C_F
+    raise RodlabError(f"unknown model {model!r}; expected frame or calc", key="model")
+
+
+def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
+    """(nominal, prior sd) of each key: the design's tolerance where it has one, else a weak prior."""
+    tol = {p.key: p.sigma for p in design_tolerances(design)}
+    nominal = np.array([design_value(design, k) for k in keys])
+    sd = np.array([tol.get(k, WEAK_PRIOR * abs(v)) or WEAK_PRIOR * abs(v) for k, v in zip(keys, nominal)])
+    return nominal, sd
+
+
+def update_design(design: RodDesign, measured: Measured, keys, model: str = "frame") -> UpdateResult:
+    """Fit ``keys`` of ``design`` to ``measured`` (bounded to 0.2-5x the design value, priors from the tolerances)."""
+    keys = tuple(keys)
+    if not keys:
+        raise RodlabError("no key to fit: give --free KEY[,KEY...]", key="free")
+    for k in keys:
+        design_value(design, k)
+    fn = model_compliance(model)
+    E = measured.entries
+    rel = METHOD_ACCURACY[model]
+    nominal, prior_sd = _priors(design, keys)
+
+    def entries_of(x):
+        C = fn(with_values(design, dict(zip(keys, x))))
+        return np.array([C[m, n] for m, n in E])
+
+    C0 = entries_of(nominal)
+    S = measured.cov + np.diag([(rel.get(e, 0.01) * c) ** 2 for e, c in zip(E, C0)])
+    W = np.linalg.inv(np.linalg.cholesky(S))
+
+    def residual(x):
+        return np.concatenate([W @ (entries_of(x) - measured.C), (x - nominal) / prior_sd])
+
+    lo, hi = 0.2 * np.abs(nominal), 5.0 * np.abs(nominal)
+    res = least_squares(residual, nominal, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
+    J = res.jac
+    cov = np.linalg.pinv(J.T @ J)
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+    corr = cov / np.outer(np.where(sd > 0, sd, 1), np.where(sd > 0, sd, 1))
+    C1 = entries_of(res.x)
+    z0, z1 = W @ (C0 - measured.C), W @ (C1 - measured.C)
+    as_built = with_values(design, dict(zip(keys, res.x)))
+    insep = _inseparable(design, keys, res.x, J[:len(E)], fn, E)
+    return UpdateResult(keys, nominal, res.x, sd, corr, insep, E, measured.C / C0, measured.C / C1,
+                        float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message))
+
+
+def _collinearity(A: np.ndarray, a: int) -> tuple[float, list]:
+    """How well column ``a`` of ``A`` is reproduced by the other columns: (multiple correlation R, the indices of
+    the columns that carry it)."""
+    others = [i for i in range(A.shape[1]) if i != a]
+    col = A[:, a]
+    if not others or not np.linalg.norm(col) > 0:
+        return 0.0, []
+    B = A[:, others]
+    coef, *_ = np.linalg.lstsq(B, col, rcond=None)
+    proj = B @ coef
+    share = np.abs(coef) * np.linalg.norm(B, axis=0)
+    partners = [others[i] for i in np.nonzero(share > 0.1 * share.max())[0]] if share.max() > 0 else []
+    return float(np.linalg.norm(proj) / np.linalg.norm(col)), partners
+
+
+def _inseparable(design, keys, x, Jd, fn, E) -> list:
+    """Keys the measurement cannot tell from the others: the key's column of the whitened data Jacobian is
+    reproduced by the other keys' columns (multiple correlation > :data:`SEPARATE_CORR`: together they move the
+    measured entries in the same proportions, so only the priors split them), each with the first extra
+    measurement (a C_F entry not measured, the rod's mass, or the key itself) that brings it to 0.9 or below."""
+    out = []
+    for a in range(len(keys)):
+        R, partners = _collinearity(Jd, a)
+        if R > SEPARATE_CORR:
+            out.append((keys[a], ", ".join(keys[i] for i in partners), R, _separator(design, keys, x, Jd, a, fn, E)))
+    return out
+
+
+def _separator(design, keys, x, Jd, a, fn, E) -> str:
+    """The first candidate measurement whose information row makes key ``a`` separable."""
+    for label, row in _candidate_rows(design, keys, x, fn, E):
+        if _collinearity(np.vstack([Jd, row]), a)[0] <= 0.9:
+            return label
+    return "no single extra measurement here separates them: hold one at its design value"
+
+
+def _candidate_rows(design, keys, x, fn, E):
+    """(label, information row) of measurements that could be added: unmeasured entries, the mass, each key."""
+    def derivs(f):
+        base = f(x)
+        rows = []
+        for i in range(len(keys)):
+            h = 1e-3 * abs(x[i]) or 1e-6
+            xp = np.array(x, float)
+            xp[i] += h
+            rows.append((f(xp) - base) / h)
+        return np.array(rows)
+    names = {0: "x", 1: "y", 2: "z"}
+    for m, n in STRUCTURAL_ENTRIES:
+        if (m, n) in E:
+            continue
+        d = derivs(lambda v: fn(with_values(design, dict(zip(keys, v))))[m, n])
+        c = fn(with_values(design, dict(zip(keys, x))))[m, n]
+        if abs(c) > 0:
+            yield (f"load along {names[n]}_T and read the {names[m]} gauge (c{m + 1}{n + 1})", d / (_ENTRY_REL * abs(c)))
+    d = derivs(lambda v: mass_properties(with_values(design, dict(zip(keys, v)))).mass_kg)
+    yield f"weigh the rod (to {_MASS_SD_KG * 1e3:g} g)", d / _MASS_SD_KG
+    for i, k in enumerate(keys):
+        row = np.zeros(len(keys))
+        if k.endswith("_mm"):
+            row[i], how = 1.0 / _CALIPER_MM, f"a caliper or micrometer, {_CALIPER_MM:g} mm"
+        else:
+            row[i], how = 1.0 / (_COUPON_REL * abs(x[i]) or 1.0), f"a coupon test, {_COUPON_REL:.0%}"
+        yield f"measure {k} directly ({how})", row

@@ -1,0 +1,124 @@
+"""Design tolerances ([tolerances], documented defaults), the rod as built (dotted keys set), compliance
+sensitivities, the methods' accuracy against the solid references, and the as-built file writer."""
+import numpy as np
+import pytest
+
+from rodlab import calc_rod_compliance, load_design, resolve_design
+from rodlab.design_edit import edited_design_text, write_edited_design
+from rodlab.errors import DesignError, RodlabError
+from rodlab.sensitivity import METHOD_ACCURACY, compliance_sensitivity, with_values
+from rodlab.tolerances import design_tolerances, design_value
+
+TOML = """format = "rodlab.rod/1"
+name = "t"
+L1_mm = 300.0
+L2_mm = 450.0
+gamma_deg = 90.0
+[tube]   # a comment that must survive
+material = "cfrp_tube"
+outer_diameter_mm = 25.0
+wall_mm = 2.0
+[materials.cfrp_tube]
+E_GPa = 100.0
+G_GPa = 10.0
+nu = 0.30
+density_kg_m3 = 1550.0
+"""
+
+
+def _write(tmp_path, extra=""):
+    p = tmp_path / "t.rod.toml"
+    p.write_text(TOML + extra)
+    return p
+
+
+def test_tolerances_file_over_defaults(tmp_path):
+    d = load_design(_write(tmp_path, '[tolerances]\n"tube.outer_diameter_mm" = 0.1\n'
+                                     '"materials.cfrp_tube.E_GPa" = "8%"\n"tube.wall_mm" = 0\n'))
+    tol = {p.key: p for p in design_tolerances(d)}
+    assert tol["tube.outer_diameter_mm"].sigma == pytest.approx(0.1) and tol["tube.outer_diameter_mm"].source == "file"
+    assert tol["materials.cfrp_tube.E_GPa"].sigma == pytest.approx(8.0)
+    assert tol["materials.cfrp_tube.G_GPa"].sigma == pytest.approx(2.0)      # laminate default 20 %
+    assert "tube.wall_mm" not in tol                                          # 0 removes a default
+
+
+def test_metal_defaults_are_tight():
+    tol = {p.key: p.relative for p in design_tolerances(resolve_design("rod4"))}
+    assert tol["materials.steel_304.E_GPa"] == pytest.approx(0.03)
+    assert not any(k.endswith("G_GPa") for k in tol)                          # isotropic: G follows E
+
+
+@pytest.mark.parametrize("entry, message", [
+    ('"materials.cfrp.E_GPa" = "5%"', "Did you mean `materials.cfrp_tube.E_GPa`"),
+    ('"tube.wall_mm" = "5 percent"', "percentage"),
+    ('"tube.wall_mm" = -1', "number >= 0"),
+])
+def test_bad_tolerance_named_with_line(tmp_path, entry, message):
+    with pytest.raises(DesignError) as e:
+        load_design(_write(tmp_path, "[tolerances]\n" + entry + "\n"))
+    assert message in str(e.value) and "t.rod.toml, line 16" in str(e.value)
+
+
+def test_with_values_is_the_rod_as_built():
+    d = resolve_design("rod1")
+    soft = with_values(d, {"materials.cfrp_tube.E_GPa": 80.0, "tube.outer_diameter_mm": 26.0})
+    assert design_value(soft, "materials.cfrp_tube.E_GPa") == 80.0
+    assert soft.pipe_I.outer_diameter_mm == soft.pipe_II.outer_diameter_mm == 26.0
+    with pytest.raises(DesignError, match="no numeric key"):
+        with_values(d, {"tube.od": 1.0})
+
+
+def test_sensitivity_matches_the_closed_form_scaling():
+    """C_F of the closed form is EI-proportional in bending: d ln c11 / d ln E = -1 exactly on a rod whose
+    members are all the one material (rod 1#'s bend is steel: only the tube share)."""
+    d = resolve_design("rod1")
+    s = compliance_sensitivity(d, ["materials.cfrp_tube.E_GPa", "materials.cfrp_tube.G_GPa"],
+                               lambda x: calc_rod_compliance(x).C_F)
+    elasticity_E = s.dC_F[0, 0, 0] * 100.0 / s.C_F[0, 0]
+    assert -1.0 < elasticity_E < -0.8
+    assert s.dC_F[1, 0, 0] == pytest.approx(0.0, abs=1e-12)                  # G does not bend the rod in plane
+    assert s.dC_F[1, 1, 1] < 0                                                  # ... but twists pipe I
+
+
+def test_method_accuracy_covers_the_solid_references():
+    """The stated accuracy of calc and frame is the rms of their relative error against the solid references."""
+    from rodlab.fea.frame import frame_compliance
+    from rodlab.fea.reference_designs import reference_design, solid_references
+    err = {"calc": {}, "frame": {}}
+    for name, ref in solid_references().items():
+        try:
+            d = reference_design(name)
+        except (KeyError, RodlabError):
+            continue
+        Cs = np.array(ref["C_F"])
+        for method, C in (("calc", calc_rod_compliance(d).C_F), ("frame", frame_compliance(d)[0])):
+            for m, n in METHOD_ACCURACY[method]:
+                if abs(Cs[m, n]) >= 0.05 * np.sqrt(abs(Cs[m, m] * Cs[n, n])):
+                    err[method].setdefault((m, n), []).append(C[m, n] / Cs[m, n] - 1)
+    for method, per in err.items():
+        for e, v in per.items():
+            rms = float(np.sqrt(np.mean(np.square(v))))
+            assert rms <= METHOD_ACCURACY[method][e] * 1.05 and rms >= METHOD_ACCURACY[method][e] * 0.7, (method, e)
+
+
+def test_edited_design_keeps_the_file_and_reads_back(tmp_path):
+    src = _write(tmp_path)
+    d = load_design(src)
+    out = write_edited_design(src.read_text(), d, {"materials.cfrp_tube.E_GPa": 93.0, "bend.radius_mm": 55.0},
+                              tmp_path / "asbuilt.rod.toml", "# as built\n")
+    text = out.read_text()
+    assert "# a comment that must survive" in text and "E_GPa = 93   # design: 100" in text
+    back = load_design(out)
+    assert design_value(back, "materials.cfrp_tube.E_GPa") == 93.0 and back.bend.radius_mm == 55.0
+    # a built-in material the file does not define gets its own table with all its numbers
+    d1 = resolve_design("rod1")
+    t1 = edited_design_text(d1.source.read_text(), d1, {"materials.steel_304.E_GPa": 180.0})
+    assert "[materials.steel_304]" in t1 and "density_kg_m3" in t1.split("[materials.steel_304]")[1]
+
+
+def test_edited_design_refuses_an_invalid_result(tmp_path):
+    src = _write(tmp_path)
+    d = load_design(src)
+    with pytest.raises(DesignError, match="nothing was written"):
+        write_edited_design(src.read_text(), d, {"bend.radius_mm": 10.0}, tmp_path / "bad.rod.toml")
+    assert not (tmp_path / "bad.rod.toml").exists()

@@ -117,7 +117,7 @@ class _AsBuilt:
     def refit_with_cause(self, B: np.ndarray, lower, upper, s0) -> tuple[np.ndarray, np.ndarray, float]:
         """The cause's columns fitted together with the keys (nonlinear, from u = 0 and the Gauss-Newton
         estimate ``s0``): (coefficients, standard errors, chi-square drop)."""
-        k, p = self.k, B.shape[1]
+        k = self.k
         scale = np.maximum(np.abs(np.asarray(s0, float)), 1e-3 * np.maximum(np.abs(upper), 1e-12))
 
         def res(x):

@@ -3,9 +3,9 @@
 - :func:`with_values`: the design with some dotted keys set (a rod as built);
 - :func:`compliance_sensitivity`: C_F and its derivatives with respect to design keys (central differences on a
   compliance model: the closed form here, the frame model when the application passes it);
-- :data:`METHOD_ACCURACY`: one standard deviation of each C_F entry of a simulation method relative to the solid
-  FEA reference, from rodlab's own verification set (``fea/data/solid_reference.json``, 303 entries of the
-  reference designs: docs/diagnose.md; ``tests/test_tolerances.py`` recomputes it).
+- :data:`METHOD_ACCURACY`: the bias, scatter and correlation of a simulation method's C_F entries against the solid
+  FEA, from rodlab's own verification set (``fea/data/solid_reference.json``: docs/diagnose.md;
+  ``tests/test_tolerances.py`` recomputes it).
 """
 from __future__ import annotations
 
@@ -20,25 +20,68 @@ from .errors import DesignError
 from .tolerances import design_value
 
 __all__ = ["with_values", "compliance_sensitivity", "Sensitivity", "METHOD_ACCURACY", "STRUCTURAL_ENTRIES",
-           "method_accuracy"]
+           "method_accuracy", "MethodAccuracy"]
 
 #: the C_F entries a planar rod has (x, z in its plane, y out of it): (m, n) with m <= n
 STRUCTURAL_ENTRIES = ((0, 0), (0, 2), (1, 1), (2, 2))
 
-#: relative standard deviation of the C_F entries (0,0), (0,2), (1,1), (2,2) of each method against the solid FEA:
-#: rms over rodlab's solid references (rod1-rod6, full rods A-Z, part probes, thin bends, families). The closed form
-#: is stiffer by 5-12 % on average (no shear, rigid joints, no bend ovalisation) and up to 73 % off on thin bends;
-#: the calibrated frame is within 1 % rms (4.5 % worst); the solid FEA's discretisation error is ~0.1 %.
+@dataclass(frozen=True)
+class MethodAccuracy:
+    """How a simulation method's C_F entries (:data:`STRUCTURAL_ENTRIES`, in that order) sit against the solid FEA:
+    ln(method / solid) has mean ``bias`` and standard deviation ``sd`` with correlation ``corr`` [-].
+
+    bias, sd : shape=(4,); corr : shape=(4, 4); label : the method's name
+    """
+
+    label: str
+    bias: np.ndarray
+    sd: np.ndarray
+    corr: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name, shape in (("bias", (4,)), ("sd", (4,)), ("corr", (4, 4))):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), float))
+            if getattr(self, name).shape != shape:
+                raise ValueError(f"MethodAccuracy.{name}: shape {shape} expected, got {getattr(self, name).shape}")
+
+    @classmethod
+    def uniform(cls, label: str, rel: float) -> "MethodAccuracy":
+        """No bias, ``rel`` on every entry, independent (a stated accuracy)."""
+        return cls(label, np.zeros(4), np.full(4, rel), np.eye(4))
+
+    def _index(self, entries) -> list:
+        return [STRUCTURAL_ENTRIES.index(tuple(e)) for e in entries]
+
+    def expected(self, C_sim: np.ndarray, entries) -> np.ndarray:
+        """The rod's entries a simulation ``C_sim`` predicts once the method's bias is removed [mm/N]."""
+        i = self._index(entries)
+        return np.array([C_sim[m, n] for m, n in entries]) * np.exp(-self.bias[i])
+
+    def covariance(self, C_sim: np.ndarray, entries) -> np.ndarray:
+        """Covariance of those entries from the method's scatter [(mm/N)^2]."""
+        i = self._index(entries)
+        scale = np.abs(np.array([C_sim[m, n] for m, n in entries])) * self.sd[i]
+        return self.corr[np.ix_(i, i)] * np.outer(scale, scale)
+
+
+#: ln(method / solid FEA) of the C_F entries c11, c13, c22, c33 over rodlab's 60 bent solid references (rod1-rod6,
+#: full rods A-Z, part probes, thin bends, families; ``fea/data/solid_reference.json``; ``tests/test_tolerances.py``
+#: recomputes it). The closed form is stiffer (no shear, rigid joints, no bend ovalisation) by 6-17 % on average,
+#: scattering 3-22 %; the calibrated frame has no bias and ~1 % scatter; the solid FEA's discretisation ~0.2 %.
 METHOD_ACCURACY = {
-    "calc": {(0, 0): 0.105, (0, 2): 0.176, (1, 1): 0.060, (2, 2): 0.144},
-    "frame": {(0, 0): 0.008, (0, 2): 0.010, (1, 1): 0.005, (2, 2): 0.011},
-    "solid": {(0, 0): 0.002, (0, 2): 0.002, (1, 1): 0.002, (2, 2): 0.002},
+    "calc": MethodAccuracy("calc", [-0.094, -0.111, -0.061, -0.169], [0.105, 0.218, 0.033, 0.082],
+                           [[1.0, 0.784, 0.255, 0.465], [0.784, 1.0, 0.388, 0.502], [0.255, 0.388, 1.0, 0.771],
+                            [0.465, 0.502, 0.771, 1.0]]),
+    "frame": MethodAccuracy("frame", [0.0017, -0.0022, 0.0, -0.0011], [0.0089, 0.0094, 0.0059, 0.0129],
+                            [[1.0, 0.599, 0.509, 0.619], [0.599, 1.0, 0.595, 0.728], [0.509, 0.595, 1.0, 0.865],
+                             [0.619, 0.728, 0.865, 1.0]]),
+    "solid": MethodAccuracy.uniform("solid", 0.002),
 }
 
 
-def method_accuracy(method: str, model: str | None = None) -> dict:
-    """Relative sigma per entry for a compliance file's ``method`` (``calc``, ``fea``) and, for ``fea``, the
-    provenance's ``model`` (``frame`` or ``solid``; unknown: the frame's)."""
+def method_accuracy(method: str, model: str | None = None) -> MethodAccuracy:
+    """The accuracy of a compliance file's ``method`` (``calc``, ``fea``) and, for ``fea``, the provenance's
+    ``model`` (``frame`` or ``solid``; unknown: the frame's)."""
     if method == "calc":
         return METHOD_ACCURACY["calc"]
     if method == "fea":

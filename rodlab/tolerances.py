@@ -32,8 +32,8 @@ from dataclasses import dataclass
 from .design import RodDesign
 from .errors import DesignError, did_you_mean
 
-__all__ = ["ToleranceParam", "design_tolerances", "parse_tolerance_value", "check_tolerance_table", "design_value",
-           "numeric_keys", "DEFAULT_RULES"]
+__all__ = ["defaults_markdown", "ToleranceParam", "design_tolerances", "parse_tolerance_value", "check_tolerance_table",
+           "design_value", "numeric_keys", "DEFAULT_RULES"]
 
 #: (key pattern, laminate sigma, metal sigma, why) of the documented defaults; ``M`` stands for a material name
 DEFAULT_RULES = (
@@ -191,3 +191,13 @@ def _defaults(design: RodDesign) -> dict[str, float]:
                 continue
             out[key] = parse_tolerance_value(lam if laminate_tube else metal, keys[key], key)
     return out
+
+
+def defaults_markdown() -> str:
+    """The documented defaults as the Markdown table of docs/formats.md (generated: ``scripts/gen_cli_docs.py``)."""
+    rows = ["| key | laminate (E_transverse or G given) | metal / isotropic | what |", "|---|---|---|---|"]
+    for pattern, lam, metal, why in DEFAULT_RULES:
+        def cell(v):
+            return "-" if v is None else (f"{v} mm" if isinstance(v, float) else v)
+        rows.append(f"| `{pattern}` | {cell(lam)} | {cell(metal)} | {why} |")
+    return "\n".join(rows)

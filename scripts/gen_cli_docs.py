@@ -13,6 +13,7 @@ from rodlab.fileio import write_generated
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 FORMATS = DOC.with_name("formats.md")
 TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
+          "tolerance-defaults": "rodlab.tolerances:defaults_markdown",
           "campaign-effects": "rodlab.calibrate.effects:campaign_vocabulary_markdown"}
 
 

@@ -104,15 +104,15 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
         design_value(design, k)
     fn = model_compliance(model)
     E = measured.entries
-    rel = METHOD_ACCURACY[model]
+    acc = METHOD_ACCURACY[model]
     nominal, prior_sd = _priors(design, keys)
 
     def entries_of(x):
-        C = fn(with_values(design, dict(zip(keys, x))))
-        return np.array([C[m, n] for m, n in E])
+        """The rod's entries the model predicts for keys ``x``, its bias against the solid FEA removed."""
+        return acc.expected(fn(with_values(design, dict(zip(keys, x)))), E)
 
     C0 = entries_of(nominal)
-    S = measured.cov + np.diag([(rel.get(e, 0.01) * c) ** 2 for e, c in zip(E, C0)])
+    S = measured.cov + acc.covariance(fn(design), E)
     W = np.linalg.inv(np.linalg.cholesky(S))
 
     def residual(x):

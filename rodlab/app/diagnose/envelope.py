@@ -18,7 +18,7 @@ import numpy as np
 from ...compliance import RodCompliance, design_hash
 from ...enums import Method, SimAccuracy
 from ...errors import RodlabError
-from ...sensitivity import STRUCTURAL_ENTRIES, compliance_sensitivity, method_accuracy
+from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, compliance_sensitivity, method_accuracy
 from ...tolerances import ToleranceParam, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
@@ -39,10 +39,12 @@ class Envelope:
 
     kind : :class:`~rodlab.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
     uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); dC : d C_F / d key [mm/N per key unit],
-    shape=(k, 3, 3); relative : {(m, n): relative standard deviation of the entry} (the method's own accuracy, or
-    the whole envelope without a design); source : one line saying what the envelope is made of; model : design ->
+    shape=(k, 3, 3); accuracy : the simulation method's bias and scatter against the solid FEA
+    (:class:`~rodlab.sensitivity.MethodAccuracy`; without a design, the whole envelope); source : one line
+    saying what the envelope is made of; model : design ->
     C_F [mm/N] (the frame) and design : the design, for the as-built fit (:meth:`entries_at`); ratio : simulated
-    over model C_F, entry by entry, shape=(3, 3) (the simulation's own form kept as the as-built keys move);
+    over model C_F with the method's bias removed, entry by entry, shape=(3, 3) (the simulation's own form kept as
+    the as-built keys move);
     u_bounds : the range of each key's standardised deviation the design rules allow (within +-4), shape=(k, 2)
     """
 
@@ -50,7 +52,7 @@ class Envelope:
     C_sim: np.ndarray
     params: tuple = ()
     dC: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
-    relative: dict = field(default_factory=dict)
+    accuracy: MethodAccuracy = field(default_factory=lambda: MethodAccuracy.uniform("exact", 0.0))
     source: str = ""
     model: object = None
     design: object = None
@@ -75,13 +77,6 @@ class Envelope:
         """One standard deviation of each key [key unit], shape=(k,)."""
         return np.array([p.sigma for p in self.params], float)
 
-    def covariance(self, entries) -> np.ndarray:
-        """Covariance of the rod's C_F entries about the simulated ones [(mm/N)^2]: tolerances through the
-        sensitivities plus the method's own accuracy, shape=(len(entries), len(entries))."""
-        J = self.jacobian(entries) * self.prior_sd()
-        rel = np.array([self.relative.get((m, n), 0.0) * abs(self.C_sim[m, n]) for m, n in entries])
-        return J @ J.T + np.diag(rel ** 2)
-
     def values(self, u: np.ndarray) -> dict:
         """The as-built keys for standardised log deviations ``u`` (a key is ``nominal exp(u sigma / nominal)``:
         moduli and sizes stay positive, and a compliance ~ 1/E is linear in u)."""
@@ -90,18 +85,17 @@ class Envelope:
     def entries_at(self, u: np.ndarray, entries) -> np.ndarray:
         """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
         if self.model is None or not self.params:
-            return np.array([self.C_sim[m, n] for m, n in entries])
+            return self.accuracy.expected(self.C_sim, entries)
         from ...sensitivity import with_values
         C = np.asarray(self.model(with_values(self.design, self.values(u))), float) * self.ratio
         return np.array([C[m, n] for m, n in entries])
 
-    def tightened(self, material_rel: float, method_rel: dict) -> "Envelope":
-        """The envelope if the moduli were measured to ``material_rel`` and the simulation had the accuracy
-        ``method_rel`` (what a coupon test and a solid FEA would leave)."""
+    def tightened(self, material_rel: float, accuracy: MethodAccuracy) -> "Envelope":
+        """The envelope if the moduli were measured to ``material_rel`` and the simulation had ``accuracy`` (what a
+        coupon test and a solid FEA would leave)."""
         params = tuple(ToleranceParam(p.key, p.nominal, min(p.sigma, material_rel * abs(p.nominal)), p.source)
                        if p.key.startswith("materials.") else p for p in self.params)
-        return Envelope(self.kind, self.C_sim, params, self.dC, dict(method_rel), self.source, self.model, self.design,
-                        self.ratio, self.u_bounds)
+        return replace(self, params=params, accuracy=accuracy)
 
 
 def design_of(sim: RodCompliance, design=None):
@@ -130,7 +124,7 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
     C = np.asarray(sim.C_F, float)
     if accuracy is not None and not isinstance(accuracy, str):
         rel = float(accuracy)
-        return Envelope(SimAccuracy.RELATIVE, C, relative={e: rel for e in STRUCTURAL_ENTRIES},
+        return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("stated", rel),
                         source=f"{rel:.1%} per C_F entry (stated)")
     kind = SimAccuracy.parse(accuracy or "design", "simulation accuracy")
     if kind is SimAccuracy.EXACT:
@@ -138,11 +132,11 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
     if kind is SimAccuracy.RELATIVE:
         raise RodlabError("--sim-accuracy relative needs a number: give the relative accuracy, e.g. 0.05 for 5 %")
     if sim.method is Method.MEAS:
-        return Envelope(SimAccuracy.RELATIVE, C, relative={e: MEAS_RELATIVE for e in STRUCTURAL_ENTRIES},
+        return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("measured", MEAS_RELATIVE),
                         source=f"a measured compliance: {MEAS_RELATIVE:.0%} per entry (remounting and refitting)")
     found = design_of(sim, design)
     if found is None or sim.method is Method.NONE:
-        return Envelope(SimAccuracy.RELATIVE, C, relative={e: GENERIC_RELATIVE for e in STRUCTURAL_ENTRIES},
+        return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("no design", GENERIC_RELATIVE),
                         source=f"no design known: {GENERIC_RELATIVE:.0%} per C_F entry (give --rod DESIGN.rod.toml "
                                "for its tolerances)")
     return _design_envelope(sim, found)
@@ -158,15 +152,19 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
     params = tuple(design_tolerances(design))
     sens = compliance_sensitivity(design, [p.key for p in params], model)
     C = np.asarray(sim.C_F, float)
-    ratio = np.where(np.abs(sens.C_F) > 1e-12 * np.abs(sens.C_F).max(), C / np.where(sens.C_F == 0, 1, sens.C_F), 1.0)
     method = str(sim.method)
     kind = sim.provenance.get("model")
-    rel = method_accuracy(method, kind)
+    acc = method_accuracy(method, kind)
+    unbiased = np.ones((3, 3))
+    for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias):
+        unbiased[m, n] = unbiased[n, m] = np.exp(-b)
+    ratio = np.where(np.abs(sens.C_F) > 1e-12 * np.abs(sens.C_F).max(), C / np.where(sens.C_F == 0, 1, sens.C_F), 1.0)
     label = f"{method}" + (f" ({kind})" if kind else "")
     keys = ", ".join(f"{p.key} {p.relative:.1%}" for p in params)
-    env = Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, rel,
-                   f"design {design.name}: tolerances {keys}; {label} accuracy "
-                   + ", ".join(f"c{m + 1}{n + 1} {v:.1%}" for (m, n), v in rel.items()), model, design, ratio)
+    env = Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, acc,
+                   f"design {design.name}: tolerances {keys}; {label} against the solid FEA: bias "
+                   + ", ".join(f"c{m + 1}{n + 1} {b:+.1%}" for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias))
+                   + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd), model, design, ratio * unbiased)
     return replace(env, u_bounds=_feasible_bounds(env))
 
 

@@ -66,8 +66,7 @@ class _AsBuilt:
 
     def __init__(self, env: Envelope, linear: LinearPart) -> None:
         self.env, self.E, self.C = env, linear.entries, linear.C
-        rel = np.array([env.relative.get(e, 0.0) * abs(env.C_sim[e]) for e in self.E])
-        self.Sigma = np.diag(rel ** 2) + linear.cov
+        self.Sigma = env.accuracy.covariance(env.C_sim, self.E) + linear.cov
         self.W = np.linalg.inv(np.linalg.cholesky(self.Sigma + 1e-30 * np.eye(len(self.E))))
         self.k = len(env.params) if env.model is not None else 0
         self.u = np.zeros(self.k)
@@ -233,9 +232,9 @@ def _resolution(env: Envelope, fit: _AsBuilt, causes) -> list:
     if fit.k:
         shrink = np.array([min(1.0, COUPON_RELATIVE / p.relative) if p.key.startswith("materials.") else 1.0
                            for p in env.params])
-        method = [(env.relative.get(e, 0.0) * env.C_sim[e]) ** 2 for e in fit.E]
-        solid = [(METHOD_ACCURACY["solid"].get(e, 0.0) * env.C_sim[e]) ** 2 for e in fit.E]
-        St = fit.covariance_S(fit.J * shrink, fit.Sigma - np.diag(method) + np.diag(solid))
+        method = env.accuracy.covariance(env.C_sim, fit.E)
+        solid = METHOD_ACCURACY["solid"].covariance(env.C_sim, fit.E)
+        St = fit.covariance_S(fit.J * shrink, fit.Sigma - method + solid)
     gap = fit.gap()
     out = []
     for h in causes:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from ...compliance import read_compliance, write_compliance
+from ...enums import MODEL_FORM
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
@@ -14,12 +15,16 @@ __all__ = ["register"]
 
 
 def register(sub) -> None:
+    from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
+    from rodlab.stiffness_rig.effects import RIG_EFFECTS
+    rig = ", ".join(e.value for e in RIG_EFFECTS)
+    campaign = ", ".join(e.value for e in CAMPAIGN_EFFECTS)
     p = sub.add_parser("diagnose", help="locate and explain the mismatch between simulation and recordings",
-                       description="Rig: a recording against the simulated compliance of its rod. Campaign: "
-                                   "calibration residuals against the identified model. Findings use the effect "
-                                   "vocabulary of the contract (friction, tare, creep, nonlinearity, crosstalk, "
-                                   "drift, compliance_scale, torsion_compliance, joint_compliance; fixture_pose, "
-                                   "rod_deflection, periodic_joint_error, thermal_drift, outliers; unexplained).")
+                       description="Rig: a recording against the simulated compliance of its rod (judged against "
+                                   "the design's tolerances and the simulation method's accuracy unless "
+                                   "--sim-accuracy exact). Campaign: calibration residuals against the identified "
+                                   f"model. Findings use the effect vocabulary (rig: {rig}, {MODEL_FORM}; campaign: "
+                                   f"{campaign}; unexplained).")
     p.add_argument("--rig", help="*.rig.csv recording")
     p.add_argument("--sim", help="rig: the simulated compliance file")
     p.add_argument("--campaign", help="*.campaign.csv")

@@ -1,9 +1,9 @@
 """What a simulated compliance is worth: the envelope around it inside which the rod as built may lie.
 
 A simulation is never the rod. The envelope of a C_F entry combines (a) the design's tolerances
-(:mod:`rodlab.tolerances`: tube OD and wall, laminate E and G, bend radius, ring length), propagated through the
-compliance's sensitivities to them (the frame model, :func:`rodlab.sensitivity.compliance_sensitivity`), and (b) the
-simulation method's own accuracy against the solid FEA (:data:`rodlab.sensitivity.METHOD_ACCURACY`). Without a
+(:mod:`rodlab.tolerances`: tube OD and wall, laminate E and G, bend radius, ring length), through the frame model of
+the perturbed design (the as-built fit of :mod:`.rig_form`), and (b) the simulation method's own bias and scatter
+against the solid FEA (:data:`rodlab.sensitivity.METHOD_ACCURACY`). Without a
 design the envelope is one relative standard deviation per entry; ``exact`` says the simulation is the rod (a
 re-check against an earlier measurement of the same rod).
 """
@@ -18,8 +18,8 @@ import numpy as np
 from ...compliance import RodCompliance, design_hash
 from ...enums import Method, SimAccuracy
 from ...errors import RodlabError
-from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, compliance_sensitivity, method_accuracy
-from ...tolerances import ToleranceParam, design_tolerances
+from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy
+from ...tolerances import design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
 
@@ -38,8 +38,8 @@ class Envelope:
     """How far the rod's C_F may lie from the simulated one.
 
     kind : :class:`~rodlab.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
-    uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); dC : d C_F / d key [mm/N per key unit],
-    shape=(k, 3, 3); accuracy : the simulation method's bias and scatter against the solid FEA
+    uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); accuracy : the simulation method's bias and
+    scatter against the solid FEA
     (:class:`~rodlab.sensitivity.MethodAccuracy`; without a design, the whole envelope); source : one line
     saying what the envelope is made of; model : design ->
     C_F [mm/N] (the frame) and design : the design, for the as-built fit (:meth:`entries_at`); ratio : simulated
@@ -51,7 +51,6 @@ class Envelope:
     kind: SimAccuracy
     C_sim: np.ndarray
     params: tuple = ()
-    dC: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
     accuracy: MethodAccuracy = field(default_factory=lambda: MethodAccuracy.uniform("exact", 0.0))
     source: str = ""
     model: object = None
@@ -61,21 +60,13 @@ class Envelope:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "kind", SimAccuracy.parse(self.kind, "simulation accuracy"))
-        if np.shape(self.C_sim) != (3, 3) or np.shape(self.dC) != (len(self.params), 3, 3):
-            raise ValueError(f"Envelope: C_sim (3, 3) and dC ({len(self.params)}, 3, 3) expected, got "
-                             f"{np.shape(self.C_sim)}, {np.shape(self.dC)}")
+        if np.shape(self.C_sim) != (3, 3) or np.shape(self.ratio) != (3, 3):
+            raise ValueError(f"Envelope: C_sim and ratio (3, 3) expected, got {np.shape(self.C_sim)}, "
+                             f"{np.shape(self.ratio)}")
 
     @property
     def exact(self) -> bool:
         return self.kind is SimAccuracy.EXACT
-
-    def jacobian(self, entries) -> np.ndarray:
-        """d C_F[entry] / d key [mm/N per key unit], shape=(len(entries), k)."""
-        return np.array([[d[m, n] for d in self.dC] for m, n in entries]).reshape(len(entries), len(self.params))
-
-    def prior_sd(self) -> np.ndarray:
-        """One standard deviation of each key [key unit], shape=(k,)."""
-        return np.array([p.sigma for p in self.params], float)
 
     def values(self, u: np.ndarray) -> dict:
         """The as-built keys for standardised log deviations ``u`` (a key is ``nominal exp(u sigma / nominal)``:
@@ -89,13 +80,6 @@ class Envelope:
         from ...sensitivity import with_values
         C = np.asarray(self.model(with_values(self.design, self.values(u))), float) * self.ratio
         return np.array([C[m, n] for m, n in entries])
-
-    def tightened(self, material_rel: float, accuracy: MethodAccuracy) -> "Envelope":
-        """The envelope if the moduli were measured to ``material_rel`` and the simulation had ``accuracy`` (what a
-        coupon test and a solid FEA would leave)."""
-        params = tuple(ToleranceParam(p.key, p.nominal, min(p.sigma, material_rel * abs(p.nominal)), p.source)
-                       if p.key.startswith("materials.") else p for p in self.params)
-        return replace(self, params=params, accuracy=accuracy)
 
 
 def design_of(sim: RodCompliance, design=None):
@@ -143,14 +127,14 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
 
 
 def _design_envelope(sim: RodCompliance, design) -> Envelope:
-    """Tolerances of ``design`` through the frame model's sensitivities (scaled entry by entry to the simulated
-    compliance) plus the accuracy of the method that made ``sim``."""
+    """Tolerances of ``design`` through the frame model of the perturbed design (its form scaled entry by entry to
+    the simulated compliance, the method's bias removed) plus the accuracy of the method that made ``sim``."""
     from rodlab.fea.frame import frame_compliance
 
     def model(d):
         return frame_compliance(d)[0]
     params = tuple(design_tolerances(design))
-    sens = compliance_sensitivity(design, [p.key for p in params], model)
+    C_model = model(design)
     C = np.asarray(sim.C_F, float)
     method = str(sim.method)
     kind = sim.provenance.get("model")
@@ -158,10 +142,10 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
     unbiased = np.ones((3, 3))
     for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias):
         unbiased[m, n] = unbiased[n, m] = np.exp(-b)
-    ratio = np.where(np.abs(sens.C_F) > 1e-12 * np.abs(sens.C_F).max(), C / np.where(sens.C_F == 0, 1, sens.C_F), 1.0)
+    ratio = np.where(np.abs(C_model) > 1e-12 * np.abs(C_model).max(), C / np.where(C_model == 0, 1, C_model), 1.0)
     label = f"{method}" + (f" ({kind})" if kind else "")
     keys = ", ".join(f"{p.key} {p.relative:.1%}" for p in params)
-    env = Envelope(SimAccuracy.DESIGN, C, params, sens.dC_F * ratio, acc,
+    env = Envelope(SimAccuracy.DESIGN, C, params, acc,
                    f"design {design.name}: tolerances {keys}; {label} against the solid FEA: bias "
                    + ", ".join(f"c{m + 1}{n + 1} {b:+.1%}" for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias))
                    + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd), model, design, ratio * unbiased)

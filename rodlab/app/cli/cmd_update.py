@@ -66,6 +66,9 @@ def cmd_update(args: argparse.Namespace) -> int:
     from ...design_edit import write_edited_design
     from ...design_io import resolve_design
     from ..update import update_design
+    if not Path(args.measured).is_file():
+        raise RodlabError(f"--measured {args.measured}: no such file (give a measured *.compliance.json from `rodlab rig "
+                          "fit` or a *.rig.csv recording)")
     design = resolve_design(args.design)
     keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
     measured, causes = _measured(args.measured, design)

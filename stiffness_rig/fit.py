@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab import __version__
-from rodlab.compliance import RodCompliance, r_rod as eq21_r_rod
+from rodlab.compliance import RodCompliance, r_mn as eq20_r_mn, r_rod as eq21_r_rod
 from rodlab.enums import LoadAxis, Method, Phase
 from rodlab.fileio import sha256_file
 from rodlab.units import G0
@@ -76,7 +76,8 @@ class RigFit:
 
     def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
         """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
-        C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file."""
+        C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file; the per-entry factors r_mn
+        (Eq. 20) and the standard errors of the measured entries (``C_F_sigma``), NaN where not measured."""
         r = self.r_rod if self.r_rod is not None else eq21(self, sim)
         C = r * sim.C_F.copy()
         M = self.C_F_meas
@@ -99,7 +100,13 @@ class RigFit:
         if recording is not None and recording.path is not None:
             prov["recording"] = str(recording.path)
             prov["recording_sha256"] = sha256_file(recording.path)
-        return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm, r, prov)
+        return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm, r, prov,
+                             r_mn=self.r_mn(sim), C_F_sigma=np.where(np.isfinite(M), self.C_F_se, np.nan))
+
+    def r_mn(self, sim: RodCompliance) -> np.ndarray:
+        """Per-entry correction factors (paper Eq. 20) measured / simulated [-], shape=(3, 3); NaN where the
+        entry was not measured or the simulated entry is 0."""
+        return eq20_r_mn(self.C_F_meas, sim.C_F)
 
 
 def eq21(fit: RigFit, sim: RodCompliance) -> float:

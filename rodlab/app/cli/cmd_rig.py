@@ -113,6 +113,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
               f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
               f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
+    print("  r_mn (Eq. 20, measured / simulated per entry; - not measured):")
+    for m, row in enumerate(comp.r_mn):
+        print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")
     written = [write_compliance(comp, args.output)]

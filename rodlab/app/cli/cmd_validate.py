@@ -44,6 +44,7 @@ def _lazy(module: str, name: str):
 READERS = {
     "rodlab.rod/1": _lazy("rodlab.design_io", "load_design"),
     "rodlab.compliance/1": _lazy("rodlab.compliance", "read_compliance"),
+    "rodlab.compliance/2": _lazy("rodlab.compliance", "read_compliance"),
     "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.robot/1": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),

@@ -260,6 +260,7 @@ SECTIONS: dict[str, Section] = {
     FORMAT_MASS: Section("Rod CAD: parts and mass", 10, _mass, ("view_iso.png", "view_xz.png", "view_xy.png",
                                                                "view_yz.png")),
     "rodlab.compliance/1": Section("Compliance file", 20, _compliance, ("deformed.png", "fig8.png")),
+    "rodlab.compliance/2": Section("Compliance file", 20, _compliance, ("deformed.png", "fig8.png")),
     "rodlab.joints/1": Section("Joint calibration of the beam frame", 25, _joints),
     FORMAT_SWEEP: Section("L1 x L2 sweep", 30, _sweep, ("*sweep.png",)),
     "rodlab.study/1": Section("Design study: predicted calibration accuracy", 40, _study, ("pareto.png", "heatmaps.png")),

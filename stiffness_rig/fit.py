@@ -20,6 +20,7 @@ from rodlab.units import G0
 
 from .errors import RigError
 from .holds import Holds, hold_averages
+from .load import LoadCheck, measured_load
 from .recording import RigRecording
 
 __all__ = ["LineFit", "RigFit", "fit_recording"]
@@ -62,6 +63,8 @@ class RigFit:
     C_F_meas : measured entries [mm/N], shape=(3, 3), NaN where not measured; C_F_se : their standard errors
     lines : every :class:`LineFit`; noise_mm : within-hold noise of one reading; holds : the hold table
     r_rod : Eq. 21 (None without a simulated compliance); success, message : whether the fit can be used
+    load : nominal (mass x g0) against measured load per hold and branch (:class:`LoadCheck`), None without a
+    load cell; with one, the lines are fitted against the measured load
     """
 
     C_F_meas: np.ndarray
@@ -73,6 +76,7 @@ class RigFit:
     success: bool = True
     message: str = ""
     residuals_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    load: LoadCheck | None = None
 
     def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
         """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
@@ -96,7 +100,10 @@ class RigFit:
                 "noise_mm": self.noise_mm, "lines": [ln.to_dict() for ln in self.lines],
                 "measured_entries": [[bool(np.isfinite(v)) for v in row] for row in M],
                 "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
-                "unmeasured_entries": "r_rod x simulated"}
+                "unmeasured_entries": "r_rod x simulated",
+                "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0"}
+        if self.load is not None:
+            prov["measured_load"] = self.load.to_dict()
         if recording is not None and recording.path is not None:
             prov["recording"] = str(recording.path)
             prov["recording_sha256"] = sha256_file(recording.path)
@@ -146,7 +153,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
         raise RigError("no load axis has a measured component with at least 3 holds at different loads",
                        path=rec.path, key="mass_kg")
     M, S = _combine_lines(lines)
-    fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all))
+    fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     if sim is not None:
         try:
             fit.r_rod = eq21(fit, sim)
@@ -173,7 +180,7 @@ def _reference_holds(holds) -> np.ndarray:
 def _fit_line(h, axis, c: int, robust: bool, noise: float):
     """The load-deflection line of component ``c`` of the holds ``h`` of one load axis (one intercept per
     branch when both load and unload holds exist), and its residuals [mm]; None with < 3 usable holds."""
-    F = h.mass_kg * G0 * axis.sign                       # force component along the axis index [N]
+    F = h.load_N() * axis.sign               # force component along the axis index [N] (load cell or mass x g0)
     is_unload = np.array([p is Phase.UNLOAD for p in h.phase])
     y = h.mean_mm[:, c]
     ok = np.isfinite(y)

@@ -58,6 +58,9 @@ def _register_simulate(rsub) -> None:
     p.add_argument("--hold-s", type=pos_float, default=8.0)
     p.add_argument("--rate-hz", type=pos_float, default=10.0)
     p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--load-cell-noise-n", type=nonneg_float, default=None, metavar="SD_N",
+                   help="add a load cell between the loading frame and the rod with this noise SD [N]: the "
+                        "recording gets a force_N column (the force the rod carries, friction and tare included)")
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
@@ -118,6 +121,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")
+    _print_load(fit)
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")
     if args.png:
@@ -125,6 +129,27 @@ def cmd_fit(args: argparse.Namespace) -> int:
         print(f"  wrote {written[-1]}")
     write_command_report(args, written, written[0].parent)
     return 0
+
+
+def _print_load(fit) -> None:
+    """With a load cell: the lines are against the measured force; nominal - measured per branch."""
+    if fit.load is None:
+        print("  load: mass_kg x g0 (no force_N column)")
+        return
+    ld = fit.load
+    print(f"  load: force_N of the load cell (noise {ld.force_noise_N:.4f} N per reading); "
+          f"mass_kg x g0 - force_N per branch (holds with a hanger on):")
+    for b in ld.branches:
+        print(f"    {b.axis.value:>3} {b.phase.value:<7} {b.diff_N:+8.4f} N (SD {b.sd_N:.4f} N, {b.n_holds} holds)")
+    for axis in ld.friction_N:
+        print(f"    {axis.value:>3} friction in the slides {ld.friction_N[axis]:+.4f} N, "
+              f"tare {ld.tare_kg[axis] * 1e3:+.1f} g")
+    import textwrap
+    h = fit.holds
+    for axis in sorted(set(h.axis), key=lambda a: a.value):
+        cells = " ".join(f"{k}:{v:+.3f}" for k, v, a in zip(h.step, ld.per_hold_N, h.axis) if a is axis)
+        print(textwrap.fill(cells, 110, initial_indent=f"    {axis.value:>3} per hold (step:N) ",
+                            subsequent_indent=" " * 8))
 
 
 def parse_effects(specs: list[str]) -> dict:
@@ -165,7 +190,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
     proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
-    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args))
+    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args),
+                     load_cell_noise_N=args.load_cell_noise_n)
     stated = {str(e): p for e, p in model.effects.items()}
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
                               extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})

@@ -51,6 +51,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
                "diagnosis of instrument points"),
     FormatSpec("rodlab.rigplan/1", "toml", "rigplan.schema.json", (".plan.toml",), "rig plan"),
     FormatSpec("rodlab.rigprofile/1", "toml", "rigprofile.schema.json", (".profile.toml",), "rig profile"),
+    FormatSpec("rodlab.rigprofile/2", "toml", "rigprofile2.schema.json", (".profile.toml",),
+               "rig profile (several instruments)"),
     FormatSpec("rodlab.rig/1", "csv", "rig.table.json", (".rig.csv",), "rig recording"),
     FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),

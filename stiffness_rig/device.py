@@ -123,6 +123,12 @@ class GaugeClient:
                 self._reconnect(f"no valid reading in {failures} attempts")
                 failures = 0
 
+    def read_sample(self):
+        """One reading as a :class:`~.instruments.Sample` (no load cell on a one-port counter)."""
+        from .instruments import Sample
+        x, temp = self.read()
+        return Sample(x, temp)
+
     def command_loader(self, axis: str, phase: str, mass_kg: float) -> None:
         """Command the loader (profile ``[loader]``) and wait for its acknowledgement."""
         p = self.profile

@@ -113,3 +113,24 @@ def test_force_column_round_trip_and_partial_load_cell(tmp_path, caplog):
         fit = fit_recording(rec)
     assert fit.load is None and "read on" in caplog.text
     assert fit.C_F_meas[1, 1] == pytest.approx(0.2, rel=1e-3)
+
+
+def test_plan_beyond_the_carbon_linear_range_names_the_holds(tmp_path, capsys):
+    """The paper's own schedule hangs 2 kg (19.6 N > 15 N) on the carbon rod 1#: one warning naming those holds
+    (5/123 is the first: after the zero hold and 0.5, 1.0, 1.5 kg); the stainless rod 4# and a schedule up to
+    1.5 kg (14.7 N) get none. rig simulate prints it."""
+    from rodlab.app.cli import main
+    from rodlab.stiffness_rig.config import read_plan
+    from rodlab.stiffness_rig.plan_check import linear_range_warnings
+    from conftest import ROOT
+    plan = read_plan(ROOT / "stiffness_rig" / "plans" / "paper.plan.toml")
+    w = linear_range_warnings(plan.schedule, resolve_design("rod1"))
+    assert len(w) == 1 and "2 kg" in w[0] and "19.6 N" in w[0] and "hold 5/123 (y, load, repeat 1)" in w[0]
+    assert "and 11 more" in w[0]                               # 15 holds of 2 kg: 5 repeats x 3 axes
+    assert linear_range_warnings(plan.schedule, resolve_design("rod4")) == []
+    assert linear_range_warnings(LoadSchedule(masses=(0.5, 1.0, 1.5)), resolve_design("rod1")) == []
+    sim = write_compliance(SIM, tmp_path / "s.compliance.json")
+    assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "--masses", "1,2", "-o",
+                 str(tmp_path / "r.rig.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: 2 kg loads the carbon rod 1#" in err and "hold 3/15 (y, load, repeat 1)" in err

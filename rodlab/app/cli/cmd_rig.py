@@ -78,6 +78,9 @@ def _register_acquire(rsub) -> None:
                    help="command the loader of the profile instead of prompting the operator")
     p.add_argument("--new-file", action="store_true",
                    help="never continue an existing file: record into the next free name beside it (run-2.rig.csv)")
+    p.add_argument("--design", default=None, help="the rod's design (*.rod.toml or a built-in name), to warn about "
+                                                  "loads beyond a carbon rod's linear range (default: the plan's rod "
+                                                  "when it is a built-in)")
     p.set_defaults(func=cmd_acquire)
 
 
@@ -190,6 +193,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
     proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
+    _warn_linear_range(proto, args.design or sim.rod, explicit=args.design is not None)
     model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args),
                      load_cell_noise_N=args.load_cell_noise_n)
     stated = {str(e): p for e, p in model.effects.items()}
@@ -199,12 +203,32 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _warn_linear_range(schedule, design_spec: str, explicit: bool) -> None:
+    """Warn (stderr) about every mass beyond a carbon rod's linear range, naming its holds. The design is the
+    one given, else the plan's rod when it is a built-in name (another rod: nothing to check against)."""
+    import sys
+
+    from rodlab.stiffness_rig.plan_check import linear_range_warnings
+
+    from ...design_io import resolve_design
+    from ...errors import RodlabError
+    try:
+        design = resolve_design(design_spec)
+    except RodlabError:
+        if explicit:
+            raise
+        return
+    for w in linear_range_warnings(schedule, design):
+        print(f"warning: {w}", file=sys.stderr)
+
+
 def cmd_acquire(args: argparse.Namespace) -> int:
     import sys
     from rodlab.stiffness_rig.acquire import acquire
     from rodlab.stiffness_rig.config import read_plan, read_profile
     from rodlab.stiffness_rig.resume import next_free_name, resume_point
     profile, plan = read_profile(args.profile), read_plan(args.plan)
+    _warn_linear_range(plan.schedule, args.design or plan.rod, explicit=args.design is not None)
     output = args.output
     if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
         output = str(next_free_name(output))

@@ -28,7 +28,7 @@ from .protocol import encode_values
 from .simdevice import Faults
 
 __all__ = ["SimBench", "PtyInstrument", "SimNumericLine", "SimAsciiRegex", "SimDigimatic", "SimModbusRTU",
-           "Faults", "modbus_crc"]
+           "Faults", "modbus_crc", "simulators_for", "template_of"]
 
 
 class SimBench:
@@ -60,6 +60,15 @@ class SimBench:
             st = {"x_mm": x[0], "y_mm": x[1], "z_mm": x[2], "force_N": force, "temp_C": temp}
             self._last = (t, st)
             return st
+
+    def value(self, channel) -> float:
+        """What an instrument sends for ``channel`` (an :class:`~.instrument_profile.InstrumentChannel`): the
+        rig's quantity in the channel's units, before its sign and scale (the inverse of ``channel.convert``)."""
+        from .instrument_profile import UNITS
+        st = self.state()
+        q = {"displacement": lambda: st["xyz"[channel.axis] + "_mm"], "force": lambda: st["force_N"],
+             "temperature": lambda: st["temp_C"]}[channel.quantity]()
+        return q / (channel.sign * channel.scale * UNITS[channel.quantity][channel.units])
 
     def command(self, text: str) -> bytes:
         """A loader line ``LOAD <axis> <phase> <mass_kg>`` -> ``OK`` (``ERR`` when malformed)."""
@@ -246,9 +255,10 @@ class SimDigimatic(_TextInstrument):
     sign: float = 1.0
     channel: int = 1
     request: str = "1"
+    source: object = None          # a callable giving the value (mm) instead of axis and sign
 
     def reply(self) -> bytes:
-        v = self.sign * self.bench.state()[f"{self.axis}_mm"]
+        v = self.source() if self.source else self.sign * self.bench.state()[f"{self.axis}_mm"]
         return format_digimatic(round(v, 3), self.channel)
 
 
@@ -270,8 +280,12 @@ class SimAsciiRegex(_TextInstrument):
         st.update({f"{a}_um": st[f"{a}_mm"] * 1e3 for a in "xyz"})
         return st
 
+    sources: dict = field(default_factory=dict)    # {template field: callable} beside the state's keys
+
     def reply(self) -> bytes:
-        return (self.template.format(**self._values()) + self.eol).encode("ascii")
+        values = self._values()
+        values.update({k: f() for k, f in self.sources.items()})
+        return (self.template.format(**values) + self.eol).encode("ascii")
 
     def push(self) -> None:
         self.answer(self.reply)
@@ -291,10 +305,13 @@ class SimNumericLine(_TextInstrument):
         super().__post_init__()
         self.pushing = self.stream
 
+    separator: str = ","
+
     def reply(self) -> bytes:
         st = dict(self.bench.state())
         st.update({f"{a}_um": st[f"{a}_mm"] * 1e3 for a in "xyz"})
-        return encode_values([round(st[f], 4) for f in self.fields], ",", self.checksum)
+        return encode_values([round(f() if callable(f) else st[f], 4) for f in self.fields], self.separator,
+                             self.checksum)
 
     def push(self) -> None:
         self.answer(self.reply)
@@ -333,7 +350,8 @@ class SimModbusRTU(PtyInstrument):
         words = {}
         for addr, (key, kind, order, fc, per_unit) in self.registers.items():
             if fc == function:
-                for k, w in enumerate(_words(st[key] * per_unit, kind, order)):
+                v = key() if callable(key) else st[key]
+                for k, w in enumerate(_words(v * per_unit, kind, order)):
                     words[addr + k] = w
         return words
 
@@ -355,3 +373,60 @@ class SimModbusRTU(PtyInstrument):
             self.answer(lambda fc=fc, start=start, count=count: self._respond(fc, start, count))
             buf = rest
         return buf
+
+
+def template_of(pattern: str) -> str:
+    """An answer template from a simple answer pattern: anchors and escapes dropped, each named group
+    ``(?P<name>...)`` replaced by ``{name:+.5f}`` (enough for the usual ``^M0,(?P<a>...),(?P<b>...)$``)."""
+    import re
+    out, i = [], 0
+    body = pattern.strip("^$")
+    while i < len(body):
+        m = re.match(r"\(\?P<(\w+)>", body[i:])
+        if m:
+            depth, j = 1, i + m.end()
+            while j < len(body) and depth:
+                depth += {"(": 1, ")": -1}.get(body[j], 0)
+                j += 1
+            out.append("{" + m.group(1) + ":+.5f}")
+            i = j
+            continue
+        if body[i] == "\\" and i + 1 < len(body):
+            i += 1
+        out.append(body[i].replace("{", "{{").replace("}", "}}"))
+        i += 1
+    return "".join(out)
+
+
+def _source(bench: SimBench, channel):
+    return lambda: bench.value(channel)
+
+
+def simulators_for(profile, bench: SimBench, links: dict, faults: Faults | None = None) -> list:
+    """One simulator per instrument of a ``rodlab.rigprofile/2`` profile on ``bench``, published at
+    ``links[instrument name]``, answering with what its channels expect (units, sign, scale inverted)."""
+    from .drivers.base import unescape
+    sims = []
+    for k, ins in enumerate(profile.instruments):
+        kw = {"bench": bench, "link": links[ins.name], "faults": faults or Faults(), "seed": k}
+        c = ins.config
+        by_value = {ch.value: _source(bench, ch) for ch in ins.channels}
+        if ins.protocol == "digimatic":
+            sims.append(SimDigimatic(**kw, request=unescape(c["request"]).strip(),
+                                     source=by_value.get("value", lambda: 0.0)))
+        elif ins.protocol == "numeric_line":
+            fields = tuple(by_value.get(str(i), lambda: 0.0) for i in range(int(c["n_values"])))
+            sims.append(SimNumericLine(**kw, fields=fields, request=unescape(c["request"]).strip(),
+                                       stream=c["mode"] == "stream", checksum=c["checksum"], separator=c["separator"]))
+        elif ins.protocol == "ascii_regex":
+            sims.append(SimAsciiRegex(**kw, template=template_of(c["pattern"]), request=unescape(c["request"]).strip(),
+                                      eol=unescape(c.get("eol", "\\n")), sources=by_value))
+        elif ins.protocol == "modbus_rtu":
+            regs = {}
+            for r in ins.driver().registers:
+                src = by_value.get(r["name"], lambda: 0.0)
+                regs[r["address"]] = (src, r["type"], r["word_order"], r["function"], 1.0 / r["scale"])
+            sims.append(SimModbusRTU(**kw, slave=int(c["slave"]), registers=regs))
+        else:  # pragma: no cover - every registered driver has a branch (test_every_driver_has_a_simulator)
+            raise KeyError(f"no simulator for protocol {ins.protocol!r}")
+    return sims

@@ -253,3 +253,37 @@ def test_example_profiles_read_and_validate():
     for p in found:
         read_profile(p)
         assert validate_file(p).ok, (p, validate_file(p).problems)
+
+
+def test_cli_simulator_serves_an_example_profile(tmp_path):
+    """rodlab rig simulator --profile serves every instrument of an example profile under --link-dir and
+    writes the profile pointed at them; an acquisition from it records force_N; SIGTERM removes the links."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from rodlab import write_compliance
+    sim = write_compliance(SIM, tmp_path / "sim.compliance.json")
+    links = tmp_path / "links"
+    server = subprocess.Popen([sys.executable, "-m", "rodlab", "rig", "simulator", "--sim", str(sim), "--profile",
+                               str(PLANS / "two-digimatic-loadcell.profile.toml"), "--link-dir", str(links),
+                               "--effect", "friction:F_f_N=0.5"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        for _ in range(200):
+            if (links / "load_cell").is_symlink():
+                break
+            time.sleep(0.05)
+        served = links / "sim.profile.toml"
+        served.write_text(served.read_text() + LOADER.format(who="dial_y"))
+        profile = read_profile(served)
+        assert [i.port for i in profile.instruments] == [str(links / n) for n in ("dial_y", "dial_z", "load_cell")]
+        out = acquire(profile, _plan(axes=("y",)), tmp_path / "r.rig.csv", use_loader=True)
+    finally:
+        server.send_signal(signal.SIGTERM)
+        server.wait(timeout=10)
+    rec = read_recording(out)
+    fit = fit_recording(rec)
+    assert fit.C_F_meas[1, 1] == pytest.approx(C[1, 1], rel=0.01)
+    assert fit.load.friction_N[next(iter(fit.load.friction_N))] == pytest.approx(0.5, rel=0.1)
+    assert not any(p.is_symlink() for p in links.iterdir())

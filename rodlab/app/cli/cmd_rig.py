@@ -89,7 +89,14 @@ def _register_simulator(rsub) -> None:
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
                                     "commandable loader on a pty, published at --link; point a profile's port at it.")
     p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
-    p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--link", default=None, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--profile", default=None, help="a rodlab.rigprofile/2 profile: serve every instrument of it "
+                                                   "(its protocol, channels, units) under --link-dir")
+    p.add_argument("--link-dir", default=None, help="with --profile: the folder of the instruments' pty links "
+                                                    "(one per instrument name) and of sim.profile.toml, the "
+                                                    "profile with its ports pointed at them")
+    p.add_argument("--load-cell-noise-n", type=nonneg_float, default=0.005, metavar="SD_N",
+                   help="with --profile: the simulated load cell's noise SD [N] (default 0.005)")
     p.add_argument("--protocol", choices=["query", "stream"], default="query")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (as for rig simulate; repeatable)")
@@ -143,7 +150,8 @@ def _print_load(fit) -> None:
     print(f"  load: force_N of the load cell (noise {ld.force_noise_N:.4f} N per reading); "
           f"mass_kg x g0 - force_N per branch (holds with a hanger on):")
     for b in ld.branches:
-        print(f"    {b.axis.value:>3} {b.phase.value:<7} {b.diff_N:+8.4f} N (SD {b.sd_N:.4f} N, {b.n_holds} holds)")
+        sd = f"SD {b.sd_N:.4f} N, " if np.isfinite(b.sd_N) else ""
+        print(f"    {b.axis.value:>3} {b.phase.value:<7} {b.diff_N:+8.4f} N ({sd}{b.n_holds} holds)")
     for axis in ld.friction_N:
         print(f"    {axis.value:>3} friction in the slides {ld.friction_N[axis]:+.4f} N, "
               f"tare {ld.tare_kg[axis] * 1e3:+.1f} g")
@@ -267,23 +275,36 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 
 
 def cmd_simulator(args: argparse.Namespace) -> int:
+    import contextlib
     import signal
     import time
     from pathlib import Path
 
     from rodlab.stiffness_rig.model import RigModel
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
+
+    from ...errors import RodlabError
     sim = read_compliance(args.sim)
-    model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
-    dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
-                       faults=Faults(garbage=args.garbage))
+    if args.profile is None and args.link is None:
+        raise RodlabError("give --link (the one-port simulated counter) or --profile with --link-dir")
+    if args.profile is not None:
+        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args),
+                         load_cell_noise_N=args.load_cell_noise_n)
+        devices, what = _profile_simulators(args, model, Faults(garbage=args.garbage))
+    else:
+        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
+        devices = [SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
+                                faults=Faults(garbage=args.garbage))]
+        what = f"on {args.link} ({args.protocol}, 3 gauges in um + temperature"
     def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
         raise KeyboardInterrupt
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, stop)
-    with dev:
-        print(f"simulated rig of rod {sim.rod} on {dev.port} ({args.protocol}, 3 gauges in um + temperature; "
-              f"loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop", flush=True)
+    with contextlib.ExitStack() as stack:
+        for dev in devices:
+            stack.enter_context(dev)
+        print(f"simulated rig of rod {sim.rod} {what}; loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop",
+              flush=True)
         t0 = time.monotonic()
         try:
             while not args.seconds or time.monotonic() - t0 < args.seconds:
@@ -291,3 +312,32 @@ def cmd_simulator(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             pass
     return 0
+
+
+def _profile_simulators(args, model, faults):
+    """The simulators of every instrument of ``--profile`` under ``--link-dir``, and ``sim.profile.toml``
+    there: the profile with each instrument's port pointed at its simulator."""
+    import re
+    from pathlib import Path
+
+    from rodlab.fileio import atomic_write_text
+    from rodlab.stiffness_rig.config import read_profile
+    from rodlab.stiffness_rig.siminstruments import SimBench, simulators_for
+
+    from ...errors import RodlabError
+    profile = read_profile(args.profile)
+    if not hasattr(profile, "instruments"):
+        raise RodlabError(f"{args.profile}: --profile takes a rodlab.rigprofile/2 profile; serve a /1 profile's "
+                          f"counter with --link")
+    if args.link_dir is None:
+        raise RodlabError("--profile needs --link-dir (where the instruments' pty links go)")
+    folder = Path(args.link_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    links = {ins.name: folder / ins.name for ins in profile.instruments}
+    ports = iter(str(links[ins.name]) for ins in profile.instruments)
+    text = re.sub(r"""(?m)^(\s*port\s*=\s*)(".*?"|'.*?')""", lambda m: f'{m.group(1)}"{next(ports)}"',
+                  Path(args.profile).read_text(encoding="utf-8"))
+    written = atomic_write_text(folder / "sim.profile.toml", text)
+    sims = simulators_for(profile, SimBench(model), links, faults)
+    names = ", ".join(f"{i.name} ({i.protocol})" for i in profile.instruments)
+    return sims, f"as {names} under {folder}; profile {written}"

@@ -287,3 +287,9 @@ def test_cli_simulator_serves_an_example_profile(tmp_path):
     assert fit.C_F_meas[1, 1] == pytest.approx(C[1, 1], rel=0.01)
     assert fit.load.friction_N[next(iter(fit.load.friction_N))] == pytest.approx(0.5, rel=0.1)
     assert not any(p.is_symlink() for p in links.iterdir())
+
+
+def test_docs_table_of_protocols_comes_from_the_registry():
+    from rodlab.stiffness_rig.drivers import drivers_markdown
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "rig.md").read_text()
+    assert drivers_markdown() in doc

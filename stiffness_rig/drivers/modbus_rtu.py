@@ -1,8 +1,9 @@
 """``modbus_rtu``: a load-cell amplifier or transmitter speaking Modbus RTU: holding (function 3) or input
 (function 4) registers as int16 / uint16 / int32 / uint32 / float32 (two registers, word order ``big`` =
-high word first, ``little`` = low word first), each times its ``scale``. Through minimalmodbus (pure Python on
-pyserial; chosen over pymodbus: ~13 ms import against ~66 ms, one 132 kB module, no asyncio underneath),
-on the instrument's own pyserial port, so pyserial URLs work too."""
+high word first, ``little`` = low word first), each times its ``scale``. Through minimalmodbus, on the instrument's own
+pyserial port (so pyserial URLs work too). Measured against pymodbus 3.16 on the pty simulator (this machine,
+2 shared cores): a float32 read 2.2 ms median against 5.2-5.6 ms, the import 5-25 ms against 66-200 ms, one
+132 kB pure-Python module on pyserial against a 1.4 MB package with asyncio underneath: minimalmodbus."""
 from __future__ import annotations
 
 import math

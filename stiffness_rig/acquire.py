@@ -97,6 +97,9 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
     if not use_loader and operator is None:
         raise RigError("no loader in the profile and no operator prompt: run interactively or add [loader]",
                        path=profile.path, key="loader")
+    if use_loader and profile.loader_command is None and client is None:
+        raise RigError("--non-interactive commands the loader, but the profile has no [loader]; add one or run "
+                       "interactively (the operator hangs the weights)", path=profile.path, key="loader")
     with RecordingLock(out):
         start = resume_point(out, profile, plan)
         if start.complete:

@@ -293,3 +293,10 @@ def test_docs_table_of_protocols_comes_from_the_registry():
     from rodlab.stiffness_rig.drivers import drivers_markdown
     doc = (Path(__file__).resolve().parents[1] / "docs" / "rig.md").read_text()
     assert drivers_markdown() in doc
+
+
+def test_commanding_a_loader_the_profile_lacks_writes_nothing(tmp_path):
+    profile = read_profile(PLANS / "two-digimatic.profile.toml")
+    with pytest.raises(RigError, match="no \\[loader\\]"):
+        acquire(profile, _plan(), tmp_path / "r.rig.csv", use_loader=True)
+    assert sorted(tmp_path.iterdir()) == []

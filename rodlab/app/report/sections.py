@@ -69,6 +69,14 @@ def _compliance(src: Source) -> str:
             ("tool vector (flange to ball) in {6}", f"{tool} mm")]
     if prov.get("sparse_solver"):
         rows.append(("sparse solver", str(prov["sparse_solver"])))
+    if d.get("r_mn"):
+        cells = "; ".join(f"{'xyz'[m]}: " + " ".join("-" if v is None else f"{v:.4f}" for v in row)
+                          for m, row in enumerate(d["r_mn"]))
+        rows.append(("r_mn (Eq. 20, measured / simulated per entry; - not measured)", cells))
+    load = prov.get("measured_load") or {}
+    if load.get("friction_N"):
+        rows.append(("slides' friction, measured by the load cell",
+                     ", ".join(f"{a}: {v:+.3f} N" for a, v in load["friction_N"].items())))
     return (_kv(rows) + "<div class=grid><div><b>C_F</b>: ball displacement per tip force"
             + matrix_table(d["C_F_mm_per_N"], "um/N", "force") + "</div><div><b>C_g</b>: ball displacement under the "
             "rod's own weight per unit of gravity along each axis" + matrix_table(d["C_g_mm_per_g0"], "um per g0",

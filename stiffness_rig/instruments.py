@@ -26,6 +26,19 @@ __all__ = ["Sample", "InstrumentClient", "RigClient"]
 log = logging.getLogger(__name__)
 
 
+def _port_errors() -> tuple:
+    """What a lost port raises: pyserial's error, OSError, and on POSIX termios.error (a flush on a pty whose
+    other end closed), which is neither."""
+    import serial
+    errors = (serial.SerialException, OSError)
+    try:
+        import termios
+        errors += (termios.error,)
+    except ImportError:  # pragma: no cover - Windows
+        pass
+    return errors
+
+
 @dataclass
 class Sample:
     """One sample of the rig: displacement [mm] shape=(3,) in {T} (NaN where no gauge), temperature [degC] or
@@ -100,7 +113,6 @@ class InstrumentClient:
 
     def _poll_once(self):
         """The driver's values, or None after garbage / no answer (counted)."""
-        import serial
         try:
             return self.driver.poll(self.link)
         except Garbage as g:
@@ -108,7 +120,7 @@ class InstrumentClient:
             log.info("%s: garbage ignored (%d so far): %s", self._where(), self.garbage, g)
         except NoAnswer:
             self.timeouts += 1
-        except (serial.SerialException, OSError, AttributeError, TypeError) as e:
+        except (*_port_errors(), AttributeError, TypeError) as e:
             self._reconnect(f"port lost ({type(e).__name__}: {e})")
         return None
 
@@ -132,12 +144,11 @@ class InstrumentClient:
 
     def command(self, text: str, ack: str, timeout_s: float) -> None:
         """Send one command line and wait for the acknowledgement line (the loader)."""
-        import serial
         for _ in range(self.instrument.retries):
             try:
                 self.link.clear_input()
                 self.link.write(text.encode("ascii"))
-            except (serial.SerialException, OSError, AttributeError) as e:
+            except (*_port_errors(), AttributeError) as e:
                 self._reconnect(f"write failed ({e})")
                 continue
             deadline = time.monotonic() + timeout_s
@@ -146,7 +157,7 @@ class InstrumentClient:
                     raw = self.link.readline()
                 except NoAnswer:
                     continue
-                except (serial.SerialException, OSError) as e:
+                except _port_errors() as e:
                     self._reconnect(f"read failed ({e})")
                     break
                 if raw.strip().decode("ascii", "replace") == ack:

@@ -21,12 +21,15 @@ from .enums import Method
 from .errors import ComplianceError, did_you_mean
 from .fileio import atomic_write_json, json_safe, read_text_checked, sha256_file
 
-__all__ = ["RodCompliance", "c_rod_um", "r_rod", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
-           "read_compliance", "write_compliance", "design_hash"]
+__all__ = ["RodCompliance", "c_rod_um", "r_rod", "r_mn", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
+           "FORMAT_COMPLIANCE_V2", "COMPLIANCE_FORMATS", "read_compliance", "write_compliance", "design_hash"]
 
 log = logging.getLogger(__name__)
 
 FORMAT_COMPLIANCE = "rodlab.compliance/1"
+#: written when a file carries ``r_mn`` or ``C_F_sigma_mm_per_N`` (else /1, so existing files keep their format)
+FORMAT_COMPLIANCE_V2 = "rodlab.compliance/2"
+COMPLIANCE_FORMATS = (FORMAT_COMPLIANCE, FORMAT_COMPLIANCE_V2)
 #: Contact force of the three sensors on the ball, in {D} [N] (paper Section 5.2).
 DEFAULT_CONTACT_FORCE_N = np.array([1.10, 1.25, 1.05])
 #: Relative asymmetry of C_F accepted on read (Maxwell-Betti; measured files are noisy).
@@ -35,7 +38,9 @@ SYMMETRY_RTOL = 0.05
 MAX_COMPLIANCE = 1e3
 
 _KEYS = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "r_rod", "c_rod_um", "mass_kg",
-         "com_T_mm", "tool_mm", "provenance")
+         "com_T_mm", "tool_mm", "provenance", "r_mn", "C_F_sigma_mm_per_N")
+#: keys of rodlab.compliance/2 only
+_V2_KEYS = ("r_mn", "C_F_sigma_mm_per_N")
 _REQUIRED = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "mass_kg", "com_T_mm", "tool_mm")
 
 
@@ -55,6 +60,17 @@ def r_rod(C_F_meas: np.ndarray, C_F_sim: np.ndarray) -> float:
     if not den > 0:
         raise ComplianceError(f"simulated c22 + c33 must be > 0 to form r_rod, got {den}")
     return num / den
+
+
+def r_mn(C_F_meas: np.ndarray, C_F_sim: np.ndarray) -> np.ndarray:
+    """Per-entry correction factors (paper Eq. 20): ``C_F_meas[m, n] / C_F_sim[m, n]``, shape=(3, 3) [-];
+    NaN where the entry was not measured (NaN in ``C_F_meas``) or the simulated entry is ~0 (an entry of
+    ``|c| <= 1e-9 max|C_F_sim|`` has no ratio)."""
+    meas = np.asarray(C_F_meas, dtype=float)
+    sim = np.asarray(C_F_sim, dtype=float)
+    tiny = 1e-9 * max(float(np.abs(sim).max()), 1e-300)
+    ok = np.isfinite(meas) & (np.abs(sim) > tiny)
+    return np.where(ok, meas / np.where(ok, sim, 1.0), np.nan)
 
 
 def design_hash(design: RodDesign) -> str:
@@ -77,6 +93,29 @@ def _as33(value, key: str, path) -> np.ndarray:
         raise ComplianceError(f"an entry of {np.abs(a).max():.3g} is not a measuring rod's (|entry| <= "
                               f"{MAX_COMPLIANCE:g}); check the units (mm/N, mm per g0)", path=path, key=key)
     return a
+
+
+def _as33_nullable(value, key: str, path, lo: float, hi: float) -> np.ndarray:
+    """A 3x3 array whose entries are numbers in [lo, hi] or null / NaN (not known), as floats with NaN."""
+    try:
+        rows = [[np.nan if v is None else v for v in row] for row in value] if isinstance(value, list) else value
+        a = np.array(rows, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ComplianceError(f"expected a 3x3 array of numbers or null, got {value!r}"[:200], path=path,
+                              key=key) from e
+    if a.shape != (3, 3):
+        raise ComplianceError(f"expected shape (3, 3), got {a.shape}", path=path, key=key)
+    if np.isinf(a).any():
+        raise ComplianceError("entries must be finite numbers or null (not known)", path=path, key=key)
+    bad = np.isfinite(a) & ((a < lo) | (a > hi))
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ComplianceError(f"entry [{i}][{j}] = {a[i, j]:.4g} is outside [{lo:g}, {hi:g}]", path=path, key=key)
+    return a
+
+
+def _null33(a: np.ndarray, sig) -> list:
+    return [[None if not np.isfinite(v) else sig(v) for v in row] for row in a]
 
 
 def _as3(value, key: str, path) -> np.ndarray:
@@ -107,6 +146,10 @@ class RodCompliance:
     tool_mm : nominal ball centre in {6} [mm], shape=(3,)
     r_rod : correction factor measured/simulated (Eq. 21) [-]
     provenance : free-form record of how the file was made
+    r_mn : per-entry correction factors measured/simulated (Eq. 20) [-], shape=(3, 3), NaN where not measured;
+        None when the file has none (only a measured file has them)
+    C_F_sigma : standard uncertainty of the measured C_F entries [mm/N], shape=(3, 3), NaN where unknown;
+        None when the file has none
     """
 
     rod: str
@@ -118,9 +161,16 @@ class RodCompliance:
     tool_mm: np.ndarray
     r_rod: float = 1.0
     provenance: dict = field(default_factory=dict)
+    r_mn: np.ndarray | None = None
+    C_F_sigma: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", Method.parse(self.method, "method"))
+        if self.r_mn is not None:
+            object.__setattr__(self, "r_mn", _as33_nullable(self.r_mn, "r_mn", None, -1e3, 1e3))
+        if self.C_F_sigma is not None:
+            object.__setattr__(self, "C_F_sigma", _as33_nullable(self.C_F_sigma, "C_F_sigma_mm_per_N", None, 0.0,
+                                                                 MAX_COMPLIANCE))
         object.__setattr__(self, "C_F", _as33(self.C_F, "C_F_mm_per_N", None))
         object.__setattr__(self, "C_g", _as33(self.C_g, "C_g_mm_per_g0", None))
         object.__setattr__(self, "com_T_mm", _as3(self.com_T_mm, "com_T_mm", None))
@@ -179,7 +229,8 @@ class RodCompliance:
 
     def scaled(self, r: float, method: Method | str = Method.MEAS) -> "RodCompliance":
         """The same rod ``r`` times as compliant (``C_F``, ``C_g`` scaled; paper Eq. 22 with ``r = r_rod``),
-        recorded as ``method`` with ``r_rod = r``."""
+        recorded as ``method`` with ``r_rod = r``. A measurement's ``r_mn`` and ``C_F_sigma`` are not carried:
+        they describe the rig's entries, not the scaled matrices."""
         if not (isinstance(r, (int, float)) and math.isfinite(r) and r > 0):
             raise ComplianceError(f"the scale factor must be a finite number > 0, got {r!r}", key="r_rod")
         prov = dict(self.provenance, scaled_from=str(self.method), scale_factor=float(r))
@@ -187,16 +238,27 @@ class RodCompliance:
                              self.tool_mm, float(r), prov)
 
     # -- (de)serialisation -----------------------------------------------------------------
+    @property
+    def format_id(self) -> str:
+        """The format this compliance is written in: /2 when it carries ``r_mn`` or ``C_F_sigma``, else /1."""
+        return FORMAT_COMPLIANCE_V2 if (self.r_mn is not None or self.C_F_sigma is not None) else FORMAT_COMPLIANCE
+
     def to_dict(self) -> dict:
         def sig(v, n=10):
             return float(f"{float(v):.{n}g}") + 0.0
 
         def r(a):
             return [[sig(v) for v in row] for row in a] if np.ndim(a) == 2 else [sig(v) for v in a]
-        return {"format": FORMAT_COMPLIANCE, "rod": self.rod, "method": str(self.method),
-                "C_F_mm_per_N": r(self.C_F), "C_g_mm_per_g0": r(self.C_g), "r_rod": sig(self.r_rod),
-                "c_rod_um": round(self.c_rod_um, 4), "mass_kg": sig(self.mass_kg),
-                "com_T_mm": r(self.com_T_mm), "tool_mm": r(self.tool_mm), "provenance": json_safe(self.provenance)}
+        out = {"format": self.format_id, "rod": self.rod, "method": str(self.method),
+               "C_F_mm_per_N": r(self.C_F), "C_g_mm_per_g0": r(self.C_g), "r_rod": sig(self.r_rod),
+               "c_rod_um": round(self.c_rod_um, 4), "mass_kg": sig(self.mass_kg),
+               "com_T_mm": r(self.com_T_mm), "tool_mm": r(self.tool_mm)}
+        if self.r_mn is not None:
+            out["r_mn"] = _null33(self.r_mn, sig)
+        if self.C_F_sigma is not None:
+            out["C_F_sigma_mm_per_N"] = _null33(self.C_F_sigma, sig)
+        out["provenance"] = json_safe(self.provenance)
+        return out
 
     @classmethod
     def from_dict(cls, data, path=None) -> "RodCompliance":
@@ -208,8 +270,14 @@ class RodCompliance:
         for k in _REQUIRED:
             if k not in data:
                 raise ComplianceError("missing required key." + did_you_mean(k, list(data)), path=path, key=k)
-        if data["format"] != FORMAT_COMPLIANCE:
-            raise ComplianceError(f"expected {FORMAT_COMPLIANCE!r}, got {data['format']!r}", path=path, key="format")
+        if data["format"] not in COMPLIANCE_FORMATS:
+            raise ComplianceError(f"expected one of {list(COMPLIANCE_FORMATS)}, got {data['format']!r}",
+                                  path=path, key="format")
+        for k in _V2_KEYS:
+            if k in data and data["format"] == FORMAT_COMPLIANCE:
+                raise ComplianceError(f"`{k}` is a key of {FORMAT_COMPLIANCE_V2!r}; this file states "
+                                      f"{FORMAT_COMPLIANCE!r}. Fix: set \"format\": \"{FORMAT_COMPLIANCE_V2}\"",
+                                      path=path, key=k)
         if not isinstance(data["rod"], str):
             raise ComplianceError(f"expected a string, got {data['rod']!r}", path=path, key="rod")
         if not isinstance(data.get("provenance", {}), dict):
@@ -226,7 +294,9 @@ class RodCompliance:
             comp = cls(data["rod"], method, _as33(data["C_F_mm_per_N"], "C_F_mm_per_N", path),
                        _as33(data["C_g_mm_per_g0"], "C_g_mm_per_g0", path), float(data["mass_kg"]),
                        _as3(data["com_T_mm"], "com_T_mm", path), _as3(data["tool_mm"], "tool_mm", path),
-                       float(data.get("r_rod", 1.0)), dict(data.get("provenance", {})))
+                       float(data.get("r_rod", 1.0)), dict(data.get("provenance", {})),
+                       _optional33(data, "r_mn", path, -1e3, 1e3),
+                       _optional33(data, "C_F_sigma_mm_per_N", path, 0.0, MAX_COMPLIANCE))
         except ComplianceError as e:
             if e.path is None:
                 raise ComplianceError(str(e).split(": ", 1)[-1] if e.key else str(e), path=path, key=e.key) from e
@@ -238,6 +308,10 @@ class RodCompliance:
         return comp
 
 
+def _optional33(data: dict, key: str, path, lo: float, hi: float) -> np.ndarray | None:
+    return None if data.get(key) is None else _as33_nullable(data[key], key, path, lo, hi)
+
+
 def read_compliance(path: str | Path) -> RodCompliance:
     """Read and check a ``*.compliance.json`` (errors name the file, line and key)."""
     p = Path(path)
@@ -246,9 +320,9 @@ def read_compliance(path: str | Path) -> RodCompliance:
         data = json.loads(text)
     except json.JSONDecodeError as e:
         raise ComplianceError(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
-    if isinstance(data, dict) and data.get("format") == FORMAT_COMPLIANCE:
+    if isinstance(data, dict) and data.get("format") in COMPLIANCE_FORMATS:
         from .schema import require_schema
-        require_schema(data, FORMAT_COMPLIANCE, p, text, ComplianceError)
+        require_schema(data, data["format"], p, text, ComplianceError)
     return RodCompliance.from_dict(data, p)
 
 

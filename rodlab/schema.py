@@ -42,7 +42,7 @@ class FormatSpec:
 
 FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.rod/1", "toml", "rod.schema.json", (".rod.toml",), "rod design"),
-    FormatSpec("rodlab.compliance/1", "json", "compliance.schema.json", (".compliance.json",), "rod compliance"),
+    FormatSpec("rodlab.compliance/2", "json", "compliance.schema.json", (".compliance.json",), "rod compliance"),
     FormatSpec("rodlab.fixture/1", "json", "fixture.schema.json", (".fixture.json",), "device fixture"),
     FormatSpec("rodlab.robot/2", "toml", "robot.schema.json", (".robot.toml",), "robot file"),
     FormatSpec("rodlab.calibration/1", "json", "calibration.schema.json", (".cal.json",), "calibration result"),
@@ -51,6 +51,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
                "diagnosis of instrument points"),
     FormatSpec("rodlab.rigplan/1", "toml", "rigplan.schema.json", (".plan.toml",), "rig plan"),
     FormatSpec("rodlab.rigprofile/1", "toml", "rigprofile.schema.json", (".profile.toml",), "rig profile"),
+    FormatSpec("rodlab.rigprofile/2", "toml", "rigprofile2.schema.json", (".profile.toml",),
+               "rig profile (several instruments)"),
     FormatSpec("rodlab.rig/1", "csv", "rig.table.json", (".rig.csv",), "rig recording"),
     FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
@@ -63,7 +65,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
 UNCHECKED = {f"rodlab.{n}/1": "an output record of rodlab without a schema: only its JSON syntax is checked"
              for n in ("run", "sweep", "study", "joints", "mass", "comparison", "reference_designs")}
 #: format ids a file may state that are checked with another id's schema
-ALIASES = {"rodlab.robot/1": "rodlab.robot/2", "rodlab.calibration/2": "rodlab.calibration/1"}
+ALIASES = {"rodlab.robot/1": "rodlab.robot/2", "rodlab.compliance/1": "rodlab.compliance/2",
+           "rodlab.calibration/2": "rodlab.calibration/1"}
 
 
 @dataclass(frozen=True)

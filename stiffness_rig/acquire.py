@@ -19,6 +19,7 @@ import logging
 import math
 import os
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -27,6 +28,7 @@ import numpy as np
 
 from .config import RigPlan, RigProfile
 from .device import GaugeClient
+from .instruments import RigClient, Sample
 from .errors import RigError
 from .recording import RecordingWriter
 from .resume import ResumePoint, identity_meta, resume_point
@@ -95,16 +97,23 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
     if not use_loader and operator is None:
         raise RigError("no loader in the profile and no operator prompt: run interactively or add [loader]",
                        path=profile.path, key="loader")
+    if use_loader and profile.loader_command is None and client is None:
+        raise RigError("--non-interactive commands the loader, but the profile has no [loader]; add one or run "
+                       "interactively (the operator hangs the weights)", path=profile.path, key="loader")
     with RecordingLock(out):
         start = resume_point(out, profile, plan)
         if start.complete:
             log.info("%s: the plan is already complete (%d holds)", out, start.holds_total)
             return out
         own_client = client is None
-        client = client or GaugeClient(profile)
-        meta = {"rod": plan.rod, **identity_meta(profile, plan), "load_N": "mass_kg * 9.80665",
+        client = client or make_client(profile)
+        with_force = bool(getattr(profile, "has_force", False))
+        meta = {"rod": plan.rod, **identity_meta(profile, plan),
+                "load_N": "force_N (load cell)" if with_force else "mass_kg * 9.80665",
                 "plan": str(plan.path or ""), "profile": str(profile.path or ""), "generator": "rodlab rig acquire"}
-        writer = RecordingWriter(out, meta, with_temp=profile.temperature_index is not None, fsync_every=20,
+        with_temp = profile.has_temperature if hasattr(profile, "has_temperature") else \
+            profile.temperature_index is not None
+        writer = RecordingWriter(out, meta, with_temp=with_temp, fsync_every=20, with_force=with_force,
                                  decimals=6)                   # raw gauge resolution kept (nm)
         try:
             if start.holds_done:
@@ -115,6 +124,11 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
             if own_client:
                 client.close()
     return out
+
+
+def make_client(profile):
+    """The client of a profile: one port (``rodlab.rigprofile/1``) or several instruments (``/2``)."""
+    return RigClient(profile) if hasattr(profile, "instruments") else GaugeClient(profile)
 
 
 class _Session:
@@ -131,6 +145,7 @@ class _Session:
         self.dt = 1.0 / plan.schedule.rate_Hz
         self.t0 = time.monotonic() - (start.last_time_s + 1.0 if start.last_time_s >= 0 else 0.0)
         self.tick = time.monotonic()
+        self.skew_s = 0.0
 
     def run(self) -> None:
         holds = self.plan.schedule.holds()
@@ -140,6 +155,9 @@ class _Session:
             label = f"hold {k + 1}/{len(holds)}: {mass:g} kg on {axis.value} ({phase}, repeat {rep})"
             self._set_load(axis, rep, phase, mass)
             self._record_hold(axis, rep, phase, mass, label)
+            if self.skew_s > 0:
+                self.writer.comment(f"instruments step {self.step}: answers within {self.skew_s * 1e3:.1f} ms")
+                self.skew_s = 0.0
             self.writer.comment(f"hold {k + 1}/{len(holds)} complete: step {self.step}")
             self.writer.sync()
             if self.progress:
@@ -155,22 +173,26 @@ class _Session:
             self.operator(f"Remove all weights ({axis.value} series, {phase}) then press Enter")
 
     def _sample(self):
-        """One reading at the plan's rate: (time [s], gauges [mm] shape=(3,), temperature [degC])."""
+        """One reading at the plan's rate: (time [s], gauges [mm] shape=(3,), temperature [degC], force [N])."""
         self.tick += self.dt
         pause = self.tick - time.monotonic()
         if pause > 0:
             time.sleep(pause)
         else:
             self.tick = time.monotonic()
-        x, temp = self.client.read()
-        return time.monotonic() - self.t0, x, temp
+        if hasattr(self.client, "read_sample"):
+            s = self.client.read_sample()
+            self.skew_s = max(self.skew_s, s.skew_s)
+        else:                                          # a client of one port (tests may pass their own)
+            s = Sample(*self.client.read())
+        return time.monotonic() - self.t0, s.x, s.temp, s.force
 
-    def _emit(self, hold, t, x, temp) -> None:
+    def _emit(self, hold, t, x, temp, force=math.nan) -> None:
         axis, rep, phase, mass = hold
         measured = self.plan.schedule.measured.get(axis.value, (0, 1, 2))
         rel = x - self.zeros.get(axis.value, np.zeros(3))
         disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan for c in range(3))
-        self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp)
+        self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp, force)
         self.samples += 1
 
     def _record_hold(self, axis, rep, phase, mass, label) -> None:
@@ -180,7 +202,9 @@ class _Session:
         settled = self._settle(hold, label, buffer=new_series)
         if new_series:
             recent, buffered = settled
-            self.zeros[axis.value] = np.nanmean(np.array(recent), axis=0)
+            with warnings.catch_warnings():              # a tool axis without a gauge stays NaN
+                warnings.simplefilter("ignore", RuntimeWarning)
+                self.zeros[axis.value] = np.nanmean(np.array(recent), axis=0)
             self.writer.comment(f"zero {axis.value}: " + ", ".join(f"{v:.6f}" for v in self.zeros[axis.value]))
             for item in buffered:
                 self._emit(hold, *item)
@@ -196,12 +220,12 @@ class _Session:
         recent, buffered = [], []
         t_start = time.monotonic()
         while True:
-            t, x, temp = self._sample()
+            t, x, temp, force = self._sample()
             recent.append(x)
             if buffer:
-                buffered.append((t, x, temp))
+                buffered.append((t, x, temp, force))
             else:
-                self._emit(hold, t, x, temp)
+                self._emit(hold, t, x, temp, force)
             if len(recent) >= window and np.nanmax(np.ptp(np.array(recent[-window:])[:, measured], axis=0)) <= \
                     plan.settle_tolerance_mm:
                 break

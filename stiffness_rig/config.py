@@ -52,6 +52,7 @@ from .model import LoadSchedule
 __all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
 
 FORMAT_PROFILE = "rodlab.rigprofile/1"
+FORMAT_PROFILE_V2 = "rodlab.rigprofile/2"
 FORMAT_PLAN = "rodlab.rigplan/1"
 
 
@@ -152,12 +153,19 @@ class RigProfile:
         return max(idx) + 1
 
 
-def read_profile(path) -> RigProfile:
+def read_profile(path):
+    """A rig profile: :class:`RigProfile` (``rodlab.rigprofile/1``, one port) or
+    :class:`~.instrument_profile.InstrumentProfile` (``/2``, several instruments)."""
     data, text = _load_toml(path)
     r = _Reader(Path(path), text)
+    if data.get("format") == FORMAT_PROFILE_V2:
+        from .instrument_profile import parse_profile_v2
+        _schema(data, FORMAT_PROFILE_V2, path, text)
+        return parse_profile_v2(data, r, path)
     r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")
     if data.get("format") != FORMAT_PROFILE:
-        raise r.err(f"expected format = \"{FORMAT_PROFILE}\", got {data.get('format')!r}", "format")
+        raise r.err(f"expected format = \"{FORMAT_PROFILE}\" or \"{FORMAT_PROFILE_V2}\", got "
+                    f"{data.get('format')!r}", "format")
     dev = data.get("device")
     if dev is None:
         raise r.err("missing [device]", "device")

@@ -13,13 +13,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab import __version__
-from rodlab.compliance import RodCompliance, r_rod as eq21_r_rod
+from rodlab.compliance import RodCompliance, r_mn as eq20_r_mn, r_rod as eq21_r_rod
 from rodlab.enums import LoadAxis, Method, Phase
 from rodlab.fileio import sha256_file
 from rodlab.units import G0
 
 from .errors import RigError
 from .holds import Holds, hold_averages
+from .load import LoadCheck, measured_load
 from .recording import RigRecording
 
 __all__ = ["LineFit", "RigFit", "fit_recording"]
@@ -62,6 +63,8 @@ class RigFit:
     C_F_meas : measured entries [mm/N], shape=(3, 3), NaN where not measured; C_F_se : their standard errors
     lines : every :class:`LineFit`; noise_mm : within-hold noise of one reading; holds : the hold table
     r_rod : Eq. 21 (None without a simulated compliance); success, message : whether the fit can be used
+    load : nominal (mass x g0) against measured load per hold and branch (:class:`LoadCheck`), None without a
+    load cell; with one, the lines are fitted against the measured load
     """
 
     C_F_meas: np.ndarray
@@ -73,10 +76,12 @@ class RigFit:
     success: bool = True
     message: str = ""
     residuals_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    load: LoadCheck | None = None
 
     def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
         """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
-        C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file."""
+        C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file; the per-entry factors r_mn
+        (Eq. 20) and the standard errors of the measured entries (``C_F_sigma``), NaN where not measured."""
         r = self.r_rod if self.r_rod is not None else eq21(self, sim)
         C = r * sim.C_F.copy()
         M = self.C_F_meas
@@ -95,11 +100,20 @@ class RigFit:
                 "noise_mm": self.noise_mm, "lines": [ln.to_dict() for ln in self.lines],
                 "measured_entries": [[bool(np.isfinite(v)) for v in row] for row in M],
                 "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
-                "unmeasured_entries": "r_rod x simulated"}
+                "unmeasured_entries": "r_rod x simulated",
+                "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0"}
+        if self.load is not None:
+            prov["measured_load"] = self.load.to_dict()
         if recording is not None and recording.path is not None:
             prov["recording"] = str(recording.path)
             prov["recording_sha256"] = sha256_file(recording.path)
-        return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm, r, prov)
+        return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm, r, prov,
+                             r_mn=self.r_mn(sim), C_F_sigma=np.where(np.isfinite(M), self.C_F_se, np.nan))
+
+    def r_mn(self, sim: RodCompliance) -> np.ndarray:
+        """Per-entry correction factors (paper Eq. 20) measured / simulated [-], shape=(3, 3); NaN where the
+        entry was not measured or the simulated entry is 0."""
+        return eq20_r_mn(self.C_F_meas, sim.C_F)
 
 
 def eq21(fit: RigFit, sim: RodCompliance) -> float:
@@ -139,7 +153,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
         raise RigError("no load axis has a measured component with at least 3 holds at different loads",
                        path=rec.path, key="mass_kg")
     M, S = _combine_lines(lines)
-    fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all))
+    fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     if sim is not None:
         try:
             fit.r_rod = eq21(fit, sim)
@@ -166,7 +180,7 @@ def _reference_holds(holds) -> np.ndarray:
 def _fit_line(h, axis, c: int, robust: bool, noise: float):
     """The load-deflection line of component ``c`` of the holds ``h`` of one load axis (one intercept per
     branch when both load and unload holds exist), and its residuals [mm]; None with < 3 usable holds."""
-    F = h.mass_kg * G0 * axis.sign                       # force component along the axis index [N]
+    F = h.load_N() * axis.sign               # force component along the axis index [N] (load cell or mass x g0)
     is_unload = np.array([p is Phase.UNLOAD for p in h.phase])
     y = h.mean_mm[:, c]
     ok = np.isfinite(y)

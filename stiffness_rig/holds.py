@@ -22,6 +22,8 @@ class Holds:
     t_start_s, t_end_s : first and last sample time [s]; mean_mm, std_mm : shape=(m, 3) over the settled
     samples [mm] (NaN where not measured); n : settled samples; temp_C : mean temperature or NaN;
     slope_mm_per_s : shape=(m, 3), linear trend within the settled part (creep / drift).
+    force_N, force_std_N : shape=(m,) mean and SD of the load cell's settled readings along the load axis [N]
+    (NaN without a load cell).
     """
 
     step: np.ndarray
@@ -36,6 +38,31 @@ class Holds:
     n: np.ndarray
     temp_C: np.ndarray
     slope_mm_per_s: np.ndarray
+    force_N: np.ndarray = None
+    force_std_N: np.ndarray = None
+
+    def __post_init__(self) -> None:
+        for name in ("force_N", "force_std_N"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.full(self.step.shape, np.nan))
+
+    @property
+    def has_force(self) -> bool:
+        """Every hold has a measured load (a load cell's mean)."""
+        return len(self) > 0 and bool(np.isfinite(self.force_N).all())
+
+    def load_N(self, axis_sign=None) -> np.ndarray:
+        """The load of each hold along its axis [N]: the load cell's mean when every hold has one, else
+        mass_kg x g0; times ``axis_sign`` (shape=(m,)) when given."""
+        from rodlab.units import G0
+        F = self.force_N if self.has_force else self.mass_kg * G0
+        return F if axis_sign is None else F * axis_sign
+
+    def force_noise_N(self) -> float:
+        """Pooled within-hold SD of one load-cell reading [N] (NaN without a load cell)."""
+        ok = np.isfinite(self.force_std_N) & (self.n > 1)
+        dof = (self.n[ok] - 1).sum()
+        return float(np.sqrt((self.force_std_N[ok] ** 2 * (self.n[ok] - 1)).sum() / dof)) if dof > 0 else float("nan")
 
     def __len__(self) -> int:
         return int(self.step.size)
@@ -82,9 +109,21 @@ def hold_averages(rec: RigRecording, settle_fraction: float = SETTLE_FRACTION) -
             else np.nan
         i0 = g[0]
         rows.append((rec.step[i0], rec.repeat[i0], rec.phase[i0], rec.load_axis[i0], rec.mass_kg[i0],
-                     rec.time_s[g].min(), rec.time_s[g].max(), mean, std, s.size, temp, slope))
+                     rec.time_s[g].min(), rec.time_s[g].max(), mean, std, s.size, temp, slope)
+                    + _force_stats(rec, s))
     col = lambda j, dt=float: np.array([r[j] for r in rows], dtype=dt)  # noqa: E731
     return Holds(col(0, int), col(1, int), np.array([r[2] for r in rows], dtype=object),
                  np.array([r[3] for r in rows], dtype=object), col(4), col(5), col(6),
                  np.array([r[7] for r in rows]), np.array([r[8] for r in rows]), col(9, int), col(10),
-                 np.array([r[11] for r in rows]))
+                 np.array([r[11] for r in rows]), col(12), col(13))
+
+
+def _force_stats(rec: RigRecording, s: np.ndarray) -> tuple[float, float]:
+    """(mean, SD) of the load cell's readings among the samples ``s`` [N]; NaN without any."""
+    if rec.force_N is None:
+        return np.nan, np.nan
+    f = rec.force_N[s]
+    f = f[np.isfinite(f)]
+    if f.size == 0:
+        return np.nan, np.nan
+    return float(f.mean()), float(f.std(ddof=1)) if f.size > 1 else np.nan

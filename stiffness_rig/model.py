@@ -86,7 +86,9 @@ class RigModel:
     :data:`~rodlab.stiffness_rig.effects.RIG_EFFECTS`; missing ones take their defaults); noise_mm : per-reading
     SD [mm]; resolution_mm : gauge resolution [mm] (0 = none); seed : random seed; T0_C, temp_amplitude_K,
     temp_period_s : the room temperature cycle [degC, K, s]; places : {location: (point in {T} [mm], member
-    axis)} where joint springs can sit (:func:`~rodlab.stiffness_rig.effects.joint_places`)
+    axis)} where joint springs can sit (:func:`~rodlab.stiffness_rig.effects.joint_places`); load_cell_noise_N :
+    SD of a load cell's reading [N] between the loading frame and the rod (None: no load cell; 0: a perfect
+    one), read by :meth:`load_cell` with its own random stream
     """
 
     C_sim: np.ndarray
@@ -98,12 +100,18 @@ class RigModel:
     temp_amplitude_K: float = 1.0
     temp_period_s: float = 1800.0
     places: dict = field(default_factory=dict)
+    load_cell_noise_N: float | None = None
 
     def __post_init__(self) -> None:
         from .errors import RigError
         if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
             raise RigError(f"the per-reading noise must be >= 0 mm, got {self.noise_mm!r} (--noise-um takes um, "
                            f"e.g. 0.6)", key="noise")
+        if self.load_cell_noise_N is not None and not (np.isfinite(self.load_cell_noise_N)
+                                                       and self.load_cell_noise_N >= 0):
+            raise RigError(f"the load cell's noise must be >= 0 N, got {self.load_cell_noise_N!r}",
+                           key="load_cell_noise_N")
+        self.rng_load_cell = np.random.default_rng([self.seed, 1])
         self.effects = complete_effects(self.effects)
         self._active = [(RIG_EFFECTS[e], p) for e, p in self.effects.items()]
         self.rng = np.random.default_rng(self.seed)
@@ -134,6 +142,18 @@ class RigModel:
         vec = np.zeros(3)
         vec[hold.axis.index] = hold.axis.sign * F
         return vec
+
+    @property
+    def has_load_cell(self) -> bool:
+        return self.load_cell_noise_N is not None
+
+    def load_cell(self, hold: Hold) -> float:
+        """A load cell's reading [N]: the force the rod carries along the hold's load axis (friction and tare
+        included), with its noise, to 1 mN; NaN without a load cell."""
+        if self.load_cell_noise_N is None:
+            return float("nan")
+        F = float(self.force_on_rod(hold)[hold.axis.index] * hold.axis.sign)
+        return round(F + float(self.rng_load_cell.normal(0.0, self.load_cell_noise_N)), 3)
 
     def reading(self, t: float, hold: Hold, measured=(0, 1, 2)) -> tuple:
         """Gauge readings (x, y, z) [mm] at time ``t`` (NaN for unmeasured) and the temperature [degC]."""

@@ -45,17 +45,19 @@ def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
     fig, axes = plt.subplots(2, n, figsize=(5.2 * n, 7.0), squeeze=False, constrained_layout=True,
                              gridspec_kw={"height_ratios": [2.2, 1]})
     h = fit.holds
+    xk = h.load_N() / G0               # load in kg: the load cell's force / g0 when measured, else the mass
+    xlabel = "measured load / g0 [kg] (load cell)" if h.has_force else "load mass [kg] (hanger included)"
     for ax, rax, ln in zip(axes[0], axes[1], diag):
         ref = sim.C_F[ln.component, ln.axis.index] if sim is not None else ln.slope_mm_per_N
         sel0 = np.array([a is ln.axis for a in h.axis])
         for phase, colour, marker in ((Phase.LOAD, "tab:blue", "o"), (Phase.UNLOAD, "tab:orange", "s")):
             m = sel0 & np.array([p is phase for p in h.phase])
             if m.any():
-                r = 1e3 * (h.mean_mm[m, ln.component] - ref * h.mass_kg[m] * G0 * ln.axis.sign)
-                rax.plot(h.mass_kg[m] + (0.01 if phase is Phase.UNLOAD else -0.01), r, marker, color=colour, ms=3,
+                r = 1e3 * (h.mean_mm[m, ln.component] - ref * xk[m] * G0 * ln.axis.sign)
+                rax.plot(xk[m] + (0.01 if phase is Phase.UNLOAD else -0.01), r, marker, color=colour, ms=3,
                          alpha=0.7, label=str(phase))
         rax.axhline(0, color="k", lw=0.8, ls="--")
-        rax.set_xlabel("load mass [kg]")
+        rax.set_xlabel(xlabel)
         rax.set_ylabel("measured - " + ("simulated" if sim is not None else "fit") + " [um]")
         rax.grid(True, lw=0.3)
         rax.legend(fontsize=7)
@@ -66,7 +68,8 @@ def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
                 continue
             masses = np.unique(h.mass_kg[m])
             y = [h.mean_mm[m & (h.mass_kg == mk), ln.component] * 1e3 for mk in masses]
-            ax.errorbar(masses, [v.mean() for v in y], yerr=[v.std(ddof=1) if v.size > 1 else 0 for v in y],
+            at = [xk[m & (h.mass_kg == mk)].mean() for mk in masses]
+            ax.errorbar(at, [v.mean() for v in y], yerr=[v.std(ddof=1) if v.size > 1 else 0 for v in y],
                         fmt=marker, color=colour, ms=5, capsize=3, label=f"measured, {phase} (mean +- SD of repeats)")
             mm = np.linspace(0, h.mass_kg[sel].max(), 50)
             a = ln.intercept_mm[str(phase)]
@@ -79,7 +82,7 @@ def plot_fit(fit, path: str | Path, sim=None, title: str = "") -> Path:
         c = f"c{ln.component + 1}{ln.axis.index + 1}"
         ax.set_title(f"load along {ln.axis.value}_T: {c} = "
                      f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N')}", fontsize=10)
-        ax.set_xlabel("load mass [kg] (hanger included)")
+        ax.set_xlabel(xlabel)
         ax.set_ylabel(f"ball displacement along {_AX[ln.component]}_T [um]")
         ax.grid(True, lw=0.3)
         ax.legend(fontsize=7)

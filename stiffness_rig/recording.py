@@ -3,9 +3,10 @@
 File layout: comment lines ``# key: value`` (at least ``rod`` and ``format``), then a CSV header and one
 row per sample::
 
-    time_s,step,repeat,phase,load_axis,mass_kg,disp_x_mm,disp_y_mm,disp_z_mm[,temp_C]
+    time_s,step,repeat,phase,load_axis,mass_kg,disp_x_mm,disp_y_mm,disp_z_mm[,temp_C][,force_N]
 
-``disp_*`` may be empty where that axis is not measured. Every sample of a hold (``step``) has the same
+``disp_*`` may be empty where that axis is not measured; ``force_N`` (contract v1.1) is a load cell's reading
+[N] along ``load_axis``, empty where not measured. Every sample of a hold (``step``) has the same
 ``mass_kg``, ``load_axis``, ``phase`` and ``repeat``. Each load axis's series starts with a mass-0 hold.
 """
 from __future__ import annotations
@@ -30,7 +31,7 @@ __all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "
 
 FORMAT_RIG = "rodlab.rig/1"
 COLUMNS = ("time_s", "step", "repeat", "phase", "load_axis", "mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm")
-OPTIONAL_COLUMNS = ("temp_C",)
+OPTIONAL_COLUMNS = ("temp_C", "force_N")
 
 
 @dataclass
@@ -44,6 +45,8 @@ class RigRecording:
     load_axis : shape=(n,) of :class:`LoadAxis`; mass_kg : shape=(n,) [kg] (hanger included)
     disp_mm : shape=(n, 3) [mm] ball-centre displacement in {T}, NaN where not measured
     temp_C : shape=(n,) [degC] or None
+    force_N : shape=(n,) [N] the load cell's reading along ``load_axis`` (NaN where not measured), or None
+        without a ``force_N`` column
     """
 
     meta: dict
@@ -56,6 +59,7 @@ class RigRecording:
     disp_mm: np.ndarray
     temp_C: np.ndarray | None = None
     path: Path | None = field(default=None, compare=False)
+    force_N: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = self.time_s.shape[0]
@@ -64,6 +68,13 @@ class RigRecording:
                 raise ValueError(f"{name} must have shape ({n},), got {getattr(self, name).shape}")
         if self.disp_mm.shape != (n, 3):
             raise ValueError(f"disp_mm must have shape ({n}, 3), got {self.disp_mm.shape}")
+        if self.force_N is not None and np.shape(self.force_N) != (n,):
+            raise ValueError(f"force_N must have shape ({n},), got {np.shape(self.force_N)}")
+
+    @property
+    def has_force(self) -> bool:
+        """The recording has a load cell's readings (a ``force_N`` column with at least one value)."""
+        return self.force_N is not None and bool(np.isfinite(self.force_N).any())
 
     @property
     def n(self) -> int:
@@ -137,7 +148,7 @@ def _check_header(header: list[str], p: Path, line: int) -> None:
 
 
 def _row(row: list[str], ix: dict, p: Path, k: int, has_temp: bool) -> tuple:
-    """One sample line ``k``: (line, time, step, repeat, phase, load axis, mass, [dx, dy, dz], temp)."""
+    """One sample line ``k``: (line, time, step, repeat, phase, load axis, mass, [dx, dy, dz], temp, force)."""
     t = _float(row[ix["time_s"]], p, k, "time_s")
     step = _int(row[ix["step"]], p, k, "step")
     rep = _int(row[ix["repeat"]], p, k, "repeat")
@@ -156,7 +167,8 @@ def _row(row: list[str], ix: dict, p: Path, k: int, has_temp: bool) -> tuple:
         raise RigError(f"mass must be >= 0, got {m}", path=p, line=k, key="mass_kg")
     disp = [_float(row[ix[c]], p, k, c, allow_empty=True) for c in ("disp_x_mm", "disp_y_mm", "disp_z_mm")]
     temp = _float(row[ix["temp_C"]], p, k, "temp_C", allow_empty=True) if has_temp else math.nan
-    return (k, t, step, rep, ph, ax, m, disp, temp)
+    force = _float(row[ix["force_N"]], p, k, "force_N", allow_empty=True) if "force_N" in ix else math.nan
+    return (k, t, step, rep, ph, ax, m, disp, temp, force)
 
 
 def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
@@ -193,7 +205,7 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     arr = lambda j, dt=float: np.array([r[j] for r in rows], dtype=dt)  # noqa: E731
     rec = RigRecording(meta, arr(1), arr(2, int), arr(3, int), np.array([r[4] for r in rows], dtype=object),
                        np.array([r[5] for r in rows], dtype=object), arr(6), np.array([r[7] for r in rows]),
-                       arr(8) if has_temp else None, p)
+                       arr(8) if has_temp else None, p, arr(9) if "force_N" in ix else None)
     if not rec.measured_axes():
         raise RigError("no displacement column has any reading", path=p, line=header_line, key="disp_x_mm")
     return rec
@@ -202,7 +214,7 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
 def _check_holds(rows, p) -> None:
     first: dict[int, tuple] = {}
     last_time = -math.inf
-    for k, t, step, rep, ph, ax, m, _, _ in rows:
+    for k, t, step, rep, ph, ax, m, *_ in rows:
         if t < last_time:
             raise RigError(f"time goes backwards ({t} after {last_time})", path=p, line=k, key="time_s")
         last_time = t
@@ -225,11 +237,14 @@ def _check_holds(rows, p) -> None:
 
 
 def format_row(t: float, step: int, repeat: int, phase: Phase, axis: LoadAxis, mass: float,
-               disp: tuple, temp: float | None, decimals: int = 4) -> str:
+               disp: tuple, temp: float | None, decimals: int = 4, force: float | None = None) -> str:
+    """One sample line; ``temp`` / ``force`` None: no such column, NaN: an empty cell."""
     cells = [f"{t:.3f}", str(step), str(repeat), str(phase), str(axis), f"{mass:.4f}"]
     cells += ["" if (v is None or not math.isfinite(v)) else f"{v:.{decimals}f}" for v in disp]
     if temp is not None:
         cells.append("" if not math.isfinite(temp) else f"{temp:.2f}")
+    if force is not None:
+        cells.append("" if not math.isfinite(force) else f"{force:.4f}")
     return ",".join(cells) + "\n"
 
 
@@ -237,14 +252,16 @@ class RecordingWriter:
     """Append samples to a recording, flushed as they arrive; never rewrites what is on disk.
 
     Opening an existing file keeps every complete line; a torn last line (a crash mid-write) is cut off.
-    ``fsync_every`` rows the file is fsync'ed (always on :meth:`close`).
+    ``fsync_every`` rows the file is fsync'ed (always on :meth:`close`). ``with_force``: a ``force_N`` column
+    (a load cell).
     """
 
     def __init__(self, path: str | Path, meta: dict, with_temp: bool = True, fsync_every: int = 50,
-                 decimals: int = 4) -> None:
+                 decimals: int = 4, with_force: bool = False) -> None:
         self.path = Path(path)
         self.decimals = decimals
         self.with_temp = with_temp
+        self.with_force = with_force
         self.fsync_every = fsync_every
         self._since_sync = 0
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -265,13 +282,16 @@ class RecordingWriter:
                     head.write(f"# {k}: {meta.pop(k)}\n")
             for k, v in meta.items():
                 head.write(f"# {k}: {v}\n")
-            head.write(",".join(COLUMNS + (OPTIONAL_COLUMNS if with_temp else ())) + "\n")
+            head.write(",".join(COLUMNS + (("temp_C",) if with_temp else ()) + (("force_N",) if with_force else ()))
+                       + "\n")
             self._fh.write(head.getvalue())
             self._sync()
 
-    def write(self, t, step, repeat, phase, axis, mass, disp, temp=None) -> None:
+    def write(self, t, step, repeat, phase, axis, mass, disp, temp=None, force=None) -> None:
+        """One sample; ``force`` [N] the load cell's reading (None / NaN: an empty cell)."""
+        f = (math.nan if force is None else float(force)) if self.with_force else None
         self._fh.write(format_row(t, step, repeat, Phase(phase), LoadAxis(axis), mass, disp,
-                                  temp if self.with_temp else None, self.decimals))
+                                  (math.nan if temp is None else temp) if self.with_temp else None, self.decimals, f))
         self._fh.flush()
         self._since_sync += 1
         if self._since_sync >= self.fsync_every:

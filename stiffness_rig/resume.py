@@ -40,7 +40,10 @@ def plan_hash(plan: RigPlan) -> str:
 
 
 def device_hash(profile: RigProfile) -> str:
-    """16 hex digits of the wiring: port, protocol, and each channel's index, axis, sign and scale."""
+    """16 hex digits of the wiring: port, protocol, and each channel's index, axis, sign and scale (a profile of
+    several instruments: each one's name, port, protocol and its settings, channels; the loader is not wiring)."""
+    if hasattr(profile, "instruments"):
+        return _digest({"instruments": [i.identity() for i in profile.instruments]})
     return _digest({"port": profile.port, "protocol": profile.protocol,
                     "channels": [[c.index, c.axis, c.sign, c.scale_mm] for c in profile.channels],
                     "temperature": profile.temperature_index})

@@ -16,6 +16,8 @@ def simulate_recording(model: RigModel, schedule: LoadSchedule, path: str | Path
     """Run the load ``schedule`` on ``model`` and write every sample to ``path`` (contract ``rodlab.rig/1``)."""
     meta = {"rod": rod, "sample_rate_Hz": f"{schedule.rate_Hz:g}", "resolution_mm": f"{model.resolution_mm:g}",
             "load_N": "mass_kg * 9.80665", "generator": "rodlab rig simulate"}
+    if model.has_load_cell:
+        meta["load_N"] = f"force_N (load cell, noise {model.load_cell_noise_N:g} N)"
     meta.update(extra_meta or {})
     p = Path(path)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.part")     # written whole, then renamed: never a partial file
@@ -35,7 +37,7 @@ def _write_samples(model: RigModel, schedule: LoadSchedule, p: Path, meta: dict)
     t = 0.0
     current_axis = None
     offset = np.zeros(3)
-    with RecordingWriter(p, meta, with_temp=True, fsync_every=10_000) as w:
+    with RecordingWriter(p, meta, with_temp=True, fsync_every=10_000, with_force=model.has_load_cell) as w:
         for step, (axis, rep, phase, mass) in enumerate(schedule.holds(), start=1):
             hold = Hold(step, axis, rep, phase, mass, t)
             measured = schedule.measured.get(axis.value, (axis.index,))
@@ -49,5 +51,5 @@ def _write_samples(model: RigModel, schedule: LoadSchedule, p: Path, meta: dict)
                 x = x - offset
                 if model.resolution_mm > 0:
                     x = np.round(x / model.resolution_mm) * model.resolution_mm
-                w.write(round(ts, 3), step, rep, phase, axis, mass, tuple(x), temp)
+                w.write(round(ts, 3), step, rep, phase, axis, mass, tuple(x), temp, model.load_cell(hold))
             t += n * dt + schedule.gap_s

@@ -119,3 +119,49 @@ def test_reader_json_syntax_line(tmp_path, comp):
 def test_writer_refuses_nan(tmp_path, comp):
     with pytest.raises(ValueError):
         RodCompliance(comp.rod, Method.CALC, comp.C_F * np.nan, comp.C_g, 1.0, np.zeros(3), np.zeros(3))
+
+
+def _measured(comp) -> RodCompliance:
+    """A measured-looking file: r_mn on the measured entries only (column y and z: loads along y and z)."""
+    from dataclasses import replace
+    from rodlab.compliance import r_mn
+    meas = np.full((3, 3), np.nan)
+    meas[:, 1:] = comp.C_F[:, 1:] * 1.07
+    sigma = np.where(np.isfinite(meas), 2e-4, np.nan)
+    return replace(comp, method=Method.MEAS, r_mn=r_mn(meas, comp.C_F), C_F_sigma=sigma)
+
+
+def test_v2_round_trip_keeps_nulls(tmp_path, comp):
+    """r_mn and C_F_sigma survive a write / read with null where not measured; the file states /2 and passes
+    its schema; a file without them stays /1."""
+    from rodlab.schema import check_file
+    m = _measured(comp)
+    p = write_compliance(m, tmp_path / "m.compliance.json")
+    data = json.loads(p.read_text())
+    assert data["format"] == "rodlab.compliance/2"
+    assert data["r_mn"][0][0] is None and data["C_F_sigma_mm_per_N"][1][0] is None
+    assert check_file(p).ok
+    back = read_compliance(p)
+    # r_mn of an entry whose simulated value is ~0 (C_F[0,1] of a planar rod) is null too
+    expect = np.where(np.abs(comp.C_F) > 1e-9 * np.abs(comp.C_F).max(), 1.07, np.nan)
+    expect[:, 0] = np.nan
+    np.testing.assert_allclose(back.r_mn, expect, rtol=1e-9)
+    np.testing.assert_array_equal(np.isnan(back.C_F_sigma), np.isnan(m.C_F_sigma))
+    plain = json.loads(write_compliance(comp, tmp_path / "c.compliance.json").read_text())
+    assert plain["format"] == "rodlab.compliance/1" and "r_mn" not in plain
+
+
+V2_CASES = [
+    ("v2 key in a v1 file", lambda d: d.update(format="rodlab.compliance/1"), "r_mn", "rodlab.compliance/2"),
+    ("r_mn shape", lambda d: d.update(r_mn=[[1, None], [1, 1]]), "r_mn", "3 items"),
+    ("r_mn text", lambda d: d["r_mn"][1].__setitem__(1, "x"), "r_mn", "a number or a null"),
+    ("sigma negative", lambda d: d["C_F_sigma_mm_per_N"][1].__setitem__(1, -1e-3), "C_F_sigma_mm_per_N", "outside"),
+]
+
+
+@pytest.mark.parametrize("label,mutate,key,words", V2_CASES, ids=[c[0] for c in V2_CASES])
+def test_v2_reader_rejects(tmp_path, comp, label, mutate, key, words):
+    p = _bad(tmp_path, _measured(comp), mutate)
+    with pytest.raises(ComplianceError) as ei:
+        read_compliance(p)
+    assert ei.value.key.startswith(key) and words in str(ei.value) and str(p) in str(ei.value), str(ei.value)

@@ -72,8 +72,10 @@ GOOD = ["0.0,1,1,load,y,0.0,,0.000,0.000", "0.1,1,1,load,y,0.0,,0.001,0.000",
         "1.0,2,1,load,y,0.5,,1.000,0.000", "1.1,2,1,load,y,0.5,,1.001,0.000"]
 BAD = [
     ("missing column", HEADER.replace(",disp_z_mm", ""), GOOD, 3, "disp_z_mm", "missing"),
-    ("extra column", HEADER.replace("disp_z_mm", "disp_z_mm,force_N"), [g + ",1" for g in GOOD], 3, "force_N",
+    ("extra column", HEADER.replace("disp_z_mm", "disp_z_mm,force_kN"), [g + ",1" for g in GOOD], 3, "force_kN",
      "unknown column"),
+    ("bad force", HEADER.replace("disp_z_mm", "disp_z_mm,force_N"), [g + ",0.0" for g in GOOD[:2]]
+     + ["1.0,2,1,load,y,0.5,,1.0,0.0,heavy"], 6, "force_N", "number"),
     ("non-numeric", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,abc,0.000"], 6, "disp_y_mm", "number"),
     ("unknown axis", HEADER, GOOD[:2] + ["1.0,2,1,load,w,0.5,,1.0,0.000"], 6, "load_axis", "unknown load axis"),
     ("bad phase", HEADER, GOOD[:2] + ["1.0,2,1,loading,y,0.5,,1.0,0.000"], 6, "phase", "load"),

@@ -58,6 +58,9 @@ def _register_simulate(rsub) -> None:
     p.add_argument("--hold-s", type=pos_float, default=8.0)
     p.add_argument("--rate-hz", type=pos_float, default=10.0)
     p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--load-cell-noise-n", type=nonneg_float, default=None, metavar="SD_N",
+                   help="add a load cell between the loading frame and the rod with this noise SD [N]: the "
+                        "recording gets a force_N column (the force the rod carries, friction and tare included)")
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
@@ -75,6 +78,9 @@ def _register_acquire(rsub) -> None:
                    help="command the loader of the profile instead of prompting the operator")
     p.add_argument("--new-file", action="store_true",
                    help="never continue an existing file: record into the next free name beside it (run-2.rig.csv)")
+    p.add_argument("--design", default=None, help="the rod's design (*.rod.toml or a built-in name), to warn about "
+                                                  "loads beyond a carbon rod's linear range (default: the plan's rod "
+                                                  "when it is a built-in)")
     p.set_defaults(func=cmd_acquire)
 
 
@@ -83,7 +89,14 @@ def _register_simulator(rsub) -> None:
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
                                     "commandable loader on a pty, published at --link; point a profile's port at it.")
     p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
-    p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--link", default=None, help="path of the symlink to the pty (the profile's port)")
+    p.add_argument("--profile", default=None, help="a rodlab.rigprofile/2 profile: serve every instrument of it "
+                                                   "(its protocol, channels, units) under --link-dir")
+    p.add_argument("--link-dir", default=None, help="with --profile: the folder of the instruments' pty links "
+                                                    "(one per instrument name) and of sim.profile.toml, the "
+                                                    "profile with its ports pointed at them")
+    p.add_argument("--load-cell-noise-n", type=nonneg_float, default=0.005, metavar="SD_N",
+                   help="with --profile: the simulated load cell's noise SD [N] (default 0.005)")
     p.add_argument("--protocol", choices=["query", "stream"], default="query")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (as for rig simulate; repeatable)")
@@ -113,8 +126,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
               f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
               f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
+    print("  r_mn (Eq. 20, measured / simulated per entry; - not measured):")
+    for m, row in enumerate(comp.r_mn):
+        print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{comp.C_F}")
+    _print_load(fit)
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")
     if args.png:
@@ -122,6 +139,28 @@ def cmd_fit(args: argparse.Namespace) -> int:
         print(f"  wrote {written[-1]}")
     write_command_report(args, written, written[0].parent)
     return 0
+
+
+def _print_load(fit) -> None:
+    """With a load cell: the lines are against the measured force; nominal - measured per branch."""
+    if fit.load is None:
+        print("  load: mass_kg x g0 (no force_N column)")
+        return
+    ld = fit.load
+    print(f"  load: force_N of the load cell (noise {ld.force_noise_N:.4f} N per reading); "
+          f"mass_kg x g0 - force_N per branch (holds with a hanger on):")
+    for b in ld.branches:
+        sd = f"SD {b.sd_N:.4f} N, " if np.isfinite(b.sd_N) else ""
+        print(f"    {b.axis.value:>3} {b.phase.value:<7} {b.diff_N:+8.4f} N ({sd}{b.n_holds} holds)")
+    for axis in ld.friction_N:
+        print(f"    {axis.value:>3} friction in the slides {ld.friction_N[axis]:+.4f} N, "
+              f"tare {ld.tare_kg[axis] * 1e3:+.1f} g")
+    import textwrap
+    h = fit.holds
+    for axis in sorted(set(h.axis), key=lambda a: a.value):
+        cells = " ".join(f"{k}:{v:+.3f}" for k, v, a in zip(h.step, ld.per_hold_N, h.axis) if a is axis)
+        print(textwrap.fill(cells, 110, initial_indent=f"    {axis.value:>3} per hold (step:N) ",
+                            subsequent_indent=" " * 8))
 
 
 def parse_effects(specs: list[str]) -> dict:
@@ -162,12 +201,33 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
     proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
-    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args))
+    _warn_linear_range(proto, args.design or sim.rod, explicit=args.design is not None)
+    model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args),
+                     load_cell_noise_N=args.load_cell_noise_n)
     stated = {str(e): p for e, p in model.effects.items()}
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
                               extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})
     print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {stated or 'none'}")
     return 0
+
+
+def _warn_linear_range(schedule, design_spec: str, explicit: bool) -> None:
+    """Warn (stderr) about every mass beyond a carbon rod's linear range, naming its holds. The design is the
+    one given, else the plan's rod when it is a built-in name (another rod: nothing to check against)."""
+    import sys
+
+    from rodlab.stiffness_rig.plan_check import linear_range_warnings
+
+    from ...design_io import resolve_design
+    from ...errors import RodlabError
+    try:
+        design = resolve_design(design_spec)
+    except RodlabError:
+        if explicit:
+            raise
+        return
+    for w in linear_range_warnings(schedule, design):
+        print(f"warning: {w}", file=sys.stderr)
 
 
 def cmd_acquire(args: argparse.Namespace) -> int:
@@ -176,6 +236,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.config import read_plan, read_profile
     from rodlab.stiffness_rig.resume import next_free_name, resume_point
     profile, plan = read_profile(args.profile), read_plan(args.plan)
+    _warn_linear_range(plan.schedule, args.design or plan.rod, explicit=args.design is not None)
     output = args.output
     if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
         output = str(next_free_name(output))
@@ -214,23 +275,36 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 
 
 def cmd_simulator(args: argparse.Namespace) -> int:
+    import contextlib
     import signal
     import time
     from pathlib import Path
 
     from rodlab.stiffness_rig.model import RigModel
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
+
+    from ...errors import RodlabError
     sim = read_compliance(args.sim)
-    model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
-    dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
-                       faults=Faults(garbage=args.garbage))
+    if args.profile is None and args.link is None:
+        raise RodlabError("give --link (the one-port simulated counter) or --profile with --link-dir")
+    if args.profile is not None:
+        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args),
+                         load_cell_noise_N=args.load_cell_noise_n)
+        devices, what = _profile_simulators(args, model, Faults(garbage=args.garbage))
+    else:
+        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
+        devices = [SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
+                                faults=Faults(garbage=args.garbage))]
+        what = f"on {args.link} ({args.protocol}, 3 gauges in um + temperature"
     def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
         raise KeyboardInterrupt
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, stop)
-    with dev:
-        print(f"simulated rig of rod {sim.rod} on {dev.port} ({args.protocol}, 3 gauges in um + temperature; "
-              f"loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop", flush=True)
+    with contextlib.ExitStack() as stack:
+        for dev in devices:
+            stack.enter_context(dev)
+        print(f"simulated rig of rod {sim.rod} {what}; loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop",
+              flush=True)
         t0 = time.monotonic()
         try:
             while not args.seconds or time.monotonic() - t0 < args.seconds:
@@ -238,3 +312,32 @@ def cmd_simulator(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             pass
     return 0
+
+
+def _profile_simulators(args, model, faults):
+    """The simulators of every instrument of ``--profile`` under ``--link-dir``, and ``sim.profile.toml``
+    there: the profile with each instrument's port pointed at its simulator."""
+    import re
+    from pathlib import Path
+
+    from rodlab.fileio import atomic_write_text
+    from rodlab.stiffness_rig.config import read_profile
+    from rodlab.stiffness_rig.siminstruments import SimBench, simulators_for
+
+    from ...errors import RodlabError
+    profile = read_profile(args.profile)
+    if not hasattr(profile, "instruments"):
+        raise RodlabError(f"{args.profile}: --profile takes a rodlab.rigprofile/2 profile; serve a /1 profile's "
+                          f"counter with --link")
+    if args.link_dir is None:
+        raise RodlabError("--profile needs --link-dir (where the instruments' pty links go)")
+    folder = Path(args.link_dir)
+    folder.mkdir(parents=True, exist_ok=True)
+    links = {ins.name: folder / ins.name for ins in profile.instruments}
+    ports = iter(str(links[ins.name]) for ins in profile.instruments)
+    text = re.sub(r"""(?m)^(\s*port\s*=\s*)(".*?"|'.*?')""", lambda m: f'{m.group(1)}"{next(ports)}"',
+                  Path(args.profile).read_text(encoding="utf-8"))
+    written = atomic_write_text(folder / "sim.profile.toml", text)
+    sims = simulators_for(profile, SimBench(model), links, faults)
+    names = ", ".join(f"{i.name} ({i.protocol})" for i in profile.instruments)
+    return sims, f"as {names} under {folder}; profile {written}"

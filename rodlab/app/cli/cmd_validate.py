@@ -44,6 +44,7 @@ def _lazy(module: str, name: str):
 READERS = {
     "rodlab.rod/1": _lazy("rodlab.design_io", "load_design"),
     "rodlab.compliance/1": _lazy("rodlab.compliance", "read_compliance"),
+    "rodlab.compliance/2": _lazy("rodlab.compliance", "read_compliance"),
     "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.robot/1": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),
@@ -52,6 +53,7 @@ READERS = {
     "rodlab.calibration/2": _lazy("rodlab.calibrate.calibration_file", "read_calibration"),
     "rodlab.rigplan/1": _lazy("rodlab.stiffness_rig.config", "read_plan"),
     "rodlab.rigprofile/1": _lazy("rodlab.stiffness_rig.config", "read_profile"),
+    "rodlab.rigprofile/2": _lazy("rodlab.stiffness_rig.config", "read_profile"),
     "rodlab.rig/1": _lazy("rodlab.stiffness_rig", "read_recording"),
     "rodlab.campaign/1": _read_campaign,
     "rodlab.points/1": _read_points,

@@ -69,6 +69,14 @@ def _compliance(src: Source) -> str:
             ("tool vector (flange to ball) in {6}", f"{tool} mm")]
     if prov.get("sparse_solver"):
         rows.append(("sparse solver", str(prov["sparse_solver"])))
+    if d.get("r_mn"):
+        cells = "; ".join(f"{'xyz'[m]}: " + " ".join("-" if v is None else f"{v:.4f}" for v in row)
+                          for m, row in enumerate(d["r_mn"]))
+        rows.append(("r_mn (Eq. 20, measured / simulated per entry; - not measured)", cells))
+    load = prov.get("measured_load") or {}
+    if load.get("friction_N"):
+        rows.append(("slides' friction, measured by the load cell",
+                     ", ".join(f"{a}: {v:+.3f} N" for a, v in load["friction_N"].items())))
     return (_kv(rows) + "<div class=grid><div><b>C_F</b>: ball displacement per tip force"
             + matrix_table(d["C_F_mm_per_N"], "um/N", "force") + "</div><div><b>C_g</b>: ball displacement under the "
             "rod's own weight per unit of gravity along each axis" + matrix_table(d["C_g_mm_per_g0"], "um per g0",
@@ -260,6 +268,7 @@ SECTIONS: dict[str, Section] = {
     FORMAT_MASS: Section("Rod CAD: parts and mass", 10, _mass, ("view_iso.png", "view_xz.png", "view_xy.png",
                                                                "view_yz.png")),
     "rodlab.compliance/1": Section("Compliance file", 20, _compliance, ("deformed.png", "fig8.png")),
+    "rodlab.compliance/2": Section("Compliance file", 20, _compliance, ("deformed.png", "fig8.png")),
     "rodlab.joints/1": Section("Joint calibration of the beam frame", 25, _joints),
     FORMAT_SWEEP: Section("L1 x L2 sweep", 30, _sweep, ("*sweep.png",)),
     "rodlab.study/1": Section("Design study: predicted calibration accuracy", 40, _study, ("pareto.png", "heatmaps.png")),

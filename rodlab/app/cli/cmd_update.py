@@ -59,7 +59,11 @@ def _measured(path: str, design):
     comp = read_compliance(path)
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
     C = np.array([comp.C_F[e] for e in E])
-    return Measured(E, C, np.diag((MEAS_RELATIVE * C) ** 2), path), []
+    sd = MEAS_RELATIVE * np.abs(C)                      # a file that states no uncertainty: remounting's 1 %
+    if comp.C_F_sigma is not None:
+        stated = np.array([comp.C_F_sigma[e] for e in E])
+        sd = np.where(np.isfinite(stated), stated, sd)
+    return Measured(E, C, np.diag(sd ** 2), path), []
 
 
 def cmd_update(args: argparse.Namespace) -> int:

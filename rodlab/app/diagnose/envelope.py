@@ -116,14 +116,28 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
     if kind is SimAccuracy.RELATIVE:
         raise RodlabError("--sim-accuracy relative needs a number: give the relative accuracy, e.g. 0.05 for 5 %")
     if sim.method is Method.MEAS:
-        return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("measured", MEAS_RELATIVE),
-                        source=f"a measured compliance: {MEAS_RELATIVE:.0%} per entry (remounting and refitting)")
+        return _measured_envelope(sim)
     found = design_of(sim, design)
     if found is None or sim.method is Method.NONE:
         return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("no design", GENERIC_RELATIVE),
                         source=f"no design known: {GENERIC_RELATIVE:.0%} per C_F entry (give --rod DESIGN.rod.toml "
                                "for its tolerances)")
     return _design_envelope(sim, found)
+
+
+def _measured_envelope(sim: RodCompliance) -> Envelope:
+    """A measured compliance: its stated standard uncertainty (``C_F_sigma_mm_per_N``, compliance/2) with the
+    :data:`MEAS_RELATIVE` of remounting and refitting added in quadrature, per entry."""
+    rel = np.full(4, MEAS_RELATIVE)
+    if sim.C_F_sigma is not None:
+        for i, (m, n) in enumerate(STRUCTURAL_ENTRIES):
+            sd, c = sim.C_F_sigma[m, n], sim.C_F[m, n]
+            if np.isfinite(sd) and c:
+                rel[i] = float(np.hypot(sd / abs(c), MEAS_RELATIVE))
+    acc = MethodAccuracy("measured", np.zeros(4), rel, np.eye(4))
+    return Envelope(SimAccuracy.RELATIVE, np.asarray(sim.C_F, float), accuracy=acc,
+                    source="a measured compliance: its stated uncertainty and " f"{MEAS_RELATIVE:.0%} per entry "
+                           "(remounting and refitting)")
 
 
 def _design_envelope(sim: RodCompliance, design) -> Envelope:

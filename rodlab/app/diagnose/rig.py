@@ -115,7 +115,7 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))
-    lack = lack_of_fit(data, resid, sigma)
+    lack = lack_of_fit(data, resid, sigma, sim.C_F)
     verdict = "consistent" if not findings else "unexplained" if any(f.effect == OUTSIDE for f in findings) \
         else "explained"
     for finding in lack.findings(rms, sigma):

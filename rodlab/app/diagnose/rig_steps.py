@@ -220,12 +220,16 @@ class LackOfFit:
                 for k in np.unique(steps)}
 
 
-def lack_of_fit(data: RigSamples, resid: np.ndarray, sigma: float) -> LackOfFit:
+def lack_of_fit(data: RigSamples, resid: np.ndarray, sigma: float, C: np.ndarray) -> LackOfFit:
+    """The hold means' residuals against their own scatter: the gauges' noise and, where a load cell measured the
+    load, the error of the hold's mean force through the compliance ``C`` [mm/N]."""
     keys = data.step * 4 + data.comp
     uk, inv = np.unique(keys, return_inverse=True)
     cnt = np.bincount(inv)
     mean_r = np.bincount(inv, weights=resid) / cnt
-    z = mean_r * np.sqrt(cnt) / sigma
+    load_sd = np.abs(np.asarray(C, float)[data.comp, data.axis]) * data.F_se
+    load_var = np.bincount(inv, weights=load_sd ** 2) / cnt
+    z = mean_r / np.sqrt(sigma ** 2 / cnt + load_var)
     return LackOfFit(uk, mean_r, z, float(np.mean(z ** 2)), _within_hold_autocorrelation(data, resid))
 
 

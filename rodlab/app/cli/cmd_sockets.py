@@ -76,7 +76,7 @@ def run_sockets(args) -> SocketRun:
     robot = robot_from_args(args)
     fitted, held = _readings(args, robot)
     fit = identify_sockets(robot, fitted, pinned=parse_pins(args.pin), freed=args.free,
-                           fix_unidentifiable=args.fix_unidentifiable, robust=args.robust)
+                           fix_unidentifiable=not args.strict, robust=args.robust)
     checks = {}
     for label, r in (("fit", fitted), ("held out", held)):
         if r is not None:

@@ -60,9 +60,11 @@ class Prediction:
         object.__setattr__(self, "nominal_mm", n)
 
     @classmethod
-    def of_validation(cls, calibrated_mm, nominal_mm, fit_rms_mm: float) -> "Prediction":
-        """The errors of a held-out validation set (base and tool refitted on it, paper Section 5.2)."""
-        return cls(AccuracySource.VALIDATION, calibrated_mm, nominal_mm, fit_rms_mm, "validation file", 1)
+    def of_validation(cls, calibrated_mm, nominal_mm, fit_rms_mm: float, grouping: str = "validation points"
+                      ) -> "Prediction":
+        """The errors of a held-out validation set (base and tool refitted on it, paper Section 5.2; for socket
+        readings the held-out placements' spread about their sockets)."""
+        return cls(AccuracySource.VALIDATION, calibrated_mm, nominal_mm, fit_rms_mm, grouping, 1)
 
     @property
     def points(self) -> int:
@@ -105,7 +107,7 @@ class Prediction:
 
     def describe(self) -> str:
         """One sentence: the predicted accuracy, its uncertainty, the nominal model's and how it was found."""
-        how = ("on the validation points" if self.source is AccuracySource.VALIDATION else
+        how = (f"on the {self.grouping}" if self.source is AccuracySource.VALIDATION else
                f"by {self.folds}-fold cross-validation over {self.grouping}")
         rel = 100.0 * self.gain_mm / self.nominal_mean_mm if self.nominal_mean_mm > 0 else float("nan")
         return (f"held-out mean error {self.mean_mm:.3f} mm against the nominal model's {self.nominal_mean_mm:.3f} mm "

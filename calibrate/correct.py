@@ -117,7 +117,8 @@ def ik_assumptions(robot, calibrated: ModelParams, nominal: ModelParams, angle_t
                    distance_tol_mm: float = 1e-6) -> list[AxisDeviation]:
     """Every pair of consecutive joint axes that the nominal model has exactly parallel or exactly intersecting
     (what closed-form IK solvers of UR, ABB or FANUC arms assume), with the calibrated geometry's deviation;
-    also the first and last axis of a nominal spherical wrist (the last three intersecting in one point)."""
+    also the first and last axis of a nominal spherical wrist (intersecting in its centre at every configuration;
+    the zero configuration is checked)."""
     zn, on = _axes(robot, nominal)
     zc, oc = _axes(robot, calibrated)
     tcp = ball_positions(robot, nominal.with_(base=np.zeros(6)), np.zeros((1, robot.n)))[0].p0[0]
@@ -126,10 +127,10 @@ def ik_assumptions(robot, calibrated: ModelParams, nominal: ModelParams, angle_t
     for i, j in pairs:
         nominal_angle = np.degrees(np.arccos(np.clip(abs(zn[i] @ zn[j]), -1.0, 1.0)))
         cal_angle = float(np.degrees(np.arccos(np.clip(abs(zc[i] @ zc[j]), -1.0, 1.0))))
-        if nominal_angle < angle_tol_deg:
+        if nominal_angle < angle_tol_deg and j == i + 1:      # beyond neighbours parallelism depends on q
             out.append(AxisDeviation((i + 1, j + 1), "parallel", cal_angle, float("nan"),
                                      float(np.radians(cal_angle) * np.linalg.norm(tcp - on[j]))))
-        elif _line_distance(zn[i], on[i], zn[j], on[j]) < distance_tol_mm:
+        elif nominal_angle >= angle_tol_deg and _line_distance(zn[i], on[i], zn[j], on[j]) < distance_tol_mm:
             d = _line_distance(zc[i], oc[i], zc[j], oc[j])
             out.append(AxisDeviation((i + 1, j + 1), "intersecting", float("nan"), d, d))
     return out

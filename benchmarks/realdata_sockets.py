@@ -46,16 +46,28 @@ def run_split(name: str, urdf: str, fit_on: list, theirs: str | None) -> list[st
     t0 = time.perf_counter()
     fit = identify_sockets(robot, readings.subset(fit_on), fix_unidentifiable=True)
     seconds = time.perf_counter() - t0
-    row = [name, ",".join(map(str, fit_on)), ",".join(map(str, held)), str(test.n),
-           _cell(check_sockets(robot, socket_start(robot, test), test)),
-           _cell(check_sockets(robot, fit.result.params, test))]
+    nominal, calibrated = check_sockets(robot, socket_start(robot, test), test), check_sockets(robot, fit.result.params,
+                                                                                                test)
+    row = [name, ",".join(map(str, fit_on)), ",".join(map(str, held)), str(test.n), _cell(nominal), _cell(calibrated)]
     if theirs:
         other = read_robot(DATA / theirs, tip_link="ball_link")
         row.append(_cell(check_sockets(other, socket_start(other, test), test)))
     else:
         row.append("- | -")
-    row += [f"{fit.result.rms_mm * 1e3:.0f}", f"{seconds:.2f}"]
+    row += [f"{fit.result.rms_mm * 1e3:.0f}", f"{seconds:.2f}", _verdict(fit.result, nominal, calibrated)]
     return ["| " + " | ".join(row) + " |"]
+
+
+def _verdict(res, nominal, calibrated) -> str:
+    """What ``rodlab calibrate --sockets --fit-placements`` says: trusted (usable: the held-out placements' spread
+    clearly below the nominal model's, plausible parameters) or not, with the completeness statement."""
+    from rodlab.calibrate.crossval import Prediction
+    from rodlab.calibrate.trust import completeness, prediction_warnings
+    warnings = res.warnings + prediction_warnings(Prediction.of_validation(calibrated.spread_mm, nominal.spread_mm,
+                                                                           res.rms_mm))
+    complete = f"model {completeness(res)}, {res.residual_check.birge:.1f} x seat play"
+    return ("trusted" if not warnings else "NOT TRUSTED (" + "; ".join(w.split(":")[0] for w in warnings[:2]) + ")") \
+        + f"; {complete}"
 
 
 def main(argv=None) -> int:
@@ -71,8 +83,8 @@ def main(argv=None) -> int:
              "centre, mean / max [mm], and the rms error of the 50 mm socket distance [mm]. Written by "
              "`python benchmarks/realdata_sockets.py`.", "",
              "| data | fit on | checked on | readings | nominal spread | nominal distance | rodlab spread | "
-             "rodlab distance | MUKCa's own spread | MUKCa's own distance | fit rms um | fit s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "rodlab distance | MUKCa's own spread | MUKCa's own distance | fit rms um | fit s | verdict (exit 0 if trusted) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for split in SPLITS:
         lines += run_split(*split)
         print(lines[-1])

@@ -48,7 +48,9 @@ class CalibrationResult:
     offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations;
     warnings : reasons not to trust the result (:func:`trust_warnings`); cautions : what a trusted result
     should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None;
-    harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over
+    harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over;
+    prediction : the held-out accuracy (:class:`~calibrate.crossval.Prediction`) once the caller has judged it
+    (:func:`~calibrate.trust.prediction_warnings`), else None
     """
 
     params: ModelParams
@@ -72,6 +74,7 @@ class CalibrationResult:
     residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
     cautions: list = field(default_factory=list)
     harmonic_range_deg: dict = field(default_factory=dict)   # joint (1-based) -> (min, max) reading [deg] of the data
+    prediction: object = None              # calibrate.crossval.Prediction (held-out accuracy), or None
 
 
 def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
@@ -239,7 +242,7 @@ def _free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned,
     deficient = {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined",
                                                                                                    "has no"))}
     if deficient and fix_unidentifiable:
-        log.warning("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
+        log.info("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
     elif deficient:
         lines = "; ".join(f"{nm} {why}" for nm, why in list(deficient.items())[:8])
         more = ("Add clamping positions or rod orientations (more varied joint angles)" if obs.group is not None

@@ -13,7 +13,7 @@ from rodlab.units import TRACKER_NOISE_MM
 from .campaign import PointSet
 from .identify import CalibrationResult, Observations, identify
 
-__all__ = ["points_observations", "identify_points", "stated_noise_mm"]
+__all__ = ["points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
 
 
 def points_observations(pts: PointSet) -> Observations:
@@ -41,3 +41,13 @@ def identify_points(robot, pts: PointSet, expected_noise_mm: float | None = TRAC
     return identify(robot, points_observations(pts), pts.tool_mm, None, pinned=dict(pinned or {}),
                     freed=set(freed) | {"tool_y"}, robust=robust, fix_unidentifiable=fix_unidentifiable,
                     find_tool=True, expected_noise_mm=expected_noise_mm, harmonics=tuple(harmonics))
+
+
+def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: dict | None = None, freed=(),
+                          robust: bool = False, harmonics=()):
+    """The predicted accuracy of :func:`identify_points` with these options without a validation set: k-fold
+    cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
+    from .crossval import cross_validate_identify
+    return cross_validate_identify(robot, points_observations(pts), pts.tool_mm, None, fit_rms_mm=fit_rms_mm,
+                                   find_tool=True, pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"},
+                                   robust=robust, harmonics=tuple(harmonics))

@@ -36,6 +36,10 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
                    "warnings": res.warnings, "cautions": res.cautions}}
     if res.residual_check is not None:
         out["fit"]["residual_test"] = res.residual_check.to_dict()
+        from .trust import completeness, completeness_statement
+        out["fit"]["completeness"] = {"verdict": str(completeness(res)), "statement": completeness_statement(res)}
+    if res.prediction is not None:
+        out["fit"]["prediction"] = res.prediction.to_dict()
     if harmonic:
         out["joint_harmonics"] = {str(j): {"reference": res.params.h_ref[j - 1].tolist(), "q_min_deg": lo,
                                            "q_max_deg": hi} for j, (lo, hi) in res.harmonic_range_deg.items()}

@@ -297,9 +297,8 @@ def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, so
                             resid_mm, seat_rms, _stated_noise(r) * np.sqrt(chi2 / dof), corr,
                             [infos[k].name for k in free], np.zeros_like(resid_mm), bool(sol.success),
                             str(sol.message), int(sol.nfev), 1, float(np.linalg.cond(Jn)) if P else float("nan"))
-    out.warnings = trust_warnings(robot, out)
     out.residual_check = _residual_test(chi2, dof, r)
-    out.warnings += _residual_warnings(out)
+    out.warnings = trust_warnings(robot, out)     # residuals above the seat play: a caution (incomplete model)
     out.cautions = trust_cautions(out)
     keys = r.groups()
     cs = sig[P:].reshape(-1, 3)
@@ -329,17 +328,3 @@ def _residual_test(chi2: float, dof: int, r: SocketReadings) -> ResidualTest:
     p = float(chdtrc(dof, chi2))
     return ResidualTest(chi2, dof, chi2 / dof, p, _stated_noise(r), (), p < P_MISSING, clamping=False,
                         source="ball-bar length" if r.ball_bar else "seat")
-
-
-def _residual_warnings(res: CalibrationResult) -> list[str]:
-    """The socket wording of residuals that are not noise (the instrument is the seat or the bar)."""
-    t = res.residual_check
-    if not t.material:
-        return []
-    if "length" in t.source:
-        return [f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {t.describe()}; either the ball bar reads "
-                f"less exactly than stated (# length_sigma_mm, or --noise-um) or the model misses physics (joint "
-                f"backlash, the bar's pivot moving)"]
-    return [f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {t.describe()}; either the ball sits less "
-            f"exactly than stated (# seat_sigma_mm, or --noise-um) or the model misses physics (joint backlash, the "
-            f"arm bending under the hand that pushed the ball in, a worn socket)"]

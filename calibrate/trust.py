@@ -1,38 +1,57 @@
-"""Whether to trust a calibration: reasons not to (no convergence, residuals the noise model does not explain by
-a material margin, parameters beyond physical bounds) and cautions a trusted result is read with."""
+"""Whether to trust a calibration, as two separate statements.
+
+*Usable?* (the verdict, exit 3 when not): the fit converged, has degrees of freedom to spare, its parameters are
+physically plausible, it predicts held-out points clearly better than the nominal model
+(:class:`~calibrate.crossval.Prediction`: the validation set, else cross-validation) and not much worse than it
+fits its own (overfitting); for a MultiCal campaign, whose model covers every physical effect of the device,
+residuals well above the device's noise also fail it (a wrong clamping pose or a noisier device than stated
+biases every parameter). *Complete?* (:func:`completeness`): whether the model explains the readings down to the
+instrument's noise; a real robot's never quite does (gear errors, link and joint deflection, temperature), so for
+instrument points and socket readings an incomplete model is a caution on a usable result, not a reason to
+refuse it."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from rodlab.enums import Completeness
+
 if TYPE_CHECKING:
+    from .crossval import Prediction
     from .identify import CalibrationResult
 
-__all__ = ["trust_warnings", "trust_cautions", "ERROR_BOUNDS"]
+__all__ = ["trust_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
+           "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]
 
 
 #: physical bounds of the identified errors; beyond them a result is flagged
 ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
+#: scalar readings per free parameter below which a fit has too few degrees of freedom to be judged
+MIN_READINGS_PER_PARAMETER = 2.0
+#: held-out rms per coordinate over the fit's rms per reading above which the parameters may fit noise: about 1
+#: for many exchangeable points (the UR5 grid: 1.01), 1.7 for a TX90 campaign's 30 points in interleaved folds and
+#: 2.7 predicting a clamping position from the other four (an extrapolation)
+OVERFIT_RATIO = 3.0
+#: ... and overfitting only when the held-out mean error also keeps more than this share of the nominal model's:
+#: a held-out error several times a 3 um fit is harmless while it is a hundredth of the nominal's
+OVERFIT_SHARE = 0.5
 
 
 def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
-    """Reasons not to trust a calibration: no convergence, residuals the noise model does not explain by a
-    material margin (Birge ratio above :data:`~calibrate.residual_test.BIRGE_MATERIAL`)
-    (:mod:`calibrate.residual_test`, the test ``rodlab diagnose --campaign`` uses too), parameters beyond
-    physical bounds."""
+    """Reasons not to use a calibration that the fit itself shows: no convergence, too few degrees of freedom,
+    for a MultiCal campaign residuals the noise model does not explain by a material margin (Birge ratio above
+    :data:`~calibrate.residual_test.BIRGE_MATERIAL`; :mod:`calibrate.residual_test`, the test ``rodlab diagnose
+    --campaign`` uses too), parameters beyond physical bounds. The predicted accuracy adds its own
+    (:func:`prediction_warnings`)."""
     w = []
     if not res.success:
         w.append(f"the Levenberg-Marquardt run did not converge ({res.message})")
-    readings = res.residuals_mm.size
-    if len(res.free) >= readings:
-        w.append(f"{len(res.free)} parameters from {readings} readings leave no degree of freedom to test the fit "
-                 "against: measure more points or identify fewer parameters (e.g. fewer --joint-harmonics)")
+    w += _dof_warnings(res)
     test = res.residual_check
-    if test is not None and test.material:
-        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; " + (
-            "physics is missing: run `rodlab diagnose --campaign` on the same files to find which" if test.clamping
-            else "either the instrument is noisier than stated (check --noise-um against its specification) or the "
-                 "model misses physics (backlash, non-geometric errors): `rodlab diagnose --points` on the same "
-                 "files shows the residuals per joint, workspace region and time"))
+    if test is not None and test.material and test.clamping:
+        w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
+                 "campaign the model covers the device's physics, so this is a wrong clamping pose, a noisier device "
+                 "or a rod file that is not this rod, and it biases every parameter: run `rodlab diagnose --campaign` "
+                 "on the same files to find which")
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":
@@ -48,11 +67,86 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     return w
 
 
+def _dof_warnings(res: "CalibrationResult") -> list[str]:
+    readings, P = res.residuals_mm.size, len(res.free)
+    if P >= readings:
+        return [f"{P} parameters from {readings} readings leave no degree of freedom to test the fit against: "
+                "measure more points or identify fewer parameters (e.g. fewer --joint-harmonics)"]
+    if readings < MIN_READINGS_PER_PARAMETER * P:
+        return [f"{P} parameters from {readings} readings leave {readings - P} degrees of freedom, fewer than the "
+                f"parameters (at least {MIN_READINGS_PER_PARAMETER:g} readings per parameter are needed to tell a "
+                "fit from its noise): measure more poses spread over the workspace or identify fewer parameters"]
+    return []
+
+
+def prediction_warnings(pred: "Prediction | None") -> list[str]:
+    """Reasons not to use a calibration that its predicted accuracy shows: no held-out prediction could be made,
+    it is not clearly better than the nominal model's (2 standard errors of the paired difference), or the
+    held-out error is far above the fit's (:data:`OVERFIT_RATIO`)."""
+    if pred is None:
+        return []
+    if pred.points == 0:
+        why = "; ".join(pred.failed[:2])
+        return [f"no held-out prediction could be made: the identification was refused on every fold ({why}): "
+                "measure more poses"]
+    w = []
+    if not pred.clearly_better():
+        w.append(f"it does not predict clearly better than the nominal model: {pred.describe()}")
+    if pred.overfit_ratio > OVERFIT_RATIO and pred.mean_mm > OVERFIT_SHARE * pred.nominal_mean_mm:
+        w.append(f"the held-out error ({pred.rms_per_coordinate_mm * 1e3:.1f} um rms per coordinate) is "
+                 f"{pred.overfit_ratio:.1f} times the fit's ({pred.fit_rms_mm * 1e3:.1f} um) and "
+                 f"{pred.mean_mm / pred.nominal_mean_mm:.0%} of the nominal model's: the parameters fit these points "
+                 "rather than the robot (overfitting); measure more poses or identify fewer parameters")
+    return w
+
+
+def completeness(res: "CalibrationResult") -> Completeness | None:
+    """Whether the model explains the readings to the noise (``None`` without a residual test)."""
+    test = res.residual_check
+    if test is None:
+        return None
+    return (Completeness.INCOMPLETE if test.material else Completeness.NEARLY if test.missing
+            else Completeness.COMPLETE)
+
+
+def completeness_statement(res: "CalibrationResult") -> str:
+    """The *complete?* statement: how much the model leaves unexplained against the instrument's noise."""
+    test = res.residual_check
+    if test is None:
+        return "complete? not tested (no noise level stated)"
+    word = {Completeness.COMPLETE: "yes", Completeness.NEARLY: "nearly", Completeness.INCOMPLETE: "no"}
+    return (f"complete? {word[completeness(res)]}: the model leaves {res.rms_mm * 1e3:.1f} um rms per reading "
+            f"unexplained ({test.birge:.1f} times the {test.source if not test.clamping else 'device'}'s noise of "
+            f"{test.noise_mm * 1e3:.1f} um by the residual test above)")
+
+
 def trust_cautions(res: "CalibrationResult") -> list[str]:
-    """What a result that passes :func:`trust_warnings` should be read with: residuals significantly but only
-    slightly above the noise model (Birge ratio at most :data:`~calibrate.residual_test.BIRGE_MATERIAL`), and
-    periodic joint errors identified over part of a turn."""
-    return _residual_caution(res) + _partial_turn_cautions(res)
+    """What a usable result should be read with: residuals above the noise model (for instrument points and
+    socket readings also by a material margin: the model is incomplete), and periodic joint errors identified
+    over part of a turn."""
+    return _residual_caution(res) + _incomplete_caution(res) + _partial_turn_cautions(res)
+
+
+#: what an incomplete model of instrument readings may miss, by the kind of reading (ResidualTest.source)
+_CAUSES = {
+    "instrument": "either the instrument is noisier than stated (check --noise-um against its specification) or the "
+                  "model misses physics a real robot has (gear and encoder errors, backlash, link deflection, "
+                  "temperature): `rodlab diagnose --points` on the same files names what it can",
+    "seat": "either the ball sits less exactly than stated (# seat_sigma_mm, or --noise-um) or the model misses "
+            "physics (joint backlash, the arm bending under the hand that pushed the ball in, a worn socket)",
+    "ball-bar length": "either the ball bar reads less exactly than stated (# length_sigma_mm, or --noise-um) or the "
+                       "model misses physics (joint backlash, the bar's pivot moving)",
+}
+
+
+def _incomplete_caution(res: "CalibrationResult") -> list[str]:
+    test = res.residual_check
+    if test is None or not test.material or test.clamping:
+        return []
+    return [f"the model is incomplete: it leaves {res.rms_mm * 1e3:.1f} um rms per reading unexplained "
+            f"({test.birge:.1f} times the stated {test.noise_mm * 1e3:.1f} um); "
+            f"{_CAUSES.get(test.source, _CAUSES['instrument'])}. The predicted accuracy already includes what is "
+            "left out"]
 
 
 def _partial_turn_cautions(res: "CalibrationResult") -> list[str]:

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 from enum import Enum
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial"]
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
+           "Completeness"]
 
 
 class _StrEnum(str, Enum):
@@ -139,3 +140,19 @@ class SimAccuracy(_StrEnum):
 #: the finding of a rig diagnosis whose linear difference from the simulation the tolerances explain (effects v2):
 #: nothing was left out, the rod as built differs from the simulated design
 MODEL_FORM = "model_form"
+
+
+class AccuracySource(_StrEnum):
+    """Where a calibration's predicted accuracy comes from (the *usable?* half of its verdict)."""
+
+    VALIDATION = "validation"                #: a held-out validation set (``--validate``)
+    CROSS_VALIDATION = "cross_validation"    #: k-fold cross-validation over the calibration's own points
+
+
+class Completeness(_StrEnum):
+    """Whether the identified model explains the readings down to the instrument's noise (the *complete?* half of
+    a calibration's verdict; :mod:`calibrate.residual_test`)."""
+
+    COMPLETE = "complete"        #: residuals consistent with the noise model
+    NEARLY = "nearly"            #: significantly but only slightly above it (Birge ratio at most 1.5)
+    INCOMPLETE = "incomplete"    #: the model leaves out errors well above the noise (a caution for a usable result)

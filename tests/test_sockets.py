@@ -148,13 +148,16 @@ def test_reader_refuses_a_socket_too_few_readings_locate(tmp_path):
 @pytest.mark.skipif(not (DATA / "panda_7.sockets.csv").exists(), reason="MUKCa data not converted")
 def test_real_panda_data_matches_the_sources_own_calibration(tmp_path, capsys):
     """MUKCa's Panda 7: fitted on the front placement, checked on the right one. The command's verdict follows
-    the stated seat play; its held-out consistency equals that of the source's own calibrated URDF."""
+    the held-out placements (usable: far better than nominal), with the stated seat play's completeness caution;
+    its held-out consistency equals that of the source's own calibrated URDF."""
     args = ["calibrate", "--sockets", str(DATA / "panda_7.sockets.csv"), "--robot", str(DATA / "panda.urdf"),
             "--tip-link", "ball_link", "--fix-unidentifiable", "--fit-placements", "1"]
-    assert main(args + ["--json", str(tmp_path / "cal.json"), "--report"]) == 3    # 50 um stated, ~200 um seen
+    assert main(args + ["--json", str(tmp_path / "cal.json"), "--report"]) == 0    # 50 um stated, ~200 um seen
     html = (tmp_path / "calibrate.report.html").read_text()
     assert "Consistency and distortion" in html and "held out" in html
-    assert "seat 50.0 um per coordinate" in capsys.readouterr().err
+    io = capsys.readouterr()
+    assert "seat 50.0 um per coordinate" in io.out and "the model is incomplete" in io.err
+    assert "usable? yes" in io.out and "complete? no" in io.out
     data = json.loads((tmp_path / "cal.json").read_text())
     held = data["sockets"]["checks"]["held out"]
     assert held["calibrated"]["spread_mean_mm"] < held["nominal"]["spread_mean_mm"] / 10

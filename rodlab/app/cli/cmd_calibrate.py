@@ -16,6 +16,7 @@ from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, joint_list, nonneg_float, pos_float, seed
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+from .verdict import judge, print_held, print_verdict
 
 __all__ = ["register", "run_calibration", "CalibrationRun", "print_parameters", "parse_pins", "print_not_trusted",
            "print_cautions", "write_result_file"]
@@ -42,9 +43,12 @@ def _common(p) -> None:
                         f"tracker at a few metres; for --sockets the file's seat_sigma_mm / length_sigma_mm). Given, "
                         f"it replaces the per-point columns or the file's sigma")
     add_report_option(p)
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a data set that cannot identify every parameter (naming them and the remedy) "
+                        "instead of holding those at nominal")
     p.add_argument("--fix-unidentifiable", action="store_true",
-                   help="hold the parameters these points cannot identify at nominal (and report them) instead of "
-                        "refusing the data set; for instrument data not planned for this model")
+                   help="hold the parameters these data cannot identify at nominal (and report them); the default "
+                        "unless --strict, kept for scripts")
 
 
 def register(sub) -> None:
@@ -137,6 +141,8 @@ class CalibrationRun:
     result: object
     nominal_mm: np.ndarray | None = None
     calibrated_mm: np.ndarray | None = None
+    observations: object = None            # what was fitted (calibrate.Observations)
+    options: dict | None = None            # the identification's options (for cross-validation)
 
     @property
     def before(self):
@@ -163,12 +169,12 @@ def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
     camp = read_campaign(args.campaign, robot.n)
     fix = read_fixture(args.fixture)
     obs = campaign_observations(camp, fix, rod)
+    options = dict(also_compensate=_thermal(args, camp, rod), pinned=_pins(args, robot.n), freed=set(args.free),
+                   robust=args.robust, harmonics=getattr(args, "joint_harmonics", ()))
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
-                   also_compensate=_thermal(args, camp, rod),
-                   pinned=_pins(args, robot.n), freed=set(args.free), robust=args.robust,
-                   fix_unidentifiable=args.fix_unidentifiable, harmonics=getattr(args, "joint_harmonics", ()),
+                   fix_unidentifiable=not args.strict, **options,
                    expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
-    run = CalibrationRun(robot, camp, res)
+    run = CalibrationRun(robot, camp, res, observations=obs, options=options)
     if args.validate:
         pts = read_points(args.validate, robot.n)
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
@@ -224,6 +230,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     run = run_calibration(args, rod, comp)
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
+    judge(res, _campaign_prediction(run, rod, comp))
+    print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
@@ -242,6 +250,15 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return 3
     print_cautions(res)
     return 0
+
+
+def _campaign_prediction(run: CalibrationRun, rod, comp):
+    """The held-out accuracy: the validation points when given, else cross-validation over clamping positions."""
+    from rodlab.calibrate.crossval import Prediction, cross_validate_identify
+    if run.calibrated_mm is not None:
+        return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
+    return cross_validate_identify(run.robot, run.observations, rod.tool_mm, comp.rod if comp.active else None,
+                                   fit_rms_mm=run.result.rms_mm, **run.options)
 
 
 def print_cautions(res) -> None:
@@ -320,7 +337,7 @@ def print_parameters(res) -> None:
             print(f"  {nm:<14} {v * 1e6:14.3f} {s * 1e6:12.3f}  urad/(N m) {res.status[nm]}")
         else:
             print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
-    print(f"  held fixed: {len(res.unidentifiable)} (see --json for why)")
+    print_held(res)
     if res.residual_check is not None:
         t = res.residual_check
         verdict = "NOT noise" if t.material else "slightly above noise" if t.missing else "consistent with noise"
@@ -329,11 +346,12 @@ def print_parameters(res) -> None:
 
 def _calibrate_points(args) -> int:
     from rodlab.calibrate import ModelParams, read_points, result_dict, validate
-    from rodlab.calibrate.points import identify_points, stated_noise_mm
+    from rodlab.calibrate.crossval import Prediction
+    from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
-    res = identify_points(robot, pts, noise_mm, pinned=_pins(args, robot.n), freed=args.free, robust=args.robust,
-                          fix_unidentifiable=args.fix_unidentifiable, harmonics=args.joint_harmonics)
+    options = dict(pinned=_pins(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
+    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict, **options)
     before = after = None
     errors = {}
     if args.validate:
@@ -341,6 +359,9 @@ def _calibrate_points(args) -> int:
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
     _print_result(res, before, after, "instrument points")
+    judge(res, Prediction.of_validation(errors["calibrated"], errors["nominal"], res.rms_mm) if errors
+          else cross_validate_points(robot, pts, res.rms_mm, **options))
+    print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, "none", before, after))
     if args.png:
         if not errors:
@@ -353,13 +374,14 @@ def _calibrate_points(args) -> int:
     write_command_report(args, written, default_folder(args))
     if res.warnings:
         print_not_trusted(res)
+    else:
+        print_cautions(res)
+    if res.residual_check is not None and res.residual_check.material:
         from ..diagnose.points import diagnose_points
-        print("suspects (`rodlab diagnose --points`):", file=sys.stderr)
+        print("what the model leaves out, as `rodlab diagnose --points` sees it:", file=sys.stderr)
         print("\n".join("  " + line for line in diagnose_points(robot, pts, res, noise_mm).summary().splitlines()),
               file=sys.stderr)
-        return 3
-    print_cautions(res)
-    return 0
+    return 3 if res.warnings else 0
 
 
 def _compare_runs(items) -> list:

@@ -62,6 +62,24 @@ def _warn_outside_range(cal, q_rad) -> None:
                   f"configurations of the robot's work)", file=sys.stderr)
 
 
+#: deviations from an analytic-IK assumption worth a warning: TCP effect [mm]
+IK_WARN_MM = 0.001
+
+
+def _warn_ik_assumptions(robot, params) -> None:
+    """Where the calibrated geometry is no longer what a closed-form IK of the nominal arm assumes (parallel or
+    intersecting axes), and by how much: such a controller cannot take these parameters; `rodlab correct` can."""
+    from rodlab.calibrate.correct import ik_assumptions
+    from rodlab.calibrate.kinematics import ModelParams
+    broken = [d for d in ik_assumptions(robot, params, ModelParams.nominal(robot, params.tool)) if d.effect_mm > IK_WARN_MM]
+    for d in broken:
+        print(f"warning: {d.describe()}", file=sys.stderr)
+    if broken:
+        print("note: a controller with the nominal arm's analytic IK cannot represent these deviations; keep its "
+              "model and send it corrected targets or joint commands instead: `rodlab correct CAL.json "
+              "TARGETS.csv -o COMMANDS.csv`", file=sys.stderr)
+
+
 def cmd_export(args) -> int:
     from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
@@ -100,6 +118,7 @@ def cmd_export(args) -> int:
                   f"gets up to {c_mm:.3f} mm more error than the calibrated model, because the calibrated geometry "
                   f"leaves the gravity sag to the compliance; for such a consumer, calibrate again with "
                   f"--kinematic-only and export that result", file=sys.stderr)
+    _warn_ik_assumptions(robot, params)
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
     if not cal.trusted:

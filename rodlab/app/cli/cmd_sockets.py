@@ -5,10 +5,14 @@ import math
 import sys
 from dataclasses import dataclass
 
+import numpy as np
+
+from ...enums import AccuracySource
 from ...errors import RodlabError
 from .cmd_calibrate import parse_pins, print_cautions, print_not_trusted, print_parameters, write_result_file
 from .reporting import default_folder, write_command_report
 from .robotargs import robot_from_args
+from .verdict import judge, print_verdict
 
 __all__ = ["calibrate_sockets", "SocketRun"]
 
@@ -76,7 +80,7 @@ def run_sockets(args) -> SocketRun:
     robot = robot_from_args(args)
     fitted, held = _readings(args, robot)
     fit = identify_sockets(robot, fitted, pinned=parse_pins(args.pin), freed=args.free,
-                           fix_unidentifiable=args.fix_unidentifiable, robust=args.robust)
+                           fix_unidentifiable=not args.strict, robust=args.robust)
     checks = {}
     for label, r in (("fit", fitted), ("held out", held)):
         if r is not None:
@@ -121,12 +125,48 @@ def _extra(args, run: SocketRun) -> dict:
         "checks": {label: {m: c.to_dict() for m, c in pair.items()} for label, pair in run.checks.items()}}}
 
 
+def _prediction(args, run: SocketRun):
+    """The held-out accuracy: the spread of the held-out placements' (or file's) balls about their sockets,
+    calibrated against nominal; without them, cross-validation leaving out one fitted placement at a time."""
+    from rodlab.calibrate.crossval import Prediction
+    res = run.fit.result
+    if "held out" in run.checks:
+        pair = run.checks["held out"]
+        return Prediction.of_validation(pair["calibrated"].spread_mm, pair["nominal"].spread_mm, res.rms_mm,
+                                        "held-out placements (spread about their sockets)")
+    from rodlab.calibrate import CalibrationError
+    from rodlab.calibrate.socket_check import check_sockets
+    from rodlab.calibrate.socket_fit import identify_sockets, socket_start
+    placements = sorted(set(run.fitted.placement.tolist()))
+    if len(placements) < 2:
+        return None
+    cal, nom, failed = [], [], []
+    for p in placements:
+        rest, test = run.fitted.subset([q for q in placements if q != p]), run.fitted.subset([p])
+        try:
+            fit = identify_sockets(run.robot, rest, pinned=parse_pins(args.pin), freed=args.free,
+                                   fix_unidentifiable=True, robust=args.robust)
+        except CalibrationError as e:
+            failed.append(f"placement {p}: {e}")
+            continue
+        cal.append(check_sockets(run.robot, fit.result.params, test).spread_mm)
+        nom.append(check_sockets(run.robot, socket_start(run.robot, test), test).spread_mm)
+    return Prediction(AccuracySource.CROSS_VALIDATION, _joined(cal), _joined(nom), res.rms_mm,
+                      "placements (spread about their sockets)", len(placements) - len(failed), failed)
+
+
+def _joined(parts: list) -> np.ndarray:
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def calibrate_sockets(args) -> int:
     """The command: fit, print, write the result (``--json``, ``--report``), exit 3 when not trusted."""
     from rodlab.calibrate import result_dict
     run = run_sockets(args)
     _print(run)
     res = run.fit.result
+    judge(res, _prediction(args, run))
+    print_verdict(res)
     written = write_result_file(args, result_dict(run.robot, res, "none", extra=_extra(args, run)))
     write_command_report(args, written, default_folder(args))
     if res.warnings:

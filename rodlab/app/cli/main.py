@@ -12,14 +12,14 @@ import sys
 
 from ... import __version__, progress
 from ...errors import RodlabError
-from . import (cmd_calibrate, cmd_demo, cmd_design, cmd_diagnose, cmd_export, cmd_fea, cmd_geometry, cmd_rig, cmd_study,
-               cmd_sweep, cmd_update, cmd_validate)
+from . import (cmd_calibrate, cmd_correct, cmd_demo, cmd_design, cmd_diagnose, cmd_export, cmd_fea, cmd_geometry,
+               cmd_rig, cmd_study, cmd_sweep, cmd_update, cmd_validate)
 
 __all__ = ["build_parser", "main"]
 
 #: Modules that add sub-commands: each has ``register(subparsers)``.
 _COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_study, cmd_rig, cmd_calibrate,
-                    cmd_diagnose, cmd_update, cmd_export, cmd_validate]
+                    cmd_diagnose, cmd_update, cmd_export, cmd_correct, cmd_validate]
 
 
 def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:

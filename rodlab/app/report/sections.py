@@ -94,6 +94,21 @@ def _verdict(trusted: bool, warnings: list, cautions: list = ()) -> str:
     return f"<p class=bad>NOT TRUSTED: do not load these parameters into the robot.</p><ul>{items}</ul>"
 
 
+def _two_statements(fit: dict) -> str:
+    """Usable? (the held-out accuracy against nominal) and complete? (the residual test), when recorded."""
+    out = ""
+    pr = fit.get("prediction")
+    if pr and pr.get("points"):
+        how = "validation" if pr["source"] == "validation" else f"{pr['folds']}-fold cross-validation"
+        out += (f"<p>Usable? held-out mean error {fmt(pr['mean_mm'], '.3f')} mm against the nominal model's "
+                f"{fmt(pr['nominal_mean_mm'], '.3f')} mm (difference {fmt(pr['gain_mm'], '.3f')} +- "
+                f"{fmt(pr['gain_se_mm'], '.3f')} mm; {esc(how)} over {esc(pr['grouping'])}, {pr['points']} points)</p>")
+    comp = fit.get("completeness")
+    if comp:
+        out += f"<p>{esc(comp['statement'][:1].upper() + comp['statement'][1:])}</p>"
+    return out
+
+
 def _stats_rows(validation: dict) -> list[list]:
     return [[k, fmt(v["mean_mm"], ".3f"), fmt(v["max_mm"], ".3f"), fmt(v["median_mm"], ".3f"), fmt(v["sd_mm"], ".3f"),
              v.get("points", "—")] for k, v in validation.items()]
@@ -114,7 +129,7 @@ def _socket_checks(sockets: dict) -> str:
 def _calibration(src: Source) -> str:
     d = src.data
     fit = d.get("fit", {})
-    parts = [_verdict(bool(d.get("trusted")), fit.get("warnings", []), fit.get("cautions", [])),
+    parts = [_verdict(bool(d.get("trusted")), fit.get("warnings", []), fit.get("cautions", [])) + _two_statements(fit),
              _kv([("robot", d["robot"]), ("compensation", str(d["compensation"])), ("points", str(d["points"])),
                   ("residual rms", f"{d['residual_rms_mm'] * 1e3:.2f} um"),
                   ("condition number", fmt(fit.get("condition"), ".3g")),

@@ -1,0 +1,220 @@
+"""Predicted accuracy of a calibration: how far the calibrated model misses points it was not fitted to, beside
+the nominal model's miss of the same points (:class:`Prediction`).
+
+Two sources: a held-out validation set (:meth:`Prediction.of_validation`, the paper's Section 5.2 errors), or,
+without one, k-fold cross-validation over the calibration's own points (:func:`cross_validate`): the points are
+split into folds (by clamping position where the data has them, else interleaved in file order, so that every
+fold spans the whole set of poses and any slow drift), each fold is predicted by a model identified on the
+others with the same options, and by the nominal model with its base (and, for instrument points, tool) fitted
+on the same others. The comparison is paired (the same held-out points), so its uncertainty is the standard
+error of the per-point differences.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from rodlab.enums import AccuracySource
+
+from .compensation import deflection_offsets
+from .errors import CalibrationError
+from .kinematics import ModelParams, ball_positions
+from .observations import Observations, register_base, register_base_and_tool
+
+__all__ = ["Prediction", "cross_validate", "cross_validate_identify", "fold_labels", "prediction_errors",
+           "nominal_fit", "DEFAULT_FOLDS"]
+
+log = logging.getLogger(__name__)
+
+#: folds of the cross-validation without a validation set (fewer where there are fewer clamping positions)
+DEFAULT_FOLDS = 5
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Held-out position errors of the calibrated and the nominal model.
+
+    source : validation set or cross-validation; calibrated_mm, nominal_mm : shape=(M,) distance [mm] between
+    each held-out point and its prediction by the calibrated / the nominal model (the same points, paired);
+    fit_rms_mm : the calibration's residual rms per scalar reading [mm]; grouping : how the points were split
+    (e.g. ``clamping position``, ``interleaved poses``, ``validation file``); folds : folds predicted;
+    failed : folds whose identification was refused (too few points in the rest), with the reason
+    """
+
+    source: AccuracySource
+    calibrated_mm: np.ndarray
+    nominal_mm: np.ndarray
+    fit_rms_mm: float
+    grouping: str = ""
+    folds: int = 0
+    failed: list = field(default_factory=list)
+
+    def __post_init__(self):
+        c, n = np.asarray(self.calibrated_mm, float), np.asarray(self.nominal_mm, float)
+        if c.ndim != 1 or c.shape != n.shape:
+            raise ValueError(f"calibrated_mm and nominal_mm must be paired 1-D arrays, got {c.shape} and {n.shape}")
+        object.__setattr__(self, "calibrated_mm", c)
+        object.__setattr__(self, "nominal_mm", n)
+
+    @classmethod
+    def of_validation(cls, calibrated_mm, nominal_mm, fit_rms_mm: float, grouping: str = "validation points"
+                      ) -> "Prediction":
+        """The errors of a held-out validation set (base and tool refitted on it, paper Section 5.2; for socket
+        readings the held-out placements' spread about their sockets)."""
+        return cls(AccuracySource.VALIDATION, calibrated_mm, nominal_mm, fit_rms_mm, grouping, 1)
+
+    @property
+    def points(self) -> int:
+        return int(self.calibrated_mm.size)
+
+    @property
+    def mean_mm(self) -> float:
+        """Mean held-out error of the calibrated model [mm]."""
+        return float(self.calibrated_mm.mean()) if self.points else float("nan")
+
+    @property
+    def nominal_mean_mm(self) -> float:
+        return float(self.nominal_mm.mean()) if self.points else float("nan")
+
+    @property
+    def gain_mm(self) -> float:
+        """Mean of the paired differences nominal - calibrated [mm] (positive: the calibration is better)."""
+        return float(np.mean(self.nominal_mm - self.calibrated_mm)) if self.points else float("nan")
+
+    @property
+    def gain_se_mm(self) -> float:
+        """Standard error of :attr:`gain_mm` [mm] (the paired differences' scatter over sqrt(M))."""
+        if self.points < 2:
+            return float("inf")
+        return float(np.std(self.nominal_mm - self.calibrated_mm, ddof=1) / np.sqrt(self.points))
+
+    @property
+    def rms_per_coordinate_mm(self) -> float:
+        """Held-out rms error per coordinate [mm], comparable with the fit's residual rms per reading."""
+        return float(np.sqrt(np.mean(self.calibrated_mm ** 2) / 3.0)) if self.points else float("nan")
+
+    @property
+    def overfit_ratio(self) -> float:
+        """Held-out rms per coordinate over the fit's rms per reading (about 1 when the fit does not chase noise)."""
+        return self.rms_per_coordinate_mm / max(self.fit_rms_mm, 1e-12)
+
+    def clearly_better(self, z: float = 2.0) -> bool:
+        """The calibrated model's mean error is below the nominal's by more than ``z`` standard errors."""
+        return self.points > 1 and self.gain_mm > z * self.gain_se_mm
+
+    def describe(self) -> str:
+        """One sentence: the predicted accuracy, its uncertainty, the nominal model's and how it was found."""
+        how = (f"on the {self.grouping}" if self.source is AccuracySource.VALIDATION else
+               f"by {self.folds}-fold cross-validation over {self.grouping}")
+        rel = 100.0 * self.gain_mm / self.nominal_mean_mm if self.nominal_mean_mm > 0 else float("nan")
+        return (f"held-out mean error {self.mean_mm:.3f} mm against the nominal model's {self.nominal_mean_mm:.3f} mm "
+                f"({-rel:+.0f} %, difference {self.gain_mm:.3f} +- {self.gain_se_mm:.3f} mm) over {self.points} "
+                f"points {how}")
+
+    def to_dict(self) -> dict:
+        """As the calibration result records it (``fit.prediction``)."""
+        return {"source": str(self.source), "grouping": self.grouping, "folds": self.folds, "points": self.points,
+                "mean_mm": self.mean_mm, "max_mm": float(self.calibrated_mm.max()) if self.points else None,
+                "nominal_mean_mm": self.nominal_mean_mm, "gain_mm": self.gain_mm, "gain_se_mm": self.gain_se_mm,
+                "rms_per_coordinate_mm": self.rms_per_coordinate_mm, "overfit_ratio": self.overfit_ratio,
+                "clearly_better": self.clearly_better(), "failed_folds": list(self.failed)}
+
+
+def fold_labels(obs: Observations, k: int = DEFAULT_FOLDS) -> tuple[np.ndarray, str]:
+    """Fold of each point (N,) and the grouping's name: whole clamping positions where the data has three or
+    more, else the poses interleaved in file order (point i in fold i mod k)."""
+    N = obs.x_W_mm.shape[0]
+    if obs.group is not None and len(set(obs.group.tolist())) >= 3:
+        groups = sorted(set(obs.group.tolist()))
+        fold_of = {g: i % k for i, g in enumerate(groups)}
+        return np.array([fold_of[g] for g in obs.group.tolist()]), "clamping positions"
+    return np.arange(N) % min(k, N), "interleaved poses"
+
+
+def prediction_errors(robot, params: ModelParams, obs: Observations, rod=None, also_compensate: tuple = (),
+                      local: set | frozenset = frozenset()) -> np.ndarray:
+    """Distance [mm], shape=(N,), between each measured point and the model's ball centre (rod deflection and
+    any further compensation added, as the identification models them). ``local``: freed fixture offsets
+    ``fixture_J_x`` ... (names), a clamping position's own unknowns, which the points of that position fit
+    (as a validation refits base and tool): their mean residual along that axis is removed."""
+    fr, _ = ball_positions(robot, params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    off = deflection_offsets(robot, params, obs.q_rad, obs.force_W_N, rod)
+    for extra in also_compensate:
+        off = off + extra.offsets(robot, params, obs)
+    r = obs.x_W_mm - off - fr.pW
+    for g in ([] if obs.group is None else sorted(set(obs.group.tolist()))):
+        m = obs.group == g
+        for a, axis in enumerate("xyz"):
+            if f"fixture_{g}_{axis}" in local:
+                r[m, a] -= r[m, a].mean()
+    return np.linalg.norm(r, axis=1)
+
+
+def nominal_fit(robot, tool_mm, obs: Observations, find_tool: bool) -> ModelParams:
+    """The nominal model with its base (and with ``find_tool`` its tool) fitted to ``obs``."""
+    start = ModelParams.nominal(robot, np.asarray(tool_mm, float))
+    if find_tool:
+        base, tool, _ = register_base_and_tool(robot, start, obs)
+        return start.with_(base=base, tool=tool)
+    return start.with_(base=register_base(robot, start, obs))
+
+
+def cross_validate(robot, obs: Observations, fit: Callable[[Observations], ModelParams],
+                   nominal: Callable[[Observations], ModelParams], errors: Callable[[ModelParams, Observations],
+                                                                                    np.ndarray],
+                   fit_rms_mm: float, k: int = DEFAULT_FOLDS) -> Prediction:
+    """k-fold cross-validation: for each fold, ``fit`` (the identification with the user's options) and
+    ``nominal`` on the other points, ``errors`` of both on the fold. A fold whose identification is refused
+    (:class:`CalibrationError`, e.g. too few points left) is recorded in ``failed`` and predicts nothing."""
+    labels, grouping = fold_labels(obs, k)
+    cal, nom, failed = [], [], []
+    folds = sorted(set(labels.tolist()))
+    for f in folds:
+        train, test = obs.subset(labels != f), obs.subset(labels == f)
+        try:
+            p = fit(train)
+        except CalibrationError as e:
+            failed.append(f"fold {f + 1}: {e}")
+            continue
+        cal.append(errors(p, test))
+        nom.append(errors(nominal(train), test))
+        log.info("cross-validation fold %d/%d: %d points, mean %.4f mm (nominal %.4f)", f + 1, len(folds),
+                 len(cal[-1]), cal[-1].mean(), nom[-1].mean())
+    return Prediction(AccuracySource.CROSS_VALIDATION, _joined(cal), _joined(nom), fit_rms_mm, grouping,
+                      len(folds) - len(failed), failed)
+
+
+def cross_validate_identify(robot, obs: Observations, tool_mm, rod=None, *, fit_rms_mm: float,
+                            find_tool: bool = False, also_compensate: tuple = (), k: int = DEFAULT_FOLDS,
+                            **options) -> Prediction:
+    """:func:`cross_validate` of :func:`calibrate.identify.identify` with the user's ``options`` (pins, frees,
+    robust loss, harmonics; what a fold cannot identify is held at nominal), the rod's deflection and
+    ``also_compensate`` modelled in the predictions as in the fit, freed fixture offsets refitted on their
+    position's held-out points, and the nominal model's base (``find_tool``: and tool) fitted on the same
+    points."""
+    from .identify import identify
+    local = {nm for nm in options.get("freed", ()) if nm.startswith("fixture_")}
+
+    def fit(train):
+        here = set() if train.group is None else {str(g) for g in train.group.tolist()}
+        kept = {key: _present(val, here) for key, val in options.items() if key in ("pinned", "freed")}
+        return identify(robot, train, tool_mm, rod, find_tool=find_tool, also_compensate=also_compensate,
+                        expected_noise_mm=None, fix_unidentifiable=True, **(options | kept)).params
+
+    return cross_validate(robot, obs, fit, lambda train: nominal_fit(robot, tool_mm, train, find_tool),
+                          lambda p, test: prediction_errors(robot, p, test, rod, also_compensate, local),
+                          fit_rms_mm, k)
+
+
+def _present(names, positions: set):
+    """``names`` (a set, or a dict of pins) without the fixture offsets of positions a fold holds out."""
+    def keep(nm):
+        return not nm.startswith("fixture_") or nm.split("_")[1] in positions
+    return {k: v for k, v in names.items() if keep(k)} if isinstance(names, dict) else {k for k in names if keep(k)}
+
+
+def _joined(parts: list) -> np.ndarray:
+    return np.concatenate(parts) if parts else np.zeros(0)

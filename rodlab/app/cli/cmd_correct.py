@@ -1,0 +1,96 @@
+"""``rodlab correct``: TCP targets to the joint commands (or the corrected nominal-model targets) that put the
+calibrated robot on them (:mod:`rodlab.calibrate.correct`)."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RodlabError
+from .robotargs import add_robot_options, robot_from_args
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("correct", help="TCP targets -> joint commands that put the calibrated robot on them",
+                       description="For TCP position targets (x_mm, y_mm, z_mm in the calibration's measurement "
+                                   "frame; optional q1..qn [deg]: the program's configuration, where the IK starts), "
+                                   "the joint commands that put the calibrated robot's TCP on each target, and the "
+                                   "corrected targets to give a controller that keeps its nominal model and analytic "
+                                   "IK, with the IK residual, how far the uncorrected program lands, and the "
+                                   "calibration's predicted accuracy.")
+    p.add_argument("calibration", help="the calibration result (*.json from rodlab calibrate --json)")
+    p.add_argument("targets", help="*.targets.csv: x_mm,y_mm,z_mm[,q1..qn]")
+    add_robot_options(p, default=None, help="the robot the calibration used (default: the one it names, if built in)")
+    p.add_argument("--tool", default=None, metavar="X,Y,Z",
+                   help="the TCP in the flange frame {n} [mm] (default: the calibrated tool point, the measured "
+                        "target)")
+    p.add_argument("--seed-q", default=None, metavar="Q1,...,QN",
+                   help="the configuration [deg] the IK starts from for targets without q columns (default: every "
+                        "joint at 20 deg)")
+    p.add_argument("-o", "--output", required=True, help="COMMANDS.csv")
+    p.set_defaults(func=cmd_correct)
+
+
+def _vector(text: str | None, size: int, what: str) -> np.ndarray | None:
+    if text is None:
+        return None
+    try:
+        v = np.array([float(x) for x in text.split(",")])
+    except ValueError:
+        v = np.zeros(0)
+    if v.size != size or not np.all(np.isfinite(v)):
+        raise RodlabError(f"{what} {text!r}: expected {size} comma-separated numbers")
+    return v
+
+
+def _predicted_mm(path) -> float | None:
+    """The calibration's held-out mean error [mm] (``fit.prediction``), if it recorded one."""
+    pred = json.loads(Path(path).read_text(encoding="utf-8")).get("fit", {}).get("prediction") or {}
+    return pred.get("mean_mm")
+
+
+def cmd_correct(args) -> int:
+    from rodlab.calibrate import builtin_robots
+    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.correct import correct_targets
+    from rodlab.calibrate.kinematics import ModelParams
+    from rodlab.calibrate.targets import commands_csv, read_targets
+    cal = read_calibration(args.calibration)
+    if not args.robot:
+        if cal.robot not in builtin_robots():
+            raise RodlabError(f"name the robot the calibration used ({cal.robot!r} is not built in): --robot "
+                              "NAME_OR_FILE")
+        args.robot = cal.robot
+    robot = robot_from_args(args)
+    params = calibrated_params(robot, cal)
+    tool = _vector(args.tool, 3, "--tool")
+    if tool is not None:
+        params = params.with_(tool=tool)
+    nominal = ModelParams.nominal(robot, params.tool).with_(base=params.base)
+    targets = read_targets(args.targets, robot.n)
+    seed_deg = _vector(args.seed_q, robot.n, "--seed-q")
+    seeds = targets.q_seed_deg if targets.q_seed_deg is not None else (
+        seed_deg if seed_deg is not None else np.full(robot.n, 20.0))
+    corr = correct_targets(robot, params, nominal, targets.targets_mm, np.deg2rad(seeds))
+    predicted = _predicted_mm(args.calibration)
+    path = commands_csv(args.output, targets, corr, predicted,
+                        [f"rodlab correct {Path(args.calibration).name} {Path(args.targets).name} (robot {robot.name})",
+                         "q1..qn: joint commands [deg] that put the calibrated robot's TCP on the target; corrected_*: "
+                         "the target to give a controller with the nominal model",
+                         "residual_um: IK residual; uncorrected_mm: where the nominal program's joints put the "
+                         "calibrated TCP; predicted_mm: the calibration's held-out mean error"])
+    print(f"wrote {path}: {len(corr.ok)} targets, IK residual max {corr.residual_mm.max() * 1e3:.3f} um; the "
+          f"uncorrected program misses by {corr.uncorrected_mm.mean():.3f} mm mean ({corr.uncorrected_mm.max():.3f} "
+          f"max)" + (f"; the calibration predicts {predicted:.3f} mm held-out mean error" if predicted else ""))
+    if not corr.ok.all():
+        bad = np.nonzero(~corr.ok)[0] + 1
+        print(f"warning: {len(bad)} target(s) not reached within the joint limits (rows {bad[:10].tolist()}); their "
+              f"ok column is 0: give their program configuration (q1..q{robot.n})", file=sys.stderr)
+    if not cal.trusted:
+        print(f"note: {Path(args.calibration).name} says trusted: false; read its warnings before using these "
+              "commands", file=sys.stderr)
+    return 0

@@ -1,0 +1,36 @@
+"""The calibration verdict as the CLI states it: *usable?* (the held-out accuracy against the nominal model, and
+the fit's own checks; exit 3 when not) and *complete?* (what the model leaves unexplained against the
+instrument's noise), printed as two separate statements (:mod:`rodlab.calibrate.trust`)."""
+from __future__ import annotations
+
+import sys
+
+__all__ = ["judge", "print_verdict", "print_held"]
+
+
+def judge(res, prediction) -> None:
+    """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result."""
+    from rodlab.calibrate.trust import prediction_warnings
+    res.prediction = prediction
+    res.warnings = list(res.warnings) + prediction_warnings(prediction)
+
+
+def print_verdict(res) -> None:
+    """The two statements on stdout: usable? (with the predicted accuracy) and complete?."""
+    from rodlab.calibrate.trust import completeness_statement
+    pred = res.prediction
+    acc = pred.describe() if pred is not None and pred.points else "no held-out prediction"
+    print(f"  usable? {'no' if res.warnings else 'yes'}: {acc}")
+    print(f"  {completeness_statement(res)}")
+    print(f"verdict: {'NOT TRUSTED' if res.warnings else 'TRUSTED'}")
+
+
+def print_held(res) -> None:
+    """The parameters held at nominal because these data cannot separate them, with the reason."""
+    held = [u for u in res.unidentifiable if any(w in u for w in ("in this", "has no effect", "too little"))]
+    print(f"  held at nominal: {len(res.unidentifiable)} ({len(held)} that these data cannot separate"
+          + (": " if held else "") + "; ".join(held[:12]) + (" ..." if len(held) > 12 else "") + ")"
+          + ("; the rest by rule or pin, see --json" if len(res.unidentifiable) > len(held) else ""))
+    if held:
+        print(f"note: {len(held)} parameter(s) held at nominal because these data cannot separate them "
+              "(--strict refuses the data set instead)", file=sys.stderr)

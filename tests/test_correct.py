@@ -1,0 +1,124 @@
+"""`rodlab correct`: TCP targets -> joint commands that put the calibrated robot on target, and the corrected
+targets for a controller that keeps its nominal model, round-tripping through the calibrated forward
+kinematics within 1 um; and the export's check of the analytic-IK assumptions the calibration breaks."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli.main import main
+from rodlab.calibrate import ModelParams, ball_positions, resolve_robot
+from rodlab.calibrate.correct import correct_targets, ik_assumptions
+from rodlab.calibrate.ik import solve_ik_positions
+
+DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "jacobi2025"
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return resolve_robot("ur5")
+
+
+def _models(robot):
+    nominal = ModelParams.nominal(robot, np.array([0.0, 0.0, 40.0]), np.array([100.0, -50.0, 20.0, 0.1, -0.2, 30.0]))
+    rng = np.random.default_rng(3)
+    calibrated = nominal.with_(a=nominal.a + rng.normal(0, 0.3, robot.n), d=nominal.d + rng.normal(0, 0.3, robot.n),
+                               alpha=nominal.alpha + np.deg2rad(rng.normal(0, 0.03, robot.n)),
+                               beta=nominal.beta + np.deg2rad(np.r_[0, 0.02, -0.01, 0, 0, 0]),
+                               theta_offset=nominal.theta_offset + np.deg2rad(rng.normal(0, 0.03, robot.n)),
+                               c=np.r_[0, 2e-5, 1e-5, 0, 0, 0])
+    return nominal, calibrated
+
+
+def _tcp(robot, p, q):
+    return ball_positions(robot, p, np.atleast_2d(q))[0].pW
+
+
+def test_commands_and_corrected_targets_round_trip_within_a_micrometre(ur5):
+    nominal, calibrated = _models(ur5)
+    rng = np.random.default_rng(1)
+    program = np.deg2rad(rng.uniform(-60, 60, (40, 6)) + np.array([0, -60, 60, -60, 90, 0]))
+    targets = _tcp(ur5, nominal, program) + rng.normal(0, 1.0, (40, 3))
+    corr = correct_targets(ur5, calibrated, nominal, targets, program)
+    assert corr.ok.all()
+    assert np.abs(np.linalg.norm(_tcp(ur5, calibrated, corr.q_rad) - targets, axis=1)).max() < 1e-3   # < 1 um
+    # the corrected targets are the nominal model's TCP pose at the commands: a nominal controller given them
+    # (position and the flange orientation) is at a solution there, so the calibrated robot is on target
+    from rodlab.frames import pose_to_matrix
+    fr = ball_positions(ur5, nominal, corr.q_rad)[0]
+    assert np.abs(fr.pW - corr.corrected_mm).max() < 1e-9
+    R = np.einsum("ij,mjk->mik", fr.R_W0, fr.T[:, 6, :3, :3])
+    assert np.abs(np.array([pose_to_matrix(np.r_[0, 0, 0, a])[:3, :3] for a in corr.corrected_abc_deg]) - R).max() < 1e-9
+    back = solve_ik_positions(ur5, nominal, corr.corrected_mm, corr.q_rad, pos_tol_mm=1e-5, pull=False)
+    assert back.ok.all() and np.abs(back.q_rad - corr.q_rad).max() < 1e-9
+    assert np.linalg.norm(_tcp(ur5, calibrated, back.q_rad) - targets, axis=1).max() < 1e-3
+    # what the correction removes: the nominal program's joints put the calibrated TCP off by the model difference
+    nom_q = solve_ik_positions(ur5, nominal, targets, program, pos_tol_mm=1e-5).q_rad
+    miss = np.linalg.norm(_tcp(ur5, calibrated, nom_q) - targets, axis=1)
+    assert np.allclose(corr.uncorrected_mm, miss, atol=1e-6) and miss.mean() > 0.3
+
+
+def test_ik_assumptions_measure_the_calibrated_deviation(ur5):
+    nominal, _ = _models(ur5)
+    assert all(d.effect_mm < 1e-9 for d in ik_assumptions(ur5, nominal, nominal))
+    kinds = {d.joints: d.assumption for d in ik_assumptions(ur5, nominal, nominal)}
+    assert kinds[(2, 3)] == kinds[(3, 4)] == "parallel" and kinds[(1, 2)] == "intersecting"
+    tilted = nominal.with_(alpha=nominal.alpha + np.deg2rad(np.r_[0, 0, 0.01, 0, 0, 0]),
+                           a=nominal.a + np.r_[0.5, 0, 0, 0, 0, 0])
+    dev = {d.joints: d for d in ik_assumptions(ur5, tilted, nominal)}
+    assert dev[(3, 4)].angle_deg == pytest.approx(0.01, rel=1e-6) and dev[(2, 3)].angle_deg < 1e-9
+    assert dev[(1, 2)].distance_mm == pytest.approx(0.5, rel=1e-6)
+
+
+def test_cli_correct_and_the_export_warning(tmp_path, capsys):
+    """The UR5 tracker data: calibrate, then the 20 random poses' measured positions as targets with their
+    recorded joints as the program: the commands round-trip within 1 um and stay next to the recorded joints
+    (the calibrated model explains those measurements to ~0.1 mm); export warns of the broken parallel axes."""
+    lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
+    rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]
+    fit = tmp_path / "fit.validation.csv"
+    fit.write_text("\n".join(head + rows) + "\n")
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(fit), "--robot", "ur5", "--validate",
+                 str(DATA / "ur5_random.validation.csv"), "--json", str(cal)]) == 0
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    pts = read_points(DATA / "ur5_random.validation.csv", 6)
+    targets = tmp_path / "t.targets.csv"
+    targets.write_text("# the random poses\nx_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(
+        ",".join(f"{v:.6f}" for v in (*x, *q)) for q, x in zip(pts.q_deg, pts.x_W_mm)) + "\n")
+    out = tmp_path / "commands.csv"
+    capsys.readouterr()
+    assert main(["correct", str(cal), str(targets), "-o", str(out)]) == 0
+    assert "IK residual max" in capsys.readouterr().out
+    table = list(csv.DictReader(ln for ln in out.read_text().splitlines() if not ln.startswith("#")))
+    assert len(table) == 20 and all(r["ok"] == "1" for r in table)
+    q_cmd = np.deg2rad([[float(r[f"q{i}"]) for i in range(1, 7)] for r in table])
+    params = calibrated_params(resolve_robot("ur5"), read_calibration(cal))
+    reached = ball_positions(resolve_robot("ur5"), params, q_cmd)[0].pW
+    assert np.linalg.norm(reached - pts.x_W_mm, axis=1).max() < 1e-3
+    assert np.abs(np.rad2deg(q_cmd) - pts.q_deg).max() < 0.1
+    pred = json.loads(cal.read_text())["fit"]["prediction"]["mean_mm"]
+    assert float(table[0]["predicted_mm"]) == pytest.approx(pred, abs=1e-4)
+    assert main(["export", str(cal), "-o", str(tmp_path / "exp")]) == 0
+    err = capsys.readouterr().err
+    assert "joints 2 and 3 are parallel in the nominal model" in err and "rodlab correct" in err
+
+
+def test_bad_targets_are_refused_with_the_line(tmp_path, capsys):
+    cal = tmp_path / "cal.json"
+    bad = tmp_path / "bad.targets.csv"
+    bad.write_text("x_mm,y_mm,z_mm\n1,2,3\n1,x,3\n")
+    nominal = resolve_robot("ur5")
+    from rodlab.calibrate.targets import read_targets
+    from rodlab.calibrate import CalibrationError
+    with pytest.raises(CalibrationError) as e:
+        read_targets(bad, nominal.n)
+    assert e.value.line == 3 and e.value.key == "y_mm"
+    assert main(["correct", str(cal), str(bad), "-o", str(tmp_path / "o.csv")]) == 2
+    assert not (tmp_path / "o.csv").exists()

@@ -1,0 +1,127 @@
+"""The calibration verdict as two statements on real and simulated data: usable? (held-out accuracy against the
+nominal model, plausibility, degrees of freedom, overfitting) decides the exit code; complete? (the residual
+test) is a caution. Real tracker data with default options are trusted when they predict better; the wrong
+robot file and too few poses are not; parameters the data cannot separate are held at nominal by default."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli.main import main
+from rodlab.calibrate import Observations, resolve_robot
+from rodlab.calibrate.crossval import Prediction, fold_labels
+from rodlab.calibrate.trust import prediction_warnings
+from rodlab.enums import AccuracySource
+
+DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data"
+
+
+def _head_and_rows(path: Path) -> tuple[list, list]:
+    lines = path.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
+    return head, [ln for ln in lines if ln and not ln.startswith(("#", "q1"))]
+
+
+@pytest.fixture(scope="module")
+def ur5_quarter(tmp_path_factory) -> Path:
+    """Every fourth grid pose of the public UR5 tracker data (250 poses)."""
+    head, rows = _head_and_rows(DATA / "jacobi2025" / "ur5_grid.validation.csv")
+    path = tmp_path_factory.mktemp("ur5") / "ur5.validation.csv"
+    path.write_text("\n".join(head + rows[::4]) + "\n")
+    return path
+
+
+def test_real_fanuc_data_with_default_options_is_trusted_with_its_completeness_caution(tmp_path, capsys):
+    """FANUC N1 -> N2 as a new user runs it (no --fix-unidentifiable): the single-joint sweeps' unidentifiable
+    parameters are held with the reason, the calibration predicts N2 clearly better than nominal (1.19 -> 1.01
+    mm) and is trusted (exit 0) although its 0.65 mm residual is far above the tracker's noise (complete? no)."""
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(DATA / "boby2021" / "r2000ic_N1.validation.csv"), "--robot",
+                 "r2000ic165f", "--validate", str(DATA / "boby2021" / "r2000ic_N2.validation.csv"),
+                 "--json", str(out)]) == 0
+    io = capsys.readouterr()
+    assert "usable? yes" in io.out and "complete? no" in io.out and "verdict: TRUSTED" in io.out
+    assert "caution (trusted): the model is incomplete" in io.err and "NOT TRUSTED" not in io.err
+    assert "held at nominal" in io.out and "--strict refuses" in io.err
+    cal = json.loads(out.read_text())
+    pred = cal["fit"]["prediction"]
+    assert cal["trusted"] and pred["source"] == "validation" and pred["clearly_better"]
+    assert pred["mean_mm"] < 0.9 * pred["nominal_mean_mm"] and pred["gain_mm"] > 2 * pred["gain_se_mm"]
+    assert cal["fit"]["completeness"]["verdict"] == "incomplete"
+    held = {u.split(" ")[0] for u in cal["unidentifiable"] if "in this data set" in u}
+    assert {"d_3", "c_3"} <= held
+
+
+def test_strict_refuses_what_the_data_cannot_identify(capsys):
+    assert main(["calibrate", "--points", str(DATA / "boby2021" / "r2000ic_N1.validation.csv"), "--robot",
+                 "r2000ic165f", "--strict"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot identify" in err and "d_3" in err
+
+
+def test_the_wrong_robot_file_is_not_trusted(ur5_quarter, capsys):
+    """UR5 data calibrated as a UR10: it fits and even predicts the random poses well, but the link lengths move
+    by ~180 mm, beyond any manufacturing error: NOT TRUSTED, exit 3."""
+    assert main(["calibrate", "--points", str(ur5_quarter), "--robot", "ur10", "--validate",
+                 str(DATA / "jacobi2025" / "ur5_random.validation.csv")]) == 3
+    err = capsys.readouterr().err
+    assert "NOT TRUSTED" in err and "a_2 moved" in err and "not a plausible manufacturing error" in err
+
+
+def test_too_few_poses_are_not_trusted(tmp_path, capsys):
+    """The first 12 grid poses (36 readings for 26 parameters): too few degrees of freedom, and the
+    cross-validated error is many times the fit's: NOT TRUSTED, exit 3, with and without a validation file."""
+    head, rows = _head_and_rows(DATA / "jacobi2025" / "ur5_grid.validation.csv")
+    path = tmp_path / "few.validation.csv"
+    path.write_text("\n".join(head + rows[:12]) + "\n")
+    assert main(["calibrate", "--points", str(path), "--robot", "ur5", "--json", str(tmp_path / "c.json")]) == 3
+    err = capsys.readouterr().err
+    assert "NOT TRUSTED" in err and "degrees of freedom" in err and "overfitting" in err
+    cal = json.loads((tmp_path / "c.json").read_text())
+    assert not cal["trusted"] and cal["fit"]["prediction"]["source"] == "cross_validation"
+    assert cal["fit"]["prediction"]["overfit_ratio"] > 3
+    assert main(["calibrate", "--points", str(path), "--robot", "ur5", "--validate",
+                 str(DATA / "jacobi2025" / "ur5_random.validation.csv")]) == 3
+
+
+def test_cross_validation_of_complete_simulated_points_predicts_the_noise(tmp_path):
+    """Tracker points of a known truth with 25 um noise per coordinate and nothing the model leaves out: the
+    cross-validated error per coordinate is the noise (slightly above: each fold fits fewer points), far below
+    the nominal model's, and the prediction passes; the model is complete."""
+    from test_points_workflow import _write_points
+
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.points import cross_validate_points, identify_points
+    robot = resolve_robot("r2000ic165f")
+    pts = read_points(_write_points(tmp_path / "p.validation.csv", robot, seed=11, n=150), robot.n)
+    res = identify_points(robot, pts, 0.025, fix_unidentifiable=True)
+    pred = cross_validate_points(robot, pts, res.rms_mm)
+    assert pred.source is AccuracySource.CROSS_VALIDATION and pred.folds == 5 and pred.points == 150
+    assert 0.025 < pred.rms_per_coordinate_mm < 0.025 * 1.4
+    assert pred.nominal_mean_mm > 5 * pred.mean_mm and pred.clearly_better() and not prediction_warnings(pred)
+    assert 0.9 < pred.overfit_ratio < 1.5 and not res.residual_check.missing
+
+
+def test_folds_follow_clamping_positions_else_interleave_the_poses():
+    q, x = np.zeros((12, 6)), np.zeros((12, 3))
+    group = np.repeat([1, 2, 3, 4], 3)
+    labels, how = fold_labels(Observations(q, x, x, group=group), k=5)
+    assert how == "clamping positions" and len(set(labels)) == 4
+    assert all(len(set(labels[group == g])) == 1 for g in range(1, 5))
+    labels, how = fold_labels(Observations(q, x, x), k=5)
+    assert how == "interleaved poses" and labels.tolist() == [i % 5 for i in range(12)]
+
+
+def test_prediction_not_better_than_nominal_is_not_usable():
+    """Paired held-out errors: a gain within 2 standard errors is not usable, a clear one is."""
+    rng = np.random.default_rng(0)
+    nominal = rng.uniform(0.4, 0.6, 40)
+    same = Prediction.of_validation(nominal + rng.normal(0, 0.05, 40), nominal, 0.1)
+    assert not same.clearly_better() and "does not predict clearly better" in prediction_warnings(same)[0]
+    better = Prediction.of_validation(0.5 * nominal, nominal, 0.1)
+    assert better.clearly_better() and not prediction_warnings(better)
+    with pytest.raises(ValueError, match="paired"):
+        Prediction.of_validation(np.zeros(3), np.zeros(4), 0.1)

@@ -3,10 +3,10 @@
 Needs only the core install (numpy, scipy, matplotlib, pyserial): a rig PC does not need the CAD stack.
 """
 from .errors import DeviceError, RigError
-from .fit import LineFit, RigFit, fit_recording
+from .fit import LineFit, NoLoadResponse, RigFit, fit_recording
 from .holds import Holds, hold_averages
 from .plot import plot_fit
 from .recording import FORMAT_RIG, RecordingWriter, RigRecording, read_recording
 
-__all__ = ["RigError", "DeviceError", "LineFit", "RigFit", "fit_recording", "Holds", "hold_averages", "plot_fit",
-           "FORMAT_RIG", "RecordingWriter", "RigRecording", "read_recording"]
+__all__ = ["RigError", "DeviceError", "LineFit", "NoLoadResponse", "RigFit", "fit_recording", "Holds", "hold_averages",
+           "plot_fit", "FORMAT_RIG", "RecordingWriter", "RigRecording", "read_recording"]

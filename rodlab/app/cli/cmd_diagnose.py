@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from ...compliance import read_compliance, write_compliance
+from .rodargs import compliance_arg
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
@@ -21,7 +22,7 @@ def register(sub) -> None:
                                    "drift, compliance_scale, torsion_compliance, joint_compliance; fixture_pose, "
                                    "rod_deflection, periodic_joint_error, thermal_drift, outliers; unexplained).")
     p.add_argument("--rig", help="*.rig.csv recording")
-    p.add_argument("--sim", help="rig: the simulated compliance file")
+    p.add_argument("--sim", help="rig: the simulated compliance file, or a design (rod1: its closed-form compliance)")
     p.add_argument("--campaign", help="*.campaign.csv")
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
                                     "joint angle, approach direction, measurement order and workspace region")
@@ -54,15 +55,21 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.points:
         return _diagnose_points(args)
     if args.rig:
-        from rodlab.stiffness_rig import read_recording
+        from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
         if not args.sim:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
-        sim = read_compliance(args.sim)
+        sim = compliance_arg(args.sim)
         design = None
         if args.rod:
             from ...design_io import resolve_design
             design = resolve_design(args.rod)
         rec = read_recording(args.rig)
+        try:                                # a recording without a load response is refused, with its cause
+            fit_recording(rec)
+        except NoLoadResponse:
+            raise
+        except RigError:
+            pass                            # anything else: the diagnosis says what it finds
         diag, model = diagnose_rig(rec, sim, design)
         print(diag.summary())
         if args.png:

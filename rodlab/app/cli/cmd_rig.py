@@ -7,10 +7,11 @@ import os
 
 import numpy as np
 
-from ...compliance import read_compliance, write_compliance
+from ...compliance import write_compliance
 from .argtypes import count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, write_command_report
 from .effectargs import effects_help, parse_effect_specs
+from .rodargs import compliance_arg
 
 __all__ = ["register"]
 
@@ -32,7 +33,8 @@ def _register_fit(rsub) -> None:
                         description="Hold averages, one line per load axis and branch, intercepts in kg, measured "
                                     "C_F, r_rod against the simulated compliance, C_g = r_rod C_g_sim (Eq. 22).")
     p.add_argument("recording", help="*.rig.csv")
-    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc)")
+    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc), or a design (rod1, "
+                                                "my.rod.toml: its closed-form compliance)")
     p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
     p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
@@ -46,7 +48,8 @@ def _register_simulate(rsub) -> None:
                         description="Simulate the stiffness rig on a rod with a known compliance and optional "
                                     "effects, the contract's protocol by default. Effects and their parameters "
                                     "(defaults: a typical magnitude):\n" + rig_effects_help())
-    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth), or a design (rod1, "
+                                            "my.rod.toml: its closed-form compliance)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect, e.g. friction:F_f_N=0.3, creep:phi=0.03,tau_s=5 or "
                         "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6 (repeatable)")
@@ -82,7 +85,8 @@ def _register_simulator(rsub) -> None:
     p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
                                     "commandable loader on a pty, published at --link; point a profile's port at it.")
-    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth), or a design (rod1, "
+                                            "my.rod.toml: its closed-form compliance)")
     p.add_argument("--link", required=True, help="path of the symlink to the pty (the profile's port)")
     p.add_argument("--protocol", choices=["query", "stream"], default="query")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
@@ -97,7 +101,7 @@ def _register_simulator(rsub) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
     rec = read_recording(args.recording)
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         from ...errors import RodlabError
@@ -151,7 +155,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.simulate import simulate_recording
 
     from ...errors import RodlabError
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
     try:
         masses = tuple(float(m) for m in args.masses.split(","))
@@ -220,7 +224,7 @@ def cmd_simulator(args: argparse.Namespace) -> int:
 
     from rodlab.stiffness_rig.model import RigModel
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
     dev = SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                        faults=Faults(garbage=args.garbage))

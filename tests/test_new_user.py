@@ -191,3 +191,111 @@ def test_a_flat_rig_recording_names_the_file_and_the_cause(tmp_path, capsys, axi
         assert f"{flat}" in err and f"no load response on axis {axis or ''}" in err, err
         assert "check the gauges" in err and "r_rod" not in err
     assert not (tmp_path / "m.compliance.json").exists()
+
+
+# --- 5. a study prints every design it could not use, with the reason -----------------------------------------------
+
+def test_study_prints_every_unusable_design_with_its_reason(tmp_path, capsys):
+    assert main(["study", "rod1", "--tubes", "25x2,30x2", "--replicates", "1", "--methods", "calc", "--no-calibrate",
+                 "--no-budget", "--serial", "-o", str(tmp_path / "study")]) == 0
+    out = capsys.readouterr().out
+    assert "1 of 2 designs not usable:" in out
+    line = next(ln for ln in out.splitlines() if "30x2: invalid" in ln)
+    assert "bend radius 40.0 mm" in line and "kinking" in line
+
+
+# --- 8. study figures: labels kept, one colour scale, the sweep's colour map; the help's "%%" -------------------------
+
+def test_pareto_labels_of_designs_at_the_same_reach_do_not_cover_each_other():
+    from rodlab.app.study.plots import pareto_labels
+    xy = [(300.0, 200.0), (300.0, 204.0), (300.0, 204.0), (500.0, 100.0)]    # [pt]; two share a point
+    labels = pareto_labels(xy, ["25x2", "28x2", "28x2b", "far"])
+    texts = [t for _, t, _, _ in labels]
+    assert sorted(texts) == ["25x2", "28x2, 28x2b", "far"]
+    boxes = []
+    for i, text, (dx, dy), ha in labels:
+        w = 4.3 * len(text)
+        x0 = xy[i][0] + dx - (w if ha == "right" else 0.0)
+        boxes.append((x0, xy[i][1] + dy, x0 + w, xy[i][1] + dy + 9.0))
+    for a in range(len(boxes)):
+        for b in range(a):
+            A, B = boxes[a], boxes[b]
+            assert not (A[0] < B[2] and B[0] < A[2] and A[1] < B[3] and B[1] < A[3]), (labels[a], labels[b])
+
+
+def test_study_heat_maps_share_one_scale_and_the_sweeps_colour_map(tmp_path, monkeypatch):
+    import matplotlib
+    matplotlib.use("Agg")
+    import numpy as np
+    import pandas as pd
+    from matplotlib.axes import Axes
+
+    from rodlab.app.study.plots import plot_heatmaps
+    from rodlab.fea.sweep_plot import HEAT_CMAP
+    calls = []
+    real = Axes.pcolormesh
+
+    def spy(self, *args, **kw):
+        if kw.get("shading") == "nearest":                                    # the panels, not the colour bar
+            calls.append(kw)
+        return real(self, *args, **kw)
+    monkeypatch.setattr(Axes, "pcolormesh", spy)
+    L1, L2 = np.meshgrid([250.0, 300.0, 350.0], [400.0, 450.0])
+    rows = []
+    for m, level in (("none", 0.3), ("meas", 0.04)):
+        for i, (a, b) in enumerate(zip(L1.ravel(), L2.ravel())):
+            rows.append({"design": f"d{i}", "L1_mm": a, "L2_mm": b, "method": m, "mean_mm": level * (1 + 0.1 * i)})
+    df = pd.DataFrame(rows)
+    assert plot_heatmaps(df, tmp_path / "heat.png").stat().st_size > 10_000
+    assert len(calls) == 2 and all(c["cmap"] == HEAT_CMAP for c in calls)
+    norm = calls[0]["norm"]
+    assert calls[1]["norm"] is norm                                            # one scale for every panel
+    assert norm.vmin == pytest.approx(0.04) and norm.vmax == pytest.approx(0.3 * 1.5)
+
+
+def test_study_help_has_no_doubled_percent(capsys):
+    with pytest.raises(SystemExit):
+        main(["study", "--help"])
+    out = capsys.readouterr().out
+    assert "90 % band" in out and "%%" not in out
+
+
+# --- 8. a quiet local cluster; one --png convention ---------------------------------------------------------------
+
+def test_sweep_starts_its_local_cluster_quietly(tmp_path):
+    import subprocess
+    import sys
+    holder = None
+    try:                                               # the dashboard's default port taken, as by another cluster
+        import socket
+        holder = socket.socket()
+        holder.bind(("127.0.0.1", 8787))
+        holder.listen()
+    except OSError:
+        holder = None
+    try:
+        run = subprocess.run([sys.executable, "-m", "rodlab", "sweep", "--L1", "250,300", "--L2", "400", "--workers",
+                              "2", "-o", str(tmp_path / "sweep.csv")], capture_output=True, text=True, timeout=300)
+    finally:
+        if holder is not None:
+            holder.close()
+    assert run.returncode == 0, run.stderr
+    assert "distributed" not in run.stderr and "8787" not in run.stderr and "dashboard" not in run.stderr, run.stderr
+    assert (tmp_path / "sweep.png").is_file()
+
+
+def test_png_is_a_folder_everywhere_and_a_file_for_one_figure(tmp_path, capsys):
+    rec = tmp_path / "rec.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "-o", str(rec)]) == 0
+    out = ["-o", str(tmp_path / "m.compliance.json")]
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", *out, "--png", str(tmp_path / "figs")]) == 0
+    assert (tmp_path / "figs" / "fig8.png").is_file()                 # a folder: the figure under its name
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", *out, "--png", str(tmp_path / "mine.png")]) == 0
+    assert (tmp_path / "mine.png").is_file()                          # one figure: FILE.png is the file
+    assert main(["diagnose", "--rig", str(rec), "--sim", "rod1", "--png", str(tmp_path / "diag")]) == 0
+    assert list((tmp_path / "diag").glob("*.png"))
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as e:                               # several figures: a folder, never FILE.png
+        main(["diagnose", "--rig", str(rec), "--sim", "rod1", "--png", str(tmp_path / "d.png")])
+    assert e.value.code == 2 and "give a folder" in capsys.readouterr().err
+    assert not (tmp_path / "d.png").exists()

@@ -4,12 +4,12 @@ from __future__ import annotations
 import argparse
 
 from ...compliance import read_compliance, write_compliance
-from .rodargs import compliance_arg
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .reporting import add_report_option, default_folder, write_command_report
+from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+from .rodargs import compliance_arg
 
 __all__ = ["register"]
 
@@ -34,7 +34,7 @@ def register(sub) -> None:
                    help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
                         "(default: the file's sigma_*_mm columns, else 25, a laser tracker)")
     p.add_argument("--json", help="write the contract's diagnosis report")
-    p.add_argument("--png", help="folder for figures")
+    p.add_argument("--png", type=png_folder, help="folder for figures (each under its own name)")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
     p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
                    help="points / campaign: joints whose periodic errors the calibration already identifies (as "

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...compliance import write_compliance
 from .argtypes import count, nonneg_float, pos_float, seed
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, png_file, write_command_report
 from .effectargs import effects_help, parse_effect_specs
 from .rodargs import compliance_arg
 
@@ -36,7 +36,8 @@ def _register_fit(rsub) -> None:
     p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc), or a design (rod1, "
                                                 "my.rod.toml: its closed-form compliance)")
     p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
-    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
+    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording: FILE.png, or a folder (it "
+                                               "gets fig8.png)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
     add_report_option(p)
     p.set_defaults(func=cmd_fit)
@@ -122,7 +123,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")
     if args.png:
-        written.append(plot_fit(fit, args.png, sim, title=f"rod {rec.rod}"))
+        written.append(plot_fit(fit, png_file(args.png, "fig8.png"), sim, title=f"rod {rec.rod}"))
         print(f"  wrote {written[-1]}")
     write_command_report(args, written, written[0].parent)
     return 0

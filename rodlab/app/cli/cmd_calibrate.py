@@ -93,8 +93,8 @@ def register(sub) -> None:
     p.add_argument("--fixture", required=True)
     p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
                    help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")
-    p.add_argument("--png", default=None, type=png_folder,
-                   help="folder for the error distributions per method (the paper's Fig. 10)")
+    p.add_argument("--png", default=None, help="the error distributions per method (the paper's Fig. 10): FILE.png, "
+                                               "or a folder (it gets error_distributions.png)")
     p.add_argument("--json", default=None, help="write the table (format rodlab.comparison/1, docs/formats.md)")
     _common(p)
     p.set_defaults(func=cmd_compare)

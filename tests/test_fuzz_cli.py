@@ -230,7 +230,10 @@ def _broken_urdf(draw) -> tuple[str, str]:
     if kind == "link":                                 # a parent / child naming a link the file does not have
         refs = list(re.finditer(r'<(parent|child) link="([^"]+)"', text))
         m = draw(st.sampled_from(refs))
-        typo = draw(st.sampled_from([m.group(2)[:-1], m.group(2) + "_", m.group(2).replace("_", "", 1) or "x"]))
+        links = set(re.findall(r'<link name="([^"]+)"', text))
+        name = m.group(2)
+        typo = draw(st.sampled_from([t for t in (name[:-1], name + "_", name.replace("_", "", 1), name.upper())
+                                     if t and t not in links]))
         return text[:m.start(2)] + typo + text[m.end(2):], kind
     if kind == "cut":                                  # a joint removed: the chain stops before the tip
         joints = list(re.finditer(r'<joint name="[^"]+".*?</joint>', text, flags=re.S))

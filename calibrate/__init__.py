@@ -9,7 +9,7 @@ from .identify import CalibrationResult, Observations, campaign_observations, id
 from .kinematics import ModelParams, ball_positions
 from .result import result_dict, write_result
 from .robot import Robot, robot_from_chain
-from .robot_formats import ROBOT_READERS, builtin_robots, read_robot, resolve_robot
+from .robot_formats import ROBOT_READERS, builtin_robots, read_robot, resolve_robot, robot_path
 from .socket_check import SocketCheck, check_sockets
 from .socket_fit import SocketFit, identify_sockets
 from .sockets import SocketDistance, SocketReadings, read_sockets, write_sockets
@@ -21,5 +21,5 @@ __all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",
            "result_dict", "write_result", "Robot", "robot_from_chain", "ROBOT_READERS", "builtin_robots", "read_robot",
-           "resolve_robot", "ErrorStats", "validate", "SocketCheck", "check_sockets", "SocketFit", "identify_sockets",
-           "SocketDistance", "SocketReadings", "read_sockets", "write_sockets"]
+           "resolve_robot", "robot_path", "ErrorStats", "validate", "SocketCheck", "check_sockets", "SocketFit",
+           "identify_sockets", "SocketDistance", "SocketReadings", "read_sockets", "write_sockets"]

@@ -6,6 +6,7 @@ Built-in robots are the files in ``calibrate/robots`` (each names its source), b
 """
 from __future__ import annotations
 
+import logging
 from importlib import resources
 from pathlib import Path
 from typing import Callable
@@ -17,7 +18,9 @@ from .robot import Robot
 from .robot_toml import read_robot_toml
 from .robot_urdf import read_urdf
 
-__all__ = ["ROBOT_READERS", "read_robot", "resolve_robot", "builtin_robots"]
+__all__ = ["ROBOT_READERS", "read_robot", "resolve_robot", "robot_path", "builtin_robots"]
+
+log = logging.getLogger(__name__)
 
 
 def _toml(path, base_link=None, tip_link=None) -> Robot:
@@ -55,13 +58,34 @@ def builtin_robots() -> dict[str, Path]:
 
 
 def resolve_robot(spec: str | Path, base_link: str | None = None, tip_link: str | None = None) -> Robot:
-    """A robot file path (any registered kind), or a built-in name (``tx90``, case-blind)."""
+    """A robot file path (any registered kind), or a built-in name (``tx90``, case-blind).
+
+    A name is a file only when it is a file: a folder named like a built-in (``ur5/``, made by ``--json
+    ur5/cal.json``) does not hide the built-in robot; the log says which was taken when both exist.
+    """
+    return read_robot(robot_path(spec), base_link, tip_link)
+
+
+def robot_path(spec: str | Path) -> Path:
+    """The file a robot spec names: an existing file, else a built-in robot's file, else a path with a robot
+    suffix (its reader says "file not found"); a folder or an unknown name is refused with the built-ins."""
     p = Path(spec)
-    if p.exists() or p.suffix.lower() in ROBOT_READERS:
-        return read_robot(p, base_link, tip_link)
     names = builtin_robots()
     key = str(spec).strip().lower()
+    if p.is_file():
+        if key in names:
+            log.warning("%s: the file here, not the built-in robot %s (give another path to use the built-in)",
+                        spec, key)
+        return p
     if key in names:
-        return read_robot(names[key], base_link, tip_link)
+        if p.exists():
+            log.warning("%s: the built-in robot %s, not the folder %s/ here (a folder is not a robot file)",
+                        spec, key, spec)
+        return names[key]
+    if p.is_dir():
+        raise CalibrationError(f"this is a folder, not a robot file; give a robot file (.toml, .urdf) or a built-in "
+                               f"robot: {sorted(names)}.", path=spec)
+    if p.suffix.lower() in ROBOT_READERS:
+        return p
     raise CalibrationError(f"no such robot file or built-in robot; built-ins: {sorted(names)}."
                            + did_you_mean(str(spec), names), path=spec)

@@ -19,6 +19,7 @@ import numpy as np
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
 from .robot_lines import ZeroChain
+from .urdf_check import check_urdf_structure
 
 __all__ = ["read_urdf", "load_urdf", "UrdfChain", "urdf_chain", "chain_poses", "zero_chain"]
 
@@ -60,6 +61,7 @@ def load_urdf(path):
     if "${" in text or any("xacro" in str(k) for k in root.attrib) or "xacro:" in text:
         raise CalibrationError("this is a xacro file: expand it first (`xacro robot.urdf.xacro > robot.urdf`, "
                                "`pip install xacro` outside ROS)", path=p)
+    check_urdf_structure(text, p)
     import yourdfpy                                      # heavy (trimesh): only for URDF robots
     try:
         return yourdfpy.URDF.load(str(p), build_scene_graph=False, load_meshes=False,
@@ -89,7 +91,7 @@ def _tree(model):
     return by_child, children
 
 
-def _default_tip(base: str, children: dict) -> str:
+def _default_tip(base: str, children: dict, path=None) -> str:
     leaves, stack = [], [(base, 0)]
     while stack:
         link, moving = stack.pop()
@@ -104,7 +106,7 @@ def _default_tip(base: str, children: dict) -> str:
     top = [name for m, name in leaves if m == best]
     if len(top) > 1:
         raise CalibrationError(f"several tip links behind {best} moving joints: {sorted(top)}; choose one with "
-                               "--tip-link", key="tip_link")
+                               "--tip-link", path=path, key="tip_link")
     return top[0]
 
 
@@ -118,7 +120,7 @@ def urdf_chain(model, base_link: str | None = None, tip_link: str | None = None,
         if name is not None and name not in links:
             from rodlab.errors import did_you_mean
             raise CalibrationError(f"no link named {name!r}." + did_you_mean(str(name), links), path=path, key=what)
-    tip = tip_link or _default_tip(base, children)
+    tip = tip_link or _default_tip(base, children, path)
     joints, link = [], tip
     while link != base:
         if link not in by_child:

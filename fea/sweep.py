@@ -159,7 +159,7 @@ def _run_on_dask(chunks, store: _SweepStore, base, model, mesher, calibration, s
     """Evaluate the chunks on a Dask cluster (``scheduler``'s, or a local one of ``workers`` processes);
     False when Dask is not installed (the caller runs them serially)."""
     try:
-        from dask.distributed import Client, LocalCluster, as_completed
+        from dask.distributed import Client, as_completed
     except ImportError:
         log.warning("Dask is not installed (pip install 'rodlab[dist]'): the sweep runs serially in this process")
         return False
@@ -167,7 +167,8 @@ def _run_on_dask(chunks, store: _SweepStore, base, model, mesher, calibration, s
     if scheduler:
         client = Client(scheduler)
     else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        from rodlab.cluster import local_cluster
+        cluster = local_cluster(workers)
         client = Client(cluster)
     try:
         futures = {client.submit(_evaluate_batch, base, [(a, b) for a, b, _ in ch], model, mesher,

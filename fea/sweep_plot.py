@@ -11,7 +11,10 @@ import numpy as np
 
 from rodlab.fileio import atomic_write_figure
 
-__all__ = ["plot_sweep", "PAPER_RODS"]
+__all__ = ["plot_sweep", "PAPER_RODS", "HEAT_CMAP"]
+
+#: the colour map of every heat map over L1 x L2 (sweeps and studies): dark = low, yellow = high (worse)
+HEAT_CMAP = "viridis"
 
 #: the paper's Table 2 geometries (L1, L2) [mm]
 PAPER_RODS = {"1#/4#": (300.0, 450.0), "2#/5#": (150.0, 525.0), "3#/6#": (375.0, 600.0)}
@@ -39,7 +42,7 @@ def plot_sweep(df, path: str | Path, title: str = "", marks: dict | None = None)
                 Z[np.searchsorted(L2, r["L2_mm"]), np.searchsorted(L1, r["L1_mm"])] = float(r[col]) * scale
         ax.set_facecolor("#dddddd")
         if np.isfinite(Z).any():
-            pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap="viridis")
+            pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap=HEAT_CMAP)
             fig.colorbar(pc, ax=ax, label=label)
             if L1.size > 2 and L2.size > 2 and np.isfinite(Z).sum() > 4:
                 cs = ax.contour(L1, L2, Z, levels=8, colors="white", linewidths=0.6)

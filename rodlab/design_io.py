@@ -273,13 +273,18 @@ def builtin_designs() -> dict[str, Path]:
 def resolve_design(spec: str | Path) -> RodDesign:
     """Load ``spec`` as a file path or, when no such file exists, as a built-in name (``rod1``, ``1#``)."""
     p = Path(spec)
-    if p.exists() or str(spec).endswith(".toml"):
-        return load_design(p)
     names = builtin_designs()
     key = str(spec).strip()
     alias = {f"{k[3:]}#": k for k in names if k.startswith("rod")}
     key = alias.get(key, key)
-    if key in names:
+    if p.is_file() or (str(spec).endswith(".toml") and not p.exists()):
+        return load_design(p)
+    if key in names:                    # a folder named like a built-in (rod1/) does not hide it
+        if p.exists():
+            log.warning("%s: the built-in design %s, not the folder %s/ here (a folder is not a design file)",
+                        spec, key, spec)
         return load_design(names[key])
+    if p.exists():
+        return load_design(p)
     raise FormatError(f"no such file or built-in design; built-ins: {sorted(names)}." + did_you_mean(key, names),
                       path=spec)

@@ -1,6 +1,7 @@
 """File helpers: atomic writes and content hashes (nothing already recorded is ever lost)."""
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
@@ -24,6 +25,8 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     A crash leaves either the old file or the new one, never a torn file.
     """
     p = Path(path)
+    if p.is_dir():                       # else the error would name the temporary file, not the user's path
+        raise IsADirectoryError(errno.EISDIR, "this is a folder", str(p))
     p.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
     try:
@@ -33,11 +36,13 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, p)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError) and e.filename == tmp:     # name the user's path, never the temporary file
+            raise type(e)(e.errno, e.strerror, str(p)) from e
         raise
     return p
 

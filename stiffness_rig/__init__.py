@@ -4,7 +4,7 @@ Needs only the core install (numpy, scipy, matplotlib, pyserial, minimalmodbus):
 CAD stack.
 """
 from .errors import DeviceError, RigError
-from .fit import LineFit, RigFit, fit_recording
+from .fit import LineFit, NoLoadResponse, RigFit, fit_recording
 from .holds import Holds, hold_averages
 from .instrument_profile import InstrumentProfile
 from .instruments import RigClient
@@ -13,6 +13,6 @@ from .plan_check import linear_range_warnings
 from .plot import plot_fit
 from .recording import FORMAT_RIG, RecordingWriter, RigRecording, read_recording
 
-__all__ = ["RigError", "DeviceError", "LineFit", "RigFit", "fit_recording", "Holds", "hold_averages", "plot_fit",
-           "FORMAT_RIG", "RecordingWriter", "RigRecording", "read_recording", "InstrumentProfile", "RigClient",
+__all__ = ["RigError", "DeviceError", "LineFit", "NoLoadResponse", "RigFit", "fit_recording", "Holds", "hold_averages",
+           "plot_fit", "FORMAT_RIG", "RecordingWriter", "RigRecording", "read_recording", "InstrumentProfile", "RigClient",
            "LoadCheck", "measured_load", "linear_range_warnings"]

@@ -23,9 +23,13 @@ from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
 
-__all__ = ["LineFit", "RigFit", "fit_recording"]
+__all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse"]
 
 _AX = "xyz"
+
+
+class NoLoadResponse(RigError):
+    """A load axis does not deflect the rod along itself: the gauges or the loading, not the rod."""
 
 
 @dataclass
@@ -152,6 +156,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     if not lines:
         raise RigError("no load axis has a measured component with at least 3 holds at different loads",
                        path=rec.path, key="mass_kg")
+    _check_load_response(lines, rec)
     M, S = _combine_lines(lines)
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     if sim is not None:
@@ -162,6 +167,21 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     if fit.success:
         fit.message = f"{len(lines)} lines fitted; noise {noise * 1e3:.2f} um per reading"
     return fit
+
+
+def _check_load_response(lines: list, rec: RigRecording) -> None:
+    """Refuse a recording in which a load axis does not deflect the rod along itself (gauges not connected or
+    not touching, no weight hung): its on-axis slope must be positive and above its standard error x 3."""
+    for ln in lines:
+        if ln.component != ln.axis.index:
+            continue
+        if ln.slope_mm_per_N > 3 * ln.se_mm_per_N and ln.slope_mm_per_N > 0:
+            continue
+        raise NoLoadResponse(f"no load response on axis {ln.axis.value}: the {_AX[ln.component]} gauge moves "
+                       f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
+                       f"{ln.axis.value} ({ln.n_holds} holds), nothing a rod does; check the gauges (connected, "
+                       f"touching the rod, the right channel) and the loading (weights hung on that axis)",
+                       path=rec.path, key="load_axis")
 
 
 def _reference_holds(holds) -> np.ndarray:

@@ -64,3 +64,38 @@ def test_report_is_self_contained(run):
 
 def test_report_in_headless_chromium(run, render_in_chromium):
     render_in_chromium([run / "report.html"], run / "chrome-profile")
+
+
+def _page_text(page: str) -> str:
+    import html
+    import re
+    page = re.sub(r"<(style|title)>.*?</\1>", " ", page, flags=re.S)
+    page = re.sub(r"<img[^>]*>", " ", page)
+    return re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]+>", " ", page)))
+
+
+def test_report_tells_one_story(run):
+    """The conclusion comes first (what to build, what accuracy, with what compensation); sections 6 and 8 say
+    which rod each assumes (exactly as its file / as built with r_rod drawn); c_rod, r_rod and {T} are explained
+    where they first appear."""
+    import re
+    s = json.loads((run / "run.json").read_text())["stages"]
+    page = write_report(run).read_text()
+    assert re.findall(r"<h2>([^<]*)</h2>", page)[:2] == ["Conclusion", "Terms"]
+    text = _page_text(page)
+    sy, rec = s["study"], s["study"]["recommended"]
+    row = next(r for r in sy["rows"] if r["design"] == rec["design"] and r["method"] == rec["method"])
+    conclusion = _page_text(page[page.index("<h2>Conclusion</h2>"):page.index("<h2>Terms</h2>")])
+    assert f"Build {rec['design']}" in conclusion and f"{row['mean_mm']:.3f} mm" in conclusion
+    assert "with Meas compensation" in conclusion and "section 6" in conclusion and "section 8" in conclusion
+    sec6 = text[text.index("6. Calibration"):text.index("7. L1 / L2 sweep")]
+    sec8 = text[text.index("8. Which rod?"):]
+    assert "Rod assumed: exactly as its compliance file" in sec6
+    assert f"true r_rod = {s['campaign']['r_rod_true']:.3f}" in sec6
+    lo, hi = sy["r_prior"]["1#"]
+    assert "Rod assumed: as built" in sec8 and f"r_rod drawn from {lo:g}-{hi:g}" in sec8
+    rod1_calc = next(r["mean_mm"] for r in sy["rows"] if r["design"] == "1#" and r["method"] == "calc")
+    assert f"{rod1_calc:.3f} mm here against {s['calibrate']['table3']['Calc']['mean_mm']:.3f} mm" in sec8
+    for term, meaning in (("c_rod", "compliance index"), ("r_rod", "correction factor"), ("{T}", "tool frame")):
+        first = text.index(term)
+        assert meaning in text[first:first + 80], (term, text[first - 100:first + 100])

@@ -6,6 +6,10 @@ regular file), option values from a token pool (negative, zero, NaN, inf, huge, 
 invalid choices. Each run must end with an exit code (0, 1, 2 or 3), never a traceback; exit 2 prints one
 error line naming the argument, file or key at fault; a failed run leaves no output file behind.
 
+Folders named like the built-ins (``tx90/``, ``ur5/``, ``rod1/``) sit in every run's working folder: a built-in
+name must still mean the built-in. Broken URDFs (a misspelled link, a joint cut out of the chain, a vector
+without three numbers) must be refused naming the URDF and its line, by every command that takes a robot.
+
 Long jobs (demo, study, sweep, cad, mesh, solid fea, report, acquisition, the simulator) always get a broken
 main input, so they are fuzzed on their argument and file checks, not run for minutes.
 
@@ -188,6 +192,8 @@ def test_cli_fuzz(command, tmp_path_factory):
     def run(data):
         out_dir = tmp_path_factory.mktemp("fuzz")
         (out_dir / "blocker").write_text("a regular file where a folder is expected\n")
+        for name in ("tx90", "ur5", "rod1"):           # folders named like built-ins (left by `--json ur5/cal.json`)
+            (out_dir / name).mkdir()
         before = {p for p in out_dir.rglob("*")}
         argv = data.draw(_argv(command, out_dir))
         code, err, by_argparse = _run(argv, out_dir)
@@ -207,3 +213,76 @@ def test_cli_fuzz(command, tmp_path_factory):
     if os.environ.get("RODLAB_FUZZ_STATS"):
         with open(os.environ["RODLAB_FUZZ_STATS"], "a") as fh:
             fh.write(json.dumps({"command": command, **counts}) + "\n")
+
+
+# --- broken URDFs and built-in names shadowed by folders -------------------------------------------------------
+
+UR5 = ROOT / "calibrate" / "robots" / "ur5.urdf"
+UR5_POINTS = ROOT / "benchmarks" / "data" / "jacobi2025" / "ur5_random.validation.csv"
+
+
+@st.composite
+def _broken_urdf(draw) -> tuple[str, str]:
+    """(a UR5 URDF with one fault, what the fault is)."""
+    import re
+    text = UR5.read_text()
+    kind = draw(st.sampled_from(["link", "cut", "vector"]))
+    if kind == "link":                                 # a parent / child naming a link the file does not have
+        refs = list(re.finditer(r'<(parent|child) link="([^"]+)"', text))
+        m = draw(st.sampled_from(refs))
+        links = set(re.findall(r'<link name="([^"]+)"', text))
+        name = m.group(2)
+        typo = draw(st.sampled_from([t for t in (name[:-1], name + "_", name.replace("_", "", 1), name.upper())
+                                     if t and t not in links]))
+        return text[:m.start(2)] + typo + text[m.end(2):], kind
+    if kind == "cut":                                  # a joint removed: the chain stops before the tip
+        joints = list(re.finditer(r'<joint name="[^"]+".*?</joint>', text, flags=re.S))
+        m = draw(st.sampled_from(joints))
+        return text[:m.start()] + text[m.end():], kind
+    vectors = list(re.finditer(r'(xyz|rpy)="([^"]*)"', text))    # two numbers, four, or a word
+    m = draw(st.sampled_from(vectors))
+    words = m.group(2).split()
+    bad = draw(st.sampled_from([" ".join(words[:2]), " ".join(words + ["0"]), " ".join(words[:2] + ["x"]), ""]))
+    return text[:m.start(2)] + bad + text[m.end(2):], kind
+
+
+def test_cli_fuzz_broken_urdfs(tmp_path_factory):
+    """calibrate / diagnose / export on a URDF with one fault: exit 2, the URDF and a line named, no output."""
+    cal = tmp_path_factory.mktemp("cal") / "cal.json"
+    assert _run(["calibrate", "--points", str(UR5_POINTS), "--robot", "ur5", "--fix-unidentifiable", "--json",
+                 str(cal)], cal.parent)[0] in (0, 3)
+
+    @settings(max_examples=max(EXAMPLES, 8), deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+    @given(data=st.data())
+    def run(data):
+        out_dir = tmp_path_factory.mktemp("urdf")
+        text, kind = data.draw(_broken_urdf())
+        urdf = out_dir / "arm.urdf"
+        urdf.write_text(text)
+        argv = data.draw(st.sampled_from([
+            ["calibrate", "--points", str(UR5_POINTS), "--robot", str(urdf), "--json", str(out_dir / "o.json")],
+            ["diagnose", "--points", str(UR5_POINTS), "--robot", str(urdf)],
+            ["export", str(cal), "--urdf", str(urdf), "-o", str(out_dir / "o.urdf")]]))
+        before = set(out_dir.rglob("*"))
+        code, err, _ = _run(argv, out_dir)
+        assert "Traceback" not in err and code == 2, (kind, argv, err)
+        last = err.strip().splitlines()[-1]
+        assert last.startswith(f"rodlab {argv[0]}: error: {urdf}, line "), (kind, last)
+        assert set(out_dir.rglob("*")) == before, (kind, argv)
+    run()
+
+
+@pytest.mark.parametrize("argv", [
+    ["info", "rod1"], ["compliance", "rod1", "-o", "rod1/rod1.compliance.json"],
+    ["simulate-campaign", "--robot", "tx90", "--rod", str(POOL["compliance"][0]), "-o", "tx90/campaign"],
+    ["diagnose", "--points", str(UR5_POINTS), "--robot", "ur5"],
+    ["rig", "simulate", "--sim", "rod1", "-o", "rod1/rec.rig.csv"]])
+def test_builtin_names_shadowed_by_folders(argv, tmp_path_factory):
+    """A folder named like a built-in robot or design never hides it (the folder is not a file)."""
+    cwd = tmp_path_factory.getbasetemp() / "shadow"
+    for name in ("tx90", "ur5", "rod1"):
+        (cwd / name).mkdir(parents=True, exist_ok=True)
+    code, err, _ = _run(argv, cwd)
+    assert code in (0, 3), (argv, err)
+    assert "unknown robot file kind" not in err and "this is a folder" not in err

@@ -154,7 +154,8 @@ class _DemoRun:
         rod_true = RodCompliance(fea.rod, fea.method, C_true, r_true * fea.C_g, fea.mass_kg, fea.com_T_mm, fea.tool_mm,
                                  r_true)
         simulate_campaign(self.robot, fea, self.out / "campaign", CampaignSpec(seed=self.seed), rod_true=rod_true)
-        self._stage("campaign", {"robot": "tx90", "positions": 5, "orientations": 6, "points": 30})
+        self._stage("campaign", {"robot": "tx90", "positions": 5, "orientations": 6, "points": 30,
+                                 "r_rod_true": r_true})
 
     def stage_calibrate(self) -> None:
         from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture,
@@ -228,4 +229,5 @@ def _study(out: Path, robot, design, calibration) -> dict:
             "share_deflection", "share_identification", "share_noise"]
     rows = res.table[res.table["method"].notna()][cols]
     return {"designs": [c.label for c in cands], "replicates": spec.replicates, "compliance": note,
-            "recommendation": res.recommendation.text, "rows": rows.to_dict(orient="records")}
+            "recommendation": res.recommendation.text, "recommended": res.recommendation.to_dict(),
+            "r_prior": {st.label: list(st.r_prior) for st in run.setups}, "rows": rows.to_dict(orient="records")}

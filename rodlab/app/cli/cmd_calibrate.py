@@ -14,7 +14,7 @@ from ...compliance import RodCompliance, read_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, joint_list, nonneg_float, pos_float, seed
-from .reporting import add_report_option, default_folder, write_command_report
+from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 from .verdict import judge, print_held, print_verdict
 
@@ -85,7 +85,7 @@ def register(sub) -> None:
                         "of the joint reading, h1s_j h1c_j h2s_j h2c_j [deg] (gear or encoder eccentricity, as "
                         "`rodlab diagnose` names it); the result is then rodlab.calibration/2")
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
-    p.add_argument("--png", default=None,
+    p.add_argument("--png", default=None, type=png_folder,
                    help="folder for figures: residuals per position; with --validate the validation error distribution")
     _common(p)
     p.set_defaults(func=cmd_calibrate)
@@ -97,7 +97,8 @@ def register(sub) -> None:
     p.add_argument("--fixture", required=True)
     p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
                    help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")
-    p.add_argument("--png", default=None, help="error distributions per method (the paper's Fig. 10)")
+    p.add_argument("--png", default=None, help="the error distributions per method (the paper's Fig. 10): FILE.png, "
+                                               "or a folder (it gets error_distributions.png)")
     p.add_argument("--json", default=None, help="write the table (format rodlab.comparison/1, docs/formats.md)")
     _common(p)
     p.set_defaults(func=cmd_compare)

@@ -8,8 +8,9 @@ from ...enums import MODEL_FORM
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .reporting import add_report_option, default_folder, write_command_report
+from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+from .rodargs import compliance_arg
 
 __all__ = ["register"]
 
@@ -26,7 +27,7 @@ def register(sub) -> None:
                                    f"model. Findings use the effect vocabulary (rig: {rig}, {MODEL_FORM}; campaign: "
                                    f"{campaign}; unexplained).")
     p.add_argument("--rig", help="*.rig.csv recording")
-    p.add_argument("--sim", help="rig: the simulated compliance file")
+    p.add_argument("--sim", help="rig: the simulated compliance file, or a design (rod1: its closed-form compliance)")
     p.add_argument("--campaign", help="*.campaign.csv")
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
                                     "joint angle, approach direction, measurement order and workspace region")
@@ -44,7 +45,7 @@ def register(sub) -> None:
                    help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "
                         "(default: the file's sigma_*_mm columns, else 25, a laser tracker)")
     p.add_argument("--json", help="write the contract's diagnosis report")
-    p.add_argument("--png", help="folder for figures")
+    p.add_argument("--png", type=png_folder, help="folder for figures (each under its own name)")
     p.add_argument("--export", help="rig: write the corrected compliance (the model with the found physics)")
     p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
                    help="points / campaign: joints whose periodic errors the calibration already identifies (as "
@@ -80,15 +81,21 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.points:
         return _diagnose_points(args)
     if args.rig:
-        from rodlab.stiffness_rig import read_recording
+        from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
         if not args.sim:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
-        sim = read_compliance(args.sim)
+        sim = compliance_arg(args.sim)
         design = None
         if args.rod:
             from ...design_io import resolve_design
             design = resolve_design(args.rod)
         rec = read_recording(args.rig)
+        try:                                # a recording without a load response is refused, with its cause
+            fit_recording(rec)
+        except NoLoadResponse:
+            raise
+        except RigError:
+            pass                            # anything else: the diagnosis says what it finds
         diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
         print(diag.summary())
         if args.png:

@@ -80,12 +80,25 @@ def _warn_ik_assumptions(robot, params) -> None:
               "TARGETS.csv -o COMMANDS.csv`", file=sys.stderr)
 
 
+def _urdf_file(spec: str) -> str:
+    """--urdf takes a URDF file or a built-in robot's name (ur5: its own URDF); a folder does not hide the name."""
+    from rodlab.calibrate import builtin_robots, robot_path
+    path = robot_path(spec)
+    if path.suffix.lower() != ".urdf":
+        urdfs = sorted(name for name, f in builtin_robots().items() if f.suffix == ".urdf")
+        raise RodlabError(f"--urdf {spec}: {path.name} is not a URDF; give a URDF robot (built-in: "
+                          f"{', '.join(urdfs)}) or export with --robot {spec} (the YAML and the DH table)")
+    return str(path)
+
+
 def cmd_export(args) -> int:
     from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
         raise RodlabError("give --urdf (the URDF is the robot) or --robot, not both")
     cal = read_calibration(args.calibration)
+    if args.urdf:
+        args.urdf = _urdf_file(args.urdf)
     if not args.urdf and not args.robot:
         from rodlab.calibrate import builtin_robots
         if cal.robot not in builtin_robots():
@@ -110,10 +123,17 @@ def cmd_export(args) -> int:
             ([f"the periodic joint errors (up to {h_mm:.3f} mm)"] if params.h.any() else [])
         left_out = f"; {' and '.join(parts)} {'are' if len(parts) > 1 else 'is'} not in the URDF, see the YAML" \
             if parts else ""
+        if c_mm > max(0.02, cal.residual_rms_mm):
+            print(f"warning: a consumer of this URDF that does not add the joint compliance (ROS, most controllers) "
+                  f"gets up to {c_mm:.3f} mm more error than the calibrated model, more than the model's own error "
+                  f"({cal.residual_rms_mm:.3f} mm rms): the calibrated geometry leaves the gravity sag to the "
+                  f"compliance. For URDF consumers the kinematic-only calibration is the one to export: "
+                  f"calibrate again with --kinematic-only (`rodlab calibrate ... --kinematic-only`) and export that "
+                  f"result", file=sys.stderr)
         print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model's geometry "
               f"over {res.configurations} configurations{left_out})")
         _warn_outside_range(cal, q_check)
-        if c_mm > 0.02:
+        if 0.02 < c_mm <= cal.residual_rms_mm:
             print(f"note: a consumer of this URDF that does not add the joint compliance (ROS, most controllers) "
                   f"gets up to {c_mm:.3f} mm more error than the calibrated model, because the calibrated geometry "
                   f"leaves the gravity sag to the compliance; for such a consumer, calibrate again with "

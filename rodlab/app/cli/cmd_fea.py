@@ -10,7 +10,7 @@ from ...compliance import write_compliance
 from ...design_io import resolve_design
 from ...errors import RodlabError
 from .argtypes import pos_float
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, png_file, write_command_report
 
 __all__ = ["register"]
 
@@ -31,7 +31,8 @@ def register(sub) -> None:
                    help="solid: skip the second (coarser) solve for the Richardson error estimate")
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
-    p.add_argument("--png", default=None, help="solid: write the deformed shape (self-weight along -z_T) to this PNG")
+    p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
+                                               "folder (it gets deformed.png)")
     p.add_argument("--joints-out", default=None, metavar="FILE",
                    help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
                         "frame runs and sweeps of the design's family (--joints)")
@@ -53,7 +54,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
         from rodlab.fea import run_solid
         run = run_solid(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
-                        symmetry=not args.no_symmetry, joints=bool(args.joints_out), deformed_png=args.png)
+                        symmetry=not args.no_symmetry, joints=bool(args.joints_out),
+                        deformed_png=png_file(args.png, "deformed.png"))
         comp, res = run.compliance, run.result
         prov = comp.provenance
         print(f"solid FEA of rod {design.name}: {prov['dofs']} DOFs ({prov['mesh']['elements']} curved tet10"
@@ -88,6 +90,6 @@ def cmd_fea(args: argparse.Namespace) -> int:
     np.set_printoptions(precision=6, suppress=True)
     print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")
     print(f"  c_rod = {comp.c_rod_um:.1f} um ({time.perf_counter() - t0:.1f} s); wrote {path}")
-    written = [path] + [p for p in (args.png, args.joints_out) if p]
+    written = [path] + [p for p in (png_file(args.png, "deformed.png"), args.joints_out) if p]
     write_command_report(args, written, path.parent)
     return 0

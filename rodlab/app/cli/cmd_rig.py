@@ -7,10 +7,11 @@ import os
 
 import numpy as np
 
-from ...compliance import read_compliance, write_compliance
+from ...compliance import write_compliance
 from .argtypes import count, nonneg_float, pos_float, seed
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, png_file, write_command_report
 from .effectargs import effects_help, parse_effect_specs
+from .rodargs import compliance_arg
 
 __all__ = ["register"]
 
@@ -32,9 +33,11 @@ def _register_fit(rsub) -> None:
                         description="Hold averages, one line per load axis and branch, intercepts in kg, measured "
                                     "C_F, r_rod against the simulated compliance, C_g = r_rod C_g_sim (Eq. 22).")
     p.add_argument("recording", help="*.rig.csv")
-    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc)")
+    p.add_argument("--sim", required=True, help="simulated compliance file (fea or calc), or a design (rod1, "
+                                                "my.rod.toml: its closed-form compliance)")
     p.add_argument("-o", "--output", required=True, help="measured *.compliance.json")
-    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording")
+    p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording: FILE.png, or a folder (it "
+                                               "gets fig8.png)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
     add_report_option(p)
     p.set_defaults(func=cmd_fit)
@@ -46,7 +49,8 @@ def _register_simulate(rsub) -> None:
                         description="Simulate the stiffness rig on a rod with a known compliance and optional "
                                     "effects, the contract's protocol by default. Effects and their parameters "
                                     "(defaults: a typical magnitude):\n" + rig_effects_help())
-    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth), or a design (rod1, "
+                                            "my.rod.toml: its closed-form compliance)")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect, e.g. friction:F_f_N=0.3, creep:phi=0.03,tau_s=5 or "
                         "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6 (repeatable)")
@@ -88,7 +92,8 @@ def _register_simulator(rsub) -> None:
     p = rsub.add_parser("simulator", help="serve a simulated rig on a pseudo-terminal (until Ctrl-C)",
                         description="Stand-in for the real rig: a gauge counter (query or stream protocol) and a "
                                     "commandable loader on a pty, published at --link; point a profile's port at it.")
-    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth)")
+    p.add_argument("--sim", required=True, help="the rod's compliance file (its C_F is the truth), or a design (rod1, "
+                                            "my.rod.toml: its closed-form compliance)")
     p.add_argument("--link", default=None, help="path of the symlink to the pty (the profile's port)")
     p.add_argument("--profile", default=None, help="a rodlab.rigprofile/2 profile: serve every instrument of it "
                                                    "(its protocol, channels, units) under --link-dir")
@@ -110,7 +115,7 @@ def _register_simulator(rsub) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
     rec = read_recording(args.recording)
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         from ...errors import RodlabError
@@ -135,7 +140,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")
     if args.png:
-        written.append(plot_fit(fit, args.png, sim, title=f"rod {rec.rod}"))
+        written.append(plot_fit(fit, png_file(args.png, "fig8.png"), sim, title=f"rod {rec.rod}"))
         print(f"  wrote {written[-1]}")
     write_command_report(args, written, written[0].parent)
     return 0
@@ -190,7 +195,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.simulate import simulate_recording
 
     from ...errors import RodlabError
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
     try:
         masses = tuple(float(m) for m in args.masses.split(","))
@@ -284,7 +289,7 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
     from ...errors import RodlabError
-    sim = read_compliance(args.sim)
+    sim = compliance_arg(args.sim)
     if args.profile is None and args.link is None:
         raise RodlabError("give --link (the one-port simulated counter) or --profile with --link-dir")
     if args.profile is not None:

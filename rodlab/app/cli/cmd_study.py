@@ -23,7 +23,7 @@ def register(sub) -> None:
                     "or a list of designs): compliance (the frame, joint-calibrated on one solid FEA run per family), "
                     "mass, c_rod, thermal growth, natural frequencies, strength margins; pose planning on the robot "
                     "(O1..O5); then N simulated MultiCal campaigns, each calibrated with every compensation method and "
-                    "validated, give the predicted accuracy with its 90 %% band and error budget. Writes study.csv, "
+                    "validated, give the predicted accuracy with its 90 % band and error budget. Writes study.csv, "
                     "pareto.png, heatmaps.png (grids), study.html and study.json into OUTPUT; prints a "
                     "recommendation. Cached per design and replicate: a re-run resumes.")
     p.add_argument("designs", nargs="+", help="*.rod.toml files or built-in names (rod1 .. rod6); with --L1/--L2 "
@@ -104,6 +104,16 @@ def _check_numbers(args) -> None:
         raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
 
 
+def _print_unusable(table) -> None:
+    """Every design the study could not use (invalid, unreachable, failed), with its reason (study.csv too)."""
+    designs = table.drop_duplicates("design")
+    bad = designs[designs["status"] != "ok"]
+    if len(bad):
+        print(f"{len(bad)} of {len(designs)} designs not usable:")
+    for r in bad.itertuples():
+        print(f"  {r.design}: {r.status}: {r.message}")
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.calibrate import read_fixture
     from rodlab.calibrate.predict import Priors
@@ -137,6 +147,7 @@ def cmd_study(args: argparse.Namespace) -> int:
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
                               {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
+    _print_unusable(res.table)
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)

@@ -9,7 +9,7 @@ from ...design_io import resolve_design
 from ...errors import RodlabError
 from ...fileio import atomic_write_bytes, atomic_write_text
 from .argtypes import count
-from .reporting import add_report_option, write_command_report
+from .reporting import add_report_option, png_file, write_command_report
 
 __all__ = ["register"]
 
@@ -35,7 +35,8 @@ def register(sub) -> None:
                    help="frame: use a stored joint calibration of the family (*.joints.json, from an earlier "
                         "--calibrate or rodlab fea --model solid --joints-out) instead of solving")
     p.add_argument("--cache", default=None, help="cache folder (default: OUTPUT.cache)")
-    p.add_argument("--png", default=None, help="heat maps of c_rod and mass (default: OUTPUT with .png)")
+    p.add_argument("--png", default=None, help="heat maps of c_rod and mass: FILE.png, or a folder (it gets "
+                                                                  "sweep.png) (default: OUTPUT with .png)")
     p.add_argument("-o", "--output", required=True, help="sweep.csv or sweep.parquet")
     add_report_option(p)
     p.set_defaults(func=cmd_sweep)
@@ -64,7 +65,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                        cache_dir=args.cache or f"{out}.cache", mesher=mesher, use_dask=not args.serial,
                        progress=progress, calibration=calibration)
     _write_table(df, out)
-    png = Path(args.png) if args.png else out.with_suffix(".png")
+    png = png_file(args.png, "sweep.png") or out.with_suffix(".png")
     label = f"{args.model} model" + (" joint-calibrated on solid FEA" if calibration is not None else "")
     plot_sweep(df, png, title=f"{label}, base design {base.name}", marks={f"base {base.name}": (base.L1_mm, base.L2_mm)})
     _print_summary(df, time.perf_counter() - t0)

@@ -5,7 +5,26 @@ import argparse
 import shlex
 from pathlib import Path
 
-__all__ = ["add_report_option", "write_command_report", "default_folder"]
+__all__ = ["add_report_option", "write_command_report", "default_folder", "png_file", "png_folder", "PNG_CONVENTION"]
+
+#: the one --png convention of every command (docs/cli.md shows it in each command's help)
+PNG_CONVENTION = "a folder (each figure under its own name); a command that draws one figure also takes FILE.png"
+
+
+def png_file(spec: str | None, name: str) -> Path | None:
+    """--png of a command that draws one figure: ``FILE.png`` itself, else a folder that gets ``name``."""
+    if not spec:
+        return None
+    p = Path(spec)
+    return p if p.suffix.lower() == ".png" else p / name
+
+
+def png_folder(spec: str) -> str:
+    """argparse type of --png for a command that draws several figures: a folder, never ``FILE.png``."""
+    if Path(spec).suffix.lower() == ".png":
+        raise argparse.ArgumentTypeError(f"{spec!r}: this command draws several figures: give a folder, e.g. "
+                                         f"{str(Path(spec).with_suffix(''))!r}")
+    return spec
 
 
 def add_report_option(p: argparse.ArgumentParser) -> None:

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from ...errors import RodlabError
+from .demo_story import campaign_rod_note, conclusion_html, study_rod_note, terms_html
 from .html import CSS, img_tag, matrix_table
 
 __all__ = ["render_run", "is_run_folder", "read_run"]
@@ -34,7 +35,8 @@ def render_run(run_dir) -> str:
              f"<h1>rodlab run: rod {html.escape(d['name'])} on a TX90</h1>",
              "<p class=note>Rod 1# of Wan et al. (2023) from the built-in design; a simulated stiffness rig and a "
              "simulated MultiCal campaign stand in for the hardware. Stage times: "
-             + ", ".join(f"{k} {v:.1f} s" for k, v in s.get("timings_s", {}).items()) + ".</p>"]
+             + ", ".join(f"{k} {v:.1f} s" for k, v in s.get("timings_s", {}).items()) + ".</p>",
+             conclusion_html(st), terms_html()]
     parts.append("<h2>1. Design</h2><table><tr><th>quantity</th><th>value</th></tr>"
                  f"<tr><td>L1 / L2 / gamma</td><td>{d['L1_mm']:g} mm / {d['L2_mm']:g} mm / {d['gamma_deg']:g} deg</td></tr>"
                  f"<tr><td>tubes</td><td>{html.escape(d['pipe_I']['material'])} {d['pipe_I']['outer_diameter_mm']:g} x "
@@ -49,12 +51,14 @@ def render_run(run_dir) -> str:
                  f"<div><b>C_F</b>: ball displacement per tip force {matrix_table(fe['C_F_mm_per_N'], 'um/N', 'force')}"
                  f"</div><div><b>C_g</b>: ball displacement under the rod's own weight, per unit of gravity along each "
                  f"axis {matrix_table(fe['C_g_mm_per_g0'], 'um per g0', 'gravity')}</div></div>"
-                 f"<p>c_rod (Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: {st['design']['c_rod_um_calc']:.1f} um). "
+                 f"<p>c_rod (compliance index, Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: "
+                 f"{st['design']['c_rod_um_calc']:.1f} um). "
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
                  + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
                  " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
     ft = st["fit"]
-    parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (Eq. 21) = "
+    parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (measured / "
+                 f"simulated compliance, Eq. 21) = "
                  f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))
     dg = st["diagnose"]
     rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location']))}</td><td>"
@@ -72,7 +76,8 @@ def render_run(run_dir) -> str:
     t3 = st["calibrate"]["table3"]
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['mean_mm']:.3f}</td><td>{v['max_mm']:.3f}</td>"
                    f"<td>{v['median_mm']:.3f}</td><td>{v['sd_mm']:.3f}</td></tr>" for k, v in t3.items())
-    parts.append("<h2>6. Calibration (the paper's Table 3 and Fig. 10)</h2><table><tr><th>method</th><th>Mean/[mm]</th>"
+    parts.append("<h2>6. Calibration (the paper's Table 3 and Fig. 10)</h2>" + campaign_rod_note(st)
+                 + "<table><tr><th>method</th><th>Mean/[mm]</th>"
                  f"<th>Max/[mm]</th><th>Median/[mm]</th><th>SD/[mm]</th></tr>{rows}</table>"
                  + img_tag(run, files.get("fig10"), "Fig. 10"))
     sw = st["sweep"]
@@ -80,7 +85,7 @@ def render_run(run_dir) -> str:
                  f"{sw['stiffest']['L1_mm']:g} mm, L2 = {sw['stiffest']['L2_mm']:g} mm, c_rod "
                  f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + img_tag(run, files.get("sweep"), "sweep heat maps"))
     if "study" in st:
-        parts.append(_study_section(run, st["study"], files))
+        parts.append(_study_section(run, st["study"], files, study_rod_note(st)))
     parts.append("</body></html>")
     return "\n".join(parts)
 
@@ -89,7 +94,7 @@ def _pct(share) -> str:
     return "—" if share is None or share != share else f"{100 * share:.0f}"
 
 
-def _study_section(run: Path, sy: dict, files: dict) -> str:
+def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
     """8. The study: predicted calibration accuracy of the paper's carbon rods per method."""
     rows = "".join(
         f"<tr><td>{html.escape(str(r['design']))}</td><td>{r['c_rod_um']:.0f}</td><td>{r['mass_kg'] * 1e3:.0f}</td>"
@@ -97,7 +102,7 @@ def _study_section(run: Path, sy: dict, files: dict) -> str:
         f"{r['mean_p95_mm']:.3f}</td><td>{r['max_mm']:.3f}</td><td>{_pct(r['share_deflection'])} / "
         f"{_pct(r['share_identification'])} / {_pct(r['share_noise'])}</td></tr>" for r in sy["rows"])
     return (f"<h2>8. Which rod? Predicted calibration accuracy (rodlab study)</h2><p><b>Recommendation.</b> "
-            f"{html.escape(sy['recommendation'])}</p><p class=note>{len(sy['designs'])} designs "
+            f"{html.escape(sy['recommendation'])}</p>{rod_note}<p class=note>{len(sy['designs'])} designs "
             f"({html.escape(', '.join(sy['designs']))}) on the TX90, {sy['replicates']} simulated campaigns each "
             f"(a design study uses 20: <code>rodlab study</code>); compliance: {html.escape(sy['compliance'])}. "
             "Mean validation error after calibration, its 5-95 % band over the campaigns, and the error budget: the "

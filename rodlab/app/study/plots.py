@@ -8,7 +8,7 @@ import numpy as np
 
 from rodlab.fileio import atomic_write_figure
 
-__all__ = ["plot_pareto", "plot_heatmaps", "pareto_mask"]
+__all__ = ["plot_pareto", "plot_heatmaps", "pareto_mask", "pareto_labels", "heat_scale"]
 
 _COLORS = {"none": "#999999", "calc": "#e69f00", "fea": "#0072b2", "meas": "#009e73"}
 
@@ -21,6 +21,37 @@ def pareto_mask(cost: np.ndarray, error: np.ndarray) -> np.ndarray:
         better = (cost <= cost[i]) & (error <= error[i]) & ((cost < cost[i]) | (error < error[i]))
         keep[i] = not better.any()
     return keep
+
+
+#: with this many designs or fewer every point is labelled, not only the Pareto front's
+_LABEL_ALL = 12
+
+
+_CHAR_PT, _LINE_PT = 4.3, 9.0        # a 7-point label's character width and line height [pt]
+_OFFSETS = [(4, -10), (4, 3), (-4, -10), (-4, 3), (4, -19), (4, 12), (-4, -19), (-4, 12), (4, -28), (4, 21)]
+
+
+def pareto_labels(xy_pt, names) -> list[tuple[int, str, tuple[float, float], str]]:
+    """Where the point labels go: (index of the point, text, offset [pt], horizontal alignment), with the
+    points' display positions ``xy_pt`` [pt]. Designs at the same point share one label; every other label
+    takes the first of a few offsets around its point where it covers no label placed before it, so two
+    designs at the same reach (another tube) both keep their names."""
+    xy = np.asarray(xy_pt, float).reshape(-1, 2)
+    groups: dict[tuple, list] = {}
+    for i, (p, name) in enumerate(zip(xy, names)):
+        groups.setdefault((round(p[0], 1), round(p[1], 1)), []).append((i, str(name)))
+    placed, out = [], []
+    for (px, py), members in sorted(groups.items(), key=lambda g: (-g[0][1], g[0][0])):
+        text = ", ".join(name for _, name in members)
+        w = _CHAR_PT * len(text)
+        for dx, dy in _OFFSETS:
+            x0 = px + dx if dx > 0 else px + dx - w
+            box = (x0, py + dy, x0 + w, py + dy + _LINE_PT)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
+                break
+        placed.append(box)
+        out.append((members[0][0], text, (float(dx), float(dy)), "left" if dx > 0 else "right"))
+    return out
 
 
 def _save(fig, path) -> Path:
@@ -36,8 +67,13 @@ def _pareto_panel(ax, rows, xcol, xlabel, xscale, method, more_is_better=False):
     front = pareto_mask(-x if more_is_better else x, y)
     order = np.argsort(x[front])
     ax.plot(x[front][order], y[front][order], "-", color="k", lw=1.2, label="Pareto front")
-    for xi, yi, name in zip(x[front], y[front], rows["design"].to_numpy()[front]):
-        ax.annotate(name, (xi, yi), xytext=(4, -10), textcoords="offset points", fontsize=7)
+    names = rows["design"].to_numpy()
+    shown = np.ones_like(front) if front.size <= _LABEL_ALL else front
+    ax.autoscale_view()
+    xy_pt = ax.transData.transform(np.column_stack([x, y])[shown]) * 72.0 / ax.figure.dpi
+    px, py = x[shown], y[shown]
+    for i, text, offset, ha in pareto_labels(xy_pt, names[shown]):
+        ax.annotate(text, (px[i], py[i]), xytext=offset, textcoords="offset points", fontsize=7, ha=ha)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("predicted validation error, mean [mm]")
     ax.grid(alpha=0.3)
@@ -64,27 +100,47 @@ def plot_pareto(df, path, method: str, title: str = "") -> Path:
     return _save(fig, path)
 
 
+def heat_scale(df, methods):
+    """One colour scale for every method's panel (the sweep's colour map): logarithmic when the methods' levels
+    differ more than 4-fold, so each panel's own variation stays visible; None without a finite value."""
+    from matplotlib.colors import LogNorm, Normalize
+    v = df[df["method"].isin(methods)]["mean_mm"].to_numpy(float)
+    v = v[np.isfinite(v) & (v > 0)]
+    if not v.size:
+        return None
+    lo, hi = float(v.min()), float(v.max())
+    return LogNorm(lo, hi) if hi > 4 * lo else Normalize(lo, hi)
+
+
 def plot_heatmaps(df, path, title: str = "") -> Path | None:
-    """Predicted mean error over L1 x L2, one panel per method, each on its own colour scale (the designs are
-    compared within a method; the methods' levels differ several-fold); None unless the designs form a grid."""
+    """Predicted mean error over L1 x L2, one panel per method on one colour scale (the sweep's colour map:
+    yellow is worse), contours for the variation within a method; None unless the designs form a grid."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from rodlab.fea.sweep_plot import HEAT_CMAP
     L1, L2 = np.unique(df["L1_mm"].to_numpy(float)), np.unique(df["L2_mm"].to_numpy(float))
     methods = [m for m in ("none", "calc", "fea", "meas") if (df["method"] == m).any()]
     if L1.size < 2 or L2.size < 2 or not methods or df["design"].nunique() != L1.size * L2.size:
         return None
-    fig, axes = plt.subplots(1, len(methods), figsize=(4.8 * len(methods), 4.0), constrained_layout=True,
+    norm = heat_scale(df, methods)
+    fig, axes = plt.subplots(1, len(methods), figsize=(4.4 * len(methods) + 1.0, 4.0), constrained_layout=True,
                              squeeze=False)
+    pc = None
     for ax, m in zip(axes[0], methods):
         Z = np.full((L2.size, L1.size), np.nan)
         for r in df[df["method"] == m].itertuples():
             Z[np.searchsorted(L2, r.L2_mm), np.searchsorted(L1, r.L1_mm)] = r.mean_mm
         ax.set_facecolor("#dddddd")
-        pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap="viridis_r")     # own scale: compare designs
-        fig.colorbar(pc, ax=ax, label="predicted mean error [mm]")
+        pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap=HEAT_CMAP, norm=norm)
+        if L1.size > 2 and L2.size > 2 and np.isfinite(Z).sum() > 4 and np.nanmax(Z) > np.nanmin(Z):
+            cs = ax.contour(L1, L2, Z, levels=6, colors="white", linewidths=0.6)
+            ax.clabel(cs, fontsize=7, fmt="%.3f")
         ax.set_title(f"{m} compensation", fontsize=10)
         ax.set_xlabel("L1 [mm]")
         ax.set_ylabel("L2 [mm]")
+    if norm is not None:
+        fig.colorbar(pc, ax=list(axes[0]), label="predicted mean error [mm] (one scale for every panel)")
     fig.suptitle(title + " — grey: not usable", fontsize=11)
     return _save(fig, path)

@@ -151,7 +151,7 @@ class _Cache:
 
 
 def _client(scheduler, workers):
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
     if not log.isEnabledFor(logging.DEBUG):      # the cluster's start / stop chatter only with --debug
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
                      "distributed.worker", "distributed.http.proxy"):
@@ -159,7 +159,8 @@ def _client(scheduler, workers):
     if scheduler:
         return Client(scheduler), None
     one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}   # small matrices
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None, env=one)
+    from rodlab.cluster import local_cluster                  # quiet, free ports, no dashboard unless asked
+    cluster = local_cluster(workers, env=one)
     return Client(cluster), cluster
 
 

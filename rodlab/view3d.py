@@ -10,6 +10,8 @@ from __future__ import annotations
 import logging
 import subprocess
 import sys
+import warnings
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -105,9 +107,17 @@ def read_field_view(path: str | Path) -> FieldView:
     if path.suffix.lower() not in (".vtu", ".vtp"):
         raise LocatedError(f"expected a .vtu or .vtp field file, got {path.suffix!r}", path)
     try:
-        mesh = pv.read(path)
+        ET.parse(path)                          # malformed XML: say where, before VTK's readers log their errors
+    except ET.ParseError as e:
+        raise LocatedError(f"not a VTK XML file: {e}", path, line=e.position[0]) from e
+    _quiet_vtk()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")      # pyvista reports a damaged file as a warning
+            mesh = pv.read(path)
     except Exception as e:                       # VTK's readers raise assorted errors on damaged files
-        raise LocatedError(f"not a readable VTK file: {e}", path) from e
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise LocatedError(f"not a readable VTK file ({first})", path) from e
     fd = mesh.field_data
     for key in ("ball_centre_mm", "ball_displacement"):
         if key not in fd:
@@ -312,10 +322,11 @@ def _screenshot(plotter, png) -> Path:
 
 
 def _quiet_vtk() -> None:
-    """VTK's logger warns on stderr when no X display exists before falling back to EGL: not the user's
-    concern (the probe has checked that rendering works)."""
+    """VTK's logger warns on stderr when no X display exists before falling back to EGL (not the user's concern:
+    the probe has checked that rendering works), and its readers log their own errors besides raising them."""
     try:
-        from vtkmodules.vtkCommonCore import vtkLogger
-        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
+        from vtkmodules.vtkCommonCore import vtkLogger, vtkObject
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)
+        vtkObject.GlobalWarningDisplayOff()
     except ImportError:                      # older VTK: the warnings stay
         pass

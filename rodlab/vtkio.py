@@ -55,7 +55,10 @@ def _array(name: str, values, tuples: bool = False) -> str:
         return (f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="{len(values)}" format="ascii">'
                 f"{codes}</Array>\n")
     a = np.asarray(values)
-    a = a.astype(np.float64) if a.dtype.kind == "f" else a.astype(np.int64) if a.dtype.kind in "iub" else a
+    if a.dtype.kind == "f":
+        a = a.astype(np.float64)
+    elif a.dtype.kind in "iub" and a.dtype != np.uint8:
+        a = a.astype(np.int64)
     if a.dtype not in _TYPES:
         raise ValueError(f"array {name!r}: unsupported dtype {a.dtype}")
     a = a.astype(a.dtype.newbyteorder("<"))

@@ -220,7 +220,9 @@ def _labels(plotter, view: FieldView) -> None:
 
 
 def _camera(plotter, camera: str) -> None:
-    if camera == "xz":
+    if camera == "above":                                        # from above, tilted to show the flange's tube
+        plotter.view_vector((0.25, -0.6, 1.0), viewup=(0.0, 1.0, 0.0))
+    elif camera == "xz":
         plotter.view_xz(negative=False)
     elif camera == "xy":
         plotter.view_xy()
@@ -293,9 +295,9 @@ def _caption(view: FieldView, load: str, scale: float, scene: _Scene, u_ball: np
 
 
 def _auto_camera(u_ball: np.ndarray) -> str:
-    """Looking along the axis across which the ball moves least: a y load is seen from above (xy), an
-    in-plane load across the bend plane (xz)."""
-    return "xy" if abs(u_ball[1]) > max(abs(u_ball[0]), abs(u_ball[2])) else "xz"
+    """Across the ball's displacement: a load across the bend plane (y) seen from above, tilted so that the tube
+    at the flange shows; an in-plane load across the bend plane (xz)."""
+    return "above" if abs(u_ball[1]) > max(abs(u_ball[0]), abs(u_ball[2])) else "xz"
 
 
 def _ball_arrow(pv, plotter, view: FieldView, u_ball: np.ndarray, scale: float) -> None:

@@ -136,7 +136,8 @@ def cmd_study(args: argparse.Namespace) -> int:
               "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
-                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
+                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed},
+                              designs={c.label: c.design for c in cands})
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)

@@ -7,6 +7,8 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from ...design import RodDesign
 from ...view3d import RenderError, read_field_view, render_view
 
@@ -29,14 +31,17 @@ class FieldViews:
 
 
 def render_field_pngs(fields: str | Path, prefix: str | Path, loads=VIEW_LOADS, colour: str = "stress") -> list[Path]:
-    """``PREFIX.3d_<load>.png`` for each load case of a field file; raises :class:`~rodlab.view3d.RenderError`."""
+    """``PREFIX.3d_<load>.png`` for each load case of a field file (``loads="weakest"``: the unit force that
+    moves the ball most); raises :class:`~rodlab.view3d.RenderError`."""
     view = read_field_view(fields)
+    if loads == "weakest":
+        loads = (VIEW_LOADS[int(np.argmax(np.linalg.norm(view.ball_displacement[:3], axis=1)))],)
     return [render_view(view, f"{prefix}.3d_{load}.png", load=load, colour=colour) for load in loads]
 
 
-def _render(fields: Path, prefix: Path, colour: str) -> FieldViews:
+def _render(fields: Path, prefix: Path, colour: str, loads=VIEW_LOADS) -> FieldViews:
     try:
-        return FieldViews(fields, render_field_pngs(fields, prefix, colour=colour))
+        return FieldViews(fields, render_field_pngs(fields, prefix, loads, colour))
     except RenderError as e:
         log.warning("no 3-D views of %s: %s", fields, e)
         return FieldViews(fields, [], str(e))
@@ -50,9 +55,9 @@ def solid_views(design: RodDesign, result, fields: str | Path, prefix: str | Pat
     return _render(path, Path(prefix) if prefix else path.with_suffix(""), "stress")
 
 
-def frame_views(design: RodDesign, fields: str | Path, prefix: str | Path | None = None) -> FieldViews:
-    """The frame model's centreline fields (``.vtp``) and their pictures, coloured by displacement (a beam
-    model has no stress field)."""
+def frame_views(design: RodDesign, fields: str | Path, prefix: str | Path | None = None, loads=VIEW_LOADS) -> FieldViews:
+    """The frame model's centreline fields (``.vtp``) and their pictures (``loads``: load cases, or
+    ``"weakest"``), coloured by displacement (a beam model has no stress field)."""
     from rodlab.fea.fields import write_frame_fields
     path = write_frame_fields(fields, design)
-    return _render(path, Path(prefix) if prefix else path.with_suffix(""), "displacement")
+    return _render(path, Path(prefix) if prefix else path.with_suffix(""), "displacement", loads)

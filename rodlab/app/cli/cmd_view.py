@@ -29,7 +29,8 @@ def register(sub) -> None:
                                    "or displacement, parts labelled, the ball's displacement as a red arrow, a colour "
                                    "bar with units. With -o it renders off-screen (no display needed: VTK's EGL or "
                                    "OSMesa, see docs/fea.md); without, it opens an interactive window.")
-    p.add_argument("fields", help="a *.vtu (solid model) or *.vtp (frame centreline) from rodlab fea --fields")
+    p.add_argument("fields_file", metavar="FIELDS",
+                   help="a *.vtu (solid model) or *.vtp (frame centreline) from rodlab fea --fields")
     p.add_argument("--load", default="y", metavar="CASE",
                    help=f"load case: x, y, z (unit force along x, y, z of {{T}}) or one of {', '.join(LOAD_KEYS)} "
                         "(gx: 1 g0 along x); default y")
@@ -48,7 +49,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     load = parse_load(args.load)
     if args.output and not args.output.lower().endswith(".png"):
         raise RodlabError(f"-o {args.output}: the picture is a PNG; name it *.png")
-    view = read_field_view(args.fields)
+    view = read_field_view(args.fields_file)
     out = render_view(view, args.output, load=load, colour=args.colour, scale=args.scale, camera=args.view)
     if out is not None:
         print(f"wrote {out}")

@@ -231,3 +231,20 @@ def test_no_opengl_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert "3-D rendering is impossible here" in err and "libegl1" in err
     assert not (tmp_path / "v.png").exists()
+
+
+def test_sweep_report_shows_the_base_design_in_3d(tmp_path):
+    """rodlab sweep --report: the base design's centreline beside the table, its picture in the page."""
+    from rodlab.app.cli import main
+    out = tmp_path / "sw.csv"
+    assert main(["sweep", "--L1", "200,300", "--L2", "400,500", "--serial", "-o", str(out), "--report"]) == 0
+    assert (tmp_path / "sw.base.vtp").stat().st_size > 1000
+    html = (tmp_path / "sweep.report.html").read_text()
+    pngs = sorted(tmp_path.glob("sw.base.3d_F?.png"))
+    try:
+        _renderer()
+    except pytest.skip.Exception:
+        assert not pngs
+        return
+    assert [p.name for p in pngs] == ["sw.base.3d_Fy.png"]            # rod 1#'s weakest direction: across the bend plane
+    assert "sw.base.3d_Fy.png" in html and html.count("data:image/png;base64,") == 2

@@ -102,15 +102,13 @@ class _DemoRun:
             model = "frame (the CAD extra is absent, so no solid FEA)"
             from .report.views import frame_views
             views = frame_views(self.design, self.out / "fea" / "rod1.vtp")
-        self.summary["files"]["fea_fields"] = str(views.fields.relative_to(self.out))
         self.summary["files"]["fea_views"] = [str(p.relative_to(self.out)) for p in views.pngs]
-        if views.note:
-            self.summary["files"]["fea_views_note"] = views.note
         fea = self.fea
         write_compliance(fea, self.out / "rod1.fea.compliance.json")
         self._stage("fea", {"model": model, "C_F_mm_per_N": fea.C_F.tolist(), "C_g_mm_per_g0": fea.C_g.tolist(),
                             "c_rod_um": fea.c_rod_um,
-                            "calc_over_fea_diag": (np.diag(self.calc.C_F) / np.diag(fea.C_F)).tolist()})
+                            "calc_over_fea_diag": (np.diag(self.calc.C_F) / np.diag(fea.C_F)).tolist(),
+                            "fields": str(views.fields.relative_to(self.out)), "views_note": views.note})
 
     def stage_rig(self) -> None:
         from rodlab.stiffness_rig.effects import joint_places

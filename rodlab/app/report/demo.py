@@ -23,9 +23,9 @@ def _cad_views(run: Path, views: list) -> str:
                                          for v in views) + "</div>"
 
 
-def _fea_views(run: Path, files: dict) -> str:
+def _fea_views(run: Path, files: dict, fea: dict) -> str:
     """The FEA's fields in 3-D (``rodlab view`` pictures of the unit forces), or why they are missing."""
-    fields = files.get("fea_fields")
+    fields = fea.get("fields")
     if not fields:
         return ""
     head = (f"<p>The fields of the unit forces at the ball in 3-D: the deformed rod (exaggerated) over its undeformed "
@@ -33,7 +33,7 @@ def _fea_views(run: Path, files: dict) -> str:
             f"<code>{html.escape(fields)}</code> for ParaView or <code>rodlab view</code>.</p>")
     views = files.get("fea_views") or []
     if not views:
-        return head + f"<p class=note>No pictures: {html.escape(files.get('fea_views_note', 'not rendered'))}</p>"
+        return head + f"<p class=note>No pictures: {html.escape(fea.get('views_note') or 'not rendered')}</p>"
     return head + "<div class=views>" + "".join(f"<figure>{img_tag(run, v, f'3-D view {v}', 0.45)}</figure>"
                                                for v in views) + "</div>"
 
@@ -68,7 +68,7 @@ def render_run(run_dir) -> str:
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
                  + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
                  " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
-    parts.append(_fea_views(run, files))
+    parts.append(_fea_views(run, files, fe))
     ft = st["fit"]
     parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (Eq. 21) = "
                  f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))

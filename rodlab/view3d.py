@@ -20,7 +20,7 @@ import numpy as np
 from .errors import LocatedError, RodlabError
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
-           "require_pyvista"]
+           "require_pyvista", "render_triangle_sets"]
 
 log = logging.getLogger(__name__)
 
@@ -309,6 +309,43 @@ def _ball_arrow(pv, plotter, view: FieldView, u_ball: np.ndarray, scale: float) 
     start = view.ball_centre_mm + scale * u_ball
     plotter.add_mesh(pv.Arrow(start=start, direction=u_ball / n, scale=0.15 * size, tip_length=0.3,
                               tip_radius=0.08, shaft_radius=0.03), color="red")
+
+
+def render_triangle_sets(sets, png, view, title: str = "", note: str | None = None, window_size=(1300, 900)) -> Path:
+    """Coloured triangle sets (:class:`rodlab.render3d.TriangleSet`: the CAD's parts, a deformed shape) drawn
+    off-screen to ``png``: smooth shading, each set's colour and opacity, its label at its centre, parallel
+    projection along ``view`` = (direction towards the camera, up vector, axis labels or None) of
+    :data:`rodlab.render3d.VIEWS`."""
+    pv = require_pyvista()
+    check_offscreen()
+    _quiet_vtk()
+    plotter = pv.Plotter(off_screen=True, window_size=list(window_size))
+    plotter.set_background("white")
+    centres: dict = {}
+    for ts in sets:
+        faces = np.hstack([np.full((len(ts.triangles), 1), 3), np.asarray(ts.triangles)]).ravel()
+        mesh = pv.PolyData(np.asarray(ts.vertices, dtype=float), faces)
+        plotter.add_mesh(mesh, color=tuple(ts.rgb), opacity=ts.alpha, smooth_shading=True, specular=0.3)
+        used = np.asarray(ts.vertices)[np.unique(np.asarray(ts.triangles))]
+        centres.setdefault(ts.label, []).append(used.mean(axis=0) if used.size else np.zeros(3))
+    names = list(centres)
+    plotter.add_point_labels(np.array([np.mean(centres[n], axis=0) for n in names]),
+                             [_PART_LABEL.get(n, n) for n in names], font_size=13, shape_opacity=0.55,
+                             always_visible=True, show_points=False, text_color="black", shape_color="white")
+    direction, up, labels = view
+    plotter.view_vector(tuple(direction), viewup=tuple(up))
+    plotter.enable_parallel_projection()
+    plotter.reset_camera()
+    if labels:
+        plotter.show_bounds(xtitle="x_T [mm]", ytitle="y_T [mm]", ztitle="z_T [mm]", color="black", font_size=10,
+                            location="outer", grid=False)
+    else:
+        plotter.add_axes(color="black", xlabel="x", ylabel="y", zlabel="z")
+    if title:
+        plotter.add_text(title, position="upper_left", font_size=11, color="black")
+    if note:
+        plotter.add_text(note, position="lower_left", font_size=10, color="black")
+    return _screenshot(plotter, png)
 
 
 def _screenshot(plotter, png) -> Path:

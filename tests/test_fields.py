@@ -248,3 +248,19 @@ def test_sweep_report_shows_the_base_design_in_3d(tmp_path):
         return
     assert [p.name for p in pngs] == ["sw.base.3d_Fy.png"]            # rod 1#'s weakest direction: across the bend plane
     assert "sw.base.3d_Fy.png" in html and html.count("data:image/png;base64,") == 2
+
+
+def test_triangle_sets_render_with_pyvista_too(tmp_path):
+    """rodlab.render3d's triangle sets (the CAD views) through the same off-screen pyvista renderer: two boxes
+    drawn, the views differ; renderer="auto" takes pyvista where it renders."""
+    from rodlab.render3d import TriangleSet, pick_renderer, render_png
+    _renderer()
+    box = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float) * [100.0, 20.0, 20.0]
+    tri = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
+                    [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    sets = [TriangleSet("pipe_I", box, tri, (0.2, 0.2, 0.25)),
+            TriangleSet("ball", box * 0.3 + [100.0, 0.0, 0.0], tri, (0.9, 0.9, 0.8))]
+    a = render_png(sets, tmp_path / "iso.png", "iso", title="boxes", renderer="pyvista")
+    b = render_png(sets, tmp_path / "xy.png", "xy", title="boxes", renderer="pyvista")
+    _check_pictures(a, b)
+    assert pick_renderer("auto") == "pyvista" and pick_renderer("matplotlib") == "matplotlib"

@@ -264,3 +264,21 @@ def test_triangle_sets_render_with_pyvista_too(tmp_path):
     b = render_png(sets, tmp_path / "xy.png", "xy", title="boxes", renderer="pyvista")
     _check_pictures(a, b)
     assert pick_renderer("auto") == "pyvista" and pick_renderer("matplotlib") == "matplotlib"
+
+
+def test_without_pyvista_view_says_what_to_install_and_reports_go_on(tmp_path, monkeypatch, capsys):
+    import sys
+    import rodlab.view3d as view3d
+    from rodlab.app.cli import main
+    monkeypatch.setitem(sys.modules, "pyvista", None)          # as if the viz extra were not installed
+    monkeypatch.setattr(view3d, "_offscreen_ok", None)
+    vtp = tmp_path / "rod1.vtp"
+    assert main(["fea", "rod1", "--model", "frame", "-o", str(tmp_path / "f.json"), "--fields", str(vtp),
+                 "--report"]) == 0
+    out = capsys.readouterr().out
+    assert "no 3-D views in the report" in out and "rodlab[viz]" in out
+    assert vtp.exists() and (tmp_path / "fea.report.html").exists() and not list(tmp_path.glob("*.png"))
+    assert main(["view", str(vtp), "-o", str(tmp_path / "v.png")]) == 2
+    assert "pip install 'rodlab[viz]'" in capsys.readouterr().err
+    from rodlab.render3d import pick_renderer
+    assert pick_renderer("auto") == "matplotlib"

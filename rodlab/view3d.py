@@ -8,6 +8,7 @@ process is tried in a child process first (:func:`check_offscreen`), and a clear
 from __future__ import annotations
 
 import logging
+import os
 import subprocess
 import sys
 import warnings
@@ -255,6 +256,8 @@ def render_view(view: FieldView, png: str | Path | None, load: str = "Fy", colou
         raise RenderError(f"scale must be a positive number, got {scale!r}")
     if png is not None:
         check_offscreen()
+    elif sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise RenderError("no display for the interactive window (DISPLAY is not set): write a picture with -o VIEW.png")
     scene = _scene(view, load, scale, colour)
     _quiet_vtk()
     plotter = pv.Plotter(off_screen=png is not None, window_size=list(window_size))

@@ -2,8 +2,9 @@
 
 The format is VTK's own (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html): numeric arrays
 inline, base64-encoded, zlib-compressed in one block (``header_type="UInt64"``); string arrays (names in the
-field data) as ASCII codes, each string ended by 0. ParaView, pyvista and meshio read both. Writing needs no
-VTK installation, so ``rodlab fea --fields`` works without the ``viz`` extra; files are written atomically.
+field data) as ASCII codes, each string ended by 0. ParaView, VTK and pyvista read them (meshio 5.3 refuses
+VTK's string arrays, which carry the part names). Writing needs no VTK installation, so ``rodlab fea --fields``
+works without the ``viz`` extra; files are written atomically.
 """
 from __future__ import annotations
 

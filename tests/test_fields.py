@@ -282,3 +282,17 @@ def test_without_pyvista_view_says_what_to_install_and_reports_go_on(tmp_path, m
     assert "pip install 'rodlab[viz]'" in capsys.readouterr().err
     from rodlab.render3d import pick_renderer
     assert pick_renderer("auto") == "matplotlib"
+
+
+def test_the_interactive_window_needs_a_display(tmp_path, monkeypatch, capsys):
+    pytest.importorskip("pyvista")
+    import sys
+    from rodlab.app.cli import main
+    from rodlab.fea.fields import write_frame_fields
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the display check is Linux's (DISPLAY / WAYLAND_DISPLAY)")
+    vtp = write_frame_fields(tmp_path / "rod1.vtp", resolve_design("rod1"))
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(vtp)]) == 2
+    assert "-o VIEW.png" in capsys.readouterr().err

@@ -36,12 +36,13 @@ class SolidRun:
 
 def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None, error_estimate: bool = True,
               symmetry: bool = True, joints: bool = False, deformed_png: str | Path | None = None,
-              backend: str | None = None) -> SolidRun:
+              backend: str | None = None, keep_displacements: bool = False) -> SolidRun:
     """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`); with ``joints``
     calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.calibrate_joints`); with
-    ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange)."""
+    ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange); with
+    ``keep_displacements`` the result keeps the load cases' displacements (for :mod:`fea.fields`)."""
     comp, res = solid_compliance(design, mesher, size_mm=size_mm, error_estimate=error_estimate,
-                                 keep_displacements=bool(deformed_png) or joints, symmetry=symmetry,
+                                 keep_displacements=keep_displacements or bool(deformed_png) or joints, symmetry=symmetry,
                                  tip_moments=joints, backend=backend)
     run = SolidRun(comp, res)
     if deformed_png:

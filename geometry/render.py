@@ -1,11 +1,12 @@
-"""Offscreen PNG views of a rod's CAD (isometric and the three planes) via :mod:`rodlab.render3d`."""
+"""Offscreen PNG views of a rod's CAD (isometric and the three planes) via :mod:`rodlab.render3d` (pyvista, the
+renderer of ``rodlab view``, where it renders off-screen; else matplotlib)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.render3d import VIEWS, TriangleSet, render_png
+from rodlab.render3d import VIEWS, TriangleSet, pick_renderer, render_png
 
 from .parts import PART_COLOURS
 
@@ -21,11 +22,13 @@ def tessellate(solids: dict, tolerance_mm: float = 0.1):
     return out
 
 
-def render_views(cad, out_dir: str | Path, prefix: str = "view", dpi: int = 130) -> list[Path]:
-    """Write ``{prefix}_iso.png``, ``_xz.png``, ``_xy.png``, ``_yz.png`` into ``out_dir``; return the paths."""
+def render_views(cad, out_dir: str | Path, prefix: str = "view", dpi: int = 130, renderer: str = "auto") -> list[Path]:
+    """Write ``{prefix}_iso.png``, ``_xz.png``, ``_xy.png``, ``_yz.png`` into ``out_dir``; return the paths.
+    ``renderer``: one of :data:`rodlab.render3d.RENDERERS`."""
     sets = [TriangleSet(str(p), v, t, PART_COLOURS[p]) for p, (v, t) in tessellate(cad.solids).items()]
     d = cad.design
-    return [render_png(sets, Path(out_dir) / f"{prefix}_{name}.png", name, dpi=dpi,
+    renderer = pick_renderer(renderer)
+    return [render_png(sets, Path(out_dir) / f"{prefix}_{name}.png", name, dpi=dpi, renderer=renderer,
                        title=f"rod {d.name}: L1 = {d.L1_mm:g} mm, L2 = {d.L2_mm:g} mm, gamma = {d.gamma_deg:g} deg"
                              f" — {name} view")
             for name in VIEWS]

@@ -1,7 +1,9 @@
-"""Offscreen orthographic rendering of coloured triangle sets to PNG (matplotlib, no OpenGL).
+"""Offscreen orthographic rendering of coloured triangle sets to PNG: matplotlib (no OpenGL) or pyvista.
 
-A painter's algorithm: flat Lambert shading, triangles sorted back to front, equal axes in mm,
-a legend. Used for the CAD views and the FEA deformed shapes, on headless machines and in CI.
+matplotlib: a painter's algorithm, flat Lambert shading, triangles sorted back to front, equal axes in mm, a
+legend; runs anywhere. pyvista (``renderer="pyvista"``, the ``viz`` extra; the renderer of ``rodlab view``,
+:mod:`rodlab.view3d`): smooth-shaded OpenGL, the same views, parts and legend. ``renderer="auto"`` takes
+pyvista where it renders off-screen, else matplotlib. Used for the CAD views and the FEA deformed shapes.
 """
 from __future__ import annotations
 
@@ -12,7 +14,10 @@ import numpy as np
 
 from .fileio import atomic_write_figure
 
-__all__ = ["TriangleSet", "VIEWS", "render_png"]
+__all__ = ["TriangleSet", "VIEWS", "RENDERERS", "render_png", "pick_renderer"]
+
+#: triangle-set renderers: auto (pyvista where it renders off-screen, else matplotlib), matplotlib, pyvista
+RENDERERS = ("auto", "matplotlib", "pyvista")
 
 #: name -> (direction from the scene towards the camera, up vector, axis labels or None)
 VIEWS = {
@@ -44,9 +49,30 @@ def _camera(direction, up):
     return u, np.cross(w, u), w
 
 
+def pick_renderer(renderer: str = "auto") -> str:
+    """``matplotlib`` or ``pyvista`` for ``renderer`` (one of :data:`RENDERERS`); ``pyvista`` asked for where it
+    cannot render raises :class:`rodlab.view3d.RenderError`."""
+    from .view3d import RenderError, check_offscreen
+    if renderer not in RENDERERS:
+        raise ValueError(f"renderer must be one of {', '.join(RENDERERS)}, got {renderer!r}")
+    if renderer == "matplotlib":
+        return renderer
+    try:
+        check_offscreen()
+    except RenderError:
+        if renderer == "pyvista":
+            raise
+        return "matplotlib"
+    return "pyvista"
+
+
 def render_png(sets: list[TriangleSet], path: str | Path, view: str = "iso", title: str = "",
-               dpi: int = 130, note: str | None = None) -> Path:
-    """Render ``sets`` in ``view`` (a key of :data:`VIEWS`) to a PNG at ``path`` (written atomically)."""
+               dpi: int = 130, note: str | None = None, renderer: str = "matplotlib") -> Path:
+    """Render ``sets`` in ``view`` (a key of :data:`VIEWS`) to a PNG at ``path`` (written atomically) with
+    ``renderer`` (:data:`RENDERERS`)."""
+    if pick_renderer(renderer) == "pyvista":
+        from .view3d import render_triangle_sets
+        return render_triangle_sets(sets, path, VIEWS[view], title=title, note=note)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

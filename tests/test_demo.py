@@ -29,7 +29,8 @@ def test_demo_stages_and_results(run):
     assert set(t3) == {"nominal", "None", "Calc", "FEA", "Meas", "Corrected"}
     assert t3["FEA"]["mean_mm"] < t3["None"]["mean_mm"] < t3["nominal"]["mean_mm"]
     for rel in ("rod1.fea.compliance.json", "rod1.meas.compliance.json", "rod1.corrected.compliance.json",
-                "rig/rod1.rig.csv", "campaign/multical.campaign.csv", "sweep/sweep.csv"):
+                "rig/rod1.rig.csv", "campaign/multical.campaign.csv", "sweep/sweep.csv", st["fea"]["fields"],
+                "study/recommended.vtp"):
         assert (run / rel).exists(), rel
     if st["fea"]["model"] == "solid":   # the sweep's frame is joint-calibrated on that solid run: rod 1#'s row agrees
         import pandas as pd

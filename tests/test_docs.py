@@ -21,6 +21,6 @@ def test_readme_first_lines_give_the_two_commands():
     lines = (ROOT / "README.md").read_text().splitlines()[:8]
     text = "\n".join(lines)
     assert "pip install -e" in text and "rodlab demo" in text
-    assert 'pip install -e ".[test,cad]"' in text and "python -m pytest" in text
+    assert 'pip install -e ".[test,cad,viz]"' in text and "python -m pytest" in text
     ci = (ROOT / ".ci" / "run").read_text()
     assert 'python -m pytest -m "not slow"' in ci and 'python -m pytest -m "not slow"' in text

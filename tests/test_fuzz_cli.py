@@ -40,8 +40,9 @@ TOKENS = ["nan", "inf", "-inf", "-1", "-3", "0", "1e308", "abc", "", "0.5", "2",
           "y,z,x", "q", "300:100:50", "150:300:50", "1:2:0", "x=1", "base_x=0.1", "tx90", "TX90", "r2000", "rod1",
           "1#", "friction:F_f_N=0.3", "creep:phi=x", "nope:a=1", "joint:1", "a" * 300, "\u00e9\u00e8", "--"]
 FILE_KEYS = {"design", "recording", "sim", "rod", "campaign", "fixture", "validate", "points", "profile", "plan",
-             "base", "joints", "robot", "run_dir", "rod_true", "designs", "rig", "files", "calibration", "urdf"}
-OUT_KEYS = {"output", "json", "png", "export", "joints_out", "cache", "link"}
+             "base", "joints", "robot", "run_dir", "rod_true", "designs", "rig", "files", "calibration", "urdf",
+             "fields_file"}
+OUT_KEYS = {"output", "json", "png", "export", "joints_out", "cache", "link", "fields"}
 #: sub-commands whose valid runs take minutes or need hardware: always fuzzed with a broken main input
 HEAVY = {"demo": None, "report": "run_dir", "cad": "design", "mesh": "design", "sweep": "base", "study": "designs",
          "rig acquire": "profile", "rig simulator": "sim", "fea": "design"}

@@ -94,15 +94,21 @@ class _DemoRun:
             self.fea = self.solid_run.compliance
             self.summary["files"]["fea_deformed"] = "fea/deformed.png"
             model = "solid"
+            from .report.views import solid_views
+            views = solid_views(self.design, self.solid_run.result, self.out / "fea" / "rod1.vtu")
         else:
             from rodlab.fea import compute_compliance
             self.fea = compute_compliance(self.design, "frame")
             model = "frame (the CAD extra is absent, so no solid FEA)"
+            from .report.views import frame_views
+            views = frame_views(self.design, self.out / "fea" / "rod1.vtp")
+        self.summary["files"]["fea_views"] = [str(p.relative_to(self.out)) for p in views.pngs]
         fea = self.fea
         write_compliance(fea, self.out / "rod1.fea.compliance.json")
         self._stage("fea", {"model": model, "C_F_mm_per_N": fea.C_F.tolist(), "C_g_mm_per_g0": fea.C_g.tolist(),
                             "c_rod_um": fea.c_rod_um,
-                            "calc_over_fea_diag": (np.diag(self.calc.C_F) / np.diag(fea.C_F)).tolist()})
+                            "calc_over_fea_diag": (np.diag(self.calc.C_F) / np.diag(fea.C_F)).tolist(),
+                            "fields": str(views.fields.relative_to(self.out)), "views_note": views.note})
 
     def stage_rig(self) -> None:
         from rodlab.stiffness_rig.effects import joint_places
@@ -224,7 +230,8 @@ def _study(out: Path, robot, design, calibration) -> dict:
                     out / "cache", use_dask=False)
     note = "frame joint-calibrated on rod 1#'s solid FEA" if calibration is not None else "frame model"
     res = write_study_outputs(out, run, robot.name, False, {"designs": ", ".join(c.label for c in cands),
-                                                            "replicates": spec.replicates, "compliance": note})
+                                                            "replicates": spec.replicates, "compliance": note},
+                              designs={c.label: c.design for c in cands})
     cols = ["design", "c_rod_um", "mass_kg", "O1", "method", "mean_mm", "mean_p05_mm", "mean_p95_mm", "max_mm",
             "share_deflection", "share_identification", "share_noise"]
     rows = res.table[res.table["method"].notna()][cols]

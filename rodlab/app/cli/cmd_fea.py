@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -33,6 +35,9 @@ def register(sub) -> None:
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
                                                "folder (it gets deformed.png)")
+    p.add_argument("--fields", default=None, metavar="OUT",
+                   help="solid: the displacement and von Mises stress fields of the six unit load cases on the mesh "
+                        "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements (*.vtp)")
     p.add_argument("--joints-out", default=None, metavar="FILE",
                    help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
                         "frame runs and sweeps of the design's family (--joints)")
@@ -46,6 +51,7 @@ def register(sub) -> None:
 def cmd_fea(args: argparse.Namespace) -> int:
     from rodlab.fea import FeaModel, compute_compliance
     design = resolve_design(args.design)
+    _check_fields_option(args)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
         from .cmd_geometry import require_cad
@@ -55,7 +61,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
         from rodlab.fea import run_solid
         run = run_solid(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
                         symmetry=not args.no_symmetry, joints=bool(args.joints_out),
-                        deformed_png=png_file(args.png, "deformed.png"))
+                        deformed_png=png_file(args.png, "deformed.png"),
+                        keep_displacements=bool(args.fields or args.report is not None))
         comp, res = run.compliance, run.result
         prov = comp.provenance
         print(f"solid FEA of rod {design.name}: {prov['dofs']} DOFs ({prov['mesh']['elements']} curved tet10"
@@ -67,6 +74,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
                   f"{100 * e['max_relative_C_g']:.3f} % of max|C_g|")
         for fig in run.figures:
             print(f"  wrote {fig}")
+        extra = _solid_views(args, design, res)
         if run.joints is not None:
             from rodlab.fea.joints_io import write_joints
             jc = run.joints
@@ -83,6 +91,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
             from rodlab.fea.joints_io import read_joints
             calibration = read_joints(args.joints)
         comp = compute_compliance(design, args.model, **({"calibration": calibration} if calibration else {}))
+        extra = _frame_views(args, design)
         for note in comp.provenance.get("outside_calibrated_range") or []:
             print(f"  note: {note}; check this design with --model solid, or calibrate the frame on it "
                   "(rodlab sweep --calibrate)")
@@ -90,6 +99,63 @@ def cmd_fea(args: argparse.Namespace) -> int:
     np.set_printoptions(precision=6, suppress=True)
     print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")
     print(f"  c_rod = {comp.c_rod_um:.1f} um ({time.perf_counter() - t0:.1f} s); wrote {path}")
-    written = [path] + [p for p in (png_file(args.png, "deformed.png"), args.joints_out) if p]
+    written = [path] + [p for p in (png_file(args.png, "deformed.png"), args.joints_out) if p] + extra
     write_command_report(args, written, path.parent)
     return 0
+
+
+def _check_fields_option(args: argparse.Namespace) -> None:
+    """``--fields``: a .vtu for the solid model, a .vtp for the frame, nothing for the closed form."""
+    if not args.fields:
+        return
+    want = {"solid": ".vtu", "frame": ".vtp"}.get(args.model)
+    if want is None:
+        raise RodlabError("--fields applies to --model solid (*.vtu) and --model frame (*.vtp)")
+    if Path(args.fields).suffix.lower() != want:
+        raise RodlabError(f"--fields {args.fields}: the {args.model} model writes a {want} file; name it *{want}")
+
+
+def _solid_views(args: argparse.Namespace, design, res) -> list:
+    """Write ``--fields``; with ``--report`` also the 3-D views of the unit forces (from a temporary field file
+    when ``--fields`` is not given). Returns the pictures for the report."""
+    from ..report.views import render_field_pngs
+    from rodlab.fea.fields import solid_fields, write_solid_fields
+    from rodlab.view3d import RenderError
+    if not (args.fields or args.report is not None):
+        return []
+    fields = solid_fields(design, res)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = write_solid_fields(args.fields or Path(tmp) / f"{design.name}.vtu", fields)
+        if args.fields:
+            print(f"  wrote {path} (displacements and von Mises stress of Fx Fy Fz gx gy gz; `rodlab view {path}`)")
+        if args.report is None:
+            return []
+        try:
+            out = Path(args.output)
+            pngs = render_field_pngs(path, Path(args.fields).with_suffix("") if args.fields
+                                     else out.parent / out.name.split(".")[0])
+        except RenderError as e:
+            print(f"  note: no 3-D views in the report: {e}")
+            return []
+    for p in pngs:
+        print(f"  wrote {p}")
+    return pngs
+
+
+def _frame_views(args: argparse.Namespace, design) -> list:
+    """``--fields`` of the frame model: its centreline (*.vtp), and with ``--report`` its 3-D views."""
+    if not args.fields:
+        return []
+    from rodlab.fea.fields import write_frame_fields
+    path = write_frame_fields(args.fields, design)
+    note = " (the constant-calibrated frame: the joint calibration changes C_F only)" if args.joints else ""
+    print(f"  wrote {path} (centreline displacements of Fx Fy Fz gx gy gz{note})")
+    if args.report is None:
+        return []
+    from ..report.views import render_field_pngs
+    from rodlab.view3d import RenderError
+    try:
+        return render_field_pngs(path, path.with_suffix(""), colour="displacement")
+    except RenderError as e:
+        print(f"  note: no 3-D views in the report: {e}")
+        return []

@@ -34,6 +34,9 @@ def register(sub) -> None:
     p.add_argument("design", help=_DESIGN_HELP)
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.add_argument("--no-png", action="store_true", help="skip the PNG views")
+    p.add_argument("--renderer", choices=["auto", "pyvista", "matplotlib"], default="auto",
+                   help="PNG views: pyvista (viz extra; the renderer of rodlab view), matplotlib (anywhere), or "
+                        "auto: pyvista where it renders off-screen (default)")
     add_report_option(p)
     p.set_defaults(func=cmd_cad)
 
@@ -57,7 +60,7 @@ def cmd_cad(args: argparse.Namespace) -> int:
     cad = geometry.build_cad(design)
     written = [cad.export_step(out / "rod.step"), cad.export_stl(out / "rod.stl"), cad.write_mass_json(out / "mass.json")]
     if not args.no_png:
-        written += geometry.render_views(cad, out, prefix="view")
+        written += geometry.render_views(cad, out, prefix="view", renderer=args.renderer)
     total = cad.total_mass_properties()
     print(f"rod {design.name}: {len(cad.solids)} parts, mass {total.mass_kg * 1e3:.2f} g, COM in {{T}} "
           f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm ({time.perf_counter() - t0:.1f} s)")

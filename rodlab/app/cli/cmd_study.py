@@ -146,7 +146,8 @@ def cmd_study(args: argparse.Namespace) -> int:
               "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
-                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed})
+                              {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed},
+                              designs={c.label: c.design for c in cands})
     _print_unusable(res.table)
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")

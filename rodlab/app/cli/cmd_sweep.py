@@ -72,6 +72,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"  wrote {out} and {png}")
     from ..report import FORMAT_SWEEP, Source
     written = [Source(FORMAT_SWEEP, df, out), png] + ([saved] if saved is not None else [])
+    if args.report is not None:                 # the base design in 3-D: its frame centreline, weakest load case
+        from ..report.views import frame_views
+        views = frame_views(base, out.with_name(out.stem + ".base.vtp"), loads="weakest")
+        print(f"  wrote {views.fields}" + "".join(f", {p}" for p in views.pngs)
+              + (f" (no picture: {views.note})" if views.note else ""))
+        written += views.pngs
     write_command_report(args, written, out.parent)
     return 0
 

@@ -13,13 +13,13 @@ import sys
 from ... import __version__, progress
 from ...errors import RodlabError
 from . import (cmd_calibrate, cmd_correct, cmd_demo, cmd_design, cmd_diagnose, cmd_export, cmd_fea, cmd_geometry,
-               cmd_rig, cmd_study, cmd_sweep, cmd_update, cmd_validate)
+               cmd_rig, cmd_study, cmd_sweep, cmd_update, cmd_validate, cmd_view)
 
 __all__ = ["build_parser", "main"]
 
 #: Modules that add sub-commands: each has ``register(subparsers)``.
 _COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_study, cmd_rig, cmd_calibrate,
-                    cmd_diagnose, cmd_update, cmd_export, cmd_correct, cmd_validate]
+                    cmd_diagnose, cmd_update, cmd_export, cmd_correct, cmd_validate, cmd_view]
 
 
 def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 #: argparse destinations that name something the command writes
-_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report")
+_OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report", "fields")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

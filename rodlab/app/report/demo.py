@@ -24,6 +24,21 @@ def _cad_views(run: Path, views: list) -> str:
                                          for v in views) + "</div>"
 
 
+def _fea_views(run: Path, files: dict, fea: dict) -> str:
+    """The FEA's fields in 3-D (``rodlab view`` pictures of the unit forces), or why they are missing."""
+    fields = fea.get("fields")
+    if not fields:
+        return ""
+    head = (f"<p>The fields of the unit forces at the ball in 3-D: the deformed rod (exaggerated) over its undeformed "
+            f"outline, coloured by von Mises stress (solid model) or displacement (frame); all six load cases are in "
+            f"<code>{html.escape(fields)}</code> for ParaView or <code>rodlab view</code>.</p>")
+    views = files.get("fea_views") or []
+    if not views:
+        return head + f"<p class=note>No pictures: {html.escape(fea.get('views_note') or 'not rendered')}</p>"
+    return head + "<div class=views>" + "".join(f"<figure>{img_tag(run, v, f'3-D view {v}', 0.45)}</figure>"
+                                               for v in views) + "</div>"
+
+
 def render_run(run_dir) -> str:
     """The demo folder ``run_dir`` (with ``run.json``) as one HTML page."""
     run = Path(run_dir)
@@ -56,6 +71,7 @@ def render_run(run_dir) -> str:
                  "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
                  + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
                  " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
+    parts.append(_fea_views(run, files, fe))
     ft = st["fit"]
     parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (measured / "
                  f"simulated compliance, Eq. 21) = "

@@ -35,9 +35,10 @@ def best_method(methods) -> str:
 
 
 def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, header: dict,
-                        extra_json: dict | None = None) -> StudyOutputs:
+                        extra_json: dict | None = None, designs: dict | None = None) -> StudyOutputs:
     """Write the study's files into ``out_dir`` (atomically each); ``header`` {label: text} heads the page,
-    ``extra_json`` is merged into ``study.json``."""
+    ``extra_json`` is merged into ``study.json``; ``designs`` {label: RodDesign}: the recommended one is drawn in
+    3-D (its frame centreline, ``recommended.vtp`` and a picture of its weakest load case)."""
     out = Path(out_dir)
     df = study_table(run)
     rec = recommend(df)
@@ -48,9 +49,22 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     heat = plot_heatmaps(df, out / "heatmaps.png", title) if grid else None
     if heat is not None:
         figs["Predicted mean error over L1 x L2"] = heat.name
+    extra = _recommended_views(out, rec, designs or {})
+    figs.update({f"Recommended design {rec.design} under a unit force at the ball (frame model, displacement "
+                 f"x the factor written; all load cases in {extra[0]})": p for p in extra[1:]})
     write_study_report(out, df, rec.text, figs, header)
     atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
                                                      "spec": spec_dict(run.spec), "robot": robot_name,
                                                      "designs": len(run.setups), **(extra_json or {})}))
-    files = ("study.csv", *figs.values(), "study.html", "study.json")
+    files = ("study.csv", *figs.values(), "study.html", "study.json", *extra[:1])
     return StudyOutputs(df, rec, figs, files)
+
+
+def _recommended_views(out: Path, rec: Recommendation, designs: dict) -> tuple:
+    """(field file, picture names) of the recommended design's frame centreline; () without one."""
+    design = designs.get(rec.design)
+    if design is None:
+        return ()
+    from rodlab.app.report.views import frame_views
+    views = frame_views(design, out / "recommended.vtp", loads="weakest")
+    return (views.fields.name, *(p.name for p in views.pngs))

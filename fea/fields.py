@@ -1,0 +1,188 @@
+"""The solid FEA's fields for ParaView and pyvista: displacements and von Mises stress of the six unit load cases
+on the whole rod's mesh, written as one VTK unstructured grid (``.vtu``); the frame model's centreline (``.vtp``).
+
+A separate step after the solve (it needs the kept displacements, :func:`~fea.solid.solve_compliance` with
+``keep_displacements``): a half mesh is mirrored into the whole rod, each field symmetric or antisymmetric about
+``y_T = 0`` as its load case. Stress: ``sigma = C : sym(grad u)`` with each element's own stiffness tensor,
+evaluated at the element's 10 nodes (exact for P2: linear in the element) and averaged over the elements around
+each node (across a bonded joint the average of the two materials' stresses). Coordinates [mm] in the flange
+frame {6} (``{T}`` shifted by the ball centre ``tool_mm``; the axes are parallel), vectors along x, y, z of
+{6} = {T}.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rodlab.design import RodDesign
+from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
+
+from .elasticity import element_tensors
+from .errors import FeaError
+from .solid import SolidResult, mirror_displacements
+
+__all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
+           "write_frame_fields", "field_data", "frame_centreline_fields", "nodal_von_mises"]
+
+#: load cases in column order: unit force along x, y, z of {T} [N] at the ball centre, then 1 g0 along x, y, z
+LOAD_CASE_KEYS = ("Fx", "Fy", "Fz", "gx", "gy", "gz")
+LOAD_CASE_TEXT = ("unit force along +x_T at the ball centre", "unit force along +y_T at the ball centre",
+                  "unit force along +z_T at the ball centre", "self-weight, 1 g0 along +x_T",
+                  "self-weight, 1 g0 along +y_T", "self-weight, 1 g0 along +z_T")
+
+
+def _per(k: int) -> str:
+    return "per N" if k < 3 else "per g0"
+
+
+@dataclass
+class SolidFields:
+    """Fields of the six unit load cases on the whole rod.
+
+    points_mm : node positions [mm] in {6}, shape=(N, 3); cells : node indices of each element in VTK's order,
+    shape=(n_el, 10) (quadratic) or (n_el, 4); part_index : element -> index into ``parts``, shape=(n_el,);
+    parts : part names; displacement : [mm per N | mm per g0] along x, y, z of {T}, shape=(N, 3, 6);
+    von_mises : [MPa per N | MPa per g0], shape=(N, 6); ball_centre_mm : the ball centre in {6} (``tool_mm``),
+    shape=(3,); ball_displacement : the ball centre's displacement (rigid fit of the ball, = the columns of C_F
+    and C_g) [mm per unit load], shape=(3, 6); rod : the design's name
+    """
+
+    points_mm: np.ndarray
+    cells: np.ndarray
+    part_index: np.ndarray
+    parts: tuple
+    displacement: np.ndarray
+    von_mises: np.ndarray
+    ball_centre_mm: np.ndarray
+    ball_displacement: np.ndarray
+    rod: str
+
+    def __post_init__(self) -> None:
+        n, m = self.points_mm.shape[0], self.cells.shape[0]
+        for name, shape in (("points_mm", (n, 3)), ("part_index", (m,)), ("displacement", (n, 3, 6)),
+                            ("von_mises", (n, 6)), ("ball_centre_mm", (3,)), ("ball_displacement", (3, 6))):
+            if np.shape(getattr(self, name)) != shape:
+                raise ValueError(f"SolidFields.{name} must have shape {shape}, got {np.shape(getattr(self, name))}")
+        if self.cells.shape[1] not in (4, 10):
+            raise ValueError(f"SolidFields.cells must have 4 or 10 nodes per element, got {self.cells.shape[1]}")
+
+
+def _node_basis(mesh):
+    """A basis whose quadrature points are the element's own nodes (the reference element's DOF locations)."""
+    from skfem import Basis, ElementTetP1, ElementTetP2, MeshTet2
+    elem = ElementTetP2() if isinstance(mesh, MeshTet2) else ElementTetP1()
+    nloc = elem.doflocs.shape[0]
+    return Basis(mesh, elem, quadrature=(elem.doflocs.T.copy(), np.full(nloc, 1.0 / nloc)))
+
+
+def nodal_von_mises(basis, C: np.ndarray, U: np.ndarray, chunk: int = 4000) -> np.ndarray:
+    """Von Mises stress [N/mm^2 = MPa] per unit load at every node, shape=(N, n_cases), from the displacements
+    ``U`` shape=(3 N, n_cases) [mm] and the element tensors ``C`` shape=(n_el, 3, 3, 3, 3) [N/mm^2]: evaluated
+    at each element's nodes (``basis`` from :func:`_node_basis`) and averaged over the elements at a node."""
+    nloc = len(basis.basis)
+    ed = basis.element_dofs                                      # (nloc, ne); quadrature point q = local node q
+    ne, n_cases = ed.shape[1], U.shape[1]
+    Un = U.reshape(-1, 3, n_cases)
+    total = np.zeros((basis.N, n_cases))
+    count = np.bincount(ed.ravel(), minlength=basis.N).astype(float)
+    G = np.stack([basis.basis[a][0].grad for a in range(nloc)])   # (a, k, e, q)
+    for s in range(0, ne, chunk):
+        e = slice(s, min(s + chunk, ne))
+        grad = np.einsum("aeic,akeq->eqcik", Un[ed[:, e]], G[:, :, e, :], optimize=True)   # du_i/dx_k
+        eps = 0.5 * (grad + np.swapaxes(grad, -1, -2))
+        sig = np.einsum("eijkl,eqckl->eqcij", C[e], eps, optimize=True)
+        dev = sig - np.trace(sig, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) / 3.0
+        vm = np.sqrt(1.5 * np.einsum("eqcij,eqcij->eqc", dev, dev))                  # (e, q, case)
+        for c in range(n_cases):
+            total[:, c] += np.bincount(ed[:, e].T.ravel(), weights=vm[:, :, c].ravel(), minlength=basis.N)
+    return total / np.maximum(count, 1.0)[:, None]
+
+
+def solid_fields(design: RodDesign, res: SolidResult) -> SolidFields:
+    """The six load cases' fields of a solid result (solved with ``keep_displacements``) on the whole rod."""
+    if res.displacements is None or res.rod_mesh is None:
+        raise FeaError("the solid result kept no displacements: solve with keep_displacements=True",
+                       key="displacements")
+    rm, U = res.rod_mesh, res.displacements[:, :6]
+    if rm.is_half:
+        whole = rm.mirrored()
+        U, rm = mirror_displacements(rm, U, whole), whole
+    basis = _node_basis(rm.mesh)
+    C = element_tensors([design.material_of(p) for p in rm.parts], rm.part_index, rm.tube_axis)
+    vm = nodal_von_mises(basis, C, U)
+    tool = np.asarray(design.tool_mm, dtype=float)
+    return SolidFields(points_mm=basis.doflocs.T + tool, cells=basis.element_dofs.T.astype(np.int64),
+                       part_index=rm.part_index.astype(np.int64), parts=tuple(str(p) for p in rm.parts),
+                       displacement=U.reshape(-1, 3, 6), von_mises=vm, ball_centre_mm=tool,
+                       ball_displacement=np.asarray(res.ball_motion[:3, :6] if res.ball_motion is not None
+                                                    else np.hstack([res.C_F, res.C_g])),
+                       rod=design.name)
+
+
+def field_data(rod: str, ball_centre_mm: np.ndarray, ball_displacement: np.ndarray, model: str) -> dict:
+    """What every rodlab field file carries besides its arrays (read by ``rodlab view``)."""
+    return {"rod": [rod], "model": [model], "frame": ["coordinates [mm] in the flange frame {6}; vectors along x, "
+                                                      "y, z of {T} (parallel to {6})"],
+            "load_cases": list(LOAD_CASE_KEYS), "load_case_text": list(LOAD_CASE_TEXT),
+            "units": ["mm per N"] * 3 + ["mm per g0"] * 3,
+            "stress_units": ["MPa per N"] * 3 + ["MPa per g0"] * 3,
+            "ball_centre_mm": np.asarray(ball_centre_mm, dtype=float)[None, :],
+            "ball_displacement": np.asarray(ball_displacement, dtype=float).T}      # (6 cases, 3)
+
+
+def write_solid_fields(path: str | Path, fields: SolidFields) -> Path:
+    """Write ``fields`` as a VTK unstructured grid (``.vtu``; quadratic tetrahedra stay quadratic): point arrays
+    ``displacement_<case>`` and ``von_mises_<case>`` for the cases :data:`LOAD_CASE_KEYS`, cell array ``part``
+    (index into the field data's ``part_names``)."""
+    pd = {}
+    for k, key in enumerate(LOAD_CASE_KEYS):
+        pd[f"displacement_{key}"] = fields.displacement[:, :, k]
+    for k, key in enumerate(LOAD_CASE_KEYS):
+        pd[f"von_mises_{key}"] = fields.von_mises[:, k]
+    fd = dict(field_data(fields.rod, fields.ball_centre_mm, fields.ball_displacement, "solid"),
+              part_names=list(fields.parts))
+    ctype = VTK_QUADRATIC_TETRA if fields.cells.shape[1] == 10 else VTK_TETRA
+    return write_vtu(path, fields.points_mm, fields.cells, ctype,
+                     VtkData(point_data=pd, cell_data={"part": fields.part_index}, field_data=fd))
+
+
+def frame_centreline_fields(design: RodDesign, n_points: int = 200):
+    """The frame model's centreline (``n_points`` points [mm] in {6}) and its displacements under the six unit
+    load cases [mm per N | mm per g0], shape=(n, 3, 6): the section motions of the chain cut at every point
+    (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g)."""
+    from rodlab.chain import centreline_points, chain_flexibility, transport
+    from rodlab.massprops import ball_mass_properties
+
+    from .frame import CALIBRATION, frame_segments
+    segs = frame_segments(design, CALIBRATION)
+    total = segs[-1].s0_mm + segs[-1].length_mm
+    cuts = np.linspace(0.0, total, n_points)[1:-1]
+    ball = ball_mass_properties(design)
+    tool = np.asarray(design.tool_mm, dtype=float)
+    ch = chain_flexibility(segs, cuts, tool, ball.mass_kg, ball.com_T_mm + tool, True, True,
+                           CALIBRATION.shear, CALIBRATION.torsion)
+    Ad = ch.adjoint()                                           # tip wrench -> wrench at each distal point
+    own_F = np.einsum("nab,nbj->naj", ch.F, Ad[:, :, :3])      # interval motions per unit tip force (n, 6, 3)
+    own_g = np.einsum("nab,nbj->naj", ch.F, ch.G) + ch.H         # per g0 (n, 6, 3)
+    own = np.concatenate([own_F, own_g], axis=2)                 # (n, 6, 6 cases)
+    P = ch.points_F
+    motion = np.zeros((P.shape[0], 6, 6))
+    for k in range(P.shape[0]):                                  # intervals 0..k carried rigidly to point k
+        T = transport(P[k][None, :] - P[:k + 1])                 # (k+1, 6, 6)
+        motion[k] = np.einsum("nba,nbc->ac", T, own[:k + 1])
+    start = centreline_points(segs, [0.0])[0]
+    points = np.vstack([start, P])
+    disp = np.concatenate([np.zeros((1, 3, 6)), motion[:, :3, :]])
+    return points, disp
+
+
+def write_frame_fields(path: str | Path, design: RodDesign, n_points: int = 200) -> Path:
+    """The frame model's centreline as VTK poly data (``.vtp``): point arrays ``displacement_<case>`` as in
+    :func:`write_solid_fields` (no stress: a beam model)."""
+    points, disp = frame_centreline_fields(design, n_points)
+    pd = {f"displacement_{key}": disp[:, :, k] for k, key in enumerate(LOAD_CASE_KEYS)}
+    fd = field_data(design.name, design.tool_mm, disp[-1], "frame")
+    return write_vtp(path, points, [np.arange(points.shape[0])], VtkData(point_data=pd, field_data=fd))
+

@@ -39,6 +39,7 @@ class CampaignSpec:
     q_resolution_deg: float = 1e-4
     alignment_mm: float = 0.15
     fixture_noise_mm_deg: tuple = (0.01, 0.002)
+    probe_accuracy_mm: float = 0.005
     error_scale: float = 1.0
     validation_points: int = 100
     seed: int = 0
@@ -135,7 +136,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                       rod_true: RodCompliance | None = None, effects=None, rod_thermal=None,
                       temp_K_per_s: float = 0.0, device=None) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
-    and the rod file into ``out_dir``; return the truth.
+    and the rod file into ``out_dir`` (with a device also ``multical.device.json`` and ``multical.probe.csv``,
+    its features probed at the true clamping poses to ``spec.probe_accuracy_mm``); return the truth.
 
     rod_true : the rod as it really is (default: ``rod``, the file the calibrator is given; a ``rod_deflection``
         effect scales it further);
@@ -170,7 +172,10 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                                                       "contact_force_N": _force_at_datum(device).tolist()})
     if device is not None:
         from .device import write_device
+        from .probe import simulated_probe_text
         write_device(device, out / "multical.device.json")
+        atomic_write_text(out / "multical.probe.csv", simulated_probe_text(Ts, device, spec.probe_accuracy_mm,
+                                                                           np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
     from rodlab.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
@@ -228,12 +233,30 @@ def _spring_loaded(robot, truth, rod, rod_true, qt, T, device, Fm):
     return fr, pW
 
 
+def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
+    """The operator aligns the ball on the device's readings, so the rod's deflection under its weight and the
+    contact force is taken out of the alignment: each configuration moved (IK from itself) until the deflected
+    ball is where the undeflected one was; one that IK cannot move keeps its place."""
+    from .ik import solve_ik_positions
+    keys = list(reached)
+    q = np.concatenate([reached[j] for j in keys])
+    F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])
+    fr, _ = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
+    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod.mass_kg,
+                             rod.com_T_mm, F)
+    q = np.where(res.ok[:, None], res.q_rad, q)
+    edges = np.cumsum([0] + [len(reached[j]) for j in keys])
+    return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
+
+
 def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s, device=None
               ) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
     forces = {j: Ts[j][:3, :3] @ _force_at_datum(device) for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
+    if device is not None:
+        reached = _reaim(robot, truth, rod, forces, reached)
     cols: dict = {"position": [], "point": [], "q_deg": [], "xD": [], "time_s": [], "temp_C": []}
     t = 0.0
     for j in range(1, spec.positions + 1):

@@ -7,7 +7,9 @@ points (Kabsch), its covariance ``sigma^2 (J^T J)^-1`` from the instrument's sta
 coordinate, 1 sigma; ``# accuracy_mm:``). Every pose is then expressed in {W} = {D_world}: ``T_W_Dj =
 T_A_Dw^-1 T_A_Dj``, its covariance propagated from both fits (the world fit's error is shared by all positions;
 that correlation between positions is not kept). A position whose residuals exceed the accuracy (chi-square
-test) is flagged with its worst feature: a feature misprobed or the device seated wrong.
+test) is flagged with its suspect feature (the one whose leave-one-out fit of the others fits best): a feature
+misprobed or the device seated wrong. With 4 features a probe error that keeps the point's distances to two
+others is ambiguous between two features; the flag itself is not.
 """
 from __future__ import annotations
 
@@ -112,7 +114,9 @@ def _number(cell, p, line, col) -> float:
 class PositionFit:
     """One clamping position's fit: T_A_D (4, 4) device frame in the instrument frame, cov_A (6, 6) of its
     left perturbation (translation [mm], rotation vector [rad] in {A}), residuals_mm (k, 3) per feature,
-    features (k,) names, chi2 over dof = 3k - 6, p its p-value, flagged (p < FLAG_P)."""
+    features (k,) names, chi2 over dof = 3k - 6, p its p-value, flagged (p < FLAG_P); suspect (feature, how far
+    [mm] its probe lies from the fit of the others) the feature whose removal leaves the best fit (with 4 or
+    more features; else the largest residual)."""
 
     position: int
     T_A_D: np.ndarray
@@ -122,6 +126,7 @@ class PositionFit:
     chi2: float
     dof: int
     p: float
+    suspect: tuple = ("", 0.0)
 
     @property
     def flagged(self) -> bool:
@@ -132,11 +137,6 @@ class PositionFit:
         """rms residual per coordinate [mm]."""
         return float(np.sqrt(np.mean(self.residuals_mm ** 2)))
 
-    @property
-    def worst(self) -> tuple:
-        """(feature, residual distance [mm]) of the feature farthest from its fit."""
-        d = np.linalg.norm(self.residuals_mm, axis=1)
-        return self.features[int(np.argmax(d))], float(d.max())
 
 
 @dataclass
@@ -183,7 +183,7 @@ def fit_fixture(probes: ProbeSet, device: Device, world_position: int, contact_f
     probing = {"accuracy_mm": probes.accuracy_mm, "probe_file": str(probes.path) if probes.path else None,
                "device": device.name,
                "rms_residual_mm": {str(j): round(f.rms_mm, 6) for j, f in fits.items()},
-               "flagged": {str(f.position): f"{f.worst[0]} {f.worst[1]:.4f} mm off" for f in fits.values()
+               "flagged": {str(f.position): f"{f.suspect[0]} {f.suspect[1]:.4f} mm off" for f in fits.values()
                            if f.flagged}}
     fix = Fixture(poses, np.asarray(contact_force_N, float), world_position, None, covs, probing)
     return FixtureFit(fix, fits, probes.accuracy_mm)
@@ -219,7 +219,24 @@ def _fit_position(probes: ProbeSet, device: Device, j: int) -> PositionFit:
     dof = 3 * m.size - 6
     from scipy.stats import chi2 as chi2_dist
     p = float(chi2_dist.sf(chi2, dof)) if dof > 0 else 1.0
-    return PositionFit(j, T, cov, r, names, chi2, dof, p)
+    return PositionFit(j, T, cov, r, names, chi2, dof, p, _suspect(F, P, r, names))
+
+
+def _suspect(F: np.ndarray, P: np.ndarray, r: np.ndarray, names: list) -> tuple:
+    """The feature most likely misprobed: the one whose leave-one-out fit of the others leaves the smallest
+    sum of squares (its own distance from that fit [mm]); with 3 features, the largest residual."""
+    if len(names) < 4:
+        d = np.linalg.norm(r, axis=1)
+        return names[int(np.argmax(d))], float(d.max())
+    best = None
+    for i in range(len(names)):
+        keep = np.arange(len(names)) != i
+        T = _kabsch(F[keep], P[keep])
+        rest = float(((P[keep] - F[keep] @ T[:3, :3].T - T[:3, 3]) ** 2).sum())
+        off = float(np.linalg.norm(P[i] - T[:3, :3] @ F[i] - T[:3, 3]))
+        if best is None or rest < best[0]:
+            best = (rest, names[i], off)
+    return best[1], best[2]
 
 
 def _kabsch(F: np.ndarray, P: np.ndarray) -> np.ndarray:

@@ -60,8 +60,9 @@ def cmd_fixture(args) -> int:
     path = write_fixture(fit.fixture, args.output)
     print(f"wrote {path}")
     for f in fit.flagged:
-        name, d = f.worst
+        name, d = f.suspect
         print(f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "
-              f"over {f.dof} degrees of freedom, p = {f.p:.1e}); feature {name!r} is {d * 1e3:.0f} um off its fit. "
+              f"over {f.dof} degrees of freedom, p = {f.p:.1e}); suspect feature {name!r}, {d * 1e3:.0f} um off the "
+              f"fit of the others. "
               f"Probe it again or check the device's seat before calibrating", file=sys.stderr)
     return 3 if fit.flagged else 0

@@ -295,3 +295,13 @@ def test_world_position_must_be_probed_and_covariances_checked(sims, tmp_path):
     with pytest.raises(CalibrationError) as e:
         read_fixture(bad)
     assert e.value.key == "pose_covariance.1" and "symmetric" in str(e.value)
+
+
+def test_cli_names_an_orthogonal_design_when_the_fit_is_not_trusted(sims, tmp_path, capsys):
+    built = sims[1][0]
+    nominal = write_device(ideal_device(), tmp_path / "nominal.device.json")
+    args = ["calibrate", str(built / "multical.campaign.csv"), "--fixture", str(built / "multical.fixture.json"),
+            "--rod", str(built / "rod.compliance.json")]
+    assert main(args + ["--device", str(nominal)]) == 3
+    assert "states exactly orthogonal sensors" in capsys.readouterr().err
+    assert main(args + ["--device", str(built / "multical.device.json")]) == 0

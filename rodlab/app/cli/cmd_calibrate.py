@@ -246,9 +246,22 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.material:
             _print_suspects(robot, camp, args, rod, comp, res.residual_check)
+        _note_ideal_device(args)
         return 3
     print_cautions(res)
     return 0
+
+
+def _note_ideal_device(args) -> None:
+    """A not-trusted raw campaign read with exactly orthogonal sensors: say that a real device's are not."""
+    if not getattr(args, "device", None):
+        return
+    from rodlab.calibrate.device import read_device
+    dev = read_device(args.device)
+    if np.max(np.abs(dev.misalignment_deg())) < 1e-6:
+        print(f"  - {args.device} states exactly orthogonal sensors (a design, not a device as built): a real "
+              f"device's axes are off by up to a degree or two, which puts several um on readings a few tenths of "
+              f"a mm from the datum; give the device's calibrated axes", file=sys.stderr)
 
 
 def print_cautions(res) -> None:

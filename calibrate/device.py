@@ -185,7 +185,8 @@ def read_device(path) -> Device:
 def _sensor(p: Path, k: int, s: dict) -> Sensor:
     key = f"sensors[{k}]"
     a = np.asarray(s["axis_D"], float)
-    n = float(np.linalg.norm(a))
+    with np.errstate(over="ignore", invalid="ignore"):
+        n = float(np.linalg.norm(a))
     if not np.all(np.isfinite(a)) or abs(n - 1.0) > 1e-3:
         raise CalibrationError(f"sensor {k}'s axis must be a unit vector, got {s['axis_D']} (length {n:.6g}); "
                                f"divide it by its length", path=p, key=f"{key}.axis_D")
@@ -196,6 +197,11 @@ def _sensor(p: Path, k: int, s: dict) -> Sensor:
     if not lo <= s["zero_mm"] <= hi:
         raise CalibrationError(f"the zero reading {s['zero_mm']:g} mm is outside the range [{lo:g}, {hi:g}] mm",
                                path=p, key=f"{key}.zero_mm")
+    for k2 in ("zero_mm", "force_at_zero_N", "rate_N_per_mm"):
+        if k2 in s and not np.isfinite(s[k2]):
+            raise CalibrationError(f"expected a finite number, got {s[k2]!r}", path=p, key=f"{key}.{k2}")
+    if not np.all(np.isfinite(s["range_mm"])):
+        raise CalibrationError(f"expected 2 finite numbers [mm], got {s['range_mm']}", path=p, key=f"{key}.range_mm")
     if "rate_N_per_mm" in s and "force_at_zero_N" not in s:
         raise CalibrationError("a spring rate needs the spring's force at the zero reading (force_at_zero_N)",
                                path=p, key=f"{key}.force_at_zero_N")

@@ -259,6 +259,9 @@ def test_misprobed_feature_is_flagged(sims, tmp_path, capsys):
     assert rc == 3 and "FLAGGED position 2" in err and "'ball_2'" in err
     assert json.loads(out.read_text())["probing"]["flagged"].keys() == {"2"}
     assert main(["validate", str(out), str(probe)]) == 0
+    rc = main(["calibrate", str(built / "multical.campaign.csv"), "--fixture", str(out), "--rod",
+               str(built / "rod.compliance.json"), "--device", str(built / "multical.device.json")])
+    assert rc in (0, 3) and "its probing flagged position 2: ball_2" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("edit, line, key, words", [
@@ -285,6 +288,11 @@ def test_bad_probe_files_are_refused_with_their_place(sims, tmp_path, edit, line
 
 def test_world_position_must_be_probed_and_covariances_checked(sims, tmp_path):
     built = sims[1][0]
+    bare = read_device(built / "multical.device.json")
+    bare.features_D_mm = {}
+    with pytest.raises(CalibrationError) as e:
+        fit_fixture(read_probe(built / "multical.probe.csv"), bare, 3)
+    assert e.value.key == "features_D_mm"
     with pytest.raises(CalibrationError, match="was not probed"):
         fit_fixture(read_probe(built / "multical.probe.csv"), read_device(built / "multical.device.json"), 9)
     fit = fit_fixture(read_probe(built / "multical.probe.csv"), read_device(built / "multical.device.json"), 3)

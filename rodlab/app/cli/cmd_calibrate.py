@@ -14,7 +14,7 @@ from ...compliance import RodCompliance, read_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, joint_list, nonneg_float, pos_float, seed
-from .deviceargs import add_device_option, campaign_from_args
+from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 
@@ -164,8 +164,10 @@ def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> Calibr
     from rodlab.calibrate import ModelParams, campaign_observations, identify, read_fixture, read_points
     from rodlab.calibrate import validate
     robot = robot_from_args(args)
-    camp = camp if camp is not None else campaign_from_args(args, robot.n)
     fix = read_fixture(args.fixture)
+    if camp is None:                                    # compare reads the campaign and warns once
+        camp = campaign_from_args(args, robot.n)
+        warn_flagged_fixture(fix, args.fixture)
     obs = campaign_observations(camp, fix, rod)
     res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                    also_compensate=_thermal(args, camp, rod),
@@ -412,6 +414,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                           "campaign's *.validation.csv")
     planned = _compare_runs(args.rod)
     camp = campaign_from_args(args, robot_from_args(args).n)
+    from rodlab.calibrate import read_fixture
+    warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
     before = runs[0][1].before

@@ -7,7 +7,7 @@ from ...compliance import read_compliance, write_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .deviceargs import DEVICE_HELP, campaign_from_args
+from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 
@@ -82,7 +82,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         robot = robot_from_args(args)
         noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
         pts = read_points(args.validate, robot.n) if args.validate else None
-        diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), read_fixture(args.fixture),
+        fix = read_fixture(args.fixture)
+        warn_flagged_fixture(fix, args.fixture)
+        diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
                                        read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
         print(diag.summary())
         if "validation" in diag.extra:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args"]
+__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "warn_flagged_fixture"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
                "each point is solved from its readings, the sensors' noise (--noise-um, per reading) is propagated "
@@ -32,3 +32,12 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
                   f"datum point (the alignment the paper assumes; the springs' force and the rod's deflection "
                   f"differ there): {shown}", file=sys.stderr)
     return camp
+
+
+def warn_flagged_fixture(fix, path) -> None:
+    """A fixture file whose probing flagged positions (``rodlab fixture`` exit 3) is named on stderr."""
+    flagged = (fix.probing or {}).get("flagged") or {}
+    if flagged:
+        where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
+        print(f"warning: {path}: its probing flagged {where} (residuals above the instrument's accuracy); those "
+              f"poses may be wrong: probe again", file=sys.stderr)

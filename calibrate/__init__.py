@@ -2,7 +2,10 @@
 
 Uses compliance files from the FEA and the rig (the core's :class:`rodlab.RodCompliance`), never their code.
 """
-from .campaign import Campaign, Fixture, PointSet, read_campaign, read_fixture, read_points
+from .campaign import Campaign, Fixture, PointSet, read_campaign, read_fixture, read_points, write_fixture
+from .device import Device, Sensor, read_device, write_device
+from .probe import FixtureFit, ProbeSet, fit_fixture, read_probe
+from .readings import apply_device, far_points
 from .compensation import Compensation, deflection_offsets
 from .errors import CalibrationError
 from .identify import CalibrationResult, Observations, campaign_observations, identify, register_base_and_tool
@@ -16,7 +19,9 @@ from .sockets import SocketDistance, SocketReadings, read_sockets, write_sockets
 from .thermal import ThermalGrowth
 from .validate import ErrorStats, validate
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "CalibrationError",
+__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
+           "Device", "Sensor", "read_device", "write_device", "apply_device", "far_points",
+           "FixtureFit", "ProbeSet", "fit_fixture", "read_probe", "CalibrationError",
            "Compensation", "deflection_offsets", "ThermalGrowth",
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",

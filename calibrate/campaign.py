@@ -1,7 +1,8 @@
 """Campaign, fixture and validation files of the contract, read with line / key errors.
 
 - ``*.campaign.csv``: ``position,point,q1..qn,x_mm,y_mm,z_mm[,time_s][,temp_C]`` (q in deg; x, y, z the
-  device's reading of the ball centre in {D_j}).
+  device's reading of the ball centre in {D_j}); or (v1.1) ``s1_mm,s2_mm,s3_mm``, the three sensors' raw
+  readings, converted with a device file (:func:`calibrate.readings.apply_device`).
 - ``*.fixture.json``: poses of {D_j} in {W} = {D_world_position}, the sensors' contact force in {D_j}.
 - ``*.validation.csv``: ``# tool_mm``, ``# rod_mass_kg``, ``# rod_com_T_mm``, ``[# temp_C]`` then
   ``q1..qn,x_mm,y_mm,z_mm`` (ball centre in {W} from an external instrument).
@@ -22,17 +23,25 @@ from rodlab.frames import pose_to_matrix
 
 from .errors import CalibrationError
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points"]
+__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
+           "FIXTURE_FORMATS"]
+
+#: fixture formats read; /2 adds each pose's covariance
+FIXTURE_FORMATS = ("rodlab.fixture/1", "rodlab.fixture/2")
 
 
 @dataclass
 class Fixture:
-    """Clamping positions: ``poses`` {j: pose of {D_j} in {W}, shape=(6,) [mm, deg]}; ``force_D_N`` shape=(3,)."""
+    """Clamping positions: ``poses`` {j: pose of {D_j} in {W}, shape=(6,) [mm, deg]}; ``force_D_N`` shape=(3,);
+    ``pose_cov`` {j: shape=(6, 6) covariance of pose j, (mm, deg) units} where stated (``rodlab.fixture/2``),
+    else None; ``probing`` the free-form record of how the poses were measured."""
 
     poses: dict
     force_D_N: np.ndarray
     world_position: int
     path: Path | None = None
+    pose_cov: dict | None = None
+    probing: dict | None = None
 
     def transform(self, j: int) -> np.ndarray:
         return pose_to_matrix(self.poses[j])
@@ -40,16 +49,40 @@ class Fixture:
 
 @dataclass
 class Campaign:
-    """Rows of a campaign: position (N,), point (N,), q_deg (N, n), x_D_mm (N, 3), time_s, temp_C (N,) or None."""
+    """Rows of a campaign: position (N,), point (N,), q_deg (N, n), x_D_mm (N, 3) ball centre in {D_j} [mm]
+    (None for raw readings not yet converted), time_s, temp_C (N,) or None; lines (N,) of the file.
+
+    Raw campaigns (v1.1): readings_mm (N, 3) the sensors' readings [mm]; once converted with the device
+    (:func:`calibrate.readings.apply_device`) also force_D_N (N, 3) the contact force of each point in {D_j} [N]
+    (None: the fixture's constant one) and noise_shape_D (N, 3, 3) the covariance in {D_j} of a point per unit
+    variance of each reading [-] (None: one noise level per coordinate)."""
 
     position: np.ndarray
     point: np.ndarray
     q_deg: np.ndarray
-    x_D_mm: np.ndarray
+    x_D_mm: np.ndarray | None
     time_s: np.ndarray | None = None
     temp_C: np.ndarray | None = None
     path: Path | None = None
     lines: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    readings_mm: np.ndarray | None = None
+    force_D_N: np.ndarray | None = None
+    noise_shape_D: np.ndarray | None = None
+
+    def __post_init__(self):
+        for name in ("x_D_mm", "readings_mm", "force_D_N"):
+            a = getattr(self, name)
+            if a is not None and np.shape(a) != (self.n, 3):
+                raise ValueError(f"{name} must have shape ({self.n}, 3), got {np.shape(a)}")
+        if self.noise_shape_D is not None and np.shape(self.noise_shape_D) != (self.n, 3, 3):
+            raise ValueError(f"noise_shape_D must have shape ({self.n}, 3, 3), got {np.shape(self.noise_shape_D)}")
+        if self.x_D_mm is None and self.readings_mm is None:
+            raise ValueError("a campaign needs x_D_mm or readings_mm")
+
+    @property
+    def raw(self) -> bool:
+        """Whether the file gave the sensors' readings (s1_mm, s2_mm, s3_mm)."""
+        return self.readings_mm is not None
 
     @property
     def n(self) -> int:
@@ -131,10 +164,29 @@ def _table(p: Path, text: str, required: list[str], optional: list[str]):
     return header, rows
 
 
-def read_campaign(path, n_joints: int = 6) -> Campaign:
+XYZ_COLUMNS = ("x_mm", "y_mm", "z_mm")
+#: v1.1: the three sensors' raw readings, instead of x, y, z (read with a device file)
+RAW_COLUMNS = ("s1_mm", "s2_mm", "s3_mm")
+
+
+def _campaign_columns(p: Path, text: str) -> tuple:
+    """x, y, z or the raw readings, whichever set the header has (exactly one)."""
+    first = next((ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
+    header = [h.strip() for h in next(csv.reader([first]))] if first else []
+    has_raw, has_xyz = any(c in header for c in RAW_COLUMNS), any(c in header for c in XYZ_COLUMNS)
+    if has_raw and has_xyz:
+        raise CalibrationError(f"give the ball centre ({', '.join(XYZ_COLUMNS)}) or the raw sensor readings "
+                               f"({', '.join(RAW_COLUMNS)}), not both", path=p, key=RAW_COLUMNS[0])
+    return RAW_COLUMNS if has_raw else XYZ_COLUMNS
+
+
+def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
+    """A campaign file; one of raw readings is converted with ``device`` (a :class:`~calibrate.device.Device`)
+    when given, else kept as readings (``x_D_mm`` None: :func:`campaign_observations` then asks for it)."""
     p, text = _read_text(path)
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = _table(p, text, ["position", "point"] + qs + ["x_mm", "y_mm", "z_mm"], ["time_s", "temp_C"])
+    xyz = _campaign_columns(p, text)
+    header, rows = _table(p, text, ["position", "point"] + qs + list(xyz), ["time_s", "temp_C"])
     pos, pt, q, x, t, T, ln = [], [], [], [], [], [], []
     seen = {}
     for k, r in rows:
@@ -149,13 +201,18 @@ def read_campaign(path, n_joints: int = 6) -> Campaign:
         pos.append(key[0])
         pt.append(key[1])
         q.append([r[c] for c in qs])
-        x.append([r["x_mm"], r["y_mm"], r["z_mm"]])
+        x.append([r[c] for c in xyz])
         t.append(r.get("time_s", np.nan))
         T.append(r.get("temp_C", np.nan))
         ln.append(k)
-    return Campaign(np.array(pos), np.array(pt), np.array(q), np.array(x),
+    raw = xyz == RAW_COLUMNS
+    camp = Campaign(np.array(pos), np.array(pt), np.array(q), None if raw else np.array(x),
                     np.array(t) if "time_s" in header else None, np.array(T) if "temp_C" in header else None,
-                    p, np.array(ln))
+                    p, np.array(ln), readings_mm=np.array(x) if raw else None)
+    if device is not None:
+        from .readings import apply_device
+        camp = apply_device(camp, device)
+    return camp
 
 
 def read_fixture(path) -> Fixture:
@@ -164,10 +221,11 @@ def read_fixture(path) -> Fixture:
         data = json.loads(text)
     except json.JSONDecodeError as e:
         raise CalibrationError(f"not valid JSON: {e.msg}", path=p, line=e.lineno) from e
-    if not isinstance(data, dict) or data.get("format") != "rodlab.fixture/1":
-        raise CalibrationError("expected a JSON object with \"format\": \"rodlab.fixture/1\"", path=p, key="format")
+    if not isinstance(data, dict) or data.get("format") not in FIXTURE_FORMATS:
+        raise CalibrationError(f"expected a JSON object with \"format\" one of {list(FIXTURE_FORMATS)}", path=p,
+                               key="format")
     from rodlab.schema import require_schema
-    require_schema(data, "rodlab.fixture/1", p, text, CalibrationError)       # keys, shapes, types
+    require_schema(data, data["format"], p, text, CalibrationError)       # keys, shapes, types
     poses = {int(k): np.asarray(v, dtype=float) for k, v in data["positions"].items()}
     for j, arr in poses.items():
         if not np.all(np.isfinite(arr)):                        # JSON's NaN / Infinity pass a number schema
@@ -180,7 +238,39 @@ def read_fixture(path) -> Fixture:
     fa = np.asarray(data.get("contact_force_N", [1.10, 1.25, 1.05]), dtype=float)
     if not np.all(np.isfinite(fa)):
         raise CalibrationError(f"expected 3 finite numbers [N], got {fa.tolist()}", path=p, key="contact_force_N")
-    return Fixture(poses, fa, wp, p)
+    return Fixture(poses, fa, wp, p, _pose_covariances(p, data, poses), data.get("probing"))
+
+
+def _pose_covariances(p: Path, data: dict, poses: dict) -> dict | None:
+    """``pose_covariance`` of a fixture/2 file: symmetric, positive semi-definite, of a listed position."""
+    if "pose_covariance" not in data:
+        return None
+    out = {}
+    for k, v in data["pose_covariance"].items():
+        key = f"pose_covariance.{k}"
+        C = np.asarray(v, dtype=float)
+        if int(k) not in poses:
+            raise CalibrationError(f"position {k} is not among the positions {sorted(poses)}", path=p, key=key)
+        if not np.all(np.isfinite(C)) or not np.allclose(C, C.T, rtol=1e-6, atol=1e-12):
+            raise CalibrationError("expected a finite, symmetric 6x6 covariance [(mm, deg) units]", path=p, key=key)
+        if np.linalg.eigvalsh(C).min() < -1e-9 * max(1.0, np.abs(C).max()):
+            raise CalibrationError("the covariance has a negative eigenvalue: not a covariance", path=p, key=key)
+        out[int(k)] = C
+    return out
+
+
+def write_fixture(fix: Fixture, path) -> Path:
+    """Write ``fix`` atomically: ``rodlab.fixture/2`` when it has pose covariances, else ``rodlab.fixture/1``."""
+    from rodlab.fileio import atomic_write_json
+    data = {"format": FIXTURE_FORMATS[1] if fix.pose_cov else FIXTURE_FORMATS[0], "world_position": fix.world_position,
+            "positions": {str(j): [round(float(v), 6) for v in pose] for j, pose in sorted(fix.poses.items())},
+            "contact_force_N": [float(v) for v in fix.force_D_N]}
+    if fix.pose_cov:
+        data["pose_covariance"] = {str(j): [[float(f"{v:.6g}") for v in row] for row in C]
+                                   for j, C in sorted(fix.pose_cov.items())}
+    if fix.probing:
+        data["probing"] = fix.probing
+    return atomic_write_json(path, data)
 
 
 def read_points(path, n_joints: int = 6) -> PointSet:

@@ -27,7 +27,10 @@ class Observations:
     q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
     group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,);
     sigma_mm (N, 3) stated standard uncertainty of each measured coordinate [mm] (instrument points), or None
-    for one noise level for all; temp_C (N,) temperature of each point [degC] or None (thermal compensation)
+    for one noise level for all; temp_C (N,) temperature of each point [degC] or None (thermal compensation);
+    noise_shape_W (N, 3, 3) covariance in {W} of each point per unit variance of the device's readings [-] (raw
+    readings through a non-orthogonal device), or None; pose_cov {group: (6, 6) covariance of the recorded
+    pose [x, y, z, a, b, c] of that clamping position, (mm, deg) units} where the fixture file states one
     """
 
     q_rad: np.ndarray
@@ -41,6 +44,8 @@ class Observations:
     x_D_mm: np.ndarray | None = None
     sigma_mm: np.ndarray | None = None
     temp_C: np.ndarray | None = None
+    noise_shape_W: np.ndarray | None = None
+    pose_cov: dict | None = None
 
     def __post_init__(self):
         if self.sigma_mm is not None and np.shape(self.sigma_mm) != np.shape(self.x_W_mm):
@@ -48,6 +53,9 @@ class Observations:
                              f"{np.shape(self.sigma_mm)}")
         if self.temp_C is not None and np.shape(self.temp_C) != (np.shape(self.x_W_mm)[0],):
             raise ValueError(f"temp_C must have shape ({np.shape(self.x_W_mm)[0]},), got {np.shape(self.temp_C)}")
+        if self.noise_shape_W is not None and np.shape(self.noise_shape_W) != (np.shape(self.x_W_mm)[0], 3, 3):
+            raise ValueError(f"noise_shape_W must have shape ({np.shape(self.x_W_mm)[0]}, 3, 3), got "
+                             f"{np.shape(self.noise_shape_W)}")
 
     def subset(self, keep: np.ndarray) -> "Observations":
         """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""
@@ -59,26 +67,38 @@ class Observations:
             return None if a is None else np.asarray(a)[keep]
         return replace(self, q_rad=self.q_rad[keep], x_W_mm=self.x_W_mm[keep], force_W_N=self.force_W_N[keep],
                        group=cut(self.group), x_D_mm=cut(self.x_D_mm), sigma_mm=cut(self.sigma_mm),
-                       temp_C=cut(self.temp_C),
+                       temp_C=cut(self.temp_C), noise_shape_W=cut(self.noise_shape_W),
                        labels=None if self.labels is None else [lab for lab, k in zip(self.labels, keep) if k])
 
 
 def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
-    """Eq. 2: device readings to {W}; the contact force of each point in {W} (Eq. 12)."""
+    """Eq. 2: device readings to {W}; the contact force of each point in {W} (Eq. 12): the springs' at its
+    readings for a raw campaign read with a device that states them, else the fixture's constant one."""
+    if camp.x_D_mm is None:
+        raise CalibrationError("this campaign gives the sensors' raw readings (s1_mm, s2_mm, s3_mm): give the "
+                               "device file that converts them (--device DEV.device.json)", path=camp.path,
+                               key="s1_mm")
     missing = sorted(set(camp.position.tolist()) - set(fix.poses))
     if missing:
         raise CalibrationError(f"clamping position(s) {missing} of the campaign are not in the fixture file "
                                f"(it has {sorted(fix.poses)})", path=fix.path, key="positions")
     xW = np.empty((camp.n, 3))
     F = np.empty((camp.n, 3))
+    shape = None if camp.noise_shape_D is None else np.empty((camp.n, 3, 3))
+    force_D = np.broadcast_to(fix.force_D_N, (camp.n, 3)) if camp.force_D_N is None else camp.force_D_N
     for j in np.unique(camp.position):
         T = fix.transform(int(j))
+        R = T[:3, :3]
         m = camp.position == j
-        xW[m] = camp.x_D_mm[m] @ T[:3, :3].T + T[:3, 3]
-        F[m] = T[:3, :3] @ fix.force_D_N
+        xW[m] = camp.x_D_mm[m] @ R.T + T[:3, 3]
+        F[m] = force_D[m] @ R.T
+        if shape is not None:
+            shape[m] = R @ camp.noise_shape_D[m] @ R.T
+    pose_cov = None if fix.pose_cov is None else {j: c for j, c in fix.pose_cov.items() if j in set(camp.position)}
     return Observations(np.deg2rad(camp.q_deg), xW, F, rod.mass_kg, rod.com_T_mm, camp.position.copy(),
                         camp.labels(), {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
-                        camp.x_D_mm.copy(), temp_C=None if camp.temp_C is None else camp.temp_C.copy())
+                        camp.x_D_mm.copy(), temp_C=None if camp.temp_C is None else camp.temp_C.copy(),
+                        noise_shape_W=shape, pose_cov=pose_cov)
 
 
 def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
@@ -140,26 +160,41 @@ def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.
 
     With per-point uncertainties (``obs.sigma_mm``) the noise of each coordinate is proportional to its stated
     sigma, scaled so that its rms over the data set is ``noise_mm`` (pass the stated rms to use them as they
-    are, an estimated level to keep only their shape)."""
+    are, an estimated level to keep only their shape). With raw readings (``obs.noise_shape_W``) ``noise_mm``
+    is each sensor reading's noise, propagated through the device's axes.
+
+    A clamping position whose fixture file states its pose covariance (``obs.pose_cov``, fitted from probes)
+    uses it instead of ``fixture_sigma``; ``fixture_sigma = (0, 0)`` leaves every pose's uncertainty out (the
+    device-only covariance)."""
     N = obs.x_W_mm.shape[0]
     if obs.sigma_mm is not None:
         s = obs.sigma_mm.reshape(-1)
         S = np.diag((s * noise_mm / np.sqrt(np.mean(s ** 2))) ** 2)
+    elif obs.noise_shape_W is not None:
+        S = np.zeros((3 * N, 3 * N))
+        for i in range(N):
+            S[3 * i:3 * i + 3, 3 * i:3 * i + 3] = noise_mm ** 2 * obs.noise_shape_W[i]
     else:
         S = noise_mm ** 2 * np.eye(3 * N)
-    if obs.group is not None and obs.fixture_T is not None:
-        st, sr = fixture_sigma[0], np.deg2rad(fixture_sigma[1])
+    if obs.group is not None and obs.fixture_T is not None and any(fixture_sigma):
+        default = np.diag([fixture_sigma[0]] * 3 + [fixture_sigma[1]] * 3) ** 2
+        stated = obs.pose_cov or {}
         for j, T in obs.fixture_T.items():
             if np.allclose(T, np.eye(4)):
                 continue                                   # the world position defines {W}
             m = np.nonzero(obs.group == j)[0]
-            d = obs.x_W_mm[m] - T[:3, 3]                             # (k, 3)
-            G = np.zeros((m.size, 3, 6))
-            G[:, :, :3] = np.eye(3) * st
-            # the recorded angles a, b, c each uncertain by sr: rotation vector E (da, db, dc), moving the
-            # point by omega x d = -skew(d) omega
-            G[:, :, 3:] = -skew(d) @ abc_rate_axes(T[:3, :3]) * sr
-            G = G.reshape(3 * m.size, 6)
+            G = pose_point_jacobian(obs.x_W_mm[m], T).reshape(3 * m.size, 6)
             rows = (3 * m[:, None] + np.arange(3)).ravel()
-            S[np.ix_(rows, rows)] += G @ G.T
+            S[np.ix_(rows, rows)] += G @ stated.get(j, default) @ G.T
     return S
+
+
+def pose_point_jacobian(x_W_mm: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """shape=(k, 3, 6): how points ``x_W_mm`` (k, 3) read in a device frame of pose ``T`` (4x4) move per unit
+    change of its recorded pose [x, y, z, a, b, c] (per mm, per deg): a translation moves them along, the angles
+    turn them about the origin through the rates of Rx(a) Ry(b) Rz(c), omega x d = -skew(d) omega."""
+    d = np.asarray(x_W_mm, float) - T[:3, 3]
+    G = np.zeros((d.shape[0], 3, 6))
+    G[:, :, :3] = np.eye(3)
+    G[:, :, 3:] = -skew(d) @ abc_rate_axes(T[:3, :3]) * np.deg2rad(1.0)
+    return G

@@ -43,6 +43,7 @@ class ResidualTest:
     missing: bool
     clamping: bool = True
     source: str = "instrument"             # what the noise is of, without clamping poses (the wording)
+    poses_stated: bool = False             # the fixture file states each pose's covariance (rodlab.fixture/2)
 
     @property
     def birge(self) -> float:
@@ -64,8 +65,9 @@ class ResidualTest:
         if not self.clamping:
             per = "per reading" if "length" in self.source else "per coordinate"
             return head + f"{self.source} {self.noise_mm * 1e3:.1f} um {per}"
-        return head + (f"device {self.noise_mm * 1e3:.1f} um per reading, clamping poses "
-                       f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
+        poses = ("as the fixture file states them" if self.poses_stated else
+                 f"{self.fixture_sigma[0]:g} mm / {self.fixture_sigma[1]:g} deg")
+        return head + f"device {self.noise_mm * 1e3:.1f} um per reading, clamping poses {poses}"
 
 
 def whitened_projection(r_mm: np.ndarray, J: np.ndarray, L: np.ndarray) -> np.ndarray:
@@ -97,4 +99,4 @@ def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002))
     chi2 = float(e @ e)
     p = float(chdtrc(dof, chi2))
     return ResidualTest(chi2, dof, chi2 / dof, p, float(noise_mm), tuple(fixture_sigma), p < P_MISSING,
-                        obs.group is not None)
+                        obs.group is not None, poses_stated=bool(getattr(obs, "pose_cov", None)))

@@ -39,6 +39,7 @@ class CampaignSpec:
     q_resolution_deg: float = 1e-4
     alignment_mm: float = 0.15
     fixture_noise_mm_deg: tuple = (0.01, 0.002)
+    probe_accuracy_mm: float = 0.005
     error_scale: float = 1.0
     validation_points: int = 100
     seed: int = 0
@@ -133,9 +134,10 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
 
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(), *,
                       rod_true: RodCompliance | None = None, effects=None, rod_thermal=None,
-                      temp_K_per_s: float = 0.0) -> dict:
+                      temp_K_per_s: float = 0.0, device=None) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
-    and the rod file into ``out_dir``; return the truth.
+    and the rod file into ``out_dir`` (with a device also ``multical.device.json`` and ``multical.probe.csv``,
+    its features probed at the true clamping poses to ``spec.probe_accuracy_mm``); return the truth.
 
     rod_true : the rod as it really is (default: ``rod``, the file the calibrator is given; a ``rod_deflection``
         effect scales it further);
@@ -145,7 +147,10 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         "offset_mm": [0.1, 0, 0]}}``; missing magnitudes take the effect's example);
     rod_thermal, temp_K_per_s : (:class:`~rodlab.calibrate.thermal.ThermalGrowth`) the room warms from 22 degC
         at that rate during the campaign and the rod's tool vector grows with it (the ``temp_C`` column records
-        it)."""
+        it);
+    device : a :class:`~calibrate.device.Device` as built: the campaign then holds its sensors' raw readings
+        (``s1_mm, s2_mm, s3_mm``, each with the device noise), the springs push the ball with the force at each
+        reading, and ``multical.device.json`` is written (the caller may write another, e.g. a nominal one)."""
     active = complete_campaign_effects(effects)
     for m, p in active:
         m.check_layout(spec.positions, spec.positions * spec.orientations, robot.n, p)
@@ -156,14 +161,21 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         rod_true = m.true_rod(rod_true, p)
     truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale).with_(base=standard_base())
     wp, Ts = fixture_layout(spec.positions, rng)
-    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s)
+    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s, device)
     xD, corrupted = _corrupt(readings, spec, active)
     readings = replace(readings, xD=xD)
     out.mkdir(parents=True, exist_ok=True)             # after every check and the reachability of the poses
-    _write_campaign(out / "multical.campaign.csv", robot, readings)
+    _write_campaign(out / "multical.campaign.csv", robot, readings, device)
     recorded = _recorded_fixture(Ts, wp, spec, rng, active)
     atomic_write_json(out / "multical.fixture.json", {"format": "rodlab.fixture/1", "world_position": wp,
-                                                      "positions": recorded, "contact_force_N": [1.10, 1.25, 1.05]})
+                                                      "positions": recorded,
+                                                      "contact_force_N": _force_at_datum(device).tolist()})
+    if device is not None:
+        from .device import write_device
+        from .probe import simulated_probe_text
+        write_device(device, out / "multical.device.json")
+        atomic_write_text(out / "multical.probe.csv", simulated_probe_text(Ts, device, spec.probe_accuracy_mm,
+                                                                           np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
     from rodlab.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
@@ -194,11 +206,57 @@ def _true_angles(q: np.ndarray, active) -> np.ndarray:
     return q
 
 
-def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s) -> _Readings:
+def _force_at_datum(device) -> np.ndarray:
+    """The contact force in {D} [N] with the ball at the datum point: the device's springs', else the paper's."""
+    if device is None or not device.has_springs:
+        return CONTACT_FORCE_D_N.copy()
+    return device.force_D(device.zero_mm[None, :])[0]
+
+
+def _device_noise(rng, sigma_mm: float, m: int, device) -> np.ndarray:
+    """Device noise of m points in {D} [mm]: per coordinate, or each sensor's reading through the axes."""
+    n = rng.normal(0, sigma_mm, (m, 3))
+    return n if device is None else device.positions(device.zero_mm + n)
+
+
+def _spring_loaded(robot, truth, rod, rod_true, qt, T, device, Fm):
+    """Ball centres in {W} (true robot, true rod deflected) and the contact forces in {W}; with a device's
+    springs the force is the one at each point's readings (one update: a spring rate changes it by ~1 %)."""
+    def centres(F):
+        fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F)
+        return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
+    fr, pW = centres(Fm)
+    if device is not None and device.has_springs:
+        Tinv = np.linalg.inv(T)
+        Fm = device.force_D(device.readings(pW @ Tinv[:3, :3].T + Tinv[:3, 3])) @ T[:3, :3].T
+        fr, pW = centres(Fm)
+    return fr, pW
+
+
+def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
+    """The operator aligns the ball on the device's readings, so the rod's deflection under its weight and the
+    contact force is taken out of the alignment: each configuration moved (IK from itself) until the deflected
+    ball is where the undeflected one was; one that IK cannot move keeps its place."""
+    from .ik import solve_ik_positions
+    keys = list(reached)
+    q = np.concatenate([reached[j] for j in keys])
+    F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])
+    fr, _ = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
+    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod.mass_kg,
+                             rod.com_T_mm, F)
+    q = np.where(res.ok[:, None], res.q_rad, q)
+    edges = np.cumsum([0] + [len(reached[j]) for j in keys])
+    return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
+
+
+def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s, device=None
+              ) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
-    forces = {j: Ts[j][:3, :3] @ CONTACT_FORCE_D_N for j in Ts}
+    forces = {j: Ts[j][:3, :3] @ _force_at_datum(device) for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
+    if device is not None:
+        reached = _reaim(robot, truth, rod, forces, reached)
     cols: dict = {"position": [], "point": [], "q_deg": [], "xD": [], "time_s": [], "temp_C": []}
     t = 0.0
     for j in range(1, spec.positions + 1):
@@ -206,10 +264,9 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, t
         qt = _true_angles(q, active)                                   # the angles the joints really take
         m = len(q)
         Fm = np.broadcast_to(forces[j], (m, 3))
-        fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, Fm)
-        pW = fr.pW + deflection_offsets(robot, truth, qt, Fm, rod_true)
+        fr, pW = _spring_loaded(robot, truth, rod, rod_true, qt, Ts[j], device, Fm)
         Tinv = np.linalg.inv(Ts[j])
-        xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + rng.normal(0, spec.device_noise_mm, (m, 3))
+        xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + _device_noise(rng, spec.device_noise_mm, m, device)
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
         temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
@@ -240,11 +297,14 @@ def _corrupt(readings: _Readings, spec, active) -> tuple[np.ndarray, dict]:
     return xD, done
 
 
-def _write_campaign(path: Path, robot, r: _Readings) -> None:
+def _write_campaign(path: Path, robot, r: _Readings, device=None) -> None:
+    """The campaign file: x, y, z in {D}, or with a device its sensors' readings (as they read them)."""
+    cells = r.xD if device is None else device.readings(r.xD)
+    cols = "x_mm,y_mm,z_mm" if device is None else "s1_mm,s2_mm,s3_mm"
     rows = [f"{j},{i}," + ",".join(f"{v:.4f}" for v in q) + "," + ",".join(f"{v:.4f}" for v in x)
-            + f",{ts:.0f},{tc:.2f}" for j, i, q, x, ts, tc in zip(r.position, r.point, r.q_deg, r.xD, r.time_s, r.temp_C)]
+            + f",{ts:.0f},{tc:.2f}" for j, i, q, x, ts, tc in zip(r.position, r.point, r.q_deg, cells, r.time_s, r.temp_C)]
     atomic_write_text(path, "position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))
-                      + ",x_mm,y_mm,z_mm,time_s,temp_C\n" + "\n".join(rows) + "\n")
+                      + f",{cols},time_s,temp_C\n" + "\n".join(rows) + "\n")
 
 
 def _recorded_fixture(Ts: dict, wp: int, spec, rng, active) -> dict:

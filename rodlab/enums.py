@@ -119,6 +119,7 @@ class CampaignEffect(_StrEnum):
     PERIODIC_JOINT_ERROR = "periodic_joint_error"
     THERMAL_DRIFT = "thermal_drift"
     OUTLIERS = "outliers"
+    DEVICE_AXES = "device_axes"
 
 
 class Trial(_StrEnum):

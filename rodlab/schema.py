@@ -44,6 +44,9 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.rod/1", "toml", "rod.schema.json", (".rod.toml",), "rod design"),
     FormatSpec("rodlab.compliance/2", "json", "compliance.schema.json", (".compliance.json",), "rod compliance"),
     FormatSpec("rodlab.fixture/1", "json", "fixture.schema.json", (".fixture.json",), "device fixture"),
+    FormatSpec("rodlab.fixture/2", "json", "fixture2.schema.json", (),
+               "device fixture with each pose's uncertainty"),
+    FormatSpec("rodlab.device/1", "json", "device.schema.json", (".device.json",), "3-D measuring device"),
     FormatSpec("rodlab.robot/2", "toml", "robot.schema.json", (".robot.toml",), "robot file"),
     FormatSpec("rodlab.calibration/1", "json", "calibration.schema.json", (".cal.json",), "calibration result"),
     FormatSpec("rodlab.diagnosis/1", "json", "diagnosis.schema.json", (".diagnosis.json",), "diagnosis report"),
@@ -57,6 +60,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.campaign/1", "csv", "campaign.table.json", (".campaign.csv",), "calibration campaign"),
     FormatSpec("rodlab.points/1", "csv", "points.table.json", (".validation.csv", ".points.csv"),
                "instrument / validation points"),
+    FormatSpec("rodlab.probe/1", "csv", "probe.table.json", (".probe.csv",), "device features probed at the "
+               "clamping positions"),
     FormatSpec("rodlab.sockets/1", "csv", "sockets.table.json", (".sockets.csv",), "ball-in-socket / ball-bar readings"),
     FormatSpec("rodlab.blind_rig/1", "toml", "blind_rig.schema.json", (), "rig blind-case definitions"),
     FormatSpec("rodlab.blind_campaign/1", "toml", "blind_campaign.schema.json", (), "campaign blind-case definitions"),

@@ -5,7 +5,8 @@ A table schema (``rodlab/schemas/*.table.json``) states the ``# key: value`` com
 (``columns``: ``name``, ``type`` number / integer / string, ``required``, ``nullable`` for empty cells,
 ``enum``, ``minimum`` / ``exclusiveMinimum``, ``unit``; a column with ``"joints": true`` and a name such as
 ``q{i}`` stands for q1..qn, n being however many the header has). ``unique`` lists column groups whose values
-may not repeat; ``together`` groups of columns that are all present or all absent.
+may not repeat; ``together`` groups of columns that are all present or all absent; ``one_of`` alternative groups
+of which exactly one is present (a campaign's x, y, z or its raw sensor readings).
 """
 from __future__ import annotations
 
@@ -88,6 +89,20 @@ def _header_problems(header: list[str], cols: dict, schema: dict, path: str, lin
             missing = [g for g in group if g not in header]
             out.append(Problem(path, f"columns {group} go together; missing {missing}", line, missing[0],
                                f"add {missing} or remove {have}"))
+    out += _one_of_problems(header, schema, path, line)
+    return out
+
+
+def _one_of_problems(header: list[str], schema: dict, path: str, line: int) -> list[Problem]:
+    out = []
+    for alternatives in schema.get("one_of", []):
+        present = [g for g in alternatives if any(c in header for c in g)]
+        if len(present) == 1:
+            continue
+        names = " or ".join(",".join(g) for g in alternatives)
+        msg = "has columns of " + " and ".join(",".join(g) for g in present) if present else "has none of them"
+        out.append(Problem(path, f"expected the columns {names}, exactly one set; the header {msg}", line,
+                           alternatives[0][0], "keep one set of columns"))
     return out
 
 

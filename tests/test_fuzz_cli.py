@@ -41,11 +41,28 @@ TOKENS = ["nan", "inf", "-inf", "-1", "-3", "0", "1e308", "abc", "", "0.5", "2",
           "1#", "friction:F_f_N=0.3", "creep:phi=x", "nope:a=1", "joint:1", "a" * 300, "\u00e9\u00e8", "--"]
 FILE_KEYS = {"design", "recording", "sim", "rod", "campaign", "fixture", "validate", "points", "profile", "plan",
              "base", "joints", "robot", "run_dir", "rod_true", "designs", "rig", "files", "calibration", "urdf",
-             "fields_file"}
+             "fields_file", "device", "probe"}
 OUT_KEYS = {"output", "json", "png", "export", "joints_out", "cache", "link", "fields"}
 #: sub-commands whose valid runs take minutes or need hardware: always fuzzed with a broken main input
 HEAVY = {"demo": None, "report": "run_dir", "cad": "design", "mesh": "design", "sweep": "base", "study": "designs",
          "rig acquire": "profile", "rig simulator": "sim", "fea": "design"}
+
+
+def _device_file(folder: Path) -> Path:
+    from rodlab.calibrate.device import ideal_device, write_device
+    return write_device(ideal_device(), folder / "multical.device.json")
+
+
+def _probe_file(folder: Path) -> Path:
+    import numpy as np
+
+    from rodlab.calibrate.device import ideal_device
+    from rodlab.calibrate.probe import simulated_probe_text
+    from rodlab.calibrate.simulate import standard_fixture
+    Ts = {j: standard_fixture().transform(j) for j in standard_fixture().poses}
+    path = folder / "multical.probe.csv"
+    path.write_text(simulated_probe_text(Ts, ideal_device(), 0.005, np.random.default_rng(0)))
+    return path
 
 
 def _pool(folder: Path) -> dict[str, list[Path]]:
@@ -57,7 +74,8 @@ def _pool(folder: Path) -> dict[str, list[Path]]:
              "compliance": write_compliance(calc_rod_compliance(resolve_design("rod1")), folder / "rod1.compliance.json"),
              "robot": ROOT / "calibrate" / "robots" / "tx90.toml",
              "profile": ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml",
-             "plan": ROOT / "stiffness_rig" / "plans" / "quick.plan.toml"}
+             "plan": ROOT / "stiffness_rig" / "plans" / "quick.plan.toml",
+             "device": _device_file(folder), "probe": _probe_file(folder)}
     if SHARED.is_dir():
         valid["recording"] = shutil.copy(SHARED / "rig-null.rig.csv", folder / "rig-null.rig.csv")
         for name in ("campaign", "fixture", "validation"):
@@ -106,7 +124,7 @@ COMMANDS = _commands()
 KIND = {"design": "design", "base": "design", "designs": "design", "sim": "compliance", "rod": "compliance",
         "rod_true": "compliance", "recording": "recording", "rig": "recording", "campaign": "campaign",
         "fixture": "fixture", "validate": "validation", "points": "validation", "profile": "profile", "plan": "plan",
-        "robot": "robot"}
+        "robot": "robot", "device": "device", "probe": "probe"}
 SANE = {"int": ["1", "2", "3", "5"], "float": ["0.5", "1.0", "3.0", "8.0"]}
 
 

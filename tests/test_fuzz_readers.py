@@ -40,6 +40,7 @@ def _sources():
         "profile": ((ROOT / "stiffness_rig" / "plans" / "simulator.profile.toml").read_bytes(), ".toml"),
         "plan": ((ROOT / "stiffness_rig" / "plans" / "paper.plan.toml").read_bytes(), ".toml"),
     }
+    out.update(_device_sources(tmp))
     mukca = ROOT / "benchmarks" / "data" / "mukca2025" / "kuka_14.sockets.csv"
     if mukca.exists():
         out["sockets"] = ("\n".join(mukca.read_text().splitlines()[:60]).encode() + b"\n", ".sockets.csv")
@@ -51,6 +52,24 @@ def _sources():
         out["fixture"] = ((c / "multical.fixture.json").read_bytes(), ".fixture.json")
         out["validation"] = ((c / "multical.validation.csv").read_bytes(), ".validation.csv")
     return out
+
+
+def _device_sources(tmp: Path) -> dict:
+    """A device file as built, its probe file, a raw campaign and the fixture fitted from the probes."""
+    from rodlab.calc import calc_rod_compliance
+    from rodlab.calibrate import fit_fixture, read_probe, resolve_robot, write_fixture
+    from rodlab.calibrate.device import ideal_device, misaligned_device
+    from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+    from rodlab.design_io import resolve_design
+    dev = misaligned_device(ideal_device(), 2.0, np.random.default_rng(1))
+    simulate_campaign(resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1")), tmp / "raw",
+                      CampaignSpec(positions=3, orientations=3), device=dev)
+    fix = write_fixture(fit_fixture(read_probe(tmp / "raw" / "multical.probe.csv"), dev, 1).fixture,
+                        tmp / "probed.fixture.json")
+    return {"device": ((tmp / "raw" / "multical.device.json").read_bytes(), ".device.json"),
+            "probe": ((tmp / "raw" / "multical.probe.csv").read_bytes(), ".probe.csv"),
+            "raw_campaign": ((tmp / "raw" / "multical.campaign.csv").read_bytes(), ".campaign.csv"),
+            "fixture2": (fix.read_bytes(), ".fixture.json")}
 
 
 SOURCES = _sources()
@@ -81,8 +100,14 @@ def _reader(kind):
     if kind == "sockets":
         from rodlab.calibrate.sockets import read_sockets
         return lambda p: read_sockets(p, 7)
+    if kind in ("device", "probe", "raw_campaign"):
+        from rodlab.calibrate import read_campaign, read_device, read_probe
+        from rodlab.calibrate.device import ideal_device
+        return {"device": read_device, "probe": read_probe,
+                "raw_campaign": lambda p: read_campaign(p, 6, ideal_device())}[kind]
     from rodlab.calibrate.campaign import read_campaign, read_fixture, read_points
-    return {"campaign": read_campaign, "fixture": read_fixture, "validation": read_points}[kind]
+    return {"campaign": read_campaign, "fixture": read_fixture, "fixture2": read_fixture,
+            "validation": read_points}[kind]
 
 
 @st.composite

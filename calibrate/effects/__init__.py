@@ -13,6 +13,7 @@ from rodlab.enums import CampaignEffect
 
 from ..errors import CalibrationError
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+from .device_axes import DeviceAxes
 from .fixture_pose import FixturePose
 from .outliers import Outliers
 from .periodic_joint_error import PeriodicJointError, correct_joints
@@ -26,7 +27,7 @@ __all__ = ["CAMPAIGN_EFFECTS", "campaign_effect", "complete_campaign_effects", "
 #: every campaign effect, in the order the simulator applies them and the diagnosis lists its hypotheses (the
 #: order also breaks ties between equally good hypotheses: append new effects at the end)
 CAMPAIGN_EFFECTS: dict[CampaignEffect, CampaignEffectModel] = {m.effect: m for m in (
-    FixturePose(), RodDeflection(), PeriodicJointError(), ThermalDrift(), Outliers())}
+    FixturePose(), RodDeflection(), PeriodicJointError(), ThermalDrift(), Outliers(), DeviceAxes())}
 
 
 def campaign_effect(name) -> CampaignEffectModel:

@@ -14,6 +14,7 @@ from ...compliance import RodCompliance, read_compliance
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import count, joint_list, nonneg_float, pos_float, seed
+from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 from .verdict import judge, print_held, print_verdict
@@ -59,6 +60,7 @@ def register(sub) -> None:
                                    "instrument's points (--points).")
     p.add_argument("campaign", nargs="?", help="*.campaign.csv (omit with --points)")
     p.add_argument("--fixture", help="*.fixture.json (clamping poses, contact force)")
+    add_device_option(p)
     p.add_argument("--rod", help="the rod's *.compliance.json (tool, mass, COM, C_F, C_g)")
     p.add_argument("--compensation", choices=["none", "file"], default="file",
                    help="file: compensate with the rod file's matrices (its method: calc / fea / meas); none: no "
@@ -95,6 +97,7 @@ def register(sub) -> None:
                                    "validation statistics in the layout of the paper's Table 3.")
     p.add_argument("campaign")
     p.add_argument("--fixture", required=True)
+    add_device_option(p)
     p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
                    help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")
     p.add_argument("--png", default=None, help="the error distributions per method (the paper's Fig. 10): FILE.png, "
@@ -161,14 +164,17 @@ def _stats(errors_mm):
     return error_stats(errors_mm)
 
 
-def run_calibration(args, rod: RodCompliance, compensation) -> CalibrationRun:
+def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> CalibrationRun:
     """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
-    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`)."""
-    from rodlab.calibrate import ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points
+    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`); ``camp`` the campaign
+    already read (else ``args.campaign`` with ``args.device``)."""
+    from rodlab.calibrate import ModelParams, campaign_observations, identify, read_fixture, read_points
     from rodlab.calibrate import validate
     robot = robot_from_args(args)
-    camp = read_campaign(args.campaign, robot.n)
     fix = read_fixture(args.fixture)
+    if camp is None:                                    # compare reads the campaign and warns once
+        camp = campaign_from_args(args, robot.n)
+        warn_flagged_fixture(fix, args.fixture)
     obs = campaign_observations(camp, fix, rod)
     options = dict(also_compensate=_thermal(args, camp, rod), pinned=_pins(args, robot.n), freed=set(args.free),
                    robust=args.robust, harmonics=getattr(args, "joint_harmonics", ()))
@@ -214,6 +220,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                               "with --robot (a built-in name such as ur5, a robot TOML or a URDF); the tx90 default "
                               "is only for MultiCal campaigns")
         args.robot = "tx90"
+    if (args.points or args.sockets) and args.device:
+        raise RodlabError("--device converts a campaign's raw sensor readings; instrument points and socket readings "
+                          "have none: leave --device out")
     if args.sockets and args.joint_harmonics:
         raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
                           "no periodic joint errors: leave it out")
@@ -248,6 +257,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.material:
             _print_suspects(robot, camp, args, rod, comp, res.residual_check)
+        _note_ideal_device(args)
         return 3
     print_cautions(res)
     return 0
@@ -260,6 +270,18 @@ def _campaign_prediction(run: CalibrationRun, rod, comp):
         return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
     return cross_validate_identify(run.robot, run.observations, rod.tool_mm, comp.rod if comp.active else None,
                                    fit_rms_mm=run.result.rms_mm, **run.options)
+
+
+def _note_ideal_device(args) -> None:
+    """A not-trusted raw campaign read with exactly orthogonal sensors: say that a real device's are not."""
+    if not getattr(args, "device", None):
+        return
+    from rodlab.calibrate.device import read_device
+    dev = read_device(args.device)
+    if np.max(np.abs(dev.misalignment_deg())) < 1e-6:
+        print(f"  - {args.device} states exactly orthogonal sensors (a design, not a device as built): a real "
+              f"device's axes are off by up to a degree or two, which puts several um on readings a few tenths of "
+              f"a mm from the datum; give the device's calibrated axes", file=sys.stderr)
 
 
 def print_cautions(res) -> None:
@@ -413,7 +435,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if not args.validate:
         raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
                           "campaign's *.validation.csv")
-    runs = [(name, run_calibration(args, rod, comp)) for name, rod, comp in _compare_runs(args.rod)]
+    planned = _compare_runs(args.rod)
+    camp = campaign_from_args(args, robot_from_args(args).n)
+    from rodlab.calibrate import read_fixture
+    warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
+    runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
     before = runs[0][1].before
     print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
@@ -469,6 +495,12 @@ def register_more(sub) -> None:
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (repeatable), e.g. periodic_joint_error:joint=4,amp_deg=0.006, "
                         "thermal_drift:growth_ppm_per_s=0.03, rod_deflection:k=1.5, outliers:count=3")
+    p.add_argument("--raw", action="store_true",
+                   help="write the device's three raw sensor readings (s1_mm, s2_mm, s3_mm; --noise-um per reading) "
+                        "and its file multical.device.json (as built: sensors 2 and 3 off by --misalign-deg, springs "
+                        "whose force follows each reading); nominal.device.json is the orthogonal design")
+    p.add_argument("--misalign-deg", type=nonneg_float, default=1.0,
+                   help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg]")
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)
@@ -485,6 +517,8 @@ def register_more(sub) -> None:
     p.add_argument("--seed", type=seed, default=0)
     p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
     p.set_defaults(func=cmd_plan)
+    from . import cmd_fixture                # the fixture's poses from probing (registered here: one campaign family)
+    cmd_fixture.register(sub)
 
 
 def cmd_simulate_campaign(args) -> int:
@@ -509,12 +543,27 @@ def cmd_simulate_campaign(args) -> int:
     effects += parse_effect_specs(args.effect, campaign_effect)
     spec = CampaignSpec(positions=args.positions, orientations=args.orientations, device_noise_mm=args.noise_um * 1e-3,
                         seed=args.seed)
-    truth = simulate_campaign(robot, rod, args.output, spec, rod_true=rod_true, effects=effects)
+    device = _simulated_device(args)
+    truth = simulate_campaign(robot, rod, args.output, spec, rod_true=rod_true, effects=effects, device=device)
     print(f"wrote a {args.positions} x {args.orientations} campaign of {robot.name} with rod {rod.rod} to {args.output}")
+    if device is not None:
+        from rodlab.calibrate.device import ideal_device, write_device
+        write_device(ideal_device(), Path(args.output) / "nominal.device.json")
+        print(f"  raw sensor readings; device as built multical.device.json (sensor pairs off orthogonal by "
+              f"{', '.join(f'{v:.2f}' for v in device.misalignment_deg())} deg), nominal.device.json the design")
     for e in truth["effects"]:
         names = [p.name for p in campaign_effect(e["effect"]).params]
         print("  effect " + e["effect"] + ": " + ", ".join(f"{k}={e[k]}" for k in names if k in e))
     return 0
+
+
+def _simulated_device(args):
+    """``--raw``: the device as built, its misalignment drawn from a generator of its own (the campaign's other
+    draws stay those of the same seed)."""
+    if not args.raw:
+        return None
+    from rodlab.calibrate.device import ideal_device, misaligned_device
+    return misaligned_device(ideal_device(), args.misalign_deg, np.random.default_rng([args.seed, 2]))
 
 
 def cmd_plan(args) -> int:

@@ -8,6 +8,7 @@ from ...enums import MODEL_FORM
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
+from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
 from .rodargs import compliance_arg
@@ -32,6 +33,7 @@ def register(sub) -> None:
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
+    p.add_argument("--device", default=None, metavar="DEV.device.json", help="campaign: " + DEVICE_HELP)
     add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
     p.add_argument("--rod", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the --sim "
                                  "file was made from, if it is still there); campaign: the *.compliance.json used")
@@ -107,13 +109,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
             print(f"wrote {written[-1]}")
     else:
-        from rodlab.calibrate import read_campaign, read_fixture, read_points
+        from rodlab.calibrate import read_fixture, read_points
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = robot_from_args(args)
         noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
         pts = read_points(args.validate, robot.n) if args.validate else None
-        diag, fits = diagnose_campaign(robot, read_campaign(args.campaign, robot.n), read_fixture(args.fixture),
+        fix = read_fixture(args.fixture)
+        warn_flagged_fixture(fix, args.fixture)
+        diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
                                        read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
         print(diag.summary())
         if "validation" in diag.extra:

@@ -1,0 +1,79 @@
+"""Raw device readings to ball centres: a campaign's ``s1_mm, s2_mm, s3_mm`` through its device file.
+
+Each point's three readings solve ``A x = s - zero`` for the ball centre x in {D_j} (:class:`~calibrate.device.
+Device`); the sensors' independent noise reaches x as ``A^-1 A^-T`` per unit variance (the campaign's
+``noise_shape_D``, which :func:`calibrate.observations.noise_covariance` turns to {W}); with the springs stated
+the contact force of each point is the springs' at its readings. A reading outside its sensor's range is
+refused (its position, point and line named): the tip had lost the ball or hit its stop.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .campaign import RAW_COLUMNS, Campaign
+from .device import Device
+from .errors import CalibrationError
+
+__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM"]
+
+log = logging.getLogger(__name__)
+
+#: how far from the datum point the paper's alignment keeps the ball (Section 3.1); farther, the springs'
+#: force and the rod's deflection differ from what a constant contact force assumes
+ALIGNMENT_LIMIT_MM = 0.5
+
+
+def apply_device(camp: Campaign, device: Device) -> Campaign:
+    """The campaign with its raw readings converted: ``x_D_mm``, ``noise_shape_D`` and (springs stated)
+    ``force_D_N`` per point. Refuses a campaign that has no raw readings and any reading outside its range."""
+    if not camp.raw:
+        raise CalibrationError(f"the device file ({device.path or device.name}) converts raw sensor readings "
+                               f"({', '.join(RAW_COLUMNS)}), but this campaign gives the ball centre in {{D}} "
+                               f"(x_mm, y_mm, z_mm); leave --device out", path=camp.path, key="x_mm")
+    _check_ranges(camp, device)
+    x = device.positions(camp.readings_mm)
+    shape = np.broadcast_to(device.noise_shape_D(), (camp.n, 3, 3)).copy()
+    force = device.force_D(camp.readings_mm) if device.has_springs else None
+    log.info("converted %d raw readings with device %s (misalignment %s deg)", camp.n, device.name,
+             np.round(device.misalignment_deg(), 3).tolist())
+    return replace(camp, x_D_mm=x, noise_shape_D=shape, force_D_N=force)
+
+
+def _check_ranges(camp: Campaign, device: Device) -> None:
+    for k, sensor in enumerate(device.sensors):
+        lo, hi = sensor.range_mm
+        s = camp.readings_mm[:, k]
+        bad = np.nonzero((s < lo) | (s > hi))[0]
+        if bad.size:
+            i = int(bad[0])
+            more = f" ({bad.size - 1} more readings of this sensor are outside too)" if bad.size > 1 else ""
+            raise CalibrationError(
+                f"position {camp.position[i]} point {camp.point[i]}: sensor {k + 1} reads {s[i]:g} mm, outside "
+                f"its range [{lo:g}, {hi:g}] mm (device {device.path or device.name}){more}; the tip lost the ball "
+                f"or hit its stop: align the ball nearer the datum and measure the point again, or delete the row",
+                path=camp.path, line=int(camp.lines[i]) if camp.lines.size else None, key=RAW_COLUMNS[k])
+
+
+@dataclass(frozen=True)
+class FarPoint:
+    """A point whose ball centre is ``distance_mm`` [mm] from the datum, at ``line`` of the campaign."""
+
+    position: int
+    point: int
+    line: int | None
+    distance_mm: float
+
+    def __str__(self) -> str:
+        at = f" (line {self.line})" if self.line else ""
+        return f"position {self.position} point {self.point}{at}: {self.distance_mm:.2f} mm"
+
+
+def far_points(camp: Campaign, limit_mm: float = ALIGNMENT_LIMIT_MM) -> list[FarPoint]:
+    """The points farther than ``limit_mm`` from the datum point (the paper aligns within about half a mm)."""
+    d = np.linalg.norm(camp.x_D_mm, axis=1)
+    idx = np.nonzero(d > limit_mm)[0]
+    return [FarPoint(int(camp.position[i]), int(camp.point[i]), int(camp.lines[i]) if camp.lines.size else None,
+                     float(d[i])) for i in idx]

@@ -1,0 +1,68 @@
+"""``rodlab fixture``: the fixture file's clamping poses, with their uncertainty, from probed device features."""
+from __future__ import annotations
+
+import sys
+
+from .argtypes import count
+
+__all__ = ["register", "cmd_fixture"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("fixture", help="fit the fixture's clamping poses from probed device features",
+                       description="Fits the device frame {D_j} of every probed clamping position to its reference "
+                                   "features (features_D_mm of the device file) measured by a measuring arm or laser "
+                                   "tracker (PROBE.csv: position,feature,x_mm,y_mm,z_mm in its own frame, "
+                                   "'# accuracy_mm:' its accuracy): least squares, each pose's covariance from the "
+                                   "accuracy. Writes the poses in {W} = {D_world} with their covariance "
+                                   "(rodlab.fixture/2; the calibration's noise model uses it) and flags a position "
+                                   "whose residuals exceed the accuracy (exit 3).")
+    p.add_argument("probe", help="*.probe.csv")
+    p.add_argument("--device", required=True, help="the device's *.device.json (its features_D_mm)")
+    p.add_argument("--world-position", type=count, required=True,
+                   help="the clamping position whose device frame is the world frame {W}")
+    p.add_argument("--contact-force", default=None, metavar="FX,FY,FZ",
+                   help="contact force on the ball in {D} [N] for the file (default: the device's springs at the "
+                        "datum, else 1.10,1.25,1.05)")
+    p.add_argument("-o", "--output", required=True, help="the *.fixture.json to write")
+    p.set_defaults(func=cmd_fixture)
+
+
+def _force(text):
+    import math
+
+    from ...errors import RodlabError
+    if text is None:
+        return None
+    try:
+        v = [float(x) for x in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) != 3 or not all(map(math.isfinite, v)):
+        raise RodlabError(f"--contact-force {text!r}: expected three finite numbers FX,FY,FZ [N], e.g. 1.10,1.25,1.05")
+    return v
+
+
+def cmd_fixture(args) -> int:
+    from rodlab.calibrate import write_fixture
+    from rodlab.calibrate.device import read_device
+    from rodlab.calibrate.probe import fit_fixture, read_probe
+    force = _force(args.contact_force)
+    fit = fit_fixture(read_probe(args.probe), read_device(args.device), args.world_position, force)
+    print(f"fixture from {args.probe}: {len(fit.fits)} positions, world position {args.world_position}, instrument "
+          f"accuracy {fit.accuracy_mm * 1e3:g} um")
+    print("  position  features  rms resid um   sigma x,y,z um        sigma a,b,c mdeg")
+    for j, f in sorted(fit.fits.items()):
+        s = fit.sigmas(j)
+        mark = "  FLAGGED" if f.flagged else ""
+        print(f"  {j:>8}  {len(f.features):>8}  {f.rms_mm * 1e3:12.1f}   {s[0] * 1e3:5.1f} {s[1] * 1e3:5.1f} "
+              f"{s[2] * 1e3:5.1f}   {s[3] * 1e3:6.1f} {s[4] * 1e3:6.1f} {s[5] * 1e3:6.1f}{mark}")
+    path = write_fixture(fit.fixture, args.output)
+    print(f"wrote {path}")
+    for f in fit.flagged:
+        name, d = f.suspect
+        print(f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "
+              f"over {f.dof} degrees of freedom, p = {f.p:.1e}); suspect feature {name!r}, {d * 1e3:.0f} um off the "
+              f"fit of the others. "
+              f"Probe it again or check the device's seat before calibrating", file=sys.stderr)
+    return 3 if fit.flagged else 0

@@ -1,0 +1,43 @@
+"""``--device DEV.device.json``: read a campaign of raw sensor readings (``s1_mm, s2_mm, s3_mm``) through its
+device file, and warn where the ball sat farther from the datum than the paper's alignment."""
+from __future__ import annotations
+
+import sys
+
+__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "warn_flagged_fixture"]
+
+DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
+               "each point is solved from its readings, the sensors' noise (--noise-um, per reading) is propagated "
+               "through the axes, the springs' force at each reading is the contact force, and a reading outside "
+               "its sensor's range is refused")
+
+
+def add_device_option(p) -> None:
+    p.add_argument("--device", default=None, metavar="DEV.device.json", help=DEVICE_HELP)
+
+
+def campaign_from_args(args, n_joints: int, warn: bool = True):
+    """``args.campaign`` read (with ``args.device`` when given); with ``warn`` the points far from the datum are
+    named on stderr."""
+    from rodlab.calibrate import read_campaign
+    from rodlab.calibrate.device import read_device
+    from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points
+    device = read_device(args.device) if getattr(args, "device", None) else None
+    camp = read_campaign(args.campaign, n_joints, device)
+    if warn and camp.x_D_mm is not None:
+        far = far_points(camp)
+        if far:
+            shown = "; ".join(str(f) for f in far[:5]) + (f"; and {len(far) - 5} more" if len(far) > 5 else "")
+            print(f"warning: {args.campaign}: {len(far)} point(s) farther than {ALIGNMENT_LIMIT_MM:g} mm from the "
+                  f"datum point (the alignment the paper assumes; the springs' force and the rod's deflection "
+                  f"differ there): {shown}", file=sys.stderr)
+    return camp
+
+
+def warn_flagged_fixture(fix, path) -> None:
+    """A fixture file whose probing flagged positions (``rodlab fixture`` exit 3) is named on stderr."""
+    flagged = (fix.probing or {}).get("flagged") or {}
+    if flagged:
+        where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
+        print(f"warning: {path}: its probing flagged {where} (residuals above the instrument's accuracy); those "
+              f"poses may be wrong: probe again", file=sys.stderr)

@@ -76,7 +76,7 @@ def parse_load(value: str) -> str:
     v = str(value).strip()
     key = {"x": "Fx", "y": "Fy", "z": "Fz"}.get(v.lower(), v[:1].upper() + v[1:].lower() if v[:1] in "Ff" else v.lower())
     if key not in LOAD_KEYS:
-        raise RenderError(f"load must be one of x, y, z (unit force), {', '.join(LOAD_KEYS)}; got {value!r}")
+        raise RenderError(f"--load {value!r}: expected one of x, y, z (unit force), {', '.join(LOAD_KEYS)}")
     return key
 
 

@@ -212,7 +212,7 @@ def test_view_and_fields_errors_are_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "bad.vtu" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert main(["view", str(bad), "--load", "w", "-o", str(tmp_path / "v.png")]) == 2
-    assert "load must be one of" in capsys.readouterr().err
+    assert "--load 'w': expected one of" in capsys.readouterr().err
     assert not (tmp_path / "v.png").exists()
 
 

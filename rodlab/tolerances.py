@@ -23,6 +23,11 @@ key                            default              why
 =============================  ===================  =================================================================
 
 ``[pipe_I]`` / ``[pipe_II]`` tables that override the tube get the tube's defaults under their own keys.
+
+Bonds: the joints a design models as rigid (the flange clamp, ring 1, pipe II: ring 2 and the ball holder) get a
+bending compliance tolerance ``joints.PLACE.s_bend_rad_per_Nm`` [rad/(N m)], default :data:`BOND_SD` (a sound epoxy
+sleeve bond is stiffer than ~3e-7 rad/(N m); 1e-6 allows a partly starved one); a compliant joint is named only
+beyond it.
 """
 from __future__ import annotations
 
@@ -32,8 +37,8 @@ from dataclasses import dataclass
 from .design import RodDesign
 from .errors import DesignError, did_you_mean
 
-__all__ = ["defaults_markdown", "ToleranceParam", "design_tolerances", "parse_tolerance_value", "check_tolerance_table",
-           "design_value", "numeric_keys", "DEFAULT_RULES"]
+__all__ = ["defaults_markdown", "bond_tolerances", "JOINT_PLACES", "BOND_SD", "ToleranceParam", "design_tolerances",
+           "parse_tolerance_value", "check_tolerance_table", "design_value", "numeric_keys", "DEFAULT_RULES"]
 
 #: (key pattern, laminate sigma, metal sigma, why) of the documented defaults; ``M`` stands for a material name
 DEFAULT_RULES = (
@@ -44,6 +49,20 @@ DEFAULT_RULES = (
     ("bend.radius_mm", "5%", "5%", "bend radius"),
     ("rings.length_mm", "10%", "10%", "bonded ring length"),
 )
+
+
+#: places where a design's rigid bonds may be compliant (the rig effect ``joint_compliance``'s locations)
+JOINT_PLACES = ("flange_clamp", "ring_1", "pipe_II")
+#: default standard deviation of a bond's bending compliance [rad/(N m)]
+BOND_SD = 1e-6
+
+
+def _bond_key(key: str) -> str | None:
+    """The place of a ``joints.PLACE.s_bend_rad_per_Nm`` key, else None."""
+    parts = key.split(".")
+    if len(parts) == 3 and parts[0] == "joints" and parts[2] == "s_bend_rad_per_Nm":
+        return parts[1]
+    return None
 
 
 @dataclass(frozen=True)
@@ -138,6 +157,16 @@ def check_tolerance_table(design: RodDesign, table: dict) -> dict[str, float]:
     """{key: one standard deviation} of a ``[tolerances]`` table, every key checked against the design."""
     out = {}
     for key, value in table.items():
+        place = _bond_key(key)
+        if place is not None:
+            if place not in JOINT_PLACES:
+                raise DesignError(f"unknown joint place {place!r}; places: {list(JOINT_PLACES)}." +
+                                  did_you_mean(place, JOINT_PLACES), key=f"tolerances.{key}")
+            if isinstance(value, str):
+                raise DesignError(f"a bond's tolerance is absolute [rad/(N m)] (its design value is 0), got {value!r}",
+                                  key=f"tolerances.{key}")
+            out[key] = parse_tolerance_value(value, 0.0, key)
+            continue
         nominal = design_value(design, key) if key in numeric_keys(design) else None
         if nominal is None:
             raise DesignError(f"unknown key {key!r}: a tolerance names a numeric key of the design file." +
@@ -149,13 +178,23 @@ def check_tolerance_table(design: RodDesign, table: dict) -> dict[str, float]:
 def design_tolerances(design: RodDesign) -> list[ToleranceParam]:
     """The design's uncertain keys: its ``[tolerances]`` over the documented defaults (:data:`DEFAULT_RULES`);
     zero tolerances left out."""
-    given = check_tolerance_table(design, dict(design.tolerances))
+    given = {k: v for k, v in check_tolerance_table(design, dict(design.tolerances)).items() if _bond_key(k) is None}
     params = {}
     for key, sigma in _defaults(design).items():
         params[key] = ToleranceParam(key, design_value(design, key), sigma, "default")
     for key, sigma in given.items():
         params[key] = ToleranceParam(key, design_value(design, key), sigma, "file")
     return [p for p in params.values() if p.sigma > 0]
+
+
+def bond_tolerances(design: RodDesign) -> dict[str, float]:
+    """{place: one standard deviation of the bond's bending compliance [rad/(N m)]}: the file's
+    ``joints.PLACE.s_bend_rad_per_Nm`` over :data:`BOND_SD`; zero tolerances left out."""
+    out = dict.fromkeys(JOINT_PLACES, BOND_SD)
+    for key, sd in check_tolerance_table(design, dict(design.tolerances)).items():
+        if _bond_key(key) is not None:
+            out[_bond_key(key)] = sd
+    return {k: v for k, v in out.items() if v > 0}
 
 
 def _materials(design: RodDesign) -> list:
@@ -200,4 +239,6 @@ def defaults_markdown() -> str:
         def cell(v):
             return "-" if v is None else (f"{v} mm" if isinstance(v, float) else v)
         rows.append(f"| `{pattern}` | {cell(lam)} | {cell(metal)} | {why} |")
+    rows.append(f"| `joints.PLACE.s_bend_rad_per_Nm` ({', '.join(JOINT_PLACES)}) | {BOND_SD:g} rad/(N m) | "
+                f"{BOND_SD:g} rad/(N m) | a bond modelled as rigid (absolute only) |")
     return "\n".join(rows)

@@ -42,6 +42,18 @@ def test_tolerances_file_over_defaults(tmp_path):
     assert "tube.wall_mm" not in tol                                          # 0 removes a default
 
 
+def test_bond_tolerances(tmp_path):
+    """Bonds get the default bending tolerance unless the file states one (absolute only, a known place)."""
+    from rodlab.tolerances import BOND_SD, bond_tolerances
+    d = load_design(_write(tmp_path, '[tolerances]\n"joints.ring_1.s_bend_rad_per_Nm" = 5e-6\n'
+                                     '"joints.pipe_II.s_bend_rad_per_Nm" = 0\n'))
+    assert bond_tolerances(d) == {"flange_clamp": BOND_SD, "ring_1": 5e-6}
+    with pytest.raises(DesignError, match="Did you mean `ring_1`"):
+        load_design(_write(tmp_path, '[tolerances]\n"joints.ring1.s_bend_rad_per_Nm" = 5e-6\n'))
+    with pytest.raises(DesignError, match="absolute"):
+        load_design(_write(tmp_path, '[tolerances]\n"joints.ring_1.s_bend_rad_per_Nm" = "5%"\n'))
+
+
 def test_metal_defaults_are_tight():
     tol = {p.key: p.relative for p in design_tolerances(resolve_design("rod4"))}
     assert tol["materials.steel_304.E_GPa"] == pytest.approx(0.03)

@@ -19,7 +19,7 @@ from ...compliance import RodCompliance, design_hash
 from ...enums import Method, SimAccuracy
 from ...errors import RodlabError
 from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy
-from ...tolerances import design_tolerances
+from ...tolerances import bond_tolerances, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
 
@@ -45,7 +45,9 @@ class Envelope:
     C_F [mm/N] (the frame) and design : the design, for the as-built fit (:meth:`entries_at`); ratio : simulated
     over model C_F with the method's bias removed, entry by entry, shape=(3, 3) (the simulation's own form kept as
     the as-built keys move);
-    u_bounds : the range of each key's standardised deviation the design rules allow (within +-4), shape=(k, 2)
+    bonds : the design's bonds as ((place, sigma [rad/(N m)], d C_F / d s_bend [mm/N per rad/(N m)], shape=(3, 3)),
+    ...): standardised deviations after the keys'; u_bounds : the range of each key's and bond's standardised
+    deviation the design rules allow (within +-4), shape=(k + bonds, 2)
     """
 
     kind: SimAccuracy
@@ -56,6 +58,7 @@ class Envelope:
     model: object = None
     design: object = None
     ratio: np.ndarray = field(default_factory=lambda: np.ones((3, 3)))
+    bonds: tuple = ()
     u_bounds: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __post_init__(self) -> None:
@@ -68,6 +71,11 @@ class Envelope:
     def exact(self) -> bool:
         return self.kind is SimAccuracy.EXACT
 
+    @property
+    def n_free(self) -> int:
+        """Standardised deviations of the as-built fit: the keys', then the bonds'."""
+        return len(self.params) + len(self.bonds) if self.model is not None else 0
+
     def values(self, u: np.ndarray) -> dict:
         """The as-built keys for standardised log deviations ``u`` (a key is ``nominal exp(u sigma / nominal)``:
         moduli and sizes stay positive, and a compliance ~ 1/E is linear in u)."""
@@ -78,7 +86,9 @@ class Envelope:
         if self.model is None or not self.params:
             return self.accuracy.expected(self.C_sim, entries)
         from ...sensitivity import with_values
-        C = np.asarray(self.model(with_values(self.design, self.values(u))), float) * self.ratio
+        C = np.asarray(self.model(with_values(self.design, self.values(u[:len(self.params)]))), float) * self.ratio
+        for (_, sd, dC), ub in zip(self.bonds, u[len(self.params):]):
+            C = C + sd * ub * dC
         return np.array([C[m, n] for m, n in entries])
 
 
@@ -162,8 +172,23 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
     env = Envelope(SimAccuracy.DESIGN, C, params, acc,
                    f"design {design.name}: tolerances {keys}; {label} against the solid FEA: bias "
                    + ", ".join(f"c{m + 1}{n + 1} {b:+.1%}" for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias))
-                   + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd), model, design, ratio * unbiased)
-    return replace(env, u_bounds=_feasible_bounds(env))
+                   + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd) + "; bonds "
+                   + ", ".join(f"{p} {sd:.1g}" for p, sd in bond_tolerances(design).items()) + " rad/(N m)",
+                   model, design, ratio * unbiased, _bonds(design))
+    bounds = np.vstack([_feasible_bounds(env), np.tile([-4.0, 4.0], (len(env.bonds), 1))])
+    return replace(env, u_bounds=bounds)
+
+
+def _bonds(design) -> tuple:
+    """(place, sigma, d C_F / d s_bend) of each toleranced bond: a rotational spring across the member there."""
+    from rodlab.stiffness_rig.effects import joint_places, spring_compliance
+    places = joint_places(design.tool_mm, design)
+    out = []
+    for place, sd in bond_tolerances(design).items():
+        if place in places:
+            pt, ax = places[place]
+            out.append((place, sd, spring_compliance(np.asarray(pt, float), np.asarray(ax, float), 1e-3, 0.0)))
+    return tuple(out)
 
 
 def _feasible_bounds(env: Envelope, reach: float = 4.0) -> np.ndarray:

@@ -68,7 +68,7 @@ class _AsBuilt:
         self.env, self.E, self.C = env, linear.entries, linear.C
         self.Sigma = env.accuracy.covariance(env.C_sim, self.E) + linear.cov
         self.W = np.linalg.inv(np.linalg.cholesky(self.Sigma + 1e-30 * np.eye(len(self.E))))
-        self.k = len(env.params) if env.model is not None else 0
+        self.k = env.n_free
         self.u = np.zeros(self.k)
         self.q = self._map()
         self.J = self._jacobian(self.u)
@@ -214,6 +214,12 @@ def _model_form(linear: LinearPart, env: Envelope, fit: _AsBuilt, causes, rms, j
                 continue
             lo, mid, hi = (p.nominal * float(np.exp(v * p.relative)) for v in (u - 1.96 * su, u, u + 1.96 * su))
             params[p.key], intervals[p.key] = mid, [lo, hi]
+        for (place, sd, _), u, su in zip(env.bonds, fit.u[len(env.params):], sd_u[len(env.params):]):
+            key = f"joints.{place}.s_bend_rad_per_Nm"
+            if su > INFORMED:
+                unresolved.append(key)
+                continue
+            params[key], intervals[key] = sd * float(u), [sd * float(u - 1.96 * su), sd * float(u + 1.96 * su)]
     ev = dict(judged.to_dict(), resolve=_resolution(env, fit, causes), envelope=env.source)
     if fit.k:
         ev["keys_not_resolved"] = unresolved
@@ -231,7 +237,7 @@ def _resolution(env: Envelope, fit: _AsBuilt, causes) -> list:
     St = None
     if fit.k:
         shrink = np.array([min(1.0, COUPON_RELATIVE / p.relative) if p.key.startswith("materials.") else 1.0
-                           for p in env.params])
+                           for p in env.params] + [1.0] * len(env.bonds))
         method = env.accuracy.covariance(env.C_sim, fit.E)
         solid = METHOD_ACCURACY["solid"].covariance(env.C_sim, fit.E)
         St = fit.covariance_S(fit.J * shrink, fit.Sigma - method + solid)

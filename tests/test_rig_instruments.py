@@ -184,7 +184,8 @@ def test_resume_with_several_instruments_loses_nothing(tmp_path):
             d.stop()
     assert out.read_bytes().startswith(before)
     rec = read_recording(out)
-    assert len(rec.steps()) == len(plan.schedule.holds()) and np.all(np.diff(rec.time_s) > 0)
+    # in time order (two readings of one millisecond share a time stamp on a busy machine)
+    assert len(rec.steps()) == len(plan.schedule.holds()) and np.all(np.diff(rec.time_s) >= 0)
     rewired = _profile(tmp_path, body.replace('"z"\nsign = -1', '"x"\nsign = -1'), "dial_y")
     with pytest.raises(RigError, match="device wiring"):
         acquire(read_profile(rewired), plan, out, use_loader=True)

@@ -96,7 +96,7 @@ def _n(x: float) -> str:
 def rod_toml(rod: int, od: float, wall: float, lam: Laminate | None) -> str:
     """The design file of rod ``rod`` with tube ``od`` x ``wall`` [mm] (carbon: laminate ``lam``)."""
     L1, L2, c_rod, r, family = TABLE2[rod]
-    radius = max(30.0 if family == "steel" else 40.0, math.ceil(1.5 * od / 5.0) * 5.0)
+    radius = max(30.0 if family == "steel" else 40.0, math.ceil(1.6 * od / 5.0) * 5.0)   # 1.5 OD + tolerance
     head = (f"# MultiCal measuring rod {rod}# (paper Table 2: L1-L2 = {L1}-{L2} mm), derived from the paper's published\n"
             f"# numbers by scripts/derive_paper_rods.py (see docs/calc_rods.md): target simulated c_rod = Table 2\n"
             f"# c_rod / r_rod = {c_rod} / {r} = {c_rod / r:.1f} um. Tube sizes and laminate are fitted, not known.\n"
@@ -121,7 +121,7 @@ def rod_toml(rod: int, od: float, wall: float, lam: Laminate | None) -> str:
         f'[bend]            # stainless-steel bending pipe (paper Fig. 3a), joined to the tubes by the rings\n'
         f'material = "steel_304"\nouter_diameter_mm = {_n(od)}\nwall_mm = {_n(wall)}\nradius_mm = {radius:.1f}\n\n'
         f'[rings]           # aluminium sleeves bonded (epoxy) over the tube / bending-pipe joints\n'
-        f'material = "al_7075"\nouter_diameter_mm = {_n(od + 7)}\nlength_mm = 50.0\n\n'
+        f'material = "al_7075"\nouter_diameter_mm = {_n(od + 7)}\nlength_mm = 40.0\n\n'
         f'[pipe_holder]     # flange adapter (clamps the first 40 mm of pipe I)\nmaterial = "al_7075"\n'
         f'outer_diameter_mm = {_n(od + 15)}\nlength_mm = 40.0\n\n'
         '[ball_holder]     # stud between pipe II and the ball\nmaterial = "al_7075"\n'

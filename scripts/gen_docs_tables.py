@@ -31,7 +31,8 @@ the paper publishes, one set per material family, with the calibrated frame mode
   tubes joined to a stainless-steel bending pipe by aluminium (7075) rings bonded with epoxy, aluminium pipe
   holder and ball holder; steel rods 4#-6#: stainless 304 tube bent in one piece, stainless sleeves and
   holders. Part sizes follow the tube (rings OD + 7 mm / + 6 mm, pipe holder OD + 15 / + 16 mm, bend radius
-  the larger of 1.5 OD and 40 / 30 mm, ring length 50 / 30 mm, pipe holder 40 mm, ball holder 20 mm).
+  1.6 OD rounded up to 5 mm (the 1.5 OD kink rule with room for the radius tolerance), ring length
+  40 / 30 mm, pipe holder 40 mm, ball holder 20 mm).
 - **Fitted, steel 4#-6#**: tube OD and wall against the three simulated c_rod (least squares on log
   residuals; continuous optimum 22.4 x 4.0 mm), then every catalogue size (ISO 1127 / EN 10305 metric
   stainless tube, wall <= OD / 4) by its worst residual: **25 x 2 mm**.
@@ -40,31 +41,31 @@ the paper publishes, one set per material family, with the calibrated frame mode
   fibre class (typical unidirectional ply data at ~60 % fibre volume: T700 standard-modulus PAN E1 135 GPa,
   M55J high-modulus PAN 330 GPa, YS-90A-class high-modulus pitch 500 GPa; E2 5.5-9, G12 4-5 GPa) whose +-45
   fraction sets E and G by classical lamination theory, so E and G are a pair a real tube has. Tube sizes
-  bounded to roll-wrapped catalogue sizes (OD 20-40 mm; 40 mm is also the largest whose 60 mm bend fits
-  2#'s L1 = 150 mm), rounded to the neighbouring catalogue sizes and the +-45 fraction refitted.
+  bounded to roll-wrapped catalogue sizes (OD 20-40 mm; 40 mm is also the largest whose 65 mm bend fits
+  2#'s L1 = 150 mm beside the 40 mm holder and 40 mm ring), rounded to the neighbouring catalogue sizes and the +-45 fraction refitted.
 
 Fit log (`python scripts/derive_paper_rods.py --dry-run`):
 
 ```
-steel 304: continuous OD 22.42 x 3.98 mm -> catalogue 25 x 2
-carbon T700 (standard-modulus PAN): continuous OD 39.98 x 4.99, f45 0.47 (E 80, G 19 GPa), sum of squared log residuals 1.9817
-carbon M55J (high-modulus PAN): continuous OD 39.95 x 4.98, f45 0.53 (E 164, G 47 GPa), sum of squared log residuals 0.1686
-carbon YS-90A (high-modulus pitch): continuous OD 39.91 x 4.78, f45 0.63 (E 196, G 80 GPa), sum of squared log residuals 0.0168
-chosen carbon: 40 x 5, YS-90A (high-modulus pitch), f45 0.671: E 175.5, E_t 62.5, G 85.7 GPa
-1#: c_rod    44.5 um, target    47.2 (-5.7%)
-2#: c_rod    45.7 um, target    46.3 (-1.2%)
-3#: c_rod   115.4 um, target   103.1 (+11.9%)
+steel 304: continuous OD 22.37 x 3.82 mm -> catalogue 25 x 2
+carbon T700 (standard-modulus PAN): continuous OD 39.85 x 4.92, f45 0.46 (E 82, G 19 GPa), sum of squared log residuals 2.1868
+carbon M55J (high-modulus PAN): continuous OD 39.88 x 4.96, f45 0.54 (E 163, G 47 GPa), sum of squared log residuals 0.1842
+carbon YS-90A (high-modulus pitch): continuous OD 39.90 x 4.80, f45 0.62 (E 200, G 80 GPa), sum of squared log residuals 0.0161
+chosen carbon: 40 x 5, YS-90A (high-modulus pitch), f45 0.664: E 179.1, E_t 62.4, G 84.8 GPa
+1#: c_rod    44.3 um, target    47.2 (-6.2%)
+2#: c_rod    45.7 um, target    46.3 (-1.1%)
+3#: c_rod   114.8 um, target   103.1 (+11.4%)
 4#: c_rod   428.6 um, target   488.5 (-12.3%)
 5#: c_rod   435.8 um, target   398.5 (+9.3%)
 6#: c_rod  1144.5 um, target  1260.8 (-9.2%)
-c22(5#)/c22(2#) = 8.39, Fig. 8 8.1 (+3.5%)
+c22(5#)/c22(2#) = 8.33, Fig. 8 8.1 (+2.8%)
 ```
 
 Findings:
 
 - The paper's simulated carbon rods are very stiff in **torsion**: c22 of 2# carries the torsion of pipe I
   (L1 L2^2 / (G I_p)). Only the high-modulus pitch class reaches every target within 15 %, with a
-  torsion-heavy layup (about two thirds +-45 plies, E 176 GPa, G 86 GPa) in a thick 40 x 5 mm tube. A
+  torsion-heavy layup (about two thirds +-45 plies, E 179 GPa, G 85 GPa) in a thick 40 x 5 mm tube. A
   standard-modulus PAN tube (E <= 124, G <= 26 GPa) misses by a factor of about 2; high-modulus PAN by about
   20-30 %. Such a G is what an isotropic carbon material (G = E / 2(1 + nu)) gives, which is likely what the
   paper's FEA used; a real roll-wrapped tube is softer in torsion, which fits the paper's r_rod of 1.2-2.3

@@ -42,7 +42,8 @@ the paper publishes, one set per material family, with the calibrated frame mode
   M55J high-modulus PAN 330 GPa, YS-90A-class high-modulus pitch 500 GPa; E2 5.5-9, G12 4-5 GPa) whose +-45
   fraction sets E and G by classical lamination theory, so E and G are a pair a real tube has. Tube sizes
   bounded to roll-wrapped catalogue sizes (OD 20-40 mm; 40 mm is also the largest whose 65 mm bend fits
-  2#'s L1 = 150 mm beside the 40 mm holder and 40 mm ring), rounded to the neighbouring catalogue sizes and the +-45 fraction refitted.
+  2#'s L1 = 150 mm beside the 40 mm holder and 40 mm ring), rounded to the neighbouring catalogue sizes
+  and the +-45 fraction refitted.
 
 Fit log (`python scripts/derive_paper_rods.py --dry-run`):
 

@@ -119,7 +119,7 @@ def test_tube_axis_follows_the_centreline(rod1_mesh):
 
 
 def test_mesh_file_and_determinism(tmp_path, rod1_mesh):
-    a = mesh_rod(resolve_design("rod1"), msh_path=tmp_path / "a.msh")
+    a = mesh_rod(legacy_design("rod1"), msh_path=tmp_path / "a.msh")
     assert a.sha256 == rod1_mesh.sha256 and a.stats["nodes"] == rod1_mesh.stats["nodes"]
     text = (tmp_path / "a.msh").read_text()
     assert text.startswith("$MeshFormat\n4.1")

@@ -3,7 +3,7 @@ sensitivities, the methods' accuracy against the solid references, and the as-bu
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, load_design
+from rodlab import calc_rod_compliance, load_design, resolve_design
 from conftest import legacy_design
 from rodlab.design_edit import edited_design_text, write_edited_design
 from rodlab.errors import DesignError, RodlabError
@@ -116,7 +116,7 @@ def test_edited_design_keeps_the_file_and_reads_back(tmp_path):
     back = load_design(out)
     assert design_value(back, "materials.cfrp_tube.E_GPa") == 93.0 and back.bend.radius_mm == 55.0
     # a built-in material the file does not define gets its own table with all its numbers
-    d1 = legacy_design("rod1")
+    d1 = resolve_design("rod1")
     t1 = edited_design_text(d1.source.read_text(), d1, {"materials.steel_304.E_GPa": 180.0})
     assert "[materials.steel_304]" in t1 and "density_kg_m3" in t1.split("[materials.steel_304]")[1]
 

@@ -36,7 +36,7 @@ from .errors import CalibrationError
 from .identify import Observations, identify
 from .ik import solve_ik_positions
 from .kinematics import ModelParams, ball_positions
-from .simulate import random_truth
+from .simulate import random_truth, robot_floor
 from .validate import ErrorStats, validate
 
 __all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replicate", "ReplicateOutcome",
@@ -64,6 +64,8 @@ class Priors:
         of ``S - I`` in ``C_true = r S C_sim S^T``: joints, anisotropy, bonds the model does not see) [-]
     meas_sigma : relative uncertainty (1 sigma) of the rig's measurement (``C_F`` entries and r_rod) [-]
     validation_points : configurations of the validation set
+    robot_floor_mm : the robot's own unmodelled error (:class:`~rodlab.calibrate.simulate.RobotFloor`: smooth
+        joint-angle errors whose mean on rigid-tool validation is this) [mm]; 0 = none
     """
 
     error_scale: float = 1.0
@@ -76,10 +78,11 @@ class Priors:
     shape_sigma: float = 0.05
     meas_sigma: float = 0.01
     validation_points: int = 100
+    robot_floor_mm: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ("error_scale", "device_noise_mm", "instrument_noise_mm", "alignment_mm", "meas_sigma",
-                    "shape_sigma"):
+                    "shape_sigma", "robot_floor_mm"):
             v = getattr(self, key)
             if not np.isfinite(v) or v < 0:
                 raise CalibrationError(f"must be a finite number >= 0, got {v!r}", key=key)
@@ -196,12 +199,13 @@ class SimulatedCampaign:
                             dict(self.true_T))
 
 
-def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng) -> SimulatedCampaign:
+def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor=None) -> SimulatedCampaign:
     q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
-    fr, _ = ball_positions(robot, truth, q, reference.mass_kg, reference.com_T_mm, F)
-    pW = fr.pW + deflection_offsets(robot, truth, q, F, rod_true)
+    qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
+    fr, _ = ball_positions(robot, truth, qt, reference.mass_kg, reference.com_T_mm, F)
+    pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     st, sr = priors.fixture_sigma
     xD = np.empty_like(pW)
     recorded = {}
@@ -217,14 +221,14 @@ def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng) -
                              reference.mass_kg, reference.com_T_mm)
 
 
-def _validation(robot, truth, priors: Priors, rng) -> tuple[PointSet, PointSet]:
+def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet, PointSet]:
     """(measured, exact) validation points: random configurations within 60 % of the limits, short rigid rod."""
     tool = np.asarray(VALIDATION_TOOL_MM, float)
     vtrue = truth.with_(tool=tool + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (int(priors.validation_points), robot.n))
     mass, com = _VALIDATION_MASS
-    fr, _ = ball_positions(robot, vtrue, vq, mass, np.asarray(com, float))
+    fr, _ = ball_positions(robot, vtrue, vq if floor is None else floor.angles(vq), mass, np.asarray(com, float))
     noisy = fr.pW + rng.normal(0, priors.instrument_noise_mm, fr.pW.shape)
 
     def pts(x):
@@ -296,8 +300,9 @@ def simulate_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: R
     methods = [Method.parse(m, "method") for m in methods]
     truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
     r_true, rod_true = _true_rod(reference, priors, rng)
-    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng)
-    pts, pts_exact = _validation(robot, truth, priors, rng)
+    floor = robot_floor(robot, priors.robot_floor_mm, seed)           # None at 0: the same draws as without
+    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor)
+    pts, pts_exact = _validation(robot, truth, priors, rng, floor)
     files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)
     return SimulatedReplicate(truth, r_true, rod_true, camp, pts, pts_exact, files)
 

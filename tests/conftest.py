@@ -4,20 +4,34 @@ from __future__ import annotations
 import copy
 import os
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 EXAMPLES = SHARED / "examples"
 ROD1 = ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml"
+
+
+def legacy_dict(name: str) -> dict:
+    """The rodlab.rod/1 table of built-in rod ``name`` as it was before issue #45 (frozen in
+    fea/data/reference_designs.json with the solid-FEA references computed on it): the subject of tests about
+    machinery (rig, diagnosis, joints, model updating) whose numbers were set on that design, not of tests about
+    the paper's rods."""
+    from rodlab.fea.reference_designs import reference_spec
+    return dict({"format": "rodlab.rod/1"}, **reference_spec(name))
+
+
+def legacy_design(name: str):
+    """Built-in rod ``name`` as it was before issue #45 (see :func:`legacy_dict`)."""
+    from rodlab.fea.reference_designs import reference_design
+    return reference_design(name)
+
+
+def legacy_file(path: Path, name: str) -> Path:
+    """Write :func:`legacy_dict` of ``name`` as a design file at ``path``."""
+    return write_toml(path, legacy_dict(name))
 
 
 @pytest.fixture
@@ -43,8 +57,8 @@ def rod1_calc():
 
 @pytest.fixture
 def rod1_dict() -> dict:
-    """Parsed rod 1# design, to be modified by a test."""
-    return copy.deepcopy(tomllib.loads(ROD1.read_text()))
+    """Parsed rod 1# design as it was before issue #45 (:func:`legacy_dict`), to be modified by a test."""
+    return copy.deepcopy(legacy_dict("rod1"))
 
 
 def write_toml(path: Path, data: dict) -> Path:

@@ -12,6 +12,7 @@ import pytest
 from rodlab import load_design, read_compliance
 from rodlab.app.diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
 from rodlab.stiffness_rig import read_recording
+from conftest import legacy_design
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -124,11 +125,11 @@ def test_blind_rig_definitions_are_consistent(tmp_path):
     knows, and a truth file per generated case that repeats the drawn protocol."""
     from rodlab.stiffness_rig.blind import blind_definitions, generate_cases
     from rodlab.stiffness_rig.effects import joint_places
-    from rodlab import resolve_design
+
     d = blind_definitions()
     bounds = [d["mix"][k] for k in ("null", "single", "pair", "decoy")]
     assert 0 < bounds[0] and bounds == sorted(bounds) and bounds[-1] < 1
-    design = resolve_design("rod1")
+    design = legacy_design("rod1")
     assert set(d["draws"]["joint_places"]) <= set(joint_places(design.tool_mm, design))
     (case,) = generate_cases(tmp_path, 1, seed=3, wide=True)
     truth = json.loads(case.path.with_name(case.path.name.replace(".rig.csv", ".truth.json")).read_text())
@@ -182,9 +183,9 @@ def test_campaign_generator_effects_are_diagnosed(tmp_path, case):
     consistent (regression: the GLS refit of the identified parameters was once credited to a hypothesis)."""
     from rodlab.calibrate import read_campaign, read_fixture, resolve_robot
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-    from rodlab import calc_rod_compliance, resolve_design
+    from rodlab import calc_rod_compliance
     from rodlab.app.diagnose import diagnose_campaign
-    robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
+    robot, rod = resolve_robot("tx90"), calc_rod_compliance(legacy_design("rod1"))
     effects = {"null": {}, "periodic": {"periodic_joint_error": {"joint": 4, "amp_deg": 0.006, "phase_deg": 30.0}},
                "thermal": {"thermal_drift": {"growth_ppm_per_s": 0.045}}}[case]
     t = simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=21), effects=effects)
@@ -262,10 +263,10 @@ def test_subset_least_squares_matches_direct_fits():
     ({"nonlinearity": {"beta2_per_100N2": -0.002}}, {"masses": (0.5, 1.0, 2.0, 3.0)}, {"nonlinearity"}),
 ])
 def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
-    from rodlab import calc_rod_compliance, resolve_design
+    from rodlab import calc_rod_compliance
     from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
-    design = resolve_design("rod1")
+    design = legacy_design("rod1")
     sim = calc_rod_compliance(design)
     model = RigModel(sim.C_F, effects, noise_mm=0.0012, resolution_mm=0.001, seed=11)
     path = tmp_path / "r.rig.csv"
@@ -277,10 +278,10 @@ def test_rig_effects_not_confused(tmp_path, effects, protocol, expected):
 
 
 def _paper_like_recording(tmp_path, effects, seed=11):
-    from rodlab import calc_rod_compliance, resolve_design
+    from rodlab import calc_rod_compliance
     from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
-    design = resolve_design("rod1")
+    design = legacy_design("rod1")
     sim = calc_rod_compliance(design)
     path = tmp_path / "r.rig.csv"
     simulate_recording(RigModel(sim.C_F, effects, noise_mm=0.001, resolution_mm=0.001, seed=seed),
@@ -354,10 +355,10 @@ def test_a_bumped_hold_is_still_set_aside_beside_a_nonlinear_gauge(tmp_path):
 def test_a_bumped_hold_is_named_not_explained_away(tmp_path, effects):
     """One hold shifted by 4 um in a short protocol (one repeat): no effect may absorb it; the hold is named
     and the rest diagnosed without it."""
-    from rodlab import calc_rod_compliance, resolve_design
+    from rodlab import calc_rod_compliance
     from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
-    design = resolve_design("rod1")
+    design = legacy_design("rod1")
     sim = calc_rod_compliance(design)
     path = tmp_path / "r.rig.csv"
     simulate_recording(RigModel(sim.C_F, effects, noise_mm=0.0003, resolution_mm=0.0001, seed=4),
@@ -396,8 +397,8 @@ def test_wrong_fixture_pose_with_outliers_names_both(tmp_path):
 
     from rodlab.calibrate import read_campaign, read_fixture, resolve_robot
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-    from rodlab import calc_rod_compliance, resolve_design
-    robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
+    from rodlab import calc_rod_compliance
+    robot, rod = resolve_robot("tx90"), calc_rod_compliance(legacy_design("rod1"))
     simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=33),
                       effects={"fixture_pose": {"position": 2, "offset_mm": [-0.15, 0.12, -0.08]}})
     path = tmp_path / "multical.campaign.csv"

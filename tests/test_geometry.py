@@ -10,6 +10,7 @@ pytest.importorskip("gmsh")
 from rodlab.geometry import GeometryError, build_cad, mesh_rod  # noqa: E402
 from rodlab import Part, mass_properties, part_mass_properties, resolve_design  # noqa: E402
 from rodlab.design_io import design_from_dict  # noqa: E402
+from conftest import legacy_design  # noqa: E402
 
 pytestmark = pytest.mark.cad
 
@@ -74,14 +75,14 @@ def test_folded_design_is_refused_naming_part_and_dimension():
 
 @pytest.fixture(scope="module")
 def rod1_mesh():
-    return mesh_rod(resolve_design("rod1"))
+    return mesh_rod(legacy_design("rod1"))
 
 
 def test_mesh_parts_quality_and_volumes(rod1_mesh):
     rm = rod1_mesh
     assert set(rm.parts) == set(Part)
     assert rm.min_quality > 0.05                       # no inverted or degenerate elements
-    cad = build_cad(resolve_design("rod1"))
+    cad = build_cad(legacy_design("rod1"))
     for part, vol in rm.volume_by_part().items():
         assert vol == pytest.approx(cad.solids[part].volume, rel=5e-3), part
     assert rm.flange_facets.size > 50 and rm.ball_facets.size > 100
@@ -118,7 +119,7 @@ def test_tube_axis_follows_the_centreline(rod1_mesh):
 
 
 def test_mesh_file_and_determinism(tmp_path, rod1_mesh):
-    a = mesh_rod(resolve_design("rod1"), msh_path=tmp_path / "a.msh")
+    a = mesh_rod(legacy_design("rod1"), msh_path=tmp_path / "a.msh")
     assert a.sha256 == rod1_mesh.sha256 and a.stats["nodes"] == rod1_mesh.stats["nodes"]
     text = (tmp_path / "a.msh").read_text()
     assert text.startswith("$MeshFormat\n4.1")

@@ -14,6 +14,7 @@ from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain,
                         joint_frame_compliance, joint_margins, joints_from_motions, span_basis)
 from rodlab.calc import unit_load_compliance
 from rodlab.chain import chain_flexibility, transport
+from conftest import legacy_design
 from rodlab.design_io import resolve_design
 from rodlab.enums import Part
 from rodlab.layout import Layer, Segment, SegmentKind
@@ -49,7 +50,7 @@ def test_chain_of_intervals_sums_to_the_unit_load_compliance(name):
 def test_span_basis_is_the_prismatic_beam():
     """A straight tube's flexibility and self-weight motion are the span basis weighted by its section
     compliances (1/EA, 1/kGA twice, 1/GJ, 1/EI twice): closed forms l/EA, l^3/3EI + l/kGA, q l^4/8EI ..."""
-    d = resolve_design("rod4")
+    d = legacy_design("rod4")
     layer = Layer(Part.PIPE_II, d.pipe_II.material, d.pipe_II.outer_diameter_mm, d.pipe_II.inner_diameter_mm)
     axis = d.pipe_II_direction
     L = 137.0
@@ -114,7 +115,7 @@ def test_joint_calibration_transfers_a_known_truth_exactly(base, members):
     weight is not the base's where they overlap)."""
     truth = replace(CALIBRATION, sleeve_end=2.5, holder_end=1.1, torsion_end=0.9, bend_scale_in=1.15,
                     bend_scale_out=0.8, bend_end=0.9, shear=1.3, torsion=0.85)
-    d = resolve_design(base)
+    d = legacy_design(base)
     margins = joint_margins(d)
     sec, tip = _frame_truth_motions(d, truth, margins)
     jc = joints_from_motions(d, sec, tip, margins)
@@ -130,7 +131,7 @@ def test_joint_calibration_transfers_a_known_truth_exactly(base, members):
 
 
 def test_joint_calibration_input_errors():
-    d = resolve_design("rod4")
+    d = legacy_design("rod4")
     margins = joint_margins(d)
     sec, tip = _frame_truth_motions(d, CALIBRATION, margins)
     jc = joints_from_motions(d, sec, tip, margins)
@@ -150,13 +151,13 @@ def test_short_base_tube_shortens_the_margins(caplog):
     """Rod 2#'s pipe I has 20 mm of free tube: its sections move closer to the joints (with a warning), and
     :func:`fea.family.calibration_member` picks a grid member with longer tubes instead."""
     from rodlab.fea.family import calibration_member
-    d2 = resolve_design("rod2")
+    d2 = legacy_design("rod2")
     m = joint_margins(d2)
     assert m[Part.PIPE_I] == pytest.approx(7.5) and m[Part.PIPE_II] == pytest.approx(25.0)
     assert "leaves its sections only 7.5 mm" in caplog.text
     pick = calibration_member(d2, [150.0, 175.0, 200.0, 225.0], [525.0, 550.0])
     assert (pick.L1_mm, pick.L2_mm) == (200.0, 525.0)   # 175: 45 mm of free pipe I < 2 x 25 + 5; 200: 70 mm
-    assert calibration_member(resolve_design("rod1"), [150.0], [450.0]).name == "1#"
+    assert calibration_member(legacy_design("rod1"), [150.0], [450.0]).name == "1#"
 
 
 @pytest.mark.cad
@@ -168,12 +169,12 @@ def test_joint_calibration_on_the_solid_rod1_family():
     from rodlab.fea import solid_compliance
     from rodlab.geometry import mesh_rod
     refs = json.loads((ROOT / "fea" / "data" / "solid_reference.json").read_text())
-    d = resolve_design("rod1")
+    d = legacy_design("rod1")
     _, res = solid_compliance(d, mesh_rod,
                               error_estimate=False, keep_displacements=True, tip_moments=True)
     jc = calibrate_joints(d, res)
     assert jc.margins_mm == (25.0, 25.0) and jc.asymmetry < 5e-3 and jc.span_residual < 2e-3
-    members = {"rod1": d, "rod2": resolve_design("rod2"), "rod3": resolve_design("rod3"),
+    members = {"rod1": d, "rod2": legacy_design("rod2"), "rod3": legacy_design("rod3"),
                "rod1_L1_200_L2_600": replace(d, L1_mm=200.0, L2_mm=600.0, name="1# 200-600")}
     for name, m in members.items():
         errs = []
@@ -191,7 +192,7 @@ def test_joints_file_round_trip_and_errors(tmp_path):
 
     from rodlab.fea.joints_io import read_joints, write_joints
     truth = replace(CALIBRATION, sleeve_end=2.5, bend_scale_in=1.15, shear=1.3)
-    d = resolve_design("rod4")
+    d = legacy_design("rod4")
     margins = joint_margins(d)
     jc = joints_from_motions(d, *_frame_truth_motions(d, truth, margins), margins)
     path = write_joints(tmp_path / "rod4.joints.json", jc, {"note": "test"})

@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from rodlab import Part, load_design, mass_properties, part_mass_properties
+from rodlab import Part, mass_properties, part_mass_properties
 
-from conftest import ROD1
+from conftest import legacy_design
 
 
 def test_part_masses_match_hand_formulas():
-    d = load_design(ROD1)
+    d = legacy_design("rod1")     # the hand formulas below use its 25 x 2 tube and parts
     parts = part_mass_properties(d)
     ann = lambda do, di: math.pi / 4 * (do ** 2 - di ** 2)  # noqa: E731
     cf, st, al = 1550e-9, 8000e-9, 2810e-9
@@ -30,7 +30,7 @@ def test_part_masses_match_hand_formulas():
 
 def test_bend_centroid_is_the_swept_annulus_centroid():
     """Quarter torus: centroid at (R^2 + I/A)/R * 2 sqrt(2)/pi from the bend centre, on the bisector."""
-    d = load_design(ROD1)
+    d = legacy_design("rod1")     # the hand formulas below use its 25 x 2 tube and parts
     bend = part_mass_properties(d)[Part.BEND]
     R = 40.0
     IA = (12.5 ** 2 + 10.5 ** 2) / 4
@@ -43,7 +43,7 @@ def test_bend_centroid_is_the_swept_annulus_centroid():
 
 
 def test_total_is_parallel_axis_sum_and_physical():
-    d = load_design(ROD1)
+    d = legacy_design("rod1")     # the hand formulas below use its 25 x 2 tube and parts
     total = mass_properties(d)
     parts = part_mass_properties(d)
     assert total.mass_kg == pytest.approx(sum(p.mass_kg for p in parts.values()))
@@ -55,7 +55,7 @@ def test_total_is_parallel_axis_sum_and_physical():
 
 
 def test_cylinder_inertia_exact():
-    d = load_design(ROD1)
+    d = legacy_design("rod1")     # the hand formulas below use its 25 x 2 tube and parts
     ph = part_mass_properties(d)[Part.PIPE_HOLDER]
     m, ro, ri, L = ph.mass_kg, 20.0, 12.5, 40.0
     np.testing.assert_allclose(np.diag(ph.inertia_kg_mm2),

@@ -8,7 +8,8 @@ import sys
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, load_design, resolve_design
+from rodlab import calc_rod_compliance, load_design
+from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.app.update import Measured, update_design
 from rodlab.compliance import RodCompliance
@@ -21,7 +22,7 @@ from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
 from rodlab.tolerances import design_tolerances
 
-ROD1 = resolve_design("rod1")
+ROD1 = legacy_design("rod1")
 
 
 def _sim(design, method="calc"):
@@ -152,11 +153,12 @@ def test_update_cli_writes_the_as_built_design(tmp_path):
     true = with_values(ROD1, {"materials.cfrp_tube.E_GPa": 110.0})
     rec = _record(tmp_path, frame_compliance(true)[0], seed=9)
     out = tmp_path / "asbuilt.rod.toml"
-    run = subprocess.run([sys.executable, "-m", "rodlab", "update", "rod1", "--measured", str(rec.path if hasattr(
+    rod1 = str(legacy_file(tmp_path / "rod1.rod.toml", "rod1"))
+    run = subprocess.run([sys.executable, "-m", "rodlab", "update", rod1, "--measured", str(rec.path if hasattr(
         rec, "path") else tmp_path / "rec.rig.csv"), "-o", str(out)], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "r_mn after" in run.stdout and load_design(out).pipe_I.material.E_GPa == pytest.approx(110.0, rel=0.02)
-    bad = subprocess.run([sys.executable, "-m", "rodlab", "update", "rod1", "--measured", str(tmp_path / "rec.rig.csv"),
+    bad = subprocess.run([sys.executable, "-m", "rodlab", "update", rod1, "--measured", str(tmp_path / "rec.rig.csv"),
                           "--free", "tube.wal", "-o", str(tmp_path / "x.rod.toml")], capture_output=True, text=True)
     assert bad.returncode == 2 and "tube.wall_mm" in bad.stderr and not (tmp_path / "x.rod.toml").exists()
 

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, resolve_design
+from rodlab import calc_rod_compliance
+from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.enums import Phase, RigEffect
 from rodlab.stiffness_rig import read_recording
@@ -19,7 +20,7 @@ from rodlab.stiffness_rig.simulate import simulate_recording
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = ROOT.parent / "shared" / "contract" / "effects.md"
-DESIGN = resolve_design("rod1")
+DESIGN = legacy_design("rod1")
 SIM = calc_rod_compliance(DESIGN)
 PLACES = joint_places(DESIGN.tool_mm, DESIGN)
 
@@ -173,7 +174,8 @@ def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
     from rodlab.compliance import write_compliance
     sim = write_compliance(SIM, tmp_path / "rod1.compliance.json")
     out = tmp_path / "j.rig.csv"
-    assert main(["rig", "simulate", "--sim", str(sim), "--design", "rod1", "--repeats", "1", "--hold-s", "2",
+    rod1 = str(legacy_file(tmp_path / "rod1.rod.toml", "rod1"))
+    assert main(["rig", "simulate", "--sim", str(sim), "--design", rod1, "--repeats", "1", "--hold-s", "2",
                  "--effect", "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=5e-6",
                  "--effect", "drift:x_mm_per_K=1e-4", "-o", str(out)]) == 0
     head = "".join(line for line in out.read_text().splitlines(True) if line.startswith("#"))

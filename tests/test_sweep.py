@@ -6,6 +6,7 @@ import pytest
 
 from rodlab.fea.sweep import SWEEP_COLUMNS, parse_range, run_sweep
 from rodlab import resolve_design
+from conftest import legacy_design, legacy_file
 from rodlab.errors import LocatedError
 
 
@@ -86,7 +87,8 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
     pytest.importorskip("gmsh")
     refs = json.loads((Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_reference.json").read_text())
     out = tmp_path / "s.csv"
-    assert main(["sweep", "--base", "rod4", "--L1", "150,375", "--L2", "525,600", "--serial", "--calibrate",
+    rod4 = str(legacy_file(tmp_path / "rod4.rod.toml", "rod4"))     # the design of the stored solid family
+    assert main(["sweep", "--base", rod4, "--L1", "150,375", "--L2", "525,600", "--serial", "--calibrate",
                  "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "frame joint-calibrated on the solid FEA of 4# (sections 20.0 / 20.0 mm" in text
@@ -94,24 +96,25 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
     assert f"saved to {joints}" in text
     df = pd.read_csv(out)
     # calibrated once: the stored calibration gives the same table, and rodlab fea the same member
-    assert main(["sweep", "--base", "rod4", "--L1", "150,375", "--L2", "525,600", "--serial", "--joints",
+    assert main(["sweep", "--base", rod4, "--L1", "150,375", "--L2", "525,600", "--serial", "--joints",
                  str(joints), "-o", str(tmp_path / "s2.csv")]) == 0
     pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "s2.csv").drop(columns="design_hash"),
                                   df.drop(columns="design_hash"))
-    assert main(["fea", "rod5", "--model", "frame", "--joints", str(joints), "-o", str(tmp_path / "r5.json")]) == 0
+    rod5 = str(legacy_file(tmp_path / "rod5.rod.toml", "rod5"))
+    assert main(["fea", rod5, "--model", "frame", "--joints", str(joints), "-o", str(tmp_path / "r5.json")]) == 0
     r5 = json.loads((tmp_path / "r5.json").read_text())
     assert r5["provenance"]["joint_calibration"]["solid_design"] == "4#"
     row5 = df[(df["L1_mm"] == 150.0) & (df["L2_mm"] == 525.0)].iloc[0]
     assert r5["c_rod_um"] == pytest.approx(row5["c_rod_um"], rel=1e-6)     # the file rounds c_rod
     capsys.readouterr()
     for bad, says in ((["--base", "rod1", "--joints", str(joints)], "1# is not a member of 4#'s family"),
-                      (["--base", "rod4", "--joints", str(joints), "--calibrate"], "not both"),
-                      (["--base", "rod4", "--joints", str(joints), "--model", "calc"], "--joints applies to")):
+                      (["--base", rod4, "--joints", str(joints), "--calibrate"], "not both"),
+                      (["--base", rod4, "--joints", str(joints), "--model", "calc"], "--joints applies to")):
         assert main(["sweep", "--L1", "150", "--L2", "525", "--serial", "-o", str(tmp_path / "x.csv")] + bad) == 2
         err = capsys.readouterr().err
         assert says in err and "Traceback" not in err, err
     for name in ("rod5", "rod6"):
-        d = resolve_design(name)
+        d = legacy_design(name)
         row = df[(df["L1_mm"] == d.L1_mm) & (df["L2_mm"] == d.L2_mm)].iloc[0]
         for key, col in (("C_F", "CF{}{}_mm_per_N"), ("C_g", "Cg{}{}_mm_per_g0")):
             ref = np.asarray(refs[name][key])

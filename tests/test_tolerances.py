@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance, load_design, resolve_design
+from conftest import legacy_design
 from rodlab.design_edit import edited_design_text, write_edited_design
 from rodlab.errors import DesignError, RodlabError
 from rodlab.sensitivity import METHOD_ACCURACY, compliance_sensitivity, with_values
@@ -55,7 +56,7 @@ def test_bond_tolerances(tmp_path):
 
 
 def test_metal_defaults_are_tight():
-    tol = {p.key: p.relative for p in design_tolerances(resolve_design("rod4"))}
+    tol = {p.key: p.relative for p in design_tolerances(legacy_design("rod4"))}
     assert tol["materials.steel_304.E_GPa"] == pytest.approx(0.03)
     assert not any(k.endswith("G_GPa") for k in tol)                          # isotropic: G follows E
 
@@ -72,7 +73,7 @@ def test_bad_tolerance_named_with_line(tmp_path, entry, message):
 
 
 def test_with_values_is_the_rod_as_built():
-    d = resolve_design("rod1")
+    d = legacy_design("rod1")
     soft = with_values(d, {"materials.cfrp_tube.E_GPa": 80.0, "tube.outer_diameter_mm": 26.0})
     assert design_value(soft, "materials.cfrp_tube.E_GPa") == 80.0
     assert soft.pipe_I.outer_diameter_mm == soft.pipe_II.outer_diameter_mm == 26.0
@@ -83,7 +84,7 @@ def test_with_values_is_the_rod_as_built():
 def test_sensitivity_matches_the_closed_form_scaling():
     """C_F of the closed form is EI-proportional in bending: d ln c11 / d ln E = -1 exactly on a rod whose
     members are all the one material (rod 1#'s bend is steel: only the tube share)."""
-    d = resolve_design("rod1")
+    d = legacy_design("rod1")
     s = compliance_sensitivity(d, ["materials.cfrp_tube.E_GPa", "materials.cfrp_tube.G_GPa"],
                                lambda x: calc_rod_compliance(x).C_F)
     elasticity_E = s.dC_F[0, 0, 0] * 100.0 / s.C_F[0, 0]

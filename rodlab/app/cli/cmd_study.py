@@ -50,6 +50,9 @@ def register(sub) -> None:
     p.add_argument("--error-scale", type=nonneg_float, default=1.0, help="robot kinematic errors (1 = ~0.5 mm, 0.05 deg)")
     p.add_argument("--device-noise", type=nonneg_float, default=0.003, help="MultiCal device noise, 1 sigma [mm]")
     p.add_argument("--instrument-noise", type=nonneg_float, default=0.02, help="validation instrument noise, 1 sigma [mm]")
+    p.add_argument("--robot-floor-mm", type=nonneg_float, default=0.0,
+                   help="the robot's own unmodelled error: smooth joint-angle errors whose mean on rigid-tool "
+                        "validation is this [mm] (paper, TX90 by laser scanner: 0.263; default 0 = none)")
     p.add_argument("--no-budget", action="store_true", help="skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",
                    help="use the frame's global calibration instead of one solid FEA run per design family")
@@ -128,7 +131,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     fixture = read_fixture(args.fixture) if args.fixture else standard_fixture()
     priors = Priors(error_scale=args.error_scale, device_noise_mm=args.device_noise,
                     instrument_noise_mm=args.instrument_noise, shape_sigma=args.shape_sigma,
-                    meas_sigma=args.meas_sigma)
+                    meas_sigma=args.meas_sigma, robot_floor_mm=args.robot_floor_mm)
     spec = StudySpec(methods, args.replicates, args.orientations, priors, _range2(args.r_prior_metal, "r-prior-metal"),
                      _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget)
     cands, grid = _candidates(args)

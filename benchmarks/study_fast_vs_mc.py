@@ -41,7 +41,7 @@ def _candidates(part: str):
     return grid_candidates(resolve_design("rod1"), GRID_L1, GRID_L2), True
 
 
-def _run_part(part: str, cache: Path) -> dict:
+def _run_part(part: str, cache: Path, keep: dict | None = None) -> dict:
     from rodlab.app.study import StudySpec, run_study, study_table
     from rodlab.app.study.family import family_joints
     from rodlab.calibrate import resolve_robot
@@ -49,8 +49,10 @@ def _run_part(part: str, cache: Path) -> dict:
     robot, fixture = resolve_robot("tx90"), standard_fixture()
     cands, grid = _candidates(part)
     joints, _ = family_joints(cands, grid, True, cache / "joints")
-    out = {}
+    out = dict(keep or {})
     for name, mc in (("fast", False), ("mc", True)):
+        if name in out:
+            continue
         spec = StudySpec(replicates=REPLICATES, monte_carlo=mc, draws=DRAWS)
         t0 = time.perf_counter()
         run = run_study(cands, robot, fixture, spec, joints, cache / part / name, workers=WORKERS)
@@ -119,6 +121,8 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cache", required=True, help="folder for the results (a part computed once is read back)")
     ap.add_argument("--only", choices=PARTS, default=None, help="compute this part only (no page)")
+    ap.add_argument("--redo-fast", action="store_true",
+                    help="recompute the linear predictor (its cache cleared), keep the Monte-Carlo results")
     a = ap.parse_args()
     cache = Path(a.cache)
     cache.mkdir(parents=True, exist_ok=True)
@@ -126,7 +130,12 @@ def main() -> None:
     res = {}
     for p in parts:
         f = cache / f"{p}.json"
-        res[p] = json.loads(f.read_text()) if f.exists() else _run_part(p, cache)
+        old = json.loads(f.read_text()) if f.exists() else None
+        if old is not None and a.redo_fast:
+            import shutil
+            shutil.rmtree(cache / p / "fast", ignore_errors=True)
+            old = _run_part(p, cache, {"mc": old["mc"]})
+        res[p] = old if old is not None else _run_part(p, cache)
     if a.only:
         return
     lines = ["# Benchmark: the study's linear predictor against Monte Carlo", "",

@@ -106,21 +106,49 @@ class LinearCampaign:
         out[:, cols] = a + np.asarray(noise_mm)[:, None] ** 2 * b > self.prior_scale[cols] ** 2
         return out
 
-    def gains(self, y: np.ndarray, rough: bool) -> np.ndarray:
+    def gains(self, y: np.ndarray, rough: bool, passes: int = 6) -> np.ndarray:
         """``A`` (D, P, 3N) per campaign ``y`` (D, 3N): the identified parameters' response to the data, the
         weak ones regularised at their start value (prior rows ``noise / physical size``) as identify does:
         with a rod to compensate (``rough``) the first pass holds the joint compliances and judges the others
-        at its scatter; the final pass judges all at the full fit's scatter."""
+        at its scatter; then each pass fits with the priors so far, takes its residual scatter as the noise
+        level and regularises what is weak at it (a prior, once given, stays), up to ``passes``."""
         weak = np.zeros((y.shape[0], self.J.shape[1]), bool)
         if rough and self.is_c.any():
             cols = ~self.is_c
             weak |= self.weak(self.scatter(y, cols), cols)
         noise = self.scatter(y)
-        weak |= self.weak(noise)
+        dof = max(self.J.shape[0] - self.J.shape[1], 1)
+        for _ in range(passes):
+            weak |= self.weak(noise)
+            A = self._regularised(weak, noise, y.shape[0])
+            r = y - ((A @ y[:, :, None])[:, :, 0]) @ self.J.T
+            noise = np.maximum(np.sqrt(np.sum(r ** 2, axis=1) / dof), 1e-6)
+            if not (self.weak(noise) & ~weak).any():
+                break
+        return self._bounded(y, weak, noise)
+
+    def _bounded(self, y: np.ndarray, weak: np.ndarray, noise: np.ndarray) -> np.ndarray:
+        """``A`` with identify's bounds: a joint compliance the fit would make negative (an uncompensated rod's
+        deflection pulls the wrist's that way) stays at its start value 0 (the bounded solver's active set)."""
+        at_bound = np.zeros_like(weak)
+        for _ in range(4):
+            A = self._regularised(weak, noise, y.shape[0], at_bound)
+            c = ((A @ y[:, :, None])[:, :, 0])[:, self.is_c]
+            low = np.zeros_like(weak)
+            low[:, self.is_c] = c < -1e-9
+            if not (low & ~at_bound).any():
+                break
+            at_bound |= low
+        return A
+
+    def _regularised(self, weak: np.ndarray, noise: np.ndarray, D: int, pinned: np.ndarray | None = None
+                     ) -> np.ndarray:
         lam = np.where(weak, (noise[:, None] / self.prior_scale) ** 2, 0.0)
         JtJ = self.J.T @ self.J
+        if pinned is not None:
+            lam = np.where(pinned, 1e10 * float(np.abs(np.diag(JtJ)).max()), lam)
         return np.linalg.solve(JtJ[None] + lam[:, :, None] * np.eye(JtJ.shape[0])[None],
-                               np.broadcast_to(self.J.T, (y.shape[0],) + self.J.T.shape))
+                               np.broadcast_to(self.J.T, (D,) + self.J.T.shape))
 
 
 def _kin_infos(n: int) -> list[ParamInfo]:

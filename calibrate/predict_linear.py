@@ -120,35 +120,39 @@ class LinearCampaign:
         dof = max(self.J.shape[0] - self.J.shape[1], 1)
         for _ in range(passes):
             weak |= self.weak(noise)
-            A = self._regularised(weak, noise, y.shape[0])
-            r = y - ((A @ y[:, :, None])[:, :, 0]) @ self.J.T
+            r = y - self._fit(y, self._normal(weak, noise)) @ self.J.T
             noise = np.maximum(np.sqrt(np.sum(r ** 2, axis=1) / dof), 1e-6)
             if not (self.weak(noise) & ~weak).any():
                 break
-        return self._bounded(y, weak, noise)
+        M = self._bounded(y, weak, noise)
+        return np.linalg.solve(M, np.broadcast_to(self.J.T, (y.shape[0],) + self.J.T.shape))
 
     def _bounded(self, y: np.ndarray, weak: np.ndarray, noise: np.ndarray) -> np.ndarray:
-        """``A`` with identify's bounds: a joint compliance the fit would make negative (an uncompensated rod's
-        deflection pulls the wrist's that way) stays at its start value 0 (the bounded solver's active set)."""
+        """The normal matrices (D, P, P) with identify's bounds: a joint compliance the fit would make negative
+        (an uncompensated rod's deflection pulls the wrist's that way) stays at its start value 0 (the bounded
+        solver's active set)."""
         at_bound = np.zeros_like(weak)
         for _ in range(4):
-            A = self._regularised(weak, noise, y.shape[0], at_bound)
-            c = ((A @ y[:, :, None])[:, :, 0])[:, self.is_c]
+            M = self._normal(weak, noise, at_bound)
             low = np.zeros_like(weak)
-            low[:, self.is_c] = c < -1e-9
+            low[:, self.is_c] = self._fit(y, M)[:, self.is_c] < -1e-9
             if not (low & ~at_bound).any():
                 break
             at_bound |= low
-        return A
+        return M
 
-    def _regularised(self, weak: np.ndarray, noise: np.ndarray, D: int, pinned: np.ndarray | None = None
-                     ) -> np.ndarray:
+    def _normal(self, weak: np.ndarray, noise: np.ndarray, pinned: np.ndarray | None = None) -> np.ndarray:
+        """``J^T J + diag(lambda)`` per draw (D, P, P): the priors of the weak parameters, and a stiff one
+        holding the ``pinned`` at their start value."""
         lam = np.where(weak, (noise[:, None] / self.prior_scale) ** 2, 0.0)
         JtJ = self.J.T @ self.J
         if pinned is not None:
             lam = np.where(pinned, 1e10 * float(np.abs(np.diag(JtJ)).max()), lam)
-        return np.linalg.solve(JtJ[None] + lam[:, :, None] * np.eye(JtJ.shape[0])[None],
-                               np.broadcast_to(self.J.T, (D,) + self.J.T.shape))
+        return JtJ[None] + lam[:, :, None] * np.eye(JtJ.shape[0])[None]
+
+    def _fit(self, y: np.ndarray, M: np.ndarray) -> np.ndarray:
+        """The identified parameters (D, P) from the data ``y`` (D, 3N) with the normal matrices ``M``."""
+        return np.linalg.solve(M, (y @ self.J)[:, :, None])[:, :, 0]
 
 
 def _kin_infos(n: int) -> list[ParamInfo]:

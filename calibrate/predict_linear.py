@@ -44,8 +44,9 @@ from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
 from .predict import _VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
 
-__all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "validation_draws",
-           "compliance_draws", "predict_linear", "KINEMATIC_KINDS"]
+__all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
+           "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
+           "KINEMATIC_KINDS"]
 
 #: the parameters the validation keeps from the identification (base and tool are refitted)
 KINEMATIC_KINDS = ("dtheta", "a", "alpha", "d", "beta", "c")

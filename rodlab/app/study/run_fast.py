@@ -8,9 +8,24 @@ from pathlib import Path
 
 from .prepare import DesignSetup, prepare_design
 
-__all__ = ["run_fast", "prediction_to_dict", "prediction_from_dict"]
+__all__ = ["run_fast", "prediction_to_dict", "prediction_from_dict", "DASK_MIN_DESIGNS"]
 
 log = logging.getLogger(__name__)
+
+#: fewer designs than this run in this process: a local cluster's start (~5-15 s on 2 cores, each worker
+#: importing rodlab) costs more than ~0.5 s per design saves (an address given with ``scheduler`` is always used)
+DASK_MIN_DESIGNS = 16
+
+
+def _one_blas_thread():
+    """A context holding NumPy's BLAS to one thread (the small matrices of a design run 1.5x faster than with
+    two threads competing; the cluster's workers are started so), when threadpoolctl is installed."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        from contextlib import nullcontext
+        return nullcontext()
+    return threadpool_limits(1)
 
 
 def prediction_to_dict(lp) -> dict:
@@ -72,7 +87,7 @@ def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, wo
     tick = _ticker(progress, sum(g is not None for g in got), len(cands))
     todo = [i for i, g in enumerate(got) if g is None]
     client = cluster = None
-    if use_dask and len(todo) > 1:
+    if use_dask and (scheduler or len(todo) >= DASK_MIN_DESIGNS):
         try:
             client, cluster = _client(scheduler, workers)
         except ImportError:
@@ -81,10 +96,11 @@ def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, wo
         if client is not None:
             _dask(client, cands, keys, todo, got, robot, fixture, spec, joints, cache, tick)
         else:
-            for i in todo:
-                got[i] = _fast_task(cands[i], robot, fixture, spec, joints.get(cands[i].label))
-                cache.put(keys[i], "fast.json", got[i])
-                tick()
+            with _one_blas_thread():
+                for i in todo:
+                    got[i] = _fast_task(cands[i], robot, fixture, spec, joints.get(cands[i].label))
+                    cache.put(keys[i], "fast.json", got[i])
+                    tick()
     finally:
         if client is not None:
             client.close()

@@ -142,10 +142,12 @@ def main() -> None:
              f"`python benchmarks/study_fast_vs_mc.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}. TX90, the simulator's five clamping "
              f"positions, 6 orientations each, 4 methods; Monte Carlo {REPLICATES} replicates per design (the "
-             f"study's default before), the linear predictor {DRAWS} draws; {WORKERS} Dask workers each. The same "
-             "setups (joint-calibrated frame compliance, planned campaign) for both.", "",
-             "Timings: the machine was shared with other jobs (7 processes on 2 cores) while this ran, so the "
-             "times compare the two predictors within one run only.", "",
+             f"study's default before) on {WORKERS} Dask workers, the linear predictor {DRAWS} draws (in the "
+             "process itself: fewer than 16 designs do not start a cluster). The same setups (joint-calibrated "
+             "frame compliance, planned campaign) for both.", "",
+             "Timings: the machine was shared with other jobs (load ~2-5 on 2 cores) while this ran, so the times "
+             "compare the two predictors within one run only; each includes the designs' preparation (pose "
+             "planning), which both need.", "",
              "| part | designs | linear [s] | Monte Carlo [s] | speed-up |", "|---|---|---|---|---|"]
     all_stats, tables = [], []
     for p in PARTS:

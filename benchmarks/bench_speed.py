@@ -71,7 +71,7 @@ ROWS = [  # (what, args, goal, goal seconds)
                                                 "rod1.fea.json"],
      "library <= 5 s from the design (fea.md: ~3.8 s); the command adds its imports", None),
     ("solid FEA of rod 1#, defaults (+ Richardson estimate)", ["fea", "rod1", "--model", "solid", "-o",
-                                                               "rod1.fea2.json"], "-", None),
+                                                               "rod1.fea2.json"], "<= 4 s, <= 1 GB", 4.0),
     ("simulate-campaign (5 x 6, TX90)", ["simulate-campaign", "--rod", "rod1.fea.json", "-o", "camp"],
      "<= 3 s", 3.0),
     ("plan (k 6, 30 candidates per position)", ["plan", "--fixture", "camp/multical.fixture.json", "--rod",
@@ -85,7 +85,9 @@ ROWS = [  # (what, args, goal, goal seconds)
      "<= 1 s per recording", 1.0),
     ("sweep --calibrate (13 x 15 grid)", ["sweep", "--L1", "150:450:25", "--L2", "300:650:25", "--calibrate",
                                           "--serial", "-o", "sweep.csv"], "~5-10 s (README before)", None),
-    ("demo", ["demo", "-o", "demo"], "<= 60 s", 60.0),
+    ("demo", ["demo", "-o", "demo"], "<= 15 s", 15.0),
+    ("study, 10 x 10 grid, 4 methods (linear predictor, 2 workers)",
+     ["study", "rod1", "--L1", "150:600:50", "--L2", "300:750:50", "--robot", "tx90", "-o", "study"], "<= 60 s", 60.0),
 ]
 
 

@@ -17,7 +17,7 @@ from rodlab.units import G0
 
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["Compensation", "deflection_offsets"]
+__all__ = ["Compensation", "deflection_offsets", "deflection_basis", "flange_loads"]
 
 
 def deflection_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray,
@@ -28,14 +28,33 @@ def deflection_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N:
     q = np.atleast_2d(np.asarray(q_rad, float))
     if rod is None or (not rod.C_F.any() and not rod.C_g.any()):
         return np.zeros((q.shape[0], 3))
+    R_TW, g_T, F_T = flange_loads(robot, params, q, force_W_N, rod.mass_kg, rod.com_T_mm)
+    dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
+    return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
+
+
+def flange_loads(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray, mass_kg: float,
+                 com_T_mm) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What Eq. 19 multiplies, per configuration: ``R_T^W`` (N, 3, 3) the flange axes in {W}, gravity in {T}
+    [g0] (N, 3) and the contact force in {T} [N] (N, 3)."""
+    q = np.atleast_2d(np.asarray(q_rad, float))
     F = np.broadcast_to(np.asarray(force_W_N, float), (q.shape[0], 3))
-    fr, _ = ball_positions(robot, params, q, rod.mass_kg, rod.com_T_mm, F)
+    fr, _ = ball_positions(robot, params, q, mass_kg, com_T_mm, F)
     n = robot.n
     R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
     g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)
     F_T = np.einsum("nji,nj->ni", R_TW, F)
-    dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
-    return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
+    return R_TW, g_T, F_T
+
+
+def deflection_basis(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray, mass_kg: float,
+                     com_T_mm) -> np.ndarray:
+    """d (ball-centre offsets in {W}) / d (C_F, C_g) [mm per mm/N, mm per mm/g0], shape=(N, 3, 18): the offsets
+    are linear in the compliance (Eq. 19), ``offsets = basis @ concatenate([C_F.ravel(), C_g.ravel()])``."""
+    R_TW, g_T, F_T = flange_loads(robot, params, q_rad, force_W_N, mass_kg, com_T_mm)
+    dF = np.einsum("nik,nl->nikl", R_TW, F_T).reshape(R_TW.shape[0], 3, 9)
+    dg = np.einsum("nik,nl->nikl", R_TW, g_T).reshape(R_TW.shape[0], 3, 9)
+    return np.concatenate([dF, dg], axis=2)
 
 
 @dataclass(frozen=True)

@@ -58,35 +58,39 @@ def _lm(robot, params, q0, targets, loads, lo, hi, q_pull, weight, iterations, t
     lam = np.full(M, 1e-3)
     eye = np.eye(n)
 
-    def cost_parts(qq):
-        r, J = _residual_and_jacobian(robot, params, qq, targets, loads)
+    def cost_parts(qq, rows=slice(None)):
+        rod_mass, com, force = loads
+        r, J = _residual_and_jacobian(robot, params, qq, targets[rows],
+                                      (rod_mass, com, None if force is None else force[rows]))
         c = np.einsum("mi,mi->m", r, r)
         if q_pull is not None:
-            dq = qq - q_pull
+            dq = qq - q_pull[rows]
             c = c + weight ** 2 * np.einsum("mi,mi->m", dq, dq)
         return r, J, c
     r, J, cost = cost_parts(q)
     active = np.ones(M, dtype=bool)
     it = 0
     for it in range(1, iterations + 1):
-        A = np.einsum("mik,mil->mkl", J, J)
-        g = np.einsum("mik,mi->mk", J, r)
+        a = np.nonzero(active)[0]                     # converged rows are left as they are: only these move
+        Ja, ra = J[a], r[a]
+        A = np.einsum("mik,mil->mkl", Ja, Ja)
+        g = np.einsum("mik,mi->mk", Ja, ra)
         if q_pull is not None:
             A = A + weight ** 2 * eye
-            g = g + weight ** 2 * (q - q_pull)
+            g = g + weight ** 2 * (q[a] - q_pull[a])
         diag = np.einsum("mkk->mk", A)
-        H = A + (lam[:, None] * np.maximum(diag, 1e-9))[:, :, None] * eye
+        H = A + (lam[a, None] * np.maximum(diag, 1e-9))[:, :, None] * eye
         step = -np.linalg.solve(H, g[..., None])[..., 0]
-        step[~active] = 0.0
-        q_new = np.clip(q + step, lo, hi)
-        r_new, J_new, cost_new = cost_parts(q_new)
-        better = (cost_new < cost) & active
-        q[better], r[better], J[better], cost[better] = q_new[better], r_new[better], J_new[better], cost_new[better]
-        lam = np.where(better, np.maximum(lam / 3.0, 1e-12), np.minimum(lam * 4.0, 1e8))
-        err = np.linalg.norm(r, axis=1)
+        q_new = np.clip(q[a] + step, lo, hi)
+        r_new, J_new, cost_new = cost_parts(q_new, a)
+        ok = cost_new < cost[a]
+        b = a[ok]
+        q[b], r[b], J[b], cost[b] = q_new[ok], r_new[ok], J_new[ok], cost_new[ok]
+        lam[a] = np.where(ok, np.maximum(lam[a] / 3.0, 1e-12), np.minimum(lam[a] * 4.0, 1e8))
+        err = np.linalg.norm(r[a], axis=1)
         small = np.abs(step).max(axis=1) < 1e-12
-        done = (err < tol) if q_pull is None else (small & better) | (lam >= 1e8)
-        active &= ~(done | (lam >= 1e8))
+        done = (err < tol) if q_pull is None else (small & ok) | (lam[a] >= 1e8)
+        active[a[done | (lam[a] >= 1e8)]] = False
         if not active.any():
             break
     return q, np.linalg.norm(r, axis=1), it

@@ -71,20 +71,49 @@ def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: 
     def J_of(ch):
         rows = [offsets[j] + i for j in ch for i in ch[j]]
         return Jall[rows].reshape(-1, len(free))
-    best = observability(J_of(chosen))["O1"]
-    for _ in range(3):                                      # greedy exchange passes
-        improved = False
-        for j in cands:
-            for slot in range(k):
-                for cand in range(len(cands[j])):
-                    if cand in chosen[j]:
-                        continue
-                    trial = {jj: list(v) for jj, v in chosen.items()}
-                    trial[j][slot] = cand
-                    o = observability(J_of(trial))["O1"]
-                    if o > best * (1 + 1e-9):
-                        best, chosen, improved = o, trial, True
-        if not improved:
-            break
+    chosen = _greedy_exchange(Jall, cands, chosen, offsets, k)
     out = {j: np.rad2deg(cands[j][chosen[j]]) for j in cands}
     return out, observability(J_of(chosen))
+
+
+def _o1_of_gram(G: np.ndarray, rows: int) -> np.ndarray:
+    """O1 of the column-scaled Jacobian from its Gram matrix ``G = J^T J`` (..., P, P): the singular values'
+    geometric mean is ``det(D^-1 G D^-1)^(1/2P)``, ``D = sqrt(diag G)`` (the column scaling), / sqrt(rows)."""
+    sign, logdet = np.linalg.slogdet(G)
+    d = np.log(np.maximum(np.diagonal(G, axis1=-2, axis2=-1), 1e-300)).sum(axis=-1)
+    return np.where(sign > 0, np.exp((logdet - d) / (2 * G.shape[-1])), 0.0) / np.sqrt(rows)
+
+
+def _greedy_exchange(Jall: np.ndarray, cands: dict, chosen: dict, offsets: dict, k: int) -> dict:
+    """Greedy exchange passes maximising O1: each slot of each position takes, in candidate order, any
+    candidate that raises O1 by more than 1e-9 relative (the other slots' poses excluded). Every candidate of a
+    slot is scored at once from the poses' Gram matrices (a swap changes ``J^T J`` by two 3-row terms)."""
+    Gp = np.einsum("nip,niq->npq", Jall, Jall)                      # per candidate pose
+    rows = 3 * k * len(cands)
+
+    def gram(ch):
+        return sum(Gp[offsets[j] + i] for j in ch for i in ch[j])
+    G = gram(chosen)
+    best = float(_o1_of_gram(G, rows))
+    for _ in range(3):
+        improved = False
+        for j in cands:
+            idx = offsets[j] + np.arange(len(cands[j]))
+            for slot in range(k):
+                cur = chosen[j][slot]
+                o = _o1_of_gram(G - Gp[offsets[j] + cur] + Gp[idx], rows)
+                others = set(chosen[j]) - {cur}
+                pick = None
+                for cand in range(len(cands[j])):
+                    if cand == cur or cand in others:
+                        continue
+                    if o[cand] > best * (1 + 1e-9):
+                        best, pick = float(o[cand]), cand
+                if pick is not None:
+                    chosen = {jj: list(v) for jj, v in chosen.items()}
+                    chosen[j][slot] = pick
+                    G = gram(chosen)
+                    improved = True
+        if not improved:
+            break
+    return chosen

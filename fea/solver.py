@@ -14,6 +14,7 @@ mirror-symmetric rod differ only in which DOFs of the plane are held) with one f
 """
 from __future__ import annotations
 
+import functools
 import logging
 import os
 from enum import Enum
@@ -40,8 +41,31 @@ class SolverBackend(str, Enum):
     SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
 
 
+#: pypardiso finds ``mkl_rt`` by a recursive glob over the whole environment (``sys.prefix/lib*/**``) at its
+#: import and at every solver it makes: ~1 s each in a venv with the cad extra, five times per ``rodlab fea``
+_MKL_RT_ENV = "PYPARDISO_MKL_RT"
+
+
+def _point_pypardiso_at_mkl() -> None:
+    """Tell pypardiso where the mkl wheel put ``mkl_rt`` (``sys.prefix/lib``, or the user site's; Windows
+    ``Library/bin``), unless the user already did: the same library its glob would find first (the
+    shortest path), found with one directory listing."""
+    if os.environ.get(_MKL_RT_ENV):
+        return
+    import glob
+    import site
+    import sys
+    for root in (sys.prefix, getattr(site, "USER_BASE", None) or ""):
+        for sub in ("lib", "Lib", "Library/bin", "lib64"):
+            hits = sorted(glob.glob(os.path.join(root, sub, "*mkl_rt*")), key=len)
+            if hits:
+                os.environ[_MKL_RT_ENV] = hits[0]
+                return
+
+
 def _pardiso_library():
     """pypardiso's handle on MKL's ``mkl_rt``, or None when either is missing."""
+    _point_pypardiso_at_mkl()
     try:
         import pypardiso
         return pypardiso.PyPardisoSolver(mtype=2)
@@ -50,11 +74,17 @@ def _pardiso_library():
         return None
 
 
+@functools.lru_cache(maxsize=1)
+def _pardiso_loads() -> bool:
+    """Whether PARDISO runs here (asked once per process: each try makes a solver)."""
+    return _pardiso_library() is not None
+
+
 def backend_available(backend: SolverBackend | str) -> bool:
     """Whether ``backend`` can run on this machine."""
     b = SolverBackend(backend)
     if b is SolverBackend.PARDISO:
-        return _pardiso_library() is not None
+        return _pardiso_loads()
     if b is SolverBackend.CHOLMOD:
         try:
             from sksparse.cholmod import cholesky  # noqa: F401

@@ -164,7 +164,7 @@ def _tube_axes(design: RodDesign, centroids_T: np.ndarray) -> np.ndarray:
 
 def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
              msh_path: str | Path | None = None, grading: tuple[float, ...] | None = None,
-             half: bool = False) -> RodMesh:
+             half: bool = False, kernel: str = "gmsh") -> RodMesh:
     """Mesh ``design`` with gmsh; optionally write ``msh_path`` (gmsh 4.1, atomically).
 
     ``half=True`` meshes only the half ``y_T >= 0``: every rod is mirror-symmetric about its bend plane
@@ -178,19 +178,27 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     ``bend_factor * size`` (default 1) in the bend. The stiff sleeves, holders and ball take ``size`` away from
     the faces they share with the tubes. ``None``: uniform size.
 
+    ``kernel``: ``gmsh`` builds the parts in gmsh's own OpenCASCADE kernel (:mod:`geometry.occ_parts`; no
+    build123d import), ``build123d`` imports the CAD assembly's solids (:func:`geometry.parts.part_solids`):
+    the same geometry.
+
     Raises :class:`~geometry.errors.GeometryError` on a mesh with inverted elements or missing parts.
     """
     import gmsh
 
+    if kernel not in ("gmsh", "build123d"):
+        raise GeometryError(f"kernel must be gmsh or build123d, got {kernel!r}", key="kernel")
     if order not in (1, 2):
         raise GeometryError(f"order must be 1 or 2, got {order!r}", key="order")
     h = default_size_mm(design, order) if size_mm is None else float(size_mm)
     if not (h > 0 and np.isfinite(h)):
         raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
     grading = _check_grading(grading)
-    solids = part_solids(design)
-    if half:
-        solids = _half_solids(solids)
+    solids = None
+    if kernel == "build123d":
+        solids = part_solids(design)
+        if half:
+            solids = _half_solids(solids)
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
@@ -198,7 +206,12 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             gmsh.option.setNumber("General.NumThreads", 1)
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.model.add(f"rod_{design.name}")
-            part_vols = _import_parts(solids, tmp)
+            if solids is None:
+                from .occ_parts import add_part_volumes
+                solids = add_part_volumes(design, half)
+                part_vols = _fragment(solids)
+            else:
+                part_vols = _import_parts(solids, tmp)
             _physical_groups(design, solids, part_vols, half)
             if grading is not None:
                 graded = sorted({v for p in GRADED_PARTS for v in part_vols.get(p, [])})
@@ -220,17 +233,25 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
 
 
 def _import_parts(solids: dict, tmp: str) -> dict:
-    """Import each part's solid into gmsh and fragment them into one conforming model; returns
+    """Import each part's build123d solid into gmsh and fragment them into one conforming model; returns
     {part: its gmsh volume tags} (a part may split into several volumes)."""
     import build123d as bd
     import gmsh
 
-    src = []
+    src = {}
     for part, solid in solids.items():
         f = os.path.join(tmp, f"{part.value}.brep")
         bd.export_brep(solid, f)
-        vols = [dt for dt in gmsh.model.occ.importShapes(f, highestDimOnly=True) if dt[0] == 3]
-        src.append((part, vols))
+        src[part] = [dt for dt in gmsh.model.occ.importShapes(f, highestDimOnly=True) if dt[0] == 3]
+    return _fragment(src)
+
+
+def _fragment(src: dict) -> dict:
+    """Fragment the parts' volumes ({part: [(3, tag)]}) into one conforming model; returns {part: its gmsh
+    volume tags} (a part may split into several volumes)."""
+    import gmsh
+
+    src = list(src.items())
     objects = [dt for _, vols in src for dt in vols]
     _, out_map = gmsh.model.occ.fragment(objects, [])
     gmsh.model.occ.synchronize()
@@ -240,7 +261,7 @@ def _import_parts(solids: dict, tmp: str) -> dict:
         for _ in vols:
             part_vols.setdefault(part, []).extend(t for d, t in out_map[k] if d == 3)
             k += 1
-    for part in solids:
+    for part, _ in src:
         if not part_vols.get(part):
             raise GeometryError(f"part {part} vanished when the parts were fused; check its dimensions",
                                 key=str(part))

@@ -114,10 +114,14 @@ def _candidates():
     return grid_candidates(base, [250.0, 300.0], [450.0])
 
 
-def test_dask_cluster_gives_the_serial_results(tmp_path):
+@pytest.mark.parametrize("monte_carlo", [False, True])
+def test_dask_cluster_gives_the_serial_results(tmp_path, monkeypatch, monte_carlo):
     pytest.importorskip("dask.distributed")
     from rodlab.app.study import StudySpec, run_study, study_table
-    spec = StudySpec(methods=("none", "fea"), replicates=2, priors=Priors(validation_points=20), budget=False)
+    spec = StudySpec(methods=("none", "fea"), replicates=2, priors=Priors(validation_points=20), budget=False,
+                     monte_carlo=monte_carlo, draws=64)
+    import rodlab.app.study.run_fast as run_fast
+    monkeypatch.setattr(run_fast, "DASK_MIN_DESIGNS", 1)      # the cluster even for these two designs
     robot, fixture = resolve_robot("tx90"), standard_fixture()
     serial = study_table(run_study(_candidates(), robot, fixture, spec, use_dask=False))
     dask = study_table(run_study(_candidates(), robot, fixture, spec, cache_dir=tmp_path / "c", workers=2))

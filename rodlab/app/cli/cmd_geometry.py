@@ -10,7 +10,7 @@ from ...errors import RodlabError
 from .argtypes import pos_float
 from .reporting import add_report_option, write_command_report
 
-__all__ = ["register", "require_cad"]
+__all__ = ["register", "require_cad", "require_mesher"]
 
 _DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6"
 
@@ -19,6 +19,17 @@ def require_cad():
     """Import the geometry package, or explain how to install the CAD extra."""
     try:
         import build123d  # noqa: F401
+        import gmsh  # noqa: F401
+        import rodlab.geometry as geometry
+    except ImportError as e:
+        raise RodlabError(f"this command needs the CAD extra ({e.name} is missing): pip install 'rodlab[cad]'") from e
+    return geometry
+
+
+def require_mesher():
+    """The geometry package for meshing only (gmsh builds the parts itself: build123d is not imported), or
+    explain how to install the CAD extra."""
+    try:
         import gmsh  # noqa: F401
         import rodlab.geometry as geometry
     except ImportError as e:
@@ -71,7 +82,7 @@ def cmd_cad(args: argparse.Namespace) -> int:
 
 
 def cmd_mesh(args: argparse.Namespace) -> int:
-    geometry = require_cad()
+    geometry = require_mesher()
     design = resolve_design(args.design)
     t0 = time.perf_counter()
     rm = geometry.mesh_rod(design, size_mm=args.size, order=args.order, msh_path=args.output)

@@ -18,14 +18,15 @@ _METHODS = ("none", "calc", "fea", "meas")
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "study", help="predict each rod design's calibration accuracy on a robot (Monte-Carlo; Pareto, budget)",
+        "study", help="predict each rod design's calibration accuracy on a robot (band, budget, Pareto)",
         description="For every design (an L1 x L2 grid around one base, with tube-material and tube-size variants, "
                     "or a list of designs): compliance (the frame, joint-calibrated on one solid FEA run per family), "
                     "mass, c_rod, thermal growth, natural frequencies, strength margins; pose planning on the robot "
-                    "(O1..O5); then N simulated MultiCal campaigns, each calibrated with every compensation method and "
-                    "validated, give the predicted accuracy with its 90 % band and error budget. Writes study.csv, "
-                    "pareto.png, heatmaps.png (grids), study.html and study.json into OUTPUT; prints a "
-                    "recommendation. Cached per design and replicate: a re-run resumes.")
+                    "(O1..O5); then the predicted accuracy per compensation method with its 90 %% band and error "
+                    "budget: by default from the planned campaign's linearised identification (seconds per design); "
+                    "with --monte-carlo from N simulated MultiCal campaigns, each calibrated with every method and "
+                    "validated. Writes study.csv, pareto.png, heatmaps.png (grids), study.html and study.json into "
+                    "OUTPUT; prints a recommendation. Cached per design (and replicate): a re-run resumes.")
     p.add_argument("designs", nargs="+", help="*.rod.toml files or built-in names (rod1 .. rod6); with --L1/--L2 "
                                               "one base design")
     p.add_argument("--L1", default=None, help="START:STOP:STEP or a,b,c [mm] (a grid around the base)")
@@ -36,7 +37,12 @@ def register(sub) -> None:
     p.add_argument("--fixture", default=None,
                    help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
                         "{W}, 650 mm in front of the robot)")
-    p.add_argument("--replicates", type=count, default=20, help="simulated campaigns per design (default 20)")
+    p.add_argument("--monte-carlo", action="store_true",
+                   help="simulate and calibrate --replicates campaigns per design instead of the linear predictor")
+    p.add_argument("--replicates", type=count, default=20,
+                   help="with --monte-carlo: simulated campaigns per design (default 20)")
+    p.add_argument("--draws", type=count, default=256,
+                   help="linear predictor: draws of r_rod, the compliance's shape and the validation sets (default 256)")
     p.add_argument("--methods", default=",".join(_METHODS), help="compensation methods (default none,calc,fea,meas)")
     p.add_argument("--orientations", type=count, default=6, help="rod orientations per clamping position (default 6)")
     p.add_argument("--seed", type=seed, default=0, help="first replicate's seed (the same draws for every design)")
@@ -53,7 +59,8 @@ def register(sub) -> None:
     p.add_argument("--robot-floor-mm", type=nonneg_float, default=0.0,
                    help="the robot's own unmodelled error: smooth joint-angle errors whose mean on rigid-tool "
                         "validation is this [mm] (paper, TX90 by laser scanner: 0.263; default 0 = none)")
-    p.add_argument("--no-budget", action="store_true", help="skip the error budget (one fit fewer per replicate)")
+    p.add_argument("--no-budget", action="store_true",
+                   help="with --monte-carlo: skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",
                    help="use the frame's global calibration instead of one solid FEA run per design family")
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
@@ -100,7 +107,7 @@ def _candidates(args):
 
 
 def _check_numbers(args) -> None:
-    for name in ("replicates", "orientations", "workers"):
+    for name in ("replicates", "orientations", "workers", "draws"):
         if getattr(args, name) < 1:
             raise RodlabError(f"--{name} must be >= 1, got {getattr(args, name)}")
     if args.orientations < 2:
@@ -133,20 +140,23 @@ def cmd_study(args: argparse.Namespace) -> int:
                     instrument_noise_mm=args.instrument_noise, shape_sigma=args.shape_sigma,
                     meas_sigma=args.meas_sigma, robot_floor_mm=args.robot_floor_mm)
     spec = StudySpec(methods, args.replicates, args.orientations, priors, _range2(args.r_prior_metal, "r-prior-metal"),
-                     _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget)
+                     _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget,
+                     args.monte_carlo, args.draws)
     cands, grid = _candidates(args)
     out = Path(args.output)
     t0 = time.perf_counter()
     cache = Path(args.cache) if args.cache else out / "cache"
     joints, model_note = family_joints(cands, grid is not None, not args.no_calibrate, cache)
-    print(f"{len(cands)} designs on {robot.name}, {args.replicates} replicates x {len(methods)} methods; "
-          f"compliance: {model_note}")
-    with bar_of(total=len(cands) * (1 + args.replicates), desc="study", unit="task") as bar:
+    how = (f"{args.replicates} simulated campaigns (Monte Carlo)" if args.monte_carlo
+           else f"linear predictor ({args.draws} draws)")
+    print(f"{len(cands)} designs on {robot.name}, {how} x {len(methods)} methods; compliance: {model_note}")
+    tasks = len(cands) * (1 + args.replicates) if args.monte_carlo else len(cands)
+    with bar_of(total=tasks, desc="study", unit="task" if args.monte_carlo else "design") as bar:
         run = run_study(cands, robot, fixture, spec, joints, cache, args.scheduler,
                         args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
     elapsed = time.perf_counter() - t0
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
-              "designs": len(cands), "replicates": args.replicates, "methods": ", ".join(methods),
+              "designs": len(cands), "predictor": how, "methods": ", ".join(methods),
               "compliance": model_note, "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
                               {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed},

@@ -119,8 +119,10 @@ def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
         f"{_pct(r['share_identification'])} / {_pct(r['share_noise'])}</td></tr>" for r in sy["rows"])
     return (f"<h2>8. Which rod? Predicted calibration accuracy (rodlab study)</h2><p><b>Recommendation.</b> "
             f"{html.escape(sy['recommendation'])}</p>{rod_note}<p class=note>{len(sy['designs'])} designs "
-            f"({html.escape(', '.join(sy['designs']))}) on the TX90, {sy['replicates']} simulated campaigns each "
-            f"(a design study uses 20: <code>rodlab study</code>); compliance: {html.escape(sy['compliance'])}. "
+            f"({html.escape(', '.join(sy['designs']))}) on the TX90, "
+            f"{html.escape(str(sy.get('predictor') or str(sy['replicates']) + ' simulated campaigns each'))} "
+            f"(<code>rodlab study</code>; <code>--monte-carlo</code> simulates the campaigns); compliance: "
+            f"{html.escape(sy['compliance'])}. "
             "Mean validation error after calibration, its 5-95 % band over the campaigns, and the error budget: the "
             "shares of the mean-square error from the rod's deflection left after compensation, the identification "
             "and the validation instrument's noise. The whole study: <code>study/study.html</code>.</p>"

@@ -43,7 +43,8 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     df = study_table(run)
     rec = recommend(df)
     atomic_write_text(out / "study.csv", df.to_csv(index=False))
-    title = f"{robot_name}, {run.spec.replicates} simulated campaigns per design"
+    title = (f"{robot_name}, {run.spec.replicates} simulated campaigns per design" if run.spec.monte_carlo
+             else f"{robot_name}, linear predictor ({run.spec.draws} draws per design)")
     pareto = plot_pareto(df, out / "pareto.png", best_method(run.spec.methods), title)
     figs = {"Pareto fronts: predicted accuracy vs mass and vs reach": pareto.name}
     heat = plot_heatmaps(df, out / "heatmaps.png", title) if grid else None

@@ -1,12 +1,16 @@
-"""``rodlab study``'s engine: every (design, replicate) a Dask task, cached per design and replicate.
+"""``rodlab study``'s engine: every design (and, with Monte Carlo, every replicate) a Dask task, cached.
 
 1. the joint calibration of each design family (one solid FEA run each, in this process; cad extra);
 2. per design a preparation task (:func:`rodlab.app.study.prepare.prepare_design`);
-3. per design and replicate a Monte-Carlo task (:func:`rodlab.calibrate.predict.run_replicate`), seeds
-   ``seed + i`` — the same seeds for every design, so designs are compared on the same draws;
+3. the default (``spec.monte_carlo`` off): in the same task the linear predictor
+   (:func:`rodlab.calibrate.predict_linear.predict_linear`) from the planned campaign, milliseconds to a
+   second per design; with ``spec.monte_carlo`` per design and replicate a Monte-Carlo task
+   (:func:`rodlab.calibrate.predict.run_replicate`), seeds ``seed + i`` — the same seeds for every design, so
+   designs are compared on the same draws (the linear predictor's draws are seeded alike);
 4. the summaries per design and method (:func:`rodlab.calibrate.predict.summarise`) as the study table.
 
-Results are cached under ``cache_dir/<design key>/`` (``setup.json``, ``rep_<seed>.json``); the key hashes
+Results are cached under ``cache_dir/<design key>/`` (``setup.json``, ``rep_<seed>.json``, or ``fast.json``
+for the linear predictor); the key hashes
 everything that changes a result (the design's numbers, robot, fixture, priors, methods, orientations, the
 joint calibration, rodlab's version), so a re-run computes only what is missing and an interrupted study
 resumes. Dask runs on a ``LocalCluster`` by default, on ``scheduler=ADDRESS`` when given, or serially.
@@ -37,7 +41,8 @@ class StudySpec:
     """How a study predicts: ``methods`` (contract spellings), ``replicates`` per design, ``orientations``
     per clamping position, ``priors`` (:class:`rodlab.calibrate.predict.Priors`; its ``r_rod`` is replaced per
     design by ``r_prior_metal`` / ``r_prior_composite``), ``seed``, ``budget`` (the error budget's extra
-    identification per replicate)."""
+    identification per replicate), ``monte_carlo`` (simulate ``replicates`` campaigns per design instead of the
+    linear predictor's ``draws``)."""
 
     methods: tuple = ("none", "calc", "fea", "meas")
     replicates: int = 20
@@ -47,16 +52,20 @@ class StudySpec:
     r_prior_composite: tuple = (1.23, 2.30)
     seed: int = 0
     budget: bool = True
+    monte_carlo: bool = False
+    draws: int = 256
 
 
 @dataclass
 class StudyRun:
-    """A finished study: per design its setup and its replicate outcomes (in seed order)."""
+    """A finished study: per design its setup and its replicate outcomes (in seed order; Monte Carlo) or its
+    linear prediction (:class:`rodlab.calibrate.predict_linear.LinearPrediction`, else None)."""
 
     setups: list
     outcomes: list
     spec: StudySpec
     timings: dict = field(default_factory=dict)
+    predictions: list = field(default_factory=list)
 
 
 def _priors(spec: StudySpec, setup_or_prior):
@@ -169,6 +178,9 @@ def run_study(cands: list[Candidate], robot, fixture, spec: StudySpec = StudySpe
               progress: Callable[[int, int], None] | None = None) -> StudyRun:
     """Run the study (see the module docstring). ``joints``: {candidate label: JointCalibration or None}."""
     joints = joints or {}
+    if not spec.monte_carlo:
+        from .run_fast import run_fast
+        return run_fast(cands, robot, fixture, spec, joints, cache_dir, scheduler, workers, use_dask, progress)
     cache = _Cache(Path(cache_dir) if cache_dir else None)
     keys = [_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
     seeds = [spec.seed + i for i in range(int(spec.replicates))]

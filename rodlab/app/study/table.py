@@ -43,13 +43,17 @@ def study_table(run: StudyRun):
 
     from rodlab.calibrate.predict import summarise
     rows = []
-    for s, outs in zip(run.setups, run.outcomes):
+    preds = run.predictions or [None] * len(run.setups)
+    for s, outs, pred in zip(run.setups, run.outcomes, preds):
         base = _design_part(s)
-        if not s.ok or not outs:
+        if pred is not None:
+            nominal, summaries = pred.nominal_mean_mm, pred.summaries
+        elif not s.ok or not outs:
             rows.append(dict(base, message=s.message or "no replicate succeeded"))
             continue
-        nominal = float(np.mean([o.before.mean_mm for o in outs]))
-        for a in summarise(outs, run.spec.methods):
+        else:
+            nominal, summaries = float(np.mean([o.before.mean_mm for o in outs])), summarise(outs, run.spec.methods)
+        for a in summaries:
             b = a.budget
             rows.append(dict(base, method=str(a.method), mean_mm=a.mean_mm, max_mm=a.max_mm, median_mm=a.median_mm,
                              mean_p05_mm=a.mean_p05_mm, mean_p95_mm=a.mean_p95_mm, rms_mm=a.rms_mm,

@@ -2,8 +2,9 @@
 simulated by the calibrated frame model, diagnosed against the closed form ("calc", default) or the frame model of
 the nominal design with the design's envelope (the default of `rodlab diagnose --rig`).
 
-    python benchmarks/diagnose_blind_as_built.py [N] [SEED] [rod] [calc|frame]
-    # writes docs/benchmarks/diagnose_blind_as_built[_frame].md
+    python benchmarks/diagnose_blind_as_built.py [N] [SEED] [ROD] [calc|frame]
+    # writes docs/benchmarks/diagnose_blind_as_built_ROD_METHOD.md; ROD a built-in or legacy:rod1 (the rod 1# of
+    # before issue #45, kept with the solid references in fea/data/reference_designs.json)
 
 Goals (#43): at least 90 % right, at most 1 false alarm in 20 nulls, wrong cause at most 5 %.
 """
@@ -22,6 +23,7 @@ from rodlab.app.diagnose import diagnose_rig
 from rodlab.compliance import RodCompliance
 from rodlab.errors import DesignError
 from rodlab.fea.frame import frame_compliance
+from rodlab.fea.reference_designs import reference_design
 from rodlab.fileio import atomic_write_text
 from rodlab.sensitivity import with_values
 from rodlab.stiffness_rig import read_recording
@@ -65,7 +67,7 @@ def main() -> int:
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 3000
     rod = sys.argv[3] if len(sys.argv) > 3 else "rod1"
     method = sys.argv[4] if len(sys.argv) > 4 else "calc"
-    design = resolve_design(rod)
+    design = reference_design(rod.split(":", 1)[1]) if rod.startswith("legacy:") else resolve_design(rod)
     calc = calc_rod_compliance(design)
     sim = RodCompliance.from_design(design, calc.C_F, calc.C_g, "calc") if method == "calc" else \
         RodCompliance.from_design(design, frame_compliance(design)[0], calc.C_g, "fea", {"model": "frame"})
@@ -102,7 +104,7 @@ def main() -> int:
               f"| wrong cause (cases with a cause named that is not there) | {counts['wrong']}/{n} |",
               f"| time per recording | median {np.median(times):.2f} s, max {max(times):.2f} s |", "",
               "| case | kind | truth | verdict | findings | right |", "|---|---|---|---|---|---|"] + rows
-    atomic_write_text(OUT if method == "calc" else OUT.with_name(f"diagnose_blind_as_built_{method}.md"),
+    atomic_write_text(OUT.with_name(f"diagnose_blind_as_built_{rod.replace(':', '_')}_{method}.md"),
                       "\n".join(lines) + "\n")
     print("\n".join(lines[:14]))
     return 0

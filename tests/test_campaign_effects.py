@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, resolve_design
+from conftest import legacy_design
+from rodlab import calc_rod_compliance
 from rodlab.app.diagnose import diagnose_campaign
 from rodlab.app.diagnose.advice import remedy
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
@@ -22,7 +23,7 @@ from rodlab.errors import RodlabError
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = ROOT.parent / "shared" / "contract" / "effects.md"
 ROBOT = resolve_robot("tx90")
-ROD = calc_rod_compliance(resolve_design("rod1"))
+ROD = calc_rod_compliance(legacy_design("rod1"))     # the rod 1# these were sized on (conftest)
 
 #: a clearly detectable magnitude of each effect, and where the diagnosis must put it
 CASES = {

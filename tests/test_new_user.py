@@ -196,12 +196,13 @@ def test_a_flat_rig_recording_names_the_file_and_the_cause(tmp_path, capsys, axi
 # --- 5. a study prints every design it could not use, with the reason -----------------------------------------------
 
 def test_study_prints_every_unusable_design_with_its_reason(tmp_path, capsys):
-    assert main(["study", "rod1", "--tubes", "25x2,30x2", "--replicates", "1", "--methods", "calc", "--no-calibrate",
+    # rod 1#'s bend radius is 65 mm: too tight to bend a 50 mm tube (at least 1.5 diameters)
+    assert main(["study", "rod1", "--tubes", "40x5,50x3", "--replicates", "1", "--methods", "calc", "--no-calibrate",
                  "--no-budget", "--serial", "-o", str(tmp_path / "study")]) == 0
     out = capsys.readouterr().out
     assert "1 of 2 designs not usable:" in out
-    line = next(ln for ln in out.splitlines() if "30x2: invalid" in ln)
-    assert "bend radius 40.0 mm" in line and "kinking" in line
+    line = next(ln for ln in out.splitlines() if "50x3: invalid" in ln)
+    assert "bend radius 65.0 mm" in line and "kinking" in line
 
 
 # --- 8. study figures: labels kept, one colour scale, the sweep's colour map; the help's "%%" -------------------------

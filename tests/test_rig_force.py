@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance, read_compliance, resolve_design, write_compliance
+from conftest import legacy_design
 from rodlab.stiffness_rig import fit_recording, read_recording
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
 
-SIM = calc_rod_compliance(resolve_design("rod1"))
+SIM = calc_rod_compliance(legacy_design("rod1"))     # the rod 1# the rig machinery was sized on (conftest)
 QUICK = LoadSchedule(axes=("y", "z", "x"), masses=(0.5, 1.0, 1.5, 2.0), repeats=2, hold_s=4.0, rate_Hz=10.0)
 
 

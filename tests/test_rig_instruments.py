@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodlab import calc_rod_compliance, resolve_design
+from conftest import legacy_design
+from rodlab import calc_rod_compliance
 from rodlab.stiffness_rig import DeviceError, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.acquire import acquire
 from rodlab.stiffness_rig.config import RigPlan, read_profile
@@ -18,7 +19,7 @@ from rodlab.stiffness_rig import siminstruments as si
 from rodlab.stiffness_rig.siminstruments import Faults, SimBench
 
 PLANS = Path(__file__).resolve().parents[1] / "stiffness_rig" / "plans"
-SIM = calc_rod_compliance(resolve_design("rod1"))
+SIM = calc_rod_compliance(legacy_design("rod1"))     # the rod 1# the rig machinery was sized on (conftest)
 C = SIM.C_F
 FAULTS = Faults(garbage=0.05, stall=0.02, stall_s=0.4, disconnect=0.01, reconnect_after_s=0.2)
 LOADER = '[loader]\ninstrument = "{who}"\ncommand = "LOAD {{axis}} {{phase}} {{mass_kg:.4f}}\\r\\n"\n'

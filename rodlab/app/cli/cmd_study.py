@@ -22,7 +22,7 @@ def register(sub) -> None:
         description="For every design (an L1 x L2 grid around one base, with tube-material and tube-size variants, "
                     "or a list of designs): compliance (the frame, joint-calibrated on one solid FEA run per family), "
                     "mass, c_rod, thermal growth, natural frequencies, strength margins; pose planning on the robot "
-                    "(O1..O5); then the predicted accuracy per compensation method with its 90 %% band and error "
+                    "(O1..O5); then the predicted accuracy per compensation method with its 90 % band and error "
                     "budget: by default from the planned campaign's linearised identification (seconds per design); "
                     "with --monte-carlo from N simulated MultiCal campaigns, each calibrated with every method and "
                     "validated. Writes study.csv, pareto.png, heatmaps.png (grids), study.html and study.json into "

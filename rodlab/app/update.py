@@ -15,7 +15,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..design import RodDesign
-from ..errors import RodlabError
+from ..errors import DesignError, RodlabError
 from ..massprops import mass_properties
 from ..sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
 from ..tolerances import design_tolerances, design_value
@@ -101,7 +101,9 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     if not keys:
         raise RodlabError("no key to fit: give --free KEY[,KEY...]", key="free")
     for k in keys:
-        design_value(design, k)
+        if not design_value(design, k) > 0:
+            raise RodlabError(f"--free {k}: its design value is {design_value(design, k):g}; only a key with a "
+                              "positive value (a size, a modulus) can be fitted", key="free")
     fn = model_compliance(model)
     E = measured.entries
     acc = METHOD_ACCURACY[model]
@@ -119,7 +121,11 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
         return np.concatenate([W @ (entries_of(x) - measured.C), (x - nominal) / prior_sd])
 
     lo, hi = 0.2 * np.abs(nominal), 5.0 * np.abs(nominal)
-    res = least_squares(residual, nominal, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
+    try:
+        res = least_squares(residual, nominal, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
+    except DesignError as e:
+        raise RodlabError(f"the fit of {', '.join(keys)} reached a design the rules refuse ({e.detail}); free fewer "
+                          "keys or keys the measurement constrains", key="free") from e
     J = res.jac
     cov = np.linalg.pinv(J.T @ J)
     sd = np.sqrt(np.clip(np.diag(cov), 0, None))

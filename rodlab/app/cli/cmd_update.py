@@ -10,6 +10,9 @@ from ...errors import RodlabError
 
 __all__ = ["register"]
 
+#: causes a rig diagnosis names in the linear compliance itself (not design keys)
+_STRUCTURAL = ("joint_compliance", "torsion_compliance", "compliance_scale")
+
 
 def register(sub) -> None:
     p = sub.add_parser("update", help="fit a design's uncertain keys to a measured compliance (the rod as built)",
@@ -53,16 +56,22 @@ def _measured(path: str, design):
         C = model_compliance("frame")(design)
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea", {"model": "frame"})
         diag, model = diagnose_rig(read_recording(path), sim, design)
-        causes = [f.effect for f in diag.findings if f.effect not in ("model_form",)]
+        rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
+        local = [f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings
+                 if f.effect in _STRUCTURAL]
+        if local:
+            raise RodlabError(f"{path}: the recording shows {', '.join(local)} beyond the design's tolerances "
+                              "(`rodlab diagnose --rig`): a local cause, not a design key the fit could move; "
+                              "repair or re-bond the rod and measure again, or fit only what the tolerances explain")
         lin = model.linear
-        return Measured(lin.entries, lin.C, lin.cov, path), causes
+        return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
     C = np.array([comp.C_F[e] for e in E])
-    sd = MEAS_RELATIVE * np.abs(C)                      # a file that states no uncertainty: remounting's 1 %
+    sd = MEAS_RELATIVE * np.abs(C)                      # remounting and refitting: 1 %, beside the stated fit error
     if comp.C_F_sigma is not None:
         stated = np.array([comp.C_F_sigma[e] for e in E])
-        sd = np.where(np.isfinite(stated), stated, sd)
+        sd = np.hypot(np.where(np.isfinite(stated), stated, 0.0), sd)
     return Measured(E, C, np.diag(sd ** 2), path), []
 
 
@@ -75,14 +84,14 @@ def cmd_update(args: argparse.Namespace) -> int:
                           "fit` or a *.rig.csv recording)")
     design = resolve_design(args.design)
     keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
-    measured, causes = _measured(args.measured, design)
-    if causes:
-        print("the recording also shows: " + ", ".join(causes) + " (separated from the linear compliance; see "
-              "`rodlab diagnose --rig`)")
-    res = update_design(design, measured, keys, args.model)
-    _print(res, args.model)
     if design.source is None:
         raise RodlabError("the design has no file to start from", key="design")
+    measured, causes = _measured(args.measured, design)
+    if causes:
+        print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
+              "compliance; see `rodlab diagnose --rig`)")
+    res = update_design(design, measured, keys, args.model)
+    _print(res, args.model)
     text = Path(design.source).read_text(encoding="utf-8")
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")

@@ -83,7 +83,7 @@ class Envelope:
 
     def entries_at(self, u: np.ndarray, entries) -> np.ndarray:
         """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
-        if self.model is None or not self.params:
+        if self.n_free == 0:
             return self.accuracy.expected(self.C_sim, entries)
         from ...sensitivity import with_values
         C = np.asarray(self.model(with_values(self.design, self.values(u[:len(self.params)]))), float) * self.ratio
@@ -175,7 +175,7 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
                    + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd) + "; bonds "
                    + ", ".join(f"{p} {sd:.1g}" for p, sd in bond_tolerances(design).items()) + " rad/(N m)",
                    model, design, ratio * unbiased, _bonds(design))
-    bounds = np.vstack([_feasible_bounds(env), np.tile([-4.0, 4.0], (len(env.bonds), 1))])
+    bounds = np.vstack([_feasible_bounds(env), np.tile([0.0, 4.0], (len(env.bonds), 1))])   # a bond only softens
     return replace(env, u_bounds=bounds)
 
 

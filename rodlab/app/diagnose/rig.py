@@ -26,6 +26,8 @@ import logging
 import numpy as np
 
 from ...compliance import RodCompliance
+from ...enums import Method
+from ...errors import RodlabError
 from rodlab.stiffness_rig.effects import HypothesisContext, joint_places, rig_hypotheses
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
@@ -53,6 +55,9 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     the rig: when one hold carries most of the lack of fit and leaving it out removes the lack of fit, the
     diagnosis is of the recording without it, and an ``unexplained`` finding names the hold.
     """
+    if sim.method is Method.NONE:
+        raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
+                          "against; give the rod's calc, fea or meas compliance file")
     data = rig_samples(rec)
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)

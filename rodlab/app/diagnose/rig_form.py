@@ -21,6 +21,7 @@ import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
 from rodlab.enums import MODEL_FORM
+from rodlab.errors import DesignError
 from rodlab.hypothesis import Hypothesis
 from rodlab.sensitivity import METHOD_ACCURACY
 
@@ -74,12 +75,17 @@ class _AsBuilt:
         self.J = self._jacobian(self.u)
 
     def _residual(self, u):
-        return np.concatenate([self.W @ (self.env.entries_at(u, self.E) - self.C), u])
+        try:
+            C = self.env.entries_at(u, self.E)
+        except DesignError:                  # two keys moved together past a design rule: no rod as built there
+            return np.full(len(self.E) + len(u), 1e6)
+        return np.concatenate([self.W @ (C - self.C), u])
 
     def _map(self) -> float:
         if self.k:
             b = self.env.u_bounds
-            res = least_squares(self._residual, np.zeros(self.k), bounds=(b[:, 0], b[:, 1]), diff_step=1e-4)
+            x0 = np.clip(np.zeros(self.k), b[:, 0] + 1e-6, b[:, 1] - 1e-6)   # strictly inside (a bond starts at 0)
+            res = least_squares(self._residual, x0, bounds=(b[:, 0], b[:, 1]), diff_step=1e-4)
             self.u = res.x
         r = self._residual(self.u)
         return float(r @ r)
@@ -125,7 +131,7 @@ class _AsBuilt:
         b = self.env.u_bounds if k else np.zeros((0, 2))
         lo = np.concatenate([b[:, 0], np.asarray(lower, float) / scale])
         hi = np.concatenate([b[:, 1], np.asarray(upper, float) / scale])
-        x0 = np.clip(np.concatenate([np.zeros(k), np.asarray(s0, float) / scale]), lo + 1e-12, hi - 1e-12)
+        x0 = np.clip(np.concatenate([np.zeros(k), np.asarray(s0, float) / scale]), lo + 1e-6, hi - 1e-6)
         fit = least_squares(res, x0, bounds=(lo, hi), diff_step=1e-4)
         A = fit.jac
         se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))[k:] * scale

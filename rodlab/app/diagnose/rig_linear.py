@@ -84,14 +84,17 @@ class Projector:
 
 
 def fit_linear(data: RigSamples, entries, L: np.ndarray, y_minus_effects: np.ndarray, sigma: float,
-               C_sim: np.ndarray, inflation: float = 1.0) -> LinearPart:
+               C_sim: np.ndarray, inflation: float = 1.0, effects: np.ndarray | None = None) -> LinearPart:
     """The entries fitted to the readings less the chosen effects' fitted change (gauge zeros projected out), with
-    covariance ``sigma^2 (L^T L)^-1`` times ``inflation`` (the lack of fit's reduced chi-square, at least 1)."""
+    the covariance of a joint fit with the effects' columns ``effects`` (gauge zeros removed; shape=(n, p)):
+    ``sigma^2 [(L, X)^T (L, X)]^-1``'s linear block, times ``inflation`` (the lack of fit's reduced chi-square,
+    at least 1). An effect that varies with the load as the compliance does (fast creep, hysteresis) widens it."""
     groups = data.axis * 4 + data.comp
     Ld = demean(L, groups)
     yd = demean(y_minus_effects, groups)
     coef, *_ = np.linalg.lstsq(Ld, yd, rcond=None)
-    cov = sigma ** 2 * max(inflation, 1.0) * np.linalg.pinv(Ld.T @ Ld)
+    M = Ld if effects is None or np.size(effects) == 0 else np.column_stack([Ld, effects])
+    cov = sigma ** 2 * max(inflation, 1.0) * np.linalg.pinv(M.T @ M)[:Ld.shape[1], :Ld.shape[1]]
     C_F = np.array(C_sim, float).copy()
     for (m, n), c in zip(entries, coef):
         C_F[m, n] = C_F[n, m] = c

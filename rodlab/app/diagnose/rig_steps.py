@@ -35,6 +35,10 @@ class Prep:
         term.X = self.project(term.X) if self.project is not None else self.raw[id(term)]
         return term
 
+    def raw_columns(self, terms) -> np.ndarray:
+        """The terms' columns before projection (gauge zeros removed), shape=(n, p)."""
+        return np.column_stack([self.raw[id(t)] for t in terms]) if terms else np.zeros((0, 0))
+
     def fitted_change(self, terms, coef: np.ndarray) -> np.ndarray:
         """The change of every reading the fitted terms make (gauge zeros removed) [mm]."""
         if not terms:

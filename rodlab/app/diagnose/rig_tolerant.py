@@ -57,7 +57,8 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
     resid = ls.residual(S, coef)
     lack = lack_of_fit(data, resid, sigma, lin0.C_F)
-    linear = fit_linear(data, entries, L, data.y - prep.fitted_change(chosen, coef), sigma, sim.C_F, lack.chi_red)
+    linear = fit_linear(data, entries, L, data.y - prep.fitted_change(chosen, coef), sigma, sim.C_F, lack.chi_red,
+                        prep.raw_columns(chosen))
     rms_sim, rms_lin, rms = (float(np.sqrt(v / n)) for v in (r_sim @ r_sim, r0 @ r0, rss))
     judged = None
     if entries:

@@ -15,7 +15,6 @@ import random
 import select
 import threading
 import time
-import tty
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from pathlib import Path
 from rodlab.enums import LoadAxis, Phase
 
 from .model import Hold, RigModel
+from .ptylink import PtyLink
 from .protocol import encode_values
 
 __all__ = ["Faults", "SimulatedRig"]
@@ -43,7 +43,7 @@ class Faults:
 
 
 @dataclass
-class SimulatedRig:
+class SimulatedRig(PtyLink):
     """The rig behind a pty. ``channels``: tool axis (0..2) of each value in a line, device units of
     ``scale_mm`` mm; ``temperature``: append the room temperature as the last value."""
 
@@ -75,30 +75,6 @@ class SimulatedRig:
         self._t0 = time.monotonic()
 
     # -- pty management ------------------------------------------------------------------------
-    def _open_pty(self) -> None:
-        master, slave = os.openpty()
-        tty.setraw(master)
-        tty.setraw(slave)
-        self._master, self._slave = master, slave
-        tmp = self.link.with_name(self.link.name + ".new")
-        if tmp.is_symlink() or tmp.exists():
-            tmp.unlink()
-        tmp.symlink_to(os.ttyname(slave))
-        os.replace(tmp, self.link)
-
-    def _close_pty(self) -> None:
-        for fd in (self._master, self._slave):
-            if fd is not None:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
-        self._master = self._slave = None
-
-    @property
-    def port(self) -> str:
-        return str(self.link)
-
     def start(self) -> "SimulatedRig":
         self._open_pty()
         self._thread = threading.Thread(target=self._run, name="simulated-rig", daemon=True)

@@ -14,7 +14,6 @@ import select
 import struct
 import threading
 import time
-import tty
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from rodlab.enums import LoadAxis, Phase
 
 from .drivers.digimatic import format_digimatic
 from .model import Hold, RigModel
+from .ptylink import PtyLink
 from .protocol import encode_values
 from .simdevice import Faults
 
@@ -84,7 +84,7 @@ class SimBench:
 
 
 @dataclass
-class PtyInstrument:
+class PtyInstrument(PtyLink):
     """One simulated instrument behind a pty at ``link``. Subclasses implement :meth:`handle` (bytes in ->
     answers out) and, for a pushing device, :meth:`push`."""
 
@@ -104,30 +104,6 @@ class PtyInstrument:
         self._buf = b""
 
     # -- pty ---------------------------------------------------------------------------------
-    def _open_pty(self) -> None:
-        master, slave = os.openpty()
-        tty.setraw(master)
-        tty.setraw(slave)
-        self._master, self._slave = master, slave
-        tmp = self.link.with_name(self.link.name + ".new")
-        if tmp.is_symlink() or tmp.exists():
-            tmp.unlink()
-        tmp.symlink_to(os.ttyname(slave))
-        os.replace(tmp, self.link)
-
-    def _close_pty(self) -> None:
-        for fd in (self._master, self._slave):
-            if fd is not None:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
-        self._master = self._slave = None
-
-    @property
-    def port(self) -> str:
-        return str(self.link)
-
     def start(self):
         self._open_pty()
         self._thread = threading.Thread(target=self._run, name=f"sim-{type(self).__name__}", daemon=True)

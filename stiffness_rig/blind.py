@@ -26,7 +26,8 @@ from .errors import RigError
 from .model import Hold, LoadSchedule, RigModel
 from .simulate import simulate_recording
 
-__all__ = ["generate_cases", "BlindCase", "blind_definitions", "read_blind_definitions", "FORMAT_BLIND"]
+__all__ = ["generate_cases", "BlindCase", "blind_definitions", "read_blind_definitions", "FORMAT_BLIND", "unit_effect",
+           "peak_change", "scaled_effects", "standard_schedule", "out_of_library"]
 
 FORMAT_BLIND = "rodlab.blind_rig/1"
 
@@ -58,7 +59,7 @@ def blind_definitions() -> dict:
     return read_blind_definitions(Path(str(resources.files("rodlab.stiffness_rig").joinpath("blind_cases.toml"))))
 
 
-def _unit_effect(name, rng, places, variants: bool = False):
+def unit_effect(name, rng, places, variants: bool = False):
     """(effects dict for a unit magnitude, location, scalable keys); ``variants``: other forms of an effect than
     the diagnosis's first hypothesis (a nonlinearity quadratic in the load, or on one load axis only)."""
     if name == "nonlinearity" and variants:
@@ -98,7 +99,7 @@ def _unit_effect(name, rng, places, variants: bool = False):
                                                                                "s_torsion_rad_per_Nm"]
 
 
-def _peak(C, effects, proto) -> float:
+def peak_change(C, effects, proto) -> float:
     """Largest change of the noiseless readings an effect makes."""
     clean = RigModel(C, {}, noise_mm=0.0, resolution_mm=0.0)
     eff = RigModel(C, effects, noise_mm=0.0, resolution_mm=0.0)
@@ -113,7 +114,7 @@ def _peak(C, effects, proto) -> float:
     return peak
 
 
-def _scale(effects, keys, factor):
+def scaled_effects(effects, keys, factor):
     out = json.loads(json.dumps(effects))
     for name, params in out.items():
         for k in keys:
@@ -137,7 +138,7 @@ def _wide_schedule(rng) -> LoadSchedule:
                         rate_Hz=rate, gap_s=float(rng.choice(w["gap_s"])), masses=masses)
 
 
-def _standard_schedule(rng) -> LoadSchedule:
+def standard_schedule(rng) -> LoadSchedule:
     """The load schedules of the standard batches (``[standard]``)."""
     st = blind_definitions()["standard"]
     return LoadSchedule(axes=tuple(rng.permutation(["y", "z", "x"])),
@@ -157,7 +158,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
                    variants: bool = False) -> list[BlindCase]:
     """``n`` blind cases; ``wide``: draw the load schedules from :func:`_wide_schedule` (other repeats, signs, hold
     times, sample rates, gaps and loads) instead of the standard ones; ``variants``: other forms of the effects
-    (:func:`_unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
+    (:func:`unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
     slips once, a gauge that saturates)."""
     rng = np.random.default_rng(seed)
     draws = blind_definitions()["draws"]
@@ -170,15 +171,15 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
     for i in range(n):
         kind = _kind(rng.random())
         noise = float(rng.choice(draws["noise_mm"]))
-        proto = _wide_schedule(rng) if wide else _standard_schedule(rng)
+        proto = _wide_schedule(rng) if wide else standard_schedule(rng)
         effects, truth_effects = {}, []
         names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
                                                                            replace=False))
         for name in names:
-            unit, loc, keys = _unit_effect(name, rng, places, variants)
+            unit, loc, keys = unit_effect(name, rng, places, variants)
             snr = float(np.exp(rng.uniform(*np.log(draws["snr"]))))
-            pk = _peak(C, unit, proto)
-            scaled = _scale(unit, keys, snr * noise / pk)
+            pk = peak_change(C, unit, proto)
+            scaled = scaled_effects(unit, keys, snr * noise / pk)
             effects.update(scaled)
             truth_effects.append({"effect": name, "location": loc, "snr": snr, "parameters": scaled[name]})
         model = RigModel(C, effects, noise_mm=noise, resolution_mm=0.001 if noise >= 0.0006 else 0.0001,
@@ -191,7 +192,7 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wi
             truth_effects = []
             expected = "consistent|unexplained"
         if kind == "oolib":
-            _out_of_library(path, rng, noise, variants)
+            out_of_library(path, rng, noise, variants)
             expected = "unexplained"
         if variants and kind == "single" and rng.random() < draws["variants_decoy"]:   # beside a bumped hold
             _decoy(path, rng)
@@ -227,7 +228,7 @@ def _decoy(path, rng):
     _rewrite(path, fn)
 
 
-def _out_of_library(path, rng, noise, variants: bool = False):
+def out_of_library(path, rng, noise, variants: bool = False):
     """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library; with ``variants`` also a
     gauge that slips once (a step of 15 noise SDs from a random time on, one gauge) or saturates (readings
     clipped at 70 % of that gauge's largest)."""

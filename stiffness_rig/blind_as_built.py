@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .blind import BlindCase, _out_of_library, _peak, _scale, _standard_schedule, _unit_effect, blind_definitions
+from .blind import BlindCase, out_of_library, peak_change, scaled_effects, standard_schedule, unit_effect, blind_definitions
 from .effects import joint_places, spring_compliance
 from .model import RigModel
 from .simulate import simulate_recording
@@ -57,7 +57,7 @@ def generate_as_built_cases(out_dir, as_built, design, n: int = 40, seed: int = 
     for i in range(n):
         kind = _kind(rng.random())
         noise = float(rng.choice(d["draws"]["noise_mm"]))
-        proto = _standard_schedule(rng)
+        proto = standard_schedule(rng)
         C, drawn = as_built(rng)
         effects, truth = _case_physics(kind, rng, C, places, proto, noise)
         model = RigModel(C, effects, noise_mm=noise, resolution_mm=0.001 if noise >= 0.0006 else 0.0001,
@@ -67,7 +67,7 @@ def generate_as_built_cases(out_dir, as_built, design, n: int = 40, seed: int = 
         simulate_recording(model, proto, path, rod=design.name)
         expected = "consistent" if kind == "null" else "unexplained" if kind == "oolib" else "explained"
         if kind == "oolib":
-            _out_of_library(path, rng, noise)
+            out_of_library(path, rng, noise)
         info = {"kind": kind, "effects": truth, "expected_verdict": expected, "noise_mm": noise,
                 "as_built": drawn, "protocol": {"axes": list(proto.axes), "repeats": proto.repeats,
                                                 "masses": list(proto.masses), "hold_s": proto.hold_s}}
@@ -82,9 +82,9 @@ def _case_physics(kind: str, rng, C: np.ndarray, places: dict, proto, noise: flo
     effects, truth = {}, []
     if kind in ("effect", "pair"):
         name = str(rng.choice(d["effects"]))
-        unit, loc, keys = _unit_effect(name, rng, places)
+        unit, loc, keys = unit_effect(name, rng, places)
         snr = float(np.exp(rng.uniform(*np.log(blind_definitions()["draws"]["snr"]))))
-        scaled = _scale(unit, keys, snr * noise / _peak(C, unit, proto))
+        scaled = scaled_effects(unit, keys, snr * noise / peak_change(C, unit, proto))
         effects.update(scaled)
         truth.append({"effect": name, "location": loc, "snr": snr, "parameters": scaled[name]})
     if kind in ("joint", "pair"):

@@ -36,6 +36,7 @@ import numpy as np
 from rodlab.calc import unit_load_compliance
 from rodlab.design import RodDesign
 from rodlab.enums import Part
+from rodlab.joint_springs import declared_joint_compliance
 from rodlab.layout import Segment, SegmentKind, layout
 from rodlab.massprops import ball_mass_properties
 from rodlab.materials import Material
@@ -297,7 +298,8 @@ def frame_compliance(design: RodDesign, bend: BendFlexibility | None = None,
     ball = ball_mass_properties(design)
     CF, Cg = unit_load_compliance(segs, design.tool_mm, ball.mass_kg, True, True,
                                   ball.com_T_mm + design.tool_mm, (1.0, 1.0), cal.shear, cal.torsion)
-    return 0.5 * (CF + CF.T), Cg
+    dF, dg = declared_joint_compliance(design)        # the design's declared compliant joints, in series
+    return 0.5 * (CF + CF.T) + dF, Cg + dg
 
 
 def frame_errors(design: RodDesign, C_F_solid, C_g_solid, cal: FrameCalibration = CALIBRATION) -> np.ndarray:

@@ -29,6 +29,7 @@ from .design import RodDesign
 from .enums import Part
 from .frames import skew as _skew
 from .errors import DesignError
+from .joint_springs import declared_joint_compliance
 from .layout import Layer, Segment, SegmentKind, layout
 from .units import G0
 
@@ -193,7 +194,8 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
 
     Parameters
     ----------
-    pipes_only : the paper's idealisation (two tubes, sharp corner, no parts, no ball mass)
+    pipes_only : the paper's idealisation (two tubes, sharp corner, no parts, no ball mass, no declared joints;
+        otherwise the design's declared joints, :mod:`rodlab.joint_springs`, are added in series)
     shear : add Timoshenko shear flexibility (Euler-Bernoulli when False, as the paper)
     axial : add axial flexibility of the tubes (the paper neglects it)
     bend : :class:`BendModel` of the bend pipe
@@ -210,8 +212,10 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
             segs = _corner_segments(design, segs)
         from .massprops import ball_mass_properties
         ball = ball_mass_properties(design)
-        return unit_load_compliance(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm,
-                          tuple(bend_flexibility))
+        CF, Cg = unit_load_compliance(segs, design.tool_mm, ball.mass_kg, shear, axial,
+                                      ball.com_T_mm + design.tool_mm, tuple(bend_flexibility))
+        dF, dg = declared_joint_compliance(design)
+        return CF + dF, Cg + dg
     return unit_load_compliance(segs, design.tool_mm, tip_mass, shear, axial)
 
 

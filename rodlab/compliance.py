@@ -218,6 +218,8 @@ class RodCompliance:
                 "design": design.name, "design_sha256": design_hash(design)}
         if design.source is not None:
             prov["design_file"] = str(design.source)
+        if design.joints:
+            prov["declared_joints_rad_per_Nm"] = {p: vars(j) for p, j in design.joints.items()}
         prov.update(provenance or {})
         return cls(design.name, method, C_F, C_g, mp.mass_kg, mp.com_T_mm, design.tool_mm, r_rod, prov)
 

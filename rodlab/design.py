@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DesignError
+from .joint_springs import JointSpring, check_joint_place
 from .materials import Material
 
 __all__ = ["TubeSpec", "BendSpec", "SleeveSpec", "BallSpec", "RodDesign", "MIN_BEND_RATIO"]
@@ -135,6 +136,8 @@ class RodDesign:
     source : the file the design was read from, if any
     tolerances : the file's ``[tolerances]`` table as given ({dotted key: one standard deviation, a number in
         the key's unit or ``"N%"``}); :func:`rodlab.tolerances.design_tolerances` adds the defaults
+    joints : compliant joints the design declares ({place of :data:`rodlab.joint_springs.JOINT_PLACES`:
+        :class:`rodlab.joint_springs.JointSpring`}, ``rodlab.rod/2``); every compliance method adds them in series
     """
 
     name: str
@@ -150,8 +153,14 @@ class RodDesign:
     ball: BallSpec
     source: Path | None = field(default=None, compare=False)
     tolerances: dict = field(default_factory=dict, compare=False)
+    joints: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        for place, spring in self.joints.items():
+            check_joint_place(place, f"joints.{place}")
+            if not isinstance(spring, JointSpring):
+                raise DesignError(f"joints.{place}: a JointSpring expected, got {type(spring).__name__}",
+                                  key=f"joints.{place}")
         _check_pos("L1_mm", self.L1_mm, "L1_mm")
         _check_pos("L2_mm", self.L2_mm, "L2_mm")
         g = self.gamma_deg
@@ -302,4 +311,4 @@ class RodDesign:
             "rings": sleeve(self.rings), "pipe_holder": sleeve(self.pipe_holder),
             "ball_holder": sleeve(self.ball_holder),
             "ball": {"material": self.ball.material.name, "diameter_mm": self.ball.diameter_mm},
-        }
+        } | ({"joints": {p: vars(j) for p, j in self.joints.items()}} if self.joints else {})

@@ -10,7 +10,7 @@ import re
 from pathlib import Path
 
 from .design import RodDesign
-from .design_io import design_from_dict, design_to_dict
+from .design_io import FORMAT_ROD_V2, design_from_dict, design_to_dict
 from .errors import DesignError, FormatError
 from .fileio import atomic_write_text
 
@@ -62,6 +62,8 @@ def edited_design_text(text: str, design: RodDesign, values: dict, header: str =
             for k, v in _material_table(design, table.split(".", 1)[1]).items():
                 lines = _set_key(lines, table, k, float(v), None) if k != name else lines
         lines = _set_key(lines, table, name, float(value), was)
+    if any(k.startswith("joints.") for k in values):       # a declared joint needs the v2 format
+        lines = [re.sub(r'^(\s*format\s*=\s*)"rodlab\.rod/1"', rf'\1"{FORMAT_ROD_V2}"', ln) for ln in lines]
     body = "\n".join(lines) + "\n"
     return (header + body) if header else body
 

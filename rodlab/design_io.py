@@ -1,4 +1,5 @@
-"""Read ``*.rod.toml`` rod designs (contract ``rodlab.rod/1``) and the built-in designs.
+"""Read ``*.rod.toml`` rod designs (contract ``rodlab.rod/1``; ``rodlab.rod/2`` adds ``[joints.PLACE]``, compliant
+joints the design declares: :mod:`rodlab.joint_springs`) and the built-in designs.
 
 Defaults for optional parts (documented in ``docs/formats.md``; ``OD`` = pipe I's outer diameter):
 
@@ -26,16 +27,21 @@ from pathlib import Path
 from .design import BallSpec, BendSpec, RodDesign, SleeveSpec, TubeSpec
 from .errors import DesignError, FormatError, did_you_mean
 from .fileio import read_toml
+from .joint_springs import JOINT_KEYS, JOINT_PLACES, JointSpring
 from .materials import Material, get_material, material_from_table
 
-__all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD"]
+__all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD",
+           "FORMAT_ROD_V2", "ROD_FORMATS"]
 
 FORMAT_ROD = "rodlab.rod/1"
+#: v2: a design that declares compliant joints (``[joints.PLACE]``); a file without them stays v1
+FORMAT_ROD_V2 = "rodlab.rod/2"
+ROD_FORMATS = (FORMAT_ROD, FORMAT_ROD_V2)
 
 log = logging.getLogger(__name__)
 
 _TOP_KEYS = ("format", "name", "L1_mm", "L2_mm", "gamma_deg", "tube", "pipe_I", "pipe_II", "ball",
-             "bend", "rings", "pipe_holder", "ball_holder", "materials", "tolerances")
+             "bend", "rings", "pipe_holder", "ball_holder", "materials", "tolerances", "joints")
 _TUBE_KEYS = ("material", "outer_diameter_mm", "wall_mm")
 _BEND_KEYS = ("material", "outer_diameter_mm", "wall_mm", "radius_mm")
 _SLEEVE_KEYS = ("material", "outer_diameter_mm", "length_mm")
@@ -122,8 +128,12 @@ def design_from_dict(data: Mapping, path: str | Path | None = None, text: str | 
 def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     c.check_keys(data, None, _TOP_KEYS)
     fmt = data.get("format")
-    if fmt != FORMAT_ROD:
-        raise c.err(f"expected format = \"{FORMAT_ROD}\", got {fmt!r}", None, "format", FormatError)
+    if fmt not in ROD_FORMATS:
+        raise c.err(f"expected format = \"{FORMAT_ROD}\" (or \"{FORMAT_ROD_V2}\" with [joints]), got {fmt!r}", None,
+                    "format", FormatError)
+    if "joints" in data and fmt != FORMAT_ROD_V2:
+        raise c.err(f"a [joints] table needs format = \"{FORMAT_ROD_V2}\" (a {FORMAT_ROD} reader would not know it); "
+                    "change the format line", None, "format", FormatError)
     name = data.get("name", Path(str(path)).name.split(".")[0] if path else "rod")
     if not isinstance(name, str) or not name.strip():
         raise c.err(f"name must be a non-empty string, got {name!r}", None, "name")
@@ -146,8 +156,28 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     stud = _sleeve(data, c, "ball_holder", materials, "al_7075",
                    min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
     design = RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
-                       source=None if path is None else Path(path))
+                       source=None if path is None else Path(path), joints=_joints(data.get("joints", {}), c))
     return _with_tolerances(design, data.get("tolerances", {}), c)
+
+
+def _joints(table, c: _Ctx) -> dict[str, JointSpring]:
+    """The ``[joints.PLACE]`` tables (v2): {place: spring}, places and keys checked."""
+    if not isinstance(table, Mapping):
+        raise c.err(f"expected [joints.PLACE] tables, got {type(table).__name__}", None, "joints")
+    out = {}
+    for place, tbl in table.items():
+        if place not in JOINT_PLACES:
+            raise c.err(f"unknown joint place `{place}`; places: {list(JOINT_PLACES)}." +
+                        did_you_mean(place, JOINT_PLACES), f"joints.{place}", None)
+        c.check_keys(tbl, f"joints.{place}", JOINT_KEYS)
+        if not tbl:
+            raise c.err(f"expected at least one of {list(JOINT_KEYS)} [rad/(N m)]", f"joints.{place}", None)
+        values = {k: c.number(tbl, f"joints.{place}", k) for k in tbl}
+        try:
+            out[place] = JointSpring(**values)
+        except DesignError as e:
+            raise c.err(e.detail, f"joints.{place}", e.key) from e
+    return out
 
 
 def _with_tolerances(design: RodDesign, table, c: _Ctx) -> RodDesign:
@@ -237,11 +267,14 @@ def design_to_dict(design: RodDesign) -> dict:
     def sleeve(t) -> dict:
         return {"material": mat(t.material), "outer_diameter_mm": t.outer_diameter_mm, "length_mm": t.length_mm}
     d = design
-    return {"format": FORMAT_ROD, "name": d.name, "L1_mm": d.L1_mm, "L2_mm": d.L2_mm, "gamma_deg": d.gamma_deg,
-            "pipe_I": tube(d.pipe_I), "pipe_II": tube(d.pipe_II),
-            "bend": dict(tube(d.bend), radius_mm=d.bend.radius_mm), "rings": sleeve(d.rings),
-            "pipe_holder": sleeve(d.pipe_holder), "ball_holder": sleeve(d.ball_holder),
-            "ball": {"material": mat(d.ball.material), "diameter_mm": d.ball.diameter_mm}, "materials": mats}
+    out = {"format": FORMAT_ROD_V2 if d.joints else FORMAT_ROD, "name": d.name, "L1_mm": d.L1_mm, "L2_mm": d.L2_mm,
+           "gamma_deg": d.gamma_deg, "pipe_I": tube(d.pipe_I), "pipe_II": tube(d.pipe_II),
+           "bend": dict(tube(d.bend), radius_mm=d.bend.radius_mm), "rings": sleeve(d.rings),
+           "pipe_holder": sleeve(d.pipe_holder), "ball_holder": sleeve(d.ball_holder),
+           "ball": {"material": mat(d.ball.material), "diameter_mm": d.ball.diameter_mm}, "materials": mats}
+    if d.joints:
+        out["joints"] = {place: {k: getattr(j, k) for k in JOINT_KEYS} for place, j in d.joints.items()}
+    return out
 
 
 def load_design(path: str | Path) -> RodDesign:
@@ -251,7 +284,7 @@ def load_design(path: str | Path) -> RodDesign:
     data, text = read_toml(p, FormatError)
     design = design_from_dict(data, p, text)
     from .schema import require_schema
-    require_schema(data, "rodlab.rod/1", p, text, FormatError, kind="toml")     # anything the rules above miss
+    require_schema(data, str(data.get("format")), p, text, FormatError, kind="toml")     # anything the rules above miss
     from .design_range import check_design, range_warnings
     try:
         check_design(design)

@@ -15,7 +15,8 @@ from .enums import Part
 from .layout import Segment, SegmentKind, flange_to_tool, layout
 from .units import kg_m3_to_kg_mm3
 
-__all__ = ["MassProperties", "mass_properties", "part_mass_properties", "ball_mass_properties", "combine"]
+__all__ = ["MassProperties", "mass_properties", "part_mass_properties", "ball_mass_properties", "combine",
+           "distal_mass_properties"]
 
 
 @dataclass(frozen=True)
@@ -67,11 +68,13 @@ def _section_rule(d_out: float, d_in: float, n_r: int = 3, n_phi: int = 8):
     return R.ravel(), PHI.ravel(), W.ravel()
 
 
-def _segment_points(seg: Segment, d_out: float, d_in: float, density_kg_mm3: float, n_s: int):
-    """Quadrature points {F} and masses [kg] of one annular layer along one segment."""
+def _segment_points(seg: Segment, d_out: float, d_in: float, density_kg_mm3: float, n_s: int, u0: float = 0.0):
+    """Quadrature points {F} and masses [kg] of one annular layer along one segment (from local arc length
+    ``u0`` [mm] to its end)."""
     xg, wg = np.polynomial.legendre.leggauss(n_s)
-    u = 0.5 * seg.length_mm * (xg + 1.0)
-    wu = 0.5 * seg.length_mm * wg
+    span = seg.length_mm - u0
+    u = u0 + 0.5 * span * (xg + 1.0)
+    wu = 0.5 * span * wg
     c = seg.point(u)
     t = seg.tangent(u)
     e1 = np.array([0.0, 1.0, 0.0])  # out-of-plane axis (the bend lies in x-z)
@@ -88,13 +91,17 @@ def _segment_points(seg: Segment, d_out: float, d_in: float, density_kg_mm3: flo
     return pts.reshape(-1, 3), w.ravel()
 
 
-def _part_clouds(design: RodDesign):
+def _part_clouds(design: RodDesign, s_from_mm: float = 0.0):
+    """{part: [(points {T}, masses)]} of the rod from arc length ``s_from_mm`` (from the flange face) on."""
     clouds: dict[Part, list] = {}
     for seg in layout(design):
+        u0 = min(max(s_from_mm - seg.s0_mm, 0.0), seg.length_mm)
+        if u0 >= seg.length_mm:
+            continue
         n_s = 24 if seg.kind is SegmentKind.ARC else 3
         for layer in seg.layers:
             pts, w = _segment_points(seg, layer.d_out_mm, layer.d_in_mm,
-                                     kg_m3_to_kg_mm3(layer.material.density_kg_m3), n_s)
+                                     kg_m3_to_kg_mm3(layer.material.density_kg_m3), n_s, u0)
             clouds.setdefault(layer.part, []).append((flange_to_tool(pts, design), w))
     return clouds
 
@@ -141,6 +148,14 @@ def combine(parts) -> MassProperties:
         d = p.com_T_mm - com
         inertia += p.inertia_kg_mm2 + p.mass_kg * (d @ d * np.eye(3) - np.outer(d, d))
     return MassProperties(m, com, inertia)
+
+
+def distal_mass_properties(design: RodDesign, s_mm: float) -> MassProperties:
+    """Mass properties in {T} of the rod beyond arc length ``s_mm`` from the flange face (the ball included): what a
+    joint there carries."""
+    items = [it for its in _part_clouds(design, s_mm).values() for it in its]
+    parts = [MassProperties.from_points(p, w) for p, w in items if w.sum() > 0]
+    return combine(parts + [ball_mass_properties(design)])
 
 
 def mass_properties(design: RodDesign) -> MassProperties:

@@ -42,6 +42,7 @@ class FormatSpec:
 
 FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.rod/1", "toml", "rod.schema.json", (".rod.toml",), "rod design"),
+    FormatSpec("rodlab.rod/2", "toml", "rod2.schema.json", (".rod.toml",), "rod design with declared compliant joints"),
     FormatSpec("rodlab.compliance/2", "json", "compliance.schema.json", (".compliance.json",), "rod compliance"),
     FormatSpec("rodlab.fixture/1", "json", "fixture.schema.json", (".fixture.json",), "device fixture"),
     FormatSpec("rodlab.fixture/2", "json", "fixture2.schema.json", (),

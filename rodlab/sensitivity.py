@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .design import RodDesign
-from .design_io import design_from_dict, design_to_dict
+from .design_io import FORMAT_ROD_V2, design_from_dict, design_to_dict
 from .errors import DesignError
 from .tolerances import design_value
 
@@ -96,7 +96,10 @@ def with_values(design: RodDesign, values: dict) -> RodDesign:
     for key, value in values.items():
         design_value(design, key)                       # names the key when the design has none such
         table, _, name = key.rpartition(".")
-        if table.startswith("materials."):
+        if table.startswith("joints."):
+            data["format"] = FORMAT_ROD_V2
+            data.setdefault("joints", {}).setdefault(table.split(".", 1)[1], {})[name] = float(value)
+        elif table.startswith("materials."):
             data["materials"][table.split(".", 1)[1]][name] = float(value)
         elif table == "tube":
             for label in ("pipe_I", "pipe_II"):

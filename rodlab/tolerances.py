@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 from .design import RodDesign
 from .errors import DesignError, did_you_mean
+from .joint_springs import JOINT_KEYS, JOINT_PLACES
 
 __all__ = ["defaults_markdown", "bond_tolerances", "JOINT_PLACES", "BOND_SD", "ToleranceParam", "design_tolerances",
            "parse_tolerance_value", "check_tolerance_table", "design_value", "numeric_keys", "DEFAULT_RULES"]
@@ -51,8 +52,6 @@ DEFAULT_RULES = (
 )
 
 
-#: places where a design's rigid bonds may be compliant (the rig effect ``joint_compliance``'s locations)
-JOINT_PLACES = ("flange_clamp", "ring_1", "pipe_II")
 #: default standard deviation of a bond's bending compliance [rad/(N m)]
 BOND_SD = 1e-6
 
@@ -118,8 +117,8 @@ def parse_tolerance_value(value, nominal: float, key: str) -> float:
 
 def numeric_keys(design: RodDesign) -> dict[str, float]:
     """Every numeric dotted key of ``design`` as a file would spell it, with its value: the top-level lengths,
-    ``tube.*`` (pipes that share the tube) or ``pipe_I.*`` / ``pipe_II.*``, the parts' keys and
-    ``materials.NAME.*`` of every material used."""
+    ``tube.*`` (pipes that share the tube) or ``pipe_I.*`` / ``pipe_II.*``, the parts' keys,
+    ``materials.NAME.*`` of every material used and ``joints.PLACE.*`` (0 where the design declares no joint)."""
     d = design
     out = {"L1_mm": d.L1_mm, "L2_mm": d.L2_mm, "gamma_deg": d.gamma_deg}
     for label, pipe in (("pipe_I", d.pipe_I), ("pipe_II", d.pipe_II)):
@@ -141,6 +140,10 @@ def numeric_keys(design: RodDesign) -> dict[str, float]:
         out[f"materials.{m.name}.density_kg_m3"] = m.density_kg_m3
         if m.E_transverse_GPa is not None:
             out[f"materials.{m.name}.E_transverse_GPa"] = m.E_transverse_GPa
+    for place in JOINT_PLACES:                 # a bond the design does not declare is rigid: 0
+        spring = d.joints.get(place)
+        for k in JOINT_KEYS:
+            out[f"joints.{place}.{k}"] = getattr(spring, k) if spring is not None else 0.0
     return out
 
 

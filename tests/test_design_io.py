@@ -97,7 +97,7 @@ RULES = [
     ("string number", _set(("L1_mm",), "300"), "L1_mm", "number"),
     ("gamma 0", _set(("gamma_deg",), 0.0), "gamma_deg", "(0, 180]"),
     ("gamma 190", _set(("gamma_deg",), 190.0), "gamma_deg", "(0, 180]"),
-    ("format", _set(("format",), "rodlab.rod/2"), "format", "rodlab.rod/1"),
+    ("format", _set(("format",), "rodlab.rod/3"), "format", "rodlab.rod/1"),
     ("material E", _set(("materials", "cfrp_tube", "E_GPa"), -1.0), "materials.cfrp_tube.E_GPa", ""),
     ("material nu", _set(("materials", "cfrp_tube", "nu"), 0.7), "materials.cfrp_tube.nu", "nu"),
     ("material key", _set(("materials", "cfrp_tube", "density"), 1.0), "materials.cfrp_tube.density",

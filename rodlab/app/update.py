@@ -18,7 +18,7 @@ from ..design import RodDesign
 from ..errors import DesignError, RodlabError
 from ..massprops import mass_properties
 from ..sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
-from ..tolerances import design_tolerances, design_value
+from ..tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
 __all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR"]
 
@@ -26,6 +26,9 @@ __all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEP
 SEPARATE_CORR = 0.95
 #: prior of a freed key the design gives no tolerance for: this relative standard deviation (weak)
 WEAK_PRIOR = 0.5
+#: prior of a freed joint compliance: this many times a sound bond's tolerance (weak: a joint is freed because the
+#: rod shows it, and the bond's tolerance describes sound bonds)
+JOINT_PRIOR = 100.0
 #: extra measurements that may separate keys: (what, standard uncertainty)
 _MASS_SD_KG = 0.001
 _ENTRY_REL = 0.005
@@ -87,12 +90,37 @@ def model_compliance(model: str):
     raise RodlabError(f"unknown model {model!r}; expected frame or calc", key="model")
 
 
+def _is_joint(key: str) -> bool:
+    return key.startswith("joints.")
+
+
 def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
-    """(nominal, prior sd) of each key: the design's tolerance where it has one, else a weak prior."""
+    """(nominal, prior sd) of each key: the design's tolerance where it has one, a bond's tolerance
+    (:func:`rodlab.tolerances.bond_tolerances`, :data:`~rodlab.tolerances.BOND_SD` for torsion) for a joint's
+    compliance, else a weak prior."""
     tol = {p.key: p.sigma for p in design_tolerances(design)}
+    bonds = bond_tolerances(design)
     nominal = np.array([design_value(design, k) for k in keys])
-    sd = np.array([tol.get(k, WEAK_PRIOR * abs(v)) or WEAK_PRIOR * abs(v) for k, v in zip(keys, nominal)])
-    return nominal, sd
+    sd = []
+    for k, v in zip(keys, nominal):
+        if _is_joint(k):     # freed because the rod shows it: weak, JOINT_PRIOR x the tolerance of a sound bond
+            sound = bonds.get(k.split(".")[1], BOND_SD) if k.endswith("s_bend_rad_per_Nm") else BOND_SD
+            sd.append(max(JOINT_PRIOR * sound, WEAK_PRIOR * v))
+        else:
+            sd.append(tol.get(k, WEAK_PRIOR * abs(v)) or WEAK_PRIOR * abs(v))
+    return nominal, np.array(sd)
+
+
+def _bounds_and_start(keys, nominal, prior_sd) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(lower, upper, start): 0.2-5x the design value; a joint's compliance from 0 (rigid) to the larger of 5x its
+    declared value and 10 prior standard deviations, started strictly inside."""
+    lo, hi = 0.2 * np.abs(nominal), 5.0 * np.abs(nominal)
+    start = np.array(nominal, float)
+    for i, k in enumerate(keys):
+        if _is_joint(k):
+            lo[i], hi[i] = 0.0, max(5.0 * nominal[i], 10.0 * prior_sd[i])
+            start[i] = min(max(nominal[i], 0.01 * prior_sd[i]), 0.9 * hi[i])
+    return lo, hi, start
 
 
 def update_design(design: RodDesign, measured: Measured, keys, model: str = "frame") -> UpdateResult:
@@ -101,7 +129,7 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     if not keys:
         raise RodlabError("no key to fit: give --free KEY[,KEY...]", key="free")
     for k in keys:
-        if not design_value(design, k) > 0:
+        if not _is_joint(k) and not design_value(design, k) > 0:
             raise RodlabError(f"--free {k}: its design value is {design_value(design, k):g}; only a key with a "
                               "positive value (a size, a modulus) can be fitted", key="free")
     fn = model_compliance(model)
@@ -120,9 +148,9 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     def residual(x):
         return np.concatenate([W @ (entries_of(x) - measured.C), (x - nominal) / prior_sd])
 
-    lo, hi = 0.2 * np.abs(nominal), 5.0 * np.abs(nominal)
+    lo, hi, start = _bounds_and_start(keys, nominal, prior_sd)
     try:
-        res = least_squares(residual, nominal, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
+        res = least_squares(residual, start, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
     except DesignError as e:
         raise RodlabError(f"the fit of {', '.join(keys)} reached a design the rules refuse ({e.detail}); free fewer "
                           "keys or keys the measurement constrains", key="free") from e
@@ -197,7 +225,9 @@ def _candidate_rows(design, keys, x, fn, E):
     yield f"weigh the rod (to {_MASS_SD_KG * 1e3:g} g)", d / _MASS_SD_KG
     for i, k in enumerate(keys):
         row = np.zeros(len(keys))
-        if k.endswith("_mm"):
+        if _is_joint(k):
+            row[i], how = 1.0 / (0.2 * BOND_SD), "two dial gauges across the bond under a side load, its rotation"
+        elif k.endswith("_mm"):
             row[i], how = 1.0 / _CALIPER_MM, f"a caliper or micrometer, {_CALIPER_MM:g} mm"
         else:
             row[i], how = 1.0 / (_COUPON_REL * abs(x[i]) or 1.0), f"a coupon test, {_COUPON_REL:.0%}"

@@ -4,26 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from rodlab.joint_springs import design_joint_places, spring_matrices
+
 __all__ = ["spring_matrices", "spring_compliance", "spring_columns", "joint_places"]
-
-
-def spring_matrices(point_T, axis_T) -> tuple[np.ndarray, np.ndarray]:
-    """C_F increments [mm/N] per unit bending and torsion compliance [rad/(N mm)] of a rotational spring at
-    ``point_T`` (in {T}) on a member along ``axis_T``.
-
-    A tip force F makes a moment (0 - point) x F about the spring; each compliant rotation axis e with
-    compliance s adds ``s (e x r)(e x r)^T`` with r from the spring to the ball centre (origin of {T}): the two
-    axes across the member bend, the member axis twists.
-    """
-    r = -np.asarray(point_T, float)
-    t = np.asarray(axis_T, float) / np.linalg.norm(axis_T)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(t[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    b1 = np.cross(t, helper)
-    b1 /= np.linalg.norm(b1)
-    b2 = np.cross(t, b1)
-    Cb = sum(np.outer(np.cross(e, r), np.cross(e, r)) for e in (b1, b2))
-    Ct = np.outer(np.cross(t, r), np.cross(t, r))
-    return Cb, Ct
 
 
 def spring_compliance(point_T_mm, axis, s_bend: float, s_torsion: float) -> np.ndarray:
@@ -45,17 +28,7 @@ def joint_places(tool_mm, design=None) -> dict:
     L-rod with pipe I along z and pipe II towards the ball, guessed from the tool vector."""
     tool = np.asarray(tool_mm, float)
     if design is not None:
-        from rodlab.layout import layout
-        segs = layout(design)
-        pts = {"flange_clamp": (segs[0].start_F - tool, segs[0].direction)}
-        ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)]
-        if ring1:
-            pts["ring_1"] = (ring1[0].point([ring1[0].length_mm / 2])[0] - tool, ring1[0].direction)
-        p2 = [s for s in segs if any(str(l.part) == "pipe_II" for l in s.layers)]
-        if p2:
-            s = p2[len(p2) // 2]
-            pts["pipe_II"] = (s.point([s.length_mm / 2])[0] - tool, s.direction)
-        return pts
+        return {k: (p.point_T_mm, p.axis_T) for k, p in design_joint_places(design).items()}
     L1 = tool[2] if tool[0] > 0 else tool[2] / 2
     u2 = tool - np.array([0.0, 0.0, L1])
     u2 = u2 / max(np.linalg.norm(u2), 1e-9)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import RodlabError
+from ...joint_springs import JOINT_PLACES
 
 __all__ = ["register"]
 
@@ -27,7 +28,9 @@ def register(sub) -> None:
                    help="a measured *.compliance.json (rodlab rig fit) or a *.rig.csv recording (diagnosed first: "
                         "friction, creep, drift ... are separated from the linear compliance)")
     p.add_argument("--free", default=None, metavar="KEY[,KEY...]",
-                   help="dotted keys of the design file to fit (default: E_GPa and G_GPa of the tube material)")
+                   help="dotted keys of the design file to fit (default: E_GPa and G_GPa of the tube material); a "
+                        f"joint's compliance joints.PLACE.s_bend_rad_per_Nm (PLACE: {', '.join(JOINT_PLACES)}) "
+                        "declares it in the as-built design (rodlab.rod/2)")
     p.add_argument("--model", choices=("frame", "calc"), default="frame",
                    help="compliance model the keys are fitted through (default: the calibrated frame, ~1 %% of the "
                         "solid FEA; calc: the closed form, 6-18 %%)")
@@ -43,7 +46,7 @@ def _default_free(design) -> list[str]:
     return keys
 
 
-def _measured(path: str, design):
+def _measured(path: str, design, keys):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part."""
     from ...compliance import RodCompliance, read_compliance
     from ...sensitivity import STRUCTURAL_ENTRIES
@@ -57,12 +60,17 @@ def _measured(path: str, design):
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea", {"model": "frame"})
         diag, model = diagnose_rig(read_recording(path), sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
+        freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
         local = [f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings
-                 if f.effect in _STRUCTURAL]
+                 if f.effect in _STRUCTURAL and not (f.effect == "joint_compliance" and f.location in freed)]
+        joints = [f"joints.{f.location.split('|')[0]}.s_bend_rad_per_Nm" for f in diag.findings
+                  if f.effect == "joint_compliance" and f.location]
         if local:
             raise RodlabError(f"{path}: the recording shows {', '.join(local)} beyond the design's tolerances "
                               "(`rodlab diagnose --rig`): a local cause, not a design key the fit could move; "
-                              "repair or re-bond the rod and measure again, or fit only what the tolerances explain")
+                              "repair or re-bond the rod and measure again, fit only what the tolerances explain, or "
+                              "free the joint's compliance (--free " + (",".join(joints) or "joints.PLACE.s_bend_rad_per_Nm")
+                              + ")")
         lin = model.linear
         return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
@@ -86,7 +94,7 @@ def cmd_update(args: argparse.Namespace) -> int:
     keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
     if design.source is None:
         raise RodlabError("the design has no file to start from", key="design")
-    measured, causes = _measured(args.measured, design)
+    measured, causes = _measured(args.measured, design, keys)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
               "compliance; see `rodlab diagnose --rig`)")
@@ -105,7 +113,8 @@ def _print(res, model: str) -> None:
           f"{res.chi2_before:.2f} -> {res.chi2_after:.2f}")
     print(f"  {'key':34s} {'design':>10s} {'as built':>10s} {'+-':>9s}")
     for k, v0, v, s in zip(res.keys, res.nominal, res.x, res.sigma):
-        print(f"  {k:34s} {v0:10.4g} {v:10.4g} {s:9.2g}  ({(v / v0 - 1):+.1%})")
+        change = f"({(v / v0 - 1):+.1%})" if v0 else "(the design has it rigid)"
+        print(f"  {k:34s} {v0:10.4g} {v:10.4g} {s:9.2g}  {change}")
     if len(res.keys) > 1:
         print("  correlations: " + "; ".join(f"{a} / {b} {res.corr[i, j]:+.2f}" for i, a in enumerate(res.keys)
                                            for j, b in enumerate(res.keys) if j > i))

@@ -19,6 +19,7 @@ from ...compliance import RodCompliance, design_hash
 from ...enums import Method, SimAccuracy
 from ...errors import RodlabError
 from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy
+from ...joint_springs import design_joint_places, spring_matrices
 from ...tolerances import bond_tolerances, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
@@ -175,19 +176,21 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
                    + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd) + "; bonds "
                    + ", ".join(f"{p} {sd:.1g}" for p, sd in bond_tolerances(design).items()) + " rad/(N m)",
                    model, design, ratio * unbiased, _bonds(design))
-    bounds = np.vstack([_feasible_bounds(env), np.tile([0.0, 4.0], (len(env.bonds), 1))])   # a bond only softens
-    return replace(env, u_bounds=bounds)
+    # a bond only softens below its design value: a rigid one (the default) from 0, a declared one down to 0
+    declared = [design.joints[b[0]].s_bend_rad_per_Nm if b[0] in design.joints else 0.0 for b in env.bonds]
+    lower = [max(-4.0, -s / b[1]) for s, b in zip(declared, env.bonds)]
+    bounds = np.vstack([_feasible_bounds(env), np.column_stack([lower, np.full(len(lower), 4.0)])])
+    return replace(env, u_bounds=bounds.reshape(-1, 2))
 
 
 def _bonds(design) -> tuple:
     """(place, sigma, d C_F / d s_bend) of each toleranced bond: a rotational spring across the member there."""
-    from rodlab.stiffness_rig.effects import joint_places, spring_compliance
-    places = joint_places(design.tool_mm, design)
+    places = design_joint_places(design)
     out = []
     for place, sd in bond_tolerances(design).items():
         if place in places:
-            pt, ax = places[place]
-            out.append((place, sd, spring_compliance(np.asarray(pt, float), np.asarray(ax, float), 1e-3, 0.0)))
+            Cb, _ = spring_matrices(places[place].point_T_mm, places[place].axis_T)
+            out.append((place, sd, 1e-3 * Cb))
     return tuple(out)
 
 

@@ -231,7 +231,8 @@ def _decoy(path, rng):
 def out_of_library(path, rng, noise, variants: bool = False):
     """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library; with ``variants`` also a
     gauge that slips once (a step of 15 noise SDs from a random time on, one gauge) or saturates (readings
-    clipped at 70 % of that gauge's largest)."""
+    clipped at 70 % of that gauge's largest). Returns the variant's name. The quadratic term is at least
+    ``quadratic_min_noise_sd`` noise SDs at the largest reading (on a stiff rod 0.004/mm alone is nanometres)."""
     o = blind_definitions()["outside"]
     which = rng.choice(["quadratic", "hum", "slip", "saturation"] if variants else ["quadratic", "hum"])
     t_slip, col = 0.0, 6
@@ -241,6 +242,8 @@ def out_of_library(path, rng, noise, variants: bool = False):
 
     def fn(rows):
         vmax = max((abs(float(r[col])) for r in rows if r[col]), default=0.0)
+        vall = max((abs(float(r[c])) for r in rows for c in (6, 7, 8) if r[c]), default=0.0)
+        k = max(o["quadratic_per_mm"], o.get("quadratic_min_noise_sd", 0.0) * noise / max(vall * vall, 1e-12))
         for r in rows:
             t = float(r[0])
             for c in (6, 7, 8):
@@ -248,7 +251,7 @@ def out_of_library(path, rng, noise, variants: bool = False):
                     continue
                 v = float(r[c])
                 if which == "quadratic":
-                    v += o["quadratic_per_mm"] * v * v
+                    v += k * v * v
                 elif which == "hum":
                     v += o["hum_noise_sd"] * noise * np.sin(2 * np.pi * t / o["hum_period_s"])
                 elif which == "slip" and c == col and t >= t_slip:
@@ -257,3 +260,4 @@ def out_of_library(path, rng, noise, variants: bool = False):
                     v = float(np.clip(v, -o["saturation"] * vmax, o["saturation"] * vmax))
                 r[c] = f"{v:.4f}"
     _rewrite(path, fn)
+    return str(which)

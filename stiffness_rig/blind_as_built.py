@@ -66,9 +66,8 @@ def generate_as_built_cases(out_dir, as_built, design, n: int = 40, seed: int = 
         path = out / f"case{i:03d}.rig.csv"
         simulate_recording(model, proto, path, rod=design.name)
         expected = "consistent" if kind == "null" else "unexplained" if kind == "oolib" else "explained"
-        if kind == "oolib":
-            out_of_library(path, rng, noise)
-        info = {"kind": kind, "effects": truth, "expected_verdict": expected, "noise_mm": noise,
+        outside = out_of_library(path, rng, noise) if kind == "oolib" else None
+        info = {"kind": kind, "effects": truth, "expected_verdict": expected, "noise_mm": noise, "outside": outside,
                 "as_built": drawn, "protocol": {"axes": list(proto.axes), "repeats": proto.repeats,
                                                 "masses": list(proto.masses), "hold_s": proto.hold_s}}
         (out / f"case{i:03d}.truth.json").write_text(json.dumps(info, indent=1))

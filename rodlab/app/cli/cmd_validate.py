@@ -43,6 +43,7 @@ def _lazy(module: str, name: str):
 #: format id -> the reader whose rules go beyond the schema (None: the schema is all there is)
 READERS = {
     "rodlab.rod/1": _lazy("rodlab.design_io", "load_design"),
+    "rodlab.rod/2": _lazy("rodlab.design_io", "load_design"),
     "rodlab.compliance/1": _lazy("rodlab.compliance", "read_compliance"),
     "rodlab.compliance/2": _lazy("rodlab.compliance", "read_compliance"),
     "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),

@@ -44,8 +44,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
           f"{st['fea']['c_rod_um']:.0f} um; rig r_rod {st['fit']['r_rod']:.3f}")
     d = st["diagnose"]
     for f in d["findings"]:
-        print(f"diagnosis: {d['verdict']}: {f['effect']} at {f['location']} "
-              + ", ".join(f"{k} = {v:.3g}" for k, v in f["parameters"].items() if isinstance(v, float)))
+        where = f" at {f['location']}" if f["location"] else ""
+        print(f"diagnosis: {d['verdict']}: {f['effect']}{where} "
+              + ", ".join(f"{k} = {v:.3g}" for k, v in f["parameters"].items() if isinstance(v, float) and abs(v) > 1e-15))
+    up = d.get("update")
+    if up:
+        print("rod as built (rodlab update -> rod1.asbuilt.rod.toml): " + ", ".join(
+            f"{k.split('.', 1)[1]} {v0:.4g} -> {v:.4g} +- {s:.2g}" for k, v0, v, s in
+            zip(up["keys"], up["design"], up["as_built"], up["sigma"])))
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>9} {'Median/[mm]':>12} {'SD/[mm]':>8}")
     for k, v in st["calibrate"]["table3"].items():
         print(f"{k:<10} {v['mean_mm']:10.3f} {v['max_mm']:9.3f} {v['median_mm']:12.3f} {v['sd_mm']:8.3f}")

@@ -77,18 +77,18 @@ def render_run(run_dir) -> str:
                  f"simulated compliance, Eq. 21) = "
                  f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))
     dg = st["diagnose"]
-    rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location']))}</td><td>"
-                   + html.escape(", ".join(f"{k} = {v:.4g}" for k, v in f["parameters"].items() if isinstance(v, (int, float))))
+    rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location'] or '-'))}</td><td>"
+                   + html.escape(", ".join(f"{k} = {v:.4g}" for k, v in f["parameters"].items()
+                                           if isinstance(v, (int, float)) and abs(v) > 1e-15))
                    + f"</td><td>{html.escape(_evidence(f))}</td><td>"
                    f"{html.escape(f['explanation'])}</td></tr>" for f in dg["findings"])
     parts.append(f"<h2>5. Diagnosis</h2><p>Verdict <b>{html.escape(dg['verdict'])}</b>; noise {dg['noise_mm'] * 1e3:.2f} um; "
-                 f"rms {dg['rms_before_mm'] * 1e3:.2f} -> {dg['rms_after_mm'] * 1e3:.2f} um. The rig truth was: "
-                 f"{html.escape(st['rig']['concealed_effect'])} (s_bend {st['rig']['s_bend_rad_per_Nm']:.3g}, s_torsion "
-                 f"{st['rig']['s_torsion_rad_per_Nm']:.3g} rad/(N m)); the corrected compliance differs from the true "
-                 f"C_F by at most {100 * dg['corrected_vs_true_max_rel']:.1e} % of its largest entry.</p>"
+                 f"rms {dg['rms_before_mm'] * 1e3:.2f} -> {dg['rms_after_mm'] * 1e3:.2f} um. The truth was "
+                 f"{html.escape(st['rig']['concealed_effect'])}; the corrected compliance differs from the true "
+                 f"C_F by at most {100 * dg['corrected_vs_true_max_rel']:.2f} % of its largest entry.</p>"
                  "<table><tr><th>effect</th><th>location</th><th>parameters</th>"
                  f"<th>what it explains</th><th>physics</th></tr>{rows}</table>"
-                 + img_tag(run, files.get("diagnosis"), "diagnosis"))
+                 + img_tag(run, files.get("diagnosis"), "diagnosis") + _update_table(st))
     t3 = st["calibrate"]["table3"]
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['mean_mm']:.3f}</td><td>{v['max_mm']:.3f}</td>"
                    f"<td>{v['median_mm']:.3f}</td><td>{v['sd_mm']:.3f}</td></tr>" for k, v in t3.items())
@@ -142,3 +142,17 @@ def read_run(run: Path) -> dict:
         return json.loads((run / "run.json").read_text())
     except FileNotFoundError as e:
         raise RodlabError(f"{run}: no run.json here; run `rodlab demo -o {run}` first") from e
+
+
+def _update_table(st) -> str:
+    """The model update of the demo's diagnosis: each freed key, design -> as built +- sigma, and the truth."""
+    up, truth = st["diagnose"].get("update"), st["rig"].get("as_built", {})
+    if not up:
+        return ""
+    rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v0:.4g}</td><td>{v:.4g} &plusmn; {s:.2g}</td>"
+                   f"<td>{truth.get(k, v0):.4g}</td></tr>"
+                   for k, v0, v, s in zip(up["keys"], up["design"], up["as_built"], up["sigma"]))
+    r = ", ".join(f"{a:.3f} -> {b:.3f}" for a, b in zip(up["r_before"], up["r_after"]))
+    return ("<p><b>The rod as built</b> (<code>rodlab update</code> on the diagnosed linear compliance, written to "
+            "<code>rod1.asbuilt.rod.toml</code>): r_mn (measured / frame model) " + html.escape(r) + ".</p>"
+            "<table><tr><th>key</th><th>design</th><th>as built (fitted)</th><th>truth</th></tr>" + rows + "</table>")

@@ -178,8 +178,8 @@ class _DemoRun:
                             dict(zip(res.keys, res.x)), self.out / "rod1.asbuilt.rod.toml",
                             "# as built: rodlab update rod1 --measured rig/rod1.rig.csv --free " + ",".join(keys) + "\n")
         return {"file": "rod1.asbuilt.rod.toml", "keys": list(res.keys), "design": res.nominal.tolist(),
-                "as_built": res.x.tolist(), "sigma": res.sigma.tolist(), "r_before": res.r_before.tolist(), "r_after": res.r_after.tolist(),
-                "inseparable": [a for a, *_ in res.inseparable]}
+                "as_built": res.x.tolist(), "sigma": res.sigma.tolist(), "r_before": res.r_before.tolist(),
+                "r_after": res.r_after.tolist(), "inseparable": [a for a, *_ in res.inseparable]}
 
     def stage_campaign(self) -> None:
         from rodlab.calibrate import resolve_robot

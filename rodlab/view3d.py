@@ -183,8 +183,9 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
     values = np.asarray(mesh.point_data[f"von_mises_{load}"]) if stress else 1e3 * np.linalg.norm(disp, axis=1)
     mesh.point_data["colour"] = values
     title = ("von Mises stress" if stress else "displacement") + f" [{_units(load, stress)}]"
-    # a stress colour bar to the 99.5th percentile: the clamp's edge is singular and would take the whole range
-    top = float(np.percentile(values, 99.5)) if stress else float(values.max())
+    # a solid's stress colour bar to the 99.5th percentile: the clamp's edge is singular and would take the whole
+    # range (a frame's section stress is not: its bar goes to the peak)
+    top = float(np.percentile(values, 99.5)) if stress and view.model != "frame" else float(values.max())
     clim = (0.0, top if top > 0 else 1.0)
     if view.model == "frame":                                    # a centreline: drawn as a tube
         r = 0.012 * np.ptp(np.asarray(mesh.points), axis=0).max()

@@ -149,13 +149,13 @@ def _frame_views(args: argparse.Namespace, design) -> list:
     from rodlab.fea.fields import write_frame_fields
     path = write_frame_fields(args.fields, design)
     note = " (the constant-calibrated frame: the joint calibration changes C_F only)" if args.joints else ""
-    print(f"  wrote {path} (centreline displacements of Fx Fy Fz gx gy gz{note})")
+    print(f"  wrote {path} (centreline displacements and section von Mises stress of Fx Fy Fz gx gy gz{note})")
     if args.report is None:
         return []
     from ..report.views import render_field_pngs
     from rodlab.view3d import RenderError
     try:
-        return render_field_pngs(path, path.with_suffix(""), colour="displacement")
+        return render_field_pngs(path, path.with_suffix(""))
     except RenderError as e:
         print(f"  note: no 3-D views in the report: {e}")
         return []

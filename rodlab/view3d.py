@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LocatedError, RodlabError
+from .vtkio import decode_strings
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
            "require_pyvista", "render_triangle_sets"]
@@ -126,10 +127,11 @@ def read_field_view(path: str | Path) -> FieldView:
     missing = [f"displacement_{k}" for k in LOAD_KEYS if f"displacement_{k}" not in mesh.point_data]
     if missing:
         raise LocatedError(f"point arrays missing: {', '.join(missing)}", path, key=missing[0])
-    text = lambda k, d: str(fd[k][0]) if k in fd and len(fd[k]) else d   # noqa: E731
+    texts = {k: decode_strings(fd[k]) for k in ("rod", "model", "part_names") if k in fd and len(fd[k])}
+    text = lambda k, d: texts[k][0] if texts.get(k) else d   # noqa: E731
     return FieldView(mesh, text("rod", path.stem), text("model", "solid"), np.asarray(fd["ball_centre_mm"]).ravel()[:3],
                      np.asarray(fd["ball_displacement"], dtype=float).reshape(6, 3),
-                     tuple(str(s) for s in fd["part_names"]) if "part_names" in fd else (), path)
+                     tuple(texts.get("part_names", ())), path)
 
 
 def _units(load: str, stress: bool) -> str:

@@ -12,7 +12,7 @@ import pytest
 from rodlab import resolve_design
 from rodlab.design_io import design_from_dict
 from rodlab.enums import Part
-from rodlab.vtkio import VTK_QUADRATIC_TETRA, VtkData, write_vtu
+from rodlab.vtkio import VTK_QUADRATIC_TETRA, VtkData, decode_strings, write_vtu
 
 CASES = ("Fx", "Fy", "Fz", "gx", "gy", "gz")
 
@@ -44,7 +44,14 @@ def test_vtu_writer_writes_what_vtk_documents(tmp_path):
     assert _decode(arrays["types"].text, "u1").tolist() == [24]
     assert _decode(arrays["offsets"].text, "<i8").tolist() == [10]
     assert _decode(arrays["part"].text, "<i8").tolist() == [2]
-    assert arrays["part_names"].text.split() == [str(b) for b in b"tube"] + ["0"] + [str(b) for b in b"ball"] + ["0"]
+    assert arrays["part_names"].get("type") == "UInt8"           # texts as ASCII codes, each ended by 0
+    assert _decode(arrays["part_names"].text, "u1").tobytes() == b"tube\0ball\0"
+    assert not [a for a in arrays.values() if a.get("type") == "String"]     # meshio refuses String arrays
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(path)
+    assert m.cells[0].type == "tetra10" and m.cells[0].data.tolist() == [list(range(10))]
+    np.testing.assert_array_equal(m.point_data["displacement_Fx"], disp)
+    assert decode_strings(m.field_data["part_names"]) == ["tube", "ball"]
     with pytest.raises(ValueError, match="10 rows"):
         write_vtu(tmp_path / "bad.vtu", pts, np.arange(10)[None, :], VTK_QUADRATIC_TETRA,
                   VtkData({"u": disp[:4]}))
@@ -146,11 +153,11 @@ def test_solid_vtu_reads_back_with_its_arrays_and_the_ball_moves_by_C_F(rod1_vtu
     for key in CASES:
         assert m.point_data[f"displacement_{key}"].shape == (m.n_points, 3)
         assert m.point_data[f"von_mises_{key}"].shape == (m.n_points,)
-    assert list(m.field_data["part_names"]) == [str(p) for p in ("pipe_holder", "pipe_I", "ring_1", "bend", "ring_2",
-                                                                 "pipe_II", "ball_holder", "ball")]
+    assert decode_strings(m.field_data["part_names"]) == ["pipe_holder", "pipe_I", "ring_1", "bend", "ring_2",
+                                                          "pipe_II", "ball_holder", "ball"]
     assert set(np.unique(m.cell_data["part"])) == set(range(8))
-    assert list(m.field_data["units"]) == ["mm per N"] * 3 + ["mm per g0"] * 3
-    assert list(m.field_data["stress_units"]) == ["MPa per N"] * 3 + ["MPa per g0"] * 3
+    assert decode_strings(m.field_data["units"]) == ["mm per N"] * 3 + ["mm per g0"] * 3
+    assert decode_strings(m.field_data["stress_units"]) == ["MPa per N"] * 3 + ["MPa per g0"] * 3
     lo, hi = np.asarray(m.bounds).reshape(3, 2).T      # the whole rod (the half mesh mirrored), flange at z = 0
     assert lo[1] == pytest.approx(-hi[1]) and lo[2] == pytest.approx(0.0, abs=1e-9)
     np.testing.assert_allclose(m.field_data["ball_centre_mm"][0], d.tool_mm)
@@ -164,7 +171,47 @@ def test_solid_vtu_reads_back_with_its_arrays_and_the_ball_moves_by_C_F(rod1_vtu
     assert flange.sum() > 10 and np.abs(m.point_data["displacement_Fy"][flange]).max() == 0.0
 
 
+def _p2_at(points, cells, values, x):
+    """``values`` (per node) interpolated at ``x`` in the quadratic tetrahedron holding it (VTK node order:
+    vertices, then the edges 01, 12, 20, 03, 13, 23), with the barycentric coordinates of its vertices."""
+    v = points[cells[:, :4]]                                          # (m, 4, 3)
+    Tm = np.transpose(v[:, :3] - v[:, 3:4], (0, 2, 1))              # (m, 3, 3)
+    lam3 = np.linalg.solve(Tm, (x - v[:, 3])[:, :, None])[:, :, 0]
+    lam = np.column_stack([lam3, 1 - lam3.sum(axis=1)])
+    e = int(np.argmax(lam.min(axis=1)))
+    assert lam[e].min() > -1e-9, "no element holds the point"
+    L = lam[e]
+    N = np.concatenate([L * (2 * L - 1), 4 * L[[0, 1, 2, 0, 1, 2]] * L[[1, 2, 0, 3, 3, 3]]])
+    return N @ values[cells[e]]
+
+
 @pytest.mark.cad
+def test_solid_vtu_reads_back_with_meshio(rod1_vtu):
+    """meshio reads the .vtu (no String arrays): tetra10 cells, the twelve point arrays, the parts and units
+    (decoded from their ASCII codes); the displacement at the ball centre, interpolated with the P2 shape
+    functions of the element holding it, is the C_F / C_g column of its load case (to 1e-5 of the column)."""
+    meshio = pytest.importorskip("meshio")
+    d, comp, path = rod1_vtu
+    m = meshio.read(path)
+    assert [c.type for c in m.cells] == ["tetra10"]
+    cells = m.cells[0].data
+    for key in CASES:
+        assert m.point_data[f"displacement_{key}"].shape == (len(m.points), 3)
+        assert m.point_data[f"von_mises_{key}"].shape == (len(m.points),)
+    assert decode_strings(m.field_data["part_names"])[:2] == ["pipe_holder", "pipe_I"]
+    assert set(np.unique(m.cell_data["part"][0])) == set(range(8))
+    assert decode_strings(m.field_data["units"]) == ["mm per N"] * 3 + ["mm per g0"] * 3
+    assert decode_strings(m.field_data["stress_units"]) == ["MPa per N"] * 3 + ["MPa per g0"] * 3
+    ball = m.field_data["ball_centre_mm"].ravel()
+    np.testing.assert_allclose(ball, d.tool_mm)
+    for k, key in enumerate(CASES):
+        col = (comp.C_F if k < 3 else comp.C_g)[:, k % 3]
+        u = _p2_at(m.points, cells, m.point_data[f"displacement_{key}"], ball)
+        np.testing.assert_allclose(u, col, atol=1e-5 * np.abs(col).max())
+        np.testing.assert_allclose(m.field_data["ball_displacement"].reshape(6, 3)[k], col,
+                                   atol=1e-9 * np.abs(col).max())
+
+
 def _beam_fibre_stress(W, t, y, ro, ri):
     """Von Mises stress of a thin-walled tube's beam theory at the fibres ``y`` (from the centreline, across the
     tangent ``t``), under the section wrenches ``W`` (force, moment) shape=(n, 6): sigma = N / A + (M x y) . t / I,

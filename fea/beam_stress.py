@@ -26,7 +26,7 @@ from rodlab.chain import centreline_points, distal_weight_wrench, transport
 from rodlab.layout import Segment
 from rodlab.units import gpa_to_mpa
 
-__all__ = ["section_wrenches", "section_von_mises"]
+__all__ = ["section_wrenches", "section_von_mises", "section_index"]
 
 
 def section_wrenches(segs: list[Segment], s_mm, tip_F: np.ndarray, tip_mass_kg: float,
@@ -42,7 +42,7 @@ def section_wrenches(segs: list[Segment], s_mm, tip_F: np.ndarray, tip_mass_kg: 
     return W
 
 
-def _section_of(segs: list[Segment], s: np.ndarray) -> np.ndarray:
+def section_index(segs: list[Segment], s: np.ndarray) -> np.ndarray:
     """Index of the segment holding each arc length (at a boundary: the one that starts there)."""
     starts = np.array([g.s0_mm for g in segs])
     return np.clip(np.searchsorted(starts, s, side="right") - 1, 0, len(segs) - 1)
@@ -85,7 +85,7 @@ def section_von_mises(segs: list[Segment], s_mm, wrenches: np.ndarray) -> np.nda
     T = np.einsum("ni,nic->nc", t, M)[:, None, :]
     Mu = np.einsum("nfi,nic->nfc", e_theta, M)                           # (M x u) . t = M . (u x t) = -M . e_theta
     V = np.einsum("nfi,nic->nfc", e_theta, F)
-    idx = _section_of(segs, s)
+    idx = section_index(segs, s)
     out = np.zeros((s.size, wrenches.shape[2]))
     for k in np.unique(idx):
         sel = idx == k

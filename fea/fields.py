@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.design import RodDesign
+from rodlab.enums import Part
 from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
@@ -153,15 +154,20 @@ def write_solid_fields(path: str | Path, fields: SolidFields) -> Path:
 class FrameFields:
     """The frame model's centreline fields: points_mm [mm] in {6}, shape=(n, 3) (the first at the flange, the
     last the ball centre); displacement [mm per N | mm per g0] along x, y, z of {T}, shape=(n, 3, 6);
-    von_mises : the section's outer-fibre stress [MPa per N | MPa per g0], shape=(n, 6)."""
+    von_mises : the section's outer-fibre stress [MPa per N | MPa per g0], shape=(n, 6); part_index : the part
+    whose section holds each point (a ring or holder where it sleeves a tube), index into ``parts``,
+    shape=(n,); parts : the part names, flange to ball."""
 
     points_mm: np.ndarray
     displacement: np.ndarray
     von_mises: np.ndarray
+    part_index: np.ndarray
+    parts: tuple
 
     def __post_init__(self) -> None:
         n = self.points_mm.shape[0]
-        for name, shape in (("points_mm", (n, 3)), ("displacement", (n, 3, 6)), ("von_mises", (n, 6))):
+        for name, shape in (("points_mm", (n, 3)), ("displacement", (n, 3, 6)), ("von_mises", (n, 6)),
+                            ("part_index", (n,))):
             if np.shape(getattr(self, name)) != shape:
                 raise ValueError(f"FrameFields.{name} must have shape {shape}, got {np.shape(getattr(self, name))}")
 
@@ -175,7 +181,7 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFiel
     from rodlab.chain import centreline_points, chain_flexibility, transport
     from rodlab.massprops import ball_mass_properties
 
-    from .beam_stress import section_von_mises, section_wrenches
+    from .beam_stress import section_index, section_von_mises, section_wrenches
     from .frame import CALIBRATION, frame_segments
     segs = frame_segments(design, CALIBRATION)
     total = segs[-1].s0_mm + segs[-1].length_mm
@@ -198,7 +204,19 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFiel
     points = np.vstack([start, P])
     disp = np.concatenate([np.zeros((1, 3, 6)), motion[:, :3, :]])
     vm = section_von_mises(segs, s_all, section_wrenches(segs, s_all, tool, ball.mass_kg, ball.com_T_mm + tool))
-    return FrameFields(points, disp, vm)
+    names = [_section_part(segs[k]) for k in section_index(segs, s_all)]
+    parts = tuple(str(p) for p in Part if str(p) in names)                # flange to ball
+    return FrameFields(points, disp, vm, np.array([parts.index(n) for n in names], dtype=np.int64), parts)
+
+
+_TUBES = ("pipe_I", "bend", "pipe_II")
+
+
+def _section_part(seg) -> str:
+    """The part a section shows: the ring or holder sleeving a tube where it carries load (not in its
+    load-transfer zone, where the tube alone does), else the tube (or the holder alone)."""
+    names = [str(layer.part) for layer in seg.layers if layer.part not in seg.slack] or [str(seg.layers[0].part)]
+    return next((n for n in names if n not in _TUBES), names[0])
 
 
 def write_frame_fields(path: str | Path, design: RodDesign, n_points: int = 200) -> Path:
@@ -208,5 +226,11 @@ def write_frame_fields(path: str | Path, design: RodDesign, n_points: int = 200)
     f = frame_centreline_fields(design, n_points)
     pd = {f"displacement_{key}": f.displacement[:, :, k] for k, key in enumerate(LOAD_CASE_KEYS)}
     pd.update({f"von_mises_{key}": f.von_mises[:, k] for k, key in enumerate(LOAD_CASE_KEYS)})
-    fd = field_data(design.name, design.tool_mm, f.displacement[-1], "frame")
-    return write_vtp(path, f.points_mm, [np.arange(f.points_mm.shape[0])], VtkData(point_data=pd, field_data=fd))
+    fd = dict(field_data(design.name, design.tool_mm, f.displacement[-1], "frame"), part_names=list(f.parts))
+    # one poly-line per run of points in one part (neighbouring runs share their end point), cell array ``part``
+    starts = np.r_[0, np.nonzero(np.diff(f.part_index))[0] + 1]
+    ends = np.r_[starts[1:], len(f.part_index) - 1]
+    keep = ends > starts                                         # a last run of one point is the previous line's end
+    lines = [np.arange(a, b + 1) for a, b in zip(starts[keep], ends[keep])]
+    return write_vtp(path, f.points_mm, lines,
+                     VtkData(point_data=pd, cell_data={"part": f.part_index[starts[keep]]}, field_data=fd))

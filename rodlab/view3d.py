@@ -168,6 +168,10 @@ def _peak(view: FieldView, values: np.ndarray) -> tuple:
     i = int(np.argmax(values))
     if not view.parts or "part" not in view.mesh.cell_data:
         return float(values[i]), ""
+    if not hasattr(view.mesh, "cell_connectivity"):             # poly data (a frame's centreline)
+        cells = view.mesh.point_cell_ids(i)                        # a shared end point: the section starting there
+        name = view.parts[int(np.asarray(view.mesh.cell_data["part"])[max(cells)])] if len(cells) else ""
+        return float(values[i]), _PART_LABEL.get(name, name)
     at = np.nonzero(np.asarray(view.mesh.cell_connectivity) == i)[0]
     if not at.size:
         return float(values[i]), ""
@@ -207,17 +211,19 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
 
 
 def _labels(plotter, view: FieldView) -> None:
-    """Each part's name at its centre."""
+    """Each part's name at its centre (a frame's: at the middle of the part's longest stretch of centreline)."""
     mesh = view.mesh
     if not view.parts or "part" not in mesh.cell_data:
         return
     centres = np.asarray(mesh.cell_centers().points)
     part = np.asarray(mesh.cell_data["part"])
+    frame = not hasattr(mesh, "cell_connectivity")
+    sizes = np.array([mesh.get_cell(c).n_points for c in range(mesh.n_cells)]) if frame else None
     pts, names = [], []
     for k, name in enumerate(view.parts):
         sel = part == k
         if sel.any():
-            pts.append(centres[sel].mean(axis=0))
+            pts.append(centres[np.flatnonzero(sel)[np.argmax(sizes[sel])]] if frame else centres[sel].mean(axis=0))
             names.append(_PART_LABEL.get(name, name))
     plotter.add_point_labels(np.array(pts), names, font_size=13, point_size=1, shape_opacity=0.55,
                              always_visible=True, show_points=False, text_color="black", shape_color="white")
@@ -271,13 +277,13 @@ def render_view(view: FieldView, png: str | Path | None, load: str = "Fy", colou
                      above_color="magenta" if scene.clim[1] < scene.peak[0] else None,
                      scalar_bar_args={"title": scene.bar_title, "vertical": True, "position_x": 0.87,
                                       "position_y": 0.15, "height": 0.7, "width": 0.045, "color": "black",
-                                      "title_font_size": 15, "label_font_size": 14, "fmt": "%.3g", "above_label": ""})
+                                      "title_font_size": 17, "label_font_size": 15, "fmt": "%.3g", "above_label": ""})
     _labels(plotter, view)
     u_ball = view.ball_displacement[LOAD_KEYS.index(load)]
     _ball_arrow(pv, plotter, view, u_ball, scale)
     plotter.add_text(title or f"rod {view.rod} ({view.model} model): {_case_text(load)}", position="upper_left",
                      font_size=13, color="black")
-    plotter.add_text(_caption(view, load, scale, scene, u_ball), position="lower_left", font_size=10, color="black")
+    plotter.add_text(_caption(view, load, scale, scene, u_ball), position="lower_left", font_size=12, color="black")
     plotter.add_axes(color="black", xlabel="x", ylabel="y", zlabel="z")
     _camera(plotter, _auto_camera(u_ball) if camera == "auto" else camera)
     if png is None:

@@ -74,6 +74,32 @@ def test_frame_centreline_ends_at_the_compliance():
     assert np.abs(disp[0]).max() == 0.0
     uy = disp[:, 1, 1]                                 # sideways: grows monotonically from the clamp
     assert np.all(np.diff(uy) >= -1e-15) and uy[len(uy) // 2] < 0.5 * uy[-1]
+    # parts along the centreline, flange to ball: a ring where it carries load, the tube in its end zones
+    assert f.parts == ("pipe_holder", "pipe_I", "ring_1", "bend", "ring_2", "pipe_II", "ball_holder")
+    assert f.part_index[0] == 0 and f.part_index[3 * len(f.part_index) // 4] == 5 and f.part_index[-1] == 6
+
+
+def test_frame_vtp_has_the_parts_and_the_stress(tmp_path):
+    """The .vtp: one poly-line per run of a part (sharing end points), cell array ``part`` naming
+    ``part_names``, point arrays displacement_<case> and von_mises_<case>; rodlab view names the peak's part."""
+    pv = pytest.importorskip("pyvista")
+    from rodlab.fea.fields import frame_centreline_fields, write_frame_fields
+    d = resolve_design("rod1")
+    m = pv.read(write_frame_fields(tmp_path / "rod1.vtp", d, n_points=150))
+    f = frame_centreline_fields(d, n_points=150)
+    names = decode_strings(m.field_data["part_names"])
+    assert tuple(names) == f.parts and m.n_points == 150
+    lines = [m.get_cell(c).point_ids for c in range(m.n_cells)]
+    assert lines[0][0] == 0 and lines[-1][-1] == 149 and all(a[-1] == b[0] for a, b in zip(lines[:-1], lines[1:]))
+    for c, ids in enumerate(lines):
+        assert f.part_index[ids[0]] == m.cell_data["part"][c]
+    for k, key in enumerate(CASES):
+        np.testing.assert_allclose(m.point_data[f"von_mises_{key}"], f.von_mises[:, k], rtol=1e-12)
+        np.testing.assert_allclose(m.point_data[f"displacement_{key}"], f.displacement[:, :, k], rtol=1e-12)
+    from rodlab.view3d import _peak, read_field_view
+    view = read_field_view(tmp_path / "rod1.vtp")
+    i = int(np.argmax(f.von_mises[:, 1]))
+    assert _peak(view, f.von_mises[:, 1]) == (pytest.approx(f.von_mises[i, 1]), f.parts[f.part_index[i]].replace("_", " "))
 
 
 def _straight_tube(material: str = "steel_304"):

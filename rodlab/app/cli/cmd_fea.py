@@ -37,7 +37,8 @@ def register(sub) -> None:
                                                "folder (it gets deformed.png)")
     p.add_argument("--fields", default=None, metavar="OUT",
                    help="solid: the displacement and von Mises stress fields of the six unit load cases on the mesh "
-                        "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements (*.vtp)")
+                        "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements and its sections' "
+                        "outer-fibre von Mises stress (*.vtp)")
     p.add_argument("--joints-out", default=None, metavar="FILE",
                    help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
                         "frame runs and sweeps of the design's family (--joints)")

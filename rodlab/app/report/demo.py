@@ -131,19 +131,19 @@ def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
             "and the validation instrument's noise. The whole study: <code>study/study.html</code>.</p>"
             "<table><tr><th>design</th><th>c_rod um</th><th>mass g</th><th>method</th><th>mean mm</th>"
             f"<th>90 % band mm</th><th>max mm</th><th>budget % (defl. / ident. / noise)</th></tr>{rows}</table>"
-            + img_tag(run, files.get("study_pareto"), "study Pareto fronts") + _study_view(run))
+            + img_tag(run, files.get("study_pareto"), "study Pareto fronts") + _study_views(run, files))
 
 
-def _study_view(run: Path) -> str:
+def _study_views(run: Path, files: dict) -> str:
     """The recommended design's frame centreline in 3-D under its weakest unit force (``rodlab study`` draws it
     beside ``recommended.vtp`` where pyvista renders), coloured by the sections' von Mises stress."""
-    pngs = sorted((run / "study").glob("recommended.3d_*.png"))
+    pngs = files.get("study_views") or []
     if not pngs:
         return ""
     return ("<p>The recommended design under the unit force that moves its ball most (frame model, displacement "
             "exaggerated, coloured by the sections' outer-fibre von Mises stress; all six load cases in "
             "<code>study/recommended.vtp</code>):</p>"
-            + "".join(img_tag(run, p.relative_to(run), f"3-D view {p.name}", _VIEW_SCALE) for p in pngs))
+            + "".join(img_tag(run, p, f"3-D view {p}", _VIEW_SCALE) for p in pngs))
 
 
 def _evidence(f: dict) -> str:

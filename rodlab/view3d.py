@@ -168,7 +168,7 @@ def _peak(view: FieldView, values: np.ndarray) -> tuple:
     i = int(np.argmax(values))
     if not view.parts or "part" not in view.mesh.cell_data:
         return float(values[i]), ""
-    if not hasattr(view.mesh, "cell_connectivity"):             # poly data (a frame's centreline)
+    if view.model == "frame":                                    # poly-lines along the centreline
         cells = view.mesh.point_cell_ids(i)                        # a shared end point: the section starting there
         name = view.parts[int(np.asarray(view.mesh.cell_data["part"])[max(cells)])] if len(cells) else ""
         return float(values[i]), _PART_LABEL.get(name, name)
@@ -217,7 +217,7 @@ def _labels(plotter, view: FieldView) -> None:
         return
     centres = np.asarray(mesh.cell_centers().points)
     part = np.asarray(mesh.cell_data["part"])
-    frame = not hasattr(mesh, "cell_connectivity")
+    frame = view.model == "frame"
     sizes = np.array([mesh.get_cell(c).n_points for c in range(mesh.n_cells)]) if frame else None
     pts, names = [], []
     for k, name in enumerate(view.parts):

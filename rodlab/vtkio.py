@@ -2,7 +2,7 @@
 
 The format is VTK's own (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html): numeric arrays
 inline, base64-encoded, zlib-compressed in one block (``header_type="UInt64"``). Texts in the field data (part
-names, units) are ``UInt8`` arrays of their ASCII codes, each text ended by 0 (:func:`decode_strings` reads
+names, units) are ``UInt8`` arrays of their UTF-8 (ASCII) codes, each text ended by 0 (:func:`decode_strings` reads
 them back), not VTK's ``String`` arrays: meshio (5.3) refuses a file holding any ``String`` array, so with
 numbers alone ParaView, VTK, pyvista and meshio all read the ``.vtu`` (meshio reads no ``.vtp``). Writing
 needs no VTK installation, so ``rodlab fea --fields`` works without the ``viz`` extra; files are written
@@ -53,10 +53,10 @@ def _encode(a: np.ndarray) -> str:
 
 
 def encode_strings(texts) -> np.ndarray:
-    """Texts as one ``uint8`` array of their ASCII codes, each text ended by 0."""
+    """Texts as one ``uint8`` array of their UTF-8 codes (ASCII for ASCII texts), each text ended by 0."""
     out = bytearray()
     for t in texts:
-        b = str(t).encode("ascii")
+        b = str(t).encode("utf-8")
         if b"\0" in b:
             raise ValueError(f"text {t!r} holds a 0 byte")
         out += b + b"\0"
@@ -70,7 +70,7 @@ def decode_strings(values) -> list[str]:
     if a.dtype.kind in "US" or a.dtype == object:
         return [str(v) for v in a.ravel()]
     raw = a.astype(np.uint8).ravel().tobytes()
-    return [t.decode("ascii") for t in raw.split(b"\0")[:-1]] if raw.endswith(b"\0") else [raw.decode("ascii")]
+    return [t.decode("utf-8") for t in raw.split(b"\0")[:-1]] if raw.endswith(b"\0") else [raw.decode("utf-8")]
 
 
 def _array(name: str, values, tuples: bool = False) -> str:

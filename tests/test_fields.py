@@ -12,7 +12,7 @@ import pytest
 from rodlab import resolve_design
 from rodlab.design_io import design_from_dict
 from rodlab.enums import Part
-from rodlab.vtkio import VTK_QUADRATIC_TETRA, VtkData, decode_strings, write_vtu
+from rodlab.vtkio import VTK_QUADRATIC_TETRA, VtkData, decode_strings, encode_strings, write_vtu
 
 CASES = ("Fx", "Fy", "Fz", "gx", "gy", "gz")
 
@@ -52,6 +52,7 @@ def test_vtu_writer_writes_what_vtk_documents(tmp_path):
     assert m.cells[0].type == "tetra10" and m.cells[0].data.tolist() == [list(range(10))]
     np.testing.assert_array_equal(m.point_data["displacement_Fx"], disp)
     assert decode_strings(m.field_data["part_names"]) == ["tube", "ball"]
+    assert decode_strings(encode_strings(["Stab ü", "", "1#"])) == ["Stab ü", "", "1#"]
     with pytest.raises(ValueError, match="10 rows"):
         write_vtu(tmp_path / "bad.vtu", pts, np.arange(10)[None, :], VTK_QUADRATIC_TETRA,
                   VtkData({"u": disp[:4]}))

@@ -7,7 +7,8 @@ A separate step after the solve (it needs the kept displacements, :func:`~fea.so
 evaluated at the element's 10 nodes (exact for P2: linear in the element) and averaged over the elements around
 each node (across a bonded joint the average of the two materials' stresses). Coordinates [mm] in the flange
 frame {6} (``{T}`` shifted by the ball centre ``tool_mm``; the axes are parallel), vectors along x, y, z of
-{6} = {T}.
+{6} = {T}. The frame's centreline carries the same displacement arrays and the sections' outer-fibre von Mises
+stress from the beam's section forces (:mod:`fea.beam_stress`).
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.design import RodDesign
+from rodlab.enums import Part
 from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
@@ -24,7 +26,7 @@ from .errors import FeaError
 from .solid import SolidResult, mirror_displacements
 
 __all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
-           "write_frame_fields", "field_data", "frame_centreline_fields", "nodal_von_mises"]
+           "write_frame_fields", "field_data", "FrameFields", "frame_centreline_fields", "nodal_von_mises"]
 
 #: load cases in column order: unit force along x, y, z of {T} [N] at the ball centre, then 1 g0 along x, y, z
 LOAD_CASE_KEYS = ("Fx", "Fy", "Fz", "gx", "gy", "gz")
@@ -148,17 +150,43 @@ def write_solid_fields(path: str | Path, fields: SolidFields) -> Path:
                      VtkData(point_data=pd, cell_data={"part": fields.part_index}, field_data=fd))
 
 
-def frame_centreline_fields(design: RodDesign, n_points: int = 200):
-    """The frame model's centreline (``n_points`` points [mm] in {6}) and its displacements under the six unit
+@dataclass
+class FrameFields:
+    """The frame model's centreline fields: points_mm [mm] in {6}, shape=(n, 3) (the first at the flange, the
+    last the ball centre); displacement [mm per N | mm per g0] along x, y, z of {T}, shape=(n, 3, 6);
+    von_mises : the section's outer-fibre stress [MPa per N | MPa per g0], shape=(n, 6); part_index : the part
+    whose section holds each point (a ring or holder where it sleeves a tube), index into ``parts``,
+    shape=(n,); parts : the part names, flange to ball."""
+
+    points_mm: np.ndarray
+    displacement: np.ndarray
+    von_mises: np.ndarray
+    part_index: np.ndarray
+    parts: tuple
+
+    def __post_init__(self) -> None:
+        n = self.points_mm.shape[0]
+        for name, shape in (("points_mm", (n, 3)), ("displacement", (n, 3, 6)), ("von_mises", (n, 6)),
+                            ("part_index", (n,))):
+            if np.shape(getattr(self, name)) != shape:
+                raise ValueError(f"FrameFields.{name} must have shape {shape}, got {np.shape(getattr(self, name))}")
+
+
+def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFields:
+    """The frame model's centreline (``n_points`` points [mm] in {6}), its displacements under the six unit
     load cases [mm per N | mm per g0], shape=(n, 3, 6): the section motions of the chain cut at every point
-    (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g)."""
+    (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g); and
+    the sections' outer-fibre von Mises stress [MPa per N | MPa per g0], shape=(n, 6), from the section forces
+    (:mod:`fea.beam_stress`)."""
     from rodlab.chain import centreline_points, chain_flexibility, transport
     from rodlab.massprops import ball_mass_properties
 
+    from .beam_stress import section_index, section_von_mises, section_wrenches
     from .frame import CALIBRATION, frame_segments
     segs = frame_segments(design, CALIBRATION)
     total = segs[-1].s0_mm + segs[-1].length_mm
-    cuts = np.linspace(0.0, total, n_points)[1:-1]
+    s_all = np.linspace(0.0, total, n_points)
+    cuts = s_all[1:-1]
     ball = ball_mass_properties(design)
     tool = np.asarray(design.tool_mm, dtype=float)
     ch = chain_flexibility(segs, cuts, tool, ball.mass_kg, ball.com_T_mm + tool, True, True,
@@ -175,14 +203,34 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200):
     start = centreline_points(segs, [0.0])[0]
     points = np.vstack([start, P])
     disp = np.concatenate([np.zeros((1, 3, 6)), motion[:, :3, :]])
-    return points, disp
+    vm = section_von_mises(segs, s_all, section_wrenches(segs, s_all, tool, ball.mass_kg, ball.com_T_mm + tool))
+    names = [_section_part(segs[k]) for k in section_index(segs, s_all)]
+    parts = tuple(str(p) for p in Part if str(p) in names)                # flange to ball
+    return FrameFields(points, disp, vm, np.array([parts.index(n) for n in names], dtype=np.int64), parts)
+
+
+_TUBES = ("pipe_I", "bend", "pipe_II")
+
+
+def _section_part(seg) -> str:
+    """The part a section shows: the ring or holder sleeving a tube where it carries load (not in its
+    load-transfer zone, where the tube alone does), else the tube (or the holder alone)."""
+    names = [str(layer.part) for layer in seg.layers if layer.part not in seg.slack] or [str(seg.layers[0].part)]
+    return next((n for n in names if n not in _TUBES), names[0])
 
 
 def write_frame_fields(path: str | Path, design: RodDesign, n_points: int = 200) -> Path:
-    """The frame model's centreline as VTK poly data (``.vtp``): point arrays ``displacement_<case>`` as in
-    :func:`write_solid_fields` (no stress: a beam model)."""
-    points, disp = frame_centreline_fields(design, n_points)
-    pd = {f"displacement_{key}": disp[:, :, k] for k, key in enumerate(LOAD_CASE_KEYS)}
-    fd = field_data(design.name, design.tool_mm, disp[-1], "frame")
-    return write_vtp(path, points, [np.arange(points.shape[0])], VtkData(point_data=pd, field_data=fd))
-
+    """The frame model's centreline as VTK poly data (``.vtp``): point arrays ``displacement_<case>`` and
+    ``von_mises_<case>`` (the sections' outer-fibre stress from the beam's section forces) as in
+    :func:`write_solid_fields`."""
+    f = frame_centreline_fields(design, n_points)
+    pd = {f"displacement_{key}": f.displacement[:, :, k] for k, key in enumerate(LOAD_CASE_KEYS)}
+    pd.update({f"von_mises_{key}": f.von_mises[:, k] for k, key in enumerate(LOAD_CASE_KEYS)})
+    fd = dict(field_data(design.name, design.tool_mm, f.displacement[-1], "frame"), part_names=list(f.parts))
+    # one poly-line per run of points in one part (neighbouring runs share their end point), cell array ``part``
+    starts = np.r_[0, np.nonzero(np.diff(f.part_index))[0] + 1]
+    ends = np.r_[starts[1:], len(f.part_index) - 1]
+    keep = ends > starts                                         # a last run of one point is the previous line's end
+    lines = [np.arange(a, b + 1) for a, b in zip(starts[keep], ends[keep])]
+    return write_vtp(path, f.points_mm, lines,
+                     VtkData(point_data=pd, cell_data={"part": f.part_index[starts[keep]]}, field_data=fd))

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LocatedError, RodlabError
+from .vtkio import decode_strings
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
            "require_pyvista", "render_triangle_sets"]
@@ -126,10 +127,11 @@ def read_field_view(path: str | Path) -> FieldView:
     missing = [f"displacement_{k}" for k in LOAD_KEYS if f"displacement_{k}" not in mesh.point_data]
     if missing:
         raise LocatedError(f"point arrays missing: {', '.join(missing)}", path, key=missing[0])
-    text = lambda k, d: str(fd[k][0]) if k in fd and len(fd[k]) else d   # noqa: E731
+    texts = {k: decode_strings(fd[k]) for k in ("rod", "model", "part_names") if k in fd and len(fd[k])}
+    text = lambda k, d: texts[k][0] if texts.get(k) else d   # noqa: E731
     return FieldView(mesh, text("rod", path.stem), text("model", "solid"), np.asarray(fd["ball_centre_mm"]).ravel()[:3],
                      np.asarray(fd["ball_displacement"], dtype=float).reshape(6, 3),
-                     tuple(str(s) for s in fd["part_names"]) if "part_names" in fd else (), path)
+                     tuple(texts.get("part_names", ())), path)
 
 
 def _units(load: str, stress: bool) -> str:
@@ -166,6 +168,10 @@ def _peak(view: FieldView, values: np.ndarray) -> tuple:
     i = int(np.argmax(values))
     if not view.parts or "part" not in view.mesh.cell_data:
         return float(values[i]), ""
+    if view.model == "frame":                                    # poly-lines along the centreline
+        cells = view.mesh.point_cell_ids(i)                        # a shared end point: the section starting there
+        name = view.parts[int(np.asarray(view.mesh.cell_data["part"])[max(cells)])] if len(cells) else ""
+        return float(values[i]), _PART_LABEL.get(name, name)
     at = np.nonzero(np.asarray(view.mesh.cell_connectivity) == i)[0]
     if not at.size:
         return float(values[i]), ""
@@ -183,8 +189,9 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
     values = np.asarray(mesh.point_data[f"von_mises_{load}"]) if stress else 1e3 * np.linalg.norm(disp, axis=1)
     mesh.point_data["colour"] = values
     title = ("von Mises stress" if stress else "displacement") + f" [{_units(load, stress)}]"
-    # a stress colour bar to the 99.5th percentile: the clamp's edge is singular and would take the whole range
-    top = float(np.percentile(values, 99.5)) if stress else float(values.max())
+    # a solid's stress colour bar to the 99.5th percentile: the clamp's edge is singular and would take the whole
+    # range (a frame's section stress is not: its bar goes to the peak)
+    top = float(np.percentile(values, 99.5)) if stress and view.model != "frame" else float(values.max())
     clim = (0.0, top if top > 0 else 1.0)
     if view.model == "frame":                                    # a centreline: drawn as a tube
         r = 0.012 * np.ptp(np.asarray(mesh.points), axis=0).max()
@@ -204,17 +211,19 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
 
 
 def _labels(plotter, view: FieldView) -> None:
-    """Each part's name at its centre."""
+    """Each part's name at its centre (a frame's: at the middle of the part's longest stretch of centreline)."""
     mesh = view.mesh
     if not view.parts or "part" not in mesh.cell_data:
         return
     centres = np.asarray(mesh.cell_centers().points)
     part = np.asarray(mesh.cell_data["part"])
+    frame = view.model == "frame"
+    sizes = np.array([mesh.get_cell(c).n_points for c in range(mesh.n_cells)]) if frame else None
     pts, names = [], []
     for k, name in enumerate(view.parts):
         sel = part == k
         if sel.any():
-            pts.append(centres[sel].mean(axis=0))
+            pts.append(centres[np.flatnonzero(sel)[np.argmax(sizes[sel])]] if frame else centres[sel].mean(axis=0))
             names.append(_PART_LABEL.get(name, name))
     plotter.add_point_labels(np.array(pts), names, font_size=13, point_size=1, shape_opacity=0.55,
                              always_visible=True, show_points=False, text_color="black", shape_color="white")
@@ -268,13 +277,13 @@ def render_view(view: FieldView, png: str | Path | None, load: str = "Fy", colou
                      above_color="magenta" if scene.clim[1] < scene.peak[0] else None,
                      scalar_bar_args={"title": scene.bar_title, "vertical": True, "position_x": 0.87,
                                       "position_y": 0.15, "height": 0.7, "width": 0.045, "color": "black",
-                                      "title_font_size": 15, "label_font_size": 14, "fmt": "%.3g", "above_label": ""})
+                                      "title_font_size": 17, "label_font_size": 15, "fmt": "%.3g", "above_label": ""})
     _labels(plotter, view)
     u_ball = view.ball_displacement[LOAD_KEYS.index(load)]
     _ball_arrow(pv, plotter, view, u_ball, scale)
     plotter.add_text(title or f"rod {view.rod} ({view.model} model): {_case_text(load)}", position="upper_left",
                      font_size=13, color="black")
-    plotter.add_text(_caption(view, load, scale, scene, u_ball), position="lower_left", font_size=10, color="black")
+    plotter.add_text(_caption(view, load, scale, scene, u_ball), position="lower_left", font_size=12, color="black")
     plotter.add_axes(color="black", xlabel="x", ylabel="y", zlabel="z")
     _camera(plotter, _auto_camera(u_ball) if camera == "auto" else camera)
     if png is None:

@@ -1,10 +1,12 @@
 """VTK XML files (``.vtu`` unstructured grids, ``.vtp`` poly data) written with NumPy alone.
 
 The format is VTK's own (https://docs.vtk.org/en/latest/design_documents/VTKFileFormats.html): numeric arrays
-inline, base64-encoded, zlib-compressed in one block (``header_type="UInt64"``); string arrays (names in the
-field data) as ASCII codes, each string ended by 0. ParaView, VTK and pyvista read them (meshio 5.3 refuses
-VTK's string arrays, which carry the part names). Writing needs no VTK installation, so ``rodlab fea --fields``
-works without the ``viz`` extra; files are written atomically.
+inline, base64-encoded, zlib-compressed in one block (``header_type="UInt64"``). Texts in the field data (part
+names, units) are ``UInt8`` arrays of their UTF-8 (ASCII) codes, each text ended by 0 (:func:`decode_strings` reads
+them back), not VTK's ``String`` arrays: meshio (5.3) refuses a file holding any ``String`` array, so with
+numbers alone ParaView, VTK, pyvista and meshio all read the ``.vtu`` (meshio reads no ``.vtp``). Writing
+needs no VTK installation, so ``rodlab fea --fields`` works without the ``viz`` extra; files are written
+atomically.
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ import numpy as np
 
 from .fileio import atomic_write_text
 
-__all__ = ["VTK_LINE", "VTK_POLY_LINE", "VTK_TETRA", "VTK_QUADRATIC_TETRA", "VtkData", "write_vtu", "write_vtp"]
+__all__ = ["VTK_LINE", "VTK_POLY_LINE", "VTK_TETRA", "VTK_QUADRATIC_TETRA", "VtkData", "write_vtu", "write_vtp",
+           "encode_strings", "decode_strings"]
 
 #: VTK cell type ids (vtkCellType.h)
 VTK_LINE, VTK_POLY_LINE, VTK_TETRA, VTK_QUADRATIC_TETRA = 3, 4, 10, 24
@@ -49,12 +52,31 @@ def _encode(a: np.ndarray) -> str:
     return base64.b64encode(header).decode() + base64.b64encode(comp).decode()
 
 
+def encode_strings(texts) -> np.ndarray:
+    """Texts as one ``uint8`` array of their UTF-8 codes (ASCII for ASCII texts), each text ended by 0."""
+    out = bytearray()
+    for t in texts:
+        b = str(t).encode("utf-8")
+        if b"\0" in b:
+            raise ValueError(f"text {t!r} holds a 0 byte")
+        out += b + b"\0"
+    return np.frombuffer(bytes(out), dtype=np.uint8).copy()
+
+
+def decode_strings(values) -> list[str]:
+    """The texts of a field-data array of :func:`encode_strings` (as read by pyvista or meshio); VTK's own
+    string arrays (as older rodlab files hold them, read by pyvista) pass through."""
+    a = np.asarray(values)
+    if a.dtype.kind in "US" or a.dtype == object:
+        return [str(v) for v in a.ravel()]
+    raw = a.astype(np.uint8).ravel().tobytes()
+    return [t.decode("utf-8") for t in raw.split(b"\0")[:-1]] if raw.endswith(b"\0") else [raw.decode("utf-8")]
+
+
 def _array(name: str, values, tuples: bool = False) -> str:
-    """One ``<DataArray>`` (or a string ``<Array>`` in the field data)."""
+    """One ``<DataArray>`` (or ``<Array>`` in the field data; a list of texts as :func:`encode_strings`)."""
     if isinstance(values, (list, tuple)) and values and isinstance(values[0], str):
-        codes = " ".join(" ".join(str(b) for b in s.encode()) + " 0" for s in values)
-        return (f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="{len(values)}" format="ascii">'
-                f"{codes}</Array>\n")
+        values = encode_strings(values)
     a = np.asarray(values)
     if a.dtype.kind == "f":
         a = a.astype(np.float64)
@@ -66,7 +88,9 @@ def _array(name: str, values, tuples: bool = False) -> str:
     comps = 1 if a.ndim == 1 else int(np.prod(a.shape[1:]))
     tag = "Array" if tuples else "DataArray"
     extra = f' NumberOfTuples="{a.shape[0]}"' if tuples else ""
-    return (f'<{tag} type="{_TYPES[a.dtype]}" Name={quoteattr(name)} NumberOfComponents="{comps}"{extra} '
+    # one component is VTK's default: no attribute, so that meshio reads a scalar array as shape (n,), not (n, 1)
+    extra = (f' NumberOfComponents="{comps}"' if comps > 1 else "") + extra
+    return (f'<{tag} type="{_TYPES[a.dtype]}" Name={quoteattr(name)}{extra} '
             f'format="binary">{_encode(a)}</{tag}>\n')
 
 

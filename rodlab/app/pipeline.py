@@ -242,6 +242,8 @@ class _DemoRun:
     def stage_study(self) -> None:
         self._stage("study", _study(self.out / "study", self.robot, self.design, self.calibration))
         self.summary["files"]["study_pareto"] = "study/pareto.png"
+        self.summary["files"]["study_views"] = [str(p.relative_to(self.out))      # where pyvista rendered them
+                                                for p in sorted((self.out / "study").glob("recommended.3d_*.png"))]
 
 
 #: the demo's study: the paper's three carbon rods by the linear predictor (the replicates count only for

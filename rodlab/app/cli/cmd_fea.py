@@ -37,7 +37,8 @@ def register(sub) -> None:
                                                "folder (it gets deformed.png)")
     p.add_argument("--fields", default=None, metavar="OUT",
                    help="solid: the displacement and von Mises stress fields of the six unit load cases on the mesh "
-                        "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements (*.vtp)")
+                        "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements and its sections' "
+                        "outer-fibre von Mises stress (*.vtp)")
     p.add_argument("--joints-out", default=None, metavar="FILE",
                    help="solid: also calibrate the frame's joints on this run and write them (*.joints.json) for "
                         "frame runs and sweeps of the design's family (--joints)")
@@ -149,13 +150,13 @@ def _frame_views(args: argparse.Namespace, design) -> list:
     from rodlab.fea.fields import write_frame_fields
     path = write_frame_fields(args.fields, design)
     note = " (the constant-calibrated frame: the joint calibration changes C_F only)" if args.joints else ""
-    print(f"  wrote {path} (centreline displacements of Fx Fy Fz gx gy gz{note})")
+    print(f"  wrote {path} (centreline displacements and section von Mises stress of Fx Fy Fz gx gy gz{note})")
     if args.report is None:
         return []
     from ..report.views import render_field_pngs
     from rodlab.view3d import RenderError
     try:
-        return render_field_pngs(path, path.with_suffix(""), colour="displacement")
+        return render_field_pngs(path, path.with_suffix(""))
     except RenderError as e:
         print(f"  note: no 3-D views in the report: {e}")
         return []

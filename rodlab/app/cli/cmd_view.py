@@ -35,7 +35,8 @@ def register(sub) -> None:
                    help=f"load case: x, y, z (unit force along x, y, z of {{T}}) or one of {', '.join(LOAD_KEYS)} "
                         "(gx: 1 g0 along x); default y")
     p.add_argument("--colour", "--color", dest="colour", choices=["stress", "displacement"], default="stress",
-                   help="colour by von Mises stress (default; solid model) or by displacement")
+                   help="colour by von Mises stress (default; solid: at the nodes, frame: the sections' outer fibre) "
+                        "or by displacement")
     p.add_argument("--scale", type=_scale, default=None, metavar="auto|FACTOR",
                    help="displacement exaggeration (default auto: the largest displacement 8 %% of the rod's size)")
     p.add_argument("--view", choices=list(CAMERAS), default="auto",

@@ -13,6 +13,8 @@ __all__ = ["render_run", "is_run_folder", "read_run"]
 
 #: scale of the CAD views on the page: the four views side by side at one pixel scale
 _CAD_SCALE = 0.5
+#: the 3-D field views (1400 px wide) at the page's full width, so that their captions and colour bar read
+_VIEW_SCALE = 0.78
 
 
 def is_run_folder(run_dir) -> bool:
@@ -30,12 +32,13 @@ def _fea_views(run: Path, files: dict, fea: dict) -> str:
     if not fields:
         return ""
     head = (f"<p>The fields of the unit forces at the ball in 3-D: the deformed rod (exaggerated) over its undeformed "
-            f"outline, coloured by von Mises stress (solid model) or displacement (frame); all six load cases are in "
+            f"outline, coloured by von Mises stress (solid model: at the nodes; frame: the sections' outer fibre, from the "
+            f"beam's section forces); all six load cases are in "
             f"<code>{html.escape(fields)}</code> for ParaView or <code>rodlab view</code>.</p>")
     views = files.get("fea_views") or []
     if not views:
         return head + f"<p class=note>No pictures: {html.escape(fea.get('views_note') or 'not rendered')}</p>"
-    return head + "<div class=views>" + "".join(f"<figure>{img_tag(run, v, f'3-D view {v}', 0.45)}</figure>"
+    return head + "<div class=views>" + "".join(f"<figure>{img_tag(run, v, f'3-D view {v}', _VIEW_SCALE)}</figure>"
                                                for v in views) + "</div>"
 
 
@@ -128,7 +131,19 @@ def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
             "and the validation instrument's noise. The whole study: <code>study/study.html</code>.</p>"
             "<table><tr><th>design</th><th>c_rod um</th><th>mass g</th><th>method</th><th>mean mm</th>"
             f"<th>90 % band mm</th><th>max mm</th><th>budget % (defl. / ident. / noise)</th></tr>{rows}</table>"
-            + img_tag(run, files.get("study_pareto"), "study Pareto fronts"))
+            + img_tag(run, files.get("study_pareto"), "study Pareto fronts") + _study_views(run, files))
+
+
+def _study_views(run: Path, files: dict) -> str:
+    """The recommended design's frame centreline in 3-D under its weakest unit force (``rodlab study`` draws it
+    beside ``recommended.vtp`` where pyvista renders), coloured by the sections' von Mises stress."""
+    pngs = files.get("study_views") or []
+    if not pngs:
+        return ""
+    return ("<p>The recommended design under the unit force that moves its ball most (frame model, displacement "
+            "exaggerated, coloured by the sections' outer-fibre von Mises stress; all six load cases in "
+            "<code>study/recommended.vtp</code>):</p>"
+            + "".join(img_tag(run, p, f"3-D view {p}", _VIEW_SCALE) for p in pngs))
 
 
 def _evidence(f: dict) -> str:

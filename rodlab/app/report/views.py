@@ -57,7 +57,7 @@ def solid_views(design: RodDesign, result, fields: str | Path, prefix: str | Pat
 
 def frame_views(design: RodDesign, fields: str | Path, prefix: str | Path | None = None, loads=VIEW_LOADS) -> FieldViews:
     """The frame model's centreline fields (``.vtp``) and their pictures (``loads``: load cases, or
-    ``"weakest"``), coloured by displacement (a beam model has no stress field)."""
+    ``"weakest"``), coloured by the sections' outer-fibre von Mises stress (from the beam's section forces)."""
     from rodlab.fea.fields import write_frame_fields
     path = write_frame_fields(fields, design)
-    return _render(path, Path(prefix) if prefix else path.with_suffix(""), "displacement", loads)
+    return _render(path, Path(prefix) if prefix else path.with_suffix(""), "stress", loads)

@@ -11,7 +11,11 @@ identified parameters by ``A y``, ``A = (J^T J + L^T L)^-1 J^T`` with ``J`` the 
   (:func:`calibrate.observations.noise_covariance`);
 - what the compensation leaves of the rod's deflection: the offsets are linear in the compliance (Eq. 19,
   :func:`calibrate.compensation.deflection_basis` ``B``), so the error is the *bias*
-  ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior.
+  ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior;
+- what neither the model nor any compensation describes, drawn per draw and added to the data as Monte Carlo
+  adds it: the rod's non-repeatable deflection (:mod:`calibrate.rod_slip`, ``priors.rod_slip``) and the robot's
+  own unmodelled error at the campaign's poses (``priors.robot_floor_mm``, one
+  :class:`~calibrate.simulate.RobotFloor` per draw).
 
 On the validation configurations (base and tool refitted: the projection ``P`` off their 9 columns) the error
 of the identified model is ``e = P J_v (E A y - xi) + P n`` (``E`` picks the kinematic parameters, ``n`` the
@@ -36,7 +40,8 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
 
 from .campaign import Fixture
-from .compensation import deflection_basis
+from .compensation import deflection_basis, flange_loads
+from .rod_slip import slip_directions
 from .identify import _free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -349,6 +354,46 @@ def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
     return float(np.hypot(priors.instrument_noise_mm, floor_sd))
 
 
+def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
+                    priors: Priors, true: np.ndarray, seed: int) -> np.ndarray:
+    """(D, 3N) [mm] per draw, what neither the model nor the compensation describes in the campaign's data: the
+    rod's slip (:func:`calibrate.rod_slip.slip_offsets` with each draw's true ``C_g``, directions from a
+    generator of their own) and the robot floor at the campaign's poses (the ball's offset from one
+    :class:`~calibrate.simulate.RobotFloor` per draw, seeds ``seed + d`` as Monte Carlo's replicates)."""
+    D = true.shape[0]
+    out = np.zeros((D, lc.J.shape[0]))
+    if not (priors.rod_slip or priors.robot_floor_mm > 0):
+        return out
+    model = linearisation_model(robot, reference.tool_mm, base, priors)
+    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
+    if priors.rod_slip:
+        R_TW, _, _ = flange_loads(robot, model, obs.q_rad, obs.force_W_N, reference.mass_kg, reference.com_T_mm)
+        u = slip_directions(np.random.default_rng([seed, 46]), D * R_TW.shape[0]).reshape(D, -1, 3)
+        Cg = true[:, 9:].reshape(D, 3, 3)
+        out += priors.rod_slip * np.einsum("nij,djk,dnk->dni", R_TW, Cg, u).reshape(D, -1)
+    if priors.robot_floor_mm > 0:
+        p0, _ = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+        for d, fl in enumerate(cached_floor_draws(robot, priors.robot_floor_mm, D, seed)):
+            p1, _ = ball_positions(robot, model, fl.angles(obs.q_rad), obs.rod_mass_kg, obs.rod_com_T_mm,
+                                   obs.force_W_N)
+            out[d] += (p1.pW - p0.pW).ravel()
+    return out
+
+
+_FLOORS: dict = {}
+
+
+def cached_floor_draws(robot, floor_mm: float, draws: int, seed: int = 0) -> list:
+    """:func:`calibrate.simulate.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
+    design."""
+    from .simulate import robot_floor
+    key = (repr(robot), float(floor_mm), int(draws), int(seed))
+    if key not in _FLOORS:
+        _FLOORS.clear()
+        _FLOORS[key] = [robot_floor(robot, floor_mm, seed + d) for d in range(int(draws))]
+    return _FLOORS[key]
+
+
 def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
     """(K, P): the identified kinematic parameters from the free ones."""
     E = np.zeros((K, lc.J.shape[1]))
@@ -357,13 +402,16 @@ def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
     return E
 
 
-def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd) -> float:
+def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None) -> float:
     """Mean-square validation error [mm^2] over the draws' compliances, regularisations and validation sets,
     the Gaussian parts (campaign noise, the truth's spread) by their covariance:
-    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``)."""
+    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``); the data's bias per draw is what
+    the compensation leaves, ``B vec(C_true - C_file)`` (``dC`` (D, 18)), plus ``extra`` (D, 3N) [mm] (the
+    rod's slip, the robot floor at the campaign's poses; None: none)."""
     EA = E @ A                                                        # (D, K, 3N)
     R = EA @ lc.J_kin - np.eye(E.shape[0])
-    v = _mv(EA, dC @ lc.B.T) + R @ mean                               # (D, K) mean kinematic error
+    bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
+    v = _mv(EA, bias) + R @ mean                                      # (D, K) mean kinematic error
     bias = np.sum(_mv(vd.PJ, v) ** 2, axis=1)
     cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + EA @ lc.Sigma @ np.swapaxes(EA, 1, 2)
     return float(np.mean(bias + np.sum(W * cov, axis=(1, 2)))) / vd.points
@@ -392,21 +440,22 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     D, K = vd.PJ.shape[0], vd.PJ.shape[2]
     mean, sd = robot_prior(robot, priors)
     rnd = _random_parts(lc, vd, mean, sd, priors, seed)
-    _, dC, _ = compliance_draws(reference, calc, methods, priors, D, seed)
+    _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
+    extra = _campaign_extra(robot, lc, plan_q, fixture, base, reference, priors, true, seed)
     W = vd.W
     E = _to_kin(lc, K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
-    y_robot = rnd.xi @ lc.J_kin.T + rnd.eps
+    y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     A_true = lc.gains(y_robot, rough=True)
-    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd) + ms_noise
+    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
         A = lc.gains(y, rough=m is not Method.NONE)
         delta = _mv(A, y) @ E.T - rnd.xi
         means, maxs, medians = _stats(_mv(vd.PJ, delta) + rnd.Pn)
-        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd) + ms_noise
+        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
                                    float(np.sqrt(ms)), _budget(ms, ms_true, ms_noise), D, 0,

@@ -214,12 +214,14 @@ class ValidationDraws:
 
     PJ : (D, 3M, K) the projected Jacobian ``P J_v`` w.r.t. the kinematic parameters [mm per internal unit];
     Q : (D, 3M, 9) orthonormal basis of the base / tool columns (``P = I - Q Q^T``); W : (D, K, K)
-    ``(P J_v)^T P J_v``
+    ``(P J_v)^T P J_v``; q_rad : (D, M, n) the configurations [rad] (None: not kept; the robot floor is then
+    isotropic scatter, :func:`_validation_sd`)
     """
 
     PJ: np.ndarray
     Q: np.ndarray
     W: np.ndarray
+    q_rad: np.ndarray | None = None
 
     @property
     def points(self) -> int:
@@ -244,7 +246,7 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     Jb = position_jacobian(fr, tau, bt, model.base).reshape(D, M * 3, len(bt))
     Q, _ = np.linalg.qr(Jb)
     PJ = Jv - Q @ (np.swapaxes(Q, 1, 2) @ Jv)
-    return ValidationDraws(PJ, Q, np.swapaxes(PJ, 1, 2) @ PJ)
+    return ValidationDraws(PJ, Q, np.swapaxes(PJ, 1, 2) @ PJ, vq.reshape(D, M, robot.n))
 
 
 _CACHE: dict = {}
@@ -345,10 +347,13 @@ def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Pri
 
 
 def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
-    """Per-coordinate scatter of a validation point [mm]: the instrument's noise and, added in quadrature, the
-    robot's own unmodelled error (``priors.robot_floor_mm``, the mean error of a perfect calibration on the
-    validation points: an isotropic error whose projected mean norm is that floor). The floor is left out of the
-    campaign here (the Monte-Carlo path, ``--monte-carlo``, realises it as smooth joint errors in both)."""
+    """Per-coordinate scatter of a validation point [mm]: the instrument's noise; when the validation
+    configurations are not kept (``vd.q_rad`` None) also, added in quadrature, the robot's own unmodelled error
+    (``priors.robot_floor_mm``, as an isotropic error whose projected mean norm is that floor). With them the
+    floor is realised instead, the same :class:`~calibrate.simulate.RobotFloor` per draw in the campaign and on
+    validation (:func:`_validation_floor`), as Monte Carlo does."""
+    if vd.q_rad is not None:
+        return float(priors.instrument_noise_mm)
     M, q = vd.points, vd.Q.shape[2]
     floor_sd = priors.robot_floor_mm / np.sqrt(8.0 / np.pi) / np.sqrt(max(3 * M - q, 1) / (3 * M))
     return float(np.hypot(priors.instrument_noise_mm, floor_sd))
@@ -380,6 +385,23 @@ def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, b
     return out
 
 
+def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> np.ndarray | None:
+    """(D, 3M) [mm] the robot floor's offsets of the validation points, base and tool refitted (projected
+    by ``P``), one :class:`~calibrate.simulate.RobotFloor` per draw (the campaign's, :func:`_campaign_extra`);
+    None without a floor or without the configurations."""
+    if not priors.robot_floor_mm > 0 or vd.q_rad is None:
+        return None
+    mass, com = _VALIDATION_MASS
+    model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
+    D = vd.q_rad.shape[0]
+    e = np.empty(vd.PJ.shape[:2])
+    for d, fl in enumerate(cached_floor_draws(robot, priors.robot_floor_mm, D, seed)):
+        p0, _ = ball_positions(robot, model, vd.q_rad[d], mass, np.asarray(com, float))
+        p1, _ = ball_positions(robot, model, fl.angles(vd.q_rad[d]), mass, np.asarray(com, float))
+        e[d] = (p1.pW - p0.pW).ravel()
+    return e - _mv(vd.Q, _mv(np.swapaxes(vd.Q, 1, 2), e))
+
+
 _FLOORS: dict = {}
 
 
@@ -402,17 +424,20 @@ def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
     return E
 
 
-def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None) -> float:
+def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None, val_extra=None
+              ) -> float:
     """Mean-square validation error [mm^2] over the draws' compliances, regularisations and validation sets,
     the Gaussian parts (campaign noise, the truth's spread) by their covariance:
     ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``); the data's bias per draw is what
     the compensation leaves, ``B vec(C_true - C_file)`` (``dC`` (D, 18)), plus ``extra`` (D, 3N) [mm] (the
-    rod's slip, the robot floor at the campaign's poses; None: none)."""
+    rod's slip, the robot floor at the campaign's poses; None: none) and on validation ``val_extra`` (D, 3M)
+    [mm] (the robot floor there, projected; None: none)."""
     EA = E @ A                                                        # (D, K, 3N)
     R = EA @ lc.J_kin - np.eye(E.shape[0])
     bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
     v = _mv(EA, bias) + R @ mean                                      # (D, K) mean kinematic error
-    bias = np.sum(_mv(vd.PJ, v) ** 2, axis=1)
+    ev = _mv(vd.PJ, v) if val_extra is None else _mv(vd.PJ, v) + val_extra
+    bias = np.sum(ev ** 2, axis=1)
     cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + EA @ lc.Sigma @ np.swapaxes(EA, 1, 2)
     return float(np.mean(bias + np.sum(W * cov, axis=(1, 2)))) / vd.points
 
@@ -446,22 +471,25 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     E = _to_kin(lc, K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
+    vf = _validation_floor(robot, vd, priors, seed)
+    Pn = rnd.Pn if vf is None else rnd.Pn + vf                        # validation scatter: noise and floor
+    ms_clean = ms_noise if vf is None else ms_noise + float(np.mean(np.sum(vf ** 2, axis=1))) / M
     y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     A_true = lc.gains(y_robot, rough=True)
-    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra) + ms_noise
+    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
         A = lc.gains(y, rough=m is not Method.NONE)
         delta = _mv(A, y) @ E.T - rnd.xi
-        means, maxs, medians = _stats(_mv(vd.PJ, delta) + rnd.Pn)
-        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra) + ms_noise
+        means, maxs, medians = _stats(_mv(vd.PJ, delta) + Pn)
+        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
-                                   float(np.sqrt(ms)), _budget(ms, ms_true, ms_noise), D, 0,
+                                   float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,
                                    tuple(float(v) for v in means)))
-    nominal = _stats(rnd.Pn - _mv(vd.PJ, rnd.xi))[0]
-    return LinearPrediction(out, float(nominal.mean()), float(ms_noise), D)
+    nominal = _stats(Pn - _mv(vd.PJ, rnd.xi))[0]
+    return LinearPrediction(out, float(nominal.mean()), float(ms_clean), D)
 
 
 def _budget(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:

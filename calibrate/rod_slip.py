@@ -17,7 +17,7 @@ Size. The paper publishes no hysteresis of the rods, only its consequences: its 
 (Fig. 8) cross the load axis at ~1 N on both rods (friction), the carbon rods' r_rod grows with creep in the
 bonds (3#: 2.30), and Table 3's rods end above what elastic deflection and the robot's own error explain, the
 more the softer the rod (4# Meas 0.451 mm against a laser-scanner floor of 0.263 mm). ``slip`` is fitted to
-Table 3 (docs/study.md); the fit is about 2, i.e. an error about twice the rod's own gravity deflection: larger
+Table 3 (docs/study.md); the fit is 2.4, i.e. an error more than twice the rod's own gravity deflection: larger
 than the elastic hysteresis of bonded joints explains (tens of %), so it stands for all the rod-related error
 that grows with compliance and that Eq. 19 does not describe.
 """

@@ -71,12 +71,11 @@ def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4):
     assert slipped[Method.NONE] > slipped[Method.FEA]
 
 
-@pytest.mark.slow
 def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4):
     """Steel rod 4#, the robot floor of the paper and the default slip in both paths: the linear predictor's
     mean within 3 Monte-Carlo standard errors plus 5 % of the Monte-Carlo mean (none and fea)."""
     robot, fixture, plan, rod = rod4
-    pri = Priors(r_rod=(1.01, 1.05), validation_points=50, robot_floor_mm=0.263, rod_slip=2.0)
+    pri = Priors(r_rod=(1.01, 1.05), validation_points=50, robot_floor_mm=0.263, rod_slip=2.4)
     R = 12
     mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
                                                 pri, replicates=R, seed=0, budget=False)}

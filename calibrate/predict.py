@@ -215,7 +215,7 @@ def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, f
     fr, _ = ball_positions(robot, truth, qt, reference.mass_kg, reference.com_T_mm, F)
     pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     if priors.rod_slip:                                              # the rod's non-repeatable part
-        u = slip_directions(slip_rng or np.random.default_rng(), len(q))
+        u = slip_directions(rng if slip_rng is None else slip_rng, len(q))
         pW = pW + slip_offsets(robot, truth, qt, F, rod_true, priors.rod_slip, u)
     st, sr = priors.fixture_sigma
     xD = np.empty_like(pW)

@@ -40,14 +40,14 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
 
 from .campaign import Fixture
-from .compensation import deflection_basis, flange_loads
-from .rod_slip import slip_directions
+from .compensation import deflection_basis
 from .identify import _free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
 from .predict import _VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .unmodelled import campaign_offsets, validation_floor_offsets
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
@@ -361,59 +361,23 @@ def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
 
 def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
                     priors: Priors, true: np.ndarray, seed: int) -> np.ndarray:
-    """(D, 3N) [mm] per draw, what neither the model nor the compensation describes in the campaign's data: the
-    rod's slip (:func:`calibrate.rod_slip.slip_offsets` with each draw's true ``C_g``, directions from a
-    generator of their own) and the robot floor at the campaign's poses (the ball's offset from one
-    :class:`~calibrate.simulate.RobotFloor` per draw, seeds ``seed + d`` as Monte Carlo's replicates)."""
-    D = true.shape[0]
-    out = np.zeros((D, lc.J.shape[0]))
+    """(D, 3N) [mm] per draw: the rod's slip and the robot floor in the campaign's data
+    (:func:`calibrate.unmodelled.campaign_offsets`)."""
     if not (priors.rod_slip or priors.robot_floor_mm > 0):
-        return out
+        return np.zeros((true.shape[0], lc.J.shape[0]))
     model = linearisation_model(robot, reference.tool_mm, base, priors)
     obs = _campaign_observations(robot, model, plan_q, fixture, reference)
-    if priors.rod_slip:
-        R_TW, _, _ = flange_loads(robot, model, obs.q_rad, obs.force_W_N, reference.mass_kg, reference.com_T_mm)
-        u = slip_directions(np.random.default_rng([seed, 46]), D * R_TW.shape[0]).reshape(D, -1, 3)
-        Cg = true[:, 9:].reshape(D, 3, 3)
-        out += priors.rod_slip * np.einsum("nij,djk,dnk->dni", R_TW, Cg, u).reshape(D, -1)
-    if priors.robot_floor_mm > 0:
-        p0, _ = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-        for d, fl in enumerate(cached_floor_draws(robot, priors.robot_floor_mm, D, seed)):
-            p1, _ = ball_positions(robot, model, fl.angles(obs.q_rad), obs.rod_mass_kg, obs.rod_com_T_mm,
-                                   obs.force_W_N)
-            out[d] += (p1.pW - p0.pW).ravel()
-    return out
+    return campaign_offsets(robot, model, obs, priors, true, seed)
 
 
 def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> np.ndarray | None:
-    """(D, 3M) [mm] the robot floor's offsets of the validation points, base and tool refitted (projected
-    by ``P``), one :class:`~calibrate.simulate.RobotFloor` per draw (the campaign's, :func:`_campaign_extra`);
-    None without a floor or without the configurations."""
+    """(D, 3M) [mm] the robot floor on the validation points, projected (the campaign's floor of each draw,
+    :func:`calibrate.unmodelled.validation_floor_offsets`); None without a floor or without the configurations."""
     if not priors.robot_floor_mm > 0 or vd.q_rad is None:
         return None
     mass, com = _VALIDATION_MASS
     model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
-    D = vd.q_rad.shape[0]
-    e = np.empty(vd.PJ.shape[:2])
-    for d, fl in enumerate(cached_floor_draws(robot, priors.robot_floor_mm, D, seed)):
-        p0, _ = ball_positions(robot, model, vd.q_rad[d], mass, np.asarray(com, float))
-        p1, _ = ball_positions(robot, model, fl.angles(vd.q_rad[d]), mass, np.asarray(com, float))
-        e[d] = (p1.pW - p0.pW).ravel()
-    return e - _mv(vd.Q, _mv(np.swapaxes(vd.Q, 1, 2), e))
-
-
-_FLOORS: dict = {}
-
-
-def cached_floor_draws(robot, floor_mm: float, draws: int, seed: int = 0) -> list:
-    """:func:`calibrate.simulate.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
-    design."""
-    from .simulate import robot_floor
-    key = (repr(robot), float(floor_mm), int(draws), int(seed))
-    if key not in _FLOORS:
-        _FLOORS.clear()
-        _FLOORS[key] = [robot_floor(robot, floor_mm, seed + d) for d in range(int(draws))]
-    return _FLOORS[key]
+    return validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm, seed)
 
 
 def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:

@@ -375,9 +375,18 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
     :func:`calibrate.unmodelled.validation_floor_offsets`); None without a floor or without the configurations."""
     if not priors.robot_floor_mm > 0 or vd.q_rad is None:
         return None
-    mass, com = _VALIDATION_MASS
-    model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
-    return validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm, seed)
+    key = (repr(robot), float(priors.robot_floor_mm), tuple(priors.joint_compliance), int(seed),
+           hash(vd.q_rad.tobytes()))
+    if key not in _VFLOOR:                            # the same for every design: kept for the next one
+        mass, com = _VALIDATION_MASS
+        model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
+        _VFLOOR.clear()
+        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm,
+                                                seed)
+    return _VFLOOR[key]
+
+
+_VFLOOR: dict = {}
 
 
 def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:

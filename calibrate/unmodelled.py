@@ -48,11 +48,13 @@ def campaign_offsets(robot, model: ModelParams, obs: Observations, priors, true_
         Cg = true_C[:, 9:].reshape(D, 3, 3)
         out += priors.rod_slip * np.einsum("nij,djk,dnk->dni", R_TW, Cg, u).reshape(D, -1)
     if priors.robot_floor_mm > 0:
-        p0, _ = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-        for d, fl in enumerate(cached_floor_draws(robot, priors.robot_floor_mm, D, seed)):
-            p1, _ = ball_positions(robot, model, fl.angles(obs.q_rad), obs.rod_mass_kg, obs.rod_com_T_mm,
-                                   obs.force_W_N)
-            out[d] += (p1.pW - p0.pW).ravel()
+        N = obs.q_rad.shape[0]
+        floors = cached_floor_draws(robot, priors.robot_floor_mm, D, seed)
+        q = np.concatenate([obs.q_rad] + [fl.angles(obs.q_rad) for fl in floors])     # one batch: (1 + D) N
+        F = np.tile(obs.force_W_N, (D + 1, 1))
+        p, _ = ball_positions(robot, model, q, obs.rod_mass_kg, obs.rod_com_T_mm, F)
+        pW = p.pW.reshape(D + 1, N, 3)
+        out += (pW[1:] - pW[:1]).reshape(D, -1)
     return out
 
 
@@ -61,11 +63,11 @@ def validation_floor_offsets(robot, model: ModelParams, q_rad: np.ndarray, mass_
     """(D, 3M) [mm] the robot floor's offsets of the validation points ``q_rad`` (D, M, n) of the validation
     rod (``model``'s tool, its mass and centre of mass), one floor per draw (the campaign's), projected off the
     base / tool columns ``Q`` (D, 3M, 9) as the validation's refit takes them out."""
-    D = q_rad.shape[0]
-    e = np.empty((D, 3 * q_rad.shape[1]))
+    D, M, n = q_rad.shape
     com = np.asarray(com_T_mm, float)
-    for d, fl in enumerate(cached_floor_draws(robot, floor_mm, D, seed)):
-        p0, _ = ball_positions(robot, model, q_rad[d], mass_kg, com)
-        p1, _ = ball_positions(robot, model, fl.angles(q_rad[d]), mass_kg, com)
-        e[d] = (p1.pW - p0.pW).ravel()
+    floors = cached_floor_draws(robot, floor_mm, D, seed)
+    q1 = np.concatenate([fl.angles(q_rad[d]) for d, fl in enumerate(floors)])
+    p0, _ = ball_positions(robot, model, q_rad.reshape(D * M, n), mass_kg, com)
+    p1, _ = ball_positions(robot, model, q1, mass_kg, com)
+    e = (p1.pW - p0.pW).reshape(D, 3 * M)
     return e - (Q @ (np.swapaxes(Q, 1, 2) @ e[:, :, None]))[:, :, 0]

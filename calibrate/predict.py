@@ -13,6 +13,9 @@ One *replicate* is one campaign as it happens in practice (paper Section 5.2), s
    ``none``; ``calc`` (closed form) and ``fea`` (the reference), both off by the true ``r_rod``; ``meas``, the
    rig's ``r_rod`` within its fit's uncertainty times the reference (paper Eq. 22); then validation.
 
+With ``priors.rod_slip`` the true rod's deflection is off its elastic one at every point by a random
+non-repeatable part (:mod:`calibrate.rod_slip`); no method compensates it, so it counts as identification error.
+
 The error budget of each method splits its mean-square validation error (:class:`AccuracySummary`):
 ``deflection`` — what the compensation leaves of the rod's deflection (this method minus calibrating with the
 true rod's compliance); ``identification`` — the campaign's noise and fixture uncertainty propagated through
@@ -33,6 +36,7 @@ from rodlab.frames import pose_to_matrix
 from .campaign import Fixture, PointSet
 from .compensation import Compensation, deflection_offsets
 from .errors import CalibrationError
+from .rod_slip import slip_directions, slip_offsets
 from .identify import Observations, identify
 from .ik import solve_ik_positions
 from .kinematics import ModelParams, ball_positions
@@ -66,6 +70,8 @@ class Priors:
     validation_points : configurations of the validation set
     robot_floor_mm : the robot's own unmodelled error (:class:`~rodlab.calibrate.simulate.RobotFloor`: smooth
         joint-angle errors whose mean on rigid-tool validation is this) [mm]; 0 = none
+    rod_slip : the rod's non-repeatable deflection (:mod:`~rodlab.calibrate.rod_slip`: slip and hysteresis in
+        its joints), as the deflection under this many times its own weight in a random direction [-]; 0 = elastic
     """
 
     error_scale: float = 1.0
@@ -79,10 +85,11 @@ class Priors:
     meas_sigma: float = 0.01
     validation_points: int = 100
     robot_floor_mm: float = 0.0
+    rod_slip: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ("error_scale", "device_noise_mm", "instrument_noise_mm", "alignment_mm", "meas_sigma",
-                    "shape_sigma", "robot_floor_mm"):
+                    "shape_sigma", "robot_floor_mm", "rod_slip"):
             v = getattr(self, key)
             if not np.isfinite(v) or v < 0:
                 raise CalibrationError(f"must be a finite number >= 0, got {v!r}", key=key)
@@ -199,13 +206,17 @@ class SimulatedCampaign:
                             dict(self.true_T))
 
 
-def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor=None) -> SimulatedCampaign:
+def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor=None, slip_rng=None
+              ) -> SimulatedCampaign:
     q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
     qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
     fr, _ = ball_positions(robot, truth, qt, reference.mass_kg, reference.com_T_mm, F)
     pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
+    if priors.rod_slip:                                              # the rod's non-repeatable part
+        u = slip_directions(rng if slip_rng is None else slip_rng, len(q))
+        pW = pW + slip_offsets(robot, truth, qt, F, rod_true, priors.rod_slip, u)
     st, sr = priors.fixture_sigma
     xD = np.empty_like(pW)
     recorded = {}
@@ -301,7 +312,8 @@ def simulate_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: R
     truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
     r_true, rod_true = _true_rod(reference, priors, rng)
     floor = robot_floor(robot, priors.robot_floor_mm, seed)           # None at 0: the same draws as without
-    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor)
+    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor,
+                     np.random.default_rng([seed, 46]))
     pts, pts_exact = _validation(robot, truth, priors, rng, floor)
     files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)
     return SimulatedReplicate(truth, r_true, rod_true, camp, pts, pts_exact, files)

@@ -11,7 +11,11 @@ identified parameters by ``A y``, ``A = (J^T J + L^T L)^-1 J^T`` with ``J`` the 
   (:func:`calibrate.observations.noise_covariance`);
 - what the compensation leaves of the rod's deflection: the offsets are linear in the compliance (Eq. 19,
   :func:`calibrate.compensation.deflection_basis` ``B``), so the error is the *bias*
-  ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior.
+  ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior;
+- what neither the model nor any compensation describes, drawn per draw and added to the data as Monte Carlo
+  adds it: the rod's non-repeatable deflection (:mod:`calibrate.rod_slip`, ``priors.rod_slip``) and the robot's
+  own unmodelled error at the campaign's poses (``priors.robot_floor_mm``, one
+  :class:`~calibrate.simulate.RobotFloor` per draw).
 
 On the validation configurations (base and tool refitted: the projection ``P`` off their 9 columns) the error
 of the identified model is ``e = P J_v (E A y - xi) + P n`` (``E`` picks the kinematic parameters, ``n`` the
@@ -43,6 +47,7 @@ from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
 from .predict import _VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .unmodelled import campaign_offsets, validation_floor_offsets
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
@@ -209,12 +214,14 @@ class ValidationDraws:
 
     PJ : (D, 3M, K) the projected Jacobian ``P J_v`` w.r.t. the kinematic parameters [mm per internal unit];
     Q : (D, 3M, 9) orthonormal basis of the base / tool columns (``P = I - Q Q^T``); W : (D, K, K)
-    ``(P J_v)^T P J_v``
+    ``(P J_v)^T P J_v``; q_rad : (D, M, n) the configurations [rad] (None: not kept; the robot floor is then
+    isotropic scatter, :func:`_validation_sd`)
     """
 
     PJ: np.ndarray
     Q: np.ndarray
     W: np.ndarray
+    q_rad: np.ndarray | None = None
 
     @property
     def points(self) -> int:
@@ -239,7 +246,7 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     Jb = position_jacobian(fr, tau, bt, model.base).reshape(D, M * 3, len(bt))
     Q, _ = np.linalg.qr(Jb)
     PJ = Jv - Q @ (np.swapaxes(Q, 1, 2) @ Jv)
-    return ValidationDraws(PJ, Q, np.swapaxes(PJ, 1, 2) @ PJ)
+    return ValidationDraws(PJ, Q, np.swapaxes(PJ, 1, 2) @ PJ, vq.reshape(D, M, robot.n))
 
 
 _CACHE: dict = {}
@@ -340,13 +347,46 @@ def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Pri
 
 
 def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
-    """Per-coordinate scatter of a validation point [mm]: the instrument's noise and, added in quadrature, the
-    robot's own unmodelled error (``priors.robot_floor_mm``, the mean error of a perfect calibration on the
-    validation points: an isotropic error whose projected mean norm is that floor). The floor is left out of the
-    campaign here (the Monte-Carlo path, ``--monte-carlo``, realises it as smooth joint errors in both)."""
+    """Per-coordinate scatter of a validation point [mm]: the instrument's noise; when the validation
+    configurations are not kept (``vd.q_rad`` None) also, added in quadrature, the robot's own unmodelled error
+    (``priors.robot_floor_mm``, as an isotropic error whose projected mean norm is that floor). With them the
+    floor is realised instead, the same :class:`~calibrate.simulate.RobotFloor` per draw in the campaign and on
+    validation (:func:`_validation_floor`), as Monte Carlo does."""
+    if vd.q_rad is not None:
+        return float(priors.instrument_noise_mm)
     M, q = vd.points, vd.Q.shape[2]
     floor_sd = priors.robot_floor_mm / np.sqrt(8.0 / np.pi) / np.sqrt(max(3 * M - q, 1) / (3 * M))
     return float(np.hypot(priors.instrument_noise_mm, floor_sd))
+
+
+def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
+                    priors: Priors, true: np.ndarray, seed: int) -> np.ndarray:
+    """(D, 3N) [mm] per draw: the rod's slip and the robot floor in the campaign's data
+    (:func:`calibrate.unmodelled.campaign_offsets`)."""
+    if not (priors.rod_slip or priors.robot_floor_mm > 0):
+        return np.zeros((true.shape[0], lc.J.shape[0]))
+    model = linearisation_model(robot, reference.tool_mm, base, priors)
+    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
+    return campaign_offsets(robot, model, obs, priors, true, seed)
+
+
+def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> np.ndarray | None:
+    """(D, 3M) [mm] the robot floor on the validation points, projected (the campaign's floor of each draw,
+    :func:`calibrate.unmodelled.validation_floor_offsets`); None without a floor or without the configurations."""
+    if not priors.robot_floor_mm > 0 or vd.q_rad is None:
+        return None
+    key = (repr(robot), float(priors.robot_floor_mm), tuple(priors.joint_compliance), int(seed),
+           hash(vd.q_rad.tobytes()))
+    if key not in _VFLOOR:                            # the same for every design: kept for the next one
+        mass, com = _VALIDATION_MASS
+        model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
+        _VFLOOR.clear()
+        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm,
+                                                seed)
+    return _VFLOOR[key]
+
+
+_VFLOOR: dict = {}
 
 
 def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
@@ -357,14 +397,20 @@ def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
     return E
 
 
-def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd) -> float:
+def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None, val_extra=None
+              ) -> float:
     """Mean-square validation error [mm^2] over the draws' compliances, regularisations and validation sets,
     the Gaussian parts (campaign noise, the truth's spread) by their covariance:
-    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``)."""
+    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``); the data's bias per draw is what
+    the compensation leaves, ``B vec(C_true - C_file)`` (``dC`` (D, 18)), plus ``extra`` (D, 3N) [mm] (the
+    rod's slip, the robot floor at the campaign's poses; None: none) and on validation ``val_extra`` (D, 3M)
+    [mm] (the robot floor there, projected; None: none)."""
     EA = E @ A                                                        # (D, K, 3N)
     R = EA @ lc.J_kin - np.eye(E.shape[0])
-    v = _mv(EA, dC @ lc.B.T) + R @ mean                               # (D, K) mean kinematic error
-    bias = np.sum(_mv(vd.PJ, v) ** 2, axis=1)
+    bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
+    v = _mv(EA, bias) + R @ mean                                      # (D, K) mean kinematic error
+    ev = _mv(vd.PJ, v) if val_extra is None else _mv(vd.PJ, v) + val_extra
+    bias = np.sum(ev ** 2, axis=1)
     cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + EA @ lc.Sigma @ np.swapaxes(EA, 1, 2)
     return float(np.mean(bias + np.sum(W * cov, axis=(1, 2)))) / vd.points
 
@@ -392,27 +438,31 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     D, K = vd.PJ.shape[0], vd.PJ.shape[2]
     mean, sd = robot_prior(robot, priors)
     rnd = _random_parts(lc, vd, mean, sd, priors, seed)
-    _, dC, _ = compliance_draws(reference, calc, methods, priors, D, seed)
+    _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
+    extra = _campaign_extra(robot, lc, plan_q, fixture, base, reference, priors, true, seed)
     W = vd.W
     E = _to_kin(lc, K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
-    y_robot = rnd.xi @ lc.J_kin.T + rnd.eps
+    vf = _validation_floor(robot, vd, priors, seed)
+    Pn = rnd.Pn if vf is None else rnd.Pn + vf                        # validation scatter: noise and floor
+    ms_clean = ms_noise if vf is None else ms_noise + float(np.mean(np.sum(vf ** 2, axis=1))) / M
+    y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     A_true = lc.gains(y_robot, rough=True)
-    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd) + ms_noise
+    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
         A = lc.gains(y, rough=m is not Method.NONE)
         delta = _mv(A, y) @ E.T - rnd.xi
-        means, maxs, medians = _stats(_mv(vd.PJ, delta) + rnd.Pn)
-        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd) + ms_noise
+        means, maxs, medians = _stats(_mv(vd.PJ, delta) + Pn)
+        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
-                                   float(np.sqrt(ms)), _budget(ms, ms_true, ms_noise), D, 0,
+                                   float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,
                                    tuple(float(v) for v in means)))
-    nominal = _stats(rnd.Pn - _mv(vd.PJ, rnd.xi))[0]
-    return LinearPrediction(out, float(nominal.mean()), float(ms_noise), D)
+    nominal = _stats(Pn - _mv(vd.PJ, rnd.xi))[0]
+    return LinearPrediction(out, float(nominal.mean()), float(ms_clean), D)
 
 
 def _budget(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:

@@ -14,6 +14,8 @@ from .robotargs import add_robot_options, robot_from_args
 __all__ = ["register"]
 
 _METHODS = ("none", "calc", "fea", "meas")
+#: the default of --rod-slip (docs/study.md: fitted to Table 3's Meas column)
+ROD_SLIP = 2.4
 
 
 def register(sub) -> None:
@@ -59,6 +61,10 @@ def register(sub) -> None:
     p.add_argument("--robot-floor-mm", type=nonneg_float, default=0.0,
                    help="the robot's own unmodelled error: smooth joint-angle errors whose mean on rigid-tool "
                         "validation is this [mm] (paper, TX90 by laser scanner: 0.263; default 0 = none)")
+    p.add_argument("--rod-slip", type=nonneg_float, default=ROD_SLIP,
+                   help="the rod's non-repeatable deflection (slip, hysteresis in its joints; no compensation removes "
+                        "it): at every point the deflection under this many times its own weight in a random "
+                        f"direction (default {ROD_SLIP:g}, fitted to the paper's Table 3; 0 = elastic)")
     p.add_argument("--no-budget", action="store_true",
                    help="with --monte-carlo: skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",
@@ -138,7 +144,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     fixture = read_fixture(args.fixture) if args.fixture else standard_fixture()
     priors = Priors(error_scale=args.error_scale, device_noise_mm=args.device_noise,
                     instrument_noise_mm=args.instrument_noise, shape_sigma=args.shape_sigma,
-                    meas_sigma=args.meas_sigma, robot_floor_mm=args.robot_floor_mm)
+                    meas_sigma=args.meas_sigma, robot_floor_mm=args.robot_floor_mm,
+                    rod_slip=args.rod_slip)
     spec = StudySpec(methods, args.replicates, args.orientations, priors, _range2(args.r_prior_metal, "r-prior-metal"),
                      _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget,
                      args.monte_carlo, args.draws)

@@ -1,0 +1,86 @@
+"""The rod's non-repeatable deflection (calibrate.rod_slip, Priors.rod_slip, study --rod-slip): its size, its
+scaling with the compliance, and that both predictors carry it with every method."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rodlab.calc import calc_rod_compliance
+from rodlab.calibrate import resolve_robot
+from rodlab.calibrate.compensation import flange_loads
+from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.kinematics import ModelParams
+from rodlab.calibrate.plan import plan_poses
+from rodlab.calibrate.predict import Priors, predict_accuracy
+from rodlab.calibrate.predict_linear import predict_linear
+from rodlab.calibrate.rod_slip import slip_directions, slip_offsets
+from rodlab.calibrate.simulate import standard_base, standard_fixture
+from rodlab.design_io import resolve_design
+from rodlab.enums import Method
+
+
+@pytest.fixture(scope="module")
+def rod4():
+    robot = resolve_robot("tx90")
+    fixture = standard_fixture()
+    d = resolve_design("rod4")
+    rod = calc_rod_compliance(d)
+    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
+    return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod
+
+
+def test_slip_is_the_deflection_under_a_random_load_of_its_weight(rod4):
+    """In {T} the offset is slip * C_g u (a rotation to {W} keeps its length); it doubles with the compliance
+    and with slip, vanishes at 0, and its directions are N(0, I/3) (|u| ~ 1)."""
+    robot, fixture, plan, rod = rod4
+    q = np.concatenate(list(plan.values()))
+    p = ModelParams.nominal(robot, rod.tool_mm, base=standard_base())
+    F = np.zeros((q.shape[0], 3))
+    u = slip_directions(np.random.default_rng(1), q.shape[0])
+    off = slip_offsets(robot, p, q, F, rod, 2.0, u)
+    R_TW, _, _ = flange_loads(robot, p, q, F, rod.mass_kg, rod.com_T_mm)
+    np.testing.assert_allclose(np.einsum("nji,nj->ni", R_TW, off), 2.0 * u @ rod.C_g.T, atol=1e-12)
+    np.testing.assert_allclose(slip_offsets(robot, p, q, F, rod.scaled(2.0, Method.FEA), 1.0, u), off, atol=1e-12)
+    assert not slip_offsets(robot, p, q, F, rod, 0.0, u).any()
+    big = slip_directions(np.random.default_rng(2), 20000)
+    np.testing.assert_allclose(np.cov(big.T), np.eye(3) / 3, atol=0.01)
+
+
+def test_negative_slip_is_refused():
+    with pytest.raises(CalibrationError, match="rod_slip"):
+        Priors(rod_slip=-1.0)
+
+
+def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4):
+    """Linear predictor, files equal to the true rod: without slip FEA ends where the robot's own noise puts it;
+    with slip every method is worse by about the same, and a rod three times as compliant loses more."""
+    robot, fixture, plan, rod = rod4
+    exact = dict(r_rod=(1.0, 1.0), shape_sigma=0.0, meas_sigma=0.0, validation_points=30)
+
+    def mean(r, slip):
+        out = predict_linear(robot, plan, fixture, standard_base(), r, None, ["none", "fea", "meas"],
+                             Priors(rod_slip=slip, **exact), draws=128).summaries
+        return {a.method: a.mean_mm for a in out}
+    base, slipped = mean(rod, 0.0), mean(rod, 2.0)
+    soft = rod.scaled(3.0, Method.FEA)
+    soft0, soft2 = mean(soft, 0.0), mean(soft, 2.0)
+    for m in (Method.FEA, Method.MEAS):
+        assert slipped[m] > 1.5 * base[m]
+        assert soft2[m] - soft0[m] > 2 * (slipped[m] - base[m])
+    assert slipped[Method.FEA] == pytest.approx(slipped[Method.MEAS], rel=1e-6)   # the same files: same data
+    assert slipped[Method.NONE] > slipped[Method.FEA]
+
+
+def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4):
+    """Steel rod 4#, the robot floor of the paper and the default slip in both paths: the linear predictor's
+    mean within 3 Monte-Carlo standard errors plus 5 % of the Monte-Carlo mean (none and fea)."""
+    robot, fixture, plan, rod = rod4
+    pri = Priors(r_rod=(1.01, 1.05), validation_points=50, robot_floor_mm=0.263, rod_slip=2.4)
+    R = 12
+    mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
+                                                pri, replicates=R, seed=0, budget=False)}
+    lin = {a.method: a for a in predict_linear(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
+                                               pri, draws=256).summaries}
+    for m in (Method.NONE, Method.FEA):
+        se = np.std(mc[m].means_mm, ddof=1) / np.sqrt(R)
+        assert abs(lin[m].mean_mm - mc[m].mean_mm) <= 3 * se + 0.05 * mc[m].mean_mm, (m, lin[m], mc[m], se)

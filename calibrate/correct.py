@@ -1,17 +1,18 @@
 """A calibration made usable by a controller that keeps its nominal model (and its analytic IK): for TCP position
-targets (:func:`correct_targets`) or poses where the tool defines the orientation (:func:`correct_poses`), the joint commands that put the calibrated robot on each target, and the corrected targets to give
-the nominal controller instead (:func:`correct_targets`); and where the calibrated geometry breaks an
-analytic-IK assumption of the nominal one (:func:`ik_assumptions`: parallel or intersecting axes that are no
-longer exactly so).
+targets (:func:`correct_targets`) or poses where the tool defines the orientation (:func:`correct_poses`), the
+joint commands that put the calibrated robot on each target, and the corrected targets to give the nominal
+controller instead; and where the calibrated geometry breaks an analytic-IK assumption of the nominal one
+(:func:`ik_assumptions`: parallel or intersecting axes that are no longer exactly so).
 
 Targets are positions of the TCP (the calibration's tool point, or another point on the flange) in the frame
-the calibration measured in ({W}); both models carry the calibrated base there, so the nominal controller is
-assumed registered to that frame (its user frame), as a cell calibration does. The commands come from the
-project's batched position IK (:mod:`calibrate.ik`): first the nominal model's solution near the program's
-configuration (the seed), then the calibrated model's from there (pulled towards it: a position leaves a 6-joint
-arm three redundant degrees of freedom, so the tool's orientation is not a target and stays near the nominal
-solution's). The corrected target is the nominal model's TCP pose at the commands (position and flange
-orientation): a controller's pose IK of it returns the commands.
+the calibration measured in ({W}), for poses with the tool frame's orientation there; both models carry the
+calibrated base there, so the nominal controller is assumed registered to that frame (its user frame), as a
+cell calibration does. Position targets: the project's batched position IK (:mod:`calibrate.ik`), first the
+nominal model's solution near the program's configuration (the seed), then the calibrated model's from there
+(pulled towards it: a position leaves a 6-joint arm three redundant degrees of freedom, so the tool's
+orientation is not a target and stays near the nominal solution's). Pose targets: the same two steps with the
+6-D IK of :mod:`calibrate.ik_pose`. The corrected target is the nominal model's TCP pose at the commands
+(position and the flange's, or the tool frame's, orientation): a controller's pose IK of it returns the commands.
 """
 from __future__ import annotations
 

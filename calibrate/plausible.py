@@ -97,17 +97,19 @@ def excursions(res: "CalibrationResult") -> list[RangeHold]:
     return out
 
 
-def constrain_to_ranges(fit: Callable[[dict], "CalibrationResult"], pinned: dict | None = None
+def constrain_to_ranges(fit: Callable[[dict], "CalibrationResult"], pinned: dict | None = None, freed=()
                         ) -> tuple["CalibrationResult", dict]:
     """Fit with ``fit(pinned)``; while a joint-space parameter is outside its range by less than
     :data:`SIGNIFICANT_Z` standard uncertainties, hold it at the range's end and fit again. Returns the last
     result (its holds listed with the reason in ``unidentifiable`` and ``cautions``) and the pins it was fitted
-    with (the user's and the holds, for the cross-validation of the same model)."""
+    with (the user's and the holds, for the cross-validation of the same model). Parameters in ``freed`` (the
+    user's ``--free``) are never held: the user asked for the unconstrained estimate, and the range check judges it."""
     pins = dict(pinned or {})
     holds: list[RangeHold] = []
     res = fit(pins)
     for _ in range(MAX_ROUNDS):
-        new = [h for h in excursions(res) if h.z <= SIGNIFICANT_Z and h.name not in pins]
+        new = [h for h in excursions(res) if h.z <= SIGNIFICANT_Z and h.name not in pins
+               and h.name not in freed]
         if not new:
             break
         for h in new:

@@ -189,3 +189,46 @@ def test_a_significant_excursion_is_refused_an_insignificant_one_is_held():
     assert pins == {} and len(calls) == 1 and not res.cautions
     robot = resolve_robot("ur5")
     assert any("c_2" in w and "not a plausible gearbox compliance" in w for w in trust_warnings(robot, res))
+
+
+@pytest.mark.skipif(not (MUKCA / "dinova_1.sockets.csv").exists(), reason="MUKCa data not converted")
+def test_free_keeps_the_unconstrained_estimate_and_its_refusal(capsys):
+    """--free c_2 asks for the unconstrained joint-2 compliance: no hold, and the range check judges it."""
+    assert main(["calibrate", "--sockets", str(MUKCA / "dinova_1.sockets.csv"), "--robot", str(MUKCA / "gen3lite.urdf"),
+                 "--tip-link", "ball_link", "--fit-placements", "1,3", "--free", "c_2"]) == 3
+    err = capsys.readouterr().err
+    assert "c_2 = 0.000192" in err and "not a plausible gearbox compliance" in err and "c_2 held at" not in err
+
+
+@pytest.mark.skipif(not (MUKCA / "panda_6.sockets.csv").exists(), reason="MUKCa data not converted")
+@pytest.mark.parametrize("name, urdf, fit_on", [("panda_6", "panda.urdf", "1"), ("panda_7", "panda.urdf", "1"),
+                                                ("panda_2", "panda.urdf", "1,3,5,7,9"), ("panda_3", "panda.urdf", "1,3,5"),
+                                                ("kuka_14", "iiwa14.urdf", "1,3")])
+def test_real_panda_and_iiwa_sockets_are_trusted_without_holds(tmp_path, name, urdf, fit_on):
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--sockets", str(MUKCA / f"{name}.sockets.csv"), "--robot", str(MUKCA / urdf),
+                 "--tip-link", "ball_link", "--fit-placements", fit_on, "--json", str(out)]) == 0
+    cal = json.loads(out.read_text())
+    assert cal["trusted"] and cal["fit"]["completeness"]["verdict"] == "incomplete"
+    assert not any("end of its physical range" in u for u in cal["unidentifiable"])
+
+
+def test_real_ur5_grid_to_random_is_trusted(tmp_path, capsys):
+    """UR5 grid -> 20 random poses with default options: 0.428 -> 0.089 mm, trusted with its caution."""
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(DATA / "jacobi2025" / "ur5_grid.validation.csv"), "--robot", "ur5",
+                 "--validate", str(DATA / "jacobi2025" / "ur5_random.validation.csv"), "--json", str(out)]) == 0
+    pred = json.loads(out.read_text())["fit"]["prediction"]
+    assert pred["mean_mm"] < 0.1 and pred["nominal_mean_mm"] > 0.4
+    assert "caution (trusted): the model is incomplete" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_real_ur10_b_to_c_is_trusted(tmp_path):
+    """UR10 B -> C with default options (~30 s): 0.901 -> 0.441 mm, trusted."""
+    d = DATA / "landgraf2021"
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(d / "ur10_B.validation.csv"), "--robot", "ur10", "--validate",
+                 str(d / "ur10_C.validation.csv"), "--json", str(out)]) == 0
+    pred = json.loads(out.read_text())["fit"]["prediction"]
+    assert pred["mean_mm"] < 0.5 * pred["nominal_mean_mm"] and pred["clearly_better"]

@@ -183,7 +183,7 @@ def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> Calibr
     res, options["pinned"] = constrain_to_ranges(
         lambda pins: identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
                               fix_unidentifiable=not args.strict, **(options | {"pinned": pins}),
-                              expected_noise_mm=noise), options["pinned"])
+                              expected_noise_mm=noise), options["pinned"], options["freed"])
     run = CalibrationRun(robot, camp, res, observations=obs, options=options)
     if args.validate:
         pts = read_points(args.validate, robot.n)
@@ -380,7 +380,7 @@ def _calibrate_points(args) -> int:
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, options["pinned"] = constrain_to_ranges(
         lambda pins: identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict,
-                                     **(options | {"pinned": pins})), options["pinned"])
+                                     **(options | {"pinned": pins})), options["pinned"], options["freed"])
     before = after = None
     errors = {}
     if args.validate:

@@ -88,7 +88,7 @@ def run_sockets(args) -> SocketRun:
                                      robust=args.robust))
         return fits[-1].result
 
-    _, pins = constrain_to_ranges(fit_with, parse_pins(args.pin))
+    _, pins = constrain_to_ranges(fit_with, parse_pins(args.pin), args.free)
     fit = fits[-1]
     checks = {}
     for label, r in (("fit", fitted), ("held out", held)):

@@ -223,9 +223,8 @@ def test_real_ur5_grid_to_random_is_trusted(tmp_path, capsys):
     assert "caution (trusted): the model is incomplete" in capsys.readouterr().err
 
 
-@pytest.mark.slow
 def test_real_ur10_b_to_c_is_trusted(tmp_path):
-    """UR10 B -> C with default options (~30 s): 0.901 -> 0.441 mm, trusted."""
+    """UR10 B -> C with default options: 0.901 -> 0.441 mm, trusted."""
     d = DATA / "landgraf2021"
     out = tmp_path / "cal.json"
     assert main(["calibrate", "--points", str(d / "ur10_B.validation.csv"), "--robot", "ur10", "--validate",

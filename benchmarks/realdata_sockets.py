@@ -36,6 +36,7 @@ def _cell(c) -> str:
 def run_split(name: str, urdf: str, fit_on: list, theirs: str | None) -> list[str]:
     """One table row: the held-out checks of the nominal, rodlab's and (if any) the source's model."""
     from rodlab.calibrate import read_robot
+    from rodlab.calibrate.plausible import constrain_to_ranges
     from rodlab.calibrate.socket_check import check_sockets
     from rodlab.calibrate.socket_fit import identify_sockets, socket_start
     from rodlab.calibrate.sockets import read_sockets
@@ -44,7 +45,14 @@ def run_split(name: str, urdf: str, fit_on: list, theirs: str | None) -> list[st
     held = sorted(set(readings.placement.tolist()) - set(fit_on))
     test = readings.subset(held)
     t0 = time.perf_counter()
-    fit = identify_sockets(robot, readings.subset(fit_on), fix_unidentifiable=True)
+    fits = []                       # what the CLI runs: an insignificant excursion held at its range's end, refitted
+
+    def fit_with(pins):
+        fits.append(identify_sockets(robot, readings.subset(fit_on), pinned=pins, fix_unidentifiable=True))
+        return fits[-1].result
+
+    constrain_to_ranges(fit_with)
+    fit = fits[-1]
     seconds = time.perf_counter() - t0
     nominal, calibrated = check_sockets(robot, socket_start(robot, test), test), check_sockets(robot, fit.result.params,
                                                                                                 test)
@@ -66,6 +74,8 @@ def _verdict(res, nominal, calibrated) -> str:
     warnings = res.warnings + prediction_warnings(Prediction.of_validation(calibrated.spread_mm, nominal.spread_mm,
                                                                            res.rms_mm))
     complete = f"model {completeness(res)}, {res.residual_check.birge:.1f} x seat play"
+    held = [u.split(" ")[0] for u in res.unidentifiable if "end of its physical range" in u]
+    complete += f"; {', '.join(held)} held at the end of its range" if held else ""
     return ("trusted" if not warnings else "NOT TRUSTED (" + "; ".join(w.split(":")[0] for w in warnings[:2]) + ")") \
         + f"; {complete}"
 

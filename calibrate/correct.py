@@ -1,17 +1,18 @@
 """A calibration made usable by a controller that keeps its nominal model (and its analytic IK): for TCP position
-targets, the joint commands that put the calibrated robot on each target, and the corrected targets to give
-the nominal controller instead (:func:`correct_targets`); and where the calibrated geometry breaks an
-analytic-IK assumption of the nominal one (:func:`ik_assumptions`: parallel or intersecting axes that are no
-longer exactly so).
+targets (:func:`correct_targets`) or poses where the tool defines the orientation (:func:`correct_poses`), the
+joint commands that put the calibrated robot on each target, and the corrected targets to give the nominal
+controller instead; and where the calibrated geometry breaks an analytic-IK assumption of the nominal one
+(:func:`ik_assumptions`: parallel or intersecting axes that are no longer exactly so).
 
 Targets are positions of the TCP (the calibration's tool point, or another point on the flange) in the frame
-the calibration measured in ({W}); both models carry the calibrated base there, so the nominal controller is
-assumed registered to that frame (its user frame), as a cell calibration does. The commands come from the
-project's batched position IK (:mod:`calibrate.ik`): first the nominal model's solution near the program's
-configuration (the seed), then the calibrated model's from there (pulled towards it: a position leaves a 6-joint
-arm three redundant degrees of freedom, so the tool's orientation is not a target and stays near the nominal
-solution's). The corrected target is the nominal model's TCP pose at the commands (position and flange
-orientation): a controller's pose IK of it returns the commands.
+the calibration measured in ({W}), for poses with the tool frame's orientation there; both models carry the
+calibrated base there, so the nominal controller is assumed registered to that frame (its user frame), as a
+cell calibration does. Position targets: the project's batched position IK (:mod:`calibrate.ik`), first the
+nominal model's solution near the program's configuration (the seed), then the calibrated model's from there
+(pulled towards it: a position leaves a 6-joint arm three redundant degrees of freedom, so the tool's
+orientation is not a target and stays near the nominal solution's). Pose targets: the same two steps with the
+6-D IK of :mod:`calibrate.ik_pose`. The corrected target is the nominal model's TCP pose at the commands
+(position and the flange's, or the tool frame's, orientation): a controller's pose IK of it returns the commands.
 """
 from __future__ import annotations
 
@@ -19,13 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.frames import matrix_to_pose
+from rodlab.frames import matrix_to_pose, pose_to_matrix
 
 from .errors import CalibrationError
 from .ik import solve_ik_positions
+from .ik_pose import rotation_angle, solve_ik_poses, tcp_poses
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["Correction", "correct_targets", "AxisDeviation", "ik_assumptions"]
+__all__ = ["Correction", "correct_targets", "correct_poses", "AxisDeviation", "ik_assumptions"]
 
 
 @dataclass(frozen=True)
@@ -40,7 +42,10 @@ class Correction:
     residual_mm : shape=(M,) distance of the calibrated TCP at the commands from the target [mm] (the IK's own
     error); uncorrected_mm : shape=(M,) how far the calibrated robot's TCP lands from the target when the
     nominal model's IK solution is commanded [mm] (what the correction removes);
-    ok : shape=(M,) both IK solutions converged within the joint limits
+    ok : shape=(M,) both IK solutions converged within the joint limits;
+    for pose targets (:func:`correct_poses`) also residual_rad : shape=(M,) the angle between the calibrated TCP
+    frame at the commands and the target orientation [rad]; uncorrected_rad : shape=(M,) the same angle with the
+    nominal model's IK solution commanded [rad] (both None for position targets)
     """
 
     q_rad: np.ndarray
@@ -49,6 +54,8 @@ class Correction:
     residual_mm: np.ndarray
     uncorrected_mm: np.ndarray
     ok: np.ndarray
+    residual_rad: np.ndarray | None = None
+    uncorrected_rad: np.ndarray | None = None
 
 
 def _tcp(robot, params: ModelParams, q_rad) -> np.ndarray:
@@ -67,12 +74,38 @@ def correct_targets(robot, calibrated: ModelParams, nominal: ModelParams, target
     nom = solve_ik_positions(robot, nominal, targets, seeds, pos_tol_mm=tol_mm)
     cal = solve_ik_positions(robot, calibrated, targets, nom.q_rad, pos_tol_mm=tol_mm)
     uncorrected = np.linalg.norm(_tcp(robot, calibrated, nom.q_rad) - targets, axis=1)
-    fr, _ = ball_positions(robot, nominal, cal.q_rad)
-    R = np.einsum("ij,mjk->mik", fr.R_W0, fr.T[:, robot.n, :3, :3])
-    T = np.broadcast_to(np.eye(4), (len(targets), 4, 4)).copy()
+    corrected, abc = _nominal_pose(robot, nominal, cal.q_rad)
+    return Correction(cal.q_rad, corrected, abc, cal.error_mm, uncorrected, nom.ok & cal.ok)
+
+
+def _nominal_pose(robot, nominal: ModelParams, q_rad, R_tool=None) -> tuple[np.ndarray, np.ndarray]:
+    """The nominal model's TCP position [mm] and frame orientation (contract A, B, C [deg]) at ``q_rad``."""
+    p, R = tcp_poses(robot, nominal, q_rad, R_tool)
+    T = np.broadcast_to(np.eye(4), (len(p), 4, 4)).copy()
     T[:, :3, :3] = R
-    abc = np.array([matrix_to_pose(t)[3:] for t in T])
-    return Correction(cal.q_rad, fr.pW, abc, cal.error_mm, uncorrected, nom.ok & cal.ok)
+    return p, np.array([matrix_to_pose(t)[3:] for t in T])
+
+
+def correct_poses(robot, calibrated: ModelParams, nominal: ModelParams, targets_mm, abc_deg, q_seed_rad,
+                  R_tool=None, tol_mm: float = 1e-5, tol_rad: float = 1e-8) -> Correction:
+    """The commands and corrected targets of TCP poses: positions ``targets_mm`` [mm], shape=(M, 3), and
+    orientations ``abc_deg`` (contract A, B, C [deg]), shape=(M, 3), of the tool frame in {W} (the flange frame
+    rotated by ``R_tool``, identity by default), near ``q_seed_rad`` [rad]; 6-D IK (:mod:`calibrate.ik_pose`),
+    first on the nominal model, then on the calibrated one from there. The corrected target is the nominal
+    model's tool pose at the commands: a nominal controller's pose IK of it returns them."""
+    targets = np.atleast_2d(np.asarray(targets_mm, float))
+    abc = np.atleast_2d(np.asarray(abc_deg, float))
+    if targets.shape != abc.shape or targets.shape[1:] != (3,) or not np.all(np.isfinite(np.c_[targets, abc])):
+        raise CalibrationError(f"pose targets must be finite positions and A, B, C angles, shape (M, 3) each, got "
+                               f"{targets.shape} and {abc.shape}", key="targets")
+    R_t = np.array([pose_to_matrix(np.r_[0.0, 0.0, 0.0, a])[:3, :3] for a in abc])
+    seeds = np.broadcast_to(np.asarray(q_seed_rad, float), (len(targets), robot.n)).copy()
+    nom = solve_ik_poses(robot, nominal, targets, R_t, seeds, R_tool, tol_mm, tol_rad)
+    cal = solve_ik_poses(robot, calibrated, targets, R_t, nom.q_rad, R_tool, tol_mm, tol_rad)
+    p_u, R_u = tcp_poses(robot, calibrated, nom.q_rad, R_tool)
+    corrected, corrected_abc = _nominal_pose(robot, nominal, cal.q_rad, R_tool)
+    return Correction(cal.q_rad, corrected, corrected_abc, cal.error_mm, np.linalg.norm(p_u - targets, axis=1),
+                      nom.ok & cal.ok, cal.error_rad, rotation_angle(R_u @ np.swapaxes(R_t, 1, 2)))
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,9 @@ __all__ = ["trust_warnings", "trust_cautions", "prediction_warnings", "completen
 
 #: physical bounds of the identified errors; beyond them a result is flagged
 ERROR_BOUNDS = {"dtheta": 2.0, "d": 10.0, "a": 10.0, "alpha": 2.0, "beta": 2.0}
+#: physical range of a joint compliance [rad/(N m)] and how far below 0 an estimate is still zero (a parameter
+#: outside it by less than its uncertainty is held at the range's end and refitted: :mod:`calibrate.plausible`)
+C_LOW, C_HIGH, C_TOLERANCE = 0.0, 1e-4, 1e-6
 #: scalar readings per free parameter below which a fit has too few degrees of freedom to be judged
 MIN_READINGS_PER_PARAMETER = 2.0
 #: held-out rms per coordinate over the fit's rms per reading above which the parameters may fit noise: about 1
@@ -62,8 +65,9 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
             if abs(err) > ERROR_BOUNDS[info.kind]:
                 w.append(f"{info.name} moved {err:+.3g} {info.unit} from nominal (bound {ERROR_BOUNDS[info.kind]:g}): "
                          f"not a plausible manufacturing error")
-        if info.kind == "c" and not (-1e-6 <= v <= 1e-4):
-            w.append(f"{info.name} = {v:.3g} rad/(N m) is outside [0, 1e-4]: not a plausible gearbox compliance")
+        if info.kind == "c" and not (C_LOW - C_TOLERANCE <= v <= C_HIGH):
+            w.append(f"{info.name} = {v:.3g} +- {res.sigma[info.name]:.2g} rad/(N m) is outside [{C_LOW:g}, {C_HIGH:g}] by "
+                     "more than its uncertainty can explain: not a plausible gearbox compliance")
     return w
 
 

@@ -125,3 +125,109 @@ def test_prediction_not_better_than_nominal_is_not_usable():
     assert better.clearly_better() and not prediction_warnings(better)
     with pytest.raises(ValueError, match="paired"):
         Prediction.of_validation(np.zeros(3), np.zeros(4), 0.1)
+
+
+MUKCA = DATA / "mukca2025"
+
+
+@pytest.mark.skipif(not (MUKCA / "dinova_1.sockets.csv").exists(), reason="MUKCa data not converted")
+@pytest.mark.parametrize("name, held", [("dinova_1", {"c_2"}), ("dinova_2", {"c_2", "dtheta_2"})])
+def test_real_kinova_backlash_parameters_are_held_at_their_range_and_the_refit_is_trusted(tmp_path, capsys, name,
+                                                                                         held):
+    """The Gen3 lite's backlash drives joint 2's compliance (and on dinova_2 its offset) outside its physical
+    range, by less than one standard uncertainty (c_2 = 1.9e-4 +- 3.6e-4 and -1.4e-4 +- 1.9e-4 rad/(N m)): the
+    data cannot tell it from inside, so it is held at the range's end, refitted, and the refit predicts the
+    held-out placements clearly better than nominal: trusted (exit 0) with the holds and the completeness caution
+    in the output and the result file."""
+    from rodlab.calibrate.plausible import RANGES
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--sockets", str(MUKCA / f"{name}.sockets.csv"), "--robot",
+                 str(MUKCA / "gen3lite.urdf"), "--tip-link", "ball_link", "--fit-placements", "1,3",
+                 "--json", str(out)]) == 0
+    io = capsys.readouterr()
+    assert "verdict: TRUSTED" in io.out and "NOT TRUSTED" not in io.err
+    assert "the model is incomplete" in io.err and "end of its physical range" in io.err
+    cal = json.loads(out.read_text())
+    assert cal["trusted"] and cal["fit"]["prediction"]["clearly_better"]
+    reasons = {u.split(" ")[0]: u for u in cal["unidentifiable"] if "end of its physical range" in u}
+    assert set(reasons) == held
+    for nm in held:
+        p = cal["parameters"][nm]
+        assert p["status"] == "fixed" and p["value"] in RANGES[nm.split("_")[0]]   # at an end of the range
+        assert "cannot tell from inside the range" in reasons[nm]
+    assert any(f"{nm} held at" in c for c in cal["fit"]["cautions"] for nm in held)
+
+
+def test_a_significant_excursion_is_refused_an_insignificant_one_is_held():
+    """The rule of calibrate.plausible on a stand-in fit: a compliance outside [0, 1e-4] by less than 3 of its
+    standard uncertainties is held at the nearest end and the fit repeated with the pin; by more it is left for
+    the refusal (trust_warnings) and nothing is refitted."""
+    from types import SimpleNamespace
+
+    from rodlab.calibrate.plausible import constrain_to_ranges
+    from rodlab.calibrate.trust import trust_warnings
+    info = SimpleNamespace(name="c_2", kind="c", unit="rad/(N m)", index=1)
+
+    def fake(value, sigma):
+        calls = []
+
+        def fit(pins):
+            calls.append(dict(pins))
+            v = pins.get("c_2", value)
+            return SimpleNamespace(infos=[info], values={"c_2": v}, sigma={"c_2": sigma},
+                                   status={"c_2": "fixed" if "c_2" in pins else "identified"}, unidentifiable=[],
+                                   cautions=[], success=True, message="", residuals_mm=np.zeros((50, 3)),
+                                   free=[] if "c_2" in pins else ["c_2"], residual_check=None)
+        return fit, calls
+
+    fit, calls = fake(-1.4e-4, 1.9e-4)                 # 0.74 sigma below 0: held at 0
+    res, pins = constrain_to_ranges(fit, {"d_1": 0.0})
+    assert pins == {"d_1": 0.0, "c_2": 0.0} and len(calls) == 2 and res.values["c_2"] == 0.0
+    assert "c_2 held at 0" in res.cautions[0] and res.unidentifiable[0].startswith("c_2 (held at 0")
+    fit, calls = fake(3.0e-4, 0.5e-4)                  # 4 sigma above 1e-4: shown implausible, refused
+    res, pins = constrain_to_ranges(fit)
+    assert pins == {} and len(calls) == 1 and not res.cautions
+    robot = resolve_robot("ur5")
+    assert any("c_2" in w and "not a plausible gearbox compliance" in w for w in trust_warnings(robot, res))
+
+
+@pytest.mark.skipif(not (MUKCA / "dinova_1.sockets.csv").exists(), reason="MUKCa data not converted")
+def test_free_keeps_the_unconstrained_estimate_and_its_refusal(capsys):
+    """--free c_2 asks for the unconstrained joint-2 compliance: no hold, and the range check judges it."""
+    assert main(["calibrate", "--sockets", str(MUKCA / "dinova_1.sockets.csv"), "--robot", str(MUKCA / "gen3lite.urdf"),
+                 "--tip-link", "ball_link", "--fit-placements", "1,3", "--free", "c_2"]) == 3
+    err = capsys.readouterr().err
+    assert "c_2 = 0.000192" in err and "not a plausible gearbox compliance" in err and "c_2 held at" not in err
+
+
+@pytest.mark.skipif(not (MUKCA / "panda_6.sockets.csv").exists(), reason="MUKCa data not converted")
+@pytest.mark.parametrize("name, urdf, fit_on", [("panda_6", "panda.urdf", "1"), ("panda_7", "panda.urdf", "1"),
+                                                ("panda_2", "panda.urdf", "1,3,5,7,9"), ("panda_3", "panda.urdf", "1,3,5"),
+                                                ("kuka_14", "iiwa14.urdf", "1,3")])
+def test_real_panda_and_iiwa_sockets_are_trusted_without_holds(tmp_path, name, urdf, fit_on):
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--sockets", str(MUKCA / f"{name}.sockets.csv"), "--robot", str(MUKCA / urdf),
+                 "--tip-link", "ball_link", "--fit-placements", fit_on, "--json", str(out)]) == 0
+    cal = json.loads(out.read_text())
+    assert cal["trusted"] and cal["fit"]["completeness"]["verdict"] == "incomplete"
+    assert not any("end of its physical range" in u for u in cal["unidentifiable"])
+
+
+def test_real_ur5_grid_to_random_is_trusted(tmp_path, capsys):
+    """UR5 grid -> 20 random poses with default options: 0.428 -> 0.089 mm, trusted with its caution."""
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(DATA / "jacobi2025" / "ur5_grid.validation.csv"), "--robot", "ur5",
+                 "--validate", str(DATA / "jacobi2025" / "ur5_random.validation.csv"), "--json", str(out)]) == 0
+    pred = json.loads(out.read_text())["fit"]["prediction"]
+    assert pred["mean_mm"] < 0.1 and pred["nominal_mean_mm"] > 0.4
+    assert "caution (trusted): the model is incomplete" in capsys.readouterr().err
+
+
+def test_real_ur10_b_to_c_is_trusted(tmp_path):
+    """UR10 B -> C with default options: 0.901 -> 0.441 mm, trusted."""
+    d = DATA / "landgraf2021"
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(d / "ur10_B.validation.csv"), "--robot", "ur10", "--validate",
+                 str(d / "ur10_C.validation.csv"), "--json", str(out)]) == 0
+    pred = json.loads(out.read_text())["fit"]["prediction"]
+    assert pred["mean_mm"] < 0.5 * pred["nominal_mean_mm"] and pred["clearly_better"]

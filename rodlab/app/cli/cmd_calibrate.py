@@ -178,9 +178,12 @@ def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> Calibr
     obs = campaign_observations(camp, fix, rod)
     options = dict(also_compensate=_thermal(args, camp, rod), pinned=_pins(args, robot.n), freed=set(args.free),
                    robust=args.robust, harmonics=getattr(args, "joint_harmonics", ()))
-    res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
-                   fix_unidentifiable=not args.strict, **options,
-                   expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
+    from rodlab.calibrate.plausible import constrain_to_ranges
+    noise = args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM
+    res, options["pinned"] = constrain_to_ranges(
+        lambda pins: identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
+                              fix_unidentifiable=not args.strict, **(options | {"pinned": pins}),
+                              expected_noise_mm=noise), options["pinned"], options["freed"])
     run = CalibrationRun(robot, camp, res, observations=obs, options=options)
     if args.validate:
         pts = read_points(args.validate, robot.n)
@@ -374,7 +377,10 @@ def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=_pins(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
-    res = identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict, **options)
+    from rodlab.calibrate.plausible import constrain_to_ranges
+    res, options["pinned"] = constrain_to_ranges(
+        lambda pins: identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict,
+                                     **(options | {"pinned": pins})), options["pinned"], options["freed"])
     before = after = None
     errors = {}
     if args.validate:

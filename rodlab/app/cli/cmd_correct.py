@@ -17,17 +17,22 @@ __all__ = ["register"]
 def register(sub) -> None:
     p = sub.add_parser("correct", help="TCP targets -> joint commands that put the calibrated robot on them",
                        description="For TCP position targets (x_mm, y_mm, z_mm in the calibration's measurement "
-                                   "frame; optional q1..qn [deg]: the program's configuration, where the IK starts), "
-                                   "the joint commands that put the calibrated robot's TCP on each target, and the "
+                                   "frame) or poses (also a_deg, b_deg, c_deg: the tool frame's orientation, R = "
+                                   "Rx(a) Ry(b) Rz(c); solved by a 6-D IK), optional q1..qn [deg]: the program's "
+                                   "configuration, where the IK starts, the joint commands that put the calibrated "
+                                   "robot's TCP on each target, and the "
                                    "corrected targets to give a controller that keeps its nominal model and analytic "
                                    "IK, with the IK residual, how far the uncorrected program lands, and the "
                                    "calibration's predicted accuracy.")
     p.add_argument("calibration", help="the calibration result (*.json from rodlab calibrate --json)")
-    p.add_argument("targets", help="*.targets.csv: x_mm,y_mm,z_mm[,q1..qn]")
+    p.add_argument("targets", help="*.targets.csv: x_mm,y_mm,z_mm[,a_deg,b_deg,c_deg][,q1..qn]")
     add_robot_options(p, default=None, help="the robot the calibration used (default: the one it names, if built in)")
     p.add_argument("--tool", default=None, metavar="X,Y,Z",
                    help="the TCP in the flange frame {n} [mm] (default: the calibrated tool point, the measured "
                         "target)")
+    p.add_argument("--tool-abc", default=None, metavar="A,B,C",
+                   help="pose targets: the tool frame's orientation in the flange frame {n} (contract A, B, C "
+                        "[deg]; default: the flange's axes)")
     p.add_argument("--seed-q", default=None, metavar="Q1,...,QN",
                    help="the configuration [deg] the IK starts from for targets without q columns (default: every "
                         "joint at 20 deg)")
@@ -75,15 +80,25 @@ def cmd_correct(args) -> int:
     seed_deg = _vector(args.seed_q, robot.n, "--seed-q")
     seeds = targets.q_seed_deg if targets.q_seed_deg is not None else (
         seed_deg if seed_deg is not None else np.full(robot.n, 20.0))
-    corr = correct_targets(robot, params, nominal, targets.targets_mm, np.deg2rad(seeds))
+    if targets.poses:
+        corr = _correct_poses(args, robot, params, nominal, targets, np.deg2rad(seeds))
+    elif args.tool_abc is not None:
+        raise RodlabError(f"--tool-abc orients the tool frame of pose targets; {args.targets} has positions only "
+                          "(add a_deg,b_deg,c_deg columns, or leave --tool-abc out)")
+    else:
+        corr = correct_targets(robot, params, nominal, targets.targets_mm, np.deg2rad(seeds))
     predicted = _predicted_mm(args.calibration)
     path = commands_csv(args.output, targets, corr, predicted,
                         [f"rodlab correct {Path(args.calibration).name} {Path(args.targets).name} (robot {robot.name})",
                          "q1..qn: joint commands [deg] that put the calibrated robot's TCP on the target; corrected_*: "
                          "the target to give a controller with the nominal model",
                          "residual_um: IK residual; uncorrected_mm: where the nominal program's joints put the "
-                         "calibrated TCP; predicted_mm: the calibration's held-out mean error"])
-    print(f"wrote {path}: {len(corr.ok)} targets, IK residual max {corr.residual_mm.max() * 1e3:.3f} um; the "
+                         "calibrated TCP; predicted_mm: the calibration's held-out mean error"]
+                        + (["pose targets: a_deg..c_deg and corrected_a_deg..: the tool frame, R = Rx(a) Ry(b) Rz(c) "
+                            "in {W}; residual_urad, uncorrected_mrad: the same for the orientation"]
+                           if targets.poses else []))
+    print(f"wrote {path}: {len(corr.ok)} targets, IK residual max {corr.residual_mm.max() * 1e3:.3f} um"
+          + (f" and {corr.residual_rad.max() * 1e6:.3f} urad" if targets.poses else "") + "; the "
           f"uncorrected program misses by {corr.uncorrected_mm.mean():.3f} mm mean ({corr.uncorrected_mm.max():.3f} "
           f"max)" + (f"; the calibration predicts {predicted:.3f} mm held-out mean error" if predicted else ""))
     if not corr.ok.all():
@@ -94,3 +109,22 @@ def cmd_correct(args) -> int:
         print(f"note: {Path(args.calibration).name} says trusted: false; read its warnings before using these "
               "commands", file=sys.stderr)
     return 0
+
+
+def _correct_poses(args, robot, params, nominal, targets, seeds_rad):
+    """Pose targets: the 6-D IK; a pose the calibrated robot cannot reach is refused with its line (no output)."""
+    from rodlab.calibrate import CalibrationError
+    from rodlab.calibrate.correct import correct_poses
+    from rodlab.frames import rotation_from_abc
+    abc = _vector(args.tool_abc, 3, "--tool-abc")
+    R_tool = None if abc is None else rotation_from_abc(abc)
+    corr = correct_poses(robot, params, nominal, targets.targets_mm, targets.abc_deg, seeds_rad, R_tool)
+    if not corr.ok.all():
+        k = int(np.nonzero(~corr.ok)[0][0])
+        raise CalibrationError(
+            f"target {k + 1} is not reachable as a pose by the calibrated robot within its joint limits (closest "
+            f"{corr.residual_mm[k]:.3g} mm and {np.rad2deg(corr.residual_rad[k]):.3g} deg away"
+            + (f"; {int((~corr.ok).sum())} target(s) in all" if (~corr.ok).sum() > 1 else "") + "): move it into the "
+            f"workspace, away from a stretched or singular arm, or give its program configuration (q1..q{robot.n})",
+            path=targets.path, line=int(targets.lines[k]) if targets.lines is not None else None)
+    return corr

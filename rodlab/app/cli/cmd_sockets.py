@@ -30,6 +30,7 @@ class SocketRun:
     held_out: object | None
     fit: object
     checks: dict
+    pins: dict                      # the fit's pins: the user's and the range holds (calibrate.plausible)
 
 
 def _placements(text: str | None, readings) -> list[int]:
@@ -79,14 +80,22 @@ def run_sockets(args) -> SocketRun:
         raise RodlabError("--sockets is a calibration of its own: leave out the campaign, --points and --thermal")
     robot = robot_from_args(args)
     fitted, held = _readings(args, robot)
-    fit = identify_sockets(robot, fitted, pinned=parse_pins(args.pin), freed=args.free,
-                           fix_unidentifiable=not args.strict, robust=args.robust)
+    from rodlab.calibrate.plausible import constrain_to_ranges
+    fits = []
+
+    def fit_with(pins):
+        fits.append(identify_sockets(robot, fitted, pinned=pins, freed=args.free, fix_unidentifiable=not args.strict,
+                                     robust=args.robust))
+        return fits[-1].result
+
+    _, pins = constrain_to_ranges(fit_with, parse_pins(args.pin), args.free)
+    fit = fits[-1]
     checks = {}
     for label, r in (("fit", fitted), ("held out", held)):
         if r is not None:
             checks[label] = {"nominal": check_sockets(robot, socket_start(robot, r), r),
                              "calibrated": check_sockets(robot, fit.result.params, r)}
-    return SocketRun(robot, fitted, held, fit, checks)
+    return SocketRun(robot, fitted, held, fit, checks, pins)
 
 
 def _print(run: SocketRun) -> None:
@@ -144,7 +153,7 @@ def _prediction(args, run: SocketRun):
     for p in placements:
         rest, test = run.fitted.subset([q for q in placements if q != p]), run.fitted.subset([p])
         try:
-            fit = identify_sockets(run.robot, rest, pinned=parse_pins(args.pin), freed=args.free,
+            fit = identify_sockets(run.robot, rest, pinned=run.pins, freed=args.free,
                                    fix_unidentifiable=True, robust=args.robust)
         except CalibrationError as e:
             failed.append(f"placement {p}: {e}")

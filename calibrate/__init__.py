@@ -8,9 +8,9 @@ from .probe import FixtureFit, ProbeSet, fit_fixture, read_probe
 from .readings import apply_device, far_points
 from .compensation import Compensation, deflection_offsets
 from .errors import CalibrationError
-from .identify import CalibrationResult, Observations, campaign_observations, identify, register_base_and_tool
+from .identify import Observations, campaign_observations, identify, register_base_and_tool
 from .kinematics import ModelParams, ball_positions
-from .result import result_dict, write_result
+from .result import CalibrationResult, calibrated_params, read_calibration, result_dict, write_result
 from .robot import Robot, robot_from_chain
 from .robot_formats import ROBOT_READERS, builtin_robots, read_robot, resolve_robot, robot_path
 from .socket_check import SocketCheck, check_sockets
@@ -25,6 +25,7 @@ __all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "
            "Compensation", "deflection_offsets", "ThermalGrowth",
            "CalibrationResult", "Observations", "campaign_observations", "identify", "register_base_and_tool",
            "ModelParams", "ball_positions",
-           "result_dict", "write_result", "Robot", "robot_from_chain", "ROBOT_READERS", "builtin_robots", "read_robot",
+           "result_dict", "write_result", "read_calibration", "calibrated_params",
+           "Robot", "robot_from_chain", "ROBOT_READERS", "builtin_robots", "read_robot",
            "resolve_robot", "robot_path", "ErrorStats", "validate", "SocketCheck", "check_sockets", "SocketFit",
            "identify_sockets", "SocketDistance", "SocketReadings", "read_sockets", "write_sockets"]

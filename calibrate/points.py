@@ -11,7 +11,8 @@ import numpy as np
 from rodlab.units import TRACKER_NOISE_MM
 
 from .campaign import PointSet
-from .identify import CalibrationResult, Observations, identify
+from .identify import Observations, identify
+from .result import CalibrationResult
 
 __all__ = ["points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
 

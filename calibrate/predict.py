@@ -45,7 +45,7 @@ __all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replic
 
 #: the validation rod (short, rigid) of the simulated instrument: tool [mm], mass [kg], COM in {T} [mm]
 VALIDATION_TOOL_MM = (0.0, 0.0, 150.0)
-_VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
+VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
 
 
 @dataclass(frozen=True)
@@ -227,7 +227,7 @@ def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet
     vtrue = truth.with_(tool=tool + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (int(priors.validation_points), robot.n))
-    mass, com = _VALIDATION_MASS
+    mass, com = VALIDATION_MASS
     fr, _ = ball_positions(robot, vtrue, vq if floor is None else floor.angles(vq), mass, np.asarray(com, float))
     noisy = fr.pW + rng.normal(0, priors.instrument_noise_mm, fr.pW.shape)
 

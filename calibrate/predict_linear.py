@@ -37,12 +37,12 @@ from rodlab.enums import Method
 
 from .campaign import Fixture
 from .compensation import deflection_basis
-from .identify import _free_parameters
+from .identify import free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
-from .predict import _VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .predict import VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
@@ -185,7 +185,7 @@ def linear_campaign(robot, plan_q: dict, fixture: Fixture, base, reference: RodC
     obs = _campaign_observations(robot, model, plan_q, fixture, reference)
     positions = [j for j in sorted(set(obs.group.tolist())) if not np.allclose(obs.fixture_T[j], np.eye(4))]
     infos = catalogue(robot.n, positions)
-    free, _ = _free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
+    free, _ = free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
                                positions, False)
     fr, tau = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     free_infos = [infos[k] for k in free]
@@ -228,7 +228,7 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     M, D = int(priors.validation_points), int(draws)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (D * M, robot.n))
-    mass, com = _VALIDATION_MASS
+    mass, com = VALIDATION_MASS
     model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
     fr, tau = ball_positions(robot, model, vq, mass, np.asarray(com, float))
     kin = _kin_infos(robot.n)

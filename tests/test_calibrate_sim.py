@@ -60,7 +60,7 @@ def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsy
     """A campaign with no effect, calibrated with its own compliance file, passes the trust checks (exit 0):
     joint compliances are bounded to [0, C_MAX] by construction, so a weakly identified wrist compliance can
     no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
-    from rodlab.calibrate.identify import C_MAX
+    from rodlab.calibrate.estimate import C_MAX
     from rodlab.app.cli import main
     from rodlab.compliance import write_compliance
     robot = resolve_robot("tx90")

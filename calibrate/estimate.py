@@ -1,6 +1,7 @@
 """The estimation kernel every identification shares (campaign and instrument points in :mod:`.identify`, socket
 readings in :mod:`.socket_fit`, pose planning in :mod:`.plan`):
 
+- :class:`FitOptions`: how a fit is asked for (pins, frees, loss, periodic terms, noise level, start);
 - :func:`check_names`: ``--pin`` / ``--free`` names against the parameter catalogue;
 - :func:`pinned_vector`: the internal parameter vector at the start with the pinned values;
 - :func:`select_free`: the parameters to fit: structural rules, the user's pins and frees, then a rank analysis
@@ -12,16 +13,60 @@ readings in :mod:`.socket_fit`, pose planning in :mod:`.plan`):
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from rodlab.errors import did_you_mean
+from rodlab.units import DEVICE_NOISE_MM
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams
 from .params import INTERNAL_SCALE, ParamInfo, structural_fixed
 
-__all__ = ["C_MAX", "check_names", "pinned_vector", "select_free", "physical_bounds", "solve", "parameter_value",
+__all__ = ["FitOptions", "C_MAX", "check_names", "pinned_vector", "select_free", "physical_bounds", "solve", "parameter_value",
            "data_name"]
+
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How an identification is asked to fit (the defaults are a planned MultiCal campaign's).
+
+    pinned : {parameter name: value in contract units} held at that value
+    freed : names of parameters the defaults hold that are fitted (e.g. ``fixture_2_x``, ``tool_y``)
+    robust : soft-L1 loss (gross alignment errors lose weight)
+    fix_unidentifiable : parameters the data cannot separate (beyond the structural rules) are held at their
+        nominal values and reported, instead of refusing the data set: for instrument data that was not planned
+        for this model (single-joint sweeps, few configurations); a planned campaign should not need it
+    find_tool : start from a tool point found from the data (for instrument points whose tool is only roughly
+        known)
+    harmonics : joints (1-based) whose periodic angle errors (first and second harmonic of the joint reading,
+        ``h1s_j .. h2c_j``) are identified too: gear or encoder eccentricity that ``rodlab diagnose`` named
+    expected_noise_mm : the measuring noise per coordinate [mm] the residual test judges against; None skips it
+    fixture_sigma : 1-sigma uncertainty of each clamping pose (position [mm], angle [deg])
+    max_compensation : most identification / compensation passes
+    initial : the model to start from (:class:`~rodlab.calibrate.kinematics.ModelParams`), or None: nominal with
+        the base registered to the points
+    """
+
+    pinned: dict = field(default_factory=dict)
+    freed: frozenset = frozenset()
+    robust: bool = False
+    fix_unidentifiable: bool = False
+    find_tool: bool = False
+    harmonics: tuple = ()
+    expected_noise_mm: float | None = DEVICE_NOISE_MM
+    fixture_sigma: tuple = (0.01, 0.002)
+    max_compensation: int = 6
+    initial: ModelParams | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pinned", {str(k): float(v) for k, v in dict(self.pinned or {}).items()})
+        object.__setattr__(self, "freed", frozenset(self.freed or ()))
+        object.__setattr__(self, "harmonics", tuple(self.harmonics or ()))
+        if int(self.max_compensation) < 1:
+            raise ValueError(f"max_compensation must be >= 1, got {self.max_compensation!r}")
 
 
 def check_names(names: list, pinned: dict, freed: set) -> None:

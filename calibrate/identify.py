@@ -8,31 +8,31 @@
 3. LM (``scipy.optimize.least_squares``, analytic Jacobian) on the free parameters; weakly identified
    parameters (standard error above their physical scale) get a Gaussian prior at their initial value and
    are reported ``regularised``.
-4. Compensation: with a compliance file, the ball offset ``R_T^W (C_g g^T + C_F F^T)`` of every point is
-   computed from the current model and removed from the measurement (Eq. 11); steps 3-4 repeat until the
-   offsets stop changing (the paper's rough calibration is the first pass).
+4. Compensation: the ball offsets of every point by each of the ``compensations``
+   (:mod:`calibrate.compensations`: the rod's deflection ``R_T^W (C_g g^T + C_F F^T)`` from its compliance, its
+   thermal growth) are computed from the current model and removed from the measurement (Eq. 11); steps 3-4
+   repeat until the offsets stop changing (the paper's rough calibration is the first pass).
 5. Standard errors: sandwich estimate with the device noise (from the residuals) and the fixture-pose
    uncertainty, correlated within each clamping position.
 """
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.units import DEVICE_NOISE_MM
-
-from .compensation import deflection_offsets
+from .compensations import Compensation, total_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
-from .estimate import check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
+from .estimate import FitOptions, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .result import CalibrationResult
+from .rod import Rod
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
            "register_base_and_tool", "noise_covariance", "free_parameters"]
@@ -40,57 +40,67 @@ __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observatio
 log = logging.getLogger(__name__)
 
 
-def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
-             freed: set | None = None, robust: bool = False, max_compensation: int = 6,
-             fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
-             expected_noise_mm: float | None = DEVICE_NOISE_MM, fix_unidentifiable: bool = False,
-             find_tool: bool = False, also_compensate: tuple = (), harmonics: tuple = ()) -> CalibrationResult:
+def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compensation] = (),
+             options: FitOptions = FitOptions()) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
 
-    fix_unidentifiable : parameters this data set cannot separate (beyond the structural rules) are held at
-        their nominal values and reported, instead of refusing the data set. Meant for instrument data that
-        was not planned for this model (single-joint sweeps, few configurations); a planned campaign should
-        not need it.
-    find_tool : start from a tool point found from the data (:func:`register_base_and_tool`), for instrument
-        points whose tool is only roughly known.
-    also_compensate : further compensations beside the rod's deflection, each with
-        ``offsets(robot, params, obs)`` -> ball-centre offsets in {W} [mm], shape=(N, 3) (e.g.
-        :class:`~rodlab.calibrate.thermal.ThermalGrowth`); removed from the measurements with the deflection.
-    harmonics : joints (1-based) whose periodic angle errors (first and second harmonic of the joint reading,
-        ``h1s_j .. h2c_j``) are identified too: gear or encoder eccentricity that ``rodlab diagnose`` named.
+    rod : the rod on the flange (:class:`~rodlab.calibrate.rod.Rod`): its tool vector starts the fit
+    compensations : what is removed from the measurements, alternating with the fit (entries of
+        :data:`~rodlab.calibrate.compensations.COMPENSATIONS`, e.g. ``[RodDeflection.of(rod), ThermalGrowth(...)]``);
+        none: the rigid model
+    options : pins, frees, loss, periodic joint errors, noise level (:class:`~rodlab.calibrate.estimate.FitOptions`)
     """
-
+    if not isinstance(rod, Rod):
+        raise TypeError(f"identify takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm)), got "
+                        f"{type(rod).__name__}")
     _check_observations(obs)
-    _check_harmonics(harmonics, robot.n)
-    pinned, freed = dict(pinned or {}), set(freed or ())
-    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
-    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
-    infos = catalogue(robot.n, positions, harmonics)
-    check_names([i.name for i in infos], pinned, freed)
-    start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
-    if harmonics or start.h.any():
-        start = _harmonic_start(start, obs.q_rad, harmonics)
-    x = pinned_vector(infos, start, pinned)
-    free, reasons = free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
-                                     fix_unidentifiable)
-    lower, upper = physical_bounds(infos, start)
-    x = np.clip(x, lower, upper)
-    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
-    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
-    rough = [k for k in free if infos[k].kind == "c"] if rod is not None and (rod.C_F.any() or rod.C_g.any()) \
-        else []
-    st = _compensate(robot, obs, rod, start, infos, x, free, rough, (lower, upper), robust, max_compensation,
-                     fixture_sigma, also_compensate)
-    out = _result(robot, obs, start, infos, reasons, st, fixture_sigma)
+    _check_harmonics(options.harmonics, robot.n)
+    problem, reasons = _problem(robot, obs, rod, compensations, options)
+    st = _compensate(robot, obs, problem, compensations, options)
+    out = _result(robot, obs, problem, reasons, st, options.fixture_sigma)
     out.harmonic_range_deg = {j: (float(np.rad2deg(obs.q_rad[:, j - 1].min())), float(np.rad2deg(obs.q_rad[:, j - 1].max())))
-                              for j in sorted(set(harmonics))}
-    if expected_noise_mm:
+                              for j in sorted(set(options.harmonics))}
+    if options.expected_noise_mm:
         from .residual_test import residual_test
-        out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
+        out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
     from .trust import trust_cautions, trust_warnings
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out
+
+
+@dataclass
+class _Problem:
+    """What the compensation loop fits: the start model, the parameter catalogue, the internal vector ``x`` at
+    the start (pins applied), the free parameters, those held in the first pass (``rough``) and the bounds."""
+
+    start: ModelParams
+    infos: list
+    x: np.ndarray
+    free: list
+    rough: list
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+def _problem(robot, obs: Observations, rod: Rod, compensations, options: FitOptions) -> tuple[_Problem, dict]:
+    """The catalogue, the start model, the free parameters (and why the others are held) and the bounds."""
+    pinned, freed = dict(options.pinned), set(options.freed)
+    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
+    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
+    infos = catalogue(robot.n, positions, options.harmonics)
+    check_names([i.name for i in infos], pinned, freed)
+    start, tool_mm = _starting_model(robot, obs, rod.tool_mm, options.initial, options.find_tool)
+    if options.harmonics or start.h.any():
+        start = _harmonic_start(start, obs.q_rad, options.harmonics)
+    x = pinned_vector(infos, start, pinned)
+    free, reasons = free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
+                                    options.fix_unidentifiable)
+    lower, upper = physical_bounds(infos, start)
+    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
+    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
+    rough = [k for k in free if infos[k].kind == "c"] if any(c.rough_pass for c in compensations) else []
+    return _Problem(start, infos, np.clip(x, lower, upper), free, rough, lower, upper), reasons
 
 
 def _check_observations(obs: Observations) -> None:
@@ -208,14 +218,14 @@ def _residual_functions(robot, start, infos, x, free, obs, target, prior, x0, no
     return fun, jac
 
 
-def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robust, max_compensation,
-                fixture_sigma, also_compensate) -> _Compensated:
+def _compensate(robot, obs, problem: _Problem, compensations, options: FitOptions) -> _Compensated:
     """Identification and compensation alternate until the offsets stop changing (paper Eqs. 11-19): each pass
     fits the model to the measurements minus the offsets, then recomputes the offsets with the new model;
     parameters too weak for the data get a prior (once) and are refitted."""
     N = obs.x_W_mm.shape[0]
-    lower, upper = bounds
-    x = x.copy()
+    start, infos, free_all, rough = problem.start, problem.infos, problem.free, problem.rough
+    lower, upper, fixture_sigma = problem.lower, problem.upper, options.fixture_sigma
+    x = problem.x.copy()
     prior = np.zeros(len(infos), dtype=bool)
     x_init = x.copy()                                   # priors are centred on the initial values
     offsets = np.zeros_like(obs.x_W_mm)
@@ -223,16 +233,15 @@ def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robus
     res = None
     it = 0
     free = list(free_all)
-    for it in range(1, max_compensation + 1):
+    for it in range(1, options.max_compensation + 1):
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
         fun, jac = _residual_functions(robot, start, infos, x, free, obs, target, prior, x_init[free], noise_est)
-        res = solve(fun, jac, x[free], lower[free], upper[free], robust, 3 * noise_est, 200 * len(free))
+        res = solve(fun, jac, x[free], lower[free], upper[free], options.robust, 3 * noise_est,
+                    200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
-        new_off = deflection_offsets(robot, p, obs.q_rad, obs.force_W_N, rod)
-        for extra in also_compensate:
-            new_off = new_off + extra.offsets(robot, p, obs)
+        new_off = total_offsets(compensations, robot, p, obs)
         change = float(np.abs(new_off - offsets).max())
         offsets = new_off
         r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW
@@ -251,9 +260,9 @@ def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robus
     return _Compensated(x, prior, offsets, noise_est, res, it, free)
 
 
-def _result(robot, obs, start, infos, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:
+def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:
     """The calibration result: values, standard deviations and status of every parameter, residuals."""
-    x, free = st.x, st.free
+    x, free, start, infos = st.x, st.free, problem.start, problem.infos
     p = apply(start, infos, x)
     fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW

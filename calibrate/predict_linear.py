@@ -10,7 +10,7 @@ identified parameters by ``A y``, ``A = (J^T J + L^T L)^-1 J^T`` with ``J`` the 
 - the device noise and the recorded fixture poses' uncertainty ``eps ~ N(0, Sigma)``
   (:func:`calibrate.observations.noise_covariance`);
 - what the compensation leaves of the rod's deflection: the offsets are linear in the compliance (Eq. 19,
-  :func:`calibrate.compensation.deflection_basis` ``B``), so the error is the *bias*
+  :func:`calibrate.compensations.deflection_basis` ``B``), so the error is the *bias*
   ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior.
 
 On the validation configurations (base and tool refitted: the projection ``P`` off their 9 columns) the error
@@ -36,7 +36,7 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
 
 from .campaign import Fixture
-from .compensation import deflection_basis
+from .compensations import deflection_basis
 from .identify import free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import logging
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,7 +36,15 @@ class CalibrationRun:
     nominal_mm: np.ndarray | None = None
     calibrated_mm: np.ndarray | None = None
     observations: object = None            # what was fitted (calibrate.Observations)
-    options: dict | None = None            # the identification's options (for cross-validation)
+    rod: object = None                     # the rod on the flange (calibrate.Rod)
+    compensations: list = field(default_factory=list)   # what the fit removed (calibrate.compensations entries)
+    options: object = None                 # the identification's options (calibrate.FitOptions; cross-validation)
+
+    @property
+    def label(self) -> str:
+        """What the result calls its compensation (e.g. ``fea``, ``none``, ``calc+thermal``)."""
+        from rodlab.calibrate.compensations import compensation_label
+        return compensation_label(self.compensations)
 
     @property
     def before(self):
@@ -54,24 +62,25 @@ def _stats(errors_mm):
     return error_stats(errors_mm)
 
 
-def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> CalibrationRun:
-    """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
-    deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`); ``camp`` the campaign
-    already read (else ``args.campaign`` with ``args.device``)."""
-    from rodlab.calibrate import ModelParams, campaign_observations, identify, read_fixture, read_points
-    from rodlab.calibrate import validate
+def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> CalibrationRun:
+    """Identification (+ validation) of one campaign with the rod (tool, mass, COM) of the file ``rod``, its
+    deflection compensated by ``deflection`` (:class:`rodlab.calibrate.RodDeflection`) and, with ``--thermal``,
+    its thermal growth; ``camp`` the campaign already read (else ``args.campaign`` with ``args.device``)."""
+    from rodlab.calibrate import FitOptions, ModelParams, Rod, campaign_observations, identify, read_fixture
+    from rodlab.calibrate import read_points, validate
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if camp is None:                                    # compare reads the campaign and warns once
         camp = campaign_from_args(args, robot.n)
         warn_flagged_fixture(fix, args.fixture)
     obs = campaign_observations(camp, fix, rod)
-    options = dict(also_compensate=_thermal(args, camp, rod), pinned=pins_from_args(args, robot.n), freed=set(args.free),
-                   robust=args.robust, harmonics=getattr(args, "joint_harmonics", ()))
-    res = identify(robot, obs, rod.tool_mm, compensation.rod if compensation.active else None,
-                   fix_unidentifiable=not args.strict, **options,
-                   expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
-    run = CalibrationRun(robot, camp, res, observations=obs, options=options)
+    compensations = [deflection, *_thermal(args, camp, rod)]
+    options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,
+                         harmonics=getattr(args, "joint_harmonics", ()), fix_unidentifiable=not args.strict,
+                         expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
+    res = identify(robot, obs, Rod.of(rod), compensations, options)
+    run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations,
+                         options=options)
     if args.validate:
         pts = read_points(args.validate, robot.n)
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]

@@ -21,11 +21,12 @@ __all__ = ["register", "cmd_calibrate"]
 
 
 def register(sub) -> None:
+    from rodlab.calibrate.compensations import compensations_help
     p = sub.add_parser("calibrate", help="identify a robot from a MultiCal campaign (or instrument points)",
                        description="Levenberg-Marquardt identification of the robot's kinematic errors, Hayati beta, "
                                    "base, tool and joint compliances from a MultiCal campaign, with rod-deflection "
                                    "compensation from a compliance file (paper Eqs. 2-19); or from an external "
-                                   "instrument's points (--points).")
+                                   "instrument's points (--points). Compensations: " + compensations_help() + ".")
     p.add_argument("campaign", nargs="?", help="*.campaign.csv (omit with --points)")
     p.add_argument("--fixture", help="*.fixture.json (clamping poses, contact force)")
     add_device_option(p)
@@ -85,14 +86,14 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
-    from rodlab.calibrate import Compensation
+    from rodlab.calibrate import RodDeflection
     rod = read_compliance(args.rod)
-    comp = Compensation.of(None if args.compensation == "none" else rod)
-    label = comp.label + ("+thermal" if args.thermal else "")
+    comp = RodDeflection.of(None if args.compensation == "none" else rod)
     run = run_calibration(args, rod, comp)
+    label = run.label
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
-    judge(res, _campaign_prediction(run, rod, comp))
+    judge(res, _campaign_prediction(run))
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.png:
@@ -115,13 +116,13 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _campaign_prediction(run: CalibrationRun, rod, comp):
+def _campaign_prediction(run: CalibrationRun):
     """The held-out accuracy: the validation points when given, else cross-validation over clamping positions."""
     from rodlab.calibrate.crossval import Prediction, cross_validate_identify
     if run.calibrated_mm is not None:
         return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
-    return cross_validate_identify(run.robot, run.observations, rod.tool_mm, comp.rod if comp.active else None,
-                                   fit_rms_mm=run.result.rms_mm, **run.options)
+    return cross_validate_identify(run.robot, run.observations, run.rod, run.compensations, run.options,
+                                   fit_rms_mm=run.result.rms_mm)
 
 
 def _note_ideal_device(args) -> None:
@@ -156,7 +157,7 @@ def _print_suspects(robot, camp, args, rod, comp, test) -> None:
     from rodlab.compliance import RodCompliance
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
-    used = comp.rod if comp.active else RodCompliance.none_like(rod)
+    used = rod if comp.active else RodCompliance.none_like(rod)
     diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=test.noise_mm,
                                 fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)

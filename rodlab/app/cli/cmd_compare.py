@@ -38,7 +38,7 @@ def _compare_runs(items) -> list:
     """(name, rod file, compensation) per ``--rod LABEL=FILE``, led by no compensation; checked before any run.
     A label is only a name: the file's matrices compensate whatever it is called (a file of method ``none``
     compensates nothing, and says so)."""
-    from rodlab.calibrate import Compensation
+    from rodlab.calibrate import RodDeflection
     runs = []
     for item in items:
         label, eq, path = item.partition("=")
@@ -46,14 +46,14 @@ def _compare_runs(items) -> list:
             raise RodlabError(f"--rod {item!r}: expected LABEL=FILE (e.g. fea=rod1.fea.compliance.json)")
         rod = read_compliance(path)
         if not runs:
-            runs.append(("None", rod, Compensation.of(None)))
+            runs.append(("None", rod, RodDeflection.of(None)))
         if label.strip().lower() == "none" and rod.method.value != "none":
             raise RodlabError(f"--rod {item!r}: the label 'none' is the uncompensated run, which compare adds "
                               f"itself, but {path} is a {rod.method} file; label it by its method "
                               f"(e.g. {rod.method}={path})")
         if rod.method.value == "none":
             log.warning("--rod %s: a method-none file compensates nothing", item)
-        runs.append((label.strip(), rod, Compensation.of(rod, label.strip())))
+        runs.append((label.strip(), rod, RodDeflection.of(rod, label.strip())))
     return runs
 
 

@@ -24,6 +24,7 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+from rodlab.calibrate import Rod, RodDeflection
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
 from rodlab.enums import Trial
@@ -294,10 +295,15 @@ class _Selection:
         search(self, self.max_terms + self.max_outliers + 1)
 
 
+def _deflection(rod):
+    """The deflection of the compliance file ``rod`` as it stands (its matrices, whatever its method says)."""
+    return RodDeflection(Rod.of(rod), str(rod.method))
+
+
 def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
     result and the :class:`Refit` it used."""
-    from rodlab.calibrate import campaign_observations, identify
+    from rodlab.calibrate import FitOptions, campaign_observations, identify
     fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
@@ -308,8 +314,9 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
         obs2 = edit(obs2)
     if not fit.keep.all():
         obs2 = obs2.subset(fit.keep)
-    res2 = identify(robot, obs2, rod.tool_mm, fit.rod, freed=fit.freed, expected_noise_mm=noise_mm,
-                    fixture_sigma=fixture_sigma, harmonics=tuple(ctx.result.harmonic_range_deg))
+    res2 = identify(robot, obs2, Rod.of(rod), [_deflection(fit.rod)],
+                    FitOptions(freed=fit.freed, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
+                               harmonics=tuple(ctx.result.harmonic_range_deg)))
     return res2, fit
 
 
@@ -368,11 +375,11 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                       fixture_sigma=(0.01, 0.002), harmonics=()):
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
-    from rodlab.calibrate import campaign_observations, identify
+    from rodlab.calibrate import FitOptions, campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
-    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
-                   harmonics=tuple(harmonics))
+    res = identify(robot, obs, Rod.of(rod), [_deflection(rod)],
+                   FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics)))
     ctx, tau = _context(robot, res, obs, camp, rod)
     sel = _Selection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()

@@ -31,10 +31,10 @@ def p_even(robot, rod, seed: int, factor: float) -> float:
         obs = campaign_observations(camp, read_fixture(Path(tmp) / "multical.fixture.json"), rod)
     res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)],
                    FitOptions(expected_noise_mm=0.003, fixture_sigma=(0.01, 0.002)))
-    ctx, tau = C._context(robot, res, obs, camp, rod)
-    sel = C._Selection(ctx, tau, 0.003, (0.01, 0.002), 3)
+    ctx, tau = C.campaign_context(robot, res, obs, camp, rod)
+    sel = C.CampaignSelection(ctx, tau, 0.003, (0.01, 0.002), 3)
     ew = sel.fit([])[2]
-    _, null_cov = C._device_noise_null(sel, ew, sel.J)
+    _, null_cov = C.device_noise_null(sel, ew, sel.J)
     return position_share_test(ew, sel.J, np.asarray(camp.position), np.ones(sel.N, bool), null_cov).p
 
 

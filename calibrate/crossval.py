@@ -23,7 +23,7 @@ from rodlab.enums import AccuracySource
 from .compensations import Compensation, total_offsets
 from .errors import CalibrationError
 from .estimate import FitOptions
-from .kinematics import ModelParams, ball_positions
+from .kinematics import ModelParams
 from .observations import Observations, register_base, register_base_and_tool
 from .rod import Rod
 
@@ -143,7 +143,7 @@ def prediction_errors(robot, params: ModelParams, obs: Observations, compensatio
     ``compensations``' offsets added, as the identification models them). ``local``: freed fixture offsets
     ``fixture_J_x`` ... (names), a clamping position's own unknowns, which the points of that position fit
     (as a validation refits base and tool): their mean residual along that axis is removed."""
-    fr, _ = ball_positions(robot, params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, _ = obs.balls(robot, params)
     off = total_offsets(compensations, robot, params, obs)
     r = obs.x_W_mm - off - fr.pW
     for g in ([] if obs.group is None else sorted(set(obs.group.tolist()))):

@@ -27,7 +27,7 @@ from .compensations import Compensation, total_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
-from .kinematics import ModelParams, ball_positions, harmonic_reference
+from .kinematics import ModelParams, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
 from .estimate import FitOptions, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
@@ -152,8 +152,7 @@ def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, 
     """The parameters to fit and why the others are held; refuses a data set that cannot identify what it
     must (unless ``fix_unidentifiable``), naming the parameters and the remedy."""
     N = obs.x_W_mm.shape[0]
-    fr, tau = ball_positions(robot, apply(start, infos, x), obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm,
-                             obs.force_W_N)
+    fr, tau = obs.balls(robot, apply(start, infos, x))
     J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
     free, reasons = select_free(robot, tool_mm, infos, J0, pinned, freed, positions)
     structural = structural_fixed(robot, tool_mm, positions)
@@ -244,8 +243,7 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
         new_off = total_offsets(compensations, robot, p, obs)
         change = float(np.abs(new_off - offsets).max())
         offsets = new_off
-        r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW
-              - (obs.x_W_mm - offsets) - _fixture_shift(infos, x, obs))
+        r3 = obs.balls(robot, p)[0].pW - (obs.x_W_mm - offsets) - _fixture_shift(infos, x, obs)
         dof = max(3 * N - len(free), 1)
         noise_est = max(float(np.sqrt((r3 ** 2).sum() / dof)), 1e-6)
         # weak parameters -> prior (once), then refit
@@ -264,7 +262,7 @@ def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_si
     """The calibration result: values, standard deviations and status of every parameter, residuals."""
     x, free, start, infos = st.x, st.free, problem.start, problem.infos
     p = apply(start, infos, x)
-    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, p)
     resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW
     sig, corr, cond = _sigmas(robot, p, infos, free, obs, st.noise_est, fixture_sigma, full=True)
     values, sigma, status = {}, {}, {}
@@ -296,7 +294,7 @@ def _memo_model(robot, start: ModelParams, infos, x: np.ndarray, free: list, obs
         xx = x.copy()
         xx[free] = z
         p = apply(start, infos, xx)
-        frr, tt = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+        frr, tt = obs.balls(robot, p)
         last["z"], last["out"] = z.copy(), (xx, p, frr, tt)
         return last["out"]
     return model_at
@@ -313,7 +311,7 @@ def _fixture_shift(infos, x, obs) -> np.ndarray:
 
 def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
     """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
-    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, p)
     J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
     S = noise_covariance(obs, noise, fixture_sigma)
     C = parameter_covariance(J)                        # (J^T J)^-1, inf where the data see nothing

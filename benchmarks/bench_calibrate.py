@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, resolve_robot, Rod,
+                              RodDeflection)
 from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.params import apply
@@ -31,11 +32,11 @@ def main() -> int:
         simulate_campaign(robot, rod, tmp, CampaignSpec(positions=5, orientations=30, seed=4, validation_points=10))
         camp, fix = read_campaign(Path(tmp) / "multical.campaign.csv"), read_fixture(Path(tmp) / "multical.fixture.json")
     obs = campaign_observations(camp, fix, rod)
-    identify(robot, obs, rod.tool_mm, rod)
+    identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)])
     times = []
     for _ in range(5):
         t0 = time.perf_counter()
-        res = identify(robot, obs, rod.tool_mm, rod)
+        res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)])
         times.append(time.perf_counter() - t0)
     # analytic vs finite-difference Jacobian at the solution
     infos = [i for i in res.infos if i.name in res.free]

@@ -49,7 +49,7 @@ def _cycle_seconds(tmp: Path) -> tuple[float, float]:
 
     from rodlab import calc_rod_compliance, resolve_design
     from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, read_points,
-                                  resolve_robot, validate)
+                                  resolve_robot, Rod, RodDeflection, validate)
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     robot, rod = resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1"))
     times, means = [], []
@@ -59,7 +59,7 @@ def _cycle_seconds(tmp: Path) -> tuple[float, float]:
         simulate_campaign(robot, rod, out, CampaignSpec(seed=seed, validation_points=30))
         obs = campaign_observations(read_campaign(out / "multical.campaign.csv"),
                                     read_fixture(out / "multical.fixture.json"), rod)
-        res = identify(robot, obs, rod.tool_mm, rod)
+        res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)])
         stats = validate(robot, res.params, read_points(out / "multical.validation.csv"))[0]
         times.append(time.perf_counter() - t0)
         means.append(stats.mean_mm)

@@ -17,7 +17,8 @@ import numpy as np
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.app.diagnose import campaign as C
 from rodlab.app.diagnose.spread import position_share_test
-from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate import (campaign_observations, FitOptions, identify, read_campaign, read_fixture,
+                              resolve_robot, Rod, RodDeflection)
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 
 
@@ -28,11 +29,12 @@ def p_even(robot, rod, seed: int, factor: float) -> float:
                                                         validation_points=5))
         camp = read_campaign(Path(tmp) / "multical.campaign.csv")
         obs = campaign_observations(camp, read_fixture(Path(tmp) / "multical.fixture.json"), rod)
-    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=0.003, fixture_sigma=(0.01, 0.002))
-    ctx, tau = C._context(robot, res, obs, camp, rod)
-    sel = C._Selection(ctx, tau, 0.003, (0.01, 0.002), 3)
+    res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)],
+                   FitOptions(expected_noise_mm=0.003, fixture_sigma=(0.01, 0.002)))
+    ctx, tau = C.campaign_context(robot, res, obs, camp, rod)
+    sel = C.CampaignSelection(ctx, tau, 0.003, (0.01, 0.002), 3)
     ew = sel.fit([])[2]
-    _, null_cov = C._device_noise_null(sel, ew, sel.J)
+    _, null_cov = C.device_noise_null(sel, ew, sel.J)
     return position_share_test(ew, sel.J, np.asarray(camp.position), np.ones(sel.N, bool), null_cov).p
 
 

@@ -105,7 +105,7 @@ class PointSet:
     path: Path | None = None
     sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
 
-def _read_text(path) -> tuple[Path, str]:
+def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
 
 
@@ -134,7 +134,7 @@ def leading_comments(text: str) -> list[tuple[int, str, str]]:
     return out
 
 
-def _table(p: Path, text: str, required: list[str], optional: list[str]):
+def read_table(p: Path, text: str, required: list[str], optional: list[str]):
     lines = text.splitlines()
     i = 0
     while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
@@ -183,10 +183,10 @@ def _campaign_columns(p: Path, text: str) -> tuple:
 def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
     """A campaign file; one of raw readings is converted with ``device`` (a :class:`~calibrate.device.Device`)
     when given, else kept as readings (``x_D_mm`` None: :func:`campaign_observations` then asks for it)."""
-    p, text = _read_text(path)
+    p, text = read_text_file(path)
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
     xyz = _campaign_columns(p, text)
-    header, rows = _table(p, text, ["position", "point"] + qs + list(xyz), ["time_s", "temp_C"])
+    header, rows = read_table(p, text, ["position", "point"] + qs + list(xyz), ["time_s", "temp_C"])
     pos, pt, q, x, t, T, ln = [], [], [], [], [], [], []
     seen = {}
     for k, r in rows:
@@ -216,7 +216,7 @@ def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
 
 
 def read_fixture(path) -> Fixture:
-    p, text = _read_text(path)
+    p, text = read_text_file(path)
     try:
         data = json.loads(text)
     except json.JSONDecodeError as e:
@@ -274,7 +274,7 @@ def write_fixture(fix: Fixture, path) -> Path:
 
 
 def read_points(path, n_joints: int = 6) -> PointSet:
-    p, text = _read_text(path)
+    p, text = read_text_file(path)
     meta = {key: (k, val) for k, key, val in leading_comments(text)}
     def vec(key, n):
         if key not in meta:
@@ -293,7 +293,7 @@ def read_points(path, n_joints: int = 6) -> PointSet:
     com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)
     temp = float(vec("temp_C", 1)[0]) if "temp_C" in meta else None
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = _table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS))
+    header, rows = read_table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS))
     q = np.array([[r[c] for c in qs] for _, r in rows])
     x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
     return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows))

@@ -12,17 +12,20 @@ error of the per-point differences.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
 
 from rodlab.enums import AccuracySource
 
-from .compensation import deflection_offsets
+from .compensations import Compensation, total_offsets
 from .errors import CalibrationError
-from .kinematics import ModelParams, ball_positions
+from .estimate import FitOptions
+from .kinematics import ModelParams
 from .observations import Observations, register_base, register_base_and_tool
+from .rod import Rod
 
 __all__ = ["Prediction", "cross_validate", "cross_validate_identify", "fold_labels", "prediction_errors",
            "nominal_fit", "DEFAULT_FOLDS"]
@@ -134,16 +137,14 @@ def fold_labels(obs: Observations, k: int = DEFAULT_FOLDS) -> tuple[np.ndarray, 
     return np.arange(N) % min(k, N), "interleaved poses"
 
 
-def prediction_errors(robot, params: ModelParams, obs: Observations, rod=None, also_compensate: tuple = (),
+def prediction_errors(robot, params: ModelParams, obs: Observations, compensations: Sequence[Compensation] = (),
                       local: set | frozenset = frozenset()) -> np.ndarray:
-    """Distance [mm], shape=(N,), between each measured point and the model's ball centre (rod deflection and
-    any further compensation added, as the identification models them). ``local``: freed fixture offsets
+    """Distance [mm], shape=(N,), between each measured point and the model's ball centre (the
+    ``compensations``' offsets added, as the identification models them). ``local``: freed fixture offsets
     ``fixture_J_x`` ... (names), a clamping position's own unknowns, which the points of that position fit
     (as a validation refits base and tool): their mean residual along that axis is removed."""
-    fr, _ = ball_positions(robot, params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
-    off = deflection_offsets(robot, params, obs.q_rad, obs.force_W_N, rod)
-    for extra in also_compensate:
-        off = off + extra.offsets(robot, params, obs)
+    fr, _ = obs.balls(robot, params)
+    off = total_offsets(compensations, robot, params, obs)
     r = obs.x_W_mm - off - fr.pW
     for g in ([] if obs.group is None else sorted(set(obs.group.tolist()))):
         m = obs.group == g
@@ -187,25 +188,24 @@ def cross_validate(robot, obs: Observations, fit: Callable[[Observations], Model
                       len(folds) - len(failed), failed)
 
 
-def cross_validate_identify(robot, obs: Observations, tool_mm, rod=None, *, fit_rms_mm: float,
-                            find_tool: bool = False, also_compensate: tuple = (), k: int = DEFAULT_FOLDS,
-                            **options) -> Prediction:
+def cross_validate_identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compensation] = (),
+                            options: FitOptions = FitOptions(), *, fit_rms_mm: float,
+                            k: int = DEFAULT_FOLDS) -> Prediction:
     """:func:`cross_validate` of :func:`calibrate.identify.identify` with the user's ``options`` (pins, frees,
-    robust loss, harmonics; what a fold cannot identify is held at nominal), the rod's deflection and
-    ``also_compensate`` modelled in the predictions as in the fit, freed fixture offsets refitted on their
-    position's held-out points, and the nominal model's base (``find_tool``: and tool) fitted on the same
-    points."""
+    robust loss, harmonics; what a fold cannot identify is held at nominal), the ``compensations`` modelled in
+    the predictions as in the fit, freed fixture offsets refitted on their position's held-out points, and the
+    nominal model's base (``options.find_tool``: and tool) fitted on the same points."""
     from .identify import identify
-    local = {nm for nm in options.get("freed", ()) if nm.startswith("fixture_")}
+    local = {nm for nm in options.freed if nm.startswith("fixture_")}
 
     def fit(train):
         here = set() if train.group is None else {str(g) for g in train.group.tolist()}
-        kept = {key: _present(val, here) for key, val in options.items() if key in ("pinned", "freed")}
-        return identify(robot, train, tool_mm, rod, find_tool=find_tool, also_compensate=also_compensate,
-                        expected_noise_mm=None, fix_unidentifiable=True, **(options | kept)).params
+        fold = replace(options, pinned=_present(options.pinned, here), freed=_present(options.freed, here),
+                       expected_noise_mm=None, fix_unidentifiable=True)
+        return identify(robot, train, rod, compensations, fold).params
 
-    return cross_validate(robot, obs, fit, lambda train: nominal_fit(robot, tool_mm, train, find_tool),
-                          lambda p, test: prediction_errors(robot, p, test, rod, also_compensate, local),
+    return cross_validate(robot, obs, fit, lambda train: nominal_fit(robot, rod.tool_mm, train, options.find_tool),
+                          lambda p, test: prediction_errors(robot, p, test, compensations, local),
                           fit_rms_mm, k)
 
 

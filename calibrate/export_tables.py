@@ -16,7 +16,7 @@ import numpy as np
 
 from rodlab.fileio import atomic_write_text
 
-from .calibration_file import CalibrationFile
+from .result import CalibrationFile
 from .kinematics import HARMONICS, ModelParams
 
 __all__ = ["params_yaml", "dh_table_csv", "write_params_yaml", "write_dh_csv"]

@@ -8,158 +8,99 @@
 3. LM (``scipy.optimize.least_squares``, analytic Jacobian) on the free parameters; weakly identified
    parameters (standard error above their physical scale) get a Gaussian prior at their initial value and
    are reported ``regularised``.
-4. Compensation: with a compliance file, the ball offset ``R_T^W (C_g g^T + C_F F^T)`` of every point is
-   computed from the current model and removed from the measurement (Eq. 11); steps 3-4 repeat until the
-   offsets stop changing (the paper's rough calibration is the first pass).
+4. Compensation: the ball offsets of every point by each of the ``compensations``
+   (:mod:`calibrate.compensations`: the rod's deflection ``R_T^W (C_g g^T + C_F F^T)`` from its compliance, its
+   thermal growth) are computed from the current model and removed from the measurement (Eq. 11); steps 3-4
+   repeat until the offsets stop changing (the paper's rough calibration is the first pass).
 5. Standard errors: sandwich estimate with the device noise (from the residuals) and the fixture-pose
    uncertainty, correlated within each clamping position.
 """
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.units import DEVICE_NOISE_MM
-
-from .compensation import deflection_offsets
+from .compensations import Compensation, total_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
 from .jacobian import position_jacobian
-from .kinematics import HARMONICS, ModelParams, ball_positions, harmonic_reference
+from .kinematics import ModelParams, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
-from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue, structural_fixed
+from .estimate import FitOptions, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
+from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
+from .result import CalibrationResult
+from .rod import Rod
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
-           "register_base_and_tool", "noise_covariance"]
+           "register_base_and_tool", "noise_covariance", "free_parameters"]
 
 log = logging.getLogger(__name__)
 
 
-@dataclass
-class CalibrationResult:
-    """Identified model and its statistics (scipy ``OptimizeResult`` style).
-
-    params : the identified :class:`ModelParams`; values / sigma : {name: value in contract units};
-    status : {name: identified | fixed | regularised}; unidentifiable : reasons; residuals_mm : (N, 3);
-    rms_mm : per scalar reading; noise_mm : estimate; correlation : (P, P) of the free parameters;
-    offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations;
-    warnings : reasons not to trust the result (:func:`trust_warnings`); cautions : what a trusted result
-    should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None;
-    harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over;
-    prediction : the held-out accuracy (:class:`~calibrate.crossval.Prediction`) once the caller has judged it
-    (:func:`~calibrate.trust.prediction_warnings`), else None
-    """
-
-    params: ModelParams
-    infos: list
-    values: dict
-    sigma: dict
-    status: dict
-    unidentifiable: list
-    residuals_mm: np.ndarray
-    rms_mm: float
-    noise_mm: float
-    correlation: np.ndarray
-    free: list
-    offsets_W_mm: np.ndarray
-    success: bool
-    message: str
-    nfev: int = 0
-    iterations: int = 0
-    condition: float = float("nan")
-    warnings: list = field(default_factory=list)
-    residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
-    cautions: list = field(default_factory=list)
-    harmonic_range_deg: dict = field(default_factory=dict)   # joint (1-based) -> (min, max) reading [deg] of the data
-    prediction: object = None              # calibrate.crossval.Prediction (held-out accuracy), or None
-
-
-def _select(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
-    """Free parameters: structural rules, user pins / frees, then the preference-ordered rank analysis."""
-    fixed = structural_fixed(robot, tool_mm, positions)
-    if "tool_y" in freed and f"dtheta_{robot.n}" not in freed:
-        fixed[f"dtheta_{robot.n}"] = "combined with the tool point's azimuth about the last axis (tool_x, tool_y)"
-    for name in freed:
-        fixed.pop(name, None)
-    for name in pinned:
-        fixed[name] = "pinned by the user"
-    A = J0.reshape(-1, J0.shape[-1])
-    norms = np.linalg.norm(A, axis=0)
-    kept: list[int] = []
-    Q = np.zeros((A.shape[0], 0))
-    reasons = dict(fixed)
-    for k, info in enumerate(infos):
-        if info.name in fixed:
-            continue
-        if norms[k] < 1e-12:
-            reasons[info.name] = "has no effect on the measured points"
-            continue
-        v = A[:, k] / norms[k]
-        r = v - Q @ (Q.T @ v)
-        if np.linalg.norm(r) < np.sqrt(tol) * 10 and info.name not in freed:
-            coef, *_ = np.linalg.lstsq(A[:, kept] / norms[kept], v, rcond=None)
-            big = [infos[kept[m]].name for m in np.argsort(-np.abs(coef)) if abs(coef[m]) > 0.1][:4]
-            reasons[info.name] = f"combined with {', '.join(big)} in this {_data_name(positions)}"
-            continue
-        kept.append(k)
-        Q = np.column_stack([Q, r / np.linalg.norm(r)])
-    return kept, reasons
-
-
-def identify(robot, obs: Observations, tool_mm, rod: RodCompliance | None = None, *, pinned: dict | None = None,
-             freed: set | None = None, robust: bool = False, max_compensation: int = 6,
-             fixture_sigma=(0.01, 0.002), initial: ModelParams | None = None,
-             expected_noise_mm: float | None = DEVICE_NOISE_MM, fix_unidentifiable: bool = False,
-             find_tool: bool = False, also_compensate: tuple = (), harmonics: tuple = ()) -> CalibrationResult:
+def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compensation] = (),
+             options: FitOptions = FitOptions()) -> CalibrationResult:
     """Identify the robot (and base, tool, joint compliance) from ``obs``; see the module docstring.
 
-    fix_unidentifiable : parameters this data set cannot separate (beyond the structural rules) are held at
-        their nominal values and reported, instead of refusing the data set. Meant for instrument data that
-        was not planned for this model (single-joint sweeps, few configurations); a planned campaign should
-        not need it.
-    find_tool : start from a tool point found from the data (:func:`register_base_and_tool`), for instrument
-        points whose tool is only roughly known.
-    also_compensate : further compensations beside the rod's deflection, each with
-        ``offsets(robot, params, obs)`` -> ball-centre offsets in {W} [mm], shape=(N, 3) (e.g.
-        :class:`~rodlab.calibrate.thermal.ThermalGrowth`); removed from the measurements with the deflection.
-    harmonics : joints (1-based) whose periodic angle errors (first and second harmonic of the joint reading,
-        ``h1s_j .. h2c_j``) are identified too: gear or encoder eccentricity that ``rodlab diagnose`` named.
+    rod : the rod on the flange (:class:`~rodlab.calibrate.rod.Rod`): its tool vector starts the fit
+    compensations : what is removed from the measurements, alternating with the fit (entries of
+        :data:`~rodlab.calibrate.compensations.COMPENSATIONS`, e.g. ``[RodDeflection.of(rod), ThermalGrowth(...)]``);
+        none: the rigid model
+    options : pins, frees, loss, periodic joint errors, noise level (:class:`~rodlab.calibrate.estimate.FitOptions`)
     """
-
+    if not isinstance(rod, Rod):
+        raise TypeError(f"identify takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm)), got "
+                        f"{type(rod).__name__}")
     _check_observations(obs)
-    _check_harmonics(harmonics, robot.n)
-    pinned, freed = dict(pinned or {}), set(freed or ())
-    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
-    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
-    infos = catalogue(robot.n, positions, harmonics)
-    _check_names([i.name for i in infos], pinned, freed)
-    start, tool_mm = _starting_model(robot, obs, tool_mm, initial, find_tool)
-    if harmonics or start.h.any():
-        start = _harmonic_start(start, obs.q_rad, harmonics)
-    x = _pinned_vector(infos, start, pinned)
-    free, reasons = _free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
-                                     fix_unidentifiable)
-    lower, upper = physical_bounds(infos, start)
-    x = np.clip(x, lower, upper)
-    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
-    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
-    rough = [k for k in free if infos[k].kind == "c"] if rod is not None and (rod.C_F.any() or rod.C_g.any()) \
-        else []
-    st = _compensate(robot, obs, rod, start, infos, x, free, rough, (lower, upper), robust, max_compensation,
-                     fixture_sigma, also_compensate)
-    out = _result(robot, obs, start, infos, reasons, st, fixture_sigma)
+    _check_harmonics(options.harmonics, robot.n)
+    problem, reasons = _problem(robot, obs, rod, compensations, options)
+    st = _compensate(robot, obs, problem, compensations, options)
+    out = _result(robot, obs, problem, reasons, st, options.fixture_sigma)
     out.harmonic_range_deg = {j: (float(np.rad2deg(obs.q_rad[:, j - 1].min())), float(np.rad2deg(obs.q_rad[:, j - 1].max())))
-                              for j in sorted(set(harmonics))}
-    if expected_noise_mm:
+                              for j in sorted(set(options.harmonics))}
+    if options.expected_noise_mm:
         from .residual_test import residual_test
-        out.residual_check = residual_test(robot, out, obs, expected_noise_mm, fixture_sigma)
+        out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
     from .trust import trust_cautions, trust_warnings
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out
+
+
+@dataclass
+class _Problem:
+    """What the compensation loop fits: the start model, the parameter catalogue, the internal vector ``x`` at
+    the start (pins applied), the free parameters, those held in the first pass (``rough``) and the bounds."""
+
+    start: ModelParams
+    infos: list
+    x: np.ndarray
+    free: list
+    rough: list
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+def _problem(robot, obs: Observations, rod: Rod, compensations, options: FitOptions) -> tuple[_Problem, dict]:
+    """The catalogue, the start model, the free parameters (and why the others are held) and the bounds."""
+    pinned, freed = dict(options.pinned), set(options.freed)
+    positions = sorted(set(obs.group.tolist())) if obs.group is not None else []
+    positions = [j for j in positions if obs.fixture_T is None or not np.allclose(obs.fixture_T[j], np.eye(4))]
+    infos = catalogue(robot.n, positions, options.harmonics)
+    check_names([i.name for i in infos], pinned, freed)
+    start, tool_mm = _starting_model(robot, obs, rod.tool_mm, options.initial, options.find_tool)
+    if options.harmonics or start.h.any():
+        start = _harmonic_start(start, obs.q_rad, options.harmonics)
+    x = pinned_vector(infos, start, pinned)
+    free, reasons = free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
+                                    options.fix_unidentifiable)
+    lower, upper = physical_bounds(infos, start)
+    # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
+    # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
+    rough = [k for k in free if infos[k].kind == "c"] if any(c.rough_pass for c in compensations) else []
+    return _Problem(start, infos, np.clip(x, lower, upper), free, rough, lower, upper), reasons
 
 
 def _check_observations(obs: Observations) -> None:
@@ -193,16 +134,6 @@ def _harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelPa
     return start.with_(h_ref=ref, theta_offset=th)
 
 
-def _check_names(names: list, pinned: dict, freed: set) -> None:
-    for nm in list(pinned) + list(freed):
-        if nm not in names:
-            from rodlab.errors import did_you_mean
-            kind, _, j = nm.rpartition("_")
-            hint = (f" It is a periodic joint error: add joint {j} to --joint-harmonics." if kind in HARMONICS
-                    else did_you_mean(nm, names))
-            raise CalibrationError(f"unknown parameter {nm!r}." + hint, key="parameters")
-
-
 def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool):
     """The model the fit starts from (nominal with the base registered to the points, or ``initial``) and the
     tool [mm] (found from the data with ``find_tool``)."""
@@ -216,26 +147,14 @@ def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool)
     return start, tool_mm
 
 
-def _pinned_vector(infos, start: ModelParams, pinned: dict) -> np.ndarray:
-    """The internal parameter vector: zero (the start) except the pinned values."""
-    names = [i.name for i in infos]
-    x = np.zeros(len(infos))
-    for nm, v in pinned.items():
-        k = names.index(nm)
-        x[k] = (v - _value(start, infos[k], 0.0)) * INTERNAL_SCALE[infos[k].unit] if infos[k].kind in (
-            "base_t", "base_r", "tool") else v * INTERNAL_SCALE[infos[k].unit]
-    return x
-
-
-def _free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, freed, positions,
+def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, freed, positions,
                      fix_unidentifiable: bool) -> tuple[list, dict]:
     """The parameters to fit and why the others are held; refuses a data set that cannot identify what it
     must (unless ``fix_unidentifiable``), naming the parameters and the remedy."""
     N = obs.x_W_mm.shape[0]
-    fr, tau = ball_positions(robot, apply(start, infos, x), obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm,
-                             obs.force_W_N)
+    fr, tau = obs.balls(robot, apply(start, infos, x))
     J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
-    free, reasons = _select(robot, tool_mm, infos, J0, pinned, freed, positions)
+    free, reasons = select_free(robot, tool_mm, infos, J0, pinned, freed, positions)
     structural = structural_fixed(robot, tool_mm, positions)
     structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in freed else None
     structural = {k: v for k, v in structural.items() if v is not None}
@@ -298,14 +217,14 @@ def _residual_functions(robot, start, infos, x, free, obs, target, prior, x0, no
     return fun, jac
 
 
-def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robust, max_compensation,
-                fixture_sigma, also_compensate) -> _Compensated:
+def _compensate(robot, obs, problem: _Problem, compensations, options: FitOptions) -> _Compensated:
     """Identification and compensation alternate until the offsets stop changing (paper Eqs. 11-19): each pass
     fits the model to the measurements minus the offsets, then recomputes the offsets with the new model;
     parameters too weak for the data get a prior (once) and are refitted."""
     N = obs.x_W_mm.shape[0]
-    lower, upper = bounds
-    x = x.copy()
+    start, infos, free_all, rough = problem.start, problem.infos, problem.free, problem.rough
+    lower, upper, fixture_sigma = problem.lower, problem.upper, options.fixture_sigma
+    x = problem.x.copy()
     prior = np.zeros(len(infos), dtype=bool)
     x_init = x.copy()                                   # priors are centred on the initial values
     offsets = np.zeros_like(obs.x_W_mm)
@@ -313,20 +232,18 @@ def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robus
     res = None
     it = 0
     free = list(free_all)
-    for it in range(1, max_compensation + 1):
+    for it in range(1, options.max_compensation + 1):
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
         fun, jac = _residual_functions(robot, start, infos, x, free, obs, target, prior, x_init[free], noise_est)
-        res = _solve(fun, jac, x[free], lower[free], upper[free], robust, 3 * noise_est, 200 * len(free))
+        res = solve(fun, jac, x[free], lower[free], upper[free], options.robust, 3 * noise_est,
+                    200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
-        new_off = deflection_offsets(robot, p, obs.q_rad, obs.force_W_N, rod)
-        for extra in also_compensate:
-            new_off = new_off + extra.offsets(robot, p, obs)
+        new_off = total_offsets(compensations, robot, p, obs)
         change = float(np.abs(new_off - offsets).max())
         offsets = new_off
-        r3 = (ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)[0].pW
-              - (obs.x_W_mm - offsets) - _fixture_shift(infos, x, obs))
+        r3 = obs.balls(robot, p)[0].pW - (obs.x_W_mm - offsets) - _fixture_shift(infos, x, obs)
         dof = max(3 * N - len(free), 1)
         noise_est = max(float(np.sqrt((r3 ** 2).sum() / dof)), 1e-6)
         # weak parameters -> prior (once), then refit
@@ -341,16 +258,16 @@ def _compensate(robot, obs, rod, start, infos, x, free_all, rough, bounds, robus
     return _Compensated(x, prior, offsets, noise_est, res, it, free)
 
 
-def _result(robot, obs, start, infos, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:
+def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:
     """The calibration result: values, standard deviations and status of every parameter, residuals."""
-    x, free = st.x, st.free
+    x, free, start, infos = st.x, st.free, problem.start, problem.infos
     p = apply(start, infos, x)
-    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, p)
     resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW
     sig, corr, cond = _sigmas(robot, p, infos, free, obs, st.noise_est, fixture_sigma, full=True)
     values, sigma, status = {}, {}, {}
     for k, info in enumerate(infos):
-        values[info.name] = _value(p, info, x[k])
+        values[info.name] = parameter_value(p, info, x[k])
         status[info.name] = "fixed"
         sigma[info.name] = 0.0
     for s, k in zip(sig, free):
@@ -365,23 +282,6 @@ def _result(robot, obs, start, infos, reasons, st: _Compensated, fixture_sigma) 
                              [infos[k].name for k in free], st.offsets, ok, str(msg), int(res.nfev), st.passes, cond)
 
 
-def _solve(fun, jac, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, robust: bool, f_scale: float, max_nfev: int):
-    """One least-squares pass. Without a robust loss, MINPACK's Levenberg-Marquardt runs first (several times
-    faster than the bounded trust-region solver); only if its solution leaves the physical bounds is the
-    bounded problem solved, from the clipped solution."""
-    from scipy.optimize import least_squares
-
-    tol = dict(xtol=1e-12, ftol=1e-12, gtol=1e-12)
-    bounded = bool(np.isfinite(lb).any() or np.isfinite(ub).any())
-    if not robust:
-        res = least_squares(fun, z0, jac=jac, method="lm", max_nfev=max_nfev, **tol)
-        if not bounded or (np.all(res.x >= lb) and np.all(res.x <= ub)):
-            return res
-        z0 = np.clip(res.x, lb, ub)
-    return least_squares(fun, z0, jac=jac, method="trf", bounds=(lb, ub) if bounded else (-np.inf, np.inf),
-                         loss="soft_l1" if robust else "linear", f_scale=f_scale, max_nfev=max_nfev, **tol)
-
-
 def _memo_model(robot, start: ModelParams, infos, x: np.ndarray, free: list, obs: Observations):
     """``z -> (internal vector, params, frames, torques)`` with the free parameters set to ``z``, remembering
     the last evaluation (the solver asks for the Jacobian at the point whose residual it just computed)."""
@@ -394,32 +294,10 @@ def _memo_model(robot, start: ModelParams, infos, x: np.ndarray, free: list, obs
         xx = x.copy()
         xx[free] = z
         p = apply(start, infos, xx)
-        frr, tt = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+        frr, tt = obs.balls(robot, p)
         last["z"], last["out"] = z.copy(), (xx, p, frr, tt)
         return last["out"]
     return model_at
-
-
-#: joint compliance a gearbox can have [rad/(N m)]: identified within [0, C_MAX] by construction (bounded LM)
-C_MAX = 1e-4
-
-
-def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds of the internal parameter vector: a joint compliance stays within [0, :data:`C_MAX`] (a negative
-    compliance is not a gearbox); every other parameter is free."""
-    lo = np.full(len(infos), -np.inf)
-    hi = np.full(len(infos), np.inf)
-    for k, info in enumerate(infos):
-        if info.kind == "c":
-            s = INTERNAL_SCALE[info.unit]
-            lo[k] = (0.0 - start.c[info.index]) * s
-            hi[k] = (C_MAX - start.c[info.index]) * s
-    return lo, hi
-
-
-def _data_name(positions) -> str:
-    """What the user measured: a MultiCal campaign (clamping positions) or instrument points."""
-    return "campaign" if len(positions) else "data set"
 
 
 def _fixture_shift(infos, x, obs) -> np.ndarray:
@@ -431,36 +309,9 @@ def _fixture_shift(infos, x, obs) -> np.ndarray:
     return shift
 
 
-def _value(p: ModelParams, info: ParamInfo, x_int: float) -> float:
-    """Contract-unit value: DH rows as errors (dtheta) or absolute (d, a, alpha, beta), c, base, tool absolute."""
-    i = info.index
-    k = info.kind
-    if k == "dtheta":
-        return float(x_int / INTERNAL_SCALE["deg"])
-    if k == "d":
-        return float(p.d[i])
-    if k == "a":
-        return float(p.a[i])
-    if k == "alpha":
-        return float(np.rad2deg(p.alpha[i]))
-    if k == "beta":
-        return float(np.rad2deg(p.beta[i]))
-    if k == "c":
-        return float(p.c[i])
-    if k in HARMONICS:
-        return float(np.rad2deg(p.h[i, list(HARMONICS).index(k)]))
-    if k == "base_t":
-        return float(p.base[i])
-    if k == "base_r":
-        return float(p.base[3 + i])
-    if k == "fixture":
-        return float(x_int)
-    return float(p.tool["xyz".index(info.name[-1])])
-
-
 def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
     """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
-    fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, p)
     J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
     S = noise_covariance(obs, noise, fixture_sigma)
     C = parameter_covariance(J)                        # (J^T J)^-1, inf where the data see nothing

@@ -12,7 +12,7 @@ a projected Levenberg-Marquardt iteration: one forward-kinematics call over the 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -40,28 +40,49 @@ class IkBatch:
     iterations: int
 
 
-def _residual_and_jacobian(robot, params: ModelParams, q, targets, loads):
+@dataclass(frozen=True)
+class _Batch:
+    """The problems one LM run solves: ball targets in {W} [mm] (M, 3); the rod's mass [kg] and centre of mass in
+    {T} [mm] and the contact forces in {W} [N] (M, 3) or None, which deflect the compliant joints; the joint
+    limits [rad] (n,); the iterations allowed and the position tolerance [mm]."""
+
+    targets: np.ndarray
+    rod_mass_kg: float
+    rod_com_T_mm: np.ndarray | None
+    force_W_N: np.ndarray | None
+    lo: np.ndarray
+    hi: np.ndarray
+    iterations: int
+    tol_mm: float
+
+    def rows(self, rows) -> "_Batch":
+        """The same problems restricted to ``rows``."""
+        return replace(self, targets=self.targets[rows],
+                       force_W_N=None if self.force_W_N is None else self.force_W_N[rows])
+
+
+def _residual_and_jacobian(robot, params: ModelParams, q, batch: _Batch):
     """Ball position error [mm], shape=(M, 3), and its Jacobian in {W} [mm/rad], shape=(M, 3, n) (the joint
     compliance's own dependence on q is neglected in the Jacobian, not in the residual)."""
-    rod_mass, com, force = loads
-    fr, _ = ball_positions(robot, params, q, rod_mass, com, force)
+    fr, _ = ball_positions(robot, params, q, batch.rod_mass_kg, batch.rod_com_T_mm, batch.force_W_N)
+    targets = batch.targets
     r = fr.pW - targets
     J0 = np.cross(fr.z_prev, fr.p0[:, None, :] - fr.o_prev)            # (M, n, 3) in {0}
     J = np.einsum("ij,mkj->mik", fr.R_W0, J0)                           # (M, 3, n) in {W}
     return r, J
 
 
-def _lm(robot, params, q0, targets, loads, lo, hi, q_pull, weight, iterations, tol):
-    """Projected LM over the batch; ``q_pull`` None: position only. Returns q, |r|, iterations run."""
+def _lm(robot, params, q0, batch: _Batch, q_pull=None, weight: float = 0.0):
+    """Projected LM over the batch, pulled towards ``q_pull`` with ``weight`` [mm/rad] (None: position only).
+    Returns q, |r|, iterations run."""
     M, n = q0.shape
+    lo, hi, iterations, tol = batch.lo, batch.hi, batch.iterations, batch.tol_mm
     q = np.clip(q0, lo, hi)
     lam = np.full(M, 1e-3)
     eye = np.eye(n)
 
     def cost_parts(qq, rows=slice(None)):
-        rod_mass, com, force = loads
-        r, J = _residual_and_jacobian(robot, params, qq, targets[rows],
-                                      (rod_mass, com, None if force is None else force[rows]))
+        r, J = _residual_and_jacobian(robot, params, qq, batch.rows(rows))
         c = np.einsum("mi,mi->m", r, r)
         if q_pull is not None:
             dq = qq - q_pull[rows]
@@ -109,13 +130,13 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_k
         raise CalibrationError(f"q_seed has {n} joints per row, the robot has {robot.n}", key="q_seed")
     targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
     force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
-    loads = (rod_mass_kg, rod_com_T_mm, force)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    batch = _Batch(targets, rod_mass_kg, rod_com_T_mm, force, lo, hi, iterations, pos_tol_mm)
     seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
     q, it1 = seed, 0
     if pull:
-        q, _, it1 = _lm(robot, params, seed, targets, loads, lo, hi, seed, SEED_WEIGHT, iterations, pos_tol_mm)
-    q, err, it2 = _lm(robot, params, q, targets, loads, lo, hi, None, 0.0, iterations, pos_tol_mm)
+        q, _, it1 = _lm(robot, params, seed, batch, seed, SEED_WEIGHT)
+    q, err, it2 = _lm(robot, params, q, batch)
     ok = (err < pos_tol_mm) & np.all((q >= lo) & (q <= hi), axis=1)
     return IkBatch(q, ok, err, it1 + it2)
 

@@ -5,7 +5,7 @@ import numpy as np
 
 from rodlab.frames import rot_x, rot_y
 
-from .kinematics import HARMONICS, Frames, _cross, harmonic_basis
+from .kinematics import HARMONICS, Frames, cross3, harmonic_basis
 from .params import INTERNAL_SCALE, ParamInfo
 
 __all__ = ["position_jacobian"]
@@ -27,7 +27,7 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
         i = info.index
         kind = info.kind
         if kind in ("dtheta", "c") or kind in HARMONICS:
-            col = _cross(fr.z_prev[:, i], p0 - fr.o_prev[:, i])
+            col = cross3(fr.z_prev[:, i], p0 - fr.o_prev[:, i])
             if kind == "c":
                 col = col * tau[:, i:i + 1]
             elif kind in HARMONICS:
@@ -38,9 +38,9 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
         elif kind == "a":
             col = fr.xA[:, i]
         elif kind == "alpha":
-            col = _cross(fr.xA[:, i], p0 - fr.o_i[:, i])
+            col = cross3(fr.xA[:, i], p0 - fr.o_i[:, i])
         elif kind == "beta":
-            col = _cross(fr.yB[:, i], p0 - fr.o_i[:, i])
+            col = cross3(fr.yB[:, i], p0 - fr.o_i[:, i])
         elif kind == "tool":
             col = Rn[:, :, "xyz".index(info.name[-1])]
         elif kind == "fixture":
@@ -51,7 +51,7 @@ def position_jacobian(fr: Frames, tau: np.ndarray, infos: list[ParamInfo], base_
             out[:, :, k] = np.eye(3)[i] / INTERNAL_SCALE[info.unit]
             continue
         elif kind == "base_r":
-            out[:, :, k] = _cross(axes_base[i], fr.pW - fr.t_W0) * (np.pi / 180.0) / INTERNAL_SCALE[info.unit]
+            out[:, :, k] = cross3(axes_base[i], fr.pW - fr.t_W0) * (np.pi / 180.0) / INTERNAL_SCALE[info.unit]
             continue
         else:  # pragma: no cover
             raise ValueError(kind)

@@ -159,7 +159,7 @@ def forward(params: ModelParams, q_rad: np.ndarray, tau_Nm: np.ndarray | None = 
     return Frames(T, z_prev, o_prev, xA, yB, o_i, p0, pW, R_W0, t_W0, theta, q, harmonic)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b over the last axis (broadcast), without np.cross's per-call overhead."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
@@ -187,21 +187,21 @@ def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=Non
     R, t = fr.T[:, 1:, :3, :3], fr.T[:, 1:, :3, 3]                    # (N, n, 3, 3), (N, n, 3)
     c = (R @ np.asarray(robot.com_mm, float)[:, :, None])[..., 0] + t
     F = np.broadcast_to(np.asarray(robot.mass_kg, float)[:, None] * g0, (N, n, 3))
-    M = _cross(c, F)                                                 # moment about {0}'s origin [N mm]
+    M = cross3(c, F)                                                 # moment about {0}'s origin [N mm]
     S = F.copy()
     if rod_mass_kg > 0:
         com = np.zeros(3) if rod_com_T_mm is None else np.asarray(rod_com_T_mm, float)
         cr = fr.p0 + fr.T[:, n, :3, :3] @ com
         Fr = np.broadcast_to(rod_mass_kg * g0, (N, 3))
-        M[:, n - 1] += _cross(cr, Fr)
+        M[:, n - 1] += cross3(cr, Fr)
         S[:, n - 1] += Fr
     if force_W_N is not None:
         F0 = np.broadcast_to(np.atleast_2d(force_W_N) @ fr.R_W0, (N, 3))   # {W} -> {0}
-        M[:, n - 1] += _cross(fr.p0, F0)
+        M[:, n - 1] += cross3(fr.p0, F0)
         S[:, n - 1] += F0
     Msum = np.cumsum(M[:, ::-1], axis=1)[:, ::-1]                      # sum over k >= i
     Ssum = np.cumsum(S[:, ::-1], axis=1)[:, ::-1]
-    return np.einsum("mij,mij->mi", fr.z_prev, Msum - _cross(fr.o_prev, Ssum)) * 1e-3   # N mm -> N m
+    return np.einsum("mij,mij->mi", fr.z_prev, Msum - cross3(fr.o_prev, Ssum)) * 1e-3   # N mm -> N m
 
 
 def ball_positions(robot, params: ModelParams, q_rad, rod_mass_kg=0.0, rod_com_T_mm=None, force_W_N=None,

@@ -57,6 +57,11 @@ class Observations:
             raise ValueError(f"noise_shape_W must have shape ({np.shape(self.x_W_mm)[0]}, 3, 3), got "
                              f"{np.shape(self.noise_shape_W)}")
 
+    def balls(self, robot, params: ModelParams):
+        """The model's frames and joint torques at these points (:func:`~.kinematics.ball_positions`) under the
+        loads they were measured with: the rod's weight and the contact forces."""
+        return ball_positions(robot, params, self.q_rad, self.rod_mass_kg, self.rod_com_T_mm, self.force_W_N)
+
     def subset(self, keep: np.ndarray) -> "Observations":
         """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""
         keep = np.asarray(keep, bool)

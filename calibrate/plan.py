@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .identify import _select
+from .estimate import select_free
 from .errors import CalibrationError
 from .ik import random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
@@ -63,7 +63,7 @@ def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: 
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod_mass_kg, rod_com_T_mm)
     Jall = position_jacobian(fr, tau, infos, p.base)
-    free, _ = _select(robot, tool_mm, infos, Jall, {}, set())
+    free, _ = select_free(robot, tool_mm, infos, Jall, {}, set())
     Jall = Jall[:, :, free]
     chosen = {j: list(range(k)) for j in cands}
     offsets = {j: int(np.sum([len(cands[i]) for i in cands if i < j])) for j in cands}

@@ -11,9 +11,17 @@ import numpy as np
 from rodlab.units import TRACKER_NOISE_MM
 
 from .campaign import PointSet
-from .identify import CalibrationResult, Observations, identify
+from .estimate import FitOptions
+from .identify import Observations, identify
+from .result import CalibrationResult
+from .rod import Rod
 
-__all__ = ["points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
+__all__ = ["points_rod", "points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
+
+
+def points_rod(pts: PointSet) -> Rod:
+    """The instrument's rigid probe: the file's tool and payload."""
+    return Rod.rigid(pts.tool_mm, pts.rod_mass_kg, pts.rod_com_T_mm)
 
 
 def points_observations(pts: PointSet) -> Observations:
@@ -38,9 +46,10 @@ def identify_points(robot, pts: PointSet, expected_noise_mm: float | None = TRAC
                     fix_unidentifiable: bool = False, harmonics=()) -> CalibrationResult:
     """Identify ``robot`` from instrument points: base and tool from scratch, ``tool_y`` free; ``None`` noise
     skips the residual test; ``harmonics``: joints whose periodic angle errors are identified too."""
-    return identify(robot, points_observations(pts), pts.tool_mm, None, pinned=dict(pinned or {}),
-                    freed=set(freed) | {"tool_y"}, robust=robust, fix_unidentifiable=fix_unidentifiable,
-                    find_tool=True, expected_noise_mm=expected_noise_mm, harmonics=tuple(harmonics))
+    options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust,
+                         fix_unidentifiable=fix_unidentifiable, find_tool=True, expected_noise_mm=expected_noise_mm,
+                         harmonics=tuple(harmonics))
+    return identify(robot, points_observations(pts), points_rod(pts), options=options)
 
 
 def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: dict | None = None, freed=(),
@@ -48,6 +57,7 @@ def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: di
     """The predicted accuracy of :func:`identify_points` with these options without a validation set: k-fold
     cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
     from .crossval import cross_validate_identify
-    return cross_validate_identify(robot, points_observations(pts), pts.tool_mm, None, fit_rms_mm=fit_rms_mm,
-                                   find_tool=True, pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"},
-                                   robust=robust, harmonics=tuple(harmonics))
+    options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust, find_tool=True,
+                         harmonics=tuple(harmonics))
+    return cross_validate_identify(robot, points_observations(pts), points_rod(pts), options=options,
+                                   fit_rms_mm=fit_rms_mm)

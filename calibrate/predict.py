@@ -9,7 +9,7 @@ One *replicate* is one campaign as it happens in practice (paper Section 5.2), s
    the true robot within the alignment tolerance; the device reads the deflected ball with its noise; the
    recorded fixture poses carry their uncertainty;
 3. a validation set of random configurations measured by an external instrument (short rigid rod);
-4. identification with compensation once per method, the methods being data (:class:`Compensation`):
+4. identification with compensation once per method, the methods being data (compliance files):
    ``none``; ``calc`` (closed form) and ``fea`` (the reference), both off by the true ``r_rod``; ``meas``, the
    rig's ``r_rod`` within its fit's uncertainty times the reference (paper Eq. 22); then validation.
 
@@ -34,12 +34,14 @@ from rodlab.enums import Method
 from rodlab.frames import pose_to_matrix
 
 from .campaign import Fixture, PointSet
-from .compensation import Compensation, deflection_offsets
+from .compensations import RodDeflection, deflection_offsets
 from .errors import CalibrationError
+from .estimate import FitOptions
 from .rod_slip import slip_directions, slip_offsets
 from .identify import Observations, identify
 from .ik import solve_ik_positions
 from .kinematics import ModelParams, ball_positions
+from .rod import Rod
 from .simulate import random_truth, robot_floor
 from .validate import ErrorStats, validate
 
@@ -49,7 +51,7 @@ __all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replic
 
 #: the validation rod (short, rigid) of the simulated instrument: tool [mm], mass [kg], COM in {T} [mm]
 VALIDATION_TOOL_MM = (0.0, 0.0, 150.0)
-_VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
+VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
 
 
 @dataclass(frozen=True)
@@ -238,7 +240,7 @@ def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet
     vtrue = truth.with_(tool=tool + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (int(priors.validation_points), robot.n))
-    mass, com = _VALIDATION_MASS
+    mass, com = VALIDATION_MASS
     fr, _ = ball_positions(robot, vtrue, vq if floor is None else floor.angles(vq), mass, np.asarray(com, float))
     noisy = fr.pW + rng.normal(0, priors.instrument_noise_mm, fr.pW.shape)
 
@@ -264,27 +266,28 @@ def _true_rod(reference: RodCompliance, priors: Priors, rng) -> tuple[float, Rod
 
 def _method_files(methods, reference: RodCompliance, calc: RodCompliance | None, true: RodCompliance,
                   r_true: float, priors, rng):
-    """{method: Compensation} as the files stand to the true rod: calc and fea as computed; meas the rig's
-    ``C_F`` (the true one within ``meas_sigma``) and ``C_g = r_meas C_g,sim`` (paper Eq. 22)."""
+    """{method: compliance file, None for method none} as the files stand to the true rod: calc and fea as
+    computed; meas the rig's ``C_F`` (the true one within ``meas_sigma``) and ``C_g = r_meas C_g,sim`` (paper
+    Eq. 22)."""
     r_meas = r_true * (1.0 + priors.meas_sigma * rng.standard_normal())
     meas = _congruent(true, 1.0, priors.meas_sigma, Method.MEAS, rng, C_g=r_meas * reference.C_g)
     out = {}
     for m in methods:
         if m is Method.NONE:
-            out[m] = Compensation.of(None)
+            out[m] = None
         elif m is Method.CALC:
             if calc is None:
                 raise CalibrationError("method calc needs the closed-form compliance file", key="methods")
-            out[m] = Compensation.of(calc)
+            out[m] = calc
         elif m is Method.FEA:
-            out[m] = Compensation.of(reference)
+            out[m] = reference
         else:
-            out[m] = Compensation.of(meas)
+            out[m] = meas
     return out
 
 
-def _calibrated_ms(robot, obs, tool_mm, comp: Compensation, pts: PointSet):
-    res = identify(robot, obs, tool_mm, comp.rod if comp.active else None, expected_noise_mm=None)
+def _calibrated_ms(robot, obs, rod: Rod, comp: RodDeflection, pts: PointSet):
+    res = identify(robot, obs, rod, [comp], FitOptions(expected_noise_mm=None))
     stats, err, _ = validate(robot, res.params, pts)
     return stats, float(np.mean(err ** 2)), bool(res.success)
 
@@ -329,12 +332,13 @@ def run_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCom
     sim = simulate_replicate(robot, plan_q, fixture, base, reference, calc, methods, priors, seed)
     obs, pts = sim.campaign.observations(), sim.points
     stats, ms, ok = {}, {}, {}
-    for m, comp in sim.files.items():
-        stats[m], ms[m], ok[m] = _calibrated_ms(robot, obs, reference.tool_mm, comp, pts)
+    rod = Rod.of(reference)
+    for m, file in sim.files.items():
+        stats[m], ms[m], ok[m] = _calibrated_ms(robot, obs, rod, RodDeflection.of(file), pts)
     ms_true = ms_clean = float("nan")
     if budget:
-        exact = Compensation.of(sim.rod_true, "true rod")
-        ms_true = _calibrated_ms(robot, obs, reference.tool_mm, exact, pts)[1]
+        exact = RodDeflection.of(sim.rod_true, "true rod")
+        ms_true = _calibrated_ms(robot, obs, rod, exact, pts)[1]
         _, err, _ = validate(robot, sim.truth, pts)                  # the true robot itself, base / tool refitted
         ms_clean = float(np.mean(err ** 2))
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]

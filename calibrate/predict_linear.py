@@ -10,7 +10,7 @@ identified parameters by ``A y``, ``A = (J^T J + L^T L)^-1 J^T`` with ``J`` the 
 - the device noise and the recorded fixture poses' uncertainty ``eps ~ N(0, Sigma)``
   (:func:`calibrate.observations.noise_covariance`);
 - what the compensation leaves of the rod's deflection: the offsets are linear in the compliance (Eq. 19,
-  :func:`calibrate.compensation.deflection_basis` ``B``), so the error is the *bias*
+  :func:`calibrate.compensations.deflection_basis` ``B``), so the error is the *bias*
   ``B vec(C_true - C_file)``, ``C_true = r S C_FEA S^T`` with ``r`` from the material's r_rod prior;
 - what neither the model nor any compensation describes, drawn per draw and added to the data as Monte Carlo
   adds it: the rod's non-repeatable deflection (:mod:`calibrate.rod_slip`, ``priors.rod_slip``) and the robot's
@@ -40,13 +40,13 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
 
 from .campaign import Fixture
-from .compensation import deflection_basis
-from .identify import _free_parameters
+from .compensations import deflection_basis
+from .identify import free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
-from .predict import _VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .predict import VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
 from .unmodelled import campaign_offsets, validation_floor_offsets
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
@@ -190,7 +190,7 @@ def linear_campaign(robot, plan_q: dict, fixture: Fixture, base, reference: RodC
     obs = _campaign_observations(robot, model, plan_q, fixture, reference)
     positions = [j for j in sorted(set(obs.group.tolist())) if not np.allclose(obs.fixture_T[j], np.eye(4))]
     infos = catalogue(robot.n, positions)
-    free, _ = _free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
+    free, _ = free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
                                positions, False)
     fr, tau = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     free_infos = [infos[k] for k in free]
@@ -235,7 +235,7 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     M, D = int(priors.validation_points), int(draws)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (D * M, robot.n))
-    mass, com = _VALIDATION_MASS
+    mass, com = VALIDATION_MASS
     model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
     fr, tau = ball_positions(robot, model, vq, mass, np.asarray(com, float))
     kin = _kin_infos(robot.n)
@@ -378,7 +378,7 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
     key = (repr(robot), float(priors.robot_floor_mm), tuple(priors.joint_compliance), int(seed),
            hash(vd.q_rad.tobytes()))
     if key not in _VFLOOR:                            # the same for every design: kept for the next one
-        mass, com = _VALIDATION_MASS
+        mass, com = VALIDATION_MASS
         model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
         _VFLOOR.clear()
         _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm,

@@ -42,7 +42,7 @@ def write_replicate(sim: SimulatedReplicate, fixture: Fixture, reference: RodCom
     lines += [",".join(f"{v:.6f}" for v in q) + "," + ",".join(f"{v:.6f}" for v in x)
               for q, x in zip(p.q_deg, p.x_W_mm)]
     paths["validation"] = atomic_write_text(out / "validation.csv", "\n".join(lines) + "\n")
-    for m, comp in sim.files.items():
-        rod = comp.rod if comp.rod is not None else RodCompliance.none_like(reference)
+    for m, file in sim.files.items():
+        rod = file if file is not None else RodCompliance.none_like(reference)
         paths[str(m)] = write_compliance(rod, out / f"{m}.compliance.json")
     return paths

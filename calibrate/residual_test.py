@@ -85,12 +85,11 @@ def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002))
 
     from .observations import noise_covariance
     from .jacobian import position_jacobian
-    from .kinematics import ball_positions
 
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise ValueError(f"noise_mm must be > 0, got {noise_mm!r}")
     N = obs.x_W_mm.shape[0]
-    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, res.params)
     free = [i for i in res.infos if i.name in res.free]
     J = position_jacobian(fr, tau, free, res.params.base, obs.group).reshape(3 * N, -1)
     L = np.linalg.cholesky(noise_covariance(obs, noise_mm, fixture_sigma))

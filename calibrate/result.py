@@ -1,21 +1,71 @@
-"""The calibration result file (contract ``rodlab.calibration/1``; ``/2`` when it carries periodic joint errors)."""
+"""The calibration result: the type identification returns (:class:`CalibrationResult`), its file (contract
+``rodlab.calibration/1``; ``/2`` when it carries periodic joint errors) written (:func:`result_dict`,
+:func:`write_result`) and read back (:func:`read_calibration`) with the model it describes
+(:func:`calibrated_params`)."""
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
 
 from rodlab.fileio import atomic_write_json, json_safe
 
-from .identify import CalibrationResult
-from .kinematics import HARMONICS
-from .validate import ErrorStats
+from .errors import CalibrationError
+from .kinematics import HARMONICS, ModelParams
 
-__all__ = ["result_dict", "write_result", "FORMAT_CALIBRATION", "FORMAT_CALIBRATION_HARMONICS", "CALIBRATION_FORMATS"]
+if TYPE_CHECKING:                                      # validate -> points -> identify -> result
+    from .validate import ErrorStats
+
+__all__ = ["CalibrationResult", "result_dict", "write_result", "FORMAT_CALIBRATION", "FORMAT_CALIBRATION_HARMONICS",
+           "CALIBRATION_FORMATS", "CalibratedParameter", "CalibrationFile", "read_calibration", "calibrated_params"]
 
 FORMAT_CALIBRATION = "rodlab.calibration/1"
 #: the same with the periodic joint-error parameters ``h1s_j .. h2c_j``: a new version, so that a reader of
 #: ``/1`` refuses the file instead of dropping a part of the model it does not know
 FORMAT_CALIBRATION_HARMONICS = "rodlab.calibration/2"
 CALIBRATION_FORMATS = (FORMAT_CALIBRATION, FORMAT_CALIBRATION_HARMONICS)
+
+
+@dataclass
+class CalibrationResult:
+    """Identified model and its statistics (scipy ``OptimizeResult`` style).
+
+    params : the identified :class:`ModelParams`; values / sigma : {name: value in contract units};
+    status : {name: identified | fixed | regularised}; unidentifiable : reasons; residuals_mm : (N, 3);
+    rms_mm : per scalar reading; noise_mm : estimate; correlation : (P, P) of the free parameters;
+    offsets_W_mm : the compensated rod-deflection offsets (N, 3); success, message, nfev, iterations;
+    warnings : reasons not to trust the result (:func:`trust_warnings`); cautions : what a trusted result
+    should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None;
+    harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over;
+    prediction : the held-out accuracy (:class:`~calibrate.crossval.Prediction`) once the caller has judged it
+    (:func:`~calibrate.trust.prediction_warnings`), else None
+    """
+
+    params: ModelParams
+    infos: list
+    values: dict
+    sigma: dict
+    status: dict
+    unidentifiable: list
+    residuals_mm: np.ndarray
+    rms_mm: float
+    noise_mm: float
+    correlation: np.ndarray
+    free: list
+    offsets_W_mm: np.ndarray
+    success: bool
+    message: str
+    nfev: int = 0
+    iterations: int = 0
+    condition: float = float("nan")
+    warnings: list = field(default_factory=list)
+    residual_check: object = None          # calibrate.residual_test.ResidualTest, or None without a noise level
+    cautions: list = field(default_factory=list)
+    harmonic_range_deg: dict = field(default_factory=dict)   # joint (1-based) -> (min, max) reading [deg] of the data
+    prediction: object = None              # calibrate.crossval.Prediction (held-out accuracy), or None
 
 
 def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorStats | None = None,
@@ -52,3 +102,136 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
 
 def write_result(path: str | Path, data: dict) -> Path:
     return atomic_write_json(path, data)
+
+
+@dataclass(frozen=True)
+class CalibratedParameter:
+    """One parameter of a result: value and 1-sigma in ``unit`` (contract units), and how it was treated
+    (``identified`` / ``regularised`` / ``fixed`` / ``pinned``)."""
+
+    value: float
+    sigma: float
+    unit: str
+    status: str
+
+
+@dataclass(frozen=True)
+class CalibrationFile:
+    """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters; for a
+    ``/2`` result the periodic terms' references (joint -> 4 means) and the readings they were identified over
+    (joint -> (min, max) [deg])."""
+
+    path: Path
+    robot: str
+    compensation: str
+    trusted: bool
+    residual_rms_mm: float
+    parameters: dict
+    harmonic_reference: dict = field(default_factory=dict)
+    harmonic_range_deg: dict = field(default_factory=dict)
+
+
+def read_calibration(path) -> CalibrationFile:
+    """Read a result file; errors name the file and key and say what is expected."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+        data = json.loads(text)
+    except FileNotFoundError as e:
+        raise CalibrationError("file not found", path=p) from e
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        line = getattr(e, "lineno", None)
+        raise CalibrationError(f"not a JSON calibration result: {e}", path=p, line=line) from e
+    if not isinstance(data, dict) or data.get("format") not in CALIBRATION_FORMATS:
+        got = data.get("format") if isinstance(data, dict) else type(data).__name__
+        raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" or \"{CALIBRATION_FORMATS[1]}\" (written by "
+                               f"`rodlab calibrate --json`), got {got!r}", path=p, key="format")
+    from rodlab.schema import require_schema
+    require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
+    params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
+              for name, v in data["parameters"].items()}
+    ref, rng = _harmonics(data, params, p)
+    return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
+                           bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params,
+                           ref, rng)
+
+
+def _harmonics(data: dict, params: dict, p: Path) -> tuple[dict, dict]:
+    """The ``/2`` block: {joint: reference} and {joint: (min, max)}; periodic parameters need it and ``/2``."""
+    named = [name.rpartition("_") for name in params if name.rpartition("_")[0] in HARMONICS]
+    bad = [f"{k}_{j}" for k, _, j in named if not j.isdigit()]
+    if bad:
+        raise CalibrationError(f"parameters {bad}: a periodic joint error is named like h1s_4 (term, joint number)",
+                               path=p, key="parameters")
+    joints = {int(j) for _, _, j in named}
+    block = data.get("joint_harmonics", {})
+    reversed_ = [j for j, v in block.items() if v["q_min_deg"] > v["q_max_deg"]]
+    if reversed_:
+        raise CalibrationError(f"joint_harmonics of joints {reversed_}: q_min_deg is above q_max_deg", path=p,
+                               key="joint_harmonics")
+    if (joints or block) and data["format"] == FORMAT_CALIBRATION:
+        raise CalibrationError(f"periodic joint-error parameters of joints {sorted(joints)} in a \"{FORMAT_CALIBRATION}\" "
+                               f"file: they belong to \"{CALIBRATION_FORMATS[1]}\" (written by `rodlab calibrate "
+                               f"--joint-harmonics`)", path=p, key="format")
+    missing = sorted(j for j in joints if str(j) not in block)
+    if missing:
+        raise CalibrationError(f"periodic joint errors of joints {missing} have no reference in `joint_harmonics`; "
+                               f"write the file with `rodlab calibrate --joint-harmonics`", path=p,
+                               key="joint_harmonics")
+    return ({int(j): v["reference"] for j, v in block.items()},
+            {int(j): (v["q_min_deg"], v["q_max_deg"]) for j, v in block.items()})
+
+
+def _sigma(v: dict) -> float:
+    """A parameter's standard error: absent (a held parameter) is 0; ``null`` is what JSON makes of an infinite
+    one (a direction the data do not see), read back as ``inf``."""
+    if "sigma" not in v:
+        return 0.0
+    return float("inf") if v["sigma"] is None else float(v["sigma"])
+
+
+def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
+    """The identified model (internal units) of ``robot``; parameters absent from the file stay nominal."""
+    n = robot.n
+    joints = {int(k.split("_")[1]) for k in cal.parameters if k.startswith("dtheta_") and k[7:].isdigit()}
+    if joints != set(range(1, n + 1)):
+        raise CalibrationError(f"this result does not describe a {n}-joint robot (robot {robot.name!r}); export "
+                               f"with the robot the calibration used (it says {cal.robot!r})", path=cal.path,
+                               key="parameters")
+    _check_description(robot, cal)
+    beyond = sorted(j for j in cal.harmonic_reference if not 1 <= j <= n)   # every term's joint has one (read_calibration)
+    if beyond:
+        raise CalibrationError(f"periodic joint errors of joints {beyond}, which this {n}-joint robot does not have; "
+                               f"export with the robot the calibration used (it says {cal.robot!r})", path=cal.path,
+                               key="joint_harmonics")
+    p = ModelParams.nominal(robot, np.zeros(3))
+
+    def get(name, default):
+        return cal.parameters[name].value if name in cal.parameters else default
+
+    rows = {k: np.array([get(f"{k}_{i + 1}", float(v[i])) for i in range(n)])
+            for k, v in (("d", robot.d_mm), ("a", robot.a_mm), ("alpha", robot.alpha_deg), ("beta", robot.beta_deg),
+                         ("dtheta", np.zeros(n)), ("c", np.zeros(n)))}
+    h = np.deg2rad([[get(f"{t}_{i + 1}", 0.0) for t in HARMONICS] for i in range(n)])
+    h_ref = np.array([cal.harmonic_reference.get(i + 1, [0.0] * len(HARMONICS)) for i in range(n)], float)
+    return ModelParams(np.deg2rad(robot.theta_offset_deg + rows["dtheta"]), rows["d"], rows["a"],
+                       np.deg2rad(rows["alpha"]), np.deg2rad(rows["beta"]), rows["c"],
+                       np.array([get(f"base_{k}", 0.0) for k in "xyzabc"]),
+                       np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h, h_ref)
+
+
+def _check_description(robot, cal: CalibrationFile) -> None:
+    """Rows the calibration held at nominal must be this description's nominal: else it is another robot file
+    (a URDF's rows differ from a hand-written DH table of the same arm)."""
+    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
+    for name, v in cal.parameters.items():
+        kind, _, idx = name.rpartition("_")
+        if v.status != "fixed" or kind not in nominal or not idx.isdigit():
+            continue
+        expected = float(nominal[kind][int(idx) - 1])
+        if abs(v.value - expected) > 1e-6 * max(1.0, abs(expected)):
+            raise CalibrationError(f"{name} was held at {v.value:g} {v.unit} by the calibration, but this robot "
+                                   f"description ({robot.name!r}) has {expected:g}: the result was made with another "
+                                   f"description of the robot (it names {cal.robot!r}); export with the one the "
+                                   f"calibration used", path=cal.path,
+                                   key=f"parameters.{name}")

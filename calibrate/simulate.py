@@ -9,6 +9,7 @@ configurations is measured by an external instrument with a short rigid rod.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from rodlab.frames import matrix_to_pose, rotation_from_abc
 
 from .campaign import Fixture
 from .errors import CalibrationError
-from .compensation import deflection_offsets
+from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, deflection_offsets
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
 from .ik import random_configurations, solve_ik_groups
 from .kinematics import ModelParams, ball_positions
@@ -207,7 +208,7 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
 
 
 def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = CampaignSpec(), *,
-                      rod_true: RodCompliance | None = None, effects=None, rod_thermal=None,
+                      rod_true: RodCompliance | None = None, effects=None, compensations: Sequence[Compensation] = (),
                       temp_K_per_s: float = 0.0, device=None) -> dict:
     """Write ``multical.campaign.csv``, ``multical.fixture.json``, ``multical.validation.csv``, ``truth.json``
     and the rod file into ``out_dir`` (with a device also ``multical.device.json`` and ``multical.probe.csv``,
@@ -219,13 +220,17 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         (an effect may repeat in the list form) with the names and parameters of
         :data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS` (e.g. ``{"fixture_pose": {"position": 2,
         "offset_mm": [0.1, 0, 0]}}``; missing magnitudes take the effect's example);
-    rod_thermal, temp_K_per_s : (:class:`~rodlab.calibrate.thermal.ThermalGrowth`) the room warms from 22 degC
-        at that rate during the campaign and the rod's tool vector grows with it (the ``temp_C`` column records
+    compensations : what the true rod does beyond its deflection (which ``rod_true`` gives), as the entries of
+        :data:`~rodlab.calibrate.compensations.COMPENSATIONS` a calibration would remove it with: each one's
+        offsets (true robot, true angles, contact forces, the recorded temperatures) move the readings, e.g.
+        :class:`~rodlab.calibrate.compensations.ThermalGrowth`;
+    temp_K_per_s : the room warms from 22 degC at that rate during the campaign (the ``temp_C`` column records
         it);
     device : a :class:`~calibrate.device.Device` as built: the campaign then holds its sensors' raw readings
         (``s1_mm, s2_mm, s3_mm``, each with the device noise), the springs push the ball with the force at each
         reading, and ``multical.device.json`` is written (the caller may write another, e.g. a nominal one)."""
     active = complete_campaign_effects(effects)
+    _check_compensations(compensations)
     for m, p in active:
         m.check_layout(spec.positions, spec.positions * spec.orientations, robot.n, p)
     rng = np.random.default_rng(spec.seed)
@@ -235,7 +240,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         rod_true = m.true_rod(rod_true, p)
     truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale).with_(base=standard_base())
     wp, Ts = fixture_layout(spec.positions, rng)
-    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s, device)
+    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s,
+                         device)
     xD, corrupted = _corrupt(readings, spec, active)
     readings = replace(readings, xD=xD)
     out.mkdir(parents=True, exist_ok=True)             # after every check and the reachability of the poses
@@ -253,7 +259,7 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
     from rodlab.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
-    t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, rod_thermal, temp_K_per_s)
+    t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s)
     atomic_write_json(out / "truth.json", t)
     return t
 
@@ -323,7 +329,7 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
 
 
-def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, temp_K_per_s, device=None
+def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s, device=None
               ) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
@@ -344,8 +350,8 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, rod_thermal, t
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
         temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
-        if rod_thermal is not None:
-            grow_W = rod_thermal.offsets_at(robot, truth, qt, temps, Fm, rod.mass_kg, rod.com_T_mm)
+        for c in compensations:
+            grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod.mass_kg, rod.com_T_mm))
             xD = xD + grow_W @ Tinv[:3, :3].T
         for eff, p in active:
             grow = eff.reading_offset_W(pW, times, fr.t_W0, p)
@@ -411,7 +417,18 @@ def _write_validation(path: Path, robot, truth, spec, rng, active) -> None:
     atomic_write_text(path, "\n".join(lines) + "\n")
 
 
-def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, rod_thermal, temp_K_per_s) -> dict:
+def _check_compensations(compensations) -> None:
+    """The simulator's compensations: registry entries beside the rod's deflection (``rod_true`` is that)."""
+    for c in compensations:
+        if not isinstance(c, Compensation):
+            raise CalibrationError(f"compensations: {c!r} is not a compensation (one of {', '.join(COMPENSATIONS)})",
+                                   key="compensations")
+        if isinstance(c, RodDeflection):
+            raise CalibrationError("compensations: the simulated rod deflects by its compliance already; give the "
+                                   "true rod as rod_true instead of a rod_deflection entry", key="compensations")
+
+
+def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s) -> dict:
     """``truth.json``: the true model, fixture poses and every simulated effect with its parameters."""
     t = {"format": "rodlab.truth.campaign/1", "seed": spec.seed, "spec": spec.__dict__,
          "true_base_pose_W": truth.base.tolist(), "true_tool_mm": truth.tool.tolist(),
@@ -424,8 +441,9 @@ def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, rod_
     for m, p in active:
         for k, v in m.truth(p).items():
             t[k] = {**t[k], **v} if isinstance(v, dict) and isinstance(t.get(k), dict) else v
-    t.update({"rod_thermal_growth_T_mm_per_K": None if rod_thermal is None else rod_thermal.growth_T_mm_per_K.tolist(),
-              "temp_K_per_s": float(temp_K_per_s),
+    simulated = {k: v for c in COMPENSATIONS.values() for k, v in c.truth_of(None).items()}
+    simulated.update({k: v for c in compensations for k, v in type(c).truth_of(c).items()})
+    t.update({**simulated, "temp_K_per_s": float(temp_K_per_s),
               "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0,
               "effects": [{"effect": str(m.effect), **p} for m, p in active], **corrupted})
     return t

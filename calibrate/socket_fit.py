@@ -26,7 +26,8 @@ import numpy as np
 
 from .covariance import correlation, parameter_covariance
 from .errors import CalibrationError
-from .identify import CalibrationResult, _check_names, _pinned_vector, _select, _solve
+from .estimate import check_names, parameter_value, pinned_vector, select_free, solve
+from .result import CalibrationResult
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
@@ -175,7 +176,7 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     Jp = _off_centres(J, len(infos))
     rules = _rule_held(robot, prob, pinned)
     rules |= _negligible(infos, Jp, set(rules) | set(pinned) | freed)
-    free, reasons = _select(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
+    free, reasons = select_free(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
                             freed | {"tool_y"})
     reasons |= rules
     structural = set(structural_fixed(robot, start.tool)) | {f"dtheta_{robot.n}"} | set(rules)
@@ -235,10 +236,10 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     loss that lets readings beyond about 3 sigma lose weight (a ball not fully seated)."""
     pinned, freed = dict(pinned or {}), set(freed)
     infos = catalogue(robot.n)
-    _check_names([i.name for i in infos], pinned, freed)
+    check_names([i.name for i in infos], pinned, freed)
     prob = _Problem.of(readings)
     start = socket_start(robot, readings)
-    x = _pinned_vector(infos, start, pinned)
+    x = pinned_vector(infos, start, pinned)
     fr, _ = ball_positions(robot, apply(start, infos, x), readings.q_rad)
     C = socket_centres(fr.pW, readings)
     free, reasons = _free_parameters(robot, start, infos, prob, C, pinned, freed, fix_unidentifiable)
@@ -247,7 +248,7 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     x0 = x.copy()
     for _ in range(max_passes):
         fun, jac = _functions(robot, start, infos, x, free, prob, prior, x0[free])
-        sol = _solve(fun, jac, np.concatenate([x[free], C.ravel()]), np.full(len(free) + C.size, -np.inf),
+        sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), np.full(len(free) + C.size, -np.inf),
                      np.full(len(free) + C.size, np.inf), robust, 3.0, 200 * (len(free) + C.size))
         x[free], C = sol.x[:len(free)], sol.x[len(free):].reshape(-1, 3)
         reduced = float(sol.fun @ sol.fun) / max(sol.fun.size - sol.x.size, 1)
@@ -273,7 +274,6 @@ def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
 
 def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, sol, C) -> SocketFit:
     """The calibration result (values, sigmas, status, residuals, trust) and the centres."""
-    from .identify import _value
     from .trust import trust_cautions, trust_warnings
     r = prob.readings
     p = apply(start, infos, x)
@@ -283,7 +283,7 @@ def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, so
     cov = _covariance(sol.jac, chi2 / dof)
     sig = np.sqrt(np.diag(cov))
     P = len(free)
-    values = {i.name: _value(p, i, x[k]) for k, i in enumerate(infos)}
+    values = {i.name: parameter_value(p, i, x[k]) for k, i in enumerate(infos)}
     sigma = {i.name: 0.0 for i in infos} | {infos[k].name: float(s / INTERNAL_SCALE[infos[k].unit])
                                             for k, s in zip(free, sig[:P])}
     status = {i.name: "fixed" for i in infos} | {infos[k].name: "regularised" if prior[k] else "identified"

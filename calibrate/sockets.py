@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .campaign import _read_text, _table, leading_comments
+from .campaign import read_text_file, read_table, leading_comments
 from .errors import CalibrationError
 
 __all__ = ["SocketDistance", "SocketReadings", "read_sockets", "write_sockets", "SEAT_SIGMA_MM", "DISTANCE_SIGMA_MM",
@@ -199,10 +199,10 @@ def _distances(p: Path, meta: dict) -> tuple:
 
 def read_sockets(path, n_joints: int = 6) -> SocketReadings:
     """Read a ``*.sockets.csv``; every problem names the file, line and key (see the module docstring)."""
-    p, text = _read_text(path)
+    p, text = read_text_file(path)
     meta = _meta(p, text)
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = _table(p, text, ["placement", "socket"] + qs, ["length_mm"])
+    header, rows = read_table(p, text, ["placement", "socket"] + qs, ["length_mm"])
     for k, r in rows:
         for col in ("placement", "socket"):
             if r[col] != int(r[col]) or r[col] < 1:

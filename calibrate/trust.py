@@ -17,7 +17,7 @@ from rodlab.enums import Completeness
 
 if TYPE_CHECKING:
     from .crossval import Prediction
-    from .identify import CalibrationResult
+    from .result import CalibrationResult
 
 __all__ = ["trust_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
            "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]

@@ -21,7 +21,7 @@ from rodlab.enums import Part
 from rodlab.units import gpa_to_mpa
 
 from .assembly import scalar_basis
-from .elasticity import NU23_DEFAULT, _frames
+from .elasticity import NU23_DEFAULT, local_frames
 from .errors import FeaError
 
 __all__ = ["ccx_available", "write_deck", "run_ccx_compliance"]
@@ -67,7 +67,7 @@ def write_deck(design: RodDesign, rod_mesh, path: str | Path) -> Path:
                     f"{E1:.6g}, {E2:.6g}, {E2:.6g}, {mat.nu:.6g}, {mat.nu:.6g}, {NU23_DEFAULT:.6g}, {G12:.6g}, "
                     f"{G12:.6g},", f"{G23:.6g}"]
             els = rod_mesh.elements_of(part)
-            R = _frames(rod_mesh.tube_axis[els])
+            R = local_frames(rod_mesh.tube_axis[els])
             for e, Re in zip(els, R):
                 a, b = Re[:, 0], Re[:, 1]
                 out += [f"*ELSET, ELSET=E{e + 1}", str(e + 1),

@@ -49,7 +49,7 @@ def stiffness_tensor_local(mat: Material) -> np.ndarray:
     return _voigt_to_tensor(np.linalg.inv(S))
 
 
-def _frames(axes: np.ndarray) -> np.ndarray:
+def local_frames(axes: np.ndarray) -> np.ndarray:
     """Rotation matrices, shape=(n, 3, 3), whose first column is the unit axis."""
     a = axes / np.linalg.norm(axes, axis=1, keepdims=True)
     helper = np.where(np.abs(a[:, [0]]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
@@ -76,5 +76,5 @@ def element_tensors(materials: list[Material], part_index: np.ndarray, tube_axis
         if mat.is_isotropic:
             out[sel] = C
         else:
-            out[sel] = rotate_tensor(C, _frames(tube_axis[sel]))
+            out[sel] = rotate_tensor(C, local_frames(tube_axis[sel]))
     return out

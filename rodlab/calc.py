@@ -64,7 +64,7 @@ def _gauss(n: int):
     return x, w
 
 
-def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces: int = 8):
+def quadrature_points(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces: int = 8):
     """Quadrature points along all segments: (seg index, local u, weight); ``arc_pieces`` per 90 deg of arc."""
     idx, u, w = [], [], []
     for k, seg in enumerate(segs):
@@ -80,7 +80,7 @@ def _quadrature(segs: list[Segment], n_line: int = 4, n_arc: int = 8, arc_pieces
     return np.concatenate(idx), np.concatenate(u), np.concatenate(w)
 
 
-class _Centreline:
+class Centreline:
     """All segments' geometry as arrays, for positions, tangents and first moments at many points at once
     (the same formulas as :class:`Segment`, vectorised over segments)."""
 
@@ -113,7 +113,7 @@ class _Centreline:
         return span[:, None] * self.start[idx] + c_t[:, None] * self.t0[idx] + c_n[:, None] * self.n[idx]
 
 
-def _distal_moments(segs, cl: _Centreline, idx, u, tip_mass_kg, tip_com_F):
+def distal_moments(segs, cl: Centreline, idx, u, tip_mass_kg, tip_com_F):
     """Distal mass W [kg] and first moment Q1 [kg mm] (about {F} origin) at each quadrature point (exact)."""
     mpm = np.array([seg.mass_per_mm for seg in segs])
     all_k = np.arange(len(segs))
@@ -126,7 +126,7 @@ def _distal_moments(segs, cl: _Centreline, idx, u, tip_mass_kg, tip_com_F):
     return W, Q
 
 
-def _flexibility(segs: list[Segment], idx, t, bend_flex, shear: bool, axial: bool, shear_factor: float,
+def section_flexibility(segs: list[Segment], idx, t, bend_flex, shear: bool, axial: bool, shear_factor: float,
                  torsion_factor: float):
     """Section compliances at the quadrature points: force ``Kf^-1`` [1/N] and moment ``Km^-1``
     [1/(N mm^2)], each shape=(n, 3, 3) in {F}, along the local tangents ``t`` shape=(n, 3)."""
@@ -160,14 +160,14 @@ def unit_load_compliance(segs: list[Segment], tip_F: np.ndarray, tip_mass_kg: fl
     (a segment's own ``bend_flex`` overrides it); shear_factor / torsion_factor : factors on all shear /
     torsion flexibility (frame-model calibration).
     """
-    idx, u, w = _quadrature(segs)
-    cl = _Centreline(segs)
+    idx, u, w = quadrature_points(segs)
+    cl = Centreline(segs)
     r = cl.point(idx, u)
     t = cl.tangent(idx, u)
-    Kf_inv, Km_inv = _flexibility(segs, idx, t, bend_flex, shear, axial, shear_factor, torsion_factor)
+    Kf_inv, Km_inv = section_flexibility(segs, idx, t, bend_flex, shear, axial, shear_factor, torsion_factor)
     Mu = _skew(tip_F[None, :] - r)                       # moment of unit tip forces, columns = load dirs
     CF = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mu) + np.einsum("q,qij->ij", w, Kf_inv)
-    W, Q = _distal_moments(segs, cl, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
+    W, Q = distal_moments(segs, cl, idx, u, tip_mass_kg, tip_F if tip_com_F is None else tip_com_F)
     Mg = G0 * _skew(Q - W[:, None] * r)                  # moment of distal weight per unit g0 along e_j
     Ng = G0 * W[:, None, None] * np.eye(3)[None]
     Cg = np.einsum("q,qai,qab,qbj->ij", w, Mu, Km_inv, Mg) + np.einsum("q,qab,qbj->aj", w, Kf_inv, Ng)

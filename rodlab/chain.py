@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .calc import _Centreline, _distal_moments, _flexibility, _quadrature
+from .calc import Centreline, distal_moments, section_flexibility, quadrature_points
 from .frames import skew as _skew
 from .layout import Segment
 from .units import G0
@@ -117,17 +117,17 @@ def chain_flexibility(segs: list[Segment], cuts_mm, tip_F: np.ndarray, tip_mass_
     pieces = split_at(segs, cuts)
     mid = np.array([p.s0_mm + 0.5 * p.length_mm for p in pieces])
     interval = np.searchsorted(cuts, mid)                       # piece -> interval
-    idx, u, w = _quadrature(pieces)
-    cl = _Centreline(pieces)
+    idx, u, w = quadrature_points(pieces)
+    cl = Centreline(pieces)
     r, t = cl.point(idx, u), cl.tangent(idx, u)
-    Kf, Km = _flexibility(pieces, idx, t, (1.0, 1.0), shear, axial, shear_factor, torsion_factor)
-    W, Q = _distal_moments(pieces, cl, idx, u, tip_mass_kg, tip_com_F)
+    Kf, Km = section_flexibility(pieces, idx, t, (1.0, 1.0), shear, axial, shear_factor, torsion_factor)
+    W, Q = distal_moments(pieces, cl, idx, u, tip_mass_kg, tip_com_F)
     n = cuts.size + 1
     first = [int(np.nonzero(interval == i)[0][0]) for i in range(1, n)]   # first piece beyond each cut
     starts = np.array([pieces[j].start_F for j in first]).reshape(-1, 3)
     points = np.vstack([starts, tip_F[None, :]])
     # weight beyond each distal point (for the tip: the tip mass alone)
-    Wd, Qd = _distal_moments(pieces, cl, np.array(first, dtype=int), np.zeros(len(first)), tip_mass_kg,
+    Wd, Qd = distal_moments(pieces, cl, np.array(first, dtype=int), np.zeros(len(first)), tip_mass_kg,
                              tip_com_F)
     Wd = np.append(Wd, tip_mass_kg)
     Qd = np.vstack([Qd.reshape(-1, 3), tip_mass_kg * np.asarray(tip_com_F, dtype=float)[None, :]])
@@ -166,7 +166,7 @@ def _locate(segs: list[Segment], s_mm):
 def centreline_points(segs: list[Segment], s_mm) -> tuple[np.ndarray, np.ndarray]:
     """Points [mm] in {F} and unit tangents at the arc lengths ``s_mm`` from the flange, shape=(n, 3) each."""
     idx, u = _locate(segs, s_mm)
-    cl = _Centreline(segs)
+    cl = Centreline(segs)
     return cl.point(idx, u), cl.tangent(idx, u)
 
 
@@ -174,8 +174,8 @@ def distal_weight_wrench(segs: list[Segment], s_mm, tip_mass_kg: float, tip_com_
     """Wrench at the centreline points ``s_mm`` [mm from the flange] of all the weight beyond them (the
     segments' and the rigid tip mass), per g0 along x, y, z of {T}, shape=(n, 6, 3) [N, N mm]."""
     idx, u = _locate(segs, s_mm)
-    cl = _Centreline(segs)
-    W, Q = _distal_moments(segs, cl, idx, u, tip_mass_kg, np.asarray(tip_com_F, dtype=float))
+    cl = Centreline(segs)
+    W, Q = distal_moments(segs, cl, idx, u, tip_mass_kg, np.asarray(tip_com_F, dtype=float))
     return weight_wrench(W, Q, cl.point(idx, u))
 
 

@@ -1,5 +1,6 @@
-"""Generate docs/cli.md from the argparse parser, and the rig and campaign effect tables of docs/formats.md
-from the effect registries (``--check`` exits 1 when either is stale; used by the tests)."""
+"""Generate docs/cli.md from the argparse parser, the rig and campaign effect tables of docs/formats.md from the
+effect registries and the compensation table of docs/calibrate.md from its registry (``--check`` exits 1 when any
+is stale; used by the tests)."""
 from __future__ import annotations
 
 import argparse
@@ -15,13 +16,15 @@ FORMATS = DOC.with_name("formats.md")
 TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
           "tolerance-defaults": "rodlab.tolerances:defaults_markdown",
           "campaign-effects": "rodlab.calibrate.effects:campaign_vocabulary_markdown"}
+CALIBRATE = DOC.with_name("calibrate.md")
+CALIBRATE_TABLES = {"compensations": "rodlab.calibrate.compensations:compensations_markdown"}
 
 
-def render_formats() -> str:
-    """docs/formats.md with the tables between the markers taken from the effect registries."""
+def render_formats(path: Path = FORMATS, tables: dict = TABLES) -> str:
+    """The docs page ``path`` with the tables between the markers taken from the registries."""
     import importlib
-    text = FORMATS.read_text(encoding="utf-8")
-    for name, target in TABLES.items():
+    text = path.read_text(encoding="utf-8")
+    for name, target in tables.items():
         module, func = target.split(":")
         begin, end = f"<!-- {name}:begin (generated) -->", f"<!-- {name}:end -->"
         a, b = text.index(begin) + len(begin), text.index(end)
@@ -47,7 +50,8 @@ def render() -> str:
 
 if __name__ == "__main__":
     check = "--check" in sys.argv
-    status = write_generated(DOC, render(), check) | write_generated(FORMATS, render_formats(), check)
+    status = (write_generated(DOC, render(), check) | write_generated(FORMATS, render_formats(), check)
+              | write_generated(CALIBRATE, render_formats(CALIBRATE, CALIBRATE_TABLES), check))
     if not check:
-        print(f"wrote {DOC} and the effect tables of {FORMATS}")
+        print(f"wrote {DOC}, the effect tables of {FORMATS} and the compensation table of {CALIBRATE}")
     sys.exit(status)

@@ -129,11 +129,11 @@ def test_arc_bend_is_softer_in_torsion_than_corner_but_close():
 def test_vectorised_centreline_matches_segments():
     """The unit-load integrator's array form of the centreline equals Segment.point / tangent, and its exact
     first moments equal a fine numerical quadrature of the positions."""
-    from rodlab.calc import _Centreline
+    from rodlab.calc import Centreline
     from rodlab.layout import SegmentKind, layout
     segs = layout(resolve_design("rod1"))
     assert any(s.kind is SegmentKind.ARC for s in segs)
-    cl = _Centreline(segs)
+    cl = Centreline(segs)
     for k, seg in enumerate(segs):
         u = np.linspace(0.0, seg.length_mm, 7)
         idx = np.full(u.size, k)

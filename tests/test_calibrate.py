@@ -6,8 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from rodlab.calibrate import (CalibrationError, ModelParams, Observations, ball_positions, campaign_observations, identify,
-                       read_campaign, read_fixture, read_points, resolve_robot, result_dict, validate)
+from rodlab.calibrate import (ball_positions, CalibrationError, campaign_observations, FitOptions, identify,
+                              ModelParams, Observations, read_campaign, read_fixture, read_points, resolve_robot,
+                              result_dict, Rod, RodDeflection, validate)
 from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.params import apply, catalogue
 from rodlab import read_compliance
@@ -57,7 +58,7 @@ def test_analytic_jacobian_matches_finite_differences(robot):
 
 def test_null_campaign_reaches_the_floor(examples, robot):
     camp, fix, rod, pts, truth = _load(examples, "campaign-null")
-    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    res = identify(robot, campaign_observations(camp, fix, rod), Rod.of(rod), [RodDeflection.of(rod)])
     assert res.success and res.rms_mm < 1.2 * truth["floor"]["oracle"]["campaign_rms_mm"]
     after = validate(robot, res.params, pts)[0]
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
@@ -74,9 +75,10 @@ def test_null_campaign_reaches_the_floor(examples, robot):
 def test_fixture_pose_campaign(examples, robot):
     camp, fix, rod, pts, truth = _load(examples, "campaign-fixture_pose")
     obs = campaign_observations(camp, fix, rod)
-    plain = identify(robot, obs, rod.tool_mm, rod)
+    plain = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)])
     assert validate(robot, plain.params, pts)[0].mean_mm <= 1.15 * truth["floor"]["ignore_effect"]["mean"]
-    freed = identify(robot, obs, rod.tool_mm, rod, freed={"fixture_1_x", "fixture_1_y", "fixture_1_z"})
+    freed = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)],
+                     FitOptions(freed={"fixture_1_x", "fixture_1_y", "fixture_1_z"}))
     assert validate(robot, freed.params, pts)[0].mean_mm <= 1.15 * truth["floor"]["oracle"]["mean"]
     est = np.array([freed.values[f"fixture_1_{k}"] for k in "xyz"])
     np.testing.assert_allclose(-est, truth["effects"][0]["parameters"]["offset_mm"], atol=0.03)
@@ -89,10 +91,10 @@ def test_degenerate_campaigns_are_refused(examples, robot):
     single = Observations(obs.q_rad[one], obs.x_W_mm[one], obs.force_W_N[one], obs.rod_mass_kg, obs.rod_com_T_mm,
                           obs.group[one], None, {3: obs.fixture_T[3]})
     with pytest.raises(CalibrationError, match="cannot identify .* parameter"):
-        identify(robot, single, rod.tool_mm, rod)
+        identify(robot, single, Rod.of(rod), [RodDeflection.of(rod)])
     few = Observations(obs.q_rad[:4], obs.x_W_mm[:4], obs.force_W_N[:4])
     with pytest.raises(CalibrationError, match="too few|cannot identify a robot"):
-        identify(robot, few, rod.tool_mm, rod)
+        identify(robot, few, Rod.of(rod), [RodDeflection.of(rod)])
     fix.poses.pop(5)
     with pytest.raises(CalibrationError, match=r"\[5\] .* not in the fixture file"):
         campaign_observations(camp, fix, rod)
@@ -108,7 +110,7 @@ def test_nan_and_bad_cells_name_the_line(tmp_path):
 
 def test_result_file_follows_the_contract(examples, robot, tmp_path):
     camp, fix, rod, pts, _ = _load(examples, "campaign-null")
-    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    res = identify(robot, campaign_observations(camp, fix, rod), Rod.of(rod), [RodDeflection.of(rod)])
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
     after = validate(robot, res.params, pts)[0]
     d = result_dict(robot, res, "calc", before, after)
@@ -140,7 +142,8 @@ def test_instrument_points_calibrate_another_robot(tmp_path):
     fr, _ = ball_positions(robot, true, q)
     x = fr.pW + rng.normal(0, 0.01, fr.pW.shape)
     obs = Observations(q[:80], x[:80], np.zeros((80, 3)))
-    res = identify(robot, obs, [20.0, 10.0, 150.0], None, freed={"tool_y"}, pinned={f"c_{i}": 0.0 for i in range(2, 7)})
+    res = identify(robot, obs, Rod.rigid([20.0, 10.0, 150.0]),
+                   options=FitOptions(freed={"tool_y"}, pinned={f"c_{i}": 0.0 for i in range(2, 7)}))
     assert res.rms_mm < 0.015
     from rodlab.calibrate.campaign import PointSet
     test = PointSet(np.rad2deg(q[80:]), x[80:], np.array([20.0, 10.0, 150.0]), 0.0, np.zeros(3))
@@ -159,8 +162,9 @@ def test_base_and_tool_found_from_scratch(robot):
     obs = Observations(q, x, np.zeros_like(x))
     base, tool, rms = register_base_and_tool(robot, ModelParams.nominal(robot, [0.0, 0.0, 100.0]), obs)
     assert rms < 0.05 and np.allclose(tool, true.tool, atol=0.1) and np.allclose(base[:3], true.base[:3], atol=0.2)
-    res = identify(robot, obs, [0.0, 0.0, 100.0], None, freed={"tool_y"}, find_tool=True, expected_noise_mm=None,
-                   pinned={f"c_{i}": 0.0 for i in range(2, 7)})
+    res = identify(robot, obs, Rod.rigid([0.0, 0.0, 100.0]),
+                   options=FitOptions(freed={"tool_y"}, find_tool=True, expected_noise_mm=None,
+                                      pinned={f"c_{i}": 0.0 for i in range(2, 7)}))
     assert res.rms_mm < 0.015
 
 
@@ -176,9 +180,9 @@ def test_single_joint_sweeps_need_fix_unidentifiable(robot):
     x = ball_positions(robot, true, q)[0].pW + rng.normal(0, 0.01, (60, 3))
     obs = Observations(q, x, np.zeros_like(x))
     with pytest.raises(CalibrationError, match="--fix-unidentifiable"):
-        identify(robot, obs, [0.0, 30.0, 180.0], None, freed={"tool_y"})
-    res = identify(robot, obs, [0.0, 30.0, 180.0], None, freed={"tool_y"}, fix_unidentifiable=True,
-                   expected_noise_mm=None)
+        identify(robot, obs, Rod.rigid([0.0, 30.0, 180.0]), options=FitOptions(freed={"tool_y"}))
+    res = identify(robot, obs, Rod.rigid([0.0, 30.0, 180.0]),
+                   options=FitOptions(freed={"tool_y"}, fix_unidentifiable=True, expected_noise_mm=None))
     held = [u for u in res.unidentifiable if "in this campaign" in u or "no effect" in u]
     assert any(u.startswith("c_6") for u in held) and all(res.status[u.split(" ")[0]] == "fixed" for u in held)
     assert res.rms_mm < 0.02            # the nominal robot is the truth here: the fit reaches the noise

@@ -6,8 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture, read_points,
-                       resolve_robot, validate)
+from rodlab.calibrate import (campaign_observations, identify, ModelParams, read_campaign, read_fixture, read_points,
+                              resolve_robot, Rod, RodDeflection, validate)
 from rodlab.calibrate.plan import observability, plan_poses
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
@@ -31,7 +31,7 @@ def test_simulated_campaign_round_trip(tmp_path_factory, robot, rod):
     pts = read_points(out / "multical.validation.csv")
     assert camp.n == 30 and set(fix.poses) == {1, 2, 3, 4, 5}
     assert np.abs(camp.x_D_mm).max() < 1.0                 # aligned with the datum points (deflection included)
-    res = identify(robot, campaign_observations(camp, fix, rod), rod.tool_mm, rod)
+    res = identify(robot, campaign_observations(camp, fix, rod), Rod.of(rod), [RodDeflection.of(rod)])
     assert res.rms_mm < 0.01
     after = validate(robot, res.params, pts)[0]
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
@@ -60,7 +60,7 @@ def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsy
     """A campaign with no effect, calibrated with its own compliance file, passes the trust checks (exit 0):
     joint compliances are bounded to [0, C_MAX] by construction, so a weakly identified wrist compliance can
     no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
-    from rodlab.calibrate.identify import C_MAX
+    from rodlab.calibrate.estimate import C_MAX
     from rodlab.app.cli import main
     from rodlab.compliance import write_compliance
     robot = resolve_robot("tx90")

@@ -87,7 +87,7 @@ def test_cli_correct_and_the_export_warning(tmp_path, capsys):
     assert main(["calibrate", "--points", str(fit), "--robot", "ur5", "--validate",
                  str(DATA / "ur5_random.validation.csv"), "--json", str(cal)]) == 0
     from rodlab.calibrate import read_points
-    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.result import calibrated_params, read_calibration
     pts = read_points(DATA / "ur5_random.validation.csv", 6)
     targets = tmp_path / "t.targets.csv"
     targets.write_text("# the random poses\nx_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(

@@ -11,8 +11,8 @@ import pytest
 
 from rodlab.app.cli.main import main
 from rodlab.calibrate import (CalibrationError, campaign_observations, fit_fixture, identify, read_campaign,
-                              read_device, read_fixture, read_points, read_probe, validate, write_device,
-                              write_fixture)
+                              read_device, read_fixture, read_points, read_probe, Rod, RodDeflection, validate,
+                              write_device, write_fixture)
 from rodlab.calibrate.device import ideal_device, misaligned_device
 from rodlab.calibrate.observations import noise_covariance
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
@@ -38,7 +38,7 @@ def sims(tmp_path_factory, tx90, rod1_calc):
 
 def _calibrate(robot, rod, folder, device, fixture="multical.fixture.json"):
     camp = read_campaign(folder / "multical.campaign.csv", robot.n, device)
-    res = identify(robot, campaign_observations(camp, read_fixture(folder / fixture), rod), rod.tool_mm, rod)
+    res = identify(robot, campaign_observations(camp, read_fixture(folder / fixture), rod), Rod.of(rod), [RodDeflection.of(rod)])
     return res, validate(robot, res.params, read_points(folder / "multical.validation.csv"))[0]
 
 

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from rodlab.fea.elasticity import _frames, element_tensors, rotate_tensor, stiffness_tensor_local
+from rodlab.fea.elasticity import local_frames, element_tensors, rotate_tensor, stiffness_tensor_local
 from rodlab import calc_compliance, get_material, mass_properties, resolve_design
 from rodlab.design_io import design_from_dict
 
@@ -21,7 +21,7 @@ def test_isotropic_tensor_gives_E_and_nu():
     S = np.linalg.inv(_as6(stiffness_tensor_local(m)))
     assert 1 / S[0, 0] == pytest.approx(193e3, rel=1e-12)
     assert -S[0, 1] / S[0, 0] == pytest.approx(0.29, rel=1e-12)
-    R = _frames(np.array([[0.3, -0.5, 0.81]]))
+    R = local_frames(np.array([[0.3, -0.5, 0.81]]))
     np.testing.assert_allclose(rotate_tensor(stiffness_tensor_local(m), R)[0], stiffness_tensor_local(m),
                                atol=1e-8 * 193e3)
 

@@ -46,7 +46,7 @@ def test_fewer_readings_than_parameters_leave_some_unseen():
 def test_an_infinite_sigma_survives_the_result_file(tmp_path):
     """JSON writes an infinite standard error as null; reading it back must not give 0 (the best known)."""
     import json
-    from rodlab.calibrate.calibration_file import read_calibration
+    from rodlab.calibrate.result import read_calibration
     doc = {"format": "rodlab.calibration/1", "robot": "tx90", "compensation": "calc", "trusted": False,
            "parameters": {"d_2": {"value": 0.1, "sigma": None, "unit": "mm", "status": "identified"},
                           "a_2": {"value": 0.2, "sigma": 0.01, "unit": "mm", "status": "identified"},

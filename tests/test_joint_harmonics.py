@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from rodlab.calibrate import ModelParams, resolve_robot, result_dict, write_result
-from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+from rodlab.calibrate.result import calibrated_params, read_calibration
 from rodlab.calibrate.campaign import PointSet
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.jacobian import position_jacobian

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodlab.calibrate import ModelParams, resolve_robot
+from rodlab.calibrate import FitOptions, ModelParams, resolve_robot, Rod
 from rodlab.calibrate.kinematics import forward
 from rodlab.app.cli.main import main
 
@@ -87,8 +87,8 @@ def test_noise_only_points_have_no_findings(tmp_path, robot, seed):
     path = _write_points(tmp_path / "p.validation.csv", robot, seed=seed)
     pts = read_points(path, robot.n)
     obs = Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm))
-    res = identify(robot, obs, pts.tool_mm, None, freed={"tool_y"}, fix_unidentifiable=True, find_tool=True,
-                   expected_noise_mm=0.025)
+    res = identify(robot, obs, Rod.rigid(pts.tool_mm),
+                   options=FitOptions(freed={"tool_y"}, fix_unidentifiable=True, find_tool=True, expected_noise_mm=0.025))
     diag = diagnose_points(robot, pts, res, 0.025)
     assert diag.findings == () and diag.consistent, diag.summary()
 

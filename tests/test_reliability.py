@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, resolve_robot, Rod,
+                              RodDeflection)
 from rodlab.fea import FeaError
 from rodlab.fea.compute import estimated_dofs, solid_compliance
 from rodlab import read_compliance
@@ -17,7 +18,8 @@ def test_untrusted_calibration_is_flagged(examples):
         ex = examples / name
         rod = read_compliance(ex / "rod1.compliance.json")
         res = identify(robot, campaign_observations(read_campaign(ex / "multical.campaign.csv"),
-                                                    read_fixture(ex / "multical.fixture.json"), rod), rod.tool_mm, rod)
+                                                    read_fixture(ex / "multical.fixture.json"), rod),
+                       Rod.of(rod), [RodDeflection.of(rod)])
         assert (not res.warnings) == trusted, res.warnings
         if not trusted:
             assert any("diagnose" in w for w in res.warnings)

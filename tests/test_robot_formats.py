@@ -324,7 +324,7 @@ def test_export_writes_a_urdf_with_the_calibrated_kinematics(tmp_path):
     puts the tool point (<= 1 um); the YAML and the DH CSV carry the values and sigmas."""
     import yaml
 
-    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.app.cli.main import main
     urdf = tmp_path / "skew.urdf"
     urdf.write_text(_random_urdf(np.random.default_rng(7)))

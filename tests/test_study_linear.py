@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rodlab.calibrate import resolve_robot
-from rodlab.calibrate.compensation import deflection_basis, deflection_offsets
+from rodlab.calibrate.compensations import deflection_basis, deflection_offsets
 from rodlab.calibrate.kinematics import ModelParams
 from rodlab.calibrate.plan import plan_poses
 from rodlab.calibrate.predict import Priors, predict_accuracy

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance, resolve_design
-from rodlab.calibrate import (ThermalGrowth, campaign_observations, identify, read_campaign, read_fixture,
-                              read_points, resolve_robot, validate)
+from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, read_points,
+                              resolve_robot, Rod, RodDeflection, ThermalGrowth, validate)
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab.materials import get_material
 
@@ -30,10 +30,11 @@ def test_growth_is_each_members_cte_times_its_span():
 def test_offsets_follow_the_flange_and_vanish_at_the_reference_temperature():
     robot = resolve_robot("tx90")
     from rodlab.calibrate import ModelParams
+    from rodlab.calibrate.compensations import Poses
     p = ModelParams.nominal(robot, DESIGN.tool_mm)
     th = ThermalGrowth(np.array([0.0, 0.0, 0.01]), T_ref_C=20.0)
     q = np.deg2rad([[0, 10, 90, 0, 30, 0], [40, -20, 100, 30, -40, 60]])
-    off = th.offsets_at(robot, p, q, [20.0, 25.0])
+    off = th.offsets(robot, p, Poses(q, temp_C=[20.0, 25.0]))
     assert np.allclose(off[0], 0.0)
     assert np.linalg.norm(off[1]) == pytest.approx(0.05, rel=1e-12)       # 5 K x 10 um/K, rotated with {T}
 
@@ -42,7 +43,7 @@ def _campaign(out, temp_K_per_s):
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(DESIGN)
     th = ThermalGrowth.of_design(DESIGN)
-    simulate_campaign(robot, rod, out, CampaignSpec(seed=5), rod_thermal=th, temp_K_per_s=temp_K_per_s)
+    simulate_campaign(robot, rod, out, CampaignSpec(seed=5), compensations=[th], temp_K_per_s=temp_K_per_s)
     return robot, rod, th, out
 
 
@@ -54,7 +55,7 @@ def warm_campaign(tmp_path_factory):
 def _identify(robot, rod, out, extra=()):
     camp = read_campaign(out / "multical.campaign.csv", robot.n)
     obs = campaign_observations(camp, read_fixture(out / "multical.fixture.json"), rod)
-    res = identify(robot, obs, rod.tool_mm, rod, also_compensate=extra)
+    res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod), *extra])
     val = validate(robot, res.params, read_points(out / "multical.validation.csv", robot.n))[1]
     return camp, res, float(np.mean(val))
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from rodlab import read_compliance
-from rodlab.calibrate import campaign_observations, identify, read_campaign, read_fixture, resolve_robot
+from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, resolve_robot, Rod,
+                              RodDeflection)
 from rodlab.compliance import RodCompliance, write_compliance
 
 
@@ -23,7 +24,7 @@ def test_residual_test_is_chi_square_under_the_noise_model(examples):
     ex = examples / "campaign-null"
     rod = read_compliance(ex / "rod1.compliance.json")
     obs = _obs(ex, rod)
-    res = identify(robot, obs, rod.tool_mm, rod)
+    res = identify(robot, obs, Rod.of(rod), [RodDeflection.of(rod)])
     assert res.residual_check is not None and not res.residual_check.missing
     assert 0.5 < res.residual_check.reduced < 2.0
     # residuals drawn from the noise model itself: the whitened, projected sum of squares is chi-square(dof)
@@ -40,7 +41,7 @@ def test_residual_test_is_chi_square_under_the_noise_model(examples):
     assert abs(np.mean(chi) / dof - 1.0) < 0.05
     bad = examples / "campaign-fixture_pose"
     rod = read_compliance(bad / "rod1.compliance.json")
-    r2 = identify(robot, _obs(bad, rod), rod.tool_mm, rod)
+    r2 = identify(robot, _obs(bad, rod), Rod.of(rod), [RodDeflection.of(rod)])
     assert r2.residual_check.missing and r2.residual_check.p_value < P_MISSING * 1e-20
     assert any("reduced chi-square" in w and "diagnose" in w for w in r2.warnings)
 

@@ -9,7 +9,7 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import CampaignEffect
 from rodlab.hypothesis import ParamSpec
 
-from ..compensation import deflection_offsets
+from ..compensations import deflection_offsets
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
 
 __all__ = ["RodDeflection", "generic_rod"]

@@ -194,8 +194,8 @@ class _DemoRun:
                                  "r_rod_true": r_true})
 
     def stage_calibrate(self) -> None:
-        from rodlab.calibrate import (ModelParams, campaign_observations, identify, read_campaign, read_fixture,
-                                      read_points, validate)
+        from rodlab.calibrate import (ModelParams, Rod, RodDeflection, campaign_observations, identify, read_campaign,
+                                      read_fixture, read_points, validate)
         from rodlab.calibrate.plots import plot_error_distributions
         robot, fea, folder = self.robot, self.fea, self.out / "campaign"
         camp = read_campaign(folder / "multical.campaign.csv")
@@ -206,7 +206,8 @@ class _DemoRun:
         errors = {"nominal": nominal_err.tolist()}
         for label, rod in (("None", RodCompliance.none_like(fea)), ("Calc", self.calc), ("FEA", fea),
                            ("Meas", self.meas), ("Corrected", self.corrected)):
-            res = identify(robot, campaign_observations(camp, fix, rod), fea.tool_mm, None if label == "None" else rod)
+            res = identify(robot, campaign_observations(camp, fix, rod), Rod.of(fea),
+                           [RodDeflection.of(None if label == "None" else rod)])
             st, err, _ = validate(robot, res.params, pts)
             table[label] = dict(st.to_dict(), fit_rms_um=res.rms_mm * 1e3)
             errors[label] = err.tolist()

@@ -60,7 +60,7 @@ def _predicted_mm(path) -> float | None:
 
 def cmd_correct(args) -> int:
     from rodlab.calibrate import builtin_robots
-    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.correct import correct_targets
     from rodlab.calibrate.kinematics import ModelParams
     from rodlab.calibrate.targets import commands_csv, read_targets

@@ -1,4 +1,4 @@
-"""``rodlab demo`` and ``rodlab report``: the main job end to end, and its HTML report."""
+"""``rodlab demo``: the main job end to end (and its HTML report)."""
 from __future__ import annotations
 
 import argparse
@@ -20,15 +20,6 @@ def register(sub) -> None:
     p.add_argument("--seed", type=seed, default=7)
     p.add_argument("--no-report", action="store_true", help="do not write report.html")
     p.set_defaults(func=cmd_demo)
-    p = sub.add_parser("report", help="one self-contained HTML page of any rodlab output folder",
-                       description="A demo folder gives the demo's page (design, CAD, FEA, rig fit, diagnosis, "
-                                   "calibration, sweep, study). Any other folder: every rodlab result found in it "
-                                   "and two levels below (compliance, joints, sweep, study, calibration, comparison, "
-                                   "diagnosis, CAD mass files, recognised by their format key) with its figures; "
-                                   "figures embedded, no links out.")
-    p.add_argument("run_dir", metavar="DIR", help="a folder rodlab wrote into")
-    p.add_argument("-o", "--output", default=None, help="default DIR/report.html")
-    p.set_defaults(func=cmd_report)
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -63,10 +54,4 @@ def cmd_demo(args: argparse.Namespace) -> int:
         from ..report import write_folder_report
         print(f"wrote {write_folder_report(args.output)}")
     print(f"done in {time.perf_counter() - t0:.0f} s; everything is in {args.output}")
-    return 0
-
-
-def cmd_report(args: argparse.Namespace) -> int:
-    from ..report import write_folder_report
-    print(f"wrote {write_folder_report(args.run_dir, args.output)}")
     return 0

@@ -92,7 +92,7 @@ def _urdf_file(spec: str) -> str:
 
 
 def cmd_export(args) -> int:
-    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
         raise RodlabError("give --urdf (the URDF is the robot) or --robot, not both")

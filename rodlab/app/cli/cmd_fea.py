@@ -55,7 +55,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
     _check_fields_option(args)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
-        from .cmd_geometry import require_mesher
+        from .cadextra import require_mesher
         mesher = require_mesher().mesh_rod
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")

@@ -9,7 +9,8 @@ import numpy as np
 
 from ...enums import AccuracySource
 from ...errors import RodlabError
-from .cmd_calibrate import parse_pins, print_cautions, print_not_trusted, print_parameters, write_result_file
+from .calibrateargs import parse_pins
+from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
 from .reporting import default_folder, write_command_report
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict

@@ -52,7 +52,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise RodlabError(f"output must end in .csv or .parquet, got {out.name!r}")
     mesher = None
     if args.model == "solid":
-        from .cmd_geometry import require_mesher
+        from .cadextra import require_mesher
         geometry = require_mesher()
         mesher = geometry.mesh_rod
     t0 = time.perf_counter()
@@ -100,7 +100,7 @@ def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
     from rodlab.app.study.family import solid_family_calibration
     from rodlab.fea.joints_io import write_joints
 
-    from .cmd_geometry import require_mesher
+    from .cadextra import require_mesher
     require_mesher()
     calibration = solid_family_calibration(base, L1s, L2s)
     m1, m2 = calibration.margins_mm

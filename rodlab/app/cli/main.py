@@ -12,14 +12,16 @@ import sys
 
 from ... import __version__, progress
 from ...errors import RodlabError
-from . import (cmd_calibrate, cmd_correct, cmd_demo, cmd_design, cmd_diagnose, cmd_export, cmd_fea, cmd_geometry,
-               cmd_rig, cmd_study, cmd_sweep, cmd_update, cmd_validate, cmd_view)
+from . import (cmd_cad, cmd_calibrate, cmd_compare, cmd_compliance, cmd_correct, cmd_demo, cmd_diagnose, cmd_export,
+               cmd_fea, cmd_fixture, cmd_info, cmd_mesh, cmd_plan, cmd_report, cmd_rig, cmd_simulate_campaign, cmd_study,
+               cmd_sweep, cmd_update, cmd_validate, cmd_view)
 
 __all__ = ["build_parser", "main"]
 
 #: Modules that add sub-commands: each has ``register(subparsers)``.
-_COMMAND_MODULES = [cmd_demo, cmd_design, cmd_geometry, cmd_fea, cmd_sweep, cmd_study, cmd_rig, cmd_calibrate,
-                    cmd_diagnose, cmd_update, cmd_export, cmd_correct, cmd_validate, cmd_view]
+_COMMAND_MODULES = [cmd_demo, cmd_report, cmd_info, cmd_compliance, cmd_cad, cmd_mesh, cmd_fea, cmd_sweep, cmd_study,
+                    cmd_rig, cmd_calibrate, cmd_compare, cmd_simulate_campaign, cmd_plan, cmd_fixture, cmd_diagnose,
+                    cmd_update, cmd_export, cmd_correct, cmd_validate, cmd_view]
 
 
 def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:

@@ -3,7 +3,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["compliance_arg"]
+__all__ = ["compliance_arg", "DESIGN_HELP"]
+
+#: help of a design argument (info, compliance)
+DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6 (the paper's rods 1# .. 6#)"
 
 
 def compliance_arg(spec: str):

@@ -24,6 +24,7 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+from rodlab.calibrate import Rod, RodDeflection
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
 from rodlab.enums import Trial
@@ -35,7 +36,7 @@ from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .spread import column_basis, position_share_test
 
-__all__ = ["diagnose_campaign", "CampaignFits"]
+__all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
 
 log = logging.getLogger(__name__)
 
@@ -98,7 +99,7 @@ class _Candidate:
     rss: float
 
 
-class _Selection:
+class CampaignSelection:
     """Forward selection of hypotheses on the whitened residuals of the identified campaign.
 
     The residuals r and the Jacobian J of the free parameters are whitened with the noise covariance (device
@@ -294,10 +295,15 @@ class _Selection:
         search(self, self.max_terms + self.max_outliers + 1)
 
 
+def _deflection(rod):
+    """The deflection of the compliance file ``rod`` as it stands (its matrices, whatever its method says)."""
+    return RodDeflection(Rod.of(rod), str(rod.method))
+
+
 def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
     result and the :class:`Refit` it used."""
-    from rodlab.calibrate import campaign_observations, identify
+    from rodlab.calibrate import FitOptions, campaign_observations, identify
     fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
@@ -308,12 +314,13 @@ def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm,
         obs2 = edit(obs2)
     if not fit.keep.all():
         obs2 = obs2.subset(fit.keep)
-    res2 = identify(robot, obs2, rod.tool_mm, fit.rod, freed=fit.freed, expected_noise_mm=noise_mm,
-                    fixture_sigma=fixture_sigma, harmonics=tuple(ctx.result.harmonic_range_deg))
+    res2 = identify(robot, obs2, Rod.of(rod), [_deflection(fit.rod)],
+                    FitOptions(freed=fit.freed, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
+                               harmonics=tuple(ctx.result.harmonic_range_deg)))
     return res2, fit
 
 
-def _unexplained(sel: _Selection, camp, final_test) -> Finding:
+def _unexplained(sel: CampaignSelection, camp, final_test) -> Finding:
     """The finding that says what the found physics leaves: residuals above the expected scatter, at the
     position where they are least expected, or spread evenly over the positions (no structure: a device noisier than
     stated would give that: :mod:`.spread`)."""
@@ -324,7 +331,7 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
     kept = np.ones(sel.N, dtype=bool)
     kept[sel.used_points] = False                  # dropped outliers: their own columns absorb them
     A = np.column_stack([sel.J] + sel.cols)
-    device_scale, null_cov = _device_noise_null(sel, ew, A)
+    device_scale, null_cov = device_noise_null(sel, ew, A)
     share = position_share_test(ew, A, np.asarray(camp.position), kept, null_cov)
     worst, p_even = share.worst, share.p
     even = p_even > 0.01
@@ -343,7 +350,7 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
                    {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even})
 
 
-def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[float, np.ndarray]:
+def device_noise_null(sel: CampaignSelection, ew: np.ndarray, A: np.ndarray) -> tuple[float, np.ndarray]:
     """The evenly spread excess "a device noisier than stated" predicts: the factor s (>= 1) on the device
     noise that makes the expected residual sum of squares the observed one (the fixture poses' uncertainty as
     stated), and the covariance of the whitened noise under it (shape=(3N, 3N))."""
@@ -356,7 +363,7 @@ def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[
     return float(np.sqrt(s2)), s2 * Dw + Fw
 
 
-def _context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
+def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
     from rodlab.calibrate.kinematics import ball_positions
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
@@ -368,13 +375,13 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                       fixture_sigma=(0.01, 0.002), harmonics=()):
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
-    from rodlab.calibrate import campaign_observations, identify
+    from rodlab.calibrate import FitOptions, campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
-    res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
-                   harmonics=tuple(harmonics))
-    ctx, tau = _context(robot, res, obs, camp, rod)
-    sel = _Selection(ctx, tau, noise_mm, fixture_sigma, max_terms)
+    res = identify(robot, obs, Rod.of(rod), [_deflection(rod)],
+                   FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics)))
+    ctx, tau = campaign_context(robot, res, obs, camp, rod)
+    sel = CampaignSelection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()
     findings = sel.findings
     res2, refit = (None, None)

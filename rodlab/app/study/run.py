@@ -68,7 +68,7 @@ class StudyRun:
     predictions: list = field(default_factory=list)
 
 
-def _priors(spec: StudySpec, setup_or_prior):
+def replicate_priors(spec: StudySpec, setup_or_prior):
     from rodlab.calibrate.predict import Priors
     base = spec.priors or Priors()
     return replace(base, r_rod=tuple(setup_or_prior))
@@ -85,7 +85,7 @@ def joints_identity(joints) -> str | None:
                       sort_keys=True, default=str)
 
 
-def _key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
+def cache_key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
     from rodlab.design_io import design_to_dict
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
@@ -130,13 +130,13 @@ def _replicate_task(setup: dict, robot, fixture, spec: StudySpec, seed: int) -> 
         return None
     try:
         o = run_replicate(robot, s.plan_q_rad, fixture, standard_base(), s.fea, s.calc, spec.methods,
-                          _priors(spec, s.r_prior), seed, spec.budget)
+                          replicate_priors(spec, s.r_prior), seed, spec.budget)
     except CalibrationError as e:
         return {"seed": seed, "error": str(e)}
     return outcome_to_dict(o)
 
 
-class _Cache:
+class ResultCache:
     def __init__(self, root: Path | None):
         self.root = root
 
@@ -159,7 +159,7 @@ class _Cache:
             atomic_write_json(p, json_safe(value))          # NaN (not computed) stored as null
 
 
-def _client(scheduler, workers):
+def dask_client(scheduler, workers):
     from dask.distributed import Client
     if not log.isEnabledFor(logging.DEBUG):      # the cluster's start / stop chatter only with --debug
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
@@ -181,18 +181,18 @@ def run_study(cands: list[Candidate], robot, fixture, spec: StudySpec = StudySpe
     if not spec.monte_carlo:
         from .run_fast import run_fast
         return run_fast(cands, robot, fixture, spec, joints, cache_dir, scheduler, workers, use_dask, progress)
-    cache = _Cache(Path(cache_dir) if cache_dir else None)
-    keys = [_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
+    cache = ResultCache(Path(cache_dir) if cache_dir else None)
+    keys = [cache_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
     seeds = [spec.seed + i for i in range(int(spec.replicates))]
     setups = [cache.get(k, "setup.json") for k in keys]
     reps = [[cache.get(k, f"rep_{s}.json") for s in seeds] for k in keys]
     total = len(cands) * (1 + len(seeds))
     done = sum(s is not None for s in setups) + sum(r is not None for rr in reps for r in rr)
-    tick = _ticker(progress, done, total)
+    tick = progress_ticker(progress, done, total)
     client = cluster = None
     if use_dask and done < total:
         try:
-            client, cluster = _client(scheduler, workers)
+            client, cluster = dask_client(scheduler, workers)
         except ImportError:
             log.warning("Dask is not installed (pip install 'rodlab[dist]'): the study runs serially")
     try:
@@ -209,7 +209,7 @@ def run_study(cands: list[Candidate], robot, fixture, spec: StudySpec = StudySpe
     return StudyRun([DesignSetup.from_dict(s) for s in setups], outcomes, spec)
 
 
-def _ticker(progress, done, total):
+def progress_ticker(progress, done, total):
     state = {"done": done}
     if progress:
         progress(done, total)

@@ -63,14 +63,14 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
     from rodlab.enums import DesignStatus
 
     from .designs import r_prior_of
-    from .run import _priors
+    from .run import replicate_priors
     prior = r_prior_of(cand.design, spec.r_prior_metal, spec.r_prior_composite) if cand.design else (1.0, 1.0)
     s = prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed)
     if not s.ok:
         return {"setup": s.to_dict(), "prediction": None}
     try:
         lp = predict_linear(robot, s.plan_q_rad, fixture, standard_base(), s.fea, s.calc, spec.methods,
-                            _priors(spec, s.r_prior), spec.draws, spec.seed)
+                            replicate_priors(spec, s.r_prior), spec.draws, spec.seed)
     except CalibrationError as e:
         s.status, s.message = DesignStatus.FAILED, f"prediction: {e}"
         return {"setup": s.to_dict(), "prediction": None}
@@ -80,16 +80,16 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
 def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, workers: int, use_dask: bool,
              progress):
     """:func:`rodlab.app.study.run.run_study` with the linear predictor (``spec.monte_carlo`` off)."""
-    from .run import StudyRun, _Cache, _client, _key, _ticker
-    cache = _Cache(Path(cache_dir) if cache_dir else None)
-    keys = [_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
+    from .run import StudyRun, ResultCache, dask_client, cache_key, progress_ticker
+    cache = ResultCache(Path(cache_dir) if cache_dir else None)
+    keys = [cache_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
     got = [cache.get(k, "fast.json") for k in keys]
-    tick = _ticker(progress, sum(g is not None for g in got), len(cands))
+    tick = progress_ticker(progress, sum(g is not None for g in got), len(cands))
     todo = [i for i, g in enumerate(got) if g is None]
     client = cluster = None
     if use_dask and (scheduler or len(todo) >= DASK_MIN_DESIGNS):
         try:
-            client, cluster = _client(scheduler, workers)
+            client, cluster = dask_client(scheduler, workers)
         except ImportError:
             log.warning("Dask is not installed (pip install 'rodlab[dist]'): the study runs serially")
     try:

@@ -1,13 +1,12 @@
-"""Rod-deflection compensation (paper Eqs. 10-19): the seam every compensation method goes through.
-
-A compensation maps configurations, the robot model and the rod to the ball-centre offsets ``dx^W`` [mm]
-that the rod's deflection adds to each measured point (Eq. 11); identification removes them from the
-measurements and the simulator adds the true rod's. The paper's methods None / Calc / FEA / Meas differ
-only in the data: the compliance file (``C_F``, ``C_g``, Eq. 19) the offsets are computed from, or none.
+"""The rod's deflection (paper Eqs. 10-19) as a compensation: the ball-centre offsets ``dx^W`` [mm] that the rod's
+deflection under its weight and the contact force adds to each measured point (Eq. 11). The paper's methods
+None / Calc / FEA / Meas differ only in the data: the rod's compliance (``C_F``, ``C_g``, Eq. 19, from a
+compliance file) the offsets are computed from, or none.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -15,13 +14,15 @@ from rodlab.compliance import RodCompliance
 from rodlab.enums import Method
 from rodlab.units import G0
 
-from .kinematics import ModelParams, ball_positions
+from ..kinematics import ModelParams, ball_positions
+from ..rod import Rod
+from .base import Compensation
 
-__all__ = ["Compensation", "deflection_offsets", "deflection_basis", "flange_loads"]
+__all__ = ["RodDeflection", "deflection_offsets", "deflection_basis", "flange_loads"]
 
 
 def deflection_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray,
-                       rod: RodCompliance | None) -> np.ndarray:
+                       rod: Rod | RodCompliance | None) -> np.ndarray:
     """Ball-centre offsets in {W} [mm], shape=(N, 3), of a rod with compliance ``rod`` on the robot ``params``
     in configurations ``q_rad`` (N, n) under contact forces ``force_W_N`` (N, 3) in {W}: gravity and force in
     {T} (the flange axes), Eq. 19 in {T}, rotated to {W} (Eq. 11). Zero without a rod or with zero matrices."""
@@ -58,35 +59,47 @@ def deflection_basis(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: n
 
 
 @dataclass(frozen=True)
-class Compensation:
-    """One compensation method as data.
+class RodDeflection(Compensation):
+    """The rod's deflection under its weight and the contact force (Eq. 19), from its compliance.
 
+    rod : the rod (:class:`~rodlab.calibrate.rod.Rod`) whose ``C_F`` / ``C_g`` give the offsets; ``None`` = no
+        compensation
     label : the name shown in results and reports (e.g. ``fea``, ``meas``, ``corrected``)
-    rod : the compliance file whose ``C_F`` / ``C_g`` give the offsets; ``None`` = no compensation
     """
 
-    label: str
-    rod: RodCompliance | None = None
+    name: ClassVar[str] = "rod_deflection"
+    summary: ClassVar[str] = ("the rod's deflection under its weight and the contact force (paper Eq. 19): "
+                              "C_g g^T + C_F F^T, rotated to {W}")
+    needs: ClassVar[str] = "the rod's compliance file (C_F, C_g; method calc / fea / meas)"
+    option: ClassVar[str] = "`--rod FILE` (`--compensation file`, the default; `none` leaves it out)"
+
+    rod: Rod | None = None
+    label: str = str(Method.NONE)
 
     def __post_init__(self) -> None:
         if not isinstance(self.label, str) or not self.label.strip():
             raise ValueError(f"a compensation needs a non-empty label, got {self.label!r}")
-        if self.rod is not None and not isinstance(self.rod, RodCompliance):
-            raise TypeError(f"rod must be a RodCompliance or None, got {type(self.rod).__name__}")
+        if self.rod is not None and not isinstance(self.rod, Rod):
+            raise TypeError(f"rod must be a Rod or None, got {type(self.rod).__name__}")
 
     @classmethod
-    def of(cls, rod: RodCompliance | None, label: str | None = None) -> "Compensation":
-        """The compensation a compliance file stands for, labelled by its method unless ``label`` is given;
-        a file of method ``none`` (zero matrices) is no compensation."""
+    def of(cls, rod: Rod | RodCompliance | None, label: str | None = None) -> "RodDeflection":
+        """The compensation a rod (or its compliance file) stands for, labelled by its method unless ``label`` is
+        given; a rod of method ``none`` (zero matrices) is no compensation."""
         if rod is None:
-            return cls(label or str(Method.NONE), None)
-        return cls(label or str(rod.method), None if rod.method is Method.NONE else rod)
+            return cls(None, label or str(Method.NONE))
+        rod = Rod.of(rod) if isinstance(rod, RodCompliance) else rod
+        return cls(None if rod.method is Method.NONE else rod, label or str(rod.method))
 
     @property
     def active(self) -> bool:
         """True when it changes the measurements (a rod with non-zero compliance)."""
-        return self.rod is not None and bool(self.rod.C_F.any() or self.rod.C_g.any())
+        return self.rod is not None and self.rod.deflects
 
-    def offsets(self, robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray) -> np.ndarray:
+    @property
+    def rough_pass(self) -> bool:
+        return self.active
+
+    def offsets(self, robot, params: ModelParams, at) -> np.ndarray:
         """Ball-centre offsets in {W} [mm], shape=(N, 3) (see :func:`deflection_offsets`)."""
-        return deflection_offsets(robot, params, q_rad, force_W_N, self.rod if self.active else None)
+        return deflection_offsets(robot, params, at.q_rad, at.force_W_N, self.rod if self.active else None)

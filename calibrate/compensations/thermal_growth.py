@@ -1,4 +1,4 @@
-"""Thermal growth of the measuring rod: a compensation through the same seam as the rod's deflection.
+"""Thermal growth of the measuring rod as a compensation (beside the rod's deflection).
 
 The tool vector (flange to ball centre) of a rod grows with its temperature by ``g (T - T_ref)``, where
 ``g`` [mm/K] in {T} is the sum over the rod's members of each member's axial CTE times its span
@@ -10,11 +10,13 @@ tool, which identification absorbs. Needs the campaign's ``temp_C`` column.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
-from .errors import CalibrationError
-from .kinematics import ModelParams, ball_positions
+from ..errors import CalibrationError
+from ..kinematics import ModelParams, ball_positions
+from .base import Compensation
 
 __all__ = ["ThermalGrowth", "tool_axes_W"]
 
@@ -31,13 +33,19 @@ def tool_axes_W(robot, params: ModelParams, q_rad: np.ndarray, force_W_N=None, r
 
 
 @dataclass(frozen=True)
-class ThermalGrowth:
+class ThermalGrowth(Compensation):
     """The rod's tool vector growing with temperature.
 
     growth_T_mm_per_K : shift of the ball centre per kelvin in {T} [mm/K], shape=(3,)
     T_ref_C : the temperature the tool vector is stated at [degC]
     label : the name shown in results
     """
+
+    name: ClassVar[str] = "thermal_growth"
+    summary: ClassVar[str] = ("the rod's tool vector growing with its temperature: each member's axial CTE times its "
+                              "span, per kelvin from the reference, rotated to {W} with the flange")
+    needs: ClassVar[str] = "the campaign's temp_C column and the rod's design (its materials' cte_ppm_K)"
+    option: ClassVar[str] = "`--thermal DESIGN` (`--t-ref-c` the reference temperature)"
 
     growth_T_mm_per_K: np.ndarray
     T_ref_C: float = 20.0
@@ -67,19 +75,16 @@ class ThermalGrowth:
     def active(self) -> bool:
         return bool(self.growth_T_mm_per_K.any())
 
-    def offsets(self, robot, params: ModelParams, obs) -> np.ndarray:
-        """Ball-centre offsets in {W} [mm], shape=(N, 3), of the points of ``obs``
-        (:class:`~rodlab.calibrate.identify.Observations` with ``temp_C``)."""
-        if obs.temp_C is None or not np.all(np.isfinite(obs.temp_C)):
+    @classmethod
+    def truth_of(cls, entry: "ThermalGrowth | None") -> dict:
+        return {"rod_thermal_growth_T_mm_per_K": None if entry is None else entry.growth_T_mm_per_K.tolist()}
+
+    def offsets(self, robot, params: ModelParams, at) -> np.ndarray:
+        """Ball-centre offsets in {W} [mm], shape=(N, 3), at the points ``at``
+        (:class:`~rodlab.calibrate.identify.Observations` or :class:`~.base.Poses` with ``temp_C`` [degC])."""
+        if at.temp_C is None or not np.all(np.isfinite(at.temp_C)):
             raise CalibrationError("thermal compensation needs the temperature of every point: a temp_C column in "
                                    "the campaign", key="temp_C")
-        return self.offsets_at(robot, params, obs.q_rad, obs.temp_C, obs.force_W_N, obs.rod_mass_kg,
-                               obs.rod_com_T_mm)
-
-    def offsets_at(self, robot, params: ModelParams, q_rad, temp_C, force_W_N=None, rod_mass_kg: float = 0.0,
-                   rod_com_T_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
-        """Ball-centre offsets in {W} [mm], shape=(N, 3), at configurations ``q_rad`` (N, n) and temperatures
-        ``temp_C`` (N,) [degC]."""
-        R = tool_axes_W(robot, params, q_rad, force_W_N, rod_mass_kg, rod_com_T_mm)
-        dx_T = np.outer(np.asarray(temp_C, float) - self.T_ref_C, self.growth_T_mm_per_K)
+        R = tool_axes_W(robot, params, at.q_rad, at.force_W_N, at.rod_mass_kg, at.rod_com_T_mm)
+        dx_T = np.outer(np.asarray(at.temp_C, float) - self.T_ref_C, self.growth_T_mm_per_K)
         return np.einsum("nij,nj->ni", R, dx_T)

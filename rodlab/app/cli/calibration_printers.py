@@ -1,0 +1,51 @@
+"""What ``rodlab calibrate`` (campaign, points, sockets) prints and writes of an identification."""
+from __future__ import annotations
+
+import sys
+
+from .verdict import print_held
+
+__all__ = ["print_parameters", "print_not_trusted", "print_cautions", "write_result_file"]
+
+
+def print_parameters(res) -> None:
+    """The free parameters (value, sigma, unit, status), how many are held, and the residual test."""
+    print(f"  {'parameter':<14} {'value':>14} {'sigma':>12}  unit       status")
+    for nm in res.free:
+        info = next(i for i in res.infos if i.name == nm)
+        v, s = res.values[nm], res.sigma[nm]
+        if info.unit == "rad/(N m)":
+            print(f"  {nm:<14} {v * 1e6:14.3f} {s * 1e6:12.3f}  urad/(N m) {res.status[nm]}")
+        else:
+            print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
+    print_held(res)
+    if res.residual_check is not None:
+        t = res.residual_check
+        verdict = "NOT noise" if t.material else "slightly above noise" if t.missing else "consistent with noise"
+        print(f"  residuals {verdict}: {res.residual_check.describe()}")
+
+
+def print_cautions(res) -> None:
+    """A trusted result's cautions (residuals slightly above the noise model, partial-turn periodic terms)."""
+    for c in res.cautions:
+        print(f"caution (trusted): {c}", file=sys.stderr)
+
+
+def print_not_trusted(res) -> None:
+    """The reasons not to trust a result, and its cautions (which hold for a later, trusted fit too)."""
+    print("NOT TRUSTED - do not load these parameters into the robot:", file=sys.stderr)
+    for w in res.warnings:
+        print(f"  - {w}", file=sys.stderr)
+    for c in res.cautions:
+        print(f"caution: {c}", file=sys.stderr)
+
+
+def write_result_file(args, result: dict) -> list:
+    """The result file when ``--json`` is given, else the result in memory (for ``--report``)."""
+    from rodlab.calibrate import write_result
+    if args.json:
+        path = write_result(args.json, result)
+        print(f"wrote {path}")
+        return [path]
+    from ..report import Source
+    return [Source(result["format"], result)]

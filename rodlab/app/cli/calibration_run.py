@@ -1,0 +1,113 @@
+"""One campaign identified (and checked on validation points): shared by ``rodlab calibrate`` and ``rodlab compare``."""
+from __future__ import annotations
+
+import logging
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...compliance import RodCompliance
+from ...errors import RodlabError
+from ...units import DEVICE_NOISE_MM
+from .calibrateargs import pins_from_args
+from .deviceargs import campaign_from_args, warn_flagged_fixture
+from .robotargs import robot_from_args
+
+__all__ = ["run_calibration", "CalibrationRun"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class CalibrationRun:
+    """One campaign identified and, with ``--validate``, checked on the validation points.
+
+    Attributes
+    ----------
+    robot, campaign : what was read; result : the :class:`~rodlab.calibrate.CalibrationResult`
+    nominal_mm, calibrated_mm : shape=(M,) position error [mm] of each validation point with the nominal and
+        the identified model, or ``None`` without validation points
+    """
+
+    robot: object
+    campaign: object
+    result: object
+    nominal_mm: np.ndarray | None = None
+    calibrated_mm: np.ndarray | None = None
+    observations: object = None            # what was fitted (calibrate.Observations)
+    rod: object = None                     # the rod on the flange (calibrate.Rod)
+    compensations: list = field(default_factory=list)   # what the fit removed (calibrate.compensations entries)
+    options: object = None                 # the identification's options (calibrate.FitOptions; cross-validation)
+
+    @property
+    def label(self) -> str:
+        """What the result calls its compensation (e.g. ``fea``, ``none``, ``calc+thermal``)."""
+        from rodlab.calibrate.compensations import compensation_label
+        return compensation_label(self.compensations)
+
+    @property
+    def before(self):
+        """:class:`~rodlab.calibrate.validate.ErrorStats` of the nominal model (or ``None``)."""
+        return None if self.nominal_mm is None else _stats(self.nominal_mm)
+
+    @property
+    def after(self):
+        """... of the identified model (or ``None``)."""
+        return None if self.calibrated_mm is None else _stats(self.calibrated_mm)
+
+
+def _stats(errors_mm):
+    from rodlab.calibrate.validate import error_stats
+    return error_stats(errors_mm)
+
+
+def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> CalibrationRun:
+    """Identification (+ validation) of one campaign with the rod (tool, mass, COM) of the file ``rod``, its
+    deflection compensated by ``deflection`` (:class:`rodlab.calibrate.RodDeflection`) and, with ``--thermal``,
+    its thermal growth; ``camp`` the campaign already read (else ``args.campaign`` with ``args.device``)."""
+    from rodlab.calibrate import FitOptions, ModelParams, Rod, campaign_observations, identify, read_fixture
+    from rodlab.calibrate import read_points, validate
+    robot = robot_from_args(args)
+    fix = read_fixture(args.fixture)
+    if camp is None:                                    # compare reads the campaign and warns once
+        camp = campaign_from_args(args, robot.n)
+        warn_flagged_fixture(fix, args.fixture)
+    obs = campaign_observations(camp, fix, rod)
+    compensations = [deflection, *_thermal(args, camp, rod)]
+    options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,
+                         harmonics=getattr(args, "joint_harmonics", ()), fix_unidentifiable=not args.strict,
+                         expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
+    from dataclasses import replace
+
+    from rodlab.calibrate.plausible import constrain_to_ranges
+    res, pins = constrain_to_ranges(lambda p: identify(robot, obs, Rod.of(rod), compensations, replace(options, pinned=p)),
+                                    options.pinned, options.freed)
+    options = replace(options, pinned=pins)       # with the range holds: the cross-validation fits the same model
+    run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations,
+                         options=options)
+    if args.validate:
+        pts = read_points(args.validate, robot.n)
+        run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
+        run.calibrated_mm = validate(robot, res.params, pts)[1]
+    return run
+
+
+def _thermal(args, camp, rod) -> tuple:
+    """``--thermal DESIGN``: the rod's thermal growth as a further compensation (needs the campaign's temp_C)."""
+    if not getattr(args, "thermal", None):
+        return ()
+    from rodlab.calibrate import ThermalGrowth
+
+    from ...design_io import resolve_design
+    if camp.temp_C is None or not np.all(np.isfinite(camp.temp_C)):
+        raise RodlabError(f"{args.campaign}: --thermal needs the temperature of every point (a temp_C column [degC]); "
+                          f"record it or leave --thermal out")
+    design = resolve_design(args.thermal)
+    if np.linalg.norm(np.asarray(design.tool_mm) - rod.tool_mm) > 1.0:
+        print(f"warning: --thermal {args.thermal}: its tool vector {np.round(design.tool_mm, 1).tolist()} mm is not "
+              f"the rod file's {np.round(rod.tool_mm, 1).tolist()} mm; is it the same rod?", file=sys.stderr)
+    growth = ThermalGrowth.of_design(design, args.t_ref_c)
+    log.info("thermal growth of the tool vector: %s um/K; temp_C %.2f..%.2f", np.round(growth.growth_T_mm_per_K * 1e3, 3),
+             np.min(camp.temp_C), np.max(camp.temp_C))
+    return (growth,)

@@ -1,0 +1,43 @@
+"""``rodlab compliance``: a rod's compliance file by the closed form."""
+from __future__ import annotations
+
+import argparse
+
+from ...calc import BendModel, calc_rod_compliance
+from ...compliance import RodCompliance, write_compliance
+from ...design_io import resolve_design
+from ...enums import Method
+from .reporting import add_report_option, write_command_report
+from .rodargs import DESIGN_HELP
+
+__all__ = ["register"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("compliance", help="compute a rod's compliance file (closed form)",
+                       description="Compute C_F and C_g of a rod design and write a *.compliance.json "
+                                   "(contract rodlab.compliance/1). For finite elements use `rodlab fea`.")
+    p.add_argument("design", help=DESIGN_HELP)
+    p.add_argument("--method", choices=["calc", "none"], default="calc",
+                   help="calc: closed-form Euler-Bernoulli frame (paper Eqs. 15/17 generalised); "
+                        "none: zero matrices (no compensation)")
+    p.add_argument("--bend", choices=[m.value for m in BendModel], default="arc",
+                   help="bend model of the closed form: arc (curved beam) or corner (sharp-corner idealisation)")
+    p.add_argument("--shear", action="store_true", help="add Timoshenko shear flexibility")
+    p.add_argument("-o", "--output", help="output file (default: NAME.compliance.json in the current folder)")
+    add_report_option(p)
+    p.set_defaults(func=cmd_compliance)
+
+
+def cmd_compliance(args: argparse.Namespace) -> int:
+    design = resolve_design(args.design)
+    comp = calc_rod_compliance(design, bend=BendModel(args.bend), shear=args.shear)
+    if args.method == Method.NONE.value:
+        comp = RodCompliance.none_like(comp)
+    out = args.output or f"{design.name.replace('#', '')}.compliance.json"
+    if not args.output and not out[0].isalpha():
+        out = f"rod{out}"
+    path = write_compliance(comp, out)
+    print(f"wrote {path}: method {comp.method}, c_rod = {comp.c_rod_um:.1f} um, mass = {comp.mass_kg * 1e3:.1f} g")
+    write_command_report(args, [path], path.parent)
+    return 0

@@ -1,0 +1,49 @@
+"""``rodlab plan``: rod orientations per clamping position chosen by observability (O1)."""
+from __future__ import annotations
+
+from ...compliance import read_compliance
+from .argtypes import count, seed
+from .robotargs import add_robot_options, robot_from_args
+
+__all__ = ["register", "cmd_plan"]
+
+
+def register(sub) -> None:
+    p = sub.add_parser("plan", help="choose rod orientations per clamping position by observability (O1)",
+                       description="Reachable rod orientations at every clamping position (numeric IK within the "
+                                   "joint limits), chosen to maximise the observability index O1; prints O1-O5 and "
+                                   "writes the joint angles for the robot program.")
+    add_robot_options(p)
+    p.add_argument("--fixture", required=True)
+    p.add_argument("--rod", required=True, help="a compliance file (tool, mass) or a *.rod.toml design")
+    p.add_argument("-k", type=count, default=6, help="orientations per position")
+    p.add_argument("--candidates", type=count, default=24)
+    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
+    p.set_defaults(func=cmd_plan)
+
+
+def cmd_plan(args) -> int:
+    from rodlab.calibrate import read_fixture
+    from rodlab.calibrate.plan import plan_poses
+    from rodlab.fileio import atomic_write_text
+    robot = robot_from_args(args)
+    fix = read_fixture(args.fixture)
+    if str(args.rod).endswith(".toml"):
+        from ...calc import calc_rod_compliance
+        from ...design_io import load_design
+        rod = calc_rod_compliance(load_design(args.rod))
+    else:
+        rod = read_compliance(args.rod)
+    poses, obs = plan_poses(robot, fix, rod.tool_mm, args.k, args.candidates, args.seed, rod.mass_kg, rod.com_T_mm)
+    print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
+          ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
+    lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]
+    for j, qs in poses.items():
+        for i, q in enumerate(qs, start=1):
+            lines.append(f"{j},{i}," + ",".join(f"{v:.4f}" for v in q))
+    if args.output:
+        print(f"wrote {atomic_write_text(args.output, chr(10).join(lines) + chr(10))}")
+    else:
+        print("\n".join(lines))
+    return 0

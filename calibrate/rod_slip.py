@@ -27,7 +27,7 @@ import numpy as np
 
 from rodlab.compliance import RodCompliance
 
-from .compensation import flange_loads
+from .compensations.rod_deflection import flange_loads
 from .kinematics import ModelParams
 
 __all__ = ["slip_offsets", "slip_directions"]

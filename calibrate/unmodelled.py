@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compensation import flange_loads
+from .compensations.rod_deflection import flange_loads
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations
 from .rod_slip import slip_directions

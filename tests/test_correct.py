@@ -165,7 +165,7 @@ def test_cli_pose_targets_and_their_refusals(tmp_path, capsys):
     targets within 1 um / 1 urad. An unreachable pose, a quaternion column and a partial orientation are refused
     with the file and line, exit 2, and no output file."""
     from rodlab.calibrate import read_points
-    from rodlab.calibrate.calibration_file import calibrated_params, read_calibration
+    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.ik_pose import rotation_angle
     from rodlab.frames import matrix_to_pose, rotation_from_abc
     lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()

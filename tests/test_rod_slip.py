@@ -7,7 +7,7 @@ import pytest
 
 from rodlab.calc import calc_rod_compliance
 from rodlab.calibrate import resolve_robot
-from rodlab.calibrate.compensation import flange_loads
+from rodlab.calibrate.compensations.rod_deflection import flange_loads
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import ModelParams
 from rodlab.calibrate.plan import plan_poses

@@ -11,7 +11,6 @@ from dataclasses import asdict
 
 import logging
 import time
-from enum import Enum
 from typing import Protocol
 
 import numpy as np
@@ -20,7 +19,7 @@ from rodlab.calc import calc_rod_compliance
 from rodlab.progress import stages
 from rodlab.compliance import RodCompliance
 from rodlab.design import RodDesign
-from rodlab.enums import Method
+from rodlab.enums import FeaModel, Method
 from rodlab.fem_mesh import RodMesh
 
 from .errors import FeaError
@@ -42,14 +41,6 @@ class Mesher(Protocol):
     """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it."""
 
     def __call__(self, design: RodDesign, *, size_mm: float, grading, half: bool) -> RodMesh: ...
-
-
-class FeaModel(str, Enum):
-    """Which model computes the compliance."""
-
-    SOLID = "solid"   #: 3-D elasticity, scikit-fem, curved P2 (reference)
-    FRAME = "frame"   #: Timoshenko beam frame with pipe-bend flexibility (sweeps)
-    CALC = "calc"     #: the paper's closed form generalised (Euler-Bernoulli frame)
 
 
 def default_solid_size_mm(design: RodDesign) -> float:

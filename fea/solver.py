@@ -17,10 +17,11 @@ from __future__ import annotations
 import functools
 import logging
 import os
-from enum import Enum
 
 import numpy as np
 import scipy.sparse as sp
+
+from rodlab.enums import SolverBackend
 
 from .errors import FeaError
 
@@ -31,14 +32,6 @@ log = logging.getLogger(__name__)
 
 #: environment variable that forces a backend (``pardiso``, ``cholmod`` or ``superlu``)
 SOLVER_ENV = "RODLAB_SPARSE_SOLVER"
-
-
-class SolverBackend(str, Enum):
-    """Sparse direct solvers, fastest first."""
-
-    PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
-    CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
-    SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
 
 
 #: pypardiso finds ``mkl_rt`` by a recursive glob over the whole environment (``sys.prefix/lib*/**``) at its

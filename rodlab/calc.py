@@ -20,13 +20,12 @@ C_g [mm per g0] (gravity of magnitude g0 = 9.80665 m/s^2 along the given {T} dir
 from __future__ import annotations
 
 from dataclasses import replace
-from enum import Enum
 from functools import lru_cache
 
 import numpy as np
 
 from .design import RodDesign
-from .enums import Part
+from .enums import BendModel, Part
 from .frames import skew as _skew
 from .errors import DesignError
 from .layout import Layer, Segment, SegmentKind, layout
@@ -34,13 +33,6 @@ from .units import G0
 
 __all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments",
            "unit_load_compliance"]
-
-
-class BendModel(str, Enum):
-    """How the closed form treats the bend pipe."""
-
-    ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
-    CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
 
 
 def pipes_only_segments(design: RodDesign) -> list[Segment]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from enum import Enum
 
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
-           "Completeness"]
+           "Completeness", "BendModel", "SegmentKind", "FeaModel", "SolverBackend"]
 
 
 class _StrEnum(str, Enum):
@@ -157,3 +157,46 @@ class Completeness(_StrEnum):
     COMPLETE = "complete"        #: residuals consistent with the noise model
     NEARLY = "nearly"            #: significantly but only slightly above it (Birge ratio at most 1.5)
     INCOMPLETE = "incomplete"    #: the model leaves out errors well above the noise (a caution for a usable result)
+
+
+class BendModel(str, Enum):
+    """How the closed form treats the bend pipe."""
+
+    ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
+    CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
+
+
+class SegmentKind(str, Enum):
+    """The shape of a piece of a rod's centreline (:class:`rodlab.layout.Segment`)."""
+
+    LINE = "line"
+    ARC = "arc"
+
+
+class FeaModel(str, Enum):
+    """Which model computes the compliance."""
+
+    SOLID = "solid"   #: 3-D elasticity, scikit-fem, curved P2 (reference)
+    FRAME = "frame"   #: Timoshenko beam frame with pipe-bend flexibility (sweeps)
+    CALC = "calc"     #: the paper's closed form generalised (Euler-Bernoulli frame)
+
+    @property
+    def describes(self) -> str:
+        """What the model is, for help texts (``rodlab fea --help``)."""
+        return _FEA_MODEL_TEXT[self]
+
+
+_FEA_MODEL_TEXT = {
+    FeaModel.SOLID: "3-D elasticity on the CAD mesh (scikit-fem, curved P2, transversely-isotropic carbon; needs the "
+                    "cad extra)",
+    FeaModel.FRAME: "Timoshenko beam frame with pipe-bend flexibility (fast)",
+    FeaModel.CALC: "the closed form",
+}
+
+
+class SolverBackend(str, Enum):
+    """Sparse direct solvers, fastest first."""
+
+    PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
+    CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
+    SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)

@@ -10,7 +10,7 @@ from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
 from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
-from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg
 
 __all__ = ["register"]
@@ -34,7 +34,7 @@ def register(sub) -> None:
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     p.add_argument("--device", default=None, metavar="DEV.device.json", help="campaign: " + DEVICE_HELP)
-    add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
+    add_robot_options(p, help="campaign / points: " + robot_help())
     p.add_argument("--rod", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the --sim "
                                  "file was made from, if it is still there); campaign: the *.compliance.json used")
     p.add_argument("--sim-accuracy", type=sim_accuracy, default=None, metavar="ACC",

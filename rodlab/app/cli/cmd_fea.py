@@ -10,22 +10,22 @@ import numpy as np
 
 from ...compliance import write_compliance
 from ...design_io import resolve_design
+from ...enums import FeaModel
 from ...errors import RodlabError
 from .argtypes import pos_float
 from .reporting import add_report_option, png_file, write_command_report
+from .rodargs import design_help
 
 __all__ = ["register"]
 
 
 def register(sub) -> None:
     p = sub.add_parser("fea", help="compute C_F and C_g by solid FEA (reference), beam frame or closed form",
-                       description="Compute the compliance file of a rod design. solid: 3-D elasticity on the CAD "
-                                   "mesh (scikit-fem, curved P2, transversely-isotropic carbon; needs the cad "
-                                   "extra); frame: Timoshenko beam frame with pipe-bend flexibility (fast); "
-                                   "calc: the closed form.")
-    p.add_argument("design", help="a *.rod.toml file, or a built-in design: rod1 .. rod6")
+                       description="Compute the compliance file of a rod design. "
+                                   + "; ".join(f"{m.value}: {m.describes}" for m in FeaModel) + ".")
+    p.add_argument("design", help=design_help())
     p.add_argument("-o", "--output", required=True, help="output *.compliance.json")
-    p.add_argument("--model", choices=["solid", "frame", "calc"], default="solid")
+    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.SOLID.value)
     p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
                    "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
                    "changes, at most 2.1 x wall in the bend)")
@@ -49,7 +49,7 @@ def register(sub) -> None:
 
 
 def cmd_fea(args: argparse.Namespace) -> int:
-    from rodlab.fea import FeaModel, compute_compliance
+    from rodlab.fea import compute_compliance
     design = resolve_design(args.design)
     _check_fields_option(args)
     t0 = time.perf_counter()

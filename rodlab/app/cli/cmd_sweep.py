@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from ...design_io import resolve_design
+from ...enums import FeaModel
 from ...errors import RodlabError
 from ...fileio import atomic_write_bytes, atomic_write_text
 from .argtypes import count
@@ -22,7 +23,7 @@ def register(sub) -> None:
     p.add_argument("--L1", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--L2", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--base", default="rod1", help="base design (file or built-in; default rod1)")
-    p.add_argument("--model", choices=["frame", "calc", "solid"], default="frame")
+    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.FRAME.value)
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
     p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")

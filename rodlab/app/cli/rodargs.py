@@ -3,10 +3,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["compliance_arg", "DESIGN_HELP"]
+__all__ = ["compliance_arg", "design_help", "builtin_designs_text"]
 
-#: help of a design argument (info, compliance)
-DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6 (the paper's rods 1# .. 6#)"
+
+def builtin_designs_text() -> str:
+    """The built-in designs for a help text: ``rod1 .. rod6`` when they are numbered without a gap, else each."""
+    import re
+
+    from rodlab.design_io import builtin_designs
+    names = sorted(builtin_designs(), key=lambda n: (len(n), n))
+    numbers = [re.fullmatch(r"rod([0-9]+)", n) for n in names]
+    if len(names) > 2 and all(numbers) and [int(m.group(1)) for m in numbers] == list(
+            range(int(numbers[0].group(1)), int(numbers[0].group(1)) + len(names))):
+        return f"{names[0]} .. {names[-1]}"
+    return ", ".join(names)
+
+
+def design_help(paper: bool = False) -> str:
+    """Help of a design argument, the built-in designs from the package's data (``paper``: say they are the
+    paper's rods)."""
+    return (f"a *.rod.toml file, or a built-in design: {builtin_designs_text()}"
+            + (" (the paper's rods 1# .. 6#)" if paper else ""))
 
 
 def compliance_arg(spec: str):

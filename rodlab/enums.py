@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 from enum import Enum
+from typing import Union
 
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
-           "Completeness", "BendModel", "SegmentKind", "FeaModel", "SolverBackend"]
+           "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
+           "SegmentKind", "FeaModel", "SolverBackend"]
 
 
 class _StrEnum(str, Enum):
@@ -138,9 +140,53 @@ class SimAccuracy(_StrEnum):
     RELATIVE = "relative"    #: one relative standard deviation per C_F entry (no design known)
 
 
+class FindingKind(_StrEnum):
+    """Finding IDs of a diagnosis that name no modelled effect (contract ``effects.md``)."""
+
+    #: rig: the linear difference from the simulation the tolerances explain (effects v2): nothing was left out,
+    #: the rod as built differs from the simulated design
+    MODEL_FORM = "model_form"
+    #: both subjects: structure that no modelled effect explains, with where it is
+    UNEXPLAINED = "unexplained"
+
+
 #: the finding of a rig diagnosis whose linear difference from the simulation the tolerances explain (effects v2):
 #: nothing was left out, the rod as built differs from the simulated design
-MODEL_FORM = "model_form"
+MODEL_FORM = FindingKind.MODEL_FORM
+
+#: what a diagnosis finding's ``effect`` is: a rig effect, a campaign effect, or a finding that names none
+EffectId = Union[RigEffect, CampaignEffect, FindingKind]
+
+
+def parse_effect_id(value) -> EffectId:
+    """A finding's effect ID from its contract spelling (rig effects, campaign effects, ``model_form``,
+    ``unexplained``); :class:`~rodlab.errors.RodlabError` listing them otherwise."""
+    kinds = (RigEffect, CampaignEffect, FindingKind)
+    if isinstance(value, kinds):
+        return value
+    for kind in kinds:
+        try:
+            return kind(str(value).strip().lower())
+        except ValueError:
+            continue
+    from .errors import RodlabError, did_you_mean
+    choices = [m.value for kind in kinds for m in kind]
+    raise RodlabError(f"unknown effect {value!r}; expected one of {choices}." + did_you_mean(str(value), choices))
+
+
+class Verdict(_StrEnum):
+    """A diagnosis' verdict (contract ``rodlab.diagnosis/1``, ``verdict``)."""
+
+    CONSISTENT = "consistent"      #: the recording matches the simulation within the noise: nothing found
+    EXPLAINED = "explained"        #: the findings explain the difference down to the noise
+    UNEXPLAINED = "unexplained"    #: structure above the noise is left that no modelled effect explains
+
+
+class Subject(_StrEnum):
+    """What a diagnosis looked at (contract ``rodlab.diagnosis/1``, ``subject``)."""
+
+    RIG = "rig"              #: a stiffness-rig recording against a simulated compliance
+    CAMPAIGN = "campaign"    #: a calibration campaign's residuals against the identified model
 
 
 class AccuracySource(_StrEnum):

@@ -7,6 +7,7 @@ always says what to do next.
 """
 from __future__ import annotations
 
+from ...enums import FindingKind
 from .report import Finding
 
 __all__ = ["remedy"]
@@ -24,7 +25,7 @@ def _unexplained(f: Finding) -> str:
 
 def remedy(f: Finding) -> str:
     """One sentence: what to do about ``f`` (an effect of the campaign vocabulary: its module's remedy)."""
-    if f.effect == "unexplained":
+    if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
     from rodlab.calibrate.effects import campaign_effect
     from rodlab.errors import RodlabError

@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
-from rodlab.enums import Trial
+from rodlab.enums import FindingKind, Subject, Trial, Verdict
 from rodlab.hypothesis import Hypothesis, location_parts
 
 from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
@@ -335,7 +335,7 @@ def _unexplained(sel: _Selection, camp, final_test) -> Finding:
     where = (f"spread evenly over the positions (least expected share at position {worst}, p = {p_even:.2g}): "
              f"no structure; {noisier}" if even else
              f"least expected at position {worst} (p = {p_even:.2g}), with no modelled cause")
-    return Finding("unexplained", f"position:{worst}",
+    return Finding(FindingKind.UNEXPLAINED, f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
                    {"rms_mm": final_rms, "reduced_chi2": final_test.reduced, "birge_ratio": final_test.birge,
@@ -381,10 +381,10 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     if findings:
         res2, refit = _reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
     final_test = res2.residual_check if res2 is not None else res.residual_check
-    verdict = "consistent" if not findings else "explained"
+    verdict = Verdict.CONSISTENT if not findings else Verdict.EXPLAINED
     if final_test.missing:                 # calibrate's residual test: one story between the two
         findings.append(_unexplained(sel, camp, final_test))
-        verdict = "unexplained"
+        verdict = Verdict.UNEXPLAINED
     extra = {"residual_test": {"before": res.residual_check.to_dict(), "after": final_test.to_dict()}}
     keep = refit.keep if refit is not None else np.ones(ctx.n_points, dtype=bool)
     fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position),
@@ -395,7 +395,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}
     rms_after = res2.rms_mm if res2 is not None else res.rms_mm
-    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
+    return Diagnosis(Subject.CAMPAIGN, verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
 
 
 def _validation_errors(robot, fits: CampaignFits, points) -> dict:

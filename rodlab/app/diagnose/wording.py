@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from rodlab.enums import MODEL_FORM
+from rodlab.enums import MODEL_FORM, FindingKind
 
 from .report import Finding
 
@@ -22,7 +22,7 @@ __all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "for
 def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
     for physics outside the vocabulary :func:`.rig_outside.confirm_outside`."""
-    if effect == "unexplained":
+    if effect == FindingKind.UNEXPLAINED:
         from .rig_outside import confirm_outside
         return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
                                              "that moves is handling")
@@ -42,7 +42,7 @@ def certainty(f: Finding) -> str:
     p = f.evidence.get("lr_p")
     cv_ok = f.evidence.get("cv_sse_after", 0.0) < f.evidence.get("cv_sse_before", 1.0)
     if p is None or not math.isfinite(p):
-        return "not tested" if f.effect != "unexplained" else "the structure is significant; its cause is not modelled"
+        return "not tested" if f.effect != FindingKind.UNEXPLAINED else "the structure is significant; its cause is not modelled"
     chance = "below 1e-300" if p == 0 else f"{p:.1g}"
     if p < 1e-6 and cv_ok:
         level = "decisive"

@@ -20,7 +20,7 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.units import gpa_to_mpa
 
-from .assembly import scalar_basis
+from .stiffness_assembly import scalar_basis
 from .elasticity import NU23_DEFAULT, _frames
 from .errors import FeaError
 

@@ -128,7 +128,7 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
     """Compliance of ``design`` by ``model`` (``solid`` needs a ``mesher``, see :func:`solid_compliance`).
 
     ``calibration`` (frame only): a :class:`fea.frame.FrameCalibration` (constants) or a
-    :class:`fea.joints.JointCalibration` (one solid run of the design's family, :mod:`fea.family`)."""
+    :class:`fea.joints.JointFit` (one solid run of the design's family, :mod:`fea.family`)."""
     model = FeaModel(model)
     if model is FeaModel.SOLID:
         if mesher is None:
@@ -139,8 +139,8 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
         raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
     if model is FeaModel.FRAME:
         from .frame import CALIBRATION, FRAME_REVISION, frame_range_notes
-        from .joints import JointCalibration, joint_frame_compliance
-        if isinstance(calibration, JointCalibration):
+        from .joints import JointFit, joint_frame_compliance
+        if isinstance(calibration, JointFit):
             CF, Cg = joint_frame_compliance(design, calibration)
             b = calibration.base
             return RodCompliance.from_design(design, CF, Cg, Method.FEA, {

@@ -22,7 +22,7 @@ import numpy as np
 from rodlab.design import RodDesign
 from rodlab.units import kg_m3_to_kg_mm3
 
-from .assembly import assemble_stiffness, scalar_basis
+from .stiffness_assembly import assemble_stiffness, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering

@@ -5,7 +5,7 @@ the full rods A-Z beside the built-in rod1-rod6, the part probes (rods reduced t
 ``rings_*``, ``bend_*``), thin-walled bends outside the calibrated range, off-grid members of the paper's
 two families, and which of them were fitted (calibration set) and which held out (validation set).
 ``solid_reference.json`` holds their solid C_F / C_g; ``solid_joint_blind_reference.json`` the random
-families drawn blind for the joint calibration. ``scripts/calibrate_frame.py`` and
+families drawn blind for the joint fit. ``scripts/calibrate_frame.py`` and
 ``scripts/frame_random_blind.py`` (re)compute those references; the tests read them through this module.
 """
 from __future__ import annotations
@@ -88,13 +88,13 @@ def random_global_errors(refs: dict) -> dict:
 
 
 def joint_blind_references() -> dict:
-    """The blind random families of the joint calibration: designs with their solid C_F / C_g, and the bases'
+    """The blind random families of the joint fit: designs with their solid C_F / C_g, and the bases'
     section motions."""
     return json.loads((DATA / "solid_joint_blind_reference.json").read_text())
 
 
 def family_errors(refs: dict) -> dict:
-    """Per family: max error [-] on its two variants of the frame joint-calibrated on the base's stored solid
+    """Per family: max error [-] on its two variants of the frame joint-fitted on the base's stored solid
     measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
     from rodlab.enums import Part
 

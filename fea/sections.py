@@ -1,4 +1,4 @@
-"""Beam kinematics of cross-sections of a solid FEA solution: where the joint calibration cuts the rod.
+"""Beam kinematics of cross-sections of a solid FEA solution: where the joint fit cuts the rod.
 
 A solid tube section does not move rigidly (shear warping, ovalisation, Poisson contraction). What a beam
 model calls its motion is the centroid's translation and the plane sections' rotation; :func:`sectional_motion`
@@ -50,7 +50,7 @@ def solid_section_motions(design: RodDesign, rod_mesh, U: np.ndarray, cuts, cent
     ``centres_F`` [mm] in {F} and axis, shape=(n, 3) each, from the tube's nodes within ``reach_mm[part]`` of
     it; ``U`` shape=(3 N, n_cases) on ``rod_mesh`` (a :class:`rodlab.fem_mesh.RodMesh`, whole or half).
     Returns shape=(n_cuts, 6, n_cases) [mm, rad], {F} axes (= {T} axes)."""
-    from .assembly import scalar_basis
+    from .stiffness_assembly import scalar_basis
     from .solid import mirror_nodes
 
     basis = scalar_basis(rod_mesh.mesh, intorder=1)

@@ -159,7 +159,7 @@ class HeldSystem:
     zero.
 
     K : symmetric sparse matrix, shape=(n, n); its CSR arrays are used as CSC (the transpose, = K). Or, for
-    CHOLMOD only, its upper triangle as CSR (:func:`~fea.assembly.assemble_stiffness` ``upper=True``): read
+    CHOLMOD only, its upper triangle as CSR (:func:`~fea.stiffness_assembly.assemble_stiffness` ``upper=True``): read
     as CSC that is the lower triangle, the only part CHOLMOD reads.
     """
 
@@ -260,7 +260,7 @@ class PatternSolver:
     memory). ``factor(A)`` returns ``solve(B)``, valid until the next ``factor`` call.
 
     PARDISO and CHOLMOD read one triangle only: ``pattern`` and every ``A`` may hold just the lower triangle
-    as CSC (:func:`~fea.assembly.assemble_stiffness` ``upper=True``); SuperLU needs the whole matrix."""
+    as CSC (:func:`~fea.stiffness_assembly.assemble_stiffness` ``upper=True``); SuperLU needs the whole matrix."""
 
     def __init__(self, pattern: sp.spmatrix, backend: str | None = None, ordering_method: str = "amd"):
         self.backend = SolverBackend(backend or available_backend()).value

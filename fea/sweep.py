@@ -92,8 +92,8 @@ def run_sweep(base: RodDesign, L1s, L2s, model: str = "frame", scheduler: str | 
 
     ``model``: ``frame`` (default), ``calc`` or ``solid`` (needs ``mesher``, see :func:`fea.solid_compliance`).
     ``calibration``: for the frame, a :class:`fea.frame.FrameCalibration` (constants) or a
-    :class:`fea.joints.JointCalibration` (one solid run of the family: :func:`fea.run_solid` with
-    ``joints=True`` on :func:`fea.family.calibration_member`).
+    :class:`fea.joints.JointFit` (one solid run of the family: :func:`fea.run_solid` with
+    ``joints=True`` on :func:`fea.family.joint_fit_member`).
     """
     import pandas as pd
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ...compliance import read_compliance, write_compliance
 from ...enums import MODEL_FORM
@@ -35,8 +36,9 @@ def register(sub) -> None:
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     p.add_argument("--device", default=None, metavar="DEV.device.json", help="campaign: " + DEVICE_HELP)
     add_robot_options(p, help="campaign / points: " + robot_help())
-    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the --sim "
-                                 "file was made from, if it is still there); campaign: the *.compliance.json used")
+    p.add_argument("--design", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the "
+                                    "--sim file was made from, if it is still there)")
+    p.add_argument("--rod", help="campaign: the *.compliance.json used (as in `rodlab calibrate`)")
     p.add_argument("--sim-accuracy", type=sim_accuracy, default=None, metavar="ACC",
                    help="rig: what the simulation is worth. Default: the design's tolerances ([tolerances] of the "
                         "design file over documented defaults) and the simulation method's accuracy; a measured "
@@ -88,9 +90,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
         sim = compliance_arg(args.sim)
         design = None
-        if args.rod:
+        if _rig_design(args):
             from ...design_io import resolve_design
-            design = resolve_design(args.rod)
+            design = resolve_design(args.design)
         rec = read_recording(args.rig)
         try:                                # a recording without a load response is refused, with its cause
             fit_recording(rec)
@@ -110,6 +112,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             print(f"wrote {written[-1]}")
     else:
         from rodlab.calibrate import read_fixture, read_points
+        if args.design:
+            raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
+                              "as --rod ROD.compliance.json")
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = robot_from_args(args)
@@ -139,6 +144,18 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         written.insert(0, Source(report["format"], report))
     write_command_report(args, written, default_folder(args))
     return 0
+
+
+def _rig_design(args) -> str | None:
+    """``--design``; ``--rod`` with ``--rig`` is its old spelling (it named the design there but the compliance file
+    everywhere else): still read, with a deprecation warning."""
+    if args.rod and args.design:
+        raise RodlabError("--rod with --rig is the old spelling of --design; give --design only")
+    if args.rod:
+        print(f"warning: --rod with --rig is deprecated (--rod is a compliance file in calibrate and diagnose "
+              f"--campaign); the rig's design is --design: --design {args.rod}", file=sys.stderr)
+        args.design, args.rod = args.rod, None
+    return args.design
 
 
 def _diagnose_points(args) -> int:

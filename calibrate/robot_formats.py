@@ -21,7 +21,8 @@ from .robot import Robot
 from .robot_toml import read_robot_toml
 from .robot_urdf import read_urdf
 
-__all__ = ["ROBOT_READERS", "RobotFormat", "robot_formats_help", "read_robot", "resolve_robot", "robot_path", "builtin_robots"]
+__all__ = ["ROBOT_READERS", "RobotFormat", "robot_formats_help", "robot_formats_markdown", "read_robot", "resolve_robot",
+           "robot_path", "builtin_robots"]
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +67,17 @@ def robot_formats_help() -> str:
     kinds = [f.describes for f in ROBOT_READERS.values()]
     files = ", ".join(kinds[:-1]) + " or " + kinds[-1] if len(kinds) > 1 else kinds[0]
     return f"built-in robot ({', '.join(builtin_robots())}), {files}"
+
+
+def robot_formats_markdown() -> str:
+    """The robot file formats and the built-in robots as the Markdown table of docs/formats.md (generated:
+    ``scripts/gen_cli_docs.py``)."""
+    rows = ["| suffix | robot file | `rodlab validate` checks it as |", "|---|---|---|"]
+    for suffix, f in ROBOT_READERS.items():
+        rows.append(f"| `{suffix}` | {f.describes} | "
+                    + (f"`{f.format_id}` (its reader's rules)" if f.format_id else "its `format` key and schema") + " |")
+    robots = ", ".join(f"`{name}` ({p.suffix.lstrip('.').upper()})" for name, p in builtin_robots().items())
+    return "\n".join(rows) + f"\n\nBuilt in (`--robot NAME`, the files in `calibrate/robots/`): {robots}."
 
 
 def read_robot(path, base_link: str | None = None, tip_link: str | None = None) -> Robot:

@@ -6,7 +6,7 @@ from typing import Union
 
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
            "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
-           "SegmentKind", "FeaModel", "SolverBackend"]
+           "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum"]
 
 
 class _StrEnum(str, Enum):
@@ -246,3 +246,17 @@ class SolverBackend(str, Enum):
     PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
     CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
     SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
+
+
+class LineProtocol(_StrEnum):
+    """How a rig instrument sends its readings over its serial line (a rig profile's ``protocol``)."""
+
+    QUERY = "query"      #: a request, answered by one line
+    STREAM = "stream"    #: the instrument pushes lines by itself
+
+
+class Checksum(_StrEnum):
+    """A rig instrument's line checksum (a rig profile's ``checksum``)."""
+
+    NONE = "none"        #: no checksum
+    XOR = "xor"          #: the line ends with ``*HH``, the XOR of the bytes before ``*``

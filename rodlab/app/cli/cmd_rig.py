@@ -8,6 +8,7 @@ import os
 import numpy as np
 
 from ...compliance import write_compliance
+from ...enums import Checksum, LineProtocol
 from .argtypes import count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, png_file, write_command_report
 from .effectargs import effects_help, parse_effect_specs
@@ -102,11 +103,11 @@ def _register_simulator(rsub) -> None:
                                                     "profile with its ports pointed at them")
     p.add_argument("--load-cell-noise-n", type=nonneg_float, default=0.005, metavar="SD_N",
                    help="with --profile: the simulated load cell's noise SD [N] (default 0.005)")
-    p.add_argument("--protocol", choices=["query", "stream"], default="query")
+    p.add_argument("--protocol", choices=[m.value for m in LineProtocol], default=LineProtocol.QUERY.value)
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (as for rig simulate; repeatable)")
     p.add_argument("--design", default=None, help="the rod's design, to place joint springs exactly")
-    p.add_argument("--checksum", choices=["none", "xor"], default="none")
+    p.add_argument("--checksum", choices=[m.value for m in Checksum], default=Checksum.NONE.value)
     p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
     p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     p.set_defaults(func=cmd_simulator)

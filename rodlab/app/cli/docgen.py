@@ -1,13 +1,13 @@
-"""The generated docs: docs/cli.md from the parser, and the tables of docs/formats.md from the registries
-(rig and campaign effects, tolerance defaults, robot formats). ``scripts/gen_cli_docs.py`` writes them and
-``--check`` (run by the tests) fails when either is stale."""
+"""The generated docs: docs/cli.md from the parser, and the tables of docs/formats.md (rig and campaign effects,
+tolerance defaults, robot formats) and docs/rig.md (instrument protocols) from the registries.
+``scripts/gen_cli_docs.py`` writes them and ``--check`` (run by the tests) fails when any is stale."""
 from __future__ import annotations
 
 import argparse
 import importlib
 import os
 
-__all__ = ["TABLES", "render_cli", "render_tables"]
+__all__ = ["TABLES", "DOC_TABLES", "render_cli", "render_tables"]
 
 #: marker name in docs/formats.md -> the registry function that draws its table
 TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
@@ -15,10 +15,15 @@ TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
           "campaign-effects": "rodlab.calibrate.effects:campaign_vocabulary_markdown",
           "robot-formats": "rodlab.calibrate.robot_formats:robot_formats_markdown"}
 
+#: docs page (in docs/) -> its generated tables (marker name -> registry function)
+DOC_TABLES = {"formats.md": TABLES,
+              "rig.md": {"rig-drivers": "rodlab.stiffness_rig.drivers:drivers_markdown"}}
 
-def render_tables(text: str) -> str:
-    """``text`` (docs/formats.md) with the tables between the markers taken from the registries."""
-    for name, target in TABLES.items():
+
+def render_tables(text: str, tables: dict | None = None) -> str:
+    """``text`` (docs/formats.md, or another page with ``tables``) with the tables between the markers taken
+    from the registries."""
+    for name, target in (TABLES if tables is None else tables).items():
         module, func = target.split(":")
         begin, end = f"<!-- {name}:begin (generated) -->", f"<!-- {name}:end -->"
         a, b = text.index(begin) + len(begin), text.index(end)

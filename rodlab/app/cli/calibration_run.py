@@ -7,7 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rodlab.calibrate import ModelParams, ThermalGrowth, campaign_observations, identify, read_fixture, read_points, validate
+from rodlab.calibrate.validate import error_stats
+
 from ...compliance import RodCompliance
+from ...design_io import resolve_design
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
@@ -50,7 +54,6 @@ class CalibrationRun:
 
 
 def _stats(errors_mm):
-    from rodlab.calibrate.validate import error_stats
     return error_stats(errors_mm)
 
 
@@ -58,8 +61,6 @@ def run_calibration(args, rod: RodCompliance, compensation, camp=None) -> Calibr
     """Identification (+ validation) of one campaign with the rod's mass / tool from ``rod`` and the
     deflection offsets of ``compensation`` (:class:`rodlab.calibrate.Compensation`); ``camp`` the campaign
     already read (else ``args.campaign`` with ``args.device``)."""
-    from rodlab.calibrate import ModelParams, campaign_observations, identify, read_fixture, read_points
-    from rodlab.calibrate import validate
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if camp is None:                                    # compare reads the campaign and warns once
@@ -83,9 +84,6 @@ def _thermal(args, camp, rod) -> tuple:
     """``--thermal DESIGN``: the rod's thermal growth as a further compensation (needs the campaign's temp_C)."""
     if not getattr(args, "thermal", None):
         return ()
-    from rodlab.calibrate import ThermalGrowth
-
-    from ...design_io import resolve_design
     if camp.temp_C is None or not np.all(np.isfinite(camp.temp_C)):
         raise RodlabError(f"{args.campaign}: --thermal needs the temperature of every point (a temp_C column [degC]); "
                           f"record it or leave --thermal out")

@@ -4,9 +4,17 @@ from __future__ import annotations
 import argparse
 import sys
 
+from rodlab.calibrate import read_fixture, read_points
+from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
+from rodlab.calibrate.points import identify_points, stated_noise_mm
+from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
+from rodlab.stiffness_rig.effects import RIG_EFFECTS
+
 from ...compliance import read_compliance, write_compliance
+from ...design_io import resolve_design
 from ...enums import MODEL_FORM
 from ...errors import RodlabError
+from ...fileio import atomic_write_json, json_safe
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
 from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
@@ -18,8 +26,6 @@ __all__ = ["register"]
 
 
 def register(sub) -> None:
-    from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
-    from rodlab.stiffness_rig.effects import RIG_EFFECTS
     rig = ", ".join(e.value for e in RIG_EFFECTS)
     campaign = ", ".join(e.value for e in CAMPAIGN_EFFECTS)
     p = sub.add_parser("diagnose", help="locate and explain the mismatch between simulation and recordings",
@@ -85,13 +91,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.points:
         return _diagnose_points(args)
     if args.rig:
-        from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
         if not args.sim:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
         sim = compliance_arg(args.sim)
         design = None
         if _rig_design(args):
-            from ...design_io import resolve_design
             design = resolve_design(args.design)
         rec = read_recording(args.rig)
         try:                                # a recording without a load response is refused, with its cause
@@ -111,7 +115,6 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
             print(f"wrote {written[-1]}")
     else:
-        from rodlab.calibrate import read_fixture, read_points
         if args.design:
             raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
                               "as --rod ROD.compliance.json")
@@ -160,11 +163,7 @@ def _rig_design(args) -> str | None:
 
 def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
-    from rodlab.calibrate import read_points
-    from rodlab.calibrate.points import identify_points, stated_noise_mm
-
     from ..diagnose.points import diagnose_points
-    from ...fileio import atomic_write_json, json_safe
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)

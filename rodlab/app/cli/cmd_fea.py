@@ -12,7 +12,9 @@ from ...compliance import write_compliance
 from ...design_io import resolve_design
 from ...enums import FeaModel
 from ...errors import RodlabError
+from ...view3d import RenderError
 from .argtypes import pos_float
+from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report
 from .rodargs import design_help
 
@@ -54,7 +56,6 @@ def cmd_fea(args: argparse.Namespace) -> int:
     _check_fields_option(args)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
-        from .cadextra import require_mesher
         mesher = require_mesher().mesh_rod
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
@@ -118,9 +119,9 @@ def _check_fields_option(args: argparse.Namespace) -> None:
 def _solid_views(args: argparse.Namespace, design, res) -> list:
     """Write ``--fields``; with ``--report`` also the 3-D views of the unit forces (from a temporary field file
     when ``--fields`` is not given). Returns the pictures for the report."""
-    from ..report.views import render_field_pngs
     from rodlab.fea.fields import solid_fields, write_solid_fields
-    from rodlab.view3d import RenderError
+
+    from ..report.views import render_field_pngs
     if not (args.fields or args.report is not None):
         return []
     fields = solid_fields(design, res)
@@ -153,7 +154,6 @@ def _frame_views(args: argparse.Namespace, design) -> list:
     if args.report is None:
         return []
     from ..report.views import render_field_pngs
-    from rodlab.view3d import RenderError
     try:
         return render_field_pngs(path, path.with_suffix(""), colour="displacement")
     except RenderError as e:

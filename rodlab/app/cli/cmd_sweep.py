@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import time
 from pathlib import Path
 
@@ -9,7 +10,9 @@ from ...design_io import resolve_design
 from ...enums import FeaModel
 from ...errors import RodlabError
 from ...fileio import atomic_write_bytes, atomic_write_text
+from ...progress import progress as bar_of
 from .argtypes import count
+from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report
 
 __all__ = ["register"]
@@ -53,12 +56,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise RodlabError(f"output must end in .csv or .parquet, got {out.name!r}")
     mesher = None
     if args.model == "solid":
-        from .cadextra import require_mesher
         geometry = require_mesher()
         mesher = geometry.mesh_rod
     t0 = time.perf_counter()
     calibration, saved = _frame_calibration(args, base, L1s, L2s, out)
-    from ...progress import progress as bar_of
     with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
         def progress(done, total):
             bar.update(done - bar.n)
@@ -101,7 +102,6 @@ def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
     from rodlab.app.study.family import solid_family_calibration
     from rodlab.fea.joints_io import write_joints
 
-    from .cadextra import require_mesher
     require_mesher()
     calibration = solid_family_calibration(base, L1s, L2s)
     m1, m2 = calibration.margins_mm
@@ -115,7 +115,6 @@ def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
 def _write_table(df, out: Path) -> None:
     """The sweep table as CSV or Parquet (by the suffix), atomically."""
     if out.suffix == ".parquet":
-        import io
         buf = io.BytesIO()
         try:
             df.to_parquet(buf)

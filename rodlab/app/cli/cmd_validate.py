@@ -5,7 +5,9 @@ import re
 import sys
 from pathlib import Path
 
+from rodlab.calibrate import read_campaign, read_points
 from rodlab.calibrate.robot_formats import ROBOT_READERS
+from rodlab.calibrate.sockets import read_sockets
 
 from ...errors import LocatedError
 from ...schema import ALIASES, FORMATS, FileCheck, Problem, check_file
@@ -21,17 +23,14 @@ def _joints(path) -> int:
 
 
 def _read_campaign(path):
-    from rodlab.calibrate import read_campaign
     return read_campaign(path, _joints(path))
 
 
 def _read_points(path):
-    from rodlab.calibrate import read_points
     return read_points(path, _joints(path))
 
 
 def _read_sockets(path):
-    from rodlab.calibrate.sockets import read_sockets
     return read_sockets(path, _joints(path))
 
 

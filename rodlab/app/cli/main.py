@@ -9,12 +9,33 @@ import argparse
 import errno
 import logging
 import sys
+from pathlib import Path
 
 from ... import __version__, progress
 from ...errors import RodlabError
-from . import (cmd_cad, cmd_calibrate, cmd_compare, cmd_compliance, cmd_correct, cmd_demo, cmd_diagnose, cmd_export,
-               cmd_fea, cmd_fixture, cmd_info, cmd_mesh, cmd_plan, cmd_report, cmd_rig, cmd_simulate_campaign, cmd_study,
-               cmd_sweep, cmd_update, cmd_validate, cmd_view)
+from . import (
+    cmd_cad,
+    cmd_calibrate,
+    cmd_compare,
+    cmd_compliance,
+    cmd_correct,
+    cmd_demo,
+    cmd_diagnose,
+    cmd_export,
+    cmd_fea,
+    cmd_fixture,
+    cmd_info,
+    cmd_mesh,
+    cmd_plan,
+    cmd_report,
+    cmd_rig,
+    cmd_simulate_campaign,
+    cmd_study,
+    cmd_sweep,
+    cmd_update,
+    cmd_validate,
+    cmd_view,
+)
 
 __all__ = ["build_parser", "main"]
 
@@ -94,7 +115,6 @@ _OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report", "fie
 def _check_outputs(args: argparse.Namespace) -> None:
     """Before any work: two outputs must not share a path, and no part of an output's folder may be a file
     (else the first output would be written and the second fail, leaving a partial result)."""
-    from pathlib import Path
     seen: dict[Path, str] = {}
     for dest in _OUTPUT_DESTS:
         value = getattr(args, dest, None)

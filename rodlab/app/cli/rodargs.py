@@ -1,16 +1,18 @@
 """A rod's compliance given as a file or a built-in design's name, as every command that takes a rod accepts."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
+
+from ...calc import calc_rod_compliance
+from ...compliance import read_compliance
+from ...design_io import builtin_designs, resolve_design
 
 __all__ = ["compliance_arg", "design_help", "builtin_designs_text"]
 
 
 def builtin_designs_text() -> str:
     """The built-in designs for a help text: ``rod1 .. rod6`` when they are numbered without a gap, else each."""
-    import re
-
-    from rodlab.design_io import builtin_designs
     names = sorted(builtin_designs(), key=lambda n: (len(n), n))
     numbers = [re.fullmatch(r"rod([0-9]+)", n) for n in names]
     if len(names) > 2 and all(numbers) and [int(m.group(1)) for m in numbers] == list(
@@ -29,16 +31,12 @@ def design_help(paper: bool = False) -> str:
 def compliance_arg(spec: str):
     """``*.compliance.json`` (read as it is), or a design (``rod1``, ``1#``, ``my.rod.toml``): its closed-form
     (calc) compliance. A file wins over a built-in name only when it is a file."""
-    from rodlab.compliance import read_compliance
-    from rodlab.design_io import builtin_designs
     p = Path(spec)
     names = builtin_designs()
     alias = {f"{k[3:]}#": k for k in names if k.startswith("rod")}
     key = alias.get(str(spec).strip(), str(spec).strip())
     design = key in names and not p.is_file()
     if design or (p.is_file() and str(spec).lower().endswith(".toml")):
-        from rodlab.calc import calc_rod_compliance
-        from rodlab.design_io import resolve_design
         print(f"{spec}: the design's closed-form (calc) compliance")
         return calc_rod_compliance(resolve_design(spec))
     return read_compliance(spec)

@@ -16,11 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.chain import centreline_points, chain_flexibility, transport
 from rodlab.design import RodDesign
+from rodlab.massprops import ball_mass_properties
 from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
 from .errors import FeaError
+from .frame import CALIBRATION, frame_segments
 from .solid import SolidResult, mirror_displacements
 
 __all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
@@ -152,10 +155,6 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200):
     """The frame model's centreline (``n_points`` points [mm] in {6}) and its displacements under the six unit
     load cases [mm per N | mm per g0], shape=(n, 3, 6): the section motions of the chain cut at every point
     (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g)."""
-    from rodlab.chain import centreline_points, chain_flexibility, transport
-    from rodlab.massprops import ball_mass_properties
-
-    from .frame import CALIBRATION, frame_segments
     segs = frame_segments(design, CALIBRATION)
     total = segs[-1].s0_mm + segs[-1].length_mm
     cuts = np.linspace(0.0, total, n_points)[1:-1]

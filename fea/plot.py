@@ -7,6 +7,9 @@ import numpy as np
 
 from rodlab.render3d import TriangleSet, render_png
 
+from .solid import mirror_displacements
+from .stiffness_assembly import scalar_basis
+
 __all__ = ["render_deformed", "LOAD_CASES"]
 
 #: column of the displacement matrix -> description
@@ -24,9 +27,7 @@ def render_deformed(rod_mesh, U: np.ndarray, path: str | Path, case: int = 5, sc
     ``U`` has shape (3 N, 6) in the vector DOF numbering of :mod:`fea.stiffness_assembly` (on a half mesh: drawn
     with its mirror image); the default scale makes the largest displacement 10 % of the rod's size.
     """
-    from .stiffness_assembly import scalar_basis
     if rod_mesh.is_half:                                        # draw the whole rod
-        from .solid import mirror_displacements
         whole = rod_mesh.mirrored()
         U, rod_mesh = mirror_displacements(rod_mesh, U, whole), whole
     mesh = rod_mesh.mesh

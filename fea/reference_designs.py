@@ -19,6 +19,10 @@ import numpy as np
 
 from rodlab.design import RodDesign
 from rodlab.design_io import design_from_dict, resolve_design
+from rodlab.enums import Part
+
+from .frame import frame_errors
+from .joints import joint_frame_compliance, joints_from_motions
 
 __all__ = ["DATA", "reference_sets", "reference_design", "reference_spec", "spec_design", "solid_references",
            "random_references", "joint_blind_references", "random_global_errors", "family_errors"]
@@ -82,7 +86,6 @@ def random_references() -> dict:
 
 def random_global_errors(refs: dict) -> dict:
     """Largest relative error [-] of the globally calibrated frame on each random (non-variant) design."""
-    from .frame import frame_errors
     return {n: float(np.abs(frame_errors(spec_design(n, r["spec"]), r["C_F"], r["C_g"])).max())
             for n, r in refs["designs"].items() if "_v" not in n}
 
@@ -96,10 +99,6 @@ def joint_blind_references() -> dict:
 def family_errors(refs: dict) -> dict:
     """Per family: max error [-] on its two variants of the frame joint-fitted on the base's stored solid
     measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
-    from rodlab.enums import Part
-
-    from .frame import frame_errors
-    from .joints import joint_frame_compliance, joints_from_motions
     ds = refs.get("designs", {})
     out = {}
     for base, j in refs.get("joints", {}).items():

@@ -15,8 +15,11 @@ mirror-symmetric rod differ only in which DOFs of the plane are held) with one f
 from __future__ import annotations
 
 import functools
+import glob
 import logging
 import os
+import site
+import sys
 
 import numpy as np
 import scipy.sparse as sp
@@ -45,9 +48,6 @@ def _point_pypardiso_at_mkl() -> None:
     shortest path), found with one directory listing."""
     if os.environ.get(_MKL_RT_ENV):
         return
-    import glob
-    import site
-    import sys
     for root in (sys.prefix, getattr(site, "USER_BASE", None) or ""):
         for sub in ("lib", "Lib", "Library/bin", "lib64"):
             hits = sorted(glob.glob(os.path.join(root, sub, "*mkl_rt*")), key=len)

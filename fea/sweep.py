@@ -22,6 +22,7 @@ from rodlab.errors import RodlabError
 from rodlab.fileio import atomic_write_json
 
 from .errors import FeaError
+from .frame import CALIBRATION, FRAME_REVISION
 
 __all__ = ["parse_range", "sweep_designs", "run_sweep", "SWEEP_COLUMNS"]
 
@@ -47,7 +48,6 @@ def parse_range(text: str, name: str) -> np.ndarray:
 
 
 def _key(design_summary: dict, model: str, calibration=None) -> str:
-    from .frame import CALIBRATION, FRAME_REVISION
     blob = json.dumps({"d": design_summary, "m": model, "v": __version__, "cal": repr(calibration or CALIBRATION),
                        "frame": FRAME_REVISION}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]

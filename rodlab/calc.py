@@ -24,11 +24,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from .compliance import RodCompliance
 from .design import RodDesign
-from .enums import BendModel, Part
+from .enums import BendModel, Method, Part
 from .frames import skew as _skew
 from .errors import DesignError
 from .layout import Layer, Segment, SegmentKind, layout
+from .massprops import ball_mass_properties
 from .units import G0
 
 __all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments",
@@ -200,7 +202,6 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
         segs = layout(design)
         if bend is BendModel.CORNER:
             segs = _corner_segments(design, segs)
-        from .massprops import ball_mass_properties
         ball = ball_mass_properties(design)
         return unit_load_compliance(segs, design.tool_mm, ball.mass_kg, shear, axial, ball.com_T_mm + design.tool_mm,
                           tuple(bend_flexibility))
@@ -236,8 +237,6 @@ def paper_compliance(design: RodDesign) -> tuple[np.ndarray, np.ndarray]:
 def calc_rod_compliance(design: RodDesign, *, bend: BendModel = BendModel.ARC, shear: bool = False,
                         axial: bool = True):
     """Closed-form compliance of ``design`` as a :class:`~rodlab.compliance.RodCompliance` (method ``calc``)."""
-    from .compliance import RodCompliance
-    from .enums import Method
     CF, Cg = calc_compliance(design, bend=bend, shear=shear, axial=axial)
     CF = 0.5 * (CF + CF.T)  # exact in theory; remove round-off
     return RodCompliance.from_design(design, CF, Cg, Method.CALC, {

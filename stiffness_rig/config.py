@@ -47,6 +47,7 @@ from rodlab.errors import did_you_mean
 from rodlab.fileio import read_toml
 
 from .errors import RigError
+from .instrument_profile import parse_profile_v2
 from .model import LoadSchedule
 
 __all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
@@ -159,7 +160,6 @@ def read_profile(path):
     data, text = _load_toml(path)
     r = _Reader(Path(path), text)
     if data.get("format") == FORMAT_PROFILE_V2:
-        from .instrument_profile import parse_profile_v2
         _schema(data, FORMAT_PROFILE_V2, path, text)
         return parse_profile_v2(data, r, path)
     r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rodlab.layout import layout
+
 __all__ = ["spring_matrices", "spring_compliance", "spring_columns", "joint_places"]
 
 
@@ -45,7 +47,6 @@ def joint_places(tool_mm, design=None) -> dict:
     L-rod with pipe I along z and pipe II towards the ball, guessed from the tool vector."""
     tool = np.asarray(tool_mm, float)
     if design is not None:
-        from rodlab.layout import layout
         segs = layout(design)
         pts = {"flange_clamp": (segs[0].start_F - tool, segs[0].direction)}
         ring1 = [s for s in segs if any(str(l.part) == "ring_1" for l in s.layers)]

@@ -24,8 +24,13 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
+from rodlab.calibrate import ModelParams, campaign_observations, identify, validate
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
+from rodlab.calibrate.jacobian import position_jacobian
+from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.observations import noise_covariance
+from rodlab.calibrate.validate import error_stats
 from rodlab.enums import FindingKind, Subject, Trial, Verdict
 from rodlab.hypothesis import Hypothesis, location_parts
 
@@ -110,8 +115,6 @@ class _Selection:
     """
 
     def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma, max_terms: int):
-        from rodlab.calibrate.observations import noise_covariance
-        from rodlab.calibrate.jacobian import position_jacobian
         res, obs, fr = ctx.result, ctx.obs, ctx.frames
         self.ctx, self.noise_mm, self.N = ctx, noise_mm, ctx.n_points
         self.max_terms, self.max_outliers = max_terms, max(2, self.N // 10)
@@ -297,7 +300,6 @@ class _Selection:
 def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
     result and the :class:`Refit` it used."""
-    from rodlab.calibrate import campaign_observations, identify
     fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
@@ -358,7 +360,6 @@ def _device_noise_null(sel: _Selection, ew: np.ndarray, A: np.ndarray) -> tuple[
 
 def _context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
-    from rodlab.calibrate.kinematics import ball_positions
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     return CampaignContext(robot, res, obs, np.asarray(camp.position), camp.labels(), camp.time_s, camp.temp_C, rod,
                            fr), tau
@@ -368,7 +369,6 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                       fixture_sigma=(0.01, 0.002), harmonics=()):
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
-    from rodlab.calibrate import campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     res = identify(robot, obs, rod.tool_mm, rod, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
@@ -401,7 +401,6 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
 def _validation_errors(robot, fits: CampaignFits, points) -> dict:
     """Position errors at the validation points: nominal model, identified, identified with the found physics
     (joint angles corrected as a controller would)."""
-    from rodlab.calibrate import ModelParams, validate
     after_points = points
     if fits.joint_corrections_rad:
         after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
@@ -413,5 +412,4 @@ def _validation_errors(robot, fits: CampaignFits, points) -> dict:
 
 
 def _stats(errors_mm: np.ndarray) -> dict:
-    from rodlab.calibrate.validate import error_stats
     return error_stats(errors_mm).to_dict()

@@ -15,10 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.stiffness_rig.effects import joint_places, spring_compliance
+
 from ...compliance import RodCompliance, design_hash
+from ...design_io import load_design
 from ...enums import Method, SimAccuracy
-from ...errors import RodlabError
-from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy
+from ...errors import DesignError, RodlabError
+from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy, with_values
 from ...tolerances import bond_tolerances, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
@@ -85,7 +88,6 @@ class Envelope:
         """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
         if self.n_free == 0:
             return self.accuracy.expected(self.C_sim, entries)
-        from ...sensitivity import with_values
         C = np.asarray(self.model(with_values(self.design, self.values(u[:len(self.params)]))), float) * self.ratio
         for (_, sd, dC), ub in zip(self.bonds, u[len(self.params):]):
             C = C + sd * ub * dC
@@ -100,7 +102,6 @@ def design_of(sim: RodCompliance, design=None):
     path = sim.provenance.get("design_file")
     if not path or not Path(path).is_file():
         return None
-    from ...design_io import load_design
     try:
         found = load_design(path)
     except RodlabError:
@@ -181,7 +182,6 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
 
 def _bonds(design) -> tuple:
     """(place, sigma, d C_F / d s_bend) of each toleranced bond: a rotational spring across the member there."""
-    from rodlab.stiffness_rig.effects import joint_places, spring_compliance
     places = joint_places(design.tool_mm, design)
     out = []
     for place, sd in bond_tolerances(design).items():
@@ -195,8 +195,6 @@ def _feasible_bounds(env: Envelope, reach: float = 4.0) -> np.ndarray:
     """Per key, the standardised deviations within +-``reach`` for which the design rules accept the design (a bend
     cannot be made tighter than 1.5 tube diameters, ...): bisection where the full reach is refused, with a 5 %
     margin for keys moved together."""
-    from ...errors import DesignError
-    from ...sensitivity import with_values
     k = len(env.params)
     out = np.tile([-reach, reach], (k, 1))
 

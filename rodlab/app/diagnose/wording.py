@@ -14,8 +14,10 @@ from __future__ import annotations
 import math
 
 from rodlab.enums import MODEL_FORM, FindingKind
+from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from .report import Finding
+from .rig_outside import confirm_outside
 
 __all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "form_resolution"]
 
@@ -23,10 +25,8 @@ def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
     for physics outside the vocabulary :func:`.rig_outside.confirm_outside`."""
     if effect == FindingKind.UNEXPLAINED:
-        from .rig_outside import confirm_outside
         return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
                                              "that moves is handling")
-    from rodlab.stiffness_rig.effects import RIG_EFFECTS
     return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
 

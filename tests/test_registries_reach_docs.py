@@ -2,11 +2,13 @@
 text and docs table without another edit. Each kind gets a throw-away entry here, registered the way a real
 one is (its module's object in the registry; monkeypatched so that nothing outlives the test), and is then
 looked for in ``rodlab ... --help``, in docs/cli.md as generated and in the tables of docs/formats.md as
-generated. The files a real one takes are in docs/architecture.md ("Registries")."""
+generated; the sub-command is a real module file, found without any other edit. The files a real one takes are
+in docs/architecture.md ("Registries")."""
 from __future__ import annotations
 
 import importlib
 import os
+import sys
 from enum import Enum
 from pathlib import Path
 
@@ -48,25 +50,30 @@ class _Sag(CampaignEffectModel):
     reported = "`sag_mm`"
 
 
-def _cmd_test_probe():
-    """What a sub-command module is: ``register(subparsers)``."""
-    class Module:
-        @staticmethod
-        def register(sub):
-            p = sub.add_parser("test-probe", help="a throw-away sub-command of this test",
-                               description="It only shows that a registered module reaches the help and docs.")
-            p.add_argument("--probe-level", type=int, default=1, help="how hard to probe")
-    return Module
+#: a whole sub-command module, as a new one would be written (cmd_NAME.py beside the others)
+_CMD_MODULE = '''"""``rodlab test-probe``: a throw-away sub-command of tests/test_registries_reach_docs.py."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("test-probe", help="a throw-away sub-command of this test",
+                       description="It only shows that a module of its own reaches the help and the docs.")
+    p.add_argument("--probe-level", type=int, default=1, help="how hard to probe")
+    p.set_defaults(func=lambda args: 0)
+'''
 
 
 @pytest.fixture
-def registered(monkeypatch):
+def registered(monkeypatch, tmp_path):
     monkeypatch.setitem(RIG_EFFECTS, _New.WOBBLE, _Wobble())
     monkeypatch.setitem(CAMPAIGN_EFFECTS, _New.SAG, _Sag())
     monkeypatch.setitem(ROBOT_READERS, ".dhx", RobotFormat(lambda path, base, tip: None,
                                                            "a DHX test file (throw-away)", "dhx"))
-    monkeypatch.setattr(cli_main, "_COMMAND_MODULES", [*cli_main._COMMAND_MODULES, _cmd_test_probe()])
+    (tmp_path / "cmd_test_probe.py").write_text(_CMD_MODULE)        # the package gets one more folder to look in
+    package = sys.modules["rodlab.app.cli"]
+    monkeypatch.setattr(package, "__path__", [*package.__path__, str(tmp_path)])
     monkeypatch.setitem(os.environ, "COLUMNS", "200")
+    yield
+    sys.modules.pop("rodlab.app.cli.cmd_test_probe", None)
 
 
 def _help(capsys, *argv) -> str:
@@ -86,6 +93,7 @@ def test_each_new_entry_is_in_every_help_text(registered, capsys):
         assert "a DHX test file (throw-away)" in _help(capsys, *argv), argv
     assert "dhx" in _help(capsys, "validate")
     assert "test-probe" in _help(capsys) and "--probe-level" in _help(capsys, "test-probe")
+    assert cli_main.main(["test-probe", "--probe-level", "2"]) == 0
 
 
 def test_each_new_entry_is_in_every_generated_docs_table(registered):
@@ -96,6 +104,12 @@ def test_each_new_entry_is_in_every_generated_docs_table(registered):
     cli = docgen.render_cli()
     assert "## `rodlab test-probe`" in cli and "a throw-away sub-command of this test" in cli
     assert "a DHX test file (throw-away)" in cli and "test_wobble" in cli and "test_campaign_sag" in cli
+
+
+def test_the_sub_commands_are_the_cmd_modules_in_the_help_order():
+    names = [m.__name__.rsplit(".cmd_", 1)[1] for m in cli_main.command_modules()]
+    assert names == [n for n in cli_main.COMMAND_ORDER]           # every listed one exists, no stray module
+    assert "sockets" not in names                                 # cmd_sockets.py (calibrate --sockets) adds none
 
 
 def test_without_them_the_docs_are_what_is_committed():

@@ -1,12 +1,15 @@
 """Robot descriptions rodlab reads, one reader per file kind (the registry), and the built-in robots.
 
-Adding a format is one reader module and one entry in :data:`ROBOT_READERS` (suffix -> reader). A reader takes
-the path and the chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a :class:`Robot`.
+Adding a format is one reader module and one entry in :data:`ROBOT_READERS` (suffix -> :class:`RobotFormat`: the
+reader, what the format is in a help text, and the name ``rodlab validate`` gives a file of it that has no JSON
+schema). A reader takes the path and the chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a
+:class:`Robot`. The ``--robot`` help of every command and ``rodlab validate --format`` are generated from it.
 Built-in robots are the files in ``calibrate/robots`` (each names its source), by file stem.
 """
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Callable
@@ -18,7 +21,8 @@ from .robot import Robot
 from .robot_toml import read_robot_toml
 from .robot_urdf import read_urdf
 
-__all__ = ["ROBOT_READERS", "read_robot", "resolve_robot", "robot_path", "builtin_robots"]
+__all__ = ["ROBOT_READERS", "RobotFormat", "robot_formats_help", "robot_formats_markdown", "read_robot", "resolve_robot",
+           "robot_path", "builtin_robots"]
 
 log = logging.getLogger(__name__)
 
@@ -30,8 +34,50 @@ def _toml(path, base_link=None, tip_link=None) -> Robot:
     return read_robot_toml(path)
 
 
-#: file suffix -> reader(path, base_link, tip_link)
-ROBOT_READERS: dict[str, Callable[..., Robot]] = {".toml": _toml, ".urdf": read_urdf}
+@dataclass(frozen=True)
+class RobotFormat:
+    """One kind of robot file: how to read it and how to name it.
+
+    Attributes
+    ----------
+    read : reader(path, base_link, tip_link) -> :class:`Robot`
+    describes : the format in a help text, e.g. ``"a URDF (xacro expanded)"``
+    format_id : what ``rodlab validate`` calls a file of this kind when it has no JSON schema (``"urdf"``); ``None``
+        when the file names its format itself (a robot TOML's ``format`` key, checked by its schema)
+    """
+
+    read: Callable[..., Robot]
+    describes: str
+    format_id: str | None = None
+
+    def __call__(self, path, base_link: str | None = None, tip_link: str | None = None) -> Robot:
+        return self.read(path, base_link, tip_link)
+
+
+#: file suffix -> its :class:`RobotFormat` (called as reader(path, base_link, tip_link))
+ROBOT_READERS: dict[str, RobotFormat] = {
+    ".toml": RobotFormat(_toml, "a robot TOML file (DH or modified-DH rows)"),
+    ".urdf": RobotFormat(read_urdf, "a URDF (xacro expanded)", "urdf"),
+}
+
+
+def robot_formats_help() -> str:
+    """``built-in robot (tx90, ...), a robot TOML file (...) or a URDF (...)``: the built-in robots and the
+    registered formats, for the ``--robot`` help texts."""
+    kinds = [f.describes for f in ROBOT_READERS.values()]
+    files = ", ".join(kinds[:-1]) + " or " + kinds[-1] if len(kinds) > 1 else kinds[0]
+    return f"built-in robot ({', '.join(builtin_robots())}), {files}"
+
+
+def robot_formats_markdown() -> str:
+    """The robot file formats and the built-in robots as the Markdown table of docs/formats.md (generated:
+    ``scripts/gen_cli_docs.py``)."""
+    rows = ["| suffix | robot file | `rodlab validate` checks it as |", "|---|---|---|"]
+    for suffix, f in ROBOT_READERS.items():
+        rows.append(f"| `{suffix}` | {f.describes} | "
+                    + (f"`{f.format_id}` (its reader's rules)" if f.format_id else "its `format` key and schema") + " |")
+    robots = ", ".join(f"`{name}` ({p.suffix.lstrip('.').upper()})" for name, p in builtin_robots().items())
+    return "\n".join(rows) + f"\n\nBuilt in (`--robot NAME`, the files in `calibrate/robots/`): {robots}."
 
 
 def read_robot(path, base_link: str | None = None, tip_link: str | None = None) -> Robot:

@@ -20,8 +20,8 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.units import gpa_to_mpa
 
-from .assembly import scalar_basis
 from .elasticity import NU23_DEFAULT, local_frames
+from .stiffness_assembly import scalar_basis
 from .errors import FeaError
 
 __all__ = ["ccx_available", "write_deck", "run_ccx_compliance"]

@@ -11,21 +11,23 @@ from dataclasses import asdict
 
 import logging
 import time
-from enum import Enum
 from typing import Protocol
 
 import numpy as np
 
 from rodlab.calc import calc_rod_compliance
 from rodlab.joint_springs import declared_joint_compliance
+from rodlab.massprops import part_mass_properties
 from rodlab.progress import stages
 from rodlab.compliance import RodCompliance
 from rodlab.design import RodDesign
-from rodlab.enums import Method
+from rodlab.enums import FeaModel, Method
 from rodlab.fem_mesh import RodMesh
 
 from .errors import FeaError
-from .frame import asme_bend_flexibility, frame_compliance
+from .frame import CALIBRATION, FRAME_REVISION, asme_bend_flexibility, frame_compliance, frame_range_notes
+from .joints import JointFit, joint_frame_compliance
+from .solid import solve_compliance
 
 __all__ = ["Mesher", "FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
            "DEFAULT_GRADING", "estimated_dofs", "MAX_DOFS"]
@@ -45,14 +47,6 @@ class Mesher(Protocol):
     def __call__(self, design: RodDesign, *, size_mm: float, grading, half: bool) -> RodMesh: ...
 
 
-class FeaModel(str, Enum):
-    """Which model computes the compliance."""
-
-    SOLID = "solid"   #: 3-D elasticity, scikit-fem, curved P2 (reference)
-    FRAME = "frame"   #: Timoshenko beam frame with pipe-bend flexibility (sweeps)
-    CALC = "calc"     #: the paper's closed form generalised (Euler-Bernoulli frame)
-
-
 def default_solid_size_mm(design: RodDesign) -> float:
     """3 x the thinnest wall: graded down to 1.2 x wall at the section changes."""
     walls = [design.pipe_I.wall_mm, design.pipe_II.wall_mm] + ([design.bend.wall_mm] if design.has_bend else [])
@@ -66,7 +60,6 @@ MAX_DOFS = 1.5e6
 def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, half: bool = True) -> float:
     """DOFs of the curved-P2 mesh, estimated from the parts' volume (empirical: within ~15 % on rods 1#-6# at
     the default grading, ~22 vol / h^3 for a uniform half mesh); the whole rod has twice as many."""
-    from rodlab.massprops import part_mass_properties
     vol = sum(m.mass_kg / (design.material_of(p).density_kg_m3 * 1e-9) for p, m in part_mass_properties(design).items())
     per_volume = 117.0 if grading else 21.6
     return per_volume * vol / size_mm ** 3 * (1.0 if half else 2.0)
@@ -74,7 +67,6 @@ def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, h
 
 def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
     """The coarser solve of the Richardson error estimate."""
-    from .solid import solve_compliance
     with bar.step("mesh (coarse)"):
         rc = mesher(design, size_mm=size_mm, grading=grading, half=symmetry)
     with bar.step("solve (coarse)"):
@@ -90,8 +82,6 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
     ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
     """
-    from .solid import solve_compliance
-
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
     if not (np.isfinite(h) and h > 0):
         raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
@@ -139,7 +129,7 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
     """Compliance of ``design`` by ``model`` (``solid`` needs a ``mesher``, see :func:`solid_compliance`).
 
     ``calibration`` (frame only): a :class:`fea.frame.FrameCalibration` (constants) or a
-    :class:`fea.joints.JointCalibration` (one solid run of the design's family, :mod:`fea.family`)."""
+    :class:`fea.joints.JointFit` (one solid run of the design's family, :mod:`fea.family`)."""
     model = FeaModel(model)
     if model is FeaModel.SOLID:
         if mesher is None:
@@ -149,9 +139,7 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
     if kwargs:
         raise FeaError(f"options {sorted(kwargs)} apply to the solid model only", key="model")
     if model is FeaModel.FRAME:
-        from .frame import CALIBRATION, FRAME_REVISION, frame_range_notes
-        from .joints import JointCalibration, joint_frame_compliance
-        if isinstance(calibration, JointCalibration):
+        if isinstance(calibration, JointFit):
             CF, Cg = joint_frame_compliance(design, calibration)
             b = calibration.base
             return RodCompliance.from_design(design, CF, Cg, Method.FEA, {

@@ -6,7 +6,7 @@ the free tube lengths change, so one solid run of one member, cut at its free tu
 flexibility (:mod:`fea.joints`), which every other member takes over: within 0.35 % on the paper's families
 and 10 hard random families (``scripts/frame_random_blind.py``).
 
-:func:`calibration_member` picks the member to solve: the base, unless its free tubes are too short to cut
+:func:`joint_fit_member` picks the member to solve: the base, unless its free tubes are too short to cut
 ``margin`` diameters from their ends (then the grid's nearest member that has them).
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from rodlab.errors import RodlabError
 
 from .joints import DEFAULT_MARGIN, MIN_SPAN_MM, free_spans
 
-__all__ = ["calibration_member"]
+__all__ = ["joint_fit_member", "calibration_member"]
 
 log = logging.getLogger(__name__)
 
@@ -34,9 +34,9 @@ def _fits(design: RodDesign, margin: float) -> bool:
                for p, t in ((Part.PIPE_I, design.pipe_I), (Part.PIPE_II, design.pipe_II)))
 
 
-def calibration_member(base: RodDesign, L1s=(), L2s=(), margin: float = DEFAULT_MARGIN) -> RodDesign:
+def joint_fit_member(base: RodDesign, L1s=(), L2s=(), margin: float = DEFAULT_MARGIN) -> RodDesign:
     """The family member whose solid run calibrates the family: ``base`` if its free tubes are long enough
-    for the joint calibration's sections, else the valid L1 x L2 grid design nearest to it (relative distance
+    for the joint fit's sections, else the valid L1 x L2 grid design nearest to it (relative distance
     ``|dL1| / L1 + |dL2| / L2``) that is; ``base`` if none is (a coarser calibration, logged)."""
     if _fits(base, margin):
         return base
@@ -56,3 +56,7 @@ def calibration_member(base: RodDesign, L1s=(), L2s=(), margin: float = DEFAULT_
         return base
     log.info("%s's free tubes are too short for the joint calibration: calibrating on %s", base.name, best.name)
     return best
+
+
+#: the name before "calibration" was kept for the robot's (kept for callers)
+calibration_member = joint_fit_member

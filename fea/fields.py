@@ -17,12 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.chain import centreline_points, chain_flexibility, transport
 from rodlab.design import RodDesign
 from rodlab.enums import Part
+from rodlab.massprops import ball_mass_properties
 from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
 from .errors import FeaError
+from .frame import CALIBRATION, frame_segments
 from .solid import SolidResult, mirror_displacements
 
 __all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
@@ -178,11 +181,7 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFiel
     (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g); and
     the sections' outer-fibre von Mises stress [MPa per N | MPa per g0], shape=(n, 6), from the section forces
     (:mod:`fea.beam_stress`)."""
-    from rodlab.chain import centreline_points, chain_flexibility, transport
-    from rodlab.massprops import ball_mass_properties
-
     from .beam_stress import section_index, section_von_mises, section_wrenches
-    from .frame import CALIBRATION, frame_segments
     segs = frame_segments(design, CALIBRATION)
     total = segs[-1].s0_mm + segs[-1].length_mm
     s_all = np.linspace(0.0, total, n_points)

@@ -30,6 +30,7 @@ against the solid model (``scripts/calibrate_frame.py``, data in ``fea/data/soli
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from difflib import get_close_matches
 
 import numpy as np
 
@@ -324,8 +325,6 @@ def calibrate_frame(designs: list[RodDesign], C_F_solid: list, C_g_solid: list,
     Calibrating on one design of a family (same tubes, bend, sleeves) and sweeping its L1 / L2 keeps the
     local physics fixed while the frame moves the lever arms (docs/fea.md: rods 4# -> 5#, 6#).
     """
-    from difflib import get_close_matches
-
     from scipy.optimize import least_squares
     for n in names:
         if n not in _CAL_FIELDS:

@@ -1,4 +1,4 @@
-"""Joint calibration of the frame model: one solid run of a family member, carried to any L1 x L2.
+"""Joint fit of the frame model: one solid run of a family member, carried to any L1 x L2.
 
 A design family (one set of tubes, bend, rings, holders and ball; any L1 and L2) differs only in the free
 lengths of pipe I and pipe II. Away from the joints a tube is a prismatic beam; everything beam theory
@@ -40,8 +40,8 @@ from rodlab.units import G0
 from .errors import FeaError
 from .frame import CALIBRATION, FrameCalibration, frame_compliance, frame_segments
 
-__all__ = ["JointCalibration", "free_spans", "joint_margins", "measure_sections", "calibrate_joints",
-           "joints_from_motions",
+__all__ = ["JointFit", "free_spans", "joint_margins", "measure_sections", "fit_joints", "joints_from_motions",
+           "JointCalibration", "calibrate_joints",
            "joint_frame_compliance", "span_basis", "DEFAULT_MARGIN", "WRENCH_CASES", "GRAVITY_CASES",
            "SECTION_TERMS"]
 
@@ -58,7 +58,7 @@ DEFAULT_MARGIN = 1.0
 SECTION_REACH = 0.5
 #: shortest span left between the two sections of a tube on the calibrated design [mm]
 MIN_SPAN_MM = 5.0
-#: the span section compliances a joint calibration corrects (per unit length: 1 / EA, 1 / kGA across and
+#: the span section compliances a joint fit corrects (per unit length: 1 / EA, 1 / kGA across and
 #: in the bend plane, 1 / GJ, 1 / EI about the bend-plane normal and about the in-plane normal)
 SECTION_TERMS = ("axial", "shear_out", "shear_in", "torsion", "bend_in", "bend_out")
 _TUBES = (Part.PIPE_I, Part.PIPE_II)
@@ -106,7 +106,7 @@ def free_spans(design: RodDesign) -> dict[Part, tuple[float, float]]:
 def joint_margins(design: RodDesign, margin: float = DEFAULT_MARGIN) -> dict[Part, float]:
     """Section distance [mm] from the ends of each free tube: ``margin`` tube diameters, shortened to leave
     ``MIN_SPAN_MM`` between the two sections of a short tube (a warning: the end effects have not decayed
-    there; calibrate on a member with longer tubes, :func:`fea.family.calibration_member`)."""
+    there; calibrate on a member with longer tubes, :func:`fea.family.joint_fit_member`)."""
     if not (isinstance(margin, (int, float)) and np.isfinite(margin) and margin > 0):
         raise FeaError(f"margin must be a positive number of tube diameters, got {margin!r}", key="margin")
     spans = free_spans(design)
@@ -144,7 +144,7 @@ def _span_geometry(design: RodDesign, cuts) -> list[tuple[np.ndarray, float, flo
 
 
 @dataclass(frozen=True, eq=False)
-class JointCalibration:
+class JointFit:
     """Corrections of the frame's intervals measured on one solid run of a family member (module doc).
 
     base : the solid-run design; margins_mm : section distance from the ends of pipe I's and pipe II's free
@@ -169,10 +169,10 @@ class JointCalibration:
 
     def __post_init__(self) -> None:
         if self.D.shape != (5, 6, 6) or self.dH.shape != (5, 6, 3) or self.section.shape != (2, 6):
-            raise ValueError(f"JointCalibration needs D shape (5, 6, 6), dH (5, 6, 3) and section (2, 6), got "
+            raise ValueError(f"JointFit needs D shape (5, 6, 6), dH (5, 6, 3) and section (2, 6), got "
                              f"{self.D.shape}, {self.dH.shape}, {self.section.shape}")
         if not all(np.all(np.isfinite(a)) for a in (self.D, self.dH, self.section, self.margins_mm)):
-            raise ValueError("JointCalibration corrections and margins must be finite")
+            raise ValueError("JointFit corrections and margins must be finite")
 
     @property
     def margins(self) -> dict[Part, float]:
@@ -188,7 +188,8 @@ class JointCalibration:
                            f"{', '.join(diff) or 'its parts'}, not only in L1 / L2): the joint calibration does "
                            f"not apply", key="design")
 
-    def __repr__(self) -> str:     # the sweep's cache key: every number that changes a result
+    def __repr__(self) -> str:     # the sweep's cache key: every number that changes a result; it keeps the
+        # class's old name, so the caches of earlier sweeps stay valid
         return (f"JointCalibration(base={self.base.summary()!r}, margins_mm={self.margins_mm!r}, "
                 f"D={self.D.tolist()!r}, dH={self.dH.tolist()!r}, section={self.section.tolist()!r}, "
                 f"calibration={self.calibration!r})")
@@ -201,8 +202,8 @@ def _frame_chain(design: RodDesign, cuts, cal: FrameCalibration):
 
 
 def joints_from_motions(base: RodDesign, section_motion: np.ndarray, tip_motion: np.ndarray,
-                        margins: dict[Part, float], cal: FrameCalibration = CALIBRATION) -> JointCalibration:
-    """The joint calibration from the motions of ``base``'s four sections (:func:`_cuts` of ``margins``),
+                        margins: dict[Part, float], cal: FrameCalibration = CALIBRATION) -> JointFit:
+    """The joint fit from the motions of ``base``'s four sections (:func:`_cuts` of ``margins``),
     shape=(4, 6, 9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], under the nine load cases
     (:data:`WRENCH_CASES`, :data:`GRAVITY_CASES`). Pure: motions in, corrections out."""
     cuts = _cuts(base, margins)
@@ -230,7 +231,7 @@ def joints_from_motions(base: RodDesign, section_motion: np.ndarray, tip_motion:
         section[j] = np.linalg.lstsq(A, (D[i] / scale).ravel(), rcond=None)[0]
         resid = max(resid, float(np.abs(A @ section[j] - (D[i] / scale).ravel()).max()))
     D[[1, 3]], dH[[1, 3]] = 0.0, 0.0
-    jc = JointCalibration(base, (margins[Part.PIPE_I], margins[Part.PIPE_II]), D, dH, section, cal,
+    jc = JointFit(base, (margins[Part.PIPE_I], margins[Part.PIPE_II]), D, dH, section, cal,
                           float(asym[[0, 2, 4]].max()), resid)
     log.info("joint calibration on %s: sections %.1f / %.1f mm from the tube ends, block asymmetry %.1e, "
              "span fit residual %.2f %%", base.name, *jc.margins_mm, jc.asymmetry, 100 * resid)
@@ -238,7 +239,7 @@ def joints_from_motions(base: RodDesign, section_motion: np.ndarray, tip_motion:
 
 
 def measure_sections(base: RodDesign, solid, margin: float = DEFAULT_MARGIN):
-    """What the joint calibration measures on ``base``'s solid run ``solid`` (a :class:`fea.SolidResult`
+    """What the joint fit measures on ``base``'s solid run ``solid`` (a :class:`fea.SolidResult`
     solved with ``tip_moments=True, keep_displacements=True``): the motions of its four sections, shape=(4, 6,
     9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], and the margins [mm] (:func:`joint_margins` of
     ``margin`` tube diameters)."""
@@ -256,14 +257,14 @@ def measure_sections(base: RodDesign, solid, margin: float = DEFAULT_MARGIN):
     return solid_section_motions(base, rm, U, cuts, centres, axes, reach), solid.ball_motion, margins
 
 
-def calibrate_joints(base: RodDesign, solid, margin: float = DEFAULT_MARGIN,
-                     cal: FrameCalibration = CALIBRATION) -> JointCalibration:
-    """The joint calibration of ``base``'s family from its solid run ``solid`` (:func:`measure_sections`,
+def fit_joints(base: RodDesign, solid, margin: float = DEFAULT_MARGIN,
+               cal: FrameCalibration = CALIBRATION) -> JointFit:
+    """The joint fit of ``base``'s family from its solid run ``solid`` (:func:`measure_sections`,
     :func:`joints_from_motions`); ``margin`` in tube diameters (:func:`joint_margins`)."""
     return joints_from_motions(base, *measure_sections(base, solid, margin), cal)
 
 
-def joint_frame_compliance(design: RodDesign, jc: JointCalibration) -> tuple[np.ndarray, np.ndarray]:
+def joint_frame_compliance(design: RodDesign, jc: JointFit) -> tuple[np.ndarray, np.ndarray]:
     """C_F [mm/N] and C_g [mm/g0] in {T}, shape=(3, 3) each, of a member of ``jc``'s family: the frame of
     ``design`` plus the base's block corrections lumped at their distal sections and the spans' section
     corrections over the member's span lengths, all carried by the member's own lever arms and weights."""
@@ -287,3 +288,8 @@ def joint_frame_compliance(design: RodDesign, jc: JointCalibration) -> tuple[np.
         D[i], dH[i] = np.tensordot(jc.section[j], B, 1), np.tensordot(jc.section[j], Bh, 1)
     C6, C6g = ChainFlexibility(pts, D, G, dH, design.tool_mm).tip_compliance()
     return CF + 0.5 * (C6[:3, :3] + C6[:3, :3].T), Cg + C6g[:3]
+
+
+#: the names this concept had before "calibration" was kept for the robot's (kept for callers of rodlab.fea)
+JointCalibration = JointFit
+calibrate_joints = fit_joints

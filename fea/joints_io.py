@@ -1,6 +1,6 @@
-"""Joint-calibration files (``*.joints.json``, format ``rodlab.joints/1``): calibrate once, sweep many times.
+"""Joint-fit files (``*.joints.json``, format ``rodlab.joints/1``): calibrate once, sweep many times.
 
-A joint calibration (:class:`fea.joints.JointCalibration`) costs one solid FEA run; the file keeps it with the
+A joint fit (:class:`fea.joints.JointFit`) costs one solid FEA run; the file keeps it with the
 calibrated design (every part and material's numbers, so that a revised built-in material does not change its
 meaning) and the frame it corrects, so that ``rodlab sweep --joints FILE`` and ``rodlab fea --model frame
 --joints FILE`` reuse it for any member of the family. Layout (docs/formats.md)::
@@ -23,7 +23,7 @@ from rodlab.fileio import atomic_write_json, read_text_checked
 
 from .errors import FeaError
 from .frame import FRAME_REVISION, FrameCalibration
-from .joints import JointCalibration
+from .joints import JointFit
 
 __all__ = ["FORMAT_JOINTS", "write_joints", "read_joints"]
 
@@ -31,7 +31,7 @@ FORMAT_JOINTS = "rodlab.joints/1"
 _SHAPES = {"margins_mm": (2,), "D": (5, 6, 6), "dH": (5, 6, 3), "section": (2, 6)}
 
 
-def write_joints(path: str | Path, jc: JointCalibration, provenance: dict | None = None) -> Path:
+def write_joints(path: str | Path, jc: JointFit, provenance: dict | None = None) -> Path:
     """Write ``jc`` to ``path`` (atomically) with optional ``provenance`` (e.g. the solid run's DOFs)."""
     return atomic_write_json(path, {
         "format": FORMAT_JOINTS, "design": design_to_dict(jc.base), "margins_mm": list(jc.margins_mm),
@@ -40,7 +40,7 @@ def write_joints(path: str | Path, jc: JointCalibration, provenance: dict | None
         "asymmetry": jc.asymmetry, "span_residual": jc.span_residual, "provenance": provenance or {}})
 
 
-def read_joints(path: str | Path) -> JointCalibration:
+def read_joints(path: str | Path) -> JointFit:
     """Read a ``*.joints.json``; errors name the file and key (:class:`FeaError`)."""
     text = read_text_checked(path, FeaError)
     try:
@@ -86,7 +86,7 @@ def read_joints(path: str | Path) -> JointCalibration:
     if not isinstance(cal, dict) or set(cal) - set(names):
         raise FeaError(f"expected the frame constants {', '.join(names)}", path=path, key="frame_calibration")
     try:
-        return JointCalibration(design, tuple(float(m) for m in arrays["margins_mm"]), arrays["D"], arrays["dH"],
+        return JointFit(design, tuple(float(m) for m in arrays["margins_mm"]), arrays["D"], arrays["dH"],
                                 arrays["section"], FrameCalibration(**cal), extra["asymmetry"],
                                 extra["span_residual"])
     except (TypeError, ValueError) as e:

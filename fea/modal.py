@@ -10,7 +10,7 @@ and point ``a`` sees interval ``k``'s motion carried rigidly,
 
 so ``omega^2`` are the eigenvalues of ``(M^1/2 D M^1/2)^-1``. Rotary inertia is neglected (the ball's is
 ~1e-5 kg m^2, the tubes' sections are thin). The frame's global calibration gives the interval
-flexibilities (a family's joint calibration is not applied here); the clamp is rigid.
+flexibilities (a family's joint fit is not applied here); the clamp is rigid.
 """
 from __future__ import annotations
 

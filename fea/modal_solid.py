@@ -18,11 +18,12 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from rodlab.design import RodDesign
 from rodlab.units import kg_m3_to_kg_mm3
 
-from .assembly import assemble_stiffness, scalar_basis
+from .stiffness_assembly import assemble_stiffness, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering
@@ -57,7 +58,6 @@ class SolidModes:
 
 def _mass_matrix(basis, density_kg_mm3: np.ndarray):
     """Consistent mass [kg], shape=(3N, 3N), DOFs ``3 node + component``; ``density_kg_mm3`` per element."""
-    import scipy.sparse as sp
     from skfem import BilinearForm
 
     @BilinearForm

@@ -7,6 +7,9 @@ import numpy as np
 
 from rodlab.render3d import TriangleSet, render_png
 
+from .solid import mirror_displacements
+from .stiffness_assembly import scalar_basis
+
 __all__ = ["render_deformed", "LOAD_CASES"]
 
 #: column of the displacement matrix -> description
@@ -21,12 +24,10 @@ def render_deformed(rod_mesh, U: np.ndarray, path: str | Path, case: int = 5, sc
                     view: str = "xz", title: str = "", load_label: str | None = None) -> Path:
     """Draw the undeformed rod (translucent) and the deformed one, displacements ``U[:, case]`` x ``scale``.
 
-    ``U`` has shape (3 N, 6) in the vector DOF numbering of :mod:`fea.assembly` (on a half mesh: drawn
+    ``U`` has shape (3 N, 6) in the vector DOF numbering of :mod:`fea.stiffness_assembly` (on a half mesh: drawn
     with its mirror image); the default scale makes the largest displacement 10 % of the rod's size.
     """
-    from .assembly import scalar_basis
     if rod_mesh.is_half:                                        # draw the whole rod
-        from .solid import mirror_displacements
         whole = rod_mesh.mirrored()
         U, rod_mesh = mirror_displacements(rod_mesh, U, whole), whole
     mesh = rod_mesh.mesh

@@ -5,7 +5,7 @@ the full rods A-Z beside the built-in rod1-rod6, the part probes (rods reduced t
 ``rings_*``, ``bend_*``), thin-walled bends outside the calibrated range, off-grid members of the paper's
 two families, and which of them were fitted (calibration set) and which held out (validation set).
 ``solid_reference.json`` holds their solid C_F / C_g; ``solid_joint_blind_reference.json`` the random
-families drawn blind for the joint calibration. ``scripts/calibrate_frame.py`` and
+families drawn blind for the joint fit. ``scripts/calibrate_frame.py`` and
 ``scripts/frame_random_blind.py`` (re)compute those references; the tests read them through this module.
 """
 from __future__ import annotations
@@ -19,6 +19,10 @@ import numpy as np
 
 from rodlab.design import RodDesign
 from rodlab.design_io import design_from_dict, resolve_design
+from rodlab.enums import Part
+
+from .frame import frame_errors
+from .joints import joint_frame_compliance, joints_from_motions
 
 __all__ = ["DATA", "reference_sets", "reference_design", "reference_spec", "spec_design", "solid_references",
            "random_references", "joint_blind_references", "random_global_errors", "family_errors"]
@@ -82,24 +86,19 @@ def random_references() -> dict:
 
 def random_global_errors(refs: dict) -> dict:
     """Largest relative error [-] of the globally calibrated frame on each random (non-variant) design."""
-    from .frame import frame_errors
     return {n: float(np.abs(frame_errors(spec_design(n, r["spec"]), r["C_F"], r["C_g"])).max())
             for n, r in refs["designs"].items() if "_v" not in n}
 
 
 def joint_blind_references() -> dict:
-    """The blind random families of the joint calibration: designs with their solid C_F / C_g, and the bases'
+    """The blind random families of the joint fit: designs with their solid C_F / C_g, and the bases'
     section motions."""
     return json.loads((DATA / "solid_joint_blind_reference.json").read_text())
 
 
 def family_errors(refs: dict) -> dict:
-    """Per family: max error [-] on its two variants of the frame joint-calibrated on the base's stored solid
+    """Per family: max error [-] on its two variants of the frame joint-fitted on the base's stored solid
     measurements (what ``rodlab sweep --calibrate`` does, :mod:`fea.joints`), and of the global calibration."""
-    from rodlab.enums import Part
-
-    from .frame import frame_errors
-    from .joints import joint_frame_compliance, joints_from_motions
     ds = refs.get("designs", {})
     out = {}
     for base, j in refs.get("joints", {}).items():

@@ -1,4 +1,4 @@
-"""Beam kinematics of cross-sections of a solid FEA solution: where the joint calibration cuts the rod.
+"""Beam kinematics of cross-sections of a solid FEA solution: where the joint fit cuts the rod.
 
 A solid tube section does not move rigidly (shear warping, ovalisation, Poisson contraction). What a beam
 model calls its motion is the centroid's translation and the plane sections' rotation; :func:`sectional_motion`
@@ -14,6 +14,8 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 
 from .errors import FeaError
+from .solid import mirror_nodes
+from .stiffness_assembly import scalar_basis
 
 __all__ = ["sectional_motion", "solid_section_motions"]
 
@@ -50,9 +52,6 @@ def solid_section_motions(design: RodDesign, rod_mesh, U: np.ndarray, cuts, cent
     ``centres_F`` [mm] in {F} and axis, shape=(n, 3) each, from the tube's nodes within ``reach_mm[part]`` of
     it; ``U`` shape=(3 N, n_cases) on ``rod_mesh`` (a :class:`rodlab.fem_mesh.RodMesh`, whole or half).
     Returns shape=(n_cuts, 6, n_cases) [mm, rad], {F} axes (= {T} axes)."""
-    from .assembly import scalar_basis
-    from .solid import mirror_nodes
-
     basis = scalar_basis(rod_mesh.mesh, intorder=1)
     X = basis.doflocs.T                                          # {T} [mm]
     out = []

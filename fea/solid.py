@@ -26,7 +26,7 @@ from rodlab.design import RodDesign
 from rodlab.enums import Part
 from rodlab.units import G0, kg_m3_to_kg_mm3
 
-from .assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
+from .stiffness_assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering
@@ -112,7 +112,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
                      backend: str | None = None, tip_moments: bool = False) -> SolidResult:
     """Solve the six load cases on ``rod_mesh`` (a :class:`geometry.RodMesh` of ``design``, whole or half);
     ``tip_moments`` adds three unit moments at the ball centre (columns 6-8; same factorisations), which the
-    joint calibration of the frame model needs (:mod:`fea.joints`)."""
+    joint fit of the frame model needs (:mod:`fea.joints`)."""
     t0 = time.perf_counter()
     timings = {}
     half = rod_mesh.is_half

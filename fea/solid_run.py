@@ -1,4 +1,4 @@
-"""One solid run and what is made from it: the compliance, the frame's joint calibration, the deformed-shape
+"""One solid run and what is made from it: the compliance, the frame's joint fit, the deformed-shape
 figure. ``rodlab fea --model solid``, the demo and the design study's family calibration all call
 :func:`run_solid` (they only parse, call and print)."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ from rodlab.compliance import RodCompliance
 from rodlab.design import RodDesign
 
 from .compute import Mesher, solid_compliance
-from .joints import JointCalibration, calibrate_joints
+from .joints import JointFit, fit_joints
 from .solid import SolidResult
 
 __all__ = ["SolidRun", "run_solid"]
@@ -24,13 +24,13 @@ class SolidRun:
     """A solid FEA run of one design.
 
     compliance : C_F [mm/N] and C_g [mm/g0] in {T} (method ``fea``); result : the solid solution (mesh,
-    displacements of the unit load cases when kept); joints : the frame's joint calibration on this run, or
+    displacements of the unit load cases when kept); joints : the frame's joint fit on this run, or
     None when not asked; figures : the figures written, in order
     """
 
     compliance: RodCompliance
     result: SolidResult
-    joints: JointCalibration | None = None
+    joints: JointFit | None = None
     figures: list[Path] = field(default_factory=list)
 
 
@@ -38,7 +38,7 @@ def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None
               symmetry: bool = True, joints: bool = False, deformed_png: str | Path | None = None,
               backend: str | None = None, keep_displacements: bool = False) -> SolidRun:
     """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`); with ``joints``
-    calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.calibrate_joints`); with
+    calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.fit_joints`); with
     ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange); with
     ``keep_displacements`` the result keeps the load cases' displacements (for :mod:`fea.fields`)."""
     comp, res = solid_compliance(design, mesher, size_mm=size_mm, error_estimate=error_estimate,
@@ -48,7 +48,7 @@ def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None
     if deformed_png:
         run.figures.append(_deformed_figure(design, res, deformed_png))
     if joints:
-        run.joints = calibrate_joints(design, res)
+        run.joints = fit_joints(design, res)
         log.info("joint calibration of %s: span fit residual %.2f %%", design.name, 100 * run.joints.span_residual)
     return run
 

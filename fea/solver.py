@@ -15,12 +15,16 @@ mirror-symmetric rod differ only in which DOFs of the plane are held) with one f
 from __future__ import annotations
 
 import functools
+import glob
 import logging
 import os
-from enum import Enum
+import site
+import sys
 
 import numpy as np
 import scipy.sparse as sp
+
+from rodlab.enums import SolverBackend
 
 from .errors import FeaError
 
@@ -31,14 +35,6 @@ log = logging.getLogger(__name__)
 
 #: environment variable that forces a backend (``pardiso``, ``cholmod`` or ``superlu``)
 SOLVER_ENV = "RODLAB_SPARSE_SOLVER"
-
-
-class SolverBackend(str, Enum):
-    """Sparse direct solvers, fastest first."""
-
-    PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
-    CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
-    SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
 
 
 #: pypardiso finds ``mkl_rt`` by a recursive glob over the whole environment (``sys.prefix/lib*/**``) at its
@@ -52,9 +48,6 @@ def _point_pypardiso_at_mkl() -> None:
     shortest path), found with one directory listing."""
     if os.environ.get(_MKL_RT_ENV):
         return
-    import glob
-    import site
-    import sys
     for root in (sys.prefix, getattr(site, "USER_BASE", None) or ""):
         for sub in ("lib", "Lib", "Library/bin", "lib64"):
             hits = sorted(glob.glob(os.path.join(root, sub, "*mkl_rt*")), key=len)
@@ -166,7 +159,7 @@ class HeldSystem:
     zero.
 
     K : symmetric sparse matrix, shape=(n, n); its CSR arrays are used as CSC (the transpose, = K). Or, for
-    CHOLMOD only, its upper triangle as CSR (:func:`~fea.assembly.assemble_stiffness` ``upper=True``): read
+    CHOLMOD only, its upper triangle as CSR (:func:`~fea.stiffness_assembly.assemble_stiffness` ``upper=True``): read
     as CSC that is the lower triangle, the only part CHOLMOD reads.
     """
 
@@ -267,7 +260,7 @@ class PatternSolver:
     memory). ``factor(A)`` returns ``solve(B)``, valid until the next ``factor`` call.
 
     PARDISO and CHOLMOD read one triangle only: ``pattern`` and every ``A`` may hold just the lower triangle
-    as CSC (:func:`~fea.assembly.assemble_stiffness` ``upper=True``); SuperLU needs the whole matrix."""
+    as CSC (:func:`~fea.stiffness_assembly.assemble_stiffness` ``upper=True``); SuperLU needs the whole matrix."""
 
     def __init__(self, pattern: sp.spmatrix, backend: str | None = None, ordering_method: str = "amd"):
         self.backend = SolverBackend(backend or available_backend()).value

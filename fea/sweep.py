@@ -22,6 +22,7 @@ from rodlab.errors import RodlabError
 from rodlab.fileio import atomic_write_json
 
 from .errors import FeaError
+from .frame import CALIBRATION, FRAME_REVISION
 
 __all__ = ["parse_range", "sweep_designs", "run_sweep", "SWEEP_COLUMNS"]
 
@@ -47,7 +48,6 @@ def parse_range(text: str, name: str) -> np.ndarray:
 
 
 def _key(design_summary: dict, model: str, calibration=None) -> str:
-    from .frame import CALIBRATION, FRAME_REVISION
     blob = json.dumps({"d": design_summary, "m": model, "v": __version__, "cal": repr(calibration or CALIBRATION),
                        "frame": FRAME_REVISION}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
@@ -92,8 +92,8 @@ def run_sweep(base: RodDesign, L1s, L2s, model: str = "frame", scheduler: str | 
 
     ``model``: ``frame`` (default), ``calc`` or ``solid`` (needs ``mesher``, see :func:`fea.solid_compliance`).
     ``calibration``: for the frame, a :class:`fea.frame.FrameCalibration` (constants) or a
-    :class:`fea.joints.JointCalibration` (one solid run of the family: :func:`fea.run_solid` with
-    ``joints=True`` on :func:`fea.family.calibration_member`).
+    :class:`fea.joints.JointFit` (one solid run of the family: :func:`fea.run_solid` with
+    ``joints=True`` on :func:`fea.family.joint_fit_member`).
     """
     import pandas as pd
 

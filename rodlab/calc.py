@@ -20,28 +20,22 @@ C_g [mm per g0] (gravity of magnitude g0 = 9.80665 m/s^2 along the given {T} dir
 from __future__ import annotations
 
 from dataclasses import replace
-from enum import Enum
 from functools import lru_cache
 
 import numpy as np
 
+from .compliance import RodCompliance
 from .design import RodDesign
-from .enums import Part
+from .enums import BendModel, Method, Part
 from .frames import skew as _skew
 from .errors import DesignError
 from .joint_springs import declared_joint_compliance
 from .layout import Layer, Segment, SegmentKind, layout
+from .massprops import ball_mass_properties
 from .units import G0
 
 __all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments",
            "unit_load_compliance"]
-
-
-class BendModel(str, Enum):
-    """How the closed form treats the bend pipe."""
-
-    ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
-    CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
 
 
 def pipes_only_segments(design: RodDesign) -> list[Segment]:
@@ -210,7 +204,6 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
         segs = layout(design)
         if bend is BendModel.CORNER:
             segs = _corner_segments(design, segs)
-        from .massprops import ball_mass_properties
         ball = ball_mass_properties(design)
         CF, Cg = unit_load_compliance(segs, design.tool_mm, ball.mass_kg, shear, axial,
                                       ball.com_T_mm + design.tool_mm, tuple(bend_flexibility))
@@ -248,8 +241,6 @@ def paper_compliance(design: RodDesign) -> tuple[np.ndarray, np.ndarray]:
 def calc_rod_compliance(design: RodDesign, *, bend: BendModel = BendModel.ARC, shear: bool = False,
                         axial: bool = True):
     """Closed-form compliance of ``design`` as a :class:`~rodlab.compliance.RodCompliance` (method ``calc``)."""
-    from .compliance import RodCompliance
-    from .enums import Method
     CF, Cg = calc_compliance(design, bend=bend, shear=shear, axial=axial)
     CF = 0.5 * (CF + CF.T)  # exact in theory; remove round-off
     return RodCompliance.from_design(design, CF, Cg, Method.CALC, {

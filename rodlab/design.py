@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .enums import Part
 from .errors import DesignError
 from .joint_springs import JointSpring, check_joint_place
 from .materials import Material
@@ -290,7 +291,6 @@ class RodDesign:
 
     def material_of(self, part) -> Material:
         """The material of a part (:class:`~rodlab.enums.Part` or its name)."""
-        from .enums import Part
         part = Part.parse(part)
         return {Part.PIPE_HOLDER: self.pipe_holder.material, Part.PIPE_I: self.pipe_I.material,
                 Part.RING_1: self.rings.material, Part.BEND: self.bend.material, Part.RING_2: self.rings.material,

@@ -7,6 +7,7 @@ numbers, a part that took its defaults) is appended; the result is read back as 
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 from .design import RodDesign
@@ -70,7 +71,6 @@ def edited_design_text(text: str, design: RodDesign, values: dict, header: str =
 
 def write_edited_design(source_text: str, design: RodDesign, values: dict, out: str | Path, header: str = "") -> Path:
     """Write the edited design to ``out`` atomically, after reading it back as a valid design."""
-    import sys
     if sys.version_info >= (3, 11):
         import tomllib
     else:  # pragma: no cover

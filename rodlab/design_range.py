@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .calc import calc_compliance
 from .design import RodDesign
 from .errors import DesignError
 
@@ -72,7 +73,6 @@ class RangeWarning:
 
 def linear_model_error_mm(design: RodDesign) -> tuple[float, float]:
     """(self-weight sag [mm], second-order error of the linear models ``sag^2 / reach`` [mm]) by the closed form."""
-    from .calc import calc_compliance
     _, Cg = calc_compliance(design)
     sag = float(max(np.linalg.norm(Cg @ g) for g in np.eye(3)))        # worst gravity direction, mm per g0
     reach = float(np.linalg.norm(design.tool_mm))

@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 from enum import Enum
+from typing import Union
 
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
-           "Completeness"]
+           "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
+           "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum"]
 
 
 class _StrEnum(str, Enum):
@@ -138,9 +140,53 @@ class SimAccuracy(_StrEnum):
     RELATIVE = "relative"    #: one relative standard deviation per C_F entry (no design known)
 
 
+class FindingKind(_StrEnum):
+    """Finding IDs of a diagnosis that name no modelled effect (contract ``effects.md``)."""
+
+    #: rig: the linear difference from the simulation the tolerances explain (effects v2): nothing was left out,
+    #: the rod as built differs from the simulated design
+    MODEL_FORM = "model_form"
+    #: both subjects: structure that no modelled effect explains, with where it is
+    UNEXPLAINED = "unexplained"
+
+
 #: the finding of a rig diagnosis whose linear difference from the simulation the tolerances explain (effects v2):
 #: nothing was left out, the rod as built differs from the simulated design
-MODEL_FORM = "model_form"
+MODEL_FORM = FindingKind.MODEL_FORM
+
+#: what a diagnosis finding's ``effect`` is: a rig effect, a campaign effect, or a finding that names none
+EffectId = Union[RigEffect, CampaignEffect, FindingKind]
+
+
+def parse_effect_id(value) -> EffectId:
+    """A finding's effect ID from its contract spelling (rig effects, campaign effects, ``model_form``,
+    ``unexplained``); :class:`~rodlab.errors.RodlabError` listing them otherwise."""
+    kinds = (RigEffect, CampaignEffect, FindingKind)
+    if isinstance(value, kinds):
+        return value
+    for kind in kinds:
+        try:
+            return kind(str(value).strip().lower())
+        except ValueError:
+            continue
+    from .errors import RodlabError, did_you_mean
+    choices = [m.value for kind in kinds for m in kind]
+    raise RodlabError(f"unknown effect {value!r}; expected one of {choices}." + did_you_mean(str(value), choices))
+
+
+class Verdict(_StrEnum):
+    """A diagnosis' verdict (contract ``rodlab.diagnosis/1``, ``verdict``)."""
+
+    CONSISTENT = "consistent"      #: the recording matches the simulation within the noise: nothing found
+    EXPLAINED = "explained"        #: the findings explain the difference down to the noise
+    UNEXPLAINED = "unexplained"    #: structure above the noise is left that no modelled effect explains
+
+
+class Subject(_StrEnum):
+    """What a diagnosis looked at (contract ``rodlab.diagnosis/1``, ``subject``)."""
+
+    RIG = "rig"              #: a stiffness-rig recording against a simulated compliance
+    CAMPAIGN = "campaign"    #: a calibration campaign's residuals against the identified model
 
 
 class AccuracySource(_StrEnum):
@@ -157,3 +203,60 @@ class Completeness(_StrEnum):
     COMPLETE = "complete"        #: residuals consistent with the noise model
     NEARLY = "nearly"            #: significantly but only slightly above it (Birge ratio at most 1.5)
     INCOMPLETE = "incomplete"    #: the model leaves out errors well above the noise (a caution for a usable result)
+
+
+class BendModel(str, Enum):
+    """How the closed form treats the bend pipe."""
+
+    ARC = "arc"        #: curved beam along the bend's arc (default; what the part is)
+    CORNER = "corner"  #: two straight legs of the bend section meeting at the vertex (sharp-corner idealisation)
+
+
+class SegmentKind(str, Enum):
+    """The shape of a piece of a rod's centreline (:class:`rodlab.layout.Segment`)."""
+
+    LINE = "line"
+    ARC = "arc"
+
+
+class FeaModel(str, Enum):
+    """Which model computes the compliance."""
+
+    SOLID = "solid"   #: 3-D elasticity, scikit-fem, curved P2 (reference)
+    FRAME = "frame"   #: Timoshenko beam frame with pipe-bend flexibility (sweeps)
+    CALC = "calc"     #: the paper's closed form generalised (Euler-Bernoulli frame)
+
+    @property
+    def describes(self) -> str:
+        """What the model is, for help texts (``rodlab fea --help``)."""
+        return _FEA_MODEL_TEXT[self]
+
+
+_FEA_MODEL_TEXT = {
+    FeaModel.SOLID: "3-D elasticity on the CAD mesh (scikit-fem, curved P2, transversely-isotropic carbon; needs the "
+                    "cad extra)",
+    FeaModel.FRAME: "Timoshenko beam frame with pipe-bend flexibility (fast)",
+    FeaModel.CALC: "the closed form",
+}
+
+
+class SolverBackend(str, Enum):
+    """Sparse direct solvers, fastest first."""
+
+    PARDISO = "pardiso"   #: Intel MKL PARDISO (pypardiso + the mkl wheel)
+    CHOLMOD = "cholmod"   #: SuiteSparse CHOLMOD (scikit-sparse + a system SuiteSparse)
+    SUPERLU = "superlu"   #: SciPy's SuperLU (always there; the last fallback)
+
+
+class LineProtocol(_StrEnum):
+    """How a rig instrument sends its readings over its serial line (a rig profile's ``protocol``)."""
+
+    QUERY = "query"      #: a request, answered by one line
+    STREAM = "stream"    #: the instrument pushes lines by itself
+
+
+class Checksum(_StrEnum):
+    """A rig instrument's line checksum (a rig profile's ``checksum``)."""
+
+    NONE = "none"        #: no checksum
+    XOR = "xor"          #: the line ends with ``*HH``, the XOR of the bytes before ``*``

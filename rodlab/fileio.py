@@ -3,11 +3,16 @@ from __future__ import annotations
 
 import errno
 import hashlib
+import io
 import json
+import math
 import os
 import re
+import sys
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 __all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
            "sha256_file", "read_text_checked"]
@@ -50,8 +55,6 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
 def atomic_write_figure(path: str | Path, fig, dpi: int = 120, **savefig_kw) -> Path:
     """Render a matplotlib figure to PNG in memory, close it, and write the file atomically (never a partial
     image)."""
-    import io
-
     import matplotlib.pyplot as plt
     buf = io.BytesIO()
     fig.savefig(buf, dpi=dpi, **savefig_kw)
@@ -66,9 +69,6 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
 
 def json_safe(obj):
     """Replace non-finite floats by ``None`` (JSON ``null``) and NumPy scalars/arrays by Python values."""
-    import math
-
-    import numpy as np
     if isinstance(obj, dict):
         return {str(k): json_safe(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
@@ -115,7 +115,6 @@ def read_text_checked(path, error_cls) -> str:
 def read_toml(path, error_cls) -> tuple[dict, str]:
     """A TOML file's table and text, or ``error_cls`` naming the file: unreadable (:func:`read_text_checked`)
     or not valid TOML (with the line the parser names)."""
-    import sys
     if sys.version_info >= (3, 11):
         import tomllib
     else:  # pragma: no cover

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import did_you_mean
+
 __all__ = ["ParamSpec", "Hypothesis", "EffectSchema", "location_parts"]
 
 
@@ -48,7 +50,6 @@ class ParamSpec:
         if self.kind == "str":
             v = str(value).strip()
             if self.choices and v not in self.choices:
-                from rodlab.errors import did_you_mean
                 raise ValueError(f"{self.name} must be one of {list(self.choices)}, got {v!r}."
                                  + did_you_mean(v, self.choices))
             return v
@@ -171,7 +172,6 @@ class EffectSchema:
         for p in self.params:
             if p.name == name:
                 return p
-        from rodlab.errors import did_you_mean
         names = [p.name for p in self.params]
         self.fail(f"effect {self.effect}: unknown parameter {name!r}; its parameters are {names}."
                   + did_you_mean(name, names), f"{self.effect}.{name}")

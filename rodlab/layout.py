@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
 
 from .design import RodDesign
-from .enums import Part
+from .enums import Part, SegmentKind
 from .materials import Material
 from .units import gpa_to_mpa, kg_m3_to_kg_mm3
 
@@ -58,11 +57,6 @@ class Layer:
     @property
     def shear_coefficient(self) -> float:
         return _K_SHEAR_SOLID if self.d_in_mm <= 0 else _K_SHEAR_TUBE
-
-
-class SegmentKind(str, Enum):
-    LINE = "line"
-    ARC = "arc"
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from importlib import resources
 from pathlib import Path
 
 from .errors import did_you_mean
+from .fileio import read_toml
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -285,7 +286,6 @@ def require_schema(data, format_id: str, path, text: str, error_cls, kind: str =
 def read_toml_checked(path, format_id: str, error_cls) -> tuple[dict, str]:
     """Read a TOML file of ``format_id`` and check it against its schema: (table, text). Raises ``error_cls``
     naming the file (unreadable, not TOML: with the line) or every schema problem at once."""
-    from .fileio import read_toml
     data, text = read_toml(path, error_cls)
     require_schema(data, format_id, path, text, error_cls, kind="toml")
     return data, text

@@ -42,11 +42,12 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rodlab.enums import LoadAxis
+from rodlab.enums import Checksum, LineProtocol, LoadAxis
 from rodlab.errors import did_you_mean
 from rodlab.fileio import read_toml
 
 from .errors import RigError
+from .instrument_profile import parse_profile_v2
 from .model import LoadSchedule
 
 __all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
@@ -159,7 +160,6 @@ def read_profile(path):
     data, text = _load_toml(path)
     r = _Reader(Path(path), text)
     if data.get("format") == FORMAT_PROFILE_V2:
-        from .instrument_profile import parse_profile_v2
         _schema(data, FORMAT_PROFILE_V2, path, text)
         return parse_profile_v2(data, r, path)
     r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")
@@ -202,14 +202,15 @@ def read_profile(path):
         ack = r.string(loader, "ack", "loader", "OK")
     _schema(data, FORMAT_PROFILE, path, text)
     return RigProfile(
-        port=r.string(dev, "port", "device"), protocol=r.string(dev, "protocol", "device", "query", ("query", "stream")),
+        port=r.string(dev, "port", "device"), protocol=r.string(dev, "protocol", "device", LineProtocol.QUERY.value,
+                                                                   tuple(m.value for m in LineProtocol)),
         channels=tuple(channels), baudrate=r.num(dev, "baudrate", "device", 9600, integer=True),
         bytesize=r.num(dev, "bytesize", "device", 8, integer=True),
         parity=r.string(dev, "parity", "device", "N", ("N", "E", "O")),
         stopbits=r.num(dev, "stopbits", "device", 1.0), timeout_s=r.num(dev, "timeout_s", "device", 0.5),
         request=r.string(dev, "request", "device", "R\\r\\n").encode().decode("unicode_escape"),
         separator=r.string(dev, "separator", "device", ","),
-        checksum=r.string(dev, "checksum", "device", "none", ("none", "xor")),
+        checksum=r.string(dev, "checksum", "device", Checksum.NONE.value, tuple(m.value for m in Checksum)),
         retries=r.num(dev, "retries", "device", 5, integer=True), temperature_index=t_index,
         loader_command=cmd, loader_ack=ack, path=Path(path))
 

@@ -5,6 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rodlab.units import G0
+
 
 from .recording import RigRecording
 
@@ -54,7 +56,6 @@ class Holds:
     def load_N(self, axis_sign=None) -> np.ndarray:
         """The load of each hold along its axis [N]: the load cell's mean when every hold has one, else
         mass_kg x g0; times ``axis_sign`` (shape=(m,)) when given."""
-        from rodlab.units import G0
         F = self.force_N if self.has_force else self.mass_kg * G0
         return F if axis_sign is None else F * axis_sign
 

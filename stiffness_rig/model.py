@@ -14,6 +14,7 @@ from rodlab.enums import LoadAxis, Phase
 from rodlab.units import G0
 
 from .effects import RIG_EFFECTS, RigState, complete_effects, spring_compliance
+from .errors import RigError
 
 __all__ = ["LoadSchedule", "RigModel", "spring_compliance", "Hold"]
 
@@ -34,7 +35,6 @@ class LoadSchedule:
                                                    "-x": (0, 2), "-y": (1, 2), "-z": (0, 2)})
 
     def __post_init__(self) -> None:
-        from .errors import RigError
         bad = [m for m in self.masses if not (np.isfinite(m) and m > 0)]
         if not self.masses or bad:
             raise RigError(f"masses must be positive numbers of kg, got {list(self.masses)}; give e.g. 0.5,1.0,1.5,2.0 "
@@ -103,7 +103,6 @@ class RigModel:
     load_cell_noise_N: float | None = None
 
     def __post_init__(self) -> None:
-        from .errors import RigError
         if not (np.isfinite(self.noise_mm) and self.noise_mm >= 0):
             raise RigError(f"the per-reading noise must be >= 0 mm, got {self.noise_mm!r} (--noise-um takes um, "
                            f"e.g. 0.6)", key="noise")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import select
 import struct
 import threading
@@ -21,7 +22,9 @@ import numpy as np
 
 from rodlab.enums import LoadAxis, Phase
 
+from .drivers.base import unescape
 from .drivers.digimatic import format_digimatic
+from .instrument_profile import UNITS
 from .model import Hold, RigModel
 from .ptylink import PtyLink
 from .protocol import encode_values
@@ -64,7 +67,6 @@ class SimBench:
     def value(self, channel) -> float:
         """What an instrument sends for ``channel`` (an :class:`~.instrument_profile.InstrumentChannel`): the
         rig's quantity in the channel's units, before its sign and scale (the inverse of ``channel.convert``)."""
-        from .instrument_profile import UNITS
         st = self.state()
         q = {"displacement": lambda: st["xyz"[channel.axis] + "_mm"], "force": lambda: st["force_N"],
              "temperature": lambda: st["temp_C"]}[channel.quantity]()
@@ -354,7 +356,6 @@ class SimModbusRTU(PtyInstrument):
 def template_of(pattern: str) -> str:
     """An answer template from a simple answer pattern: anchors and escapes dropped, each named group
     ``(?P<name>...)`` replaced by ``{name:+.5f}`` (enough for the usual ``^M0,(?P<a>...),(?P<b>...)$``)."""
-    import re
     out, i = [], 0
     body = pattern.strip("^$")
     while i < len(body):
@@ -381,7 +382,6 @@ def _source(bench: SimBench, channel):
 def simulators_for(profile, bench: SimBench, links: dict, faults: Faults | None = None) -> list:
     """One simulator per instrument of a ``rodlab.rigprofile/2`` profile on ``bench``, published at
     ``links[instrument name]``, answering with what its channels expect (units, sign, scale inverted)."""
-    from .drivers.base import unescape
     sims = []
     for k, ins in enumerate(profile.instruments):
         kw = {"bench": bench, "link": links[ins.name], "faults": faults or Faults(), "seed": k}

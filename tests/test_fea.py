@@ -122,7 +122,7 @@ def test_half_model_equals_mirrored_whole():
     assert np.abs(half.mesh.p[1]).min() == 0.0 and half.mesh.p[1].min() > -1e-9
     whole = half.mirrored()
     assert not whole.is_half and whole.mesh.p.shape[1] < 2 * half.mesh.p.shape[1]   # plane nodes shared
-    from rodlab.fea.assembly import scalar_basis
+    from rodlab.fea.stiffness_assembly import scalar_basis
     b = scalar_basis(whole.mesh)
     assert (b.mapping.detDF(b.X) > 0).all()                # images re-ordered: no inverted element
     rh = solve_compliance(d, half, keep_displacements=True, tip_moments=True)
@@ -181,7 +181,7 @@ def test_node_ordered_assembly_and_held_system():
     """K assembled in a node ordering equals the permuted K; a held system solves like the sliced one."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve
-    from rodlab.fea.assembly import assemble_stiffness, block_pattern, scalar_basis
+    from rodlab.fea.stiffness_assembly import assemble_stiffness, block_pattern, scalar_basis
     from rodlab.fea.elasticity import element_tensors
     from rodlab.fea.solver import HeldSystem
     pytest.importorskip("gmsh")

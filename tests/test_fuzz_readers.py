@@ -26,10 +26,10 @@ def _sources():
     import tempfile
     tmp = Path(tempfile.mkdtemp())
     comp = write_compliance(calc_rod_compliance(resolve_design("rod1")), tmp / "rod1.compliance.json")
-    from rodlab.fea.joints import JointCalibration
+    from rodlab.fea.joints import JointFit
     from rodlab.fea.joints_io import write_joints
     rng = np.random.default_rng(0)
-    joints = write_joints(tmp / "rod1.joints.json", JointCalibration(
+    joints = write_joints(tmp / "rod1.joints.json", JointFit(
         resolve_design("rod1"), (25.0, 25.0), 1e-4 * rng.normal(size=(5, 6, 6)), 1e-4 * rng.normal(size=(5, 6, 3)),
         1e-6 * rng.normal(size=(2, 6))))
     out = {

@@ -10,7 +10,7 @@ import pytest
 
 from rodlab.fea.errors import FeaError
 from rodlab.fea.frame import CALIBRATION, frame_compliance, frame_segments
-from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, calibrate_joints, free_spans,
+from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, fit_joints, free_spans,
                         joint_frame_compliance, joint_margins, joints_from_motions, span_basis)
 from rodlab.calc import unit_load_compliance
 from rodlab.chain import chain_flexibility, transport
@@ -142,22 +142,22 @@ def test_joint_calibration_input_errors():
         with pytest.raises(FeaError, match="margin must be a positive number"):
             joint_margins(d, bad)
     with pytest.raises(FeaError, match="tip_moments=True, keep_displacements=True"):
-        calibrate_joints(d, type("R", (), {"displacements": None, "rod_mesh": None, "ball_motion": None})())
+        fit_joints(d, type("R", (), {"displacements": None, "rod_mesh": None, "ball_motion": None})())
     with pytest.raises(FeaError, match="must leave 5 mm of span"):
         joints_from_motions(d, sec, tip, {Part.PIPE_I: 120.0, Part.PIPE_II: 20.0})
 
 
 def test_short_base_tube_shortens_the_margins(caplog):
     """Rod 2#'s pipe I has 20 mm of free tube: its sections move closer to the joints (with a warning), and
-    :func:`fea.family.calibration_member` picks a grid member with longer tubes instead."""
-    from rodlab.fea.family import calibration_member
+    :func:`fea.family.joint_fit_member` picks a grid member with longer tubes instead."""
+    from rodlab.fea.family import joint_fit_member
     d2 = legacy_design("rod2")
     m = joint_margins(d2)
     assert m[Part.PIPE_I] == pytest.approx(7.5) and m[Part.PIPE_II] == pytest.approx(25.0)
     assert "leaves its sections only 7.5 mm" in caplog.text
-    pick = calibration_member(d2, [150.0, 175.0, 200.0, 225.0], [525.0, 550.0])
+    pick = joint_fit_member(d2, [150.0, 175.0, 200.0, 225.0], [525.0, 550.0])
     assert (pick.L1_mm, pick.L2_mm) == (200.0, 525.0)   # 175: 45 mm of free pipe I < 2 x 25 + 5; 200: 70 mm
-    assert calibration_member(legacy_design("rod1"), [150.0], [450.0]).name == "1#"
+    assert joint_fit_member(legacy_design("rod1"), [150.0], [450.0]).name == "1#"
 
 
 @pytest.mark.cad
@@ -172,7 +172,7 @@ def test_joint_calibration_on_the_solid_rod1_family():
     d = legacy_design("rod1")
     _, res = solid_compliance(d, mesh_rod,
                               error_estimate=False, keep_displacements=True, tip_moments=True)
-    jc = calibrate_joints(d, res)
+    jc = fit_joints(d, res)
     assert jc.margins_mm == (25.0, 25.0) and jc.asymmetry < 5e-3 and jc.span_residual < 2e-3
     members = {"rod1": d, "rod2": legacy_design("rod2"), "rod3": legacy_design("rod3"),
                "rod1_L1_200_L2_600": replace(d, L1_mm=200.0, L2_mm=600.0, name="1# 200-600")}

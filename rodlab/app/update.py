@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..calc import calc_rod_compliance
 from ..design import RodDesign
 from ..errors import DesignError, RodlabError
 from ..massprops import mass_properties
@@ -85,7 +86,6 @@ def model_compliance(model: str):
         from rodlab.fea.frame import frame_compliance
         return lambda d: frame_compliance(d)[0]
     if model == "calc":
-        from ..calc import calc_rod_compliance
         return lambda d: calc_rod_compliance(d).C_F
     raise RodlabError(f"unknown model {model!r}; expected frame or calc", key="model")
 

@@ -3,6 +3,8 @@ protocol): ``query`` (a request, one line back) or ``stream`` (the device pushes
 optional NMEA-style XOR checksum ``*HH``. Values are named by their place in the line: ``0``, ``1``, ..."""
 from __future__ import annotations
 
+from rodlab.enums import Checksum, LineProtocol
+
 from ..protocol import parse_line
 from .base import Driver, Garbage, Link, Setting, unescape
 
@@ -12,11 +14,13 @@ __all__ = ["NumericLine"]
 class NumericLine(Driver):
     name = "numeric_line"
     summary = "one line of bare numbers per reading (query or stream), optional XOR checksum *HH"
-    settings = (Setting("mode", str, "query", "query: request -> one line; stream: the device pushes lines",
-                        ("query", "stream")),
+    settings = (Setting("mode", str, LineProtocol.QUERY.value,
+                        "query: request -> one line; stream: the device pushes lines",
+                        tuple(m.value for m in LineProtocol)),
                 Setting("request", str, "R\\r\\n", "query: what asks for a reading"),
                 Setting("separator", str, ",", "between the values of a line"),
-                Setting("checksum", str, "none", "none, or xor: the line ends with *HH", ("none", "xor")),
+                Setting("checksum", str, Checksum.NONE.value, "none, or xor: the line ends with *HH",
+                        tuple(m.value for m in Checksum)),
                 Setting("n_values", int, 0, "values per line (0: one more than the highest channel value)"))
     simulator = "SimNumericLine"
 

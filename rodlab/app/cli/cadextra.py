@@ -1,12 +1,9 @@
-"""The CAD extra (build123d, gmsh) for the commands that need it, and the design argument of ``cad`` and ``mesh``."""
+"""The CAD extra (build123d, gmsh) for the commands that need it."""
 from __future__ import annotations
 
 from ...errors import RodlabError
 
-__all__ = ["require_cad", "require_mesher", "DESIGN_HELP"]
-
-#: help of the design argument of cad and mesh
-DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6"
+__all__ = ["require_cad", "require_mesher"]
 
 
 def require_cad():

@@ -5,14 +5,14 @@ from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import pos_float
 from .reporting import add_report_option
-from .robotargs import ROBOT_HELP, add_robot_options
+from .robotargs import add_robot_options, robot_help
 
 __all__ = ["add_identify_options", "parse_pins", "pins_from_args"]
 
 
 def add_identify_options(p) -> None:
     """The options calibrate and compare share: robot, validation points, pins, loss, noise, report, strictness."""
-    add_robot_options(p, default=None, help=ROBOT_HELP + "; default tx90 (the paper's robot) for a campaign, while "
+    add_robot_options(p, default=None, help=robot_help() + "; default tx90 (the paper's robot) for a campaign, while "
                                                          "instrument points and socket readings must name theirs")
     p.add_argument("--validate", default=None,
                    help="validation points (*.validation.csv) for the paper's statistics; with --sockets, other "

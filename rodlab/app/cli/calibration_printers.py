@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import sys
 
+from rodlab.calibrate import write_result
+
 from .verdict import print_held
 
 __all__ = ["print_parameters", "print_not_trusted", "print_cautions", "write_result_file"]
@@ -42,7 +44,6 @@ def print_not_trusted(res) -> None:
 
 def write_result_file(args, result: dict) -> list:
     """The result file when ``--json`` is given, else the result in memory (for ``--report``)."""
-    from rodlab.calibrate import write_result
     if args.json:
         path = write_result(args.json, result)
         print(f"wrote {path}")

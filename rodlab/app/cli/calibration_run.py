@@ -3,11 +3,16 @@ from __future__ import annotations
 
 import logging
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
+                              read_points, validate)
+from rodlab.calibrate.validate import error_stats
+
 from ...compliance import RodCompliance
+from ...design_io import resolve_design
 from ...errors import RodlabError
 from ...units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
@@ -58,7 +63,6 @@ class CalibrationRun:
 
 
 def _stats(errors_mm):
-    from rodlab.calibrate.validate import error_stats
     return error_stats(errors_mm)
 
 
@@ -66,8 +70,6 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     """Identification (+ validation) of one campaign with the rod (tool, mass, COM) of the file ``rod``, its
     deflection compensated by ``deflection`` (:class:`rodlab.calibrate.RodDeflection`) and, with ``--thermal``,
     its thermal growth; ``camp`` the campaign already read (else ``args.campaign`` with ``args.device``)."""
-    from rodlab.calibrate import FitOptions, ModelParams, Rod, campaign_observations, identify, read_fixture
-    from rodlab.calibrate import read_points, validate
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if camp is None:                                    # compare reads the campaign and warns once
@@ -78,8 +80,6 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,
                          harmonics=getattr(args, "joint_harmonics", ()), fix_unidentifiable=not args.strict,
                          expected_noise_mm=args.noise_um * 1e-3 if getattr(args, "noise_um", None) else DEVICE_NOISE_MM)
-    from dataclasses import replace
-
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, pins = constrain_to_ranges(lambda p: identify(robot, obs, Rod.of(rod), compensations, replace(options, pinned=p)),
                                     options.pinned, options.freed)
@@ -97,9 +97,6 @@ def _thermal(args, camp, rod) -> tuple:
     """``--thermal DESIGN``: the rod's thermal growth as a further compensation (needs the campaign's temp_C)."""
     if not getattr(args, "thermal", None):
         return ()
-    from rodlab.calibrate import ThermalGrowth
-
-    from ...design_io import resolve_design
     if camp.temp_C is None or not np.all(np.isfinite(camp.temp_C)):
         raise RodlabError(f"{args.campaign}: --thermal needs the temperature of every point (a temp_C column [degC]); "
                           f"record it or leave --thermal out")

@@ -6,8 +6,9 @@ import time
 from pathlib import Path
 
 from ...design_io import resolve_design
-from .cadextra import DESIGN_HELP, require_cad
+from .cadextra import require_cad
 from .reporting import add_report_option, write_command_report
+from .rodargs import design_help
 
 __all__ = ["register"]
 
@@ -17,7 +18,7 @@ def register(sub) -> None:
                        description="Build the rod as a multi-part CAD assembly (build123d) in the tool frame {T}; "
                                    "write DIR/rod.step (part names and colours), DIR/rod.stl, PNG views (iso, xz, "
                                    "xy, yz) and DIR/mass.json (per part and total: mass, COM in {T}, inertia).")
-    p.add_argument("design", help=DESIGN_HELP)
+    p.add_argument("design", help=design_help())
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.add_argument("--no-png", action="store_true", help="skip the PNG views")
     p.add_argument("--renderer", choices=["auto", "pyvista", "matplotlib"], default="auto",

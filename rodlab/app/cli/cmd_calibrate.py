@@ -6,7 +6,20 @@ import sys
 
 import numpy as np
 
-from ...compliance import read_compliance
+from rodlab.calibrate import (
+    ModelParams,
+    RodDeflection,
+    campaign_observations,
+    deflection_offsets,
+    read_fixture,
+    read_points,
+    result_dict,
+    validate,
+)
+from rodlab.calibrate.device import read_device
+from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
+
+from ...compliance import RodCompliance, read_compliance
 from ...errors import RodlabError
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
@@ -63,7 +76,6 @@ def register(sub) -> None:
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    from rodlab.calibrate import result_dict
     if args.points and args.thermal:
         raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
                           "points (--points) have no rod to grow: leave --thermal out")
@@ -86,7 +98,6 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
-    from rodlab.calibrate import RodDeflection
     rod = read_compliance(args.rod)
     comp = RodDeflection.of(None if args.compensation == "none" else rod)
     run = run_calibration(args, rod, comp)
@@ -129,7 +140,6 @@ def _note_ideal_device(args) -> None:
     """A not-trusted raw campaign read with exactly orthogonal sensors: say that a real device's are not."""
     if not getattr(args, "device", None):
         return
-    from rodlab.calibrate.device import read_device
     dev = read_device(args.device)
     if np.max(np.abs(dev.misalignment_deg())) < 1e-6:
         print(f"  - {args.device} states exactly orthogonal sensors (a design, not a device as built): a real "
@@ -141,9 +151,6 @@ def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
     """With ``--compensation none`` and a file that has matrices: how far the uncompensated rod deflects."""
     if comp.active or not (rod.C_F.any() or rod.C_g.any()):
         return
-    import numpy as np
-
-    from rodlab.calibrate import campaign_observations, deflection_offsets, read_fixture
     obs = campaign_observations(camp, read_fixture(args.fixture), rod)
     off = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod)
     print(f"note: the rod's deflection is not compensated; by {args.rod} it moves the ball up to "
@@ -153,8 +160,6 @@ def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
 def _print_suspects(robot, camp, args, rod, comp, test) -> None:
     """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses) and
     what to do about each."""
-    from rodlab.calibrate import read_fixture
-    from rodlab.compliance import RodCompliance
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     used = rod if comp.active else RodCompliance.none_like(rod)
@@ -178,9 +183,7 @@ def _print_result(res, before, after, label) -> None:
 
 
 def _calibrate_points(args) -> int:
-    from rodlab.calibrate import ModelParams, read_points, result_dict, validate
     from rodlab.calibrate.crossval import Prediction
-    from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)

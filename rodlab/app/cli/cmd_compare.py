@@ -5,8 +5,11 @@ import argparse
 import logging
 from pathlib import Path
 
+from rodlab.calibrate import RodDeflection, read_fixture
+
 from ...compliance import read_compliance
 from ...errors import RodlabError
+from ...fileio import atomic_write_json, json_safe
 from .calibrateargs import add_identify_options
 from .calibration_run import run_calibration
 from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
@@ -38,7 +41,6 @@ def _compare_runs(items) -> list:
     """(name, rod file, compensation) per ``--rod LABEL=FILE``, led by no compensation; checked before any run.
     A label is only a name: the file's matrices compensate whatever it is called (a file of method ``none``
     compensates nothing, and says so)."""
-    from rodlab.calibrate import RodDeflection
     runs = []
     for item in items:
         label, eq, path = item.partition("=")
@@ -64,7 +66,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
                           "campaign's *.validation.csv")
     planned = _compare_runs(args.rod)
     camp = campaign_from_args(args, robot_from_args(args).n)
-    from rodlab.calibrate import read_fixture
     warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
@@ -94,7 +95,6 @@ def _write_comparison(args, runs: list) -> list:
             "fixture": str(args.fixture), "validation": str(args.validate), "methods": methods}
     if not args.json:
         return [Source(FORMAT_COMPARISON, data)]
-    from ...fileio import atomic_write_json, json_safe
     path = atomic_write_json(args.json, json_safe(data))
     print(f"wrote {path}")
     return [path]

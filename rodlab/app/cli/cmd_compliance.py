@@ -8,7 +8,7 @@ from ...compliance import RodCompliance, write_compliance
 from ...design_io import resolve_design
 from ...enums import Method
 from .reporting import add_report_option, write_command_report
-from .rodargs import DESIGN_HELP
+from .rodargs import design_help
 
 __all__ = ["register"]
 
@@ -17,7 +17,7 @@ def register(sub) -> None:
     p = sub.add_parser("compliance", help="compute a rod's compliance file (closed form)",
                        description="Compute C_F and C_g of a rod design and write a *.compliance.json "
                                    "(contract rodlab.compliance/1). For finite elements use `rodlab fea`.")
-    p.add_argument("design", help=DESIGN_HELP)
+    p.add_argument("design", help=design_help(paper=True))
     p.add_argument("--method", choices=["calc", "none"], default="calc",
                    help="calc: closed-form Euler-Bernoulli frame (paper Eqs. 15/17 generalised); "
                         "none: zero matrices (no compensation)")

@@ -2,23 +2,30 @@
 from __future__ import annotations
 
 import argparse
+import sys
+
+from rodlab.calibrate import read_fixture, read_points
+from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
+from rodlab.calibrate.points import identify_points, stated_noise_mm
+from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
+from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...compliance import read_compliance, write_compliance
+from ...design_io import resolve_design
 from ...enums import MODEL_FORM
 from ...errors import RodlabError
+from ...fileio import atomic_write_json, json_safe
 from ...units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
 from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
-from .robotargs import ROBOT_HELP, add_robot_options, robot_from_args
+from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg
 
 __all__ = ["register"]
 
 
 def register(sub) -> None:
-    from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
-    from rodlab.stiffness_rig.effects import RIG_EFFECTS
     rig = ", ".join(e.value for e in RIG_EFFECTS)
     campaign = ", ".join(e.value for e in CAMPAIGN_EFFECTS)
     p = sub.add_parser("diagnose", help="locate and explain the mismatch between simulation and recordings",
@@ -34,9 +41,10 @@ def register(sub) -> None:
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     p.add_argument("--device", default=None, metavar="DEV.device.json", help="campaign: " + DEVICE_HELP)
-    add_robot_options(p, help="campaign / points: " + ROBOT_HELP)
-    p.add_argument("--rod", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the --sim "
-                                 "file was made from, if it is still there); campaign: the *.compliance.json used")
+    add_robot_options(p, help="campaign / points: " + robot_help())
+    p.add_argument("--design", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the "
+                                    "--sim file was made from, if it is still there)")
+    p.add_argument("--rod", help="campaign: the *.compliance.json used (as in `rodlab calibrate`)")
     p.add_argument("--sim-accuracy", type=sim_accuracy, default=None, metavar="ACC",
                    help="rig: what the simulation is worth. Default: the design's tolerances ([tolerances] of the "
                         "design file over documented defaults) and the simulation method's accuracy; a measured "
@@ -83,14 +91,12 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.points:
         return _diagnose_points(args)
     if args.rig:
-        from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
         if not args.sim:
             raise RodlabError("--rig needs --sim SIM.compliance.json")
         sim = compliance_arg(args.sim)
         design = None
-        if args.rod:
-            from ...design_io import resolve_design
-            design = resolve_design(args.rod)
+        if _rig_design(args):
+            design = resolve_design(args.design)
         rec = read_recording(args.rig)
         try:                                # a recording without a load response is refused, with its cause
             fit_recording(rec)
@@ -109,7 +115,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
             print(f"wrote {written[-1]}")
     else:
-        from rodlab.calibrate import read_fixture, read_points
+        if args.design:
+            raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
+                              "as --rod ROD.compliance.json")
         if not (args.fixture and args.rod):
             raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
         robot = robot_from_args(args)
@@ -141,13 +149,21 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+def _rig_design(args) -> str | None:
+    """``--design``; ``--rod`` with ``--rig`` is its old spelling (it named the design there but the compliance file
+    everywhere else): still read, with a deprecation warning."""
+    if args.rod and args.design:
+        raise RodlabError("--rod with --rig is the old spelling of --design; give --design only")
+    if args.rod:
+        print(f"warning: --rod with --rig is deprecated (--rod is a compliance file in calibrate and diagnose "
+              f"--campaign); the rig's design is --design: --design {args.rod}", file=sys.stderr)
+        args.design, args.rod = args.rod, None
+    return args.design
+
+
 def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
-    from rodlab.calibrate import read_points
-    from rodlab.calibrate.points import identify_points, stated_noise_mm
-
     from ..diagnose.points import diagnose_points
-    from ...fileio import atomic_write_json, json_safe
     robot = robot_from_args(args)
     pts = read_points(args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)

@@ -6,6 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.calibrate import builtin_robots, read_points, robot_path
+from rodlab.calibrate.kinematics import ModelParams
+
 from ...errors import RodlabError
 from .argtypes import seed
 from .robotargs import add_robot_options, robot_from_args
@@ -45,7 +48,6 @@ def _outputs(args, robot) -> tuple[Path | None, Path, Path]:
 
 def _check_configurations(args, robot) -> np.ndarray:
     if args.validate:
-        from rodlab.calibrate import read_points
         return np.deg2rad(read_points(args.validate, robot.n).q_deg)
     lo, hi = robot.limits_deg[:, 0], robot.limits_deg[:, 1]
     return np.deg2rad(np.random.default_rng(args.seed).uniform(lo, hi, (200, robot.n)))
@@ -70,7 +72,6 @@ def _warn_ik_assumptions(robot, params) -> None:
     """Where the calibrated geometry is no longer what a closed-form IK of the nominal arm assumes (parallel or
     intersecting axes), and by how much: such a controller cannot take these parameters; `rodlab correct` can."""
     from rodlab.calibrate.correct import ik_assumptions
-    from rodlab.calibrate.kinematics import ModelParams
     broken = [d for d in ik_assumptions(robot, params, ModelParams.nominal(robot, params.tool)) if d.effect_mm > IK_WARN_MM]
     for d in broken:
         print(f"warning: {d.describe()}", file=sys.stderr)
@@ -82,7 +83,6 @@ def _warn_ik_assumptions(robot, params) -> None:
 
 def _urdf_file(spec: str) -> str:
     """--urdf takes a URDF file or a built-in robot's name (ur5: its own URDF); a folder does not hide the name."""
-    from rodlab.calibrate import builtin_robots, robot_path
     path = robot_path(spec)
     if path.suffix.lower() != ".urdf":
         urdfs = sorted(name for name, f in builtin_robots().items() if f.suffix == ".urdf")
@@ -100,7 +100,6 @@ def cmd_export(args) -> int:
     if args.urdf:
         args.urdf = _urdf_file(args.urdf)
     if not args.urdf and not args.robot:
-        from rodlab.calibrate import builtin_robots
         if cal.robot not in builtin_robots():
             raise RodlabError(f"name the robot the calibration used ({cal.robot!r} is not built in): --robot "
                               "NAME_OR_FILE, or --urdf ROBOT.urdf")

@@ -10,22 +10,24 @@ import numpy as np
 
 from ...compliance import write_compliance
 from ...design_io import resolve_design
+from ...enums import FeaModel
 from ...errors import RodlabError
+from ...view3d import RenderError
 from .argtypes import pos_float
+from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report
+from .rodargs import design_help
 
 __all__ = ["register"]
 
 
 def register(sub) -> None:
     p = sub.add_parser("fea", help="compute C_F and C_g by solid FEA (reference), beam frame or closed form",
-                       description="Compute the compliance file of a rod design. solid: 3-D elasticity on the CAD "
-                                   "mesh (scikit-fem, curved P2, transversely-isotropic carbon; needs the cad "
-                                   "extra); frame: Timoshenko beam frame with pipe-bend flexibility (fast); "
-                                   "calc: the closed form.")
-    p.add_argument("design", help="a *.rod.toml file, or a built-in design: rod1 .. rod6")
+                       description="Compute the compliance file of a rod design. "
+                                   + "; ".join(f"{m.value}: {m.describes}" for m in FeaModel) + ".")
+    p.add_argument("design", help=design_help())
     p.add_argument("-o", "--output", required=True, help="output *.compliance.json")
-    p.add_argument("--model", choices=["solid", "frame", "calc"], default="solid")
+    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.SOLID.value)
     p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
                    "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
                    "changes, at most 2.1 x wall in the bend)")
@@ -50,12 +52,11 @@ def register(sub) -> None:
 
 
 def cmd_fea(args: argparse.Namespace) -> int:
-    from rodlab.fea import FeaModel, compute_compliance
+    from rodlab.fea import compute_compliance
     design = resolve_design(args.design)
     _check_fields_option(args)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
-        from .cadextra import require_mesher
         mesher = require_mesher().mesh_rod
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
@@ -119,9 +120,9 @@ def _check_fields_option(args: argparse.Namespace) -> None:
 def _solid_views(args: argparse.Namespace, design, res) -> list:
     """Write ``--fields``; with ``--report`` also the 3-D views of the unit forces (from a temporary field file
     when ``--fields`` is not given). Returns the pictures for the report."""
-    from ..report.views import render_field_pngs
     from rodlab.fea.fields import solid_fields, write_solid_fields
-    from rodlab.view3d import RenderError
+
+    from ..report.views import render_field_pngs
     if not (args.fields or args.report is not None):
         return []
     fields = solid_fields(design, res)
@@ -154,7 +155,6 @@ def _frame_views(args: argparse.Namespace, design) -> list:
     if args.report is None:
         return []
     from ..report.views import render_field_pngs
-    from rodlab.view3d import RenderError
     try:
         return render_field_pngs(path, path.with_suffix(""))
     except RenderError as e:

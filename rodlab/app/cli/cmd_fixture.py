@@ -1,8 +1,14 @@
 """``rodlab fixture``: the fixture file's clamping poses, with their uncertainty, from probed device features."""
 from __future__ import annotations
 
+import math
 import sys
 
+from rodlab.calibrate import write_fixture
+from rodlab.calibrate.device import read_device
+from rodlab.calibrate.probe import fit_fixture, read_probe
+
+from ...errors import RodlabError
 from .argtypes import count
 
 __all__ = ["register", "cmd_fixture"]
@@ -29,9 +35,6 @@ def register(sub) -> None:
 
 
 def _force(text):
-    import math
-
-    from ...errors import RodlabError
     if text is None:
         return None
     try:
@@ -44,9 +47,6 @@ def _force(text):
 
 
 def cmd_fixture(args) -> int:
-    from rodlab.calibrate import write_fixture
-    from rodlab.calibrate.device import read_device
-    from rodlab.calibrate.probe import fit_fixture, read_probe
     force = _force(args.contact_force)
     fit = fit_fixture(read_probe(args.probe), read_device(args.device), args.world_position, force)
     print(f"fixture from {args.probe}: {len(fit.fits)} positions, world position {args.world_position}, instrument "

@@ -9,7 +9,7 @@ import numpy as np
 from ...calc import calc_rod_compliance
 from ...design_io import resolve_design
 from ...massprops import mass_properties, part_mass_properties
-from .rodargs import DESIGN_HELP
+from .rodargs import design_help
 
 __all__ = ["register"]
 
@@ -18,7 +18,7 @@ def register(sub) -> None:
     p = sub.add_parser("info", help="print a rod design, its parts, mass, centre of mass and c_rod",
                        description="Print a rod design: parts, mass properties (analytic) and the closed-form "
                                    "compliance with c_rod (paper Eq. 23).")
-    p.add_argument("design", help=DESIGN_HELP)
+    p.add_argument("design", help=design_help(paper=True))
     p.add_argument("--json", action="store_true", help="print machine-readable JSON instead of text")
     p.set_defaults(func=cmd_info)
 

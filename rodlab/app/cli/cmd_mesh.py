@@ -6,7 +6,8 @@ import time
 
 from ...design_io import resolve_design
 from .argtypes import pos_float
-from .cadextra import DESIGN_HELP, require_mesher
+from .cadextra import require_mesher
+from .rodargs import design_help
 
 __all__ = ["register"]
 
@@ -16,7 +17,7 @@ def register(sub) -> None:
                        description="Conformal tetrahedral mesh of all parts (bonded interfaces share nodes), "
                                    "physical volumes named after the parts, physical surfaces flange_face and "
                                    "ball; gmsh 4.1 format.")
-    p.add_argument("design", help=DESIGN_HELP)
+    p.add_argument("design", help=design_help())
     p.add_argument("-o", "--output", required=True, help="output .msh file")
     p.add_argument("--size", type=pos_float, default=None,
                    help="element size [mm] (default: 2 x the thinnest wall for order 2, wall/2 for order 1)")

@@ -1,7 +1,12 @@
 """``rodlab plan``: rod orientations per clamping position chosen by observability (O1)."""
 from __future__ import annotations
 
+from rodlab.calibrate import read_fixture
+
+from ...calc import calc_rod_compliance
 from ...compliance import read_compliance
+from ...design_io import load_design
+from ...fileio import atomic_write_text
 from .argtypes import count, seed
 from .robotargs import add_robot_options, robot_from_args
 
@@ -24,14 +29,10 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
-    from rodlab.calibrate import read_fixture
     from rodlab.calibrate.plan import plan_poses
-    from rodlab.fileio import atomic_write_text
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if str(args.rod).endswith(".toml"):
-        from ...calc import calc_rod_compliance
-        from ...design_io import load_design
         rod = calc_rod_compliance(load_design(args.rod))
     else:
         rod = read_compliance(args.rod)

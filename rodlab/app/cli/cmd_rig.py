@@ -2,15 +2,32 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import re
+import signal
+import sys
+import textwrap
+import time
+from pathlib import Path
 
 import numpy as np
 
+from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
+from rodlab.stiffness_rig.plan_check import linear_range_warnings
+from rodlab.stiffness_rig.plot import format_pm, format_zero
+
 from ...compliance import write_compliance
+from ...design_io import resolve_design
+from ...enums import Checksum, LineProtocol
+from ...errors import RodlabError
+from ...fileio import atomic_write_text
+from ...progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
-from .reporting import add_report_option, png_file, write_command_report
 from .effectargs import effects_help, parse_effect_specs
+from .reporting import add_report_option, png_file, write_command_report
 from .rodargs import compliance_arg
 
 __all__ = ["register"]
@@ -102,27 +119,24 @@ def _register_simulator(rsub) -> None:
                                                     "profile with its ports pointed at them")
     p.add_argument("--load-cell-noise-n", type=nonneg_float, default=0.005, metavar="SD_N",
                    help="with --profile: the simulated load cell's noise SD [N] (default 0.005)")
-    p.add_argument("--protocol", choices=["query", "stream"], default="query")
+    p.add_argument("--protocol", choices=[m.value for m in LineProtocol], default=LineProtocol.QUERY.value)
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (as for rig simulate; repeatable)")
     p.add_argument("--design", default=None, help="the rod's design, to place joint springs exactly")
-    p.add_argument("--checksum", choices=["none", "xor"], default="none")
+    p.add_argument("--checksum", choices=[m.value for m in Checksum], default=Checksum.NONE.value)
     p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
     p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     p.set_defaults(func=cmd_simulator)
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
-    from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
     rec = read_recording(args.recording)
     sim = compliance_arg(args.sim)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
-        from ...errors import RodlabError
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, noise {fit.noise_mm * 1e3:.2f} um per reading")
-    from rodlab.stiffness_rig.plot import format_pm, format_zero
     print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
     for ln in fit.lines:
         z = ln.zero_load_kg
@@ -160,7 +174,6 @@ def _print_load(fit) -> None:
     for axis in ld.friction_N:
         print(f"    {axis.value:>3} friction in the slides {ld.friction_N[axis]:+.4f} N, "
               f"tare {ld.tare_kg[axis] * 1e3:+.1f} g")
-    import textwrap
     h = fit.holds
     for axis in sorted(set(h.axis), key=lambda a: a.value):
         cells = " ".join(f"{k}:{v:+.3f}" for k, v, a in zip(h.step, ld.per_hold_N, h.axis) if a is axis)
@@ -171,21 +184,17 @@ def _print_load(fit) -> None:
 def parse_effects(specs: list[str]) -> dict:
     """``NAME[:key=value,...]`` -> {name: given parameters}, checked against the rig effect registry
     (:data:`rodlab.stiffness_rig.effects.RIG_EFFECTS`)."""
-    from rodlab.stiffness_rig.effects import rig_effect
     return dict(parse_effect_specs(specs, rig_effect))
 
 
 def rig_effects_help() -> str:
-    from rodlab.stiffness_rig.effects import RIG_EFFECTS
     return effects_help(RIG_EFFECTS)
 
 
 def _places(sim, args) -> dict:
     """Where joint springs sit on the rod: from ``--design`` when given, else guessed from the tool vector."""
-    from rodlab.stiffness_rig.effects import joint_places
     design = None
     if getattr(args, "design", None):
-        from ...design_io import resolve_design
         design = resolve_design(args.design)
     return joint_places(sim.tool_mm, design)
 
@@ -194,7 +203,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.model import LoadSchedule, RigModel
     from rodlab.stiffness_rig.simulate import simulate_recording
 
-    from ...errors import RodlabError
     sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
     try:
@@ -219,12 +227,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 def _warn_linear_range(schedule, design_spec: str, explicit: bool) -> None:
     """Warn (stderr) about every mass beyond a carbon rod's linear range, naming its holds. The design is the
     one given, else the plan's rod when it is a built-in name (another rod: nothing to check against)."""
-    import sys
-
-    from rodlab.stiffness_rig.plan_check import linear_range_warnings
-
-    from ...design_io import resolve_design
-    from ...errors import RodlabError
     try:
         design = resolve_design(design_spec)
     except RodlabError:
@@ -236,7 +238,6 @@ def _warn_linear_range(schedule, design_spec: str, explicit: bool) -> None:
 
 
 def cmd_acquire(args: argparse.Namespace) -> int:
-    import sys
     from rodlab.stiffness_rig.acquire import acquire
     from rodlab.stiffness_rig.config import read_plan, read_profile
     from rodlab.stiffness_rig.resume import next_free_name, resume_point
@@ -255,11 +256,9 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 
     def operator(prompt: str) -> None:
         if not sys.stdin or not sys.stdin.isatty():
-            from ...errors import RodlabError
             raise RodlabError("no terminal to prompt the operator; use --non-interactive with a [loader]")
         input(f"\n{prompt} ")
 
-    from ...progress import progress as bar_of
     bar = bar_of(total=None, desc="rig acquisition", unit="hold")
 
     def progress(st) -> None:                      # tqdm's estimate of the plan's remaining time from its rate
@@ -280,15 +279,9 @@ def cmd_acquire(args: argparse.Namespace) -> int:
 
 
 def cmd_simulator(args: argparse.Namespace) -> int:
-    import contextlib
-    import signal
-    import time
-    from pathlib import Path
-
     from rodlab.stiffness_rig.model import RigModel
     from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
 
-    from ...errors import RodlabError
     sim = compliance_arg(args.sim)
     if args.profile is None and args.link is None:
         raise RodlabError("give --link (the one-port simulated counter) or --profile with --link-dir")
@@ -322,14 +315,9 @@ def cmd_simulator(args: argparse.Namespace) -> int:
 def _profile_simulators(args, model, faults):
     """The simulators of every instrument of ``--profile`` under ``--link-dir``, and ``sim.profile.toml``
     there: the profile with each instrument's port pointed at its simulator."""
-    import re
-    from pathlib import Path
-
-    from rodlab.fileio import atomic_write_text
     from rodlab.stiffness_rig.config import read_profile
     from rodlab.stiffness_rig.siminstruments import SimBench, simulators_for
 
-    from ...errors import RodlabError
     profile = read_profile(args.profile)
     if not hasattr(profile, "instruments"):
         raise RodlabError(f"{args.profile}: --profile takes a rodlab.rigprofile/2 profile; serve a /1 profile's "

@@ -7,17 +7,19 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.calibrate.device import ideal_device, misaligned_device, write_device
+from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect
+
 from ...compliance import read_compliance
 from ...errors import RodlabError
 from .argtypes import count, nonneg_float, seed
+from .effectargs import effects_help, parse_effect_specs
 from .robotargs import add_robot_options, robot_from_args
 
 __all__ = ["register", "cmd_simulate_campaign"]
 
 
 def register(sub) -> None:
-    from .effectargs import effects_help
-    from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
     p = sub.add_parser("simulate-campaign", help="write a synthetic MultiCal campaign from a random truth robot",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="The project's own test data: a truth robot (random kinematic errors, joint "
@@ -53,9 +55,6 @@ def cmd_simulate_campaign(args) -> int:
     robot = robot_from_args(args)
     rod = read_compliance(args.rod)
     rod_true = read_compliance(args.rod_true) if args.rod_true else None
-    from rodlab.calibrate.effects import campaign_effect
-
-    from .effectargs import parse_effect_specs
     effects = []
     for it in args.fixture_error:
         j, _, v = it.partition(":")
@@ -74,7 +73,6 @@ def cmd_simulate_campaign(args) -> int:
     truth = simulate_campaign(robot, rod, args.output, spec, rod_true=rod_true, effects=effects, device=device)
     print(f"wrote a {args.positions} x {args.orientations} campaign of {robot.name} with rod {rod.rod} to {args.output}")
     if device is not None:
-        from rodlab.calibrate.device import ideal_device, write_device
         write_device(ideal_device(), Path(args.output) / "nominal.device.json")
         print(f"  raw sensor readings; device as built multical.device.json (sensor pairs off orthogonal by "
               f"{', '.join(f'{v:.2f}' for v in device.misalignment_deg())} deg), nominal.device.json the design")
@@ -89,5 +87,4 @@ def _simulated_device(args):
     draws stay those of the same seed)."""
     if not args.raw:
         return None
-    from rodlab.calibrate.device import ideal_device, misaligned_device
     return misaligned_device(ideal_device(), args.misalign_deg, np.random.default_rng([args.seed, 2]))

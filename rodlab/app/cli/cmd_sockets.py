@@ -3,9 +3,14 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+
+from rodlab.calibrate import CalibrationError, result_dict
+from rodlab.calibrate.socket_check import check_sockets
+from rodlab.calibrate.socket_fit import identify_sockets, socket_start
+from rodlab.calibrate.sockets import read_sockets
 
 from ...enums import AccuracySource
 from ...errors import RodlabError
@@ -53,9 +58,6 @@ def _placements(text: str | None, readings) -> list[int]:
 
 def _readings(args, robot):
     """The fitted readings, the held-out ones (the file's other placements, or a --validate sockets file)."""
-    from dataclasses import replace
-
-    from rodlab.calibrate.sockets import read_sockets
     readings = read_sockets(args.sockets, robot.n)
     if args.noise_um:
         key = "length_sigma_mm" if readings.ball_bar else "seat_sigma_mm"
@@ -75,8 +77,6 @@ def _readings(args, robot):
 
 def run_sockets(args) -> SocketRun:
     """Read, fit, and check the nominal and the calibrated model on the fitted and the held-out readings."""
-    from rodlab.calibrate.socket_check import check_sockets
-    from rodlab.calibrate.socket_fit import identify_sockets, socket_start
     if args.thermal or args.points or args.campaign:
         raise RodlabError("--sockets is a calibration of its own: leave out the campaign, --points and --thermal")
     robot = robot_from_args(args)
@@ -144,9 +144,6 @@ def _prediction(args, run: SocketRun):
         pair = run.checks["held out"]
         return Prediction.of_validation(pair["calibrated"].spread_mm, pair["nominal"].spread_mm, res.rms_mm,
                                         "held-out placements (spread about their sockets)")
-    from rodlab.calibrate import CalibrationError
-    from rodlab.calibrate.socket_check import check_sockets
-    from rodlab.calibrate.socket_fit import identify_sockets, socket_start
     placements = sorted(set(run.fitted.placement.tolist()))
     if len(placements) < 2:
         return None
@@ -171,7 +168,6 @@ def _joined(parts: list) -> np.ndarray:
 
 def calibrate_sockets(args) -> int:
     """The command: fit, print, write the result (``--json``, ``--report``), exit 3 when not trusted."""
-    from rodlab.calibrate import result_dict
     run = run_sockets(args)
     _print(run)
     res = run.fit.result

@@ -2,13 +2,17 @@
 from __future__ import annotations
 
 import argparse
+import io
 import time
 from pathlib import Path
 
 from ...design_io import resolve_design
+from ...enums import FeaModel
 from ...errors import RodlabError
 from ...fileio import atomic_write_bytes, atomic_write_text
+from ...progress import progress as bar_of
 from .argtypes import count
+from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report
 
 __all__ = ["register"]
@@ -22,7 +26,7 @@ def register(sub) -> None:
     p.add_argument("--L1", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--L2", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--base", default="rod1", help="base design (file or built-in; default rod1)")
-    p.add_argument("--model", choices=["frame", "calc", "solid"], default="frame")
+    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.FRAME.value)
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
     p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")
@@ -52,12 +56,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise RodlabError(f"output must end in .csv or .parquet, got {out.name!r}")
     mesher = None
     if args.model == "solid":
-        from .cadextra import require_mesher
         geometry = require_mesher()
         mesher = geometry.mesh_rod
     t0 = time.perf_counter()
     calibration, saved = _frame_calibration(args, base, L1s, L2s, out)
-    from ...progress import progress as bar_of
     with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
         def progress(done, total):
             bar.update(done - bar.n)
@@ -100,7 +102,6 @@ def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
     from rodlab.app.study.family import solid_family_calibration
     from rodlab.fea.joints_io import write_joints
 
-    from .cadextra import require_mesher
     require_mesher()
     calibration = solid_family_calibration(base, L1s, L2s)
     m1, m2 = calibration.margins_mm
@@ -114,7 +115,6 @@ def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):
 def _write_table(df, out: Path) -> None:
     """The sweep table as CSV or Parquet (by the suffix), atomically."""
     if out.suffix == ".parquet":
-        import io
         buf = io.BytesIO()
         try:
             df.to_parquet(buf)

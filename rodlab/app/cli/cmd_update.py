@@ -6,6 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.stiffness_rig import read_recording
+
+from ...calc import calc_rod_compliance
+from ...compliance import RodCompliance, read_compliance
+from ...design_io import resolve_design
 from ...errors import RodlabError
 from ...joint_springs import JOINT_PLACES
 
@@ -48,14 +53,11 @@ def _default_free(design) -> list[str]:
 
 def _measured(path: str, design, keys):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part."""
-    from ...compliance import RodCompliance, read_compliance
     from ...sensitivity import STRUCTURAL_ENTRIES
     from ..diagnose.envelope import MEAS_RELATIVE
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
-        from rodlab.stiffness_rig import read_recording
         from ..diagnose import diagnose_rig
-        from ...calc import calc_rod_compliance
         C = model_compliance("frame")(design)
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea", {"model": "frame"})
         diag, model = diagnose_rig(read_recording(path), sim, design)
@@ -85,7 +87,6 @@ def _measured(path: str, design, keys):
 
 def cmd_update(args: argparse.Namespace) -> int:
     from ...design_edit import write_edited_design
-    from ...design_io import resolve_design
     from ..update import update_design
     if not Path(args.measured).is_file():
         raise RodlabError(f"--measured {args.measured}: no such file (give a measured *.compliance.json from `rodlab rig "

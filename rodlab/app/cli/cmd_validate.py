@@ -5,6 +5,10 @@ import re
 import sys
 from pathlib import Path
 
+from rodlab.calibrate import read_campaign, read_points
+from rodlab.calibrate.robot_formats import ROBOT_READERS
+from rodlab.calibrate.sockets import read_sockets
+
 from ...errors import LocatedError
 from ...schema import ALIASES, FORMATS, FileCheck, Problem, check_file
 
@@ -19,17 +23,14 @@ def _joints(path) -> int:
 
 
 def _read_campaign(path):
-    from rodlab.calibrate import read_campaign
     return read_campaign(path, _joints(path))
 
 
 def _read_points(path):
-    from rodlab.calibrate import read_points
     return read_points(path, _joints(path))
 
 
 def _read_sockets(path):
-    from rodlab.calibrate.sockets import read_sockets
     return read_sockets(path, _joints(path))
 
 
@@ -52,7 +53,6 @@ READERS = {
     "rodlab.probe/1": _lazy("rodlab.calibrate.probe", "read_probe"),
     "rodlab.robot/1": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),
-    "urdf": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.calibration/1": _lazy("rodlab.calibrate.result", "read_calibration"),
     "rodlab.calibration/2": _lazy("rodlab.calibrate.result", "read_calibration"),
     "rodlab.rigplan/1": _lazy("rodlab.stiffness_rig.config", "read_plan"),
@@ -69,16 +69,43 @@ READERS = {
 }
 
 
+
+def schemaless_robot_formats() -> dict[str, str]:
+    """Robot file kinds without a JSON schema (``urdf``), suffix -> format name, from the robot format registry:
+    their reader's rules are all there is to check."""
+    return {suffix: f.format_id for suffix, f in ROBOT_READERS.items() if f.format_id}
+
+
+READERS.update({fid: _lazy("rodlab.calibrate", "read_robot") for fid in schemaless_robot_formats().values()})
+
+
+def _schemaless_format(path, format_id: str | None) -> str | None:
+    """The robot format (``urdf``) ``--format`` names, or ``path``'s suffix without ``--format``; else None."""
+    kinds = schemaless_robot_formats()
+    if format_id is not None:
+        return format_id if format_id in kinds.values() else None
+    return kinds.get(Path(path).suffix.lower())
+
+
+def _reader(format_id: str):
+    """The reader of a format whose rules go beyond its schema, or None."""
+    if format_id in schemaless_robot_formats().values():
+        return READERS.get(format_id) or _lazy("rodlab.calibrate", "read_robot")
+    return READERS.get(format_id)
+
+
 def validate_file(path, format_id: str | None = None) -> FileCheck:
     """The schema check of ``path`` and, if it passes, its reader's rules (a reader refuses at its first
     problem; the schema lists all of its own)."""
-    if format_id == "urdf" or (format_id is None and str(path).lower().endswith(".urdf")):
-        check = FileCheck(str(path), "urdf")
+    robot_format = _schemaless_format(path, format_id)
+    if robot_format is not None:
+        check = FileCheck(str(path), robot_format)
     else:
         check = check_file(path, format_id)
-    if check.ok and check.format in READERS and READERS[check.format] is not None:
+    reader = _reader(check.format) if check.ok else None
+    if reader is not None:
         try:
-            READERS[check.format](path)
+            reader(path)
         except LocatedError as e:
             check.problems.append(Problem(e.path or str(path), e.detail, e.line, e.key))
         except ValueError as e:
@@ -95,7 +122,8 @@ def register(sub) -> None:
                                    "whose own rules (a symmetric C_F, holds that keep their load, ...) it must "
                                    "also pass. Exit 0 if every file is valid, 2 otherwise.")
     p.add_argument("files", nargs="+", help="files to check")
-    p.add_argument("--format", default=None, choices=sorted(FORMATS) + sorted(ALIASES) + ["urdf"],
+    p.add_argument("--format", default=None,
+                   choices=sorted(FORMATS) + sorted(ALIASES) + sorted(schemaless_robot_formats().values()),
                    help="check as this format instead of the one the file names")
     p.set_defaults(func=cmd_validate)
 

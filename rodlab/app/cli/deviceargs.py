@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import sys
 
+from rodlab.calibrate import read_campaign
+from rodlab.calibrate.device import read_device
+from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points
+
 __all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "warn_flagged_fixture"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
@@ -19,9 +23,6 @@ def add_device_option(p) -> None:
 def campaign_from_args(args, n_joints: int, warn: bool = True):
     """``args.campaign`` read (with ``args.device`` when given); with ``warn`` the points far from the datum are
     named on stderr."""
-    from rodlab.calibrate import read_campaign
-    from rodlab.calibrate.device import read_device
-    from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points
     device = read_device(args.device) if getattr(args, "device", None) else None
     camp = read_campaign(args.campaign, n_joints, device)
     if warn and camp.x_D_mm is not None:

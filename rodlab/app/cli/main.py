@@ -7,21 +7,32 @@ from __future__ import annotations
 
 import argparse
 import errno
+import importlib
 import logging
+import pkgutil
 import sys
+from pathlib import Path
 
 from ... import __version__, progress
 from ...errors import RodlabError
-from . import (cmd_cad, cmd_calibrate, cmd_compare, cmd_compliance, cmd_correct, cmd_demo, cmd_diagnose, cmd_export,
-               cmd_fea, cmd_fixture, cmd_info, cmd_mesh, cmd_plan, cmd_report, cmd_rig, cmd_simulate_campaign, cmd_study,
-               cmd_sweep, cmd_update, cmd_validate, cmd_view)
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "command_modules", "COMMAND_ORDER"]
 
-#: Modules that add sub-commands: each has ``register(subparsers)``.
-_COMMAND_MODULES = [cmd_demo, cmd_report, cmd_info, cmd_compliance, cmd_cad, cmd_mesh, cmd_fea, cmd_sweep, cmd_study,
-                    cmd_rig, cmd_calibrate, cmd_compare, cmd_simulate_campaign, cmd_plan, cmd_fixture, cmd_diagnose,
-                    cmd_update, cmd_export, cmd_correct, cmd_validate, cmd_view]
+#: the order of ``rodlab --help``. Every ``cmd_*.py`` module of this package that has ``register(subparsers)``
+#: adds its sub-command; one not listed here is found all the same and listed after these, by name (a new
+#: sub-command is its module and its test; list it here only to place it)
+COMMAND_ORDER = ("demo", "report", "info", "compliance", "cad", "mesh", "fea", "sweep", "study", "rig", "calibrate",
+                 "compare", "simulate_campaign", "plan", "fixture", "diagnose", "update", "export", "correct",
+                 "validate", "view")
+
+
+def command_modules() -> list:
+    """The modules that add sub-commands (each has ``register(subparsers)``), in the order of the help."""
+    package = sys.modules[__package__]
+    found = sorted(m.name[len("cmd_"):] for m in pkgutil.iter_modules(package.__path__) if m.name.startswith("cmd_"))
+    names = [n for n in COMMAND_ORDER if n in found] + [n for n in found if n not in COMMAND_ORDER]
+    modules = [importlib.import_module(f"{__package__}.cmd_{n}") for n in names]
+    return [m for m in modules if callable(getattr(m, "register", None))]
 
 
 def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
@@ -41,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
     _global_options(parser, suppress=False)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for mod in _COMMAND_MODULES:
+    for mod in command_modules():
         mod.register(sub)
     _add_global_options_below(parser)
     return parser
@@ -94,7 +105,6 @@ _OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report", "fie
 def _check_outputs(args: argparse.Namespace) -> None:
     """Before any work: two outputs must not share a path, and no part of an output's folder may be a file
     (else the first output would be written and the second fail, leaving a partial result)."""
-    from pathlib import Path
     seen: dict[Path, str] = {}
     for dest in _OUTPUT_DESTS:
         value = getattr(args, dest, None)

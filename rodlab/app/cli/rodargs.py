@@ -1,27 +1,42 @@
 """A rod's compliance given as a file or a built-in design's name, as every command that takes a rod accepts."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
-__all__ = ["compliance_arg", "DESIGN_HELP"]
+from ...calc import calc_rod_compliance
+from ...compliance import read_compliance
+from ...design_io import builtin_designs, resolve_design
 
-#: help of a design argument (info, compliance)
-DESIGN_HELP = "a *.rod.toml file, or a built-in design: rod1 .. rod6 (the paper's rods 1# .. 6#)"
+__all__ = ["compliance_arg", "design_help", "builtin_designs_text"]
+
+
+def builtin_designs_text() -> str:
+    """The built-in designs for a help text: ``rod1 .. rod6`` when they are numbered without a gap, else each."""
+    names = sorted(builtin_designs(), key=lambda n: (len(n), n))
+    numbers = [re.fullmatch(r"rod([0-9]+)", n) for n in names]
+    if len(names) > 2 and all(numbers) and [int(m.group(1)) for m in numbers] == list(
+            range(int(numbers[0].group(1)), int(numbers[0].group(1)) + len(names))):
+        return f"{names[0]} .. {names[-1]}"
+    return ", ".join(names)
+
+
+def design_help(paper: bool = False) -> str:
+    """Help of a design argument, the built-in designs from the package's data (``paper``: say they are the
+    paper's rods)."""
+    return (f"a *.rod.toml file, or a built-in design: {builtin_designs_text()}"
+            + (" (the paper's rods 1# .. 6#)" if paper else ""))
 
 
 def compliance_arg(spec: str):
     """``*.compliance.json`` (read as it is), or a design (``rod1``, ``1#``, ``my.rod.toml``): its closed-form
     (calc) compliance. A file wins over a built-in name only when it is a file."""
-    from rodlab.compliance import read_compliance
-    from rodlab.design_io import builtin_designs
     p = Path(spec)
     names = builtin_designs()
     alias = {f"{k[3:]}#": k for k in names if k.startswith("rod")}
     key = alias.get(str(spec).strip(), str(spec).strip())
     design = key in names and not p.is_file()
     if design or (p.is_file() and str(spec).lower().endswith(".toml")):
-        from rodlab.calc import calc_rod_compliance
-        from rodlab.design_io import resolve_design
         print(f"{spec}: the design's closed-form (calc) compliance")
         return calc_rod_compliance(resolve_design(spec))
     return read_compliance(spec)

@@ -7,6 +7,10 @@ always says what to do next.
 """
 from __future__ import annotations
 
+from rodlab.calibrate.effects import campaign_effect
+
+from ...enums import FindingKind
+from ...errors import RodlabError
 from .report import Finding
 
 __all__ = ["remedy"]
@@ -24,10 +28,8 @@ def _unexplained(f: Finding) -> str:
 
 def remedy(f: Finding) -> str:
     """One sentence: what to do about ``f`` (an effect of the campaign vocabulary: its module's remedy)."""
-    if f.effect == "unexplained":
+    if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
-    from rodlab.calibrate.effects import campaign_effect
-    from rodlab.errors import RodlabError
     try:
         model = campaign_effect(f.effect)
     except RodlabError:

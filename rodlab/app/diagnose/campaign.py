@@ -24,10 +24,14 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
-from rodlab.calibrate import Rod, RodDeflection
+from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
                                       correct_joints)
-from rodlab.enums import Trial
+from rodlab.calibrate.jacobian import position_jacobian
+from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.observations import noise_covariance
+from rodlab.calibrate.validate import error_stats
+from rodlab.enums import FindingKind, Subject, Trial, Verdict
 from rodlab.hypothesis import Hypothesis, location_parts
 
 from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
@@ -111,8 +115,6 @@ class CampaignSelection:
     """
 
     def __init__(self, ctx: CampaignContext, tau: np.ndarray, noise_mm: float, fixture_sigma, max_terms: int):
-        from rodlab.calibrate.observations import noise_covariance
-        from rodlab.calibrate.jacobian import position_jacobian
         res, obs, fr = ctx.result, ctx.obs, ctx.frames
         self.ctx, self.noise_mm, self.N = ctx, noise_mm, ctx.n_points
         self.max_terms, self.max_outliers = max_terms, max(2, self.N // 10)
@@ -303,7 +305,6 @@ def _deflection(rod):
 def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
     result and the :class:`Refit` it used."""
-    from rodlab.calibrate import FitOptions, campaign_observations, identify
     fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
     for f in findings:
         campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
@@ -342,7 +343,7 @@ def _unexplained(sel: CampaignSelection, camp, final_test) -> Finding:
     where = (f"spread evenly over the positions (least expected share at position {worst}, p = {p_even:.2g}): "
              f"no structure; {noisier}" if even else
              f"least expected at position {worst} (p = {p_even:.2g}), with no modelled cause")
-    return Finding("unexplained", f"position:{worst}",
+    return Finding(FindingKind.UNEXPLAINED, f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
                    {"rms_mm": final_rms, "reduced_chi2": final_test.reduced, "birge_ratio": final_test.birge,
@@ -365,7 +366,6 @@ def device_noise_null(sel: CampaignSelection, ew: np.ndarray, A: np.ndarray) -> 
 
 def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
-    from rodlab.calibrate.kinematics import ball_positions
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
     return CampaignContext(robot, res, obs, np.asarray(camp.position), camp.labels(), camp.time_s, camp.temp_C, rod,
                            fr), tau
@@ -375,7 +375,6 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                       fixture_sigma=(0.01, 0.002), harmonics=()):
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
-    from rodlab.calibrate import FitOptions, campaign_observations, identify
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     res = identify(robot, obs, Rod.of(rod), [_deflection(rod)],
@@ -388,10 +387,10 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     if findings:
         res2, refit = _reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
     final_test = res2.residual_check if res2 is not None else res.residual_check
-    verdict = "consistent" if not findings else "explained"
+    verdict = Verdict.CONSISTENT if not findings else Verdict.EXPLAINED
     if final_test.missing:                 # calibrate's residual test: one story between the two
         findings.append(_unexplained(sel, camp, final_test))
-        verdict = "unexplained"
+        verdict = Verdict.UNEXPLAINED
     extra = {"residual_test": {"before": res.residual_check.to_dict(), "after": final_test.to_dict()}}
     keep = refit.keep if refit is not None else np.ones(ctx.n_points, dtype=bool)
     fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position),
@@ -402,13 +401,12 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}
     rms_after = res2.rms_mm if res2 is not None else res.rms_mm
-    return Diagnosis("campaign", verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
+    return Diagnosis(Subject.CAMPAIGN, verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
 
 
 def _validation_errors(robot, fits: CampaignFits, points) -> dict:
     """Position errors at the validation points: nominal model, identified, identified with the found physics
     (joint angles corrected as a controller would)."""
-    from rodlab.calibrate import ModelParams, validate
     after_points = points
     if fits.joint_corrections_rad:
         after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
@@ -420,5 +418,4 @@ def _validation_errors(robot, fits: CampaignFits, points) -> dict:
 
 
 def _stats(errors_mm: np.ndarray) -> dict:
-    from rodlab.calibrate.validate import error_stats
     return error_stats(errors_mm).to_dict()

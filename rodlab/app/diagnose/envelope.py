@@ -15,11 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+
 from ...compliance import RodCompliance, design_hash
+from ...design_io import load_design
 from ...enums import Method, SimAccuracy
-from ...errors import RodlabError
-from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy
+from ...errors import DesignError, RodlabError
 from ...joint_springs import design_joint_places, spring_matrices
+from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy, with_values
 from ...tolerances import bond_tolerances, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
@@ -86,7 +88,6 @@ class Envelope:
         """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
         if self.n_free == 0:
             return self.accuracy.expected(self.C_sim, entries)
-        from ...sensitivity import with_values
         C = np.asarray(self.model(with_values(self.design, self.values(u[:len(self.params)]))), float) * self.ratio
         for (_, sd, dC), ub in zip(self.bonds, u[len(self.params):]):
             C = C + sd * ub * dC
@@ -101,7 +102,6 @@ def design_of(sim: RodCompliance, design=None):
     path = sim.provenance.get("design_file")
     if not path or not Path(path).is_file():
         return None
-    from ...design_io import load_design
     try:
         found = load_design(path)
     except RodlabError:
@@ -198,8 +198,6 @@ def _feasible_bounds(env: Envelope, reach: float = 4.0) -> np.ndarray:
     """Per key, the standardised deviations within +-``reach`` for which the design rules accept the design (a bend
     cannot be made tighter than 1.5 tube diameters, ...): bisection where the full reach is refused, with a 5 %
     margin for keys moved together."""
-    from ...errors import DesignError
-    from ...sensitivity import with_values
     k = len(env.params)
     out = np.tile([-reach, reach], (k, 1))
 

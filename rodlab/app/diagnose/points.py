@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rodlab.calibrate.kinematics import forward, harmonic_basis
+
 __all__ = ["PointFinding", "PointsDiagnosis", "diagnose_points", "FORMAT_POINTS_DIAGNOSIS"]
 
 FORMAT_POINTS_DIAGNOSIS = "rodlab.points_diagnosis/1"
@@ -108,7 +110,6 @@ def _approach(q: np.ndarray) -> np.ndarray:
 
 def _joint_columns(params, q: np.ndarray) -> np.ndarray:
     """Motion of the measured point per radian of each joint, in the measurement frame, shape=(N, n, 3)."""
-    from rodlab.calibrate.kinematics import forward
     fr = forward(params, q)
     col = np.cross(fr.z_prev, fr.p0[:, None, :] - fr.o_prev)
     return col @ fr.R_W0.T
@@ -128,7 +129,6 @@ def _candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
            "the error changes in the order the poses were measured: thermal growth of the arm or instrument drift "
            "(re-measure a reference pose during the session), or, when one joint was swept at a time, whatever "
            "differs between the sweeps")
-    from rodlab.calibrate.kinematics import harmonic_basis
     approach = _approach(q)
     harmonics = harmonic_basis(q)                                  # (N, n, 4): the terms --joint-harmonics fits
     for j in range(n):
@@ -179,7 +179,6 @@ def _regions(p0: np.ndarray, r: np.ndarray) -> tuple:
 
 def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     """The diagnosis of ``res`` (an identification of the instrument points ``pts``) under ``noise_mm``."""
-    from rodlab.calibrate.kinematics import forward
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
     modelled = tuple(res.harmonic_range_deg)

@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ...enums import EffectId, Subject, Verdict, parse_effect_id
 from ...fileio import atomic_write_json, json_safe
 
 __all__ = ["Finding", "Diagnosis", "FORMAT_DIAGNOSIS"]
@@ -16,7 +17,7 @@ class Finding:
     """One effect: ID and location (contract vocabulary), one sentence of physics, fitted parameters with
     95 % intervals, the fit before / after adding it, and the evidence (delta BIC, LR test, CV)."""
 
-    effect: str
+    effect: EffectId        # the contract spelling is parsed: RigEffect, CampaignEffect or FindingKind
     location: str | None
     explanation: str
     parameters: dict
@@ -24,6 +25,9 @@ class Finding:
     rms_before_mm: float
     rms_after_mm: float
     evidence: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.effect = parse_effect_id(self.effect)
 
     @classmethod
     def from_dict(cls, f: dict) -> "Finding":
@@ -33,23 +37,29 @@ class Finding:
 
     def to_dict(self) -> dict:
         params = dict(self.parameters)
-        return {"effect": self.effect, "location": self.location, "explanation": self.explanation,
+        return {"effect": self.effect.value, "location": self.location, "explanation": self.explanation,
                 "parameters": params, "intervals_95": self.intervals, "rms_before_mm": self.rms_before_mm,
                 "rms_after_mm": self.rms_after_mm, "evidence": self.evidence}
 
 
 @dataclass
 class Diagnosis:
-    subject: str
-    verdict: str
+    """A diagnosis report: what was looked at, the verdict, the noise and fit before / after the findings."""
+
+    subject: Subject
+    verdict: Verdict
     noise_mm: float
     rms_before_mm: float
     rms_after_mm: float
     findings: list
     extra: dict = field(default_factory=dict)
 
+    def __post_init__(self):
+        self.subject = Subject.parse(self.subject, "diagnosis subject")
+        self.verdict = Verdict.parse(self.verdict, "verdict")
+
     def to_dict(self) -> dict:
-        return json_safe({"format": FORMAT_DIAGNOSIS, "subject": self.subject, "verdict": self.verdict,
+        return json_safe({"format": FORMAT_DIAGNOSIS, "subject": self.subject.value, "verdict": self.verdict.value,
                           "noise_mm": self.noise_mm, "rms_before_mm": self.rms_before_mm,
                           "rms_after_mm": self.rms_after_mm, "findings": [f.to_dict() for f in self.findings],
                           **self.extra})
@@ -71,5 +81,5 @@ class Diagnosis:
             lines.append(f"     {evidence_text(f)}")
             if ev.get("alternatives"):
                 lines.append("     the data fit about as well with: " + "; ".join(ev["alternatives"]))
-            lines.append(f"     {'to confirm' if self.subject == 'rig' else 'next step'}: {confirmation(f)}")
+            lines.append(f"     {'to confirm' if self.subject == Subject.RIG else 'next step'}: {confirmation(f)}")
         return "\n".join(lines)

@@ -26,7 +26,7 @@ import logging
 import numpy as np
 
 from ...compliance import RodCompliance
-from ...enums import Method
+from ...enums import FindingKind, Method, Subject, Verdict
 from ...errors import RodlabError
 from rodlab.stiffness_rig.effects import HypothesisContext, joint_places, rig_hypotheses
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
@@ -76,11 +76,11 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
         return diag, model
     off = model.hold_offset_mm[w]
     diag2.findings.append(Finding(
-        "unexplained", f"step:{w}", f"one hold is off all the others by {off * 1e3:.1f} um (largest component), "
+        FindingKind.UNEXPLAINED, f"step:{w}", f"one hold is off all the others by {off * 1e3:.1f} um (largest component), "
         "which no effect of the rod or the rig produces (a bumped gauge or a mislabelled load); it was left out "
         "and the rest diagnosed without it", {"hold_offset_mm": off}, {}, diag2.rms_after_mm, diag2.rms_after_mm,
         {"hold_chi2": float(tot.max()), "share_of_lack_of_fit": float(tot.max() / tot.sum())}))
-    diag2.verdict = "unexplained"
+    diag2.verdict = Verdict.UNEXPLAINED
     diag2.extra["excluded_steps"] = [w]
     return diag2, model2
 
@@ -121,11 +121,11 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))
     lack = lack_of_fit(data, resid, sigma, sim.C_F)
-    verdict = "consistent" if not findings else "unexplained" if any(f.effect == OUTSIDE for f in findings) \
-        else "explained"
+    verdict = Verdict.CONSISTENT if not findings else Verdict.UNEXPLAINED if any(f.effect == OUTSIDE for f in findings) \
+        else Verdict.EXPLAINED
     for finding in lack.findings(rms, sigma):
         findings.append(finding)
-        verdict = "unexplained"
+        verdict = Verdict.UNEXPLAINED
     model = RigModelFit([library[j] for j in S], coef, resid, r0, data, sigma, lack.hold_z2(), lack.hold_offset_mm())
-    return Diagnosis("rig", verdict, sigma, float(np.sqrt(r0 @ r0 / n)), rms, findings,
+    return Diagnosis(Subject.RIG, verdict, sigma, float(np.sqrt(r0 @ r0 / n)), rms, findings,
                      {"reduced_chi2_hold_means": lack.chi_red, "simulation_accuracy": "exact"}), model

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from rodlab.enums import MODEL_FORM
+from rodlab.enums import MODEL_FORM, FindingKind
 from rodlab.errors import DesignError
 from rodlab.hypothesis import Hypothesis
 from rodlab.sensitivity import METHOD_ACCURACY
@@ -194,7 +194,7 @@ def _cause(h: Hypothesis, val, se, lr: float, scored, rms, q0: float, k: int) ->
 
 
 def _outside(q: float, k: int, rms, why: str) -> Finding:
-    return Finding("unexplained", "C_F", f"the measured linear compliance lies outside the design's envelope "
+    return Finding(FindingKind.UNEXPLAINED, "C_F", f"the measured linear compliance lies outside the design's envelope "
                    f"(chi-square {q:.1f} on {k} entries) {why}: a difference of form that no tolerance, method error "
                    "or modelled local cause produces", {"envelope_chi2": q}, {}, rms[0], rms[1],
                    {"envelope_chi2": q, "envelope_dof": k})

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from rodlab.enums import FindingKind
 from rodlab.hypothesis import Hypothesis
 
 __all__ = ["outside_hypotheses", "OUTSIDE", "confirm_outside"]
 
 #: the effect name of a hypothesis outside the vocabulary (its finding is reported as ``unexplained``)
-OUTSIDE = "unexplained"
+OUTSIDE = FindingKind.UNEXPLAINED
 _AXES = "xyz"
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from rodlab.enums import Trial
 from rodlab.hypothesis import Hypothesis
@@ -181,7 +182,6 @@ def subset_ls(library: list[Hypothesis], r0: np.ndarray, folds) -> SubsetLS:
 def refine_tau(library, S: tuple, j: int, data: RigSamples, base, r0, prep) -> float:
     """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau); ``prep`` projects a
     new term's columns as the library's were (gauge zeros, and the free linear part where it is fitted)."""
-    from scipy.optimize import minimize_scalar
     others = [library[i] for i in S if i != j]
 
     def rss(log_tau):

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rodlab.enums import FindingKind
 from rodlab.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
@@ -196,7 +197,7 @@ class LackOfFit:
         """``unexplained`` findings: correlated readings within the holds; hold means above the noise."""
         out = []
         if self.rho > 0.3:
-            out.append(Finding("unexplained", "within_hold", "the readings within the holds are correlated in time "
+            out.append(Finding(FindingKind.UNEXPLAINED, "within_hold", "the readings within the holds are correlated in time "
                                f"(lag-1 autocorrelation {self.rho:.2f}; white gauge noise gives ~0): a disturbance "
                                "such as vibration, hum or a sliding contact that no modelled effect explains",
                                {"lag1_autocorrelation": self.rho}, {}, rms, rms, {}))
@@ -207,7 +208,7 @@ class LackOfFit:
             bad_steps = np.unique(self.keys[np.abs(self.z) > 4] // 4)
             if bad_steps.size:
                 loc += f", step:{bad_steps.min()}-{bad_steps.max()}"
-            out.append(Finding("unexplained", loc, "structure above the noise that no modelled effect explains "
+            out.append(Finding(FindingKind.UNEXPLAINED, loc, "structure above the noise that no modelled effect explains "
                                                    f"(reduced chi-square of hold means {self.chi_red:.1f})",
                                {"reduced_chi2": self.chi_red}, {}, rms, rms, {"worst_hold": int(step_w)}))
         return out

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from rodlab.compliance import RodCompliance
-from rodlab.enums import MODEL_FORM
+from rodlab.enums import MODEL_FORM, Subject, Verdict
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, HypothesisContext, joint_places
 from rodlab.stiffness_rig.samples import RigSamples
 
@@ -68,20 +68,20 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     verdict = _verdict(findings)
     for finding in lack.findings(rms, sigma):
         findings.append(finding)
-        verdict = "unexplained"
+        verdict = Verdict.UNEXPLAINED
     model = RigModelFit(chosen, coef, resid, r_sim, data, sigma, lack.hold_z2(), lack.hold_offset_mm(), linear)
     extra = {"reduced_chi2_hold_means": lack.chi_red, "simulation_accuracy": str(env.kind),
              "envelope": env.source, "linear_part": _linear_dict(linear, sim)}
     if judged is not None:
         extra["linear_part"].update(judged.to_dict())
-    return Diagnosis("rig", verdict, sigma, rms_sim, rms, findings, extra), model
+    return Diagnosis(Subject.RIG, verdict, sigma, rms_sim, rms, findings, extra), model
 
 
-def _verdict(findings: list) -> str:
+def _verdict(findings: list) -> Verdict:
     """``model_form`` alone is nothing left out (consistent); any cause explains; ``unexplained`` wins."""
     if any(f.effect == OUTSIDE for f in findings):
-        return "unexplained"
-    return "explained" if any(f.effect != MODEL_FORM for f in findings) else "consistent"
+        return Verdict.UNEXPLAINED
+    return Verdict.EXPLAINED if any(f.effect != MODEL_FORM for f in findings) else Verdict.CONSISTENT
 
 
 def _linear_dict(linear, sim: RodCompliance) -> dict:

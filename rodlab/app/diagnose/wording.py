@@ -13,20 +13,20 @@ from __future__ import annotations
 
 import math
 
-from rodlab.enums import MODEL_FORM
+from rodlab.enums import MODEL_FORM, FindingKind
+from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from .report import Finding
+from .rig_outside import confirm_outside
 
 __all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "form_resolution"]
 
 def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
     for physics outside the vocabulary :func:`.rig_outside.confirm_outside`."""
-    if effect == "unexplained":
-        from .rig_outside import confirm_outside
+    if effect == FindingKind.UNEXPLAINED:
         return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
                                              "that moves is handling")
-    from rodlab.stiffness_rig.effects import RIG_EFFECTS
     return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
 
@@ -42,7 +42,7 @@ def certainty(f: Finding) -> str:
     p = f.evidence.get("lr_p")
     cv_ok = f.evidence.get("cv_sse_after", 0.0) < f.evidence.get("cv_sse_before", 1.0)
     if p is None or not math.isfinite(p):
-        return "not tested" if f.effect != "unexplained" else "the structure is significant; its cause is not modelled"
+        return "not tested" if f.effect != FindingKind.UNEXPLAINED else "the structure is significant; its cause is not modelled"
     chance = "below 1e-300" if p == 0 else f"{p:.1g}"
     if p < 1e-6 and cv_ok:
         level = "decisive"

@@ -20,7 +20,7 @@ from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.params import apply
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab import calc_rod_compliance, resolve_design
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "calibrate.md"
 

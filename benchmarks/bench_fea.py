@@ -215,7 +215,7 @@ def _machine_section(speed0: float) -> list[str]:
 
 
 def main() -> int:
-    from rodlab.fileio import atomic_write_text
+    from rodlab.core.fileio import atomic_write_text
     lines = ["# Benchmark: FEA", "",
              f"`python benchmarks/bench_fea.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}.", ""]

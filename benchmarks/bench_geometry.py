@@ -11,8 +11,8 @@ import platform
 import time
 from pathlib import Path
 
-from rodlab.design_io import resolve_design
-from rodlab.fileio import atomic_write_text
+from rodlab.core.design_io import resolve_design
+from rodlab.core.fileio import atomic_write_text
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "geometry.md"
 GOAL_S = 10.0

@@ -117,7 +117,7 @@ def _accuracy() -> list[str]:
 
 def main() -> int:
     from rodlab import resolve_design
-    from rodlab.fileio import atomic_write_text
+    from rodlab.core.fileio import atomic_write_text
     lines = ["# Benchmark: joint-calibrated frame", "",
              f"`python benchmarks/bench_joints.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}.", ""]

@@ -20,7 +20,7 @@ from rodlab import calc_rod_compliance, resolve_design
 from rodlab.app.diagnose import diagnose_campaign
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
 from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 def _span(v, unit: str = "", scale: float = 1.0) -> str:
     """``[a, b]`` as ``a-b unit``, a number as itself (the definitions' ranges in a sentence)."""

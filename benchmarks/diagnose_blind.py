@@ -17,7 +17,7 @@ import numpy as np
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.stiffness_rig.blind import generate_cases
 from rodlab.app.diagnose import diagnose_rig  # noqa: E402
-from rodlab.fileio import atomic_write_text  # noqa: E402
+from rodlab.core.fileio import atomic_write_text  # noqa: E402
 from rodlab.stiffness_rig import read_recording  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind.md"

@@ -20,15 +20,15 @@ import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.app.diagnose import diagnose_rig
-from rodlab.compliance import RodCompliance
-from rodlab.errors import DesignError
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.errors import DesignError
 from rodlab.fea.frame import frame_compliance
 from rodlab.fea.reference_designs import reference_design
-from rodlab.fileio import atomic_write_text
-from rodlab.sensitivity import with_values
+from rodlab.core.fileio import atomic_write_text
+from rodlab.core.sensitivity import with_values
 from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.blind_as_built import generate_as_built_cases
-from rodlab.tolerances import design_tolerances
+from rodlab.core.tolerances import design_tolerances
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "diagnose_blind_as_built.md"
 STRUCTURAL = {"compliance_scale", "torsion_compliance", "joint_compliance"}

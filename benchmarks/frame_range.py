@@ -1,8 +1,8 @@
-"""Check: the frame model against solid FEA at the edges of the design range (``rodlab.design_range``).
+"""Check: the frame model against solid FEA at the edges of the design range (``rodlab.core.design_range``).
 
 The frame model's constants were fitted and checked on L1 150-450 mm, L2 250-600 mm, gamma 60-180 deg
 (``fea/data/solid_reference.json``). This script checks the designs at the edges of the wider range that
-``rodlab.design_range.VERIFIED_RANGE`` states (longest, shortest, sharpest bend, carbon and steel): the
+``rodlab.core.design_range.VERIFIED_RANGE`` states (longest, shortest, sharpest bend, carbon and steel): the
 largest relative error of the frame on every significant entry of C_F and C_g (|entry| > 2 % of its
 matrix's largest). Needs the CAD extra (gmsh).
 
@@ -37,7 +37,7 @@ CASES = (
 
 
 def _row(label, base, L1, L2, gamma) -> tuple[str, float]:
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     from rodlab.fea import frame_compliance, solid_compliance
     from rodlab.fea.frame import frame_errors
     from rodlab.geometry import mesh_rod
@@ -53,7 +53,7 @@ def _row(label, base, L1, L2, gamma) -> tuple[str, float]:
 
 
 def main() -> None:
-    from rodlab.design_range import VERIFIED_RANGE
+    from rodlab.core.design_range import VERIFIED_RANGE
     rows, worst = [], 0.0
     for case in CASES:
         row, w = _row(*case)
@@ -66,7 +66,7 @@ def main() -> None:
              f"`python benchmarks/frame_range.py` on {platform.node()} ({platform.machine()}), "
              f"{time.strftime('%Y-%m-%d')}. The frame model (the study's and sweep's default) against the solid "
              "FEA (default mesh, half model, no error estimate) on the corners of the range rodlab states as "
-             f"checked (`rodlab.design_range.VERIFIED_RANGE`: {rng}); outside it a design loads with a warning "
+             f"checked (`rodlab.core.design_range.VERIFIED_RANGE`: {rng}); outside it a design loads with a warning "
              "naming the key and the range. Parts as the base rod's (1#: carbon, 4#: steel).", "",
              "Errors of the frame: *of largest* = largest |frame - solid| over C_F and C_g, each divided by its "
              "matrix's largest entry (what moves the ball); *per entry* = largest relative error of a "

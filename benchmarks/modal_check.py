@@ -24,7 +24,7 @@ RODS = ("rod1", "rod2", "rod3", "rod4", "rod5", "rod6")
 
 
 def _row(name: str) -> tuple[list[str], float]:
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     from rodlab.fea import frame_frequencies, solid_frequencies
     from rodlab.geometry import mesh_rod
     d = resolve_design(name)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 __all__ = ["write_page"]
 

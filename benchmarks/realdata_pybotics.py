@@ -48,7 +48,7 @@ from rodlab.calibrate.kinematics import forward
 from rodlab.calibrate.points import points_observations
 from rodlab.calibrate.robot_lines import row_matrix
 from rodlab.calibrate.validate import error_stats
-from rodlab.frames import pose_to_matrix
+from rodlab.core.frames import pose_to_matrix
 
 HERE = Path(__file__).parent
 VENV = HERE / ".cache" / "pybotics-venv"

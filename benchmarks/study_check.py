@@ -34,7 +34,7 @@ METHODS = ("none", "fea", "meas")
 def _designs():
     from dataclasses import replace
 
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     d4 = resolve_design("rod4")
     return [resolve_design("rod1"), resolve_design("rod3"), d4, resolve_design("rod6"),
             replace(d4, L1_mm=250.0, L2_mm=550.0, name="4# 250-550")]
@@ -55,7 +55,7 @@ def _end_to_end(folder: Path, method: str) -> float:
 
 
 def main() -> None:
-    from rodlab.calc import calc_rod_compliance
+    from rodlab.core.calc import calc_rod_compliance
     from rodlab.calibrate import resolve_robot
     from rodlab.calibrate.plan import plan_poses
     from rodlab.calibrate.predict import Priors, run_replicate, simulate_replicate, summarise

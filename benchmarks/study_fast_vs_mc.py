@@ -35,7 +35,7 @@ PARTS = ("paper", "grid")
 
 def _candidates(part: str):
     from rodlab.app.study import grid_candidates, list_candidates
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     if part == "paper":
         return list_candidates([resolve_design(f"rod{i}") for i in range(1, 7)]), False
     return grid_candidates(resolve_design("rod1"), GRID_L1, GRID_L2), True

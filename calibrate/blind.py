@@ -48,7 +48,7 @@ class BlindDefinitions:
 def read_blind_definitions(path) -> BlindDefinitions:
     """Blind-case definitions from ``path`` (``rodlab.blind_campaign/1``); every schema problem named at once
     (file, line, key)."""
-    from rodlab.schema import read_toml_checked
+    from rodlab.core.schema import read_toml_checked
     data, _ = read_toml_checked(path, FORMAT_BLIND, CalibrationError)
     return BlindDefinitions(tuple(data["kinds"]), dict(data["modes"]), dict(data["magnitudes"]), dict(data["wide"]))
 

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.errors import did_you_mean
-from rodlab.fileio import read_text_checked
-from rodlab.frames import pose_to_matrix
+from rodlab.core.errors import did_you_mean
+from rodlab.core.fileio import read_text_checked
+from rodlab.core.frames import pose_to_matrix
 
 from .errors import CalibrationError
 
@@ -224,7 +224,7 @@ def read_fixture(path) -> Fixture:
     if not isinstance(data, dict) or data.get("format") not in FIXTURE_FORMATS:
         raise CalibrationError(f"expected a JSON object with \"format\" one of {list(FIXTURE_FORMATS)}", path=p,
                                key="format")
-    from rodlab.schema import require_schema
+    from rodlab.core.schema import require_schema
     require_schema(data, data["format"], p, text, CalibrationError)       # keys, shapes, types
     poses = {int(k): np.asarray(v, dtype=float) for k, v in data["positions"].items()}
     for j, arr in poses.items():
@@ -261,7 +261,7 @@ def _pose_covariances(p: Path, data: dict, poses: dict) -> dict | None:
 
 def write_fixture(fix: Fixture, path) -> Path:
     """Write ``fix`` atomically: ``rodlab.fixture/2`` when it has pose covariances, else ``rodlab.fixture/1``."""
-    from rodlab.fileio import atomic_write_json
+    from rodlab.core.fileio import atomic_write_json
     data = {"format": FIXTURE_FORMATS[1] if fix.pose_cov else FIXTURE_FORMATS[0], "world_position": fix.world_position,
             "positions": {str(j): [round(float(v), 6) for v in pose] for j, pose in sorted(fix.poses.items())},
             "contact_force_N": [float(v) for v in fix.force_D_N]}

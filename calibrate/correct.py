@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.frames import matrix_to_pose, pose_to_matrix
+from rodlab.core.frames import matrix_to_pose, pose_to_matrix
 
 from .errors import CalibrationError
 from .ik import solve_ik_positions

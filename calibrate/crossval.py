@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from rodlab.enums import AccuracySource
+from rodlab.core.enums import AccuracySource
 
 from .compensations import Compensation, total_offsets
 from .errors import CalibrationError

@@ -1,7 +1,7 @@
 """Exceptions of the calibrate package."""
 from __future__ import annotations
 
-from rodlab.errors import LocatedError
+from rodlab.core.errors import LocatedError
 
 __all__ = ["CalibrationError"]
 

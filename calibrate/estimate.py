@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.errors import did_you_mean
-from rodlab.units import DEVICE_NOISE_MM
+from rodlab.core.errors import did_you_mean
+from rodlab.core.units import DEVICE_NOISE_MM
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams

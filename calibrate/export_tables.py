@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 from .result import CalibrationFile
 from .kinematics import HARMONICS, ModelParams

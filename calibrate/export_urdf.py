@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
-from rodlab.frames import pose_to_matrix
+from rodlab.core.fileio import atomic_write_text
+from rodlab.core.frames import pose_to_matrix
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams, ball_positions, forward

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.frames import rot_x, rot_y
+from rodlab.core.frames import rot_x, rot_y
 
 from .kinematics import HARMONICS, Frames, cross3, harmonic_basis
 from .params import INTERNAL_SCALE, ParamInfo

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rodlab.frames import pose_to_matrix
+from rodlab.core.frames import pose_to_matrix
 
 __all__ = ["ModelParams", "Frames", "HARMONICS", "harmonic_basis", "harmonic_reference", "forward", "static_torques",
            "ball_positions"]

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.frames import abc_rate_axes, pose_to_matrix, skew
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.frames import abc_rate_axes, pose_to_matrix, skew
 
 from .campaign import Campaign, Fixture
 from .errors import CalibrationError
@@ -108,7 +108,7 @@ def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> O
 
 def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
     """Base pose [mm, deg] by rigid registration (Kabsch) of nominal ball positions to the measured ones."""
-    from rodlab.frames import matrix_to_pose
+    from rodlab.core.frames import matrix_to_pose
     fr, _ = ball_positions(robot, params.with_(base=np.zeros(6)), obs.q_rad)
     P, Q = fr.p0, obs.x_W_mm
     pc, qc = P.mean(0), Q.mean(0)
@@ -160,7 +160,7 @@ def noise_covariance(obs: Observations, noise_mm: float, fixture_sigma=(0.01, 0.
     """Covariance of the measured points [mm^2], shape=(3N, 3N): device noise plus the uncertainty of each
     recorded clamping pose, correlated among the points of a position. ``fixture_sigma`` = (standard
     uncertainty of each recorded x, y, z [mm], of each recorded angle a, b, c [deg]): the angles' uncertainty
-    reaches the orientation through the rates of ``Rx(a) Ry(b) Rz(c)`` (:func:`rodlab.frames.abc_rate_axes`),
+    reaches the orientation through the rates of ``Rx(a) Ry(b) Rz(c)`` (:func:`rodlab.core.frames.abc_rate_axes`),
     larger along one axis near b = +-90 deg.
 
     With per-point uncertainties (``obs.sigma_mm``) the noise of each coordinate is proportional to its stated

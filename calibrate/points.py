@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.units import TRACKER_NOISE_MM
+from rodlab.core.units import TRACKER_NOISE_MM
 
 from .campaign import PointSet
 from .estimate import FitOptions

@@ -29,9 +29,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
-from rodlab.frames import pose_to_matrix
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
+from rodlab.core.frames import pose_to_matrix
 
 from .campaign import Fixture, PointSet
 from .compensations import RodDeflection, deflection_offsets

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
 
 from .campaign import Fixture
 from .compensations import deflection_basis

@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.errors import did_you_mean
-from rodlab.fileio import read_text_checked
-from rodlab.frames import matrix_to_pose, skew
+from rodlab.core.errors import did_you_mean
+from rodlab.core.fileio import read_text_checked
+from rodlab.core.frames import matrix_to_pose, skew
 
 from .campaign import Fixture, leading_comments
 from .device import Device
@@ -284,7 +284,7 @@ ARM_POSE_W = np.array([900.0, -400.0, -300.0, 5.0, -10.0, 120.0])
 def simulated_probe_text(Ts: dict, device: Device, accuracy_mm: float, rng, arm_pose_W=ARM_POSE_W) -> str:
     """A probe file of the device frames ``Ts`` {j: 4x4 pose of {D_j} in {W}}: every feature measured in the
     arm's frame (at ``arm_pose_W``) with normal errors of ``accuracy_mm`` per coordinate."""
-    from rodlab.frames import pose_to_matrix
+    from rodlab.core.frames import pose_to_matrix
     T_A_W = np.linalg.inv(pose_to_matrix(arm_pose_W))
     rows = [f"# accuracy_mm: {accuracy_mm:g}", ",".join(PROBE_COLUMNS)]
     for j in sorted(Ts):

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance, write_compliance
-from rodlab.fileio import atomic_write_json, atomic_write_text
+from rodlab.core.compliance import RodCompliance, write_compliance
+from rodlab.core.fileio import atomic_write_json, atomic_write_text
 
 from .campaign import Fixture
 from .predict import SimulatedReplicate

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_json, json_safe
+from rodlab.core.fileio import atomic_write_json, json_safe
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams
@@ -146,7 +146,7 @@ def read_calibration(path) -> CalibrationFile:
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" or \"{CALIBRATION_FORMATS[1]}\" (written by "
                                f"`rodlab calibrate --json`), got {got!r}", path=p, key="format")
-    from rodlab.schema import require_schema
+    from rodlab.core.schema import require_schema
     require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
     params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
               for name, v in data["parameters"].items()}

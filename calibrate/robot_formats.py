@@ -14,7 +14,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Callable
 
-from rodlab.errors import did_you_mean
+from rodlab.core.errors import did_you_mean
 
 from .errors import CalibrationError
 from .robot import Robot

@@ -118,7 +118,7 @@ def urdf_chain(model, base_link: str | None = None, tip_link: str | None = None,
     base = base_link or (roots[0] if roots else None)
     for what, name in (("base_link", base), ("tip_link", tip_link)):
         if name is not None and name not in links:
-            from rodlab.errors import did_you_mean
+            from rodlab.core.errors import did_you_mean
             raise CalibrationError(f"no link named {name!r}." + did_you_mean(str(name), links), path=path, key=what)
     tip = tip_link or _default_tip(base, children, path)
     joints, link = [], tip

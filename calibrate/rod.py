@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
 
 from .errors import CalibrationError
 
@@ -43,7 +43,7 @@ class Rod:
     com_T_mm : its centre of mass in {T} [mm], shape=(3,)
     C_F : ball-centre displacement per contact force on the ball [mm/N], in {T}, shape=(3, 3) (Eq. 19)
     C_g : ball-centre displacement under the rod's own weight per g0 of gravity [mm/g0], in {T}, shape=(3, 3)
-    method : where ``C_F`` / ``C_g`` came from (:class:`rodlab.enums.Method`; ``none``: a rigid rod)
+    method : where ``C_F`` / ``C_g`` came from (:class:`rodlab.core.enums.Method`; ``none``: a rigid rod)
     name : the rod's name (the compliance file's ``rod``), for messages
     """
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
+from rodlab.core.compliance import RodCompliance
 
 from .compensations.rod_deflection import flange_loads
 from .kinematics import ModelParams

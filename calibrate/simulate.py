@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.fileio import atomic_write_json, atomic_write_text
-from rodlab.frames import matrix_to_pose, rotation_from_abc
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.fileio import atomic_write_json, atomic_write_text
+from rodlab.core.frames import matrix_to_pose, rotation_from_abc
 
 from .campaign import Fixture
 from .errors import CalibrationError
@@ -257,7 +257,7 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         atomic_write_text(out / "multical.probe.csv", simulated_probe_text(Ts, device, spec.probe_accuracy_mm,
                                                                            np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
     t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s)
     atomic_write_json(out / "truth.json", t)

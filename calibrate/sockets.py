@@ -241,7 +241,7 @@ def _check_layout(r: SocketReadings) -> None:
 
 def write_sockets(path, readings: SocketReadings, comment: str = "") -> Path:
     """Write ``readings`` as a ``*.sockets.csv`` (atomically; q in deg with 6 decimals)."""
-    from rodlab.fileio import atomic_write_text
+    from rodlab.core.fileio import atomic_write_text
     r = readings
     head = [f"# {line}" for line in comment.splitlines()]
     if r.distances:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text, read_text_checked
+from rodlab.core.fileio import atomic_write_text, read_text_checked
 
 from .errors import CalibrationError
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from rodlab.enums import Completeness
+from rodlab.core.enums import Completeness
 
 if TYPE_CHECKING:
     from .crossval import Prediction

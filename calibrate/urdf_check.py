@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.parsers import expat
 
-from rodlab.errors import did_you_mean
+from rodlab.core.errors import did_you_mean
 
 from .errors import CalibrationError
 

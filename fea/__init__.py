@@ -1,6 +1,6 @@
 """fea: rod compliance C^F and C^g by 3-D solid FEA (scikit-fem), a fast beam-frame model, and design sweeps.
 
-The solid model consumes a :class:`rodlab.fem_mesh.RodMesh` (made by ``geometry``), never imports geometry.
+The solid model consumes a :class:`rodlab.core.fem_mesh.RodMesh` (made by ``geometry``), never imports geometry.
 """
 from .compute import DEFAULT_GRADING, FeaModel, Mesher, compute_compliance, default_solid_size_mm, solid_compliance
 from .errors import FeaError

@@ -2,7 +2,7 @@
 
 The rod is a statically determinate cantilever, so the section forces at a centreline point are those of
 everything beyond it: a unit force at the ball centre reaches the section at ``p`` as the wrench
-``(F, (p_ball - p) x F)``, and the weight beyond ``p`` as :func:`rodlab.chain.distal_weight_wrench`. Along the
+``(F, (p_ball - p) x F)``, and the weight beyond ``p`` as :func:`rodlab.core.chain.distal_weight_wrench`. Along the
 local tangent ``t`` the wrench splits into the axial force ``N = F . t``, the torque ``T = M . t`` and the
 bending moment ``M_b = |M - T t|``. A section is concentric layers (a tube, a bonded sleeve over it) that
 deform together (plane sections), so the fibre at radius ``r`` of layer ``l`` carries
@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.chain import centreline_points, distal_weight_wrench, transport
-from rodlab.layout import Segment
-from rodlab.units import gpa_to_mpa
+from rodlab.core.chain import centreline_points, distal_weight_wrench, transport
+from rodlab.core.layout import Segment
+from rodlab.core.units import gpa_to_mpa
 
 __all__ = ["section_wrenches", "section_von_mises", "section_index"]
 

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.units import gpa_to_mpa
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.units import gpa_to_mpa
 
 from .elasticity import NU23_DEFAULT, local_frames
 from .stiffness_assembly import scalar_basis

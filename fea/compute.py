@@ -15,14 +15,14 @@ from typing import Protocol
 
 import numpy as np
 
-from rodlab.calc import calc_rod_compliance
-from rodlab.joint_springs import declared_joint_compliance
-from rodlab.massprops import part_mass_properties
-from rodlab.progress import stages
-from rodlab.compliance import RodCompliance
-from rodlab.design import RodDesign
-from rodlab.enums import FeaModel, Method
-from rodlab.fem_mesh import RodMesh
+from rodlab.core.calc import calc_rod_compliance
+from rodlab.core.joint_springs import declared_joint_compliance
+from rodlab.core.massprops import part_mass_properties
+from rodlab.core.progress import stages
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import FeaModel, Method
+from rodlab.core.fem_mesh import RodMesh
 
 from .errors import FeaError
 from .frame import CALIBRATION, FRAME_REVISION, asme_bend_flexibility, frame_compliance, frame_range_notes
@@ -76,10 +76,10 @@ def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
                      symmetry: bool = True, tip_moments: bool = False):
-    """Solid-FEA :class:`~rodlab.compliance.RodCompliance` (method ``fea``) and the raw result.
+    """Solid-FEA :class:`~rodlab.core.compliance.RodCompliance` (method ``fea``) and the raw result.
 
     ``mesher`` (:class:`Mesher`, called by keyword) makes the meshes: ``rodlab.geometry.mesh_rod`` as it is (the
-    domain packages meet through the core's :class:`~rodlab.fem_mesh.RodMesh`, never import each other).
+    domain packages meet through the core's :class:`~rodlab.core.fem_mesh.RodMesh`, never import each other).
     ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
     """
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.materials import Material
-from rodlab.units import gpa_to_mpa
+from rodlab.core.materials import Material
+from rodlab.core.units import gpa_to_mpa
 
 __all__ = ["stiffness_tensor_local", "rotate_tensor", "element_tensors", "NU23_DEFAULT"]
 

@@ -16,9 +16,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.errors import RodlabError
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.errors import RodlabError
 
 from .joints import DEFAULT_MARGIN, MIN_SPAN_MM, free_spans
 

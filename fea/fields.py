@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.chain import centreline_points, chain_flexibility, transport
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.massprops import ball_mass_properties
-from rodlab.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
+from rodlab.core.chain import centreline_points, chain_flexibility, transport
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.massprops import ball_mass_properties
+from rodlab.core.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
 from .errors import FeaError
@@ -178,7 +178,7 @@ class FrameFields:
 def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFields:
     """The frame model's centreline (``n_points`` points [mm] in {6}), its displacements under the six unit
     load cases [mm per N | mm per g0], shape=(n, 3, 6): the section motions of the chain cut at every point
-    (:func:`rodlab.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g); and
+    (:func:`rodlab.core.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g); and
     the sections' outer-fibre von Mises stress [MPa per N | MPa per g0], shape=(n, 6), from the section forces
     (:mod:`fea.beam_stress`)."""
     from .beam_stress import section_index, section_von_mises, section_wrenches

@@ -5,7 +5,7 @@ E axial for bending and tension, G axial for torsion and shear) sections, rings,
 holder's plug as composite sections, the bend as a curved beam whose bending compliance is scaled by
 pipe-bend flexibility factors (ovalisation), the ball as the tip's rigid mass. Because the frame is
 statically determinate its tip compliance follows exactly from the unit-load method along the centreline
-(:func:`rodlab.calc.unit_load_compliance`): no element discretisation error, a few ms per design.
+(:func:`rodlab.core.calc.unit_load_compliance`): no element discretisation error, a few ms per design.
 
 Three effects that beam theory misses are modelled from their mechanics and their constants calibrated once
 against the solid model (``scripts/calibrate_frame.py``, data in ``fea/data/solid_reference.json``):
@@ -34,13 +34,13 @@ from difflib import get_close_matches
 
 import numpy as np
 
-from rodlab.calc import unit_load_compliance
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.joint_springs import declared_joint_compliance
-from rodlab.layout import Segment, SegmentKind, layout
-from rodlab.massprops import ball_mass_properties
-from rodlab.materials import Material
+from rodlab.core.calc import unit_load_compliance
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.joint_springs import declared_joint_compliance
+from rodlab.core.layout import Segment, SegmentKind, layout
+from rodlab.core.massprops import ball_mass_properties
+from rodlab.core.materials import Material
 
 from .elasticity import NU23_DEFAULT
 

@@ -9,7 +9,7 @@ clamp, the ball holder) sits within about a diameter of a joint (Saint-Venant). 
 
 by four sections through the free tubes, ``margin`` tube diameters from their ends. The sections' motions
 (:mod:`fea.sections`) under nine load cases (unit tip forces and moments, self-weight along x, y, z of {T})
-give every interval's own 6 x 6 flexibility and self-weight motion (:mod:`rodlab.chain`):
+give every interval's own 6 x 6 flexibility and self-weight motion (:mod:`rodlab.core.chain`):
 
 - a block's *correction* is its solid flexibility minus the frame's, lumped at its distal section;
 - a span's is a correction of its section compliances per unit length (1/EA, 1/kGA, 1/GJ, 1/EI; e.g. the
@@ -28,14 +28,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from rodlab.frames import skew as _skew
-from rodlab.chain import (ChainFlexibility, centreline_points, chain_flexibility, distal_weight_wrench, transport,
+from rodlab.core.frames import skew as _skew
+from rodlab.core.chain import (ChainFlexibility, centreline_points, chain_flexibility, distal_weight_wrench, transport,
                           weight_wrench)
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.layout import Layer, layout
-from rodlab.massprops import ball_mass_properties
-from rodlab.units import G0
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.layout import Layer, layout
+from rodlab.core.massprops import ball_mass_properties
+from rodlab.core.units import G0
 
 from .errors import FeaError
 from .frame import CALIBRATION, FrameCalibration, frame_compliance, frame_segments
@@ -67,7 +67,7 @@ _TUBES = (Part.PIPE_I, Part.PIPE_II)
 def span_basis(axis: np.ndarray, length_mm: float, weight_N_per_mm: float = 0.0):
     """A straight span of ``length_mm`` along ``axis``, per unit of each section compliance of
     :data:`SECTION_TERMS`: its flexibility at the distal end, shape=(6, 6, 6), and its motion under its own
-    weight (``weight_N_per_mm`` per g0 along x, y, z), shape=(6, 6, 3) ({F} axes; see :mod:`rodlab.chain`).
+    weight (``weight_N_per_mm`` per g0 along x, y, z), shape=(6, 6, 3) ({F} axes; see :mod:`rodlab.core.chain`).
     A negative length takes the span off (the overlap of two blocks)."""
     t = np.asarray(axis, dtype=float)
     ey = np.array([0.0, 1.0, 0.0])

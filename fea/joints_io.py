@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design_io import design_from_dict, design_to_dict
-from rodlab.errors import FormatError
-from rodlab.fileio import atomic_write_json, read_text_checked
+from rodlab.core.design_io import design_from_dict, design_to_dict
+from rodlab.core.errors import FormatError
+from rodlab.core.fileio import atomic_write_json, read_text_checked
 
 from .errors import FeaError
 from .frame import FRAME_REVISION, FrameCalibration

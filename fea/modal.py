@@ -3,7 +3,7 @@
 The centreline (the frame's segments, :func:`fea.frame.frame_segments`) is cut into ``pieces`` intervals of
 about equal length; each interval's mass is lumped at its distal point and the ball (with the holder's stud
 beyond the last cut) at the ball centre. The translational flexibility between the lumped points follows from
-the cantilever chain (:mod:`rodlab.chain`): a force at point ``b`` deforms every interval ``k`` up to ``b``,
+the cantilever chain (:mod:`rodlab.core.chain`): a force at point ``b`` deforms every interval ``k`` up to ``b``,
 and point ``a`` sees interval ``k``'s motion carried rigidly,
 
     D[a, b] = sum_{k <= min(a, b)} (Ad_{a,k}^T F_k Ad_{b,k})[:3, :3],   Ad_{x,k} = transport(p_x - p_k),
@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.chain import chain_flexibility, transport
-from rodlab.design import RodDesign
-from rodlab.massprops import ball_mass_properties
+from rodlab.core.chain import chain_flexibility, transport
+from rodlab.core.design import RodDesign
+from rodlab.core.massprops import ball_mass_properties
 
 from .frame import CALIBRATION, FrameCalibration, frame_segments
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from rodlab.design import RodDesign
-from rodlab.units import kg_m3_to_kg_mm3
+from rodlab.core.design import RodDesign
+from rodlab.core.units import kg_m3_to_kg_mm3
 
 from .stiffness_assembly import assemble_stiffness, scalar_basis
 from .elasticity import element_tensors

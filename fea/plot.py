@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.render3d import TriangleSet, render_png
+from rodlab.core.render3d import TriangleSet, render_png
 
 from .solid import mirror_displacements
 from .stiffness_assembly import scalar_basis

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.design_io import design_from_dict, resolve_design
-from rodlab.enums import Part
+from rodlab.core.design import RodDesign
+from rodlab.core.design_io import design_from_dict, resolve_design
+from rodlab.core.enums import Part
 
 from .frame import frame_errors
 from .joints import joint_frame_compliance, joints_from_motions

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.frames import skew as _skew
-from rodlab.design import RodDesign
-from rodlab.enums import Part
+from rodlab.core.frames import skew as _skew
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
 
 from .errors import FeaError
 from .solid import mirror_nodes
@@ -50,7 +50,7 @@ def solid_section_motions(design: RodDesign, rod_mesh, U: np.ndarray, cuts, cent
                           axes: np.ndarray, reach_mm: dict[Part, float]) -> np.ndarray:
     """Section motion (:func:`sectional_motion`) at each cut ``(tube part, arc length [mm])`` with its centre
     ``centres_F`` [mm] in {F} and axis, shape=(n, 3) each, from the tube's nodes within ``reach_mm[part]`` of
-    it; ``U`` shape=(3 N, n_cases) on ``rod_mesh`` (a :class:`rodlab.fem_mesh.RodMesh`, whole or half).
+    it; ``U`` shape=(3 N, n_cases) on ``rod_mesh`` (a :class:`rodlab.core.fem_mesh.RodMesh`, whole or half).
     Returns shape=(n_cuts, 6, n_cases) [mm, rad], {F} axes (= {T} axes)."""
     basis = scalar_basis(rod_mesh.mesh, intorder=1)
     X = basis.doflocs.T                                          # {T} [mm]

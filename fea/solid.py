@@ -22,9 +22,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.units import G0, kg_m3_to_kg_mm3
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.units import G0, kg_m3_to_kg_mm3
 
 from .stiffness_assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
 from .elasticity import element_tensors

@@ -7,8 +7,8 @@ import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rodlab.compliance import RodCompliance
-from rodlab.design import RodDesign
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.design import RodDesign
 
 from .compute import Mesher, solid_compliance
 from .joints import JointFit, fit_joints

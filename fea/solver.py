@@ -24,7 +24,7 @@ import sys
 import numpy as np
 import scipy.sparse as sp
 
-from rodlab.enums import SolverBackend
+from rodlab.core.enums import SolverBackend
 
 from .errors import FeaError
 

@@ -17,9 +17,9 @@ from typing import Callable
 import numpy as np
 
 from rodlab import __version__
-from rodlab.design import RodDesign
-from rodlab.errors import RodlabError
-from rodlab.fileio import atomic_write_json
+from rodlab.core.design import RodDesign
+from rodlab.core.errors import RodlabError
+from rodlab.core.fileio import atomic_write_json
 
 from .errors import FeaError
 from .frame import CALIBRATION, FRAME_REVISION
@@ -167,7 +167,7 @@ def _run_on_dask(chunks, store: _SweepStore, base, model, mesher, calibration, s
     if scheduler:
         client = Client(scheduler)
     else:
-        from rodlab.cluster import local_cluster
+        from rodlab.core.cluster import local_cluster
         cluster = local_cluster(workers)
         client = Client(cluster)
     try:

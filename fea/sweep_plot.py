@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_figure
+from rodlab.core.fileio import atomic_write_figure
 
 __all__ = ["plot_sweep", "PAPER_RODS", "HEAT_CMAP"]
 

@@ -1,7 +1,7 @@
 """geometry: the rod as a build123d CAD assembly (STEP/STL/PNG, mass properties) and a gmsh FEA mesh.
 
 Needs the ``cad`` extra (build123d, gmsh); both are imported inside the functions that use them. The
-mesh is returned as the core type :class:`rodlab.fem_mesh.RodMesh`, which ``fea`` consumes.
+mesh is returned as the core type :class:`rodlab.core.fem_mesh.RodMesh`, which ``fea`` consumes.
 """
 from .assembly import RodCad, build_cad
 from .errors import GeometryError

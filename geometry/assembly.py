@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.fileio import atomic_write_bytes, atomic_write_json
-from rodlab.massprops import MassProperties, combine
-from rodlab.units import kg_m3_to_kg_mm3
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.fileio import atomic_write_bytes, atomic_write_json
+from rodlab.core.massprops import MassProperties, combine
+from rodlab.core.units import kg_m3_to_kg_mm3
 
 from .parts import PART_COLOURS, part_solids
 

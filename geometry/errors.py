@@ -1,7 +1,7 @@
 """Exceptions of the geometry package."""
 from __future__ import annotations
 
-from rodlab.errors import DesignError
+from rodlab.core.errors import DesignError
 
 __all__ = ["GeometryError"]
 

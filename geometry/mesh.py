@@ -2,7 +2,7 @@
 
 The parts' OCC solids are imported into gmsh and fragmented together, so bonded interfaces
 (tube in ring, tube in holder, plug in bore, stud in ball seat) share their nodes. One physical
-volume per part (named as :class:`~rodlab.enums.Part`), physical surfaces ``flange_face`` (the
+volume per part (named as :class:`~rodlab.core.enums.Part`), physical surfaces ``flange_face`` (the
 clamped face) and ``ball`` (the sphere). Quadratic elements are curved (``SecondOrderLinear = 0``):
 straight-sided P2 tets make a tube's section an inscribed polygon. Meshing runs single-threaded
 so that the same inputs give a bit-identical mesh.
@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.fileio import atomic_write_bytes
-from rodlab.fem_mesh import RodMesh
-from rodlab.layout import layout
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.fileio import atomic_write_bytes
+from rodlab.core.fem_mesh import RodMesh
+from rodlab.core.layout import layout
 
 from .errors import GeometryError
 from .parts import part_solids

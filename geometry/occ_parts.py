@@ -1,6 +1,6 @@
 """The rod's parts built directly in gmsh's own OpenCASCADE kernel, for the mesh.
 
-The same solids as :mod:`geometry.parts` (build123d), from the same :func:`rodlab.layout.layout`: tubes and
+The same solids as :mod:`geometry.parts` (build123d), from the same :func:`rodlab.core.layout.layout`: tubes and
 sleeves annular cylinders along straight segments, the bend pipe an annulus revolved about the bend axis, the
 ball holder's layers fused, the ball a sphere truncated by its seat. Building them in gmsh skips build123d's
 import (~2 s of ``rodlab fea --model solid``) and the BREP round trip through files; the CAD exports (STEP,
@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.layout import Layer, Segment, SegmentKind, layout
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.layout import Layer, Segment, SegmentKind, layout
 
 from .errors import GeometryError
 
@@ -115,7 +115,7 @@ def _halve(occ, parts: dict) -> dict:
 
 def add_part_volumes(design: RodDesign, half: bool = False) -> dict:
     """Build every present part in the current gmsh model's OCC kernel (not yet synchronised, not
-    fragmented): {Part: [(3, tag), ...]} in {T} [mm], in :class:`~rodlab.enums.Part` order; ``half``: only
+    fragmented): {Part: [(3, tag), ...]} in {T} [mm], in :class:`~rodlab.core.enums.Part` order; ``half``: only
     ``y_T >= 0``. Raises :class:`~geometry.errors.GeometryError` for impossible geometry or parts that
     overlap."""
     import gmsh

@@ -1,6 +1,6 @@
 """build123d solids of each part of a rod, placed in the tool frame {T} from the shared layout.
 
-Every solid is built from :func:`rodlab.layout.layout`, so the CAD places the parts exactly as
+Every solid is built from :func:`rodlab.core.layout.layout`, so the CAD places the parts exactly as
 the analytic mass properties and the closed form do: tubes and sleeves are annular cylinders
 along straight segments, the bend pipe is an annulus revolved about the bend centre, the ball
 holder is a solid stud (with its plug in pipe II's bore), the ball a sphere truncated by its seat.
@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from rodlab.design import RodDesign
-from rodlab.enums import Part
-from rodlab.layout import Layer, Segment, SegmentKind, layout
+from rodlab.core.design import RodDesign
+from rodlab.core.enums import Part
+from rodlab.core.layout import Layer, Segment, SegmentKind, layout
 
 from .errors import GeometryError
 
@@ -70,7 +70,7 @@ def _ball_solid(bd, design: RodDesign, offset_T: np.ndarray):
 
 
 def part_solids(design: RodDesign) -> dict[Part, "object"]:
-    """Solids of every present part, in {T} [mm], keyed by :class:`~rodlab.enums.Part`.
+    """Solids of every present part, in {T} [mm], keyed by :class:`~rodlab.core.enums.Part`.
 
     Several layout layers of one part (a sleeve over two segments, the ball holder's plug and stud)
     are fused into one solid.

@@ -1,4 +1,4 @@
-"""Offscreen PNG views of a rod's CAD (isometric and the three planes) via :mod:`rodlab.render3d` (pyvista, the
+"""Offscreen PNG views of a rod's CAD (isometric and the three planes) via :mod:`rodlab.core.render3d` (pyvista, the
 renderer of ``rodlab view``, where it renders off-screen; else matplotlib)."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.render3d import VIEWS, TriangleSet, pick_renderer, render_png
+from rodlab.core.render3d import VIEWS, TriangleSet, pick_renderer, render_png
 
 from .parts import PART_COLOURS
 
@@ -24,7 +24,7 @@ def tessellate(solids: dict, tolerance_mm: float = 0.1):
 
 def render_views(cad, out_dir: str | Path, prefix: str = "view", dpi: int = 130, renderer: str = "auto") -> list[Path]:
     """Write ``{prefix}_iso.png``, ``_xz.png``, ``_xy.png``, ``_yz.png`` into ``out_dir``; return the paths.
-    ``renderer``: one of :data:`rodlab.render3d.RENDERERS`."""
+    ``renderer``: one of :data:`rodlab.core.render3d.RENDERERS`."""
     sets = [TriangleSet(str(p), v, t, PART_COLOURS[p]) for p, (v, t) in tessellate(cad.solids).items()]
     d = cad.design
     renderer = pick_renderer(renderer)

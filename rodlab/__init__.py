@@ -1,22 +1,27 @@
 """rodlab: design, simulate, measure and use long measuring rods for on-site robot calibration (MultiCal).
 
-The core package holds the shared types (rod design, materials, compliance files, frames, units)
-and the CLI. Domain packages (``geometry``, ``fea``, ``stiffness_rig``, ``calibrate``) depend on it,
-never on each other.
+The layers, bottom up (docs/architecture.md): ``rodlab.core`` holds the shared types (rod design, materials,
+compliance files, frames, units); the domain packages ``rodlab.geometry``, ``rodlab.fea``,
+``rodlab.stiffness_rig`` and ``rodlab.calibrate`` depend on it, never on each other; the application
+``rodlab.app`` (the CLI, the demo, diagnosis, study, reports) sits on top. The core's stable API is re-exported
+here.
 """
 from __future__ import annotations
 
+import importlib
+import importlib.abc
+import importlib.util
+import sys
+import warnings
+from pathlib import Path
+
 __version__ = "0.1.0"
 
-from .enums import LoadAxis, Method, Part, Phase  # noqa: E402
-from .errors import ComplianceError, DesignError, FormatError, RodlabError  # noqa: E402
-from .materials import BUILTIN_MATERIALS, Material, get_material  # noqa: E402
-from .design import RodDesign  # noqa: E402
-from .design_io import builtin_designs, load_design, resolve_design  # noqa: E402
-from .massprops import MassProperties, mass_properties, part_mass_properties  # noqa: E402
-from .calc import BendModel, calc_compliance, calc_rod_compliance, paper_compliance  # noqa: E402
-from .compliance import RodCompliance, c_rod_um, r_rod, read_compliance, write_compliance  # noqa: E402
-from .units import G0  # noqa: E402
+from .core import (  # noqa: E402
+    BUILTIN_MATERIALS, G0, BendModel, ComplianceError, DesignError, FormatError, LoadAxis, MassProperties,
+    Material, Method, Part, Phase, RodCompliance, RodDesign, RodlabError, builtin_designs, c_rod_um,
+    calc_compliance, calc_rod_compliance, get_material, load_design, mass_properties, paper_compliance,
+    part_mass_properties, r_rod, read_compliance, resolve_design, write_compliance)
 
 __all__ = [
     "__version__", "LoadAxis", "Method", "Part", "Phase",
@@ -28,3 +33,35 @@ __all__ = [
     "RodCompliance", "c_rod_um", "r_rod", "read_compliance", "write_compliance",
     "G0",
 ]
+
+#: the core modules, which lived at rodlab.NAME before they moved to rodlab.core.NAME
+_CORE_MODULES = frozenset(p.stem for p in Path(__file__).parent.joinpath("core").glob("*.py") if p.stem != "__init__")
+
+
+class _MovedLoader(importlib.abc.Loader):
+    """Hands out the module at its new place (one module object under both names)."""
+
+    def __init__(self, target: str) -> None:
+        self.target = target
+
+    def create_module(self, spec):
+        warnings.warn(f"{spec.name} moved to {self.target}; import it from there (or the stable API from rodlab)",
+                      DeprecationWarning, stacklevel=2)
+        return importlib.import_module(self.target)
+
+    def exec_module(self, module) -> None:
+        pass
+
+
+class _MovedCore(importlib.abc.MetaPathFinder):
+    """``import rodlab.compliance`` (the path before the core moved to ``rodlab.core``) keeps working."""
+
+    def find_spec(self, fullname, path, target=None):
+        head, _, name = fullname.rpartition(".")
+        if head != "rodlab" or name not in _CORE_MODULES:
+            return None
+        return importlib.util.spec_from_loader(fullname, _MovedLoader(f"rodlab.core.{name}"))
+
+
+if not any(isinstance(f, _MovedCore) for f in sys.meta_path):
+    sys.meta_path.append(_MovedCore())

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_json
+from rodlab.core.fileio import atomic_write_json
 
 from rodlab.fea.reference_designs import reference_design as design
 from rodlab.fea.reference_designs import reference_sets

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 HEADER = """# Laser-tracker points of a FANUC R-2000iC/165F, reflector {name} (public data of R. A. Boby and
 # A. Klimchik, github.com/RABKKK/LaserTrackerPoseData4KinIdent, N1N2N3Jval.csv; converted by

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 #: robot data folder -> (the source's URDF, joints)
 ROBOTS = {"panda_2": ("panda.urdf", 7), "panda_3": ("panda.urdf", 7), "panda_6": ("panda.urdf", 7),

@@ -4,7 +4,7 @@
     python scripts/derive_paper_rods.py --dry-run  # print the fit only
 
 Targets (Zhang et al. 2023, the MultiCal paper): the *simulated* compliance index of each rod, Table 2 c_rod / r_rod
-(c_rod per paper Eq. 23 as ``rodlab.compliance.c_rod_um`` computes it), and Fig. 8's simulated stiffness ratio
+(c_rod per paper Eq. 23 as ``rodlab.core.compliance.c_rod_um`` computes it), and Fig. 8's simulated stiffness ratio
 c22(5#) / c22(2#) = 8.1. Model: the calibrated beam frame ``rodlab.fea.frame.frame_compliance``.
 
 Unknowns, one set per material family (the paper's supplement with the parts is not available):
@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import least_squares
 
-from rodlab.compliance import c_rod_um
-from rodlab.design_io import design_from_dict
+from rodlab.core.compliance import c_rod_um
+from rodlab.core.design_io import design_from_dict
 from rodlab.fea.frame import frame_compliance
 
 OUT = Path(__file__).resolve().parents[1] / "rodlab" / "data" / "rods"

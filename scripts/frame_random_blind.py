@@ -25,7 +25,7 @@ import numpy as np
 
 from rodlab.fea.reference_designs import family_errors, spec_design as design
 from rodlab.fea.reference_designs import random_global_errors as global_errors
-from rodlab.fileio import atomic_write_json
+from rodlab.core.fileio import atomic_write_json
 
 REF = Path(__file__).resolve().parents[1] / "fea" / "data" / "solid_random_reference.json"
 #: families drawn only to test the joint calibration blind (its margin was fixed before they were drawn)

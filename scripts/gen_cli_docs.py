@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rodlab.app.cli.docgen import DOC_TABLES, render_cli, render_tables
-from rodlab.fileio import write_generated
+from rodlab.core.fileio import write_generated
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from rodlab.calc import calc_rod_compliance
-from rodlab.compliance import c_rod_um
+from rodlab.core.calc import calc_rod_compliance
+from rodlab.core.compliance import c_rod_um
 from rodlab.fea.frame import frame_compliance
-from rodlab.design_io import builtin_designs, load_design
-from rodlab.fileio import write_generated
+from rodlab.core.design_io import builtin_designs, load_design
+from rodlab.core.fileio import write_generated
 
 #: rod name -> (Table 2 c_rod [um], r_rod): the paper's published numbers the built-ins are derived from
 TABLE2 = {"1#": (57.9, 1.226), "2#": (63.1, 1.364), "3#": (237.3, 2.302), "4#": (513.4, 1.051),
@@ -108,7 +108,7 @@ def render() -> str:
         "## Against the paper (frame model, `rodlab fea rodN --model frame`)",
         "",
         "Target: the simulated compliance index, Table 2 c_rod / r_rod (c_rod per paper Eq. 23 with",
-        "|F| = |[1.10, 1.25, 1.05]| N, signed sums of all nine entries, as `rodlab.compliance.c_rod_um`).",
+        "|F| = |[1.10, 1.25, 1.05]| N, signed sums of all nine entries, as `rodlab.core.compliance.c_rod_um`).",
         "",
         "| rod | L1-L2 mm | tube | E / G GPa | mass g | Table 2 c_rod / r_rod um | frame c_rod um | residual |",
         "|---|---|---|---|---|---|---|---|",
@@ -133,7 +133,7 @@ def render() -> str:
     lines += [
         "## Closed-form (\"Calc\") compliance",
         "",
-        "Model: `rodlab.calc.calc_compliance`, unit-load Euler-Bernoulli frame along the real centreline (bend as",
+        "Model: `rodlab.core.calc.calc_compliance`, unit-load Euler-Bernoulli frame along the real centreline (bend as",
         "an arc, composite sections under rings and holders, axial flexibility, ball and ball holder as tip mass).",
         "C_F in mm/N, C_g in mm per g0, both in {T}; c_rod per paper Eq. 23.",
         "",
@@ -150,7 +150,7 @@ def render() -> str:
         "",
         "The closed form ignores the frame model's calibrated joint and bend flexibilities, so it is stiffer than",
         "the frame model for the carbon rods (whose stainless bend and aluminium rings are relatively soft). The",
-        "paper's Eq. 15/17 (pipes only, sharp corner) are available as `rodlab.calc.paper_compliance`.",
+        "paper's Eq. 15/17 (pipes only, sharp corner) are available as `rodlab.core.calc.paper_compliance`.",
         "",
     ]
     return "\n".join(lines)

@@ -11,7 +11,7 @@ from typing import Callable
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 
 
 def find_source(src: Path, name: str, repository: str) -> Path:

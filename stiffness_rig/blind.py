@@ -48,7 +48,7 @@ class BlindCase:
 def read_blind_definitions(path) -> dict:
     """Blind-case definitions from ``path`` (``rodlab.blind_rig/1``): {table: {key: value}}; every schema
     problem named at once (file, line, key)."""
-    from rodlab.schema import read_toml_checked
+    from rodlab.core.schema import read_toml_checked
     data, _ = read_toml_checked(path, FORMAT_BLIND, RigError)
     return data
 

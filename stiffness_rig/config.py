@@ -42,9 +42,9 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rodlab.enums import Checksum, LineProtocol, LoadAxis
-from rodlab.errors import did_you_mean
-from rodlab.fileio import read_toml
+from rodlab.core.enums import Checksum, LineProtocol, LoadAxis
+from rodlab.core.errors import did_you_mean
+from rodlab.core.fileio import read_toml
 
 from .errors import RigError
 from .instrument_profile import parse_profile_v2
@@ -63,7 +63,7 @@ def _load_toml(path) -> tuple[dict, str]:
 
 def _schema(data: dict, format_id: str, path, text: str) -> None:
     """The format's schema, after the reader's own rules: anything they let through is refused too."""
-    from rodlab.schema import require_schema
+    from rodlab.core.schema import require_schema
     require_schema(data, format_id, Path(path), text, RigError, kind="toml")
 
 

@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab import __version__
-from rodlab.compliance import RodCompliance, r_mn as eq20_r_mn, r_rod as eq21_r_rod
-from rodlab.enums import LoadAxis, Method, Phase
-from rodlab.fileio import sha256_file
-from rodlab.units import G0
+from rodlab.core.compliance import RodCompliance, r_mn as eq20_r_mn, r_rod as eq21_r_rod
+from rodlab.core.enums import LoadAxis, Method, Phase
+from rodlab.core.fileio import sha256_file
+from rodlab.core.units import G0
 
 from .errors import RigError
 from .holds import Holds, hold_averages

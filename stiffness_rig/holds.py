@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.units import G0
+from rodlab.core.units import G0
 
 
 from .recording import RigRecording

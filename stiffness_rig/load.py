@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.enums import LoadAxis, Phase
-from rodlab.units import G0
+from rodlab.core.enums import LoadAxis, Phase
+from rodlab.core.units import G0
 
 from .holds import Holds
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.enums import LoadAxis, Phase
-from rodlab.units import G0
+from rodlab.core.enums import LoadAxis, Phase
+from rodlab.core.units import G0
 
 from .effects import RIG_EFFECTS, RigState, complete_effects, spring_compliance
 from .errors import RigError

@@ -6,7 +6,7 @@ the calibration's light contact forces see. Each mass whose weight exceeds the l
 """
 from __future__ import annotations
 
-from rodlab.units import G0
+from rodlab.core.units import G0
 
 __all__ = ["CARBON_LINEAR_LIMIT_N", "is_carbon", "linear_range_warnings"]
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.enums import Phase
-from rodlab.fileio import atomic_write_figure
-from rodlab.units import G0
+from rodlab.core.enums import Phase
+from rodlab.core.fileio import atomic_write_figure
+from rodlab.core.units import G0
 
 __all__ = ["plot_fit", "format_pm", "format_zero"]
 

@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.enums import LoadAxis, Phase
-from rodlab.errors import did_you_mean
-from rodlab.fileio import read_text_checked
+from rodlab.core.enums import LoadAxis, Phase
+from rodlab.core.errors import did_you_mean
+from rodlab.core.fileio import read_text_checked
 
 from .errors import RigError
 

@@ -5,8 +5,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from rodlab.enums import Phase
-from rodlab.units import G0
+from rodlab.core.enums import Phase
+from rodlab.core.units import G0
 
 __all__ = ["RigSamples", "rig_samples"]
 

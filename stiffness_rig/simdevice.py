@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
-from rodlab.enums import LoadAxis, Phase
+from rodlab.core.enums import LoadAxis, Phase
 
 from .model import Hold, RigModel
 from .ptylink import PtyLink

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.enums import LoadAxis, Phase
+from rodlab.core.enums import LoadAxis, Phase
 
 from .drivers.base import unescape
 from .drivers.digimatic import format_digimatic

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from rodlab import G0, calc_compliance, load_design, paper_compliance, resolve_design
-from rodlab.calc import BendModel
-from rodlab.design_io import design_from_dict
+from rodlab.core.calc import BendModel
+from rodlab.core.design_io import design_from_dict
 
 from conftest import ROD1, legacy_design
 
@@ -129,8 +129,8 @@ def test_arc_bend_is_softer_in_torsion_than_corner_but_close():
 def test_vectorised_centreline_matches_segments():
     """The unit-load integrator's array form of the centreline equals Segment.point / tangent, and its exact
     first moments equal a fine numerical quadrature of the positions."""
-    from rodlab.calc import Centreline
-    from rodlab.layout import SegmentKind, layout
+    from rodlab.core.calc import Centreline
+    from rodlab.core.layout import SegmentKind, layout
     segs = layout(resolve_design("rod1"))
     assert any(s.kind is SegmentKind.ARC for s in segs)
     cl = Centreline(segs)

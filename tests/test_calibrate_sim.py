@@ -62,7 +62,7 @@ def test_clean_campaign_is_trusted_and_compliances_stay_physical(tmp_path, capsy
     no longer come out negative and raise a false NOT TRUSTED (seed 1 did, c_6 = -3.6 +- 10.8 urad/(N m))."""
     from rodlab.calibrate.estimate import C_MAX
     from rodlab.app.cli import main
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     robot = resolve_robot("tx90")
     rod = calc_rod_compliance(resolve_design("rod1"))
     write_compliance(rod, tmp_path / "rod.json")

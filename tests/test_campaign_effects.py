@@ -17,8 +17,8 @@ from rodlab.app.diagnose.advice import remedy
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect, campaign_vocabulary_markdown
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-from rodlab.enums import CampaignEffect
-from rodlab.errors import RodlabError
+from rodlab.core.enums import CampaignEffect
+from rodlab.core.errors import RodlabError
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = ROOT.parent / "shared" / "contract" / "effects.md"
@@ -137,7 +137,7 @@ def test_bad_effects_are_refused_before_anything_is_written(tmp_path, effects, k
 def test_cli_simulates_campaign_effects_by_name(tmp_path, capsys):
     from rodlab.app.cli import main
     rod = tmp_path / "rod.compliance.json"
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     write_compliance(ROD, rod)
     out = tmp_path / "camp"
     assert main(["simulate-campaign", "--rod", str(rod), "--positions", "3", "--orientations", "4", "-o", str(out),

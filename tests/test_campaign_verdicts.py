@@ -12,7 +12,7 @@ import pytest
 from rodlab.calibrate import read_campaign, read_fixture
 from rodlab.calibrate.residual_test import BIRGE_MATERIAL, ResidualTest
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-from rodlab.compliance import write_compliance
+from rodlab.core.compliance import write_compliance
 
 
 @pytest.fixture
@@ -124,7 +124,7 @@ def test_robust_fit_sets_gross_errors_aside():
 
 
 def test_angle_rates_are_the_derivative_of_the_rotation():
-    from rodlab.frames import abc_rate_axes, rotation_from_abc, skew
+    from rodlab.core.frames import abc_rate_axes, rotation_from_abc, skew
     abc = np.array([33.8, -71.0, 17.8])
     R = rotation_from_abc(abc)
     E = abc_rate_axes(R)

@@ -17,8 +17,8 @@ from rodlab.calibrate import (COMPENSATIONS, CalibrationError, Compensation, Fit
                               resolve_robot)
 from rodlab.calibrate import compensations as registry
 from rodlab.calibrate.simulate import simulate_campaign
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import pytest
 
 from rodlab import ComplianceError, Method, RodCompliance, c_rod_um, load_design, r_rod, read_compliance, \
     write_compliance
-from rodlab.calc import calc_rod_compliance
+from rodlab.core.calc import calc_rod_compliance
 
 from conftest import ROD1
 
@@ -124,7 +124,7 @@ def test_writer_refuses_nan(tmp_path, comp):
 def _measured(comp) -> RodCompliance:
     """A measured-looking file: r_mn on the measured entries only (column y and z: loads along y and z)."""
     from dataclasses import replace
-    from rodlab.compliance import r_mn
+    from rodlab.core.compliance import r_mn
     meas = np.full((3, 3), np.nan)
     meas[:, 1:] = comp.C_F[:, 1:] * 1.07
     sigma = np.where(np.isfinite(meas), 2e-4, np.nan)
@@ -134,7 +134,7 @@ def _measured(comp) -> RodCompliance:
 def test_v2_round_trip_keeps_nulls(tmp_path, comp):
     """r_mn and C_F_sigma survive a write / read with null where not measured; the file states /2 and passes
     its schema; a file without them stays /1."""
-    from rodlab.schema import check_file
+    from rodlab.core.schema import check_file
     m = _measured(comp)
     p = write_compliance(m, tmp_path / "m.compliance.json")
     data = json.loads(p.read_text())

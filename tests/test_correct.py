@@ -48,7 +48,7 @@ def test_commands_and_corrected_targets_round_trip_within_a_micrometre(ur5):
     assert np.abs(np.linalg.norm(_tcp(ur5, calibrated, corr.q_rad) - targets, axis=1)).max() < 1e-3   # < 1 um
     # the corrected targets are the nominal model's TCP pose at the commands: a nominal controller given them
     # (position and the flange orientation) is at a solution there, so the calibrated robot is on target
-    from rodlab.frames import pose_to_matrix
+    from rodlab.core.frames import pose_to_matrix
     fr = ball_positions(ur5, nominal, corr.q_rad)[0]
     assert np.abs(fr.pW - corr.corrected_mm).max() < 1e-9
     R = np.einsum("ij,mjk->mik", fr.R_W0, fr.T[:, 6, :3, :3])
@@ -135,7 +135,7 @@ def test_pose_targets_round_trip_within_a_micrometre_and_a_microradian(ur5):
     tool pose at the commands (a nominal pose IK of it returns them); the nominal program misses in both."""
     from rodlab.calibrate.correct import correct_poses
     from rodlab.calibrate.ik_pose import rotation_angle, solve_ik_poses
-    from rodlab.frames import matrix_to_pose, rotation_from_abc
+    from rodlab.core.frames import matrix_to_pose, rotation_from_abc
     nominal, calibrated = _models(ur5)
     rng = np.random.default_rng(2)
     program = np.deg2rad(rng.uniform(-40, 40, (30, 6)) + np.array([0, -80, 90, -60, 90, 0]))  # elbow bent, no wrist flip
@@ -167,7 +167,7 @@ def test_cli_pose_targets_and_their_refusals(tmp_path, capsys):
     from rodlab.calibrate import read_points
     from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.ik_pose import rotation_angle
-    from rodlab.frames import matrix_to_pose, rotation_from_abc
+    from rodlab.core.frames import matrix_to_pose, rotation_from_abc
     lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
     rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]

@@ -6,9 +6,9 @@ import math
 import pytest
 
 from rodlab import DesignError, FormatError, load_design, resolve_design
-from rodlab.design_io import builtin_designs
-from rodlab.enums import Part
-from rodlab.massprops import part_mass_properties
+from rodlab.core.design_io import builtin_designs
+from rodlab.core.enums import Part
+from rodlab.core.massprops import part_mass_properties
 
 from conftest import write_toml
 
@@ -128,13 +128,13 @@ def test_range_warnings_name_key_range_and_line(tmp_path, rod1_dict, caplog):
     file's line; a long rod also gets the linear model's second-order error (sag^2 / reach)."""
     import logging
 
-    from rodlab.design_range import VERIFIED_RANGE, linear_model_error_mm, range_warnings
-    with caplog.at_level(logging.WARNING, logger="rodlab.design_io"):
+    from rodlab.core.design_range import VERIFIED_RANGE, linear_model_error_mm, range_warnings
+    with caplog.at_level(logging.WARNING, logger="rodlab.core.design_io"):
         load_design(write_toml(tmp_path / "ok.rod.toml", rod1_dict))
     assert not caplog.records
     rod1_dict["L2_mm"] = 4500.0
     path = write_toml(tmp_path / "long.rod.toml", rod1_dict)
-    with caplog.at_level(logging.WARNING, logger="rodlab.design_io"):
+    with caplog.at_level(logging.WARNING, logger="rodlab.core.design_io"):
         d = load_design(path)
     text = caplog.text
     line = next(i for i, ln in enumerate(path.read_text().splitlines(), 1) if ln.startswith("L2_mm"))
@@ -175,8 +175,8 @@ def test_design_to_dict_round_trip():
     equal, also with a part removed and a user material."""
     from dataclasses import replace
 
-    from rodlab.design_io import design_from_dict, design_to_dict
-    from rodlab.materials import Material
+    from rodlab.core.design_io import design_from_dict, design_to_dict
+    from rodlab.core.materials import Material
     designs = [resolve_design(n) for n in builtin_designs()]
     d = designs[0]
     designs.append(replace(d, rings=replace(d.rings, length_mm=0.0),

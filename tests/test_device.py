@@ -16,7 +16,7 @@ from rodlab.calibrate import (CalibrationError, campaign_observations, fit_fixtu
 from rodlab.calibrate.device import ideal_device, misaligned_device
 from rodlab.calibrate.observations import noise_covariance
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-from rodlab.frames import pose_to_matrix
+from rodlab.core.frames import pose_to_matrix
 
 
 def _device(seed: int, deg: float = 2.0):
@@ -178,7 +178,7 @@ def test_far_point_warned_and_column_sets_checked(sims, tmp_path, capsys):
 
 
 def test_simulate_campaign_raw_cli(tmp_path, rod1_calc, capsys):
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     rod = write_compliance(rod1_calc, tmp_path / "rod.compliance.json")
     assert main(["simulate-campaign", "--rod", str(rod), "--raw", "--misalign-deg", "2", "--positions", "3",
                  "--orientations", "4", "-o", str(tmp_path / "c")]) == 0

@@ -1,4 +1,4 @@
-"""A diagnosis' verdict, subject and finding effects are Enums of rodlab.enums, parsed from the contract
+"""A diagnosis' verdict, subject and finding effects are Enums of rodlab.core.enums, parsed from the contract
 spelling, and its report file holds exactly the contract spelling (plain JSON strings, byte for byte)."""
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import pytest
 
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.app.diagnose.report import Diagnosis, Finding
-from rodlab.enums import CampaignEffect, FindingKind, RigEffect, Subject, Verdict, parse_effect_id
-from rodlab.errors import RodlabError
-from rodlab.schema import load_schema
+from rodlab.core.enums import CampaignEffect, FindingKind, RigEffect, Subject, Verdict, parse_effect_id
+from rodlab.core.errors import RodlabError
+from rodlab.core.schema import load_schema
 from rodlab.stiffness_rig import read_recording
 
 from conftest import legacy_design

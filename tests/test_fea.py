@@ -8,7 +8,7 @@ import pytest
 
 from rodlab.fea.elasticity import local_frames, element_tensors, rotate_tensor, stiffness_tensor_local
 from rodlab import calc_compliance, get_material, mass_properties, resolve_design
-from rodlab.design_io import design_from_dict
+from rodlab.core.design_io import design_from_dict
 
 
 def _as6(C):

@@ -1,4 +1,4 @@
-"""FEA fields out (``rodlab fea --fields``: .vtu / .vtp) and their pictures (``rodlab view``, rodlab.view3d)."""
+"""FEA fields out (``rodlab fea --fields``: .vtu / .vtp) and their pictures (``rodlab view``, rodlab.core.view3d)."""
 from __future__ import annotations
 
 import base64
@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 from rodlab import resolve_design
-from rodlab.design_io import design_from_dict
-from rodlab.enums import Part
-from rodlab.vtkio import VTK_QUADRATIC_TETRA, VtkData, decode_strings, encode_strings, write_vtu
+from rodlab.core.design_io import design_from_dict
+from rodlab.core.enums import Part
+from rodlab.core.vtkio import VTK_QUADRATIC_TETRA, VtkData, decode_strings, encode_strings, write_vtu
 
 CASES = ("Fx", "Fy", "Fz", "gx", "gy", "gz")
 
 
 def _decode(text: str, dtype) -> np.ndarray:
-    """One inline binary array of rodlab.vtkio (UInt64 header [1, n, n, compressed n], zlib), decoded by hand."""
+    """One inline binary array of rodlab.core.vtkio (UInt64 header [1, n, n, compressed n], zlib), decoded by hand."""
     head = base64.b64decode(text[:44])                    # 32 header bytes -> 44 base64 characters
     n_blocks, raw, last, comp = np.frombuffer(head, "<u8")
     assert n_blocks == 1 and raw == last
@@ -97,7 +97,7 @@ def test_frame_vtp_has_the_parts_and_the_stress(tmp_path):
     for k, key in enumerate(CASES):
         np.testing.assert_allclose(m.point_data[f"von_mises_{key}"], f.von_mises[:, k], rtol=1e-12)
         np.testing.assert_allclose(m.point_data[f"displacement_{key}"], f.displacement[:, :, k], rtol=1e-12)
-    from rodlab.view3d import _peak, read_field_view
+    from rodlab.core.view3d import _peak, read_field_view
     view = read_field_view(tmp_path / "rod1.vtp")
     i = int(np.argmax(f.von_mises[:, 1]))
     assert _peak(view, f.von_mises[:, 1]) == (pytest.approx(f.von_mises[i, 1]), f.parts[f.part_index[i]].replace("_", " "))
@@ -119,8 +119,8 @@ def test_frame_stress_of_a_straight_tube_is_the_cantilever_closed_form(tmp_path)
     along it stretches it by that weight over A. Written to the .vtp as von_mises_<case>."""
     from rodlab.fea.fields import frame_centreline_fields, write_frame_fields
     from rodlab.fea.frame import frame_segments
-    from rodlab.massprops import ball_mass_properties
-    from rodlab.units import G0
+    from rodlab.core.massprops import ball_mass_properties
+    from rodlab.core.units import G0
     d = _straight_tube()
     f = frame_centreline_fields(d, n_points=60)
     ro, ri = 10.0, 8.0
@@ -259,10 +259,10 @@ def test_frame_stress_agrees_with_the_solid_far_from_the_joints(rod1_solid):
     the beam's at that node from the frame's section forces (median within 1.5 %, 80 % of the nodes within
     6 %, at nodes carrying more than half the section's peak; measured: medians 0.995-1.008); and the frame's
     section value (the .vtp's von_mises_<case>) is the beam formula's peak around the circumference."""
-    from rodlab.chain import centreline_points
+    from rodlab.core.chain import centreline_points
     from rodlab.fea.beam_stress import section_von_mises, section_wrenches
     from rodlab.fea.frame import frame_segments
-    from rodlab.massprops import ball_mass_properties
+    from rodlab.core.massprops import ball_mass_properties
     d, _, sf = rod1_solid
     segs = frame_segments(d)
     ball, tool = ball_mass_properties(d), np.asarray(d.tool_mm, float)
@@ -325,7 +325,7 @@ def test_von_mises_of_a_straight_tube_is_beam_theory():
 
 def _renderer():
     pytest.importorskip("pyvista")
-    from rodlab.view3d import RenderError, check_offscreen
+    from rodlab.core.view3d import RenderError, check_offscreen
     try:
         check_offscreen()
     except RenderError as e:
@@ -403,7 +403,7 @@ def test_no_opengl_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
     """Where VTK can render nowhere (here: forced onto OSMesa, which is absent) it would end the process with a
     segmentation fault; rodlab view says so in one line, exit 2, and writes nothing."""
     pytest.importorskip("pyvista")
-    import rodlab.view3d as view3d
+    import rodlab.core.view3d as view3d
     from rodlab.app.cli import main
     from rodlab.fea.fields import write_frame_fields
     vtp = write_frame_fields(tmp_path / "rod1.vtp", resolve_design("rod1"))
@@ -433,9 +433,9 @@ def test_sweep_report_shows_the_base_design_in_3d(tmp_path):
 
 
 def test_triangle_sets_render_with_pyvista_too(tmp_path):
-    """rodlab.render3d's triangle sets (the CAD views) through the same off-screen pyvista renderer: two boxes
+    """rodlab.core.render3d's triangle sets (the CAD views) through the same off-screen pyvista renderer: two boxes
     drawn, the views differ; renderer="auto" takes pyvista where it renders."""
-    from rodlab.render3d import TriangleSet, pick_renderer, render_png
+    from rodlab.core.render3d import TriangleSet, pick_renderer, render_png
     _renderer()
     box = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float) * [100.0, 20.0, 20.0]
     tri = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],
@@ -450,7 +450,7 @@ def test_triangle_sets_render_with_pyvista_too(tmp_path):
 
 def test_without_pyvista_view_says_what_to_install_and_reports_go_on(tmp_path, monkeypatch, capsys):
     import sys
-    import rodlab.view3d as view3d
+    import rodlab.core.view3d as view3d
     from rodlab.app.cli import main
     monkeypatch.setitem(sys.modules, "pyvista", None)          # as if the viz extra were not installed
     monkeypatch.setattr(view3d, "_offscreen_ok", None)
@@ -462,7 +462,7 @@ def test_without_pyvista_view_says_what_to_install_and_reports_go_on(tmp_path, m
     assert vtp.exists() and (tmp_path / "fea.report.html").exists() and not list(tmp_path.glob("*.png"))
     assert main(["view", str(vtp), "-o", str(tmp_path / "v.png")]) == 2
     assert "pip install 'rodlab[viz]'" in capsys.readouterr().err
-    from rodlab.render3d import pick_renderer
+    from rodlab.core.render3d import pick_renderer
     assert pick_renderer("auto") == "matplotlib"
 
 

@@ -7,8 +7,8 @@ import pytest
 
 from rodlab.fea.frame import (FrameCalibration, bend_flexibility_factor, calibrate_frame, frame_errors, frame_segments,
                        shear_lag_mm)
-from rodlab.enums import Part
-from rodlab.layout import SegmentKind
+from rodlab.core.enums import Part
+from rodlab.core.layout import SegmentKind
 
 from rodlab.fea.reference_designs import (family_errors, random_global_errors, random_references, reference_design,
                                           reference_sets, reference_spec, solid_references)

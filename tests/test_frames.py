@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.frames import matrix_to_pose, pose_to_matrix, rot_x, rot_y, rot_z
+from rodlab.core.frames import matrix_to_pose, pose_to_matrix, rot_x, rot_y, rot_z
 
 
 def test_order_and_round_trip():

@@ -67,9 +67,9 @@ def _probe_file(folder: Path) -> Path:
 
 def _pool(folder: Path) -> dict[str, list[Path]]:
     """Input files: per kind the valid one and its corruptions; plus kind-less broken ones."""
-    from rodlab.calc import calc_rod_compliance
-    from rodlab.compliance import write_compliance
-    from rodlab.design_io import builtin_designs, resolve_design
+    from rodlab.core.calc import calc_rod_compliance
+    from rodlab.core.compliance import write_compliance
+    from rodlab.core.design_io import builtin_designs, resolve_design
     valid = {"design": builtin_designs()["rod1"],
              "compliance": write_compliance(calc_rod_compliance(resolve_design("rod1")), folder / "rod1.compliance.json"),
              "robot": ROOT / "calibrate" / "robots" / "tx90.toml",

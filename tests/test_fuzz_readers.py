@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rodlab.errors import RodlabError
+from rodlab.core.errors import RodlabError
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "examples"
@@ -20,9 +20,9 @@ TOKENS = ["nan", "inf", "-inf", "1e308", "-1e308", "abc", "", "0", "-1", "1e-320
 
 
 def _sources():
-    from rodlab.calc import calc_rod_compliance
-    from rodlab.compliance import write_compliance
-    from rodlab.design_io import builtin_designs, resolve_design
+    from rodlab.core.calc import calc_rod_compliance
+    from rodlab.core.compliance import write_compliance
+    from rodlab.core.design_io import builtin_designs, resolve_design
     import tempfile
     tmp = Path(tempfile.mkdtemp())
     comp = write_compliance(calc_rod_compliance(resolve_design("rod1")), tmp / "rod1.compliance.json")
@@ -56,11 +56,11 @@ def _sources():
 
 def _device_sources(tmp: Path) -> dict:
     """A device file as built, its probe file, a raw campaign and the fixture fitted from the probes."""
-    from rodlab.calc import calc_rod_compliance
+    from rodlab.core.calc import calc_rod_compliance
     from rodlab.calibrate import fit_fixture, read_probe, resolve_robot, write_fixture
     from rodlab.calibrate.device import ideal_device, misaligned_device
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     dev = misaligned_device(ideal_device(), 2.0, np.random.default_rng(1))
     simulate_campaign(resolve_robot("tx90"), calc_rod_compliance(resolve_design("rod1")), tmp / "raw",
                       CampaignSpec(positions=3, orientations=3), device=dev)
@@ -77,10 +77,10 @@ SOURCES = _sources()
 
 def _reader(kind):
     if kind == "design":
-        from rodlab.design_io import load_design
+        from rodlab.core.design_io import load_design
         return load_design
     if kind == "compliance":
-        from rodlab.compliance import read_compliance
+        from rodlab.core.compliance import read_compliance
         return read_compliance
     if kind == "joints":
         from rodlab.fea.joints_io import read_joints

@@ -9,7 +9,7 @@ pytest.importorskip("gmsh")
 
 from rodlab.geometry import GeometryError, build_cad, mesh_rod  # noqa: E402
 from rodlab import Part, mass_properties, part_mass_properties, resolve_design  # noqa: E402
-from rodlab.design_io import design_from_dict  # noqa: E402
+from rodlab.core.design_io import design_from_dict  # noqa: E402
 from conftest import legacy_design  # noqa: E402
 
 pytestmark = pytest.mark.cad

@@ -9,19 +9,19 @@ import pytest
 from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.app.update import Measured, update_design
-from rodlab.calc import calc_compliance
-from rodlab.compliance import RodCompliance
-from rodlab.design_io import design_from_dict, design_to_dict, load_design
-from rodlab.errors import DesignError, FormatError
+from rodlab.core.calc import calc_compliance
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.design_io import design_from_dict, design_to_dict, load_design
+from rodlab.core.errors import DesignError, FormatError
 from rodlab.fea.frame import frame_compliance
-from rodlab.joint_springs import JointSpring, design_joint_places
-from rodlab.massprops import distal_mass_properties, mass_properties
-from rodlab.sensitivity import with_values
+from rodlab.core.joint_springs import JointSpring, design_joint_places
+from rodlab.core.massprops import distal_mass_properties, mass_properties
+from rodlab.core.sensitivity import with_values
 from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.effects import joint_places
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
-from rodlab.units import G0
+from rodlab.core.units import G0
 
 ROD1 = legacy_design("rod1")
 S = 4e-6          # rad/(N m)
@@ -66,7 +66,7 @@ def test_distal_mass_runs_from_the_whole_rod_to_the_ball():
     mp = mass_properties(ROD1)
     assert whole.mass_kg == pytest.approx(mp.mass_kg, rel=1e-9)
     np.testing.assert_allclose(whole.com_T_mm, mp.com_T_mm, atol=1e-6)
-    from rodlab.massprops import ball_mass_properties
+    from rodlab.core.massprops import ball_mass_properties
     assert ball_only.mass_kg == pytest.approx(ball_mass_properties(ROD1).mass_kg, rel=1e-9)
     mid = distal_mass_properties(ROD1, design_joint_places(ROD1)["ring_1"].s_mm)
     assert ball_only.mass_kg < mid.mass_kg < whole.mass_kg

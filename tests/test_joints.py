@@ -1,4 +1,4 @@
-"""Joint calibration of the frame model (fea.joints) and the chain decomposition under it (rodlab.chain)."""
+"""Joint calibration of the frame model (fea.joints) and the chain decomposition under it (rodlab.core.chain)."""
 from __future__ import annotations
 
 import json
@@ -12,14 +12,14 @@ from rodlab.fea.errors import FeaError
 from rodlab.fea.frame import CALIBRATION, frame_compliance, frame_segments
 from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, fit_joints, free_spans,
                         joint_frame_compliance, joint_margins, joints_from_motions, span_basis)
-from rodlab.calc import unit_load_compliance
-from rodlab.chain import chain_flexibility, transport
+from rodlab.core.calc import unit_load_compliance
+from rodlab.core.chain import chain_flexibility, transport
 from conftest import legacy_design
-from rodlab.design_io import resolve_design
-from rodlab.enums import Part
-from rodlab.layout import Layer, Segment, SegmentKind
-from rodlab.massprops import ball_mass_properties
-from rodlab.units import G0
+from rodlab.core.design_io import resolve_design
+from rodlab.core.enums import Part
+from rodlab.core.layout import Layer, Segment, SegmentKind
+from rodlab.core.massprops import ball_mass_properties
+from rodlab.core.units import G0
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -50,7 +50,7 @@ def test_a_heavier_ball_lowers_the_first_frequency(steel_half):
     from dataclasses import replace
 
     from rodlab.fea.modal_solid import solid_frequencies
-    from rodlab.materials import Material
+    from rodlab.core.materials import Material
     d, rm = steel_half
     heavy = replace(d, ball=replace(d.ball, material=Material("heavy", 370.0, 0.22, 4 * 3900.0)))
     f0 = solid_frequencies(d, rm, modes=1).frequencies_Hz[0]

@@ -12,15 +12,15 @@ from rodlab import calc_rod_compliance, load_design
 from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.app.update import Measured, update_design
-from rodlab.compliance import RodCompliance
-from rodlab.enums import MODEL_FORM
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import MODEL_FORM
 from rodlab.fea.frame import frame_compliance
-from rodlab.sensitivity import with_values
+from rodlab.core.sensitivity import with_values
 from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.effects import joint_places
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
-from rodlab.tolerances import design_tolerances
+from rodlab.core.tolerances import design_tolerances
 
 ROD1 = legacy_design("rod1")
 
@@ -58,7 +58,7 @@ def _causes(diag):
 @pytest.fixture(scope="module")
 def calc_sim(tmp_path_factory):
     """`rodlab compliance rod1.rod.toml --method calc` of the examples' design: the file names its design."""
-    from rodlab.compliance import read_compliance
+    from rodlab.core.compliance import read_compliance
     from pathlib import Path
     ex = Path(__file__).resolve().parents[2] / "shared" / "examples"
     if not ex.is_dir():
@@ -166,7 +166,7 @@ def test_update_cli_writes_the_as_built_design(tmp_path):
 def test_sim_accuracy_option(tmp_path, calc_sim):
     sim_path = tmp_path / "s.json"
     sim, ex = calc_sim
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     write_compliance(sim, sim_path)
     run = subprocess.run([sys.executable, "-m", "rodlab", "diagnose", "--rig", str(ex / "rig-null.rig.csv"), "--sim",
                           str(sim_path), "--sim-accuracy", "2x", "--json", str(tmp_path / "d.json")],

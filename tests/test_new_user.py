@@ -32,7 +32,7 @@ def test_a_folder_named_like_a_builtin_robot_does_not_hide_it(tmp_path, monkeypa
 
 
 def test_a_folder_named_like_a_builtin_design_does_not_hide_it(tmp_path, monkeypatch):
-    from rodlab.design_io import resolve_design
+    from rodlab.core.design_io import resolve_design
     monkeypatch.chdir(tmp_path)
     (tmp_path / "rod1").mkdir()
     assert resolve_design("rod1").L1_mm == 300.0

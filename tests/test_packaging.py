@@ -46,6 +46,6 @@ def test_domain_folders_install_inside_rodlab_only():
 
 def test_builtin_data_found_through_the_installed_names():
     from rodlab.calibrate.robot_formats import builtin_robots
-    from rodlab.design_io import builtin_designs
+    from rodlab.core.design_io import builtin_designs
     assert {"tx90", "r2000ic165f", "ur10", "ur5"} <= set(builtin_robots())
     assert {f"rod{i}" for i in range(1, 7)} <= set(builtin_designs())

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from rodlab.compliance import c_rod_um
-from rodlab.design_io import resolve_design
+from rodlab.core.compliance import c_rod_um
+from rodlab.core.design_io import resolve_design
 from rodlab.fea.frame import frame_compliance
 
 #: rod -> simulated c_rod of Table 2 (c_rod / r_rod) [um]

@@ -17,7 +17,7 @@ import pytest
 from rodlab.app.cli import docgen
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, CampaignEffectModel
 from rodlab.calibrate.robot_formats import ROBOT_READERS, RobotFormat
-from rodlab.hypothesis import ParamSpec
+from rodlab.core.hypothesis import ParamSpec
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, RigEffectModel
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -25,7 +25,7 @@ cli_main = importlib.import_module("rodlab.app.cli.main")      # the package's `
 
 
 class _New(str, Enum):
-    """The IDs a real entry would add to RigEffect / CampaignEffect in rodlab/enums.py."""
+    """The IDs a real entry would add to RigEffect / CampaignEffect in rodlab/core/enums.py."""
 
     WOBBLE = "test_wobble"
     SAG = "test_campaign_sag"

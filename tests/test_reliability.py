@@ -9,7 +9,7 @@ from rodlab.calibrate import (campaign_observations, identify, read_campaign, re
 from rodlab.fea import FeaError
 from rodlab.fea.compute import estimated_dofs, solid_compliance
 from rodlab import read_compliance
-from rodlab.design_io import design_from_dict
+from rodlab.core.design_io import design_from_dict
 
 
 def test_untrusted_calibration_is_flagged(examples):

@@ -68,7 +68,7 @@ def _embedded(html: str) -> int:
 def _renders_3d() -> int:
     """1 where the 3-D views render (pyvista, off-screen OpenGL): the sweep's page then shows its base design."""
     try:
-        from rodlab.view3d import check_offscreen
+        from rodlab.core.view3d import check_offscreen
         check_offscreen()
     except Exception:
         return 0

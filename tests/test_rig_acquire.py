@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
 from rodlab.stiffness_rig import DeviceError, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.acquire import RecordingLock, acquire
 from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
@@ -165,7 +165,7 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
     import time
 
     from rodlab.app.cli import main
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     from rodlab.stiffness_rig.config import read_plan, read_profile
     link = tmp_path / "tty"
     sim = write_compliance(SIM, tmp_path / "sim.compliance.json")

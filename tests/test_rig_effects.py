@@ -12,7 +12,7 @@ import pytest
 from rodlab import calc_rod_compliance
 from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
-from rodlab.enums import Phase, RigEffect
+from rodlab.core.enums import Phase, RigEffect
 from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, vocabulary_markdown
 from rodlab.stiffness_rig.model import Hold, LoadSchedule, RigModel
@@ -35,7 +35,7 @@ def _contract_rig_effects() -> list[str]:
 def test_registry_covers_the_contract_vocabulary():
     """Every rig effect of the contract is a registry entry, but for ``model_form`` (effects v2): nothing left out,
     the rod as built inside its envelope, a finding of the diagnosis (tests/test_model_form.py), not an effect."""
-    from rodlab.enums import MODEL_FORM
+    from rodlab.core.enums import MODEL_FORM
     names = _contract_rig_effects()
     assert len(names) >= 9
     assert set(names) <= {e.value for e in RIG_EFFECTS} | {MODEL_FORM}, set(names) - {e.value for e in RIG_EFFECTS}
@@ -45,9 +45,9 @@ def test_registry_covers_the_contract_vocabulary():
 
 
 def test_campaign_vocabulary_is_the_enum():
-    """The campaign effects of the contract are :class:`rodlab.enums.CampaignEffect` (the diagnoser's hypotheses
+    """The campaign effects of the contract are :class:`rodlab.core.enums.CampaignEffect` (the diagnoser's hypotheses
     carry them; simulated and diagnosed in tests/test_diagnose.py and benchmarks/campaign_blind.py)."""
-    from rodlab.enums import CampaignEffect
+    from rodlab.core.enums import CampaignEffect
     text = CONTRACT.read_text() if CONTRACT.exists() else (ROOT / "docs" / "formats.md").read_text()
     part = text.split("## Subject `campaign`")[1] if CONTRACT.exists() else \
         text.split("subject `campaign`")[1].split("##")[0]
@@ -106,8 +106,8 @@ def test_load_hysteresis_splits_the_branches_in_proportion_to_the_load():
 def test_nonlinearity_forms_scale_the_compliance_as_stated(params, axis_hit):
     """Forward model of the quadratic and the one-axis forms: the reading at load F is (1 + beta |F| / 10 N +
     beta2 F^2 / 100 N^2) times the linear one, on the stated axis only (a load along -y counts as y)."""
-    from rodlab.enums import LoadAxis
-    from rodlab.units import G0
+    from rodlab.core.enums import LoadAxis
+    from rodlab.core.units import G0
     lin = RigModel(SIM.C_F, {}, noise_mm=0.0, resolution_mm=0.0)
     eff = RIG_EFFECTS[RigEffect.NONLINEARITY].complete(params)
     model = RigModel(SIM.C_F, {"nonlinearity": eff}, noise_mm=0.0, resolution_mm=0.0)
@@ -171,7 +171,7 @@ def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
     """``rodlab rig simulate --effect`` takes joint springs by location and drift with temperature (both were
     refused before the registry), and writes the completed parameters into the recording's header."""
     from rodlab.app.cli.main import main
-    from rodlab.compliance import write_compliance
+    from rodlab.core.compliance import write_compliance
     sim = write_compliance(SIM, tmp_path / "rod1.compliance.json")
     out = tmp_path / "j.rig.csv"
     rod1 = str(legacy_file(tmp_path / "rod1.rod.toml", "rod1"))

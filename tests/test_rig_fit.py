@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rodlab import Method, read_compliance
-from rodlab.units import G0
+from rodlab.core.units import G0
 from rodlab.stiffness_rig import RecordingWriter, RigError, fit_recording, read_recording
 
 

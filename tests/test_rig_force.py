@@ -46,7 +46,7 @@ def test_load_cell_measures_friction_and_tare_and_the_fit_needs_no_friction(tmp_
     hypothesis needed), every measured entry is the truth, and mass x g0 - force_N per branch gives the friction
     within 10 % and the tare within 10 %. Without the load cell the same rig splits the branches by the
     friction."""
-    from rodlab.units import G0
+    from rodlab.core.units import G0
     effects = {"friction": {"F_f_N": 0.4}, "tare": {"tare_kg": 0.06}}
     rec, model = _record(tmp_path, effects, load_cell_noise_N=0.01)
     assert rec.has_force

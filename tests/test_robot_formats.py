@@ -10,7 +10,7 @@ import pytest
 from rodlab.calibrate import ModelParams, builtin_robots, read_robot, resolve_robot
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import forward
-from rodlab.frames import pose_to_matrix
+from rodlab.core.frames import pose_to_matrix
 
 yourdfpy = pytest.importorskip("yourdfpy")
 
@@ -298,7 +298,7 @@ def test_robot_file_errors_name_the_problem(tmp_path):
 def _calibration_file(tmp_path, robot, rng):
     """A result file of a perturbed model (what `rodlab calibrate --json` writes)."""
     from rodlab.calibrate.params import catalogue, structural_fixed
-    from rodlab.fileio import atomic_write_json
+    from rodlab.core.fileio import atomic_write_json
     fixed = structural_fixed(robot, np.array([10.0, 0.0, 150.0]))
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     params = {}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodlab.calc import calc_rod_compliance
+from rodlab.core.calc import calc_rod_compliance
 from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.compensations.rod_deflection import flange_loads
 from rodlab.calibrate.errors import CalibrationError
@@ -15,8 +15,8 @@ from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.predict_linear import predict_linear
 from rodlab.calibrate.rod_slip import slip_directions, slip_offsets
 from rodlab.calibrate.simulate import standard_base, standard_fixture
-from rodlab.design_io import resolve_design
-from rodlab.enums import Method
+from rodlab.core.design_io import resolve_design
+from rodlab.core.enums import Method
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import numpy as np
 
 from rodlab.app.diagnose.criteria import bic_penalty, evidence
 from rodlab.app.diagnose.search import search
-from rodlab.enums import Trial
+from rodlab.core.enums import Trial
 
 
 class _Scripted:

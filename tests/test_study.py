@@ -7,13 +7,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rodlab.calc import calc_rod_compliance
+from rodlab.core.calc import calc_rod_compliance
 from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.plan import plan_poses
 from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.simulate import standard_base, standard_fixture
-from rodlab.design_io import resolve_design
-from rodlab.enums import Method
+from rodlab.core.design_io import resolve_design
+from rodlab.core.enums import Method
 
 
 @pytest.fixture(scope="module")
@@ -66,8 +66,8 @@ def test_priors_are_checked():
 
 def test_uniform_expansion_scales_the_tool_vector():
     """Every part of the same CTE: the rod grows like a photograph, the ball moves by alpha * tool."""
-    from rodlab.materials import Material
-    from rodlab.strength import thermal_growth_um_per_K
+    from rodlab.core.materials import Material
+    from rodlab.core.strength import thermal_growth_um_per_K
     d = resolve_design("rod4")
     m = Material("same", 200.0, 0.3, 8000.0, cte_ppm_K=10.0)
     d = replace(d, pipe_I=replace(d.pipe_I, material=m), pipe_II=replace(d.pipe_II, material=m),
@@ -79,10 +79,10 @@ def test_uniform_expansion_scales_the_tool_vector():
 
 def test_cantilever_frequency_matches_euler_bernoulli():
     """A slender straight steel tube clamped at one end: f1 = 1.8751^2 / (2 pi) sqrt(EI / (m L^4))."""
-    from rodlab.enums import Part
+    from rodlab.core.enums import Part
     from rodlab.fea.modal import chain_frequencies
-    from rodlab.layout import Layer, Segment, SegmentKind
-    from rodlab.materials import BUILTIN_MATERIALS
+    from rodlab.core.layout import Layer, Segment, SegmentKind
+    from rodlab.core.materials import BUILTIN_MATERIALS
     steel = BUILTIN_MATERIALS["steel_304"]
     L = 1500.0
     seg = Segment(SegmentKind.LINE, 0.0, L, np.zeros(3), np.array([0.0, 0.0, 1.0]),
@@ -96,7 +96,7 @@ def test_cantilever_frequency_matches_euler_bernoulli():
 
 
 def test_strength_grows_with_the_contact_force():
-    from rodlab.strength import strength_margins
+    from rodlab.core.strength import strength_margins
     d = resolve_design("rod6")
     a, b = strength_margins(d, 2.0), strength_margins(d, 200.0)
     assert b.tube_stress_MPa > 10 * a.tube_stress_MPa and b.tube_margin < a.tube_margin

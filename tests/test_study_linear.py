@@ -13,9 +13,9 @@ from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.predict_linear import (_exact_ms, _mv, _random_parts, _to_kin, compliance_draws,
                                              linear_campaign, predict_linear, robot_prior, validation_draws)
 from rodlab.calibrate.simulate import standard_base, standard_fixture
-from rodlab.calc import calc_rod_compliance
-from rodlab.design_io import resolve_design
-from rodlab.enums import Method
+from rodlab.core.calc import calc_rod_compliance
+from rodlab.core.design_io import resolve_design
+from rodlab.core.enums import Method
 
 
 @pytest.fixture(scope="module")

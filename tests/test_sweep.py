@@ -7,7 +7,7 @@ import pytest
 from rodlab.fea.sweep import SWEEP_COLUMNS, parse_range, run_sweep
 from rodlab import resolve_design
 from conftest import legacy_design, legacy_file
-from rodlab.errors import LocatedError
+from rodlab.core.errors import LocatedError
 
 
 def test_parse_range():

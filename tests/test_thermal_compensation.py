@@ -10,7 +10,7 @@ from rodlab import calc_rod_compliance, resolve_design
 from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, read_points,
                               resolve_robot, Rod, RodDeflection, ThermalGrowth, validate)
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-from rodlab.materials import get_material
+from rodlab.core.materials import get_material
 
 DESIGN = resolve_design("rod4")
 

@@ -5,10 +5,10 @@ import pytest
 
 from rodlab import calc_rod_compliance, load_design, resolve_design
 from conftest import legacy_design
-from rodlab.design_edit import edited_design_text, write_edited_design
-from rodlab.errors import DesignError, RodlabError
-from rodlab.sensitivity import METHOD_ACCURACY, compliance_sensitivity, with_values
-from rodlab.tolerances import design_tolerances, design_value
+from rodlab.core.design_edit import edited_design_text, write_edited_design
+from rodlab.core.errors import DesignError, RodlabError
+from rodlab.core.sensitivity import METHOD_ACCURACY, compliance_sensitivity, with_values
+from rodlab.core.tolerances import design_tolerances, design_value
 
 TOML = """format = "rodlab.rod/1"
 name = "t"
@@ -45,7 +45,7 @@ def test_tolerances_file_over_defaults(tmp_path):
 
 def test_bond_tolerances(tmp_path):
     """Bonds get the default bending tolerance unless the file states one (absolute only, a known place)."""
-    from rodlab.tolerances import BOND_SD, bond_tolerances
+    from rodlab.core.tolerances import BOND_SD, bond_tolerances
     d = load_design(_write(tmp_path, '[tolerances]\n"joints.ring_1.s_bend_rad_per_Nm" = 5e-6\n'
                                      '"joints.pipe_II.s_bend_rad_per_Nm" = 0\n'))
     assert bond_tolerances(d) == {"flange_clamp": BOND_SD, "ring_1": 5e-6}
@@ -97,7 +97,7 @@ def test_method_accuracy_is_the_verification_data():
     """The stated bias and scatter of calc and frame are those of ln(method / solid) over the bent solid references."""
     from rodlab.fea.frame import frame_compliance
     from rodlab.fea.reference_designs import reference_design, solid_references
-    from rodlab.sensitivity import STRUCTURAL_ENTRIES
+    from rodlab.core.sensitivity import STRUCTURAL_ENTRIES
     logs = {"calc": [], "frame": []}
     for name, ref in solid_references().items():
         try:

@@ -9,7 +9,7 @@ import pytest
 
 from rodlab.app.cli.cmd_validate import READERS, validate_file
 from rodlab.app.cli.main import main
-from rodlab.schema import FORMATS, check_file, load_schema
+from rodlab.core.schema import FORMATS, check_file, load_schema
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = sorted([*ROOT.glob("rodlab/data/**/*.toml"), *ROOT.glob("calibrate/robots/*.toml"),

@@ -14,7 +14,7 @@ from rodlab.app.cli.main import main
 from rodlab.calibrate import Observations, resolve_robot
 from rodlab.calibrate.crossval import Prediction, fold_labels
 from rodlab.calibrate.trust import prediction_warnings
-from rodlab.enums import AccuracySource
+from rodlab.core.enums import AccuracySource
 
 DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data"
 

@@ -7,7 +7,7 @@ import numpy as np
 from rodlab import read_compliance
 from rodlab.calibrate import (campaign_observations, identify, read_campaign, read_fixture, resolve_robot, Rod,
                               RodDeflection)
-from rodlab.compliance import RodCompliance, write_compliance
+from rodlab.core.compliance import RodCompliance, write_compliance
 
 
 def _obs(ex, rod):

@@ -10,9 +10,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import Method
-from rodlab.units import G0
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import Method
+from rodlab.core.units import G0
 
 from ..kinematics import ModelParams, ball_positions
 from ..rod import Rod

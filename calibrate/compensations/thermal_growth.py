@@ -2,7 +2,7 @@
 
 The tool vector (flange to ball centre) of a rod grows with its temperature by ``g (T - T_ref)``, where
 ``g`` [mm/K] in {T} is the sum over the rod's members of each member's axial CTE times its span
-(:func:`rodlab.strength.thermal_growth_um_per_K`): about 8 um/K for a 500 mm steel rod, a tenth of that for
+(:func:`rodlab.core.strength.thermal_growth_um_per_K`): about 8 um/K for a 500 mm steel rod, a tenth of that for
 carbon. A campaign whose ``temp_C`` changes while the robot measures sees each point's ball centre moved by
 that growth, rotated to {W} with the flange (Eq. 11 as for deflection); a constant temperature only shifts the
 tool, which identification absorbs. Needs the campaign's ``temp_C`` column.
@@ -64,7 +64,7 @@ class ThermalGrowth(Compensation):
     @classmethod
     def of_design(cls, design, T_ref_C: float = 20.0) -> "ThermalGrowth":
         """From a rod design: each member's axial CTE (the materials table) times its span."""
-        from rodlab.strength import thermal_growth_um_per_K
+        from rodlab.core.strength import thermal_growth_um_per_K
         g = np.asarray(thermal_growth_um_per_K(design), float) * 1e-3
         if not np.all(np.isfinite(g)):
             raise CalibrationError(f"design {design.name}: a tube or the ball has a material without cte_ppm_K; "

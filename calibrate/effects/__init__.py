@@ -1,6 +1,6 @@
 """Campaign effects: one module per effect of ``contract/effects.md`` (subject ``campaign``), each with its part
 of the campaign simulator, its parameter schema, its hypotheses for the diagnosis, how a finding enters the
-re-identification, its wording and its remedy; one registry keyed by :class:`rodlab.enums.CampaignEffect`.
+re-identification, its wording and its remedy; one registry keyed by :class:`rodlab.core.enums.CampaignEffect`.
 
 Adding an effect: a new value of ``CampaignEffect``, a module with a :class:`CampaignEffectModel` subclass,
 one line in :data:`CAMPAIGN_EFFECTS` and a test. ``simulate_campaign(effects=...)``, ``rodlab
@@ -9,7 +9,7 @@ table of docs/formats.md take it from here.
 """
 from __future__ import annotations
 
-from rodlab.enums import CampaignEffect
+from rodlab.core.enums import CampaignEffect
 
 from ..errors import CalibrationError
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis

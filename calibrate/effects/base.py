@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.enums import CampaignEffect
-from rodlab.hypothesis import EffectSchema, Hypothesis
+from rodlab.core.enums import CampaignEffect
+from rodlab.core.hypothesis import EffectSchema, Hypothesis
 
 from ..errors import CalibrationError
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.enums import CampaignEffect
-from rodlab.hypothesis import ParamSpec
+from rodlab.core.enums import CampaignEffect
+from rodlab.core.hypothesis import ParamSpec
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
 

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.enums import CampaignEffect
-from rodlab.hypothesis import ParamSpec, location_parts
+from rodlab.core.enums import CampaignEffect
+from rodlab.core.hypothesis import ParamSpec, location_parts
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
 

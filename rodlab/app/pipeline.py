@@ -20,8 +20,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..compliance import RodCompliance, write_compliance
-from ..fileio import atomic_write_json, atomic_write_text, json_safe
+from ..core.compliance import RodCompliance, write_compliance
+from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
 
 __all__ = ["run_demo", "STAGES"]
 
@@ -63,8 +63,8 @@ class _DemoRun:
         self.summary["stages"][name] = values
 
     def stage_design(self) -> None:
-        from ..calc import calc_rod_compliance
-        from ..design_io import resolve_design
+        from ..core.calc import calc_rod_compliance
+        from ..core.design_io import resolve_design
         self.design = resolve_design("rod1")
         self.calc = calc_rod_compliance(self.design)
         write_compliance(self.calc, self.out / "rod1.calc.compliance.json")
@@ -129,7 +129,7 @@ class _DemoRun:
         """(C_F, C_g, the drawn keys) of the rod as built: the design's FEA plus the frame model's change for a
         laminate 7 % softer than designed and a compliant ring-1 bond (the demo's rod is not its simulation)."""
         from rodlab.fea.frame import frame_compliance
-        from rodlab.sensitivity import with_values
+        from rodlab.core.sensitivity import with_values
         m = self.design.pipe_I.material
         as_built = {f"materials.{m.name}.E_GPa": round(0.93 * m.E_GPa, 3), "joints.ring_1.s_bend_rad_per_Nm": 2.0e-5}
         built, nominal = frame_compliance(with_values(self.design, as_built)), frame_compliance(self.design)
@@ -166,7 +166,7 @@ class _DemoRun:
     def _update(self, diag, model) -> dict:
         """`rodlab update` on the diagnosed linear part: the laminate's E and G and each located joint's compliance,
         written as the rod as built (``rod1.asbuilt.rod.toml``, the design file with the fitted values)."""
-        from rodlab.design_edit import write_edited_design
+        from rodlab.core.design_edit import write_edited_design
         from .update import Measured, update_design
         m = self.design.pipe_I.material
         keys = [f"materials.{m.name}.E_GPa"] + ([f"materials.{m.name}.G_GPa"] if m.G_GPa is not None else [])
@@ -256,7 +256,7 @@ def _study(out: Path, robot, design, calibration) -> dict:
     """Predicted calibration accuracy of rods 1#-3# on the TX90 (serial; rod 1#'s joint calibration serves the
     family); the study's files in ``out``, its rows for the report."""
     from rodlab.calibrate.simulate import standard_fixture
-    from ..design_io import resolve_design
+    from ..core.design_io import resolve_design
     from .study import StudySpec, list_candidates, run_study, write_study_outputs
     cands = list_candidates([design] + [resolve_design(r) for r in DEMO_STUDY_RODS[1:]])
     spec = StudySpec(replicates=DEMO_STUDY_REPLICATES)

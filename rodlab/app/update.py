@@ -3,7 +3,7 @@
 The structural-dynamics practice: the freed dotted keys of the design (``materials.cfrp_tube.E_GPa``,
 ``tube.wall_mm``, ...) are fitted, bounded and with priors from the design's tolerances where it states them, so
 that the compliance model (the calibrated frame by default) reproduces the measured C_F entries within their
-uncertainty plus the model's own accuracy (:data:`rodlab.sensitivity.METHOD_ACCURACY`). The result says what
+uncertainty plus the model's own accuracy (:data:`rodlab.core.sensitivity.METHOD_ACCURACY`). The result says what
 each key became with its uncertainty, their correlations, which keys the measurement cannot separate and which
 extra measurement would, and the r_mn (measured / model, entry by entry) before and after.
 """
@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..calc import calc_rod_compliance
-from ..design import RodDesign
-from ..errors import DesignError, RodlabError
-from ..massprops import mass_properties
-from ..sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
-from ..tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
+from ..core.calc import calc_rod_compliance
+from ..core.design import RodDesign
+from ..core.errors import DesignError, RodlabError
+from ..core.massprops import mass_properties
+from ..core.sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
+from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
 __all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR"]
 
@@ -96,7 +96,7 @@ def _is_joint(key: str) -> bool:
 
 def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
     """(nominal, prior sd) of each key: the design's tolerance where it has one, a bond's tolerance
-    (:func:`rodlab.tolerances.bond_tolerances`, :data:`~rodlab.tolerances.BOND_SD` for torsion) for a joint's
+    (:func:`rodlab.core.tolerances.bond_tolerances`, :data:`~rodlab.core.tolerances.BOND_SD` for torsion) for a joint's
     compliance, else a weak prior."""
     tol = {p.key: p.sigma for p in design_tolerances(design)}
     bonds = bond_tolerances(design)

@@ -3,7 +3,7 @@ protocol): ``query`` (a request, one line back) or ``stream`` (the device pushes
 optional NMEA-style XOR checksum ``*HH``. Values are named by their place in the line: ``0``, ``1``, ..."""
 from __future__ import annotations
 
-from rodlab.enums import Checksum, LineProtocol
+from rodlab.core.enums import Checksum, LineProtocol
 
 from ..protocol import parse_line
 from .base import Driver, Garbage, Link, Setting, unescape

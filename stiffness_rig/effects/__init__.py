@@ -1,6 +1,6 @@
 """Rig effects: one module per effect of ``contract/effects.md`` (subject ``rig``) plus rodlab's additions,
 each with its forward model, parameter schema, hypotheses and wording; one registry keyed by
-:class:`rodlab.enums.RigEffect`.
+:class:`rodlab.core.enums.RigEffect`.
 
 Adding an effect: a new value of ``RigEffect``, a module with a :class:`RigEffectModel` subclass, one line in
 :data:`RIG_EFFECTS` and a test. The simulator, ``rodlab rig simulate --effect``, the diagnosis, its report and
@@ -8,7 +8,7 @@ the docs (``python scripts/gen_cli_docs.py`` writes the table of docs/formats.md
 """
 from __future__ import annotations
 
-from rodlab.enums import RigEffect
+from rodlab.core.enums import RigEffect
 
 from ..errors import RigError
 from .base import HypothesisContext, RigEffectModel, RigState

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.enums import RigEffect
-from rodlab.hypothesis import EffectSchema, Hypothesis
+from rodlab.core.enums import RigEffect
+from rodlab.core.hypothesis import EffectSchema, Hypothesis
 
 from ..errors import RigError
 

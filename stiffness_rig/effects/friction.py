@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.enums import Phase, RigEffect
-from rodlab.hypothesis import Hypothesis, ParamSpec
+from rodlab.core.enums import Phase, RigEffect
+from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
 

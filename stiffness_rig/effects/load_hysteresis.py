@@ -8,8 +8,8 @@ to it, the same in every hold.
 """
 from __future__ import annotations
 
-from rodlab.enums import Phase, RigEffect
-from rodlab.hypothesis import Hypothesis, ParamSpec
+from rodlab.core.enums import Phase, RigEffect
+from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
 

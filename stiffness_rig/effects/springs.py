@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.joint_springs import design_joint_places, spring_matrices
+from rodlab.core.joint_springs import design_joint_places, spring_matrices
 
 __all__ = ["spring_matrices", "spring_compliance", "spring_columns", "joint_places"]
 

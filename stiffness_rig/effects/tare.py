@@ -1,9 +1,9 @@
 """``tare``: a dead load [kg] (hanger, loading frame) missing from ``mass_kg`` whenever the hanger is on."""
 from __future__ import annotations
 
-from rodlab.enums import RigEffect
-from rodlab.hypothesis import Hypothesis, ParamSpec
-from rodlab.units import G0
+from rodlab.core.enums import RigEffect
+from rodlab.core.hypothesis import Hypothesis, ParamSpec
+from rodlab.core.units import G0
 
 from .base import RigEffectModel
 

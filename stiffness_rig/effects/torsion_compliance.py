@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.enums import RigEffect
-from rodlab.hypothesis import Hypothesis, ParamSpec
+from rodlab.core.enums import RigEffect
+from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from ..errors import RigError
 from .base import RigEffectModel

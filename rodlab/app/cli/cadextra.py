@@ -1,7 +1,7 @@
 """The CAD extra (build123d, gmsh) for the commands that need it."""
 from __future__ import annotations
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 
 __all__ = ["require_cad", "require_mesher"]
 

@@ -1,8 +1,8 @@
 """The options ``rodlab calibrate`` and ``rodlab compare`` share, and the ``--pin`` parser."""
 from __future__ import annotations
 
-from ...errors import RodlabError
-from ...units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
+from ...core.errors import RodlabError
+from ...core.units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import pos_float
 from .reporting import add_report_option
 from .robotargs import add_robot_options, robot_help

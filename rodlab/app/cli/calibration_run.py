@@ -11,10 +11,10 @@ from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campa
                               read_points, validate)
 from rodlab.calibrate.validate import error_stats
 
-from ...compliance import RodCompliance
-from ...design_io import resolve_design
-from ...errors import RodlabError
-from ...units import DEVICE_NOISE_MM
+from ...core.compliance import RodCompliance
+from ...core.design_io import resolve_design
+from ...core.errors import RodlabError
+from ...core.units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
 from .deviceargs import campaign_from_args, warn_flagged_fixture
 from .robotargs import robot_from_args

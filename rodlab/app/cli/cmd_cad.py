@@ -5,7 +5,7 @@ import argparse
 import time
 from pathlib import Path
 
-from ...design_io import resolve_design
+from ...core.design_io import resolve_design
 from .cadextra import require_cad
 from .reporting import add_report_option, write_command_report
 from .rodargs import design_help

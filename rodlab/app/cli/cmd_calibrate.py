@@ -19,8 +19,8 @@ from rodlab.calibrate import (
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 
-from ...compliance import RodCompliance, read_compliance
-from ...errors import RodlabError
+from ...core.compliance import RodCompliance, read_compliance
+from ...core.errors import RodlabError
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file

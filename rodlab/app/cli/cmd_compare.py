@@ -7,9 +7,9 @@ from pathlib import Path
 
 from rodlab.calibrate import RodDeflection, read_fixture
 
-from ...compliance import read_compliance
-from ...errors import RodlabError
-from ...fileio import atomic_write_json, json_safe
+from ...core.compliance import read_compliance
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_json, json_safe
 from .calibrateargs import add_identify_options
 from .calibration_run import run_calibration
 from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import argparse
 
-from ...calc import BendModel, calc_rod_compliance
-from ...compliance import RodCompliance, write_compliance
-from ...design_io import resolve_design
-from ...enums import Method
+from ...core.calc import BendModel, calc_rod_compliance
+from ...core.compliance import RodCompliance, write_compliance
+from ...core.design_io import resolve_design
+from ...core.enums import Method
 from .reporting import add_report_option, write_command_report
 from .rodargs import design_help
 

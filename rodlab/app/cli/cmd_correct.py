@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 from .robotargs import add_robot_options, robot_from_args
 
 __all__ = ["register"]
@@ -115,7 +115,7 @@ def _correct_poses(args, robot, params, nominal, targets, seeds_rad):
     """Pose targets: the 6-D IK; a pose the calibrated robot cannot reach is refused with its line (no output)."""
     from rodlab.calibrate import CalibrationError
     from rodlab.calibrate.correct import correct_poses
-    from rodlab.frames import rotation_from_abc
+    from rodlab.core.frames import rotation_from_abc
     abc = _vector(args.tool_abc, 3, "--tool-abc")
     R_tool = None if abc is None else rotation_from_abc(abc)
     corr = correct_poses(robot, params, nominal, targets.targets_mm, targets.abc_deg, seeds_rad, R_tool)

@@ -10,12 +10,12 @@ from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
-from ...compliance import read_compliance, write_compliance
-from ...design_io import resolve_design
-from ...enums import MODEL_FORM
-from ...errors import RodlabError
-from ...fileio import atomic_write_json, json_safe
-from ...units import DEVICE_NOISE_MM
+from ...core.compliance import read_compliance, write_compliance
+from ...core.design_io import resolve_design
+from ...core.enums import MODEL_FORM
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_json, json_safe
+from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
 from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report

@@ -9,7 +9,7 @@ import numpy as np
 from rodlab.calibrate import builtin_robots, read_points, robot_path
 from rodlab.calibrate.kinematics import ModelParams
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 from .argtypes import seed
 from .robotargs import add_robot_options, robot_from_args
 

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ...compliance import write_compliance
-from ...design_io import resolve_design
-from ...enums import FeaModel
-from ...errors import RodlabError
-from ...view3d import RenderError
+from ...core.compliance import write_compliance
+from ...core.design_io import resolve_design
+from ...core.enums import FeaModel
+from ...core.errors import RodlabError
+from ...core.view3d import RenderError
 from .argtypes import pos_float
 from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report

@@ -8,7 +8,7 @@ from rodlab.calibrate import write_fixture
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate.probe import fit_fixture, read_probe
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 from .argtypes import count
 
 __all__ = ["register", "cmd_fixture"]

@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 
-from ...calc import calc_rod_compliance
-from ...design_io import resolve_design
-from ...massprops import mass_properties, part_mass_properties
+from ...core.calc import calc_rod_compliance
+from ...core.design_io import resolve_design
+from ...core.massprops import mass_properties, part_mass_properties
 from .rodargs import design_help
 
 __all__ = ["register"]

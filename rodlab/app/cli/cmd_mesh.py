@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ...design_io import resolve_design
+from ...core.design_io import resolve_design
 from .argtypes import pos_float
 from .cadextra import require_mesher
 from .rodargs import design_help

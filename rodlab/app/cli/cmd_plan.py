@@ -3,10 +3,10 @@ from __future__ import annotations
 
 from rodlab.calibrate import read_fixture
 
-from ...calc import calc_rod_compliance
-from ...compliance import read_compliance
-from ...design_io import load_design
-from ...fileio import atomic_write_text
+from ...core.calc import calc_rod_compliance
+from ...core.compliance import read_compliance
+from ...core.design_io import load_design
+from ...core.fileio import atomic_write_text
 from .argtypes import count, seed
 from .robotargs import add_robot_options, robot_from_args
 

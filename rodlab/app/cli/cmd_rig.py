@@ -19,12 +19,12 @@ from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.plan_check import linear_range_warnings
 from rodlab.stiffness_rig.plot import format_pm, format_zero
 
-from ...compliance import write_compliance
-from ...design_io import resolve_design
-from ...enums import Checksum, LineProtocol
-from ...errors import RodlabError
-from ...fileio import atomic_write_text
-from ...progress import progress as bar_of
+from ...core.compliance import write_compliance
+from ...core.design_io import resolve_design
+from ...core.enums import Checksum, LineProtocol
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_text
+from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
@@ -208,7 +208,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     try:
         masses = tuple(float(m) for m in args.masses.split(","))
         axes = tuple(a.strip() for a in args.axes.split(","))
-        from ...enums import LoadAxis
+        from ...core.enums import LoadAxis
         for a in axes:
             LoadAxis.parse(a, "load axis")
     except ValueError as e:

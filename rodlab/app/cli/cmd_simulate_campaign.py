@@ -10,8 +10,8 @@ import numpy as np
 from rodlab.calibrate.device import ideal_device, misaligned_device, write_device
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect
 
-from ...compliance import read_compliance
-from ...errors import RodlabError
+from ...core.compliance import read_compliance
+from ...core.errors import RodlabError
 from .argtypes import count, nonneg_float, seed
 from .effectargs import effects_help, parse_effect_specs
 from .robotargs import add_robot_options, robot_from_args

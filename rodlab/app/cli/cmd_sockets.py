@@ -12,8 +12,8 @@ from rodlab.calibrate.socket_check import check_sockets
 from rodlab.calibrate.socket_fit import identify_sockets, socket_start
 from rodlab.calibrate.sockets import read_sockets
 
-from ...enums import AccuracySource
-from ...errors import RodlabError
+from ...core.enums import AccuracySource
+from ...core.errors import RodlabError
 from .calibrateargs import parse_pins
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
 from .reporting import default_folder, write_command_report

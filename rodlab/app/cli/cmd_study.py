@@ -5,8 +5,8 @@ import argparse
 import time
 from pathlib import Path
 
-from ...design_io import resolve_design
-from ...errors import RodlabError
+from ...core.design_io import resolve_design
+from ...core.errors import RodlabError
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, write_command_report
 from .robotargs import add_robot_options, robot_from_args
@@ -137,7 +137,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.app.study import StudySpec, run_study, write_study_outputs
     from rodlab.app.study.family import family_joints
 
-    from ...progress import progress as bar_of
+    from ...core.progress import progress as bar_of
     _check_numbers(args)
     methods = _methods(args.methods)
     robot = robot_from_args(args)

@@ -6,11 +6,11 @@ import io
 import time
 from pathlib import Path
 
-from ...design_io import resolve_design
-from ...enums import FeaModel
-from ...errors import RodlabError
-from ...fileio import atomic_write_bytes, atomic_write_text
-from ...progress import progress as bar_of
+from ...core.design_io import resolve_design
+from ...core.enums import FeaModel
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_bytes, atomic_write_text
+from ...core.progress import progress as bar_of
 from .argtypes import count
 from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report

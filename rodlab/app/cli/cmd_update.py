@@ -8,11 +8,11 @@ import numpy as np
 
 from rodlab.stiffness_rig import read_recording
 
-from ...calc import calc_rod_compliance
-from ...compliance import RodCompliance, read_compliance
-from ...design_io import resolve_design
-from ...errors import RodlabError
-from ...joint_springs import JOINT_PLACES
+from ...core.calc import calc_rod_compliance
+from ...core.compliance import RodCompliance, read_compliance
+from ...core.design_io import resolve_design
+from ...core.errors import RodlabError
+from ...core.joint_springs import JOINT_PLACES
 
 __all__ = ["register"]
 
@@ -53,7 +53,7 @@ def _default_free(design) -> list[str]:
 
 def _measured(path: str, design, keys):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part."""
-    from ...sensitivity import STRUCTURAL_ENTRIES
+    from ...core.sensitivity import STRUCTURAL_ENTRIES
     from ..diagnose.envelope import MEAS_RELATIVE
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
@@ -86,7 +86,7 @@ def _measured(path: str, design, keys):
 
 
 def cmd_update(args: argparse.Namespace) -> int:
-    from ...design_edit import write_edited_design
+    from ...core.design_edit import write_edited_design
     from ..update import update_design
     if not Path(args.measured).is_file():
         raise RodlabError(f"--measured {args.measured}: no such file (give a measured *.compliance.json from `rodlab rig "

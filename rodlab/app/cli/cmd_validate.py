@@ -9,8 +9,8 @@ from rodlab.calibrate import read_campaign, read_points
 from rodlab.calibrate.robot_formats import ROBOT_READERS
 from rodlab.calibrate.sockets import read_sockets
 
-from ...errors import LocatedError
-from ...schema import ALIASES, FORMATS, FileCheck, Problem, check_file
+from ...core.errors import LocatedError
+from ...core.schema import ALIASES, FORMATS, FileCheck, Problem, check_file
 
 __all__ = ["register", "READERS", "validate_file"]
 
@@ -43,10 +43,10 @@ def _lazy(module: str, name: str):
 
 #: format id -> the reader whose rules go beyond the schema (None: the schema is all there is)
 READERS = {
-    "rodlab.rod/1": _lazy("rodlab.design_io", "load_design"),
-    "rodlab.rod/2": _lazy("rodlab.design_io", "load_design"),
-    "rodlab.compliance/1": _lazy("rodlab.compliance", "read_compliance"),
-    "rodlab.compliance/2": _lazy("rodlab.compliance", "read_compliance"),
+    "rodlab.rod/1": _lazy("rodlab.core.design_io", "load_design"),
+    "rodlab.rod/2": _lazy("rodlab.core.design_io", "load_design"),
+    "rodlab.compliance/1": _lazy("rodlab.core.compliance", "read_compliance"),
+    "rodlab.compliance/2": _lazy("rodlab.core.compliance", "read_compliance"),
     "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.fixture/2": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.device/1": _lazy("rodlab.calibrate.device", "read_device"),

@@ -13,7 +13,7 @@ __all__ = ["TABLES", "DOC_TABLES", "render_cli", "render_tables"]
 
 #: marker name in docs/formats.md -> the registry function that draws its table
 TABLES = {"rig-effects": "rodlab.stiffness_rig.effects:vocabulary_markdown",
-          "tolerance-defaults": "rodlab.tolerances:defaults_markdown",
+          "tolerance-defaults": "rodlab.core.tolerances:defaults_markdown",
           "campaign-effects": "rodlab.calibrate.effects:campaign_vocabulary_markdown",
           "robot-formats": "rodlab.calibrate.robot_formats:robot_formats_markdown"}
 

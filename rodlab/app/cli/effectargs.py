@@ -2,7 +2,7 @@
 and the help text listing that registry's effects with their parameters and units."""
 from __future__ import annotations
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 
 __all__ = ["parse_effect_specs", "effects_help"]
 

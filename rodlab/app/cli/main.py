@@ -1,6 +1,6 @@
 """``rodlab`` entry point: argparse sub-commands, logging set-up, and error reporting.
 
-Every input error (:class:`~rodlab.errors.RodlabError`) and OS error is printed as one clear
+Every input error (:class:`~rodlab.core.errors.RodlabError`) and OS error is printed as one clear
 line on stderr with exit code 2; never a traceback. ``--debug`` shows tracebacks.
 """
 from __future__ import annotations
@@ -13,8 +13,9 @@ import pkgutil
 import sys
 from pathlib import Path
 
-from ... import __version__, progress
-from ...errors import RodlabError
+from ... import __version__
+from ...core import progress
+from ...core.errors import RodlabError
 
 __all__ = ["build_parser", "main", "command_modules", "COMMAND_ORDER"]
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from ...calc import calc_rod_compliance
-from ...compliance import read_compliance
-from ...design_io import builtin_designs, resolve_design
+from ...core.calc import calc_rod_compliance
+from ...core.compliance import read_compliance
+from ...core.design_io import builtin_designs, resolve_design
 
 __all__ = ["compliance_arg", "design_help", "builtin_designs_text"]
 

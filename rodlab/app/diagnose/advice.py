@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from rodlab.calibrate.effects import campaign_effect
 
-from ...enums import FindingKind
-from ...errors import RodlabError
+from ...core.enums import FindingKind
+from ...core.errors import RodlabError
 from .report import Finding
 
 __all__ = ["remedy"]

@@ -31,8 +31,8 @@ from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.observations import noise_covariance
 from rodlab.calibrate.validate import error_stats
-from rodlab.enums import FindingKind, Subject, Trial, Verdict
-from rodlab.hypothesis import Hypothesis, location_parts
+from rodlab.core.enums import FindingKind, Subject, Trial, Verdict
+from rodlab.core.hypothesis import Hypothesis, location_parts
 
 from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
 from .report import Diagnosis, Finding

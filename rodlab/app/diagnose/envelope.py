@@ -1,9 +1,9 @@
 """What a simulated compliance is worth: the envelope around it inside which the rod as built may lie.
 
 A simulation is never the rod. The envelope of a C_F entry combines (a) the design's tolerances
-(:mod:`rodlab.tolerances`: tube OD and wall, laminate E and G, bend radius, ring length), through the frame model of
+(:mod:`rodlab.core.tolerances`: tube OD and wall, laminate E and G, bend radius, ring length), through the frame model of
 the perturbed design (the as-built fit of :mod:`.rig_form`), and (b) the simulation method's own bias and scatter
-against the solid FEA (:data:`rodlab.sensitivity.METHOD_ACCURACY`). Without a
+against the solid FEA (:data:`rodlab.core.sensitivity.METHOD_ACCURACY`). Without a
 design the envelope is one relative standard deviation per entry; ``exact`` says the simulation is the rod (a
 re-check against an earlier measurement of the same rod).
 """
@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 
 
-from ...compliance import RodCompliance, design_hash
-from ...design_io import load_design
-from ...enums import Method, SimAccuracy
-from ...errors import DesignError, RodlabError
-from ...joint_springs import design_joint_places, spring_matrices
-from ...sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy, with_values
-from ...tolerances import bond_tolerances, design_tolerances
+from ...core.compliance import RodCompliance, design_hash
+from ...core.design_io import load_design
+from ...core.enums import Method, SimAccuracy
+from ...core.errors import DesignError, RodlabError
+from ...core.joint_springs import design_joint_places, spring_matrices
+from ...core.sensitivity import STRUCTURAL_ENTRIES, MethodAccuracy, method_accuracy, with_values
+from ...core.tolerances import bond_tolerances, design_tolerances
 
 __all__ = ["Envelope", "envelope_for", "design_of", "MEAS_RELATIVE", "GENERIC_RELATIVE"]
 
@@ -32,7 +32,7 @@ log = logging.getLogger(__name__)
 #: on the rig and re-fitting repeats C_F to about this)
 MEAS_RELATIVE = 0.01
 #: relative standard deviation per entry of a simulation whose design is unknown (a laminate's modulus alone
-#: scatters this much: :data:`rodlab.tolerances.DEFAULT_RULES`)
+#: scatters this much: :data:`rodlab.core.tolerances.DEFAULT_RULES`)
 GENERIC_RELATIVE = 0.15
 
 
@@ -40,10 +40,10 @@ GENERIC_RELATIVE = 0.15
 class Envelope:
     """How far the rod's C_F may lie from the simulated one.
 
-    kind : :class:`~rodlab.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
-    uncertain keys (:class:`~rodlab.tolerances.ToleranceParam`); accuracy : the simulation method's bias and
+    kind : :class:`~rodlab.core.enums.SimAccuracy`; C_sim : simulated C_F [mm/N], shape=(3, 3); params : the design's
+    uncertain keys (:class:`~rodlab.core.tolerances.ToleranceParam`); accuracy : the simulation method's bias and
     scatter against the solid FEA
-    (:class:`~rodlab.sensitivity.MethodAccuracy`; without a design, the whole envelope); source : one line
+    (:class:`~rodlab.core.sensitivity.MethodAccuracy`; without a design, the whole envelope); source : one line
     saying what the envelope is made of; model : design ->
     C_F [mm/N] (the frame) and design : the design, for the as-built fit (:meth:`entries_at`); ratio : simulated
     over model C_F with the method's bias removed, entry by entry, shape=(3, 3) (the simulation's own form kept as

@@ -1,8 +1,8 @@
 """The corrected compliance: the simulated model with the structural physics the diagnosis found."""
 from __future__ import annotations
 
-from ...compliance import RodCompliance
-from ...enums import Method
+from ...core.compliance import RodCompliance
+from ...core.enums import Method
 
 __all__ = ["corrected_compliance"]
 

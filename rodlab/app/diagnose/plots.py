@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...fileio import atomic_write_figure
+from ...core.fileio import atomic_write_figure
 
 __all__ = ["plot_rig_diagnosis", "plot_campaign_diagnosis"]
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...enums import EffectId, Subject, Verdict, parse_effect_id
-from ...fileio import atomic_write_json, json_safe
+from ...core.enums import EffectId, Subject, Verdict, parse_effect_id
+from ...core.fileio import atomic_write_json, json_safe
 
 __all__ = ["Finding", "Diagnosis", "FORMAT_DIAGNOSIS"]
 

@@ -25,9 +25,9 @@ import logging
 
 import numpy as np
 
-from ...compliance import RodCompliance
-from ...enums import FindingKind, Method, Subject, Verdict
-from ...errors import RodlabError
+from ...core.compliance import RodCompliance
+from ...core.enums import FindingKind, Method, Subject, Verdict
+from ...core.errors import RodlabError
 from rodlab.stiffness_rig.effects import HypothesisContext, joint_places, rig_hypotheses
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 

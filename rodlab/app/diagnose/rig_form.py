@@ -20,10 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from rodlab.enums import MODEL_FORM, FindingKind
-from rodlab.errors import DesignError
-from rodlab.hypothesis import Hypothesis
-from rodlab.sensitivity import METHOD_ACCURACY
+from rodlab.core.enums import MODEL_FORM, FindingKind
+from rodlab.core.errors import DesignError
+from rodlab.core.hypothesis import Hypothesis
+from rodlab.core.sensitivity import METHOD_ACCURACY
 
 from .chi2 import chi2_sf
 from .criteria import DBIC_MIN, P_MAX

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.sensitivity import STRUCTURAL_ENTRIES
+from rodlab.core.sensitivity import STRUCTURAL_ENTRIES
 from rodlab.stiffness_rig.samples import RigSamples
 
 from .rig_select import demean
@@ -47,7 +47,7 @@ class LinearPart:
 
 
 def measured_entries(data: RigSamples, C_sim: np.ndarray) -> tuple:
-    """The structural C_F entries (:data:`~rodlab.sensitivity.STRUCTURAL_ENTRIES`, non-zero in the simulation or
+    """The structural C_F entries (:data:`~rodlab.core.sensitivity.STRUCTURAL_ENTRIES`, non-zero in the simulation or
     on the diagonal) that some gauge measures under some load axis (either way round: Maxwell-Betti)."""
     scale = float(np.abs(C_sim).max())
     pairs = set(zip(data.comp.tolist(), data.axis.tolist()))

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.enums import FindingKind
-from rodlab.hypothesis import Hypothesis
+from rodlab.core.enums import FindingKind
+from rodlab.core.hypothesis import Hypothesis
 
 __all__ = ["outside_hypotheses", "OUTSIDE", "confirm_outside"]
 

@@ -16,8 +16,8 @@ import logging
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from rodlab.enums import Trial
-from rodlab.hypothesis import Hypothesis
+from rodlab.core.enums import Trial
+from rodlab.core.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
 from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.enums import FindingKind
-from rodlab.hypothesis import Hypothesis
+from rodlab.core.enums import FindingKind
+from rodlab.core.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
 
@@ -51,7 +51,7 @@ class Prep:
 class RigModelFit:
     """The model a rig diagnosis chose, for export and figures.
 
-    terms : the chosen hypotheses (:class:`~rodlab.hypothesis.Hypothesis`); coef : their fitted internal
+    terms : the chosen hypotheses (:class:`~rodlab.core.hypothesis.Hypothesis`); coef : their fitted internal
     parameters, concatenated in ``terms`` order; resid : residual of every sample after the fit [mm];
     base_resid : residual against the simulated compliance alone (gauge zeros removed) [mm]; data : the samples
     (:class:`~rodlab.stiffness_rig.samples.RigSamples`); sigma : noise of one reading [mm]; hold_z2 : {step: sum of

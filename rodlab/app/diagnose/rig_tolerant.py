@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import MODEL_FORM, Subject, Verdict
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import MODEL_FORM, Subject, Verdict
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, HypothesisContext, joint_places
 from rodlab.stiffness_rig.samples import RigSamples
 

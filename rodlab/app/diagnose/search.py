@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Protocol, Sequence
 
-from rodlab.enums import Trial
+from rodlab.core.enums import Trial
 
 __all__ = ["SearchSpace", "search"]
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from rodlab.enums import MODEL_FORM, FindingKind
+from rodlab.core.enums import MODEL_FORM, FindingKind
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from .report import Finding

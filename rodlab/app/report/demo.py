@@ -5,7 +5,7 @@ import html
 import json
 from pathlib import Path
 
-from ...errors import RodlabError
+from ...core.errors import RodlabError
 from .demo_story import campaign_rod_note, conclusion_html, study_rod_note, terms_html
 from .html import CSS, img_tag, matrix_table
 

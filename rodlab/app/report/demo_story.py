@@ -83,7 +83,7 @@ def conclusion_html(st: dict) -> str:
 
 def terms_html() -> str:
     """The page's terms, defined before any section uses them."""
-    from ...compliance import DEFAULT_CONTACT_FORCE_N
+    from ...core.compliance import DEFAULT_CONTACT_FORCE_N
     from ..study.designs import R_PRIOR_COMPOSITE, R_PRIOR_METAL
     force = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N))
     rows = [

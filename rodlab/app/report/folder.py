@@ -9,8 +9,8 @@ from fnmatch import fnmatch
 from pathlib import Path
 
 from ... import __version__
-from ...errors import RodlabError
-from ...fileio import atomic_write_text
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_text
 from .html import esc, figure, page
 from .sections import FORMAT_MASS, FORMAT_SWEEP, SECTIONS, Source
 

@@ -1,5 +1,5 @@
 """3-D views of FEA fields for the reports: the field file (``.vtu`` of the solid model, ``.vtp`` of the frame's
-centreline) written, then one picture per load case (:func:`rodlab.view3d.render_view`). Where pyvista is
+centreline) written, then one picture per load case (:func:`rodlab.core.view3d.render_view`). Where pyvista is
 absent or cannot render off-screen a report goes on without them (said in the log and in the returned note)."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...design import RodDesign
-from ...view3d import RenderError, read_field_view, render_view
+from ...core.design import RodDesign
+from ...core.view3d import RenderError, read_field_view, render_view
 
 __all__ = ["FieldViews", "solid_views", "frame_views", "render_field_pngs", "VIEW_LOADS"]
 
@@ -32,7 +32,7 @@ class FieldViews:
 
 def render_field_pngs(fields: str | Path, prefix: str | Path, loads=VIEW_LOADS, colour: str = "stress") -> list[Path]:
     """``PREFIX.3d_<load>.png`` for each load case of a field file (``loads="weakest"``: the unit force that
-    moves the ball most); raises :class:`~rodlab.view3d.RenderError`."""
+    moves the ball most); raises :class:`~rodlab.core.view3d.RenderError`."""
     view = read_field_view(fields)
     if loads == "weakest":
         loads = (VIEW_LOADS[int(np.argmax(np.linalg.norm(view.ball_displacement[:3], axis=1)))],)

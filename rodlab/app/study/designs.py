@@ -5,9 +5,9 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, replace
 
-from rodlab.design import RodDesign
-from rodlab.errors import RodlabError
-from rodlab.materials import get_material
+from rodlab.core.design import RodDesign
+from rodlab.core.errors import RodlabError
+from rodlab.core.materials import get_material
 
 __all__ = ["Candidate", "grid_candidates", "list_candidates", "parse_tube", "r_prior_of", "R_PRIOR_METAL",
            "R_PRIOR_COMPOSITE"]

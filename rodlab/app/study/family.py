@@ -7,8 +7,8 @@ import json
 import logging
 from pathlib import Path
 
-from rodlab.design import RodDesign
-from rodlab.errors import RodlabError
+from rodlab.core.design import RodDesign
+from rodlab.core.errors import RodlabError
 
 __all__ = ["solid_family_calibration", "cad_available", "family_joints"]
 
@@ -36,7 +36,7 @@ def solid_family_calibration(base: RodDesign, L1s=(), L2s=()):
 def _family_joints(base, L1s, L2s, cache: Path):
     """The family's joint calibration, solved once and kept in ``cache/joints`` (keyed by the solid-run
     design's identity), so a re-run or a resumed study does not solve again."""
-    from rodlab.design_io import design_to_dict
+    from rodlab.core.design_io import design_to_dict
     from rodlab.fea.family import calibration_member
     from rodlab.fea.joints_io import read_joints, write_joints
     member = calibration_member(base, L1s, L2s)

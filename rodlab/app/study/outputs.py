@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rodlab.fileio import atomic_write_json, atomic_write_text, json_safe
+from rodlab.core.fileio import atomic_write_json, atomic_write_text, json_safe
 
 from .plots import plot_heatmaps, plot_pareto
 from .report import write_study_report

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.fileio import atomic_write_figure
+from rodlab.core.fileio import atomic_write_figure
 
 __all__ = ["plot_pareto", "plot_heatmaps", "pareto_mask", "pareto_labels", "heat_scale"]
 

@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rodlab.compliance import RodCompliance
-from rodlab.enums import DesignStatus
-from rodlab.errors import RodlabError
+from rodlab.core.compliance import RodCompliance
+from rodlab.core.enums import DesignStatus
+from rodlab.core.errors import RodlabError
 
 from .designs import Candidate
 
@@ -71,7 +71,7 @@ class DesignSetup:
 
 
 def _compliance(design, joints):
-    from rodlab.calc import calc_rod_compliance
+    from rodlab.core.calc import calc_rod_compliance
     from rodlab.fea import compute_compliance
     fea = compute_compliance(design, "frame", **({"calibration": joints} if joints is not None else {}))
     model = "frame, joint-calibrated on solid FEA" if joints is not None else "frame (global calibration)"
@@ -80,7 +80,7 @@ def _compliance(design, joints):
 
 def _physics(design, force_N: float) -> dict:
     from rodlab.fea.modal import frame_frequencies
-    from rodlab.strength import strength_margins, thermal_growth_um_per_K
+    from rodlab.core.strength import strength_margins, thermal_growth_um_per_K
     sm = strength_margins(design, force_N)
     return {"thermal_um_per_K": tuple(float(v) for v in thermal_growth_um_per_K(design)),
             "frequencies_Hz": tuple(float(v) for v in frame_frequencies(design, modes=3)),

@@ -5,7 +5,7 @@ import html
 import math
 from pathlib import Path
 
-from rodlab.fileio import atomic_write_text
+from rodlab.core.fileio import atomic_write_text
 from rodlab.app.report.html import CSS, img_tag
 
 __all__ = ["write_study_report"]

@@ -26,7 +26,7 @@ from typing import Callable
 
 
 from rodlab import __version__
-from rodlab.fileio import atomic_write_json, json_safe
+from rodlab.core.fileio import atomic_write_json, json_safe
 
 from .designs import Candidate, r_prior_of
 from .prepare import DesignSetup, prepare_design
@@ -80,13 +80,13 @@ def joints_identity(joints) -> str | None:
     invalidate a cache."""
     if joints is None:
         return None
-    from rodlab.design_io import design_to_dict
+    from rodlab.core.design_io import design_to_dict
     return json.dumps({"base": design_to_dict(joints.base), "calibration": repr(joints.calibration)},
                       sort_keys=True, default=str)
 
 
 def cache_key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
-    from rodlab.design_io import design_to_dict
+    from rodlab.core.design_io import design_to_dict
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
             "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": joints_identity(joints),
@@ -108,7 +108,7 @@ def _float(v) -> float:
 def outcome_from_dict(d: dict):
     from rodlab.calibrate.predict import ReplicateOutcome
     from rodlab.calibrate.validate import ErrorStats
-    from rodlab.enums import Method
+    from rodlab.core.enums import Method
     return ReplicateOutcome(int(d["seed"]), float(d["r_true"]),
                             {Method.parse(m): ErrorStats(**s) for m, s in d["stats"].items()},
                             {Method.parse(m): float(v) for m, v in d["ms_mm2"].items()},
@@ -168,7 +168,7 @@ def dask_client(scheduler, workers):
     if scheduler:
         return Client(scheduler), None
     one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}   # small matrices
-    from rodlab.cluster import local_cluster                  # quiet, free ports, no dashboard unless asked
+    from rodlab.core.cluster import local_cluster                  # quiet, free ports, no dashboard unless asked
     cluster = local_cluster(workers, env=one)
     return Client(cluster), cluster
 

@@ -44,7 +44,7 @@ def _f(v) -> float:
 def prediction_from_dict(d: dict):
     from rodlab.calibrate.predict import AccuracySummary, BudgetShares
     from rodlab.calibrate.predict_linear import LinearPrediction
-    from rodlab.enums import Method
+    from rodlab.core.enums import Method
     out = []
     for a in d["summaries"]:
         b = BudgetShares(*(_f(a["budget"][k]) for k in ("deflection", "identification", "noise")))
@@ -60,7 +60,7 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
     from rodlab.calibrate import CalibrationError
     from rodlab.calibrate.predict_linear import predict_linear
     from rodlab.calibrate.simulate import standard_base
-    from rodlab.enums import DesignStatus
+    from rodlab.core.enums import DesignStatus
 
     from .designs import r_prior_of
     from .run import replicate_priors

@@ -1,5 +1,5 @@
 """Read ``*.rod.toml`` rod designs (contract ``rodlab.rod/1``; ``rodlab.rod/2`` adds ``[joints.PLACE]``, compliant
-joints the design declares: :mod:`rodlab.joint_springs`) and the built-in designs.
+joints the design declares: :mod:`rodlab.core.joint_springs`) and the built-in designs.
 
 Defaults for optional parts (documented in ``docs/formats.md``; ``OD`` = pipe I's outer diameter):
 
@@ -278,7 +278,7 @@ def design_to_dict(design: RodDesign) -> dict:
 
 
 def load_design(path: str | Path) -> RodDesign:
-    """Read and validate a ``*.rod.toml`` file: the design's own rules, then :mod:`rodlab.design_range` (a rod
+    """Read and validate a ``*.rod.toml`` file: the design's own rules, then :mod:`rodlab.core.design_range` (a rod
     that would hang is refused; keys outside the checked range are logged as warnings with file and line)."""
     p = Path(path)
     data, text = read_toml(p, FormatError)

@@ -1,12 +1,12 @@
 """Where the rod models hold: the design range they were checked on, and rods no model here describes.
 
 Two kinds of rule about the whole design (single-part rules, such as a ring that does not fit over its tube,
-live in :class:`~rodlab.design.RodDesign`):
+live in :class:`~rodlab.core.design.RodDesign`):
 
-- **refused** (:class:`~rodlab.errors.DesignError`, raised by :func:`check_design`): a rod that would hang
+- **refused** (:class:`~rodlab.core.errors.DesignError`, raised by :func:`check_design`): a rod that would hang
   rather than reach, its self-weight sag above ``SAG_LIMIT`` of its reach: every compliance in rodlab
   (closed form, frame, solid FEA, Eqs. 15-18) is linear, valid for deflections small against the length.
-  (Parts that cannot be assembled, such as a bend too tight for L1, are :class:`~rodlab.design.RodDesign`'s
+  (Parts that cannot be assembled, such as a bend too tight for L1, are :class:`~rodlab.core.design.RodDesign`'s
   own rules; with them pipe II cannot run through the flange.)
 
 - **warned** (:func:`range_warnings`): a key outside ``VERIFIED_RANGE`` (the designs on which the frame
@@ -84,7 +84,7 @@ def _longer_key(design: RodDesign) -> str:
 
 
 def check_design(design: RodDesign) -> None:
-    """Refuse a rod beyond linear theory (the rules on parts and lengths are :class:`~rodlab.design.RodDesign`'s
+    """Refuse a rod beyond linear theory (the rules on parts and lengths are :class:`~rodlab.core.design.RodDesign`'s
     own)."""
     sag, _ = linear_model_error_mm(design)
     reach = float(np.linalg.norm(design.tool_mm))

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from .. import __version__
 from .design import RodDesign
 from .enums import Method
 from .errors import ComplianceError, did_you_mean
@@ -138,7 +138,7 @@ class RodCompliance:
     Attributes
     ----------
     rod : rod name
-    method : how it was obtained (:class:`~rodlab.enums.Method`)
+    method : how it was obtained (:class:`~rodlab.core.enums.Method`)
     C_F : force compliance in {T} [mm/N], shape=(3, 3), symmetric
     C_g : gravity compliance in {T} [mm per g0], shape=(3, 3)
     mass_kg : rod mass [kg]

@@ -324,10 +324,10 @@ def _ball_arrow(pv, plotter, view: FieldView, u_ball: np.ndarray, scale: float) 
 
 
 def render_triangle_sets(sets, png, view, title: str = "", note: str | None = None, window_size=(1300, 900)) -> Path:
-    """Coloured triangle sets (:class:`rodlab.render3d.TriangleSet`: the CAD's parts, a deformed shape) drawn
+    """Coloured triangle sets (:class:`rodlab.core.render3d.TriangleSet`: the CAD's parts, a deformed shape) drawn
     off-screen to ``png``: smooth shading, each set's colour and opacity, its label at its centre, parallel
     projection along ``view`` = (direction towards the camera, up vector, axis labels or None) of
-    :data:`rodlab.render3d.VIEWS`."""
+    :data:`rodlab.core.render3d.VIEWS`."""
     pv = require_pyvista()
     check_offscreen()
     _quiet_vtk()

@@ -2,7 +2,7 @@
 
 matplotlib: a painter's algorithm, flat Lambert shading, triangles sorted back to front, equal axes in mm, a
 legend; runs anywhere. pyvista (``renderer="pyvista"``, the ``viz`` extra; the renderer of ``rodlab view``,
-:mod:`rodlab.view3d`): smooth-shaded OpenGL, the same views, parts and legend. ``renderer="auto"`` takes
+:mod:`rodlab.core.view3d`): smooth-shaded OpenGL, the same views, parts and legend. ``renderer="auto"`` takes
 pyvista where it renders off-screen, else matplotlib. Used for the CAD views and the FEA deformed shapes.
 """
 from __future__ import annotations
@@ -51,7 +51,7 @@ def _camera(direction, up):
 
 def pick_renderer(renderer: str = "auto") -> str:
     """``matplotlib`` or ``pyvista`` for ``renderer`` (one of :data:`RENDERERS`); ``pyvista`` asked for where it
-    cannot render raises :class:`rodlab.view3d.RenderError`."""
+    cannot render raises :class:`rodlab.core.view3d.RenderError`."""
     from .view3d import RenderError, check_offscreen
     if renderer not in RENDERERS:
         raise ValueError(f"renderer must be one of {', '.join(RENDERERS)}, got {renderer!r}")

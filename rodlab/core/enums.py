@@ -160,7 +160,7 @@ EffectId = Union[RigEffect, CampaignEffect, FindingKind]
 
 def parse_effect_id(value) -> EffectId:
     """A finding's effect ID from its contract spelling (rig effects, campaign effects, ``model_form``,
-    ``unexplained``); :class:`~rodlab.errors.RodlabError` listing them otherwise."""
+    ``unexplained``); :class:`~rodlab.core.errors.RodlabError` listing them otherwise."""
     kinds = (RigEffect, CampaignEffect, FindingKind)
     if isinstance(value, kinds):
         return value
@@ -213,7 +213,7 @@ class BendModel(str, Enum):
 
 
 class SegmentKind(str, Enum):
-    """The shape of a piece of a rod's centreline (:class:`rodlab.layout.Segment`)."""
+    """The shape of a piece of a rod's centreline (:class:`rodlab.core.layout.Segment`)."""
 
     LINE = "line"
     ARC = "arc"

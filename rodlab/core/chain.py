@@ -9,7 +9,7 @@ the tip for the last interval). With a wrench ``W = (F, M)`` [N, N mm] applied a
     (delta, phi) = F_i W,      F_i = int_i Phi^T blockdiag(Kf^-1, Km^-1) Phi ds,
 
 with ``Phi = [[I, 0], [skew(p_i - r(s)), I]]`` the internal (force, moment) at ``r(s)`` per unit ``W``
-(the unit-load method of :func:`rodlab.calc.unit_load_compliance`, restricted to the interval). A tip
+(the unit-load method of :func:`rodlab.core.calc.unit_load_compliance`, restricted to the interval). A tip
 wrench reaches ``p_i`` as ``Ad_i W_tip``, ``Ad_i = [[I, 0], [skew(p_tip - p_i), I]]``, and the interval's
 motion reaches the tip as ``Ad_i^T``, so
 
@@ -20,7 +20,7 @@ motion reaches the tip as ``Ad_i^T``, so
 interval's motion under its own weight. This is what lets the frame carry a *joint* correction measured
 on one design (an interval's flexibility from the solid model) to another design of the same family.
 
-Frames: {F} (see :mod:`rodlab.layout`); motions and wrenches as (translation, rotation) and (force, moment).
+Frames: {F} (see :mod:`rodlab.core.layout`); motions and wrenches as (translation, rotation) and (force, moment).
 """
 from __future__ import annotations
 
@@ -109,7 +109,7 @@ def chain_flexibility(segs: list[Segment], cuts_mm, tip_F: np.ndarray, tip_mass_
                       shear_factor: float = 1.0, torsion_factor: float = 1.0) -> ChainFlexibility:
     """The intervals between the clamp, the cuts (arc lengths from the flange [mm], strictly inside the
     centreline, increasing) and the tip, for a chain of ``segs`` with a rigid tip mass (see module doc and
-    :func:`rodlab.calc.unit_load_compliance` for the other arguments)."""
+    :func:`rodlab.core.calc.unit_load_compliance` for the other arguments)."""
     cuts = np.asarray(cuts_mm, dtype=float)
     total = segs[-1].s0_mm + segs[-1].length_mm
     if cuts.size and (np.any(np.diff(cuts) <= 0) or cuts[0] <= 0 or cuts[-1] >= total):

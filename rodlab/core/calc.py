@@ -189,7 +189,7 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
     Parameters
     ----------
     pipes_only : the paper's idealisation (two tubes, sharp corner, no parts, no ball mass, no declared joints;
-        otherwise the design's declared joints, :mod:`rodlab.joint_springs`, are added in series)
+        otherwise the design's declared joints, :mod:`rodlab.core.joint_springs`, are added in series)
     shear : add Timoshenko shear flexibility (Euler-Bernoulli when False, as the paper)
     axial : add axial flexibility of the tubes (the paper neglects it)
     bend : :class:`BendModel` of the bend pipe
@@ -240,7 +240,7 @@ def paper_compliance(design: RodDesign) -> tuple[np.ndarray, np.ndarray]:
 
 def calc_rod_compliance(design: RodDesign, *, bend: BendModel = BendModel.ARC, shear: bool = False,
                         axial: bool = True):
-    """Closed-form compliance of ``design`` as a :class:`~rodlab.compliance.RodCompliance` (method ``calc``)."""
+    """Closed-form compliance of ``design`` as a :class:`~rodlab.core.compliance.RodCompliance` (method ``calc``)."""
     CF, Cg = calc_compliance(design, bend=bend, shear=shear, axial=axial)
     CF = 0.5 * (CF + CF.T)  # exact in theory; remove round-off
     return RodCompliance.from_design(design, CF, Cg, Method.CALC, {

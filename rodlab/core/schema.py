@@ -2,7 +2,7 @@
 
 The schemas ship in ``rodlab/schemas``: JSON Schema (draft 2020-12) for the JSON and TOML formats (a TOML
 file is checked as the table it parses to), and a small table schema for the CSV formats
-(:mod:`rodlab.schema_table`). :func:`check_file` names a file's format (from its ``format`` key, its
+(:mod:`rodlab.core.schema_table`). :func:`check_file` names a file's format (from its ``format`` key, its
 ``# format:`` comment or its suffix) and returns every schema problem at once, each with the line and key
 where it can be located, what was expected and a fix. The readers' own rules beyond the schema (a symmetric
 C_F, a fixture's world position among its positions, holds that keep their load) are run after the schema
@@ -270,7 +270,7 @@ def check_file(path, format_id: str | None = None) -> FileCheck:
 
 
 def require_schema(data, format_id: str, path, text: str, error_cls, kind: str = "json") -> None:
-    """Raise ``error_cls`` (a :class:`~rodlab.errors.LocatedError`) listing every problem of ``data`` against
+    """Raise ``error_cls`` (a :class:`~rodlab.core.errors.LocatedError`) listing every problem of ``data`` against
     the schema of ``format_id``, located at the first; nothing if there is none. The readers call it first."""
     problems = data_problems(data, format_id, str(path) if path is not None else "", text or "", kind)
     if not problems:

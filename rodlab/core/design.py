@@ -136,9 +136,9 @@ class RodDesign:
     ball : the precision ball
     source : the file the design was read from, if any
     tolerances : the file's ``[tolerances]`` table as given ({dotted key: one standard deviation, a number in
-        the key's unit or ``"N%"``}); :func:`rodlab.tolerances.design_tolerances` adds the defaults
-    joints : compliant joints the design declares ({place of :data:`rodlab.joint_springs.JOINT_PLACES`:
-        :class:`rodlab.joint_springs.JointSpring`}, ``rodlab.rod/2``); every compliance method adds them in series
+        the key's unit or ``"N%"``}); :func:`rodlab.core.tolerances.design_tolerances` adds the defaults
+    joints : compliant joints the design declares ({place of :data:`rodlab.core.joint_springs.JOINT_PLACES`:
+        :class:`rodlab.core.joint_springs.JointSpring`}, ``rodlab.rod/2``); every compliance method adds them in series
     """
 
     name: str
@@ -290,7 +290,7 @@ class RodDesign:
                 key="L2_mm")
 
     def material_of(self, part) -> Material:
-        """The material of a part (:class:`~rodlab.enums.Part` or its name)."""
+        """The material of a part (:class:`~rodlab.core.enums.Part` or its name)."""
         part = Part.parse(part)
         return {Part.PIPE_HOLDER: self.pipe_holder.material, Part.PIPE_I: self.pipe_I.material,
                 Part.RING_1: self.rings.material, Part.BEND: self.bend.material, Part.RING_2: self.rings.material,

@@ -17,22 +17,10 @@ from pathlib import Path
 
 __version__ = "0.1.0"
 
-from .core import (  # noqa: E402
-    BUILTIN_MATERIALS, G0, BendModel, ComplianceError, DesignError, FormatError, LoadAxis, MassProperties,
-    Material, Method, Part, Phase, RodCompliance, RodDesign, RodlabError, builtin_designs, c_rod_um,
-    calc_compliance, calc_rod_compliance, get_material, load_design, mass_properties, paper_compliance,
-    part_mass_properties, r_rod, read_compliance, resolve_design, write_compliance)
+from . import core as _core  # noqa: E402
+from .core import *  # noqa: E402,F401,F403  (the stable API: rodlab.core.__all__)
 
-__all__ = [
-    "__version__", "LoadAxis", "Method", "Part", "Phase",
-    "RodlabError", "FormatError", "DesignError", "ComplianceError",
-    "Material", "BUILTIN_MATERIALS", "get_material",
-    "RodDesign", "load_design", "resolve_design", "builtin_designs",
-    "MassProperties", "mass_properties", "part_mass_properties",
-    "BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance",
-    "RodCompliance", "c_rod_um", "r_rod", "read_compliance", "write_compliance",
-    "G0",
-]
+__all__ = ["__version__", *_core.__all__]
 
 #: the core modules, which lived at rodlab.NAME before they moved to rodlab.core.NAME
 _CORE_MODULES = frozenset(p.stem for p in Path(__file__).parent.joinpath("core").glob("*.py") if p.stem != "__init__")

@@ -141,3 +141,22 @@ def render_in_chromium():
     """``render_in_chromium(pages, profile_dir)``: open each HTML page in headless Chromium and check it; in CI a
     missing Chromium fails instead of skipping."""
     return _render_in_chromium
+
+
+@pytest.fixture(scope="session")
+def rod4_plan():
+    """(robot, fixture, planned joint angles per clamping position [rad], calc compliance) of the steel rod 4# on
+    the TX90: the study and rod-slip tests' shared campaign."""
+    import numpy as np
+
+    from rodlab.calibrate import resolve_robot
+    from rodlab.calibrate.plan import plan_poses
+    from rodlab.calibrate.simulate import standard_fixture
+    from rodlab.core.calc import calc_rod_compliance
+    from rodlab.core.design_io import resolve_design
+    robot = resolve_robot("tx90")
+    fixture = standard_fixture()
+    d = resolve_design("rod4")
+    rod = calc_rod_compliance(d)
+    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
+    return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod

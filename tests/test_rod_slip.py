@@ -5,34 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodlab.core.calc import calc_rod_compliance
-from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.compensations.rod_deflection import flange_loads
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.plan import plan_poses
 from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.predict_linear import predict_linear
 from rodlab.calibrate.rod_slip import slip_directions, slip_offsets
-from rodlab.calibrate.simulate import standard_base, standard_fixture
-from rodlab.core.design_io import resolve_design
+from rodlab.calibrate.simulate import standard_base
 from rodlab.core.enums import Method
 
 
-@pytest.fixture(scope="module")
-def rod4():
-    robot = resolve_robot("tx90")
-    fixture = standard_fixture()
-    d = resolve_design("rod4")
-    rod = calc_rod_compliance(d)
-    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
-    return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod
-
-
-def test_slip_is_the_deflection_under_a_random_load_of_its_weight(rod4):
+def test_slip_is_the_deflection_under_a_random_load_of_its_weight(rod4_plan):
     """In {T} the offset is slip * C_g u (a rotation to {W} keeps its length); it doubles with the compliance
     and with slip, vanishes at 0, and its directions are N(0, I/3) (|u| ~ 1)."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     q = np.concatenate(list(plan.values()))
     p = ModelParams.nominal(robot, rod.tool_mm, base=standard_base())
     F = np.zeros((q.shape[0], 3))
@@ -51,10 +37,10 @@ def test_negative_slip_is_refused():
         Priors(rod_slip=-1.0)
 
 
-def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4):
+def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4_plan):
     """Linear predictor, files equal to the true rod: without slip FEA ends where the robot's own noise puts it;
     with slip every method is worse by about the same, and a rod three times as compliant loses more."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     exact = dict(r_rod=(1.0, 1.0), shape_sigma=0.0, meas_sigma=0.0, validation_points=30)
 
     def mean(r, slip):
@@ -71,10 +57,10 @@ def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4):
     assert slipped[Method.NONE] > slipped[Method.FEA]
 
 
-def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4):
+def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4_plan):
     """Steel rod 4#, the robot floor of the paper and the default slip in both paths: the linear predictor's
     mean within 3 Monte-Carlo standard errors plus 5 % of the Monte-Carlo mean (none and fea)."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.01, 1.05), validation_points=50, robot_floor_mm=0.263, rod_slip=2.4)
     R = 12
     mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],

@@ -7,29 +7,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rodlab.core.calc import calc_rod_compliance
 from rodlab.calibrate import resolve_robot
-from rodlab.calibrate.plan import plan_poses
 from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.simulate import standard_base, standard_fixture
 from rodlab.core.design_io import resolve_design
 from rodlab.core.enums import Method
 
 
-@pytest.fixture(scope="module")
-def setup_rod4():
-    robot = resolve_robot("tx90")
-    fixture = standard_fixture()
-    d = resolve_design("rod4")
-    rod = calc_rod_compliance(d)
-    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
-    return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod
-
-
-def test_perfect_files_leave_no_deflection_error(setup_rod4):
+def test_perfect_files_leave_no_deflection_error(rod4_plan):
     """Files equal to the true rod (r = 1, no shape or measurement error): every compensating method gives the
     true-rod result, so the budget's deflection share vanishes, while no compensation keeps the deflection."""
-    robot, fixture, plan, rod = setup_rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.0, 1.0), shape_sigma=0.0, meas_sigma=0.0, validation_points=30)
     out = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, rod,
                                                  ["none", "fea", "meas"], pri, replicates=2, seed=3)}
@@ -42,10 +30,10 @@ def test_perfect_files_leave_no_deflection_error(setup_rod4):
         assert sum(parts) == pytest.approx(1.0) and min(parts) >= 0
 
 
-def test_a_softer_rod_is_predicted_worse(setup_rod4):
+def test_a_softer_rod_is_predicted_worse(rod4_plan):
     """Same draws, the same file errors (r in 1.2-1.3): a rod three times as compliant leaves three times the
     deflection after FEA compensation, so its predicted error is larger; the band contains the mean."""
-    robot, fixture, plan, rod = setup_rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.2, 1.3), validation_points=30)
     stiff = predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["fea"], pri, replicates=3, seed=1,
                              budget=False)[0]

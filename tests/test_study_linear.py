@@ -8,29 +8,16 @@ import pytest
 from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.compensations import deflection_basis, deflection_offsets
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.plan import plan_poses
 from rodlab.calibrate.predict import Priors, predict_accuracy
 from rodlab.calibrate.predict_linear import (_exact_ms, _mv, _random_parts, _to_kin, compliance_draws,
                                              linear_campaign, predict_linear, robot_prior, validation_draws)
-from rodlab.calibrate.simulate import standard_base, standard_fixture
-from rodlab.core.calc import calc_rod_compliance
-from rodlab.core.design_io import resolve_design
+from rodlab.calibrate.simulate import standard_base
 from rodlab.core.enums import Method
 
 
-@pytest.fixture(scope="module")
-def rod4():
-    robot = resolve_robot("tx90")
-    fixture = standard_fixture()
-    d = resolve_design("rod4")
-    rod = calc_rod_compliance(d)
-    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
-    return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod
-
-
-def test_deflection_basis_is_the_offsets_linear_map(rod4):
+def test_deflection_basis_is_the_offsets_linear_map(rod4_plan):
     """Eq. 19 is linear in the compliance: the basis times (C_F, C_g) is deflection_offsets for any matrices."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     rng = np.random.default_rng(4)
     q = np.concatenate(list(plan.values()))
     F = rng.normal(0, 2.0, (q.shape[0], 3))
@@ -55,10 +42,10 @@ def test_validation_refit_projects_out_base_and_tool():
     np.testing.assert_allclose(vd.W, np.swapaxes(vd.PJ, 1, 2) @ vd.PJ)
 
 
-def test_unregularised_fit_recovers_the_parameters_exactly(rod4):
+def test_unregularised_fit_recovers_the_parameters_exactly(rod4_plan):
     """With data that leave no scatter no parameter is regularised and A J = I: a perturbation of the free
     parameters is identified exactly (the linearised identification is unbiased)."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     lc = linear_campaign(robot, plan, fixture, standard_base(), rod)
     A = lc.gains(np.zeros((2, lc.J.shape[0])), rough=True)
     assert A.shape == (2, lc.J.shape[1], lc.J.shape[0])
@@ -69,10 +56,10 @@ def test_unregularised_fit_recovers_the_parameters_exactly(rod4):
     assert np.trace(big[0] @ lc.J) < lc.J.shape[1] - 0.5
 
 
-def test_perfect_files_leave_no_deflection_error(rod4):
+def test_perfect_files_leave_no_deflection_error(rod4_plan):
     """Files equal to the true rod: every compensating method gives the true-rod result (deflection share 0,
     meas = fea exactly); no compensation keeps the deflection."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.0, 1.0), shape_sigma=0.0, meas_sigma=0.0, validation_points=30)
     out = {a.method: a for a in predict_linear(robot, plan, fixture, standard_base(), rod, rod,
                                                ["none", "fea", "meas"], pri, draws=64).summaries}
@@ -85,10 +72,10 @@ def test_perfect_files_leave_no_deflection_error(rod4):
         assert a.mean_p05_mm <= a.mean_mm <= a.mean_p95_mm <= a.max_mm
 
 
-def test_exact_mean_square_is_the_draws_expectation(rod4):
+def test_exact_mean_square_is_the_draws_expectation(rod4_plan):
     """The closed-form mean square (covariances propagated) equals the average of the drawn campaigns' mean
     squares within the draws' standard error (4 SE), validation noise included."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.01, 1.05), validation_points=30)
     D = 1000
     lc = linear_campaign(robot, plan, fixture, standard_base(), rod, pri)
@@ -106,11 +93,11 @@ def test_exact_mean_square_is_the_draws_expectation(rod4):
     assert abs(per.mean() - exact) < 4 * per.std() / np.sqrt(D)
 
 
-def test_linear_predictor_agrees_with_monte_carlo(rod4):
+def test_linear_predictor_agrees_with_monte_carlo(rod4_plan):
     """A steel rod, none and fea: the linear predictor's mean error lies within 3 Monte-Carlo standard errors
     (the spread of 12 replicates' mean errors / sqrt(12)) plus 3 % (linearisation: the campaign's true joint
     angles and second-order terms it leaves out) of the Monte-Carlo mean."""
-    robot, fixture, plan, rod = rod4
+    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.01, 1.05), validation_points=50)
     R = 12
     mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],

@@ -135,6 +135,8 @@ def test_update_cli_declares_the_joint(tmp_path):
            else tmp_path / "rec.rig.csv"), "-o", str(out)]
     refused = subprocess.run(cmd, capture_output=True, text=True)
     assert refused.returncode == 2 and "--free joints.ring_1.s_bend_rad_per_Nm" in refused.stderr and not out.exists()
+    typo = subprocess.run(cmd + ["--free", "joints.ring_2.s_bend_rad_per_Nm"], capture_output=True, text=True)
+    assert typo.returncode == 2 and "Did you mean `joints.ring_1.s_bend_rad_per_Nm`" in typo.stderr and not out.exists()
     run = subprocess.run(cmd + ["--free", "joints.ring_1.s_bend_rad_per_Nm"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     built = load_design(out)

@@ -13,6 +13,7 @@ from ...core.compliance import RodCompliance, read_compliance
 from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.joint_springs import JOINT_PLACES
+from ...core.tolerances import design_value
 
 __all__ = ["register"]
 
@@ -95,6 +96,8 @@ def cmd_update(args: argparse.Namespace) -> int:
     keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
     if design.source is None:
         raise RodlabError("the design has no file to start from", key="design")
+    for key in keys:                                   # a misspelt key is named before the recording is diagnosed
+        design_value(design, key)
     measured, causes = _measured(args.measured, design, keys)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
+from rodlab.fea.reference_designs import reference_design
 from rodlab.stiffness_rig.blind import generate_cases
 from rodlab.app.diagnose import diagnose_rig  # noqa: E402
 from rodlab.core.fileio import atomic_write_text  # noqa: E402
@@ -116,10 +117,11 @@ def main() -> int:
     if mode not in ("", "wide", "variants"):
         raise SystemExit(f"the third argument is wide or variants, got {mode!r}")
     wide, variants = mode == "wide", mode == "variants"
-    sim = calc_rod_compliance(resolve_design("rod1"))
-    design = resolve_design("rod1")
+    rod = sys.argv[4] if len(sys.argv) > 4 else "rod1"     # legacy:rod1 is the rod 1# of before issue #45
+    design = reference_design(rod.split(":", 1)[1]) if rod.startswith("legacy:") else resolve_design(rod)
+    sim = calc_rod_compliance(design)
     with tempfile.TemporaryDirectory() as tmp:
-        cases = generate_cases(tmp, n, seed, wide=wide, variants=variants)
+        cases = generate_cases(tmp, n, seed, rod=design, wide=wide, variants=variants)
         results = []
         for c in cases:
             t0 = time.perf_counter()
@@ -131,8 +133,9 @@ def main() -> int:
             "variants": "; variants: nonlinearity linear, quadratic or on one axis; an effect beside a bumped hold; "
                         "outside effects also a gauge slip and a saturating gauge"}.get(mode, "")
     lines = ["# Blind benchmark: rig diagnosis", "",
-             f"`python benchmarks/diagnose_blind.py {n} {seed}{' ' + mode if mode else ''}`: {n} generated cases "
-             f"(rod 1#{note}), "
+             f"`python benchmarks/diagnose_blind.py {n} {seed}{' ' + mode if mode else ''}"
+             f"{' ' + rod if rod != 'rod1' else ''}`: {n} generated cases "
+             f"({'the rod 1# of before #45' if rod.startswith('legacy:') else 'rod 1#'}{note}), "
              f"{time.strftime('%Y-%m-%d')}. Goals: false alarms <= 5 %, recall >= 90 % at SNR >= 5, wrong cause <= 5 %, "
              f"location >= 90 %, parameters within 1.35x, honest `unexplained` >= 80 %, fit after <= 1.5x noise, "
              f"<= 10 s per recording.", "",
@@ -150,7 +153,10 @@ def main() -> int:
               f"| time per recording | median {np.median(times):.2f} s, max {max(times):.2f} s |", "",
               "Confusion (true effect -> first matching finding, or the strongest finding, or none):", ""]
     lines += [f"- {k}: {v}" for k, v in sc["confusion"].items()]
-    atomic_write_text(OUT.with_name(f"diagnose_blind_{mode}.md") if mode else OUT, "\n".join(lines) + "\n")
+    page = OUT.with_name(f"diagnose_blind_{mode}.md") if mode else OUT
+    if rod != "rod1":
+        page = page.with_name(f"{page.stem}_{rod.replace(':', '_')}.md")
+    atomic_write_text(page, "\n".join(lines) + "\n")
     print("\n".join(lines))
     print(json.dumps(sc["counts"]))
     return 0

@@ -154,15 +154,16 @@ def _kind(u: float) -> str:
             else "decoy" if u < mix["decoy"] else "oolib")
 
 
-def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod: str = "rod1", wide: bool = False,
+def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod="rod1", wide: bool = False,
                    variants: bool = False) -> list[BlindCase]:
-    """``n`` blind cases; ``wide``: draw the load schedules from :func:`_wide_schedule` (other repeats, signs, hold
+    """``n`` blind cases of ``rod`` (a built-in name or a design); ``wide``: draw the load schedules from
+    :func:`_wide_schedule` (other repeats, signs, hold
     times, sample rates, gaps and loads) instead of the standard ones; ``variants``: other forms of the effects
     (:func:`unit_effect`), an effect beside a bumped hold, and more effects outside the library (a gauge that
     slips once, a gauge that saturates)."""
     rng = np.random.default_rng(seed)
     draws = blind_definitions()["draws"]
-    design = resolve_design(rod)
+    design = resolve_design(rod) if isinstance(rod, str) else rod
     C = calc_rod_compliance(design).C_F
     places = joint_places(design.tool_mm, design)
     out = Path(out_dir)

@@ -16,6 +16,7 @@ orientation is not a target and stays near the nominal solution's). Pose targets
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,7 +28,9 @@ from .ik import solve_ik_positions
 from .ik_pose import rotation_angle, solve_ik_poses, tcp_poses
 from .kinematics import ModelParams, ball_positions
 
-__all__ = ["Correction", "correct_targets", "correct_poses", "AxisDeviation", "ik_assumptions"]
+__all__ = ["Correction", "correct_targets", "correct_poses", "AxisDeviation", "ik_assumptions", "CONFIGURATION_JUMP_RAD"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -58,6 +61,21 @@ class Correction:
     uncorrected_rad: np.ndarray | None = None
 
 
+#: a command this far from its seed on any joint [rad] has left the program's configuration (elbow, wrist flip)
+CONFIGURATION_JUMP_RAD = np.pi / 2
+
+
+def _warn_configuration(seeds: np.ndarray, q_rad: np.ndarray) -> None:
+    """Log the targets whose commands leave the program's configuration (a wrist or elbow flip): a target in
+    another frame than the calibration's, or an orientation the taught configuration cannot reach."""
+    jump = np.abs(np.angle(np.exp(1j * (q_rad - seeds))))
+    for i in np.nonzero(jump.max(axis=1) > CONFIGURATION_JUMP_RAD)[0]:
+        j = int(np.argmax(jump[i]))
+        log.warning("target %d: the commands leave the program's configuration (joint %d moves %.0f deg from its "
+                    "seed); check that the target is in the calibration's frame", i + 1, j + 1,
+                    np.degrees(jump[i, j]))
+
+
 def _tcp(robot, params: ModelParams, q_rad) -> np.ndarray:
     return ball_positions(robot, params, q_rad)[0].pW
 
@@ -73,6 +91,7 @@ def correct_targets(robot, calibrated: ModelParams, nominal: ModelParams, target
     seeds = np.broadcast_to(np.asarray(q_seed_rad, float), (len(targets), robot.n)).copy()
     nom = solve_ik_positions(robot, nominal, targets, seeds, pos_tol_mm=tol_mm)
     cal = solve_ik_positions(robot, calibrated, targets, nom.q_rad, pos_tol_mm=tol_mm)
+    _warn_configuration(seeds, cal.q_rad)
     uncorrected = np.linalg.norm(_tcp(robot, calibrated, nom.q_rad) - targets, axis=1)
     corrected, abc = _nominal_pose(robot, nominal, cal.q_rad)
     return Correction(cal.q_rad, corrected, abc, cal.error_mm, uncorrected, nom.ok & cal.ok)
@@ -102,6 +121,7 @@ def correct_poses(robot, calibrated: ModelParams, nominal: ModelParams, targets_
     seeds = np.broadcast_to(np.asarray(q_seed_rad, float), (len(targets), robot.n)).copy()
     nom = solve_ik_poses(robot, nominal, targets, R_t, seeds, R_tool, tol_mm, tol_rad)
     cal = solve_ik_poses(robot, calibrated, targets, R_t, nom.q_rad, R_tool, tol_mm, tol_rad)
+    _warn_configuration(seeds, cal.q_rad)
     p_u, R_u = tcp_poses(robot, calibrated, nom.q_rad, R_tool)
     corrected, corrected_abc = _nominal_pose(robot, nominal, cal.q_rad, R_tool)
     return Correction(cal.q_rad, corrected, corrected_abc, cal.error_mm, np.linalg.norm(p_u - targets, axis=1),

@@ -53,3 +53,12 @@ class _MovedCore(importlib.abc.MetaPathFinder):
 
 if not any(isinstance(f, _MovedCore) for f in sys.meta_path):
     sys.meta_path.append(_MovedCore())
+
+
+def __getattr__(name: str):
+    """``rodlab.compliance`` as an attribute (the core module's old place) still reaches ``rodlab.core.compliance``,
+    with the same DeprecationWarning as its import."""
+    if name in _CORE_MODULES:
+        return importlib.import_module(f"rodlab.{name}")
+    raise AttributeError(f"module 'rodlab' has no attribute {name!r}")
+

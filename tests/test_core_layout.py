@@ -34,6 +34,14 @@ def test_an_old_core_path_still_imports_with_a_warning(name):
     assert any(issubclass(w.category, DeprecationWarning) and f"rodlab.core.{name}" in str(w.message) for w in caught)
 
 
+def test_an_old_core_module_as_an_attribute():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        assert rodlab.design_io.load_design is rodlab.core.design_io.load_design
+    with pytest.raises(AttributeError):
+        rodlab.no_such_thing
+
+
 def test_an_unknown_name_is_still_an_import_error():
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("rodlab.no_such_module")

@@ -209,3 +209,23 @@ def test_cli_pose_targets_and_their_refusals(tmp_path, capsys):
         err = capsys.readouterr().err
         assert str(bad.name) in err and where in err and what in err, err
         assert not o.exists()
+
+
+def test_a_pose_target_that_flips_the_wrist_is_warned_about(ur5, caplog):
+    """A target orientation in another frame (turned 180 deg) is reached only by leaving the program's
+    configuration: the commands are still exact, and the target is named in a warning."""
+    import logging
+
+    from rodlab.calibrate.correct import correct_poses
+    from rodlab.core.frames import matrix_to_pose
+    nominal, calibrated = _models(ur5)
+    program = np.deg2rad(np.array([[10.0, -80.0, 90.0, -60.0, 90.0, 0.0], [-10.0, -70.0, 80.0, -50.0, 80.0, 20.0]]))
+    p, R = _flange_poses(ur5, nominal, program)
+    abc = np.array([matrix_to_pose(np.block([[r, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]]))[3:]
+                    for r in R])
+    abc[1, 0] += 180.0                                                   # the second target's frame turned
+    with caplog.at_level(logging.WARNING, logger="rodlab.calibrate.correct"):
+        corr = correct_poses(ur5, calibrated, nominal, p, abc, program)
+    assert corr.residual_mm.max() < 1e-3
+    warned = [r.getMessage() for r in caplog.records if "leave the program's configuration" in r.getMessage()]
+    assert len(warned) == 1 and warned[0].startswith("target 2")

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.special import chdtrc
 
 from ..core.calc import calc_rod_compliance
 from ..core.design import RodDesign
@@ -21,8 +22,10 @@ from ..core.massprops import mass_properties
 from ..core.sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
-__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR"]
+__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR", "EXPLAIN_P"]
 
+#: below this tail probability of the chi-square after the fit, the freed keys do not explain the measurement
+EXPLAIN_P = 1e-3
 #: two freed keys whose estimates correlate beyond this are reported as not separable
 SEPARATE_CORR = 0.95
 #: prior of a freed key the design gives no tolerance for: this relative standard deviation (weak)
@@ -61,7 +64,8 @@ class UpdateResult:
     corr : correlations, shape=(k, k); inseparable : [(key, the keys it cannot be told from, multiple correlation of
     their data columns, what would separate them)];
     r_before, r_after : measured / model per entry; entries; chi2_before, chi2_after : of the entries;
-    design : the design as built; success, message
+    design : the design as built; success, message; p_after : the chi-square's tail probability after the fit
+    (degrees of freedom: entries - keys, at least 1)
     """
 
     keys: tuple
@@ -78,6 +82,12 @@ class UpdateResult:
     design: RodDesign
     success: bool
     message: str
+    p_after: float = 1.0        #: chance of a chi-square this large after the fit if the freed keys explain it
+
+    @property
+    def explains(self) -> bool:
+        """Whether the freed keys explain the measured entries (``p_after`` above :data:`EXPLAIN_P`)."""
+        return self.p_after > EXPLAIN_P
 
 
 def model_compliance(model: str):
@@ -162,8 +172,9 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     z0, z1 = W @ (C0 - measured.C), W @ (C1 - measured.C)
     as_built = with_values(design, dict(zip(keys, res.x)))
     insep = _inseparable(design, keys, res.x, J[:len(E)], fn, E)
+    p_after = float(chdtrc(max(len(E) - len(keys), 1), float(z1 @ z1)))
     return UpdateResult(keys, nominal, res.x, sd, corr, insep, E, measured.C / C0, measured.C / C1,
-                        float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message))
+                        float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message), p_after)
 
 
 def _collinearity(A: np.ndarray, a: int) -> tuple[float, list]:

@@ -104,6 +104,12 @@ def cmd_update(args: argparse.Namespace) -> int:
               "compliance; see `rodlab diagnose --rig`)")
     res = update_design(design, measured, keys, args.model)
     _print(res, args.model)
+    if not res.explains:
+        raise RodlabError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
+                          f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit, p = {res.p_after:.1e}): the "
+                          "rod differs in a way these keys cannot move. Look for a local cause (`rodlab diagnose "
+                          "--rig` on the recording) or free other keys (a joint's compliance "
+                          "joints.PLACE.s_bend_rad_per_Nm, the tube's sizes); nothing was written")
     text = Path(design.source).read_text(encoding="utf-8")
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")

@@ -107,13 +107,13 @@ def terms_html() -> str:
 
 
 def campaign_rod_note(st: dict) -> str:
-    """Section 6: the campaign's rod is exactly as its compliance file (the best case)."""
+    """Section 6: the campaign's rod is the rod as built of the rig sections (not its simulation)."""
     r_true = st.get("campaign", {}).get("r_rod_true")
     r = f" (true r_rod = {r_true:.3f})" if r_true is not None else ""
-    return ("<p><b>Rod assumed: exactly as its compliance file.</b> The simulated campaign's rod is rod 1#'s FEA "
-            f"compliance plus the compliant bond concealed in the rig recording (section 4){r}, so the simulated "
-            "compliances (Calc, FEA) are nearly the truth and match Meas: the best case. Section 8 predicts the rod "
-            "as built.</p>")
+    return ("<p><b>Rod assumed: the rod as built of sections 4-5.</b> The simulated campaign's rod is rod 1#'s FEA "
+            f"compliance changed by the laminate 7 % softer and the starved ring-1 bond of the rig recording{r}: "
+            "the simulated compliances (Calc, FEA) miss it by that much, Meas and Corrected carry it. Section 8 "
+            "predicts rods as built with r_rod drawn from the material's prior.</p>")
 
 
 def study_rod_note(st: dict) -> str:

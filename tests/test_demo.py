@@ -96,7 +96,7 @@ def test_report_tells_one_story(run):
     assert "with Meas compensation" in conclusion and "section 6" in conclusion and "section 8" in conclusion
     sec6 = text[text.index("6. Calibration"):text.index("7. L1 / L2 sweep")]
     sec8 = text[text.index("8. Which rod?"):]
-    assert "Rod assumed: exactly as its compliance file" in sec6
+    assert "Rod assumed: the rod as built of sections 4-5" in sec6
     assert f"true r_rod = {s['campaign']['r_rod_true']:.3f}" in sec6
     lo, hi = sy["r_prior"]["1#"]
     assert "Rod assumed: as built" in sec8 and f"r_rod drawn from {lo:g}-{hi:g}" in sec8

@@ -2,8 +2,8 @@
 compensation), the terms where they first appear, and which rod each calibration section assumes.
 
 Section 6 (the calibration) and section 8 (the study) assume different rods: section 6's simulated campaign
-uses a rod exactly as its compliance file (plus the rig's concealed bond, r_rod ~ 1), section 8 the rod as built
-(r_rod drawn from the material's prior: carbon 1.23-2.30). Both say so, and the conclusion joins them.
+uses the rod as built of the rig sections (its FEA file changed by a softer laminate and a starved bond), section
+8 rods as built with r_rod drawn from the material's prior (carbon 1.23-2.30). Both say so, and the conclusion joins them.
 """
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def _table3_span(t3: dict) -> tuple[float, float]:
 
 
 def _rod1_sentence(st: dict, rows: dict, sy: dict) -> str:
-    """Rod 1# as built (section 8) against the rod exactly as its file (section 6)."""
+    """Rod 1# as built with a drawn r_rod (section 8) against the rig's rod as built (section 6)."""
     t3, name = st["calibrate"]["table3"], sy["designs"][0]
     lo, hi = _table3_span(t3)
     r_true = st.get("campaign", {}).get("r_rod_true")
@@ -45,7 +45,7 @@ def _rod1_sentence(st: dict, rows: dict, sy: dict) -> str:
                       if (name, m) in rows)
     p = _prior(sy, name)
     return (f"<p><b>Rod {html.escape(name)}, the rod of sections 1-7</b>, as built (r_rod drawn from {p[0]:g}-{p[1]:g}): "
-            f"predicted {built} (section 8). Exactly as its compliance file ({as_file}, section 6) every "
+            f"predicted {built} (section 8). As the rig measured it ({as_file}, section 6) every "
             f"compensation reaches {lo:.3f}-{hi:.3f} mm (None {t3['None']['mean_mm']:.3f} mm). The two sections "
             "assume different rods, not different physics: only a measured compliance knows the rod as built.</p>")
 

@@ -176,7 +176,8 @@ class _DemoRun:
         res = update_design(self.design, Measured(lin.entries, lin.C, lin.cov, "rig/rod1.rig.csv"), keys)
         write_edited_design(Path(self.design.source).read_text(encoding="utf-8"), self.design,
                             dict(zip(res.keys, res.x)), self.out / "rod1.asbuilt.rod.toml",
-                            "# as built: rodlab update rod1 --measured rig/rod1.rig.csv --free " + ",".join(keys) + "\n")
+                            "# as built: rodlab update rod1 --measured rig/rod1.rig.csv --free " + ",".join(keys)
+                            + " --model frame\n")
         return {"file": "rod1.asbuilt.rod.toml", "keys": list(res.keys), "design": res.nominal.tolist(),
                 "as_built": res.x.tolist(), "sigma": res.sigma.tolist(), "r_before": res.r_before.tolist(),
                 "r_after": res.r_after.tolist(), "inseparable": [a for a, *_ in res.inseparable]}

@@ -1,7 +1,8 @@
 """Compliant joints a design declares (``rodlab.rod/2`` ``[joints.PLACE]``): rotational springs in series with the
 rod's members, added to every compliance method's C_F and C_g.
 
-A design models its bonds (the flange clamp, ring 1, ring 2 and the ball holder on pipe II) as rigid. A rod whose
+A design models its bonds as rigid. Their places are the flange clamp, ring 1 and pipe II (``pipe_II`` stands for
+ring 2 and the ball holder, which tip loads cannot tell apart: contract effects.md). A rod whose
 bond was measured compliant (``rodlab update --free joints.ring_1.s_bend_rad_per_Nm``), or a designer who wants to
 see what a softer bond does, declares it::
 

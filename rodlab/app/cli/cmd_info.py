@@ -55,6 +55,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(f"  {str(part):<12} {info['material']:<12} {od:>7g} {size!s:>11} {1e3 * mp.mass_kg:>9.2f}  [{com}]")
     print(f"  total mass {total.mass_kg * 1e3:.2f} g, COM in {{T}} = "
           f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm")
+    for place, spring in design.joints.items():       # rodlab.rod/2: in series in every compliance below
+        print(f"  declared joint at {place}: s_bend {spring.s_bend_rad_per_Nm:g}, s_torsion "
+              f"{spring.s_torsion_rad_per_Nm:g} rad/(N m) (included in the compliance)")
     print("  closed-form C_F (force on ball -> ball displacement, {T}):")
     print(_fmt_matrix(comp.C_F, "mm/N"))
     print("  closed-form C_g (gravity in {T} -> ball displacement):")

@@ -142,3 +142,11 @@ def test_update_cli_declares_the_joint(tmp_path):
     built = load_design(out)
     assert "rodlab.rod/2" in out.read_text() and "design: 0" in out.read_text()
     assert built.joints["ring_1"].s_bend_rad_per_Nm == pytest.approx(6e-5, rel=0.1)
+
+
+def test_validate_names_the_format_line_for_joints_in_a_v1_file(tmp_path):
+    src = legacy_file(tmp_path / "rod1.rod.toml", "rod1").read_text()
+    bad = tmp_path / "v1.rod.toml"
+    bad.write_text(src + "\n[joints.ring_1]\ns_bend_rad_per_Nm = 2e-6\n")
+    run = subprocess.run([sys.executable, "-m", "rodlab", "validate", str(bad)], capture_output=True, text=True)
+    assert run.returncode != 0 and 'format = "rodlab.rod/2"' in run.stdout + run.stderr

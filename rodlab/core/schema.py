@@ -169,6 +169,19 @@ def _dotted(where) -> str | None:
     return out or None
 
 
+def _newer_version_hint(format_id: str | None, key: str) -> str:
+    """For a key the file's format version lacks but a later version of the same format has: change the format
+    line (e.g. ``[joints]`` in a ``rodlab.rod/1`` design belongs to ``rodlab.rod/2``)."""
+    if not format_id or "/" not in format_id:
+        return ""
+    family = format_id.rsplit("/", 1)[0]
+    for other in FORMATS:
+        if other != format_id and other.rsplit("/", 1)[0] == family and FORMATS[other].kind != "csv":
+            if key in load_schema(other).get("properties", {}):
+                return f"`{key}` belongs to {other}: change the format line to format = \"{other}\""
+    return ""
+
+
 def _explain(err) -> tuple[str, str, list]:
     """(message, fix, path) of one jsonschema error, in rodlab's words."""
     where = list(err.absolute_path)
@@ -184,7 +197,7 @@ def _explain(err) -> tuple[str, str, list]:
         allowed = sorted(schema.get("properties", {}))
         extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
         key = extra[0] if extra else "?"
-        hint = did_you_mean(key, allowed).strip()
+        hint = did_you_mean(key, allowed).strip() or _newer_version_hint(schema.get("$id"), key)
         return (f"unknown key `{key}`; allowed: {allowed}",
                 hint or "remove it or check its spelling", where + [key])
     if v in ("const", "enum"):

@@ -10,12 +10,13 @@ import errno
 import importlib
 import logging
 import pkgutil
+import re
 import sys
 from pathlib import Path
 
 from ... import __version__
 from ...core import progress
-from ...core.errors import RodlabError
+from ...core.errors import RodlabError, did_you_mean
 
 __all__ = ["build_parser", "main", "command_modules", "COMMAND_ORDER"]
 
@@ -45,8 +46,20 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors", **kw)
 
 
+class RodlabParser(argparse.ArgumentParser):
+    """argparse with one-line errors (exit 2): the error, the nearest choice for a misspelt one, and where the
+    help is; the sub-command parsers inherit it."""
+
+    def error(self, message: str):
+        m = re.match(r"argument (\S+): invalid choice: '?([^' ]*)'? \(choose from (.*)\)", message)
+        if m:
+            choices = re.findall(r"'([^']*)'", m.group(3)) or [c.strip() for c in m.group(3).split(",")]
+            message += did_you_mean(m.group(2), choices)
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = RodlabParser(
         prog="rodlab",
         description="Design, simulate, measure and use long measuring rods for on-site robot calibration "
                     "(MultiCal).")

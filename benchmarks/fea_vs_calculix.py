@@ -24,6 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_fea import machine_check  # noqa: E402  (the same fixed workload as fea.md's)
 from pages import write_page  # noqa: E402
 OUT = ROOT / "docs" / "benchmarks" / "fea_vs_calculix.md"
 
@@ -60,23 +61,13 @@ def _ccx_run(size: float | None) -> dict:
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-def _machine_check() -> float:
-    import numpy as np
-    A = np.random.default_rng(0).standard_normal((1500, 1500))
-    A = A @ A.T + 1500 * np.eye(1500)
-    np.linalg.cholesky(A)
-    t0 = time.perf_counter()
-    for _ in range(20):
-        np.linalg.cholesky(A)
-    return time.perf_counter() - t0
-
 
 def main(rounds: int = 2, sizes: tuple = ()) -> int:
     from rodlab.fea.calculix import ccx_available
     if ccx_available() is None:
         raise SystemExit("CalculiX (ccx) is not installed: apt-get install calculix-ccx")
     import numpy as np
-    check0 = _machine_check()
+    check0 = machine_check()
     rows, ratios = [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for size in (None, *sizes):
@@ -91,7 +82,7 @@ def main(rounds: int = 2, sizes: tuple = ()) -> int:
                 rows.append(f"| {label} ({ccx['size_mm']:g} mm, {ccx['nodes']} nodes whole) | {i + 1} | {cli:.2f} | "
                             f"{ccx['t_ccx_s']:.1f} | {ratios[ccx['size_mm']][-1]:.1f}x | {100 * diff:.3f} % |")
                 print(rows[-1], flush=True)
-    check1 = _machine_check()
+    check1 = machine_check()
     lines = ["# `rodlab fea rod1 --model solid` against CalculiX on the same mesh", "",
              f"`python benchmarks/fea_vs_calculix.py {rounds}` on {platform.machine()}, {os.cpu_count()} cores, "
              f"Python {platform.python_version()}, {time.strftime('%Y-%m-%d')}. The command as a user runs it "

@@ -23,7 +23,7 @@ from rodlab.core.frames import pose_to_matrix
 
 from .errors import CalibrationError
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
+__all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "FIXTURE_FORMATS"]
 
 #: fixture formats read; /2 adds each pose's covariance
@@ -109,7 +109,8 @@ def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
 
 
-def _num(cell, p, line, col):
+def cell_number(cell, p, line: int, col: str) -> float:
+    """A CSV cell as a finite number; :class:`CalibrationError` naming the file, line and column otherwise."""
     try:
         v = float(cell)
     except (TypeError, ValueError):
@@ -158,7 +159,7 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str]):
             continue
         if len(row) != len(header):
             raise CalibrationError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
-        rows.append((k, {h: _num(c, p, k, h) for h, c in zip(header, row)}))
+        rows.append((k, {h: cell_number(c, p, k, h) for h, c in zip(header, row)}))
     if not rows:
         raise CalibrationError("no data rows", path=p, line=i + 1)
     return header, rows

@@ -14,7 +14,6 @@ others is ambiguous between two features; the flag itself is not.
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +23,7 @@ from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import read_text_checked
 from rodlab.core.frames import matrix_to_pose, skew
 
-from .campaign import Fixture, leading_comments
+from .campaign import Fixture, cell_number, leading_comments
 from .device import Device
 from .errors import CalibrationError
 
@@ -64,7 +63,7 @@ def read_probe(path) -> ProbeSet:
         raise CalibrationError("missing comment line '# accuracy_mm: ...' (the instrument's accuracy per coordinate,"
                                " 1 sigma [mm]) before the header", path=p, line=1, key="accuracy_mm")
     k, val = meta["accuracy_mm"]
-    acc = _number(val, p, k, "accuracy_mm")
+    acc = cell_number(val, p, k, "accuracy_mm")
     if not acc > 0:
         raise CalibrationError(f"expected an accuracy > 0 [mm], got {val!r}", path=p, line=k, key="accuracy_mm")
     lines = text.splitlines()
@@ -81,7 +80,7 @@ def read_probe(path) -> ProbeSet:
             continue
         if len(row) != 5:
             raise CalibrationError(f"expected 5 cells, got {len(row)}", path=p, line=k)
-        j = _number(row[0], p, k, "position")
+        j = cell_number(row[0], p, k, "position")
         if j != int(j) or j < 1:
             raise CalibrationError(f"expected a positive integer, got {row[0]!r}", path=p, line=k, key="position")
         name = row[1].strip()
@@ -93,21 +92,12 @@ def read_probe(path) -> ProbeSet:
         seen[(int(j), name)] = k
         pos.append(int(j))
         feat.append(name)
-        x.append([_number(c, p, k, col) for c, col in zip(row[2:], PROBE_COLUMNS[2:])])
+        x.append([cell_number(c, p, k, col) for c, col in zip(row[2:], PROBE_COLUMNS[2:])])
         ln.append(k)
     if not pos:
         raise CalibrationError("no data rows", path=p, line=i + 1)
     return ProbeSet(np.array(pos), feat, np.array(x), acc, p, np.array(ln))
 
-
-def _number(cell, p, line, col) -> float:
-    try:
-        v = float(cell)
-    except (TypeError, ValueError):
-        raise CalibrationError(f"expected a number, got {cell!r}", path=p, line=line, key=col) from None
-    if not math.isfinite(v):
-        raise CalibrationError(f"expected a finite number, got {cell!r}", path=p, line=line, key=col)
-    return v
 
 
 @dataclass

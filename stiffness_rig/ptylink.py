@@ -1,4 +1,5 @@
-"""A simulated device's end of a real pseudo-terminal, published under a stable symlink (the profile's port).
+"""A simulated device's end of a real pseudo-terminal, published under a stable symlink (the profile's port), and
+its serving thread's life (start, stop, context manager).
 
 Shared by the one-port simulator (:mod:`.simdevice`) and the instrument simulators (:mod:`.siminstruments`): the
 pty is opened raw on both ends and the link is swapped atomically, so a replug (close, reopen) gives the reader a
@@ -7,13 +8,39 @@ new device behind the same path.
 from __future__ import annotations
 
 import os
+import threading
 import tty
 
 __all__ = ["PtyLink"]
 
 
 class PtyLink:
-    """Mixin for a simulator with ``link`` (a :class:`~pathlib.Path`) and ``_master`` / ``_slave`` file descriptors."""
+    """Mixin for a simulator with ``link`` (a :class:`~pathlib.Path`), ``_master`` / ``_slave`` file descriptors, a
+    ``_stop`` event, a ``_thread`` (None until started) and ``_run`` (the device's loop on the master end)."""
+
+    #: the serving thread's name (None: ``sim-`` and the class name)
+    thread_name: str | None = None
+
+    def start(self):
+        self._open_pty()
+        self._thread = threading.Thread(target=self._run, name=self.thread_name or f"sim-{type(self).__name__}",
+                                        daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread:
+            self._thread.join(timeout=5)
+        self._close_pty()
+        if self.link.is_symlink():
+            self.link.unlink()
+
+    def __enter__(self):
+        return self.start()
+
+    def __exit__(self, *exc):
+        self.stop()
 
     def _open_pty(self) -> None:
         master, slave = os.openpty()

@@ -47,6 +47,8 @@ class SimulatedRig(PtyLink):
     """The rig behind a pty. ``channels``: tool axis (0..2) of each value in a line, device units of
     ``scale_mm`` mm; ``temperature``: append the room temperature as the last value."""
 
+    thread_name = "simulated-rig"
+
     model: RigModel
     link: Path
     protocol: str = "query"
@@ -73,27 +75,6 @@ class SimulatedRig(PtyLink):
         self._slave = None
         self._thread = None
         self._t0 = time.monotonic()
-
-    # -- pty management ------------------------------------------------------------------------
-    def start(self) -> "SimulatedRig":
-        self._open_pty()
-        self._thread = threading.Thread(target=self._run, name="simulated-rig", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread:
-            self._thread.join(timeout=5)
-        self._close_pty()
-        if self.link.is_symlink():
-            self.link.unlink()
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc):
-        self.stop()
 
     # -- behaviour -----------------------------------------------------------------------------------
     def now(self) -> float:

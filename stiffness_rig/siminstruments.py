@@ -105,27 +105,6 @@ class PtyInstrument(PtyLink):
         self._thread = None
         self._buf = b""
 
-    # -- pty ---------------------------------------------------------------------------------
-    def start(self):
-        self._open_pty()
-        self._thread = threading.Thread(target=self._run, name=f"sim-{type(self).__name__}", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread:
-            self._thread.join(timeout=5)
-        self._close_pty()
-        if self.link.is_symlink():
-            self.link.unlink()
-
-    def __enter__(self):
-        return self.start()
-
-    def __exit__(self, *exc):
-        self.stop()
-
     # -- behaviour ------------------------------------------------------------------------------
     def _write(self, data: bytes) -> None:
         try:

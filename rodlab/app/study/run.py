@@ -160,7 +160,13 @@ class ResultCache:
 
 
 def dask_client(scheduler, workers):
-    from dask.distributed import Client
+    """(client, local cluster or None) on ``scheduler`` or a local cluster of ``workers``; (None, None) with a
+    warning when Dask is not installed (the study then runs serially)."""
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        log.warning("Dask is not installed (pip install 'rodlab[dist]'): the study runs serially")
+        return None, None
     if not log.isEnabledFor(logging.DEBUG):      # the cluster's start / stop chatter only with --debug
         for name in ("distributed", "distributed.scheduler", "distributed.nanny", "distributed.core",
                      "distributed.worker", "distributed.http.proxy"):
@@ -191,10 +197,7 @@ def run_study(cands: list[Candidate], robot, fixture, spec: StudySpec = StudySpe
     tick = progress_ticker(progress, done, total)
     client = cluster = None
     if use_dask and done < total:
-        try:
-            client, cluster = dask_client(scheduler, workers)
-        except ImportError:
-            log.warning("Dask is not installed (pip install 'rodlab[dist]'): the study runs serially")
+        client, cluster = dask_client(scheduler, workers)
     try:
         if client is not None:
             _run_dask(client, cands, keys, seeds, setups, reps, robot, fixture, spec, joints, cache, tick)

@@ -88,10 +88,7 @@ def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, wo
     todo = [i for i, g in enumerate(got) if g is None]
     client = cluster = None
     if use_dask and (scheduler or len(todo) >= DASK_MIN_DESIGNS):
-        try:
-            client, cluster = dask_client(scheduler, workers)
-        except ImportError:
-            log.warning("Dask is not installed (pip install 'rodlab[dist]'): the study runs serially")
+        client, cluster = dask_client(scheduler, workers)
     try:
         if client is not None:
             _dask(client, cands, keys, todo, got, robot, fixture, spec, joints, cache, tick)

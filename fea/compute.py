@@ -1,9 +1,10 @@
 """Rod compliance files from the solid FEA, the frame model or the closed form.
 
 ``solid`` runs the 3-D model on a graded curved-P2 mesh (reference) of half the rod (it is mirror-symmetric
-about its bend plane: two half-size solves, the same answer as the whole mesh), optionally twice (sizes h and
-1.5 h) for a Richardson estimate of the discretisation error, written into the file's provenance with
-the mesh statistics, the Maxwell-Betti symmetry defect of C_F and the solver used.
+about its bend plane: two half-size solves, the same answer as the whole mesh) with an estimate of the
+discretisation error (by default stress recovery on the same solve, :mod:`fea.error_estimate`; or a second solve
+at 1.5 h and Richardson), written into the file's provenance with the mesh statistics, the Maxwell-Betti
+symmetry defect of C_F and the solver used.
 """
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from rodlab.core.massprops import part_mass_properties
 from rodlab.core.progress import stages
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.design import RodDesign
-from rodlab.core.enums import FeaModel, Method
+from rodlab.core.enums import ErrorEstimate, FeaModel, Method
 from rodlab.core.fem_mesh import RodMesh
 
 from .errors import FeaError
@@ -73,7 +74,26 @@ def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
         return solve_compliance(design, rc, backend=backend)
 
 
-def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, error_estimate: bool = True,
+def _estimate_kind(value) -> ErrorEstimate:
+    """``error_estimate`` as an :class:`ErrorEstimate` (``True``: recovery, ``False``: none)."""
+    if isinstance(value, bool):
+        return ErrorEstimate.RECOVERY if value else ErrorEstimate.NONE
+    try:
+        return ErrorEstimate.parse(value, "error estimate")
+    except ValueError as e:
+        raise FeaError(str(e), key="error_estimate") from None
+
+
+def _error_provenance(errF: np.ndarray, errg: np.ndarray, CF: np.ndarray, Cg: np.ndarray, method: str) -> dict:
+    """The provenance's ``discretisation_error``: the estimated error of every entry and the largest relative."""
+    return {"method": method, "C_F_mm_per_N": errF.tolist(), "C_g_mm_per_g0": errg.tolist(),
+            "max_relative_C_F": float(errF.max() / np.abs(CF).max()),
+            "max_relative_C_g": float(errg.max() / np.abs(Cg).max()),
+            "relative_diagonal_C_F": (np.diag(errF) / np.abs(np.diag(CF))).tolist()}
+
+
+def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
+                     error_estimate: ErrorEstimate | str | bool = ErrorEstimate.RECOVERY,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
                      symmetry: bool = True, tip_moments: bool = False):
     """Solid-FEA :class:`~rodlab.core.compliance.RodCompliance` (method ``fea``) and the raw result.
@@ -81,7 +101,9 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     ``mesher`` (:class:`Mesher`, called by keyword) makes the meshes: ``rodlab.geometry.mesh_rod`` as it is (the
     domain packages meet through the core's :class:`~rodlab.core.fem_mesh.RodMesh`, never import each other).
     ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
+    ``error_estimate``: :class:`~rodlab.core.enums.ErrorEstimate` (``True`` is recovery, ``False`` none).
     """
+    how = _estimate_kind(error_estimate)
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
     if not (np.isfinite(h) and h > 0):
         raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
@@ -90,7 +112,8 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
         raise FeaError(f"the solid model of {design.name!r} at size {h:g} mm would need ~{est / 1e6:.1f} M DOFs "
                        f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "
                        f"volume. Use a larger --size (error grows) or --model frame", key="size")
-    names = ["mesh", "solve"] + (["mesh (coarse)", "solve (coarse)"] if error_estimate else [])
+    richardson = how is ErrorEstimate.RICHARDSON
+    names = ["mesh", "solve"] + (["mesh (coarse)", "solve (coarse)"] if richardson else [])
     with stages(f"solid FEA of {design.name}", names) as bar:
         with bar.step("mesh"):
             t0 = time.perf_counter()
@@ -98,8 +121,8 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
             t_mesh = time.perf_counter() - t0
         with bar.step("solve"):
             res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
-                                   tip_moments=tip_moments)
-        coarse = _coarse_solve(design, mesher, 1.5 * h, grading, symmetry, backend, bar) if error_estimate else None
+                                   tip_moments=tip_moments, error_estimate=how is ErrorEstimate.RECOVERY)
+        coarse = _coarse_solve(design, mesher, 1.5 * h, grading, symmetry, backend, bar) if richardson else None
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),
             "dofs": res.dofs, "solver": res.backend,
@@ -112,14 +135,15 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None, er
     CF, Cg = res.C_F + dF, res.C_g + dg
     if coarse is not None:
         factor = 1.5 ** RICHARDSON_ORDER - 1.0
-        errF = np.abs(res.C_F - coarse.C_F) / factor
-        errg = np.abs(res.C_g - coarse.C_g) / factor
-        scaleF, scaleg = np.abs(CF).max(), np.abs(Cg).max()
-        prov["discretisation_error"] = {
-            "method": f"Richardson, sizes {h:g} and {1.5 * h:g} mm, assumed order {RICHARDSON_ORDER:g}",
-            "C_F_mm_per_N": errF.tolist(), "C_g_mm_per_g0": errg.tolist(),
-            "max_relative_C_F": float(errF.max() / scaleF), "max_relative_C_g": float(errg.max() / scaleg),
-            "relative_diagonal_C_F": (np.diag(errF) / np.abs(np.diag(CF))).tolist()}
+        prov["discretisation_error"] = _error_provenance(
+            np.abs(res.C_F - coarse.C_F) / factor, np.abs(res.C_g - coarse.C_g) / factor, CF, Cg,
+            f"Richardson, sizes {h:g} and {1.5 * h:g} mm, assumed order {RICHARDSON_ORDER:g}")
+    elif res.error_matrix is not None:
+        E = res.error_matrix
+        prov["discretisation_error"] = _error_provenance(
+            np.abs(E[:3, :3]), np.abs(E[:3, 3:6]), CF, Cg,
+            "stress recovery (Zienkiewicz-Zhu) on the solve's mesh: the energy of the recovered minus the computed "
+            "stress between the load cases; the computed compliance is too small by about this much")
     CF = 0.5 * (CF + CF.T)
     return RodCompliance.from_design(design, CF, Cg, Method.FEA, prov), res
 

@@ -26,8 +26,9 @@ from rodlab.core.design import RodDesign
 from rodlab.core.enums import Part
 from rodlab.core.units import G0, kg_m3_to_kg_mm3
 
-from .stiffness_assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis
+from .stiffness_assembly import assemble_body_force, assemble_stiffness, block_pattern, scalar_basis, scalar_element
 from .elasticity import element_tensors
+from .error_estimate import node_basis, recovery_error_matrix
 from .errors import FeaError
 from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering
 
@@ -52,7 +53,9 @@ class SolidResult:
     on the mesh solved: the half for a half mesh, see :func:`mirror_displacements`); ``mass_kg`` is the whole
     rod's. ``n_cases`` = 6 (F_x, F_y, F_z [N], g_x, g_y, g_z [g0]), or 9 with ``tip_moments`` (+ M_x, M_y, M_z
     [N mm] about the ball centre); ``ball_motion`` = ball-centre translation [mm] and rotation [rad] per unit
-    load, shape=(6, n_cases).
+    load, shape=(6, n_cases); ``error_matrix`` (with ``error_estimate``) the recovery estimate of the
+    compliance's discretisation error between the load cases, shape=(n_cases, n_cases), exact minus computed
+    (:func:`fea.error_estimate.recovery_error_matrix`: C_F's error is ``[:3, :3]``, C_g's ``[:3, 3:6]``).
     """
 
     C_F: np.ndarray
@@ -66,6 +69,7 @@ class SolidResult:
     displacements: np.ndarray | None = None
     rod_mesh: object | None = None
     ball_motion: np.ndarray | None = None
+    error_matrix: np.ndarray | None = None
 
 
 def _rigid_fit(X: np.ndarray, U: np.ndarray):
@@ -109,10 +113,11 @@ def _ball_loads(x_q: np.ndarray, w: np.ndarray, half: bool, moments: bool = Fals
 
 
 def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = False,
-                     backend: str | None = None, tip_moments: bool = False) -> SolidResult:
+                     backend: str | None = None, tip_moments: bool = False, error_estimate: bool = False) -> SolidResult:
     """Solve the six load cases on ``rod_mesh`` (a :class:`geometry.RodMesh` of ``design``, whole or half);
     ``tip_moments`` adds three unit moments at the ball centre (columns 6-8; same factorisations), which the
-    joint fit of the frame model needs (:mod:`fea.joints`)."""
+    joint fit of the frame model needs (:mod:`fea.joints`); ``error_estimate`` adds the stress-recovery
+    estimate of the discretisation error (``SolidResult.error_matrix``, from this solve alone)."""
     t0 = time.perf_counter()
     timings = {}
     half = rod_mesh.is_half
@@ -144,11 +149,22 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     CF = t[:, :3]
     Cg = t[:, 3:6]
     defect = float(np.abs(CF - CF.T).max() / np.abs(CF).max())
+    E = None
+    if error_estimate:
+        t1 = time.perf_counter()
+        E = _recovery_estimate(rod_mesh, C, U)
+        timings["error_estimate"] = time.perf_counter() - t1
     timings["total"] = time.perf_counter() - t0
     log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, U.shape[0], " (half mesh, two solves)" if half else "",
              solver_backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return SolidResult(CF, Cg, defect, U.shape[0], mass, timings, solver_backend, theta,
-                       U if keep_displacements else None, rod_mesh, np.vstack([t, theta]))
+                       U if keep_displacements else None, rod_mesh, np.vstack([t, theta]), E)
+
+
+def _recovery_estimate(rod_mesh, C: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """The recovery estimate of the error between the load cases (:mod:`fea.error_estimate`)."""
+    nodes = node_basis(rod_mesh.mesh, scalar_element(rod_mesh.mesh))
+    return recovery_error_matrix(nodes, C, rod_mesh.part_index, U, rod_mesh.is_half, ANTISYMMETRIC_CASES)
 
 
 def _load_cases(basis, rod_mesh, materials, n_cases: int) -> tuple[np.ndarray, float]:

@@ -10,15 +10,20 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["scalar_basis", "block_pattern", "assemble_stiffness", "assemble_body_force", "vector_dofs"]
+__all__ = ["scalar_element", "scalar_basis", "block_pattern", "assemble_stiffness", "assemble_body_force", "vector_dofs"]
+
+
+def scalar_element(mesh):
+    """The scalar Lagrange element of the mesh's order (P2 on MeshTet2, P1 on MeshTet1)."""
+    from skfem import ElementTetP1, ElementTetP2, MeshTet2
+    return ElementTetP2() if isinstance(mesh, MeshTet2) else ElementTetP1()
 
 
 def scalar_basis(mesh, intorder: int | None = None):
     """The scalar Lagrange basis of the mesh's order (P2 on MeshTet2, P1 on MeshTet1)."""
-    from skfem import Basis, ElementTetP1, ElementTetP2, MeshTet2
-    if isinstance(mesh, MeshTet2):
-        return Basis(mesh, ElementTetP2(), intorder=3 if intorder is None else intorder)
-    return Basis(mesh, ElementTetP1(), intorder=2 if intorder is None else intorder)
+    from skfem import Basis
+    elem = scalar_element(mesh)
+    return Basis(mesh, elem, intorder=(3 if elem.maxdeg == 2 else 2) if intorder is None else intorder)
 
 
 def vector_dofs(basis) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from enum import Enum
 from typing import Union
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
+__all__ = ["Method", "ErrorEstimate", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
            "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
            "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum"]
 
@@ -217,6 +217,21 @@ class SegmentKind(str, Enum):
 
     LINE = "line"
     ARC = "arc"
+
+
+class ErrorEstimate(_StrEnum):
+    """How the solid FEA estimates its discretisation error (``rodlab fea --error-estimate``)."""
+
+    RECOVERY = "recovery"        #: stress recovery on the solve's own mesh (no second solve; the default)
+    RICHARDSON = "richardson"    #: a second solve at 1.5 x the size, Richardson with an assumed order 3
+    NONE = "none"                #: no estimate
+
+    @property
+    def describes(self) -> str:
+        """What the estimate is, for help texts."""
+        return {ErrorEstimate.RECOVERY: "Zienkiewicz-Zhu stress recovery on the solve's own mesh (no second solve)",
+                ErrorEstimate.RICHARDSON: "a second mesh and solve at 1.5 x the size, Richardson with order 3",
+                ErrorEstimate.NONE: "no estimate"}[self]
 
 
 class FeaModel(str, Enum):

@@ -10,7 +10,7 @@ import numpy as np
 
 from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
-from ...core.enums import FeaModel
+from ...core.enums import ErrorEstimate, FeaModel
 from ...core.errors import RodlabError
 from ...core.view3d import RenderError
 from .argtypes import pos_float
@@ -31,8 +31,11 @@ def register(sub) -> None:
     p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
                    "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
                    "changes, at most 2.1 x wall in the bend)")
-    p.add_argument("--no-error-estimate", action="store_true",
-                   help="solid: skip the second (coarser) solve for the Richardson error estimate")
+    p.add_argument("--error-estimate", choices=[e.value for e in ErrorEstimate], default=ErrorEstimate.RECOVERY.value,
+                   help="solid: how to estimate the discretisation error (into the file's provenance): "
+                        + "; ".join(f"{e.value}: {e.describes}" for e in ErrorEstimate)
+                        + f" (default {ErrorEstimate.RECOVERY.value})")
+    p.add_argument("--no-error-estimate", action="store_true", help="solid: the same as --error-estimate none")
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
@@ -51,6 +54,10 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_fea)
 
 
+def _estimate(args: argparse.Namespace) -> ErrorEstimate:
+    return ErrorEstimate.NONE if args.no_error_estimate else ErrorEstimate(args.error_estimate)
+
+
 def cmd_fea(args: argparse.Namespace) -> int:
     from rodlab.fea import compute_compliance
     design = resolve_design(args.design)
@@ -61,7 +68,7 @@ def cmd_fea(args: argparse.Namespace) -> int:
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
         from rodlab.fea import run_solid
-        run = run_solid(design, mesher, size_mm=args.size, error_estimate=not args.no_error_estimate,
+        run = run_solid(design, mesher, size_mm=args.size, error_estimate=_estimate(args),
                         symmetry=not args.no_symmetry, joints=bool(args.joints_out),
                         deformed_png=png_file(args.png, "deformed.png"),
                         keep_displacements=bool(args.fields or args.report is not None))
@@ -72,8 +79,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
               f"solver {prov['solver']}, symmetry defect of C_F {prov['symmetry_defect_C_F']:.1e}")
         if "discretisation_error" in prov:
             e = prov["discretisation_error"]
-            print(f"  estimated discretisation error: {100 * e['max_relative_C_F']:.3f} % of max|C_F|, "
-                  f"{100 * e['max_relative_C_g']:.3f} % of max|C_g|")
+            print(f"  estimated discretisation error ({_estimate(args).value}): {100 * e['max_relative_C_F']:.3f} % of "
+                  f"max|C_F|, {100 * e['max_relative_C_g']:.3f} % of max|C_g|")
         for fig in run.figures:
             print(f"  wrote {fig}")
         extra = _solid_views(args, design, res)

@@ -1,0 +1,120 @@
+"""The discretisation error of a solid solve from that solve alone: stress recovery (Zienkiewicz-Zhu).
+
+For unit loads ``f_i`` with exact displacements ``u_i`` and finite-element ones ``u_h,i``, Galerkin
+orthogonality gives the compliance error exactly as the energy inner product of the errors
+``e_i = u_i - u_h,i``::
+
+    f_j^T u_i - f_j^T u_h,i = a(e_i, e_j)          (a Gram matrix: the FE compliance is too small, C - C_h >= 0)
+
+The recovery estimator replaces the unknown error stress ``sigma(e_i)`` by ``sigma*_i - sigma_h,i``, where
+``sigma*_i`` is the finite-element stress averaged at the nodes (volume-weighted, separately in each part: the
+stress jumps across a bond between materials) and interpolated with the displacement's own P2 functions::
+
+    E_ij = integral (sigma*_i - sigma_h,i) : S : (sigma*_j - sigma_h,j) dV          (S = C^-1 of the element)
+
+So ``E[0:3, 0:3]`` estimates the error of C_F [mm/N] and ``E[0:3, 3:6]`` that of C_g [mm/g0] (the ball-centre
+displacement is, to the ball's own tiny deformation, the work conjugate of the unit ball loads). On a half mesh
+the whole rod's energy is twice the half's, and a symmetric and an antisymmetric field are orthogonal over the
+whole rod (their pairs are 0).
+
+It needs no second mesh and no second factorisation, unlike the Richardson estimate of two solves
+(``rodlab fea --error-estimate richardson``); docs/benchmarks/fea_error_estimate.md compares both with the
+error against a much finer solve.
+"""
+from __future__ import annotations
+
+import numpy as np
+from skfem import Basis
+from skfem.quadrature import get_quadrature
+
+__all__ = ["recovery_error_matrix", "node_basis", "mandel"]
+
+_PAIRS = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+_SQ2 = np.sqrt(2.0)
+
+
+def mandel(C: np.ndarray) -> np.ndarray:
+    """Stiffness tensors, shape=(n, 3, 3, 3, 3) -> their Mandel matrices, shape=(n, 6, 6) (energy-preserving:
+    ``sigma_M = C_M eps_M`` and ``sigma : eps = sigma_M . eps_M``)."""
+    w = np.array([1.0, 1.0, 1.0, _SQ2, _SQ2, _SQ2])
+    out = np.empty((C.shape[0], 6, 6))
+    for I, (i, j) in enumerate(_PAIRS):
+        for J, (k, l) in enumerate(_PAIRS):
+            out[:, I, J] = C[:, i, j, k, l] * w[I] * w[J]
+    return out
+
+
+def _strains_mandel(grads: np.ndarray, u_e: np.ndarray) -> np.ndarray:
+    """Mandel strain vectors at the basis's points: ``grads`` of the local functions, shape=(nloc, 3, ne, nq), and
+    element displacements ``u_e``, shape=(ne, nloc, 3, nc) -> shape=(ne, nq, 6, nc)."""
+    ne, nloc, _, nc = u_e.shape
+    G = np.ascontiguousarray(grads.transpose(2, 3, 1, 0))                      # (ne, nq, k, a)
+    du = (G @ u_e.reshape(ne, 1, nloc, 3 * nc)).reshape(ne, G.shape[1], 3, 3, nc)   # du_i/dx_k: [e, q, k, i, c]
+    eps = np.empty(du.shape[:2] + (6, nc))
+    for I, (i, j) in enumerate(_PAIRS):
+        eps[:, :, I] = du[:, :, i, i] if i == j else (du[:, :, j, i] + du[:, :, i, j]) / _SQ2
+    return eps
+
+
+def _nodal_average(stress_nodes: np.ndarray, element_dofs: np.ndarray, part_index: np.ndarray,
+                   volume: np.ndarray) -> np.ndarray:
+    """Volume-weighted average of the element stresses at each (part, node): ``stress_nodes`` shape=(ne, nloc, 6,
+    nc) -> the averaged value back on every element's nodes, same shape (a node shared by two parts keeps one
+    value per part)."""
+    ne, nloc = element_dofs.shape
+    key = (part_index[:, None].astype(np.int64) * (element_dofs.max() + 1) + element_dofs).ravel()
+    _, slot = np.unique(key, return_inverse=True)
+    wts = np.repeat(volume, nloc)
+    flat = stress_nodes.reshape(ne * nloc, -1)
+    total = np.zeros((slot.max() + 1, flat.shape[1]))
+    np.add.at(total, slot, flat * wts[:, None])
+    weight = np.bincount(slot, weights=wts)
+    return (total / weight[:, None])[slot].reshape(stress_nodes.shape)
+
+
+def recovery_error_matrix(nodes, C: np.ndarray, part_index: np.ndarray, U: np.ndarray,
+                          half: bool = False, antisymmetric: tuple = ()) -> np.ndarray:
+    """The estimated compliance error ``E`` (``C_exact - C_h`` to the estimator's accuracy), shape=(nc, nc),
+    in the units of ``U^T f``.
+
+    nodes : the solve's scalar element and mesh with one point at each of the element's nodes
+    (:func:`node_basis`); C : stiffness tensors, shape=(ne, 3, 3, 3, 3)
+    [N/mm^2]; part_index : part of each element, shape=(ne,); U : displacements, shape=(3 N, nc) [mm per unit
+    load] (x, y, z per node); half / antisymmetric : a half mesh and the load cases whose fields are
+    antisymmetric about its plane.
+    """
+    ed = nodes.element_dofs.T                                                    # (ne, nloc)
+    ne, nloc = ed.shape
+    u_e = U.reshape(-1, 3, U.shape[1])[ed]                                       # (ne, nloc, 3, nc)
+    Cm = mandel(C)
+    at_nodes = np.stack([nodes.basis[a][0].grad for a in range(nloc)])          # (nloc, 3, ne, nloc)
+    s_nodes = Cm[:, None] @ _strains_mandel(at_nodes, u_e)                      # (ne, nloc, 6, nc)
+    mass, ref_volume = _reference_mass(nodes.elem)
+    volume = nodes.dx.sum(axis=1) * ref_volume                                  # mean |det J| at the nodes x ref.
+    d_nodes = _nodal_average(s_nodes, ed, part_index, volume) - s_nodes
+    # the FE stress is linear in a (straight) element, so the P2 interpolant of the nodal values is exact and the
+    # energy of the difference is the element's P2 mass matrix (its volume x the reference one) between nodes
+    Sd = np.linalg.inv(Cm)[:, None] @ d_nodes                                   # S : d at the nodes
+    MSd = (mass @ Sd.reshape(ne, nloc, -1)) * volume[:, None, None]
+    nc = d_nodes.shape[-1]
+    E = d_nodes.reshape(-1, nc).T @ MSd.reshape(-1, nc)                          # sum over e, nodes, components
+    if half:
+        E *= 2.0
+        anti = np.isin(np.arange(E.shape[0]), antisymmetric)
+        E[anti[:, None] != anti[None, :]] = 0.0
+    return 0.5 * (E + E.T)
+
+
+def _reference_mass(elem) -> tuple[np.ndarray, float]:
+    """The element's mass matrix on the reference simplex divided by its volume, shape=(nloc, nloc), and that
+    volume."""
+    X, W = get_quadrature(elem.refdom, 2 * elem.maxdeg)
+    phi = np.array([elem.lbasis(X, a)[0] for a in range(elem.doflocs.shape[0])])     # (nloc, nq)
+    return (phi * W) @ phi.T / W.sum(), float(W.sum())
+
+
+def node_basis(mesh, elem):
+    """The element ``elem`` on ``mesh`` with one point at each of its nodes (the local DOFs' reference
+    locations, equal weights), where :func:`recovery_error_matrix` takes the stresses it averages."""
+    X = np.asarray(elem.doflocs, dtype=float).T
+    return Basis(mesh, elem, quadrature=(X, np.full(X.shape[1], 1.0 / X.shape[1])))

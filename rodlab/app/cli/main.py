@@ -58,7 +58,23 @@ class RodlabParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _named_command_module(argv: list[str] | None):
+    """The module of the sub-command ``argv`` names (its first word that is not an option), if there is one:
+    only it need be imported and registered (the others' imports cost ~0.3 s of every command's start)."""
+    words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
+    if not words:
+        return None
+    name = f"cmd_{words[0].replace('-', '_')}"
+    package = sys.modules[__package__]
+    if not any(m.name == name for m in pkgutil.iter_modules(package.__path__)):
+        return None                         # a misspelt command: the full parser names the nearest one
+    module = importlib.import_module(f"{__package__}.{name}")
+    return module if callable(getattr(module, "register", None)) else None
+
+
+def build_parser(argv: list[str] | None = None, *, every_command: bool = True) -> argparse.ArgumentParser:
+    """The parser of every sub-command, or with ``every_command=False`` only of the one ``argv`` names (when it
+    names one: ``rodlab fea ...`` imports and registers ``cmd_fea`` only)."""
     parser = RodlabParser(
         prog="rodlab",
         description="Design, simulate, measure and use long measuring rods for on-site robot calibration "
@@ -66,7 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"rodlab {__version__}")
     _global_options(parser, suppress=False)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for mod in command_modules():
+    named = None if every_command else _named_command_module(argv)
+    for mod in [named] if named is not None else command_modules():
         mod.register(sub)
     _add_global_options_below(parser)
     return parser
@@ -83,7 +100,7 @@ def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    parser = build_parser(argv, every_command=False)
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]

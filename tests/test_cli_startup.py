@@ -1,0 +1,37 @@
+"""The CLI's start: a command named on the line imports and registers only its own module, and its help is
+the same as from the parser of every command."""
+from __future__ import annotations
+
+import importlib
+import subprocess
+import sys
+
+import pytest
+
+cli_main = importlib.import_module("rodlab.app.cli.main")
+
+
+def test_a_named_command_imports_only_its_module():
+    code = ("import sys; from rodlab.app.cli.main import main; main(['info', 'rod1']); "
+            "print(sorted(m for m in sys.modules if m.startswith('rodlab.app.cli.cmd_')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "['rodlab.app.cli.cmd_info']"
+
+
+def _sub_help(parser, name: str) -> str:
+    sub = next(a for a in parser._actions if a.dest == "command")
+    return sub.choices[name].format_help()
+
+
+def test_the_help_of_a_named_command_is_the_full_parsers():
+    for argv in (["fea", "rod1"], ["-v", "simulate-campaign"], ["rig", "simulate"]):
+        name = argv[1] if argv[0] == "-v" else argv[0]
+        assert _sub_help(cli_main.build_parser(argv, every_command=False), name) == \
+            _sub_help(cli_main.build_parser(), name)
+
+
+def test_an_unknown_command_still_gets_the_nearest_name(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli_main.main(["fae", "rod1"])
+    assert e.value.code == 2
+    assert "Did you mean `fea`?" in capsys.readouterr().err

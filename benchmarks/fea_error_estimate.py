@@ -85,7 +85,8 @@ def main(argv: list[str]) -> None:
         f"`python benchmarks/fea_error_estimate.py` on {platform.machine()}, Python {platform.python_version()}, "
         f"{datetime.date.today()} ({time.perf_counter() - t0:.0f} s). Graded half meshes at factors of each design's "
         f"default size; C_F's diagonal (xx / yy / zz). Reference: the two finest solves extrapolated with the order "
-        f"observed on the three finest ({', '.join(orders)}; an order below 1 is taken as 1). Errors are relative to max|C_F|; the effectivity is "
+        f"observed on the three finest ({', '.join(orders)}; an order below 1 is taken as 1). Errors are relative "
+        f"to max|C_F|; the effectivity is "
         f"estimate / (reference - computed) per diagonal entry (1 is exact; below 1 the estimate is optimistic). "
         f"The finest rows are part of the reference and their 'true' error is only what the extrapolation adds.",
         "",

@@ -4,9 +4,9 @@ from __future__ import annotations
 from enum import Enum
 from typing import Union
 
-__all__ = ["Method", "ErrorEstimate", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
            "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
-           "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum"]
+           "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum", "ErrorEstimate"]
 
 
 class _StrEnum(str, Enum):

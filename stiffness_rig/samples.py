@@ -60,30 +60,35 @@ class RigSamples:
 
 
 def rig_samples(rec) -> RigSamples:
-    """Flatten a :class:`~rodlab.stiffness_rig.RigRecording` into one row per measured reading."""
-    series_start, series_temp, hold_start, first_step = {}, {}, {}, {}
-    for i in range(rec.n):
-        ax = rec.load_axis[i]
-        if ax not in series_start:
-            series_start[ax] = rec.time_s[i]
-            series_temp[ax] = rec.temp_C[i] if rec.temp_C is not None else np.nan
-            first_step[ax] = rec.step[i]
-        hold_start.setdefault(rec.step[i], rec.time_s[i])
+    """Flatten a :class:`~rodlab.stiffness_rig.RigRecording` into one row per measured reading (component by
+    component, readings in recording order)."""
+    axes = list(dict.fromkeys(rec.load_axis))                       # the series, in order of appearance
+    code = np.array([axes.index(a) for a in rec.load_axis], dtype=int)
+    step = np.asarray(rec.step)
+    idx = np.concatenate([np.nonzero(np.isfinite(rec.disp_mm[:, c]))[0] for c in range(3)])
+    first = _first_rows(code)[idx]                                  # the first row of each reading's series
+    first_of_step = _first_rows(step)[idx]                          # and of its hold
+    temp = np.asarray(rec.temp_C, dtype=float) if rec.temp_C is not None else np.full(rec.n, np.nan)
     load, load_se = _hold_loads_N(rec)
-    rows = []
-    for c in range(3):
-        for i in np.nonzero(np.isfinite(rec.disp_mm[:, c]))[0]:
-            ax = rec.load_axis[i]
-            rows.append((rec.disp_mm[i, c], c, ax.index, ax.sign, load[rec.step[i]] * ax.sign, rec.mass_kg[i],
-                         rec.phase[i] is Phase.UNLOAD, rec.step[i] == first_step[ax] and rec.mass_kg[i] == 0,
-                         rec.time_s[i] - hold_start[rec.step[i]], rec.time_s[i] - series_start[ax],
-                         (rec.temp_C[i] - series_temp[ax]) if rec.temp_C is not None else np.nan, rec.step[i],
-                         rec.repeat[i], rec.time_s[i], load_se[rec.step[i]]))
-    a = list(zip(*rows))
-    return RigSamples(np.array(a[0]), np.array(a[1], int), np.array(a[2], int), np.array(a[3], float),
-                      np.array(a[4]), np.array(a[5]), np.array(a[6], bool), np.array(a[7], bool), np.array(a[8]),
-                      np.array(a[9]), np.array(a[10], float), np.array(a[11], int), np.array(a[12], int),
-                      np.array(a[13]), np.array(a[14]))
+    comp = np.concatenate([np.full(int(np.isfinite(rec.disp_mm[:, c]).sum()), c) for c in range(3)])
+    ax_index = np.array([a.index for a in axes], dtype=int)[code[idx]]
+    ax_sign = np.array([a.sign for a in axes], dtype=float)[code[idx]]
+    t = np.asarray(rec.time_s, dtype=float)
+    st = step[idx]
+    return RigSamples(
+        y=rec.disp_mm[idx, comp], comp=comp, axis=ax_index, sign=ax_sign,
+        F=np.array([load[k] for k in st.tolist()]) * ax_sign, mass=np.asarray(rec.mass_kg, dtype=float)[idx],
+        unload=np.array([p is Phase.UNLOAD for p in rec.phase], dtype=bool)[idx],
+        reference=(st == step[first]) & (np.asarray(rec.mass_kg)[idx] == 0),
+        t_hold=t[idx] - t[first_of_step], t_series=t[idx] - t[first], temp=temp[idx] - temp[first],
+        step=st.astype(int), repeat=np.asarray(rec.repeat, dtype=int)[idx], t_abs=t[idx],
+        F_se=np.array([load_se[k] for k in st.tolist()]))
+
+
+def _first_rows(keys: np.ndarray) -> np.ndarray:
+    """For every row, the first row with the same value of ``keys`` (integers)."""
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    return first[inverse]
 
 
 def _hold_loads_N(rec) -> tuple[dict, dict]:

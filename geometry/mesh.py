@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.design import RodDesign
-from rodlab.core.enums import Part
+from rodlab.core.enums import Part, SegmentKind
 from rodlab.core.fileio import atomic_write_bytes
 from rodlab.core.fem_mesh import RodMesh
 from rodlab.core.layout import layout
@@ -145,21 +145,40 @@ def _check_grading(grading) -> tuple[float, float, float] | None:
     return g
 
 
-def _centreline_samples(design: RodDesign, n_per_mm: float = 2.0):
-    pts, tans = [], []
-    for seg in layout(design):
-        n = max(int(seg.length_mm * n_per_mm), 2)
-        u = np.linspace(0.0, seg.length_mm, n)
-        pts.append(seg.point(u))
-        tans.append(seg.tangent(u))
-    return np.concatenate(pts) - design.tool_mm, np.concatenate(tans)
-
-
 def _tube_axes(design: RodDesign, centroids_T: np.ndarray) -> np.ndarray:
-    from scipy.spatial import cKDTree
-    pts, tans = _centreline_samples(design)
-    _, idx = cKDTree(pts).query(centroids_T)
-    return tans[idx]
+    """The centreline's tangent nearest to each element centroid, shape=(n, 3): on a straight segment its
+    direction (the nearest point by projection), on a bend the tangent of the nearest of its samples (2 per mm)."""
+    best = np.full(len(centroids_T), np.inf)
+    axes = np.zeros((len(centroids_T), 3))
+    for seg in layout(design):
+        if seg.kind is SegmentKind.LINE:
+            p0 = seg.start_F - design.tool_mm
+            u = np.clip((centroids_T - p0) @ seg.direction, 0.0, seg.length_mm)
+            d2 = ((centroids_T - p0 - u[:, None] * seg.direction) ** 2).sum(axis=1)
+            tan = np.broadcast_to(seg.direction, centroids_T.shape)
+        else:
+            u = np.linspace(0.0, seg.length_mm, max(int(seg.length_mm * 2.0), 2))
+            d2, k = _nearest_arc_sample(centroids_T, seg, u, design.tool_mm)
+            tan = seg.tangent(u)[k]
+        closer = d2 < best
+        best[closer], axes[closer] = d2[closer], tan[closer]
+    return axes
+
+
+def _nearest_arc_sample(x: np.ndarray, seg, u: np.ndarray, tool_mm) -> tuple[np.ndarray, np.ndarray]:
+    """Squared distance to the nearest of the arc's samples at arc lengths ``u`` (uniform) and its index, for every
+    row of ``x`` [mm, {T}]: the distance to a circle's point grows with the angle from the point's own angle on it,
+    so the nearest sample is a neighbour of that angle, or an end of the arc."""
+    t0, n = seg.direction, seg.tangent([seg.radius_mm * np.pi / 2.0])[0]
+    v = x - (seg.start_F - tool_mm + seg.radius_mm * n)                # from the arc's centre
+    theta = np.arctan2(v @ t0, -(v @ n))                                # 0 at the start, growing along it
+    j = np.floor(np.clip(theta * seg.radius_mm, 0.0, u[-1]) / (u[1] - u[0])).astype(int)
+    cand = np.stack([np.zeros_like(j), np.minimum(j, len(u) - 1), np.minimum(j + 1, len(u) - 1),
+                     np.full_like(j, len(u) - 1)], axis=1)
+    pts = seg.point(u) - tool_mm
+    d2 = ((x[:, None, :] - pts[cand]) ** 2).sum(axis=2)
+    best = d2.argmin(axis=1)
+    return d2[np.arange(len(x)), best], cand[np.arange(len(x)), best]
 
 
 def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,

@@ -185,3 +185,12 @@ def test_design_to_dict_round_trip():
         t = design_to_dict(d)
         assert t["format"] == "rodlab.rod/1" and d.bend.material.name in t["materials"]
         assert design_from_dict(t) == d
+
+
+def test_the_built_in_designs_pass_the_schema_they_are_loaded_without():
+    """resolve_design skips the JSON Schema pass for the built-ins (start-up time): they must pass it."""
+    from rodlab.core.schema import check_file
+    for name, path in builtin_designs().items():
+        check = check_file(path)
+        assert not check.problems, (name, check.problems)
+        assert load_design(path) == resolve_design(name)

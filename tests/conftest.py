@@ -14,6 +14,19 @@ EXAMPLES = SHARED / "examples"
 ROD1 = ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml"
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _mesh_cache_of_the_session(tmp_path_factory):
+    """The tests' meshes are cached in a folder of this session, never in the user's ~/.cache (and subprocesses
+    inherit it)."""
+    before = os.environ.get("RODLAB_CACHE_DIR")
+    os.environ["RODLAB_CACHE_DIR"] = str(tmp_path_factory.mktemp("rodlab-cache"))
+    yield
+    if before is None:
+        os.environ.pop("RODLAB_CACHE_DIR", None)
+    else:
+        os.environ["RODLAB_CACHE_DIR"] = before
+
+
 def legacy_dict(name: str) -> dict:
     """The rodlab.rod/1 table of built-in rod ``name`` as it was before issue #45 (frozen in
     fea/data/reference_designs.json with the solid-FEA references computed on it): the subject of tests about

@@ -36,6 +36,10 @@ def register(sub) -> None:
                         + "; ".join(f"{e.value}: {e.describes}" for e in ErrorEstimate)
                         + f" (default {ErrorEstimate.RECOVERY.value})")
     p.add_argument("--no-error-estimate", action="store_true", help="solid: the same as --error-estimate none")
+    p.add_argument("--no-cache", action="store_true",
+                   help="solid: mesh again even when the same design and size were meshed before (meshes are cached "
+                        "per user in ~/.cache/rodlab/meshes, or $RODLAB_CACHE_DIR/meshes; RODLAB_CACHE_DIR=off turns "
+                        "the cache off)")
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
@@ -64,7 +68,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
     _check_fields_option(args)
     t0 = time.perf_counter()
     if args.model == FeaModel.SOLID.value:
-        mesher = require_mesher().mesh_rod
+        geometry = require_mesher()
+        mesher = geometry.mesh_rod if args.no_cache else geometry.MeshCache(geometry.mesh_rod)
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
         from rodlab.fea import run_solid
@@ -77,6 +82,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
         print(f"solid FEA of rod {design.name}: {prov['dofs']} DOFs ({prov['mesh']['elements']} curved tet10"
               f"{', half model' if res.rod_mesh.is_half else ''}), "
               f"solver {prov['solver']}, symmetry defect of C_F {prov['symmetry_defect_C_F']:.1e}")
+        if getattr(mesher, "hits", 0):
+            print(f"  mesh from the cache ({mesher.folder}; --no-cache meshes again)")
         if "discretisation_error" in prov:
             e = prov["discretisation_error"]
             print(f"  estimated discretisation error ({_estimate(args).value}): {100 * e['max_relative_C_F']:.3f} % of "

@@ -1,0 +1,48 @@
+"""Registries that find their entries: every module of a package is imported, and the classes it defines that
+derive from the registry's base and name their ID are the entries, in the order they declare. Nothing else lists
+them, so a new entry is its module and its test (docs/architecture.md, "Registries").
+
+Used by the rig effects (:mod:`rodlab.stiffness_rig.effects`), the campaign effects
+(:mod:`rodlab.calibrate.effects`) and the compensations (:mod:`rodlab.calibrate.compensations`).
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import sys
+
+from .errors import RodlabError
+
+__all__ = ["package_classes", "in_declared_order"]
+
+
+def package_classes(package: str, base: type, id_attr: str) -> list[type]:
+    """The subclasses of ``base`` that the modules of ``package`` define and that set ``id_attr`` themselves,
+    found by importing every module on the package's ``__path__`` (a folder added to it is looked in too), in
+    the order the modules are found. Classes a module only imports, and intermediate bases that name no ID,
+    are left out."""
+    path = sys.modules[package].__path__
+    found = []
+    for info in pkgutil.iter_modules(path):
+        module = importlib.import_module(f"{package}.{info.name}")
+        found += [c for c in vars(module).values()
+                  if isinstance(c, type) and issubclass(c, base) and c is not base
+                  and c.__module__ == module.__name__ and id_attr in vars(c)]
+    return found
+
+
+def in_declared_order(classes: list[type], id_attr: str, what: str) -> list[type]:
+    """``classes`` sorted by their ``order`` (an int each declares); :class:`RodlabError` naming both modules when
+    two share an ID or a place, or naming the module when one declares no ``order``."""
+    for c in classes:
+        if not isinstance(vars(c).get("order"), int):
+            raise RodlabError(f"{what} {getattr(c, id_attr)!s} ({c.__module__}.{c.__qualname__}) declares no "
+                              f"`order = N` (an int: its place in the registry); add one")
+    for key, name in ((lambda c: str(getattr(c, id_attr)), "ID"), (lambda c: c.order, "order")):
+        seen = {}
+        for c in classes:
+            other = seen.setdefault(key(c), c)
+            if other is not c:
+                raise RodlabError(f"{what}s {other.__module__} and {c.__module__} both have the {name} {key(c)!r}; "
+                                  f"give each its own")
+    return sorted(classes, key=lambda c: c.order)

@@ -13,7 +13,7 @@ import sys
 
 from .errors import RodlabError
 
-__all__ = ["package_classes", "in_declared_order"]
+__all__ = ["package_classes", "in_declared_order", "sorted_by_id"]
 
 
 def package_classes(package: str, base: type, id_attr: str) -> list[type]:
@@ -38,11 +38,21 @@ def in_declared_order(classes: list[type], id_attr: str, what: str) -> list[type
         if not isinstance(vars(c).get("order"), int):
             raise RodlabError(f"{what} {getattr(c, id_attr)!s} ({c.__module__}.{c.__qualname__}) declares no "
                               f"`order = N` (an int: its place in the registry); add one")
-    for key, name in ((lambda c: str(getattr(c, id_attr)), "ID"), (lambda c: c.order, "order")):
-        seen = {}
-        for c in classes:
-            other = seen.setdefault(key(c), c)
-            if other is not c:
-                raise RodlabError(f"{what}s {other.__module__} and {c.__module__} both have the {name} {key(c)!r}; "
-                                  f"give each its own")
-    return sorted(classes, key=lambda c: c.order)
+    _check_unique(classes, lambda c: c.order, "order", what)
+    return sorted(sorted_by_id(classes, id_attr, what), key=lambda c: c.order)
+
+
+def sorted_by_id(classes: list[type], id_attr: str, what: str) -> list[type]:
+    """``classes`` sorted by their ID (for a registry whose order means nothing); :class:`RodlabError` naming
+    both modules when two share an ID."""
+    _check_unique(classes, lambda c: str(getattr(c, id_attr)), "ID", what)
+    return sorted(classes, key=lambda c: str(getattr(c, id_attr)))
+
+
+def _check_unique(classes: list[type], key, name: str, what: str) -> None:
+    seen = {}
+    for c in classes:
+        other = seen.setdefault(key(c), c)
+        if other is not c:
+            raise RodlabError(f"{what}s {other.__module__} and {c.__module__} both have the {name} {key(c)!r}; "
+                              f"give each its own")

@@ -1,10 +1,11 @@
-"""Issue 51's done-when: a new rig effect, campaign effect, robot format or sub-command shows up in every help
-text and docs table without another edit. The rig effect, the campaign effect and the sub-command are real
-module files, written into a folder added to their package's ``__path__`` and found by the package's discovery
-(monkeypatched, and rediscovered without them after the test, so that nothing outlives it); the robot format is
-registered the way a real one is. Each is then looked for in ``rodlab ... --help``, in docs/cli.md as generated
-and in the tables of docs/formats.md as generated, the effects also in their Enum and in what the simulators
-write. The files a real one takes are in docs/architecture.md ("Registries")."""
+"""Issue 51's done-when: a new rig effect, campaign effect, compensation, robot format or sub-command is one
+module (plus its test) and shows up in every help text and docs table without another edit. Each throw-away
+entry here is a real module file, written into a folder added to its package's ``__path__`` and found by the
+package's discovery (monkeypatched, and rediscovered without them after the test, so that nothing outlives it).
+Each is then looked for in ``rodlab ... --help``, in docs/cli.md as generated and in the generated tables of
+docs/formats.md and docs/calibrate.md; the effects also in their Enum, and each is shown to work: the
+simulators apply the effects and the compensation, ``read_robot`` reads the new format. The files a real one
+takes are in docs/architecture.md ("Registries")."""
 from __future__ import annotations
 
 import csv
@@ -19,8 +20,10 @@ import pytest
 
 from rodlab.app.cli import docgen
 from rodlab.app.diagnose.effect_ids import parse_effect_id
+from rodlab.calibrate import compensations, read_robot, resolve_robot, robot_formats
 from rodlab.calibrate import effects as campaign_effects
-from rodlab.calibrate.robot_formats import ROBOT_READERS, RobotFormat
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+from rodlab.core.compliance import read_compliance
 from rodlab.stiffness_rig import effects as rig_effects
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,6 +73,44 @@ class Sag(CampaignEffectModel):
         return np.broadcast_to([0.0, 0.0, -float(p["sag_mm"])], pW.shape)
 '''
 
+#: a whole compensation module (calibrate/compensations/NAME.py): the ball centre sits shift_mm higher in {W}
+_COMPENSATION_MODULE = '''"""``test_shift``: a throw-away compensation of tests/test_registries_reach_docs.py."""
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from rodlab.calibrate.compensations.base import Compensation
+
+
+@dataclass(frozen=True)
+class Shift(Compensation):
+    name: ClassVar[str] = "test_shift"
+    summary: ClassVar[str] = "a throw-away compensation of this test"
+    needs: ClassVar[str] = "nothing"
+    option: ClassVar[str] = "`--test-shift`"
+    shift_mm: float = 0.2
+    label: str = "shift"
+
+    def offsets(self, robot, params, at):
+        return np.tile([0.0, 0.0, self.shift_mm], (np.atleast_2d(at.q_rad).shape[0], 1))
+'''
+
+#: a whole robot reader module (calibrate/robot_NAME.py): a .dhx file names a built-in robot
+_ROBOT_MODULE = '''"""``.dhx`` robot files: a throw-away robot format of tests/test_registries_reach_docs.py."""
+from pathlib import Path
+
+from rodlab.calibrate.robot_formats import resolve_robot
+from rodlab.calibrate.robot_reader import RobotFormat
+
+
+def _read(path, base_link=None, tip_link=None):
+    return resolve_robot(Path(path).read_text().strip())
+
+
+ROBOT_FORMAT = RobotFormat(_read, "a DHX test file (throw-away)", "dhx", suffix=".dhx")
+'''
+
 #: a whole sub-command module, as a new one would be written (cmd_NAME.py beside the others)
 _CMD_MODULE = '''"""``rodlab test-probe``: a throw-away sub-command of tests/test_registries_reach_docs.py."""
 
@@ -95,23 +136,29 @@ def registered(monkeypatch, tmp_path):
               dict(campaign_effects.CAMPAIGN_EFFECTS))
     _add_module(monkeypatch, rig_effects, tmp_path / "rig", "test_wobble", _RIG_MODULE)
     _add_module(monkeypatch, campaign_effects, tmp_path / "campaign", "test_campaign_sag", _CAMPAIGN_MODULE)
+    _add_module(monkeypatch, compensations, tmp_path / "compensation", "test_shift", _COMPENSATION_MODULE)
+    _add_module(monkeypatch, sys.modules["rodlab.calibrate"], tmp_path / "robot", "robot_test_dhx", _ROBOT_MODULE)
     _add_module(monkeypatch, sys.modules["rodlab.app.cli"], tmp_path / "cli", "cmd_test_probe", _CMD_MODULE)
-    rig_effects.discover()
-    campaign_effects.discover()
-    monkeypatch.setitem(ROBOT_READERS, ".dhx", RobotFormat(lambda path, base, tip: None,
-                                                           "a DHX test file (throw-away)", "dhx"))
+    _rediscover()
     monkeypatch.setitem(os.environ, "COLUMNS", "200")
     yield tmp_path
     monkeypatch.undo()
     for name in ("rodlab.app.cli.cmd_test_probe", "rodlab.stiffness_rig.effects.test_wobble",
-                 "rodlab.calibrate.effects.test_campaign_sag"):
+                 "rodlab.calibrate.effects.test_campaign_sag", "rodlab.calibrate.compensations.test_shift",
+                 "rodlab.calibrate.robot_test_dhx"):
         sys.modules.pop(name, None)
-    rig_effects.discover()
-    campaign_effects.discover()
+    _rediscover()
+    assert ".dhx" not in robot_formats.ROBOT_READERS and "test_shift" not in compensations.COMPENSATIONS
     after = (rig_effects.RigEffect, rig_effects.RIG_EFFECTS, campaign_effects.CampaignEffect,
              campaign_effects.CAMPAIGN_EFFECTS)
     assert all(a is b or a == b for a, b in zip(before, after)), "the rediscovery did not give the registries back"
     assert all(m.effect in before[0] for m in before[1].values())
+
+
+def _rediscover() -> None:
+    """Every registry that finds its modules, found again (sub-commands are found whenever the parser is built)."""
+    for package in (rig_effects, campaign_effects, compensations, robot_formats):
+        package.discover()
 
 
 def _help(capsys, *argv) -> str:
@@ -124,24 +171,31 @@ def _help(capsys, *argv) -> str:
 def test_each_new_entry_is_in_every_help_text(registered, capsys):
     assert "rig: friction" in _help(capsys, "diagnose") and "test_wobble" in _help(capsys, "diagnose")
     assert "test_campaign_sag" in _help(capsys, "diagnose")
-    assert "test_wobble: a throw-away rig effect of this test; rate_um_per_s [um/s]" in _help(capsys, "rig", "simulate")
+    assert "test_wobble: a throw-away rig effect of this test; rate_um_per_s [um/s]" in \
+        _help(capsys, "rig", "simulate")
     assert "test_campaign_sag: a throw-away campaign effect of this test; sag_mm [mm]" in \
         _help(capsys, "simulate-campaign")
     for argv in (["calibrate"], ["compare"], ["plan"], ["diagnose"], ["simulate-campaign"], ["study"]):
         assert "a DHX test file (throw-away)" in _help(capsys, *argv), argv
     assert "dhx" in _help(capsys, "validate")
+    assert "test_shift: --test-shift" in _help(capsys, "calibrate")
     assert "test-probe" in _help(capsys) and "--probe-level" in _help(capsys, "test-probe")
     assert cli_main.main(["test-probe", "--probe-level", "2"]) == 0
 
 
 def test_each_new_entry_is_in_every_generated_docs_table(registered):
     tables = docgen.render_tables((ROOT / "docs" / "formats.md").read_text(encoding="utf-8"))
-    assert "| `test_wobble` | a throw-away rig effect of this test | a wobble | `null` | `rate_um_per_s` [um/s] |" in tables
+    assert ("| `test_wobble` | a throw-away rig effect of this test | a wobble | `null` | `rate_um_per_s` [um/s] |"
+            in tables)
     assert "`test_campaign_sag`" in tables and "a throw-away campaign effect of this test" in tables
     assert "| `.dhx` | a DHX test file (throw-away) | `dhx` (its reader's rules) |" in tables
+    page = (ROOT / "docs" / "calibrate.md").read_text(encoding="utf-8")
+    assert ("| `test_shift` | a throw-away compensation of this test | nothing | `--test-shift` |"
+            in docgen.render_tables(page, docgen.DOC_TABLES["calibrate.md"]))
     cli = docgen.render_cli()
     assert "## `rodlab test-probe`" in cli and "a throw-away sub-command of this test" in cli
     assert "a DHX test file (throw-away)" in cli and "test_wobble" in cli and "test_campaign_sag" in cli
+    assert "test_shift" in cli
 
 
 def test_the_sub_commands_are_the_cmd_modules_in_the_help_order():
@@ -208,3 +262,24 @@ def test_the_simulators_apply_each_new_effect(registered):
     assert np.allclose(np.linalg.norm(moved, axis=1), 0.5, atol=2e-4)
     truth = json.loads((out / "sag" / "truth.json").read_text())
     assert truth["effects"] == [{"effect": "test_campaign_sag", "sag_mm": 0.5}]
+
+
+def test_the_campaign_simulator_applies_the_new_compensation(registered):
+    """``simulate_campaign(compensations=[...])`` with the new module's class moves every reading by its offset."""
+    shift = compensations.COMPENSATIONS["test_shift"](shift_mm=0.2)
+    assert cli_main.main(["compliance", "rod1", "-o", str(registered / "rod1.compliance.json")]) == 0
+    rod = read_compliance(registered / "rod1.compliance.json")
+    spec = CampaignSpec(positions=2, orientations=4, device_noise_mm=0.0)
+    robot = resolve_robot("tx90")
+    simulate_campaign(robot, rod, registered / "plain", spec)
+    simulate_campaign(robot, rod, registered / "shift", spec, compensations=[shift])
+    xyz = ("x_mm", "y_mm", "z_mm")
+    moved = (_read_csv(registered / "shift" / "multical.campaign.csv", *xyz)
+             - _read_csv(registered / "plain" / "multical.campaign.csv", *xyz))
+    assert np.allclose(np.linalg.norm(moved, axis=1), 0.2, atol=2e-4)
+
+
+def test_read_robot_reads_the_new_format(registered):
+    (registered / "arm.dhx").write_text("ur5\n")
+    robot = read_robot(registered / "arm.dhx")
+    assert robot.n == resolve_robot("ur5").n and np.allclose(robot.a_mm, resolve_robot("ur5").a_mm)

@@ -3,17 +3,27 @@ derive from the registry's base and name their ID are the entries, in the order 
 them, so a new entry is its module and its test (docs/architecture.md, "Registries").
 
 Used by the rig effects (:mod:`rodlab.stiffness_rig.effects`), the campaign effects
-(:mod:`rodlab.calibrate.effects`) and the compensations (:mod:`rodlab.calibrate.compensations`).
+(:mod:`rodlab.calibrate.effects`), the compensations (:mod:`rodlab.calibrate.compensations`) and the robot file
+formats (:mod:`rodlab.calibrate.robot_formats`, whose entries are module-level ``ROBOT_FORMAT`` objects).
 """
 from __future__ import annotations
 
 import importlib
 import pkgutil
 import sys
+from types import ModuleType
 
 from .errors import RodlabError
 
-__all__ = ["package_classes", "in_declared_order", "sorted_by_id"]
+__all__ = ["package_modules", "package_classes", "in_declared_order", "sorted_by_id"]
+
+
+def package_modules(package: str, prefix: str = "") -> list[ModuleType]:
+    """The modules of ``package`` whose name starts with ``prefix``, imported, found on the package's ``__path__``
+    (a folder added to it is looked in too), in the order they are found."""
+    path = sys.modules[package].__path__
+    return [importlib.import_module(f"{package}.{info.name}") for info in pkgutil.iter_modules(path)
+            if info.name.startswith(prefix)]
 
 
 def package_classes(package: str, base: type, id_attr: str) -> list[type]:
@@ -21,14 +31,9 @@ def package_classes(package: str, base: type, id_attr: str) -> list[type]:
     found by importing every module on the package's ``__path__`` (a folder added to it is looked in too), in
     the order the modules are found. Classes a module only imports, and intermediate bases that name no ID,
     are left out."""
-    path = sys.modules[package].__path__
-    found = []
-    for info in pkgutil.iter_modules(path):
-        module = importlib.import_module(f"{package}.{info.name}")
-        found += [c for c in vars(module).values()
-                  if isinstance(c, type) and issubclass(c, base) and c is not base
-                  and c.__module__ == module.__name__ and id_attr in vars(c)]
-    return found
+    return [c for module in package_modules(package) for c in vars(module).values()
+            if isinstance(c, type) and issubclass(c, base) and c is not base
+            and c.__module__ == module.__name__ and id_attr in vars(c)]
 
 
 def in_declared_order(classes: list[type], id_attr: str, what: str) -> list[type]:

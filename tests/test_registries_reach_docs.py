@@ -24,6 +24,7 @@ from rodlab.calibrate import compensations, read_robot, resolve_robot, robot_for
 from rodlab.calibrate import effects as campaign_effects
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 from rodlab.core.compliance import read_compliance
+from rodlab.core.errors import RodlabError
 from rodlab.stiffness_rig import effects as rig_effects
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -283,3 +284,20 @@ def test_read_robot_reads_the_new_format(registered):
     (registered / "arm.dhx").write_text("ur5\n")
     robot = read_robot(registered / "arm.dhx")
     assert robot.n == resolve_robot("ur5").n and np.allclose(robot.a_mm, resolve_robot("ur5").a_mm)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (('"test_wobble"', '"friction"'), r"rig effects \S+\.friction and \S+\.test_clash both have the ID 'friction'"),
+    (("order = 1000", "order = 70"), r"rig effects \S+\.creep and \S+\.test_clash both have the order 70"),
+    (("    order = 1000\n", ""), r"rig effect test_wobble \(\S+\.test_clash\.Wobble\) declares no `order = N`")])
+def test_a_module_that_clashes_is_refused_naming_it(monkeypatch, tmp_path, edit, message):
+    """Two effects with one ID or one place, or one without a place: the discovery names the modules, and the
+    registry stays as it was."""
+    before = dict(rig_effects.RIG_EFFECTS)
+    _add_module(monkeypatch, rig_effects, tmp_path / "rig", "test_clash", _RIG_MODULE.replace(*edit))
+    try:
+        with pytest.raises(RodlabError, match=message):
+            rig_effects.discover()
+    finally:
+        sys.modules.pop("rodlab.stiffness_rig.effects.test_clash", None)
+    assert rig_effects.RIG_EFFECTS == before

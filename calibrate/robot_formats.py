@@ -1,64 +1,54 @@
 """Robot descriptions rodlab reads, one reader per file kind (the registry), and the built-in robots.
 
-Adding a format is one reader module and one entry in :data:`ROBOT_READERS` (suffix -> :class:`RobotFormat`: the
-reader, what the format is in a help text, and the name ``rodlab validate`` gives a file of it that has no JSON
-schema). A reader takes the path and the chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a
-:class:`Robot`. The ``--robot`` help of every command and ``rodlab validate --format`` are generated from it.
+Adding a format is one reader module ``calibrate/robot_NAME.py`` and its test: the module declares its
+``ROBOT_FORMAT`` (a :class:`RobotFormat`: the suffix, the reader, what the format is in a help text, and the name
+``rodlab validate`` gives a file of it that has no JSON schema), and :func:`discover` (run on import) puts it in
+:data:`ROBOT_READERS` (suffix -> format, in the order of the module names). A reader takes the path and the
+chain's ``base_link`` / ``tip_link`` (only URDF uses them) and returns a :class:`Robot`. The ``--robot`` help of
+every command, ``rodlab validate --format`` and the table of docs/formats.md are generated from it.
 Built-in robots are the files in ``calibrate/robots`` (each names its source), by file stem.
 """
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Callable
 
 from rodlab.core.errors import did_you_mean
+from rodlab.core.registry import package_modules
 
 from .errors import CalibrationError
 from .robot import Robot
-from .robot_toml import read_robot_toml
-from .robot_urdf import read_urdf
+from .robot_reader import RobotFormat
 
-__all__ = ["ROBOT_READERS", "RobotFormat", "robot_formats_help", "robot_formats_markdown", "read_robot", "resolve_robot",
-           "robot_path", "builtin_robots"]
+__all__ = ["ROBOT_READERS", "RobotFormat", "discover", "robot_formats_help", "robot_formats_markdown", "read_robot",
+           "resolve_robot", "robot_path", "builtin_robots"]
 
 log = logging.getLogger(__name__)
 
 
-def _toml(path, base_link=None, tip_link=None) -> Robot:
-    if base_link or tip_link:
-        raise CalibrationError("--base-link / --tip-link choose a chain in a URDF; a TOML robot file is one chain",
-                               path=path, key="base_link" if base_link else "tip_link")
-    return read_robot_toml(path)
+#: file suffix -> its :class:`RobotFormat` (called as reader(path, base_link, tip_link)); filled by :func:`discover`
+ROBOT_READERS: dict[str, RobotFormat] = {}
 
 
-@dataclass(frozen=True)
-class RobotFormat:
-    """One kind of robot file: how to read it and how to name it.
-
-    Attributes
-    ----------
-    read : reader(path, base_link, tip_link) -> :class:`Robot`
-    describes : the format in a help text, e.g. ``"a URDF (xacro expanded)"``
-    format_id : what ``rodlab validate`` calls a file of this kind when it has no JSON schema (``"urdf"``); ``None``
-        when the file names its format itself (a robot TOML's ``format`` key, checked by its schema)
-    """
-
-    read: Callable[..., Robot]
-    describes: str
-    format_id: str | None = None
-
-    def __call__(self, path, base_link: str | None = None, tip_link: str | None = None) -> Robot:
-        return self.read(path, base_link, tip_link)
-
-
-#: file suffix -> its :class:`RobotFormat` (called as reader(path, base_link, tip_link))
-ROBOT_READERS: dict[str, RobotFormat] = {
-    ".toml": RobotFormat(_toml, "a robot TOML file (DH or modified-DH rows)"),
-    ".urdf": RobotFormat(read_urdf, "a URDF (xacro expanded)", "urdf"),
-}
+def discover() -> dict[str, RobotFormat]:
+    """Find the robot formats: the ``ROBOT_FORMAT`` of every ``robot_*`` module of this package (a folder added to
+    its ``__path__`` too), by module name; refill :data:`ROBOT_READERS` in place and return it.
+    :class:`CalibrationError` naming both modules when two read the same suffix."""
+    found, where = {}, {}
+    for module in sorted(package_modules(__package__, "robot_"), key=lambda m: m.__name__.rsplit(".", 1)[1]):
+        fmt = getattr(module, "ROBOT_FORMAT", None)
+        if fmt is None:
+            continue
+        if not (fmt.suffix.startswith(".") and fmt.suffix == fmt.suffix.lower()):
+            raise CalibrationError(f"{module.__name__}: ROBOT_FORMAT needs a lower-case suffix with its dot "
+                                   f"(e.g. '.urdf'), got {fmt.suffix!r}")
+        if fmt.suffix in found:
+            raise CalibrationError(f"{where[fmt.suffix]} and {module.__name__} both read {fmt.suffix} files; keep one")
+        found[fmt.suffix], where[fmt.suffix] = fmt, module.__name__
+    ROBOT_READERS.clear()
+    ROBOT_READERS.update(found)
+    return ROBOT_READERS
 
 
 def robot_formats_help() -> str:
@@ -135,3 +125,6 @@ def robot_path(spec: str | Path) -> Path:
         return p
     raise CalibrationError(f"no such robot file or built-in robot; built-ins: {sorted(names)}."
                            + did_you_mean(str(spec), names), path=spec)
+
+
+discover()

@@ -29,13 +29,14 @@ from rodlab.core.frames import pose_to_matrix
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
 from .robot_lines import ZeroChain, chain_matrices, end_row, row_matrix
+from .robot_reader import RobotFormat
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["read_robot_toml", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS"]
+__all__ = ["read_robot_toml", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS", "ROBOT_FORMAT"]
 
 FORMAT_ROBOT = "rodlab.robot/2"
 FORMATS_ROBOT = ("rodlab.robot/1", "rodlab.robot/2")
@@ -185,3 +186,13 @@ def _end_on_flange(cols: dict, flange_T: np.ndarray) -> tuple[dict, np.ndarray]:
     out["com_mm"][-1] = (new_T_old @ np.r_[out["com_mm"][-1], 1.0])[:3]
     return out, new_T_old @ flange_T
 
+
+def _read(path, base_link=None, tip_link=None) -> Robot:
+    if base_link or tip_link:
+        raise CalibrationError("--base-link / --tip-link choose a chain in a URDF; a TOML robot file is one chain",
+                               path=path, key="base_link" if base_link else "tip_link")
+    return read_robot_toml(path)
+
+
+#: robot TOML files in the registry (:data:`rodlab.calibrate.robot_formats.ROBOT_READERS`)
+ROBOT_FORMAT = RobotFormat(_read, "a robot TOML file (DH or modified-DH rows)", suffix=".toml")

@@ -19,9 +19,10 @@ import numpy as np
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
 from .robot_lines import ZeroChain
+from .robot_reader import RobotFormat
 from .urdf_check import check_urdf_structure
 
-__all__ = ["read_urdf", "load_urdf", "UrdfChain", "urdf_chain", "chain_poses", "zero_chain"]
+__all__ = ["read_urdf", "load_urdf", "UrdfChain", "urdf_chain", "chain_poses", "zero_chain", "ROBOT_FORMAT"]
 
 log = logging.getLogger(__name__)
 _MOVING = ("revolute", "continuous")
@@ -225,3 +226,7 @@ def chain_poses(ch: UrdfChain, q_rad) -> np.ndarray:
         else:
             T = T @ _pose(j)
     return T
+
+
+#: URDF files in the registry (:data:`rodlab.calibrate.robot_formats.ROBOT_READERS`)
+ROBOT_FORMAT = RobotFormat(read_urdf, "a URDF (xacro expanded)", "urdf", suffix=".urdf")

@@ -15,9 +15,8 @@ from rodlab import calc_rod_compliance
 from rodlab.app.diagnose import diagnose_campaign
 from rodlab.app.diagnose.advice import remedy
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
-from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect, campaign_vocabulary_markdown
+from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, CampaignEffect, campaign_effect, campaign_vocabulary_markdown
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.errors import RodlabError
 
 ROOT = Path(__file__).resolve().parents[1]

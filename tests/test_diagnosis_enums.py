@@ -1,4 +1,5 @@
-"""A diagnosis' verdict, subject and finding effects are Enums of rodlab.core.enums, parsed from the contract
+"""A diagnosis' verdict, subject and finding effects are Enums (``Verdict``, ``Subject``, ``FindingKind`` of
+rodlab.core.enums; the effect IDs the registries' ``RigEffect`` and ``CampaignEffect``), parsed from the contract
 spelling, and its report file holds exactly the contract spelling (plain JSON strings, byte for byte)."""
 from __future__ import annotations
 
@@ -8,10 +9,13 @@ import pytest
 
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.app.diagnose.report import Diagnosis, Finding
-from rodlab.core.enums import CampaignEffect, FindingKind, RigEffect, Subject, Verdict, parse_effect_id
+from rodlab.app.diagnose.effect_ids import parse_effect_id
+from rodlab.calibrate.effects import CampaignEffect
+from rodlab.core.enums import FindingKind, Subject, Verdict
 from rodlab.core.errors import RodlabError
 from rodlab.core.schema import load_schema
 from rodlab.stiffness_rig import read_recording
+from rodlab.stiffness_rig.effects import RigEffect
 
 from conftest import legacy_design
 

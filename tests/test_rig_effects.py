@@ -12,9 +12,9 @@ import pytest
 from rodlab import calc_rod_compliance
 from conftest import legacy_design, legacy_file
 from rodlab.app.diagnose import diagnose_rig
-from rodlab.core.enums import Phase, RigEffect
+from rodlab.core.enums import Phase
 from rodlab.stiffness_rig import read_recording
-from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, vocabulary_markdown
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, RigEffect, joint_places, vocabulary_markdown
 from rodlab.stiffness_rig.model import Hold, LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
 
@@ -45,9 +45,9 @@ def test_registry_covers_the_contract_vocabulary():
 
 
 def test_campaign_vocabulary_is_the_enum():
-    """The campaign effects of the contract are :class:`rodlab.core.enums.CampaignEffect` (the diagnoser's hypotheses
+    """The campaign effects of the contract are :data:`rodlab.calibrate.effects.CampaignEffect` (the diagnoser's hypotheses
     carry them; simulated and diagnosed in tests/test_diagnose.py and benchmarks/campaign_blind.py)."""
-    from rodlab.core.enums import CampaignEffect
+    from rodlab.calibrate.effects import CampaignEffect
     text = CONTRACT.read_text() if CONTRACT.exists() else (ROOT / "docs" / "formats.md").read_text()
     part = text.split("## Subject `campaign`")[1] if CONTRACT.exists() else \
         text.split("subject `campaign`")[1].split("##")[0]

@@ -2,8 +2,9 @@
 the simulator adds to its readings (:class:`~.base.Compensation`: ball-centre offsets in {W} from the current
 model); one registry, :data:`COMPENSATIONS`, keyed by name.
 
-Adding a compensation: a module with a :class:`~.base.Compensation` subclass (``name``, ``summary``, ``needs``,
-``option`` and ``offsets``), one line in :data:`COMPENSATIONS` and a test. ``identify(..., compensations=[...])``,
+Adding a compensation is a module in this package with a :class:`~.base.Compensation` subclass (``name``,
+``summary``, ``needs``, ``option`` and ``offsets``) and a test: :func:`discover` (run on import) finds every
+module of the package. ``identify(..., compensations=[...])``,
 ``simulate_campaign(..., compensations=[...])``, the help of ``rodlab calibrate`` and the table of
 docs/calibrate.md take it from here.
 """
@@ -11,16 +12,32 @@ from __future__ import annotations
 
 import numpy as np
 
+from rodlab.core.registry import package_classes, sorted_by_id
+
 from .base import Compensation, Poses
 from .rod_deflection import RodDeflection, deflection_basis, deflection_offsets, flange_loads
 from .thermal_growth import ThermalGrowth, tool_axes_W
 
 __all__ = ["COMPENSATIONS", "Compensation", "Poses", "RodDeflection", "ThermalGrowth", "deflection_offsets",
            "deflection_basis", "flange_loads", "tool_axes_W", "total_offsets", "compensation_label",
-           "compensations_markdown", "compensations_help"]
+           "compensations_markdown", "compensations_help", "discover"]
 
-#: every compensation, by name, in the order their offsets are summed
-COMPENSATIONS: dict[str, type[Compensation]] = {c.name: c for c in (RodDeflection, ThermalGrowth)}
+#: every compensation class, by name (in the order of the name; a calibration sums the offsets of the ones it is
+#: given in the order given); filled by :func:`discover`
+COMPENSATIONS: dict[str, type[Compensation]] = {}
+
+
+def discover() -> dict[str, type[Compensation]]:
+    """Find the compensations: every :class:`Compensation` subclass with a ``name`` that the modules of this
+    package define (a folder added to its ``__path__`` too); refill :data:`COMPENSATIONS` in place and return it.
+    Run on import; run it again after changing the package's ``__path__``."""
+    found = sorted_by_id(package_classes(__name__, Compensation, "name"), "name", "compensation")
+    COMPENSATIONS.clear()
+    COMPENSATIONS.update({c.name: c for c in found})
+    return COMPENSATIONS
+
+
+discover()
 
 
 def total_offsets(compensations, robot, params, at) -> np.ndarray:

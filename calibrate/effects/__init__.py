@@ -1,33 +1,58 @@
 """Campaign effects: one module per effect of ``contract/effects.md`` (subject ``campaign``), each with its part
 of the campaign simulator, its parameter schema, its hypotheses for the diagnosis, how a finding enters the
-re-identification, its wording and its remedy; one registry keyed by :class:`rodlab.core.enums.CampaignEffect`.
+re-identification, its wording and its remedy; one registry, :data:`CAMPAIGN_EFFECTS`, keyed by
+:data:`CampaignEffect`, the Enum of the effect IDs it found.
 
-Adding an effect: a new value of ``CampaignEffect``, a module with a :class:`CampaignEffectModel` subclass,
-one line in :data:`CAMPAIGN_EFFECTS` and a test. ``simulate_campaign(effects=...)``, ``rodlab
-simulate-campaign --effect``, ``rodlab diagnose --campaign``, the remedies ``rodlab calibrate`` prints and the
-table of docs/formats.md take it from here.
+Adding an effect is one module in this package with a :class:`CampaignEffectModel` subclass that names its ID
+and its place (``effect = "outliers"``, ``order = 50``), and its test: :func:`discover` (run on import) finds
+every module of the package, builds :data:`CampaignEffect` from their IDs and orders the registry by
+``order``. ``simulate_campaign(effects=...)``, ``rodlab simulate-campaign --effect``, ``rodlab diagnose
+--campaign``, the remedies ``rodlab calibrate`` prints and the table of docs/formats.md take it from here.
 """
 from __future__ import annotations
 
-from rodlab.core.enums import CampaignEffect
+from rodlab.core.enums import id_enum
+from rodlab.core.registry import in_declared_order, package_classes
 
 from ..errors import CalibrationError
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
-from .device_axes import DeviceAxes
-from .fixture_pose import FixturePose
-from .outliers import Outliers
-from .periodic_joint_error import PeriodicJointError, correct_joints
-from .rod_deflection import RodDeflection, generic_rod
-from .thermal_drift import ThermalDrift
+from .periodic_joint_error import correct_joints
+from .rod_deflection import generic_rod
 
-__all__ = ["CAMPAIGN_EFFECTS", "campaign_effect", "complete_campaign_effects", "campaign_hypotheses",
-           "CampaignEffectModel", "CampaignContext", "Refit", "hypothesis", "correct_joints", "generic_rod",
-           "campaign_vocabulary_markdown"]
+__all__ = ["CAMPAIGN_EFFECTS", "CampaignEffect", "discover", "campaign_effect", "complete_campaign_effects",
+           "campaign_hypotheses", "CampaignEffectModel", "CampaignContext", "Refit", "hypothesis", "correct_joints",
+           "generic_rod", "campaign_vocabulary_markdown"]
 
-#: every campaign effect, in the order the simulator applies them and the diagnosis lists its hypotheses (the
-#: order also breaks ties between equally good hypotheses: append new effects at the end)
-CAMPAIGN_EFFECTS: dict[CampaignEffect, CampaignEffectModel] = {m.effect: m for m in (
-    FixturePose(), RodDeflection(), PeriodicJointError(), ThermalDrift(), Outliers(), DeviceAxes())}
+_ENUM_DOC = """Effects of the subject ``campaign`` (contract ``effects.md``): physics left out of the identified model,
+in registry order. Built by :func:`rodlab.calibrate.effects.discover` from the effect modules of
+:mod:`rodlab.calibrate.effects`."""
+
+#: every campaign effect, in the order the simulator applies them and the diagnosis lists its hypotheses (their
+#: ``order``, which also breaks ties between equally good hypotheses: give a new effect a place after the others);
+#: filled by :func:`discover`
+CAMPAIGN_EFFECTS: dict = {}
+
+
+def discover() -> type:
+    """Find the campaign effects: every :class:`CampaignEffectModel` subclass the modules of this package define
+    (a folder added to its ``__path__`` too), sorted by ``order``; (re)build :data:`CampaignEffect` from their
+    IDs, make each class's ``effect`` its member and refill :data:`CAMPAIGN_EFFECTS` in place. Run on import;
+    run it again after changing the package's ``__path__`` (the same modules give back the same Enum and
+    models). Returns :data:`CampaignEffect`."""
+    global CampaignEffect
+    classes = in_declared_order(package_classes(__name__, CampaignEffectModel, "effect"), "effect",
+                                "campaign effect")
+    CampaignEffect = id_enum("CampaignEffect", [str(c.effect) for c in classes], module=__name__, doc=_ENUM_DOC)
+    models = {type(m): m for m in CAMPAIGN_EFFECTS.values()}
+    for c in classes:
+        c.effect = CampaignEffect(str(c.effect))
+    CAMPAIGN_EFFECTS.clear()
+    CAMPAIGN_EFFECTS.update({c.effect: models.get(c) or c() for c in classes})
+    return CampaignEffect
+
+
+#: the campaign effect IDs (contract spelling), one member per effect module, in registry order
+CampaignEffect = discover()
 
 
 def campaign_effect(name) -> CampaignEffectModel:

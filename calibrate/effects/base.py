@@ -13,13 +13,16 @@ Simulator hooks, each applied by every active effect in registry order (:func:`r
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import EffectSchema, Hypothesis
 
 from ..errors import CalibrationError
+
+if TYPE_CHECKING:                       # the registry builds the Enum from the effect modules
+    from . import CampaignEffect
 
 __all__ = ["CampaignEffectModel", "CampaignContext", "Refit", "hypothesis"]
 
@@ -79,14 +82,17 @@ def hypothesis(effect, location, names, H, explanation, **kw) -> Hypothesis:
 class CampaignEffectModel(EffectSchema):
     """One campaign effect. Subclasses set the class attributes and override the hooks they need.
 
-    effect : its ID; params : its simulator parameters (names and units shared with docs and CLI); example :
+    effect : its ID (the registry makes it its ``CampaignEffect`` member); order : its place in the registry (an
+    int of its own: the simulator's order, and ties between equally good hypotheses go to the first); params : its
+    simulator parameters (names and units shared with docs and CLI); example :
     the parameters ``--effect NAME`` gives when no magnitude is stated; physics : what is left out; signature :
     how it shows in the residuals; locations : its location keys in a diagnosis; reported : the parameters a
     finding reports (Markdown, for the docs table); per_point : its candidates are
     single points that do not use up the diagnosis' model terms (outliers)
     """
 
-    effect: CampaignEffect
+    effect: CampaignEffect     # written as its contract spelling, ``effect = "outliers"``
+    order: int                 # e.g. ``order = 50``: where the simulator applies it and the diagnosis lists it
     physics: str = ""
     signature: str = ""
     locations: tuple = ()

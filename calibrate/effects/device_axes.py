@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -27,7 +26,8 @@ def _map(angles_deg) -> np.ndarray:
 
 
 class DeviceAxes(CampaignEffectModel):
-    effect = CampaignEffect.DEVICE_AXES
+    effect = "device_axes"
+    order = 60
     params = (ParamSpec("misalign_deg", "deg", "sensor 2 tilted towards x, sensor 3 towards x, sensor 3 towards y, "
                         "against the axes the readings are converted with", kind="vector"),)
     example = {"misalign_deg": [2.0, -1.5, 1.0]}

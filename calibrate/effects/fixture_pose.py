@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -12,7 +11,8 @@ __all__ = ["FixturePose"]
 
 
 class FixturePose(CampaignEffectModel):
-    effect = CampaignEffect.FIXTURE_POSE
+    effect = "fixture_pose"
+    order = 10
     params = (ParamSpec("position", "-", "the clamping position whose recorded pose is off", kind="int",
                         magnitude=False),
               ParamSpec("offset_mm", "mm", "offset added to the recorded position of the pose, in {W}", kind="vector"))

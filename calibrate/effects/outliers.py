@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -12,7 +11,8 @@ __all__ = ["Outliers"]
 
 
 class Outliers(CampaignEffectModel):
-    effect = CampaignEffect.OUTLIERS
+    effect = "outliers"
+    order = 50
     params = (ParamSpec("count", "-", "how many readings get a gross error", default=2, kind="int", magnitude=False),
               ParamSpec("min_mm", "mm", "smallest error per coordinate (sign random)"),
               ParamSpec("max_mm", "mm", "largest error per coordinate"))

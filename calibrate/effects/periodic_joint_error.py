@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -21,7 +20,8 @@ def correct_joints(q_rad: np.ndarray, corr: dict) -> np.ndarray:
 
 
 class PeriodicJointError(CampaignEffectModel):
-    effect = CampaignEffect.PERIODIC_JOINT_ERROR
+    effect = "periodic_joint_error"
+    order = 30
     params = (ParamSpec("joint", "-", "the joint (1-based)", kind="int", magnitude=False),
               ParamSpec("amp_deg", "deg", "amplitude A: the joint really turns q + A sin(q + phase)"),
               ParamSpec("phase_deg", "deg", "phase of the error", default=0.0, magnitude=False))

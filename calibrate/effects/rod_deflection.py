@@ -6,7 +6,6 @@ from dataclasses import replace
 import numpy as np
 
 from rodlab.core.compliance import RodCompliance
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec
 
 from ..compensations import deflection_offsets
@@ -35,7 +34,8 @@ def scaled_rod(rod: RodCompliance, k: float, **provenance) -> RodCompliance:
 
 
 class RodDeflection(CampaignEffectModel):
-    effect = CampaignEffect.ROD_DEFLECTION
+    effect = "rod_deflection"
+    order = 20
     params = (ParamSpec("k", "-", "the true rod's compliance over the file's (both C_F and C_g)"),)
     example = {"k": 1.5}
     physics = "the compliance file does not match the rod (wrong method, wrong r_rod, another rod) or is zero"

@@ -6,7 +6,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from rodlab.core.enums import CampaignEffect
 from rodlab.core.hypothesis import ParamSpec
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -15,7 +14,8 @@ __all__ = ["ThermalDrift"]
 
 
 class ThermalDrift(CampaignEffectModel):
-    effect = CampaignEffect.THERMAL_DRIFT
+    effect = "thermal_drift"
+    order = 40
     params = (ParamSpec("growth_ppm_per_s", "ppm/s", "growth rate: positions scale about the base by rate x time_s"),)
     example = {"growth_ppm_per_s": 0.03}
     physics = "the arm warms up during the campaign and its links grow"

@@ -1,12 +1,17 @@
-"""Conventions of the rodlab contract as Enums (never bare strings in the API)."""
+"""Conventions of the rodlab contract as Enums (never bare strings in the API).
+
+The effect IDs are not listed here: the rig effects' ``RigEffect`` (:mod:`rodlab.stiffness_rig.effects`) and the
+campaign effects' ``CampaignEffect`` (:mod:`rodlab.calibrate.effects`) are built by their registries from the
+effect modules they find (:func:`id_enum`), so that a new effect is one module; the core may not import them.
+"""
 from __future__ import annotations
 
 from enum import Enum
-from typing import Union
+from functools import lru_cache
 
-__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "RigEffect", "CampaignEffect", "Trial", "AccuracySource",
-           "Completeness", "Verdict", "Subject", "FindingKind", "EffectId", "parse_effect_id", "MODEL_FORM", "BendModel",
-           "SegmentKind", "FeaModel", "SolverBackend", "LineProtocol", "Checksum", "ErrorEstimate"]
+__all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "Trial", "AccuracySource", "Completeness", "Verdict",
+           "Subject", "FindingKind", "MODEL_FORM", "id_enum", "BendModel", "SegmentKind", "FeaModel", "SolverBackend",
+           "LineProtocol", "Checksum", "ErrorEstimate"]
 
 
 class _StrEnum(str, Enum):
@@ -96,34 +101,6 @@ class DesignStatus(_StrEnum):
     FAILED = "failed"            #: a computation failed (the message)
 
 
-class RigEffect(_StrEnum):
-    """Effects of the subject ``rig`` (contract ``effects.md``, plus rodlab's additions): physics of the rod or
-    the stiffness rig left out of a simulated compliance. Each has one module in
-    :mod:`rodlab.stiffness_rig.effects` (forward model, parameters with units, hypothesis, wording)."""
-
-    FRICTION = "friction"
-    TARE = "tare"
-    COMPLIANCE_SCALE = "compliance_scale"
-    NONLINEARITY = "nonlinearity"
-    TORSION_COMPLIANCE = "torsion_compliance"
-    JOINT_COMPLIANCE = "joint_compliance"
-    CREEP = "creep"
-    CROSSTALK = "crosstalk"
-    DRIFT = "drift"
-    LOAD_HYSTERESIS = "load_hysteresis"   #: rodlab's addition: the branches split in proportion to the load
-
-
-class CampaignEffect(_StrEnum):
-    """Effects of the subject ``campaign`` (contract ``effects.md``): physics left out of the identified model."""
-
-    ROD_DEFLECTION = "rod_deflection"
-    FIXTURE_POSE = "fixture_pose"
-    PERIODIC_JOINT_ERROR = "periodic_joint_error"
-    THERMAL_DRIFT = "thermal_drift"
-    OUTLIERS = "outliers"
-    DEVICE_AXES = "device_axes"
-
-
 class Trial(_StrEnum):
     """How one candidate model fares in a diagnoser's selection step (:mod:`rodlab.app.diagnose.search`)."""
 
@@ -154,24 +131,24 @@ class FindingKind(_StrEnum):
 #: nothing was left out, the rod as built differs from the simulated design
 MODEL_FORM = FindingKind.MODEL_FORM
 
-#: what a diagnosis finding's ``effect`` is: a rig effect, a campaign effect, or a finding that names none
-EffectId = Union[RigEffect, CampaignEffect, FindingKind]
+def id_enum(name: str, values, *, module: str, doc: str) -> type:
+    """A contract-spelling Enum (``str`` values, ``parse``, prints as its value) whose members are ``values`` in
+    that order, each named by its upper-cased value: how a registry turns the IDs of the entries it found into
+    its Enum (``RigEffect``, ``CampaignEffect``). ``module`` is where the registry keeps it (for pickling and
+    the docs). The same IDs give back the very same class, so a registry that is rediscovered with the same
+    modules keeps its members (``is`` still holds)."""
+    values = tuple(str(v) for v in values)
+    for v in values:
+        if not (v.isidentifier() and v == v.lower()):
+            raise ValueError(f"{name}: an ID must be a lower-case identifier (its contract spelling), got {v!r}")
+    return _id_enum(name, values, module, doc)
 
 
-def parse_effect_id(value) -> EffectId:
-    """A finding's effect ID from its contract spelling (rig effects, campaign effects, ``model_form``,
-    ``unexplained``); :class:`~rodlab.core.errors.RodlabError` listing them otherwise."""
-    kinds = (RigEffect, CampaignEffect, FindingKind)
-    if isinstance(value, kinds):
-        return value
-    for kind in kinds:
-        try:
-            return kind(str(value).strip().lower())
-        except ValueError:
-            continue
-    from .errors import RodlabError, did_you_mean
-    choices = [m.value for kind in kinds for m in kind]
-    raise RodlabError(f"unknown effect {value!r}; expected one of {choices}." + did_you_mean(str(value), choices))
+@lru_cache(maxsize=None)
+def _id_enum(name: str, values: tuple, module: str, doc: str) -> type:
+    enum = _StrEnum(name, [(v.upper(), v) for v in values], module=module, qualname=name)
+    enum.__doc__ = doc
+    return enum
 
 
 class Verdict(_StrEnum):

@@ -1,37 +1,56 @@
 """Rig effects: one module per effect of ``contract/effects.md`` (subject ``rig``) plus rodlab's additions,
-each with its forward model, parameter schema, hypotheses and wording; one registry keyed by
-:class:`rodlab.core.enums.RigEffect`.
+each with its forward model, parameter schema, hypotheses and wording; one registry, :data:`RIG_EFFECTS`, keyed
+by :data:`RigEffect`, the Enum of the effect IDs it found.
 
-Adding an effect: a new value of ``RigEffect``, a module with a :class:`RigEffectModel` subclass, one line in
-:data:`RIG_EFFECTS` and a test. The simulator, ``rodlab rig simulate --effect``, the diagnosis, its report and
-the docs (``python scripts/gen_cli_docs.py`` writes the table of docs/formats.md) all take it from here.
+Adding an effect is one module in this package with a :class:`RigEffectModel` subclass that names its ID and
+its place (``effect = "friction"``, ``order = 10``), and its test: :func:`discover` (run on import) finds every
+module of the package, builds :data:`RigEffect` from their IDs and orders the registry by ``order``. The
+simulator, ``rodlab rig simulate --effect``, the diagnosis, its report and the docs (``python
+scripts/gen_cli_docs.py`` writes the table of docs/formats.md) all take it from here.
 """
 from __future__ import annotations
 
-from rodlab.core.enums import RigEffect
+from rodlab.core.enums import id_enum
+from rodlab.core.registry import in_declared_order, package_classes
 
 from ..errors import RigError
 from .base import HypothesisContext, RigEffectModel, RigState
-from .compliance_scale import ComplianceScale
-from .creep import CREEP_TAU_GRID_S, Creep, creep_hypothesis
-from .crosstalk import Crosstalk
-from .drift import Drift
-from .friction import Friction
-from .joint_compliance import JointCompliance
-from .load_hysteresis import LoadHysteresis
-from .nonlinearity import Nonlinearity
+from .creep import CREEP_TAU_GRID_S, creep_hypothesis
 from .springs import joint_places, spring_columns, spring_compliance, spring_matrices
-from .tare import Tare
-from .torsion_compliance import TorsionCompliance
 
-__all__ = ["RIG_EFFECTS", "rig_effect", "complete_effects", "rig_hypotheses", "RigEffectModel",
-           "HypothesisContext", "RigState", "creep_hypothesis", "CREEP_TAU_GRID_S", "joint_places",
+__all__ = ["RIG_EFFECTS", "RigEffect", "discover", "rig_effect", "complete_effects", "rig_hypotheses",
+           "RigEffectModel", "HypothesisContext", "RigState", "creep_hypothesis", "CREEP_TAU_GRID_S", "joint_places",
            "spring_matrices", "spring_compliance", "spring_columns", "vocabulary_markdown"]
 
+_ENUM_DOC = """Effects of the subject ``rig`` (contract ``effects.md``, plus rodlab's additions): physics of the rod or
+the stiffness rig left out of a simulated compliance, in registry order. Built by
+:func:`rodlab.stiffness_rig.effects.discover` from the effect modules of :mod:`rodlab.stiffness_rig.effects`
+(each has its forward model, parameters with units, hypotheses and wording)."""
+
 #: every rig effect, in the order the forward model applies them and the diagnosis lists its hypotheses
-RIG_EFFECTS: dict[RigEffect, RigEffectModel] = {m.effect: m for m in (
-    Friction(), Tare(), ComplianceScale(), Nonlinearity(), TorsionCompliance(), JointCompliance(), Creep(),
-    Crosstalk(), Drift(), LoadHysteresis())}
+#: (their ``order``); filled by :func:`discover`
+RIG_EFFECTS: dict = {}
+
+
+def discover() -> type:
+    """Find the rig effects: every :class:`RigEffectModel` subclass the modules of this package define (a
+    folder added to its ``__path__`` too), sorted by ``order``; (re)build :data:`RigEffect` from their IDs, make
+    each class's ``effect`` its member and refill :data:`RIG_EFFECTS` in place. Run on import; run it again
+    after changing the package's ``__path__`` (the same modules give back the same Enum and models). Returns
+    :data:`RigEffect`."""
+    global RigEffect
+    classes = in_declared_order(package_classes(__name__, RigEffectModel, "effect"), "effect", "rig effect")
+    RigEffect = id_enum("RigEffect", [str(c.effect) for c in classes], module=__name__, doc=_ENUM_DOC)
+    models = {type(m): m for m in RIG_EFFECTS.values()}
+    for c in classes:
+        c.effect = RigEffect(str(c.effect))
+    RIG_EFFECTS.clear()
+    RIG_EFFECTS.update({c.effect: models.get(c) or c() for c in classes})
+    return RigEffect
+
+
+#: the rig effect IDs (contract spelling), one member per effect module, in registry order
+RigEffect = discover()
 
 
 def rig_effect(name) -> RigEffectModel:

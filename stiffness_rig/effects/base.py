@@ -12,13 +12,16 @@ Forward model of a reading (``RigModel.reading``), each hook applied by every ac
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import EffectSchema, Hypothesis
 
 from ..errors import RigError
+
+if TYPE_CHECKING:                       # the registry builds the Enum from the effect modules
+    from . import RigEffect
 
 __all__ = ["RigEffectModel", "HypothesisContext", "RigState"]
 
@@ -49,14 +52,16 @@ class RigState:
 class RigEffectModel(EffectSchema):
     """One rig effect. Subclasses set the class attributes and override the hooks they need.
 
-    effect : its ID; params : its parameters (names and units shared by simulator, report and docs);
+    effect : its ID (the registry makes it its ``RigEffect`` member); order : its place in the registry (an int
+    of its own); params : its parameters (names and units shared by simulator, report and docs);
     example : the parameters ``--effect NAME`` gives when no magnitude is stated; physics : what is left out
     (help text); signature : how it shows in the data; confirm : the measurement that would confirm a finding;
     structural : it changes the rod's compliance (kept in a corrected compliance file); locations : its
     location keys in a diagnosis
     """
 
-    effect: RigEffect
+    effect: RigEffect     # written as its contract spelling, ``effect = "friction"``
+    order: int            # e.g. ``order = 10``: where the forward model applies it and the diagnosis lists it
     params: tuple = ()
     example: dict = {}
     physics: str = ""

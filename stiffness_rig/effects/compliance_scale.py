@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from ..errors import RigError
@@ -13,7 +12,8 @@ __all__ = ["ComplianceScale"]
 
 
 class ComplianceScale(RigEffectModel):
-    effect = RigEffect.COMPLIANCE_SCALE
+    effect = "compliance_scale"
+    order = 30
     params = (ParamSpec("r", "-", "true over simulated compliance, all components"),)
     example = {"r": 1.2}
     physics = "every member uniformly softer/stiffer than simulated (modulus off)"

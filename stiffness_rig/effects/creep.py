@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from ..errors import RigError
@@ -17,7 +16,8 @@ CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 
 
 
 class Creep(RigEffectModel):
-    effect = RigEffect.CREEP
+    effect = "creep"
+    order = 70
     params = (ParamSpec("phi", "-", "creep deflection at equilibrium over the elastic one"),
               ParamSpec("tau_s", "s", "creep time constant", 6.0, magnitude=False))
     example = {"phi": 0.02}
@@ -59,7 +59,7 @@ def _kelvin_voigt(data, base: np.ndarray, tau: float) -> np.ndarray:
 
 def creep_hypothesis(data, base: np.ndarray, tau: float) -> Hypothesis:
     """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter."""
-    return Hypothesis(RigEffect.CREEP, None, ["phi"], _kelvin_voigt(data, base, tau)[:, None], [0.0], [1.0],
+    return Hypothesis(Creep.effect, None, ["phi"], _kelvin_voigt(data, base, tau)[:, None], [0.0], [1.0],
                       f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
                       f"constant load (time constant {tau:.3g} s), more at higher load", hidden=1,
                       settings={"tau_s": tau})

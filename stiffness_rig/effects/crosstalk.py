@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from ..errors import RigError
@@ -16,7 +15,8 @@ _AXES = "xyz"
 
 
 class Crosstalk(RigEffectModel):
-    effect = RigEffect.CROSSTALK
+    effect = "crosstalk"
+    order = 80
     params = ((ParamSpec("sensor", "-", "the tilted gauge", "z", kind="str", choices=tuple(_AXES)),)
               + tuple(ParamSpec(f"eps_{a}_rad", "rad", f"tilt of the gauge towards {a}_T (set one)") for a in _AXES))
     example = {"eps_y_rad": 0.01}

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
@@ -15,7 +14,8 @@ _AXES = "xyz"
 
 
 class Drift(RigEffectModel):
-    effect = RigEffect.DRIFT
+    effect = "drift"
+    order = 90
     params = (tuple(ParamSpec(f"rate_{a}_mm_per_s", "mm/s", f"zero drift of the {a} gauge in time") for a in _AXES)
               + tuple(ParamSpec(f"{a}_mm_per_K", "mm/K", f"zero drift of the {a} gauge with temp_C") for a in _AXES))
     # 1e-5 mm/s: ~5 um over a standard series, clearly above a gauge's ~0.6 um noise (a visible example)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import Phase, RigEffect
+from rodlab.core.enums import Phase
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
@@ -13,7 +13,8 @@ __all__ = ["Friction"]
 
 
 class Friction(RigEffectModel):
-    effect = RigEffect.FRICTION
+    effect = "friction"
+    order = 10
     params = (ParamSpec("F_f_N", "N", "friction force in the slides"),)
     example = {"F_f_N": 0.5}
     physics = "Coulomb friction in the rig's slides"

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
@@ -17,7 +16,8 @@ PLACES = ("flange_clamp", "ring_1", "pipe_II")
 
 
 class JointCompliance(RigEffectModel):
-    effect = RigEffect.JOINT_COMPLIANCE
+    effect = "joint_compliance"
+    order = 60
     params = (ParamSpec("location", "-", "where the spring sits", "ring_1", kind="str", choices=PLACES),
               ParamSpec("s_bend_rad_per_Nm", "rad/(N m)", "bending compliance of the joint"),
               ParamSpec("s_torsion_rad_per_Nm", "rad/(N m)", "torsion compliance of the joint", 0.0),

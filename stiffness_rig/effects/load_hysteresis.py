@@ -8,7 +8,7 @@ to it, the same in every hold.
 """
 from __future__ import annotations
 
-from rodlab.core.enums import Phase, RigEffect
+from rodlab.core.enums import Phase
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
@@ -17,7 +17,8 @@ __all__ = ["LoadHysteresis"]
 
 
 class LoadHysteresis(RigEffectModel):
-    effect = RigEffect.LOAD_HYSTERESIS
+    effect = "load_hysteresis"
+    order = 100
     params = (ParamSpec("eta", "-", "extra compliance on the unloading branch, relative to loading"),)
     example = {"eta": 0.01}
     physics = "load hysteresis of a bond or clamped joint"

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from .base import RigEffectModel
@@ -15,7 +14,8 @@ _AXES = "xyz"
 
 
 class Nonlinearity(RigEffectModel):
-    effect = RigEffect.NONLINEARITY
+    effect = "nonlinearity"
+    order = 40
     params = (ParamSpec("beta_per_10N", "-", "relative change of the compliance per 10 N of load"),
               ParamSpec("beta2_per_100N2", "-", "relative change of the compliance per (10 N)^2 of load: a curvature "
                         "that grows with the square of the load (optional)"),

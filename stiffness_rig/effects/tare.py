@@ -1,7 +1,6 @@
 """``tare``: a dead load [kg] (hanger, loading frame) missing from ``mass_kg`` whenever the hanger is on."""
 from __future__ import annotations
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 from rodlab.core.units import G0
 
@@ -11,7 +10,8 @@ __all__ = ["Tare"]
 
 
 class Tare(RigEffectModel):
-    effect = RigEffect.TARE
+    effect = "tare"
+    order = 20
     params = (ParamSpec("tare_kg", "kg", "dead load on the rod whenever a mass hangs, missing from mass_kg"),)
     example = {"tare_kg": 0.05}
     physics = "a dead load missing from mass_kg (hanger, loading frame)"

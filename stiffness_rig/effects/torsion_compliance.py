@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.core.enums import RigEffect
 from rodlab.core.hypothesis import Hypothesis, ParamSpec
 
 from ..errors import RigError
@@ -17,7 +16,8 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 
 class TorsionCompliance(RigEffectModel):
-    effect = RigEffect.TORSION_COMPLIANCE
+    effect = "torsion_compliance"
+    order = 50
     params = (ParamSpec("s_torsion_rad_per_Nm", "rad/(N m)", "extra torsion compliance of pipe I"),
               ParamSpec("point_T_mm", "mm", "where pipe I starts, in {T} (default: the flange)", kind="vector"),
               ParamSpec("axis", "-", "pipe I's axis in {T} (default: z_T)", kind="vector"))

@@ -4,8 +4,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...core.enums import EffectId, Subject, Verdict, parse_effect_id
+from ...core.enums import Subject, Verdict
 from ...core.fileio import atomic_write_json, json_safe
+from .effect_ids import EffectId, parse_effect_id
 
 __all__ = ["Finding", "Diagnosis", "FORMAT_DIAGNOSIS"]
 

@@ -33,6 +33,8 @@ from .estimate import FitOptions, check_names, parameter_value, physical_bounds,
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .result import CalibrationResult
 from .rod import Rod
+from .trust import trust_cautions, trust_warnings
+from .residual_test import residual_test
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
            "register_base_and_tool", "noise_covariance", "free_parameters"]
@@ -61,9 +63,7 @@ def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compens
     out.harmonic_range_deg = {j: (float(np.rad2deg(obs.q_rad[:, j - 1].min())), float(np.rad2deg(obs.q_rad[:, j - 1].max())))
                               for j in sorted(set(options.harmonics))}
     if options.expected_noise_mm:
-        from .residual_test import residual_test
         out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
-    from .trust import trust_cautions, trust_warnings
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out

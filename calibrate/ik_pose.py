@@ -42,7 +42,7 @@ class PoseIk:
 
 def rotation_angle(R) -> np.ndarray:
     """Angle [rad] of rotation matrices, shape=(..., 3, 3) -> (...); accurate for small angles too."""
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial.transform import Rotation                        # heavy (scipy.spatial, ~0.35 s)
     R = np.asarray(R, float)
     return np.linalg.norm(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_rotvec(), axis=1).reshape(R.shape[:-2])
 
@@ -57,7 +57,7 @@ def tcp_poses(robot, params: ModelParams, q_rad, R_tool=None) -> tuple[np.ndarra
 
 def _residual(robot, params, q, p_t, R_t, R_tool):
     """Residuals, shape=(M, 6) ([mm] and weighted [rad]), and the Jacobian, shape=(M, 6, n)."""
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial.transform import Rotation                        # heavy (scipy.spatial, ~0.35 s)
     fr, _ = ball_positions(robot, params, q)
     R = np.einsum("ij,mjk->mik", fr.R_W0, fr.T[:, robot.n, :3, :3]) @ R_tool
     w = Rotation.from_matrix(R @ np.swapaxes(R_t, 1, 2)).as_rotvec()

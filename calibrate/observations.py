@@ -9,7 +9,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rodlab.core.compliance import RodCompliance
-from rodlab.core.frames import abc_rate_axes, pose_to_matrix, skew
+from rodlab.core.frames import abc_rate_axes, pose_to_matrix, skew, matrix_to_pose
 
 from .campaign import Campaign, Fixture
 from .errors import CalibrationError
@@ -108,7 +108,6 @@ def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> O
 
 def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
     """Base pose [mm, deg] by rigid registration (Kabsch) of nominal ball positions to the measured ones."""
-    from rodlab.core.frames import matrix_to_pose
     fr, _ = ball_positions(robot, params.with_(base=np.zeros(6)), obs.q_rad)
     P, Q = fr.p0, obs.x_W_mm
     pc, qc = P.mean(0), Q.mean(0)

@@ -6,6 +6,8 @@ known, so base and tool are found from scratch and the tool's azimuth about the 
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from rodlab.core.units import TRACKER_NOISE_MM
@@ -15,6 +17,7 @@ from .estimate import FitOptions
 from .identify import Observations, identify
 from .result import CalibrationResult
 from .rod import Rod
+from .crossval import cross_validate_identify
 
 __all__ = ["points_rod", "points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
 
@@ -33,7 +36,6 @@ def points_observations(pts: PointSet) -> Observations:
 def stated_noise_mm(pts: PointSet, noise_mm: float | None) -> tuple[PointSet, float]:
     """The points and the noise level to judge them by: a level the user states (``noise_mm``, replacing any
     per-point columns); else the rms of the file's per-point uncertainties; else :data:`TRACKER_NOISE_MM`."""
-    from dataclasses import replace
     if noise_mm:
         return replace(pts, sigma_mm=None), float(noise_mm)
     if pts.sigma_mm is not None:
@@ -56,7 +58,6 @@ def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: di
                           robust: bool = False, harmonics=()):
     """The predicted accuracy of :func:`identify_points` with these options without a validation set: k-fold
     cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
-    from .crossval import cross_validate_identify
     options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust, find_tool=True,
                          harmonics=tuple(harmonics))
     return cross_validate_identify(robot, points_observations(pts), points_rod(pts), options=options,

@@ -48,6 +48,7 @@ from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
 from .predict import VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
 from .unmodelled import campaign_offsets, validation_floor_offsets
+from .errors import CalibrationError
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
@@ -301,7 +302,6 @@ def compliance_draws(reference: RodCompliance, calc: RodCompliance | None, metho
             files[m] = np.zeros((D, 18))
         elif m is Method.CALC:
             if calc is None:
-                from .errors import CalibrationError
                 raise CalibrationError("method calc needs the closed-form compliance file", key="methods")
             files[m] = np.tile(np.concatenate([calc.C_F.ravel(), calc.C_g.ravel()]), (D, 1))
         elif m is Method.FEA:

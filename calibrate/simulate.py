@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.core.compliance import RodCompliance
+from rodlab.core.compliance import RodCompliance, write_compliance
 from rodlab.core.fileio import atomic_write_json, atomic_write_text
 from rodlab.core.frames import matrix_to_pose, rotation_from_abc
 
@@ -23,8 +23,10 @@ from .campaign import Fixture
 from .errors import CalibrationError
 from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, deflection_offsets
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
-from .ik import random_configurations, solve_ik_groups
+from .ik import random_configurations, solve_ik_groups, solve_ik_positions
 from .kinematics import ModelParams, ball_positions
+from .probe import simulated_probe_text
+from .device import write_device
 
 __all__ = ["CampaignSpec", "simulate_campaign", "random_truth", "standard_base", "fixture_layout", "standard_fixture",
            "RobotFloor", "robot_floor"]
@@ -251,13 +253,10 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                                                       "positions": recorded,
                                                       "contact_force_N": _force_at_datum(device).tolist()})
     if device is not None:
-        from .device import write_device
-        from .probe import simulated_probe_text
         write_device(device, out / "multical.device.json")
         atomic_write_text(out / "multical.probe.csv", simulated_probe_text(Ts, device, spec.probe_accuracy_mm,
                                                                            np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
-    from rodlab.core.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
     t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s)
     atomic_write_json(out / "truth.json", t)
@@ -317,7 +316,6 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     """The operator aligns the ball on the device's readings, so the rod's deflection under its weight and the
     contact force is taken out of the alignment: each configuration moved (IK from itself) until the deflected
     ball is where the undeflected one was; one that IK cannot move keeps its place."""
-    from .ik import solve_ik_positions
     keys = list(reached)
     q = np.concatenate([reached[j] for j in keys])
     F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])

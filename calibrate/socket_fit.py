@@ -34,6 +34,7 @@ from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fi
 from .residual_test import P_MISSING, ResidualTest
 from .socket_check import socket_centres
 from .sockets import SocketReadings
+from .trust import trust_cautions, trust_warnings
 
 __all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE", "SCALE_HELD"]
 
@@ -274,7 +275,6 @@ def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
 
 def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, sol, C) -> SocketFit:
     """The calibration result (values, sigmas, status, residuals, trust) and the centres."""
-    from .trust import trust_cautions, trust_warnings
     r = prob.readings
     p = apply(start, infos, x)
     res_w = sol.fun
@@ -324,7 +324,7 @@ def _stated_noise(r: SocketReadings) -> float:
 
 
 def _residual_test(chi2: float, dof: int, r: SocketReadings) -> ResidualTest:
-    from scipy.special import chdtrc
+    from scipy.special import chdtrc                                    # heavy (scipy.special, ~0.15 s)
     p = float(chdtrc(dof, chi2))
     return ResidualTest(chi2, dof, chi2 / dof, p, _stated_noise(r), (), p < P_MISSING, clamping=False,
                         source="ball-bar length" if r.ball_bar else "seat")

@@ -18,6 +18,7 @@ from .compensations.rod_deflection import flange_loads
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations
 from .rod_slip import slip_directions
+from .simulate import robot_floor
 
 __all__ = ["cached_floor_draws", "campaign_offsets", "validation_floor_offsets"]
 
@@ -27,7 +28,6 @@ _FLOORS: dict = {}
 def cached_floor_draws(robot, floor_mm: float, draws: int, seed: int = 0) -> list:
     """:func:`calibrate.simulate.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
     design (one robot and floor at a time)."""
-    from .simulate import robot_floor
     key = (repr(robot), float(floor_mm), int(draws), int(seed))
     if key not in _FLOORS:
         _FLOORS.clear()

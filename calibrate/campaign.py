@@ -23,6 +23,7 @@ from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
+from .rod import Rod
 
 __all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "FIXTURE_FORMATS"]
@@ -105,6 +106,12 @@ class PointSet:
     temp_C: float | None = None
     path: Path | None = None
     sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
+
+    @property
+    def rod(self) -> Rod:
+        """The instrument's rigid probe as a calibration takes it: the file's ``tool_mm`` and its payload
+        (``rod_mass_kg``, ``rod_com_T_mm``)."""
+        return Rod.rigid(self.tool_mm, self.rod_mass_kg, self.rod_com_T_mm)
 
 def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)

@@ -24,13 +24,12 @@ __all__ = ["points_rod", "points_observations", "identify_points", "stated_noise
 
 def points_rod(pts: PointSet) -> Rod:
     """The instrument's rigid probe: the file's tool and payload."""
-    return Rod.rigid(pts.tool_mm, pts.rod_mass_kg, pts.rod_com_T_mm)
+    return pts.rod
 
 
 def points_observations(pts: PointSet) -> Observations:
     """The identification's observations of instrument points (no contact force, the file's payload)."""
-    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
-                        pts.rod_com_T_mm, sigma_mm=pts.sigma_mm)
+    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod, sigma_mm=pts.sigma_mm)
 
 
 def stated_noise_mm(pts: PointSet, noise_mm: float | None) -> tuple[PointSet, float]:

@@ -46,7 +46,8 @@ from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
-from .predict import VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .predict import VALIDATION_ROD, AccuracySummary, BudgetShares, Priors
+from .rod import Rod
 from .unmodelled import campaign_offsets, validation_floor_offsets
 from .errors import CalibrationError
 
@@ -166,14 +167,14 @@ def _kin_infos(n: int) -> list[ParamInfo]:
     return [i for i in catalogue(n) if i.kind in KINEMATIC_KINDS]
 
 
-def _campaign_observations(robot, model: ModelParams, plan_q: dict, fixture: Fixture, rod: RodCompliance):
+def _campaign_observations(robot, model: ModelParams, plan_q: dict, fixture: Fixture, rod: Rod):
     keys = sorted(plan_q)
     q = np.concatenate([plan_q[j] for j in keys])
     group = np.concatenate([np.full(len(plan_q[j]), j) for j in keys])
     Ts = {int(j): fixture.transform(j) for j in keys}
     F = np.array([Ts[int(j)][:3, :3] @ fixture.force_D_N for j in group])
-    fr, _ = ball_positions(robot, model, q, rod.mass_kg, rod.com_T_mm, F)
-    return Observations(q, fr.pW, F, rod.mass_kg, np.asarray(rod.com_T_mm, float), group, None, Ts)
+    fr, _ = ball_positions(robot, model, q, rod, F)
+    return Observations(q, fr.pW, F, rod, group, None, Ts)
 
 
 def linearisation_model(robot, tool_mm, base, priors: Priors) -> ModelParams:
@@ -188,20 +189,19 @@ def linear_campaign(robot, plan_q: dict, fixture: Fixture, base, reference: RodC
     ``reference`` (its mass, centre of mass and tool) on the nominal robot; raises
     :class:`~calibrate.errors.CalibrationError` where :func:`identify` would (unidentifiable parameters)."""
     model = linearisation_model(robot, reference.tool_mm, base, priors)
-    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
+    obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
     positions = [j for j in sorted(set(obs.group.tolist())) if not np.allclose(obs.fixture_T[j], np.eye(4))]
     infos = catalogue(robot.n, positions)
     free, _ = free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
                                positions, False)
-    fr, tau = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    fr, tau = obs.balls(robot, model)
     free_infos = [infos[k] for k in free]
     J = position_jacobian(fr, tau, free_infos, model.base, obs.group).reshape(-1, len(free))
     kin = _kin_infos(robot.n)
     J_kin = position_jacobian(fr, tau, kin, model.base, obs.group).reshape(-1, len(kin))
     names = [i.name for i in kin]
     kin_of_free = np.array([names.index(i.name) if i.name in names else -1 for i in free_infos])
-    B = deflection_basis(robot, model, obs.q_rad, obs.force_W_N, reference.mass_kg,
-                         reference.com_T_mm).reshape(-1, 18)
+    B = deflection_basis(robot, model, obs.q_rad, obs.force_W_N, obs.rod).reshape(-1, 18)
     Sigma = noise_covariance(obs, priors.device_noise_mm, priors.fixture_sigma)
     scale = np.array([PRIOR_SCALE[i.unit] * INTERNAL_SCALE[i.unit] for i in free_infos])
     return LinearCampaign(J, J_kin, kin_of_free, Sigma, B, scale, tuple(i.name for i in free_infos),
@@ -236,9 +236,8 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     M, D = int(priors.validation_points), int(draws)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (D * M, robot.n))
-    mass, com = VALIDATION_MASS
-    model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
-    fr, tau = ball_positions(robot, model, vq, mass, np.asarray(com, float))
+    model = linearisation_model(robot, VALIDATION_ROD.tool_mm, np.zeros(6), priors)
+    fr, tau = ball_positions(robot, model, vq, VALIDATION_ROD)
     kin = _kin_infos(robot.n)
     Jv = position_jacobian(fr, tau, kin, model.base).reshape(D, M * 3, len(kin))
     bt = [ParamInfo(f"base_{k}", "base_t", i, "mm") for i, k in enumerate("xyz")]
@@ -366,7 +365,7 @@ def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, b
     if not (priors.rod_slip or priors.robot_floor_mm > 0):
         return np.zeros((true.shape[0], lc.J.shape[0]))
     model = linearisation_model(robot, reference.tool_mm, base, priors)
-    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
+    obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
     return campaign_offsets(robot, model, obs, priors, true, seed)
 
 
@@ -378,10 +377,9 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
     key = (repr(robot), float(priors.robot_floor_mm), tuple(priors.joint_compliance), int(seed),
            hash(vd.q_rad.tobytes()))
     if key not in _VFLOOR:                            # the same for every design: kept for the next one
-        mass, com = VALIDATION_MASS
-        model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
+        model = linearisation_model(robot, VALIDATION_ROD.tool_mm, np.zeros(6), priors)
         _VFLOOR.clear()
-        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm,
+        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, VALIDATION_ROD, vd.Q, priors.robot_floor_mm,
                                                 seed)
     return _VFLOOR[key]
 

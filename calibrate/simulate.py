@@ -25,6 +25,7 @@ from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, de
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
 from .ik import random_configurations, solve_ik_groups, solve_ik_positions
 from .kinematics import ModelParams, ball_positions
+from .rod import Rod
 from .probe import simulated_probe_text
 from .device import write_device
 
@@ -200,7 +201,7 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
         seeds = random_configurations(robot, rng, len(short) * m)
         targets = {j: Ts[j][:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (m, 3)) @ Ts[j][:3, :3].T
                    for j in short}
-        for j, q in solve_ik_groups(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, forces).items():
+        for j, q in solve_ik_groups(robot, truth, targets, seeds, rod, forces).items():
             got[j] += list(q)
     for j in Ts:
         if len(got[j]) < k:
@@ -302,7 +303,7 @@ def _spring_loaded(robot, truth, rod, rod_true, qt, T, device, Fm):
     """Ball centres in {W} (true robot, true rod deflected) and the contact forces in {W}; with a device's
     springs the force is the one at each point's readings (one update: a spring rate changes it by ~1 %)."""
     def centres(F):
-        fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F)
+        fr, _ = ball_positions(robot, truth, qt, rod, F)
         return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     fr, pW = centres(Fm)
     if device is not None and device.has_springs:
@@ -319,9 +320,8 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     keys = list(reached)
     q = np.concatenate([reached[j] for j in keys])
     F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])
-    fr, _ = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
-    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod.mass_kg,
-                             rod.com_T_mm, F)
+    fr, _ = ball_positions(robot, truth, q, rod, F)
+    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod, F)
     q = np.where(res.ok[:, None], res.q_rad, q)
     edges = np.cumsum([0] + [len(reached[j]) for j in keys])
     return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
@@ -331,6 +331,7 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations,
               ) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
+    rod = Rod.of(rod)                                   # the file the calibrator is given: tool, weight, compliance
     forces = {j: Ts[j][:3, :3] @ _force_at_datum(device) for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
     if device is not None:
@@ -349,7 +350,7 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations,
         t = float(times[-1])
         temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
         for c in compensations:
-            grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod.mass_kg, rod.com_T_mm))
+            grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod))
             xD = xD + grow_W @ Tinv[:3, :3].T
         for eff, p in active:
             grow = eff.reading_offset_W(pW, times, fr.t_W0, p)
@@ -406,7 +407,7 @@ def _write_validation(path: Path, robot, truth, spec, rng, active) -> None:
     vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
-    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), 0.3, [0, 0, -60])
+    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), Rod.rigid(vt, 0.3, [0, 0, -60]))
     vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
     lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
              ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]

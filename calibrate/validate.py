@@ -51,7 +51,7 @@ def validate(robot, model: ModelParams, pts: PointSet) -> tuple[ErrorStats, np.n
 
     def frames(z):
         p = apply(start, infos, z)
-        return p, ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, None)
+        return p, ball_positions(robot, p, obs.q_rad, obs.rod)
 
     def fun(z):
         _, (fr, _) = frames(z)

@@ -89,7 +89,7 @@ def test_rod_is_the_compliance_files_rod():
     robot = resolve_robot("tx90")
     p = ModelParams.nominal(robot, rc.tool_mm)
     q = np.deg2rad([[0, 10, 90, 0, 30, 0], [40, -20, 100, 30, -40, 60]])
-    at = Observations(q, np.zeros((2, 3)), np.tile(F, (2, 1)), rc.mass_kg, rc.com_T_mm)
+    at = Observations(q, np.zeros((2, 3)), np.tile(F, (2, 1)), Rod.of(rc))
     np.testing.assert_array_equal(RodDeflection.of(rc).offsets(robot, p, at),
                                   deflection_offsets(robot, p, q, at.force_W_N, rc))
     none = RodDeflection.of(RodCompliance.none_like(rc))

@@ -22,7 +22,7 @@ def test_deflection_basis_is_the_offsets_linear_map(rod4_plan):
     q = np.concatenate(list(plan.values()))
     F = rng.normal(0, 2.0, (q.shape[0], 3))
     p = ModelParams.nominal(robot, rod.tool_mm, base=standard_base())
-    B = deflection_basis(robot, p, q, F, rod.mass_kg, rod.com_T_mm)
+    B = deflection_basis(robot, p, q, F, rod)
     for _ in range(3):
         G = rng.normal(0, 0.3, (3, 3))
         C_F, C_g = G @ G.T, rng.normal(0, 0.1, (3, 3))                 # C_F symmetric (Maxwell-Betti)

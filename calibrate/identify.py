@@ -29,7 +29,8 @@ from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
-from .estimate import FitOptions, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
+from .estimate import (FitOptions, Selection, check_names, parameter_value, physical_bounds, pinned_vector, select_free,
+                       solve)
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .result import CalibrationResult
 from .rod import Rod
@@ -94,8 +95,7 @@ def _problem(robot, obs: Observations, rod: Rod, compensations, options: FitOpti
     if options.harmonics or start.h.any():
         start = _harmonic_start(start, obs.q_rad, options.harmonics)
     x = pinned_vector(infos, start, pinned)
-    free, reasons = free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
-                                    options.fix_unidentifiable)
+    free, reasons = free_parameters(robot, obs, apply(start, infos, x), Selection.of(infos, tool_mm, positions, options))
     lower, upper = physical_bounds(infos, start)
     # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
     # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
@@ -147,19 +147,31 @@ def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool)
     return start, tool_mm
 
 
-def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, freed, positions,
-                     fix_unidentifiable: bool) -> tuple[list, dict]:
-    """The parameters to fit and why the others are held; refuses a data set that cannot identify what it
-    must (unless ``fix_unidentifiable``), naming the parameters and the remedy."""
+def free_parameters(robot, obs: Observations, model: ModelParams, sel: Selection) -> tuple[list, dict]:
+    """The parameters to fit (indices into ``sel.infos``) and why the others are held, from the Jacobian of the
+    model the fit starts from (``model``: pins applied) at the points ``obs``; refuses a data set that cannot
+    identify what it must (unless ``sel.fix_unidentifiable``), naming the parameters and the remedy."""
+    fr, tau = obs.balls(robot, model)
+    J0 = position_jacobian(fr, tau, sel.infos, model.base, obs.group)
+    free, reasons = select_free(robot, sel, J0)
+    _refuse_deficient(obs, _deficient(robot, sel, reasons), sel.fix_unidentifiable)
     N = obs.x_W_mm.shape[0]
-    fr, tau = obs.balls(robot, apply(start, infos, x))
-    J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
-    free, reasons = select_free(robot, tool_mm, infos, J0, pinned, freed, positions)
-    structural = structural_fixed(robot, tool_mm, positions)
-    structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in freed else None
+    if len(free) > 3 * N:
+        raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
+    return free, reasons
+
+
+def _deficient(robot, sel: Selection, reasons: dict) -> dict:
+    """The held parameters the data could not separate (beyond the structural rules), with the reason."""
+    structural = structural_fixed(robot, sel.tool_mm, sel.positions)
+    structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in sel.freed else None
     structural = {k: v for k, v in structural.items() if v is not None}
-    deficient = {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined",
-                                                                                                   "has no"))}
+    return {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined", "has no"))}
+
+
+def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bool) -> None:
+    """A data set that cannot identify what it must is refused with the parameters and the remedy, or (with
+    ``fix_unidentifiable``) those parameters are held at nominal and logged."""
     if deficient and fix_unidentifiable:
         log.info("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
     elif deficient:
@@ -170,9 +182,6 @@ def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, 
             f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
             f"parameter(s): {lines}. {more}, hold them with --pin NAME=VALUE, or hold all of them at nominal with "
             f"--fix-unidentifiable", key="campaign" if obs.group is not None else "points")
-    if len(free) > 3 * N:
-        raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
-    return free, reasons
 
 
 @dataclass

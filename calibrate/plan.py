@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .estimate import select_free
+from .estimate import Selection, select_free
 from .errors import CalibrationError
 from .ik import random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
@@ -67,7 +67,7 @@ def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed:
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod)
     Jall = position_jacobian(fr, tau, infos, p.base)
-    free, _ = select_free(robot, rod.tool_mm, infos, Jall, {}, set())
+    free, _ = select_free(robot, Selection(infos, rod.tool_mm), Jall)
     Jall = Jall[:, :, free]
     chosen = {j: list(range(k)) for j in cands}
     offsets = {j: int(np.sum([len(cands[i]) for i in cands if i < j])) for j in cands}

@@ -41,11 +41,12 @@ from rodlab.core.enums import Method
 
 from .campaign import Fixture
 from .compensations import deflection_basis
+from .estimate import Selection
 from .identify import free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
-from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
+from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue
 from .predict import VALIDATION_ROD, AccuracySummary, BudgetShares, Priors
 from .rod import Rod
 from .unmodelled import campaign_offsets, validation_floor_offsets
@@ -192,8 +193,8 @@ def linear_campaign(robot, plan_q: dict, fixture: Fixture, base, reference: RodC
     obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
     positions = [j for j in sorted(set(obs.group.tolist())) if not np.allclose(obs.fixture_T[j], np.eye(4))]
     infos = catalogue(robot.n, positions)
-    free, _ = free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
-                               positions, False)
+    free, _ = free_parameters(robot, obs, apply(model, infos, np.zeros(len(infos))),
+                              Selection(infos, reference.tool_mm, positions))
     fr, tau = obs.balls(robot, model)
     free_infos = [infos[k] for k in free]
     J = position_jacobian(fr, tau, free_infos, model.base, obs.group).reshape(-1, len(free))

@@ -26,7 +26,7 @@ import numpy as np
 
 from .covariance import correlation, parameter_covariance
 from .errors import CalibrationError
-from .estimate import check_names, parameter_value, pinned_vector, select_free, solve
+from .estimate import Selection, check_names, parameter_value, pinned_vector, select_free, solve
 from .result import CalibrationResult
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -177,8 +177,8 @@ def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, free
     Jp = _off_centres(J, len(infos))
     rules = _rule_held(robot, prob, pinned)
     rules |= _negligible(infos, Jp, set(rules) | set(pinned) | freed)
-    free, reasons = select_free(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
-                            freed | {"tool_y"})
+    free, reasons = select_free(robot, Selection(infos, start.tool, (), {nm: 0.0 for nm in rules} | dict(pinned),
+                                                freed | {"tool_y"}), Jp)
     reasons |= rules
     structural = set(structural_fixed(robot, start.tool)) | {f"dtheta_{robot.n}"} | set(rules)
     deficient = {nm: why for nm, why in reasons.items()

@@ -173,12 +173,13 @@ def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def solve(fun, jac, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, robust: bool, f_scale: float, max_nfev: int):
-    """One least-squares pass. Without a robust loss, MINPACK's Levenberg-Marquardt runs first (several times
-    faster than the bounded trust-region solver); only if its solution leaves the physical bounds is the
-    bounded problem solved, from the clipped solution."""
+def solve(fun, jac, z0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], robust: bool, f_scale: float, max_nfev: int):
+    """One least-squares pass from ``z0`` within ``bounds`` = (lower, upper). Without a robust loss, MINPACK's
+    Levenberg-Marquardt runs first (several times faster than the bounded trust-region solver); only if its
+    solution leaves the physical bounds is the bounded problem solved, from the clipped solution."""
     from scipy.optimize import least_squares                            # heavy (scipy.optimize, ~0.3 s)
 
+    lb, ub = bounds
     tol = dict(xtol=1e-12, ftol=1e-12, gtol=1e-12)
     bounded = bool(np.isfinite(lb).any() or np.isfinite(ub).any())
     if not robust:

@@ -199,10 +199,25 @@ class _Compensated:
     free: list
 
 
-def _residual_functions(robot, start, infos, x, free, obs, target, prior, x0, noise_est):
+@dataclass
+class _Pass:
+    """One pass of the compensation loop: the internal vector ``x`` it starts from, the parameters it fits, the
+    measurements minus the current offsets in {W} [mm] (N, 3), which parameters carry a prior, the scatter [mm]."""
+
+    x: np.ndarray
+    free: list
+    target: np.ndarray
+    prior: np.ndarray
+    noise_est: float
+
+
+def _residual_functions(robot, obs: Observations, problem: _Problem, step: _Pass):
     """The pure residual and its analytic Jacobian for one pass: ball positions minus the compensated
-    measurements (fixture offsets applied), and the priors of the weak parameters scaled by the scatter."""
-    model_at = _memo_model(robot, start, infos, x, free, obs)
+    measurements (fixture offsets applied), and the priors of the weak parameters (centred on their values at
+    the start, ``problem.x``) scaled by the scatter."""
+    infos, free, target, prior, noise_est = problem.infos, step.free, step.target, step.prior, step.noise_est
+    x0 = problem.x[free]
+    model_at = _memo_model(robot, problem.start, infos, step.x, free, obs)
     scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
 
     def fun(z):
@@ -233,9 +248,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     N = obs.x_W_mm.shape[0]
     start, infos, free_all, rough = problem.start, problem.infos, problem.free, problem.rough
     lower, upper, fixture_sigma = problem.lower, problem.upper, options.fixture_sigma
-    x = problem.x.copy()
+    x = problem.x.copy()                                # priors are centred on these initial values
     prior = np.zeros(len(infos), dtype=bool)
-    x_init = x.copy()                                   # priors are centred on the initial values
     offsets = np.zeros_like(obs.x_W_mm)
     noise_est = 0.01
     res = None
@@ -244,9 +258,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     for it in range(1, options.max_compensation + 1):
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
-        fun, jac = _residual_functions(robot, start, infos, x, free, obs, target, prior, x_init[free], noise_est)
-        res = solve(fun, jac, x[free], lower[free], upper[free], options.robust, 3 * noise_est,
-                    200 * len(free))
+        fun, jac = _residual_functions(robot, obs, problem, _Pass(x, free, target, prior, noise_est))
+        res = solve(fun, jac, x[free], (lower[free], upper[free]), options.robust, 3 * noise_est, 200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
         new_off = total_offsets(compensations, robot, p, obs)
@@ -256,7 +269,7 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
         dof = max(3 * N - len(free), 1)
         noise_est = max(float(np.sqrt((r3 ** 2).sum() / dof)), 1e-6)
         # weak parameters -> prior (once), then refit
-        sig = _sigmas(robot, p, infos, free, obs, noise_est, fixture_sigma)
+        sig = _sigmas(robot, obs, p, [infos[k] for k in free], noise_est, fixture_sigma)
         weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]]
         newly = [k for k in weak if not prior[k]]
         for k in newly:
@@ -273,7 +286,7 @@ def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_si
     p = apply(start, infos, x)
     fr, tau = obs.balls(robot, p)
     resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW
-    sig, corr, cond = _sigmas(robot, p, infos, free, obs, st.noise_est, fixture_sigma, full=True)
+    sig, corr, cond = _sigmas(robot, obs, p, [infos[k] for k in free], st.noise_est, fixture_sigma, full=True)
     values, sigma, status = {}, {}, {}
     for k, info in enumerate(infos):
         values[info.name] = parameter_value(p, info, x[k])
@@ -318,10 +331,11 @@ def _fixture_shift(infos, x, obs) -> np.ndarray:
     return shift
 
 
-def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
-    """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
+def _sigmas(robot, obs, p, free_infos: list, noise, fixture_sigma, full=False):
+    """Sandwich standard errors (internal units) of the parameters ``free_infos`` with per-position correlated
+    fixture-pose uncertainty; ``full``: also their correlation matrix and the Jacobian's condition number."""
     fr, tau = obs.balls(robot, p)
-    J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+    J = position_jacobian(fr, tau, free_infos, p.base, obs.group).reshape(-1, len(free_infos))
     S = noise_covariance(obs, noise, fixture_sigma)
     C = parameter_covariance(J)                        # (J^T J)^-1, inf where the data see nothing
     JtJ_inv = np.nan_to_num(C, nan=0.0, posinf=0.0)

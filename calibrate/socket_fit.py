@@ -249,8 +249,8 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     x0 = x.copy()
     for _ in range(max_passes):
         fun, jac = _functions(robot, start, infos, x, free, prob, prior, x0[free])
-        sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), np.full(len(free) + C.size, -np.inf),
-                     np.full(len(free) + C.size, np.inf), robust, 3.0, 200 * (len(free) + C.size))
+        unbounded = (np.full(len(free) + C.size, -np.inf), np.full(len(free) + C.size, np.inf))
+        sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), unbounded, robust, 3.0, 200 * (len(free) + C.size))
         x[free], C = sol.x[:len(free)], sol.x[len(free):].reshape(-1, 3)
         reduced = float(sol.fun @ sol.fun) / max(sol.fun.size - sol.x.size, 1)
         sig = np.sqrt(np.diag(_covariance(sol.jac, reduced)))[:len(free)]

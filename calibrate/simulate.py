@@ -243,8 +243,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         rod_true = m.true_rod(rod_true, p)
     truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale).with_(base=standard_base())
     wp, Ts = fixture_layout(spec.positions, rng)
-    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s,
-                         device)
+    world = _World(truth, Rod.of(rod), rod_true, Ts, active, tuple(compensations), temp_K_per_s, device)
+    readings = _readings(robot, world, spec, rng)
     xD, corrupted = _corrupt(readings, spec, active)
     readings = replace(readings, xD=xD)
     out.mkdir(parents=True, exist_ok=True)             # after every check and the reachability of the poses
@@ -259,9 +259,27 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                                                                            np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
     write_compliance(rod, out / "rod.compliance.json")
-    t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s)
+    t = _truth_record(robot, world, spec, corrupted)
     atomic_write_json(out / "truth.json", t)
     return t
+
+
+@dataclass(frozen=True)
+class _World:
+    """What the simulated campaign really is (the calibrator sees it only through the readings): the true robot
+    model, the rod the calibrator is given (its tool, weight and compliance), the rod as it really is (its
+    compliance deflects the ball), the true clamping poses {j: 4 x 4 in {W}}, the active effects [(effect,
+    parameters)], the compensations' true effects, the room's warming rate [K/s] and the device as built (None:
+    the paper's, constant contact force)."""
+
+    truth: ModelParams
+    rod: Rod
+    rod_true: RodCompliance
+    Ts: dict
+    active: list
+    compensations: tuple = ()
+    temp_K_per_s: float = 0.0
+    device: object = None
 
 
 @dataclass
@@ -299,9 +317,12 @@ def _device_noise(rng, sigma_mm: float, m: int, device) -> np.ndarray:
     return n if device is None else device.positions(device.zero_mm + n)
 
 
-def _spring_loaded(robot, truth, rod, rod_true, qt, T, device, Fm):
-    """Ball centres in {W} (true robot, true rod deflected) and the contact forces in {W}; with a device's
-    springs the force is the one at each point's readings (one update: a spring rate changes it by ~1 %)."""
+def _spring_loaded(robot, world: _World, qt, T, Fm):
+    """Ball centres in {W} (true robot, true rod deflected) at the true angles ``qt`` of a clamping position of
+    pose ``T`` under the contact forces ``Fm`` in {W}; with a device's springs the force is the one at each point's
+    readings (one update: a spring rate changes it by ~1 %)."""
+    truth, rod, rod_true, device = world.truth, world.rod, world.rod_true, world.device
+
     def centres(F):
         fr, _ = ball_positions(robot, truth, qt, rod, F)
         return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
@@ -327,11 +348,10 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
 
 
-def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s, device=None
-              ) -> _Readings:
+def _readings(robot, world: _World, spec, rng) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
-    rod = Rod.of(rod)                                   # the file the calibrator is given: tool, weight, compliance
+    truth, rod, Ts, active, device = world.truth, world.rod, world.Ts, world.active, world.device
     forces = {j: Ts[j][:3, :3] @ _force_at_datum(device) for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
     if device is not None:
@@ -343,13 +363,13 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations,
         qt = _true_angles(q, active)                                   # the angles the joints really take
         m = len(q)
         Fm = np.broadcast_to(forces[j], (m, 3))
-        fr, pW = _spring_loaded(robot, truth, rod, rod_true, qt, Ts[j], device, Fm)
+        fr, pW = _spring_loaded(robot, world, qt, Ts[j], Fm)
         Tinv = np.linalg.inv(Ts[j])
         xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + _device_noise(rng, spec.device_noise_mm, m, device)
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
-        temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
-        for c in compensations:
+        temps = np.round(22.0 + world.temp_K_per_s * np.round(times), 2)
+        for c in world.compensations:
             grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod))
             xD = xD + grow_W @ Tinv[:3, :3].T
         for eff, p in active:
@@ -427,8 +447,9 @@ def _check_compensations(compensations) -> None:
                                    "true rod as rod_true instead of a rod_deflection entry", key="compensations")
 
 
-def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s) -> dict:
+def _truth_record(robot, world: _World, spec, corrupted: dict) -> dict:
     """``truth.json``: the true model, fixture poses and every simulated effect with its parameters."""
+    truth, rod, rod_true, Ts, active = world.truth, world.rod, world.rod_true, world.Ts, world.active
     t = {"format": "rodlab.truth.campaign/1", "seed": spec.seed, "spec": spec.__dict__,
          "true_base_pose_W": truth.base.tolist(), "true_tool_mm": truth.tool.tolist(),
          "dtheta_deg": np.rad2deg(truth.theta_offset - np.deg2rad(robot.theta_offset_deg)).tolist(),
@@ -441,8 +462,8 @@ def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, comp
         for k, v in m.truth(p).items():
             t[k] = {**t[k], **v} if isinstance(v, dict) and isinstance(t.get(k), dict) else v
     simulated = {k: v for c in COMPENSATIONS.values() for k, v in c.truth_of(None).items()}
-    simulated.update({k: v for c in compensations for k, v in type(c).truth_of(c).items()})
-    t.update({**simulated, "temp_K_per_s": float(temp_K_per_s),
+    simulated.update({k: v for c in world.compensations for k, v in type(c).truth_of(c).items()})
+    t.update({**simulated, "temp_K_per_s": float(world.temp_K_per_s),
               "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0,
               "effects": [{"effect": str(m.effect), **p} for m, p in active], **corrupted})
     return t

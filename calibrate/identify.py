@@ -38,7 +38,7 @@ from .trust import trust_cautions, trust_warnings
 from .residual_test import residual_test
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
-           "register_base_and_tool", "noise_covariance", "free_parameters"]
+           "register_base_and_tool", "noise_covariance", "free_parameters", "harmonic_start"]
 
 log = logging.getLogger(__name__)
 
@@ -93,7 +93,7 @@ def _problem(robot, obs: Observations, rod: Rod, compensations, options: FitOpti
     check_names([i.name for i in infos], pinned, freed)
     start, tool_mm = _starting_model(robot, obs, rod.tool_mm, options.initial, options.find_tool)
     if options.harmonics or start.h.any():
-        start = _harmonic_start(start, obs.q_rad, options.harmonics)
+        start = harmonic_start(start, obs.q_rad, options.harmonics)
     x = pinned_vector(infos, start, pinned)
     free, reasons = free_parameters(robot, obs, apply(start, infos, x), Selection.of(infos, tool_mm, positions, options))
     lower, upper = physical_bounds(infos, start)
@@ -119,9 +119,10 @@ def _check_harmonics(harmonics, n: int) -> None:
                                f"1..{n}, e.g. 1,4")
 
 
-def _harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelParams:
-    """The start model with the periodic terms of ``harmonics`` centred on these readings; an ``initial`` model's
-    terms keep their effect (the change of their means moves into the joint offsets)."""
+def harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelParams:
+    """The start model with the periodic terms of ``harmonics`` (joints, 1-based) centred on the readings ``q_rad``
+    (N, n) [rad]; an ``initial`` model's terms keep their effect (the change of their means moves into the joint
+    offsets), and an initial model with terms of joints not in ``harmonics`` is refused (they would be dropped)."""
     carried = {int(j) + 1 for j in np.nonzero(start.h.any(axis=1))[0]} - set(harmonics)
     if carried:
         raise CalibrationError(f"the initial model has periodic errors of joints {sorted(carried)} that would be "

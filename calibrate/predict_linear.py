@@ -54,7 +54,7 @@ from .errors import CalibrationError
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
-           "KINEMATIC_KINDS"]
+           "KINEMATIC_KINDS", "Draws", "random_parts", "exact_mean_square"]
 
 #: the parameters the validation keeps from the identification (base and tool are refitted)
 KINEMATIC_KINDS = ("dtheta", "a", "alpha", "d", "beta", "c")
@@ -88,6 +88,13 @@ class LinearCampaign:
                              f"{self.Sigma.shape}, B {self.B.shape}")
         if self.kin_of_free.shape != (P,) or self.prior_scale.shape != (P,):
             raise ValueError(f"kin_of_free / prior_scale must have shape ({P},)")
+
+    def kinematic_map(self, K: int) -> np.ndarray:
+        """(K, P) ``E``: picks the identified kinematic parameters (of the ``K``) out of the free ones."""
+        E = np.zeros((K, self.J.shape[1]))
+        k = np.nonzero(self.kin_of_free >= 0)[0]
+        E[self.kin_of_free[k], k] = 1.0
+        return E
 
     @property
     def is_c(self) -> np.ndarray:
@@ -324,16 +331,20 @@ class LinearPrediction:
 
 
 @dataclass(frozen=True)
-class _Draws:
-    """The random parts of the draws: the truth's errors xi (D, K) [internal units], the campaign noise
-    eps (D, 3N) [mm] and the validation noise n (D, 3M) [mm], projected off base and tool."""
+class Draws:
+    """The random parts of the draws (:func:`random_parts`): the truth's errors xi (D, K) [internal units], the
+    campaign noise eps (D, 3N) [mm] and the validation noise Pn (D, 3M) [mm], projected off base and tool."""
 
     xi: np.ndarray
     eps: np.ndarray
     Pn: np.ndarray
 
 
-def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Priors, seed: int) -> _Draws:
+def random_parts(lc: LinearCampaign, vd: ValidationDraws, prior: tuple, priors: Priors, seed: int) -> Draws:
+    """The draws' random parts (:class:`Draws`) from the generator ``[seed, 3]``: the truth's errors from
+    ``prior`` = (mean, sd) (:func:`robot_prior`; a joint compliance uniform, the rest Gaussian), the campaign
+    noise with the covariance ``lc.Sigma`` and the validation scatter of ``priors``."""
+    mean, sd = prior
     rng = np.random.default_rng([seed, 3])
     D = vd.PJ.shape[0]
     is_c = (mean > 0)
@@ -343,7 +354,7 @@ def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Pri
     eps = rng.standard_normal((D, L.shape[0])) @ L.T
     n = _validation_sd(priors, vd) * rng.standard_normal(vd.PJ.shape[:2])
     Pn = n - _mv(vd.Q, _mv(np.swapaxes(vd.Q, 1, 2), n))
-    return _Draws(xi, eps, Pn)
+    return Draws(xi, eps, Pn)
 
 
 def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
@@ -388,22 +399,19 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
 _VFLOOR: dict = {}
 
 
-def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
-    """(K, P): the identified kinematic parameters from the free ones."""
-    E = np.zeros((K, lc.J.shape[1]))
-    k = np.nonzero(lc.kin_of_free >= 0)[0]
-    E[lc.kin_of_free[k], k] = 1.0
-    return E
+def exact_mean_square(lc: LinearCampaign, vd: ValidationDraws, A: np.ndarray, dC: np.ndarray, prior: tuple,
+                      extra: np.ndarray | None = None, val_extra: np.ndarray | None = None) -> float:
+    """Mean-square validation error [mm^2] (without the validation noise) over the draws' compliances,
+    regularisations and validation sets, the Gaussian parts (campaign noise, the truth's spread) by their
+    covariance: ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``, ``vd.W``).
 
-
-def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None, val_extra=None
-              ) -> float:
-    """Mean-square validation error [mm^2] over the draws' compliances, regularisations and validation sets,
-    the Gaussian parts (campaign noise, the truth's spread) by their covariance:
-    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``); the data's bias per draw is what
-    the compensation leaves, ``B vec(C_true - C_file)`` (``dC`` (D, 18)), plus ``extra`` (D, 3N) [mm] (the
-    rod's slip, the robot floor at the campaign's poses; None: none) and on validation ``val_extra`` (D, 3M)
-    [mm] (the robot floor there, projected; None: none)."""
+    A : (D, P, 3N) each draw's gains (:meth:`LinearCampaign.gains`); dC : (D, 18) what the compensation leaves of
+    each draw's compliance, ``vec(C_true - C_file)`` (the data's bias ``B dC``); prior : (mean, sd) (K,) of the
+    truth's kinematic errors (:func:`robot_prior`); extra : (D, 3N) [mm] further bias of the data (the rod's
+    slip, the robot floor at the campaign's poses; None: none); val_extra : (D, 3M) [mm] on validation (the
+    robot floor there, projected; None: none)."""
+    mean, sd = prior
+    W, E = vd.W, lc.kinematic_map(vd.PJ.shape[2])
     EA = E @ A                                                        # (D, K, 3N)
     R = EA @ lc.J_kin - np.eye(E.shape[0])
     bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
@@ -436,11 +444,10 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     vd = validation if validation is not None else cached_validation_draws(robot, priors, draws, seed)
     D, K = vd.PJ.shape[0], vd.PJ.shape[2]
     mean, sd = robot_prior(robot, priors)
-    rnd = _random_parts(lc, vd, mean, sd, priors, seed)
+    rnd = random_parts(lc, vd, (mean, sd), priors, seed)
     _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
     extra = _campaign_extra(robot, lc, plan_q, fixture, base, reference, priors, true, seed)
-    W = vd.W
-    E = _to_kin(lc, K)
+    E = lc.kinematic_map(K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
     vf = _validation_floor(robot, vd, priors, seed)
@@ -448,14 +455,14 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     ms_clean = ms_noise if vf is None else ms_noise + float(np.mean(np.sum(vf ** 2, axis=1))) / M
     y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     A_true = lc.gains(y_robot, rough=True)
-    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra, vf) + ms_noise
+    ms_true = exact_mean_square(lc, vd, A_true, np.zeros((D, 18)), (mean, sd), extra, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
         A = lc.gains(y, rough=m is not Method.NONE)
         delta = _mv(A, y) @ E.T - rnd.xi
         means, maxs, medians = _stats(_mv(vd.PJ, delta) + Pn)
-        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra, vf) + ms_noise
+        ms = exact_mean_square(lc, vd, A, dC[m], (mean, sd), extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
                                    float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,

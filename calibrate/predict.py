@@ -166,9 +166,21 @@ def _draw_truth(robot, tool_mm, base, priors: Priors, rng) -> ModelParams:
     return truth.with_(c=c, base=np.asarray(base, float))
 
 
-def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodCompliance, priors, rng):
+@dataclass(frozen=True)
+class _Setup:
+    """What every replicate of a prediction shares: the planned orientations {position: (k, n) [rad]}, the
+    fixture, the rod's (FEA) compliance file the calibrator is given and the priors."""
+
+    plan_q: dict
+    fixture: Fixture
+    reference: RodCompliance
+    priors: Priors
+
+
+def _reach(robot, truth, setup: _Setup, rng):
     """The true robot at every planned orientation, the ball within the alignment tolerance of the datum:
     (q [rad], group, datum-to-W transforms, forces in {W}) for the orientations it reached."""
+    plan_q, fixture, reference, priors = setup.plan_q, setup.fixture, setup.reference, setup.priors
     keys = sorted(plan_q)
     Ts = {j: fixture.transform(j) for j in keys}
     seeds = np.concatenate([plan_q[j] for j in keys])
@@ -205,9 +217,12 @@ class SimulatedCampaign:
         return Observations(self.q_rad, x, self.force_W_N, self.rod, self.group.copy(), None, dict(self.true_T))
 
 
-def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor=None, slip_rng=None
-              ) -> SimulatedCampaign:
-    q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
+def _campaign(robot, truth, rod_true, floor, setup: _Setup, rng, slip_rng=None) -> SimulatedCampaign:
+    """One campaign of the true robot ``truth`` (its unmodelled ``floor`` or None) with the true rod ``rod_true``:
+    the planned orientations reached, the device's readings and the fixture poses as recorded; the rod's slip
+    from ``slip_rng`` (default ``rng``)."""
+    fixture, reference, priors = setup.fixture, setup.reference, setup.priors
+    q, group, Ts, F = _reach(robot, truth, setup, rng)
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
     qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
@@ -311,7 +326,7 @@ def simulate_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: R
     truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
     r_true, rod_true = _true_rod(reference, priors, rng)
     floor = robot_floor(robot, priors.robot_floor_mm, seed)           # None at 0: the same draws as without
-    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor,
+    camp = _campaign(robot, truth, rod_true, floor, _Setup(plan_q, fixture, reference, priors), rng,
                      np.random.default_rng([seed, 46]))
     pts, pts_exact = _validation(robot, truth, priors, rng, floor)
     files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)

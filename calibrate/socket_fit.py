@@ -124,8 +124,22 @@ def _distance_blocks(C: np.ndarray, prob: _Problem, P: int):
     return (rho - prob.pair_mm) / s, J
 
 
-def _functions(robot, start, infos, x, free, prob: _Problem, prior: np.ndarray, x0: np.ndarray):
-    """Pure residual and Jacobian of ``z = [free robot parameters (internal units), centres (mm)]``."""
+@dataclass
+class _State:
+    """Where the socket fit stands: the internal parameter vector ``x``, the free parameters, which of them carry a
+    prior (bool, one per catalogue entry), the socket centres (G, 3) [mm] and the last solver result."""
+
+    x: np.ndarray
+    free: list
+    prior: np.ndarray
+    C: np.ndarray
+    sol: object = None
+
+
+def _functions(robot, start, infos, prob: _Problem, st: _State, x0: np.ndarray):
+    """Pure residual and Jacobian of ``z = [free robot parameters (internal units), centres (mm)]`` around the
+    state ``st``; the priors pull towards ``x0`` (the free parameters' start values)."""
+    x, free, prior = st.x, st.free, st.prior
     P = len(free)
     infos_free = [infos[k] for k in free]
     scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
@@ -167,12 +181,14 @@ def _rule_held(robot, prob: _Problem, pinned: dict) -> dict:
     return {nm: why for nm, why in held.items() if nm not in pinned}
 
 
-def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, freed: set, fix_unidentifiable: bool):
+def _free_parameters(robot, start, prob: _Problem, C0, sel: Selection):
     """The parameters to fit: structural rules, the rules of socket data (:func:`_rule_held`), then the rank
     analysis of the robot's columns projected off the centres' (what a centre absorbs is not information about
-    the robot)."""
-    fun, jac = _functions(robot, start, infos, np.zeros(len(infos)), list(range(len(infos))), prob,
-                          np.zeros(len(infos), bool), np.zeros(len(infos)))
+    the robot), around the centres ``C0``."""
+    infos, pinned, freed, fix_unidentifiable = sel.infos, sel.pinned, set(sel.freed), sel.fix_unidentifiable
+    P = len(infos)
+    fun, jac = _functions(robot, start, infos, prob, _State(np.zeros(P), list(range(P)), np.zeros(P, bool), C0),
+                          np.zeros(P))
     J = jac(np.concatenate([np.zeros(len(infos)), C0.ravel()]))
     Jp = _off_centres(J, len(infos))
     rules = _rule_held(robot, prob, pinned)
@@ -243,15 +259,18 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     x = pinned_vector(infos, start, pinned)
     fr, _ = ball_positions(robot, apply(start, infos, x), readings.q_rad)
     C = socket_centres(fr.pW, readings)
-    free, reasons = _free_parameters(robot, start, infos, prob, C, pinned, freed, fix_unidentifiable)
+    free, reasons = _free_parameters(robot, start, prob, C, Selection(infos, start.tool, (), pinned, freed,
+                                                                      fix_unidentifiable))
     _check_size(readings, prob, free)
     prior = np.zeros(len(infos), bool)
     x0 = x.copy()
+    st = _State(x, free, prior, C)
     for _ in range(max_passes):
-        fun, jac = _functions(robot, start, infos, x, free, prob, prior, x0[free])
+        fun, jac = _functions(robot, start, infos, prob, st, x0[free])
         unbounded = (np.full(len(free) + C.size, -np.inf), np.full(len(free) + C.size, np.inf))
         sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), unbounded, robust, 3.0, 200 * (len(free) + C.size))
         x[free], C = sol.x[:len(free)], sol.x[len(free):].reshape(-1, 3)
+        st.C, st.sol = C, sol
         reduced = float(sol.fun @ sol.fun) / max(sol.fun.size - sol.x.size, 1)
         sig = np.sqrt(np.diag(_covariance(sol.jac, reduced)))[:len(free)]
         weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]
@@ -261,7 +280,7 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
         prior[weak] = True
         log.info("socket fit: %d weakly identified parameter(s) get a prior: %s", len(weak),
                  ", ".join(infos[k].name for k in weak))
-    return _fit_result(robot, start, infos, x, free, prior, reasons, prob, sol, C)
+    return _fit_result(robot, start, infos, reasons, prob, st)
 
 
 def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
@@ -273,8 +292,9 @@ def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
                                key="sockets")
 
 
-def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, sol, C) -> SocketFit:
+def _fit_result(robot, start, infos, reasons: dict, prob: _Problem, st: _State) -> SocketFit:
     """The calibration result (values, sigmas, status, residuals, trust) and the centres."""
+    x, free, prior, sol, C = st.x, st.free, st.prior, st.sol, st.C
     r = prob.readings
     p = apply(start, infos, x)
     res_w = sol.fun

@@ -370,17 +370,6 @@ def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
     return float(np.hypot(priors.instrument_noise_mm, floor_sd))
 
 
-def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
-                    priors: Priors, true: np.ndarray, seed: int) -> np.ndarray:
-    """(D, 3N) [mm] per draw: the rod's slip and the robot floor in the campaign's data
-    (:func:`calibrate.unmodelled.campaign_offsets`)."""
-    if not (priors.rod_slip or priors.robot_floor_mm > 0):
-        return np.zeros((true.shape[0], lc.J.shape[0]))
-    model = linearisation_model(robot, reference.tool_mm, base, priors)
-    obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
-    return campaign_offsets(robot, model, obs, priors, true, seed)
-
-
 def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> np.ndarray | None:
     """(D, 3M) [mm] the robot floor on the validation points, projected (the campaign's floor of each draw,
     :func:`calibrate.unmodelled.validation_floor_offsets`); None without a floor or without the configurations."""
@@ -446,7 +435,11 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     mean, sd = robot_prior(robot, priors)
     rnd = random_parts(lc, vd, (mean, sd), priors, seed)
     _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
-    extra = _campaign_extra(robot, lc, plan_q, fixture, base, reference, priors, true, seed)
+    extra = np.zeros((D, lc.J.shape[0]))             # the rod's slip and the robot floor in the campaign's data
+    if priors.rod_slip or priors.robot_floor_mm > 0:
+        model = linearisation_model(robot, reference.tool_mm, base, priors)
+        obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
+        extra = campaign_offsets(robot, model, obs, priors, true, seed)
     E = lc.kinematic_map(K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M

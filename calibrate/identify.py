@@ -34,7 +34,6 @@ from .estimate import (FitOptions, Selection, check_names, parameter_value, phys
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .result import CalibrationResult
 from .rod import Rod
-from .trust import trust_cautions, trust_warnings
 from .residual_test import residual_test
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
@@ -65,6 +64,7 @@ def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compens
                               for j in sorted(set(options.harmonics))}
     if options.expected_noise_mm:
         out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
+    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out

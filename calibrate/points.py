@@ -17,7 +17,6 @@ from .estimate import FitOptions
 from .identify import Observations, identify
 from .result import CalibrationResult
 from .rod import Rod
-from .crossval import cross_validate_identify
 
 __all__ = ["points_rod", "points_observations", "identify_points", "stated_noise_mm", "cross_validate_points"]
 
@@ -59,5 +58,6 @@ def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: di
     cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
     options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust, find_tool=True,
                          harmonics=tuple(harmonics))
+    from .crossval import cross_validate_identify            # start-up: loaded on first use, not by `rodlab --help`
     return cross_validate_identify(robot, points_observations(pts), points_rod(pts), options=options,
                                    fit_rms_mm=fit_rms_mm)

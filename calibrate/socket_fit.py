@@ -34,7 +34,6 @@ from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fi
 from .residual_test import P_MISSING, ResidualTest
 from .socket_check import socket_centres
 from .sockets import SocketReadings
-from .trust import trust_cautions, trust_warnings
 
 __all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE", "SCALE_HELD"]
 
@@ -318,6 +317,7 @@ def _fit_result(robot, start, infos, reasons: dict, prob: _Problem, st: _State) 
                             [infos[k].name for k in free], np.zeros_like(resid_mm), bool(sol.success),
                             str(sol.message), int(sol.nfev), 1, float(np.linalg.cond(Jn)) if P else float("nan"))
     out.residual_check = _residual_test(chi2, dof, r)
+    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)     # residuals above the seat play: a caution (incomplete model)
     out.cautions = trust_cautions(out)
     keys = r.groups()

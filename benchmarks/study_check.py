@@ -56,7 +56,7 @@ def _end_to_end(folder: Path, method: str) -> float:
 
 def main() -> None:
     from rodlab.core.calc import calc_rod_compliance
-    from rodlab.calibrate import resolve_robot
+    from rodlab.calibrate import Rod, resolve_robot
     from rodlab.calibrate.plan import plan_poses
     from rodlab.calibrate.predict import Priors, run_replicate, simulate_replicate, summarise
     from rodlab.calibrate.replicate_io import write_replicate
@@ -76,7 +76,7 @@ def main() -> None:
     total = 0
     for d in _designs():
         fea, calc = compute_compliance(d, "frame"), calc_rod_compliance(d)
-        q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm)
+        q, _ = plan_poses(robot, fixture, Rod.rigid(d.tool_mm, fea.mass_kg, fea.com_T_mm))
         plan = {j: np.deg2rad(v) for j, v in q.items()}
         pri = Priors(r_rod=r_prior_of(d))
         outs = [run_replicate(robot, plan, fixture, base, fea, calc, METHODS, pri, s, budget=False)

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.core.schema import read_toml_checked
+
 from .errors import CalibrationError
 from .simulate import CampaignSpec, simulate_campaign
 
@@ -48,7 +50,6 @@ class BlindDefinitions:
 def read_blind_definitions(path) -> BlindDefinitions:
     """Blind-case definitions from ``path`` (``rodlab.blind_campaign/1``); every schema problem named at once
     (file, line, key)."""
-    from rodlab.core.schema import read_toml_checked
     data, _ = read_toml_checked(path, FORMAT_BLIND, CalibrationError)
     return BlindDefinitions(tuple(data["kinds"]), dict(data["modes"]), dict(data["magnitudes"]), dict(data["wide"]))
 

@@ -18,10 +18,12 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.errors import did_you_mean
-from rodlab.core.fileio import read_text_checked
+from rodlab.core.fileio import read_text_checked, atomic_write_json
 from rodlab.core.frames import pose_to_matrix
+from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
+from .rod import Rod
 
 __all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "FIXTURE_FORMATS"]
@@ -104,6 +106,12 @@ class PointSet:
     temp_C: float | None = None
     path: Path | None = None
     sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
+
+    @property
+    def rod(self) -> Rod:
+        """The instrument's rigid probe as a calibration takes it: the file's ``tool_mm`` and its payload
+        (``rod_mass_kg``, ``rod_com_T_mm``)."""
+        return Rod.rigid(self.tool_mm, self.rod_mass_kg, self.rod_com_T_mm)
 
 def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
@@ -211,7 +219,7 @@ def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
                     np.array(t) if "time_s" in header else None, np.array(T) if "temp_C" in header else None,
                     p, np.array(ln), readings_mm=np.array(x) if raw else None)
     if device is not None:
-        from .readings import apply_device
+        from .readings import apply_device   # cycle: readings imports Campaign and RAW_COLUMNS from here
         camp = apply_device(camp, device)
     return camp
 
@@ -225,7 +233,6 @@ def read_fixture(path) -> Fixture:
     if not isinstance(data, dict) or data.get("format") not in FIXTURE_FORMATS:
         raise CalibrationError(f"expected a JSON object with \"format\" one of {list(FIXTURE_FORMATS)}", path=p,
                                key="format")
-    from rodlab.core.schema import require_schema
     require_schema(data, data["format"], p, text, CalibrationError)       # keys, shapes, types
     poses = {int(k): np.asarray(v, dtype=float) for k, v in data["positions"].items()}
     for j, arr in poses.items():
@@ -262,7 +269,6 @@ def _pose_covariances(p: Path, data: dict, poses: dict) -> dict | None:
 
 def write_fixture(fix: Fixture, path) -> Path:
     """Write ``fix`` atomically: ``rodlab.fixture/2`` when it has pose covariances, else ``rodlab.fixture/1``."""
-    from rodlab.core.fileio import atomic_write_json
     data = {"format": FIXTURE_FORMATS[1] if fix.pose_cov else FIXTURE_FORMATS[0], "world_position": fix.world_position,
             "positions": {str(j): [round(float(v), 6) for v in pose] for j, pose in sorted(fix.poses.items())},
             "contact_force_N": [float(v) for v in fix.force_D_N]}

@@ -26,6 +26,7 @@ from .estimate import FitOptions
 from .kinematics import ModelParams
 from .observations import Observations, register_base, register_base_and_tool
 from .rod import Rod
+from .identify import identify
 
 __all__ = ["Prediction", "cross_validate", "cross_validate_identify", "fold_labels", "prediction_errors",
            "nominal_fit", "DEFAULT_FOLDS"]
@@ -195,7 +196,6 @@ def cross_validate_identify(robot, obs: Observations, rod: Rod, compensations: S
     robust loss, harmonics; what a fold cannot identify is held at nominal), the ``compensations`` modelled in
     the predictions as in the fit, freed fixture offsets refitted on their position's held-out points, and the
     nominal model's base (``options.find_tool``: and tool) fitted on the same points."""
-    from .identify import identify
     local = {nm for nm in options.freed if nm.startswith("fixture_")}
 
     def fit(train):

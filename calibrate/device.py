@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.fileio import atomic_write_json, read_text_checked
+from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
 
@@ -171,7 +172,6 @@ def read_device(path) -> Device:
         raise CalibrationError(f"not valid JSON: {e.msg}", path=p, line=e.lineno) from e
     if not isinstance(data, dict) or data.get("format") != DEVICE_FORMAT:
         raise CalibrationError(f"expected a JSON object with \"format\": \"{DEVICE_FORMAT}\"", path=p, key="format")
-    from rodlab.core.schema import require_schema
     require_schema(data, DEVICE_FORMAT, p, text, CalibrationError)
     sensors = [_sensor(p, k, s) for k, s in enumerate(data["sensors"], start=1)]
     _check_convention(p, sensors)

@@ -2,6 +2,7 @@
 readings in :mod:`.socket_fit`, pose planning in :mod:`.plan`):
 
 - :class:`FitOptions`: how a fit is asked for (pins, frees, loss, periodic terms, noise level, start);
+- :class:`Selection`: what the choice of the free parameters looks at (catalogue, tool, positions, pins, frees);
 - :func:`check_names`: ``--pin`` / ``--free`` names against the parameter catalogue;
 - :func:`pinned_vector`: the internal parameter vector at the start with the pinned values;
 - :func:`select_free`: the parameters to fit: structural rules, the user's pins and frees, then a rank analysis
@@ -24,8 +25,8 @@ from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams
 from .params import INTERNAL_SCALE, ParamInfo, structural_fixed
 
-__all__ = ["FitOptions", "C_MAX", "check_names", "pinned_vector", "select_free", "physical_bounds", "solve", "parameter_value",
-           "data_name"]
+__all__ = ["FitOptions", "Selection", "C_MAX", "check_names", "pinned_vector", "select_free", "physical_bounds", "solve",
+           "parameter_value", "data_name"]
 
 
 
@@ -69,6 +70,36 @@ class FitOptions:
             raise ValueError(f"max_compensation must be >= 1, got {self.max_compensation!r}")
 
 
+@dataclass(frozen=True)
+class Selection:
+    """What the choice of the free parameters (:func:`select_free`,
+    :func:`~rodlab.calibrate.identify.free_parameters`) looks at.
+
+    infos : the parameter catalogue (:func:`~rodlab.calibrate.params.catalogue`), in preference order
+    tool_mm : the tool vector in {n} [mm], shape=(3,) (a tool on the last axis cannot show that axis' offset)
+    positions : the clamping positions whose fixture offsets are in the catalogue (empty for instrument points)
+    pinned : {name: value in contract units} the user holds; freed : names the defaults hold that are fitted
+    fix_unidentifiable : hold what the data cannot separate at nominal (reported) instead of refusing the data
+    """
+
+    infos: list
+    tool_mm: np.ndarray
+    positions: tuple = ()
+    pinned: dict = field(default_factory=dict)
+    freed: frozenset = frozenset()
+    fix_unidentifiable: bool = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "positions", tuple(self.positions))
+        object.__setattr__(self, "pinned", dict(self.pinned))
+        object.__setattr__(self, "freed", frozenset(self.freed))
+
+    @classmethod
+    def of(cls, infos: list, tool_mm, positions, options: FitOptions) -> "Selection":
+        """The selection an identification with ``options`` asks for."""
+        return cls(infos, tool_mm, positions, options.pinned, options.freed, options.fix_unidentifiable)
+
+
 def check_names(names: list, pinned: dict, freed: set) -> None:
     """Every pinned or freed name is a parameter of the catalogue ``names``; else a one-line error with the
     nearest name (or, for a periodic term, the option that adds it)."""
@@ -91,9 +122,11 @@ def pinned_vector(infos, start: ModelParams, pinned: dict) -> np.ndarray:
     return x
 
 
-def select_free(robot, tool_mm, infos, J0: np.ndarray, pinned: dict, freed: set, positions=(), tol: float = 1e-7):
-    """Free parameters: structural rules, user pins / frees, then the preference-ordered rank analysis."""
-    fixed = structural_fixed(robot, tool_mm, positions)
+def select_free(robot, sel: Selection, J0: np.ndarray, tol: float = 1e-7) -> tuple[list, dict]:
+    """Free parameters (indices into ``sel.infos``) and why the others are held: structural rules, user pins /
+    frees, then the preference-ordered rank analysis of the Jacobian ``J0`` (..., P)."""
+    infos, pinned, freed, positions = sel.infos, sel.pinned, sel.freed, sel.positions
+    fixed = structural_fixed(robot, sel.tool_mm, positions)
     if "tool_y" in freed and f"dtheta_{robot.n}" not in freed:
         fixed[f"dtheta_{robot.n}"] = "combined with the tool point's azimuth about the last axis (tool_x, tool_y)"
     for name in freed:
@@ -140,12 +173,13 @@ def physical_bounds(infos, start: ModelParams) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
-def solve(fun, jac, z0: np.ndarray, lb: np.ndarray, ub: np.ndarray, robust: bool, f_scale: float, max_nfev: int):
-    """One least-squares pass. Without a robust loss, MINPACK's Levenberg-Marquardt runs first (several times
-    faster than the bounded trust-region solver); only if its solution leaves the physical bounds is the
-    bounded problem solved, from the clipped solution."""
-    from scipy.optimize import least_squares
+def solve(fun, jac, z0: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], robust: bool, f_scale: float, max_nfev: int):
+    """One least-squares pass from ``z0`` within ``bounds`` = (lower, upper). Without a robust loss, MINPACK's
+    Levenberg-Marquardt runs first (several times faster than the bounded trust-region solver); only if its
+    solution leaves the physical bounds is the bounded problem solved, from the clipped solution."""
+    from scipy.optimize import least_squares                            # heavy (scipy.optimize, ~0.3 s)
 
+    lb, ub = bounds
     tol = dict(xtol=1e-12, ftol=1e-12, gtol=1e-12)
     bounded = bool(np.isfinite(lb).any() or np.isfinite(ub).any())
     if not robust:

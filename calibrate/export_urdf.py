@@ -91,7 +91,7 @@ def _metres(T) -> np.ndarray:
 
 def _add_frames(model, ch: UrdfChain, base: np.ndarray, tcp: np.ndarray) -> None:
     """The measurement frame above the base link and the TCP below the tip, as fixed joints."""
-    import yourdfpy
+    import yourdfpy                                                     # heavy (yourdfpy (trimesh): only for URDF robots)
     model.robot.links += [yourdfpy.Link(name=MEASUREMENT_LINK), yourdfpy.Link(name=TCP_LINK)]
     model.robot.joints += [
         yourdfpy.Joint(name=f"{MEASUREMENT_LINK}-{ch.base_link}", type="fixed", parent=MEASUREMENT_LINK,

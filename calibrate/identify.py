@@ -29,13 +29,15 @@ from .errors import CalibrationError
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
-from .estimate import FitOptions, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
+from .estimate import (FitOptions, Selection, check_names, parameter_value, physical_bounds, pinned_vector, select_free,
+                       solve)
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .result import CalibrationResult
 from .rod import Rod
+from .residual_test import residual_test
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
-           "register_base_and_tool", "noise_covariance", "free_parameters"]
+           "register_base_and_tool", "noise_covariance", "free_parameters", "harmonic_start"]
 
 log = logging.getLogger(__name__)
 
@@ -61,9 +63,8 @@ def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compens
     out.harmonic_range_deg = {j: (float(np.rad2deg(obs.q_rad[:, j - 1].min())), float(np.rad2deg(obs.q_rad[:, j - 1].max())))
                               for j in sorted(set(options.harmonics))}
     if options.expected_noise_mm:
-        from .residual_test import residual_test
         out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
-    from .trust import trust_cautions, trust_warnings
+    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out
@@ -92,10 +93,9 @@ def _problem(robot, obs: Observations, rod: Rod, compensations, options: FitOpti
     check_names([i.name for i in infos], pinned, freed)
     start, tool_mm = _starting_model(robot, obs, rod.tool_mm, options.initial, options.find_tool)
     if options.harmonics or start.h.any():
-        start = _harmonic_start(start, obs.q_rad, options.harmonics)
+        start = harmonic_start(start, obs.q_rad, options.harmonics)
     x = pinned_vector(infos, start, pinned)
-    free, reasons = free_parameters(robot, obs, tool_mm, infos, start, x, pinned, freed, positions,
-                                    options.fix_unidentifiable)
+    free, reasons = free_parameters(robot, obs, apply(start, infos, x), Selection.of(infos, tool_mm, positions, options))
     lower, upper = physical_bounds(infos, start)
     # rough calibration (paper Section 4.1): with a rod to compensate, the first pass holds the joint
     # compliances at their initial values, otherwise the wrist's c absorbs the uncompensated rod torsion
@@ -119,9 +119,10 @@ def _check_harmonics(harmonics, n: int) -> None:
                                f"1..{n}, e.g. 1,4")
 
 
-def _harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelParams:
-    """The start model with the periodic terms of ``harmonics`` centred on these readings; an ``initial`` model's
-    terms keep their effect (the change of their means moves into the joint offsets)."""
+def harmonic_start(start: ModelParams, q_rad: np.ndarray, harmonics) -> ModelParams:
+    """The start model with the periodic terms of ``harmonics`` (joints, 1-based) centred on the readings ``q_rad``
+    (N, n) [rad]; an ``initial`` model's terms keep their effect (the change of their means moves into the joint
+    offsets), and an initial model with terms of joints not in ``harmonics`` is refused (they would be dropped)."""
     carried = {int(j) + 1 for j in np.nonzero(start.h.any(axis=1))[0]} - set(harmonics)
     if carried:
         raise CalibrationError(f"the initial model has periodic errors of joints {sorted(carried)} that would be "
@@ -147,19 +148,31 @@ def _starting_model(robot, obs: Observations, tool_mm, initial, find_tool: bool)
     return start, tool_mm
 
 
-def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, freed, positions,
-                     fix_unidentifiable: bool) -> tuple[list, dict]:
-    """The parameters to fit and why the others are held; refuses a data set that cannot identify what it
-    must (unless ``fix_unidentifiable``), naming the parameters and the remedy."""
+def free_parameters(robot, obs: Observations, model: ModelParams, sel: Selection) -> tuple[list, dict]:
+    """The parameters to fit (indices into ``sel.infos``) and why the others are held, from the Jacobian of the
+    model the fit starts from (``model``: pins applied) at the points ``obs``; refuses a data set that cannot
+    identify what it must (unless ``sel.fix_unidentifiable``), naming the parameters and the remedy."""
+    fr, tau = obs.balls(robot, model)
+    J0 = position_jacobian(fr, tau, sel.infos, model.base, obs.group)
+    free, reasons = select_free(robot, sel, J0)
+    _refuse_deficient(obs, _deficient(robot, sel, reasons), sel.fix_unidentifiable)
     N = obs.x_W_mm.shape[0]
-    fr, tau = obs.balls(robot, apply(start, infos, x))
-    J0 = position_jacobian(fr, tau, infos, apply(start, infos, x).base, obs.group)
-    free, reasons = select_free(robot, tool_mm, infos, J0, pinned, freed, positions)
-    structural = structural_fixed(robot, tool_mm, positions)
-    structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in freed else None
+    if len(free) > 3 * N:
+        raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
+    return free, reasons
+
+
+def _deficient(robot, sel: Selection, reasons: dict) -> dict:
+    """The held parameters the data could not separate (beyond the structural rules), with the reason."""
+    structural = structural_fixed(robot, sel.tool_mm, sel.positions)
+    structural[f"dtheta_{robot.n}"] = structural.get(f"dtheta_{robot.n}", "") if "tool_y" in sel.freed else None
     structural = {k: v for k, v in structural.items() if v is not None}
-    deficient = {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined",
-                                                                                                   "has no"))}
+    return {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined", "has no"))}
+
+
+def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bool) -> None:
+    """A data set that cannot identify what it must is refused with the parameters and the remedy, or (with
+    ``fix_unidentifiable``) those parameters are held at nominal and logged."""
     if deficient and fix_unidentifiable:
         log.info("held at nominal (not identifiable from these points): %s", ", ".join(deficient))
     elif deficient:
@@ -170,9 +183,6 @@ def free_parameters(robot, obs: Observations, tool_mm, infos, start, x, pinned, 
             f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
             f"parameter(s): {lines}. {more}, hold them with --pin NAME=VALUE, or hold all of them at nominal with "
             f"--fix-unidentifiable", key="campaign" if obs.group is not None else "points")
-    if len(free) > 3 * N:
-        raise CalibrationError(f"{len(free)} parameters from {3 * N} readings: too few points", key="points")
-    return free, reasons
 
 
 @dataclass
@@ -190,10 +200,25 @@ class _Compensated:
     free: list
 
 
-def _residual_functions(robot, start, infos, x, free, obs, target, prior, x0, noise_est):
+@dataclass
+class _Pass:
+    """One pass of the compensation loop: the internal vector ``x`` it starts from, the parameters it fits, the
+    measurements minus the current offsets in {W} [mm] (N, 3), which parameters carry a prior, the scatter [mm]."""
+
+    x: np.ndarray
+    free: list
+    target: np.ndarray
+    prior: np.ndarray
+    noise_est: float
+
+
+def _residual_functions(robot, obs: Observations, problem: _Problem, step: _Pass):
     """The pure residual and its analytic Jacobian for one pass: ball positions minus the compensated
-    measurements (fixture offsets applied), and the priors of the weak parameters scaled by the scatter."""
-    model_at = _memo_model(robot, start, infos, x, free, obs)
+    measurements (fixture offsets applied), and the priors of the weak parameters (centred on their values at
+    the start, ``problem.x``) scaled by the scatter."""
+    infos, free, target, prior, noise_est = problem.infos, step.free, step.target, step.prior, step.noise_est
+    x0 = problem.x[free]
+    model_at = _memo_model(robot, problem.start, infos, step.x, free, obs)
     scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
 
     def fun(z):
@@ -224,9 +249,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     N = obs.x_W_mm.shape[0]
     start, infos, free_all, rough = problem.start, problem.infos, problem.free, problem.rough
     lower, upper, fixture_sigma = problem.lower, problem.upper, options.fixture_sigma
-    x = problem.x.copy()
+    x = problem.x.copy()                                # priors are centred on these initial values
     prior = np.zeros(len(infos), dtype=bool)
-    x_init = x.copy()                                   # priors are centred on the initial values
     offsets = np.zeros_like(obs.x_W_mm)
     noise_est = 0.01
     res = None
@@ -235,9 +259,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     for it in range(1, options.max_compensation + 1):
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
-        fun, jac = _residual_functions(robot, start, infos, x, free, obs, target, prior, x_init[free], noise_est)
-        res = solve(fun, jac, x[free], lower[free], upper[free], options.robust, 3 * noise_est,
-                    200 * len(free))
+        fun, jac = _residual_functions(robot, obs, problem, _Pass(x, free, target, prior, noise_est))
+        res = solve(fun, jac, x[free], (lower[free], upper[free]), options.robust, 3 * noise_est, 200 * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
         new_off = total_offsets(compensations, robot, p, obs)
@@ -247,7 +270,7 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
         dof = max(3 * N - len(free), 1)
         noise_est = max(float(np.sqrt((r3 ** 2).sum() / dof)), 1e-6)
         # weak parameters -> prior (once), then refit
-        sig = _sigmas(robot, p, infos, free, obs, noise_est, fixture_sigma)
+        sig = _sigmas(robot, obs, p, [infos[k] for k in free], noise_est, fixture_sigma)
         weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]]
         newly = [k for k in weak if not prior[k]]
         for k in newly:
@@ -264,7 +287,7 @@ def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_si
     p = apply(start, infos, x)
     fr, tau = obs.balls(robot, p)
     resid = (obs.x_W_mm - st.offsets + _fixture_shift(infos, x, obs)) - fr.pW
-    sig, corr, cond = _sigmas(robot, p, infos, free, obs, st.noise_est, fixture_sigma, full=True)
+    sig, corr, cond = _sigmas(robot, obs, p, [infos[k] for k in free], st.noise_est, fixture_sigma, full=True)
     values, sigma, status = {}, {}, {}
     for k, info in enumerate(infos):
         values[info.name] = parameter_value(p, info, x[k])
@@ -309,10 +332,11 @@ def _fixture_shift(infos, x, obs) -> np.ndarray:
     return shift
 
 
-def _sigmas(robot, p, infos, free, obs, noise, fixture_sigma, full=False):
-    """Sandwich standard errors (internal units) with per-position correlated fixture-pose uncertainty."""
+def _sigmas(robot, obs, p, free_infos: list, noise, fixture_sigma, full=False):
+    """Sandwich standard errors (internal units) of the parameters ``free_infos`` with per-position correlated
+    fixture-pose uncertainty; ``full``: also their correlation matrix and the Jacobian's condition number."""
     fr, tau = obs.balls(robot, p)
-    J = position_jacobian(fr, tau, [infos[k] for k in free], p.base, obs.group).reshape(-1, len(free))
+    J = position_jacobian(fr, tau, free_infos, p.base, obs.group).reshape(-1, len(free_infos))
     S = noise_covariance(obs, noise, fixture_sigma)
     C = parameter_covariance(J)                        # (J^T J)^-1, inf where the data see nothing
     JtJ_inv = np.nan_to_num(C, nan=0.0, posinf=0.0)

@@ -18,6 +18,7 @@ import numpy as np
 
 from .errors import CalibrationError
 from .kinematics import ModelParams, ball_positions
+from .rod import Rod
 
 __all__ = ["IkBatch", "solve_ik_positions", "solve_ik_position", "solve_ik_groups", "random_configurations"]
 
@@ -42,13 +43,12 @@ class IkBatch:
 
 @dataclass(frozen=True)
 class _Batch:
-    """The problems one LM run solves: ball targets in {W} [mm] (M, 3); the rod's mass [kg] and centre of mass in
-    {T} [mm] and the contact forces in {W} [N] (M, 3) or None, which deflect the compliant joints; the joint
-    limits [rad] (n,); the iterations allowed and the position tolerance [mm]."""
+    """The problems one LM run solves: ball targets in {W} [mm] (M, 3); the rod (its weight) and the contact
+    forces in {W} [N] (M, 3) or None, which deflect the compliant joints; the joint limits [rad] (n,); the
+    iterations allowed and the position tolerance [mm]."""
 
     targets: np.ndarray
-    rod_mass_kg: float
-    rod_com_T_mm: np.ndarray | None
+    rod: Rod | None
     force_W_N: np.ndarray | None
     lo: np.ndarray
     hi: np.ndarray
@@ -64,7 +64,7 @@ class _Batch:
 def _residual_and_jacobian(robot, params: ModelParams, q, batch: _Batch):
     """Ball position error [mm], shape=(M, 3), and its Jacobian in {W} [mm/rad], shape=(M, 3, n) (the joint
     compliance's own dependence on q is neglected in the Jacobian, not in the residual)."""
-    fr, _ = ball_positions(robot, params, q, batch.rod_mass_kg, batch.rod_com_T_mm, batch.force_W_N)
+    fr, _ = ball_positions(robot, params, q, batch.rod, batch.force_W_N)
     targets = batch.targets
     r = fr.pW - targets
     J0 = np.cross(fr.z_prev, fr.p0[:, None, :] - fr.o_prev)            # (M, n, 3) in {0}
@@ -117,13 +117,13 @@ def _lm(robot, params, q0, batch: _Batch, q_pull=None, weight: float = 0.0):
     return q, np.linalg.norm(r, axis=1), it
 
 
-def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_kg: float = 0.0,
-                       rod_com_T_mm=None, force_W_N=None, pos_tol_mm: float = 1e-4,
-                       iterations: int = 60, pull: bool = True) -> IkBatch:
+def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod: Rod | None = None, force_W_N=None, *,
+                       pos_tol_mm: float = 1e-4, iterations: int = 60, pull: bool = True) -> IkBatch:
     """Joint angles near ``q_seed`` [rad], shape=(M, n), that put the ball at ``targets_W`` [mm], shape=(M, 3)
-    or (3,), with the rod's weight and a contact force ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting
-    the compliant joints of ``params``. All M problems are solved together (see the module docstring).
-    ``pull=False`` skips stage 1, for seeds already near a solution (planned configurations)."""
+    or (3,), with the weight of ``rod`` (:class:`~rodlab.calibrate.rod.Rod` or None) and a contact force
+    ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting the compliant joints of ``params``. All M problems are
+    solved together (see the module docstring). ``pull=False`` skips stage 1, for seeds already near a solution
+    (planned configurations)."""
     q_seed = np.atleast_2d(np.asarray(q_seed, float))
     M, n = q_seed.shape
     if n != robot.n:
@@ -131,7 +131,7 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_k
     targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
     force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-    batch = _Batch(targets, rod_mass_kg, rod_com_T_mm, force, lo, hi, iterations, pos_tol_mm)
+    batch = _Batch(targets, rod, force, lo, hi, iterations, pos_tol_mm)
     seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
     q, it1 = seed, 0
     if pull:
@@ -141,13 +141,12 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod_mass_k
     return IkBatch(q, ok, err, it1 + it2)
 
 
-def solve_ik_position(robot, params: ModelParams, target_W, q_seed, rod_mass_kg=0.0, rod_com_T_mm=None,
-                      force_W_N=None, pos_tol_mm: float = 1e-4):
+def solve_ik_position(robot, params: ModelParams, target_W, q_seed, rod: Rod | None = None, force_W_N=None, *,
+                      pos_tol_mm: float = 1e-4):
     """One configuration: joint angles [rad], shape=(n,), near ``q_seed`` that put the ball at ``target_W``
     [mm], or None (see :func:`solve_ik_positions`)."""
     res = solve_ik_positions(robot, params, np.asarray(target_W, float)[None], np.asarray(q_seed, float)[None],
-                             rod_mass_kg, rod_com_T_mm, None if force_W_N is None else np.atleast_2d(force_W_N),
-                             pos_tol_mm)
+                             rod, None if force_W_N is None else np.atleast_2d(force_W_N), pos_tol_mm=pos_tol_mm)
     return res.q_rad[0] if res.ok[0] else None
 
 
@@ -158,8 +157,8 @@ def random_configurations(robot, rng, count: int, fraction: float = 0.7) -> np.n
     return rng.uniform(fraction * lo, fraction * hi, (count, robot.n))
 
 
-def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray, rod_mass_kg: float = 0.0,
-                    rod_com_T_mm=None, forces: dict | None = None) -> dict:
+def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray, rod: Rod | None = None,
+                    forces: dict | None = None) -> dict:
     """Position IK of several groups of targets in one batch (a group: one clamping position).
 
     targets : {group: (m_g, 3) [mm]}; seeds : (sum m_g, n) [rad], in the groups' order; forces : {group: (3,)
@@ -168,7 +167,6 @@ def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray
     keys = list(targets)
     sizes = [len(targets[j]) for j in keys]
     F = None if forces is None else np.repeat(np.array([forces[j] for j in keys]), sizes, axis=0)
-    res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod_mass_kg,
-                             rod_com_T_mm, F)
+    res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod, F)
     edges = np.cumsum([0, *sizes])
     return {j: res.q_rad[a:b][res.ok[a:b]] for j, a, b in zip(keys, edges[:-1], edges[1:])}

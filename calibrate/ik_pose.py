@@ -10,7 +10,7 @@ nearest the seed kept.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -42,7 +42,7 @@ class PoseIk:
 
 def rotation_angle(R) -> np.ndarray:
     """Angle [rad] of rotation matrices, shape=(..., 3, 3) -> (...); accurate for small angles too."""
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial.transform import Rotation                        # heavy (scipy.spatial, ~0.35 s)
     R = np.asarray(R, float)
     return np.linalg.norm(Rotation.from_matrix(R.reshape(-1, 3, 3)).as_rotvec(), axis=1).reshape(R.shape[:-2])
 
@@ -57,7 +57,7 @@ def tcp_poses(robot, params: ModelParams, q_rad, R_tool=None) -> tuple[np.ndarra
 
 def _residual(robot, params, q, p_t, R_t, R_tool):
     """Residuals, shape=(M, 6) ([mm] and weighted [rad]), and the Jacobian, shape=(M, 6, n)."""
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial.transform import Rotation                        # heavy (scipy.spatial, ~0.35 s)
     fr, _ = ball_positions(robot, params, q)
     R = np.einsum("ij,mjk->mik", fr.R_W0, fr.T[:, robot.n, :3, :3]) @ R_tool
     w = Rotation.from_matrix(R @ np.swapaxes(R_t, 1, 2)).as_rotvec()
@@ -67,15 +67,35 @@ def _residual(robot, params, q, p_t, R_t, R_tool):
     return r, np.concatenate([Jp, ROTATION_WEIGHT_MM * Jw], axis=1)
 
 
-def _lm(robot, params, q0, p_t, R_t, R_tool, lo, hi, iterations: int, tol: np.ndarray):
+@dataclass(frozen=True)
+class _PoseBatch:
+    """The problems one LM run solves: TCP targets in {W} [mm] (M, 3) and frames (M, 3, 3), the tool's rotation
+    in {n} (3, 3), the joint limits [rad] (n,), the iterations allowed and the tolerances (position [mm],
+    weighted rotation [mm])."""
+
+    p_t: np.ndarray
+    R_t: np.ndarray
+    R_tool: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    iterations: int
+    tol: np.ndarray
+
+    def rows(self, rows) -> "_PoseBatch":
+        """The same problems restricted to ``rows``."""
+        return replace(self, p_t=self.p_t[rows], R_t=self.R_t[rows])
+
+
+def _lm(robot, params, q0, batch: _PoseBatch):
     """Projected LM over the batch. Returns q and the final residuals, shape=(M, 6)."""
     M, n = q0.shape
+    lo, hi, tol, R_tool = batch.lo, batch.hi, batch.tol, batch.R_tool
     q = np.clip(q0, lo, hi)
-    r, J = _residual(robot, params, q, p_t, R_t, R_tool)
+    r, J = _residual(robot, params, q, batch.p_t, batch.R_t, R_tool)
     cost = np.einsum("mi,mi->m", r, r)
     lam = np.full(M, 1e-3)
     active = ~_converged(r, tol)
-    for _ in range(iterations):
+    for _ in range(batch.iterations):
         a = np.nonzero(active)[0]
         if a.size == 0:
             break
@@ -83,7 +103,7 @@ def _lm(robot, params, q0, p_t, R_t, R_tool, lo, hi, iterations: int, tol: np.nd
         g = np.einsum("mik,mi->mk", J[a], r[a])
         H = A + (lam[a, None] * np.maximum(np.einsum("mkk->mk", A), 1e-9))[:, :, None] * np.eye(n)
         q_new = np.clip(q[a] - np.linalg.solve(H, g[..., None])[..., 0], lo, hi)
-        r_new, J_new = _residual(robot, params, q_new, p_t[a], R_t[a], R_tool)
+        r_new, J_new = _residual(robot, params, q_new, batch.p_t[a], batch.R_t[a], R_tool)
         c_new = np.einsum("mi,mi->m", r_new, r_new)
         better = c_new < cost[a]
         b = a[better]
@@ -111,14 +131,15 @@ def solve_ik_poses(robot, params: ModelParams, targets_mm, R_target, q_seed, R_t
     R_tool = np.eye(3) if R_tool is None else np.asarray(R_tool, float)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     tol = np.array([pos_tol_mm, ROTATION_WEIGHT_MM * rot_tol_rad])
-    q, r = _lm(robot, params, np.clip(seeds, lo + 1e-6, hi - 1e-6), p_t, R_t, R_tool, lo, hi, iterations, tol)
+    batch = _PoseBatch(p_t, R_t, R_tool, lo, hi, iterations, tol)
+    q, r = _lm(robot, params, np.clip(seeds, lo + 1e-6, hi - 1e-6), batch)
     rng = np.random.default_rng(seed)
     for _ in range(RESTARTS):
         bad = np.nonzero(~_converged(r, tol))[0]
         if bad.size == 0:
             break
         start = rng.uniform(0.9 * lo, 0.9 * hi, (bad.size, robot.n))
-        q2, r2 = _lm(robot, params, start, p_t[bad], R_t[bad], R_tool, lo, hi, iterations, tol)
+        q2, r2 = _lm(robot, params, start, batch.rows(bad))
         take = np.linalg.norm(r2, axis=1) < np.linalg.norm(r[bad], axis=1)
         q[bad[take]], r[bad[take]] = q2[take], r2[take]
     ok = _converged(r, tol) & np.all((q >= lo) & (q <= hi), axis=1)

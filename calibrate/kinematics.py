@@ -10,11 +10,15 @@ Internal units: mm, rad, N, N m; arrays over N configurations.
 """
 from __future__ import annotations
 
+import numbers
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rodlab.core.frames import pose_to_matrix
+
+from .rod import Rod
 
 __all__ = ["ModelParams", "Frames", "HARMONICS", "harmonic_basis", "harmonic_reference", "forward", "static_torques",
            "ball_positions"]
@@ -170,9 +174,9 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=None,
-                   force_W_N: np.ndarray | None = None) -> np.ndarray:
-    """Static joint torques [N m], shape=(N, n): gravity on the links and the rod plus the contact force.
+def static_torques(robot, fr: Frames, rod: Rod | None = None, force_W_N: np.ndarray | None = None) -> np.ndarray:
+    """Static joint torques [N m], shape=(N, n): gravity on the links and the rod (``rod``: its mass and centre of
+    mass; None: no rod) plus the contact force ``force_W_N`` in {W} [N].
 
     The torque about joint i (axis z_{i-1} through o_{i-1}) of every load beyond it; the joint's gearbox
     deflects in the direction of that torque (theta = ... + c tau). With each load's force F_k at c_k on link
@@ -189,10 +193,9 @@ def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=Non
     F = np.broadcast_to(np.asarray(robot.mass_kg, float)[:, None] * g0, (N, n, 3))
     M = cross3(c, F)                                                 # moment about {0}'s origin [N mm]
     S = F.copy()
-    if rod_mass_kg > 0:
-        com = np.zeros(3) if rod_com_T_mm is None else np.asarray(rod_com_T_mm, float)
-        cr = fr.p0 + fr.T[:, n, :3, :3] @ com
-        Fr = np.broadcast_to(rod_mass_kg * g0, (N, 3))
+    if rod is not None and rod.mass_kg > 0:
+        cr = fr.p0 + fr.T[:, n, :3, :3] @ rod.com_T_mm
+        Fr = np.broadcast_to(rod.mass_kg * g0, (N, 3))
         M[:, n - 1] += cross3(cr, Fr)
         S[:, n - 1] += Fr
     if force_W_N is not None:
@@ -204,16 +207,41 @@ def static_torques(robot, fr: Frames, rod_mass_kg: float = 0.0, rod_com_T_mm=Non
     return np.einsum("mij,mij->mi", fr.z_prev, Msum - cross3(fr.o_prev, Ssum)) * 1e-3   # N mm -> N m
 
 
-def ball_positions(robot, params: ModelParams, q_rad, rod_mass_kg=0.0, rod_com_T_mm=None, force_W_N=None,
-                   iterations: int = 2) -> tuple[Frames, np.ndarray]:
-    """Frames with the joint compliance solved consistently (torques at the deflected pose), and the torques."""
+def ball_positions(robot, params: ModelParams, q_rad, rod: Rod | None = None, force_W_N=None,
+                   iterations: int = 2, **deprecated) -> tuple[Frames, np.ndarray]:
+    """Frames with the joint compliance solved consistently (torques at the deflected pose), and the torques.
+
+    rod : the rod on the flange (:class:`~rodlab.calibrate.rod.Rod`; its weight loads the joints: only its mass and
+        centre of mass are read, the ball is at ``params.tool``), or None for none; force_W_N : contact force on the
+        ball in {W} [N], (N, 3) or (3,), or None. The rod's mass and centre of mass as two numbers
+        (``rod_mass_kg=``, ``rod_com_T_mm=``, or a number in place of ``rod``) still work, with a DeprecationWarning.
+    """
+    if deprecated or isinstance(rod, numbers.Real):
+        rod, force_W_N, iterations = _legacy_load(rod, force_W_N, iterations, deprecated)
     q = np.atleast_2d(q_rad)
     tau = np.zeros_like(q)
     fr = forward(params, q, tau)
     if np.any(params.c != 0):
         for _ in range(iterations):
-            tau = static_torques(robot, fr, rod_mass_kg, rod_com_T_mm, force_W_N)
+            tau = static_torques(robot, fr, rod, force_W_N)
             fr = forward(params, q, tau)
     else:
-        tau = static_torques(robot, fr, rod_mass_kg, rod_com_T_mm, force_W_N)
+        tau = static_torques(robot, fr, rod, force_W_N)
     return fr, tau
+
+
+def _legacy_load(rod, force_W_N, iterations, deprecated: dict):
+    """The arguments of the old signature ``ball_positions(robot, params, q, rod_mass_kg, rod_com_T_mm, force_W_N,
+    iterations)`` as (rod, force, iterations) of the new one."""
+    unknown = set(deprecated) - {"rod_mass_kg", "rod_com_T_mm"}
+    if unknown:
+        raise TypeError(f"ball_positions() got unexpected keyword arguments {sorted(unknown)}")
+    warnings.warn("ball_positions(..., rod_mass_kg, rod_com_T_mm, ...) is deprecated: pass the rod as a Rod "
+                  "(rodlab.calibrate.Rod.rigid(tool_mm, mass_kg, com_T_mm))", DeprecationWarning, stacklevel=3)
+    if isinstance(rod, numbers.Real):                  # positional: (mass, com, force, iterations)
+        mass, com = float(rod), force_W_N
+        force_W_N, iterations = (None, 2) if isinstance(iterations, numbers.Integral) else (iterations, 2)
+    else:
+        mass, com = deprecated.get("rod_mass_kg", 0.0), deprecated.get("rod_com_T_mm")
+    com = np.zeros(3) if com is None else com
+    return Rod.rigid(np.zeros(3), mass, com), force_W_N, iterations

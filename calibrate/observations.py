@@ -4,16 +4,17 @@ rigid registration of the base (and the tool) that starts every fit."""
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rodlab.core.compliance import RodCompliance
-from rodlab.core.frames import abc_rate_axes, pose_to_matrix, skew
+from rodlab.core.frames import abc_rate_axes, pose_to_matrix, skew, matrix_to_pose
 
 from .campaign import Campaign, Fixture
 from .errors import CalibrationError
 from .kinematics import ModelParams, ball_positions
+from .rod import Rod
 
 __all__ = ["Observations", "campaign_observations", "register_base", "register_base_and_tool", "noise_covariance"]
 
@@ -24,7 +25,8 @@ log = logging.getLogger(__name__)
 class Observations:
     """What the identification fits: joint angles, measured ball centres in {W}, and the loads.
 
-    q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod_mass_kg, rod_com_T_mm;
+    q_rad (N, n); x_W_mm (N, 3); force_W_N (N, 3) contact force on the ball in {W}; rod the rod the points were
+    measured with (:class:`~rodlab.calibrate.rod.Rod`: its weight loads the joints), or None for no payload;
     group (N,) clamping position of each point (fixture uncertainty correlation), labels (N,);
     sigma_mm (N, 3) stated standard uncertainty of each measured coordinate [mm] (instrument points), or None
     for one noise level for all; temp_C (N,) temperature of each point [degC] or None (thermal compensation);
@@ -36,8 +38,7 @@ class Observations:
     q_rad: np.ndarray
     x_W_mm: np.ndarray
     force_W_N: np.ndarray
-    rod_mass_kg: float = 0.0
-    rod_com_T_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rod: Rod | None = None
     group: np.ndarray | None = None
     labels: list | None = None
     fixture_T: dict | None = None          # group -> 4x4 pose of {D_j} in {W}
@@ -48,6 +49,9 @@ class Observations:
     pose_cov: dict | None = None
 
     def __post_init__(self):
+        if self.rod is not None and not isinstance(self.rod, Rod):
+            raise TypeError(f"Observations.rod must be a Rod or None, got {type(self.rod).__name__} (Rod.of(compliance) "
+                            f"or Rod.rigid(tool_mm, mass_kg, com_T_mm))")
         if self.sigma_mm is not None and np.shape(self.sigma_mm) != np.shape(self.x_W_mm):
             raise ValueError(f"sigma_mm must have the shape of x_W_mm {np.shape(self.x_W_mm)}, got "
                              f"{np.shape(self.sigma_mm)}")
@@ -60,7 +64,7 @@ class Observations:
     def balls(self, robot, params: ModelParams):
         """The model's frames and joint torques at these points (:func:`~.kinematics.ball_positions`) under the
         loads they were measured with: the rod's weight and the contact forces."""
-        return ball_positions(robot, params, self.q_rad, self.rod_mass_kg, self.rod_com_T_mm, self.force_W_N)
+        return ball_positions(robot, params, self.q_rad, self.rod, self.force_W_N)
 
     def subset(self, keep: np.ndarray) -> "Observations":
         """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""
@@ -76,9 +80,10 @@ class Observations:
                        labels=None if self.labels is None else [lab for lab, k in zip(self.labels, keep) if k])
 
 
-def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> Observations:
+def campaign_observations(camp: Campaign, fix: Fixture, rod: Rod | RodCompliance) -> Observations:
     """Eq. 2: device readings to {W}; the contact force of each point in {W} (Eq. 12): the springs' at its
-    readings for a raw campaign read with a device that states them, else the fixture's constant one."""
+    readings for a raw campaign read with a device that states them, else the fixture's constant one; the
+    rod (a :class:`~rodlab.calibrate.rod.Rod` or its compliance file) travels with them."""
     if camp.x_D_mm is None:
         raise CalibrationError("this campaign gives the sensors' raw readings (s1_mm, s2_mm, s3_mm): give the "
                                "device file that converts them (--device DEV.device.json)", path=camp.path,
@@ -100,15 +105,15 @@ def campaign_observations(camp: Campaign, fix: Fixture, rod: RodCompliance) -> O
         if shape is not None:
             shape[m] = R @ camp.noise_shape_D[m] @ R.T
     pose_cov = None if fix.pose_cov is None else {j: c for j, c in fix.pose_cov.items() if j in set(camp.position)}
-    return Observations(np.deg2rad(camp.q_deg), xW, F, rod.mass_kg, rod.com_T_mm, camp.position.copy(),
-                        camp.labels(), {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
+    rod = Rod.of(rod) if isinstance(rod, RodCompliance) else rod
+    return Observations(np.deg2rad(camp.q_deg), xW, F, rod, camp.position.copy(), camp.labels(),
+                        {int(j): fix.transform(int(j)) for j in np.unique(camp.position)},
                         camp.x_D_mm.copy(), temp_C=None if camp.temp_C is None else camp.temp_C.copy(),
                         noise_shape_W=shape, pose_cov=pose_cov)
 
 
 def register_base(robot, params: ModelParams, obs: Observations) -> np.ndarray:
     """Base pose [mm, deg] by rigid registration (Kabsch) of nominal ball positions to the measured ones."""
-    from rodlab.core.frames import matrix_to_pose
     fr, _ = ball_positions(robot, params.with_(base=np.zeros(6)), obs.q_rad)
     P, Q = fr.p0, obs.x_W_mm
     pc, qc = P.mean(0), Q.mean(0)

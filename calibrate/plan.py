@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .estimate import select_free
+from .estimate import Selection, select_free
 from .errors import CalibrationError
 from .ik import random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import catalogue
+from .rod import Rod
 from .simulate import standard_base
 
 __all__ = ["observability", "plan_poses"]
@@ -32,14 +33,14 @@ def observability(J: np.ndarray) -> dict:
             "parameters": m}
 
 
-def reachable_candidates(robot, params: ModelParams, fixture, k: int, candidates: int, rng, rod_mass_kg=0.0,
-                         rod_com_T_mm=None) -> dict:
-    """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array):
-    position IK from ``4 * candidates`` random seeds per position, every position in one batch."""
+def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng) -> dict:
+    """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
+    robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
+    position in one batch."""
     m = 4 * candidates
     targets = {j: np.tile(fixture.transform(j)[:3, 3], (m, 1)) for j in fixture.poses}
     seeds = random_configurations(robot, rng, len(targets) * m)
-    reached = solve_ik_groups(robot, params, targets, seeds, rod_mass_kg, rod_com_T_mm)
+    reached = solve_ik_groups(robot, params, targets, seeds, rod)
     cands = {}
     for j, got in reached.items():
         got = got[:candidates]
@@ -51,19 +52,22 @@ def reachable_candidates(robot, params: ModelParams, fixture, k: int, candidates
     return cands
 
 
-def plan_poses(robot, fixture, tool_mm, k: int = 6, candidates: int = 30, seed: int = 0, rod_mass_kg: float = 0.0,
-               rod_com_T_mm=None, base_guess=None):
-    """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices."""
+def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None):
+    """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices, for the
+    rod ``rod`` (:class:`~rodlab.calibrate.rod.Rod`: its tool vector and its weight; ``Rod.of(compliance)``)."""
+    if not isinstance(rod, Rod):
+        raise TypeError(f"plan_poses takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm, mass_kg, "
+                        f"com_T_mm)), got {type(rod).__name__}")
     rng = np.random.default_rng(seed)
-    p = ModelParams.nominal(robot, tool_mm, base=base_guess)
+    p = ModelParams.nominal(robot, rod.tool_mm, base=base_guess)
     if base_guess is None:
         p = p.with_(base=standard_base())      # {W} 650 mm in front, 250 mm up, device tilted as in the paper
-    cands = reachable_candidates(robot, p, fixture, k, candidates, rng, rod_mass_kg, rod_com_T_mm)
+    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng)
     allq = np.concatenate(list(cands.values()))
     infos = catalogue(robot.n)
-    fr, tau = ball_positions(robot, p, allq, rod_mass_kg, rod_com_T_mm)
+    fr, tau = ball_positions(robot, p, allq, rod)
     Jall = position_jacobian(fr, tau, infos, p.base)
-    free, _ = select_free(robot, tool_mm, infos, Jall, {}, set())
+    free, _ = select_free(robot, Selection(infos, rod.tool_mm), Jall)
     Jall = Jall[:, :, free]
     chosen = {j: list(range(k)) for j in cands}
     offsets = {j: int(np.sum([len(cands[i]) for i in cands if i < j])) for j in cands}

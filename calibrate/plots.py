@@ -17,7 +17,7 @@ def _save(fig, path) -> Path:
 
 def plot_residuals(res, camp, out_dir) -> Path:
     """Residual components [um] of every point, grouped by clamping position."""
-    import matplotlib
+    import matplotlib                                                   # heavy (matplotlib: only for plots)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     r = res.residuals_mm * 1e3
@@ -52,7 +52,7 @@ def plot_error_distributions(errors_mm: dict, out, title: str = "") -> Path:
     errors_mm : {label: shape=(M,) [mm]}, ``"nominal"`` first if present; out : a folder (the figure is
     ``error_distributions.png``) or a ``*.png`` path.
     """
-    import matplotlib
+    import matplotlib                                                   # heavy (matplotlib: only for plots)
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     if not errors_mm:

@@ -6,6 +6,8 @@ known, so base and tool are found from scratch and the tool's azimuth about the 
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from rodlab.core.units import TRACKER_NOISE_MM
@@ -21,19 +23,17 @@ __all__ = ["points_rod", "points_observations", "identify_points", "stated_noise
 
 def points_rod(pts: PointSet) -> Rod:
     """The instrument's rigid probe: the file's tool and payload."""
-    return Rod.rigid(pts.tool_mm, pts.rod_mass_kg, pts.rod_com_T_mm)
+    return pts.rod
 
 
 def points_observations(pts: PointSet) -> Observations:
     """The identification's observations of instrument points (no contact force, the file's payload)."""
-    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod_mass_kg,
-                        pts.rod_com_T_mm, sigma_mm=pts.sigma_mm)
+    return Observations(np.deg2rad(pts.q_deg), pts.x_W_mm, np.zeros_like(pts.x_W_mm), pts.rod, sigma_mm=pts.sigma_mm)
 
 
 def stated_noise_mm(pts: PointSet, noise_mm: float | None) -> tuple[PointSet, float]:
     """The points and the noise level to judge them by: a level the user states (``noise_mm``, replacing any
     per-point columns); else the rms of the file's per-point uncertainties; else :data:`TRACKER_NOISE_MM`."""
-    from dataclasses import replace
     if noise_mm:
         return replace(pts, sigma_mm=None), float(noise_mm)
     if pts.sigma_mm is not None:
@@ -56,8 +56,8 @@ def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: di
                           robust: bool = False, harmonics=()):
     """The predicted accuracy of :func:`identify_points` with these options without a validation set: k-fold
     cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
-    from .crossval import cross_validate_identify
     options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust, find_tool=True,
                          harmonics=tuple(harmonics))
+    from .crossval import cross_validate_identify            # start-up: loaded on first use, not by `rodlab --help`
     return cross_validate_identify(robot, points_observations(pts), points_rod(pts), options=options,
                                    fit_rms_mm=fit_rms_mm)

@@ -51,7 +51,7 @@ __all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replic
 
 #: the validation rod (short, rigid) of the simulated instrument: tool [mm], mass [kg], COM in {T} [mm]
 VALIDATION_TOOL_MM = (0.0, 0.0, 150.0)
-VALIDATION_MASS = (0.3, (0.0, 0.0, -60.0))
+VALIDATION_ROD = Rod.rigid(VALIDATION_TOOL_MM, 0.3, (0.0, 0.0, -60.0))
 
 
 @dataclass(frozen=True)
@@ -166,9 +166,21 @@ def _draw_truth(robot, tool_mm, base, priors: Priors, rng) -> ModelParams:
     return truth.with_(c=c, base=np.asarray(base, float))
 
 
-def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodCompliance, priors, rng):
+@dataclass(frozen=True)
+class _Setup:
+    """What every replicate of a prediction shares: the planned orientations {position: (k, n) [rad]}, the
+    fixture, the rod's (FEA) compliance file the calibrator is given and the priors."""
+
+    plan_q: dict
+    fixture: Fixture
+    reference: RodCompliance
+    priors: Priors
+
+
+def _reach(robot, truth, setup: _Setup, rng):
     """The true robot at every planned orientation, the ball within the alignment tolerance of the datum:
     (q [rad], group, datum-to-W transforms, forces in {W}) for the orientations it reached."""
+    plan_q, fixture, reference, priors = setup.plan_q, setup.fixture, setup.reference, setup.priors
     keys = sorted(plan_q)
     Ts = {j: fixture.transform(j) for j in keys}
     seeds = np.concatenate([plan_q[j] for j in keys])
@@ -177,15 +189,14 @@ def _reach(robot, truth, plan_q: dict, fixture: Fixture, reference: RodComplianc
     targets = np.concatenate([Ts[j][:3, 3] + rng.uniform(-a, a, (len(plan_q[j]), 3)) @ Ts[j][:3, :3].T
                               for j in keys])
     forces = np.array([Ts[j][:3, :3] @ fixture.force_D_N for j in group])
-    res = solve_ik_positions(robot, truth, targets, seeds, reference.mass_kg, reference.com_T_mm, forces,
-                             pull=False)
+    res = solve_ik_positions(robot, truth, targets, seeds, Rod.of(reference), forces, pull=False)
     return res.q_rad[res.ok], group[res.ok], Ts, forces[res.ok]
 
 
 @dataclass(frozen=True)
 class SimulatedCampaign:
     """One simulated campaign: q_rad (N, n) commanded angles; group (N,) clamping position; x_D_mm (N, 3) the
-    device readings (with noise); force_W_N (N, 3);
+    device readings (with noise); force_W_N (N, 3); rod the rod the calibrator is given (:class:`~.rod.Rod`);
     recorded_poses {j: (6,)} the fixture poses as recorded (with their uncertainty); true_T {j: 4 x 4}."""
 
     q_rad: np.ndarray
@@ -194,8 +205,7 @@ class SimulatedCampaign:
     force_W_N: np.ndarray
     recorded_poses: dict
     true_T: dict
-    mass_kg: float
-    com_T_mm: np.ndarray
+    rod: Rod
 
     def observations(self) -> Observations:
         """What identification sees: the readings through the recorded poses (Eq. 2)."""
@@ -204,17 +214,19 @@ class SimulatedCampaign:
             m = self.group == j
             Tr = pose_to_matrix(self.recorded_poses[int(j)])
             x[m] = self.x_D_mm[m] @ Tr[:3, :3].T + Tr[:3, 3]
-        return Observations(self.q_rad, x, self.force_W_N, self.mass_kg, self.com_T_mm, self.group.copy(), None,
-                            dict(self.true_T))
+        return Observations(self.q_rad, x, self.force_W_N, self.rod, self.group.copy(), None, dict(self.true_T))
 
 
-def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor=None, slip_rng=None
-              ) -> SimulatedCampaign:
-    q, group, Ts, F = _reach(robot, truth, plan_q, fixture, reference, priors, rng)
+def _campaign(robot, truth, rod_true, floor, setup: _Setup, rng, slip_rng=None) -> SimulatedCampaign:
+    """One campaign of the true robot ``truth`` (its unmodelled ``floor`` or None) with the true rod ``rod_true``:
+    the planned orientations reached, the device's readings and the fixture poses as recorded; the rod's slip
+    from ``slip_rng`` (default ``rng``)."""
+    fixture, reference, priors = setup.fixture, setup.reference, setup.priors
+    q, group, Ts, F = _reach(robot, truth, setup, rng)
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
     qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
-    fr, _ = ball_positions(robot, truth, qt, reference.mass_kg, reference.com_T_mm, F)
+    fr, _ = ball_positions(robot, truth, qt, Rod.of(reference), F)
     pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     if priors.rod_slip:                                              # the rod's non-repeatable part
         u = slip_directions(rng if slip_rng is None else slip_rng, len(q))
@@ -231,7 +243,7 @@ def _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, f
             pose = pose + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
         recorded[int(j)] = pose
     return SimulatedCampaign(q, group, xD, F, recorded, {int(j): Ts[int(j)] for j in np.unique(group)},
-                             reference.mass_kg, reference.com_T_mm)
+                             Rod.of(reference))
 
 
 def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet, PointSet]:
@@ -240,12 +252,11 @@ def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet
     vtrue = truth.with_(tool=tool + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (int(priors.validation_points), robot.n))
-    mass, com = VALIDATION_MASS
-    fr, _ = ball_positions(robot, vtrue, vq if floor is None else floor.angles(vq), mass, np.asarray(com, float))
+    fr, _ = ball_positions(robot, vtrue, vq if floor is None else floor.angles(vq), VALIDATION_ROD)
     noisy = fr.pW + rng.normal(0, priors.instrument_noise_mm, fr.pW.shape)
 
     def pts(x):
-        return PointSet(np.rad2deg(vq), x, tool, mass, np.asarray(com, float))
+        return PointSet(np.rad2deg(vq), x, tool, VALIDATION_ROD.mass_kg, VALIDATION_ROD.com_T_mm.copy())
     return pts(noisy), pts(fr.pW)
 
 
@@ -315,7 +326,7 @@ def simulate_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: R
     truth = _draw_truth(robot, reference.tool_mm, base, priors, rng)
     r_true, rod_true = _true_rod(reference, priors, rng)
     floor = robot_floor(robot, priors.robot_floor_mm, seed)           # None at 0: the same draws as without
-    camp = _campaign(robot, truth, plan_q, fixture, reference, rod_true, priors, rng, floor,
+    camp = _campaign(robot, truth, rod_true, floor, _Setup(plan_q, fixture, reference, priors), rng,
                      np.random.default_rng([seed, 46]))
     pts, pts_exact = _validation(robot, truth, priors, rng, floor)
     files = _method_files(methods, reference, calc, rod_true, r_true, priors, rng)

@@ -41,17 +41,20 @@ from rodlab.core.enums import Method
 
 from .campaign import Fixture
 from .compensations import deflection_basis
+from .estimate import Selection
 from .identify import free_parameters
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
-from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, catalogue
-from .predict import VALIDATION_MASS, VALIDATION_TOOL_MM, AccuracySummary, BudgetShares, Priors
+from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue
+from .predict import VALIDATION_ROD, AccuracySummary, BudgetShares, Priors
+from .rod import Rod
 from .unmodelled import campaign_offsets, validation_floor_offsets
+from .errors import CalibrationError
 
 __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_campaign", "linearisation_model",
            "validation_draws", "cached_validation_draws", "robot_prior", "compliance_draws", "predict_linear",
-           "KINEMATIC_KINDS"]
+           "KINEMATIC_KINDS", "Draws", "random_parts", "exact_mean_square"]
 
 #: the parameters the validation keeps from the identification (base and tool are refitted)
 KINEMATIC_KINDS = ("dtheta", "a", "alpha", "d", "beta", "c")
@@ -85,6 +88,13 @@ class LinearCampaign:
                              f"{self.Sigma.shape}, B {self.B.shape}")
         if self.kin_of_free.shape != (P,) or self.prior_scale.shape != (P,):
             raise ValueError(f"kin_of_free / prior_scale must have shape ({P},)")
+
+    def kinematic_map(self, K: int) -> np.ndarray:
+        """(K, P) ``E``: picks the identified kinematic parameters (of the ``K``) out of the free ones."""
+        E = np.zeros((K, self.J.shape[1]))
+        k = np.nonzero(self.kin_of_free >= 0)[0]
+        E[self.kin_of_free[k], k] = 1.0
+        return E
 
     @property
     def is_c(self) -> np.ndarray:
@@ -165,14 +175,14 @@ def _kin_infos(n: int) -> list[ParamInfo]:
     return [i for i in catalogue(n) if i.kind in KINEMATIC_KINDS]
 
 
-def _campaign_observations(robot, model: ModelParams, plan_q: dict, fixture: Fixture, rod: RodCompliance):
+def _campaign_observations(robot, model: ModelParams, plan_q: dict, fixture: Fixture, rod: Rod):
     keys = sorted(plan_q)
     q = np.concatenate([plan_q[j] for j in keys])
     group = np.concatenate([np.full(len(plan_q[j]), j) for j in keys])
     Ts = {int(j): fixture.transform(j) for j in keys}
     F = np.array([Ts[int(j)][:3, :3] @ fixture.force_D_N for j in group])
-    fr, _ = ball_positions(robot, model, q, rod.mass_kg, rod.com_T_mm, F)
-    return Observations(q, fr.pW, F, rod.mass_kg, np.asarray(rod.com_T_mm, float), group, None, Ts)
+    fr, _ = ball_positions(robot, model, q, rod, F)
+    return Observations(q, fr.pW, F, rod, group, None, Ts)
 
 
 def linearisation_model(robot, tool_mm, base, priors: Priors) -> ModelParams:
@@ -187,20 +197,19 @@ def linear_campaign(robot, plan_q: dict, fixture: Fixture, base, reference: RodC
     ``reference`` (its mass, centre of mass and tool) on the nominal robot; raises
     :class:`~calibrate.errors.CalibrationError` where :func:`identify` would (unidentifiable parameters)."""
     model = linearisation_model(robot, reference.tool_mm, base, priors)
-    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
+    obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
     positions = [j for j in sorted(set(obs.group.tolist())) if not np.allclose(obs.fixture_T[j], np.eye(4))]
     infos = catalogue(robot.n, positions)
-    free, _ = free_parameters(robot, obs, reference.tool_mm, infos, model, np.zeros(len(infos)), {}, set(),
-                               positions, False)
-    fr, tau = ball_positions(robot, model, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, obs.force_W_N)
+    free, _ = free_parameters(robot, obs, apply(model, infos, np.zeros(len(infos))),
+                              Selection(infos, reference.tool_mm, positions))
+    fr, tau = obs.balls(robot, model)
     free_infos = [infos[k] for k in free]
     J = position_jacobian(fr, tau, free_infos, model.base, obs.group).reshape(-1, len(free))
     kin = _kin_infos(robot.n)
     J_kin = position_jacobian(fr, tau, kin, model.base, obs.group).reshape(-1, len(kin))
     names = [i.name for i in kin]
     kin_of_free = np.array([names.index(i.name) if i.name in names else -1 for i in free_infos])
-    B = deflection_basis(robot, model, obs.q_rad, obs.force_W_N, reference.mass_kg,
-                         reference.com_T_mm).reshape(-1, 18)
+    B = deflection_basis(robot, model, obs.q_rad, obs.force_W_N, obs.rod).reshape(-1, 18)
     Sigma = noise_covariance(obs, priors.device_noise_mm, priors.fixture_sigma)
     scale = np.array([PRIOR_SCALE[i.unit] * INTERNAL_SCALE[i.unit] for i in free_infos])
     return LinearCampaign(J, J_kin, kin_of_free, Sigma, B, scale, tuple(i.name for i in free_infos),
@@ -235,9 +244,8 @@ def validation_draws(robot, priors: Priors, draws: int, seed: int = 0) -> Valida
     M, D = int(priors.validation_points), int(draws)
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (D * M, robot.n))
-    mass, com = VALIDATION_MASS
-    model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
-    fr, tau = ball_positions(robot, model, vq, mass, np.asarray(com, float))
+    model = linearisation_model(robot, VALIDATION_ROD.tool_mm, np.zeros(6), priors)
+    fr, tau = ball_positions(robot, model, vq, VALIDATION_ROD)
     kin = _kin_infos(robot.n)
     Jv = position_jacobian(fr, tau, kin, model.base).reshape(D, M * 3, len(kin))
     bt = [ParamInfo(f"base_{k}", "base_t", i, "mm") for i, k in enumerate("xyz")]
@@ -301,7 +309,6 @@ def compliance_draws(reference: RodCompliance, calc: RodCompliance | None, metho
             files[m] = np.zeros((D, 18))
         elif m is Method.CALC:
             if calc is None:
-                from .errors import CalibrationError
                 raise CalibrationError("method calc needs the closed-form compliance file", key="methods")
             files[m] = np.tile(np.concatenate([calc.C_F.ravel(), calc.C_g.ravel()]), (D, 1))
         elif m is Method.FEA:
@@ -324,16 +331,20 @@ class LinearPrediction:
 
 
 @dataclass(frozen=True)
-class _Draws:
-    """The random parts of the draws: the truth's errors xi (D, K) [internal units], the campaign noise
-    eps (D, 3N) [mm] and the validation noise n (D, 3M) [mm], projected off base and tool."""
+class Draws:
+    """The random parts of the draws (:func:`random_parts`): the truth's errors xi (D, K) [internal units], the
+    campaign noise eps (D, 3N) [mm] and the validation noise Pn (D, 3M) [mm], projected off base and tool."""
 
     xi: np.ndarray
     eps: np.ndarray
     Pn: np.ndarray
 
 
-def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Priors, seed: int) -> _Draws:
+def random_parts(lc: LinearCampaign, vd: ValidationDraws, prior: tuple, priors: Priors, seed: int) -> Draws:
+    """The draws' random parts (:class:`Draws`) from the generator ``[seed, 3]``: the truth's errors from
+    ``prior`` = (mean, sd) (:func:`robot_prior`; a joint compliance uniform, the rest Gaussian), the campaign
+    noise with the covariance ``lc.Sigma`` and the validation scatter of ``priors``."""
+    mean, sd = prior
     rng = np.random.default_rng([seed, 3])
     D = vd.PJ.shape[0]
     is_c = (mean > 0)
@@ -343,7 +354,7 @@ def _random_parts(lc: LinearCampaign, vd: ValidationDraws, mean, sd, priors: Pri
     eps = rng.standard_normal((D, L.shape[0])) @ L.T
     n = _validation_sd(priors, vd) * rng.standard_normal(vd.PJ.shape[:2])
     Pn = n - _mv(vd.Q, _mv(np.swapaxes(vd.Q, 1, 2), n))
-    return _Draws(xi, eps, Pn)
+    return Draws(xi, eps, Pn)
 
 
 def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
@@ -359,17 +370,6 @@ def _validation_sd(priors: Priors, vd: ValidationDraws) -> float:
     return float(np.hypot(priors.instrument_noise_mm, floor_sd))
 
 
-def _campaign_extra(robot, lc: LinearCampaign, plan_q: dict, fixture: Fixture, base, reference: RodCompliance,
-                    priors: Priors, true: np.ndarray, seed: int) -> np.ndarray:
-    """(D, 3N) [mm] per draw: the rod's slip and the robot floor in the campaign's data
-    (:func:`calibrate.unmodelled.campaign_offsets`)."""
-    if not (priors.rod_slip or priors.robot_floor_mm > 0):
-        return np.zeros((true.shape[0], lc.J.shape[0]))
-    model = linearisation_model(robot, reference.tool_mm, base, priors)
-    obs = _campaign_observations(robot, model, plan_q, fixture, reference)
-    return campaign_offsets(robot, model, obs, priors, true, seed)
-
-
 def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> np.ndarray | None:
     """(D, 3M) [mm] the robot floor on the validation points, projected (the campaign's floor of each draw,
     :func:`calibrate.unmodelled.validation_floor_offsets`); None without a floor or without the configurations."""
@@ -378,10 +378,9 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
     key = (repr(robot), float(priors.robot_floor_mm), tuple(priors.joint_compliance), int(seed),
            hash(vd.q_rad.tobytes()))
     if key not in _VFLOOR:                            # the same for every design: kept for the next one
-        mass, com = VALIDATION_MASS
-        model = linearisation_model(robot, np.asarray(VALIDATION_TOOL_MM, float), np.zeros(6), priors)
+        model = linearisation_model(robot, VALIDATION_ROD.tool_mm, np.zeros(6), priors)
         _VFLOOR.clear()
-        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, mass, com, vd.Q, priors.robot_floor_mm,
+        _VFLOOR[key] = validation_floor_offsets(robot, model, vd.q_rad, VALIDATION_ROD, vd.Q, priors.robot_floor_mm,
                                                 seed)
     return _VFLOOR[key]
 
@@ -389,22 +388,19 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
 _VFLOOR: dict = {}
 
 
-def _to_kin(lc: LinearCampaign, K: int) -> np.ndarray:
-    """(K, P): the identified kinematic parameters from the free ones."""
-    E = np.zeros((K, lc.J.shape[1]))
-    k = np.nonzero(lc.kin_of_free >= 0)[0]
-    E[lc.kin_of_free[k], k] = 1.0
-    return E
+def exact_mean_square(lc: LinearCampaign, vd: ValidationDraws, A: np.ndarray, dC: np.ndarray, prior: tuple,
+                      extra: np.ndarray | None = None, val_extra: np.ndarray | None = None) -> float:
+    """Mean-square validation error [mm^2] (without the validation noise) over the draws' compliances,
+    regularisations and validation sets, the Gaussian parts (campaign noise, the truth's spread) by their
+    covariance: ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``, ``vd.W``).
 
-
-def _exact_ms(lc: LinearCampaign, vd: ValidationDraws, W, E, A, dC, mean, sd, extra=None, val_extra=None
-              ) -> float:
-    """Mean-square validation error [mm^2] over the draws' compliances, regularisations and validation sets,
-    the Gaussian parts (campaign noise, the truth's spread) by their covariance:
-    ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``); the data's bias per draw is what
-    the compensation leaves, ``B vec(C_true - C_file)`` (``dC`` (D, 18)), plus ``extra`` (D, 3N) [mm] (the
-    rod's slip, the robot floor at the campaign's poses; None: none) and on validation ``val_extra`` (D, 3M)
-    [mm] (the robot floor there, projected; None: none)."""
+    A : (D, P, 3N) each draw's gains (:meth:`LinearCampaign.gains`); dC : (D, 18) what the compensation leaves of
+    each draw's compliance, ``vec(C_true - C_file)`` (the data's bias ``B dC``); prior : (mean, sd) (K,) of the
+    truth's kinematic errors (:func:`robot_prior`); extra : (D, 3N) [mm] further bias of the data (the rod's
+    slip, the robot floor at the campaign's poses; None: none); val_extra : (D, 3M) [mm] on validation (the
+    robot floor there, projected; None: none)."""
+    mean, sd = prior
+    W, E = vd.W, lc.kinematic_map(vd.PJ.shape[2])
     EA = E @ A                                                        # (D, K, 3N)
     R = EA @ lc.J_kin - np.eye(E.shape[0])
     bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
@@ -437,11 +433,14 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     vd = validation if validation is not None else cached_validation_draws(robot, priors, draws, seed)
     D, K = vd.PJ.shape[0], vd.PJ.shape[2]
     mean, sd = robot_prior(robot, priors)
-    rnd = _random_parts(lc, vd, mean, sd, priors, seed)
+    rnd = random_parts(lc, vd, (mean, sd), priors, seed)
     _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
-    extra = _campaign_extra(robot, lc, plan_q, fixture, base, reference, priors, true, seed)
-    W = vd.W
-    E = _to_kin(lc, K)
+    extra = np.zeros((D, lc.J.shape[0]))             # the rod's slip and the robot floor in the campaign's data
+    if priors.rod_slip or priors.robot_floor_mm > 0:
+        model = linearisation_model(robot, reference.tool_mm, base, priors)
+        obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
+        extra = campaign_offsets(robot, model, obs, priors, true, seed)
+    E = lc.kinematic_map(K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
     vf = _validation_floor(robot, vd, priors, seed)
@@ -449,14 +448,14 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     ms_clean = ms_noise if vf is None else ms_noise + float(np.mean(np.sum(vf ** 2, axis=1))) / M
     y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     A_true = lc.gains(y_robot, rough=True)
-    ms_true = _exact_ms(lc, vd, W, E, A_true, np.zeros((D, 18)), mean, sd, extra, vf) + ms_noise
+    ms_true = exact_mean_square(lc, vd, A_true, np.zeros((D, 18)), (mean, sd), extra, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
         A = lc.gains(y, rough=m is not Method.NONE)
         delta = _mv(A, y) @ E.T - rnd.xi
         means, maxs, medians = _stats(_mv(vd.PJ, delta) + Pn)
-        ms = _exact_ms(lc, vd, W, E, A, dC[m], mean, sd, extra, vf) + ms_noise
+        ms = exact_mean_square(lc, vd, A, dC[m], (mean, sd), extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
                                    float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,

@@ -21,7 +21,7 @@ import numpy as np
 
 from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import read_text_checked
-from rodlab.core.frames import matrix_to_pose, skew
+from rodlab.core.frames import matrix_to_pose, skew, pose_to_matrix
 
 from .campaign import Fixture, cell_number, leading_comments
 from .device import Device
@@ -207,7 +207,7 @@ def _fit_position(probes: ProbeSet, device: Device, j: int) -> PositionFit:
     cov = s2 * np.linalg.inv(J.T @ J)
     chi2 = float((r ** 2).sum() / s2)
     dof = 3 * m.size - 6
-    from scipy.stats import chi2 as chi2_dist
+    from scipy.stats import chi2 as chi2_dist                           # heavy (scipy.stats, ~0.6 s)
     p = float(chi2_dist.sf(chi2, dof)) if dof > 0 else 1.0
     return PositionFit(j, T, cov, r, names, chi2, dof, p, _suspect(F, P, r, names))
 
@@ -242,7 +242,7 @@ def _kabsch(F: np.ndarray, P: np.ndarray) -> np.ndarray:
 
 def _perturbed(T: np.ndarray, e: np.ndarray) -> np.ndarray:
     """T moved by the left perturbation e = (dt [mm], omega [rad]) (exact rotation)."""
-    from scipy.spatial.transform import Rotation
+    from scipy.spatial.transform import Rotation                        # heavy (scipy.spatial, ~0.35 s)
     E = np.eye(4)
     E[:3, :3] = Rotation.from_rotvec(e[3:]).as_matrix()
     E[:3, 3] = e[:3]
@@ -274,7 +274,6 @@ ARM_POSE_W = np.array([900.0, -400.0, -300.0, 5.0, -10.0, 120.0])
 def simulated_probe_text(Ts: dict, device: Device, accuracy_mm: float, rng, arm_pose_W=ARM_POSE_W) -> str:
     """A probe file of the device frames ``Ts`` {j: 4x4 pose of {D_j} in {W}}: every feature measured in the
     arm's frame (at ``arm_pose_W``) with normal errors of ``accuracy_mm`` per coordinate."""
-    from rodlab.core.frames import pose_to_matrix
     T_A_W = np.linalg.inv(pose_to_matrix(arm_pose_W))
     rows = [f"# accuracy_mm: {accuracy_mm:g}", ",".join(PROBE_COLUMNS)]
     for j in sorted(Ts):

@@ -14,6 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .jacobian import position_jacobian
+
+from .observations import noise_covariance
 __all__ = ["ResidualTest", "residual_test", "P_MISSING", "BIRGE_MATERIAL"]
 
 #: tail probability below which the residuals are not noise (the diagnosers' likelihood-ratio level too)
@@ -81,10 +84,8 @@ def whitened_projection(r_mm: np.ndarray, J: np.ndarray, L: np.ndarray) -> np.nd
 def residual_test(robot, res, obs, noise_mm: float, fixture_sigma=(0.01, 0.002)) -> ResidualTest:
     """The test of ``res`` (a :class:`calibrate.identify.CalibrationResult` of ``obs``) with device noise
     ``noise_mm`` [mm] and clamping-pose uncertainty ``fixture_sigma`` ([mm], [deg])."""
-    from scipy.special import chdtrc
+    from scipy.special import chdtrc                                    # heavy (scipy.special, ~0.15 s)
 
-    from .observations import noise_covariance
-    from .jacobian import position_jacobian
 
     if not (np.isfinite(noise_mm) and noise_mm > 0):
         raise ValueError(f"noise_mm must be > 0, got {noise_mm!r}")

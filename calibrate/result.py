@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rodlab.core.fileio import atomic_write_json, json_safe
+from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams
@@ -85,8 +86,8 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,
                    "warnings": res.warnings, "cautions": res.cautions}}
     if res.residual_check is not None:
+        from .trust import completeness, completeness_statement  # start-up: loaded on first use, not by `rodlab --help`
         out["fit"]["residual_test"] = res.residual_check.to_dict()
-        from .trust import completeness, completeness_statement
         out["fit"]["completeness"] = {"verdict": str(completeness(res)), "statement": completeness_statement(res)}
     if res.prediction is not None:
         out["fit"]["prediction"] = res.prediction.to_dict()
@@ -146,7 +147,6 @@ def read_calibration(path) -> CalibrationFile:
         got = data.get("format") if isinstance(data, dict) else type(data).__name__
         raise CalibrationError(f"expected format \"{FORMAT_CALIBRATION}\" or \"{CALIBRATION_FORMATS[1]}\" (written by "
                                f"`rodlab calibrate --json`), got {got!r}", path=p, key="format")
-    from rodlab.core.schema import require_schema
     require_schema(data, FORMAT_CALIBRATION, p, text, CalibrationError)   # every parameter {value, unit, ...}
     params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
               for name, v in data["parameters"].items()}

@@ -25,6 +25,7 @@ import numpy as np
 
 from rodlab.core.errors import did_you_mean
 from rodlab.core.frames import pose_to_matrix
+from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
@@ -162,7 +163,6 @@ def read_robot_toml(path) -> Robot:
     flange = pose_to_matrix(_numbers(data.get("flange_pose", [0.0] * 6), (6,),
                                      {"path": p, "key": "flange_pose", "line": _line(text, None, "flange_pose")}))
     name = str(data.get("name", p.stem))
-    from rodlab.core.schema import require_schema
     require_schema(data, "rodlab.robot/2", p, text, CalibrationError, kind="toml")    # anything the rules above miss
     if convention == "mdh":
         return robot_from_chain(_mdh_chain(name, cols, flange, gravity, source or str(p)), names, path=p)

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.core.errors import did_you_mean
+
 from .errors import CalibrationError
 from .robot import Robot, robot_from_chain
 from .robot_lines import ZeroChain
@@ -76,7 +78,7 @@ def _pose(joint, q: float = 0.0) -> np.ndarray:
     T = np.array(joint.origin if joint.origin is not None else np.eye(4), float)
     T[:3, 3] *= 1000.0
     if joint.type in _MOVING and q != 0.0:
-        from scipy.spatial.transform import Rotation
+        from scipy.spatial.transform import Rotation                    # heavy (scipy.spatial, ~0.35 s)
         axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
         R = np.eye(4)
         R[:3, :3] = Rotation.from_rotvec(axis / np.linalg.norm(axis) * q).as_matrix()
@@ -119,7 +121,6 @@ def urdf_chain(model, base_link: str | None = None, tip_link: str | None = None,
     base = base_link or (roots[0] if roots else None)
     for what, name in (("base_link", base), ("tip_link", tip_link)):
         if name is not None and name not in links:
-            from rodlab.core.errors import did_you_mean
             raise CalibrationError(f"no link named {name!r}." + did_you_mean(str(name), links), path=path, key=what)
     tip = tip_link or _default_tip(base, children, path)
     joints, link = [], tip

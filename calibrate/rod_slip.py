@@ -46,5 +46,5 @@ def slip_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.nd
     if slip == 0 or not rod.C_g.any():
         return np.zeros((q.shape[0], 3))
     F = np.broadcast_to(np.asarray(force_W_N, float), (q.shape[0], 3))
-    R_TW, _, _ = flange_loads(robot, params, q, F, rod.mass_kg, rod.com_T_mm)
+    R_TW, _, _ = flange_loads(robot, params, q, F, rod)
     return float(slip) * np.einsum("nij,jk,nk->ni", R_TW, rod.C_g, np.asarray(u, float))

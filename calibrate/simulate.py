@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.core.compliance import RodCompliance
+from rodlab.core.compliance import RodCompliance, write_compliance
 from rodlab.core.fileio import atomic_write_json, atomic_write_text
 from rodlab.core.frames import matrix_to_pose, rotation_from_abc
 
@@ -23,8 +23,11 @@ from .campaign import Fixture
 from .errors import CalibrationError
 from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, deflection_offsets
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
-from .ik import random_configurations, solve_ik_groups
+from .ik import random_configurations, solve_ik_groups, solve_ik_positions
 from .kinematics import ModelParams, ball_positions
+from .rod import Rod
+from .probe import simulated_probe_text
+from .device import write_device
 
 __all__ = ["CampaignSpec", "simulate_campaign", "random_truth", "standard_base", "fixture_layout", "standard_fixture",
            "RobotFloor", "robot_floor"]
@@ -198,7 +201,7 @@ def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> di
         seeds = random_configurations(robot, rng, len(short) * m)
         targets = {j: Ts[j][:3, 3] + rng.uniform(-spec.alignment_mm, spec.alignment_mm, (m, 3)) @ Ts[j][:3, :3].T
                    for j in short}
-        for j, q in solve_ik_groups(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, forces).items():
+        for j, q in solve_ik_groups(robot, truth, targets, seeds, rod, forces).items():
             got[j] += list(q)
     for j in Ts:
         if len(got[j]) < k:
@@ -240,8 +243,8 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
         rod_true = m.true_rod(rod_true, p)
     truth = random_truth(robot, rod.tool_mm, rng, spec.error_scale).with_(base=standard_base())
     wp, Ts = fixture_layout(spec.positions, rng)
-    readings = _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s,
-                         device)
+    world = _World(truth, Rod.of(rod), rod_true, Ts, active, tuple(compensations), temp_K_per_s, device)
+    readings = _readings(robot, world, spec, rng)
     xD, corrupted = _corrupt(readings, spec, active)
     readings = replace(readings, xD=xD)
     out.mkdir(parents=True, exist_ok=True)             # after every check and the reachability of the poses
@@ -251,17 +254,32 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
                                                       "positions": recorded,
                                                       "contact_force_N": _force_at_datum(device).tolist()})
     if device is not None:
-        from .device import write_device
-        from .probe import simulated_probe_text
         write_device(device, out / "multical.device.json")
         atomic_write_text(out / "multical.probe.csv", simulated_probe_text(Ts, device, spec.probe_accuracy_mm,
                                                                            np.random.default_rng([spec.seed, 3])))
     _write_validation(out / "multical.validation.csv", robot, truth, spec, rng, active)
-    from rodlab.core.compliance import write_compliance
     write_compliance(rod, out / "rod.compliance.json")
-    t = _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s)
+    t = _truth_record(robot, world, spec, corrupted)
     atomic_write_json(out / "truth.json", t)
     return t
+
+
+@dataclass(frozen=True)
+class _World:
+    """What the simulated campaign really is (the calibrator sees it only through the readings): the true robot
+    model, the rod the calibrator is given (its tool, weight and compliance), the rod as it really is (its
+    compliance deflects the ball), the true clamping poses {j: 4 x 4 in {W}}, the active effects [(effect,
+    parameters)], the compensations' true effects, the room's warming rate [K/s] and the device as built (None:
+    the paper's, constant contact force)."""
+
+    truth: ModelParams
+    rod: Rod
+    rod_true: RodCompliance
+    Ts: dict
+    active: list
+    compensations: tuple = ()
+    temp_K_per_s: float = 0.0
+    device: object = None
 
 
 @dataclass
@@ -299,11 +317,14 @@ def _device_noise(rng, sigma_mm: float, m: int, device) -> np.ndarray:
     return n if device is None else device.positions(device.zero_mm + n)
 
 
-def _spring_loaded(robot, truth, rod, rod_true, qt, T, device, Fm):
-    """Ball centres in {W} (true robot, true rod deflected) and the contact forces in {W}; with a device's
-    springs the force is the one at each point's readings (one update: a spring rate changes it by ~1 %)."""
+def _spring_loaded(robot, world: _World, qt, T, Fm):
+    """Ball centres in {W} (true robot, true rod deflected) at the true angles ``qt`` of a clamping position of
+    pose ``T`` under the contact forces ``Fm`` in {W}; with a device's springs the force is the one at each point's
+    readings (one update: a spring rate changes it by ~1 %)."""
+    truth, rod, rod_true, device = world.truth, world.rod, world.rod_true, world.device
+
     def centres(F):
-        fr, _ = ball_positions(robot, truth, qt, rod.mass_kg, rod.com_T_mm, F)
+        fr, _ = ball_positions(robot, truth, qt, rod, F)
         return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     fr, pW = centres(Fm)
     if device is not None and device.has_springs:
@@ -317,22 +338,20 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     """The operator aligns the ball on the device's readings, so the rod's deflection under its weight and the
     contact force is taken out of the alignment: each configuration moved (IK from itself) until the deflected
     ball is where the undeflected one was; one that IK cannot move keeps its place."""
-    from .ik import solve_ik_positions
     keys = list(reached)
     q = np.concatenate([reached[j] for j in keys])
     F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])
-    fr, _ = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
-    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod.mass_kg,
-                             rod.com_T_mm, F)
+    fr, _ = ball_positions(robot, truth, q, rod, F)
+    res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod, F)
     q = np.where(res.ok[:, None], res.q_rad, q)
     edges = np.cumsum([0] + [len(reached[j]) for j in keys])
     return {j: q[a:b] for j, a, b in zip(keys, edges[:-1], edges[1:])}
 
 
-def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations, temp_K_per_s, device=None
-              ) -> _Readings:
+def _readings(robot, world: _World, spec, rng) -> _Readings:
     """What the device reads at every clamping position: the true robot with the true rod deflected by its
     weight and the contact force, the effects' offsets, device noise, quantised joint angles."""
+    truth, rod, Ts, active, device = world.truth, world.rod, world.Ts, world.active, world.device
     forces = {j: Ts[j][:3, :3] @ _force_at_datum(device) for j in Ts}
     reached = _reach_positions(robot, truth, rod, Ts, forces, spec, rng)
     if device is not None:
@@ -344,14 +363,14 @@ def _readings(robot, truth, rod, rod_true, Ts, spec, rng, active, compensations,
         qt = _true_angles(q, active)                                   # the angles the joints really take
         m = len(q)
         Fm = np.broadcast_to(forces[j], (m, 3))
-        fr, pW = _spring_loaded(robot, truth, rod, rod_true, qt, Ts[j], device, Fm)
+        fr, pW = _spring_loaded(robot, world, qt, Ts[j], Fm)
         Tinv = np.linalg.inv(Ts[j])
         xD = pW @ Tinv[:3, :3].T + Tinv[:3, 3] + _device_noise(rng, spec.device_noise_mm, m, device)
         times = t + np.cumsum(rng.uniform(40, 120, m))
         t = float(times[-1])
-        temps = np.round(22.0 + temp_K_per_s * np.round(times), 2)
-        for c in compensations:
-            grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod.mass_kg, rod.com_T_mm))
+        temps = np.round(22.0 + world.temp_K_per_s * np.round(times), 2)
+        for c in world.compensations:
+            grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod))
             xD = xD + grow_W @ Tinv[:3, :3].T
         for eff, p in active:
             grow = eff.reading_offset_W(pW, times, fr.t_W0, p)
@@ -408,7 +427,7 @@ def _write_validation(path: Path, robot, truth, spec, rng, active) -> None:
     vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
-    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), 0.3, [0, 0, -60])
+    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), Rod.rigid(vt, 0.3, [0, 0, -60]))
     vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
     lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
              ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]
@@ -428,8 +447,9 @@ def _check_compensations(compensations) -> None:
                                    "true rod as rod_true instead of a rod_deflection entry", key="compensations")
 
 
-def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, compensations, temp_K_per_s) -> dict:
+def _truth_record(robot, world: _World, spec, corrupted: dict) -> dict:
     """``truth.json``: the true model, fixture poses and every simulated effect with its parameters."""
+    truth, rod, rod_true, Ts, active = world.truth, world.rod, world.rod_true, world.Ts, world.active
     t = {"format": "rodlab.truth.campaign/1", "seed": spec.seed, "spec": spec.__dict__,
          "true_base_pose_W": truth.base.tolist(), "true_tool_mm": truth.tool.tolist(),
          "dtheta_deg": np.rad2deg(truth.theta_offset - np.deg2rad(robot.theta_offset_deg)).tolist(),
@@ -442,8 +462,8 @@ def _truth_record(robot, truth, spec, Ts, rod, rod_true, active, corrupted, comp
         for k, v in m.truth(p).items():
             t[k] = {**t[k], **v} if isinstance(v, dict) and isinstance(t.get(k), dict) else v
     simulated = {k: v for c in COMPENSATIONS.values() for k, v in c.truth_of(None).items()}
-    simulated.update({k: v for c in compensations for k, v in type(c).truth_of(c).items()})
-    t.update({**simulated, "temp_K_per_s": float(temp_K_per_s),
+    simulated.update({k: v for c in world.compensations for k, v in type(c).truth_of(c).items()})
+    t.update({**simulated, "temp_K_per_s": float(world.temp_K_per_s),
               "r_true": float(rod_true.C_F[1, 1] / rod.C_F[1, 1]) if rod.C_F[1, 1] else 1.0,
               "effects": [{"effect": str(m.effect), **p} for m, p in active], **corrupted})
     return t

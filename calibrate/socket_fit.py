@@ -26,7 +26,7 @@ import numpy as np
 
 from .covariance import correlation, parameter_covariance
 from .errors import CalibrationError
-from .estimate import check_names, parameter_value, pinned_vector, select_free, solve
+from .estimate import Selection, check_names, parameter_value, pinned_vector, select_free, solve
 from .result import CalibrationResult
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
@@ -123,8 +123,22 @@ def _distance_blocks(C: np.ndarray, prob: _Problem, P: int):
     return (rho - prob.pair_mm) / s, J
 
 
-def _functions(robot, start, infos, x, free, prob: _Problem, prior: np.ndarray, x0: np.ndarray):
-    """Pure residual and Jacobian of ``z = [free robot parameters (internal units), centres (mm)]``."""
+@dataclass
+class _State:
+    """Where the socket fit stands: the internal parameter vector ``x``, the free parameters, which of them carry a
+    prior (bool, one per catalogue entry), the socket centres (G, 3) [mm] and the last solver result."""
+
+    x: np.ndarray
+    free: list
+    prior: np.ndarray
+    C: np.ndarray
+    sol: object = None
+
+
+def _functions(robot, start, infos, prob: _Problem, st: _State, x0: np.ndarray):
+    """Pure residual and Jacobian of ``z = [free robot parameters (internal units), centres (mm)]`` around the
+    state ``st``; the priors pull towards ``x0`` (the free parameters' start values)."""
+    x, free, prior = st.x, st.free, st.prior
     P = len(free)
     infos_free = [infos[k] for k in free]
     scale = np.array([PRIOR_SCALE[infos[k].unit] * INTERNAL_SCALE[infos[k].unit] for k in free])
@@ -166,18 +180,20 @@ def _rule_held(robot, prob: _Problem, pinned: dict) -> dict:
     return {nm: why for nm, why in held.items() if nm not in pinned}
 
 
-def _free_parameters(robot, start, infos, prob: _Problem, C0, pinned: dict, freed: set, fix_unidentifiable: bool):
+def _free_parameters(robot, start, prob: _Problem, C0, sel: Selection):
     """The parameters to fit: structural rules, the rules of socket data (:func:`_rule_held`), then the rank
     analysis of the robot's columns projected off the centres' (what a centre absorbs is not information about
-    the robot)."""
-    fun, jac = _functions(robot, start, infos, np.zeros(len(infos)), list(range(len(infos))), prob,
-                          np.zeros(len(infos), bool), np.zeros(len(infos)))
+    the robot), around the centres ``C0``."""
+    infos, pinned, freed, fix_unidentifiable = sel.infos, sel.pinned, set(sel.freed), sel.fix_unidentifiable
+    P = len(infos)
+    fun, jac = _functions(robot, start, infos, prob, _State(np.zeros(P), list(range(P)), np.zeros(P, bool), C0),
+                          np.zeros(P))
     J = jac(np.concatenate([np.zeros(len(infos)), C0.ravel()]))
     Jp = _off_centres(J, len(infos))
     rules = _rule_held(robot, prob, pinned)
     rules |= _negligible(infos, Jp, set(rules) | set(pinned) | freed)
-    free, reasons = select_free(robot, start.tool, infos, Jp, {nm: 0.0 for nm in rules} | dict(pinned),
-                            freed | {"tool_y"})
+    free, reasons = select_free(robot, Selection(infos, start.tool, (), {nm: 0.0 for nm in rules} | dict(pinned),
+                                                freed | {"tool_y"}), Jp)
     reasons |= rules
     structural = set(structural_fixed(robot, start.tool)) | {f"dtheta_{robot.n}"} | set(rules)
     deficient = {nm: why for nm, why in reasons.items()
@@ -242,15 +258,18 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
     x = pinned_vector(infos, start, pinned)
     fr, _ = ball_positions(robot, apply(start, infos, x), readings.q_rad)
     C = socket_centres(fr.pW, readings)
-    free, reasons = _free_parameters(robot, start, infos, prob, C, pinned, freed, fix_unidentifiable)
+    free, reasons = _free_parameters(robot, start, prob, C, Selection(infos, start.tool, (), pinned, freed,
+                                                                      fix_unidentifiable))
     _check_size(readings, prob, free)
     prior = np.zeros(len(infos), bool)
     x0 = x.copy()
+    st = _State(x, free, prior, C)
     for _ in range(max_passes):
-        fun, jac = _functions(robot, start, infos, x, free, prob, prior, x0[free])
-        sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), np.full(len(free) + C.size, -np.inf),
-                     np.full(len(free) + C.size, np.inf), robust, 3.0, 200 * (len(free) + C.size))
+        fun, jac = _functions(robot, start, infos, prob, st, x0[free])
+        unbounded = (np.full(len(free) + C.size, -np.inf), np.full(len(free) + C.size, np.inf))
+        sol = solve(fun, jac, np.concatenate([x[free], C.ravel()]), unbounded, robust, 3.0, 200 * (len(free) + C.size))
         x[free], C = sol.x[:len(free)], sol.x[len(free):].reshape(-1, 3)
+        st.C, st.sol = C, sol
         reduced = float(sol.fun @ sol.fun) / max(sol.fun.size - sol.x.size, 1)
         sig = np.sqrt(np.diag(_covariance(sol.jac, reduced)))[:len(free)]
         weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]
@@ -260,7 +279,7 @@ def identify_sockets(robot, readings: SocketReadings, *, pinned: dict | None = N
         prior[weak] = True
         log.info("socket fit: %d weakly identified parameter(s) get a prior: %s", len(weak),
                  ", ".join(infos[k].name for k in weak))
-    return _fit_result(robot, start, infos, x, free, prior, reasons, prob, sol, C)
+    return _fit_result(robot, start, infos, reasons, prob, st)
 
 
 def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
@@ -272,9 +291,9 @@ def _check_size(readings: SocketReadings, prob: _Problem, free: list) -> None:
                                key="sockets")
 
 
-def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, sol, C) -> SocketFit:
+def _fit_result(robot, start, infos, reasons: dict, prob: _Problem, st: _State) -> SocketFit:
     """The calibration result (values, sigmas, status, residuals, trust) and the centres."""
-    from .trust import trust_cautions, trust_warnings
+    x, free, prior, sol, C = st.x, st.free, st.prior, st.sol, st.C
     r = prob.readings
     p = apply(start, infos, x)
     res_w = sol.fun
@@ -298,6 +317,7 @@ def _fit_result(robot, start, infos, x, free, prior, reasons, prob: _Problem, so
                             [infos[k].name for k in free], np.zeros_like(resid_mm), bool(sol.success),
                             str(sol.message), int(sol.nfev), 1, float(np.linalg.cond(Jn)) if P else float("nan"))
     out.residual_check = _residual_test(chi2, dof, r)
+    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)     # residuals above the seat play: a caution (incomplete model)
     out.cautions = trust_cautions(out)
     keys = r.groups()
@@ -324,7 +344,7 @@ def _stated_noise(r: SocketReadings) -> float:
 
 
 def _residual_test(chi2: float, dof: int, r: SocketReadings) -> ResidualTest:
-    from scipy.special import chdtrc
+    from scipy.special import chdtrc                                    # heavy (scipy.special, ~0.15 s)
     p = float(chdtrc(dof, chi2))
     return ResidualTest(chi2, dof, chi2 / dof, p, _stated_noise(r), (), p < P_MISSING, clamping=False,
                         source="ball-bar length" if r.ball_bar else "seat")

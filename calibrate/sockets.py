@@ -15,10 +15,13 @@ present makes every row a ball-bar reading).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+import difflib
 
 import numpy as np
+
+from rodlab.core.fileio import atomic_write_text
 
 from .campaign import read_text_file, read_table, leading_comments
 from .errors import CalibrationError
@@ -116,7 +119,6 @@ class SocketReadings:
 
     def subset(self, placements) -> "SocketReadings":
         """The readings of some placements only (a fit on some, a check on the others)."""
-        from dataclasses import replace
         m = np.isin(self.placement, list(placements))
         return replace(self, q_rad=self.q_rad[m], placement=self.placement[m], socket=self.socket[m],
                        length_mm=None if self.length_mm is None else self.length_mm[m],
@@ -134,7 +136,6 @@ def _meta(p: Path, text: str) -> dict:
         if not re.fullmatch(r"[A-Za-z_]+", key):
             continue
         if key not in _KEYS:
-            import difflib
             near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.8)
             if near:                                      # a misspelt key, not a comment of the user's
                 raise CalibrationError(f"unknown key {key!r}; did you mean {near[0]!r}? A sockets file knows "
@@ -241,7 +242,6 @@ def _check_layout(r: SocketReadings) -> None:
 
 def write_sockets(path, readings: SocketReadings, comment: str = "") -> Path:
     """Write ``readings`` as a ``*.sockets.csv`` (atomically; q in deg with 6 decimals)."""
-    from rodlab.core.fileio import atomic_write_text
     r = readings
     head = [f"# {line}" for line in comment.splitlines()]
     if r.distances:

@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING
 
 from rodlab.core.enums import Completeness
 
+from .residual_test import BIRGE_MATERIAL
+
 if TYPE_CHECKING:
     from .crossval import Prediction
     from .result import CalibrationResult
@@ -160,7 +162,6 @@ def _partial_turn_cautions(res: "CalibrationResult") -> list[str]:
 
 
 def _residual_caution(res: "CalibrationResult") -> list[str]:
-    from .residual_test import BIRGE_MATERIAL
     test = res.residual_check
     if test is None or not test.missing or test.material:
         return []

@@ -17,7 +17,9 @@ import numpy as np
 from .compensations.rod_deflection import flange_loads
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations
+from .rod import Rod
 from .rod_slip import slip_directions
+from .simulate import robot_floor
 
 __all__ = ["cached_floor_draws", "campaign_offsets", "validation_floor_offsets"]
 
@@ -27,7 +29,6 @@ _FLOORS: dict = {}
 def cached_floor_draws(robot, floor_mm: float, draws: int, seed: int = 0) -> list:
     """:func:`calibrate.simulate.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
     design (one robot and floor at a time)."""
-    from .simulate import robot_floor
     key = (repr(robot), float(floor_mm), int(draws), int(seed))
     if key not in _FLOORS:
         _FLOORS.clear()
@@ -43,7 +44,7 @@ def campaign_offsets(robot, model: ModelParams, obs: Observations, priors, true_
     D = true_C.shape[0]
     out = np.zeros((D, 3 * obs.q_rad.shape[0]))
     if priors.rod_slip:
-        R_TW, _, _ = flange_loads(robot, model, obs.q_rad, obs.force_W_N, obs.rod_mass_kg, obs.rod_com_T_mm)
+        R_TW, _, _ = flange_loads(robot, model, obs.q_rad, obs.force_W_N, obs.rod)
         u = slip_directions(np.random.default_rng([seed, 46]), D * R_TW.shape[0]).reshape(D, -1, 3)
         Cg = true_C[:, 9:].reshape(D, 3, 3)
         out += priors.rod_slip * np.einsum("nij,djk,dnk->dni", R_TW, Cg, u).reshape(D, -1)
@@ -52,22 +53,21 @@ def campaign_offsets(robot, model: ModelParams, obs: Observations, priors, true_
         floors = cached_floor_draws(robot, priors.robot_floor_mm, D, seed)
         q = np.concatenate([obs.q_rad] + [fl.angles(obs.q_rad) for fl in floors])     # one batch: (1 + D) N
         F = np.tile(obs.force_W_N, (D + 1, 1))
-        p, _ = ball_positions(robot, model, q, obs.rod_mass_kg, obs.rod_com_T_mm, F)
+        p, _ = ball_positions(robot, model, q, obs.rod, F)
         pW = p.pW.reshape(D + 1, N, 3)
         out += (pW[1:] - pW[:1]).reshape(D, -1)
     return out
 
 
-def validation_floor_offsets(robot, model: ModelParams, q_rad: np.ndarray, mass_kg: float, com_T_mm,
-                             Q: np.ndarray, floor_mm: float, seed: int) -> np.ndarray:
+def validation_floor_offsets(robot, model: ModelParams, q_rad: np.ndarray, rod: Rod, Q: np.ndarray, floor_mm: float,
+                             seed: int) -> np.ndarray:
     """(D, 3M) [mm] the robot floor's offsets of the validation points ``q_rad`` (D, M, n) of the validation
-    rod (``model``'s tool, its mass and centre of mass), one floor per draw (the campaign's), projected off the
+    rod ``rod`` (``model``'s tool; its weight), one floor per draw (the campaign's), projected off the
     base / tool columns ``Q`` (D, 3M, 9) as the validation's refit takes them out."""
     D, M, n = q_rad.shape
-    com = np.asarray(com_T_mm, float)
     floors = cached_floor_draws(robot, floor_mm, D, seed)
     q1 = np.concatenate([fl.angles(q_rad[d]) for d, fl in enumerate(floors)])
-    p0, _ = ball_positions(robot, model, q_rad.reshape(D * M, n), mass_kg, com)
-    p1, _ = ball_positions(robot, model, q1, mass_kg, com)
+    p0, _ = ball_positions(robot, model, q_rad.reshape(D * M, n), rod)
+    p1, _ = ball_positions(robot, model, q1, rod)
     e = (p1.pW - p0.pW).reshape(D, 3 * M)
     return e - (Q @ (np.swapaxes(Q, 1, 2) @ e[:, :, None]))[:, :, 0]

@@ -40,7 +40,7 @@ def error_stats(err_mm: np.ndarray) -> ErrorStats:
 
 def validate(robot, model: ModelParams, pts: PointSet) -> tuple[ErrorStats, np.ndarray, ModelParams]:
     """Refit base and tool of ``model`` on ``pts``; return the statistics, per-point errors [mm] and the model."""
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares                            # heavy (scipy.optimize, ~0.3 s)
 
     start = model.with_(tool=np.asarray(pts.tool_mm, float))
     obs = points_observations(pts)
@@ -51,7 +51,7 @@ def validate(robot, model: ModelParams, pts: PointSet) -> tuple[ErrorStats, np.n
 
     def frames(z):
         p = apply(start, infos, z)
-        return p, ball_positions(robot, p, obs.q_rad, obs.rod_mass_kg, obs.rod_com_T_mm, None)
+        return p, ball_positions(robot, p, obs.q_rad, obs.rod)
 
     def fun(z):
         _, (fr, _) = frames(z)

@@ -162,7 +162,7 @@ def rod4_plan():
     the TX90: the study and rod-slip tests' shared campaign."""
     import numpy as np
 
-    from rodlab.calibrate import resolve_robot
+    from rodlab.calibrate import Rod, resolve_robot
     from rodlab.calibrate.plan import plan_poses
     from rodlab.calibrate.simulate import standard_fixture
     from rodlab.core.calc import calc_rod_compliance
@@ -171,5 +171,5 @@ def rod4_plan():
     fixture = standard_fixture()
     d = resolve_design("rod4")
     rod = calc_rod_compliance(d)
-    q, _ = plan_poses(robot, fixture, d.tool_mm, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm)
+    q, _ = plan_poses(robot, fixture, Rod.rigid(d.tool_mm, rod.mass_kg, rod.com_T_mm))
     return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod

@@ -38,7 +38,7 @@ def test_analytic_jacobian_matches_finite_differences(robot):
 
     def pos(xx):
         p = apply(base, infos, xx)
-        fr, tau = ball_positions(robot, p, q, 0.47, [-330, 0, -80], np.ones((7, 3)))
+        fr, tau = ball_positions(robot, p, q, Rod.rigid(np.zeros(3), 0.47, [-330, 0, -80]), np.ones((7, 3)))
         shift = np.zeros((7, 3))
         for info, v in zip(infos, xx):
             if info.kind == "fixture":
@@ -88,8 +88,8 @@ def test_degenerate_campaigns_are_refused(examples, robot):
     camp, fix, rod, _, _ = _load(examples, "campaign-null")
     obs = campaign_observations(camp, fix, rod)
     one = camp.position == 3
-    single = Observations(obs.q_rad[one], obs.x_W_mm[one], obs.force_W_N[one], obs.rod_mass_kg, obs.rod_com_T_mm,
-                          obs.group[one], None, {3: obs.fixture_T[3]})
+    single = Observations(obs.q_rad[one], obs.x_W_mm[one], obs.force_W_N[one], obs.rod, obs.group[one], None,
+                          {3: obs.fixture_T[3]})
     with pytest.raises(CalibrationError, match="cannot identify .* parameter"):
         identify(robot, single, Rod.of(rod), [RodDeflection.of(rod)])
     few = Observations(obs.q_rad[:4], obs.x_W_mm[:4], obs.force_W_N[:4])

@@ -42,8 +42,7 @@ def test_simulated_campaign_round_trip(tmp_path_factory, robot, rod):
 
 def test_planning_beats_a_random_choice(robot, rod, examples):
     fix = read_fixture(examples / "campaign-null" / "multical.fixture.json")
-    poses, obs = plan_poses(robot, fix, rod.tool_mm, k=6, candidates=10, seed=2, rod_mass_kg=rod.mass_kg,
-                            rod_com_T_mm=rod.com_T_mm)
+    poses, obs = plan_poses(robot, fix, Rod.of(rod), k=6, candidates=10, seed=2)
     assert all(v.shape == (6, 6) for v in poses.values())
     lim = robot.limits_deg
     for q in poses.values():

@@ -15,7 +15,9 @@ from rodlab.app.cli.main import build_parser
 from rodlab.calibrate import (COMPENSATIONS, CalibrationError, Compensation, FitOptions, ModelParams, Observations,
                               Rod, RodDeflection, ThermalGrowth, ball_positions, deflection_offsets, identify,
                               resolve_robot)
+from rodlab.calibrate import PointSet
 from rodlab.calibrate import compensations as registry
+from rodlab.calibrate.points import points_observations
 from rodlab.calibrate.simulate import simulate_campaign
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.enums import Method
@@ -89,12 +91,37 @@ def test_rod_is_the_compliance_files_rod():
     robot = resolve_robot("tx90")
     p = ModelParams.nominal(robot, rc.tool_mm)
     q = np.deg2rad([[0, 10, 90, 0, 30, 0], [40, -20, 100, 30, -40, 60]])
-    at = Observations(q, np.zeros((2, 3)), np.tile(F, (2, 1)), rc.mass_kg, rc.com_T_mm)
+    at = Observations(q, np.zeros((2, 3)), np.tile(F, (2, 1)), Rod.of(rc))
     np.testing.assert_array_equal(RodDeflection.of(rc).offsets(robot, p, at),
                                   deflection_offsets(robot, p, q, at.force_W_N, rc))
     none = RodDeflection.of(RodCompliance.none_like(rc))
     assert not none.active and none.label == "none" and not none.offsets(robot, p, at).any()
     assert not Rod.rigid([0.0, 0.0, 100.0]).deflects
+
+
+def test_the_rod_travels_with_the_observations_and_its_weight_bends_the_joints():
+    """The observations carry the rod they were measured with (the compliance file's, an instrument's payload),
+    and its weight is what loads the joints: the points move by the rod's weight on compliant joints, as
+    ball_positions with that rod moves them; a rod given as loose numbers is refused."""
+    rc = calc_rod_compliance(resolve_design("rod1"))
+    robot = resolve_robot("tx90")
+    p = ModelParams.nominal(robot, rc.tool_mm).with_(c=np.r_[0.0, np.full(5, 2e-6)])
+    q = np.deg2rad([[0, 10, 90, 0, 30, 0], [40, -20, 100, 30, -40, 60]])
+    F = np.tile([1.1, 1.25, 1.05], (2, 1))
+    heavy = Observations(q, np.zeros((2, 3)), F, Rod.of(rc))
+    light = Observations(q, np.zeros((2, 3)), F)
+    np.testing.assert_array_equal(heavy.balls(robot, p)[0].pW, ball_positions(robot, p, q, Rod.of(rc), F)[0].pW)
+    sag = np.linalg.norm(heavy.balls(robot, p)[0].pW - light.balls(robot, p)[0].pW, axis=1)
+    assert np.all(sag > 1e-3)                                   # 2 urad/(N m) joints under a rod of ~1 kg
+    rigid = Rod.rigid(rc.tool_mm, rc.mass_kg, rc.com_T_mm)       # the weight alone: the same load
+    np.testing.assert_array_equal(ball_positions(robot, p, q, rigid, F)[1], heavy.balls(robot, p)[1])
+    assert heavy.subset(np.array([True, False])).rod is heavy.rod
+    pts = PointSet(np.rad2deg(q), np.zeros((2, 3)), rc.tool_mm, 0.8, np.array([0.0, 0.0, -50.0]))
+    probe = points_observations(pts).rod                         # an instrument's probe: the file's tool and payload
+    assert probe.mass_kg == 0.8 and not probe.deflects and np.array_equal(probe.com_T_mm, [0.0, 0.0, -50.0])
+    np.testing.assert_array_equal(probe.tool_mm, rc.tool_mm)
+    with pytest.raises(TypeError, match="Rod.rigid"):
+        Observations(q, np.zeros((2, 3)), F, rc.mass_kg)
 
 
 @pytest.mark.parametrize("kw, key", [({"tool_mm": [1.0, 2.0]}, "tool_mm"), ({"mass_kg": -1.0}, "mass_kg"),

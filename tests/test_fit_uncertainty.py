@@ -5,6 +5,7 @@ import numpy as np
 
 from rodlab.calibrate.covariance import correlation, parameter_covariance
 from rodlab.calibrate.identify import Observations
+from rodlab.calibrate.rod import Rod
 
 
 def test_well_posed_covariance_is_the_inverse_normal_matrix():
@@ -27,14 +28,14 @@ def test_a_direction_the_data_do_not_see_has_infinite_variance_not_zero():
 def test_subset_keeps_every_per_point_field():
     """Outliers removed by the diagnoser used to drop the temperatures (and sigmas) of the points kept."""
     n = 6
-    obs = Observations(np.zeros((n, 6)), np.arange(3 * n, dtype=float).reshape(n, 3), np.ones((n, 3)), 1.5,
-                       np.zeros(3), np.arange(n) % 2, [f"p{i}" for i in range(n)], None,
+    obs = Observations(np.zeros((n, 6)), np.arange(3 * n, dtype=float).reshape(n, 3), np.ones((n, 3)),
+                       Rod.rigid(np.zeros(3), 1.5), np.arange(n) % 2, [f"p{i}" for i in range(n)], None,
                        np.ones((n, 3)), np.full((n, 3), 0.01), np.linspace(20, 25, n))
     keep = np.array([True, False, True, True, False, True])
     sub = obs.subset(keep)
     assert sub.x_W_mm.shape == (4, 3) and sub.labels == ["p0", "p2", "p3", "p5"]
     assert np.array_equal(sub.temp_C, obs.temp_C[keep]) and sub.sigma_mm.shape == (4, 3)
-    assert np.array_equal(sub.group, [0, 0, 1, 1]) and sub.rod_mass_kg == 1.5
+    assert np.array_equal(sub.group, [0, 0, 1, 1]) and sub.rod.mass_kg == 1.5
 
 
 def test_fewer_readings_than_parameters_leave_some_unseen():

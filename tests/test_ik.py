@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rodlab.calibrate import resolve_robot
+from rodlab.calibrate import Rod, resolve_robot
 from rodlab.calibrate.ik import solve_ik_position, solve_ik_positions
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.simulate import random_truth
@@ -27,12 +27,12 @@ def test_batch_reaches_targets_of_known_configurations(setup):
     robot, rod, truth, rng, lo, hi = setup
     F = np.array([1.1, 1.25, 1.05])
     q_true = rng.uniform(0.6 * lo, 0.6 * hi, (120, robot.n))
-    targets = ball_positions(robot, truth, q_true, rod.mass_kg, rod.com_T_mm, np.tile(F, (120, 1)))[0].pW
+    targets = ball_positions(robot, truth, q_true, Rod.of(rod), np.tile(F, (120, 1)))[0].pW
     seeds = rng.uniform(0.7 * lo, 0.7 * hi, (120, robot.n))
-    res = solve_ik_positions(robot, truth, targets, seeds, rod.mass_kg, rod.com_T_mm, F)
+    res = solve_ik_positions(robot, truth, targets, seeds, Rod.of(rod), F)
     assert res.ok.mean() > 0.85                                  # random far seeds: a few end in local minima
     assert np.all(res.error_mm[res.ok] < 1e-4)
-    pW = ball_positions(robot, truth, res.q_rad[res.ok], rod.mass_kg, rod.com_T_mm,
+    pW = ball_positions(robot, truth, res.q_rad[res.ok], Rod.of(rod),
                         np.tile(F, (int(res.ok.sum()), 1)))[0].pW
     np.testing.assert_allclose(pW, targets[res.ok], atol=1e-4)  # independently recomputed
     assert np.all(res.q_rad >= lo - 1e-12) and np.all(res.q_rad <= hi + 1e-12)
@@ -41,9 +41,9 @@ def test_batch_reaches_targets_of_known_configurations(setup):
 def test_seed_pull_gives_different_orientations_for_one_point(setup):
     """One target from many seeds: different joint solutions (the rod orientations a planner chooses from)."""
     robot, rod, truth, rng, lo, hi = setup
-    target = ball_positions(robot, truth, np.zeros((1, robot.n)) + 0.3, rod.mass_kg, rod.com_T_mm)[0].pW[0]
+    target = ball_positions(robot, truth, np.zeros((1, robot.n)) + 0.3, Rod.of(rod))[0].pW[0]
     seeds = rng.uniform(0.7 * lo, 0.7 * hi, (40, robot.n))
-    res = solve_ik_positions(robot, truth, target, seeds, rod.mass_kg, rod.com_T_mm)
+    res = solve_ik_positions(robot, truth, target, seeds, Rod.of(rod))
     q = res.q_rad[res.ok]
     assert len(q) >= 20
     spread = np.rad2deg(q.max(axis=0) - q.min(axis=0))
@@ -78,7 +78,7 @@ def test_static_torques_equal_the_sum_over_loads_beyond_each_joint(setup):
     fr = forward(truth, q)
     F_W = rng.normal(size=(25, 3))
     com = np.array([3.0, -2.0, -80.0])
-    tau = static_torques(robot, fr, 0.7, com, F_W)
+    tau = static_torques(robot, fr, Rod.rigid(np.zeros(3), 0.7, com), F_W)
     g0 = np.asarray(robot.gravity_base, float)
     n = robot.n
     loads = [(k, fr.T[:, k + 1, :3, :3] @ robot.com_mm[k] + fr.T[:, k + 1, :3, 3], robot.mass_kg[k] * g0)
@@ -91,3 +91,21 @@ def test_static_torques_equal_the_sum_over_loads_beyond_each_joint(setup):
                 arm = c - fr.o_prev[:, i]
                 ref[:, i] += np.einsum("mj,mj->m", fr.z_prev[:, i], np.cross(arm, np.broadcast_to(F, arm.shape)))
     np.testing.assert_allclose(tau, ref * 1e-3, atol=1e-12 * np.abs(ref).max())
+
+
+def test_the_rods_weight_as_two_numbers_still_works_with_a_warning(setup):
+    """ball_positions' old signature (the rod's mass and centre of mass as two numbers, positional or by keyword)
+    gives the same frames and torques as the rod, with a DeprecationWarning."""
+    robot, rod, truth, rng, lo, hi = setup
+    q = rng.uniform(0.5 * lo, 0.5 * hi, (5, robot.n))
+    F = np.tile([1.1, 1.25, 1.05], (5, 1))
+    fr, tau = ball_positions(robot, truth, q, Rod.of(rod), F)
+    with pytest.warns(DeprecationWarning, match="pass the rod as a Rod"):
+        old_pos = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
+    with pytest.warns(DeprecationWarning, match="pass the rod as a Rod"):
+        old_kw = ball_positions(robot, truth, q, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm, force_W_N=F)
+    for fr_o, tau_o in (old_pos, old_kw):
+        np.testing.assert_array_equal(fr_o.pW, fr.pW)
+        np.testing.assert_array_equal(tau_o, tau)
+    unloaded = ball_positions(robot, truth, q, None, F)[1]
+    assert np.abs(tau - unloaded).max() > 1.0                   # the rod's weight is not lost on the way

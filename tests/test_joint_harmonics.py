@@ -237,15 +237,15 @@ def test_joints_already_modelled_are_not_hypotheses_again(ur5):
 def test_an_initial_model_keeps_its_terms_and_refuses_to_drop_them(ur5):
     """identify(initial=...) re-centres the listed joints' terms on the new readings without changing the model,
     and refuses an initial model whose terms the call would drop."""
-    from rodlab.calibrate.identify import _harmonic_start
+    from rodlab.calibrate.identify import harmonic_start
     truth = _truth(ur5)
     q_old, q_new = (np.deg2rad(np.random.default_rng(s).uniform(-170, 170, (50, 6))) for s in (20, 21))
     start = truth.with_(h_ref=harmonic_reference(q_old, (4,)))
-    moved = _harmonic_start(start, q_new, (4,))
+    moved = harmonic_start(start, q_new, (4,))
     assert np.abs(moved.h_ref[3] - harmonic_reference(q_new, (4,))[3]).max() < 1e-12
     assert np.abs(forward(moved, q_new).pW - forward(start, q_new).pW).max() < 1e-9
     with pytest.raises(CalibrationError, match=r"joints \[4\] that would be dropped"):
-        _harmonic_start(start, q_new, ())
+        harmonic_start(start, q_new, ())
 
 
 def test_a_fit_with_no_degree_of_freedom_is_not_trusted(ur5):

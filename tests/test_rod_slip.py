@@ -24,7 +24,7 @@ def test_slip_is_the_deflection_under_a_random_load_of_its_weight(rod4_plan):
     F = np.zeros((q.shape[0], 3))
     u = slip_directions(np.random.default_rng(1), q.shape[0])
     off = slip_offsets(robot, p, q, F, rod, 2.0, u)
-    R_TW, _, _ = flange_loads(robot, p, q, F, rod.mass_kg, rod.com_T_mm)
+    R_TW, _, _ = flange_loads(robot, p, q, F, rod)
     np.testing.assert_allclose(np.einsum("nji,nj->ni", R_TW, off), 2.0 * u @ rod.C_g.T, atol=1e-12)
     np.testing.assert_allclose(slip_offsets(robot, p, q, F, rod.scaled(2.0, Method.FEA), 1.0, u), off, atol=1e-12)
     assert not slip_offsets(robot, p, q, F, rod, 0.0, u).any()

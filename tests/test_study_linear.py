@@ -9,8 +9,8 @@ from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.compensations import deflection_basis, deflection_offsets
 from rodlab.calibrate.kinematics import ModelParams
 from rodlab.calibrate.predict import Priors, predict_accuracy
-from rodlab.calibrate.predict_linear import (_exact_ms, _mv, _random_parts, _to_kin, compliance_draws,
-                                             linear_campaign, predict_linear, robot_prior, validation_draws)
+from rodlab.calibrate.predict_linear import (compliance_draws, exact_mean_square, linear_campaign, predict_linear,
+                                             random_parts, robot_prior, validation_draws)
 from rodlab.calibrate.simulate import standard_base
 from rodlab.core.enums import Method
 
@@ -22,7 +22,7 @@ def test_deflection_basis_is_the_offsets_linear_map(rod4_plan):
     q = np.concatenate(list(plan.values()))
     F = rng.normal(0, 2.0, (q.shape[0], 3))
     p = ModelParams.nominal(robot, rod.tool_mm, base=standard_base())
-    B = deflection_basis(robot, p, q, F, rod.mass_kg, rod.com_T_mm)
+    B = deflection_basis(robot, p, q, F, rod)
     for _ in range(3):
         G = rng.normal(0, 0.3, (3, 3))
         C_F, C_g = G @ G.T, rng.normal(0, 0.1, (3, 3))                 # C_F symmetric (Maxwell-Betti)
@@ -81,14 +81,14 @@ def test_exact_mean_square_is_the_draws_expectation(rod4_plan):
     lc = linear_campaign(robot, plan, fixture, standard_base(), rod, pri)
     vd = validation_draws(robot, pri, D, seed=5)
     mean, sd = robot_prior(robot, pri)
-    rnd = _random_parts(lc, vd, mean, sd, pri, 5)
+    rnd = random_parts(lc, vd, (mean, sd), pri, 5)
     _, dC, _ = compliance_draws(rod, None, [Method.FEA], pri, D, 5)
-    E = _to_kin(lc, vd.PJ.shape[2])
+    E = lc.kinematic_map(vd.PJ.shape[2])
     y = rnd.xi @ lc.J_kin.T + rnd.eps + dC[Method.FEA] @ lc.B.T
     A = lc.gains(y, rough=True)
-    e = _mv(vd.PJ, _mv(A, y) @ E.T - rnd.xi) + rnd.Pn
+    e = np.einsum("dij,dj->di", vd.PJ, np.einsum("dpi,di->dp", A, y) @ E.T - rnd.xi) + rnd.Pn
     per = np.sum(e ** 2, axis=1) / vd.points
-    exact = _exact_ms(lc, vd, vd.W, E, A, dC[Method.FEA], mean, sd) + \
+    exact = exact_mean_square(lc, vd, A, dC[Method.FEA], (mean, sd)) + \
         pri.instrument_noise_mm ** 2 * (3 * vd.points - 9) / vd.points
     assert abs(per.mean() - exact) < 4 * per.std() / np.sqrt(D)
 

@@ -9,10 +9,12 @@ the simulator (:func:`~rodlab.calibrate.simulate.simulate_campaign`) adds the tr
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+
+from ..rod import Rod
 
 __all__ = ["Compensation", "Poses"]
 
@@ -23,15 +25,14 @@ class Poses:
     :class:`~rodlab.calibrate.identify.Observations` (which has the same fields).
 
     q_rad : joint angles [rad], shape=(N, n); force_W_N : contact force on the ball in {W} [N], shape=(N, 3) (zero
-    when not given); temp_C : temperature of each point [degC], shape=(N,), or None; rod_mass_kg [kg],
-    rod_com_T_mm [mm] in {T}, shape=(3,): the rod's weight, which bends the joints a little
+    when not given); temp_C : temperature of each point [degC], shape=(N,), or None; rod : the rod
+    (:class:`~rodlab.calibrate.rod.Rod`), whose weight bends the joints a little, or None
     """
 
     q_rad: np.ndarray
     force_W_N: np.ndarray | None = None
     temp_C: np.ndarray | None = None
-    rod_mass_kg: float = 0.0
-    rod_com_T_mm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rod: Rod | None = None
 
     def __post_init__(self) -> None:
         q = np.atleast_2d(np.asarray(self.q_rad, float))
@@ -43,10 +44,8 @@ class Poses:
             if t.shape != (q.shape[0],):
                 raise ValueError(f"temp_C must have shape ({q.shape[0]},), got {t.shape}")
             object.__setattr__(self, "temp_C", t)
-        com = np.asarray(self.rod_com_T_mm, float)
-        if com.shape != (3,):
-            raise ValueError(f"rod_com_T_mm must have shape (3,), got {com.shape}")
-        object.__setattr__(self, "rod_com_T_mm", com)
+        if self.rod is not None and not isinstance(self.rod, Rod):
+            raise TypeError(f"Poses.rod must be a Rod or None, got {type(self.rod).__name__}")
 
 
 class Compensation(ABC):

@@ -29,18 +29,19 @@ def deflection_offsets(robot, params: ModelParams, q_rad: np.ndarray, force_W_N:
     q = np.atleast_2d(np.asarray(q_rad, float))
     if rod is None or (not rod.C_F.any() and not rod.C_g.any()):
         return np.zeros((q.shape[0], 3))
-    R_TW, g_T, F_T = flange_loads(robot, params, q, force_W_N, rod.mass_kg, rod.com_T_mm)
+    R_TW, g_T, F_T = flange_loads(robot, params, q, force_W_N, rod)
     dx_T = rod.offset_T_mm(g_T, F_T)                                   # Eq. 19
     return np.einsum("nij,nj->ni", R_TW, dx_T)                         # Eq. 11 (in {W})
 
 
-def flange_loads(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray, mass_kg: float,
-                 com_T_mm) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def flange_loads(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray, rod: Rod | RodCompliance | None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What Eq. 19 multiplies, per configuration: ``R_T^W`` (N, 3, 3) the flange axes in {W}, gravity in {T}
-    [g0] (N, 3) and the contact force in {T} [N] (N, 3)."""
+    [g0] (N, 3) and the contact force in {T} [N] (N, 3), with the weight of ``rod`` (a compliance file's mass and
+    centre of mass count the same) on the compliant joints."""
     q = np.atleast_2d(np.asarray(q_rad, float))
     F = np.broadcast_to(np.asarray(force_W_N, float), (q.shape[0], 3))
-    fr, _ = ball_positions(robot, params, q, mass_kg, com_T_mm, F)
+    fr, _ = ball_positions(robot, params, q, _as_rod(rod), F)
     n = robot.n
     R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
     g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)
@@ -48,14 +49,18 @@ def flange_loads(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.nd
     return R_TW, g_T, F_T
 
 
-def deflection_basis(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray, mass_kg: float,
-                     com_T_mm) -> np.ndarray:
+def deflection_basis(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.ndarray,
+                     rod: Rod | RodCompliance | None) -> np.ndarray:
     """d (ball-centre offsets in {W}) / d (C_F, C_g) [mm per mm/N, mm per mm/g0], shape=(N, 3, 18): the offsets
     are linear in the compliance (Eq. 19), ``offsets = basis @ concatenate([C_F.ravel(), C_g.ravel()])``."""
-    R_TW, g_T, F_T = flange_loads(robot, params, q_rad, force_W_N, mass_kg, com_T_mm)
+    R_TW, g_T, F_T = flange_loads(robot, params, q_rad, force_W_N, rod)
     dF = np.einsum("nik,nl->nikl", R_TW, F_T).reshape(R_TW.shape[0], 3, 9)
     dg = np.einsum("nik,nl->nikl", R_TW, g_T).reshape(R_TW.shape[0], 3, 9)
     return np.concatenate([dF, dg], axis=2)
+
+
+def _as_rod(rod: Rod | RodCompliance | None) -> Rod | None:
+    return Rod.of(rod) if isinstance(rod, RodCompliance) else rod
 
 
 @dataclass(frozen=True)

@@ -14,21 +14,22 @@ from typing import ClassVar
 
 import numpy as np
 
+
 from ..errors import CalibrationError
 from ..kinematics import ModelParams, ball_positions
+from ..rod import Rod
 from .base import Compensation
 
 __all__ = ["ThermalGrowth", "tool_axes_W"]
 
 
-def tool_axes_W(robot, params: ModelParams, q_rad: np.ndarray, force_W_N=None, rod_mass_kg: float = 0.0,
-                rod_com_T_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
+def tool_axes_W(robot, params: ModelParams, q_rad: np.ndarray, force_W_N=None, rod: Rod | None = None) -> np.ndarray:
     """Rotation of {T} (the flange axes) in {W}, shape=(N, 3, 3), at configurations ``q_rad`` (N, n) under the
-    rod's weight and the contact forces (the joints' compliance turns the flange a little)."""
+    weight of ``rod`` and the contact forces (the joints' compliance turns the flange a little)."""
     q = np.atleast_2d(np.asarray(q_rad, float))
     F = np.zeros((q.shape[0], 3)) if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float),
                                                                              (q.shape[0], 3))
-    fr, _ = ball_positions(robot, params, q, rod_mass_kg, rod_com_T_mm, F)
+    fr, _ = ball_positions(robot, params, q, rod, F)
     return fr.R_W0[None] @ fr.T[:, robot.n, :3, :3]
 
 
@@ -64,7 +65,7 @@ class ThermalGrowth(Compensation):
     @classmethod
     def of_design(cls, design, T_ref_C: float = 20.0) -> "ThermalGrowth":
         """From a rod design: each member's axial CTE (the materials table) times its span."""
-        from rodlab.core.strength import thermal_growth_um_per_K
+        from rodlab.core.strength import thermal_growth_um_per_K  # start-up: loaded on first use, not by `rodlab --help`
         g = np.asarray(thermal_growth_um_per_K(design), float) * 1e-3
         if not np.all(np.isfinite(g)):
             raise CalibrationError(f"design {design.name}: a tube or the ball has a material without cte_ppm_K; "
@@ -85,6 +86,6 @@ class ThermalGrowth(Compensation):
         if at.temp_C is None or not np.all(np.isfinite(at.temp_C)):
             raise CalibrationError("thermal compensation needs the temperature of every point: a temp_C column in "
                                    "the campaign", key="temp_C")
-        R = tool_axes_W(robot, params, at.q_rad, at.force_W_N, at.rod_mass_kg, at.rod_com_T_mm)
+        R = tool_axes_W(robot, params, at.q_rad, at.force_W_N, at.rod)
         dx_T = np.outer(np.asarray(at.temp_C, float) - self.T_ref_C, self.growth_T_mm_per_K)
         return np.einsum("nij,nj->ni", R, dx_T)

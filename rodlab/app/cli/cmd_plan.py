@@ -29,6 +29,7 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
+    from rodlab.calibrate import Rod
     from rodlab.calibrate.plan import plan_poses
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
@@ -36,7 +37,7 @@ def cmd_plan(args) -> int:
         rod = calc_rod_compliance(load_design(args.rod))
     else:
         rod = read_compliance(args.rod)
-    poses, obs = plan_poses(robot, fix, rod.tool_mm, args.k, args.candidates, args.seed, rod.mass_kg, rod.com_T_mm)
+    poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed)
     print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
           ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
     lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]

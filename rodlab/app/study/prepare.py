@@ -93,7 +93,7 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
                    candidates: int = 30) -> DesignSetup:
     """Everything of ``cand`` that does not depend on a replicate; a design the robot cannot use, or whose
     computation fails, is a setup with that status and the reason (never an exception)."""
-    from rodlab.calibrate import CalibrationError
+    from rodlab.calibrate import CalibrationError, Rod
     from rodlab.calibrate.plan import plan_poses
 
     row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
@@ -108,8 +108,8 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
     setup = DesignSetup(**row, status=DesignStatus.OK, fea=fea, calc=calc, compliance_model=model,
                         r_prior=tuple(r_prior), **extras)
     try:
-        q_deg, obs = plan_poses(robot, fixture, d.tool_mm, k=orientations, candidates=candidates, seed=seed,
-                                rod_mass_kg=fea.mass_kg, rod_com_T_mm=fea.com_T_mm)
+        q_deg, obs = plan_poses(robot, fixture, Rod.rigid(d.tool_mm, fea.mass_kg, fea.com_T_mm), k=orientations,
+                                candidates=candidates, seed=seed)
     except CalibrationError as e:
         setup.status, setup.message = DesignStatus.UNREACHABLE, f"{robot.name} with this rod: {e}"
         return setup

@@ -20,6 +20,8 @@ import numpy as np
 
 from .errors import LocatedError, RodlabError
 from .vtkio import decode_strings
+from .fileio import atomic_write_bytes
+import io
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
            "require_pyvista", "render_triangle_sets"]
@@ -361,8 +363,6 @@ def render_triangle_sets(sets, png, view, title: str = "", note: str | None = No
 
 
 def _screenshot(plotter, png) -> Path:
-    from .fileio import atomic_write_bytes
-    import io
 
     img = plotter.screenshot(return_img=True)
     plotter.close()

@@ -13,8 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .fileio import atomic_write_figure
-from .view3d import RenderError, check_offscreen
-from .view3d import render_triangle_sets
+from .view3d import RenderError, check_offscreen, render_triangle_sets
 
 __all__ = ["TriangleSet", "VIEWS", "RENDERERS", "render_png", "pick_renderer"]
 

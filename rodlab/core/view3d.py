@@ -7,6 +7,7 @@ process is tried in a child process first (:func:`check_offscreen`), and a clear
 """
 from __future__ import annotations
 
+import io
 import logging
 import os
 import subprocess
@@ -21,7 +22,6 @@ import numpy as np
 from .errors import LocatedError, RodlabError
 from .vtkio import decode_strings
 from .fileio import atomic_write_bytes
-import io
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
            "require_pyvista", "render_triangle_sets"]

@@ -39,6 +39,7 @@ from rodlab.core.units import G0
 
 from .errors import FeaError
 from .frame import CALIBRATION, FrameCalibration, frame_compliance, frame_segments
+from .sections import solid_section_motions
 
 __all__ = ["JointFit", "free_spans", "joint_margins", "measure_sections", "fit_joints", "joints_from_motions",
            "JointCalibration", "calibrate_joints",
@@ -243,7 +244,6 @@ def measure_sections(base: RodDesign, solid, margin: float = DEFAULT_MARGIN):
     solved with ``tip_moments=True, keep_displacements=True``): the motions of its four sections, shape=(4, 6,
     9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], and the margins [mm] (:func:`joint_margins` of
     ``margin`` tube diameters)."""
-    from .sections import solid_section_motions
 
     U, rm = solid.displacements, solid.rod_mesh
     if U is None or U.shape[1] != 9 or solid.ball_motion is None or rm is None:

@@ -11,6 +11,9 @@ import html
 
 import numpy as np
 
+from ...core.compliance import DEFAULT_CONTACT_FORCE_N
+from ..study.designs import R_PRIOR_COMPOSITE, R_PRIOR_METAL
+
 __all__ = ["conclusion_html", "terms_html", "campaign_rod_note", "study_rod_note"]
 
 _LABEL = {"none": "None", "calc": "Calc", "fea": "FEA", "meas": "Meas"}
@@ -22,7 +25,6 @@ def _rows(sy: dict) -> dict:
 
 
 def _prior(sy: dict, design: str) -> tuple[float, float]:
-    from ..study.designs import R_PRIOR_COMPOSITE
     return tuple(sy.get("r_prior", {}).get(design, R_PRIOR_COMPOSITE))
 
 
@@ -83,8 +85,6 @@ def conclusion_html(st: dict) -> str:
 
 def terms_html() -> str:
     """The page's terms, defined before any section uses them."""
-    from ...core.compliance import DEFAULT_CONTACT_FORCE_N
-    from ..study.designs import R_PRIOR_COMPOSITE, R_PRIOR_METAL
     force = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N))
     rows = [
         ("{T}", "the rod's tool frame: origin at the ball centre, z_T along the flange normal (pipe I), x_T towards "

@@ -3,7 +3,9 @@ docs/architecture.md "Imports"):
 
 (a) a heavy dependency: an optional extra of pyproject.toml (``[project.optional-dependencies]``), a
     dependency not declared at all (used when installed), or one of the few heavy required ones in
-    ``HEAVY_REQUIRED`` (each with its measured import time);
+    ``HEAVY_REQUIRED`` (each with its measured import time); or a module of ours that loads one where the
+    importing module's users must not pay for it, marked ``# heavy: <what it loads, how long>`` on the line
+    (the comment must name one of those dependencies);
 (b) the CLI's lazy start-up: ``rodlab --help`` builds the parser from every module of ``rodlab/app/cli`` (each
     ``cmd_*.py`` registers its sub-command), so a handler there imports its domain module when it runs; this
     counts only for a module that ``rodlab --help`` does not load anyway (found by running it);
@@ -63,6 +65,7 @@ PENDING_OTHER = {  # rodlab/core/enums.py, rodlab/app/diagnose/report.py, stiffn
 }
 
 CYCLE = re.compile(r"#\s*cycle:\s*\S")
+HEAVY_MARK = re.compile(r"#\s*heavy:(.*)")
 
 
 def _requirement_names(requirements) -> set[str]:
@@ -128,6 +131,9 @@ def classify(node, lines: list[str], where: str, package: str | None, startup: f
     span = "\n".join(lines[node.lineno - 1: node.end_lineno])
     if CYCLE.search(span):
         return "cycle"
+    marks = HEAVY_MARK.findall(span)
+    if marks and heavy_names() & set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", " ".join(marks))):
+        return "heavy"
     modules = _imported_modules(node, package)
     tops = {m.split(".")[0] for m in modules}
     if tops <= heavy_names() or not all(_is_declared_or_local(t) for t in tops):
@@ -173,14 +179,17 @@ def test_the_scan_classifies_each_reason():
     text = ("import numpy as np\ntry:\n    import tomllib\nexcept ImportError:\n    tomllib = None\n"
             "def f():\n    import gmsh\n    import matplotlib.pyplot as plt\n    from scipy.optimize import least_squares\n"
             "    from .rod import Rod\n    from .report import (Source,  # cycle: report imports this module\n"
-            "                         classify)\n    import json\n    def g():\n        from rodlab.fea import run_solid\n")
+            "                         classify)\n    import json\n    def g():\n        from rodlab.fea import run_solid\n"
+            "    from .plots import draw  # heavy: loads matplotlib.pyplot (0.3 s)\n"
+            "    from .rod import rows  # heavy: a big module\n")
     lines = text.splitlines()
     startup = frozenset({"rodlab", "rodlab.app.cli", "rodlab.app.cli.rod", "json"})
     got = [(n.lineno, classify(n, lines, "rodlab/app/cli/x.py", "rodlab.app.cli", startup))
            for n in function_imports(text)]
-    assert got == [(7, "heavy"), (8, "heavy"), (9, "heavy"), (10, None), (11, "cycle"), (13, None), (15, "cli")]
+    assert got == [(7, "heavy"), (8, "heavy"), (9, "heavy"), (10, None), (11, "cycle"), (13, None), (15, "cli"),
+                   (16, "heavy"), (17, None)]       # a `# heavy:` mark must name a heavy dependency
     # outside the CLI a domain import in a function has no reason
-    node = function_imports(text)[-1]
+    node = function_imports(text)[6]
     assert classify(node, lines, "rodlab/app/pipeline.py", "rodlab.app", startup) is None
 
 

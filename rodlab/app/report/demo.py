@@ -8,8 +8,6 @@ from pathlib import Path
 from ...core.errors import RodlabError
 from .demo_story import campaign_rod_note, conclusion_html, study_rod_note, terms_html
 from .html import CSS, img_tag, matrix_table
-from ..diagnose.report import Finding
-from ..diagnose.wording import evidence_text
 
 __all__ = ["render_run", "is_run_folder", "read_run"]
 
@@ -149,6 +147,8 @@ def _study_views(run: Path, files: dict) -> str:
 
 
 def _evidence(f: dict) -> str:
+    from ..diagnose.report import Finding  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
+    from ..diagnose.wording import evidence_text  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
     return evidence_text(Finding.from_dict(f))
 
 

@@ -27,6 +27,7 @@ from .elasticity import element_tensors
 from .errors import FeaError
 from .frame import CALIBRATION, frame_segments
 from .solid import SolidResult, mirror_displacements
+from .beam_stress import section_index, section_von_mises, section_wrenches
 
 __all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
            "write_frame_fields", "field_data", "FrameFields", "frame_centreline_fields", "nodal_von_mises"]
@@ -181,7 +182,6 @@ def frame_centreline_fields(design: RodDesign, n_points: int = 200) -> FrameFiel
     (:func:`rodlab.core.chain.chain_flexibility`), the last point the ball centre (its displacement = C_F, C_g); and
     the sections' outer-fibre von Mises stress [MPa per N | MPa per g0], shape=(n, 6), from the section forces
     (:mod:`fea.beam_stress`)."""
-    from .beam_stress import section_index, section_von_mises, section_wrenches
     segs = frame_segments(design, CALIBRATION)
     total = segs[-1].s0_mm + segs[-1].length_mm
     s_all = np.linspace(0.0, total, n_points)

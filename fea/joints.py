@@ -39,9 +39,10 @@ from rodlab.core.units import G0
 
 from .errors import FeaError
 from .frame import CALIBRATION, FrameCalibration, frame_compliance, frame_segments
+from .sections import solid_section_motions
 
 __all__ = ["JointFit", "free_spans", "joint_margins", "measure_sections", "fit_joints", "joints_from_motions",
-           "JointCalibration", "calibrate_joints",
+           "JointCalibration", "calibrate_joints", "section_cuts", "frame_chain",
            "joint_frame_compliance", "span_basis", "DEFAULT_MARGIN", "WRENCH_CASES", "GRAVITY_CASES",
            "SECTION_TERMS"]
 
@@ -126,7 +127,7 @@ def joint_margins(design: RodDesign, margin: float = DEFAULT_MARGIN) -> dict[Par
     return out
 
 
-def _cuts(design: RodDesign, margins: dict[Part, float]) -> list[tuple[Part, float]]:
+def section_cuts(design: RodDesign, margins: dict[Part, float]) -> list[tuple[Part, float]]:
     """The four sections ``(tube, arc length [mm])``: ``margins[tube]`` inside each end of its free tube (for a
     member with a short tube the second may come before the first)."""
     spans = free_spans(design)
@@ -195,7 +196,10 @@ class JointFit:
                 f"calibration={self.calibration!r})")
 
 
-def _frame_chain(design: RodDesign, cuts, cal: FrameCalibration):
+def frame_chain(design: RodDesign, cuts, cal: FrameCalibration):
+    """The frame model's cantilever chain of ``design`` (calibration ``cal``) cut at the arc lengths of ``cuts``
+    (:func:`section_cuts`), the ball's mass at the tip: the flexibilities the joint fit compares with the solid's
+    section motions."""
     ball = ball_mass_properties(design)
     return chain_flexibility(frame_segments(design, cal), [s for _, s in cuts], design.tool_mm, ball.mass_kg,
                              ball.com_T_mm + design.tool_mm, True, True, cal.shear, cal.torsion)
@@ -203,14 +207,14 @@ def _frame_chain(design: RodDesign, cuts, cal: FrameCalibration):
 
 def joints_from_motions(base: RodDesign, section_motion: np.ndarray, tip_motion: np.ndarray,
                         margins: dict[Part, float], cal: FrameCalibration = CALIBRATION) -> JointFit:
-    """The joint fit from the motions of ``base``'s four sections (:func:`_cuts` of ``margins``),
+    """The joint fit from the motions of ``base``'s four sections (:func:`section_cuts` of ``margins``),
     shape=(4, 6, 9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], under the nine load cases
     (:data:`WRENCH_CASES`, :data:`GRAVITY_CASES`). Pure: motions in, corrections out."""
-    cuts = _cuts(base, margins)
+    cuts = section_cuts(base, margins)
     if any(b - a < MIN_SPAN_MM - 1e-9 for (_, a), (_, b) in (cuts[:2], cuts[2:])):
         raise FeaError(f"{base.name}: the sections of a calibrated design must leave {MIN_SPAN_MM:g} mm of span "
                        f"(use joint_margins)", key="margins")
-    frame = _frame_chain(base, cuts, cal)
+    frame = frame_chain(base, cuts, cal)
     motion = np.concatenate([np.zeros((1, 6, 9)), section_motion, tip_motion[None]], axis=0)
     pts = np.vstack([np.zeros((1, 3)), frame.points_F])
     # each interval's motion relative to its proximal section (rigid transport of that section's motion)
@@ -243,14 +247,13 @@ def measure_sections(base: RodDesign, solid, margin: float = DEFAULT_MARGIN):
     solved with ``tip_moments=True, keep_displacements=True``): the motions of its four sections, shape=(4, 6,
     9), and of the tip, shape=(6, 9) [mm, rad; {F} axes], and the margins [mm] (:func:`joint_margins` of
     ``margin`` tube diameters)."""
-    from .sections import solid_section_motions
 
     U, rm = solid.displacements, solid.rod_mesh
     if U is None or U.shape[1] != 9 or solid.ball_motion is None or rm is None:
         raise FeaError("the joint calibration needs the solid run's displacements of all nine load cases: "
                        "solve with tip_moments=True, keep_displacements=True", key="solid")
     margins = joint_margins(base, margin)
-    cuts = _cuts(base, margins)
+    cuts = section_cuts(base, margins)
     centres, axes = centreline_points(layout(base), [s for _, s in cuts])
     reach = {p: min(SECTION_REACH * t.outer_diameter_mm, 0.9 * margins[p])
              for p, t in zip(_TUBES, (base.pipe_I, base.pipe_II))}
@@ -271,7 +274,7 @@ def joint_frame_compliance(design: RodDesign, jc: JointFit) -> tuple[np.ndarray,
     jc.check_member(design)
     CF, Cg = frame_compliance(design, cal=jc.calibration)
     segs = layout(design)
-    cuts = _cuts(design, jc.margins)
+    cuts = section_cuts(design, jc.margins)
     s = np.array([c for _, c in cuts])
     total = segs[-1].s0_mm + segs[-1].length_mm
     if np.any(s <= 0) or np.any(s >= total):

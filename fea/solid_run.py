@@ -13,6 +13,7 @@ from rodlab.core.design import RodDesign
 from .compute import Mesher, solid_compliance
 from .joints import JointFit, fit_joints
 from .solid import SolidResult
+from .plot import render_deformed
 
 __all__ = ["SolidRun", "run_solid"]
 
@@ -54,7 +55,6 @@ def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None
 
 
 def _deformed_figure(design: RodDesign, res: SolidResult, path) -> Path:
-    from .plot import render_deformed
     U = res.displacements.copy()
     U[:, 5] *= -1.0                                     # gravity along -z_T, as on a vertical flange
     return render_deformed(res.rod_mesh, U, path, case=5, title=f"rod {design.name}: self-weight, gravity along -z_T",

@@ -17,10 +17,12 @@ from typing import Callable
 import numpy as np
 
 from rodlab import __version__
+from rodlab.core.cluster import local_cluster
 from rodlab.core.design import RodDesign
 from rodlab.core.errors import RodlabError
 from rodlab.core.fileio import atomic_write_json
 
+from .compute import FeaModel, compute_compliance
 from .errors import FeaError
 from .frame import CALIBRATION, FRAME_REVISION
 
@@ -60,7 +62,6 @@ def _evaluate(base: RodDesign, L1: float, L2: float, model: str, mesher, calibra
     except RodlabError as e:
         return dict(row, status="invalid", message=str(e))
     try:
-        from .compute import FeaModel, compute_compliance
         opts = {"error_estimate": False} if model == "solid" else (
             {"calibration": calibration} if model == "frame" and calibration is not None else {})
         comp = compute_compliance(d, FeaModel(model), mesher=mesher, **opts)
@@ -167,7 +168,6 @@ def _run_on_dask(chunks, store: _SweepStore, base, model, mesher, calibration, s
     if scheduler:
         client = Client(scheduler)
     else:
-        from rodlab.core.cluster import local_cluster
         cluster = local_cluster(workers)
         client = Client(cluster)
     try:

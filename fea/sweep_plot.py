@@ -11,7 +11,7 @@ import numpy as np
 
 from rodlab.core.fileio import atomic_write_figure
 
-__all__ = ["plot_sweep", "PAPER_RODS", "HEAT_CMAP"]
+__all__ = ["plot_sweep", "PAPER_RODS", "HEAT_CMAP", "grid_extent"]
 
 #: the colour map of every heat map over L1 x L2 (sweeps and studies): dark = low, yellow = high (worse)
 HEAT_CMAP = "viridis"
@@ -47,7 +47,7 @@ def plot_sweep(df, path: str | Path, title: str = "", marks: dict | None = None)
             if L1.size > 2 and L2.size > 2 and np.isfinite(Z).sum() > 4:
                 cs = ax.contour(L1, L2, Z, levels=8, colors="white", linewidths=0.6)
                 ax.clabel(cs, fontsize=7, fmt="%.0f")
-        xlim, ylim = _extent(L1), _extent(L2)
+        xlim, ylim = grid_extent(L1), grid_extent(L2)
         for name, (a, b) in (marks or {}).items():
             if xlim[0] <= a <= xlim[1] and ylim[0] <= b <= ylim[1]:
                 ax.plot(a, b, "*", ms=13, color="white", mec="k", zorder=5)
@@ -63,8 +63,9 @@ def plot_sweep(df, path: str | Path, title: str = "", marks: dict | None = None)
     return atomic_write_figure(path, fig)
 
 
-def _extent(v: np.ndarray) -> tuple[float, float]:
-    """The grid's span plus half a step each side (one value: +-5 %)."""
+def grid_extent(v: np.ndarray) -> tuple[float, float]:
+    """The axis limits of a heat map over the sorted grid values ``v`` [mm]: the grid's span plus half a step each
+    side (one value: +-5 %)."""
     if v.size == 1:
         return float(v[0]) * 0.95, float(v[0]) * 1.05
     half = float(np.min(np.diff(v))) / 2

@@ -27,6 +27,7 @@ from rodlab.core.layout import layout
 
 from .errors import GeometryError
 from .parts import part_solids
+from .occ_parts import add_part_volumes
 
 __all__ = ["mesh_rod", "default_size_mm", "feature_circles", "GMSH_TO_VTK_TET10"]
 
@@ -226,7 +227,6 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.model.add(f"rod_{design.name}")
             if solids is None:
-                from .occ_parts import add_part_volumes
                 solids = add_part_volumes(design, half)
                 part_vols = _fragment(solids)
             else:

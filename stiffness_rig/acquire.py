@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from filelock import FileLock, Timeout
 
 from .config import RigPlan, RigProfile
 from .device import GaugeClient
@@ -54,7 +55,6 @@ class RecordingLock:
     process death), the lock file removed when released."""
 
     def __init__(self, recording: Path) -> None:
-        from filelock import FileLock, Timeout
 
         self.path = Path(str(recording) + ".lock")
         self.path.parent.mkdir(parents=True, exist_ok=True)

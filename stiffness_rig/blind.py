@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from rodlab import calc_rod_compliance, resolve_design
+from rodlab.core.schema import read_toml_checked
+
 from .effects import joint_places
 from .errors import RigError
 from .model import Hold, LoadSchedule, RigModel
@@ -48,7 +50,6 @@ class BlindCase:
 def read_blind_definitions(path) -> dict:
     """Blind-case definitions from ``path`` (``rodlab.blind_rig/1``): {table: {key: value}}; every schema
     problem named at once (file, line, key)."""
-    from rodlab.core.schema import read_toml_checked
     data, _ = read_toml_checked(path, FORMAT_BLIND, RigError)
     return data
 

@@ -49,6 +49,7 @@ from rodlab.core.fileio import read_toml
 from .errors import RigError
 from .instrument_profile import parse_profile_v2
 from .model import LoadSchedule
+from rodlab.core.schema import require_schema
 
 __all__ = ["Channel", "RigProfile", "RigPlan", "read_profile", "read_plan", "FORMAT_PROFILE", "FORMAT_PLAN"]
 
@@ -63,7 +64,6 @@ def _load_toml(path) -> tuple[dict, str]:
 
 def _schema(data: dict, format_id: str, path, text: str) -> None:
     """The format's schema, after the reader's own rules: anything they let through is refused too."""
-    from rodlab.core.schema import require_schema
     require_schema(data, format_id, Path(path), text, RigError, kind="toml")
 
 

@@ -16,6 +16,12 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
+import serial
+
+try:
+    import termios
+except ImportError:  # pragma: no cover - Windows
+    termios = None
 
 from .drivers import Garbage, Link, NoAnswer
 from .errors import DeviceError
@@ -29,13 +35,9 @@ log = logging.getLogger(__name__)
 def _port_errors() -> tuple:
     """What a lost port raises: pyserial's error, OSError, and on POSIX termios.error (a flush on a pty whose
     other end closed), which is neither."""
-    import serial
     errors = (serial.SerialException, OSError)
-    try:
-        import termios
+    if termios is not None:
         errors += (termios.error,)
-    except ImportError:  # pragma: no cover - Windows
-        pass
     return errors
 
 
@@ -75,7 +77,6 @@ class InstrumentClient:
         return f"instrument {self.instrument.name!r} ({self.instrument.protocol}) at {self.instrument.port!r}"
 
     def _open(self) -> None:
-        import serial
         i = self.instrument
         try:
             ser = serial.serial_for_url(i.port, baudrate=i.baudrate, bytesize=i.bytesize, parity=i.parity,

@@ -97,10 +97,10 @@ def test_frame_vtp_has_the_parts_and_the_stress(tmp_path):
     for k, key in enumerate(CASES):
         np.testing.assert_allclose(m.point_data[f"von_mises_{key}"], f.von_mises[:, k], rtol=1e-12)
         np.testing.assert_allclose(m.point_data[f"displacement_{key}"], f.displacement[:, :, k], rtol=1e-12)
-    from rodlab.core.view3d import _peak, read_field_view
+    from rodlab.core.view3d import field_peak, read_field_view
     view = read_field_view(tmp_path / "rod1.vtp")
     i = int(np.argmax(f.von_mises[:, 1]))
-    assert _peak(view, f.von_mises[:, 1]) == (pytest.approx(f.von_mises[i, 1]), f.parts[f.part_index[i]].replace("_", " "))
+    assert field_peak(view, f.von_mises[:, 1]) == (pytest.approx(f.von_mises[i, 1]), f.parts[f.part_index[i]].replace("_", " "))
 
 
 def _straight_tube(material: str = "steel_304"):

@@ -220,12 +220,12 @@ def test_joints_already_modelled_are_not_hypotheses_again(ur5):
     points advice names the union of the joints."""
     from types import SimpleNamespace
 
-    from rodlab.app.diagnose.points import _candidates
+    from rodlab.app.diagnose.points import point_candidates
     from rodlab.calibrate.effects.periodic_joint_error import PeriodicJointError
     q = np.deg2rad(np.random.default_rng(18).uniform(-170, 170, (40, 6)))
     fr = forward(ModelParams.nominal(ur5, TOOL), q)
     cols = np.random.default_rng(19).normal(size=(40, 6, 3))
-    periodic = [c for c in _candidates(q, cols, modelled=(4,)) if c[0] == "periodic_joint_error"]
+    periodic = [c for c in point_candidates(q, cols, modelled=(4,)) if c[0] == "periodic_joint_error"]
     assert [c[1] for c in periodic] == ["joint 1", "joint 2", "joint 3", "joint 5", "joint 6"]
     assert "--joint-harmonics 1,4`" in periodic[0][3]
     ctx = SimpleNamespace(frames=fr, n_points=40, robot=ur5, obs=SimpleNamespace(q_rad=q),

@@ -10,7 +10,7 @@ import pytest
 
 from rodlab.fea.errors import FeaError
 from rodlab.fea.frame import CALIBRATION, frame_compliance, frame_segments
-from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, _cuts, _frame_chain, fit_joints, free_spans,
+from rodlab.fea.joints import (GRAVITY_CASES, WRENCH_CASES, section_cuts, frame_chain, fit_joints, free_spans,
                         joint_frame_compliance, joint_margins, joints_from_motions, span_basis)
 from rodlab.core.calc import unit_load_compliance
 from rodlab.core.chain import chain_flexibility, transport
@@ -91,8 +91,8 @@ def test_sectional_motion_recovers_beam_kinematics():
 def _frame_truth_motions(design, cal_truth, margins):
     """Section and tip motions of a frame with other constants (zones, bend factors, shear, torsion): what a
     solid would give if the frame with ``cal_truth`` were the truth."""
-    cuts = _cuts(design, margins)
-    ch = _frame_chain(design, cuts, cal_truth)
+    cuts = section_cuts(design, margins)
+    ch = frame_chain(design, cuts, cal_truth)
     Ad = ch.adjoint()
     dq = np.zeros((5, 6, 9))
     dq[:, :, list(WRENCH_CASES)] = np.einsum("nab,nbc->nac", ch.F, Ad)

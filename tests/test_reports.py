@@ -136,9 +136,9 @@ def test_evidence_is_said_in_an_engineers_words():
 
 
 def test_sweep_axes_span_the_grid_only():
-    from rodlab.fea.sweep_plot import _extent
-    assert _extent(np.array([250.0, 350.0, 450.0])) == (200.0, 500.0)
-    lo, hi = _extent(np.array([300.0]))
+    from rodlab.fea.sweep_plot import grid_extent
+    assert grid_extent(np.array([250.0, 350.0, 450.0])) == (200.0, 500.0)
+    lo, hi = grid_extent(np.array([300.0]))
     assert lo < 300.0 < hi
 
 

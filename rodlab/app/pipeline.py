@@ -20,8 +20,42 @@ from typing import Callable
 
 import numpy as np
 
+import rodlab.geometry as geometry
+from rodlab.calibrate import (
+    ModelParams,
+    Rod,
+    RodDeflection,
+    campaign_observations,
+    identify,
+    read_campaign,
+    read_fixture,
+    read_points,
+    resolve_robot,
+    validate,
+)
+from rodlab.calibrate.plots import plot_error_distributions
+from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign, standard_fixture
+from rodlab.core.design_edit import write_edited_design
+from rodlab.core.sensitivity import with_values
+from rodlab.fea import compute_compliance, run_solid
+from rodlab.fea.frame import frame_compliance
+from rodlab.fea.sweep import run_sweep
+from rodlab.fea.sweep_plot import PAPER_RODS, plot_sweep
+from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+from rodlab.stiffness_rig.effects import joint_places
+from rodlab.stiffness_rig.model import LoadSchedule, RigModel
+from rodlab.stiffness_rig.simulate import simulate_recording
+
+from ..core.calc import calc_rod_compliance
 from ..core.compliance import RodCompliance, write_compliance
+from ..core.design_io import resolve_design
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
+from .diagnose import corrected_compliance, diagnose_rig
+from .diagnose.plots import plot_rig_diagnosis
+from .report.views import frame_views, solid_views
+from .study import StudySpec, list_candidates, run_study, write_study_outputs
+from .study.family import cad_available
+from .update import Measured, update_design
 
 __all__ = ["run_demo", "STAGES"]
 
@@ -63,8 +97,6 @@ class _DemoRun:
         self.summary["stages"][name] = values
 
     def stage_design(self) -> None:
-        from ..core.calc import calc_rod_compliance
-        from ..core.design_io import resolve_design
         self.design = resolve_design("rod1")
         self.calc = calc_rod_compliance(self.design)
         write_compliance(self.calc, self.out / "rod1.calc.compliance.json")
@@ -72,12 +104,10 @@ class _DemoRun:
         self._stage("design", {"mass_kg": self.calc.mass_kg, "c_rod_um_calc": self.calc.c_rod_um})
 
     def stage_cad(self) -> None:
-        from .study.family import cad_available
         self.cad = cad_available()
         if not self.cad:
             self._stage("cad", {"skipped": "the CAD extra (build123d, gmsh) is not installed"})
             return
-        import rodlab.geometry as geometry
         c = geometry.build_cad(self.design)
         c.export_step(self.out / "cad" / "rod.step")
         c.write_mass_json(self.out / "cad" / "mass.json")
@@ -87,21 +117,16 @@ class _DemoRun:
 
     def stage_fea(self) -> None:
         if self.cad:
-            import rodlab.geometry as geometry
-            from rodlab.fea import run_solid
             # one solid run: the compliance, the deformed shape, and the joints that calibrate the sweep's frame
             self.solid_run = run_solid(self.design, geometry.mesh_rod, error_estimate=False, joints=True,
                                        deformed_png=self.out / "fea" / "deformed.png")
             self.fea = self.solid_run.compliance
             self.summary["files"]["fea_deformed"] = "fea/deformed.png"
             model = "solid"
-            from .report.views import solid_views
             views = solid_views(self.design, self.solid_run.result, self.out / "fea" / "rod1.vtu")
         else:
-            from rodlab.fea import compute_compliance
             self.fea = compute_compliance(self.design, "frame")
             model = "frame (the CAD extra is absent, so no solid FEA)"
-            from .report.views import frame_views
             views = frame_views(self.design, self.out / "fea" / "rod1.vtp")
         self.summary["files"]["fea_views"] = [str(p.relative_to(self.out)) for p in views.pngs]
         fea = self.fea
@@ -112,9 +137,6 @@ class _DemoRun:
                             "fields": str(views.fields.relative_to(self.out)), "views_note": views.note})
 
     def stage_rig(self) -> None:
-        from rodlab.stiffness_rig.effects import joint_places
-        from rodlab.stiffness_rig.model import LoadSchedule, RigModel
-        from rodlab.stiffness_rig.simulate import simulate_recording
         C_F, C_g, as_built = self._rod_as_built()
         rig_effects = {"friction": {"F_f_N": 0.1}}          # the rig's own: its slides
         rig_model = RigModel(C_F, rig_effects, noise_mm=0.0006, seed=self.seed,
@@ -128,15 +150,12 @@ class _DemoRun:
     def _rod_as_built(self) -> tuple[np.ndarray, np.ndarray, dict]:
         """(C_F, C_g, the drawn keys) of the rod as built: the design's FEA plus the frame model's change for a
         laminate 7 % softer than designed and a compliant ring-1 bond (the demo's rod is not its simulation)."""
-        from rodlab.fea.frame import frame_compliance
-        from rodlab.core.sensitivity import with_values
         m = self.design.pipe_I.material
         as_built = {f"materials.{m.name}.E_GPa": round(0.93 * m.E_GPa, 3), "joints.ring_1.s_bend_rad_per_Nm": 2.0e-5}
         built, nominal = frame_compliance(with_values(self.design, as_built)), frame_compliance(self.design)
         return self.fea.C_F + built[0] - nominal[0], self.fea.C_g + built[1] - nominal[1], as_built
 
     def stage_fit(self) -> None:
-        from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
         self.rec = read_recording(self.out / "rig" / "rod1.rig.csv")
         fit = fit_recording(self.rec, self.fea)
         self.meas = fit.compliance(self.fea, self.rec)
@@ -147,8 +166,6 @@ class _DemoRun:
                             "C_F_meas_mm_per_N": self.meas.C_F.tolist()})
 
     def stage_diagnose(self) -> None:
-        from .diagnose import corrected_compliance, diagnose_rig
-        from .diagnose.plots import plot_rig_diagnosis
         # the rod as built is not its simulation: the default diagnosis judges the linear part against the design's
         # tolerances and the FEA's accuracy, and names only what lies beyond them (docs/diagnose.md)
         diag, model = diagnose_rig(self.rec, self.fea, self.design)
@@ -166,8 +183,6 @@ class _DemoRun:
     def _update(self, diag, model) -> dict:
         """`rodlab update` on the diagnosed linear part: the laminate's E and G and each located joint's compliance,
         written as the rod as built (``rod1.asbuilt.rod.toml``, the design file with the fitted values)."""
-        from rodlab.core.design_edit import write_edited_design
-        from .update import Measured, update_design
         m = self.design.pipe_I.material
         keys = [f"materials.{m.name}.E_GPa"] + ([f"materials.{m.name}.G_GPa"] if m.G_GPa is not None else [])
         keys += [f"joints.{f.location.split('|')[0]}.s_bend_rad_per_Nm" for f in diag.findings
@@ -183,8 +198,6 @@ class _DemoRun:
                 "r_after": res.r_after.tolist(), "inseparable": [a for a, *_ in res.inseparable]}
 
     def stage_campaign(self) -> None:
-        from rodlab.calibrate import resolve_robot
-        from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
         fea, C_true = self.fea, self.C_true
         self.robot = resolve_robot("tx90")
         r_true = float((C_true[1, 1] + C_true[2, 2]) / (fea.C_F[1, 1] + fea.C_F[2, 2]))
@@ -195,9 +208,6 @@ class _DemoRun:
                                  "r_rod_true": r_true})
 
     def stage_calibrate(self) -> None:
-        from rodlab.calibrate import (ModelParams, Rod, RodDeflection, campaign_observations, identify, read_campaign,
-                                      read_fixture, read_points, validate)
-        from rodlab.calibrate.plots import plot_error_distributions
         robot, fea, folder = self.robot, self.fea, self.out / "campaign"
         camp = read_campaign(folder / "multical.campaign.csv")
         fix = read_fixture(folder / "multical.fixture.json")
@@ -219,8 +229,6 @@ class _DemoRun:
         self._stage("calibrate", {"table3": table})
 
     def stage_sweep(self) -> None:
-        from rodlab.fea.sweep import run_sweep
-        from rodlab.fea.sweep_plot import PAPER_RODS, plot_sweep
         title = "frame model around rod 1#"
         if self.solid_run is not None:                 # that solid run calibrates the frame's joints
             self.calibration = self.solid_run.joints
@@ -256,9 +264,6 @@ DEMO_STUDY_RODS, DEMO_STUDY_REPLICATES = ("rod1", "rod2", "rod3"), 5
 def _study(out: Path, robot, design, calibration) -> dict:
     """Predicted calibration accuracy of rods 1#-3# on the TX90 (serial; rod 1#'s joint calibration serves the
     family); the study's files in ``out``, its rows for the report."""
-    from rodlab.calibrate.simulate import standard_fixture
-    from ..core.design_io import resolve_design
-    from .study import StudySpec, list_candidates, run_study, write_study_outputs
     cands = list_candidates([design] + [resolve_design(r) for r in DEMO_STUDY_RODS[1:]])
     spec = StudySpec(replicates=DEMO_STUDY_REPLICATES)
     run = run_study(cands, robot, standard_fixture(), spec, {c.label: calibration for c in cands},

@@ -15,6 +15,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.special import chdtrc
 
+from rodlab.fea.frame import frame_compliance
 from ..core.calc import calc_rod_compliance
 from ..core.design import RodDesign
 from ..core.errors import DesignError, RodlabError
@@ -93,7 +94,6 @@ class UpdateResult:
 def model_compliance(model: str):
     """design -> C_F [mm/N] of the compliance model ``frame`` (calibrated beam frame) or ``calc`` (closed form)."""
     if model == "frame":
-        from rodlab.fea.frame import frame_compliance
         return lambda d: frame_compliance(d)[0]
     if model == "calc":
         return lambda d: calc_rod_compliance(d).C_F

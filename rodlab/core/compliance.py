@@ -20,6 +20,8 @@ from .design import RodDesign
 from .enums import Method
 from .errors import ComplianceError, did_you_mean
 from .fileio import atomic_write_json, json_safe, read_text_checked, sha256_file
+from .massprops import mass_properties
+from .schema import require_schema
 
 __all__ = ["RodCompliance", "c_rod_um", "r_rod", "r_mn", "DEFAULT_CONTACT_FORCE_N", "FORMAT_COMPLIANCE",
            "FORMAT_COMPLIANCE_V2", "COMPLIANCE_FORMATS", "read_compliance", "write_compliance", "design_hash"]
@@ -212,7 +214,6 @@ class RodCompliance:
     def from_design(cls, design: RodDesign, C_F, C_g, method: Method, provenance: dict | None = None,
                     r_rod: float = 1.0) -> "RodCompliance":
         """Fill mass, centre of mass and tool point from ``design``."""
-        from .massprops import mass_properties
         mp = mass_properties(design)
         prov = {"rodlab_version": __version__, "method": str(Method.parse(method)),
                 "design": design.name, "design_sha256": design_hash(design)}
@@ -323,7 +324,6 @@ def read_compliance(path: str | Path) -> RodCompliance:
     except json.JSONDecodeError as e:
         raise ComplianceError(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
     if isinstance(data, dict) and data.get("format") in COMPLIANCE_FORMATS:
-        from .schema import require_schema
         require_schema(data, data["format"], p, text, ComplianceError)
     return RodCompliance.from_dict(data, p)
 

@@ -14,6 +14,12 @@ from .design import RodDesign
 from .design_io import FORMAT_ROD_V2, design_from_dict, design_to_dict
 from .errors import DesignError, FormatError
 from .fileio import atomic_write_text
+from .tolerances import design_value
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
 
 __all__ = ["edited_design_text", "write_edited_design"]
 
@@ -54,7 +60,6 @@ def _material_table(design: RodDesign, name: str) -> dict:
 def edited_design_text(text: str, design: RodDesign, values: dict, header: str = "") -> str:
     """``text`` (the design's file) with the dotted keys of ``values`` set; ``tube.*`` keys are written to
     ``[tube]``, ``materials.NAME.*`` to ``[materials.NAME]`` (created with the material's numbers if absent)."""
-    from .tolerances import design_value
     lines = text.splitlines()
     for key, value in values.items():
         was = design_value(design, key)
@@ -71,10 +76,6 @@ def edited_design_text(text: str, design: RodDesign, values: dict, header: str =
 
 def write_edited_design(source_text: str, design: RodDesign, values: dict, out: str | Path, header: str = "") -> Path:
     """Write the edited design to ``out`` atomically, after reading it back as a valid design."""
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
     text = edited_design_text(source_text, design, values, header)
     try:
         design_from_dict(tomllib.loads(text), out, text)

@@ -29,6 +29,9 @@ from .errors import DesignError, FormatError, did_you_mean
 from .fileio import read_toml
 from .joint_springs import JOINT_KEYS, JOINT_PLACES, JointSpring
 from .materials import Material, get_material, material_from_table
+from .tolerances import check_tolerance_table
+from .schema import require_schema
+from .design_range import check_design, range_warnings
 
 __all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD",
            "FORMAT_ROD_V2", "ROD_FORMATS"]
@@ -186,7 +189,6 @@ def _with_tolerances(design: RodDesign, table, c: _Ctx) -> RodDesign:
         return design
     if not isinstance(table, Mapping):
         raise c.err(f"expected a table, got {type(table).__name__}", "tolerances", None)
-    from .tolerances import check_tolerance_table
     design = replace(design, tolerances=dict(table))
     try:
         check_tolerance_table(design, design.tolerances)
@@ -286,9 +288,7 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
     data, text = read_toml(p, FormatError)
     design = design_from_dict(data, p, text)
     if schema:
-        from .schema import require_schema
         require_schema(data, str(data.get("format")), p, text, FormatError, kind="toml")   # anything the rules miss
-    from .design_range import check_design, range_warnings
     try:
         check_design(design)
     except DesignError as e:

@@ -14,6 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 __all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
            "sha256_file", "read_text_checked"]
 
@@ -115,10 +120,6 @@ def read_text_checked(path, error_cls) -> str:
 def read_toml(path, error_cls) -> tuple[dict, str]:
     """A TOML file's table and text, or ``error_cls`` naming the file: unreadable (:func:`read_text_checked`)
     or not valid TOML (with the line the parser names)."""
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
     p = Path(path)
     text = read_text_checked(p, error_cls)
     try:

@@ -81,7 +81,7 @@ class JointPlace:
 def design_joint_places(design) -> dict[str, JointPlace]:
     """The places of :data:`JOINT_PLACES` the design has, from its layout: the flange clamp at the flange face,
     ring 1 and pipe II at their middles."""
-    from .layout import layout
+    from .layout import layout  # cycle: layout imports design, which imports this module
     segs = layout(design)
     tool = design.tool_mm
 
@@ -149,7 +149,7 @@ def declared_joint_compliance(design) -> tuple[np.ndarray, np.ndarray]:
     joints = getattr(design, "joints", None) or {}
     if not any(j.s_bend_rad_per_Nm or j.s_torsion_rad_per_Nm for j in joints.values()):
         return CF, Cg
-    from .massprops import distal_mass_properties
+    from .massprops import distal_mass_properties  # cycle: massprops imports design, which imports this module
     for place, spring in joints.items():
         where = joint_place(design, place)
         sb, st = spring.s_bend_rad_per_Nm * 1e-3, spring.s_torsion_rad_per_Nm * 1e-3   # rad/(N mm)

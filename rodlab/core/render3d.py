@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .fileio import atomic_write_figure
+from .view3d import RenderError, check_offscreen, render_triangle_sets
 
 __all__ = ["TriangleSet", "VIEWS", "RENDERERS", "render_png", "pick_renderer"]
 
@@ -52,7 +53,6 @@ def _camera(direction, up):
 def pick_renderer(renderer: str = "auto") -> str:
     """``matplotlib`` or ``pyvista`` for ``renderer`` (one of :data:`RENDERERS`); ``pyvista`` asked for where it
     cannot render raises :class:`rodlab.core.view3d.RenderError`."""
-    from .view3d import RenderError, check_offscreen
     if renderer not in RENDERERS:
         raise ValueError(f"renderer must be one of {', '.join(RENDERERS)}, got {renderer!r}")
     if renderer == "matplotlib":
@@ -71,7 +71,6 @@ def render_png(sets: list[TriangleSet], path: str | Path, view: str = "iso", tit
     """Render ``sets`` in ``view`` (a key of :data:`VIEWS`) to a PNG at ``path`` (written atomically) with
     ``renderer`` (:data:`RENDERERS`)."""
     if pick_renderer(renderer) == "pyvista":
-        from .view3d import render_triangle_sets
         return render_triangle_sets(sets, path, VIEWS[view], title=title, note=note)
     import matplotlib
     matplotlib.use("Agg")

@@ -252,7 +252,7 @@ def _parse(p: Path, text: str, kind: str):
 
 def check_file(path, format_id: str | None = None) -> FileCheck:
     """Every schema problem of the file at ``path`` (its format sniffed unless ``format_id`` is given)."""
-    from .schema_table import table_problems
+    from .schema_table import table_problems  # cycle: schema_table imports Problem from here
 
     p = Path(path)
     try:

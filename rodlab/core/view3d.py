@@ -7,6 +7,7 @@ process is tried in a child process first (:func:`check_offscreen`), and a clear
 """
 from __future__ import annotations
 
+import io
 import logging
 import os
 import subprocess
@@ -20,9 +21,10 @@ import numpy as np
 
 from .errors import LocatedError, RodlabError
 from .vtkio import decode_strings
+from .fileio import atomic_write_bytes
 
 __all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
-           "require_pyvista", "render_triangle_sets"]
+           "require_pyvista", "render_triangle_sets", "field_peak"]
 
 log = logging.getLogger(__name__)
 
@@ -163,8 +165,9 @@ class _Scene:
     peak: tuple
 
 
-def _peak(view: FieldView, values: np.ndarray) -> tuple:
-    """(largest value, name of the part of a cell at that node)."""
+def field_peak(view: FieldView, values: np.ndarray) -> tuple:
+    """The peak of a field: (largest of ``values``, one per node of ``view``; the name of the part of a cell at
+    that node, "" when the file names no parts). The picture's caption states it."""
     i = int(np.argmax(values))
     if not view.parts or "part" not in view.mesh.cell_data:
         return float(values[i]), ""
@@ -198,7 +201,7 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
         deformed = mesh.copy()
         deformed.points = np.asarray(mesh.points) + scale * disp
         und = mesh.tube(radius=r)
-        return _Scene(und, und.extract_feature_edges(), deformed.tube(radius=r), title, clim, _peak(view, values))
+        return _Scene(und, und.extract_feature_edges(), deformed.tube(radius=r), title, clim, field_peak(view, values))
     try:
         surf = mesh.extract_surface(nonlinear_subdivision=2, algorithm="dataset_surface")
     except TypeError:                                            # pyvista < 0.47: no algorithm keyword
@@ -207,7 +210,7 @@ def _scene(view: FieldView, load: str, scale: float, colour: str) -> _Scene:
                                          manifold_edges=False)
     deformed = surf.copy()
     deformed.points = np.asarray(surf.points) + scale * np.asarray(surf.point_data[f"displacement_{load}"])
-    return _Scene(surf, outline, deformed, title, clim, _peak(view, values))
+    return _Scene(surf, outline, deformed, title, clim, field_peak(view, values))
 
 
 def _labels(plotter, view: FieldView) -> None:
@@ -361,8 +364,6 @@ def render_triangle_sets(sets, png, view, title: str = "", note: str | None = No
 
 
 def _screenshot(plotter, png) -> Path:
-    from .fileio import atomic_write_bytes
-    import io
 
     img = plotter.screenshot(return_img=True)
     plotter.close()

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 
+import minimalmodbus
+
 from .base import Driver, Garbage, Link, NoAnswer, Setting, SettingError
 
 __all__ = ["ModbusRTU", "REGISTER_TYPES"]
@@ -76,7 +78,6 @@ class ModbusRTU(Driver):
         self._instrument = self._serial = None
 
     def _client(self, link: Link):
-        import minimalmodbus
         if self._instrument is None or self._serial is not link.serial:
             self._instrument = minimalmodbus.Instrument(link.serial, int(self.config.get("slave", 1)))
             self._instrument.clear_buffers_before_each_transaction = True
@@ -84,8 +85,7 @@ class ModbusRTU(Driver):
         return self._instrument
 
     def _read(self, inst, reg: dict) -> float:
-        import minimalmodbus as mm
-        order = mm.BYTEORDER_BIG if reg["word_order"] == "big" else mm.BYTEORDER_LITTLE_SWAP
+        order = minimalmodbus.BYTEORDER_BIG if reg["word_order"] == "big" else minimalmodbus.BYTEORDER_LITTLE_SWAP
         t, fc, a = reg["type"], reg["function"], reg["address"]
         if t in ("int16", "uint16"):
             v = inst.read_register(a, 0, fc, signed=t == "int16")
@@ -96,15 +96,14 @@ class ModbusRTU(Driver):
         return float(v) * float(reg["scale"])
 
     def poll(self, link: Link) -> dict:
-        import minimalmodbus as mm
         inst = self._client(link)
         out = {}
         for reg in self.registers:
             try:
                 v = self._read(inst, reg)
-            except mm.NoResponseError as e:
+            except minimalmodbus.NoResponseError as e:
                 raise NoAnswer(str(e)) from e
-            except (mm.ModbusException, ValueError) as e:       # CRC, wrong slave / length, an exception code
+            except (minimalmodbus.ModbusException, ValueError) as e:       # CRC, wrong slave / length, an exception code
                 raise Garbage(b"", f"{type(e).__name__}: {e}") from e
             if not math.isfinite(v):
                 raise Garbage(b"", f"register {reg['name']} is not finite")

@@ -10,6 +10,7 @@ import numpy as np
 from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
                               read_points, validate)
 from rodlab.calibrate.validate import error_stats
+from rodlab.calibrate.compensations import compensation_label
 
 from ...core.compliance import RodCompliance
 from ...core.design_io import resolve_design
@@ -48,7 +49,6 @@ class CalibrationRun:
     @property
     def label(self) -> str:
         """What the result calls its compensation (e.g. ``fea``, ``none``, ``calc+thermal``)."""
-        from rodlab.calibrate.compensations import compensation_label
         return compensation_label(self.compensations)
 
     @property

@@ -18,6 +18,7 @@ from rodlab.calibrate import (
 )
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
+from rodlab.calibrate.compensations import compensations_help
 
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.errors import RodlabError
@@ -29,12 +30,12 @@ from .deviceargs import add_device_option
 from .reporting import default_folder, png_folder, write_command_report
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict
+from .cmd_sockets import calibrate_sockets
 
 __all__ = ["register", "cmd_calibrate"]
 
 
 def register(sub) -> None:
-    from rodlab.calibrate.compensations import compensations_help
     p = sub.add_parser("calibrate", help="identify a robot from a MultiCal campaign (or instrument points)",
                        description="Levenberg-Marquardt identification of the robot's kinematic errors, Hayati beta, "
                                    "base, tool and joint compliances from a MultiCal campaign, with rod-deflection "
@@ -92,7 +93,6 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
                           "no periodic joint errors: leave it out")
     if args.sockets:
-        from .cmd_sockets import calibrate_sockets
         return calibrate_sockets(args)
     if args.points:
         return _calibrate_points(args)

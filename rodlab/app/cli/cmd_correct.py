@@ -8,6 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.calibrate import CalibrationError, builtin_robots
+from rodlab.calibrate.kinematics import ModelParams
+from rodlab.calibrate.result import calibrated_params, read_calibration
+from rodlab.core.frames import rotation_from_abc
+
 from ...core.errors import RodlabError
 from .robotargs import add_robot_options, robot_from_args
 
@@ -59,10 +64,7 @@ def _predicted_mm(path) -> float | None:
 
 
 def cmd_correct(args) -> int:
-    from rodlab.calibrate import builtin_robots
-    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.correct import correct_targets
-    from rodlab.calibrate.kinematics import ModelParams
     from rodlab.calibrate.targets import commands_csv, read_targets
     cal = read_calibration(args.calibration)
     if not args.robot:
@@ -113,9 +115,7 @@ def cmd_correct(args) -> int:
 
 def _correct_poses(args, robot, params, nominal, targets, seeds_rad):
     """Pose targets: the 6-D IK; a pose the calibrated robot cannot reach is refused with its line (no output)."""
-    from rodlab.calibrate import CalibrationError
     from rodlab.calibrate.correct import correct_poses
-    from rodlab.core.frames import rotation_from_abc
     abc = _vector(args.tool_abc, 3, "--tool-abc")
     R_tool = None if abc is None else rotation_from_abc(abc)
     corr = correct_poses(robot, params, nominal, targets.targets_mm, targets.abc_deg, seeds_rad, R_tool)

@@ -8,6 +8,7 @@ import numpy as np
 
 from rodlab.calibrate import builtin_robots, read_points, robot_path
 from rodlab.calibrate.kinematics import ModelParams
+from rodlab.calibrate.result import calibrated_params, read_calibration
 
 from ...core.errors import RodlabError
 from .argtypes import seed
@@ -92,7 +93,6 @@ def _urdf_file(spec: str) -> str:
 
 
 def cmd_export(args) -> int:
-    from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
         raise RodlabError("give --urdf (the URDF is the robot) or --robot, not both")

@@ -134,11 +134,11 @@ def _check_fields_option(args: argparse.Namespace) -> None:
 def _solid_views(args: argparse.Namespace, design, res) -> list:
     """Write ``--fields``; with ``--report`` also the 3-D views of the unit forces (from a temporary field file
     when ``--fields`` is not given). Returns the pictures for the report."""
+    if not (args.fields or args.report is not None):
+        return []
     from rodlab.fea.fields import solid_fields, write_solid_fields
 
     from ..report.views import render_field_pngs
-    if not (args.fields or args.report is not None):
-        return []
     fields = solid_fields(design, res)
     with tempfile.TemporaryDirectory() as tmp:
         path = write_solid_fields(args.fields or Path(tmp) / f"{design.name}.vtu", fields)

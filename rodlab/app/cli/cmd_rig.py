@@ -21,7 +21,7 @@ from rodlab.stiffness_rig.plot import format_pm, format_zero
 
 from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
-from ...core.enums import Checksum, LineProtocol
+from ...core.enums import Checksum, LineProtocol, LoadAxis
 from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
 from ...core.progress import progress as bar_of
@@ -208,7 +208,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     try:
         masses = tuple(float(m) for m in args.masses.split(","))
         axes = tuple(a.strip() for a in args.axes.split(","))
-        from ...core.enums import LoadAxis
         for a in axes:
             LoadAxis.parse(a, "load axis")
     except ValueError as e:

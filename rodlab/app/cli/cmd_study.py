@@ -5,8 +5,11 @@ import argparse
 import time
 from pathlib import Path
 
+from rodlab.calibrate import read_fixture
+
 from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
+from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, write_command_report
 from .robotargs import add_robot_options, robot_from_args
@@ -97,8 +100,8 @@ def _methods(text: str) -> tuple:
 
 
 def _candidates(args):
-    from rodlab.fea.sweep import parse_range
     from rodlab.app.study.designs import grid_candidates, list_candidates, parse_tube
+    from rodlab.fea.sweep import parse_range
     grid = args.L1 is not None or args.L2 is not None or args.materials or args.tubes
     if not grid:
         return list_candidates([resolve_design(d) for d in args.designs]), None
@@ -131,13 +134,11 @@ def _print_unusable(table) -> None:
 
 
 def cmd_study(args: argparse.Namespace) -> int:
-    from rodlab.calibrate import read_fixture
-    from rodlab.calibrate.predict import Priors
-    from rodlab.calibrate.simulate import standard_fixture
     from rodlab.app.study import StudySpec, run_study, write_study_outputs
     from rodlab.app.study.family import family_joints
+    from rodlab.calibrate.predict import Priors
+    from rodlab.calibrate.simulate import standard_fixture
 
-    from ...core.progress import progress as bar_of
     _check_numbers(args)
     methods = _methods(args.methods)
     robot = robot_from_args(args)

@@ -1,6 +1,7 @@
 """``rodlab validate``: name a file's format and report every problem at once (schema, then the reader's rules)."""
 from __future__ import annotations
 
+import importlib
 import re
 import sys
 from pathlib import Path
@@ -36,7 +37,6 @@ def _read_sockets(path):
 
 def _lazy(module: str, name: str):
     def read(path):
-        import importlib
         return getattr(importlib.import_module(module), name)(path)
     return read
 

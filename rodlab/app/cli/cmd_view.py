@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from ...core.errors import RodlabError
+from ...core.view3d import CAMERAS, LOAD_KEYS, parse_load, read_field_view, render_view
 
 __all__ = ["register"]
 
@@ -21,7 +22,6 @@ def _scale(value: str):
 
 
 def register(sub) -> None:
-    from ...core.view3d import CAMERAS, LOAD_KEYS
     p = sub.add_parser("view", help="picture of FEA fields (*.vtu / *.vtp of rodlab fea --fields): deformed rod, "
                                     "stress colours (viz extra)",
                        description="Draw one load case of a field file: the deformed rod (exaggerated, the factor "
@@ -46,7 +46,6 @@ def register(sub) -> None:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from ...core.view3d import parse_load, read_field_view, render_view
     load = parse_load(args.load)
     if args.output and not args.output.lower().endswith(".png"):
         raise RodlabError(f"-o {args.output}: the picture is a PNG; name it *.png")

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.fea.frame import frame_compliance
 
 from ...core.compliance import RodCompliance, design_hash
 from ...core.design_io import load_design
@@ -154,7 +155,6 @@ def _measured_envelope(sim: RodCompliance) -> Envelope:
 def _design_envelope(sim: RodCompliance, design) -> Envelope:
     """Tolerances of ``design`` through the frame model of the perturbed design (its form scaled entry by entry to
     the simulated compliance, the method's bias removed) plus the accuracy of the method that made ``sim``."""
-    from rodlab.fea.frame import frame_compliance
 
     def model(d):
         return frame_compliance(d)[0]

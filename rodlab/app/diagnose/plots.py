@@ -5,14 +5,15 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.calibrate.plots import plot_error_distributions
 from ...core.fileio import atomic_write_figure
+from .wording import explained_share
 
 __all__ = ["plot_rig_diagnosis", "plot_campaign_diagnosis"]
 
 
 def _finding_names(diag) -> str:
     """``friction (100 %), tare at x (3 %)``: each finding with the share of the residual it explains."""
-    from .wording import explained_share
     return ", ".join(f.effect + (f" at {f.location}" if f.location else "")
                      + f" ({100 * explained_share(f):.0f} %)" for f in diag.findings) or "nothing"
 
@@ -105,7 +106,6 @@ def plot_campaign_diagnosis(diag, fits, out_dir, noise_mm: float) -> list[Path]:
                  f"{diag.rms_before_mm * 1e3:.1f} -> {diag.rms_after_mm * 1e3:.1f} um", fontsize=11)
     out = [atomic_write_figure(Path(out_dir) / "diagnosis_campaign.png", fig, 100)]
     if fits.validation_errors_mm is not None:
-        from rodlab.calibrate.plots import plot_error_distributions
         e = fits.validation_errors_mm
         out.append(plot_error_distributions({"nominal": e["nominal"], "identified": e["before"],
                                              "with the found physics": e["after"]}, out_dir,

@@ -20,7 +20,7 @@ import numpy as np
 
 from rodlab.calibrate.kinematics import forward, harmonic_basis
 
-__all__ = ["PointFinding", "PointsDiagnosis", "diagnose_points", "FORMAT_POINTS_DIAGNOSIS"]
+__all__ = ["PointFinding", "PointsDiagnosis", "diagnose_points", "point_candidates", "FORMAT_POINTS_DIAGNOSIS"]
 
 FORMAT_POINTS_DIAGNOSIS = "rodlab.points_diagnosis/1"
 P_FINDING = 1e-3
@@ -120,9 +120,10 @@ def _through_joint(cols_j: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (cols_j[:, :, None] * f[:, None, :]).reshape(-1, f.shape[1])
 
 
-def _candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
-    """(effect, where, design (3N, k), meaning) of every candidate explanation; ``modelled``: joints whose periodic
-    error the identification already carries."""
+def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
+    """(effect, where, design (3N, k), meaning) of every candidate explanation of the points' residuals, for joint
+    angles ``q`` (N, n) [rad] and the joints' residual columns ``cols`` (N, n, 3) [mm/rad]; ``modelled``: joints
+    whose periodic error the identification already carries (left out)."""
     N, n = q.shape
     t = np.linspace(-1.0, 1.0, N)
     yield ("drift", "measurement order", np.kron(np.c_[t, t ** 2], np.eye(3)),
@@ -182,7 +183,7 @@ def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
     modelled = tuple(res.harmonic_range_deg)
-    findings = _greedy(r.ravel(), list(_candidates(q, _joint_columns(res.params, q), modelled)))
+    findings = _greedy(r.ravel(), list(point_candidates(q, _joint_columns(res.params, q), modelled)))
     dof = max(r.size - len(res.free), 1)
     p0 = forward(res.params, q).p0
     return PointsDiagnosis(len(r), float(np.sqrt(np.mean(r ** 2))), float(noise_mm),

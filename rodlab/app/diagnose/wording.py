@@ -18,6 +18,7 @@ from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from .report import Finding
 from .rig_outside import confirm_outside
+from .advice import remedy
 
 __all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "form_resolution"]
 
@@ -63,7 +64,6 @@ def confirmation(f: Finding) -> str:
     rig = _rig_confirm(f.effect, f.location)
     if rig and not (f.location or "").startswith(("position:", "points:", "joint:")):
         return rig
-    from .advice import remedy
     return remedy(f)
 
 

@@ -147,8 +147,8 @@ def _study_views(run: Path, files: dict) -> str:
 
 
 def _evidence(f: dict) -> str:
-    from ..diagnose.report import Finding
-    from ..diagnose.wording import evidence_text
+    from ..diagnose.report import Finding  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
+    from ..diagnose.wording import evidence_text  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
     return evidence_text(Finding.from_dict(f))
 
 

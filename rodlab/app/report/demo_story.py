@@ -11,6 +11,8 @@ import html
 
 import numpy as np
 
+from ...core.compliance import DEFAULT_CONTACT_FORCE_N
+
 __all__ = ["conclusion_html", "terms_html", "campaign_rod_note", "study_rod_note"]
 
 _LABEL = {"none": "None", "calc": "Calc", "fea": "FEA", "meas": "Meas"}
@@ -22,7 +24,7 @@ def _rows(sy: dict) -> dict:
 
 
 def _prior(sy: dict, design: str) -> tuple[float, float]:
-    from ..study.designs import R_PRIOR_COMPOSITE
+    from ..study.designs import R_PRIOR_COMPOSITE  # heavy: the study loads scipy.sparse (FEA), ~0.3 s
     return tuple(sy.get("r_prior", {}).get(design, R_PRIOR_COMPOSITE))
 
 
@@ -83,8 +85,7 @@ def conclusion_html(st: dict) -> str:
 
 def terms_html() -> str:
     """The page's terms, defined before any section uses them."""
-    from ...core.compliance import DEFAULT_CONTACT_FORCE_N
-    from ..study.designs import R_PRIOR_COMPOSITE, R_PRIOR_METAL
+    from ..study.designs import R_PRIOR_COMPOSITE, R_PRIOR_METAL  # heavy: the study loads scipy.sparse (FEA), ~0.3 s
     force = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N))
     rows = [
         ("{T}", "the rod's tool frame: origin at the ball centre, z_T along the flange normal (pipe I), x_T towards "

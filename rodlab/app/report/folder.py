@@ -13,6 +13,7 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
 from .html import esc, figure, page
 from .sections import FORMAT_MASS, FORMAT_SWEEP, SECTIONS, Source
+from .demo import is_run_folder, render_run
 
 __all__ = ["classify", "discover", "render_sources", "write_sources_report", "write_folder_report", "CAPTIONS"]
 
@@ -132,7 +133,6 @@ def write_folder_report(folder, out=None) -> Path:
     if not folder.is_dir():
         raise RodlabError(f"{folder}: not a folder; give the folder a rodlab command wrote into")
     out = Path(out) if out else folder / "report.html"
-    from .demo import is_run_folder, render_run
     if is_run_folder(folder):
         return atomic_write_text(out, render_run(folder))
     sources, figures = discover(folder)

@@ -163,8 +163,8 @@ def _calibration(src: Source) -> str:
 
 
 def _finding_rows(findings: list, subject: str) -> list[list]:
-    from ..diagnose.report import Finding
-    from ..diagnose.wording import confirmation, evidence_text
+    from ..diagnose.report import Finding  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
+    from ..diagnose.wording import confirmation, evidence_text  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
     rows = []
     for f in findings:
         fi = Finding.from_dict(f)

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.fea.fields import solid_fields, write_solid_fields, write_frame_fields
 from ...core.design import RodDesign
 from ...core.view3d import RenderError, read_field_view, render_view
 
@@ -50,7 +51,6 @@ def _render(fields: Path, prefix: Path, colour: str, loads=VIEW_LOADS) -> FieldV
 def solid_views(design: RodDesign, result, fields: str | Path, prefix: str | Path | None = None) -> FieldViews:
     """Write the solid ``result``'s fields (solved with ``keep_displacements``) to ``fields`` (``.vtu``) and
     render them, coloured by von Mises stress, to ``prefix_<load>.png`` (default: beside the field file)."""
-    from rodlab.fea.fields import solid_fields, write_solid_fields
     path = write_solid_fields(fields, solid_fields(design, result))
     return _render(path, Path(prefix) if prefix else path.with_suffix(""), "stress")
 
@@ -58,6 +58,5 @@ def solid_views(design: RodDesign, result, fields: str | Path, prefix: str | Pat
 def frame_views(design: RodDesign, fields: str | Path, prefix: str | Path | None = None, loads=VIEW_LOADS) -> FieldViews:
     """The frame model's centreline fields (``.vtp``) and their pictures (``loads``: load cases, or
     ``"weakest"``), coloured by the sections' outer-fibre von Mises stress (from the beam's section forces)."""
-    from rodlab.fea.fields import write_frame_fields
     path = write_frame_fields(fields, design)
     return _render(path, Path(prefix) if prefix else path.with_suffix(""), "stress", loads)

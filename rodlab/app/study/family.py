@@ -5,10 +5,16 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+from importlib.util import find_spec
 from pathlib import Path
 
+import rodlab.geometry as geometry
 from rodlab.core.design import RodDesign
+from rodlab.core.design_io import design_to_dict
 from rodlab.core.errors import RodlabError
+from rodlab.fea import run_solid
+from rodlab.fea.family import calibration_member
+from rodlab.fea.joints_io import read_joints, write_joints
 
 __all__ = ["solid_family_calibration", "cad_available", "family_joints"]
 
@@ -18,16 +24,12 @@ log = logging.getLogger(__name__)
 def cad_available(mesh_only: bool = False) -> bool:
     """True when the cad extra (build123d and gmsh; gmsh alone with ``mesh_only``: it builds the parts it
     meshes itself) is installed: found, not imported (build123d's import alone takes ~2 s)."""
-    from importlib.util import find_spec
     return find_spec("gmsh") is not None and (mesh_only or find_spec("build123d") is not None)
 
 
 def solid_family_calibration(base: RodDesign, L1s=(), L2s=()):
     """A :class:`rodlab.fea.joints.JointCalibration` of ``base``'s family from one solid run of its calibration
     member (``base``, or the grid's nearest design whose free tubes are long enough); needs the cad extra."""
-    import rodlab.geometry as geometry
-    from rodlab.fea import run_solid
-    from rodlab.fea.family import calibration_member
     member = calibration_member(base, L1s, L2s)
     log.info("joint calibration of %s's family on a solid run of %s", base.name, member.name)
     return run_solid(member, geometry.mesh_rod, error_estimate=False, joints=True).joints
@@ -36,9 +38,6 @@ def solid_family_calibration(base: RodDesign, L1s=(), L2s=()):
 def _family_joints(base, L1s, L2s, cache: Path):
     """The family's joint calibration, solved once and kept in ``cache/joints`` (keyed by the solid-run
     design's identity), so a re-run or a resumed study does not solve again."""
-    from rodlab.core.design_io import design_to_dict
-    from rodlab.fea.family import calibration_member
-    from rodlab.fea.joints_io import read_joints, write_joints
     member = calibration_member(base, L1s, L2s)
     key = hashlib.sha256(json.dumps(design_to_dict(member), sort_keys=True, default=str).encode()).hexdigest()[:20]
     path = cache / "joints" / f"{key}.joints.json"

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rodlab.core.fileio import atomic_write_json, atomic_write_text, json_safe
+from rodlab.app.report.views import frame_views
 
 from .plots import plot_heatmaps, plot_pareto
 from .report import write_study_report
@@ -66,6 +67,5 @@ def _recommended_views(out: Path, rec: Recommendation, designs: dict) -> tuple:
     design = designs.get(rec.design)
     if design is None:
         return ()
-    from rodlab.app.report.views import frame_views
     views = frame_views(design, out / "recommended.vtp", loads="weakest")
     return (views.fields.name, *(p.name for p in views.pngs))

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.fileio import atomic_write_figure
+from rodlab.fea.sweep_plot import HEAT_CMAP
 
 __all__ = ["plot_pareto", "plot_heatmaps", "pareto_mask", "pareto_labels", "heat_scale"]
 
@@ -119,7 +120,6 @@ def plot_heatmaps(df, path, title: str = "") -> Path | None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from rodlab.fea.sweep_plot import HEAT_CMAP
     L1, L2 = np.unique(df["L1_mm"].to_numpy(float)), np.unique(df["L2_mm"].to_numpy(float))
     methods = [m for m in ("none", "calc", "fea", "meas") if (df["method"] == m).any()]
     if L1.size < 2 or L2.size < 2 or not methods or df["design"].nunique() != L1.size * L2.size:

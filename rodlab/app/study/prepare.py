@@ -9,9 +9,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rodlab.calibrate import CalibrationError, Rod
+from rodlab.calibrate.plan import plan_poses
+from rodlab.core.calc import calc_rod_compliance
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.enums import DesignStatus
 from rodlab.core.errors import RodlabError
+from rodlab.core.strength import strength_margins, thermal_growth_um_per_K
+from rodlab.fea import compute_compliance
+from rodlab.fea.modal import frame_frequencies
 
 from .designs import Candidate
 
@@ -71,16 +77,12 @@ class DesignSetup:
 
 
 def _compliance(design, joints):
-    from rodlab.core.calc import calc_rod_compliance
-    from rodlab.fea import compute_compliance
     fea = compute_compliance(design, "frame", **({"calibration": joints} if joints is not None else {}))
     model = "frame, joint-calibrated on solid FEA" if joints is not None else "frame (global calibration)"
     return fea, calc_rod_compliance(design), model
 
 
 def _physics(design, force_N: float) -> dict:
-    from rodlab.fea.modal import frame_frequencies
-    from rodlab.core.strength import strength_margins, thermal_growth_um_per_K
     sm = strength_margins(design, force_N)
     return {"thermal_um_per_K": tuple(float(v) for v in thermal_growth_um_per_K(design)),
             "frequencies_Hz": tuple(float(v) for v in frame_frequencies(design, modes=3)),
@@ -93,8 +95,6 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
                    candidates: int = 30) -> DesignSetup:
     """Everything of ``cand`` that does not depend on a replicate; a design the robot cannot use, or whose
     computation fails, is a setup with that status and the reason (never an exception)."""
-    from rodlab.calibrate import CalibrationError, Rod
-    from rodlab.calibrate.plan import plan_poses
 
     row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
     if cand.design is None:

@@ -24,8 +24,14 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
-
 from rodlab import __version__
+from rodlab.calibrate import CalibrationError
+from rodlab.calibrate.predict import Priors, ReplicateOutcome, run_replicate
+from rodlab.calibrate.simulate import standard_base
+from rodlab.calibrate.validate import ErrorStats
+from rodlab.core.cluster import local_cluster
+from rodlab.core.design_io import design_to_dict
+from rodlab.core.enums import Method
 from rodlab.core.fileio import atomic_write_json, json_safe
 
 from .designs import Candidate, r_prior_of
@@ -69,7 +75,6 @@ class StudyRun:
 
 
 def replicate_priors(spec: StudySpec, setup_or_prior):
-    from rodlab.calibrate.predict import Priors
     base = spec.priors or Priors()
     return replace(base, r_rod=tuple(setup_or_prior))
 
@@ -80,13 +85,11 @@ def joints_identity(joints) -> str | None:
     invalidate a cache."""
     if joints is None:
         return None
-    from rodlab.core.design_io import design_to_dict
     return json.dumps({"base": design_to_dict(joints.base), "calibration": repr(joints.calibration)},
                       sort_keys=True, default=str)
 
 
 def cache_key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
-    from rodlab.core.design_io import design_to_dict
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
             "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": joints_identity(joints),
@@ -106,9 +109,6 @@ def _float(v) -> float:
 
 
 def outcome_from_dict(d: dict):
-    from rodlab.calibrate.predict import ReplicateOutcome
-    from rodlab.calibrate.validate import ErrorStats
-    from rodlab.core.enums import Method
     return ReplicateOutcome(int(d["seed"]), float(d["r_true"]),
                             {Method.parse(m): ErrorStats(**s) for m, s in d["stats"].items()},
                             {Method.parse(m): float(v) for m, v in d["ms_mm2"].items()},
@@ -122,9 +122,6 @@ def _prepare_task(cand, robot, fixture, spec, joints) -> dict:
 
 
 def _replicate_task(setup: dict, robot, fixture, spec: StudySpec, seed: int) -> dict | None:
-    from rodlab.calibrate import CalibrationError
-    from rodlab.calibrate.predict import run_replicate
-    from rodlab.calibrate.simulate import standard_base
     s = DesignSetup.from_dict(setup)
     if not s.ok:
         return None
@@ -174,7 +171,6 @@ def dask_client(scheduler, workers):
     if scheduler:
         return Client(scheduler), None
     one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}   # small matrices
-    from rodlab.core.cluster import local_cluster                  # quiet, free ports, no dashboard unless asked
     cluster = local_cluster(workers, env=one)
     return Client(cluster), cluster
 
@@ -185,7 +181,7 @@ def run_study(cands: list[Candidate], robot, fixture, spec: StudySpec = StudySpe
     """Run the study (see the module docstring). ``joints``: {candidate label: JointCalibration or None}."""
     joints = joints or {}
     if not spec.monte_carlo:
-        from .run_fast import run_fast
+        from .run_fast import run_fast  # cycle: run_fast imports this module's helpers
         return run_fast(cands, robot, fixture, spec, joints, cache_dir, scheduler, workers, use_dask, progress)
     cache = ResultCache(Path(cache_dir) if cache_dir else None)
     keys = [cache_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]

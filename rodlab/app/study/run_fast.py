@@ -4,9 +4,18 @@ cached per design as ``cache_dir/<design key>/fast.json`` (the key as for Monte 
 from __future__ import annotations
 
 import logging
+from contextlib import nullcontext
 from pathlib import Path
 
+from rodlab.calibrate import CalibrationError
+from rodlab.calibrate.predict import AccuracySummary, BudgetShares
+from rodlab.calibrate.predict_linear import LinearPrediction, predict_linear
+from rodlab.calibrate.simulate import standard_base
+from rodlab.core.enums import DesignStatus, Method
+
+from .designs import r_prior_of
 from .prepare import DesignSetup, prepare_design
+from .run import ResultCache, StudyRun, cache_key, dask_client, progress_ticker, replicate_priors
 
 __all__ = ["run_fast", "prediction_to_dict", "prediction_from_dict", "DASK_MIN_DESIGNS"]
 
@@ -23,7 +32,6 @@ def _one_blas_thread():
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:
-        from contextlib import nullcontext
         return nullcontext()
     return threadpool_limits(1)
 
@@ -42,9 +50,6 @@ def _f(v) -> float:
 
 
 def prediction_from_dict(d: dict):
-    from rodlab.calibrate.predict import AccuracySummary, BudgetShares
-    from rodlab.calibrate.predict_linear import LinearPrediction
-    from rodlab.core.enums import Method
     out = []
     for a in d["summaries"]:
         b = BudgetShares(*(_f(a["budget"][k]) for k in ("deflection", "identification", "noise")))
@@ -57,13 +62,7 @@ def prediction_from_dict(d: dict):
 def _fast_task(cand, robot, fixture, spec, joints) -> dict:
     """One design: its setup and its linear prediction (None for a design that is not usable); a prediction
     that fails marks the design failed with the reason."""
-    from rodlab.calibrate import CalibrationError
-    from rodlab.calibrate.predict_linear import predict_linear
-    from rodlab.calibrate.simulate import standard_base
-    from rodlab.core.enums import DesignStatus
 
-    from .designs import r_prior_of
-    from .run import replicate_priors
     prior = r_prior_of(cand.design, spec.r_prior_metal, spec.r_prior_composite) if cand.design else (1.0, 1.0)
     s = prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed)
     if not s.ok:
@@ -80,7 +79,6 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
 def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, workers: int, use_dask: bool,
              progress):
     """:func:`rodlab.app.study.run.run_study` with the linear predictor (``spec.monte_carlo`` off)."""
-    from .run import StudyRun, ResultCache, dask_client, cache_key, progress_ticker
     cache = ResultCache(Path(cache_dir) if cache_dir else None)
     keys = [cache_key(c, robot, fixture, spec, joints.get(c.label)) for c in cands]
     got = [cache.get(k, "fast.json") for k in keys]

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rodlab.calibrate.predict import summarise
 from .prepare import DesignSetup
 from .run import StudyRun
 
@@ -41,7 +42,6 @@ def study_table(run: StudyRun):
     for a design that is invalid, unreachable or failed)."""
     import pandas as pd
 
-    from rodlab.calibrate.predict import summarise
     rows = []
     preds = run.predictions or [None] * len(run.setups)
     for s, outs, pred in zip(run.setups, run.outcomes, preds):

@@ -26,15 +26,15 @@ import numpy as np
 from .compensations import Compensation, total_offsets
 from .covariance import parameter_covariance
 from .errors import CalibrationError
+from .estimate import FitOptions, Selection, check_names, parameter_value, physical_bounds, pinned_vector, select_free, solve
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, harmonic_reference
 from .observations import Observations, campaign_observations, noise_covariance, register_base, register_base_and_tool
-from .estimate import (FitOptions, Selection, check_names, parameter_value, physical_bounds, pinned_vector, select_free,
-                       solve)
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
+from .residual_test import residual_test
 from .result import CalibrationResult
 from .rod import Rod
-from .residual_test import residual_test
+from .trust import trust_cautions, trust_warnings
 
 __all__ = ["Observations", "CalibrationResult", "identify", "campaign_observations", "register_base",
            "register_base_and_tool", "noise_covariance", "free_parameters", "harmonic_start"]
@@ -64,7 +64,6 @@ def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compens
                               for j in sorted(set(options.harmonics))}
     if options.expected_noise_mm:
         out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
-    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)
     out.cautions = trust_cautions(out)
     return out

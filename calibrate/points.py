@@ -13,6 +13,7 @@ import numpy as np
 from rodlab.core.units import TRACKER_NOISE_MM
 
 from .campaign import PointSet
+from .crossval import cross_validate_identify
 from .estimate import FitOptions
 from .identify import Observations, identify
 from .result import CalibrationResult
@@ -58,6 +59,5 @@ def cross_validate_points(robot, pts: PointSet, fit_rms_mm: float, *, pinned: di
     cross-validation over the points (:func:`calibrate.crossval.cross_validate_identify`)."""
     options = FitOptions(pinned=dict(pinned or {}), freed=set(freed) | {"tool_y"}, robust=robust, find_tool=True,
                          harmonics=tuple(harmonics))
-    from .crossval import cross_validate_identify            # start-up: loaded on first use, not by `rodlab --help`
     return cross_validate_identify(robot, points_observations(pts), points_rod(pts), options=options,
                                    fit_rms_mm=fit_rms_mm)

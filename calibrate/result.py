@@ -16,6 +16,7 @@ from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams
+from .trust import completeness, completeness_statement
 
 if TYPE_CHECKING:                                      # validate -> points -> identify -> result
     from .validate import ErrorStats
@@ -86,7 +87,6 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,
                    "warnings": res.warnings, "cautions": res.cautions}}
     if res.residual_check is not None:
-        from .trust import completeness, completeness_statement  # start-up: loaded on first use, not by `rodlab --help`
         out["fit"]["residual_test"] = res.residual_check.to_dict()
         out["fit"]["completeness"] = {"verdict": str(completeness(res)), "statement": completeness_statement(res)}
     if res.prediction is not None:

@@ -27,13 +27,14 @@ import numpy as np
 from .covariance import correlation, parameter_covariance
 from .errors import CalibrationError
 from .estimate import Selection, check_names, parameter_value, pinned_vector, select_free, solve
-from .result import CalibrationResult
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import INTERNAL_SCALE, PRIOR_SCALE, apply, catalogue, structural_fixed
 from .residual_test import P_MISSING, ResidualTest
+from .result import CalibrationResult
 from .socket_check import socket_centres
 from .sockets import SocketReadings
+from .trust import trust_cautions, trust_warnings
 
 __all__ = ["SocketFit", "identify_sockets", "socket_start", "BASE_GAUGE", "SCALE_HELD"]
 
@@ -317,7 +318,6 @@ def _fit_result(robot, start, infos, reasons: dict, prob: _Problem, st: _State) 
                             [infos[k].name for k in free], np.zeros_like(resid_mm), bool(sol.success),
                             str(sol.message), int(sol.nfev), 1, float(np.linalg.cond(Jn)) if P else float("nan"))
     out.residual_check = _residual_test(chi2, dof, r)
-    from .trust import trust_cautions, trust_warnings        # start-up: loaded on first use, not by `rodlab --help`
     out.warnings = trust_warnings(robot, out)     # residuals above the seat play: a caution (incomplete model)
     out.cautions = trust_cautions(out)
     keys = r.groups()
@@ -344,7 +344,7 @@ def _stated_noise(r: SocketReadings) -> float:
 
 
 def _residual_test(chi2: float, dof: int, r: SocketReadings) -> ResidualTest:
-    from scipy.special import chdtrc                                    # heavy (scipy.special, ~0.15 s)
+    from scipy.special import chdtrc  # heavy (scipy.special, ~0.15 s)
     p = float(chdtrc(dof, chi2))
     return ResidualTest(chi2, dof, chi2 / dof, p, _stated_noise(r), (), p < P_MISSING, clamping=False,
                         source="ball-bar length" if r.ball_bar else "seat")

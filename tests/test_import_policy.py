@@ -49,22 +49,6 @@ HEAVY_REQUIRED = {
     "tqdm": "28 ms: 14 % of `rodlab --help`, which loads rodlab.core.progress (only long runs draw a bar)",
 }
 
-#: Files another branch reworks while this test was written (issue 51): their function-level imports are
-#: listed, not judged. The merger empties these once those branches are in (each count is today's number of
-#: unexplained function-level imports; a file not listed is checked in full).
-PENDING_CALIBRATE = {  # calibrate/ is being reworked on another branch
-    "calibrate/blind.py": 1, "calibrate/campaign.py": 3, "calibrate/compensations/thermal_growth.py": 1,
-    "calibrate/crossval.py": 1, "calibrate/device.py": 1, "calibrate/effects/device_axes.py": 1,
-    "calibrate/effects/rod_deflection.py": 2, "calibrate/identify.py": 2, "calibrate/observations.py": 1,
-    "calibrate/points.py": 2, "calibrate/predict_linear.py": 1, "calibrate/probe.py": 1, "calibrate/residual_test.py": 2,
-    "calibrate/result.py": 2, "calibrate/robot_toml.py": 1, "calibrate/robot_urdf.py": 1, "calibrate/simulate.py": 4,
-    "calibrate/socket_fit.py": 1, "calibrate/sockets.py": 3, "calibrate/trust.py": 1, "calibrate/unmodelled.py": 1,
-}
-PENDING_OTHER = {  # rodlab/core/enums.py, rodlab/app/diagnose/report.py, stiffness_rig/effects/: the registries' branch
-    "rodlab/core/enums.py": 2,            # .errors imports nothing of rodlab: hoist both
-    "rodlab/app/diagnose/report.py": 1,   # a cycle (wording imports Finding from report): mark it `# cycle:`
-}
-
 CYCLE = re.compile(r"#\s*cycle:\s*\S")
 HEAVY_MARK = re.compile(r"#\s*heavy:(.*)")
 
@@ -200,28 +184,14 @@ def test_heavy_names_come_from_pyproject():
     assert {"numpy", "filelock", "serial", "minimalmodbus"}.isdisjoint(names)
 
 
-def test_pending_lists_name_existing_files():
-    for where in {**PENDING_CALIBRATE, **PENDING_OTHER}:
-        assert (ROOT / where).is_file(), f"{where} in a PENDING list of {__file__} does not exist: remove it"
-
-
 @pytest.fixture(scope="module")
 def imports_in_functions():
     return scan(startup_modules())
 
 
 def test_imports_are_at_the_top_unless_there_is_a_reason(imports_in_functions):
-    bad, stale = [], []
-    for where, hits in sorted(imports_in_functions.items()):
-        unexplained = [(line, src) for line, src, reason in hits if reason is None]
-        pending = {**PENDING_CALIBRATE, **PENDING_OTHER}.get(where)
-        if pending is not None:
-            if len(unexplained) < pending:
-                stale.append(f"{where}: {len(unexplained)} unexplained now, the PENDING list says {pending}")
-            if len(unexplained) <= pending:
-                continue
-        bad.extend(f"{where}:{line}: {src}" for line, src in unexplained)
+    bad = [f"{where}:{line}: {src}" for where, hits in sorted(imports_in_functions.items())
+           for line, src, reason in hits if reason is None]
     assert not bad, ("imports inside functions without a reason; move each to the top of its module, or mark an "
                      "import cycle with `# cycle: <why>` on its line (heavy dependencies and the CLI's lazy "
                      "start-up are recognised by themselves; see this test's docstring):\n" + "\n".join(bad))
-    assert not stale, "lower the PENDING counts in " + __file__ + ":\n" + "\n".join(stale)

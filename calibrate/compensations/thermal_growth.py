@@ -14,6 +14,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from rodlab.core.strength import thermal_growth_um_per_K
 
 from ..errors import CalibrationError
 from ..kinematics import ModelParams, ball_positions
@@ -65,7 +66,6 @@ class ThermalGrowth(Compensation):
     @classmethod
     def of_design(cls, design, T_ref_C: float = 20.0) -> "ThermalGrowth":
         """From a rod design: each member's axial CTE (the materials table) times its span."""
-        from rodlab.core.strength import thermal_growth_um_per_K  # start-up: loaded on first use, not by `rodlab --help`
         g = np.asarray(thermal_growth_um_per_K(design), float) * 1e-3
         if not np.all(np.isfinite(g)):
             raise CalibrationError(f"design {design.name}: a tube or the ball has a material without cte_ppm_K; "

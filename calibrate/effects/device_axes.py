@@ -3,6 +3,8 @@ orthogonal read as orthogonal, or a wrong device file), so every point is off by
 the datum point, the same map in {D} at every position."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from rodlab.core.hypothesis import ParamSpec
@@ -68,7 +70,6 @@ class DeviceAxes(CampaignEffectModel):
         E = _map([parameters[n] for n in NAMES])
 
         def corrected(obs):
-            from dataclasses import replace
             dx = obs.x_D_mm @ np.linalg.inv(np.eye(3) + E).T - obs.x_D_mm       # x_true - x_read in {D}
             xW = obs.x_W_mm.copy()
             for j, T in obs.fixture_T.items():

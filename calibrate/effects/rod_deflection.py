@@ -5,7 +5,9 @@ from dataclasses import replace
 
 import numpy as np
 
+from rodlab.core.calc import calc_rod_compliance
 from rodlab.core.compliance import RodCompliance
+from rodlab.core.design_io import resolve_design
 from rodlab.core.hypothesis import ParamSpec
 
 from ..compensations import deflection_offsets
@@ -18,8 +20,6 @@ def generic_rod(rod: RodCompliance) -> RodCompliance:
     """A stand-in compliance for a rod known only by its tool vector and mass (a file with method ``none``):
     the built-in steel rod 4# with L1 / L2 taken from the tool vector's z / x, its closed form. Only its
     shape serves: the hypothesis scales its gravity and force parts separately."""
-    from rodlab.core.calc import calc_rod_compliance
-    from rodlab.core.design_io import resolve_design
     x, _, z = (float(v) for v in rod.tool_mm)
     d = replace(resolve_design("rod4"), L1_mm=min(max(z, 120.0), 900.0), L2_mm=min(max(abs(x), 150.0), 900.0),
                 name="generic")

@@ -9,6 +9,8 @@ from __future__ import annotations
 from enum import Enum
 from functools import lru_cache
 
+from .errors import RodlabError, did_you_mean
+
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "Trial", "AccuracySource", "Completeness", "Verdict",
            "Subject", "FindingKind", "MODEL_FORM", "id_enum", "BendModel", "SegmentKind", "FeaModel", "SolverBackend",
            "LineProtocol", "Checksum", "ErrorEstimate"]
@@ -26,7 +28,6 @@ class _StrEnum(str, Enum):
         try:
             return cls(str(value).strip().lower())
         except ValueError:
-            from .errors import RodlabError, did_you_mean
             choices = [m.value for m in cls]
             raise RodlabError(
                 f"unknown {what} {value!r}; expected one of {choices}."

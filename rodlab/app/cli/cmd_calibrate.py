@@ -19,6 +19,7 @@ from rodlab.calibrate import (
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
+from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.errors import RodlabError
@@ -129,7 +130,6 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 def _campaign_prediction(run: CalibrationRun):
     """The held-out accuracy: the validation points when given, else cross-validation over clamping positions."""
-    from rodlab.calibrate.crossval import Prediction, cross_validate_identify
     if run.calibrated_mm is not None:
         return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
     return cross_validate_identify(run.robot, run.observations, run.rod, run.compensations, run.options,
@@ -183,7 +183,6 @@ def _print_result(res, before, after, label) -> None:
 
 
 def _calibrate_points(args) -> int:
-    from rodlab.calibrate.crossval import Prediction
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)

@@ -1,7 +1,7 @@
 """``rodlab plan``: rod orientations per clamping position chosen by observability (O1)."""
 from __future__ import annotations
 
-from rodlab.calibrate import read_fixture
+from rodlab.calibrate import Rod, read_fixture
 
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
@@ -29,7 +29,6 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
-    from rodlab.calibrate import Rod
     from rodlab.calibrate.plan import plan_poses
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)

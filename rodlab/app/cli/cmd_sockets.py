@@ -11,6 +11,7 @@ from rodlab.calibrate import CalibrationError, result_dict
 from rodlab.calibrate.socket_check import check_sockets
 from rodlab.calibrate.socket_fit import identify_sockets, socket_start
 from rodlab.calibrate.sockets import read_sockets
+from rodlab.calibrate.crossval import Prediction
 
 from ...core.enums import AccuracySource
 from ...core.errors import RodlabError
@@ -138,7 +139,6 @@ def _extra(args, run: SocketRun) -> dict:
 def _prediction(args, run: SocketRun):
     """The held-out accuracy: the spread of the held-out placements' (or file's) balls about their sockets,
     calibrated against nominal; without them, cross-validation leaving out one fitted placement at a time."""
-    from rodlab.calibrate.crossval import Prediction
     res = run.fit.result
     if "held out" in run.checks:
         pair = run.checks["held out"]

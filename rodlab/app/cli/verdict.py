@@ -5,19 +5,19 @@ from __future__ import annotations
 
 import sys
 
+from rodlab.calibrate.trust import completeness_statement, prediction_warnings
+
 __all__ = ["judge", "print_verdict", "print_held"]
 
 
 def judge(res, prediction) -> None:
     """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result."""
-    from rodlab.calibrate.trust import prediction_warnings
     res.prediction = prediction
     res.warnings = list(res.warnings) + prediction_warnings(prediction)
 
 
 def print_verdict(res) -> None:
     """The two statements on stdout: usable? (with the predicted accuracy) and complete?."""
-    from rodlab.calibrate.trust import completeness_statement
     pred = res.prediction
     acc = pred.describe() if pred is not None and pred.points else "no held-out prediction"
     print(f"  usable? {'no' if res.warnings else 'yes'}: {acc}")

@@ -69,7 +69,7 @@ class Diagnosis:
         return atomic_write_json(path, self.to_dict())
 
     def summary(self) -> str:
-        from .wording import confirmation, evidence_text
+        from .wording import confirmation, evidence_text   # cycle: wording imports Finding from this module
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
         for i, f in enumerate(self.findings, 1):

@@ -11,8 +11,7 @@ every module of the package, builds :data:`CampaignEffect` from their IDs and or
 """
 from __future__ import annotations
 
-from rodlab.core.enums import id_enum
-from rodlab.core.registry import in_declared_order, package_classes
+from rodlab.core.registry import refill_id_registry
 
 from ..errors import CalibrationError
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
@@ -40,14 +39,8 @@ def discover() -> type:
     run it again after changing the package's ``__path__`` (the same modules give back the same Enum and
     models). Returns :data:`CampaignEffect`."""
     global CampaignEffect
-    classes = in_declared_order(package_classes(__name__, CampaignEffectModel, "effect"), "effect",
-                                "campaign effect")
-    CampaignEffect = id_enum("CampaignEffect", [str(c.effect) for c in classes], module=__name__, doc=_ENUM_DOC)
-    models = {type(m): m for m in CAMPAIGN_EFFECTS.values()}
-    for c in classes:
-        c.effect = CampaignEffect(str(c.effect))
-    CAMPAIGN_EFFECTS.clear()
-    CAMPAIGN_EFFECTS.update({c.effect: models.get(c) or c() for c in classes})
+    CampaignEffect = refill_id_registry(__name__, CampaignEffectModel, CAMPAIGN_EFFECTS, "CampaignEffect", _ENUM_DOC,
+                                        "campaign effect")
     return CampaignEffect
 
 

@@ -13,9 +13,10 @@ import pkgutil
 import sys
 from types import ModuleType
 
+from .enums import id_enum
 from .errors import RodlabError
 
-__all__ = ["package_modules", "package_classes", "in_declared_order", "sorted_by_id"]
+__all__ = ["package_modules", "package_classes", "in_declared_order", "sorted_by_id", "refill_id_registry"]
 
 
 def package_modules(package: str, prefix: str = "") -> list[ModuleType]:
@@ -61,3 +62,18 @@ def _check_unique(classes: list[type], key, name: str, what: str) -> None:
         if other is not c:
             raise RodlabError(f"{what}s {other.__module__} and {c.__module__} both have the {name} {key(c)!r}; "
                               f"give each its own")
+
+
+def refill_id_registry(package: str, base: type, registry: dict, enum_name: str, doc: str, what: str) -> type:
+    """An effect registry found anew: the ``base`` subclasses the modules of ``package`` define with their ID
+    (``effect``) and place (``order``), in that order; the Enum ``enum_name`` of their IDs (:func:`id_enum`:
+    the same IDs give back the same class); each class's ``effect`` made its member; ``registry`` refilled in
+    place (a class already there keeps its instance). Returns the Enum."""
+    classes = in_declared_order(package_classes(package, base, "effect"), "effect", what)
+    enum = id_enum(enum_name, [str(c.effect) for c in classes], module=package, doc=doc)
+    models = {type(m): m for m in registry.values()}
+    for c in classes:
+        c.effect = enum(str(c.effect))
+    registry.clear()
+    registry.update({c.effect: models.get(c) or c() for c in classes})
+    return enum

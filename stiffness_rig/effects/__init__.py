@@ -10,8 +10,7 @@ scripts/gen_cli_docs.py`` writes the table of docs/formats.md) all take it from 
 """
 from __future__ import annotations
 
-from rodlab.core.enums import id_enum
-from rodlab.core.registry import in_declared_order, package_classes
+from rodlab.core.registry import refill_id_registry
 
 from ..errors import RigError
 from .base import HypothesisContext, RigEffectModel, RigState
@@ -39,13 +38,7 @@ def discover() -> type:
     after changing the package's ``__path__`` (the same modules give back the same Enum and models). Returns
     :data:`RigEffect`."""
     global RigEffect
-    classes = in_declared_order(package_classes(__name__, RigEffectModel, "effect"), "effect", "rig effect")
-    RigEffect = id_enum("RigEffect", [str(c.effect) for c in classes], module=__name__, doc=_ENUM_DOC)
-    models = {type(m): m for m in RIG_EFFECTS.values()}
-    for c in classes:
-        c.effect = RigEffect(str(c.effect))
-    RIG_EFFECTS.clear()
-    RIG_EFFECTS.update({c.effect: models.get(c) or c() for c in classes})
+    RigEffect = refill_id_registry(__name__, RigEffectModel, RIG_EFFECTS, "RigEffect", _ENUM_DOC, "rig effect")
     return RigEffect
 
 

@@ -30,6 +30,8 @@ from skfem.quadrature import get_quadrature
 __all__ = ["recovery_error_matrix", "node_basis", "mandel"]
 
 _PAIRS = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+#: elements per chunk of the vectorised steps
+CHUNK = 1024
 _SQ2 = np.sqrt(2.0)
 
 
@@ -59,17 +61,21 @@ def _strains_mandel(grads: np.ndarray, u_e: np.ndarray) -> np.ndarray:
 def _nodal_average(stress_nodes: np.ndarray, element_dofs: np.ndarray, part_index: np.ndarray,
                    volume: np.ndarray) -> np.ndarray:
     """Volume-weighted average of the element stresses at each (part, node): ``stress_nodes`` shape=(ne, nloc, 6,
-    nc) -> the averaged value back on every element's nodes, same shape (a node shared by two parts keeps one
-    value per part)."""
+    nc) -> the averaged value at each (element, node), same shape (a node shared by two parts keeps one value per
+    part)."""
     ne, nloc = element_dofs.shape
     key = (part_index[:, None].astype(np.int64) * (element_dofs.max() + 1) + element_dofs).ravel()
     _, slot = np.unique(key, return_inverse=True)
     wts = np.repeat(volume, nloc)
     flat = stress_nodes.reshape(ne * nloc, -1)
-    total = np.zeros((slot.max() + 1, flat.shape[1]))
-    np.add.at(total, slot, flat * wts[:, None])
     weight = np.bincount(slot, weights=wts)
+    total = np.stack([np.bincount(slot, weights=flat[:, j] * wts, minlength=weight.size)
+                      for j in range(flat.shape[1])], axis=1)
     return (total / weight[:, None])[slot].reshape(stress_nodes.shape)
+
+
+def _chunks(n: int, size: int = CHUNK):
+    return (slice(s, min(s + size, n)) for s in range(0, n, size))
 
 
 def recovery_error_matrix(nodes, C: np.ndarray, part_index: np.ndarray, U: np.ndarray,
@@ -84,25 +90,44 @@ def recovery_error_matrix(nodes, C: np.ndarray, part_index: np.ndarray, U: np.nd
     antisymmetric about its plane.
     """
     ed = nodes.element_dofs.T                                                    # (ne, nloc)
-    ne, nloc = ed.shape
-    u_e = U.reshape(-1, 3, U.shape[1])[ed]                                       # (ne, nloc, 3, nc)
     Cm = mandel(C)
-    at_nodes = np.stack([nodes.basis[a][0].grad for a in range(nloc)])          # (nloc, 3, ne, nloc)
-    s_nodes = Cm[:, None] @ _strains_mandel(at_nodes, u_e)                      # (ne, nloc, 6, nc)
     mass, ref_volume = _reference_mass(nodes.elem)
     volume = nodes.dx.sum(axis=1) * ref_volume                                  # mean |det J| at the nodes x ref.
-    d_nodes = _nodal_average(s_nodes, ed, part_index, volume) - s_nodes
-    # the FE stress is linear in a (straight) element, so the P2 interpolant of the nodal values is exact and the
-    # energy of the difference is the element's P2 mass matrix (its volume x the reference one) between nodes
-    Sd = np.linalg.inv(Cm)[:, None] @ d_nodes                                   # S : d at the nodes
-    MSd = (mass @ Sd.reshape(ne, nloc, -1)) * volume[:, None, None]
-    nc = d_nodes.shape[-1]
-    E = d_nodes.reshape(-1, nc).T @ MSd.reshape(-1, nc)                          # sum over e, nodes, components
+    s_nodes = _nodal_stresses(nodes, Cm, U)
+    E = _difference_energy(_nodal_average(s_nodes, ed, part_index, volume), s_nodes, Cm, mass, volume)
     if half:
         E *= 2.0
         anti = np.isin(np.arange(E.shape[0]), antisymmetric)
         E[anti[:, None] != anti[None, :]] = 0.0
     return 0.5 * (E + E.T)
+
+
+def _nodal_stresses(nodes, Cm: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """The FE stress (Mandel) at each element's nodes, shape=(ne, nloc, 6, nc), element chunk by chunk (the
+    temporaries stay small: fresh memory is slow on a VM)."""
+    ed = nodes.element_dofs.T
+    ne, nloc = ed.shape
+    U3 = U.reshape(-1, 3, U.shape[1])
+    at_nodes = np.stack([nodes.basis[a][0].grad for a in range(nloc)])          # (nloc, 3, ne, nloc)
+    out = np.empty((ne, nloc, 6, U.shape[1]))
+    for c in _chunks(ne):
+        out[c] = Cm[c, None] @ _strains_mandel(at_nodes[:, :, c], U3[ed[c]])
+    return out
+
+
+def _difference_energy(s_star: np.ndarray, s_nodes: np.ndarray, Cm: np.ndarray, mass: np.ndarray,
+                       volume: np.ndarray) -> np.ndarray:
+    """``E_ij = int d_i : S : d_j`` of the nodal differences ``d = s_star - s_nodes``: the FE stress is linear in a
+    (straight) element, so the P2 interpolant of the nodal values is exact and the energy is the element's P2
+    mass matrix (its volume x the reference one) between its nodes."""
+    ne, nloc, _, nc = s_nodes.shape
+    S = np.linalg.inv(Cm)
+    E = np.zeros((nc, nc))
+    for c in _chunks(ne):
+        d = s_star[c] - s_nodes[c]
+        MSd = (mass @ (S[c, None] @ d).reshape(-1, nloc, 6 * nc)) * volume[c, None, None]
+        E += d.reshape(-1, nc).T @ MSd.reshape(-1, nc)                          # sum over e, nodes, components
+    return E
 
 
 def _reference_mass(elem) -> tuple[np.ndarray, float]:

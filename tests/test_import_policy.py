@@ -18,15 +18,11 @@ import ast
 import re
 import subprocess
 import sys
-import tomllib
 from functools import lru_cache
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
-PACKAGE_DIRS = PYPROJECT["tool"]["setuptools"]["package-dir"]
+from source_tree import PACKAGE_DIRS, PYPROJECT, ROOT, package_of
 
 #: distribution name -> the top-level names it installs, where they differ
 IMPORT_NAMES = {"pyserial": ("serial",), "import-linter": ("importlinter",), "scikit-fem": ("skfem",),
@@ -74,16 +70,6 @@ def heavy_names() -> set[str]:
 def _is_declared_or_local(top: str) -> bool:
     declared = _requirement_names(PYPROJECT["project"]["dependencies"]) | heavy_names()
     return top in declared or top == "rodlab" or top in sys.stdlib_module_names
-
-
-def _package_of(path: Path) -> str | None:
-    for name, folder in sorted(PACKAGE_DIRS.items(), key=lambda kv: -len(kv[1])):
-        try:
-            rel = path.parent.relative_to(ROOT / folder)
-        except ValueError:
-            continue
-        return ".".join([name, *rel.parts]) if rel.parts else name
-    return None
 
 
 def _imported_modules(node, package: str | None) -> list[str]:
@@ -151,7 +137,7 @@ def scan(startup: frozenset[str]):
         where = path.relative_to(ROOT).as_posix()
         text = path.read_text(encoding="utf-8")
         lines = text.splitlines()
-        hits = [(n.lineno, lines[n.lineno - 1].strip(), classify(n, lines, where, _package_of(path), startup))
+        hits = [(n.lineno, lines[n.lineno - 1].strip(), classify(n, lines, where, package_of(path), startup))
                 for n in function_imports(text)]
         if hits:
             result[where] = hits

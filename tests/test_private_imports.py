@@ -3,11 +3,9 @@
 The scan covers every installed package folder (pyproject's package-dir), scripts/ and benchmarks/; tests may
 exercise the private helpers of the module they test."""
 import ast
-import tomllib
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-PACKAGE_DIRS = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-dir"]
+from source_tree import PACKAGE_DIRS, ROOT, package_of
 
 
 def _source_folders() -> list[Path]:
@@ -25,17 +23,6 @@ def _module_file(dotted: str) -> Path | None:
     for f in (base.with_suffix(".py"), base / "__init__.py"):
         if f.is_file():
             return f
-    return None
-
-
-def _package_of(path: Path) -> str | None:
-    """The dotted package a source file sits in (for relative imports), or None outside the packages."""
-    for name, folder in sorted(PACKAGE_DIRS.items(), key=lambda kv: -len(kv[1])):
-        try:
-            rel = path.parent.relative_to(ROOT / folder)
-        except ValueError:
-            continue
-        return ".".join([name, *rel.parts]) if rel.parts else name
     return None
 
 
@@ -96,6 +83,6 @@ def test_no_module_uses_another_modules_private_name():
     files = list(_python_files())
     assert len(files) > 100, f"the scan found only {len(files)} source files: are the folders right?"
     bad = [hit for p in files
-           for hit in private_uses(p.read_text(encoding="utf-8"), str(p.relative_to(ROOT)), _package_of(p))]
+           for hit in private_uses(p.read_text(encoding="utf-8"), str(p.relative_to(ROOT)), package_of(p))]
     assert not bad, ("modules use another module's private name; make the name public (with a docstring) in the "
                      "module that owns it, or move it:\n" + "\n".join(bad))

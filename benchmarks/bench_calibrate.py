@@ -44,7 +44,7 @@ def main() -> int:
     p = res.params
     t0 = time.perf_counter()
     for _ in range(20):
-        fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod, obs.force_W_N)
+        fr, tau = ball_positions(robot, p, obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
         position_jacobian(fr, tau, infos, p.base, obs.group)
     t_an = (time.perf_counter() - t0) / 20
     t0 = time.perf_counter()
@@ -52,7 +52,7 @@ def main() -> int:
         for k in range(len(infos)):
             e = np.zeros(len(infos))
             e[k] = 1e-6
-            ball_positions(robot, apply(p, infos, x + e), obs.q_rad, obs.rod, obs.force_W_N)
+            ball_positions(robot, apply(p, infos, x + e), obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
     t_fd = (time.perf_counter() - t0) / 3
     lines = ["# Benchmark: calibration", "",
              f"`python benchmarks/bench_calibrate.py` on {platform.machine()}, {os.cpu_count()} cores, "

@@ -64,7 +64,7 @@ class _Batch:
 def _residual_and_jacobian(robot, params: ModelParams, q, batch: _Batch):
     """Ball position error [mm], shape=(M, 3), and its Jacobian in {W} [mm/rad], shape=(M, 3, n) (the joint
     compliance's own dependence on q is neglected in the Jacobian, not in the residual)."""
-    fr, _ = ball_positions(robot, params, q, batch.rod, batch.force_W_N)
+    fr, _ = ball_positions(robot, params, q, batch.rod, force_W_N=batch.force_W_N)
     targets = batch.targets
     r = fr.pW - targets
     J0 = np.cross(fr.z_prev, fr.p0[:, None, :] - fr.o_prev)            # (M, n, 3) in {0}

@@ -207,17 +207,19 @@ def static_torques(robot, fr: Frames, rod: Rod | None = None, force_W_N: np.ndar
     return np.einsum("mij,mij->mi", fr.z_prev, Msum - cross3(fr.o_prev, Ssum)) * 1e-3   # N mm -> N m
 
 
-def ball_positions(robot, params: ModelParams, q_rad, rod: Rod | None = None, force_W_N=None,
+def ball_positions(robot, params: ModelParams, q_rad, rod: Rod | None = None, *legacy, force_W_N=None,
                    iterations: int = 2, **deprecated) -> tuple[Frames, np.ndarray]:
     """Frames with the joint compliance solved consistently (torques at the deflected pose), and the torques.
 
     rod : the rod on the flange (:class:`~rodlab.calibrate.rod.Rod`; its weight loads the joints: only its mass and
         centre of mass are read, the ball is at ``params.tool``), or None for none; force_W_N : contact force on the
-        ball in {W} [N], (N, 3) or (3,), or None. The rod's mass and centre of mass as two numbers
-        (``rod_mass_kg=``, ``rod_com_T_mm=``, or a number in place of ``rod``) still work, with a DeprecationWarning.
+        ball in {W} [N], (N, 3) or (3,), or None (by keyword). The old forms with the rod's mass and centre of mass
+        as two numbers still work, with a DeprecationWarning: ``ball_positions(robot, params, q, mass, com[, force[,
+        iterations]])``, the same with ``force_W_N=`` / ``iterations=`` by keyword, and ``rod_mass_kg=`` /
+        ``rod_com_T_mm=``.
     """
-    if deprecated or isinstance(rod, numbers.Real):
-        rod, force_W_N, iterations = _legacy_load(rod, force_W_N, iterations, deprecated)
+    if deprecated or legacy or isinstance(rod, numbers.Real):
+        rod, force_W_N, iterations = _legacy_load(rod, legacy, force_W_N, iterations, deprecated)
     q = np.atleast_2d(q_rad)
     tau = np.zeros_like(q)
     fr = forward(params, q, tau)
@@ -230,17 +232,23 @@ def ball_positions(robot, params: ModelParams, q_rad, rod: Rod | None = None, fo
     return fr, tau
 
 
-def _legacy_load(rod, force_W_N, iterations, deprecated: dict):
+def _legacy_load(rod, legacy: tuple, force_W_N, iterations, deprecated: dict):
     """The arguments of the old signature ``ball_positions(robot, params, q, rod_mass_kg, rod_com_T_mm, force_W_N,
     iterations)`` as (rod, force, iterations) of the new one."""
     unknown = set(deprecated) - {"rod_mass_kg", "rod_com_T_mm"}
     if unknown:
         raise TypeError(f"ball_positions() got unexpected keyword arguments {sorted(unknown)}")
+    if legacy and not isinstance(rod, numbers.Real):
+        raise TypeError("ball_positions(robot, params, q, rod, ...): the force and iterations go by keyword "
+                        "(force_W_N=, iterations=)")
+    if len(legacy) > 3 or (len(legacy) > 1 and force_W_N is not None) or (len(legacy) > 2 and iterations != 2):
+        raise TypeError("ball_positions(): the old form takes mass, com, force_W_N, iterations once each")
     warnings.warn("ball_positions(..., rod_mass_kg, rod_com_T_mm, ...) is deprecated: pass the rod as a Rod "
                   "(rodlab.calibrate.Rod.rigid(tool_mm, mass_kg, com_T_mm))", DeprecationWarning, stacklevel=3)
     if isinstance(rod, numbers.Real):                  # positional: (mass, com, force, iterations)
-        mass, com = float(rod), force_W_N
-        force_W_N, iterations = (None, 2) if isinstance(iterations, numbers.Integral) else (iterations, 2)
+        mass, com = float(rod), (legacy[0] if legacy else deprecated.get("rod_com_T_mm"))
+        force_W_N = legacy[1] if len(legacy) > 1 else force_W_N
+        iterations = legacy[2] if len(legacy) > 2 else iterations
     else:
         mass, com = deprecated.get("rod_mass_kg", 0.0), deprecated.get("rod_com_T_mm")
     com = np.zeros(3) if com is None else com

@@ -64,7 +64,7 @@ class Observations:
     def balls(self, robot, params: ModelParams):
         """The model's frames and joint torques at these points (:func:`~.kinematics.ball_positions`) under the
         loads they were measured with: the rod's weight and the contact forces."""
-        return ball_positions(robot, params, self.q_rad, self.rod, self.force_W_N)
+        return ball_positions(robot, params, self.q_rad, self.rod, force_W_N=self.force_W_N)
 
     def subset(self, keep: np.ndarray) -> "Observations":
         """The points where the boolean mask ``keep`` (N,) is true, every per-point field with them."""

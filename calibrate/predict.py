@@ -226,7 +226,7 @@ def _campaign(robot, truth, rod_true, floor, setup: _Setup, rng, slip_rng=None) 
     if q.shape[0] < 6:
         raise CalibrationError(f"the true robot reached only {q.shape[0]} planned orientations", key="plan")
     qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
-    fr, _ = ball_positions(robot, truth, qt, Rod.of(reference), F)
+    fr, _ = ball_positions(robot, truth, qt, Rod.of(reference), force_W_N=F)
     pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     if priors.rod_slip:                                              # the rod's non-repeatable part
         u = slip_directions(rng if slip_rng is None else slip_rng, len(q))

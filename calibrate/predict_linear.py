@@ -181,7 +181,7 @@ def _campaign_observations(robot, model: ModelParams, plan_q: dict, fixture: Fix
     group = np.concatenate([np.full(len(plan_q[j]), j) for j in keys])
     Ts = {int(j): fixture.transform(j) for j in keys}
     F = np.array([Ts[int(j)][:3, :3] @ fixture.force_D_N for j in group])
-    fr, _ = ball_positions(robot, model, q, rod, F)
+    fr, _ = ball_positions(robot, model, q, rod, force_W_N=F)
     return Observations(q, fr.pW, F, rod, group, None, Ts)
 
 

@@ -324,7 +324,7 @@ def _spring_loaded(robot, world: _World, qt, T, Fm):
     truth, rod, rod_true, device = world.truth, world.rod, world.rod_true, world.device
 
     def centres(F):
-        fr, _ = ball_positions(robot, truth, qt, rod, F)
+        fr, _ = ball_positions(robot, truth, qt, rod, force_W_N=F)
         return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
     fr, pW = centres(Fm)
     if device is not None and device.has_springs:
@@ -341,7 +341,7 @@ def _reaim(robot, truth, rod, forces: dict, reached: dict) -> dict:
     keys = list(reached)
     q = np.concatenate([reached[j] for j in keys])
     F = np.concatenate([np.broadcast_to(forces[j], (len(reached[j]), 3)) for j in keys])
-    fr, _ = ball_positions(robot, truth, q, rod, F)
+    fr, _ = ball_positions(robot, truth, q, rod, force_W_N=F)
     res = solve_ik_positions(robot, truth, fr.pW - deflection_offsets(robot, truth, q, F, rod), q, rod, F)
     q = np.where(res.ok[:, None], res.q_rad, q)
     edges = np.cumsum([0] + [len(reached[j]) for j in keys])

@@ -53,7 +53,7 @@ def campaign_offsets(robot, model: ModelParams, obs: Observations, priors, true_
         floors = cached_floor_draws(robot, priors.robot_floor_mm, D, seed)
         q = np.concatenate([obs.q_rad] + [fl.angles(obs.q_rad) for fl in floors])     # one batch: (1 + D) N
         F = np.tile(obs.force_W_N, (D + 1, 1))
-        p, _ = ball_positions(robot, model, q, obs.rod, F)
+        p, _ = ball_positions(robot, model, q, obs.rod, force_W_N=F)
         pW = p.pW.reshape(D + 1, N, 3)
         out += (pW[1:] - pW[:1]).reshape(D, -1)
     return out

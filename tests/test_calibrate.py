@@ -38,7 +38,8 @@ def test_analytic_jacobian_matches_finite_differences(robot):
 
     def pos(xx):
         p = apply(base, infos, xx)
-        fr, tau = ball_positions(robot, p, q, Rod.rigid(np.zeros(3), 0.47, [-330, 0, -80]), np.ones((7, 3)))
+        fr, tau = ball_positions(robot, p, q, Rod.rigid(np.zeros(3), 0.47, [-330, 0, -80]),
+                                 force_W_N=np.ones((7, 3)))
         shift = np.zeros((7, 3))
         for info, v in zip(infos, xx):
             if info.kind == "fixture":

@@ -110,11 +110,11 @@ def test_the_rod_travels_with_the_observations_and_its_weight_bends_the_joints()
     F = np.tile([1.1, 1.25, 1.05], (2, 1))
     heavy = Observations(q, np.zeros((2, 3)), F, Rod.of(rc))
     light = Observations(q, np.zeros((2, 3)), F)
-    np.testing.assert_array_equal(heavy.balls(robot, p)[0].pW, ball_positions(robot, p, q, Rod.of(rc), F)[0].pW)
+    np.testing.assert_array_equal(heavy.balls(robot, p)[0].pW, ball_positions(robot, p, q, Rod.of(rc), force_W_N=F)[0].pW)
     sag = np.linalg.norm(heavy.balls(robot, p)[0].pW - light.balls(robot, p)[0].pW, axis=1)
     assert np.all(sag > 1e-3)                                   # 2 urad/(N m) joints under a rod of ~1 kg
     rigid = Rod.rigid(rc.tool_mm, rc.mass_kg, rc.com_T_mm)       # the weight alone: the same load
-    np.testing.assert_array_equal(ball_positions(robot, p, q, rigid, F)[1], heavy.balls(robot, p)[1])
+    np.testing.assert_array_equal(ball_positions(robot, p, q, rigid, force_W_N=F)[1], heavy.balls(robot, p)[1])
     assert heavy.subset(np.array([True, False])).rod is heavy.rod
     pts = PointSet(np.rad2deg(q), np.zeros((2, 3)), rc.tool_mm, 0.8, np.array([0.0, 0.0, -50.0]))
     probe = points_observations(pts).rod                         # an instrument's probe: the file's tool and payload

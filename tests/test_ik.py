@@ -27,13 +27,13 @@ def test_batch_reaches_targets_of_known_configurations(setup):
     robot, rod, truth, rng, lo, hi = setup
     F = np.array([1.1, 1.25, 1.05])
     q_true = rng.uniform(0.6 * lo, 0.6 * hi, (120, robot.n))
-    targets = ball_positions(robot, truth, q_true, Rod.of(rod), np.tile(F, (120, 1)))[0].pW
+    targets = ball_positions(robot, truth, q_true, Rod.of(rod), force_W_N=np.tile(F, (120, 1)))[0].pW
     seeds = rng.uniform(0.7 * lo, 0.7 * hi, (120, robot.n))
     res = solve_ik_positions(robot, truth, targets, seeds, Rod.of(rod), F)
     assert res.ok.mean() > 0.85                                  # random far seeds: a few end in local minima
     assert np.all(res.error_mm[res.ok] < 1e-4)
     pW = ball_positions(robot, truth, res.q_rad[res.ok], Rod.of(rod),
-                        np.tile(F, (int(res.ok.sum()), 1)))[0].pW
+                        force_W_N=np.tile(F, (int(res.ok.sum()), 1)))[0].pW
     np.testing.assert_allclose(pW, targets[res.ok], atol=1e-4)  # independently recomputed
     assert np.all(res.q_rad >= lo - 1e-12) and np.all(res.q_rad <= hi + 1e-12)
 
@@ -99,13 +99,21 @@ def test_the_rods_weight_as_two_numbers_still_works_with_a_warning(setup):
     robot, rod, truth, rng, lo, hi = setup
     q = rng.uniform(0.5 * lo, 0.5 * hi, (5, robot.n))
     F = np.tile([1.1, 1.25, 1.05], (5, 1))
-    fr, tau = ball_positions(robot, truth, q, Rod.of(rod), F)
-    with pytest.warns(DeprecationWarning, match="pass the rod as a Rod"):
-        old_pos = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F)
-    with pytest.warns(DeprecationWarning, match="pass the rod as a Rod"):
-        old_kw = ball_positions(robot, truth, q, rod_mass_kg=rod.mass_kg, rod_com_T_mm=rod.com_T_mm, force_W_N=F)
-    for fr_o, tau_o in (old_pos, old_kw):
+    fr, tau = ball_positions(robot, truth, q, Rod.of(rod), force_W_N=F)
+    olds = []
+    for args, kw in ((( rod.mass_kg, rod.com_T_mm, F), {}), ((rod.mass_kg, rod.com_T_mm, F, 2), {}),
+                     ((rod.mass_kg, rod.com_T_mm), {"force_W_N": F}), ((rod.mass_kg, rod.com_T_mm, F), {"iterations": 2}),
+                     ((), {"rod_mass_kg": rod.mass_kg, "rod_com_T_mm": rod.com_T_mm, "force_W_N": F})):
+        with pytest.warns(DeprecationWarning, match="pass the rod as a Rod"):
+            olds.append(ball_positions(robot, truth, q, *args, **kw))
+    for fr_o, tau_o in olds:
         np.testing.assert_array_equal(fr_o.pW, fr.pW)
         np.testing.assert_array_equal(tau_o, tau)
-    unloaded = ball_positions(robot, truth, q, None, F)[1]
+    one = ball_positions(robot, truth, q, Rod.of(rod), force_W_N=F, iterations=1)
+    with pytest.warns(DeprecationWarning):
+        one_old = ball_positions(robot, truth, q, rod.mass_kg, rod.com_T_mm, F, iterations=1)
+    np.testing.assert_array_equal(one_old[0].pW, one[0].pW)                   # iterations are kept, not reset
+    with pytest.raises(TypeError, match="by keyword"):
+        ball_positions(robot, truth, q, Rod.of(rod), F)
+    unloaded = ball_positions(robot, truth, q, None, force_W_N=F)[1]
     assert np.abs(tau - unloaded).max() > 1.0                   # the rod's weight is not lost on the way

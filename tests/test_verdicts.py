@@ -30,7 +30,7 @@ def test_residual_test_is_chi_square_under_the_noise_model(examples):
     # residuals drawn from the noise model itself: the whitened, projected sum of squares is chi-square(dof)
     from rodlab.calibrate.jacobian import position_jacobian
     from rodlab.calibrate.kinematics import ball_positions
-    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, obs.force_W_N)
+    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
     J = position_jacobian(fr, tau, [i for i in res.infos if i.name in res.free], res.params.base,
                           obs.group).reshape(res.residuals_mm.size, -1)
     S = noise_covariance(obs, 0.003)

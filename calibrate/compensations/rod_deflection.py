@@ -41,7 +41,7 @@ def flange_loads(robot, params: ModelParams, q_rad: np.ndarray, force_W_N: np.nd
     centre of mass count the same) on the compliant joints."""
     q = np.atleast_2d(np.asarray(q_rad, float))
     F = np.broadcast_to(np.asarray(force_W_N, float), (q.shape[0], 3))
-    fr, _ = ball_positions(robot, params, q, _as_rod(rod), F)
+    fr, _ = ball_positions(robot, params, q, _as_rod(rod), force_W_N=F)
     n = robot.n
     R_TW = fr.R_W0[None] @ fr.T[:, n, :3, :3]                        # {T} axes = {n} axes
     g_T = np.einsum("nji,j->ni", fr.T[:, n, :3, :3], robot.gravity_base / G0)

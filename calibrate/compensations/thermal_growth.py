@@ -30,7 +30,7 @@ def tool_axes_W(robot, params: ModelParams, q_rad: np.ndarray, force_W_N=None, r
     q = np.atleast_2d(np.asarray(q_rad, float))
     F = np.zeros((q.shape[0], 3)) if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float),
                                                                              (q.shape[0], 3))
-    fr, _ = ball_positions(robot, params, q, rod, F)
+    fr, _ = ball_positions(robot, params, q, rod, force_W_N=F)
     return fr.R_W0[None] @ fr.T[:, robot.n, :3, :3]
 
 

@@ -366,7 +366,7 @@ def device_noise_null(sel: CampaignSelection, ew: np.ndarray, A: np.ndarray) -> 
 
 def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
-    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, obs.force_W_N)
+    fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
     return CampaignContext(robot, res, obs, np.asarray(camp.position), camp.labels(), camp.time_s, camp.temp_C, rod,
                            fr), tau
 

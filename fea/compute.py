@@ -143,7 +143,8 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
         prov["discretisation_error"] = _error_provenance(
             np.abs(E[:3, :3]), np.abs(E[:3, 3:6]), CF, Cg,
             "stress recovery (Zienkiewicz-Zhu) on the solve's mesh: the energy of the recovered minus the computed "
-            "stress between the load cases; the computed compliance is too small by about this much")
+            "stress between the load cases; the computed compliance is too small by this much or more (it sees "
+            "0.3-0.6 of the error at the sleeves' corners: docs/benchmarks/fea_error_estimate.md)")
     CF = 0.5 * (CF + CF.T)
     return RodCompliance.from_design(design, CF, Cg, Method.FEA, prov), res
 

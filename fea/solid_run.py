@@ -9,6 +9,7 @@ from pathlib import Path
 
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.design import RodDesign
+from rodlab.core.enums import ErrorEstimate
 
 from .compute import Mesher, solid_compliance
 from .joints import JointFit, fit_joints
@@ -35,10 +36,12 @@ class SolidRun:
     figures: list[Path] = field(default_factory=list)
 
 
-def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None, error_estimate: bool = True,
+def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None,
+              error_estimate: ErrorEstimate | str | bool = ErrorEstimate.RECOVERY,
               symmetry: bool = True, joints: bool = False, deformed_png: str | Path | None = None,
               backend: str | None = None, keep_displacements: bool = False) -> SolidRun:
-    """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`); with ``joints``
+    """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`; ``error_estimate`` as
+    :func:`~fea.compute.solid_compliance`); with ``joints``
     calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.fit_joints`); with
     ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange); with
     ``keep_displacements`` the result keeps the load cases' displacements (for :mod:`fea.fields`)."""

@@ -1,14 +1,15 @@
 """A per-user cache of rod meshes: a designer who reruns ``rodlab fea`` on the same design and size skips gmsh.
 
 The key is the SHA-256 of everything the mesh depends on: the design as a ``rodlab.rod`` table (every dimension,
-part and material), the size, grading and half / whole, the mesh order, gmsh's version and
-:data:`MESH_REVISION` (raised whenever :func:`geometry.mesh_rod` changes what it makes). A hit is the pickled
+part and material), the mesher's keywords (size, grading, half / whole), the source of the geometry package and
+of the core modules it builds from (so that a change to the mesher is never served an old mesh), the versions of
+gmsh, scikit-fem and numpy, and :data:`MESH_REVISION`. A hit is the pickled
 :class:`~rodlab.core.fem_mesh.RodMesh` (~2 MB for rod 1#'s default half mesh); a file that cannot be read is
 meshed again and replaced. Files are written atomically; the folder is pruned to :data:`MAX_BYTES`, oldest first.
 
 Folder: ``$RODLAB_CACHE_DIR/meshes``, else ``$XDG_CACHE_HOME/rodlab/meshes``, else ``~/.cache/rodlab/meshes``;
-``RODLAB_CACHE_DIR=off`` (or ``rodlab fea --no-cache``) turns it off. Only rodlab writes there: the files are
-pickles, read back by the user who wrote them.
+``RODLAB_CACHE_DIR=off`` (or ``rodlab fea --no-cache``) turns it off. The files are pickles: only a file owned
+by the user who runs rodlab is read (another user's file in a shared folder is ignored and meshed anew).
 """
 from __future__ import annotations
 
@@ -17,6 +18,9 @@ import json
 import logging
 import os
 import pickle
+import sys
+from functools import lru_cache
+from importlib import metadata
 from pathlib import Path
 
 from rodlab.core.design import RodDesign
@@ -28,8 +32,10 @@ __all__ = ["MeshCache", "MESH_REVISION", "MAX_BYTES", "cache_folder"]
 
 log = logging.getLogger(__name__)
 
-#: raise when mesh_rod makes a different mesh from the same inputs (old entries are then never hit)
+#: raise when the mesh changes for a reason the key cannot see (the sources and versions are in it)
 MESH_REVISION = 1
+#: the core modules the mesher builds from, besides its own package
+_CORE_SOURCES = ("layout.py", "fem_mesh.py", "design.py", "enums.py")
 #: the folder's size limit [bytes]
 MAX_BYTES = 500_000_000
 
@@ -42,7 +48,27 @@ def cache_folder() -> Path | None:
     if root:
         return Path(root).expanduser() / "meshes"
     xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "rodlab" / "meshes"
+    try:
+        return (Path(xdg) if xdg else Path.home() / ".cache") / "rodlab" / "meshes"
+    except RuntimeError:                                  # no home folder: no cache
+        return None
+
+
+@lru_cache(maxsize=1)
+def _code_and_versions() -> str:
+    """The SHA-256 of the geometry package's and the mesher's core modules' sources, and the versions of the
+    packages a mesh is made and pickled with."""
+    here = Path(__file__).resolve().parent
+    core = Path(sys.modules[RodMesh.__module__].__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(here.glob("*.py")) + [core / name for name in _CORE_SOURCES]:
+        h.update(f.name.encode() + f.read_bytes())
+    for dist in ("gmsh", "scikit-fem", "numpy"):
+        try:
+            h.update(f"{dist} {metadata.version(dist)}".encode())
+        except metadata.PackageNotFoundError:
+            h.update(f"{dist} ?".encode())
+    return h.hexdigest()
 
 
 class MeshCache:
@@ -56,9 +82,8 @@ class MeshCache:
 
     def key(self, design: RodDesign, **kw) -> str:
         """The SHA-256 naming the mesh of ``design`` with the mesher's keywords ``kw``."""
-        import gmsh
         text = json.dumps({"design": design_to_dict(design), "mesher": {k: kw[k] for k in sorted(kw)},
-                           "gmsh": gmsh.__version__, "revision": MESH_REVISION}, sort_keys=True, default=str)
+                           "code": _code_and_versions(), "revision": MESH_REVISION}, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()
 
     def __call__(self, design: RodDesign, **kw) -> RodMesh:
@@ -77,6 +102,9 @@ class MeshCache:
 
     def _read(self, path: Path) -> RodMesh | None:
         try:
+            if path.stat().st_uid != os.getuid():
+                log.warning("mesh cache %s belongs to another user: not read, meshing again", path)
+                return None
             with open(path, "rb") as f:
                 rm = pickle.load(f)
         except FileNotFoundError:
@@ -87,7 +115,10 @@ class MeshCache:
         if not isinstance(rm, RodMesh):
             log.warning("mesh cache %s holds no rod mesh: meshing again", path)
             return None
-        os.utime(path)                                     # recently used: pruned last
+        try:
+            os.utime(path)                                 # recently used: pruned last
+        except OSError:                                    # a read-only cache still serves
+            pass
         return rm
 
     def _write(self, path: Path, rm: RodMesh) -> None:
@@ -99,9 +130,16 @@ class MeshCache:
             log.warning("mesh cache %s not written (%s)", path, e)
 
     def _prune(self) -> None:
-        files = sorted(self.folder.glob("*.pickle"), key=lambda p: p.stat().st_mtime, reverse=True)
+        """Newest first, delete what is beyond :data:`MAX_BYTES` (another process may prune at the same time)."""
+        sized = []
+        for p in self.folder.glob("*.pickle"):
+            try:
+                st = p.stat()
+            except FileNotFoundError:
+                continue
+            sized.append((st.st_mtime, st.st_size, p))
         total = 0
-        for p in files:
-            total += p.stat().st_size
+        for _, size, p in sorted(sized, key=lambda t: t[0], reverse=True):
+            total += size
             if total > MAX_BYTES:
                 p.unlink(missing_ok=True)

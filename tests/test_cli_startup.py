@@ -35,3 +35,10 @@ def test_an_unknown_command_still_gets_the_nearest_name(capsys):
         cli_main.main(["fae", "rod1"])
     assert e.value.code == 2
     assert "Did you mean `fea`?" in capsys.readouterr().err
+
+
+def test_help_before_a_command_is_the_help_of_every_command(capsys):
+    with pytest.raises(SystemExit):
+        cli_main.main(["-h", "fea"])
+    out = capsys.readouterr().out
+    assert "fea" in out and "calibrate" in out and "diagnose" in out

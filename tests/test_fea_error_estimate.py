@@ -82,8 +82,8 @@ def rod1_runs():
     from rodlab.fea.compute import solid_compliance
     from rodlab.geometry import mesh_rod
     d = resolve_design("rod1")
-    return {how: solid_compliance(d, mesh_rod, size_mm=22.5, error_estimate=how)
-            for how in (ErrorEstimate.RECOVERY, ErrorEstimate.NONE)}
+    return {how: solid_compliance(d, mesh_rod, size_mm=22.5, error_estimate=how, keep_displacements=True)
+            for how in ErrorEstimate}
 
 
 def test_the_rods_compliance_file_carries_the_recovery_estimate(rod1_runs):
@@ -105,3 +105,39 @@ def test_an_unknown_estimate_is_refused_with_the_choices():
     from rodlab.fea.compute import solid_compliance
     with pytest.raises(FeaError, match="recovery"):
         solid_compliance(resolve_design("rod1"), None, error_estimate="zz")
+
+
+def test_the_half_mesh_estimate_is_the_whole_rods(rod1_runs):
+    """The half mesh's estimate (x 2, symmetric and antisymmetric fields orthogonal) against the estimate on the
+    mirrored whole mesh with the mirrored displacements: the same up to the averaging at the plane, which sees one
+    side only (a lost factor 2 would be 50 % off)."""
+    from rodlab.fea.solid import ANTISYMMETRIC_CASES, mirror_displacements
+    d = resolve_design("rod1")
+    _, res = rod1_runs[ErrorEstimate.RECOVERY]
+    half = res.rod_mesh
+    whole = half.mirrored()
+    C = element_tensors([d.material_of(p) for p in whole.parts], whole.part_index, whole.tube_axis)
+    E = recovery_error_matrix(node_basis(whole.mesh, scalar_element(whole.mesh)), C, whole.part_index,
+                              mirror_displacements(half, res.displacements, whole))
+    np.testing.assert_allclose(np.diag(res.error_matrix), np.diag(E), rtol=0.1)
+    anti = np.isin(np.arange(6), ANTISYMMETRIC_CASES)
+    assert np.abs(E[anti[:, None] != anti[None, :]]).max() < 1e-6 * np.abs(E).max()
+
+
+def test_richardson_is_still_there_and_agrees_in_sign_of_size(rod1_runs):
+    """``--error-estimate richardson``: the second solve at 1.5 x the size; the same compliance as the recovery
+    run, an estimate of the same order or smaller (it assumes order 3, the rod converges like h)."""
+    rich, _ = rod1_runs[ErrorEstimate.RICHARDSON]
+    rec, _ = rod1_runs[ErrorEstimate.RECOVERY]
+    err = rich.provenance["discretisation_error"]
+    assert err["method"].startswith("Richardson, sizes 22.5 and 33.75 mm")
+    np.testing.assert_allclose(rich.C_F, rec.C_F, rtol=1e-12)
+    assert 0 < err["max_relative_C_F"] < 2 * rec.provenance["discretisation_error"]["max_relative_C_F"]
+
+
+def test_contradicting_estimate_options_are_refused_before_any_work(tmp_path, capsys):
+    from rodlab.app.cli.main import main
+    out = tmp_path / "r.json"
+    assert main(["fea", "rod1", "--model", "solid", "--no-error-estimate", "--error-estimate", "richardson",
+                 "-o", str(out)]) == 2
+    assert "contradict" in capsys.readouterr().err and not out.exists()

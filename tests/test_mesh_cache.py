@@ -68,3 +68,35 @@ def test_the_folder_follows_the_environment(monkeypatch, tmp_path):
     cache(d, size_mm=30.0, grading=None, half=True)
     cache(d, size_mm=30.0, grading=None, half=True)
     assert len(calls) == 2 and not list(tmp_path.rglob("*.pickle"))
+
+
+def test_a_read_only_entry_still_serves_and_another_users_entry_is_not_read(tmp_path, monkeypatch):
+    mesher, calls = _counting()
+    cache = MeshCache(mesher, tmp_path)
+    d = resolve_design("rod1")
+    cache(d, size_mm=30.0, grading=None, half=True)
+    entry = next(tmp_path.glob("*.pickle"))
+
+    def no_utime(*a, **k):
+        raise PermissionError("read-only")
+    monkeypatch.setattr(mesh_cache.os, "utime", no_utime)
+    assert cache(d, size_mm=30.0, grading=None, half=True).is_half and len(calls) == 1     # a hit all the same
+    monkeypatch.setattr(mesh_cache.os, "getuid", lambda: entry.stat().st_uid + 1)
+    cache(d, size_mm=30.0, grading=None, half=True)
+    assert len(calls) == 2                                                       # not another user's pickle
+
+
+def test_the_key_holds_the_mesher_source_and_versions():
+    key_text = mesh_cache._code_and_versions()
+    assert len(key_text) == 64
+    d = resolve_design("rod1")
+    cache = MeshCache(mesh_rod, None)
+    assert cache.key(d, size_mm=30.0, half=True) != cache.key(d, size_mm=30.0, half=False)
+    mesh_cache._code_and_versions.cache_clear()
+    try:
+        original = mesh_cache._CORE_SOURCES
+        mesh_cache._CORE_SOURCES = original[:-1]                               # as if a source had changed
+        assert mesh_cache._code_and_versions() != key_text
+    finally:
+        mesh_cache._CORE_SOURCES = original
+        mesh_cache._code_and_versions.cache_clear()

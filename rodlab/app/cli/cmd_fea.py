@@ -59,6 +59,9 @@ def register(sub) -> None:
 
 
 def _estimate(args: argparse.Namespace) -> ErrorEstimate:
+    if args.no_error_estimate and args.error_estimate != ErrorEstimate.RECOVERY.value:
+        raise RodlabError(f"--no-error-estimate and --error-estimate {args.error_estimate} contradict each other; "
+                          f"give one")
     return ErrorEstimate.NONE if args.no_error_estimate else ErrorEstimate(args.error_estimate)
 
 

@@ -61,9 +61,11 @@ class RodlabParser(argparse.ArgumentParser):
 def _named_command_module(argv: list[str] | None):
     """The module of the sub-command ``argv`` names (its first word that is not an option), if there is one:
     only it need be imported and registered (the others' imports cost ~0.3 s of every command's start)."""
-    words = [a for a in (sys.argv[1:] if argv is None else argv) if not a.startswith("-")]
-    if not words:
-        return None
+    args = list(sys.argv[1:] if argv is None else argv)
+    first = next((i for i, a in enumerate(args) if not a.startswith("-")), None)
+    if first is None or any(a in ("-h", "--help", "--version") for a in args[:first]):
+        return None                         # `rodlab -h fea` is the help of rodlab: every command
+    words = args[first:]
     name = f"cmd_{words[0].replace('-', '_')}"
     package = sys.modules[__package__]
     if not any(m.name == name for m in pkgutil.iter_modules(package.__path__)):

@@ -1,18 +1,40 @@
 """fea: rod compliance C^F and C^g by 3-D solid FEA (scikit-fem), a fast beam-frame model, and design sweeps.
 
 The solid model consumes a :class:`rodlab.core.fem_mesh.RodMesh` (made by ``geometry``), never imports geometry.
-"""
-from .compute import DEFAULT_GRADING, FeaModel, Mesher, compute_compliance, default_solid_size_mm, solid_compliance
-from .errors import FeaError
-from .frame import BendFlexibility, asme_bend_flexibility, frame_compliance
-from .joints import JointCalibration, JointFit, calibrate_joints, fit_joints, joint_frame_compliance
-from .modal import chain_frequencies, frame_frequencies
-from .modal_solid import SolidModes, solid_frequencies
-from .solid import SolidResult, mirror_displacements, solve_compliance
-from .solid_run import SolidRun, run_solid
 
-__all__ = ["FeaModel", "Mesher", "compute_compliance", "solid_compliance", "default_solid_size_mm", "DEFAULT_GRADING",
-           "FeaError", "BendFlexibility", "asme_bend_flexibility", "frame_compliance", "SolidResult",
-           "solve_compliance", "mirror_displacements", "JointFit", "fit_joints", "JointCalibration", "calibrate_joints",
-           "joint_frame_compliance", "frame_frequencies", "chain_frequencies", "SolidModes", "solid_frequencies",
-           "SolidRun", "run_solid"]
+The names below load their module on first use (PEP 562), so that the frame model (``rodlab.fea.frame``: numpy
+and the core only) does not bring scikit-fem and scipy.sparse along (~0.1 s of ``rodlab diagnose --rig``).
+"""
+from __future__ import annotations
+
+import importlib
+
+#: each public name and the module it comes from
+_EXPORTS = {
+    "FeaModel": "compute", "Mesher": "compute", "compute_compliance": "compute", "solid_compliance": "compute",
+    "default_solid_size_mm": "compute", "DEFAULT_GRADING": "compute",
+    "FeaError": "errors",
+    "BendFlexibility": "frame", "asme_bend_flexibility": "frame", "frame_compliance": "frame",
+    "SolidResult": "solid", "solve_compliance": "solid", "mirror_displacements": "solid",
+    "JointFit": "joints", "fit_joints": "joints", "JointCalibration": "joints", "calibrate_joints": "joints",
+    "joint_frame_compliance": "joints",
+    "frame_frequencies": "modal", "chain_frequencies": "modal",
+    "SolidModes": "modal_solid", "solid_frequencies": "modal_solid",
+    "SolidRun": "solid_run", "run_solid": "solid_run",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str):
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

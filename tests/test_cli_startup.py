@@ -42,3 +42,12 @@ def test_help_before_a_command_is_the_help_of_every_command(capsys):
         cli_main.main(["-h", "fea"])
     out = capsys.readouterr().out
     assert "fea" in out and "calibrate" in out and "diagnose" in out
+
+
+def test_the_frame_model_does_not_bring_the_solid_fea_along():
+    """rodlab.fea's names load their module on first use: the frame model (diagnose --rig's as-built fit) needs
+    numpy and the core only, not scikit-fem."""
+    code = ("import sys; import rodlab.fea.frame; a = 'skfem' in sys.modules; "
+            "from rodlab.fea import solid_compliance; print(a, 'skfem' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "True"]

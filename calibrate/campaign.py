@@ -10,7 +10,6 @@
 from __future__ import annotations
 
 import csv
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.errors import did_you_mean
-from rodlab.core.fileio import read_text_checked, atomic_write_json
+from rodlab.core.fileio import read_json, read_text_checked, atomic_write_json
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
 
@@ -225,11 +224,8 @@ def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
 
 
 def read_fixture(path) -> Fixture:
-    p, text = read_text_file(path)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise CalibrationError(f"not valid JSON: {e.msg}", path=p, line=e.lineno) from e
+    p = Path(path)
+    data, text = read_json(p, CalibrationError)
     if not isinstance(data, dict) or data.get("format") not in FIXTURE_FORMATS:
         raise CalibrationError(f"expected a JSON object with \"format\" one of {list(FIXTURE_FORMATS)}", path=p,
                                key="format")

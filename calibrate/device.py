@@ -10,13 +10,12 @@ point; the sensors' independent noise of one standard deviation sigma becomes ``
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.core.fileio import atomic_write_json, read_text_checked
+from rodlab.core.fileio import atomic_write_json, read_json
 from rodlab.core.schema import require_schema
 
 from .errors import CalibrationError
@@ -165,11 +164,7 @@ def read_device(path) -> Device:
     """Read a device file: the schema, then unit axes, the {D} convention, sensors not coplanar, a zero
     inside its range; every error names the file and the key."""
     p = Path(path)
-    text = read_text_checked(p, CalibrationError)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise CalibrationError(f"not valid JSON: {e.msg}", path=p, line=e.lineno) from e
+    data, text = read_json(p, CalibrationError)
     if not isinstance(data, dict) or data.get("format") != DEVICE_FORMAT:
         raise CalibrationError(f"expected a JSON object with \"format\": \"{DEVICE_FORMAT}\"", path=p, key="format")
     require_schema(data, DEVICE_FORMAT, p, text, CalibrationError)

@@ -173,3 +173,17 @@ def rod4_plan():
     rod = calc_rod_compliance(d)
     q, _ = plan_poses(robot, fixture, Rod.rigid(d.tool_mm, rod.mass_kg, rod.com_T_mm))
     return robot, fixture, {j: np.deg2rad(v) for j, v in q.items()}, rod
+
+
+def linear_and_monte_carlo(rod4_plan, priors, replicates: int = 12) -> tuple[dict, dict]:
+    """The linear predictor (256 draws) and Monte Carlo (``replicates``, no error budget) on the rod 4# campaign
+    for the methods none and fea: ({method: linear summary}, {method: Monte-Carlo accuracy})."""
+    from rodlab.calibrate.predict import predict_accuracy
+    from rodlab.calibrate.predict_linear import predict_linear
+    from rodlab.calibrate.simulate import standard_base
+    robot, fixture, plan, rod = rod4_plan
+    mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
+                                                priors, replicates=replicates, seed=0, budget=False)}
+    lin = {a.method: a for a in predict_linear(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
+                                               priors, draws=256).summaries}
+    return lin, mc

@@ -74,10 +74,8 @@ def test_ik_assumptions_measure_the_calibrated_deviation(ur5):
     assert dev[(1, 2)].distance_mm == pytest.approx(0.5, rel=1e-6)
 
 
-def test_cli_correct_and_the_export_warning(tmp_path, capsys):
-    """The UR5 tracker data: calibrate, then the 20 random poses' measured positions as targets with their
-    recorded joints as the program: the commands round-trip within 1 um and stay next to the recorded joints
-    (the calibrated model explains those measurements to ~0.1 mm); export warns of the broken parallel axes."""
+def _calibrate_ur5(tmp_path):
+    """``rodlab calibrate`` on every 4th point of the UR5 grid, validated on the random set: the result file."""
     lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()
     head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
     rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]
@@ -86,6 +84,14 @@ def test_cli_correct_and_the_export_warning(tmp_path, capsys):
     cal = tmp_path / "cal.json"
     assert main(["calibrate", "--points", str(fit), "--robot", "ur5", "--validate",
                  str(DATA / "ur5_random.validation.csv"), "--json", str(cal)]) == 0
+    return cal
+
+
+def test_cli_correct_and_the_export_warning(tmp_path, capsys):
+    """The UR5 tracker data: calibrate, then the 20 random poses' measured positions as targets with their
+    recorded joints as the program: the commands round-trip within 1 um and stay next to the recorded joints
+    (the calibrated model explains those measurements to ~0.1 mm); export warns of the broken parallel axes."""
+    cal = _calibrate_ur5(tmp_path)
     from rodlab.calibrate import read_points
     from rodlab.calibrate.result import calibrated_params, read_calibration
     pts = read_points(DATA / "ur5_random.validation.csv", 6)
@@ -168,14 +174,7 @@ def test_cli_pose_targets_and_their_refusals(tmp_path, capsys):
     from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.ik_pose import rotation_angle
     from rodlab.core.frames import matrix_to_pose, rotation_from_abc
-    lines = (DATA / "ur5_grid.validation.csv").read_text().splitlines()
-    head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
-    rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]
-    fit = tmp_path / "fit.validation.csv"
-    fit.write_text("\n".join(head + rows) + "\n")
-    cal = tmp_path / "cal.json"
-    assert main(["calibrate", "--points", str(fit), "--robot", "ur5", "--validate",
-                 str(DATA / "ur5_random.validation.csv"), "--json", str(cal)]) == 0
+    cal = _calibrate_ur5(tmp_path)
     robot = resolve_robot("ur5")
     params = calibrated_params(robot, read_calibration(cal))
     pts = read_points(DATA / "ur5_random.validation.csv", 6)

@@ -8,11 +8,13 @@ import pytest
 from rodlab.calibrate.compensations.rod_deflection import flange_loads
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.predict import Priors, predict_accuracy
+from rodlab.calibrate.predict import Priors
 from rodlab.calibrate.predict_linear import predict_linear
 from rodlab.calibrate.rod_slip import slip_directions, slip_offsets
 from rodlab.calibrate.simulate import standard_base
 from rodlab.core.enums import Method
+
+from conftest import linear_and_monte_carlo
 
 
 def test_slip_is_the_deflection_under_a_random_load_of_its_weight(rod4_plan):
@@ -60,13 +62,9 @@ def test_slip_stays_with_every_method_and_grows_with_the_compliance(rod4_plan):
 def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4_plan):
     """Steel rod 4#, the robot floor of the paper and the default slip in both paths: the linear predictor's
     mean within 3 Monte-Carlo standard errors plus 5 % of the Monte-Carlo mean (none and fea)."""
-    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.01, 1.05), validation_points=50, robot_floor_mm=0.263, rod_slip=2.4)
     R = 12
-    mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
-                                                pri, replicates=R, seed=0, budget=False)}
-    lin = {a.method: a for a in predict_linear(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
-                                               pri, draws=256).summaries}
+    lin, mc = linear_and_monte_carlo(rod4_plan, pri, R)
     for m in (Method.NONE, Method.FEA):
         se = np.std(mc[m].means_mm, ddof=1) / np.sqrt(R)
         assert abs(lin[m].mean_mm - mc[m].mean_mm) <= 3 * se + 0.05 * mc[m].mean_mm, (m, lin[m], mc[m], se)

@@ -8,11 +8,13 @@ import pytest
 from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.compensations import deflection_basis, deflection_offsets
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.predict import Priors, predict_accuracy
+from rodlab.calibrate.predict import Priors
 from rodlab.calibrate.predict_linear import (compliance_draws, exact_mean_square, linear_campaign, predict_linear,
                                              random_parts, robot_prior, validation_draws)
 from rodlab.calibrate.simulate import standard_base
 from rodlab.core.enums import Method
+
+from conftest import linear_and_monte_carlo
 
 
 def test_deflection_basis_is_the_offsets_linear_map(rod4_plan):
@@ -97,13 +99,9 @@ def test_linear_predictor_agrees_with_monte_carlo(rod4_plan):
     """A steel rod, none and fea: the linear predictor's mean error lies within 3 Monte-Carlo standard errors
     (the spread of 12 replicates' mean errors / sqrt(12)) plus 3 % (linearisation: the campaign's true joint
     angles and second-order terms it leaves out) of the Monte-Carlo mean."""
-    robot, fixture, plan, rod = rod4_plan
     pri = Priors(r_rod=(1.01, 1.05), validation_points=50)
     R = 12
-    mc = {a.method: a for a in predict_accuracy(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
-                                                pri, replicates=R, seed=0, budget=False)}
-    lin = {a.method: a for a in predict_linear(robot, plan, fixture, standard_base(), rod, None, ["none", "fea"],
-                                               pri, draws=256).summaries}
+    lin, mc = linear_and_monte_carlo(rod4_plan, pri, R)
     for m in (Method.NONE, Method.FEA):
         se = np.std(mc[m].means_mm, ddof=1) / np.sqrt(R)
         assert abs(lin[m].mean_mm - mc[m].mean_mm) <= 3 * se + 0.03 * mc[m].mean_mm, (m, lin[m], mc[m], se)

@@ -19,7 +19,7 @@ from .. import __version__
 from .design import RodDesign
 from .enums import Method
 from .errors import ComplianceError, did_you_mean
-from .fileio import atomic_write_json, json_safe, read_text_checked, sha256_file
+from .fileio import atomic_write_json, json_safe, read_json, sha256_file
 from .massprops import mass_properties
 from .schema import require_schema
 
@@ -318,11 +318,7 @@ def _optional33(data: dict, key: str, path, lo: float, hi: float) -> np.ndarray 
 def read_compliance(path: str | Path) -> RodCompliance:
     """Read and check a ``*.compliance.json`` (errors name the file, line and key)."""
     p = Path(path)
-    text = read_text_checked(p, ComplianceError)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise ComplianceError(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
+    data, text = read_json(p, ComplianceError)
     if isinstance(data, dict) and data.get("format") in COMPLIANCE_FORMATS:
         require_schema(data, data["format"], p, text, ComplianceError)
     return RodCompliance.from_dict(data, p)

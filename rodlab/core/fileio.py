@@ -20,7 +20,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
-           "sha256_file", "read_text_checked"]
+           "sha256_file", "read_text_checked", "read_toml", "read_json"]
 
 
 def _umask() -> int:
@@ -127,6 +127,17 @@ def read_toml(path, error_cls) -> tuple[dict, str]:
     except tomllib.TOMLDecodeError as e:
         m = re.search(r"line (\d+)", str(e))
         raise error_cls(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+
+
+def read_json(path, error_cls) -> tuple[object, str]:
+    """A JSON file's data and text, or ``error_cls`` naming the file: unreadable (:func:`read_text_checked`) or
+    not valid JSON (with the line and column the parser names)."""
+    p = Path(path)
+    text = read_text_checked(p, error_cls)
+    try:
+        return json.loads(text), text
+    except json.JSONDecodeError as e:
+        raise error_cls(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
 
 
 def write_generated(path: str | Path, text: str, check: bool = False) -> int:

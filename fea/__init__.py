@@ -7,7 +7,7 @@ and the core only) does not bring scikit-fem and scipy.sparse along (~0.1 s of `
 """
 from __future__ import annotations
 
-import importlib
+from rodlab.core.lazy import lazy_exports
 
 #: each public name and the module it comes from
 _EXPORTS = {
@@ -25,16 +25,4 @@ _EXPORTS = {
 
 __all__ = list(_EXPORTS)
 
-
-def __getattr__(name: str):
-    try:
-        module = _EXPORTS[name]
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

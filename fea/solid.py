@@ -128,7 +128,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     t1 = time.perf_counter()
     backend = backend or available_backend()
     pattern = block_pattern(basis)
-    nodes = node_ordering(basis, backend)                  # None: the solver orders (PARDISO's METIS, SuperLU)
+    nodes = node_ordering(basis, backend)                  # None: the solver orders (SuperLU)
     timings["ordering"] = time.perf_counter() - t1
     t1 = time.perf_counter()
     # in the solver's numbering; CHOLMOD and PARDISO read one triangle only: half the memory

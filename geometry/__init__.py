@@ -2,13 +2,24 @@
 
 Needs the ``cad`` extra (build123d, gmsh); both are imported inside the functions that use them. The
 mesh is returned as the core type :class:`rodlab.core.fem_mesh.RodMesh`, which ``fea`` consumes.
-"""
-from .assembly import RodCad, build_cad
-from .errors import GeometryError
-from .mesh import default_size_mm, feature_circles, mesh_rod
-from .mesh_cache import MeshCache
-from .parts import PART_COLOURS, part_solids
-from .render import render_views
 
-__all__ = ["RodCad", "build_cad", "GeometryError", "mesh_rod", "MeshCache", "default_size_mm", "feature_circles",
-           "PART_COLOURS", "part_solids", "render_views"]
+The names below load their module on first use (PEP 562): ``rodlab fea`` on a cached mesh does not import the
+renderer (~10 ms of its start-up).
+"""
+from __future__ import annotations
+
+from rodlab.core.lazy import lazy_exports
+
+#: each public name and the module it comes from
+_EXPORTS = {
+    "RodCad": "assembly", "build_cad": "assembly",
+    "GeometryError": "errors",
+    "mesh_rod": "mesh", "default_size_mm": "mesh", "feature_circles": "mesh",
+    "MeshCache": "mesh_cache",
+    "PART_COLOURS": "parts", "part_solids": "parts",
+    "render_views": "render",
+}
+
+__all__ = list(_EXPORTS)
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

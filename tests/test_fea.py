@@ -145,8 +145,8 @@ def test_half_model_equals_mirrored_whole():
 @SOLID
 @pytest.mark.parametrize("backend", ["pardiso", "cholmod"])
 def test_fast_solvers_match_the_superlu_fallback(backend):
-    """Every installed fast backend (PARDISO reads the upper triangle with its own METIS ordering, CHOLMOD the
-    node-ordered lower one) solves the half model to the same C_F and C_g as SciPy's SuperLU on the full K."""
+    """Every installed fast backend (PARDISO reads the node-ordered upper triangle, CHOLMOD the node-ordered
+    lower one) solves the half model to the same C_F and C_g as SciPy's SuperLU on the full K."""
     from rodlab.fea import solve_compliance
     from rodlab.fea.solver import backend_available
     pytest.importorskip("gmsh")
@@ -161,6 +161,39 @@ def test_fast_solvers_match_the_superlu_fallback(backend):
     assert fast.backend == backend
     np.testing.assert_allclose(fast.C_F, slu.C_F, atol=1e-9 * np.abs(slu.C_F).max())
     np.testing.assert_allclose(fast.C_g, slu.C_g, atol=1e-9 * np.abs(slu.C_g).max())
+
+
+@SOLID
+def test_pardiso_node_ordering_keeps_the_fill_low():
+    """The node ordering handed to PARDISO (its METIS on the vertex graph) is a permutation and leaves the factor
+    no fuller than PARDISO's own METIS on the whole DOF graph (within 10 %); the mesh's own node order, or the
+    ordering read backwards, fills it several times more."""
+    from rodlab.fea.elasticity import element_tensors
+    from rodlab.fea.solver import HeldSystem, PatternSolver, backend_available, node_ordering
+    from rodlab.fea.stiffness_assembly import assemble_stiffness, block_pattern, scalar_basis
+    pytest.importorskip("gmsh")
+    if not backend_available("pardiso"):
+        pytest.skip("pardiso is not installed here")
+    from rodlab.geometry import mesh_rod
+    d = resolve_design("rod5")
+    rm = mesh_rod(d, size_mm=12.0, half=True)
+    basis = scalar_basis(rm.mesh)
+    C = element_tensors([d.material_of(p) for p in rm.parts], rm.part_index, rm.tube_axis)
+    pattern = block_pattern(basis)
+    nodes = node_ordering(basis, "pardiso")
+    assert np.array_equal(np.sort(nodes), np.arange(basis.N))
+
+    def fill(order, method):
+        K = assemble_stiffness(basis, C, pattern=pattern, node_order=order, upper=True)
+        return PatternSolver(HeldSystem(K).pattern, "pardiso", ordering_method=method).factor_nonzeros
+
+    own = fill(None, "amd")                                 # PARDISO's METIS on the DOF graph
+    ours = fill(nodes, "natural")
+    backwards = np.empty_like(nodes)
+    backwards[nodes] = np.arange(nodes.size)
+    assert 0 < ours <= 1.1 * own
+    assert fill(np.arange(basis.N), "natural") > 2 * own
+    assert fill(backwards, "natural") > 2 * own
 
 
 def test_the_default_solver_is_the_fastest_installed_and_can_be_forced(monkeypatch):

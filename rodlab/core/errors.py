@@ -15,6 +15,7 @@ from pathlib import Path
 __all__ = [
     "RodlabError",
     "LocatedError",
+    "RenderError",
     "FormatError",
     "DesignError",
     "ComplianceError",
@@ -34,6 +35,10 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
 
 class RodlabError(ValueError):
     """Base of every rodlab error caused by input (files, parameters, designs)."""
+
+
+class RenderError(RodlabError):
+    """3-D rendering impossible here (no pyvista, no OpenGL), or a field file it cannot show."""
 
 
 class LocatedError(RodlabError):

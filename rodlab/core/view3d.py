@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LocatedError, RodlabError
+from .errors import LocatedError, RenderError
 from .vtkio import decode_strings
 from .fileio import atomic_write_bytes
 
@@ -36,10 +36,6 @@ _PART_LABEL = {"pipe_holder": "pipe holder", "pipe_I": "pipe I", "ring_1": "ring
 _HINT = ("install the EGL or OSMesa library that VTK loads (Debian / Ubuntu: `apt-get install libegl1 "
          "libgl1-mesa-dri`, or `libosmesa6`), or run where a display is available")
 _offscreen_ok: bool | None = None
-
-
-class RenderError(RodlabError):
-    """3-D rendering impossible here (no pyvista, no OpenGL), or a field file it cannot show."""
 
 
 def require_pyvista():

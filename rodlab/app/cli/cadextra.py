@@ -1,6 +1,8 @@
 """The CAD extra (build123d, gmsh) for the commands that need it."""
 from __future__ import annotations
 
+import importlib.util
+
 from ...core.errors import RodlabError
 
 __all__ = ["require_cad", "require_mesher"]
@@ -20,8 +22,9 @@ def require_cad():
 def require_mesher():
     """The geometry package for meshing only (gmsh builds the parts itself: build123d is not imported), or
     explain how to install the CAD extra."""
+    if importlib.util.find_spec("gmsh") is None:          # found, not imported: a cached mesh never needs it
+        raise RodlabError("this command needs the CAD extra (gmsh is missing): pip install 'rodlab[cad]'")
     try:
-        import gmsh  # noqa: F401
         import rodlab.geometry as geometry
     except ImportError as e:
         raise RodlabError(f"this command needs the CAD extra ({e.name} is missing): pip install 'rodlab[cad]'") from e

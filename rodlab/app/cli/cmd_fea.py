@@ -11,8 +11,7 @@ import numpy as np
 from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
 from ...core.enums import ErrorEstimate, FeaModel
-from ...core.errors import RodlabError
-from ...core.view3d import RenderError
+from ...core.errors import RenderError, RodlabError
 from .argtypes import pos_float
 from .cadextra import require_mesher
 from .reporting import add_report_option, png_file, write_command_report

@@ -20,10 +20,16 @@ from .errors import CalibrationError
 from .kinematics import ModelParams, ball_positions
 from .rod import Rod
 
-__all__ = ["IkBatch", "solve_ik_positions", "solve_ik_position", "solve_ik_groups", "random_configurations"]
+__all__ = ["PLAN_PULL_ITERATIONS", "IkBatch", "solve_ik_positions", "solve_ik_position", "solve_ik_groups",
+           "random_configurations"]
 
 #: weight of the pull towards the seed in stage 1 [mm/rad]
 SEED_WEIGHT = 5.0
+#: stage 1's iterations for a planner (``pull_iterations``): its minimum is off the target by design (the pull),
+#: it only has to come near the target near the seed, and the rows that creep there (a weak pull along the
+#: robot's redundant directions) gain nothing from more: stage 2 finishes them. 600 seeds on the TX90, UR5, UR10
+#: and R-2000iC: 15 iterations reach as many targets as 60 (+-1 %) in 0.06 s instead of 0.15 s
+PLAN_PULL_ITERATIONS = 15
 
 
 @dataclass(frozen=True)
@@ -118,12 +124,14 @@ def _lm(robot, params, q0, batch: _Batch, q_pull=None, weight: float = 0.0):
 
 
 def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod: Rod | None = None, force_W_N=None, *,
-                       pos_tol_mm: float = 1e-4, iterations: int = 60, pull: bool = True) -> IkBatch:
+                       pos_tol_mm: float = 1e-4, iterations: int = 60, pull: bool = True,
+                       pull_iterations: int | None = None) -> IkBatch:
     """Joint angles near ``q_seed`` [rad], shape=(M, n), that put the ball at ``targets_W`` [mm], shape=(M, 3)
     or (3,), with the weight of ``rod`` (:class:`~rodlab.calibrate.rod.Rod` or None) and a contact force
     ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting the compliant joints of ``params``. All M problems are
     solved together (see the module docstring). ``pull=False`` skips stage 1, for seeds already near a solution
-    (planned configurations)."""
+    (planned configurations); ``pull_iterations`` caps it (None: ``iterations``; a planner that tries many seeds:
+    :data:`PLAN_PULL_ITERATIONS`)."""
     q_seed = np.atleast_2d(np.asarray(q_seed, float))
     M, n = q_seed.shape
     if n != robot.n:
@@ -135,7 +143,8 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod: Rod |
     seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
     q, it1 = seed, 0
     if pull:
-        q, _, it1 = _lm(robot, params, seed, batch, seed, SEED_WEIGHT)
+        q, _, it1 = _lm(robot, params, seed, replace(batch, iterations=pull_iterations or iterations), seed,
+                        SEED_WEIGHT)
     q, err, it2 = _lm(robot, params, q, batch)
     ok = (err < pos_tol_mm) & np.all((q >= lo) & (q <= hi), axis=1)
     return IkBatch(q, ok, err, it1 + it2)
@@ -158,15 +167,16 @@ def random_configurations(robot, rng, count: int, fraction: float = 0.7) -> np.n
 
 
 def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray, rod: Rod | None = None,
-                    forces: dict | None = None) -> dict:
+                    forces: dict | None = None, pull_iterations: int | None = None) -> dict:
     """Position IK of several groups of targets in one batch (a group: one clamping position).
 
     targets : {group: (m_g, 3) [mm]}; seeds : (sum m_g, n) [rad], in the groups' order; forces : {group: (3,)
-    [N]} contact force of each group, or None. Returns {group: the configurations that reached their target,
-    (k_g, n) [rad], in seed order}."""
+    [N]} contact force of each group, or None; pull_iterations : as :func:`solve_ik_positions`'. Returns {group:
+    the configurations that reached their target, (k_g, n) [rad], in seed order}."""
     keys = list(targets)
     sizes = [len(targets[j]) for j in keys]
     F = None if forces is None else np.repeat(np.array([forces[j] for j in keys]), sizes, axis=0)
-    res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod, F)
+    res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod, F,
+                             pull_iterations=pull_iterations)
     edges = np.cumsum([0, *sizes])
     return {j: res.q_rad[a:b][res.ok[a:b]] for j, a, b in zip(keys, edges[:-1], edges[1:])}

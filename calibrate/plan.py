@@ -11,7 +11,7 @@ import numpy as np
 
 from .estimate import Selection, select_free
 from .errors import CalibrationError
-from .ik import random_configurations, solve_ik_groups
+from .ik import PLAN_PULL_ITERATIONS, random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .params import catalogue
@@ -36,11 +36,11 @@ def observability(J: np.ndarray) -> dict:
 def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng) -> dict:
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
     robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
-    position in one batch."""
+    position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`)."""
     m = 4 * candidates
     targets = {j: np.tile(fixture.transform(j)[:3, 3], (m, 1)) for j in fixture.poses}
     seeds = random_configurations(robot, rng, len(targets) * m)
-    reached = solve_ik_groups(robot, params, targets, seeds, rod)
+    reached = solve_ik_groups(robot, params, targets, seeds, rod, pull_iterations=PLAN_PULL_ITERATIONS)
     cands = {}
     for j, got in reached.items():
         got = got[:candidates]

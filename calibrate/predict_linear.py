@@ -402,13 +402,20 @@ def exact_mean_square(lc: LinearCampaign, vd: ValidationDraws, A: np.ndarray, dC
     mean, sd = prior
     W, E = vd.W, lc.kinematic_map(vd.PJ.shape[2])
     EA = E @ A                                                        # (D, K, 3N)
-    R = EA @ lc.J_kin - np.eye(E.shape[0])
+    K = EA.shape[1]
+    R = _right(EA, lc.J_kin) - np.eye(K)
     bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
     v = _mv(EA, bias) + R @ mean                                      # (D, K) mean kinematic error
     ev = _mv(vd.PJ, v) if val_extra is None else _mv(vd.PJ, v) + val_extra
     bias = np.sum(ev ** 2, axis=1)
-    cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + EA @ lc.Sigma @ np.swapaxes(EA, 1, 2)
+    cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + _right(EA, lc.Sigma) @ np.swapaxes(EA, 1, 2)
     return float(np.mean(bias + np.sum(W * cov, axis=(1, 2)))) / vd.points
+
+
+def _right(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Every matrix of the stack ``A`` (D, i, j) times the one matrix ``B`` (j, k), as one GEMM -> (D, i, k) (2x
+    faster than the broadcast ``A @ B``, which multiplies D small matrices)."""
+    return (A.reshape(-1, A.shape[2]) @ B).reshape(A.shape[0], A.shape[1], B.shape[1])
 
 
 def _mv(A: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -54,8 +54,10 @@ def chain_frequencies(segs, tip_F, tip_mass_kg: float, tip_com_F, modes: int = 3
     Ad = transport(P[:, None, :] - P[None, :, :])          # Ad[x, k]: a wrench at point x seen at point k
     D = np.zeros((n, 3, n, 3))
     for k in range(n):
-        A = Ad[k:, k, :, :3]                               # forces at the points beyond interval k
-        D[k:, :, k:, :] += np.einsum("aji,jl,blm->aibm", A, ch.F[k], A)
+        A = Ad[k:, k, :, :3]                               # forces at the points beyond interval k, (r, 6, 3)
+        r = A.shape[0]
+        B = np.einsum("aji,jl->ail", A, ch.F[k]).reshape(3 * r, 6)
+        D[k:, :, k:, :] += (B @ A.transpose(1, 0, 2).reshape(6, 3 * r)).reshape(r, 3, r, 3)   # A^T F A, one GEMM
     D = D.reshape(3 * n, 3 * n)
     s = np.sqrt(np.repeat(m, 3))
     lam = np.linalg.eigvalsh(0.5 * (D + D.T) * s[:, None] * s[None, :])[::-1]

@@ -31,7 +31,7 @@ from .frames import skew as _skew
 from .errors import DesignError
 from .joint_springs import declared_joint_compliance
 from .layout import Layer, Segment, SegmentKind, layout
-from .massprops import ball_mass_properties
+from .massprops import ball_mass_properties, gauss_legendre
 from .units import G0
 
 __all__ = ["BendModel", "calc_compliance", "calc_rod_compliance", "paper_compliance", "pipes_only_segments",
@@ -51,7 +51,7 @@ def pipes_only_segments(design: RodDesign) -> list[Segment]:
 @lru_cache(maxsize=None)
 def _gauss(n: int):
     """Gauss-Legendre points and weights on [0, 1] (cached: computing them dominated the frame model)."""
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, w = gauss_legendre(n)
     x, w = 0.5 * (x + 1.0), 0.5 * w
     x.flags.writeable = False
     w.flags.writeable = False

@@ -183,3 +183,23 @@ def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
     assert main(["rig", "simulate", "--sim", str(sim), "--effect", "joint_compliance:s_bend=1",
                  "-o", str(tmp_path / "bad.rig.csv")]) == 2
     assert "unknown parameter 's_bend'" in capsys.readouterr().err and not (tmp_path / "bad.rig.csv").exists()
+
+
+def test_creep_columns_follow_the_kelvin_voigt_step_response():
+    """A load stepped on at t0 and held: the creep column per unit phi is b (1 - exp(-(t - t0) / tau)) for every
+    time constant of the grid, each series on its own clock; the grid's columns, computed in one pass, equal
+    the single-tau hypothesis."""
+    from types import SimpleNamespace
+    from rodlab.stiffness_rig.effects import CREEP_TAU_GRID_S, creep_hypothesis
+    from rodlab.stiffness_rig.effects.creep import Creep
+    t = np.concatenate([np.linspace(10.0, 40.0, 31), np.linspace(100.0, 160.0, 31)])
+    data = SimpleNamespace(axis=np.repeat([0, 1], 31), comp=np.repeat([2, 1], 31), t_abs=t)
+    base = np.concatenate([np.full(31, 2e-3), np.full(31, -5e-3)])
+    t0 = np.repeat([10.0, 100.0], 31)
+    for tau in (1.0, 4.0, 30.0):
+        x = creep_hypothesis(data, base, tau).X[:, 0]
+        np.testing.assert_allclose(x, base * (1.0 - np.exp(-(t - t0) / tau)), rtol=1e-12, atol=1e-18)
+    hyps = Creep().hypotheses(data, SimpleNamespace(base=base))
+    assert [h.settings["tau_s"] for h in hyps] == list(CREEP_TAU_GRID_S)
+    for h in hyps:
+        np.testing.assert_allclose(h.X[:, 0], creep_hypothesis(data, base, h.settings["tau_s"]).X[:, 0], rtol=1e-12)

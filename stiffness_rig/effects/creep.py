@@ -37,29 +37,35 @@ class Creep(RigEffectModel):
         return x + state.creep
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        return [creep_hypothesis(data, ctx.base, float(tau)) for tau in CREEP_TAU_GRID_S]
+        columns = _kelvin_voigt(data, ctx.base, np.array(CREEP_TAU_GRID_S))
+        return [creep_hypothesis(data, ctx.base, tau, columns[:, k]) for k, tau in enumerate(CREEP_TAU_GRID_S)]
 
 
-def _kelvin_voigt(data, base: np.ndarray, tau: float) -> np.ndarray:
-    """Creep per unit phi of every sample, driven by the load history of each series: at every reading it
-    relaxes towards the current elastic deflection ``base`` with time constant ``tau`` [s]."""
-    out = np.zeros_like(base)
+def _kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
+    """Creep per unit phi of every sample, shape=(n, len(taus)), driven by the load history of each series: at
+    every reading it relaxes towards the current elastic deflection ``base`` with each time constant ``taus``
+    [s] (all of them at once: one pass over the readings)."""
+    taus = np.atleast_1d(np.asarray(taus, float))
+    out = np.zeros((base.size, taus.size))
     keys = data.axis * 4 + data.comp
     for k in np.unique(keys):
         idx = np.nonzero(keys == k)[0]
         idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
-        x = 0.0
-        t_prev = data.t_abs[idx[0]]
-        for i in idx:
-            x = base[i] + (x - base[i]) * np.exp(-(data.t_abs[i] - t_prev) / tau)
-            t_prev = data.t_abs[i]
-            out[i] = x
+        dt = np.diff(data.t_abs[idx], prepend=data.t_abs[idx[0]])
+        keep = np.exp(-dt[:, None] / taus[None, :])                   # what is left of the last creep, per tau
+        pull = (1.0 - keep) * base[idx][:, None]
+        x = np.zeros(taus.size)
+        for i, row in enumerate(idx):
+            x = x * keep[i] + pull[i]
+            out[row] = x
     return out
 
 
-def creep_hypothesis(data, base: np.ndarray, tau: float) -> Hypothesis:
-    """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter."""
-    return Hypothesis(Creep.effect, None, ["phi"], _kelvin_voigt(data, base, tau)[:, None], [0.0], [1.0],
+def creep_hypothesis(data, base: np.ndarray, tau: float, column: np.ndarray | None = None) -> Hypothesis:
+    """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter (``column``:
+    its response per unit phi, shape=(n,), when already computed)."""
+    X = (_kelvin_voigt(data, base, tau)[:, 0] if column is None else column)[:, None]
+    return Hypothesis(Creep.effect, None, ["phi"], X, [0.0], [1.0],
                       f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
                       f"constant load (time constant {tau:.3g} s), more at higher load", hidden=1,
-                      settings={"tau_s": tau})
+                      settings={"tau_s": float(tau)})

@@ -80,7 +80,6 @@ def sim_accuracy(text: str):
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from ..diagnose import corrected_compliance, diagnose_campaign, diagnose_rig
     written: list = []
     if args.rig and args.joint_harmonics:
         raise RodlabError("--joint-harmonics is for --points or --campaign (a robot's joints); a rig recording has "
@@ -104,6 +103,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             raise
         except RigError:
             pass                            # anything else: the diagnosis says what it finds
+        from ..diagnose import diagnose_rig
         diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
         print(diag.summary())
         if args.png:
@@ -112,6 +112,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                 written.append(p)
                 print(f"wrote {p}")
         if args.export:
+            from ..diagnose import corrected_compliance
             written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
             print(f"wrote {written[-1]}")
     else:
@@ -125,6 +126,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         pts = read_points(args.validate, robot.n) if args.validate else None
         fix = read_fixture(args.fixture)
         warn_flagged_fixture(fix, args.fixture)
+        from ..diagnose import diagnose_campaign
         diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
                                        read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
         print(diag.summary())

@@ -94,6 +94,11 @@ class Envelope:
             C = C + sd * ub * dC
         return np.array([C[m, n] for m, n in entries])
 
+    def bond_columns(self, entries) -> np.ndarray:
+        """d entries / d u of the bonds' standardised deviations [mm/N], shape=(len(entries), bonds): exact, the
+        entries are linear in them (:meth:`entries_at`)."""
+        return np.array([[sd * dC[m, n] for _, sd, dC in self.bonds] for m, n in entries]).reshape(len(entries), -1)
+
 
 def design_of(sim: RodCompliance, design=None):
     """The design a simulated compliance was made from: ``design`` when given, else the file its provenance names

@@ -85,19 +85,30 @@ class _AsBuilt:
         if self.k:
             b = self.env.u_bounds
             x0 = np.clip(np.zeros(self.k), b[:, 0] + 1e-6, b[:, 1] - 1e-6)   # strictly inside (a bond starts at 0)
-            res = least_squares(self._residual, x0, bounds=(b[:, 0], b[:, 1]), diff_step=1e-4)
+            res = least_squares(self._residual, x0, bounds=(b[:, 0], b[:, 1]), jac=self._residual_jacobian)
             self.u = res.x
         r = self._residual(self.u)
         return float(r @ r)
 
-    def _jacobian(self, u) -> np.ndarray:
-        """d entries / d u at ``u`` [mm/N], shape=(len(E), k)."""
+    def _residual_jacobian(self, u) -> np.ndarray:
+        """d residual / d u, shape=(len(E) + k, k): the whitened entries' :meth:`_jacobian` over the prior's
+        identity."""
+        return np.vstack([self.W @ self._jacobian(u, 1e-4), np.eye(self.k)])
+
+    def _jacobian(self, u, step: float = 1e-3) -> np.ndarray:
+        """d entries / d u at ``u`` [mm/N], shape=(len(E), k): forward differences of ``step`` for the design's
+        keys (backward where forward leaves the bounds or the valid designs), the bonds' columns exact."""
+        n = len(self.env.params)
         J = np.zeros((len(self.E), self.k))
         base = self.env.entries_at(u, self.E)
-        for i in range(self.k):
+        for i in range(n):
             du = np.zeros(self.k)
-            du[i] = -1e-3 if u[i] + 1e-3 > self.env.u_bounds[i, 1] else 1e-3     # stay where the design is valid
-            J[:, i] = (self.env.entries_at(u + du, self.E) - base) / du[i]
+            du[i] = -step if u[i] + step > self.env.u_bounds[i, 1] else step     # stay where the design is valid
+            try:
+                J[:, i] = (self.env.entries_at(u + du, self.E) - base) / du[i]
+            except DesignError:                   # past a design rule that way: the other way
+                J[:, i] = (self.env.entries_at(u - du, self.E) - base) / -du[i]
+        J[:, n:] = self.env.bond_columns(self.E)
         return J
 
     def gap(self) -> np.ndarray:

@@ -25,11 +25,11 @@ from pages import write_page  # noqa: E402  (beside this script, on sys.path whe
 OUT = ROOT / "docs" / "benchmarks" / "speed.md"
 
 
-
 def _user_env() -> dict:
     """This environment as a user's shell has it: Python writes its bytecode cache (this workplace sets
     PYTHONDONTWRITEBYTECODE, which would compile rodlab's modules anew at every command)."""
     return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
 
 def _run(args: list[str], cwd: Path, cache: Path) -> tuple[float, float, str]:
     """Wall time [s], peak RSS of that child process [GB], and the last output line of ``rodlab ARGS`` (mesh

@@ -44,11 +44,11 @@ print(json.dumps({"t_ccx_s": t, "nodes": int(whole.mesh.p.shape[1]), "C_F": C.to
 """
 
 
-
 def _user_env() -> dict:
     """This environment as a user's shell has it: Python writes its bytecode cache (this workplace sets
     PYTHONDONTWRITEBYTECODE, which would compile rodlab's modules anew at every command)."""
     return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
 
 def _cli_seconds(tmp: Path, size: float | None, cache: Path) -> tuple[float, list]:
     """Wall time of the command in a fresh process (mesh cache folder ``cache``), and its C_F."""
@@ -66,7 +66,6 @@ def _ccx_run(size: float | None) -> dict:
     r = subprocess.run([sys.executable, "-c", _CCX, *args], check=True, capture_output=True, text=True,
                        env=dict(os.environ, PYTHONWARNINGS="ignore"))
     return json.loads(r.stdout.strip().splitlines()[-1])
-
 
 
 def main(rounds: int = 2, sizes: tuple = ()) -> int:

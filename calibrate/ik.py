@@ -139,12 +139,15 @@ def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod: Rod |
     targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
     force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    if pull_iterations is not None and pull_iterations < 1:
+        raise CalibrationError(f"pull_iterations must be >= 1, got {pull_iterations}; to skip the pull towards "
+                               f"the seeds give pull=False", key="pull_iterations")
     batch = _Batch(targets, rod, force, lo, hi, iterations, pos_tol_mm)
     seed = np.clip(q_seed, lo + 1e-6, hi - 1e-6)
     q, it1 = seed, 0
     if pull:
-        q, _, it1 = _lm(robot, params, seed, replace(batch, iterations=pull_iterations or iterations), seed,
-                        SEED_WEIGHT)
+        stage1 = replace(batch, iterations=iterations if pull_iterations is None else pull_iterations)
+        q, _, it1 = _lm(robot, params, seed, stage1, seed, SEED_WEIGHT)
     q, err, it2 = _lm(robot, params, q, batch)
     ok = (err < pos_tol_mm) & np.all((q >= lo) & (q <= hi), axis=1)
     return IkBatch(q, ok, err, it1 + it2)

@@ -146,14 +146,17 @@ def _pardiso_graph_ordering(G: sp.csc_matrix) -> np.ndarray:
     ps.iparm[4] = 2        # return the permutation
     ps.iparm[34] = 0       # one-based indices (pypardiso adds 1)
     ps.perm = np.zeros(n, dtype=np.int32)
-    ps.set_phase(11)
-    ps._call_pardiso(U, np.zeros((n, 1), order="F"))
-    perm = ps.perm.astype(np.int64) - 1
-    ps.set_phase(-1)
-    ps._call_pardiso(U, np.zeros((n, 1), order="F"))
-    ps.iparm[4] = 0
-    ps.perm = np.zeros(0, dtype=np.int32)
-    return perm
+    from pypardiso.pardiso_wrapper import PyPardisoError
+    try:
+        ps.set_phase(11)
+        ps._call_pardiso(U, np.zeros((n, 1), order="F"))
+    except PyPardisoError as e:
+        raise FeaError(f"PARDISO could not order the mesh's vertex graph ({e}); set RODLAB_SPARSE_SOLVER=superlu "
+                       f"to solve without it", key="solver") from e
+    finally:
+        ps.set_phase(-1)                      # release PARDISO's memory (this solver object is not used again)
+        ps._call_pardiso(U, np.zeros((n, 1), order="F"))
+    return ps.perm.astype(np.int64) - 1
 
 
 def node_ordering(basis, backend: str | None = None):

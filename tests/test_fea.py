@@ -167,7 +167,7 @@ def test_fast_solvers_match_the_superlu_fallback(backend):
 def test_pardiso_node_ordering_keeps_the_fill_low():
     """The node ordering handed to PARDISO (its METIS on the vertex graph) is a permutation and leaves the factor
     no fuller than PARDISO's own METIS on the whole DOF graph (within 10 %); the mesh's own node order, or the
-    ordering read backwards, fills it several times more."""
+    ordering's inverse (PARDISO's permutation read the other way round), fills it several times more."""
     from rodlab.fea.elasticity import element_tensors
     from rodlab.fea.solver import HeldSystem, PatternSolver, backend_available, node_ordering
     from rodlab.fea.stiffness_assembly import assemble_stiffness, block_pattern, scalar_basis
@@ -189,11 +189,11 @@ def test_pardiso_node_ordering_keeps_the_fill_low():
 
     own = fill(None, "amd")                                 # PARDISO's METIS on the DOF graph
     ours = fill(nodes, "natural")
-    backwards = np.empty_like(nodes)
-    backwards[nodes] = np.arange(nodes.size)
+    inverse = np.empty_like(nodes)
+    inverse[nodes] = np.arange(nodes.size)
     assert 0 < ours <= 1.1 * own
     assert fill(np.arange(basis.N), "natural") > 2 * own
-    assert fill(backwards, "natural") > 2 * own
+    assert fill(inverse, "natural") > 2 * own
 
 
 def test_the_default_solver_is_the_fastest_installed_and_can_be_forced(monkeypatch):

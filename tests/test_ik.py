@@ -134,3 +134,10 @@ def test_the_rods_weight_as_two_numbers_still_works_with_a_warning(setup):
         ball_positions(robot, truth, q, Rod.of(rod), F)
     unloaded = ball_positions(robot, truth, q, None, force_W_N=F)[1]
     assert np.abs(tau - unloaded).max() > 1.0                   # the rod's weight is not lost on the way
+
+
+def test_a_pull_of_no_iterations_is_refused_with_the_fix(setup):
+    from rodlab.calibrate import CalibrationError
+    robot, rod, truth, rng, lo, hi = setup
+    with pytest.raises(CalibrationError, match="pull=False"):
+        solve_ik_positions(robot, truth, np.zeros(3), np.zeros((1, robot.n)), pull_iterations=0)

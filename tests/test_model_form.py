@@ -178,3 +178,24 @@ def test_sim_accuracy_option(tmp_path, calc_sim):
     assert run.returncode == 0, run.stderr
     report = json.loads((tmp_path / "d.json").read_text())
     assert report["verdict"] == "consistent" and report["simulation_accuracy"] == "relative"
+
+
+def test_bond_columns_are_the_exact_derivatives_of_the_entries():
+    """The as-built fit's bond columns (exact, the entries are linear in the bonds' deviations) equal a finite
+    difference of the entries; with no entries asked for, an empty (0, bonds) block."""
+    from rodlab.app.diagnose.envelope import envelope_for
+    from rodlab.core.design_io import resolve_design
+    from rodlab.fea.compute import compute_compliance
+    design = resolve_design("rod1")
+    env = envelope_for(compute_compliance(design, "frame"), design)
+    assert env.bonds, "rod 1# has bonded joints"
+    entries = [(0, 0), (1, 1), (2, 2), (0, 2)]
+    cols = env.bond_columns(entries)
+    n, u = len(env.params), np.zeros(env.n_free)
+    for j in range(len(env.bonds)):
+        du = np.zeros(env.n_free)
+        du[n + j] = 0.5
+        fd = (env.entries_at(u + du, entries) - env.entries_at(u, entries)) / 0.5
+        np.testing.assert_allclose(cols[:, j], fd, rtol=1e-9, atol=1e-15)
+    assert np.abs(cols).max() > 0
+    assert env.bond_columns([]).shape == (0, len(env.bonds))

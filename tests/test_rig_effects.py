@@ -199,6 +199,16 @@ def test_creep_columns_follow_the_kelvin_voigt_step_response():
     for tau in (1.0, 4.0, 30.0):
         x = creep_hypothesis(data, base, tau).X[:, 0]
         np.testing.assert_allclose(x, base * (1.0 - np.exp(-(t - t0) / tau)), rtol=1e-12, atol=1e-18)
+    # a load that changes within a series: against the recurrence written out reading by reading
+    steps = base * np.where(np.arange(62) % 31 < 12, 1.0, -0.4) * (1 + 0.1 * np.sin(np.arange(62)))
+    for tau in (2.0, 11.0):
+        ref = np.zeros(62)
+        for rows in (np.arange(31), np.arange(31, 62)):
+            x, t_prev = 0.0, t[rows[0]]
+            for i in rows:
+                x = steps[i] + (x - steps[i]) * np.exp(-(t[i] - t_prev) / tau)
+                t_prev, ref[i] = t[i], x
+        np.testing.assert_allclose(creep_hypothesis(data, steps, tau).X[:, 0], ref, rtol=1e-12, atol=1e-18)
     hyps = Creep().hypotheses(data, SimpleNamespace(base=base))
     assert [h.settings["tau_s"] for h in hyps] == list(CREEP_TAU_GRID_S)
     for h in hyps:

@@ -44,7 +44,6 @@ class VtkData:
                     raise ValueError(f"{what} array {name!r} must have {n} rows, got shape {np.asarray(a).shape}")
 
 
-
 def _quoteattr(text: str) -> str:
     """``text`` as a double-quoted XML attribute value (xml.sax.saxutils.quoteattr without its imports: urllib
     and ssl, ~15 ms of every command's start-up)."""
@@ -52,6 +51,7 @@ def _quoteattr(text: str) -> str:
                    ("\t", "&#9;")):
         text = text.replace(c, ent)
     return f'"{text}"'
+
 
 def _encode(a: np.ndarray) -> str:
     raw = np.ascontiguousarray(a).tobytes()

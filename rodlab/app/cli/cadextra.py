@@ -24,8 +24,4 @@ def require_mesher():
     explain how to install the CAD extra."""
     if importlib.util.find_spec("gmsh") is None:          # found, not imported: a cached mesh never needs it
         raise RodlabError("this command needs the CAD extra (gmsh is missing): pip install 'rodlab[cad]'")
-    try:
-        import rodlab.geometry as geometry
-    except ImportError as e:
-        raise RodlabError(f"this command needs the CAD extra ({e.name} is missing): pip install 'rodlab[cad]'") from e
-    return geometry
+    return importlib.import_module("rodlab.geometry")     # its modules load on first use: nothing to fail here

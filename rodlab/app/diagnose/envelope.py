@@ -97,7 +97,10 @@ class Envelope:
     def bond_columns(self, entries) -> np.ndarray:
         """d entries / d u of the bonds' standardised deviations [mm/N], shape=(len(entries), bonds): exact, the
         entries are linear in them (:meth:`entries_at`)."""
-        return np.array([[sd * dC[m, n] for _, sd, dC in self.bonds] for m, n in entries]).reshape(len(entries), -1)
+        out = np.zeros((len(entries), len(self.bonds)))
+        for j, (_, sd, dC) in enumerate(self.bonds):
+            out[:, j] = [sd * dC[m, n] for m, n in entries]
+        return out
 
 
 def design_of(sim: RodCompliance, design=None):

@@ -15,6 +15,7 @@ the tolerances integrated out this way:
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,8 @@ __all__ = ["judge_linear", "FormJudgement"]
 COUPON_RELATIVE = 0.02
 #: an as-built key is reported when the recording shrinks its standard deviation below this share of the prior's
 INFORMED = 0.9
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -104,12 +107,20 @@ class _AsBuilt:
         for i in range(n):
             du = np.zeros(self.k)
             du[i] = -step if u[i] + step > self.env.u_bounds[i, 1] else step     # stay where the design is valid
-            try:
-                J[:, i] = (self.env.entries_at(u + du, self.E) - base) / du[i]
-            except DesignError:                   # past a design rule that way: the other way
-                J[:, i] = (self.env.entries_at(u - du, self.E) - base) / -du[i]
+            J[:, i] = self._difference(u, du, base)
         J[:, n:] = self.env.bond_columns(self.E)
         return J
+
+    def _difference(self, u, du, base) -> np.ndarray:
+        """One key's column: forward along ``du``, else backward where a design rule refuses the forward step,
+        else zero (the key is pinned by design rules on both sides)."""
+        for h in (du, -du):
+            try:
+                return (self.env.entries_at(u + h, self.E) - base) / h[h != 0][0]
+            except DesignError:
+                continue
+        log.debug("as-built fit: key %d pinned by design rules on both sides at u = %s", int(np.argmax(du != 0)), u)
+        return np.zeros(len(self.E))
 
     def gap(self) -> np.ndarray:
         """The measured entries less the as-built rod's [mm/N]."""

@@ -1,5 +1,5 @@
 import sys
 
-from .app.cli.main import main
+from .app.cli.main import console
 
-sys.exit(main())
+sys.exit(console())

@@ -51,3 +51,16 @@ def test_the_frame_model_does_not_bring_the_solid_fea_along():
             "from rodlab.fea import solid_compliance; print(a, 'skfem' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.split() == ["False", "True"]
+
+
+def test_the_console_script_runs_main_and_leaves_its_objects_to_the_exit():
+    """``rodlab`` (and ``python -m rodlab``) is ``console``: main's exit code, and the objects left frozen out
+    of the collector (the exit's final collection would only walk them); pyproject names it."""
+    code = ("import gc, sys; from rodlab.app.cli.main import console; sys.argv = ['rodlab', 'info', 'rod1']; "
+            "rc = console(); print(rc, gc.get_freeze_count() > 1000)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "0 True"
+    from source_tree import PYPROJECT
+    assert PYPROJECT["project"]["scripts"]["rodlab"] == "rodlab.app.cli.main:console"
+    r = subprocess.run([sys.executable, "-m", "rodlab", "info", "no-such-rod"], capture_output=True, text=True)
+    assert r.returncode == 2 and "no-such-rod" in r.stderr

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import gc
 import importlib
 import logging
 import pkgutil
@@ -18,7 +19,7 @@ from ... import __version__
 from ...core import progress
 from ...core.errors import RodlabError, did_you_mean
 
-__all__ = ["build_parser", "main", "command_modules", "COMMAND_ORDER"]
+__all__ = ["build_parser", "main", "console", "command_modules", "COMMAND_ORDER"]
 
 #: the order of ``rodlab --help``. Every ``cmd_*.py`` module of this package that has ``register(subparsers)``
 #: adds its sub-command; one not listed here is found all the same and listed after these, by name (a new
@@ -99,6 +100,15 @@ def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
                 if "--debug" not in sp._option_string_actions:
                     _global_options(sp, suppress=True)
                 _add_global_options_below(sp)
+
+
+def console() -> int:
+    """The ``rodlab`` console script (and ``python -m rodlab``): :func:`main`, then every object left is moved
+    out of the garbage collector's reach (``gc.freeze``): the process is about to exit, and the interpreter's
+    final collection would only walk them (~30 ms after a solid FEA). In-process callers use :func:`main`."""
+    code = main()
+    gc.freeze()
+    return code
 
 
 def main(argv: list[str] | None = None) -> int:

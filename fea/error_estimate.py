@@ -24,6 +24,7 @@ error against a much finer solve.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 from skfem import Basis
 from skfem.quadrature import get_quadrature
 
@@ -66,11 +67,10 @@ def _nodal_average(stress_nodes: np.ndarray, element_dofs: np.ndarray, part_inde
     ne, nloc = element_dofs.shape
     key = (part_index[:, None].astype(np.int64) * (element_dofs.max() + 1) + element_dofs).ravel()
     _, slot = np.unique(key, return_inverse=True)
-    wts = np.repeat(volume, nloc)
-    flat = stress_nodes.reshape(ne * nloc, -1)
-    weight = np.bincount(slot, weights=wts)
-    total = np.stack([np.bincount(slot, weights=flat[:, j] * wts, minlength=weight.size)
-                      for j in range(flat.shape[1])], axis=1)
+    # the weighted sums of every (part, node) as one sparse product: (slots x element-nodes) @ (element-nodes x 36)
+    A = sp.csr_matrix((np.repeat(volume, nloc), (slot, np.arange(slot.size))), shape=(int(slot.max()) + 1, slot.size))
+    total = A @ stress_nodes.reshape(ne * nloc, -1)
+    weight = np.asarray(A.sum(axis=1)).ravel()
     return (total / weight[:, None])[slot].reshape(stress_nodes.shape)
 
 

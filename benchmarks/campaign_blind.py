@@ -68,7 +68,12 @@ NOTES = [
     "draw has a standard deviation 1.32 times the stated 3 um over its 90 readings (p = 1.6e-5); across 240",
     "other null seeds the residual test's p-values are uniform (p < 0.05 in 15/240, none below 1e-3). Diagnose",
     "now says the excess is spread evenly over the positions (a device noisier than stated, 4.0 um) and",
-    "`rodlab calibrate` trusts the result with a caution (Birge ratio 1.34 <= 1.5).", ""]
+    "`rodlab calibrate` trusts the result with a caution (Birge ratio 1.34 <= 1.5).",
+    "2026-11-27, the derived rod 1# (40 x 5 mm carbon tubes, c_rod 40 um by the closed form; the legacy rod 1#",
+    "of the earlier runs: 832 um): a compliance file off by x1.5 or x0.6 now misplaces the ball by only ~10-20 um",
+    "over the campaign, most of which the joint compliances and the kinematic parameters absorb; two such",
+    "cases (k = 1.5 in `24 501`, k = 0.6 in `28 601 pairs`) stay `consistent`, at the noise, as the weak thermal",
+    "growth does. The validation mean is unchanged in both (the error left is below the device noise).", ""]
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "campaign_blind.md"
 
 

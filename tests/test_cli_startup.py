@@ -64,3 +64,20 @@ def test_the_console_script_runs_main_and_leaves_its_objects_to_the_exit():
     assert PYPROJECT["project"]["scripts"]["rodlab"] == "rodlab.app.cli.main:console"
     r = subprocess.run([sys.executable, "-m", "rodlab", "info", "no-such-rod"], capture_output=True, text=True)
     assert r.returncode == 2 and "no-such-rod" in r.stderr
+
+
+def test_numpy_subpackages_no_command_uses_load_only_when_used():
+    """The console script defers NumPy's f2py, testing, ma ...: SciPy's array-API copy of NumPy's namespace
+    no longer imports them, and each still works in full on its first use."""
+    code = ("import sys; from rodlab.app.cli.startup import DEFERRED, defer_numpy_submodules\n"
+            "done = defer_numpy_submodules()\n"
+            "import scipy.sparse, scipy.optimize\n"
+            "print(sorted(done) == sorted(DEFERRED), 'numpy.f2py.crackfortran' in sys.modules, "
+            "'unittest' in sys.modules)\n"
+            "import numpy as np, numpy.testing as nt\n"
+            "nt.assert_allclose([1.0], [1.0]); m = np.ma.masked_array([1, 2], mask=[0, 1])\n"
+            "from numpy.testing import assert_array_equal; assert_array_equal(np.char.upper(['a']), ['A'])\n"
+            "print(float(m.sum()), 'unittest' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == "True False False"
+    assert out[1] == "1.0 True"

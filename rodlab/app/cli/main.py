@@ -105,7 +105,10 @@ def _add_global_options_below(parser: argparse.ArgumentParser) -> None:
 def console() -> int:
     """The ``rodlab`` console script (and ``python -m rodlab``): :func:`main`, then every object left is moved
     out of the garbage collector's reach (``gc.freeze``): the process is about to exit, and the interpreter's
-    final collection would only walk them (~30 ms after a solid FEA). In-process callers use :func:`main`."""
+    final collection would only walk them (~30 ms after a solid FEA). NumPy sub-packages no command needs load on
+    first use (:mod:`.startup`). In-process callers use :func:`main`."""
+    from .startup import defer_numpy_submodules  # cli start-up: only the console script defers them
+    defer_numpy_submodules()
     code = main()
     gc.freeze()
     return code

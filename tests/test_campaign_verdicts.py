@@ -86,12 +86,14 @@ def _add_gross_errors(path, rows_to_move, rng):
     return [f"{rows[i][0]}.{rows[i][1]}" for i in rows_to_move]
 
 
-@pytest.mark.parametrize("seed", [1, 6])
+@pytest.mark.parametrize("seed", [1, 6, 31])
 def test_misclamped_position_is_found_beside_an_outlier_inside_it(tmp_path, robot, rod, seed):
     """A wrong clamping pose and a gross alignment error inside that very position (plus one elsewhere): the
     least-squares fit smears both over every residual (Birge ratio ~15 by the median of its residuals), which
     hid the position (both seeds were `unexplained` naming neither before the robust scale); the robust
-    scale, the robust choice of the outlier candidate and the symmetric whitening find both."""
+    scale, the robust choice of the outlier candidate and the symmetric whitening find both. Seed 31: the
+    device's axes won the first step by absorbing part of an outlier and, kept, left position 3 `unexplained`;
+    the drop-one test removes it once the outliers and the pose are in."""
     from rodlab.app.diagnose import diagnose_campaign
     rng = np.random.default_rng(seed)
     position = int(rng.choice([1, 2, 4, 5]))

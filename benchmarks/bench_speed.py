@@ -21,14 +21,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-from pages import write_page  # noqa: E402  (beside this script, on sys.path when it runs)
+from pages import user_env, write_page  # noqa: E402  (beside this script, on sys.path when it runs)
 OUT = ROOT / "docs" / "benchmarks" / "speed.md"
-
-
-def _user_env() -> dict:
-    """This environment as a user's shell has it: Python writes its bytecode cache (this workplace sets
-    PYTHONDONTWRITEBYTECODE, which would compile rodlab's modules anew at every command)."""
-    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
 
 
 def _run(args: list[str], cwd: Path, cache: Path) -> tuple[float, float, str]:
@@ -37,7 +31,7 @@ def _run(args: list[str], cwd: Path, cache: Path) -> tuple[float, float, str]:
     with tempfile.TemporaryFile("w+") as out:
         t0 = time.perf_counter()
         p = subprocess.Popen([sys.executable, "-m", "rodlab", "-q", *args], cwd=cwd, stdout=out,
-                             stderr=subprocess.STDOUT, text=True, env=dict(_user_env(), RODLAB_CACHE_DIR=str(cache)))
+                             stderr=subprocess.STDOUT, text=True, env=user_env(RODLAB_CACHE_DIR=str(cache)))
         _, status, usage = os.wait4(p.pid, 0)
         wall = time.perf_counter() - t0
         p.returncode = os.waitstatus_to_exitcode(status)

@@ -26,7 +26,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_fea import machine_check  # noqa: E402  (the same fixed workload as fea.md's)
-from pages import write_page  # noqa: E402
+from pages import user_env, write_page  # noqa: E402
 OUT = ROOT / "docs" / "benchmarks" / "fea_vs_calculix.md"
 
 _CCX = r"""
@@ -44,19 +44,13 @@ print(json.dumps({"t_ccx_s": t, "nodes": int(whole.mesh.p.shape[1]), "C_F": C.to
 """
 
 
-def _user_env() -> dict:
-    """This environment as a user's shell has it: Python writes its bytecode cache (this workplace sets
-    PYTHONDONTWRITEBYTECODE, which would compile rodlab's modules anew at every command)."""
-    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-
-
 def _cli_seconds(tmp: Path, size: float | None, cache: Path) -> tuple[float, list]:
     """Wall time of the command in a fresh process (mesh cache folder ``cache``), and its C_F."""
     out = tmp / "rod1.fea.json"
     extra = [] if size is None else ["--size", f"{size:g}"]
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "rodlab", "-q", "fea", "rod1", "--model", "solid", *extra, "-o", str(out)],
-                   check=True, capture_output=True, text=True, env=dict(_user_env(), RODLAB_CACHE_DIR=str(cache)))
+                   check=True, capture_output=True, text=True, env=user_env(RODLAB_CACHE_DIR=str(cache)))
     wall = time.perf_counter() - t0
     return wall, json.loads(out.read_text())["C_F_mm_per_N"]
 

@@ -126,6 +126,21 @@ def _graph_ordering(G: sp.csc_matrix, backend: str) -> np.ndarray:
         return np.asarray(analyze(G, ordering_method="amd").P(), dtype=np.int64)
 
 
+def _configured_pardiso(iparm: dict, perm: np.ndarray):
+    """A PARDISO handle (:func:`_pardiso_library`) with ``iparm`` {index: value} set over zeros, ``iparm[0] = 1``
+    (given) and one-based indices (``iparm[34] = 0``: pypardiso adds 1), and the permutation array ``perm``."""
+    ps = _pardiso_library()
+    if ps is None:
+        raise FeaError("the PARDISO solver is not available (pip install pypardiso)", key="solver")
+    ps.iparm[:] = 0
+    ps.iparm[0] = 1
+    ps.iparm[34] = 0
+    for k, v in iparm.items():
+        ps.iparm[k] = v
+    ps.perm = perm
+    return ps
+
+
 def _pardiso_graph_ordering(G: sp.csc_matrix) -> np.ndarray:
     """PARDISO's METIS nested dissection of the graph ``G`` (symmetric pattern with its diagonal), new -> old:
     the analysis phase alone, on a diagonally dominant (SPD) matrix of that pattern, returning its permutation
@@ -137,15 +152,9 @@ def _pardiso_graph_ordering(G: sp.csc_matrix) -> np.ndarray:
     U.data[:] = -1.0
     U.setdiag(np.diff(G.indptr).astype(np.float64) + 1.0)
     U = sp.csr_matrix(U)
-    ps = _pardiso_library()
-    if ps is None:
-        raise FeaError("the PARDISO solver is not available (pip install pypardiso)", key="solver")
-    ps.iparm[:] = 0
-    ps.iparm[0] = 1        # iparm given
-    ps.iparm[1] = 2        # METIS nested dissection
-    ps.iparm[4] = 2        # return the permutation
-    ps.iparm[34] = 0       # one-based indices (pypardiso adds 1)
-    ps.perm = np.zeros(n, dtype=np.int32)
+    ps = _configured_pardiso({1: 2,         # METIS nested dissection
+                              4: 2},        # return the permutation
+                             np.zeros(n, dtype=np.int32))
     from pypardiso.pardiso_wrapper import PyPardisoError
     try:
         ps.set_phase(11)
@@ -251,27 +260,19 @@ class _Pardiso:
     once for the pattern; each :meth:`factor` is PARDISO's numerical phase only."""
 
     def __init__(self, pattern: sp.csc_matrix, natural: bool = False):
-        ps = _pardiso_library()
-        if ps is None:
-            raise FeaError("the PARDISO solver is not available (pip install pypardiso)", key="solver")
-        self._ps = ps
         n = pattern.shape[0]
         row = np.repeat(np.arange(n, dtype=np.int64), np.diff(pattern.indptr))
         self._keep = pattern.indices >= row                     # strictly the upper triangle (CSR rows)
         cols = pattern.indices[self._keep]
         ptr = np.concatenate([[0], np.cumsum(np.bincount(row[self._keep], minlength=n))])
         self._U = sp.csr_matrix((pattern.data[self._keep].astype(np.float64), cols, ptr), shape=pattern.shape)
-        ps.iparm[:] = 0
-        ps.iparm[0] = 1        # iparm given
-        ps.iparm[1] = 3        # METIS nested dissection, OpenMP-parallel (0.5 s instead of 0.7 s on rod 1#)
-        ps.iparm[9] = 8        # pivot perturbation 1e-8 (SPD: unused)
-        ps.iparm[17] = -1      # report the factor's nonzeros
-        ps.iparm[34] = 0       # one-based indices (pypardiso adds 1)
+        iparm = {1: 3,         # METIS nested dissection, OpenMP-parallel (0.5 s instead of 0.7 s on rod 1#)
+                 9: 8,         # pivot perturbation 1e-8 (SPD: unused)
+                 17: -1}       # report the factor's nonzeros
         if natural:            # already ordered (:func:`node_ordering`): the identity as the user's permutation
-            ps.iparm[4] = 1
-            ps.perm = np.arange(1, n + 1, dtype=np.int32)
-        else:
-            ps.perm = np.zeros(0, dtype=np.int32)
+            iparm[4] = 1
+        self._ps = ps = _configured_pardiso(iparm, np.arange(1, n + 1, dtype=np.int32) if natural
+                                            else np.zeros(0, dtype=np.int32))
         ps._check_A(self._U)   # sorted indices, no empty rows, CSR (no transpose)
         self._call(11, np.zeros((n, 1)))
         self.factor_nonzeros = int(ps.iparm[17])               # the analysis's count of the factor's nonzeros

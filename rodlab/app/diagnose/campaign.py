@@ -34,7 +34,7 @@ from rodlab.calibrate.validate import error_stats
 from rodlab.core.enums import FindingKind, Subject, Trial, Verdict
 from rodlab.core.hypothesis import Hypothesis, location_parts
 
-from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence
+from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence, weakest_term
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
@@ -293,19 +293,12 @@ class CampaignSelection:
         step by absorbing part of a gross error that the outlier points and a fixture pose, accepted after it,
         explain in full; kept, it bends the re-identification and leaves a residual pattern elsewhere."""
         while True:
-            weakest = None
-            for k, (effect, _) in enumerate(self.chosen):
-                if campaign_effect(effect).per_point:
-                    continue
-                rest = self.cols[:k] + self.cols[k + 1:]
-                lr = self.fit(rest)[1] - self.rss
-                npar = self.cols[k].shape[1]
-                if not evidence(lr, npar, bic_penalty(npar, self.n)).significant \
-                        and (weakest is None or lr < weakest[1]):
-                    weakest = (k, lr)
-            if weakest is None:
+            physical = [k for k, (effect, _) in enumerate(self.chosen) if not campaign_effect(effect).per_point]
+            k = weakest_term(physical, lambda k: self.fit(self.cols[:k] + self.cols[k + 1:])[1] - self.rss,
+                             lambda k: self.cols[k].shape[1], self.n)
+            if k is None:
                 return
-            self._drop(weakest[0])
+            self._drop(k)
 
     def _drop(self, k: int) -> None:
         """Remove the ``k``-th accepted term and its finding (drop-one test)."""

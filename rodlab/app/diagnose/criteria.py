@@ -24,7 +24,7 @@ import numpy as np
 
 from .chi2 import chi2_sf
 
-__all__ = ["DBIC_MIN", "P_MAX", "Evidence", "evidence", "bic_penalty", "cv_improves"]
+__all__ = ["DBIC_MIN", "P_MAX", "Evidence", "evidence", "bic_penalty", "cv_improves", "weakest_term"]
 
 #: delta BIC a model must gain to be accepted ("very strong" evidence on Kass & Raftery's scale)
 DBIC_MIN = 10.0
@@ -72,3 +72,16 @@ def evidence(lr: float, dof: int, penalty: float) -> Evidence:
 def cv_improves(before: float, after: float) -> bool:
     """The cross-validated prediction error drops (always True without folds: ``before`` is NaN)."""
     return not np.isfinite(before) or after < before
+
+
+def weakest_term(terms, lr_without, npar, n: int):
+    """The drop-one test of both diagnosers: among ``terms`` of the final model, the one whose removal costs the
+    smallest likelihood ratio ``lr_without(term)`` while that removal is not significant (BIC penalty of its
+    ``npar(term)`` parameters over ``n`` readings); None when every term is needed."""
+    weakest = None
+    for t in terms:
+        lr = lr_without(t)
+        if not evidence(lr, npar(t), bic_penalty(npar(t), n)).significant and (weakest is None or lr < weakest[1]):
+            weakest = (t, lr)
+    return None if weakest is None else weakest[0]
+

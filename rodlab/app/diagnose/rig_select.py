@@ -20,7 +20,7 @@ from rodlab.core.enums import Trial
 from rodlab.core.hypothesis import Hypothesis
 from rodlab.stiffness_rig.effects import creep_hypothesis
 from rodlab.stiffness_rig.samples import RigSamples
-from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence
+from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence, weakest_term
 from .search import search
 from .subset import SubsetLS
 
@@ -125,18 +125,16 @@ class _RigSpace:
 
     def finish(self) -> None:
         """Drop-one test (remove the weakest term while it fails), then swaps (:func:`_swap`)."""
+        def without(j):
+            return tuple(i for i in self.cur if i != j)
+
         while self.cur:
-            weakest = None
-            for j in self.cur:
-                rest = tuple(i for i in self.cur if i != j)
-                _, rss_r = self.ls.fit(rest)
-                lr = (rss_r - self.cur_rss) / self.sigma ** 2
-                if not evidence(lr, self.npar[j], bic_penalty(self.npar[j], self.n)).significant \
-                        and (weakest is None or lr < weakest[1]):
-                    weakest = (rest, lr, rss_r)
-            if weakest is None:
+            j = weakest_term(self.cur, lambda j: (self.ls.fit(without(j))[1] - self.cur_rss) / self.sigma ** 2,
+                             lambda j: self.npar[j], self.n)
+            if j is None:
                 break
-            self.cur, self.cur_rss = weakest[0], weakest[2]
+            self.cur = without(j)
+            self.cur_rss = self.ls.fit(self.cur)[1]
         self.cur = _swap(self.library, self.ls, self.cur, self.sigma, self.n, self.groups, self.k_of)
 
 

@@ -21,6 +21,7 @@ _EXPORTS = {
     "frame_frequencies": "modal", "chain_frequencies": "modal",
     "SolidModes": "modal_solid", "solid_frequencies": "modal_solid",
     "SolidRun": "solid_run", "run_solid": "solid_run",
+    "PlanCache": "plan_cache",
 }
 
 __all__ = list(_EXPORTS)

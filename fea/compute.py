@@ -95,13 +95,15 @@ def _error_provenance(errF: np.ndarray, errg: np.ndarray, CF: np.ndarray, Cg: np
 def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
                      error_estimate: ErrorEstimate | str | bool = ErrorEstimate.RECOVERY,
                      grading=DEFAULT_GRADING, backend: str | None = None, keep_displacements: bool = False,
-                     symmetry: bool = True, tip_moments: bool = False):
+                     symmetry: bool = True, tip_moments: bool = False, plans=None):
     """Solid-FEA :class:`~rodlab.core.compliance.RodCompliance` (method ``fea``) and the raw result.
 
     ``mesher`` (:class:`Mesher`, called by keyword) makes the meshes: ``rodlab.geometry.mesh_rod`` as it is (the
     domain packages meet through the core's :class:`~rodlab.core.fem_mesh.RodMesh`, never import each other).
     ``symmetry=True`` asks it for the half ``y_T >= 0`` (``half=True``); ``False`` meshes the whole rod.
     ``error_estimate``: :class:`~rodlab.core.enums.ErrorEstimate` (``True`` is recovery, ``False`` none).
+    ``plans``: a :class:`~fea.plan_cache.PlanCache` that keeps the mesh's node ordering and block pattern between
+    runs (None: made anew).
     """
     how = _estimate_kind(error_estimate)
     h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
@@ -121,7 +123,7 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
             t_mesh = time.perf_counter() - t0
         with bar.step("solve"):
             res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
-                                   tip_moments=tip_moments, error_estimate=how is ErrorEstimate.RECOVERY)
+                                   tip_moments=tip_moments, error_estimate=how is ErrorEstimate.RECOVERY, plans=plans)
         coarse = _coarse_solve(design, mesher, 1.5 * h, grading, symmetry, backend, bar) if richardson else None
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),

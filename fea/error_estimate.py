@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis
 from skfem.quadrature import get_quadrature
+
+from .mapping import lagrange_basis
 
 __all__ = ["recovery_error_matrix", "node_basis", "mandel"]
 
@@ -142,4 +143,4 @@ def node_basis(mesh, elem):
     """The element ``elem`` on ``mesh`` with one point at each of its nodes (the local DOFs' reference
     locations, equal weights), where :func:`recovery_error_matrix` takes the stresses it averages."""
     X = np.asarray(elem.doflocs, dtype=float).T
-    return Basis(mesh, elem, quadrature=(X, np.full(X.shape[1], 1.0 / X.shape[1])))
+    return lagrange_basis(mesh, elem, quadrature=(X, np.full(X.shape[1], 1.0 / X.shape[1])))

@@ -24,10 +24,12 @@ from rodlab.core.massprops import ball_mass_properties
 from rodlab.core.vtkio import VTK_QUADRATIC_TETRA, VTK_TETRA, VtkData, write_vtp, write_vtu
 
 from .elasticity import element_tensors
+from .error_estimate import node_basis
 from .errors import FeaError
 from .frame import CALIBRATION, frame_segments
 from .solid import SolidResult, mirror_displacements
 from .beam_stress import section_index, section_von_mises, section_wrenches
+from .stiffness_assembly import scalar_element
 
 __all__ = ["LOAD_CASE_KEYS", "LOAD_CASE_TEXT", "SolidFields", "solid_fields", "write_solid_fields",
            "write_frame_fields", "field_data", "FrameFields", "frame_centreline_fields", "nodal_von_mises"]
@@ -75,18 +77,10 @@ class SolidFields:
             raise ValueError(f"SolidFields.cells must have 4 or 10 nodes per element, got {self.cells.shape[1]}")
 
 
-def _node_basis(mesh):
-    """A basis whose quadrature points are the element's own nodes (the reference element's DOF locations)."""
-    from skfem import Basis, ElementTetP1, ElementTetP2, MeshTet2
-    elem = ElementTetP2() if isinstance(mesh, MeshTet2) else ElementTetP1()
-    nloc = elem.doflocs.shape[0]
-    return Basis(mesh, elem, quadrature=(elem.doflocs.T.copy(), np.full(nloc, 1.0 / nloc)))
-
-
 def nodal_von_mises(basis, C: np.ndarray, U: np.ndarray, chunk: int = 4000) -> np.ndarray:
     """Von Mises stress [N/mm^2 = MPa] per unit load at every node, shape=(N, n_cases), from the displacements
     ``U`` shape=(3 N, n_cases) [mm] and the element tensors ``C`` shape=(n_el, 3, 3, 3, 3) [N/mm^2]: evaluated
-    at each element's nodes (``basis`` from :func:`_node_basis`) and averaged over the elements at a node."""
+    at each element's nodes (``basis`` from :func:`~fea.error_estimate.node_basis`) and averaged over the elements at a node."""
     nloc = len(basis.basis)
     ed = basis.element_dofs                                      # (nloc, ne); quadrature point q = local node q
     ne, n_cases = ed.shape[1], U.shape[1]
@@ -115,7 +109,7 @@ def solid_fields(design: RodDesign, res: SolidResult) -> SolidFields:
     if rm.is_half:
         whole = rm.mirrored()
         U, rm = mirror_displacements(rm, U, whole), whole
-    basis = _node_basis(rm.mesh)
+    basis = node_basis(rm.mesh, scalar_element(rm.mesh))
     C = element_tensors([design.material_of(p) for p in rm.parts], rm.part_index, rm.tube_axis)
     vm = nodal_von_mises(basis, C, U)
     tool = np.asarray(design.tool_mm, dtype=float)

@@ -23,10 +23,11 @@ import scipy.sparse as sp
 from rodlab.core.design import RodDesign
 from rodlab.core.units import kg_m3_to_kg_mm3
 
+from .plan_cache import plan_for
 from .stiffness_assembly import assemble_stiffness, scalar_basis
 from .elasticity import element_tensors
 from .errors import FeaError
-from .solver import HeldSystem, PatternSolver, SolverBackend, available_backend, node_ordering
+from .solver import HeldSystem, PatternSolver, available_backend
 
 __all__ = ["SolidModes", "solid_frequencies"]
 
@@ -93,8 +94,9 @@ def solid_frequencies(design: RodDesign, rod_mesh, modes: int = 3, backend: str 
     C = element_tensors(materials, rod_mesh.part_index, rod_mesh.tube_axis)
     dens = np.array([kg_m3_to_kg_mm3(m.density_kg_m3) for m in materials])[rod_mesh.part_index]
     backend = backend or available_backend()
-    nodes = node_ordering(basis, backend)
-    K = assemble_stiffness(basis, C, node_order=nodes, upper=backend != SolverBackend.SUPERLU)
+    plan = plan_for(basis, backend)
+    nodes = plan.node_order
+    K = assemble_stiffness(basis, C, plan=plan)
     N = int(3 * basis.N)
     dof = np.arange(N) if nodes is None else (3 * nodes[:, None] + np.arange(3)).ravel()
     M = _mass_matrix(scalar_basis(rod_mesh.mesh, intorder=4), dens)[dof][:, dof]

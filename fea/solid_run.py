@@ -13,6 +13,7 @@ from rodlab.core.enums import ErrorEstimate
 
 from .compute import Mesher, solid_compliance
 from .joints import JointFit, fit_joints
+from .plan_cache import PlanCache
 from .solid import SolidResult
 from .plot import render_deformed
 
@@ -39,15 +40,16 @@ class SolidRun:
 def run_solid(design: RodDesign, mesher: Mesher, *, size_mm: float | None = None,
               error_estimate: ErrorEstimate | str | bool = ErrorEstimate.RECOVERY,
               symmetry: bool = True, joints: bool = False, deformed_png: str | Path | None = None,
-              backend: str | None = None, keep_displacements: bool = False) -> SolidRun:
+              backend: str | None = None, keep_displacements: bool = False, plans: PlanCache | None = None) -> SolidRun:
     """Solve ``design`` with the solid model (``mesher``: :func:`rodlab.geometry.mesh_rod`; ``error_estimate`` as
     :func:`~fea.compute.solid_compliance`); with ``joints``
     calibrate the frame's joints on the run (:func:`~rodlab.fea.joints.fit_joints`); with
     ``deformed_png`` draw the self-weight deformation (gravity along -z_T, as on a vertical flange); with
-    ``keep_displacements`` the result keeps the load cases' displacements (for :mod:`fea.fields`)."""
+    ``keep_displacements`` the result keeps the load cases' displacements (for :mod:`fea.fields`); ``plans`` keeps
+    the mesh's assembly plan between runs (:class:`~fea.plan_cache.PlanCache`)."""
     comp, res = solid_compliance(design, mesher, size_mm=size_mm, error_estimate=error_estimate,
                                  keep_displacements=keep_displacements or bool(deformed_png) or joints, symmetry=symmetry,
-                                 tip_moments=joints, backend=backend)
+                                 tip_moments=joints, backend=backend, plans=plans)
     run = SolidRun(comp, res)
     if deformed_png:
         run.figures.append(_deformed_figure(design, res, deformed_png))

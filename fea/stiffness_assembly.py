@@ -7,10 +7,13 @@ curved P2 elements) and the DOF numbering; the element matrices are contracted w
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["scalar_element", "scalar_basis", "block_pattern", "assemble_stiffness", "assemble_body_force", "vector_dofs"]
+__all__ = ["scalar_element", "scalar_basis", "block_pattern", "AssemblyPlan", "assembly_plan", "assemble_stiffness",
+           "assemble_body_force", "vector_dofs"]
 
 
 def scalar_element(mesh):
@@ -21,9 +24,9 @@ def scalar_element(mesh):
 
 def scalar_basis(mesh, intorder: int | None = None):
     """The scalar Lagrange basis of the mesh's order (P2 on MeshTet2, P1 on MeshTet1)."""
-    from skfem import Basis
+    from .mapping import lagrange_basis
     elem = scalar_element(mesh)
-    return Basis(mesh, elem, intorder=(3 if elem.maxdeg == 2 else 2) if intorder is None else intorder)
+    return lagrange_basis(mesh, elem, intorder=(3 if elem.maxdeg == 2 else 2) if intorder is None else intorder)
 
 
 def vector_dofs(basis) -> np.ndarray:
@@ -52,31 +55,50 @@ def block_pattern(basis):
     return uniq // basis.N, uniq % basis.N, inv.reshape(ne, nloc, nloc)
 
 
-def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, pattern=None,
-                       node_order: np.ndarray | None = None, upper: bool = False) -> sp.csr_matrix:
-    """Global stiffness [N/mm], shape=(3N, 3N), from element tensors C, shape=(ne, 3, 3, 3, 3).
+@dataclass(frozen=True)
+class AssemblyPlan:
+    """Where every element's 3x3 stiffness blocks go in the global matrix: a function of the mesh's connectivity,
+    the node ordering and whether one triangle is stored (:func:`assembly_plan`; kept per mesh by
+    :mod:`fea.plan_cache`).
 
-    ``pattern``: :func:`block_pattern` of the basis, if already computed. ``node_order``: a fill-reducing node
-    permutation, shape=(N,) (new -> old node): K is then assembled in that numbering (node ``node_order[i]``
-    becomes node i, its DOFs ``3 i + c``). ``upper``: only the 3x3 blocks on and above the block diagonal (the
-    diagonal blocks whole): read as CSC, this is the lower triangle CHOLMOD factorises (it ignores the rest),
-    in half the memory of the full matrix.
-
-    Element blocks ``K_e[a, b]`` (3x3 per pair of nodes) are summed straight into their place in the final
-    (ordered, optionally triangular) block list with ``bincount``, and the block matrix is expanded once
-    (BSR -> CSR): ~10x less sorting than a COO build. ``chunk`` elements at a time (~15 MB of element matrices
-    per 1000 elements): on a VM whose host backs guest memory lazily, fresh memory costs ~3-4 s per GB, so
-    small chunks are faster as well as leaner.
+    n_nodes : N, the nodes of the scalar basis (the matrix is 3N x 3N)
+    node_order : shape=(N,) int, the matrix's numbering (new -> old node: node ``node_order[i]`` is node i, its DOFs
+        ``3 i + c``), or None for the basis's own
+    upper : only the blocks on and above the block diagonal are stored (the diagonal blocks whole)
+    brow, bcol : shape=(nb,) int, block row and column of each stored block, row-major sorted
+    slot : shape=(ne, nloc, nloc) int, the stored block each element's block (a, b) adds into (``nb``: not stored)
     """
-    nloc = len(basis.basis)
-    G = np.stack([basis.basis[a][0].grad for a in range(nloc)])   # (nloc, 3, ne, nq)
-    dx = basis.dx                                                  # (ne, nq)
-    ne = dx.shape[0]
-    brow, bcol, inv = block_pattern(basis) if pattern is None else pattern
+
+    n_nodes: int
+    node_order: np.ndarray | None
+    upper: bool
+    brow: np.ndarray
+    bcol: np.ndarray
+    slot: np.ndarray
+
+    def __post_init__(self) -> None:
+        nb = self.brow.shape[0]
+        if self.bcol.shape != (nb,) or self.slot.ndim != 3 or self.slot.shape[1] != self.slot.shape[2]:
+            raise ValueError(f"AssemblyPlan: brow and bcol must have one shape (nb,) and slot (ne, nloc, nloc); got "
+                             f"{self.brow.shape}, {self.bcol.shape}, {self.slot.shape}")
+        if self.node_order is not None and self.node_order.shape != (self.n_nodes,):
+            raise ValueError(f"AssemblyPlan: node_order must have shape ({self.n_nodes},), got {self.node_order.shape}")
+
+    @property
+    def n_blocks(self) -> int:
+        """The number of stored 3x3 blocks."""
+        return int(self.brow.shape[0])
+
+
+def assembly_plan(basis, node_order: np.ndarray | None = None, upper: bool = False) -> AssemblyPlan:
+    """The :class:`AssemblyPlan` of ``basis``'s mesh in the numbering ``node_order`` (new -> old, or None), storing
+    the upper block triangle only with ``upper``: the :func:`block_pattern` renumbered and, with ``upper``, cut."""
+    brow, bcol, inv = block_pattern(basis)
     if node_order is not None or upper:
         # the place of every block in the final list (sorted row-major in the new numbering); dropped blocks
         # (below the diagonal) go to one extra slot that is cut off at the end
         if node_order is not None:
+            node_order = np.asarray(node_order, dtype=np.int64)
             iperm = np.empty_like(node_order)
             iperm[node_order] = np.arange(node_order.size, dtype=node_order.dtype)
             brow, bcol = iperm[brow], iperm[bcol]
@@ -86,7 +108,34 @@ def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, pattern=None,
         slot = np.full(brow.size, order.size, dtype=inv.dtype)
         slot[order] = np.arange(order.size, dtype=inv.dtype)
         brow, bcol, inv = brow[order], bcol[order], slot[inv]
-        del key, order, slot, keep
+    return AssemblyPlan(int(basis.N), node_order, bool(upper), brow, bcol, inv)
+
+
+def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, plan: AssemblyPlan | None = None,
+                       node_order: np.ndarray | None = None, upper: bool = False) -> sp.csr_matrix:
+    """Global stiffness [N/mm], shape=(3N, 3N), from element tensors C, shape=(ne, 3, 3, 3, 3).
+
+    ``plan``: the basis's :class:`AssemblyPlan`, if already made; else one is made from ``node_order`` and
+    ``upper``. ``node_order``: a fill-reducing node permutation, shape=(N,) (new -> old node): K is then assembled
+    in that numbering (node ``node_order[i]`` becomes node i, its DOFs ``3 i + c``). ``upper``: only the 3x3 blocks
+    on and above the block diagonal (the diagonal blocks whole): read as CSC, this is the lower triangle CHOLMOD
+    and PARDISO factorise (they ignore the rest), in half the memory of the full matrix.
+
+    Element blocks ``K_e[a, b]`` (3x3 per pair of nodes) are summed straight into their place in the final
+    (ordered, optionally triangular) block list with ``bincount``, and the block matrix is expanded once
+    (BSR -> CSR): ~10x less sorting than a COO build. ``chunk`` elements at a time (~15 MB of element matrices
+    per 1000 elements): on a VM whose host backs guest memory lazily, fresh memory costs ~3-4 s per GB, so
+    small chunks are faster as well as leaner.
+    """
+    plan = assembly_plan(basis, node_order, upper) if plan is None else plan
+    nloc = len(basis.basis)
+    dx = basis.dx                                                  # (ne, nq)
+    ne = dx.shape[0]
+    if plan.n_nodes != basis.N or plan.slot.shape != (ne, nloc, nloc):
+        raise ValueError(f"assemble_stiffness: the plan is for {plan.n_nodes} nodes and slots {plan.slot.shape}, the "
+                         f"basis has {basis.N} nodes, {ne} elements of {nloc}: make the plan with assembly_plan(basis)")
+    G = np.stack([basis.basis[a][0].grad for a in range(nloc)])   # (nloc, 3, ne, nq)
+    brow, bcol, inv = plan.brow, plan.bcol, plan.slot
     nb = brow.size
     blocks = np.zeros((9, nb + 1))
     for s in range(0, ne, chunk):

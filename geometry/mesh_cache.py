@@ -23,6 +23,7 @@ from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
 
+from rodlab.core.cache import cache_subfolder, prune, sources_digest
 from rodlab.core.design import RodDesign
 from rodlab.core.design_io import design_to_dict
 from rodlab.core.fem_mesh import RodMesh
@@ -41,28 +42,17 @@ MAX_BYTES = 500_000_000
 
 
 def cache_folder() -> Path | None:
-    """Where meshes are cached, or None when ``RODLAB_CACHE_DIR`` is ``off``."""
-    root = os.environ.get("RODLAB_CACHE_DIR", "").strip()
-    if root.lower() in ("off", "0", "none", "false"):
-        return None
-    if root:
-        return Path(root).expanduser() / "meshes"
-    xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-    try:
-        return (Path(xdg) if xdg else Path.home() / ".cache") / "rodlab" / "meshes"
-    except RuntimeError:                                  # no home folder: no cache
-        return None
+    """Where meshes are cached (``meshes`` in :func:`rodlab.core.cache.cache_root`), or None when
+    ``RODLAB_CACHE_DIR`` is ``off``."""
+    return cache_subfolder("meshes")
 
 
 @lru_cache(maxsize=1)
 def _code_and_versions() -> str:
     """The SHA-256 of the geometry package's and the mesher's core modules' sources, and the versions of the
     packages a mesh is made and pickled with."""
-    here = Path(__file__).resolve().parent
     core = Path(sys.modules[RodMesh.__module__].__file__).resolve().parent
-    h = hashlib.sha256()
-    for f in sorted(here.glob("*.py")) + [core / name for name in _CORE_SOURCES]:
-        h.update(f.name.encode() + f.read_bytes())
+    h = hashlib.sha256(sources_digest(__name__, tuple(core / name for name in _CORE_SOURCES)).encode())
     for dist in ("gmsh", "scikit-fem", "numpy"):
         try:
             h.update(f"{dist} {metadata.version(dist)}".encode())
@@ -131,15 +121,4 @@ class MeshCache:
 
     def _prune(self) -> None:
         """Newest first, delete what is beyond :data:`MAX_BYTES` (another process may prune at the same time)."""
-        sized = []
-        for p in self.folder.glob("*.pickle"):
-            try:
-                st = p.stat()
-            except FileNotFoundError:
-                continue
-            sized.append((st.st_mtime, st.st_size, p))
-        total = 0
-        for _, size, p in sorted(sized, key=lambda t: t[0], reverse=True):
-            total += size
-            if total > MAX_BYTES:
-                p.unlink(missing_ok=True)
+        prune(self.folder, "*.pickle", MAX_BYTES)

@@ -108,6 +108,36 @@ def test_solid_rod_mass_symmetry_and_provenance():
     assert np.all(np.diag(comp.C_F) > np.diag(CF))
 
 
+def test_section_rigid_motion_recovers_a_rigid_motion_and_is_least_squares():
+    """The ball's rigid motion: an exact rigid field (any origin offset of the nodes) is recovered to round-off,
+    on a half set of nodes too (their images carry the symmetric / antisymmetric fields), and with a non-rigid
+    part added the fit is the least-squares one (residual orthogonal to the six rigid fields)."""
+    from rodlab.fea.solid import ANTISYMMETRIC_CASES, section_rigid_motion
+    rng = np.random.default_rng(4)
+    X = rng.normal(size=(300, 3)) * 9.0 + np.array([4.0, 0.0, -30.0])
+    t, th = rng.normal(size=(3, 6)), rng.normal(size=(3, 6)) * 1e-2
+    U = t[None] + np.cross(th[None], X[:, :, None], axis=1)                        # (n, 3, 6)
+    t_fit, th_fit = section_rigid_motion(X, U.reshape(-1, 6), half=False)
+    np.testing.assert_allclose(t_fit, t, atol=1e-12 * np.abs(U).max())
+    np.testing.assert_allclose(th_fit, th, atol=1e-13)
+    noise = rng.normal(size=U.shape) * 1e-3
+    t_fit, th_fit = section_rigid_motion(X, (U + noise).reshape(-1, 6), half=False)
+    res = (U + noise) - t_fit[None] - np.cross(th_fit[None], X[:, :, None], axis=1)
+    rigid = [np.broadcast_to(e, X.shape) for e in np.eye(3)] + [np.cross(e, X) for e in np.eye(3)]
+    for f in rigid:
+        assert np.abs(np.einsum("nc,nck->k", f, res)).max() < 1e-9 * np.abs(np.einsum("nc,nck->k", f, noise)).max()
+    # half: nodes with y >= 0; each case's field is symmetric or antisymmetric about y = 0
+    Xh = X * np.array([1.0, 0.0, 1.0]) + np.abs(X) * np.array([0.0, 1.0, 0.0])
+    anti = np.isin(np.arange(6), ANTISYMMETRIC_CASES)
+    sym_t, sym_th = np.array([1.0, 0.0, 1.0])[:, None], np.array([0.0, 1.0, 0.0])[:, None]   # kept if symmetric
+    t_s = t * np.where(anti, 1.0 - sym_t, sym_t)
+    th_s = th * np.where(anti, 1.0 - sym_th, sym_th)
+    Uh = t_s[None] + np.cross(th_s[None], Xh[:, :, None], axis=1)
+    t_fit, th_fit = section_rigid_motion(Xh, Uh.reshape(-1, 6), half=True)
+    np.testing.assert_allclose(t_fit, t_s, atol=1e-12 * np.abs(Uh).max())
+    np.testing.assert_allclose(th_fit, th_s, atol=1e-13)
+
+
 @SOLID
 def test_half_model_equals_mirrored_whole():
     """The symmetry half-model (two solves, u_y or u_x,u_z held on y_T = 0) reproduces the whole rod meshed as
@@ -170,7 +200,7 @@ def test_pardiso_node_ordering_keeps_the_fill_low():
     ordering's inverse (PARDISO's permutation read the other way round), fills it several times more."""
     from rodlab.fea.elasticity import element_tensors
     from rodlab.fea.solver import HeldSystem, PatternSolver, backend_available, node_ordering
-    from rodlab.fea.stiffness_assembly import assemble_stiffness, block_pattern, scalar_basis
+    from rodlab.fea.stiffness_assembly import assemble_stiffness, scalar_basis
     pytest.importorskip("gmsh")
     if not backend_available("pardiso"):
         pytest.skip("pardiso is not installed here")
@@ -179,12 +209,11 @@ def test_pardiso_node_ordering_keeps_the_fill_low():
     rm = mesh_rod(d, size_mm=12.0, half=True)
     basis = scalar_basis(rm.mesh)
     C = element_tensors([d.material_of(p) for p in rm.parts], rm.part_index, rm.tube_axis)
-    pattern = block_pattern(basis)
     nodes = node_ordering(basis, "pardiso")
     assert np.array_equal(np.sort(nodes), np.arange(basis.N))
 
     def fill(order, method):
-        K = assemble_stiffness(basis, C, pattern=pattern, node_order=order, upper=True)
+        K = assemble_stiffness(basis, C, node_order=order, upper=True)
         return PatternSolver(HeldSystem(K).pattern, "pardiso", ordering_method=method).factor_nonzeros
 
     own = fill(None, "amd")                                 # PARDISO's METIS on the DOF graph
@@ -214,7 +243,7 @@ def test_node_ordered_assembly_and_held_system():
     """K assembled in a node ordering equals the permuted K; a held system solves like the sliced one."""
     import scipy.sparse as sp
     from scipy.sparse.linalg import spsolve
-    from rodlab.fea.stiffness_assembly import assemble_stiffness, block_pattern, scalar_basis
+    from rodlab.fea.stiffness_assembly import assemble_stiffness, assembly_plan, scalar_basis
     from rodlab.fea.elasticity import element_tensors
     from rodlab.fea.solver import HeldSystem
     pytest.importorskip("gmsh")
@@ -226,10 +255,12 @@ def test_node_ordered_assembly_and_held_system():
     K = assemble_stiffness(basis, C)
     nodes = np.random.default_rng(1).permutation(basis.N)
     dof = (3 * nodes[:, None] + np.arange(3)).ravel()
-    Kp = assemble_stiffness(basis, C, pattern=block_pattern(basis), node_order=nodes)
+    Kp = assemble_stiffness(basis, C, node_order=nodes)
     assert abs(Kp - K[dof][:, dof]).max() < 1e-12 * abs(K).max()
     # upper=True: the blocks on and above the block diagonal only (the lower triangle when read as CSC)
-    Ku = assemble_stiffness(basis, C, pattern=block_pattern(basis), node_order=nodes, upper=True)
+    plan = assembly_plan(basis, nodes, upper=True)
+    Ku = assemble_stiffness(basis, C, plan=plan)
+    assert plan.upper and np.array_equal(plan.node_order, nodes) and np.all(plan.brow <= plan.bcol)
     P = Kp.tocoo()
     up = P.row // 3 <= P.col // 3
     ref_u = sp.csr_matrix((P.data[up], (P.row[up], P.col[up])), shape=P.shape)

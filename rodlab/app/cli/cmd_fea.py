@@ -36,9 +36,9 @@ def register(sub) -> None:
                         + f" (default {ErrorEstimate.RECOVERY.value})")
     p.add_argument("--no-error-estimate", action="store_true", help="solid: the same as --error-estimate none")
     p.add_argument("--no-cache", action="store_true",
-                   help="solid: mesh again even when the same design and size were meshed before (meshes are cached "
-                        "per user in ~/.cache/rodlab/meshes, or $RODLAB_CACHE_DIR/meshes; RODLAB_CACHE_DIR=off turns "
-                        "the cache off)")
+                   help="solid: mesh and order the mesh again even when the same design and size were solved before "
+                        "(meshes and their assembly plans are cached per user in ~/.cache/rodlab/meshes and plans, or "
+                        "under $RODLAB_CACHE_DIR; RODLAB_CACHE_DIR=off turns the cache off)")
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
@@ -74,8 +74,9 @@ def cmd_fea(args: argparse.Namespace) -> int:
         mesher = geometry.mesh_rod if args.no_cache else geometry.MeshCache(geometry.mesh_rod)
         if args.joints:
             raise RodlabError("--joints applies to --model frame (with --model solid, --joints-out writes one)")
-        from rodlab.fea import run_solid
+        from rodlab.fea import PlanCache, run_solid
         run = run_solid(design, mesher, size_mm=args.size, error_estimate=_estimate(args),
+                        plans=PlanCache(None if args.no_cache else "default"),
                         symmetry=not args.no_symmetry, joints=bool(args.joints_out),
                         deformed_png=png_file(args.png, "deformed.png"),
                         keep_displacements=bool(args.fields or args.report is not None))

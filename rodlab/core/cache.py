@@ -1,0 +1,64 @@
+"""rodlab's per-user cache folder, shared by the caches of the domain packages (meshes, assembly plans).
+
+Folder: ``$RODLAB_CACHE_DIR``, else ``$XDG_CACHE_HOME/rodlab``, else ``~/.cache/rodlab``; ``RODLAB_CACHE_DIR=off``
+(or ``rodlab fea --no-cache``) turns every cache off. Each cache keeps its files in a sub-folder of its own and
+prunes it to a size limit, least recently used first (:func:`prune`).
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
+
+__all__ = ["CACHE_ENV", "cache_root", "cache_subfolder", "prune", "sources_digest"]
+
+#: the environment variable naming the cache folder (``off`` turns caching off)
+CACHE_ENV = "RODLAB_CACHE_DIR"
+
+
+def cache_root() -> Path | None:
+    """The cache folder, or None when ``RODLAB_CACHE_DIR`` is ``off`` (or there is no home folder)."""
+    root = os.environ.get(CACHE_ENV, "").strip()
+    if root.lower() in ("off", "0", "none", "false"):
+        return None
+    if root:
+        return Path(root).expanduser()
+    xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
+    try:
+        return (Path(xdg) if xdg else Path.home() / ".cache") / "rodlab"
+    except RuntimeError:                                  # no home folder: no cache
+        return None
+
+
+def cache_subfolder(name: str) -> Path | None:
+    """The sub-folder ``name`` of :func:`cache_root`, or None when caching is off."""
+    root = cache_root()
+    return None if root is None else root / name
+
+
+def prune(folder: Path, pattern: str, max_bytes: int) -> None:
+    """Delete the files ``pattern`` of ``folder`` beyond ``max_bytes`` in total, newest (most recently used)
+    kept first. Another process may prune the same folder at the same time: a file gone already is skipped."""
+    sized = []
+    for p in folder.glob(pattern):
+        try:
+            st = p.stat()
+        except FileNotFoundError:
+            continue
+        sized.append((st.st_mtime, st.st_size, p))
+    total = 0
+    for _, size, p in sorted(sized, key=lambda t: t[0], reverse=True):
+        total += size
+        if total > max_bytes:
+            p.unlink(missing_ok=True)
+
+
+def sources_digest(module_name: str, extra: tuple[Path, ...] = ()) -> str:
+    """SHA-256 of the sources of the package ``module_name`` belongs to (every ``*.py`` of its folder) and of the
+    files ``extra``: a cache keyed on it is never served a result an older version of that code made."""
+    here = Path(sys.modules[module_name].__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(here.glob("*.py")) + list(extra):
+        h.update(f.name.encode() + f.read_bytes())
+    return h.hexdigest()

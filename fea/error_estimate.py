@@ -48,16 +48,20 @@ def mandel(C: np.ndarray) -> np.ndarray:
     return out
 
 
-def _strains_mandel(grads: np.ndarray, u_e: np.ndarray) -> np.ndarray:
-    """Mandel strain vectors at the basis's points: ``grads`` of the local functions, shape=(nloc, 3, ne, nq), and
-    element displacements ``u_e``, shape=(ne, nloc, 3, nc) -> shape=(ne, nq, 6, nc)."""
-    ne, nloc, _, nc = u_e.shape
-    G = np.ascontiguousarray(grads.transpose(2, 3, 1, 0))                      # (ne, nq, k, a)
-    du = (G @ u_e.reshape(ne, 1, nloc, 3 * nc)).reshape(ne, G.shape[1], 3, 3, nc)   # du_i/dx_k: [e, q, k, i, c]
-    eps = np.empty(du.shape[:2] + (6, nc))
+def _mandel_strain_map() -> np.ndarray:
+    """The Mandel strain from the displacement gradient, shape=(6, 9): ``eps_M = P @ du`` with ``du[3 k + i] =
+    du_i/dx_k`` (the shear pairs symmetrised and weighted by sqrt 2, as :func:`mandel` weights the stiffness)."""
+    P = np.zeros((6, 9))
     for I, (i, j) in enumerate(_PAIRS):
-        eps[:, :, I] = du[:, :, i, i] if i == j else (du[:, :, j, i] + du[:, :, i, j]) / _SQ2
-    return eps
+        if i == j:
+            P[I, 4 * i] = 1.0
+        else:
+            P[I, 3 * j + i] = P[I, 3 * i + j] = 1.0 / _SQ2
+    return P
+
+
+#: :func:`_mandel_strain_map`
+_MANDEL_STRAIN = _mandel_strain_map()
 
 
 def _nodal_average(stress_nodes: np.ndarray, element_dofs: np.ndarray, part_index: np.ndarray,
@@ -108,11 +112,16 @@ def _nodal_stresses(nodes, Cm: np.ndarray, U: np.ndarray) -> np.ndarray:
     temporaries stay small: fresh memory is slow on a VM)."""
     ed = nodes.element_dofs.T
     ne, nloc = ed.shape
-    U3 = U.reshape(-1, 3, U.shape[1])
-    at_nodes = np.stack([nodes.basis[a][0].grad for a in range(nloc)])          # (nloc, 3, ne, nloc)
-    out = np.empty((ne, nloc, 6, U.shape[1]))
+    nc = U.shape[1]
+    U3 = U.reshape(-1, 3, nc)
+    grads = np.stack([nodes.basis[a][0].grad for a in range(nloc)], axis=-1)    # (k, ne, nq, a)
+    nq = grads.shape[2]
+    CP = Cm @ _MANDEL_STRAIN                                                    # stress from du: (ne, 6, 9)
+    out = np.empty((ne, nq, 6, nc))
     for c in _chunks(ne):
-        out[c] = Cm[c, None] @ _strains_mandel(at_nodes[:, :, c], U3[ed[c]])
+        G = np.ascontiguousarray(grads[:, c].transpose(1, 2, 0, 3)).reshape(-1, nq * 3, nloc)   # [e, (q, k), a]
+        du = (G @ U3[ed[c]].reshape(-1, nloc, 3 * nc)).reshape(-1, nq, 9, nc)  # du_i/dx_k at 3 k + i
+        out[c] = CP[c, None] @ du
     return out
 
 
@@ -139,8 +148,9 @@ def _reference_mass(elem) -> tuple[np.ndarray, float]:
     return (phi * W) @ phi.T / W.sum(), float(W.sum())
 
 
-def node_basis(mesh, elem):
+def node_basis(mesh, elem, doflocs: bool = True):
     """The element ``elem`` on ``mesh`` with one point at each of its nodes (the local DOFs' reference
-    locations, equal weights), where :func:`recovery_error_matrix` takes the stresses it averages."""
+    locations, equal weights), where :func:`recovery_error_matrix` takes the stresses it averages; ``doflocs``:
+    with the nodes' global positions (``basis.doflocs``; the estimate does not need them)."""
     X = np.asarray(elem.doflocs, dtype=float).T
-    return lagrange_basis(mesh, elem, quadrature=(X, np.full(X.shape[1], 1.0 / X.shape[1])))
+    return lagrange_basis(mesh, elem, quadrature=(X, np.full(X.shape[1], 1.0 / X.shape[1])), doflocs=doflocs)

@@ -30,11 +30,13 @@ class InverseOnceMapping(MappingIsoparametric):
         return out
 
 
-def lagrange_basis(mesh, elem, intorder: int | None = None, quadrature: tuple | None = None) -> Basis:
+def lagrange_basis(mesh, elem, intorder: int | None = None, quadrature: tuple | None = None,
+                   doflocs: bool = True) -> Basis:
     """``skfem.Basis(mesh, elem, ...)``, the same basis, with a curved mesh's inverse Jacobian formed once
     instead of once per local function (:class:`InverseOnceMapping`; an affine mesh keeps its own mapping).
-    ``quadrature``: (points, weights) on the reference element, shape=(3, nq) and (nq,)."""
+    ``quadrature``: (points, weights) on the reference element, shape=(3, nq) and (nq,); ``doflocs=False`` skips
+    the global DOF locations (``basis.doflocs``) a caller does not use."""
     mapping = mesh.mapping() if mesh.affine else InverseOnceMapping(mesh, mesh.elem(), mesh.bndelem)
     if quadrature is not None:
         quadrature = (np.asarray(quadrature[0], dtype=float), np.asarray(quadrature[1], dtype=float))
-    return Basis(mesh, elem, mapping=mapping, intorder=intorder, quadrature=quadrature)
+    return Basis(mesh, elem, mapping=mapping, intorder=intorder, quadrature=quadrature, disable_doflocs=not doflocs)

@@ -167,7 +167,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
 
 def _recovery_estimate(rod_mesh, C: np.ndarray, U: np.ndarray) -> np.ndarray:
     """The recovery estimate of the error between the load cases (:mod:`fea.error_estimate`)."""
-    nodes = node_basis(rod_mesh.mesh, scalar_element(rod_mesh.mesh))
+    nodes = node_basis(rod_mesh.mesh, scalar_element(rod_mesh.mesh), doflocs=False)
     return recovery_error_matrix(nodes, C, rod_mesh.part_index, U, rod_mesh.is_half, ANTISYMMETRIC_CASES)
 
 
@@ -177,19 +177,17 @@ def _load_cases(basis, rod_mesh, materials, n_cases: int) -> tuple[np.ndarray, f
     on a half mesh)."""
     half = rod_mesh.is_half
     N = int(3 * basis.N)
-    x_q = basis.mapping.F(basis.X)                          # (3, ne, nq) global quadrature points
     dens = np.array([kg_m3_to_kg_mm3(m.density_kg_m3) for m in materials])[rod_mesh.part_index]
     ne, nq = basis.dx.shape
     loads = np.zeros((N, n_cases))
     ball = np.nonzero(rod_mesh.part_index == rod_mesh.parts.index(Part.BALL))[0]
-    for j, fb in enumerate(_ball_loads(x_q[:, ball, :], basis.dx[ball], half, n_cases == 9)):
-        f = np.zeros((3, ne, nq))
-        f[:, ball, :] = fb
-        loads[:, j if j < 3 else j + 3] = assemble_body_force(basis, f)
+    x_q = basis.mapping.F(basis.X, tind=ball)               # (3, nb, nq) the ball's quadrature points
+    on_ball = np.stack(_ball_loads(x_q, basis.dx[ball], half, n_cases == 9))   # (3 or 6, 3, nb, nq)
+    loads[:, [j if j < 3 else j + 3 for j in range(on_ball.shape[0])]] = assemble_body_force(basis, on_ball, ball)
+    weight = np.zeros((3, 3, ne, nq))
     for j in range(3):
-        g = np.zeros((3, ne, nq))
-        g[j] = (dens * G0)[:, None]
-        loads[:, 3 + j] = assemble_body_force(basis, g)
+        weight[j, j] = (dens * G0)[:, None]
+    loads[:, 3:6] = assemble_body_force(basis, weight)
     mass = float((basis.dx * dens[:, None]).sum()) * (2.0 if half else 1.0)
     return loads, mass
 

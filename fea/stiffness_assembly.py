@@ -154,12 +154,16 @@ def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, plan: AssemblyPl
     return bsr.tocsr()
 
 
-def assemble_body_force(basis, f_q: np.ndarray) -> np.ndarray:
+def assemble_body_force(basis, f_q: np.ndarray, elements: np.ndarray | None = None) -> np.ndarray:
     """Load vector [N], shape=(3N,), of a body force density f [N/mm^3] given at quadrature points,
-    shape=(3, ne, nq)."""
+    shape=(3, ne, nq); or the load vectors, shape=(3N, m), of a stack of them, shape=(m, 3, ne, nq).
+    ``elements``: the indices of the elements ``f_q`` is given on (ne of them; zero on the others)."""
+    F = f_q if f_q.ndim == 4 else f_q[None]
+    e = slice(None) if elements is None else np.asarray(elements)
     nloc = len(basis.basis)
-    phi = np.stack([np.asarray(basis.basis[a][0]) for a in range(nloc)])   # (nloc, ne, nq)
-    fe = np.einsum("aeq,ieq,eq->eai", phi, f_q, basis.dx)            # (ne, nloc, 3)
-    out = np.zeros(3 * basis.N)
-    np.add.at(out, vector_dofs(basis).ravel(), fe.reshape(-1))
-    return out
+    w = np.stack([np.asarray(basis.basis[a][0])[e] for a in range(nloc)]) * basis.dx[e][None]   # (nloc, ne, nq)
+    fe = np.einsum("aeq,mieq->meai", w, F, optimize=True)          # (m, ne, nloc, 3)
+    idx = vector_dofs(basis)[e].ravel()
+    out = np.stack([np.bincount(idx, weights=fe[k].ravel(), minlength=3 * basis.N) for k in range(F.shape[0])],
+                   axis=1)
+    return out if f_q.ndim == 4 else out[:, 0]

@@ -33,10 +33,10 @@ __all__ = ["PlanCache", "PLAN_REVISION", "MAX_BYTES", "plan_for"]
 log = logging.getLogger(__name__)
 
 #: raise when a plan changes for a reason the key cannot see
-PLAN_REVISION = 1
+PLAN_REVISION = 2
 #: the folder's size limit [bytes] (rod 1#'s default half mesh: ~6 MB a plan)
 MAX_BYTES = 200_000_000
-_ARRAYS = ("brow", "bcol", "slot")
+_ARRAYS = ("brow", "bcol", "local", "slot")
 
 
 def plan_for(basis, backend: str | None = None) -> AssemblyPlan:
@@ -111,7 +111,8 @@ class PlanCache:
     def _write(self, path: Path, plan: AssemblyPlan) -> None:
         buf = io.BytesIO()
         order = plan.node_order if plan.node_order is not None else np.zeros(0, dtype=np.int64)
-        np.savez(buf, brow=plan.brow, bcol=plan.bcol, slot=plan.slot, node_order=order, upper=np.array(plan.upper))
+        np.savez(buf, brow=plan.brow, bcol=plan.bcol, local=plan.local, slot=plan.slot, node_order=order,
+                 upper=np.array(plan.upper))
         try:
             atomic_write_bytes(path, buf.getvalue())
             prune(self.folder, "*.npz", MAX_BYTES)
@@ -122,9 +123,11 @@ class PlanCache:
 def _fits(plan: AssemblyPlan, basis) -> bool:
     """Whether ``plan`` can assemble on ``basis``: its shapes, and every index in range (a damaged file whose
     arrays still load must not scatter out of bounds)."""
-    ne, nloc = basis.element_dofs.shape[1], basis.element_dofs.shape[0]
+    nloc, ne = basis.element_dofs.shape
     nb, n = plan.n_blocks, basis.N
-    return (plan.slot.shape == (ne, nloc, nloc) and bool(((plan.slot >= 0) & (plan.slot <= nb)).all())
+    m = nloc * (nloc + 1) // 2 if plan.upper else nloc * nloc
+    return (plan.slot.shape == (ne, m) and bool(((plan.slot >= 0) & (plan.slot < nb)).all())
+            and bool(((plan.local >= 0) & (plan.local < nloc * nloc)).all())
             and bool(((plan.brow >= 0) & (plan.brow < n) & (plan.bcol >= 0) & (plan.bcol < n)).all())
             and bool((np.diff(plan.brow) >= 0).all())
             and (plan.node_order is None or np.array_equal(np.sort(plan.node_order), np.arange(n))))

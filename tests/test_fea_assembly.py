@@ -66,7 +66,7 @@ def test_the_plan_cache_reads_what_it_wrote_and_remakes_a_damaged_entry(tmp_path
     made = cache.plan(basis, "mesh-sha", "superlu")
     again = PlanCache(tmp_path).plan(basis, "mesh-sha", "superlu")
     assert cache.misses == 1 and len(list(tmp_path.glob("*.npz"))) == 1
-    for name in ("brow", "bcol", "slot"):
+    for name in ("brow", "bcol", "local", "slot"):
         assert np.array_equal(getattr(made, name), getattr(again, name))
     assert again.node_order is None and not again.upper              # SuperLU: the whole matrix as numbered
     fresh = plan_for(basis, "superlu")

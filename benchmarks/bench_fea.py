@@ -1,10 +1,14 @@
-"""Benchmark: solid FEA of rod 1# (time, peak memory, DOFs, error vs a refined mesh), CalculiX on the same
-mesh, the frame model per design, and a 1000-design frame sweep.
+"""Benchmark: solid FEA of the derived rod 1# (time, peak memory, DOFs, the recovery estimate and the error
+against a reference), CalculiX on the same mesh (library path), the frame model per design, and a 1000-design
+frame sweep.
 
-    python benchmarks/bench_fea.py        # prints and writes docs/benchmarks/fea.md (~3-4 min)
+    python benchmarks/bench_fea.py        # prints and writes docs/benchmarks/fea.md (~2-3 min)
 
-Goals (issue: fea): solid C_F + C_g of rod 1# within 0.15 % of converged in <= 5 s and <= 2 GB on 2 cores;
->= 5x faster than CalculiX at equal accuracy; frame <= 5 ms per design; 1000-design frame sweep <= 30 s.
+The mesh sizes follow the design's default (``default_solid_size_mm``: 3 x the thinnest wall); the reference is
+the two finest of three graded solves (h, h/1.5, h/2.25) extrapolated with their observed order (at least 1), as
+in ``benchmarks/fea_error_estimate.py``. Goals (issue: fea, set on the legacy rod 1#): solid C_F + C_g within
+0.15 % of converged in <= 5 s and <= 2 GB on 2 cores; >= 5x faster than CalculiX at equal accuracy; frame <= 5 ms
+per design; 1000-design frame sweep <= 30 s. The command as a user runs it: docs/benchmarks/fea_vs_calculix.md.
 """
 from __future__ import annotations
 
@@ -17,35 +21,7 @@ import time
 from pathlib import Path
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "benchmarks" / "fea.md"
-NOTES = ["## Notes", "",
-         "- **Goal met in the environment of README command 1** (a fresh venv, no apt step): the solver is Intel",
-         "  MKL PARDISO from pip (pypardiso + the mkl wheels), 0.11 % from converged (goal 0.15 %) in under 5 s",
-         "  from the design (the table's median of 5 runs and their range; mesh ~1.2 s + FEA ~2.5 s), ~13x",
-         "  faster than CalculiX on the same mesh; peak memory ~1.03 GB (goal 1 GB: missed, see Memory).",
-         "  The whole CLI command adds ~3 s of imports (build123d 2.2 s of it, scikit-learn 0.75 s",
-         "  of those, pulled in by build123d): see docs/benchmarks/speed.md. VMs differ, and so does one VM from",
-         "  hour to hour (see the machine check).",
-         "- Where the FEA time goes with PARDISO (rod 1#, 91k DOFs per half): one METIS analysis of the shared",
-         "  pattern ~0.5 s (OpenMP-parallel nested dissection, iparm[1] = 3), ~0.25 s per numerical",
-         "  factorisation on 2 cores, 0.05-0.1 s per solve of its cases; assembly ~0.2-0.4 s (first touch of",
-         "  fresh memory), basis and loads ~0.2 s; loading MKL ~0.3 s once per process. gmsh sets the process's",
-         "  OpenMP thread count to 1 while meshing; rodlab sets MKL's back to the cores it may use before each",
-         "  PARDISO call (that had halved the factorisation speed).",
-         "- History. 2026-11-24: PARDISO from pip replaces CHOLMOD from apt as the fast path (CHOLMOD, node-",
-         "  ordered, OpenBLAS: ~0.8 s per factorisation; SuperLU, the fallback: ~8 s; the CHOLMOD wheels",
-         "  cholespy / sksparse-minimal ship the reference BLAS: ~3.5 s; docs/benchmarks/solvers.md).",
-         "  2026-11-23: the nodes ordered on the vertex graph for CHOLMOD, K's upper block triangle assembled",
-         "  straight into the ordered block list; METIS on the node graph with K assembled in that numbering,",
-         "  clamp and plane held in place instead of sliced copies. 2026-11-22: the symmetry half-model (two",
-         "  half-size factorisations sharing one analysis; exact), grading restricted to the tubes with a finer",
-         "  bend (91k DOFs reach 0.11 %), gmsh's 1-D size integration at 1e-3, assembly in 2000-element chunks.",
-         "- Routes that remain: swept quadratic hexahedra through the thin tube walls (far fewer DOFs),",
-         "  substructuring the stiff holders and the ball, and for the CLI a mesher that does not import",
-         "  build123d (gmsh's own OpenCASCADE kernel).",
-         "- Memory: the default row's peak (~1.03 GB) is 0.45 GB of imports (build123d, OpenCASCADE, scikit-learn",
-         "  pulled in by build123d) plus ~0.6 GB for the FEA, of which PARDISO's own ~0.32 GB (MKL reports 110 MB",
-         "  permanent + 210 MB factor for each half problem). The 1 GB goal is missed by ~3-5 %; CHOLMOD's",
-         "  node-ordered factor was ~0.2 GB smaller (0.84 GB peak), at twice the factorisation time.", ""]
+NOTES = Path(__file__).resolve().parent / "fea_notes.md"
 
 _SOLID = r"""
 import json, resource, sys, time
@@ -53,17 +29,18 @@ t0 = time.perf_counter()
 from rodlab import resolve_design
 from rodlab.geometry import mesh_rod
 from rodlab.fea import solid_compliance
-import build123d, gmsh, skfem  # noqa: F401  (imported lazily by the mesher: counted apart, once per process)
+import gmsh, skfem  # noqa: F401  (imported lazily by the mesher: counted apart, once per process)
 t_imp = time.perf_counter() - t0
 size, near, growth, bend, sym = (float(v) for v in sys.argv[1:6])
 d = resolve_design("rod1")
 t0 = time.perf_counter()
 comp, res = solid_compliance(d, mesh_rod, size_mm=size,
-                             grading=(near, growth, bend) if near < 1 else None, error_estimate=False,
+                             grading=(near, growth, bend) if near < 1 else None, error_estimate=True,
                              symmetry=bool(sym))
 wall = time.perf_counter() - t0
-print(json.dumps({"C_F": comp.C_F.tolist(), "C_g": comp.C_g.tolist(), "dofs": res.dofs, "wall_s": wall,
-                  "import_s": t_imp,
+est = comp.provenance["discretisation_error"]["max_relative_C_F"]
+print(json.dumps({"C_F": res.C_F.tolist(), "C_g": res.C_g.tolist(), "dofs": res.dofs, "wall_s": wall,
+                  "import_s": t_imp, "estimate": est,
                   "timings": comp.provenance["timings_s"], "solver": res.backend,
                   "peak_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
 """
@@ -77,7 +54,7 @@ from rodlab.fea.calculix import run_ccx_compliance
 d = resolve_design("rod1")
 half = mesh_rod(d, size_mm=float(sys.argv[1]), grading=tuple(float(v) for v in sys.argv[2:5]), half=True)
 whole = half.mirrored()           # the same discretisation as the half model, for CalculiX and our whole solve
-solve_compliance(d, half)         # warm-up (first CHOLMOD call loads its libraries)
+solve_compliance(d, half)         # warm-up (the first PARDISO call loads MKL)
 t0 = time.perf_counter(); ours = solve_compliance(d, half); t_ours = time.perf_counter() - t0
 t0 = time.perf_counter(); ours_w = solve_compliance(d, whole); t_whole = time.perf_counter() - t0
 t0 = time.perf_counter(); theirs = run_ccx_compliance(d, whole); t_ccx = time.perf_counter() - t0
@@ -108,19 +85,28 @@ def run(code: str, *args) -> dict:
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
-#: the solid-model rows: label, run(_SOLID, size, ...) arguments
-_ROWS = (("**default**: half model, graded, size 6 mm (1.8 mm at section changes, bend 4.2 mm)",
-          (6.0, 0.3, 0.3, 0.7, 1)),
-         ("the same settings on the whole rod (`symmetry=False`)", (6.0, 0.3, 0.3, 0.7, 0)),
-         ("half model, graded, size 7 mm", (7.0, 0.3, 0.3, 0.7, 1)),
-         ("half model, uniform 4 mm (2 x wall)", (4.0, 1.0, 0.0, 1.0, 1)))
+def _default_size() -> float:
+    from rodlab import resolve_design
+    from rodlab.fea.compute import default_solid_size_mm
+    return default_solid_size_mm(resolve_design("rod1"))
 
 
-def _measure_rows() -> list:
+def _rows(h: float) -> tuple:
+    """The solid-model rows: label, run(_SOLID, size, near, growth, bend, symmetry) arguments."""
+    return ((f"**default**: half model, graded, size {h:g} mm ({0.3 * h:g} mm at section changes, bend "
+             f"{0.7 * h:g} mm)", (h, 0.3, 0.3, 0.7, 1)),
+            ("the same settings on the whole rod (`symmetry=False`)", (h, 0.3, 0.3, 0.7, 0)),
+            (f"half model, graded, size {1.5 * h:g} mm", (1.5 * h, 0.3, 0.3, 0.7, 1)),
+            (f"half model, graded, size {h / 1.5:.3g} mm", (h / 1.5, 0.3, 0.3, 0.7, 1)),
+            (f"half model, uniform {h / 1.5:.3g} mm", (h / 1.5, 1.0, 0.0, 1.0, 1)))
+
+
+def _measure_rows(h: float) -> list:
     """Each row's run; the goal's row (default) as the median of 5, since one run varies by +-20 %."""
     measured = []
-    for label, args in _ROWS:
-        if args == _ROWS[0][1]:
+    rows = _rows(h)
+    for label, args in rows:
+        if args == rows[0][1]:
             runs = sorted((run(_SOLID, *args) for _ in range(5)), key=lambda r: r["wall_s"])
             r = dict(runs[2], wall_range=(runs[0]["wall_s"], runs[-1]["wall_s"]))
         else:
@@ -130,14 +116,18 @@ def _measure_rows() -> list:
     return measured
 
 
-def _reference():
-    """Richardson extrapolation of uniform 2.5 mm and 2.0 mm half meshes (observed order 3.4): (C, run a, run b)."""
+def _reference(h: float, measured: list):
+    """C_F and C_g extrapolated from graded solves at h / 1.5 and h / 2.25 with the order observed on h, h / 1.5,
+    h / 2.25 (C_F's diagonal; at least 1, as benchmarks/fea_error_estimate.py): (reference, order, finest run)."""
     import numpy as np
-    ra, rb = run(_SOLID, 2.5, 1.0, 0.0, 1.0, 1), run(_SOLID, 2.0, 1.0, 0.0, 1.0, 1)
-    f = (2.5 / 2.0) ** 3.4 - 1.0
-    ref = {k: (np.array(rb[k]) + (np.array(rb[k]) - np.array(ra[k])) / f).tolist() for k in ("C_F", "C_g")}
-    print("reference", ra["dofs"], rb["dofs"])
-    return ref, ra, rb
+    runs = [measured[0][1], measured[3][1], run(_SOLID, h / 2.25, 0.3, 0.3, 0.7, 1)]
+    d1 = np.diag(np.array(runs[1]["C_F"]) - np.array(runs[0]["C_F"]))
+    d2 = np.diag(np.array(runs[2]["C_F"]) - np.array(runs[1]["C_F"]))
+    observed = float(np.mean(np.log(np.abs(d1 / d2)) / np.log(1.5)))
+    f = 1.5 ** min(max(observed, 1.0), 6.0) - 1.0
+    ref = {k: (np.array(runs[2][k]) + (np.array(runs[2][k]) - np.array(runs[1][k])) / f).tolist() for k in ("C_F", "C_g")}
+    print("reference", runs[2]["dofs"], observed)
+    return ref, observed, runs[2]
 
 
 def _errors(measured, ref) -> list:
@@ -148,41 +138,47 @@ def _errors(measured, ref) -> list:
         CF, CR = np.array(r["C_F"]), np.array(ref["C_F"])
         big = np.abs(CR) > 1e-3 * np.abs(CR).max()
         err = float(np.max(np.abs(CF[big] / CR[big] - 1)))
-        gerr = float(np.max(np.abs(np.array(r["C_g"])[big] / np.array(ref["C_g"])[big] - 1)))
+        G, GR = np.array(r["C_g"]), np.array(ref["C_g"])
+        bigg = np.abs(GR) > 1e-3 * np.abs(GR).max()
+        gerr = float(np.max(np.abs(G[bigg] / GR[bigg] - 1)))
         rows.append((label, r, err, gerr))
         print(label, r["dofs"], r["wall_s"], err)
     return rows
 
 
-def _solid_section(rows, ra, rb) -> list[str]:
-    lines = ["## Solid C_F + C_g of rod 1# (six load cases)", "",
-             f"Reference: Richardson extrapolation (order 3.4) of uniform 2.5 mm ({ra['dofs']} DOFs) and 2.0 mm "
-             f"({rb['dofs']} DOFs, {rb['wall_s']:.0f} s) half meshes. Error = largest relative difference over the "
-             f"entries larger than 0.1 % of the matrix's largest.", "",
-             "Wall time from the design to C_F and C_g, imports excluded (build123d, gmsh and scikit-fem load "
-             f"once per process: {rows[0][1]['import_s']:.1f} s here).", "",
-             "| mesh | DOFs | wall s (mesh + FEA) | assembly s | factorise s | peak MB | solver | C_F err | C_g err |",
-             "|---|---|---|---|---|---|---|---|---|"]
+def _solid_section(rows, h: float, order: float, finest: dict) -> list[str]:
+    lines = ["## Solid C_F + C_g of the derived rod 1# (six load cases)", "",
+             f"Reference: graded half meshes at {h / 1.5:.3g} and {h / 2.25:.3g} mm ({finest['dofs']} DOFs, "
+             f"{finest['wall_s']:.0f} s) extrapolated with the order observed on {h:g} / {h / 1.5:.3g} / "
+             f"{h / 2.25:.3g} mm ({order:.2f}; taken as {min(max(order, 1.0), 6.0):.2f}). Error = largest relative "
+             f"difference over the entries larger than 0.1 % of the matrix's largest; the recovery estimate is the "
+             f"solve's own (`discretisation_error`, % of max|C_F|).", "",
+             "Wall time from the design to C_F and C_g with the recovery estimate, imports excluded (gmsh and "
+             f"scikit-fem load once per process: {rows[0][1]['import_s']:.1f} s here).", "",
+             "| mesh | DOFs | wall s (mesh + FEA) | assembly s | factorise s | peak MB | solver | C_F err | C_g err | "
+             "recovery estimate |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for label, r, err, gerr in rows:
         t = r["timings"]
-        spread = (f" (median of 5: {r['wall_range'][0]:.1f}-{r['wall_range'][1]:.1f})" if "wall_range" in r else "")
-        lines.append(f"| {label} | {r['dofs']} | {r['wall_s']:.1f} ({t['mesh']:.1f} + {t['total']:.1f}){spread} | "
+        spread = (f" (median of 5: {r['wall_range'][0]:.2f}-{r['wall_range'][1]:.2f})" if "wall_range" in r else "")
+        lines.append(f"| {label} | {r['dofs']} | {r['wall_s']:.2f} ({t['mesh']:.2f} + {t['total']:.2f}){spread} | "
                      f"{t['assembly']:.2f} | {t['factorize']:.2f} | {r['peak_MB']:.0f} | {r['solver']} | "
-                     f"{100 * err:.3f} % | {100 * gerr:.3f} % |")
+                     f"{100 * err:.3f} % | {100 * gerr:.3f} % | {100 * r['estimate']:.3f} % |")
     return lines
 
 
-def _calculix_section() -> list[str]:
-    c = run(_CCX, 6.0, 0.3, 0.3, 0.7)
-    return ["", "## CalculiX on the same discretisation", "",
+def _calculix_section(h: float) -> list[str]:
+    c = run(_CCX, h, 0.3, 0.3, 0.7)
+    return ["", "## CalculiX on the same discretisation (library path)", "",
             f"The default half mesh mirrored into the whole rod ({c['dofs_whole']} DOFs; our half model solves "
             f"the same discretisation exactly: largest difference {c['half_vs_whole']:.1e} of max |C_F|). ccx "
             f"(C3D10, `*RIGID BODY` ball, three `*STEP`s for C_F only) {c['t_ccx_s']:.1f} s; rodlab "
-            f"{c['t_ours_solve_s']:.1f} s for all six load cases on the half model ({c['dofs']} DOFs), "
-            f"{c['t_whole_solve_s']:.1f} s on the whole mesh: "
+            f"{c['t_ours_solve_s']:.2f} s for all six load cases on the half model ({c['dofs']} DOFs), "
+            f"{c['t_whole_solve_s']:.2f} s on the whole mesh: "
             f"{c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x faster for three load cases, "
             f"{2 * c['t_ccx_s'] / c['t_ours_solve_s']:.1f}x for the six; largest difference in C_F "
-            f"{100 * c['max_rel_diff']:.3f} %.", ""]
+            f"{100 * c['max_rel_diff']:.3f} %. The command with its imports and a fresh process: "
+            f"[fea_vs_calculix](fea_vs_calculix.md).", ""]
 
 
 def _frame_section() -> list[str]:
@@ -215,20 +211,20 @@ def _machine_section(speed0: float) -> list[str]:
 
 
 def main() -> int:
-    from rodlab.core.fileio import atomic_write_text
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from pages import write_page
     lines = ["# Benchmark: FEA", "",
              f"`python benchmarks/bench_fea.py` on {platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}, {time.strftime('%Y-%m-%d')}.", ""]
     machine_check()                                   # the first call in a process is slower
     speed0 = machine_check()
-    # the rows first (the reference's large runs leave memory the next runs must fetch again)
-    measured = _measure_rows()
-    ref, ra, rb = _reference()
-    lines += _solid_section(_errors(measured, ref), ra, rb)
-    lines += _calculix_section() + _frame_section() + _machine_section(speed0)
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(OUT, "\n".join(lines + NOTES))
-    print("\n".join(lines))
+    h = _default_size()
+    # the rows first (the reference's large run leaves memory the next runs must fetch again)
+    measured = _measure_rows(h)
+    ref, order, finest = _reference(h, measured)
+    lines += _solid_section(_errors(measured, ref), h, order, finest)
+    lines += _calculix_section(h) + _frame_section() + _machine_section(speed0)
+    write_page(OUT, lines, NOTES)
     return 0
 
 

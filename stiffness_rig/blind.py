@@ -193,13 +193,14 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod="rod1", wide: boo
             _decoy(path, rng)
             truth_effects = []
             expected = "consistent|unexplained"
+        outside = None
         if kind == "oolib":
-            out_of_library(path, rng, noise, variants)
+            outside = out_of_library(path, rng, noise, variants)
             expected = "unexplained"
         if variants and kind == "single" and rng.random() < draws["variants_decoy"]:   # beside a bumped hold
             _decoy(path, rng)
             kind = "single+decoy"
-        truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise,
+        truth = {"kind": kind, "effects": truth_effects, "expected_verdict": expected, "noise_mm": noise, "outside": outside,
                  "protocol": {"axes": list(proto.axes), "repeats": proto.repeats, "masses": list(proto.masses),
                               "hold_s": proto.hold_s, "rate_Hz": proto.rate_Hz, "gap_s": proto.gap_s}}
         (out / f"case{i:03d}.truth.json").write_text(json.dumps(truth, indent=1))

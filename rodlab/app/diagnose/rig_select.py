@@ -5,7 +5,9 @@ Beam search over term subsets with bounded least squares from the Gram matrix (:
 diagnosers' one selection routine (:mod:`.search`); a larger model replaces the current one only under the
 acceptance rule shared with the campaign diagnosis (:mod:`.criteria`: delta BIC <= -10 with the known noise,
 the likelihood-ratio p <= 1e-3, the leave-one-repeat-out prediction error drops); every term must change the
-readings of a series by at least ``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test.
+readings of a series by at least ``PTP_MIN`` noise SDs and stay off its physical bounds; a final drop-one test,
+swaps, and a term that contains a simpler one of another effect is reduced to it unless its extra parameters pass
+the acceptance rule.
 Creep's time constant is refined continuously (:func:`refine_tau`). The gauge zero of each series is projected
 out (:func:`demean`).
 """
@@ -136,6 +138,41 @@ class _RigSpace:
             self.cur = without(j)
             self.cur_rss = self.ls.fit(self.cur)[1]
         self.cur = _swap(self.library, self.ls, self.cur, self.sigma, self.n, self.groups, self.k_of)
+        self.cur = _nested_simpler(self.library, self.ls, self.cur, self.sigma, self.n, self.groups)
+
+
+def _spans(X: np.ndarray, Y: np.ndarray) -> bool:
+    """Whether the columns of ``Y`` lie in the span of those of ``X`` (to round-off)."""
+    coef = np.linalg.lstsq(X, Y, rcond=None)[0]
+    return bool(np.linalg.norm(Y - X @ coef) <= 1e-8 * max(np.linalg.norm(Y), 1e-300))
+
+
+def _nested_simpler(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups) -> tuple:
+    """Replace a term that contains a simpler term of another effect (its columns span the other's: a joint
+    spring on pipe I has pipe I's torsion as its torsion part) by that simpler term, unless its extra parameters
+    pass the test a new term must pass (delta BIC <= -10, likelihood-ratio p <= 1e-3): the data then say no more
+    than the simpler physics. (The plain-BIC swaps keep an extra parameter that gains ~ln n in chi-square.)"""
+    _, cur_rss = ls.fit(cur)
+    changed = True
+    while changed:
+        changed = False
+        for j in cur:
+            t, rest = library[j], tuple(i for i in cur if i != j)
+            for i, u in enumerate(library):
+                if (u.effect == t.effect or i in cur or u.n_params >= t.n_params or not compatible(library, rest, i)
+                        or not _spans(t.X, u.X)):
+                    continue
+                key = tuple(sorted(rest + (i,)))
+                c, rss = ls.fit(key)
+                dk = t.n_params - u.n_params
+                if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
+                        and _admissible(library, ls, key, c, sigma, groups)):
+                    log.info("nested: %s -> %s", t.label, u.label)
+                    cur, cur_rss, changed = key, rss, True
+                    break
+            if changed:
+                break
+    return cur
 
 
 def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of) -> tuple:

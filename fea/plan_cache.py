@@ -15,15 +15,12 @@ import hashlib
 import io
 import json
 import logging
-import os
 from functools import lru_cache
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.core.cache import cache_subfolder, prune, sources_digest
-from rodlab.core.fileio import atomic_write_bytes
+from rodlab.core.cache import cache_subfolder, code_digest, store, touch
 
 from .solver import SolverBackend, available_backend, node_ordering
 from .stiffness_assembly import AssemblyPlan, assembly_plan
@@ -48,13 +45,7 @@ def plan_for(basis, backend: str | None = None) -> AssemblyPlan:
 
 @lru_cache(maxsize=1)
 def _code_and_versions() -> str:
-    h = hashlib.sha256(sources_digest(__name__).encode())
-    for dist in ("numpy", "scikit-fem", "mkl"):
-        try:
-            h.update(f"{dist} {metadata.version(dist)}".encode())
-        except metadata.PackageNotFoundError:
-            h.update(f"{dist} ?".encode())
-    return h.hexdigest()
+    return code_digest(__name__, dists=("numpy", "scikit-fem", "mkl"))
 
 
 class PlanCache:
@@ -102,10 +93,7 @@ class PlanCache:
         if not _fits(plan, basis):
             log.warning("assembly plan cache %s does not fit the mesh: made again", path)
             return None
-        try:
-            os.utime(path)                                 # recently used: pruned last
-        except OSError:                                    # a read-only cache still serves
-            pass
+        touch(path)
         return plan
 
     def _write(self, path: Path, plan: AssemblyPlan) -> None:
@@ -113,11 +101,7 @@ class PlanCache:
         order = plan.node_order if plan.node_order is not None else np.zeros(0, dtype=np.int64)
         np.savez(buf, brow=plan.brow, bcol=plan.bcol, local=plan.local, slot=plan.slot, node_order=order,
                  upper=np.array(plan.upper))
-        try:
-            atomic_write_bytes(path, buf.getvalue())
-            prune(self.folder, "*.npz", MAX_BYTES)
-        except OSError as e:                              # a read-only home: the run goes on uncached
-            log.warning("assembly plan cache %s not written (%s)", path, e)
+        store(path, buf.getvalue(), "*.npz", MAX_BYTES, "assembly plan")
 
 
 def _fits(plan: AssemblyPlan, basis) -> bool:

@@ -20,14 +20,12 @@ import os
 import pickle
 import sys
 from functools import lru_cache
-from importlib import metadata
 from pathlib import Path
 
-from rodlab.core.cache import cache_subfolder, prune, sources_digest
+from rodlab.core.cache import cache_subfolder, code_digest, store, touch
 from rodlab.core.design import RodDesign
 from rodlab.core.design_io import design_to_dict
 from rodlab.core.fem_mesh import RodMesh
-from rodlab.core.fileio import atomic_write_bytes
 
 __all__ = ["MeshCache", "MESH_REVISION", "MAX_BYTES", "cache_folder"]
 
@@ -52,13 +50,7 @@ def _code_and_versions() -> str:
     """The SHA-256 of the geometry package's and the mesher's core modules' sources, and the versions of the
     packages a mesh is made and pickled with."""
     core = Path(sys.modules[RodMesh.__module__].__file__).resolve().parent
-    h = hashlib.sha256(sources_digest(__name__, tuple(core / name for name in _CORE_SOURCES)).encode())
-    for dist in ("gmsh", "scikit-fem", "numpy"):
-        try:
-            h.update(f"{dist} {metadata.version(dist)}".encode())
-        except metadata.PackageNotFoundError:
-            h.update(f"{dist} ?".encode())
-    return h.hexdigest()
+    return code_digest(__name__, tuple(core / name for name in _CORE_SOURCES), ("gmsh", "scikit-fem", "numpy"))
 
 
 class MeshCache:
@@ -105,20 +97,8 @@ class MeshCache:
         if not isinstance(rm, RodMesh):
             log.warning("mesh cache %s holds no rod mesh: meshing again", path)
             return None
-        try:
-            os.utime(path)                                 # recently used: pruned last
-        except OSError:                                    # a read-only cache still serves
-            pass
+        touch(path)
         return rm
 
     def _write(self, path: Path, rm: RodMesh) -> None:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            atomic_write_bytes(path, pickle.dumps(rm, protocol=pickle.HIGHEST_PROTOCOL))
-            self._prune()
-        except OSError as e:                              # a read-only home: the run goes on uncached
-            log.warning("mesh cache %s not written (%s)", path, e)
-
-    def _prune(self) -> None:
-        """Newest first, delete what is beyond :data:`MAX_BYTES` (another process may prune at the same time)."""
-        prune(self.folder, "*.pickle", MAX_BYTES)
+        store(path, pickle.dumps(rm, protocol=pickle.HIGHEST_PROTOCOL), "*.pickle", MAX_BYTES, "mesh")

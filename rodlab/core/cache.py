@@ -7,11 +7,16 @@ prunes it to a size limit, least recently used first (:func:`prune`).
 from __future__ import annotations
 
 import hashlib
+import logging
 import os
 import sys
 from pathlib import Path
 
-__all__ = ["CACHE_ENV", "cache_root", "cache_subfolder", "prune", "sources_digest"]
+from .fileio import atomic_write_bytes
+
+__all__ = ["CACHE_ENV", "cache_root", "cache_subfolder", "prune", "sources_digest", "code_digest", "store", "touch"]
+
+log = logging.getLogger(__name__)
 
 #: the environment variable naming the cache folder (``off`` turns caching off)
 CACHE_ENV = "RODLAB_CACHE_DIR"
@@ -62,3 +67,35 @@ def sources_digest(module_name: str, extra: tuple[Path, ...] = ()) -> str:
     for f in sorted(here.glob("*.py")) + list(extra):
         h.update(f.name.encode() + f.read_bytes())
     return h.hexdigest()
+
+
+def code_digest(module_name: str, extra: tuple[Path, ...] = (), dists: tuple[str, ...] = ()) -> str:
+    """:func:`sources_digest` and the installed versions of the distributions ``dists`` (``?`` for one not
+    installed): what a cache entry made by that code with those packages depends on."""
+    from importlib import metadata
+    h = hashlib.sha256(sources_digest(module_name, extra).encode())
+    for dist in dists:
+        try:
+            h.update(f"{dist} {metadata.version(dist)}".encode())
+        except metadata.PackageNotFoundError:
+            h.update(f"{dist} ?".encode())
+    return h.hexdigest()
+
+
+def store(path: Path, data: bytes, pattern: str, max_bytes: int, what: str) -> None:
+    """Write the cache entry ``path`` atomically, then prune its folder's ``pattern`` files to ``max_bytes``; a
+    folder that cannot be written (a read-only home) leaves the run uncached, with a warning naming ``what``."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(path, data)
+        prune(path.parent, pattern, max_bytes)
+    except OSError as e:
+        log.warning("%s cache %s not written (%s)", what, path, e)
+
+
+def touch(path: Path) -> None:
+    """Mark the cache entry ``path`` recently used (pruned last); a read-only cache still serves."""
+    try:
+        os.utime(path)
+    except OSError:
+        pass

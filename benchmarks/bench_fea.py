@@ -120,7 +120,8 @@ def _reference(h: float, measured: list):
     """C_F and C_g extrapolated from graded solves at h / 1.5 and h / 2.25 with the order observed on h, h / 1.5,
     h / 2.25 (C_F's diagonal; at least 1, as benchmarks/fea_error_estimate.py): (reference, order, finest run)."""
     import numpy as np
-    runs = [measured[0][1], measured[3][1], run(_SOLID, h / 2.25, 0.3, 0.3, 0.7, 1)]
+    by_args = {args: r for (_, r), (_, args) in zip(measured, _rows(h))}
+    runs = [by_args[(h, 0.3, 0.3, 0.7, 1)], by_args[(h / 1.5, 0.3, 0.3, 0.7, 1)], run(_SOLID, h / 2.25, 0.3, 0.3, 0.7, 1)]
     d1 = np.diag(np.array(runs[1]["C_F"]) - np.array(runs[0]["C_F"]))
     d2 = np.diag(np.array(runs[2]["C_F"]) - np.array(runs[1]["C_F"]))
     observed = float(np.mean(np.log(np.abs(d1 / d2)) / np.log(1.5)))

@@ -91,7 +91,8 @@ def main(rounds: int = 2, sizes: tuple = ()) -> int:
              f"`python benchmarks/fea_vs_calculix.py {rounds}` on {platform.machine()}, {os.cpu_count()} cores, "
              f"Python {platform.python_version()}, {time.strftime('%Y-%m-%d')}. The command as a user runs it "
              "(defaults: six load cases on the half mesh and the recovery error estimate from that solve; a fresh "
-             "process, imports included; first with an empty cache, then rerun with the mesh and its assembly plan cached) against "
+             "process, imports included; first with an empty cache, then rerun with the mesh and its assembly plan "
+             "cached) against "
              "CalculiX 2 threads on the whole mesh the half one mirrors into (three force cases, C_F only; its deck, "
              "run and output timed, not the meshing), alternated.", "",
              "| mesh | round | `rodlab fea rod1 --model solid` [s] | rerun, mesh and plan cached [s] | CalculiX [s] | "

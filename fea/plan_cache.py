@@ -3,11 +3,13 @@ block pattern (rod 1#'s default half mesh: ~0.05 s of a ~0.8 s command).
 
 A plan (:class:`~fea.stiffness_assembly.AssemblyPlan`: the fill-reducing node ordering and where every element
 block goes in the ordered, triangular matrix) depends only on the mesh's connectivity and the solver backend. The
-key is the SHA-256 of the mesh's own hash (nodes and connectivity), the node and element counts, the backend,
-the sources of the ``fea`` package, the versions of NumPy, scikit-fem and the MKL wheel (PARDISO orders the
-graph), and :data:`PLAN_REVISION`. An entry is a NumPy ``.npz`` of plain arrays, read without pickle; one that
-cannot be read or does not fit the basis is made again and replaced. Files are written atomically; the folder
-(``plans`` in :func:`rodlab.core.cache.cache_root`) is pruned to :data:`MAX_BYTES`, least recently used first.
+key is the SHA-256 of the mesh's own hash (nodes and connectivity), the node and element counts, the backend, the
+sources of the ``fea`` package, the versions of NumPy, scikit-fem, the MKL wheel and scikit-sparse (PARDISO's or
+CHOLMOD's METIS orders the graph), and :data:`PLAN_REVISION`. An entry is a NumPy ``.npz`` of plain arrays, read
+without pickle and only when the user owns it; before it is used it is checked against the mesh, block by block
+(:func:`_fits`): one that cannot be read or is not this mesh's plan is made again and replaced. Files are written
+atomically; the folder (``plans`` in :func:`rodlab.core.cache.cache_root`) is pruned to :data:`MAX_BYTES`, least
+recently used first.
 """
 from __future__ import annotations
 
@@ -15,6 +17,7 @@ import hashlib
 import io
 import json
 import logging
+import os
 from functools import lru_cache
 from pathlib import Path
 
@@ -45,7 +48,7 @@ def plan_for(basis, backend: str | None = None) -> AssemblyPlan:
 
 @lru_cache(maxsize=1)
 def _code_and_versions() -> str:
-    return code_digest(__name__, dists=("numpy", "scikit-fem", "mkl"))
+    return code_digest(__name__, dists=("numpy", "scikit-fem", "mkl", "scikit-sparse"))
 
 
 class PlanCache:
@@ -64,6 +67,9 @@ class PlanCache:
         return hashlib.sha256(text.encode()).hexdigest()
 
     def plan(self, basis, mesh_sha256: str, backend: str | None = None) -> AssemblyPlan:
+        """The plan of ``basis`` (the mesh whose hash is ``mesh_sha256``) for ``backend`` (default: the one that
+        runs here): from the cache when an entry there is this mesh's plan (:func:`_fits`), else made and
+        stored."""
         backend = SolverBackend(backend or available_backend()).value
         if self.folder is None or not mesh_sha256:
             return plan_for(basis, backend)
@@ -80,6 +86,9 @@ class PlanCache:
 
     def _read(self, path: Path, basis) -> AssemblyPlan | None:
         try:
+            if path.stat().st_uid != os.getuid():
+                log.warning("assembly plan cache %s belongs to another user: not read, made again", path)
+                return None
             with np.load(path, allow_pickle=False) as z:
                 arrays = {k: z[k] for k in (*_ARRAYS, "node_order", "upper")}
             order = arrays["node_order"]
@@ -105,13 +114,28 @@ class PlanCache:
 
 
 def _fits(plan: AssemblyPlan, basis) -> bool:
-    """Whether ``plan`` can assemble on ``basis``: its shapes, and every index in range (a damaged file whose
-    arrays still load must not scatter out of bounds)."""
+    """Whether ``plan`` is the plan of ``basis``'s mesh: integer arrays of the right shapes, the node order a
+    permutation, the stored blocks distinct, row-major sorted (and on or above the diagonal with ``upper``), and
+    every element block (a, b) it scatters pointing at the block (node a, node b) of the new numbering. A damaged
+    or foreign file whose arrays still load is then never used (~10 ms on rod 1#)."""
     nloc, ne = basis.element_dofs.shape
-    nb, n = plan.n_blocks, basis.N
+    n, nb = basis.N, plan.n_blocks
     m = nloc * (nloc + 1) // 2 if plan.upper else nloc * nloc
-    return (plan.slot.shape == (ne, m) and bool(((plan.slot >= 0) & (plan.slot < nb)).all())
-            and bool(((plan.local >= 0) & (plan.local < nloc * nloc)).all())
-            and bool(((plan.brow >= 0) & (plan.brow < n) & (plan.bcol >= 0) & (plan.bcol < n)).all())
-            and bool((np.diff(plan.brow) >= 0).all())
-            and (plan.node_order is None or np.array_equal(np.sort(plan.node_order), np.arange(n))))
+    arrays = (plan.brow, plan.bcol, plan.local, plan.slot) + (() if plan.node_order is None else (plan.node_order,))
+    if (not all(np.issubdtype(a.dtype, np.integer) for a in arrays) or plan.slot.shape != (ne, m)
+            or plan.brow.ndim != 1 or nb == 0):
+        return False
+    if plan.node_order is not None and not np.array_equal(np.sort(plan.node_order), np.arange(n)):
+        return False
+    if not (((plan.slot >= 0) & (plan.slot < nb)).all() and ((plan.local >= 0) & (plan.local < nloc * nloc)).all()
+            and ((plan.brow >= 0) & (plan.brow < n) & (plan.bcol >= 0) & (plan.bcol < n)).all()):
+        return False
+    key = plan.brow.astype(np.int64) * n + plan.bcol
+    if not (np.diff(key) > 0).all() or (plan.upper and not (plan.brow <= plan.bcol).all()):
+        return False
+    new = np.arange(n) if plan.node_order is None else np.argsort(plan.node_order)    # old -> new node
+    ed = new[basis.element_dofs.T]                                                    # (ne, nloc), new numbering
+    local = plan.local.astype(np.intp)
+    a = np.take_along_axis(ed, local // nloc, axis=1)
+    b = np.take_along_axis(ed, local % nloc, axis=1)
+    return bool(np.array_equal(plan.brow[plan.slot], a) and np.array_equal(plan.bcol[plan.slot], b))

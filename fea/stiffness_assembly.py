@@ -80,12 +80,21 @@ class AssemblyPlan:
     slot: np.ndarray
 
     def __post_init__(self) -> None:
-        nb = self.brow.shape[0]
-        if self.bcol.shape != (nb,) or self.slot.ndim != 2 or self.local.shape != self.slot.shape:
+        fix = "make a plan with assembly_plan(basis, node_order, upper)"
+        arrays = {"brow": self.brow, "bcol": self.bcol, "local": self.local, "slot": self.slot}
+        if self.node_order is not None:
+            arrays["node_order"] = self.node_order
+        wrong = [k for k, a in arrays.items() if not np.issubdtype(np.asarray(a).dtype, np.integer)]
+        if wrong:
+            raise ValueError(f"AssemblyPlan: {', '.join(wrong)} must be integer arrays; {fix}")
+        nb = self.brow.shape[0] if self.brow.ndim == 1 else -1
+        if nb < 0 or self.bcol.shape != (nb,) or self.slot.ndim != 2 or self.local.shape != self.slot.shape:
             raise ValueError(f"AssemblyPlan: brow and bcol must have one shape (nb,), local and slot one shape "
-                             f"(ne, m); got {self.brow.shape}, {self.bcol.shape}, {self.local.shape}, {self.slot.shape}")
+                             f"(ne, m); got {self.brow.shape}, {self.bcol.shape}, {self.local.shape}, {self.slot.shape}; "
+                             f"{fix}")
         if self.node_order is not None and self.node_order.shape != (self.n_nodes,):
-            raise ValueError(f"AssemblyPlan: node_order must have shape ({self.n_nodes},), got {self.node_order.shape}")
+            raise ValueError(f"AssemblyPlan: node_order must have shape ({self.n_nodes},), got {self.node_order.shape}; "
+                             f"{fix}")
 
     @property
     def n_blocks(self) -> int:
@@ -139,13 +148,19 @@ def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, plan: AssemblyPl
     per 1000 elements): on a VM whose host backs guest memory lazily, fresh memory costs ~3-4 s per GB, so
     small chunks are faster as well as leaner.
     """
-    plan = assembly_plan(basis, node_order, upper) if plan is None else plan
+    if plan is None:
+        plan = assembly_plan(basis, node_order, upper)
+    elif node_order is not None or upper:
+        raise ValueError("assemble_stiffness: give a plan or node_order / upper, not both (the plan has its own); "
+                         "make the plan with assembly_plan(basis, node_order, upper)")
     nloc = len(basis.basis)
     dx = basis.dx                                                  # (ne, nq)
     ne, nq = dx.shape
-    if plan.n_nodes != basis.N or plan.slot.shape[0] != ne or int(plan.local.max(initial=0)) >= nloc * nloc:
-        raise ValueError(f"assemble_stiffness: the plan is for {plan.n_nodes} nodes and {plan.slot.shape[0]} elements, "
-                         f"the basis has {basis.N} nodes, {ne} elements of {nloc}: make the plan with assembly_plan(basis)")
+    widths = (nloc * (nloc + 1) // 2,) if plan.upper else (nloc * nloc,)
+    if plan.n_nodes != basis.N or plan.slot.shape[0] != ne or plan.slot.shape[1] not in widths:
+        raise ValueError(f"assemble_stiffness: the plan is for {plan.n_nodes} nodes and {plan.slot.shape[0]} elements "
+                         f"of {plan.slot.shape[1]} blocks, the basis has {basis.N} nodes, {ne} elements of {nloc} nodes: "
+                         f"make the plan with assembly_plan(basis)")
     # gradients as [e, (k, a), q]: the element's gradient products are one (3 nloc x nq) @ (nq x 3 nloc) product
     G = np.stack([basis.basis[a][0].grad for a in range(nloc)], axis=1).transpose(2, 0, 1, 3).reshape(ne, 3 * nloc, nq)
     every = plan.local.shape[1] == nloc * nloc

@@ -64,8 +64,9 @@ def test_the_plan_cache_reads_what_it_wrote_and_remakes_a_damaged_entry(tmp_path
     basis = scalar_basis(mesh)
     cache = PlanCache(tmp_path)
     made = cache.plan(basis, "mesh-sha", "superlu")
-    again = PlanCache(tmp_path).plan(basis, "mesh-sha", "superlu")
-    assert cache.misses == 1 and len(list(tmp_path.glob("*.npz"))) == 1
+    reader = PlanCache(tmp_path)
+    again = reader.plan(basis, "mesh-sha", "superlu")
+    assert cache.misses == 1 and reader.hits == 1 and reader.misses == 0 and len(list(tmp_path.glob("*.npz"))) == 1
     for name in ("brow", "bcol", "local", "slot"):
         assert np.array_equal(getattr(made, name), getattr(again, name))
     assert again.node_order is None and not again.upper              # SuperLU: the whole matrix as numbered
@@ -87,7 +88,9 @@ def test_the_plan_cache_reads_what_it_wrote_and_remakes_a_damaged_entry(tmp_path
     entry.write_bytes(b"not an npz")
     c3 = PlanCache(tmp_path)
     assert np.array_equal(c3.plan(basis, "mesh-sha", "superlu").slot, fresh.slot) and c3.misses == 1
-    assert PlanCache(tmp_path).plan(basis, "mesh-sha", "superlu") is not None
+    c4 = PlanCache(tmp_path)
+    c4.plan(basis, "mesh-sha", "superlu")
+    assert c4.hits == 1                                                 # the replaced entry serves again
     # off: nothing is written
     off = PlanCache(None)
     off.plan(basis, "third-sha", "superlu")
@@ -99,3 +102,37 @@ def test_the_plan_cache_folder_follows_the_environment(monkeypatch, tmp_path):
     assert PlanCache().folder == tmp_path / "plans"
     monkeypatch.setenv("RODLAB_CACHE_DIR", "off")
     assert PlanCache().folder is None
+
+
+def test_an_ordered_triangular_plan_round_trips_and_a_wrong_one_is_refused(tmp_path, monkeypatch):
+    """The plan PARDISO gets (node ordering, upper block triangle, 55 blocks per element) comes back from the cache
+    and assembles the same K; a plan of the right shapes and ranges whose slots were swapped, or another user's
+    file, is not used."""
+    from rodlab.fea import plan_cache
+    mesh = _curved_box()
+    basis = scalar_basis(mesh)
+    C = _uniform(mesh, get_material("cfrp"))
+    order = np.random.default_rng(5).permutation(basis.N)
+    monkeypatch.setattr(plan_cache, "node_ordering", lambda b, backend: order)
+    made = PlanCache(tmp_path).plan(basis, "sha", "pardiso")
+    assert made.upper and made.local.shape[1] == 55 and np.array_equal(made.node_order, order)
+    reader = PlanCache(tmp_path)
+    again = reader.plan(basis, "sha", "pardiso")
+    assert reader.hits == 1
+    K1, K2 = assemble_stiffness(basis, C, plan=made), assemble_stiffness(basis, C, plan=again)
+    assert (K1 != K2).nnz == 0
+    entry = next(tmp_path.glob("*.npz"))
+    with np.load(entry) as z:
+        arrays = dict(z)
+    arrays["slot"] = arrays["slot"].copy()
+    arrays["slot"][0, [0, 1]] = arrays["slot"][0, [1, 0]]               # in range, but the wrong blocks
+    np.savez(entry, **arrays)
+    swapped = PlanCache(tmp_path)
+    assert np.array_equal(swapped.plan(basis, "sha", "pardiso").slot, made.slot) and swapped.misses == 1
+    import os
+    monkeypatch.setattr(os, "getuid", lambda: entry.stat().st_uid + 1)
+    foreign = PlanCache(tmp_path)
+    foreign.plan(basis, "sha", "pardiso")
+    assert foreign.hits == 0 and foreign.misses == 1
+    with pytest.raises(ValueError, match="not both"):
+        assemble_stiffness(basis, C, plan=made, upper=True)

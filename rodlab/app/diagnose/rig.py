@@ -108,6 +108,28 @@ def _exact_library(data: RigSamples, C_sim: np.ndarray, C_other: np.ndarray, pla
             + outside_hypotheses(data, ctx.base))
 
 
+def _select_on_the_rod_found(data, C_sim, places, tool, prep, r0, sigma, max_terms, folds, passes: int = 3):
+    """Select with the rig's effects (friction, tare, creep, non-linearity, ...) acting on the rod as found: the
+    friction of a rod whose pipe I twists more also twists it more (left out, a joint spring took that part). The
+    first pass builds every column on ``C_sim``; while the structural terms chosen differ from those the columns
+    were built on, the others are rebuilt on ``C_sim`` plus the chosen ones and selected again. The first
+    self-consistent pass is kept (none in ``passes``: the first). Returns (library, its SubsetLS, the chosen
+    indices, their coefficients, the residual sum of squares)."""
+    runs, C_other, built_on = [], C_sim, ()
+    for _ in range(passes):
+        library = [prep(t) for t in _exact_library(data, C_sim, C_other, places, tool)]
+        library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data,
+                                               C_other[data.comp, data.axis] * data.F, r0, prep, sigma, max_terms, folds)
+        coef, rss = ls.fit(S)
+        runs.append((library, ls, S, coef, rss))
+        chosen = tuple(sorted((str(library[j].effect), str(library[j].location)) for j in S if library[j].dC))
+        if chosen == built_on:
+            return runs[-1]
+        C_found = _structural_compliance(C_sim, library, S, coef)
+        C_other, built_on = (C_sim, ()) if C_found is None else (C_found, chosen)
+    return runs[0]
+
+
 def _structural_compliance(C_sim: np.ndarray, library, S: tuple, coef: np.ndarray) -> np.ndarray | None:
     """``C_sim`` plus the chosen structural terms' increments, or None when none was chosen."""
     C, k, found = np.array(C_sim, float), 0, False
@@ -134,19 +156,8 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
-    C_other = np.asarray(sim.C_F, float)
-    for second in (False, True):
-        library = [prep(t) for t in _exact_library(data, np.asarray(sim.C_F, float), C_other, places, tool)]
-        library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data,
-                                               C_other[data.comp, data.axis] * data.F, r0, prep, sigma, max_terms, folds)
-        coef, rss = ls.fit(S)
-        # the rig's effects (friction, tare, creep, non-linearity, ...) act on the rod as it is: once a
-        # structural term is found, build their columns on the compliance it gives and select once more (the
-        # friction of a rod whose pipe I twists more also twists it more; left out, a joint took that part)
-        C_found = _structural_compliance(sim.C_F, library, S, coef)
-        if second or C_found is None:
-            break
-        C_other = C_found
+    library, ls, S, coef, rss = _select_on_the_rod_found(data, np.asarray(sim.C_F, float), places, tool, prep, r0,
+                                                        sigma, max_terms, folds)
     findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))

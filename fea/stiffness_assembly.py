@@ -24,7 +24,7 @@ def scalar_element(mesh):
 
 def scalar_basis(mesh, intorder: int | None = None):
     """The scalar Lagrange basis of the mesh's order (P2 on MeshTet2, P1 on MeshTet1)."""
-    from .mapping import lagrange_basis
+    from .mapping import lagrange_basis  # heavy: skfem (fea.mapping imports scikit-fem, ~208 ms)
     elem = scalar_element(mesh)
     return lagrange_basis(mesh, elem, intorder=(3 if elem.maxdeg == 2 else 2) if intorder is None else intorder)
 

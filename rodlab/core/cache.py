@@ -10,6 +10,7 @@ import hashlib
 import logging
 import os
 import sys
+from importlib import metadata
 from pathlib import Path
 
 from .fileio import atomic_write_bytes
@@ -72,7 +73,6 @@ def sources_digest(module_name: str, extra: tuple[Path, ...] = ()) -> str:
 def code_digest(module_name: str, extra: tuple[Path, ...] = (), dists: tuple[str, ...] = ()) -> str:
     """:func:`sources_digest` and the installed versions of the distributions ``dists`` (``?`` for one not
     installed): what a cache entry made by that code with those packages depends on."""
-    from importlib import metadata
     h = hashlib.sha256(sources_digest(module_name, extra).encode())
     for dist in dists:
         try:

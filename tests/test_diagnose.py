@@ -397,6 +397,22 @@ def test_pipe_i_torsion_with_friction_is_torsion_not_a_joint(tmp_path, seed):
     assert t.parameters["s_torsion_rad_per_Nm"] == pytest.approx(1.8e-6, rel=0.2)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_load_nonlinearity_on_top_of_a_tare_needs_no_compliance_scale(tmp_path, seed):
+    """A load non-linearity acts on the load as it is, the missing dead load included: C (F + T)(1 + beta |F + T|)
+    holds a cross term 2 beta T |F| C, a compliance scale of 1 + 2 beta T g0 / 10 N, which a compliance_scale
+    took when the columns were built on the recorded load. They are now rebuilt on the load as found."""
+    path, sim, design = _stiff_rod_recording(tmp_path, {"nonlinearity": {"beta_per_10N": -0.06},
+                                                        "tare": {"tare_kg": 0.3}}, seed=seed,
+                                             axes=("y", "z", "x"), repeats=4, hold_s=8.0)
+    diag, _ = diagnose_rig(read_recording(path), sim, design, accuracy="exact")
+    named = sorted((str(f.effect.value), f.location) for f in diag.findings)
+    assert named == [("nonlinearity", None), ("tare", None)], diag.summary()
+    f = {str(f.effect.value): f for f in diag.findings}
+    assert f["nonlinearity"].parameters["beta_per_10N"] == pytest.approx(-0.06, rel=0.05)
+    assert f["tare"].parameters["tare_kg"] == pytest.approx(0.3, rel=0.05)
+
+
 def test_a_bumped_hold_is_still_set_aside_beside_a_nonlinear_gauge(tmp_path):
     """The gauge's finding is modelled physics, not lack of fit: one hold bumped by 20 um is still named and
     left out (the rule was switched off by any unexplained finding)."""

@@ -28,14 +28,15 @@ import numpy as np
 from ...core.compliance import RodCompliance
 from ...core.enums import FindingKind, Method, Subject, Verdict
 from ...core.errors import RodlabError
-from rodlab.stiffness_rig.effects import RIG_EFFECTS, HypothesisContext, joint_places
+from rodlab.stiffness_rig.effects import joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
 from .envelope import Envelope, design_of, envelope_for
 from .report import Diagnosis, Finding
-from .rig_outside import OUTSIDE, outside_hypotheses
-from .rig_select import demean, subset_ls
-from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings, within_hold_noise
+from .rig_as_found import select_as_found
+from .rig_outside import OUTSIDE
+from .rig_select import demean
+from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings, within_hold_noise
 from .rig_tolerant import diagnose_tolerant
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places", "within_hold_noise"]
@@ -99,50 +100,6 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
     return diag, model
 
 
-def _exact_library(data: RigSamples, C_sim: np.ndarray, C_other: np.ndarray, places: dict, tool: np.ndarray) -> list:
-    """The structural effects' hypotheses on the simulated compliance ``C_sim`` (their parameters are changes of
-    it), the other effects' and the gauges' on ``C_other`` (the rod as found so far)."""
-    ctx_sim = HypothesisContext(C_sim, C_sim[data.comp, data.axis] * data.F, places, tool)
-    ctx = HypothesisContext(C_other, C_other[data.comp, data.axis] * data.F, places, tool)
-    return ([h for m in RIG_EFFECTS.values() for h in m.hypotheses(data, ctx_sim if m.structural else ctx)]
-            + outside_hypotheses(data, ctx.base))
-
-
-def _select_on_the_rod_found(data, C_sim, places, tool, prep, r0, sigma, max_terms, folds, passes: int = 3):
-    """Select with the rig's effects (friction, tare, creep, non-linearity, ...) acting on the rod as found: the
-    friction of a rod whose pipe I twists more also twists it more (left out, a joint spring took that part). The
-    first pass builds every column on ``C_sim``; while the structural terms chosen differ from those the columns
-    were built on, the others are rebuilt on ``C_sim`` plus the chosen ones and selected again. The first
-    self-consistent pass is kept (none in ``passes``: the first). Returns (library, its SubsetLS, the chosen
-    indices, their coefficients, the residual sum of squares)."""
-    runs, C_other, built_on = [], C_sim, ()
-    for _ in range(passes):
-        library = [prep(t) for t in _exact_library(data, C_sim, C_other, places, tool)]
-        library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data,
-                                               C_other[data.comp, data.axis] * data.F, r0, prep, sigma, max_terms, folds)
-        coef, rss = ls.fit(S)
-        runs.append((library, ls, S, coef, rss))
-        chosen = tuple(sorted((str(library[j].effect), str(library[j].location)) for j in S if library[j].dC))
-        if chosen == built_on:
-            return runs[-1]
-        C_found = _structural_compliance(C_sim, library, S, coef)
-        C_other, built_on = (C_sim, ()) if C_found is None else (C_found, chosen)
-    return runs[0]
-
-
-def _structural_compliance(C_sim: np.ndarray, library, S: tuple, coef: np.ndarray) -> np.ndarray | None:
-    """``C_sim`` plus the chosen structural terms' increments, or None when none was chosen."""
-    C, k, found = np.array(C_sim, float), 0, False
-    for j in S:
-        t = library[j]
-        if t.dC:
-            for v, dC in zip(coef[k:k + t.X.shape[1]], t.dC):
-                C = C + v * dC
-            found = True
-        k += t.X.shape[1]
-    return C if found else None
-
-
 def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, RigModelFit]:
     """Screen, attribute, locate and explain one recording against a simulation that is the rod (the steps of the
     module docstring)."""
@@ -156,8 +113,8 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
-    library, ls, S, coef, rss = _select_on_the_rod_found(data, np.asarray(sim.C_F, float), places, tool, prep, r0,
-                                                        sigma, max_terms, folds)
+    library, ls, S, coef, rss = select_as_found(data, np.asarray(sim.C_F, float), places, tool, prep, r0, sigma,
+                                                max_terms, folds)
     findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))

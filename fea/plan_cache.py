@@ -17,13 +17,12 @@ import hashlib
 import io
 import json
 import logging
-import os
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from rodlab.core.cache import cache_subfolder, code_digest, store, touch
+from rodlab.core.cache import cache_subfolder, code_digest, load, store
 
 from .solver import SolverBackend, available_backend, node_ordering
 from .stiffness_assembly import AssemblyPlan, assembly_plan
@@ -85,25 +84,7 @@ class PlanCache:
         return made
 
     def _read(self, path: Path, basis) -> AssemblyPlan | None:
-        try:
-            if path.stat().st_uid != os.getuid():
-                log.warning("assembly plan cache %s belongs to another user: not read, made again", path)
-                return None
-            with np.load(path, allow_pickle=False) as z:
-                arrays = {k: z[k] for k in (*_ARRAYS, "node_order", "upper")}
-            order = arrays["node_order"]
-            plan = AssemblyPlan(int(basis.N), order if order.size else None, bool(arrays["upper"]),
-                                *(arrays[k] for k in _ARRAYS))
-        except FileNotFoundError:
-            return None
-        except Exception as e:                            # truncated, foreign or of another shape: make it again
-            log.warning("assembly plan cache %s unreadable (%s): made again", path, e)
-            return None
-        if not _fits(plan, basis):
-            log.warning("assembly plan cache %s does not fit the mesh: made again", path)
-            return None
-        touch(path)
-        return plan
+        return load(path, lambda p: _unpack(p, basis.N), lambda plan: _fits(plan, basis), "assembly plan")
 
     def _write(self, path: Path, plan: AssemblyPlan) -> None:
         buf = io.BytesIO()
@@ -111,6 +92,14 @@ class PlanCache:
         np.savez(buf, brow=plan.brow, bcol=plan.bcol, local=plan.local, slot=plan.slot, node_order=order,
                  upper=np.array(plan.upper))
         store(path, buf.getvalue(), "*.npz", MAX_BYTES, "assembly plan")
+
+
+def _unpack(path: Path, n_nodes: int) -> AssemblyPlan:
+    """The plan stored in ``path`` (plain arrays, no pickle)."""
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in (*_ARRAYS, "node_order", "upper")}
+    order = arrays["node_order"]
+    return AssemblyPlan(int(n_nodes), order if order.size else None, bool(arrays["upper"]), *(arrays[k] for k in _ARRAYS))
 
 
 def _fits(plan: AssemblyPlan, basis) -> bool:

@@ -16,13 +16,12 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
 import pickle
 import sys
 from functools import lru_cache
 from pathlib import Path
 
-from rodlab.core.cache import cache_subfolder, code_digest, store, touch
+from rodlab.core.cache import cache_subfolder, code_digest, load, store
 from rodlab.core.design import RodDesign
 from rodlab.core.design_io import design_to_dict
 from rodlab.core.fem_mesh import RodMesh
@@ -51,6 +50,11 @@ def _code_and_versions() -> str:
     packages a mesh is made and pickled with."""
     core = Path(sys.modules[RodMesh.__module__].__file__).resolve().parent
     return code_digest(__name__, tuple(core / name for name in _CORE_SOURCES), ("gmsh", "scikit-fem", "numpy"))
+
+
+def _unpickle(path: Path):
+    with open(path, "rb") as f:
+        return pickle.load(f)
 
 
 class MeshCache:
@@ -83,22 +87,7 @@ class MeshCache:
         return rm
 
     def _read(self, path: Path) -> RodMesh | None:
-        try:
-            if path.stat().st_uid != os.getuid():
-                log.warning("mesh cache %s belongs to another user: not read, meshing again", path)
-                return None
-            with open(path, "rb") as f:
-                rm = pickle.load(f)
-        except FileNotFoundError:
-            return None
-        except Exception as e:                            # a truncated or foreign file: mesh again, replace it
-            log.warning("mesh cache %s unreadable (%s): meshing again", path, e)
-            return None
-        if not isinstance(rm, RodMesh):
-            log.warning("mesh cache %s holds no rod mesh: meshing again", path)
-            return None
-        touch(path)
-        return rm
+        return load(path, _unpickle, lambda rm: isinstance(rm, RodMesh), "mesh")
 
     def _write(self, path: Path, rm: RodMesh) -> None:
         store(path, pickle.dumps(rm, protocol=pickle.HIGHEST_PROTOCOL), "*.pickle", MAX_BYTES, "mesh")

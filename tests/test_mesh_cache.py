@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 
 import numpy as np
 import pytest
@@ -79,9 +80,9 @@ def test_a_read_only_entry_still_serves_and_another_users_entry_is_not_read(tmp_
 
     def no_utime(*a, **k):
         raise PermissionError("read-only")
-    monkeypatch.setattr(mesh_cache.os, "utime", no_utime)
+    monkeypatch.setattr(os, "utime", no_utime)
     assert cache(d, size_mm=30.0, grading=None, half=True).is_half and len(calls) == 1     # a hit all the same
-    monkeypatch.setattr(mesh_cache.os, "getuid", lambda: entry.stat().st_uid + 1)
+    monkeypatch.setattr(os, "getuid", lambda: entry.stat().st_uid + 1)
     cache(d, size_mm=30.0, grading=None, half=True)
     assert len(calls) == 2                                                       # not another user's pickle
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .fileio import atomic_write_bytes
 
-__all__ = ["CACHE_ENV", "cache_root", "cache_subfolder", "prune", "sources_digest", "code_digest", "store", "touch"]
+__all__ = ["CACHE_ENV", "cache_root", "cache_subfolder", "prune", "sources_digest", "code_digest", "load", "store"]
 
 log = logging.getLogger(__name__)
 
@@ -93,9 +93,25 @@ def store(path: Path, data: bytes, pattern: str, max_bytes: int, what: str) -> N
         log.warning("%s cache %s not written (%s)", what, path, e)
 
 
-def touch(path: Path) -> None:
-    """Mark the cache entry ``path`` recently used (pruned last); a read-only cache still serves."""
+def load(path: Path, read, fits, what: str):
+    """The cache entry ``path`` as ``read(path)`` gives it, if ``fits(entry)``; else None: missing, another user's
+    (not read: a shared folder), unreadable, or not fitting (each but the first with a warning naming ``what``).
+    An entry kept is marked recently used (pruned last; a read-only cache still serves)."""
+    try:
+        if path.stat().st_uid != os.getuid():
+            log.warning("%s cache %s belongs to another user: not read, made again", what, path)
+            return None
+        entry = read(path)
+    except FileNotFoundError:
+        return None
+    except Exception as e:                            # a truncated or foreign file: made again and replaced
+        log.warning("%s cache %s unreadable (%s): made again", what, path, e)
+        return None
+    if not fits(entry):
+        log.warning("%s cache %s does not fit: made again", what, path)
+        return None
     try:
         os.utime(path)
     except OSError:
         pass
+    return entry

@@ -24,13 +24,13 @@ from .rig_outside import outside_hypotheses
 from .rig_select import subset_ls
 from .rig_steps import select_refining_creep
 
-__all__ = ["select_as_found", "exact_library"]
+__all__ = ["select_as_found"]
 
 #: at most this many selections: the first self-consistent one is kept, else the first
 PASSES = 3
 
 
-def exact_library(data: RigSamples, C_sim: np.ndarray, C_other: np.ndarray, places: dict, tool: np.ndarray,
+def _library(data: RigSamples, C_sim: np.ndarray, C_other: np.ndarray, places: dict, tool: np.ndarray,
                   data_other: RigSamples | None = None) -> list:
     """The structural effects' hypotheses on the simulated compliance ``C_sim`` and the samples ``data``, the
     other effects' and the gauges' on ``C_other`` and ``data_other`` (the rod and the loads as found so far;
@@ -50,7 +50,7 @@ def select_as_found(data: RigSamples, C_sim: np.ndarray, places: dict, tool: np.
     coefficients, the residual sum of squares)."""
     runs, C_other, data_other, built_on = [], C_sim, data, ()
     for _ in range(PASSES):
-        library = [prep(t) for t in exact_library(data, C_sim, C_other, places, tool, data_other)]
+        library = [prep(t) for t in _library(data, C_sim, C_other, places, tool, data_other)]
         library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data_other,
                                                C_other[data.comp, data.axis] * data_other.F, r0, prep, sigma,
                                                max_terms, folds)

@@ -151,28 +151,31 @@ def _nested_simpler(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, gro
     """Replace a term that contains a simpler term of another effect (its columns span the other's: a joint
     spring on pipe I has pipe I's torsion as its torsion part) by that simpler term, unless its extra parameters
     pass the test a new term must pass (delta BIC <= -10, likelihood-ratio p <= 1e-3): the data then say no more
-    than the simpler physics. (The plain-BIC swaps keep an extra parameter that gains ~ln n in chi-square.)"""
+    than the simpler physics. (The plain-BIC swaps keep an extra parameter that gains ~ln n in chi-square.) Each
+    step lowers the parameter count, so this ends."""
     _, cur_rss = ls.fit(cur)
-    changed = True
-    while changed:
-        changed = False
-        for j in cur:
-            t, rest = library[j], tuple(i for i in cur if i != j)
-            for i, u in enumerate(library):
-                if (u.effect == t.effect or i in cur or u.n_params >= t.n_params or not compatible(library, rest, i)
-                        or not _spans(t.X, u.X)):
-                    continue
-                key = tuple(sorted(rest + (i,)))
-                c, rss = ls.fit(key)
-                dk = t.n_params - u.n_params
-                if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-                        and _admissible(library, ls, key, c, sigma, groups)):
-                    log.info("nested: %s -> %s", t.label, u.label)
-                    cur, cur_rss, changed = key, rss, True
-                    break
-            if changed:
-                break
+    while (step := _simpler_term(library, ls, cur, cur_rss, sigma, n, groups)) is not None:
+        cur, cur_rss = step
     return cur
+
+
+def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: float, n: int, groups):
+    """The first reduction of :func:`_nested_simpler` of the model ``cur``: (the new model, its residual sum of
+    squares), or None."""
+    for j in cur:
+        t, rest = library[j], tuple(i for i in cur if i != j)
+        for i, u in enumerate(library):
+            if (u.effect == t.effect or i in cur or u.n_params >= t.n_params or not compatible(library, rest, i)
+                    or not _spans(t.X, u.X)):
+                continue
+            key = tuple(sorted(rest + (i,)))
+            c, rss = ls.fit(key)
+            dk = t.n_params - u.n_params
+            if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
+                    and _admissible(library, ls, key, c, sigma, groups)):
+                log.info("nested: %s -> %s", t.label, u.label)
+                return key, rss
+    return None
 
 
 def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of) -> tuple:

@@ -223,7 +223,8 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
             gmsh.option.setNumber("General.Terminal", 0)
-            gmsh.option.setNumber("General.NumThreads", 1)
+            gmsh.option.setNumber("General.NumThreads", 1)        # parallel 2-D meshing is not repeatable
+            gmsh.option.setNumber("Geometry.OCCParallel", 1)      # the fragment in parallel: ~0.125 -> 0.08 s
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.model.add(f"rod_{design.name}")
             if solids is None:

@@ -18,7 +18,6 @@ import numpy as np
 
 from rodlab.core.calc import calc_rod_compliance
 from rodlab.core.joint_springs import declared_joint_compliance
-from rodlab.core.massprops import part_mass_properties
 from rodlab.core.progress import stages
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.design import RodDesign
@@ -28,6 +27,7 @@ from rodlab.core.fem_mesh import RodMesh
 from .errors import FeaError
 from .frame import CALIBRATION, FRAME_REVISION, asme_bend_flexibility, frame_compliance, frame_range_notes
 from .joints import JointFit, joint_frame_compliance
+from .mesh_request import DEFAULT_GRADING, MAX_DOFS, default_solid_size_mm, estimated_dofs, solid_mesh_request
 from .solid import solve_compliance
 
 __all__ = ["Mesher", "FeaModel", "compute_compliance", "solid_compliance", "default_solid_size_mm", "RICHARDSON_ORDER",
@@ -37,33 +37,10 @@ log = logging.getLogger(__name__)
 
 #: Observed convergence order of the tip compliance on curved-P2 rod meshes (rod 1#: 3.0-3.5).
 RICHARDSON_ORDER = 3.0
-#: Element size at the section changes in the tubes as a fraction of the size, growth per mm of distance, and
-#: the bend's size as a fraction of the size (see ``geometry.mesh_rod``).
-DEFAULT_GRADING = (0.3, 0.3, 0.7)
-
-
 class Mesher(Protocol):
     """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it."""
 
     def __call__(self, design: RodDesign, *, size_mm: float, grading, half: bool) -> RodMesh: ...
-
-
-def default_solid_size_mm(design: RodDesign) -> float:
-    """3 x the thinnest wall: graded down to 1.2 x wall at the section changes."""
-    walls = [design.pipe_I.wall_mm, design.pipe_II.wall_mm] + ([design.bend.wall_mm] if design.has_bend else [])
-    return 3.0 * min(walls)
-
-
-#: largest solid model attempted (CHOLMOD fill ~12 GB at this size on 24 GB machines)
-MAX_DOFS = 1.5e6
-
-
-def estimated_dofs(design: RodDesign, size_mm: float, grading=DEFAULT_GRADING, half: bool = True) -> float:
-    """DOFs of the curved-P2 mesh, estimated from the parts' volume (empirical: within ~15 % on rods 1#-6# at
-    the default grading, ~22 vol / h^3 for a uniform half mesh); the whole rod has twice as many."""
-    vol = sum(m.mass_kg / (design.material_of(p).density_kg_m3 * 1e-9) for p, m in part_mass_properties(design).items())
-    per_volume = 117.0 if grading else 21.6
-    return per_volume * vol / size_mm ** 3 * (1.0 if half else 2.0)
 
 
 def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
@@ -106,20 +83,14 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
     runs (None: made anew).
     """
     how = _estimate_kind(error_estimate)
-    h = default_solid_size_mm(design) if size_mm is None else float(size_mm)
-    if not (np.isfinite(h) and h > 0):
-        raise FeaError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
-    est = estimated_dofs(design, h, grading, symmetry)
-    if est > MAX_DOFS:
-        raise FeaError(f"the solid model of {design.name!r} at size {h:g} mm would need ~{est / 1e6:.1f} M DOFs "
-                       f"(limit {MAX_DOFS / 1e6:.1f} M, ~{est / 1e6 * 12:.0f} GB): the walls are thin for the rod's "
-                       f"volume. Use a larger --size (error grows) or --model frame", key="size")
+    request = solid_mesh_request(design, size_mm, grading, symmetry)
+    h = request.size_mm
     richardson = how is ErrorEstimate.RICHARDSON
     names = ["mesh", "solve"] + (["mesh (coarse)", "solve (coarse)"] if richardson else [])
     with stages(f"solid FEA of {design.name}", names) as bar:
         with bar.step("mesh"):
             t0 = time.perf_counter()
-            rm = mesher(design, size_mm=h, grading=grading, half=symmetry)
+            rm = mesher(design, **request.kwargs)
             t_mesh = time.perf_counter() - t0
         with bar.step("solve"):
             res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,

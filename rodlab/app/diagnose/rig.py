@@ -36,7 +36,8 @@ from .report import Diagnosis, Finding
 from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
 from .rig_select import demean
-from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings, within_hold_noise
+from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings
+from .rig_noise import within_hold_noise
 from .rig_tolerant import diagnose_tolerant
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places", "within_hold_noise"]

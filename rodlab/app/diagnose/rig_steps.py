@@ -17,7 +17,7 @@ from .report import Finding
 from .rig_outside import OUTSIDE
 from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
 
-__all__ = ["RigModelFit", "within_hold_noise", "Prep", "select_refining_creep", "term_findings", "LackOfFit",
+__all__ = ["RigModelFit", "Prep", "select_refining_creep", "term_findings", "LackOfFit",
            "lack_of_fit"]
 
 log = logging.getLogger(__name__)
@@ -76,22 +76,6 @@ class RigModelFit:
         for term in self.terms:
             yield term, self.coef[k:k + term.X.shape[1]]
             k += term.X.shape[1]
-
-
-def within_hold_noise(data: RigSamples) -> float:
-    """Pooled SD of readings about a straight line in time within each (hold, component)."""
-    ss, dof = 0.0, 0
-    keys = data.step * 4 + data.comp
-    for k in np.unique(keys):
-        m = keys == k
-        if m.sum() < 4:
-            continue
-        t, y = data.t_hold[m], data.y[m]
-        A = np.column_stack([np.ones_like(t), t - t.mean()])
-        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-        ss += float(((y - A @ coef) ** 2).sum())
-        dof += m.sum() - 2
-    return float(np.sqrt(ss / max(dof, 1)))
 
 
 def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, sigma: float, max_terms: int,

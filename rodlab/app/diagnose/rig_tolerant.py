@@ -23,7 +23,8 @@ from .rig_form import judge_linear
 from .rig_linear import Projector, fit_linear, linear_columns, measured_entries
 from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import demean, subset_ls
-from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings, within_hold_noise
+from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings
+from .rig_noise import within_hold_noise
 
 __all__ = ["diagnose_tolerant"]
 

@@ -1,0 +1,115 @@
+"""The noise of one gauge reading, from the recording itself: the yardstick of every rig finding.
+
+1. **Within the holds:** the pooled SD of the readings about a straight line in time in each (hold, gauge) with at
+   least 3 readings (a drift or creep inside a hold is not noise).
+2. **Between repeats**, when the holds give fewer than :data:`MIN_DOF` degrees of freedom (1-3 readings per hold):
+   the scatter of the hold means of the same gauge, load axis, mass and branch over the repeats (a one-way
+   analysis of variance; friction and drift between repeats make it an upper bound: fewer findings, not false
+   ones).
+3. **The gauges' quantisation** as a floor: readings on a grid of step ``q`` (a 1 um dial gauge) are at least
+   ``q / sqrt(12)`` uncertain, even where every reading of a hold is the same.
+
+A recording that allows none of these is refused with what to record instead.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rodlab.core.errors import RodlabError
+from rodlab.stiffness_rig.samples import RigSamples
+
+__all__ = ["NoiseEstimate", "reading_noise", "within_hold_noise", "MIN_DOF"]
+
+#: degrees of freedom of the within-hold estimate below which the repeats are used too
+MIN_DOF = 10
+
+
+@dataclass(frozen=True)
+class NoiseEstimate:
+    """``sigma_mm``: SD of one reading [mm]; ``dof``: its degrees of freedom; ``source``: how it was estimated
+    (``within holds``, ``within holds and between repeats``, with ``, quantisation floor`` when the gauges'
+    step set it)."""
+
+    sigma_mm: float
+    dof: int
+    source: str
+
+
+def within_hold_noise(data: RigSamples) -> float:
+    """The SD of one reading [mm] (:func:`reading_noise`)."""
+    return reading_noise(data).sigma_mm
+
+
+def reading_noise(data: RigSamples) -> NoiseEstimate:
+    """Estimate the noise of one reading of ``data`` (the module's three steps). Raises
+    :class:`~rodlab.core.errors.RodlabError` when the recording cannot show it."""
+    ss, dof = _within_holds(data)
+    source = "within holds"
+    if dof < MIN_DOF:
+        ss_r, dof_r = _between_repeats(data)
+        if dof_r:
+            ss, dof, source = ss + ss_r, dof + dof_r, "within holds and between repeats"
+    if dof == 0:
+        raise RodlabError("the recording cannot show the gauges' noise: no hold has 3 or more readings and no hold "
+                          "is repeated at the same mass; record at least 3 readings per hold (e.g. 10 Hz over a few "
+                          "seconds) or repeat the series")
+    sigma = float(np.sqrt(ss / dof))
+    floor = _quantum(data.y) / np.sqrt(12.0)
+    if floor > sigma:
+        sigma, source = floor, source + ", quantisation floor"
+    if not sigma > 0:
+        raise RodlabError("every reading of each hold is the same and the readings show no gauge step: the noise "
+                          "cannot be estimated; check that the displacement columns are the gauges' readings")
+    return NoiseEstimate(sigma, int(dof), source)
+
+
+def _within_holds(data: RigSamples) -> tuple[float, int]:
+    """Residual sum of squares and degrees of freedom of a line in time in each (hold, gauge) of >= 3 readings."""
+    ss, dof = 0.0, 0
+    keys = data.step * 4 + data.comp
+    for k in np.unique(keys):
+        m = keys == k
+        if m.sum() < 3:
+            continue
+        t, y = data.t_hold[m], data.y[m]
+        A = np.column_stack([np.ones_like(t), t - t.mean()])
+        coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+        ss += float(((y - A @ coef) ** 2).sum())
+        dof += int(m.sum()) - 2
+    return ss, dof
+
+
+def _between_repeats(data: RigSamples) -> tuple[float, int]:
+    """Between-hold sum of squares (each hold mean weighted by its readings) and degrees of freedom of the holds
+    that repeat one (gauge, load axis and sign, mass, branch); the series' zeroing holds left out."""
+    keep = ~data.reference
+    if not keep.any():
+        return 0.0, 0
+    d = data.subset(keep)
+    group = np.unique(np.column_stack([d.comp, d.axis, d.sign, np.round(d.mass, 6), d.unload]),
+                      axis=0, return_inverse=True)[1].ravel()
+    ss, dof = 0.0, 0
+    for g in np.unique(group):
+        m = group == g
+        steps, inv, counts = np.unique(d.step[m], return_inverse=True, return_counts=True)
+        if steps.size < 2:
+            continue
+        means = np.bincount(inv.ravel(), weights=d.y[m]) / counts
+        grand = float((means * counts).sum() / counts.sum())
+        ss += float((counts * (means - grand) ** 2).sum())
+        dof += steps.size - 1
+    return ss, dof
+
+
+def _quantum(y: np.ndarray) -> float:
+    """The gauges' reading step [mm] when the readings lie on a grid (0 when they do not)."""
+    u = np.unique(np.round(np.asarray(y, float), 9))
+    steps = np.diff(u)
+    steps = steps[steps > 1e-9]
+    if steps.size == 0:
+        return 0.0
+    q = float(steps.min())
+    k = u / q
+    return q if np.mean(np.abs(k - np.round(k)) < 0.02) > 0.99 else 0.0

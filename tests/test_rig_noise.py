@@ -1,0 +1,48 @@
+"""rodlab/app/diagnose/rig_noise.py: the noise of one reading from the recording itself, with 1-3 readings per hold
+and with quantised gauges (helper-22's recordings of 1-3 readings per hold stopped the diagnosis with a
+ZeroDivisionError)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rodlab import calc_rod_compliance, resolve_design
+from rodlab.app.diagnose import diagnose_rig
+from rodlab.app.diagnose.rig_noise import reading_noise
+from rodlab.core.errors import RodlabError
+from rodlab.stiffness_rig import read_recording
+from rodlab.stiffness_rig.model import LoadSchedule, RigModel
+from rodlab.stiffness_rig.samples import rig_samples
+from rodlab.stiffness_rig.simulate import simulate_recording
+
+DESIGN = resolve_design("rod1")
+SIM = calc_rod_compliance(DESIGN)
+
+
+def _record(tmp_path, noise, resolution, hold_s, rate, repeats=4, name="r"):
+    model = RigModel(SIM.C_F, {}, noise_mm=noise, resolution_mm=resolution, seed=3)
+    sched = LoadSchedule(repeats=repeats, hold_s=hold_s, rate_Hz=rate)
+    return read_recording(simulate_recording(model, sched, tmp_path / f"{name}.rig.csv", rod=DESIGN.name))
+
+
+@pytest.mark.parametrize("hold_s, rate", [(6.0, 10.0), (0.25, 4.0), (0.1, 10.0)])
+def test_the_noise_is_found_with_many_or_one_reading_per_hold(tmp_path, hold_s, rate):
+    rec = _record(tmp_path, 0.001, 0.0, hold_s, rate)
+    est = reading_noise(rig_samples(rec))
+    per_hold = np.bincount(np.asarray(rec.step)).max()
+    assert est.sigma_mm == pytest.approx(0.001, rel=0.3), (per_hold, est)
+    assert ("between repeats" in est.source) == (per_hold < 3)
+    diag, _ = diagnose_rig(rec, SIM, DESIGN, accuracy="exact")   # and the diagnosis runs on it
+    assert diag.verdict.value == "consistent"
+
+
+def test_quantised_gauges_set_a_floor(tmp_path):
+    """Noise far below a 1 um dial: the readings of a hold are mostly equal; the noise is at least step / sqrt 12."""
+    est = reading_noise(rig_samples(_record(tmp_path, 0.00002, 0.001, 2.0, 10.0)))
+    assert est.sigma_mm == pytest.approx(0.001 / np.sqrt(12)) and "quantisation" in est.source
+
+
+def test_a_recording_that_cannot_show_its_noise_is_refused(tmp_path):
+    rec = _record(tmp_path, 0.001, 0.0, 0.15, 10.0, repeats=1)   # 2 readings per hold, nothing repeated
+    with pytest.raises(RodlabError, match="at least 3 readings per hold"):
+        reading_noise(rig_samples(rec))

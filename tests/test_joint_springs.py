@@ -150,3 +150,19 @@ def test_validate_names_the_format_line_for_joints_in_a_v1_file(tmp_path):
     bad.write_text(src + "\n[joints.ring_1]\ns_bend_rad_per_Nm = 2e-6\n")
     run = subprocess.run([sys.executable, "-m", "rodlab", "validate", str(bad)], capture_output=True, text=True)
     assert run.returncode != 0 and 'format = "rodlab.rod/2"' in run.stdout + run.stderr
+
+
+def test_update_accepts_a_freed_joint_of_a_group_and_a_freed_modulus_for_a_scale():
+    """A diagnosis that cannot tell two places apart names the group (``pipe_II|ring_1``); freeing either joint is
+    what its own refusal suggests, and must be accepted (it was refused again); a compliance scale is what a freed
+    modulus E fits, a torsion what a freed G fits."""
+    from types import SimpleNamespace as F
+
+    from rodlab.app.cli.cmd_update import _explained_by_keys
+    group = F(effect="joint_compliance", location="pipe_II|ring_1")
+    assert _explained_by_keys(group, ["joints.pipe_II.s_bend_rad_per_Nm"])
+    assert _explained_by_keys(group, ["joints.ring_1.s_bend_rad_per_Nm"])
+    assert not _explained_by_keys(group, ["joints.flange_clamp.s_bend_rad_per_Nm", "materials.CFRP.E_GPa"])
+    assert _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.E_GPa"])
+    assert not _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.G_GPa"])
+    assert _explained_by_keys(F(effect="torsion_compliance", location="pipe_I"), ["materials.CFRP.G_GPa"])

@@ -84,6 +84,16 @@ class UpdateResult:
     success: bool
     message: str
     p_after: float = 1.0        #: chance of a chi-square this large after the fit if the freed keys explain it
+    prior_sd: np.ndarray | None = None   #: each key's prior standard deviation [key units] (its tolerance), shape=(k,)
+
+    def beyond_tolerance(self, factor: float = 3.0) -> list[tuple[str, float, float]]:
+        """(key, relative change, relative prior SD) of the keys other than joints that moved more than ``factor``
+        prior SDs: the part is not what the design says (a wrong material, the wrong file), not a tolerance."""
+        if self.prior_sd is None:
+            return []
+        return [(k, float(x / v0 - 1), float(sd / v0)) for k, v0, x, sd in zip(self.keys, self.nominal, self.x,
+                                                                               self.prior_sd)
+                if not _is_joint(k) and v0 and abs(x - v0) > factor * sd]
 
     @property
     def explains(self) -> bool:
@@ -174,7 +184,8 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     insep = _inseparable(design, keys, res.x, J[:len(E)], fn, E)
     p_after = float(chdtrc(max(len(E) - len(keys), 1), float(z1 @ z1)))
     return UpdateResult(keys, nominal, res.x, sd, corr, insep, E, measured.C / C0, measured.C / C1,
-                        float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message), p_after)
+                        float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message), p_after,
+                        prior_sd)
 
 
 def _collinearity(A: np.ndarray, a: int) -> tuple[float, list]:

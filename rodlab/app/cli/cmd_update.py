@@ -52,21 +52,33 @@ def _default_free(design) -> list[str]:
     return keys
 
 
-def _measured(path: str, design, keys):
-    """The measured entries from a compliance file or, for a recording, its diagnosed linear part."""
+def _explained_by_keys(finding, keys) -> bool:
+    """Whether a structural finding is what the freed ``keys`` fit: a joint freed at its place (or at one of the
+    places a group names, ``pipe_II|ring_1``), a compliance scale with a modulus E freed, a torsion with a shear
+    modulus G freed."""
+    if finding.effect == "joint_compliance":
+        freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
+        return bool(set((finding.location or "").split("|")) & freed)
+    suffix = {"compliance_scale": ".E_GPa", "torsion_compliance": ".G_GPa"}[finding.effect]
+    return any(k.startswith("materials.") and k.endswith(suffix) for k in keys)
+
+
+def _measured(path: str, design, keys, model: str):
+    """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
+    ``model`` the keys are fitted through)."""
     from ...core.sensitivity import STRUCTURAL_ENTRIES
     from ..diagnose.envelope import MEAS_RELATIVE
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
         from ..diagnose import diagnose_rig
-        C = model_compliance("frame")(design)
-        sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea", {"model": "frame"})
+        C = model_compliance(model)(design)
+        sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
+                                        {"model": model})
         diag, model = diagnose_rig(read_recording(path), sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
-        freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
         local = [f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings
-                 if f.effect in _STRUCTURAL and not (f.effect == "joint_compliance" and f.location in freed)]
-        joints = [f"joints.{f.location.split('|')[0]}.s_bend_rad_per_Nm" for f in diag.findings
+                 if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys)]
+        joints = [" or ".join(f"joints.{p}.s_bend_rad_per_Nm" for p in f.location.split("|")) for f in diag.findings
                   if f.effect == "joint_compliance" and f.location]
         if local:
             raise RodlabError(f"{path}: the recording shows {', '.join(local)} beyond the design's tolerances "
@@ -98,7 +110,7 @@ def cmd_update(args: argparse.Namespace) -> int:
         raise RodlabError("the design has no file to start from", key="design")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
         design_value(design, key)
-    measured, causes = _measured(args.measured, design, keys)
+    measured, causes = _measured(args.measured, design, keys, args.model)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
               "compliance; see `rodlab diagnose --rig`)")
@@ -131,6 +143,10 @@ def _print(res, model: str) -> None:
     for a, b, c, how in res.inseparable:
         print(f"  the measurement cannot separate {a} from {b} (together they move the measured entries alike, "
               f"multiple correlation {c:.3f}; the priors split them): to separate them, {how}")
+    for k, change, sd in res.beyond_tolerance():
+        print(f"  note: {k} moved {change:+.1%}, more than 3x its tolerance ({sd:.1%}): the part is not what the design "
+              "says (another material or lay-up, a units slip, the wrong rod's data); check it before using the "
+              "as-built design")
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

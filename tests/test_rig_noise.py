@@ -46,3 +46,19 @@ def test_a_recording_that_cannot_show_its_noise_is_refused(tmp_path):
     rec = _record(tmp_path, 0.001, 0.0, 0.15, 10.0, repeats=1)   # 2 readings per hold, nothing repeated
     with pytest.raises(RodlabError, match="at least 3 readings per hold"):
         reading_noise(rig_samples(rec))
+
+
+@pytest.mark.parametrize("r, cautioned", [(0.1, True), (10.0, True), (2.0, False)])
+def test_a_compliance_scale_beyond_any_material_is_fitted_and_cautioned(tmp_path, r, cautioned):
+    """A units slip (masses in g, readings in um) or another rod's data: r is fitted, not clipped at 0.2 / 5 (it was
+    reported as r = 0.2 with a 95 % interval that excluded the truth), and the finding says what to check."""
+    from rodlab.app.diagnose.wording import caution
+    model = RigModel(SIM.C_F, {"compliance_scale": {"r": r}}, noise_mm=0.0006, resolution_mm=0.0001, seed=5)
+    rec = read_recording(simulate_recording(model, LoadSchedule(repeats=3, hold_s=4.0), tmp_path / "s.rig.csv",
+                                            rod=DESIGN.name))
+    diag, _ = diagnose_rig(rec, SIM, DESIGN)
+    f = next(f for f in diag.findings if f.effect == "compliance_scale")
+    lo, hi = f.intervals["r"]
+    assert lo <= r <= hi and hi - lo < max(0.5 * r, 0.5)
+    assert bool(caution(f)) == cautioned and (not cautioned or "units" in caution(f))
+    assert ("caution: " in diag.summary()) == cautioned

@@ -94,6 +94,11 @@ class RigEffectModel(EffectSchema):
         return x
 
     # -- diagnosis ---------------------------------------------------------------------------------------------
+    def caution(self, p: dict) -> str | None:
+        """A warning for fitted parameters ``p`` that no rod or rig of this kind has (a units slip, another
+        rod's data), or None."""
+        return None
+
     def hypotheses(self, data, ctx: HypothesisContext) -> list[Hypothesis]:
         """Candidate terms of this effect for the samples ``data`` (:class:`~rodlab.stiffness_rig.RigSamples`)."""
         return []

@@ -8,7 +8,10 @@ from rodlab.core.hypothesis import Hypothesis, ParamSpec
 from ..errors import RigError
 from .base import RigEffectModel
 
-__all__ = ["ComplianceScale"]
+__all__ = ["ComplianceScale", "PLAUSIBLE_R"]
+
+#: factors a modulus off (a wrong laminate, a wrong material) gives; beyond them a units slip is likelier
+PLAUSIBLE_R = (0.2, 5.0)
 
 
 class ComplianceScale(RigEffectModel):
@@ -28,8 +31,17 @@ class ComplianceScale(RigEffectModel):
     def compliance(self, C, p, places):
         return C * float(p["r"])
 
+    def caution(self, p: dict) -> str | None:
+        r = float(p.get("r", 1.0))
+        if PLAUSIBLE_R[0] <= r <= PLAUSIBLE_R[1]:
+            return None
+        return (f"r = {r:.3g} is beyond what any material or lay-up gives ({PLAUSIBLE_R[0]:g}-{PLAUSIBLE_R[1]:g}): check the "
+                "recording's units (mass_kg in kg, not g; disp_*_mm in mm, not um) and that the simulation is this "
+                "rod's")
+
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        return [Hypothesis(self.effect, None, ["r"], ctx.base[:, None], [-0.8], [4.0],
+        # r from 0.001 to 1000: a units slip (g for kg, um for mm) is fitted and named, not clipped
+        return [Hypothesis(self.effect, None, ["r"], ctx.base[:, None], [-0.999], [999.0],
                            "every member uniformly softer or stiffer than simulated (a modulus off) scales all "
                            "compliance components by one factor r", dC=[np.asarray(ctx.C_sim, float)],
                            report_offset=[1.0])]

@@ -69,7 +69,7 @@ class Diagnosis:
         return atomic_write_json(path, self.to_dict())
 
     def summary(self) -> str:
-        from .wording import confirmation, evidence_text   # cycle: wording imports Finding from this module
+        from .wording import caution, confirmation, evidence_text   # cycle: wording imports Finding from this module
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
         for i, f in enumerate(self.findings, 1):
@@ -82,5 +82,7 @@ class Diagnosis:
             lines.append(f"     {evidence_text(f)}")
             if ev.get("alternatives"):
                 lines.append("     the data fit about as well with: " + "; ".join(ev["alternatives"]))
+            if caution(f):
+                lines.append(f"     caution: {caution(f)}")
             lines.append(f"     {'to confirm' if self.subject == Subject.RIG else 'next step'}: {confirmation(f)}")
         return "\n".join(lines)

@@ -28,7 +28,7 @@ import numpy as np
 from ...core.compliance import RodCompliance
 from ...core.enums import FindingKind, Method, Subject, Verdict
 from ...core.errors import RodlabError
-from rodlab.stiffness_rig.effects import joint_places
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 
 from .envelope import Envelope, design_of, envelope_for
@@ -63,6 +63,23 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     data = rig_samples(rec)
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
+    diag, model = _without_a_stray_hold(data, sim, design, max_terms, env)
+    _add_cautions(diag)
+    return diag, model
+
+
+def _add_cautions(diag: Diagnosis) -> None:
+    """Each finding whose fitted parameters no rod or rig of its kind has gets the effect's caution
+    (``evidence["caution"]``, shown with the finding)."""
+    models = {e.value: m for e, m in RIG_EFFECTS.items()}
+    for f in diag.findings:
+        text = models[f.effect].caution(f.parameters) if f.effect in models else None
+        if text:
+            f.evidence["caution"] = text
+
+
+def _without_a_stray_hold(data, sim: RodCompliance, design, max_terms: int, env: Envelope):
+    """The diagnosis of ``data``, or of it without one hold far off all the others (see :func:`diagnose_rig`)."""
     diag, model = _diagnose(data, sim, design, max_terms, env)
     if not _lacks_fit(diag):
         return diag, model

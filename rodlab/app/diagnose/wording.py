@@ -20,7 +20,7 @@ from .report import Finding
 from .rig_outside import confirm_outside
 from .advice import remedy
 
-__all__ = ["explained_share", "certainty", "confirmation", "evidence_text", "form_resolution"]
+__all__ = ["explained_share", "certainty", "caution", "confirmation", "evidence_text", "form_resolution"]
 
 def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     """What would confirm a rig finding: the effect module's sentence (:mod:`rodlab.stiffness_rig.effects`), or
@@ -53,6 +53,11 @@ def certainty(f: Finding) -> str:
         level = "weak"
     cv = "" if cv_ok else ", and it does not predict held-out points better"
     return f"{level} (chance that noise alone gives this improvement: {chance}{cv})"
+
+
+def caution(f: Finding) -> str | None:
+    """The finding's caution: fitted parameters no rod or rig of its kind has (a units slip), or None."""
+    return f.evidence.get("caution") or None
 
 
 def confirmation(f: Finding) -> str:

@@ -164,7 +164,7 @@ def _calibration(src: Source) -> str:
 
 def _finding_rows(findings: list, subject: str) -> list[list]:
     from ..diagnose.report import Finding  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
-    from ..diagnose.wording import confirmation, evidence_text  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
+    from ..diagnose.wording import caution, confirmation, evidence_text  # heavy: the diagnosis loads scipy.optimize, ~0.6 s
     rows = []
     for f in findings:
         fi = Finding.from_dict(f)
@@ -172,7 +172,8 @@ def _finding_rows(findings: list, subject: str) -> list[list]:
                                                 if k in fi.intervals else "")
                            for k, v in fi.parameters.items() if isinstance(v, (int, float)))
         rows.append([f["effect"] + (f" at {f['location']}" if f["location"] else ""), params or "—",
-                     evidence_text(fi), fi.explanation, confirmation(fi)])
+                     evidence_text(fi), fi.explanation,
+                     (f"caution: {caution(fi)}; " if caution(fi) else "") + confirmation(fi)])
     return rows
 
 

@@ -164,9 +164,28 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
             fit.r_rod = eq21(fit, sim)
         except RigError as e:
             fit.success, fit.message = False, e.detail
+        else:
+            _check_plausible_r_rod(fit, rec, sim)
     if fit.success:
         fit.message = f"{len(lines)} lines fitted; noise {noise * 1e3:.2f} um per reading"
     return fit
+
+
+#: r_rod a rod can have against its own simulation (the paper's: 1.01-2.30); beyond it, a units slip is likelier
+PLAUSIBLE_R_ROD = (0.1, 10.0)
+
+
+def _check_plausible_r_rod(fit: "RigFit", rec: RigRecording, sim) -> None:
+    """An r_rod no rod has against its own simulation (a mass in g, readings in um, another rod's file) makes the
+    fit unusable, with what to check."""
+    lo, hi = PLAUSIBLE_R_ROD
+    if lo <= fit.r_rod <= hi:
+        return
+    fit.success = False
+    fit.message = (f"r_rod = {fit.r_rod:.3g}: the rod is {fit.r_rod:.3g} x as compliant as the simulation of rod "
+                   f"{sim.rod!r}, beyond any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units "
+                   "(mass_kg in kg, not g; disp_*_mm in mm, not um) and that --sim is this rod's (the recording says "
+                   f"rod {rec.rod!r}); nothing was written")
 
 
 def _check_load_response(lines: list, rec: RigRecording) -> None:

@@ -233,3 +233,38 @@ def test_a_strongly_tilted_gauge_on_a_stiff_rod_is_crosstalk_alone(tmp_path, eps
     assert [str(f.effect) for f in diag.findings] == ["crosstalk"]
     assert diag.findings[0].location == "sensor:z"
     assert diag.findings[0].parameters["eps_y_rad"] == pytest.approx(eps, rel=0.03)
+
+
+@pytest.mark.parametrize("accuracy", ["exact", None])
+def test_friction_whose_slide_lets_go_at_mass_0_is_friction_alone(tmp_path, accuracy):
+    """A rig whose slide lets go with the hanger off (no force at mass 0 after unloading) rather than staying stuck
+    (rodlab's own simulator): an independent simulator's recordings of it were named friction plus a tare or a
+    load hysteresis. The diagnosis tries both conventions."""
+    Ff = 0.4
+    rec_path = tmp_path / "stuck.rig.csv"
+    model = RigModel(SIM.C_F, {"friction": {"F_f_N": Ff}}, noise_mm=0.0006, resolution_mm=0.0, seed=11)
+    simulate_recording(model, LoadSchedule(repeats=4, hold_s=5.0), rec_path, rod=DESIGN.name)
+    rec = read_recording(rec_path)
+    # the slide released at every mass-0 hold after unloading: take the stuck friction's deflection out there
+    lines = rec_path.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    cols = lines[head].split(",")
+    out = lines[:head + 1]
+    for line in lines[head + 1:]:
+        c = line.split(",")
+        if float(c[cols.index("mass_kg")]) == 0 and c[cols.index("phase")] == "unload":
+            ax = c[cols.index("load_axis")]
+            j, sign = "xyz".index(ax[-1]), -1.0 if ax.startswith("-") else 1.0
+            for m, name in enumerate(("disp_x_mm", "disp_y_mm", "disp_z_mm")):
+                k = cols.index(name)
+                if c[k]:
+                    c[k] = f"{float(c[k]) - Ff * SIM.C_F[m, j] * sign:.7f}"
+        out.append(",".join(c))
+    released = tmp_path / "released.rig.csv"
+    released.write_text("\n".join(out) + "\n")
+    for path in (rec_path, released):
+        diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy=accuracy)
+        named = {f.effect for f in diag.findings} - {"model_form"}
+        assert named == {"friction"}, (path.name, diag.summary())
+        f = next(f for f in diag.findings if f.effect == "friction")
+        assert f.parameters["F_f_N"] == pytest.approx(Ff, rel=0.05)

@@ -124,3 +124,52 @@ def test_fig8_numbers_read_at_a_glance():
     assert format_pm(6.2792, 0.028, "um/N") == "6.279 +- 0.028 um/N"
     assert [format_zero(z) for z in (-4.2e-5, -0.006, 0.0123, 0.0, float("nan"))] == [
         "-0.042 g", "-6.0 g", "+12 g", "0 g", "n/a"]
+
+
+def _scaled_copy(src, dst, mass=1.0, disp=1.0, rod=None, bom=False):
+    """A copy of a recording with its masses and readings scaled (a units slip), another rod name, or a BOM."""
+    lines = src.read_text().splitlines()
+    out, header = [], None
+    for line in lines:
+        if line.startswith("#"):
+            out.append(f"# rod: {rod}" if rod and line.startswith("# rod:") else line)
+        elif header is None:
+            header = line.split(",")
+            out.append(line)
+        else:
+            cells = line.split(",")
+            for k, name in enumerate(header):
+                if cells[k] and (name == "mass_kg" or name.startswith("disp_")):
+                    cells[k] = repr(float(cells[k]) * (mass if name == "mass_kg" else disp))
+            out.append(",".join(cells))
+    dst.write_text(("\ufeff" if bom else "") + "\n".join(out) + "\n", encoding="utf-8")
+    return dst
+
+
+@pytest.mark.parametrize("mass, disp", [(1000.0, 1.0), (1.0, 1000.0)])
+def test_a_units_slip_is_refused_with_what_to_check(examples, sim, tmp_path, mass, disp):
+    """Masses in g or readings in um gave r_rod 0.001 (written silently) or an error about r_mn's schema bounds."""
+    import subprocess
+    import sys
+    bad = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "bad.rig.csv", mass, disp)
+    fit = fit_recording(read_recording(bad), sim)
+    assert not fit.success and "units" in fit.message and "mass_kg in kg" in fit.message
+    run = subprocess.run([sys.executable, "-m", "rodlab", "rig", "fit", str(bad), "--sim", str(examples / "rod1.compliance.json"),
+                          "-o", str(tmp_path / "out.json")], capture_output=True, text=True)
+    assert run.returncode != 0 and "units" in run.stderr and not (tmp_path / "out.json").exists()
+
+
+def test_another_rods_recording_is_warned_and_a_bom_is_read(examples, tmp_path):
+    import subprocess
+    import sys
+    other = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "o.rig.csv", rod="6#", bom=True)
+    assert read_recording(other).rod == "6#"
+    run = subprocess.run([sys.executable, "-m", "rodlab", "rig", "fit", str(other), "--sim",
+                          str(examples / "rod1.compliance.json"), "-o", str(tmp_path / "out.json")],
+                         capture_output=True, text=True)
+    assert "of rod '6#'" in run.stderr and "check that --sim is this rod's" in run.stderr
+    same = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "s.rig.csv", rod="rod1")
+    run = subprocess.run([sys.executable, "-m", "rodlab", "rig", "fit", str(same), "--sim",
+                          str(examples / "rod1.compliance.json"), "-o", str(tmp_path / "out2.json")],
+                         capture_output=True, text=True)
+    assert run.returncode == 0 and "warning" not in run.stderr, run.stderr

@@ -102,8 +102,8 @@ def atomic_write_json(path: str | Path, obj, indent: int = 1) -> Path:
 
 
 def read_text_checked(path, error_cls) -> str:
-    """A file's UTF-8 text, or ``error_cls`` (a FormatError) naming the file: not found, unreadable, not UTF-8
-    (with the line of the first bad byte)."""
+    """A file's UTF-8 text (a leading byte-order mark dropped), or ``error_cls`` (a FormatError) naming the file:
+    not found, unreadable, not UTF-8 (with the line of the first bad byte)."""
     p = Path(path)
     try:
         raw = p.read_bytes()
@@ -112,7 +112,7 @@ def read_text_checked(path, error_cls) -> str:
     except OSError as e:
         raise error_cls(f"cannot read: {e.strerror}", path=p) from e
     try:
-        return raw.decode("utf-8")
+        return raw.decode("utf-8-sig")          # a byte-order mark (Excel, Notepad) is not text
     except UnicodeDecodeError as e:
         raise error_cls(f"not UTF-8 text ({e.reason})", path=p, line=raw[:e.start].count(b"\n") + 1) from e
 

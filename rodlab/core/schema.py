@@ -256,7 +256,7 @@ def check_file(path, format_id: str | None = None) -> FileCheck:
 
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")   # a byte-order mark is not text
     except FileNotFoundError:
         return FileCheck(str(p), None, [Problem(str(p), "file not found", fix="check the path")])
     except (OSError, UnicodeDecodeError) as e:

@@ -1,5 +1,10 @@
 """``friction``: Coulomb friction F_f [N] in the rig's slides holds back F_f while loading and adds it while
-unloading (the hold's direction of travel), splitting the branches by 2 F_f."""
+unloading (the hold's direction of travel), splitting the branches by 2 F_f.
+
+Back at mass 0 a rig does one of two things, and the diagnosis tries both (one term at most): the slide stays
+stuck and holds the rod back by F_f (what :meth:`Friction.force` simulates), or the slide lets go with the hanger
+off and the rod carries nothing (an independent simulator's rig did this: named a tare beside the friction before).
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -29,7 +34,13 @@ class Friction(RigEffectModel):
         return F
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        brake = np.where(data.unload, 1.0, -1.0) * ~data.reference * ctx.C_sim[data.comp, data.axis] * data.sign
-        return [Hypothesis(self.effect, None, ["F_f_N"], brake[:, None], [0.0], [50.0],
-                           "Coulomb friction in the rig's slides holds back F_f while loading and adds it while "
-                           "unloading, splitting the branches by 2 F_f")]
+        travel = np.where(data.unload, 1.0, -1.0) * ~data.reference
+        unit = ctx.C_sim[data.comp, data.axis] * data.sign          # the deflection of 1 N along the load
+        text = ("Coulomb friction in the rig's slides holds back F_f while loading and adds it while unloading, "
+                "splitting the branches by 2 F_f")
+        out = [Hypothesis(self.effect, None, ["F_f_N"], (travel * unit)[:, None], [0.0], [50.0], text)]
+        released = travel * (data.mass > 0)
+        if not np.array_equal(released, travel):
+            out.append(Hypothesis(self.effect, None, ["F_f_N"], (released * unit)[:, None], [0.0], [50.0],
+                                  text + "; the slide lets go at mass 0 (no force with the hanger off)"))
+        return out

@@ -20,7 +20,7 @@ from .argtypes import joint_list, pos_float
 from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args, robot_help
-from .rodargs import compliance_arg
+from .rodargs import compliance_arg, warn_rod_mismatch
 
 __all__ = ["register"]
 
@@ -97,6 +97,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if _rig_design(args):
             design = resolve_design(args.design)
         rec = read_recording(args.rig)
+        warn_rod_mismatch(rec.rod, sim, args.rig)
         try:                                # a recording without a load response is refused, with its cause
             fit_recording(rec)
         except NoLoadResponse:

@@ -28,7 +28,7 @@ from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
-from .rodargs import compliance_arg
+from .rodargs import compliance_arg, warn_rod_mismatch
 
 __all__ = ["register"]
 
@@ -132,6 +132,7 @@ def _register_simulator(rsub) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     rec = read_recording(args.recording)
     sim = compliance_arg(args.sim)
+    warn_rod_mismatch(rec.rod, sim, args.recording)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")

@@ -18,7 +18,7 @@ __all__ = ["register", "READERS", "validate_file"]
 
 def _joints(path) -> int:
     """The number of q-columns of a CSV file's header (the reader's n_joints)."""
-    text = Path(path).read_text(encoding="utf-8")
+    text = Path(path).read_text(encoding="utf-8-sig")
     header = next((ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
     return max(1, len([h for h in header.split(",") if re.fullmatch(r"\s*q[1-9][0-9]*\s*", h)]))
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import re
+import sys
 from pathlib import Path
 
 from ...core.calc import calc_rod_compliance
@@ -40,3 +41,17 @@ def compliance_arg(spec: str):
         print(f"{spec}: the design's closed-form (calc) compliance")
         return calc_rod_compliance(resolve_design(spec))
     return read_compliance(spec)
+
+
+def _rod_key(name: str) -> str:
+    """A rod's name for comparing: ``rod1``, ``1#``, ``Rod 1`` and ``rod_1`` are one rod."""
+    return re.sub(r"[\s#_\-]|^rod", "", str(name).strip().lower())
+
+
+def warn_rod_mismatch(recording_rod: str | None, sim, source: str) -> None:
+    """Warn (stderr) when a recording's ``# rod:`` names another rod than the simulation ``sim`` is of: the
+    comparison would then measure the difference between two rods, not this rod's physics."""
+    if not recording_rod or not getattr(sim, "rod", None) or _rod_key(recording_rod) == _rod_key(sim.rod):
+        return
+    print(f"warning: {source} is of rod {recording_rod!r} (its '# rod:' line) and the simulation of rod {sim.rod!r}: "
+          "check that --sim is this rod's compliance", file=sys.stderr)

@@ -244,7 +244,6 @@ def test_friction_whose_slide_lets_go_at_mass_0_is_friction_alone(tmp_path, accu
     rec_path = tmp_path / "stuck.rig.csv"
     model = RigModel(SIM.C_F, {"friction": {"F_f_N": Ff}}, noise_mm=0.0006, resolution_mm=0.0, seed=11)
     simulate_recording(model, LoadSchedule(repeats=4, hold_s=5.0), rec_path, rod=DESIGN.name)
-    rec = read_recording(rec_path)
     # the slide released at every mass-0 hold after unloading: take the stuck friction's deflection out there
     lines = rec_path.read_text().splitlines()
     head = next(i for i, s in enumerate(lines) if not s.startswith("#"))

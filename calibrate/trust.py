@@ -122,8 +122,9 @@ def completeness_statement(res: "CalibrationResult") -> str:
         return "complete? not tested (no noise level stated)"
     word = {Completeness.COMPLETE: "yes", Completeness.NEARLY: "nearly", Completeness.INCOMPLETE: "no"}
     return (f"complete? {word[completeness(res)]}: the model leaves {res.rms_mm * 1e3:.1f} um rms per reading "
-            f"unexplained ({test.birge:.1f} times the {test.source if not test.clamping else 'device'}'s noise of "
-            f"{test.noise_mm * 1e3:.1f} um by the residual test above)")
+            f"unexplained (Birge ratio sqrt(chi-square / dof) {test.birge:.1f} by the residual test above, against "
+            + (f"the device's {test.noise_mm * 1e3:.1f} um per reading and the clamping poses' uncertainty)"
+               if test.clamping else f"the {test.source}'s noise of {test.noise_mm * 1e3:.1f} um per reading)"))
 
 
 def trust_cautions(res: "CalibrationResult") -> list[str]:
@@ -150,7 +151,7 @@ def _incomplete_caution(res: "CalibrationResult") -> list[str]:
     if test is None or not test.material or test.clamping:
         return []
     return [f"the model is incomplete: it leaves {res.rms_mm * 1e3:.1f} um rms per reading unexplained "
-            f"({test.birge:.1f} times the stated {test.noise_mm * 1e3:.1f} um); "
+            f"(Birge ratio {test.birge:.1f} against the stated {test.noise_mm * 1e3:.1f} um per reading); "
             f"{_CAUSES.get(test.source, _CAUSES['instrument'])}. The predicted accuracy already includes what is "
             "left out"]
 

@@ -252,3 +252,21 @@ def test_real_ur10_tracker_data_joint_compliance_beats_kinematics_only():
     assert full.after.mean_mm < 0.5 * full.before.mean_mm, full
     assert full.after.mean_mm < 0.95 * kin.after.mean_mm, (full.after, kin.after)
     assert full.after.max_mm < kin.after.max_mm
+
+
+def test_a_not_trusted_campaign_the_diagnosis_cannot_identify_exits_3_not_2(examples, tmp_path):
+    """Two clamping positions: calibrate holds what it cannot identify and says NOT TRUSTED (exit 3); its list of
+    suspects runs the campaign diagnosis, which identifies strictly and refused, and that refusal turned the run
+    into an input error (exit 2) after the verdict was printed."""
+    import subprocess
+    import sys
+    src = examples / "campaign-null"
+    rows = (src / "multical.campaign.csv").read_text().splitlines()
+    two = tmp_path / "two.campaign.csv"
+    two.write_text("\n".join([rows[0]] + [r for r in rows[1:] if r.split(",")[0] in ("1", "3")]) + "\n")
+    run = subprocess.run([sys.executable, "-m", "rodlab", "calibrate", str(two), "--fixture",
+                          str(src / "multical.fixture.json"), "--rod", str(src / "rod1.compliance.json"),
+                          "--validate", str(src / "multical.validation.csv")], capture_output=True, text=True,
+                         cwd=tmp_path)
+    assert run.returncode == 3, run.stderr[-2000:]
+    assert "NOT TRUSTED" in run.stderr and "the campaign diagnosis cannot run on this campaign" in run.stderr

@@ -165,3 +165,18 @@ def test_v2_reader_rejects(tmp_path, comp, label, mutate, key, words):
     with pytest.raises(ComplianceError) as ei:
         read_compliance(p)
     assert ei.value.key.startswith(key) and words in str(ei.value) and str(p) in str(ei.value), str(ei.value)
+
+
+def test_the_design_file_is_found_from_any_working_folder(tmp_path, monkeypatch):
+    """The provenance keeps the design file's absolute path: a diagnosis run from another folder still finds the
+    design's tolerances (with the path as typed it fell back to a generic envelope)."""
+    from rodlab import calc_rod_compliance, load_design
+    from rodlab.app.diagnose.envelope import design_of
+    from conftest import legacy_file
+    (tmp_path / "a").mkdir()
+    legacy_file(tmp_path / "a" / "my.rod.toml", "rod1")
+    monkeypatch.chdir(tmp_path / "a")
+    comp = calc_rod_compliance(load_design("my.rod.toml"))
+    assert comp.provenance["design_file"] == str((tmp_path / "a" / "my.rod.toml").resolve())
+    monkeypatch.chdir(tmp_path)
+    assert design_of(comp) is not None

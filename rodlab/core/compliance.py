@@ -218,7 +218,7 @@ class RodCompliance:
         prov = {"rodlab_version": __version__, "method": str(Method.parse(method)),
                 "design": design.name, "design_sha256": design_hash(design)}
         if design.source is not None:
-            prov["design_file"] = str(design.source)
+            prov["design_file"] = str(Path(design.source).resolve())   # found again from any working folder
         if design.joints:
             prov["declared_joints_rad_per_Nm"] = {p: vars(j) for p, j in design.joints.items()}
         prov.update(provenance or {})

@@ -140,7 +140,7 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
     found = design_of(sim, design)
     if found is None or sim.method is Method.NONE:
         return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("no design", GENERIC_RELATIVE),
-                        source=f"no design known: {GENERIC_RELATIVE:.0%} per C_F entry (give --rod DESIGN.rod.toml "
+                        source=f"no design known: {GENERIC_RELATIVE:.0%} per C_F entry (give --design DESIGN.rod.toml "
                                "for its tolerances)")
     return _design_envelope(sim, found)
 

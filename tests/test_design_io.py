@@ -104,6 +104,14 @@ RULES = [
      "density_kg_m3"),
     ("bare L1 key", _set(("L1",), 300.0), "L1", "Did you mean `L1_mm`"),
     ("hangs rather than reaches", _set(("L2_mm",), 45000.0), "L2_mm", "hang rather than reach"),
+    # units slips: named as such, not as a geometry rule they break further on
+    ("modulus in Pa", _set(("materials", "cfrp_tube", "E_GPa"), 140e9), "materials.cfrp_tube.E_GPa", "= 140 GPa"),
+    ("modulus in MPa", _set(("materials", "cfrp_tube", "G_GPa"), 10000.0), "materials.cfrp_tube.G_GPa", "MPa"),
+    ("modulus far too low", _set(("materials", "cfrp_tube", "E_GPa"), 0.001), "materials.cfrp_tube.E_GPa",
+     "rubber"),
+    ("density in g/cm3", _set(("materials", "cfrp_tube", "density_kg_m3"), 1.58),
+     "materials.cfrp_tube.density_kg_m3", "1580 kg/m^3"),
+    ("gamma in radians", _set(("gamma_deg",), 1.9), "gamma_deg", "did you give radians"),
 ]
 
 

@@ -167,8 +167,15 @@ class RodDesign:
         g = self.gamma_deg
         if isinstance(g, bool) or not isinstance(g, (int, float)) or not math.isfinite(g) or not (0 < g <= 180):
             raise DesignError(f"gamma_deg must lie in (0, 180] (180 = straight rod), got {g!r}", key="gamma_deg")
-        self._check_fits()
-        self._check_lengths()
+        try:
+            self._check_fits()
+            self._check_lengths()
+        except DesignError as e:
+            if g <= 2 * math.pi:        # a bend angle given in radians folds the rod onto itself
+                raise DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({e.detail}); gamma_deg is "
+                                  f"in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
+                                  key="gamma_deg") from e
+            raise
 
     # -- derived geometry ---------------------------------------------------------------
     @property

@@ -51,6 +51,12 @@ __all__ = ["Material", "BUILTIN_MATERIALS", "get_material", "material_from_table
 _ISO_TOL = 1e-6
 
 
+#: moduli [GPa] and densities [kg/m^3] of solid materials a rod's parts are made of (polymers to carbides,
+#: foams to tungsten); values outside are refused as a units slip
+MODULUS_GPA = (0.1, 1500.0)
+DENSITY_KG_M3 = (100.0, 25000.0)
+
+
 @dataclass(frozen=True)
 class Material:
     """Linear-elastic material.
@@ -92,6 +98,7 @@ class Material:
                                   key=key)
         if self.E_GPa <= 0:
             raise DesignError(f"material `{self.name}`: E_GPa must be > 0, got {self.E_GPa}", key="E_GPa")
+        self._check_units()
         if not (-1.0 < self.nu < 0.5):
             raise DesignError(f"material `{self.name}`: nu must lie in (-1, 0.5), got {self.nu}", key="nu")
         if self.density_kg_m3 <= 0:
@@ -101,6 +108,22 @@ class Material:
             v = getattr(self, key)
             if v is not None and v <= 0:
                 raise DesignError(f"material `{self.name}`: {key} must be > 0, got {v}", key=key)
+
+    def _check_units(self) -> None:
+        """Values no solid material has, which a units slip gives (Pa or MPa for GPa, g/cm^3 for kg/m^3)."""
+        for key in ("E_GPa", "E_transverse_GPa", "G_GPa"):
+            v = getattr(self, key)
+            if v is not None and v > 0 and not (MODULUS_GPA[0] <= v <= MODULUS_GPA[1]):
+                hint = (f"{v:g} Pa = {v * 1e-9:g} GPa" if v > 1e6 else f"{v:g} MPa = {v * 1e-3:g} GPa"
+                        if v > MODULUS_GPA[1] else "a modulus this low is a rubber or a foam, not a rod's part")
+                raise DesignError(f"material `{self.name}`: {key} = {v:g} is not a solid material's modulus in GPa "
+                                  f"({MODULUS_GPA[0]:g}-{MODULUS_GPA[1]:g}; {hint}); give it in GPa", key=key)
+        d = self.density_kg_m3
+        if not (DENSITY_KG_M3[0] <= d <= DENSITY_KG_M3[1]):
+            hint = f"{d:g} g/cm^3 = {d * 1e3:g} kg/m^3" if d < DENSITY_KG_M3[0] else "heavier than any metal"
+            raise DesignError(f"material `{self.name}`: density_kg_m3 = {d:g} is not a solid material's density in "
+                              f"kg/m^3 ({DENSITY_KG_M3[0]:g}-{DENSITY_KG_M3[1]:g}; {hint}); give it in kg/m^3",
+                              key="density_kg_m3")
 
     @property
     def E_t_GPa(self) -> float:

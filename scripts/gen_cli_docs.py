@@ -3,6 +3,7 @@ tolerance defaults, robot formats) and docs/rig.md (instrument protocols) from t
 exits 1 when any is stale; used by the tests). The rendering is :mod:`rodlab.app.cli.docgen`."""
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -13,7 +14,9 @@ DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 
 
 if __name__ == "__main__":
-    check = "--check" in sys.argv
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--check", action="store_true", help="write nothing; exit 1 when a generated page is stale")
+    check = ap.parse_args().check
     status = write_generated(DOC, render_cli(), check)
     for page, tables in DOC_TABLES.items():
         path = DOC.with_name(page)

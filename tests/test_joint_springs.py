@@ -166,3 +166,14 @@ def test_update_accepts_a_freed_joint_of_a_group_and_a_freed_modulus_for_a_scale
     assert _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.E_GPa"])
     assert not _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.G_GPa"])
     assert _explained_by_keys(F(effect="torsion_compliance", location="pipe_I"), ["materials.CFRP.G_GPa"])
+
+
+def test_update_does_not_overwrite_the_design_it_starts_from(tmp_path):
+    rod1 = legacy_file(tmp_path / "rod1.rod.toml", "rod1")
+    before = rod1.read_text()
+    rec = _recording(tmp_path, ROD1, seed=5)
+    run = subprocess.run([sys.executable, "-m", "rodlab", "update", str(rod1), "--measured",
+                          str(rec.path if hasattr(rec, "path") else tmp_path / "rec.rig.csv"), "-o", str(rod1)],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "is the design itself" in run.stderr and "Traceback" not in run.stderr
+    assert rod1.read_text() == before

@@ -18,7 +18,7 @@ from scipy.special import chdtrc
 from rodlab.fea.frame import frame_compliance
 from ..core.calc import calc_rod_compliance
 from ..core.design import RodDesign
-from ..core.errors import DesignError, RodlabError
+from ..core.errors import LocatedError, DesignError, RodlabError
 from ..core.massprops import mass_properties
 from ..core.sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
@@ -107,7 +107,7 @@ def model_compliance(model: str):
         return lambda d: frame_compliance(d)[0]
     if model == "calc":
         return lambda d: calc_rod_compliance(d).C_F
-    raise RodlabError(f"unknown model {model!r}; expected frame or calc", key="model")
+    raise LocatedError(f"unknown model {model!r}; expected frame or calc", key="model")
 
 
 def _is_joint(key: str) -> bool:
@@ -147,10 +147,10 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     """Fit ``keys`` of ``design`` to ``measured`` (bounded to 0.2-5x the design value, priors from the tolerances)."""
     keys = tuple(keys)
     if not keys:
-        raise RodlabError("no key to fit: give --free KEY[,KEY...]", key="free")
+        raise LocatedError("no key to fit: give --free KEY[,KEY...]", key="free")
     for k in keys:
         if not _is_joint(k) and not design_value(design, k) > 0:
-            raise RodlabError(f"--free {k}: its design value is {design_value(design, k):g}; only a key with a "
+            raise LocatedError(f"--free {k}: its design value is {design_value(design, k):g}; only a key with a "
                               "positive value (a size, a modulus) can be fitted", key="free")
     fn = model_compliance(model)
     E = measured.entries
@@ -172,7 +172,7 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     try:
         res = least_squares(residual, start, bounds=(lo, hi), x_scale=prior_sd, diff_step=1e-3)
     except DesignError as e:
-        raise RodlabError(f"the fit of {', '.join(keys)} reached a design the rules refuse ({e.detail}); free fewer "
+        raise LocatedError(f"the fit of {', '.join(keys)} reached a design the rules refuse ({e.detail}); free fewer "
                           "keys or keys the measurement constrains", key="free") from e
     J = res.jac
     cov = np.linalg.pinv(J.T @ J)

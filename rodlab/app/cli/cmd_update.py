@@ -107,7 +107,11 @@ def cmd_update(args: argparse.Namespace) -> int:
     design = resolve_design(args.design)
     keys = [k.strip() for k in args.free.split(",") if k.strip()] if args.free else _default_free(design)
     if design.source is None:
-        raise RodlabError("the design has no file to start from", key="design")
+        raise RodlabError("the design has no file to start from: give a *.rod.toml or a built-in name")
+    if Path(args.output).resolve() == Path(design.source).resolve():
+        raise RodlabError(f"-o {args.output} is the design itself: the as-built design goes beside it (e.g. "
+                          f"{Path(design.source).name.replace('.rod.toml', '')}.asbuilt.rod.toml), so that the design "
+                          "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
         design_value(design, key)
     measured, causes = _measured(args.measured, design, keys, args.model)

@@ -23,7 +23,7 @@ from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
 
-__all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse"]
+__all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "PLAUSIBLE_R_ROD"]
 
 _AX = "xyz"
 
@@ -176,16 +176,21 @@ PLAUSIBLE_R_ROD = (0.1, 10.0)
 
 
 def _check_plausible_r_rod(fit: "RigFit", rec: RigRecording, sim) -> None:
-    """An r_rod no rod has against its own simulation (a mass in g, readings in um, another rod's file) makes the
-    fit unusable, with what to check."""
+    """An r_rod no rod has against its own simulation makes the fit unusable (:func:`r_rod_caution`)."""
+    caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod)
+    if caution:
+        fit.success, fit.message = False, caution + "; nothing was written"
+
+
+def r_rod_caution(r_rod: float, recording_rod: str | None, sim_rod: str) -> str | None:
+    """What to check when ``r_rod`` is beyond any rod against its own simulation (:data:`PLAUSIBLE_R_ROD`): a
+    mass in g, readings in um, another rod's file; None when it is plausible."""
     lo, hi = PLAUSIBLE_R_ROD
-    if lo <= fit.r_rod <= hi:
-        return
-    fit.success = False
-    fit.message = (f"r_rod = {fit.r_rod:.3g}: the rod is {fit.r_rod:.3g} x as compliant as the simulation of rod "
-                   f"{sim.rod!r}, beyond any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units "
-                   "(mass_kg in kg, not g; disp_*_mm in mm, not um) and that --sim is this rod's (the recording says "
-                   f"rod {rec.rod!r}); nothing was written")
+    if lo <= r_rod <= hi:
+        return None
+    return (f"r_rod = {r_rod:.3g}: the rod is {r_rod:.3g} x as compliant as the simulation of rod {sim_rod!r}, beyond "
+            f"any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units (mass_kg in kg, not g; "
+            f"disp_*_mm in mm, not um) and that --sim is this rod's (the recording says rod {recording_rod!r})")
 
 
 def _check_load_response(lines: list, rec: RigRecording) -> None:

@@ -173,3 +173,12 @@ def test_another_rods_recording_is_warned_and_a_bom_is_read(examples, tmp_path):
                           str(examples / "rod1.compliance.json"), "-o", str(tmp_path / "out2.json")],
                          capture_output=True, text=True)
     assert run.returncode == 0 and "warning" not in run.stderr, run.stderr
+
+
+def test_diagnose_warns_of_an_implausible_r_rod(examples, tmp_path):
+    import subprocess
+    import sys
+    bad = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "bad.rig.csv", mass=1000.0)
+    run = subprocess.run([sys.executable, "-m", "rodlab", "diagnose", "--rig", str(bad), "--sim",
+                          str(examples / "rod1.compliance.json")], capture_output=True, text=True)
+    assert run.returncode in (0, 3) and "warning: r_rod = 0.001" in run.stderr and "mass_kg in kg" in run.stderr

@@ -8,6 +8,7 @@ from rodlab.calibrate import read_fixture, read_points
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
+from rodlab.stiffness_rig.fit import r_rod_caution
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...core.compliance import read_compliance, write_compliance
@@ -99,11 +100,15 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         rec = read_recording(args.rig)
         warn_rod_mismatch(rec.rod, sim, args.rig)
         try:                                # a recording without a load response is refused, with its cause
-            fit_recording(rec)
+            fit = fit_recording(rec, sim)
         except NoLoadResponse:
             raise
         except RigError:
             pass                            # anything else: the diagnosis says what it finds
+        else:
+            caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
+            if caution:
+                print(f"warning: {caution}", file=sys.stderr)
         from ..diagnose import diagnose_rig
         diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
         print(diag.summary())

@@ -270,3 +270,23 @@ def test_a_not_trusted_campaign_the_diagnosis_cannot_identify_exits_3_not_2(exam
                          cwd=tmp_path)
     assert run.returncode == 3, run.stderr[-2000:]
     assert "NOT TRUSTED" in run.stderr and "the campaign diagnosis cannot run on this campaign" in run.stderr
+
+
+def test_a_rod_file_of_another_rod_is_warned(examples, tmp_path):
+    """The identified ball centre far from the rod file's tool vector: the file is likely another rod's (its
+    compliance and mass compensate the readings); the run was silent and TRUSTED."""
+    import json
+    import subprocess
+    import sys
+    src = examples / "campaign-null"
+    rod = json.loads((src / "rod1.compliance.json").read_text())
+    rod["tool_mm"] = [rod["tool_mm"][0] + 60.0, rod["tool_mm"][1], rod["tool_mm"][2] + 40.0]
+    other = tmp_path / "other.compliance.json"
+    other.write_text(json.dumps(rod))
+    args = [sys.executable, "-m", "rodlab", "calibrate", str(src / "multical.campaign.csv"), "--fixture",
+            str(src / "multical.fixture.json")]
+    run = subprocess.run(args + ["--rod", str(other)], capture_output=True, text=True, cwd=tmp_path)
+    assert "is the rod file this rod's?" in run.stderr, run.stderr[-1500:]
+    same = subprocess.run(args + ["--rod", str(src / "rod1.compliance.json")], capture_output=True, text=True,
+                          cwd=tmp_path)
+    assert "is the rod file this rod's?" not in same.stderr

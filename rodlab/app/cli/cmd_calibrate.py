@@ -105,6 +105,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     label = run.label
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
+    _warn_other_rod(res.params.tool, rod, args.rod)
     judge(res, _campaign_prediction(run))
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
@@ -155,6 +156,23 @@ def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
     off = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod)
     print(f"note: the rod's deflection is not compensated; by {args.rod} it moves the ball up to "
           f"{np.linalg.norm(off, axis=1).max() * 1e3:.0f} um in this campaign (--compensation file compensates it)")
+
+
+#: how far [mm] the identified tool may lie from the rod file's before the file is suspected of being another rod's
+TOOL_MISMATCH_MM = 10.0
+
+
+def _warn_other_rod(tool_mm, rod, path) -> None:
+    """Warn when the identified ball centre is far from the rod file's tool vector (compared about the flange axis,
+    which the identified flange twist turns the tool about): its compliance, mass and centre of mass would then
+    be another rod's, and the compensation wrong."""
+    t, f = np.asarray(tool_mm, float), np.asarray(rod.tool_mm, float)
+    off = float(np.hypot(np.hypot(*t[:2]) - np.hypot(*f[:2]), t[2] - f[2]))
+    if off > TOOL_MISMATCH_MM:
+        print(f"warning: the identified ball centre (radius {np.hypot(*t[:2]):.1f} mm, z {t[2]:.1f} mm from the "
+              f"flange) is {off:.0f} mm from the rod file's ({np.hypot(*f[:2]):.1f}, {f[2]:.1f} mm; {path}): is the "
+              f"rod file this rod's? Its compliance, mass and centre of mass compensate the readings",
+              file=sys.stderr)
 
 
 def _print_suspects(robot, camp, args, rod, comp, test) -> None:

@@ -37,7 +37,7 @@ from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
 from .rig_select import demean
 from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import within_hold_noise
+from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, within_hold_noise
 from .rig_tolerant import diagnose_tolerant
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places", "within_hold_noise"]
@@ -63,9 +63,26 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     data = rig_samples(rec)
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
-    diag, model = _without_a_stray_hold(data, sim, design, max_terms, env)
+    glitch = isolated_glitches(data)
+    diag, model = _without_a_stray_hold(data.subset(~glitch), sim, design, max_terms, env)
+    if glitch.any():
+        _note_glitches(diag, data, glitch)
     _add_cautions(diag)
     return diag, model
+
+
+def _note_glitches(diag: Diagnosis, data: RigSamples, glitch: np.ndarray) -> None:
+    """The readings left out as glitches, as an ``unexplained`` finding naming their holds."""
+    steps = sorted(set(data.step[glitch].tolist()))
+    off = float(np.nanmax(np.abs(hold_line_residuals(data, glitch)[0][glitch])))
+    diag.findings.append(Finding(
+        FindingKind.UNEXPLAINED, "step:" + ",".join(map(str, steps)),
+        f"{int(glitch.sum())} single reading(s) far off their hold's line (up to {off * 1e3:.1f} um off it, more than "
+        f"{GLITCH_Z:g} robust noise SDs): a gauge's glitch or an electrical spike, not the rod or the rig; "
+        "left out, and the rest diagnosed without them", {"readings_left_out": int(glitch.sum())}, {},
+        diag.rms_after_mm, diag.rms_after_mm, {"glitch_z": GLITCH_Z}))
+    diag.verdict = Verdict.UNEXPLAINED
+    diag.extra["glitch_readings"] = int(glitch.sum())
 
 
 def _add_cautions(diag: Diagnosis) -> None:

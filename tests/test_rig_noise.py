@@ -88,3 +88,16 @@ def test_a_single_glitch_is_left_out_and_named_not_taken_for_noise(tmp_path):
     glitch = next(f for f in diag.findings if f.effect == "unexplained")
     assert glitch.parameters["readings_left_out"] == 1 and "glitch" in glitch.explanation
     assert diag.verdict.value == "unexplained" and "glitch_readings" not in clean.extra
+
+
+def test_a_recording_that_loads_nothing_is_refused(tmp_path):
+    rec = _record(tmp_path, 0.001, 0.0, 2.0, 10.0)
+    lines = rec.path.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    k = lines[head].split(",").index("mass_kg")
+    out = lines[:head + 1] + [",".join(c if j != k else "0.0" for j, c in enumerate(s.split(",")))
+                              for s in lines[head + 1:]]
+    zero = tmp_path / "zero.rig.csv"
+    zero.write_text("\n".join(out) + "\n")
+    with pytest.raises(RodlabError, match="every hold's load is 0"):
+        diagnose_rig(read_recording(zero), SIM, DESIGN)

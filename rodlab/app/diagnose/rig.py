@@ -61,6 +61,9 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
         raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
                           "against; give the rod's calc, fea or meas compliance file")
     data = rig_samples(rec)
+    if not np.any(data.F != 0):
+        raise RodlabError(f"{rec.path or 'the recording'}: every hold's load is 0 (mass_kg and force_N): there is no "
+                          "load-deflection to diagnose; check the mass_kg column (kg, with the hanger)")
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
     glitch = isolated_glitches(data)

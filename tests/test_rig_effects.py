@@ -267,3 +267,25 @@ def test_friction_whose_slide_lets_go_at_mass_0_is_friction_alone(tmp_path, accu
         assert named == {"friction"}, (path.name, diag.summary())
         f = next(f for f in diag.findings if f.effect == "friction")
         assert f.parameters["F_f_N"] == pytest.approx(Ff, rel=0.05)
+
+
+def test_a_gauge_whose_calibration_factor_is_off_is_unexplained_at_the_gauge(tmp_path):
+    """Every z reading 5 % too large (outside the vocabulary): an independent simulator's gauge gain errors were
+    named a 7.6 deg crosstalk, a joint or a compliance scale against an exact simulation."""
+    path = tmp_path / "g.rig.csv"
+    model = RigModel(SIM.C_F, {}, noise_mm=0.0006, resolution_mm=0.0, seed=12)
+    simulate_recording(model, LoadSchedule(repeats=3, hold_s=5.0), path, rod=DESIGN.name)
+    lines = path.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    k = lines[head].split(",").index("disp_z_mm")
+    out = lines[:head + 1]
+    for line in lines[head + 1:]:
+        c = line.split(",")
+        if c[k]:
+            c[k] = f"{1.05 * float(c[k]):.7f}"
+        out.append(",".join(c))
+    path.write_text("\n".join(out) + "\n")
+    diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy="exact")
+    assert {f.effect for f in diag.findings} == {"unexplained"}, diag.summary()
+    f = next(f for f in diag.findings if f.location == "sensor:z")
+    assert f.parameters["gain_error"] == pytest.approx(0.05, abs=0.005) and "calibration factor" in f.explanation

@@ -7,6 +7,10 @@ vocabulary effect that mimics it: a found one makes the verdict ``unexplained`` 
   off-diagonal terms), and on the other gauges, which it leaves alone. Gauges of one type off their range
   alike (one k on every gauge, location ``sensor:all``) curve each reading in proportion to its own size,
   where a load non-linearity curves every axis alike in the load.
+- a gauge's calibration factor off (``gain_error``: every reading of the gauge scaled by ``1 + g``), for a gauge
+  that reads in two or more series (one that reads its own load axis alone is that entry's compliance); it
+  costs one parameter more in the BIC, so a vocabulary effect that fits about as well is preferred. An
+  independent simulator's gauge gain errors had been named a 7.6 deg crosstalk, a joint or a compliance scale.
 """
 from __future__ import annotations
 
@@ -32,6 +36,18 @@ def outside_hypotheses(data, base: np.ndarray) -> list[Hypothesis]:
         out.append(Hypothesis(OUTSIDE, f"sensor:{_AXES[c]}", ["k_per_mm"], col[:, None], [-1.0], [1.0],
                               f"the {_AXES[c]} gauge's reading is not linear in the displacement (a reading "
                               f"scaled by 1 + k v): a property of the gauge, outside the effect vocabulary"))
+    for c in gauges if len(gauges) > 1 else ():
+        # a gauge's calibration factor off: every reading of that gauge scaled alike, the others not. Only for a
+        # gauge that reads in two or more series (one that reads its own load axis alone is that entry's
+        # compliance), and counted as one parameter more in the BIC: a vocabulary effect that fits about as well
+        # (a uniform scale on a rod whose other gauges read little) is preferred to it
+        if np.unique(data.axis[data.comp == c]).size < 2:
+            continue
+        col = np.where(data.comp == c, base, 0.0)
+        out.append(Hypothesis(OUTSIDE, f"sensor:{_AXES[c]}", ["gain_error"], col[:, None], [-0.5], [0.5],
+                              f"the {_AXES[c]} gauge reads every displacement too large or too small by one factor "
+                              f"(its calibration factor is off): a property of the gauge, outside the effect "
+                              f"vocabulary", hidden=1))
     if len(gauges) > 1:
         # on a rod whose axes differ in compliance the curvature follows each gauge's reading, not the load: a
         # load non-linearity on every axis with crosstalk would otherwise mimic it with three terms
@@ -47,5 +63,5 @@ def confirm_outside(location: str | None) -> str | None:
         g = location.split(":", 1)[1]
         which = "each gauge" if g == "all" else f"the {g} gauge"
         return (f"check {which} against reference displacements over its range (gauge blocks, a calibrated "
-                f"micrometer): its own non-linearity shows there, a load non-linearity of the rod does not")
+                f"micrometer): its own calibration factor or non-linearity shows there, the rod's compliance does not")
     return None

@@ -52,7 +52,8 @@ _ISO_TOL = 1e-6
 
 
 #: moduli [GPa] and densities [kg/m^3] of solid materials a rod's parts are made of (polymers to carbides,
-#: foams to tungsten); values outside are refused as a units slip
+#: foams to tungsten); values outside are refused as a units slip (a density below 0.1 is taken as a deliberately
+#: massless part of an idealised model, not as g/cm^3)
 MODULUS_GPA = (0.1, 1500.0)
 DENSITY_KG_M3 = (100.0, 25000.0)
 
@@ -119,7 +120,7 @@ class Material:
                 raise DesignError(f"material `{self.name}`: {key} = {v:g} is not a solid material's modulus in GPa "
                                   f"({MODULUS_GPA[0]:g}-{MODULUS_GPA[1]:g}; {hint}); give it in GPa", key=key)
         d = self.density_kg_m3
-        if not (DENSITY_KG_M3[0] <= d <= DENSITY_KG_M3[1]):
+        if 0.1 <= d < DENSITY_KG_M3[0] or d > DENSITY_KG_M3[1]:   # far below: a deliberately massless part
             hint = f"{d:g} g/cm^3 = {d * 1e3:g} kg/m^3" if d < DENSITY_KG_M3[0] else "heavier than any metal"
             raise DesignError(f"material `{self.name}`: density_kg_m3 = {d:g} is not a solid material's density in "
                               f"kg/m^3 ({DENSITY_KG_M3[0]:g}-{DENSITY_KG_M3[1]:g}; {hint}); give it in kg/m^3",

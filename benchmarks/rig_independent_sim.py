@@ -337,11 +337,13 @@ if __name__ == '__main__':
     ap = argparse.ArgumentParser()
     ap.add_argument('--out', default=os.path.join(HERE, 'recs'))
     ap.add_argument('--only', default=None, help='comma list of case names')
+    ap.add_argument('--seed-offset', type=int, default=0, help='added to every case seed (a held-out draw; rodlab)')
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     only = set(a.only.split(',')) if a.only else None
     for c in cases():
         if only and c['name'] not in only:
             continue
+        c['seed'] += a.seed_offset
         p = simulate(c, a.out)
         print(p)

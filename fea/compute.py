@@ -37,6 +37,8 @@ log = logging.getLogger(__name__)
 
 #: Observed convergence order of the tip compliance on curved-P2 rod meshes (rod 1#: 3.0-3.5).
 RICHARDSON_ORDER = 3.0
+
+
 class Mesher(Protocol):
     """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it."""
 

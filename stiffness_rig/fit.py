@@ -188,9 +188,10 @@ def r_rod_caution(r_rod: float, recording_rod: str | None, sim_rod: str) -> str 
     lo, hi = PLAUSIBLE_R_ROD
     if lo <= r_rod <= hi:
         return None
+    said = f" (the recording says rod {recording_rod!r})" if recording_rod else ""
     return (f"r_rod = {r_rod:.3g}: the rod is {r_rod:.3g} x as compliant as the simulation of rod {sim_rod!r}, beyond "
             f"any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units (mass_kg in kg, not g; "
-            f"disp_*_mm in mm, not um) and that --sim is this rod's (the recording says rod {recording_rod!r})")
+            f"disp_*_mm in mm, not um) and that the simulation is this rod's{said}")
 
 
 def _check_load_response(lines: list, rec: RigRecording) -> None:

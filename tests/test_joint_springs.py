@@ -159,13 +159,16 @@ def test_update_accepts_a_freed_joint_of_a_group_and_a_freed_modulus_for_a_scale
     from types import SimpleNamespace as F
 
     from rodlab.app.cli.cmd_update import _explained_by_keys
+    tube = ROD1.pipe_I.material.name
     group = F(effect="joint_compliance", location="pipe_II|ring_1")
-    assert _explained_by_keys(group, ["joints.pipe_II.s_bend_rad_per_Nm"])
-    assert _explained_by_keys(group, ["joints.ring_1.s_bend_rad_per_Nm"])
-    assert not _explained_by_keys(group, ["joints.flange_clamp.s_bend_rad_per_Nm", "materials.CFRP.E_GPa"])
-    assert _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.E_GPa"])
-    assert not _explained_by_keys(F(effect="compliance_scale", location=None), ["materials.CFRP.G_GPa"])
-    assert _explained_by_keys(F(effect="torsion_compliance", location="pipe_I"), ["materials.CFRP.G_GPa"])
+    assert _explained_by_keys(group, ["joints.pipe_II.s_bend_rad_per_Nm"], ROD1)
+    assert _explained_by_keys(group, ["joints.ring_1.s_bend_rad_per_Nm"], ROD1)
+    assert not _explained_by_keys(group, ["joints.flange_clamp.s_bend_rad_per_Nm", f"materials.{tube}.E_GPa"], ROD1)
+    scale, twist = F(effect="compliance_scale", location=None), F(effect="torsion_compliance", location="pipe_I")
+    assert _explained_by_keys(scale, [f"materials.{tube}.E_GPa"], ROD1)
+    assert not _explained_by_keys(scale, [f"materials.{tube}.G_GPa"], ROD1)
+    assert not _explained_by_keys(scale, [f"materials.{ROD1.ball.material.name}.E_GPa"], ROD1)   # not the tubes'
+    assert _explained_by_keys(twist, [f"materials.{tube}.G_GPa"], ROD1)
 
 
 def test_update_does_not_overwrite_the_design_it_starts_from(tmp_path):

@@ -267,6 +267,7 @@ def test_friction_whose_slide_lets_go_at_mass_0_is_friction_alone(tmp_path, accu
         assert named == {"friction"}, (path.name, diag.summary())
         f = next(f for f in diag.findings if f.effect == "friction")
         assert f.parameters["F_f_N"] == pytest.approx(Ff, rel=0.05)
+        assert ("lets go at mass 0" in f.explanation) == (path is released)
 
 
 def test_a_gauge_whose_calibration_factor_is_off_is_unexplained_at_the_gauge(tmp_path):

@@ -99,5 +99,46 @@ def test_a_recording_that_loads_nothing_is_refused(tmp_path):
                               for s in lines[head + 1:]]
     zero = tmp_path / "zero.rig.csv"
     zero.write_text("\n".join(out) + "\n")
-    with pytest.raises(RodlabError, match="every hold's load is 0"):
+    with pytest.raises(RodlabError, match="every hold's mass is 0"):
         diagnose_rig(read_recording(zero), SIM, DESIGN)
+
+
+def _spike(path, rows, add_mm):
+    """A copy of a recording with ``add_mm`` added to the first measured displacement of the data rows ``rows``."""
+    lines = path.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    cols = lines[head].split(",")
+    for r in rows:
+        cells = lines[head + 1 + r].split(",")
+        j = next(cols.index(c) for c in ("disp_z_mm", "disp_y_mm", "disp_x_mm") if cells[cols.index(c)])
+        cells[j] = f"{float(cells[j]) + add_mm:.6f}"
+        lines[head + 1 + r] = ",".join(cells)
+    out = path.with_name("spiked-" + path.name)
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
+@pytest.mark.parametrize("hold_s", [0.3, 0.4, 1.0])
+def test_a_glitch_in_a_short_hold_is_found(tmp_path, hold_s):
+    """3-10 readings per hold: a 50 um spike pulls its hold's line, so it is judged against the line through the
+    other readings (a plain refit had flagged the whole hold and then found nothing)."""
+    rec = _record(tmp_path, 0.0006, 0.0, hold_s, 10.0, repeats=4)
+    clean = reading_noise(rig_samples(rec)).sigma_mm
+    spiked = read_recording(_spike(rec.path, [200], 0.05))
+    from rodlab.app.diagnose.rig_noise import isolated_glitches
+    data = rig_samples(spiked)
+    g = isolated_glitches(data)
+    assert g.sum() == 1
+    assert reading_noise(data.subset(~g)).sigma_mm == pytest.approx(clean, rel=0.1)
+
+
+def test_readings_off_at_the_same_moment_of_every_hold_are_not_glitches(tmp_path):
+    """A reading 10 um off at the start of every hold (a swinging hanger) is settling, not a glitch."""
+    from rodlab.app.diagnose.rig_noise import isolated_glitches
+    rec = _record(tmp_path, 0.0006, 0.0, 3.0, 10.0, repeats=3)
+    lines = rec.path.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    steps = [ln.split(",")[1] for ln in lines[head + 1:]]
+    firsts = [i for i in range(len(steps)) if i == 0 or steps[i] != steps[i - 1]]
+    settled = read_recording(_spike(rec.path, firsts[1:], 0.01))
+    assert not isolated_glitches(rig_samples(settled)).any()

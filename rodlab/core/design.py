@@ -171,7 +171,7 @@ class RodDesign:
             self._check_fits()
             self._check_lengths()
         except DesignError as e:
-            if g <= 2 * math.pi:        # a bend angle given in radians folds the rod onto itself
+            if g <= math.pi:            # a bend angle given in radians folds the rod onto itself
                 raise DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({e.detail}); gamma_deg is "
                                   f"in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
                                   key="gamma_deg") from e

@@ -92,7 +92,9 @@ class Hypothesis:
     lower, upper : shape=(k,), physical bounds of the internal parameters
     explanation : the sentence of physics printed with a finding
     dC : structural effects: the C_F increment [mm/N] per unit internal parameter, one per column, else None
-    hidden : parameters chosen from a grid rather than fitted linearly (counted in the BIC)
+    hidden : parameters chosen from a grid rather than fitted linearly (counted in the BIC), or parameters of
+        cost alone that make a hypothesis dearer in the BIC than a rival that fits about as well (a gauge's gain,
+        outside the vocabulary)
     settings : those hidden parameters' values in report units (creep's ``tau_s``), reported beside the fit
     report_scale, report_offset : shape=(k,), ``reported = report_offset + report_scale * internal``
     """

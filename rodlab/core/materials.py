@@ -51,11 +51,13 @@ __all__ = ["Material", "BUILTIN_MATERIALS", "get_material", "material_from_table
 _ISO_TOL = 1e-6
 
 
-#: moduli [GPa] and densities [kg/m^3] of solid materials a rod's parts are made of (polymers to carbides,
-#: foams to tungsten); values outside are refused as a units slip (a density below 0.1 is taken as a deliberately
-#: massless part of an idealised model, not as g/cm^3)
+#: moduli [GPa] and densities [kg/m^3] of the solid materials a rod's parts are made of (polymers to carbides,
+#: plastics to tungsten); a modulus outside, a density above, is refused as a units slip
 MODULUS_GPA = (0.1, 1500.0)
 DENSITY_KG_M3 = (100.0, 25000.0)
+#: densities [kg/m^3] that are a solid's in g/cm^3 (refused with the conversion); below, a deliberately massless
+#: part of an idealised model; between this and the range above, a foam
+G_CM3 = (0.1, 30.0)
 
 
 @dataclass(frozen=True)
@@ -99,7 +101,6 @@ class Material:
                                   key=key)
         if self.E_GPa <= 0:
             raise DesignError(f"material `{self.name}`: E_GPa must be > 0, got {self.E_GPa}", key="E_GPa")
-        self._check_units()
         if not (-1.0 < self.nu < 0.5):
             raise DesignError(f"material `{self.name}`: nu must lie in (-1, 0.5), got {self.nu}", key="nu")
         if self.density_kg_m3 <= 0:
@@ -109,6 +110,7 @@ class Material:
             v = getattr(self, key)
             if v is not None and v <= 0:
                 raise DesignError(f"material `{self.name}`: {key} must be > 0, got {v}", key=key)
+        self._check_units()
 
     def _check_units(self) -> None:
         """Values no solid material has, which a units slip gives (Pa or MPa for GPa, g/cm^3 for kg/m^3)."""
@@ -120,8 +122,8 @@ class Material:
                 raise DesignError(f"material `{self.name}`: {key} = {v:g} is not a solid material's modulus in GPa "
                                   f"({MODULUS_GPA[0]:g}-{MODULUS_GPA[1]:g}; {hint}); give it in GPa", key=key)
         d = self.density_kg_m3
-        if 0.1 <= d < DENSITY_KG_M3[0] or d > DENSITY_KG_M3[1]:   # far below: a deliberately massless part
-            hint = f"{d:g} g/cm^3 = {d * 1e3:g} kg/m^3" if d < DENSITY_KG_M3[0] else "heavier than any metal"
+        if G_CM3[0] <= d <= G_CM3[1] or d > DENSITY_KG_M3[1]:
+            hint = f"{d:g} g/cm^3 = {d * 1e3:g} kg/m^3" if d <= G_CM3[1] else "heavier than any metal"
             raise DesignError(f"material `{self.name}`: density_kg_m3 = {d:g} is not a solid material's density in "
                               f"kg/m^3 ({DENSITY_KG_M3[0]:g}-{DENSITY_KG_M3[1]:g}; {hint}); give it in kg/m^3",
                               key="density_kg_m3")

@@ -11,7 +11,8 @@ from rodlab.stiffness_rig import read_recording
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.design_io import resolve_design
-from ...core.errors import RodlabError
+from ...core.errors import DesignError, RodlabError
+from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
 from ...core.tolerances import design_value
 
@@ -52,15 +53,18 @@ def _default_free(design) -> list[str]:
     return keys
 
 
-def _explained_by_keys(finding, keys) -> bool:
+def _explained_by_keys(finding, keys, design) -> bool:
     """Whether a structural finding is what the freed ``keys`` fit: a joint freed at its place (or at one of the
-    places a group names, ``pipe_II|ring_1``), a compliance scale with a modulus E freed, a torsion with a shear
-    modulus G freed."""
+    places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E freed, a torsion of
+    pipe I with its material's shear modulus G freed."""
     if finding.effect == "joint_compliance":
         freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
         return bool(set((finding.location or "").split("|")) & freed)
-    suffix = {"compliance_scale": ".E_GPa", "torsion_compliance": ".G_GPa"}[finding.effect]
-    return any(k.startswith("materials.") and k.endswith(suffix) for k in keys)
+    if finding.effect == "compliance_scale":
+        wanted = {f"materials.{t.material.name}.E_GPa" for t in (design.pipe_I, design.pipe_II)}
+    else:
+        wanted = {f"materials.{design.pipe_I.material.name}.G_GPa"}
+    return bool(wanted & set(keys))
 
 
 def _measured(path: str, design, keys, model: str):
@@ -74,11 +78,11 @@ def _measured(path: str, design, keys, model: str):
         C = model_compliance(model)(design)
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
                                         {"model": model})
-        diag, model = diagnose_rig(read_recording(path), sim, design)
+        diag, fitted = diagnose_rig(read_recording(path), sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
         local = [f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings
-                 if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys)]
-        joints = [" or ".join(f"joints.{p}.s_bend_rad_per_Nm" for p in f.location.split("|")) for f in diag.findings
+                 if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
+        joints = [f"joints.{f.location.split('|')[0]}.s_bend_rad_per_Nm" for f in diag.findings
                   if f.effect == "joint_compliance" and f.location]
         if local:
             raise RodlabError(f"{path}: the recording shows {', '.join(local)} beyond the design's tolerances "
@@ -86,7 +90,7 @@ def _measured(path: str, design, keys, model: str):
                               "repair or re-bond the rod and measure again, fit only what the tolerances explain, or "
                               "free the joint's compliance (--free " + (",".join(joints) or "joints.PLACE.s_bend_rad_per_Nm")
                               + ")")
-        lin = model.linear
+        lin = fitted.linear
         return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
@@ -126,7 +130,7 @@ def cmd_update(args: argparse.Namespace) -> int:
                           "rod differs in a way these keys cannot move. Look for a local cause (`rodlab diagnose "
                           "--rig` on the recording) or free other keys (a joint's compliance "
                           "joints.PLACE.s_bend_rad_per_Nm, the tube's sizes); nothing was written")
-    text = Path(design.source).read_text(encoding="utf-8")
+    text = read_text_checked(design.source, DesignError)
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")
     out = write_edited_design(text, design, dict(zip(res.keys, res.x)), args.output, header)

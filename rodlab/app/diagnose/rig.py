@@ -37,7 +37,7 @@ from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
 from .rig_select import demean
 from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, within_hold_noise
+from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, within_hold_noise
 from .rig_tolerant import diagnose_tolerant
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places", "within_hold_noise"]
@@ -61,9 +61,14 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
         raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
                           "against; give the rod's calc, fea or meas compliance file")
     data = rig_samples(rec)
-    if not np.any(data.F != 0):
-        raise RodlabError(f"{rec.path or 'the recording'}: every hold's load is 0 (mass_kg and force_N): there is no "
-                          "load-deflection to diagnose; check the mass_kg column (kg, with the hanger)")
+    name = rec.path or "the recording"
+    if not np.any(data.mass > 0):
+        raise RodlabError(f"{name}: every hold's mass is 0: there is no load-deflection to diagnose; check the "
+                          "mass_kg column (kg, with the hanger)")
+    try:
+        noise = reading_noise(data)
+    except RodlabError as e:
+        raise RodlabError(f"{name}: {e}") from e
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
     glitch = isolated_glitches(data)
@@ -71,15 +76,17 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     if glitch.any():
         _note_glitches(diag, data, glitch)
     _add_cautions(diag)
+    diag.extra["noise_estimate"] = {"dof": noise.dof, "source": noise.source}
     return diag, model
 
 
 def _note_glitches(diag: Diagnosis, data: RigSamples, glitch: np.ndarray) -> None:
     """The readings left out as glitches, as an ``unexplained`` finding naming their holds."""
     steps = sorted(set(data.step[glitch].tolist()))
-    off = float(np.nanmax(np.abs(hold_line_residuals(data, glitch)[0][glitch])))
+    off_line = np.abs(hold_line_residuals(data, glitch)[0][glitch])
+    off = float(np.max(off_line[np.isfinite(off_line)])) if np.isfinite(off_line).any() else float("nan")
     diag.findings.append(Finding(
-        FindingKind.UNEXPLAINED, "step:" + ",".join(map(str, steps)),
+        FindingKind.UNEXPLAINED, "step:" + ",".join(map(str, steps[:12])) + (",..." if len(steps) > 12 else ""),
         f"{int(glitch.sum())} single reading(s) far off their hold's line (up to {off * 1e3:.1f} um off it, more than "
         f"{GLITCH_Z:g} robust noise SDs): a gauge's glitch or an electrical spike, not the rod or the rig; "
         "left out, and the rest diagnosed without them", {"readings_left_out": int(glitch.sum())}, {},

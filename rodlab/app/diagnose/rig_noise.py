@@ -2,7 +2,7 @@
 
 1. **Within the holds:** the pooled SD of the readings about a straight line in time in each (hold, gauge) with at
    least 3 readings (a drift or creep inside a hold is not noise).
-2. **Between repeats**, when the holds give fewer than :data:`MIN_DOF` degrees of freedom (1-3 readings per hold):
+2. **Between repeats**, when the holds give fewer than :data:`MIN_DOF` degrees of freedom (1-2 readings per hold):
    the scatter of the hold means of the same gauge, load axis, mass and branch over the repeats (a one-way
    analysis of variance; friction and drift between repeats make it an upper bound: fewer findings, not false
    ones).
@@ -74,22 +74,64 @@ def reading_noise(data: RigSamples) -> NoiseEstimate:
 
 
 def isolated_glitches(data: RigSamples) -> np.ndarray:
-    """The readings (bool, shape=(n,)) more than :data:`GLITCH_Z` robust SDs off their (hold, gauge)'s line in
-    time, when they are rare (at most :data:`GLITCH_SHARE_MAX` of the readings) and clear the gauges' step by 5."""
+    """The readings (bool, shape=(n,)) that are glitches: in a pass over every (hold, gauge), its one reading
+    farthest off the line through the others (a leave-one-out residual: a spike cannot pull its own line), when
+    that is more than :data:`GLITCH_Z` robust SDs and 5 gauge steps off; two passes (at most two per hold). Kept
+    only when rare (at most :data:`GLITCH_SHARE_MAX` of the readings) and not at one place in the holds (a
+    reading off in many holds at the same moment is settling or handling, not a glitch)."""
     none = np.zeros(data.n, dtype=bool)
-    resid, _ = hold_line_residuals(data)
+    resid, dof = hold_line_residuals(data)
     fitted = np.isfinite(resid)
-    if fitted.sum() < 20:
+    if fitted.sum() < 20 or dof < 1:
         return none
-    robust = 1.4826 * float(np.median(np.abs(resid[fitted])))
+    # robust SD of one reading: the residuals' MAD, corrected for the lines' fitted parameters
+    robust = 1.4826 * float(np.median(np.abs(resid[fitted]))) * np.sqrt(fitted.sum() / dof)
     limit = max(GLITCH_Z * robust, 5.0 * _quantum(data.y))
     if not limit > 0:
         return none
-    out = none
-    for _ in range(2):        # a glitch pulls its hold's line: fit the line again without the readings found
-        out = fitted & (np.abs(np.nan_to_num(resid)) > limit)
-        resid, _ = hold_line_residuals(data, out)
-    return out if 0 < out.sum() <= GLITCH_SHARE_MAX * data.n else none
+    flagged = none.copy()
+    for _ in range(2):
+        worst = _worst_left_out(data, flagged, limit)
+        if not worst.any():
+            break
+        flagged |= worst
+    if not flagged.any() or flagged.sum() > GLITCH_SHARE_MAX * data.n or _at_one_place(data, flagged):
+        return none
+    return flagged
+
+
+def _worst_left_out(data: RigSamples, skip: np.ndarray, limit: float) -> np.ndarray:
+    """In each (hold, gauge) with >= 3 readings not in ``skip``, its reading farthest off the line through the
+    others, where that is beyond ``limit`` [mm]."""
+    out = np.zeros(data.n, dtype=bool)
+    keys = data.step * 4 + data.comp
+    for k in np.unique(keys):
+        u = np.nonzero((keys == k) & ~skip)[0]
+        if u.size < 3:
+            continue
+        t = data.t_hold[u] - data.t_hold[u].mean()
+        sxx = float(t @ t)
+        A = np.column_stack([np.ones_like(t), t])
+        coef, *_ = np.linalg.lstsq(A, data.y[u], rcond=None)
+        h = 1.0 / u.size + (t * t / sxx if sxx > 0 else 0.0)
+        loo = (data.y[u] - A @ coef) / np.maximum(1.0 - h, 1e-9)
+        i = int(np.argmax(np.abs(loo)))
+        if abs(loo[i]) > limit:
+            out[u[i]] = True
+    return out
+
+
+def _at_one_place(data: RigSamples, flagged: np.ndarray) -> bool:
+    """Whether the flagged readings sit mostly at one place in their holds (the same reading of each hold)."""
+    if flagged.sum() < 3:
+        return False
+    keys = data.step * 4 + data.comp
+    order = np.lexsort((data.t_hold, keys))
+    index = np.empty(data.n, dtype=int)
+    _, start = np.unique(keys[order], return_index=True)
+    counts = np.diff(np.append(start, data.n))
+    index[order] = np.arange(data.n) - np.repeat(start, counts)    # the reading's place in its hold
+    return np.bincount(index[flagged]).max() > 0.5 * flagged.sum()
 
 
 def hold_line_residuals(data: RigSamples, skip: np.ndarray | None = None) -> tuple[np.ndarray, int]:

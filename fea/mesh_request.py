@@ -2,9 +2,8 @@
 
 :func:`solid_mesh_request` checks the element size and the model's size limit and returns the keywords the solid
 model (:func:`fea.compute.solid_compliance`) calls its mesher with. It imports the core only (no scikit-fem,
-scipy or PARDISO): a caller can decide and check the mesh before the solver loads. (Meshing in a background
-thread while the solver's modules load was tried on 2026-11-27 and dropped: in an alternated run the first
-``rodlab fea rod1 --model solid`` took 1.66 s with it and 1.60 s without, medians of 5.)
+scipy or PARDISO), so ``rodlab fea --model solid`` can start meshing in the background while those load
+(:class:`rodlab.geometry.MeshPrefetch`).
 """
 from __future__ import annotations
 

@@ -15,7 +15,7 @@ _EXPORTS = {
     "RodCad": "assembly", "build_cad": "assembly",
     "GeometryError": "errors",
     "mesh_rod": "mesh", "default_size_mm": "mesh", "feature_circles": "mesh",
-    "MeshCache": "mesh_cache",
+    "MeshCache": "mesh_cache", "MeshPrefetch": "mesh_prefetch",
     "PART_COLOURS": "parts", "part_solids": "parts",
     "render_views": "render",
 }

@@ -1,9 +1,12 @@
 """Mesh one design in the background while the caller does other work (imports, set-up).
 
 ``rodlab fea --model solid`` knows which mesh it will need before it has loaded the solver (scikit-fem, scipy's
-sparse linear algebra, PARDISO: ~0.15 s): :class:`MeshPrefetch` starts meshing then, in a thread, and hands the
-mesh over when the solid model asks for it. gmsh's calls release the GIL (ctypes), so the mesh and the imports
-share the two cores; the mesh is the same as meshing in the foreground.
+sparse linear algebra, PARDISO: ~0.15 s): :class:`MeshPrefetch` starts the mesher then, in a thread, and hands the
+mesh over when the solid model asks for it; the mesh is the same as meshing in the foreground. Measured
+(alternated, 2026-11-27, rod 1#): a rerun, whose mesher computes the cache key (the sources' digest and the
+packages' versions) and unpickles the mesh while the solver imports, median 0.87-0.89 s against 1.09 s without
+(8 rounds); a first run, which meshes, gains nothing (1.66 s against 1.60 s, 5 rounds): gmsh's Python layer and
+OpenCASCADE's parallel booleans compete with the imports for the GIL and the two cores.
 """
 from __future__ import annotations
 

@@ -125,8 +125,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
 
 
 def _prefetching_mesher(args: argparse.Namespace, design):
-    """The solid model's mesher (cached unless ``--no-cache``), already meshing ``design`` in the background while
-    the solver's modules load (:class:`rodlab.geometry.MeshPrefetch`; first run of rod 1#: ~0.1 s less). The
+    """The solid model's mesher (cached unless ``--no-cache``), already at work on ``design`` in the background
+    while the solver's modules load (:class:`rodlab.geometry.MeshPrefetch`: a rerun of rod 1# ~0.2 s less). The
     size and the model's size limit are checked first."""
     from rodlab.fea.mesh_request import solid_mesh_request   # the core only: no solver imports yet
     geometry = require_mesher()

@@ -23,7 +23,7 @@ from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
 
-__all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "PLAUSIBLE_R_ROD"]
+__all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "PLAUSIBLE_R_ROD", "noise_text"]
 
 _AX = "xyz"
 
@@ -167,7 +167,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
         else:
             _check_plausible_r_rod(fit, rec, sim)
     if fit.success:
-        fit.message = f"{len(lines)} lines fitted; noise {noise * 1e3:.2f} um per reading"
+        fit.message = f"{len(lines)} lines fitted; {noise_text(noise)}"
     return fit
 
 
@@ -192,6 +192,13 @@ def r_rod_caution(r_rod: float, recording_rod: str | None, sim_rod: str) -> str 
     return (f"r_rod = {r_rod:.3g}: the rod is {r_rod:.3g} x as compliant as the simulation of rod {sim_rod!r}, beyond "
             f"any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units (mass_kg in kg, not g; "
             f"disp_*_mm in mm, not um) and that the simulation is this rod's{said}")
+
+
+def noise_text(noise_mm: float) -> str:
+    """The within-hold noise of one reading for a message: its value, or why there is none (1 reading per hold)."""
+    if np.isfinite(noise_mm):
+        return f"noise {noise_mm * 1e3:.2f} um per reading"
+    return "noise not measurable within the holds (one reading each; `rodlab diagnose --rig` uses the repeats)"
 
 
 def _check_load_response(lines: list, rec: RigRecording) -> None:

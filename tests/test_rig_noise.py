@@ -142,3 +142,9 @@ def test_readings_off_at_the_same_moment_of_every_hold_are_not_glitches(tmp_path
     firsts = [i for i in range(len(steps)) if i == 0 or steps[i] != steps[i - 1]]
     settled = read_recording(_spike(rec.path, firsts[1:], 0.01))
     assert not isolated_glitches(rig_samples(settled)).any()
+
+
+def test_rig_fit_says_why_it_has_no_noise_with_one_reading_per_hold(tmp_path):
+    from rodlab.stiffness_rig import fit_recording
+    fit = fit_recording(_record(tmp_path, 0.001, 0.0, 0.1, 10.0), SIM)
+    assert "one reading each" in fit.message and "nan" not in fit.message

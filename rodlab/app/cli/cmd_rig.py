@@ -16,6 +16,7 @@ import numpy as np
 
 from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
+from rodlab.stiffness_rig.fit import noise_text
 from rodlab.stiffness_rig.plan_check import linear_range_warnings
 from rodlab.stiffness_rig.plot import format_pm, format_zero
 
@@ -137,7 +138,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
-    print(f"rod {rec.rod}: {len(fit.holds)} holds, noise {fit.noise_mm * 1e3:.2f} um per reading")
+    print(f"rod {rec.rod}: {len(fit.holds)} holds, {noise_text(fit.noise_mm)}")
     print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
     for ln in fit.lines:
         z = ln.zero_load_kg

@@ -47,6 +47,23 @@ def legacy_file(path: Path, name: str) -> Path:
     return write_toml(path, legacy_dict(name))
 
 
+def rewrite_recording(src: Path, dst: Path, edit=None, meta=None, prefix: str = "") -> Path:
+    """A copy of the rig recording ``src`` at ``dst``: ``edit(i, row)`` changes data row ``i`` in place (``row``: column
+    -> cell text), ``meta(line)`` returns each comment line as it should be, ``prefix`` goes before the first byte
+    (a byte-order mark). Recordings of another rig, a units slip or a glitch are made this way from a simulated one."""
+    lines = Path(src).read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    cols = lines[head].split(",")
+    out = [meta(line) if meta else line for line in lines[:head]] + [lines[head]]
+    for i, line in enumerate(lines[head + 1:]):
+        row = dict(zip(cols, line.split(",")))
+        if edit:
+            edit(i, row)
+        out.append(",".join(row[c] for c in cols))
+    Path(dst).write_text(prefix + "\n".join(out) + "\n", encoding="utf-8")
+    return Path(dst)
+
+
 @pytest.fixture
 def examples() -> Path:
     if not EXAMPLES.is_dir():

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance
-from conftest import legacy_design, legacy_file
+from conftest import legacy_design, legacy_file, rewrite_recording
 from rodlab.app.diagnose import diagnose_rig
 from rodlab.core.enums import Phase
 from rodlab.stiffness_rig import read_recording
@@ -245,22 +245,14 @@ def test_friction_whose_slide_lets_go_at_mass_0_is_friction_alone(tmp_path, accu
     model = RigModel(SIM.C_F, {"friction": {"F_f_N": Ff}}, noise_mm=0.0006, resolution_mm=0.0, seed=11)
     simulate_recording(model, LoadSchedule(repeats=4, hold_s=5.0), rec_path, rod=DESIGN.name)
     # the slide released at every mass-0 hold after unloading: take the stuck friction's deflection out there
-    lines = rec_path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    cols = lines[head].split(",")
-    out = lines[:head + 1]
-    for line in lines[head + 1:]:
-        c = line.split(",")
-        if float(c[cols.index("mass_kg")]) == 0 and c[cols.index("phase")] == "unload":
-            ax = c[cols.index("load_axis")]
+    def release(_, row):
+        if float(row["mass_kg"]) == 0 and row["phase"] == "unload":
+            ax = row["load_axis"]
             j, sign = "xyz".index(ax[-1]), -1.0 if ax.startswith("-") else 1.0
             for m, name in enumerate(("disp_x_mm", "disp_y_mm", "disp_z_mm")):
-                k = cols.index(name)
-                if c[k]:
-                    c[k] = f"{float(c[k]) - Ff * SIM.C_F[m, j] * sign:.7f}"
-        out.append(",".join(c))
-    released = tmp_path / "released.rig.csv"
-    released.write_text("\n".join(out) + "\n")
+                if row[name]:
+                    row[name] = f"{float(row[name]) - Ff * SIM.C_F[m, j] * sign:.7f}"
+    released = rewrite_recording(rec_path, tmp_path / "released.rig.csv", release)
     for path in (rec_path, released):
         diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy=accuracy)
         named = {f.effect for f in diag.findings} - {"model_form"}
@@ -276,16 +268,10 @@ def test_a_gauge_whose_calibration_factor_is_off_is_unexplained_at_the_gauge(tmp
     path = tmp_path / "g.rig.csv"
     model = RigModel(SIM.C_F, {}, noise_mm=0.0006, resolution_mm=0.0, seed=12)
     simulate_recording(model, LoadSchedule(repeats=3, hold_s=5.0), path, rod=DESIGN.name)
-    lines = path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    k = lines[head].split(",").index("disp_z_mm")
-    out = lines[:head + 1]
-    for line in lines[head + 1:]:
-        c = line.split(",")
-        if c[k]:
-            c[k] = f"{1.05 * float(c[k]):.7f}"
-        out.append(",".join(c))
-    path.write_text("\n".join(out) + "\n")
+    def gain(_, row):
+        if row["disp_z_mm"]:
+            row["disp_z_mm"] = f"{1.05 * float(row['disp_z_mm']):.7f}"
+    rewrite_recording(path, path, gain)
     diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy="exact")
     assert {f.effect for f in diag.findings} == {"unexplained"}, diag.summary()
     f = next(f for f in diag.findings if f.location == "sensor:z")

@@ -9,6 +9,7 @@ import pytest
 from rodlab import Method, read_compliance
 from rodlab.core.units import G0
 from rodlab.stiffness_rig import RecordingWriter, RigError, fit_recording, read_recording
+from conftest import rewrite_recording
 
 
 @pytest.fixture
@@ -128,22 +129,12 @@ def test_fig8_numbers_read_at_a_glance():
 
 def _scaled_copy(src, dst, mass=1.0, disp=1.0, rod=None, bom=False):
     """A copy of a recording with its masses and readings scaled (a units slip), another rod name, or a BOM."""
-    lines = src.read_text().splitlines()
-    out, header = [], None
-    for line in lines:
-        if line.startswith("#"):
-            out.append(f"# rod: {rod}" if rod and line.startswith("# rod:") else line)
-        elif header is None:
-            header = line.split(",")
-            out.append(line)
-        else:
-            cells = line.split(",")
-            for k, name in enumerate(header):
-                if cells[k] and (name == "mass_kg" or name.startswith("disp_")):
-                    cells[k] = repr(float(cells[k]) * (mass if name == "mass_kg" else disp))
-            out.append(",".join(cells))
-    dst.write_text(("\ufeff" if bom else "") + "\n".join(out) + "\n", encoding="utf-8")
-    return dst
+    def scale(_, row):
+        for name, cell in row.items():
+            if cell and (name == "mass_kg" or name.startswith("disp_")):
+                row[name] = repr(float(cell) * (mass if name == "mass_kg" else disp))
+    return rewrite_recording(src, dst, scale, lambda line: f"# rod: {rod}" if rod and line.startswith("# rod:") else line,
+                             "\ufeff" if bom else "")
 
 
 @pytest.mark.parametrize("mass, disp", [(1000.0, 1.0), (1.0, 1000.0)])

@@ -14,6 +14,7 @@ from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.samples import rig_samples
 from rodlab.stiffness_rig.simulate import simulate_recording
+from conftest import rewrite_recording
 
 DESIGN = resolve_design("rod1")
 SIM = calc_rod_compliance(DESIGN)
@@ -70,16 +71,7 @@ def test_a_single_glitch_is_left_out_and_named_not_taken_for_noise(tmp_path):
     model = RigModel(SIM.C_F, {"joint_compliance": {"location": "flange_clamp", "s_bend_rad_per_Nm": 1e-5}},
                      noise_mm=0.0006, resolution_mm=0.0001, seed=8, places=joint_places(DESIGN.tool_mm, DESIGN))
     path = simulate_recording(model, LoadSchedule(repeats=3, hold_s=6.0), tmp_path / "j.rig.csv", rod=DESIGN.name)
-    lines = path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    cols = lines[head].split(",")
-    k = head + 1 + 700
-    cells = lines[k].split(",")
-    j = next(c for c in ("disp_z_mm", "disp_y_mm", "disp_x_mm") if cells[cols.index(c)])
-    cells[cols.index(j)] = f"{float(cells[cols.index(j)]) + 0.5:.4f}"
-    lines[k] = ",".join(cells)
-    spiked = tmp_path / "spiked.rig.csv"
-    spiked.write_text("\n".join(lines) + "\n")
+    spiked = _spike(path, [700], 0.5)
     clean, _ = diagnose_rig(read_recording(path), SIM, DESIGN)
     diag, _ = diagnose_rig(read_recording(spiked), SIM, DESIGN)
     assert diag.noise_mm == pytest.approx(clean.noise_mm, rel=0.05)
@@ -92,30 +84,18 @@ def test_a_single_glitch_is_left_out_and_named_not_taken_for_noise(tmp_path):
 
 def test_a_recording_that_loads_nothing_is_refused(tmp_path):
     rec = _record(tmp_path, 0.001, 0.0, 2.0, 10.0)
-    lines = rec.path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    k = lines[head].split(",").index("mass_kg")
-    out = lines[:head + 1] + [",".join(c if j != k else "0.0" for j, c in enumerate(s.split(",")))
-                              for s in lines[head + 1:]]
-    zero = tmp_path / "zero.rig.csv"
-    zero.write_text("\n".join(out) + "\n")
+    zero = rewrite_recording(rec.path, tmp_path / "zero.rig.csv", lambda _, row: row.update(mass_kg="0.0"))
     with pytest.raises(RodlabError, match="every hold's mass is 0"):
         diagnose_rig(read_recording(zero), SIM, DESIGN)
 
 
 def _spike(path, rows, add_mm):
     """A copy of a recording with ``add_mm`` added to the first measured displacement of the data rows ``rows``."""
-    lines = path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    cols = lines[head].split(",")
-    for r in rows:
-        cells = lines[head + 1 + r].split(",")
-        j = next(cols.index(c) for c in ("disp_z_mm", "disp_y_mm", "disp_x_mm") if cells[cols.index(c)])
-        cells[j] = f"{float(cells[j]) + add_mm:.6f}"
-        lines[head + 1 + r] = ",".join(cells)
-    out = path.with_name("spiked-" + path.name)
-    out.write_text("\n".join(lines) + "\n")
-    return out
+    def spike(i, row):
+        if i in rows:
+            c = next(c for c in ("disp_z_mm", "disp_y_mm", "disp_x_mm") if row[c])
+            row[c] = f"{float(row[c]) + add_mm:.6f}"
+    return rewrite_recording(path, path.with_name("spiked-" + path.name), spike)
 
 
 @pytest.mark.parametrize("hold_s", [0.3, 0.4, 1.0])
@@ -136,9 +116,7 @@ def test_readings_off_at_the_same_moment_of_every_hold_are_not_glitches(tmp_path
     """A reading 10 um off at the start of every hold (a swinging hanger) is settling, not a glitch."""
     from rodlab.app.diagnose.rig_noise import isolated_glitches
     rec = _record(tmp_path, 0.0006, 0.0, 3.0, 10.0, repeats=3)
-    lines = rec.path.read_text().splitlines()
-    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
-    steps = [ln.split(",")[1] for ln in lines[head + 1:]]
+    steps = [int(s) for s in rec.step]
     firsts = [i for i in range(len(steps)) if i == 0 or steps[i] != steps[i - 1]]
     settled = read_recording(_spike(rec.path, firsts[1:], 0.01))
     assert not isolated_glitches(rig_samples(settled)).any()

@@ -37,10 +37,10 @@ from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
 from .rig_select import demean
 from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, within_hold_noise
+from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise
 from .rig_tolerant import diagnose_tolerant
 
-__all__ = ["diagnose_rig", "RigModelFit", "joint_places", "within_hold_noise"]
+__all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
 
 log = logging.getLogger(__name__)
 
@@ -65,14 +65,15 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     if not np.any(data.mass > 0):
         raise RodlabError(f"{name}: every hold's mass is 0: there is no load-deflection to diagnose; check the "
                           "mass_kg column (kg, with the hanger)")
+    glitch = isolated_glitches(data)
+    clean = data.subset(~glitch)
     try:
-        noise = reading_noise(data)
+        noise = reading_noise(clean)
     except RodlabError as e:
         raise RodlabError(f"{name}: {e}") from e
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
-    glitch = isolated_glitches(data)
-    diag, model = _without_a_stray_hold(data.subset(~glitch), sim, design, max_terms, env)
+    diag, model = _without_a_stray_hold(clean, sim, design, max_terms, env, noise.sigma_mm)
     if glitch.any():
         _note_glitches(diag, data, glitch)
     _add_cautions(diag)
@@ -105,9 +106,9 @@ def _add_cautions(diag: Diagnosis) -> None:
             f.evidence["caution"] = text
 
 
-def _without_a_stray_hold(data, sim: RodCompliance, design, max_terms: int, env: Envelope):
+def _without_a_stray_hold(data, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float):
     """The diagnosis of ``data``, or of it without one hold far off all the others (see :func:`diagnose_rig`)."""
-    diag, model = _diagnose(data, sim, design, max_terms, env)
+    diag, model = _diagnose(data, sim, design, max_terms, env, sigma)
     if not _lacks_fit(diag):
         return diag, model
     z2 = model.hold_z2
@@ -117,7 +118,8 @@ def _without_a_stray_hold(data, sim: RodCompliance, design, max_terms: int, env:
     if tot.max() < 100.0 or tot.max() < 0.5 * tot.sum():
         return diag, model
     keep = data.step != w
-    diag2, model2 = _diagnose(data.subset(keep), sim, design, max_terms, env)
+    rest = data.subset(keep)
+    diag2, model2 = _diagnose(rest, sim, design, max_terms, env, reading_noise(rest).sigma_mm)
     if _lacks_fit(diag2):
         return diag, model
     off = model.hold_offset_mm[w]
@@ -138,17 +140,17 @@ def _lacks_fit(diag: Diagnosis) -> bool:
                for f in diag.findings)
 
 
-def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope):
+def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float):
+    """``sigma``: the noise of one reading of ``data`` [mm] (:func:`.rig_noise.reading_noise`)."""
     if env.exact:
-        return _diagnose_exact(data, sim, design, max_terms)
-    diag, model = diagnose_tolerant(data, sim, design, max_terms, env)
-    return diag, model
+        return _diagnose_exact(data, sim, design, max_terms, sigma)
+    return diagnose_tolerant(data, sim, design, max_terms, env, sigma)
 
 
-def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int) -> tuple[Diagnosis, RigModelFit]:
+def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int,
+                    sigma: float) -> tuple[Diagnosis, RigModelFit]:
     """Screen, attribute, locate and explain one recording against a simulation that is the rod (the steps of the
     module docstring)."""
-    sigma = within_hold_noise(data)
     n = data.y.size
     base = sim.C_F[data.comp, data.axis] * data.F
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised

@@ -23,7 +23,7 @@ import numpy as np
 from rodlab.core.errors import RodlabError
 from rodlab.stiffness_rig.samples import RigSamples
 
-__all__ = ["NoiseEstimate", "reading_noise", "within_hold_noise", "isolated_glitches", "hold_line_residuals",
+__all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals",
            "MIN_DOF", "GLITCH_Z"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
@@ -43,11 +43,6 @@ class NoiseEstimate:
     sigma_mm: float
     dof: int
     source: str
-
-
-def within_hold_noise(data: RigSamples) -> float:
-    """The SD of one reading [mm] (:func:`reading_noise`)."""
-    return reading_noise(data).sigma_mm
 
 
 def reading_noise(data: RigSamples) -> NoiseEstimate:

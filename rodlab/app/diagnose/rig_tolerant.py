@@ -24,7 +24,6 @@ from .rig_linear import Projector, fit_linear, linear_columns, measured_entries
 from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import demean, subset_ls
 from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings
-from .rig_noise import within_hold_noise
 
 __all__ = ["diagnose_tolerant"]
 
@@ -35,10 +34,10 @@ def _hypotheses(data: RigSamples, C: np.ndarray, places: dict, tool: np.ndarray,
     return [h for m in RIG_EFFECTS.values() if m.structural == structural for h in m.hypotheses(data, ctx)]
 
 
-def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: int,
-                      env: Envelope) -> tuple[Diagnosis, RigModelFit]:
-    """Diagnose ``data`` against ``sim`` within the envelope ``env`` (the steps of the module docstring)."""
-    sigma = within_hold_noise(data)
+def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope,
+                      sigma: float) -> tuple[Diagnosis, RigModelFit]:
+    """Diagnose ``data`` against ``sim`` within the envelope ``env`` (the steps of the module docstring); ``sigma``
+    the noise of one reading [mm] (:func:`.rig_noise.reading_noise`)."""
     n = data.y.size
     groups = data.axis * 4 + data.comp
     entries = measured_entries(data, sim.C_F)

@@ -103,7 +103,7 @@ RULES = [
     ("material key", _set(("materials", "cfrp_tube", "density"), 1.0), "materials.cfrp_tube.density",
      "density_kg_m3"),
     ("bare L1 key", _set(("L1",), 300.0), "L1", "Did you mean `L1_mm`"),
-    ("hangs rather than reaches", _set(("L2_mm",), 45000.0), "L2_mm", "hang rather than reach"),
+    ("hangs rather than reaches", _set(("L2_mm",), 9000.0), "L2_mm", "hang rather than reach"),
     # units slips: named as such, not as a geometry rule they break further on
     ("modulus in Pa", _set(("materials", "cfrp_tube", "E_GPa"), 140e9), "materials.cfrp_tube.E_GPa", "= 140 GPa"),
     ("modulus in MPa", _set(("materials", "cfrp_tube", "G_GPa"), 10000.0), "materials.cfrp_tube.G_GPa", "MPa"),
@@ -112,6 +112,8 @@ RULES = [
     ("density in g/cm3", _set(("materials", "cfrp_tube", "density_kg_m3"), 1.58),
      "materials.cfrp_tube.density_kg_m3", "1580 kg/m^3"),
     ("gamma in radians", _set(("gamma_deg",), 1.9), "gamma_deg", "did you give radians"),
+    ("absurd size", _set(("tube", "outer_diameter_mm"), 1e300), "tube.outer_diameter_mm", "<= 10000 mm"),
+    ("length in um", _set(("L1_mm",), 300000.0), "L1_mm", "millimetres"),
 ]
 
 

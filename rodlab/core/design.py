@@ -36,12 +36,18 @@ __all__ = ["TubeSpec", "BendSpec", "SleeveSpec", "BallSpec", "RodDesign", "MIN_B
 #: Smallest allowed bend radius as a multiple of the bend pipe's outer diameter.
 MIN_BEND_RATIO = 1.5
 
+#: Largest size a design may give [mm]: a measuring rod is well under a metre, so a size beyond 10 m is a typo
+#: or another unit (and the closed form overflows on absurd sizes instead of saying so).
+MAX_SIZE_MM = 10_000.0
+
 
 def _check_pos(name: str, value: float, key: str, allow_zero: bool = False) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise DesignError(f"{name} must be a finite number, got {value!r}", key=key)
     if value < 0 or (value == 0 and not allow_zero):
         raise DesignError(f"{name} must be {'>= 0' if allow_zero else '> 0'}, got {value}", key=key)
+    if value > MAX_SIZE_MM:
+        raise DesignError(f"{name} must be <= {MAX_SIZE_MM:g} mm (sizes are in millimetres), got {value:g}", key=key)
 
 
 @dataclass(frozen=True)

@@ -105,3 +105,18 @@ def test_report_tells_one_story(run):
     for term, meaning in (("c_rod", "compliance index"), ("r_rod", "correction factor"), ("{T}", "tool frame")):
         first = text.index(term)
         assert meaning in text[first:first + 80], (term, text[first - 100:first + 100])
+
+
+def test_demo_study_is_rodlab_study_with_its_defaults(run, tmp_path):
+    """A user who reruns the demo's study from the command line gets the demo's numbers and choice: the same
+    priors (the rod slip included), the same family's joint calibration."""
+    from rodlab.app.cli import main
+    assert main(["study", "rod1", "rod2", "rod3", "--robot", "tx90", "-o", str(tmp_path / "st"), "-q"]) == 0
+    cli = json.loads((tmp_path / "st" / "study.json").read_text())
+    sy = json.loads((run / "run.json").read_text())["stages"]["study"]
+    assert cli["recommendation"]["design"] == sy["recommended"]["design"]
+    import pandas as pd
+    df = pd.read_csv(tmp_path / "st" / "study.csv").dropna(subset=["method"])
+    got = {(r.design, r.method): r.mean_mm for r in df.itertuples()}
+    for r in sy["rows"]:
+        assert got[(r["design"], r["method"])] == pytest.approx(r["mean_mm"], rel=0.01), (r["design"], r["method"])

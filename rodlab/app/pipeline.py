@@ -34,6 +34,7 @@ from rodlab.calibrate import (
     validate,
 )
 from rodlab.calibrate.plots import plot_error_distributions
+from rodlab.calibrate.predict import Priors
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign, standard_fixture
 from rodlab.core.design_edit import write_edited_design
 from rodlab.core.sensitivity import with_values
@@ -50,6 +51,7 @@ from ..core.calc import calc_rod_compliance
 from ..core.compliance import RodCompliance, write_compliance
 from ..core.design_io import resolve_design
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
+from ..core.units import PAPER_ROD_SLIP
 from .diagnose import corrected_compliance, diagnose_rig
 from .diagnose.plots import plot_rig_diagnosis
 from .report.views import frame_views, solid_views
@@ -265,7 +267,7 @@ def _study(out: Path, robot, design, calibration) -> dict:
     """Predicted calibration accuracy of rods 1#-3# on the TX90 (serial; rod 1#'s joint calibration serves the
     family); the study's files in ``out``, its rows for the report."""
     cands = list_candidates([design] + [resolve_design(r) for r in DEMO_STUDY_RODS[1:]])
-    spec = StudySpec(replicates=DEMO_STUDY_REPLICATES)
+    spec = StudySpec(replicates=DEMO_STUDY_REPLICATES, priors=Priors(rod_slip=PAPER_ROD_SLIP))
     run = run_study(cands, robot, standard_fixture(), spec, {c.label: calibration for c in cands},
                     out / "cache", use_dask=False)
     note = "frame joint-calibrated on rod 1#'s solid FEA" if calibration is not None else "frame model"

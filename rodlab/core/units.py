@@ -18,6 +18,7 @@ __all__ = [
     "um_from_mm",
     "DEVICE_NOISE_MM",
     "TRACKER_NOISE_MM",
+    "PAPER_ROD_SLIP",
 ]
 
 #: Standard gravity [m/s^2]; loads in the contract are ``mass_kg * G0`` newtons.
@@ -27,6 +28,10 @@ G0: float = 9.80665
 #: 2-5 m (typical specification U = 15 um + 6 um/m, about 25 um at 1 sigma per coordinate).
 DEVICE_NOISE_MM: float = 0.003
 TRACKER_NOISE_MM: float = 0.025
+
+#: The study's default rod slip (the rod's non-repeatable deflection, in multiples of its own weight in a random
+#: direction; docs/study.md: fitted to the paper's Table 3 Meas column): ``rodlab study`` and the demo's study.
+PAPER_ROD_SLIP: float = 2.4
 
 
 def gpa_to_mpa(value_gpa: float) -> float:

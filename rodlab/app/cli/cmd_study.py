@@ -10,6 +10,7 @@ from rodlab.calibrate import read_fixture
 from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.progress import progress as bar_of
+from ...core.units import PAPER_ROD_SLIP
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, write_command_report
 from .robotargs import add_robot_options, robot_from_args
@@ -17,8 +18,6 @@ from .robotargs import add_robot_options, robot_from_args
 __all__ = ["register"]
 
 _METHODS = ("none", "calc", "fea", "meas")
-#: the default of --rod-slip (docs/study.md: fitted to Table 3's Meas column)
-ROD_SLIP = 2.4
 
 
 def register(sub) -> None:
@@ -64,10 +63,10 @@ def register(sub) -> None:
     p.add_argument("--robot-floor-mm", type=nonneg_float, default=0.0,
                    help="the robot's own unmodelled error: smooth joint-angle errors whose mean on rigid-tool "
                         "validation is this [mm] (paper, TX90 by laser scanner: 0.263; default 0 = none)")
-    p.add_argument("--rod-slip", type=nonneg_float, default=ROD_SLIP,
+    p.add_argument("--rod-slip", type=nonneg_float, default=PAPER_ROD_SLIP,
                    help="the rod's non-repeatable deflection (slip, hysteresis in its joints; no compensation removes "
                         "it): at every point the deflection under this many times its own weight in a random "
-                        f"direction (default {ROD_SLIP:g}, fitted to the paper's Table 3; 0 = elastic)")
+                        f"direction (default {PAPER_ROD_SLIP:g}, fitted to the paper's Table 3; 0 = elastic)")
     p.add_argument("--no-budget", action="store_true",
                    help="with --monte-carlo: skip the error budget (one fit fewer per replicate)")
     p.add_argument("--no-calibrate", action="store_true",

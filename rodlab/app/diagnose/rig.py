@@ -36,8 +36,8 @@ from .report import Diagnosis, Finding
 from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
 from .rig_select import demean
-from .rig_steps import Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise
+from .rig_steps import LACK_CHI_RED, Prep, RigModelFit, lack_of_fit, term_findings
+from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, repeat_scatter
 from .rig_tolerant import diagnose_tolerant
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
@@ -141,17 +141,40 @@ def _lacks_fit(diag: Diagnosis) -> bool:
 
 
 def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float):
-    """``sigma``: the noise of one reading of ``data`` [mm] (:func:`.rig_noise.reading_noise`)."""
+    """``sigma``: the noise of one reading of ``data`` [mm] (:func:`.rig_noise.reading_noise`). Where the hold
+    means are left scattering over the repeats beyond it (:func:`.rig_noise.repeat_scatter` R above
+    :data:`.rig_steps.LACK_CHI_RED`: friction that varies from hold to hold, handling), the effects are selected
+    again against that scatter (``sigma * sqrt(R)`` for what is constant within a hold): thousands of readings
+    must not make a 2 % improvement of hold means that scatter 7x their noise look decisive. A misfit that every
+    repeat shares (an effect beyond its hypothesis) is structure, not scatter, and changes nothing here."""
+    diag, model = _diagnose_once(data, sim, design, max_terms, env, sigma)
+    if not _lacks_fit(diag):
+        return diag, model
+    scatter = repeat_scatter(data, model.resid, sigma)
+    if scatter <= LACK_CHI_RED:
+        return diag, model
+    diag2, model2 = _diagnose_once(data, sim, design, max_terms, env, sigma, scatter)
+    diag2.extra["selected_against_hold_scatter"] = scatter
+    for f in diag2.findings:
+        if f.effect == OUTSIDE and "reduced_chi2" in f.parameters:
+            f.explanation += (f"; the hold means scatter over the repeats {np.sqrt(scatter):.1f} x their noise, so the "
+                              "effects named were judged against that scatter, not against the noise of one reading")
+    return diag2, model2
+
+
+def _diagnose_once(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float,
+                   scatter: float = 1.0):
     if env.exact:
-        return _diagnose_exact(data, sim, design, max_terms, sigma)
-    return diagnose_tolerant(data, sim, design, max_terms, env, sigma)
+        return _diagnose_exact(data, sim, design, max_terms, sigma, scatter)
+    return diagnose_tolerant(data, sim, design, max_terms, env, sigma, scatter)
 
 
-def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int,
-                    sigma: float) -> tuple[Diagnosis, RigModelFit]:
+def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int, sigma: float,
+                    scatter: float = 1.0) -> tuple[Diagnosis, RigModelFit]:
     """Screen, attribute, locate and explain one recording against a simulation that is the rod (the steps of the
-    module docstring)."""
+    module docstring); ``scatter`` as :func:`.rig_tolerant.diagnose_tolerant`'s."""
     n = data.y.size
+    sigma_sel = sigma * float(np.sqrt(max(scatter, 1.0)))
     base = sim.C_F[data.comp, data.axis] * data.F
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
@@ -160,9 +183,9 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
-    library, ls, S, coef, rss = select_as_found(data, np.asarray(sim.C_F, float), places, tool, prep, r0, sigma,
+    library, ls, S, coef, rss = select_as_found(data, np.asarray(sim.C_F, float), places, tool, prep, r0, sigma_sel,
                                                 max_terms, folds)
-    findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
+    findings = term_findings(library, ls, S, coef, rss, sigma_sel, float(r0 @ r0))
     resid = ls.residual(S, coef)
     rms = float(np.sqrt(rss / n))
     lack = lack_of_fit(data, resid, sigma, sim.C_F)

@@ -13,6 +13,9 @@ A recording that allows none of these is refused with what to record instead.
 
 :func:`isolated_glitches` finds single readings far off their hold's line (a gauge's glitch, an electrical
 spike): one 0.5 mm reading among 10 000 had made the noise 5 um instead of 0.66 um and hidden a joint.
+
+:func:`repeat_scatter` measures how much a model's hold means scatter over the repeats beyond their noise
+(friction that varies from hold to hold, handling): random structure, unlike a misfit that every repeat shares.
 """
 from __future__ import annotations
 
@@ -23,7 +26,7 @@ import numpy as np
 from rodlab.core.errors import RodlabError
 from rodlab.stiffness_rig.samples import RigSamples
 
-__all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals",
+__all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals", "repeat_scatter",
            "MIN_DOF", "GLITCH_Z"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
@@ -176,6 +179,32 @@ def _between_repeats(data: RigSamples) -> tuple[float, int]:
         ss += float((counts * (means - grand) ** 2).sum())
         dof += steps.size - 1
     return ss, dof
+
+
+def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
+    """The robust reduced chi-square of the hold means of ``resid`` (a model's residual of each reading [mm]) about
+    the mean of the holds that repeat them (gauge, load axis and sign, mass, branch), each against its noise
+    ``sigma**2 / readings``: ~1 when the holds repeat to within their noise, whatever misfit they share; the
+    median over the holds (divided by chi-square(1)'s median), so one stray hold does not set it. 1 when nothing
+    repeats."""
+    keep = ~data.reference
+    d, r = data.subset(keep), np.asarray(resid, float)[keep]
+    group = np.unique(np.column_stack([d.comp, d.axis, d.sign, np.round(d.mass, 6), d.unload]),
+                      axis=0, return_inverse=True)[1].ravel()
+    z2 = []
+    for g in np.unique(group):
+        m = group == g
+        steps, inv, counts = np.unique(d.step[m], return_inverse=True, return_counts=True)
+        if steps.size < 2:
+            continue
+        means = np.bincount(inv.ravel(), weights=r[m]) / counts
+        k = steps.size
+        z2 += list((means - means.mean()) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
+    return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
+
+
+#: the median of a chi-square of one degree of freedom
+CHI2_1_MEDIAN = 0.4549364
 
 
 def _quantum(y: np.ndarray) -> float:

@@ -18,9 +18,12 @@ from .rig_outside import OUTSIDE
 from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
 
 __all__ = ["RigModelFit", "Prep", "select_refining_creep", "term_findings", "LackOfFit",
-           "lack_of_fit"]
+           "lack_of_fit", "LACK_CHI_RED"]
 
 log = logging.getLogger(__name__)
+
+#: reduced chi-square of the hold means above which structure is left that nothing modelled explains
+LACK_CHI_RED = 4.0
 
 
 class Prep:
@@ -185,7 +188,7 @@ class LackOfFit:
                                f"(lag-1 autocorrelation {self.rho:.2f}; white gauge noise gives ~0): a disturbance "
                                "such as vibration, hum or a sliding contact that no modelled effect explains",
                                {"lag1_autocorrelation": self.rho}, {}, rms, rms, {}))
-        if self.chi_red > 4.0 or rms > 1.5 * sigma:
+        if self.chi_red > LACK_CHI_RED or rms > 1.5 * sigma:
             worst = self.keys[np.argmax(np.abs(self.z))]
             step_w, comp_w = worst // 4, worst % 4
             loc = f"axis:{'xyz'[comp_w]}"

@@ -35,10 +35,13 @@ def _hypotheses(data: RigSamples, C: np.ndarray, places: dict, tool: np.ndarray,
 
 
 def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope,
-                      sigma: float) -> tuple[Diagnosis, RigModelFit]:
+                      sigma: float, scatter: float = 1.0) -> tuple[Diagnosis, RigModelFit]:
     """Diagnose ``data`` against ``sim`` within the envelope ``env`` (the steps of the module docstring); ``sigma``
-    the noise of one reading [mm] (:func:`.rig_noise.reading_noise`)."""
+    the noise of one reading [mm] (:func:`.rig_noise.reading_noise`); ``scatter``: the hold means' reduced
+    chi-square that no effect explains (>= 1): effects are selected against ``sigma * sqrt(scatter)``, the hold
+    means' lack of fit against ``sigma``."""
     n = data.y.size
+    sigma_sel = sigma * float(np.sqrt(max(scatter, 1.0)))
     groups = data.axis * 4 + data.comp
     entries = measured_entries(data, sim.C_F)
     L = linear_columns(data, entries)
@@ -50,11 +53,11 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     r0 = prep.project(data.y)
     library = [prep(t) for t in _hypotheses(data, lin0.C_F, places, tool, False) + outside_hypotheses(data, base)]
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
-    library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data, base, r0, prep, sigma,
+    library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data, base, r0, prep, sigma_sel,
                                            max_terms, folds)
     coef, rss = ls.fit(S)
     chosen = [library[j] for j in S]
-    findings = term_findings(library, ls, S, coef, rss, sigma, float(r0 @ r0))
+    findings = term_findings(library, ls, S, coef, rss, sigma_sel, float(r0 @ r0))
     resid = ls.residual(S, coef)
     lack = lack_of_fit(data, resid, sigma, lin0.C_F)
     linear = fit_linear(data, entries, L, data.y - prep.fitted_change(chosen, coef), sigma, sim.C_F, lack.chi_red,

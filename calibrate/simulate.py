@@ -373,7 +373,7 @@ def _readings(robot, world: _World, spec, rng) -> _Readings:
             grow_W = c.offsets(robot, truth, Poses(qt, Fm, temps, rod))
             xD = xD + grow_W @ Tinv[:3, :3].T
         for eff, p in active:
-            grow = eff.reading_offset_W(pW, times, fr.t_W0, p)
+            grow = eff.reading_offset_W(fr, times, p)
             if grow is not None:
                 xD = xD + grow @ Ts[j][:3, :3]
         cols["position"].append(np.full(m, j))

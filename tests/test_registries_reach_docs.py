@@ -70,8 +70,8 @@ class Sag(CampaignEffectModel):
     locations = ("null",)
     reported = "`sag_mm`"
 
-    def reading_offset_W(self, pW, time_s, base_W, p):
-        return np.broadcast_to([0.0, 0.0, -float(p["sag_mm"])], pW.shape)
+    def reading_offset_W(self, frames, time_s, p):
+        return np.broadcast_to([0.0, 0.0, -float(p["sag_mm"])], (len(time_s), 3))
 '''
 
 #: a whole compensation module (calibrate/compensations/NAME.py): the ball centre sits shift_mm higher in {W}

@@ -64,7 +64,7 @@ def test_untrusted_calibration_names_the_suspect_and_the_fix(examples, capsys):
 def test_uncompensated_rod_is_one_story(examples, tmp_path, capsys):
     """No compensation on a clean campaign: calibrate is trusted (its residuals pass the noise model) and
     notes the rod's uncompensated deflection; diagnose, given the method-none file, names rod_deflection
-    (uncompensated), never `consistent`, and its compensation improves the validation."""
+    (the file's matrices are zero), never `consistent`, and its compensation improves the validation."""
     from rodlab.app.cli import main
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.calibrate import read_points
@@ -78,7 +78,8 @@ def test_uncompensated_rod_is_one_story(examples, tmp_path, capsys):
                                    read_fixture(ex / "multical.fixture.json"), read_compliance(none),
                                    validate_points=read_points(ex / "multical.validation.csv"))
     assert diag.verdict == "explained"
-    assert (diag.findings[0].effect, diag.findings[0].location) == ("rod_deflection", "uncompensated")
+    assert (diag.findings[0].effect, diag.findings[0].location) == ("rod_deflection", None)  # contract: null
+    assert {"k_gravity", "k_force"} <= set(diag.findings[0].parameters)
     v = diag.extra["validation"]
     assert v["after"]["mean_mm"] < v["before"]["mean_mm"]
 
@@ -87,7 +88,8 @@ def test_every_campaign_effect_has_a_remedy():
     from rodlab.app.diagnose.advice import remedy
     from rodlab.app.diagnose.report import Finding
     for eff, loc, params in (("fixture_pose", "position:2", {}), ("rod_deflection", None, {"k": 1.3}),
-                             ("rod_deflection", "uncompensated", {}), ("outliers", "points:3,7", {}),
+                             ("rod_deflection", None, {"k_gravity": 1.0, "k_force": 1.0}),
+                             ("rod_deflection", None, {"k": 0.01}), ("outliers", "points:3,7", {}),
                              ("periodic_joint_error", "joint:2", {}), ("thermal_drift", "time", {}),
                              ("unexplained", "position:4", {})):
         text = remedy(Finding(eff, loc, "", params, {}, 0.0, 0.0))

@@ -61,7 +61,7 @@ class Refit:
 
     rod : the compliance file to compensate with; freed : parameter names freed (fixture offsets);
     keep : shape=(N,) bool, points kept (outliers dropped), required; joint_corrections_rad : {joint index (0-based):
-    (a_sin, a_cos) [rad]} once-per-revolution errors added to the joint angles (also at validation points);
+    (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
     points referred back to the campaign start)
     """
@@ -135,8 +135,9 @@ class CampaignEffectModel(EffectSchema):
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
         return q_rad
 
-    def reading_offset_W(self, pW: np.ndarray, time_s: np.ndarray, base_W: np.ndarray, p: dict):
-        """Offset [mm] in {W} of the measured points ``pW`` (m, 3) at times ``time_s``, or None."""
+    def reading_offset_W(self, frames, time_s: np.ndarray, p: dict):
+        """Offset [mm] in {W}, shape=(m, 3), of the measured points at times ``time_s`` (``frames``: the true
+        robot's :class:`~rodlab.calibrate.kinematics.Frames` of those points), or None."""
         return None
 
     def recorded_fixture(self, j: int, pose: np.ndarray, p: dict) -> np.ndarray:

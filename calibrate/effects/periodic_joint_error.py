@@ -1,4 +1,9 @@
-"""``periodic_joint_error``: gear or encoder eccentricity, an angle error once per revolution of one joint."""
+"""``periodic_joint_error``: gear or encoder eccentricity, an angle error once per revolution of one joint.
+
+Two forms compete per joint: once per revolution (eccentricity, ``amp_sin_rad``, ``amp_cos_rad``) and twice per
+revolution (an elliptical gear or encoder disc, ``amp2_sin_rad``, ``amp2_cos_rad``); the better fit is named.
+A twice-per-revolution error read as a once-per-revolution one had been "found" and made the validation worse.
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -11,12 +16,25 @@ __all__ = ["PeriodicJointError", "correct_joints"]
 
 
 def correct_joints(q_rad: np.ndarray, corr: dict) -> np.ndarray:
-    """Joint angles [rad], shape=(N, n), with the fitted once-per-revolution errors {joint index: (a_sin,
-    a_cos) [rad]} added: the angles the joints really take."""
+    """Joint angles [rad], shape=(N, n), with the fitted periodic errors {joint index: (a_sin, a_cos) of once per
+    revolution, or (a_sin, a_cos, b_sin, b_cos) with twice per revolution's b [rad]} added: the angles the joints
+    really take."""
     q = np.array(q_rad, float, copy=True)
-    for k, (a_s, a_c) in corr.items():
-        q[:, k] = q[:, k] + a_s * np.sin(q_rad[:, k]) + a_c * np.cos(q_rad[:, k])
+    for k, amps in corr.items():
+        for h in range(len(amps) // 2):                       # harmonic h + 1
+            a_s, a_c = amps[2 * h], amps[2 * h + 1]
+            q[:, k] = q[:, k] + a_s * np.sin((h + 1) * q_rad[:, k]) + a_c * np.cos((h + 1) * q_rad[:, k])
     return q
+
+
+def _partial_period(q: np.ndarray, m: int) -> str:
+    """A caution when the joint's readings ``q`` [rad] span less than one period of the ``m``-per-revolution term:
+    there any smooth error of the joint (a stiffness that changes with the torque, a link's bending) fits too."""
+    span = float(np.rad2deg(np.ptp(q)))
+    if span >= 360.0 / m:
+        return ""
+    return (f" (caution: the joint turned over {span:.0f} deg only, less than one period of {360.0 / m:.0f} deg, so "
+            "any smooth error of this joint fits as well; the amplitude holds over that range only)")
 
 
 class PeriodicJointError(CampaignEffectModel):
@@ -24,12 +42,16 @@ class PeriodicJointError(CampaignEffectModel):
     order = 30
     params = (ParamSpec("joint", "-", "the joint (1-based)", kind="int", magnitude=False),
               ParamSpec("amp_deg", "deg", "amplitude A: the joint really turns q + A sin(q + phase)"),
-              ParamSpec("phase_deg", "deg", "phase of the error", default=0.0, magnitude=False))
+              ParamSpec("phase_deg", "deg", "phase of the error", default=0.0, magnitude=False),
+              ParamSpec("per_revolution", "-", "1: once per revolution (eccentricity), 2: twice (an elliptical "
+                                               "gear or disc): q + A sin(m q + phase)", default=1, kind="int",
+                        magnitude=False))
     example = {"joint": 4, "amp_deg": 0.006}
     physics = "gear or encoder eccentricity: the joint's angle is off by a once-per-revolution error"
     signature = "the residuals follow sin / cos of one joint's angle along that joint's motion"
     locations = ("joint:K",)
-    reported = "`amp_sin_rad`, `amp_cos_rad` [rad]: joint K turns `q + a_s sin q + a_c cos q`"
+    reported = ("`amp_sin_rad`, `amp_cos_rad` [rad]: joint K turns `q + a_s sin q + a_c cos q`; or, twice per "
+                "revolution, `amp2_sin_rad`, `amp2_cos_rad`: `q + b_s sin 2q + b_c cos 2q`")
 
     required = ("joint",)
 
@@ -37,11 +59,15 @@ class PeriodicJointError(CampaignEffectModel):
         if not 1 <= int(p["joint"]) <= n_joints:
             self.fail(f"effect {self.effect}: joint {p['joint']} is not one of the robot's joints 1..{n_joints}",
                       f"{self.effect}.joint")
+        if int(p.get("per_revolution", 1)) not in (1, 2):
+            self.fail(f"effect {self.effect}: per_revolution must be 1 or 2, got {p['per_revolution']}",
+                      f"{self.effect}.per_revolution")
 
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
         k, amp, ph = int(p["joint"]) - 1, np.deg2rad(p["amp_deg"]), np.deg2rad(p["phase_deg"])
+        m = int(p.get("per_revolution", 1))
         out = np.array(q_rad, float, copy=True)
-        out[..., k] += amp * np.sin(out[..., k] + ph)
+        out[..., k] += amp * np.sin(m * out[..., k] + ph)
         return out
 
     def truth(self, p: dict | None) -> dict:
@@ -56,18 +82,24 @@ class PeriodicJointError(CampaignEffectModel):
                 continue
             g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
             q = ctx.obs.q_rad[:, k]
-            H = np.stack([g * np.sin(q)[:, None], g * np.cos(q)[:, None]], axis=-1).reshape(3 * N, 2)
-            out.append(hypothesis(self.effect, f"joint:{k + 1}", ["amp_sin_rad", "amp_cos_rad"], H,
-                                  f"gear or encoder eccentricity of joint {k + 1}: an angle error once per "
-                                  "revolution, periodic in q"))
+            for m, names, what in ((1, ["amp_sin_rad", "amp_cos_rad"], "gear or encoder eccentricity"),
+                                   (2, ["amp2_sin_rad", "amp2_cos_rad"], "an elliptical gear or encoder disc")):
+                H = np.stack([g * np.sin(m * q)[:, None], g * np.cos(m * q)[:, None]], axis=-1).reshape(3 * N, 2)
+                out.append(hypothesis(self.effect, f"joint:{k + 1}", names, H,
+                                      f"{what} of joint {k + 1}: an angle error {('once', 'twice')[m - 1]} per "
+                                      "revolution, periodic in q" + _partial_period(q, m)))
         return out
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
         k = int(location_parts(location)[1]) - 1
-        fit.joint_corrections_rad[k] = (parameters["amp_sin_rad"], parameters["amp_cos_rad"])
+        if "amp2_sin_rad" in parameters:
+            fit.joint_corrections_rad[k] = (0.0, 0.0, parameters["amp2_sin_rad"], parameters["amp2_cos_rad"])
+        else:
+            fit.joint_corrections_rad[k] = (parameters["amp_sin_rad"], parameters["amp_cos_rad"])
 
     def remedy(self, location: str, parameters: dict) -> str:
-        return (f"joint {location_parts(location)[1]} has a once-per-revolution angle error the kinematic model "
+        times = "twice" if "amp2_sin_rad" in parameters else "once"
+        return (f"joint {location_parts(location)[1]} has a {times}-per-revolution angle error the kinematic model "
                 "does not hold: have the gearbox / encoder checked, or identify it with the robot (add joint "
                 f"{location_parts(location)[1]} to `rodlab calibrate --joint-harmonics`) and compensate it in the "
                 "controller")

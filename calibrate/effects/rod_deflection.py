@@ -28,7 +28,10 @@ def generic_rod(rod: RodCompliance) -> RodCompliance:
 
 
 def scaled_rod(rod: RodCompliance, k: float, **provenance) -> RodCompliance:
-    """``rod`` with both compliances (and r_rod) times ``k``."""
+    """``rod`` with both compliances (and r_rod) times ``k``; ``k <= 0`` (a fit's estimate of a rod far stiffer than
+    its file, within its noise of 0) is a rigid rod: zero matrices, method ``none``."""
+    if not k > 0:
+        return RodCompliance.none_like(rod)
     return RodCompliance(rod.rod, rod.method, rod.C_F * k, rod.C_g * k, rod.mass_kg, rod.com_T_mm, rod.tool_mm,
                          rod.r_rod * k, dict(rod.provenance, **provenance) if provenance else rod.provenance)
 
@@ -40,9 +43,10 @@ class RodDeflection(CampaignEffectModel):
     example = {"k": 1.5}
     physics = "the compliance file does not match the rod (wrong method, wrong r_rod, another rod) or is zero"
     signature = "the residuals follow R_T^W (C_g g + C_F F), the compensated deflection, scaled"
-    locations = ("null", "uncompensated")
-    reported = ("`k` [-] (the true compliance over the file's); at `uncompensated` (the file's matrices are zero; "
-                "shape of a generic steel rod fitted to the tool vector): `k_gravity`, `k_force` [-]")
+    locations = ("null",)
+    reported = ("`k` [-] (the true compliance over the file's; about 0: the rod is far stiffer than its file); "
+                "when the file's matrices are zero (method `none`: shape of a generic steel rod fitted to the tool "
+                "vector): `k_gravity`, `k_force` [-]")
 
     def check(self, p: dict) -> None:
         if not p["k"] > 0:
@@ -70,12 +74,12 @@ class RodDeflection(CampaignEffectModel):
         cols = [deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(g, C_F=0 * g.C_F)),
                 deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(g, C_g=0 * g.C_g))]
         H = np.stack([c.reshape(-1) for c in cols], axis=1)
-        return hypothesis(self.effect, "uncompensated", ["k_gravity", "k_force"], H,
+        return hypothesis(self.effect, None, ["k_gravity", "k_force"], H,
                           "the rod's deflection is not compensated (the compliance file has zero matrices): the "
                           "residuals follow a cantilever's deflection under its weight and the contact force")
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
-        if location == "uncompensated":
+        if "k_force" in parameters:                   # the file's matrices are zero: the stand-in's two parts
             g = generic_rod(ctx.rod)
             fit.rod = replace(g, C_F=g.C_F * parameters["k_force"], C_g=g.C_g * parameters["k_gravity"])
         else:
@@ -84,6 +88,10 @@ class RodDeflection(CampaignEffectModel):
 
     def remedy(self, location: str, parameters: dict) -> str:
         k = parameters.get("k")
+        if k is not None and k < 0.05:
+            return (f"the rod deflects far less than its compliance file says (k = {k:.2g}): the file is of another, "
+                    "softer rod or of the wrong method; calibrate with this rod's own file (`rodlab rig fit` or "
+                    "`rodlab fea`), or `--compensation none` for a rigid rod")
         if k is None:
             return ("the rod's deflection is not compensated: calibrate with the rod's compliance file "
                     "(`--rod FILE --compensation file`; `rodlab fea` or `rodlab rig fit` make one)")

@@ -18,9 +18,15 @@ __all__ = ["remedy"]
 
 def _unexplained(f: Finding) -> str:
     if f.parameters.get("spread") == "even":
-        return ("no structure left: if the device's specification allows a scatter of at least "
-                f"{f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise check the device's "
-                "mounting and the fixture for play")
+        return ("no structure by position or time: a device noisier than stated would give this; if its "
+                "specification or a repeatability test (the ball held still, read 30 times) shows a scatter of at "
+                f"least {f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise the excess is "
+                "structure no effect models: check the device's mounting and sensors, the ball and the fixture for "
+                "play")
+    if f.parameters.get("spread") == "time":
+        return ("the residuals change through the campaign: let the robot run warm to a steady temperature before "
+                "the campaign (log temp_C), check the device and the fixture for settling, and record again or "
+                "shorter; a noisier device would not give this")
     return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "
             f"{f.location or 'the worst position'}, and compare with the simulated campaign of "
             "`rodlab simulate-campaign`")

@@ -38,7 +38,7 @@ from .criteria import DBIC_MIN, Evidence, bic_penalty, cv_improves, evidence, we
 from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
-from .spread import column_basis, position_share_test
+from .spread import column_basis, position_share_test, time_trend_p
 
 __all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
 
@@ -58,7 +58,7 @@ class CampaignFits:
     after : the identification with the found physics, or ``None`` when nothing was found
     kept : shape=(N,) bool, the campaign points ``after`` used (isolated outliers dropped)
     labels : shape=(N,) point labels; position : shape=(N,) int, clamping position of each point
-    joint_corrections_rad : {joint index (0-based): (a_sin, a_cos) [rad]} of periodic joint errors found
+    joint_corrections_rad : {joint index (0-based): (a_sin, a_cos[, b_sin, b_cos]) [rad]} of periodic joint errors found
     validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
     q_deg : shape=(N, n) joint angles of the campaign points [deg]
     time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
@@ -354,20 +354,32 @@ def _unexplained(sel: CampaignSelection, camp, final_test) -> Finding:
     device_scale, null_cov = device_noise_null(sel, ew, A)
     share = position_share_test(ew, A, np.asarray(camp.position), kept, null_cov)
     worst, p_even = share.worst, share.p
-    even = p_even > 0.01
+    p_time = _time_trend(sel, ew, A, camp) if p_even > 0.01 else 1.0
+    even = p_even > 0.01 and p_time > 0.01
     scatter_um = sel.noise_mm * device_scale * 1e3
     noisier = (f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
                "would give this" if device_scale > 1.0 + 1e-6 else
                "the device noise as stated cannot give this: the fixture poses may be less certain than stated")
     where = (f"spread evenly over the positions (least expected share at position {worst}, p = {p_even:.2g}): "
              f"no structure; {noisier}" if even else
+             f"spread over the positions but changing with the campaign's time (p = {p_time:.2g}): the robot or the "
+             "device changed while it was recorded, in a way no effect's form matches" if p_time <= 0.01 else
              f"least expected at position {worst} (p = {p_even:.2g}), with no modelled cause")
     return Finding(FindingKind.UNEXPLAINED, f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
                    {"rms_mm": final_rms, "reduced_chi2": final_test.reduced, "birge_ratio": final_test.birge,
-                    "spread": "even" if even else "position", "scatter_um": scatter_um},
+                    "spread": "even" if even else "time" if p_time <= 0.01 else "position", "scatter_um": scatter_um},
                    {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even})
+
+
+def _time_trend(sel: CampaignSelection, ew: np.ndarray, A: np.ndarray, camp) -> float:
+    """:func:`.spread.time_trend_p` of the campaign's time column (1 without one)."""
+    t = None if camp.time_s is None else np.asarray(camp.time_s, float)
+    if t is None or not np.isfinite(t).all() or np.ptp(t) <= 0:
+        return 1.0
+    T = np.kron(((t - t.mean()) / np.ptp(t))[:, None], np.eye(3))          # (3N, 3): x, y, z of each point
+    return time_trend_p(ew, A, sel.white(T))
 
 
 def device_noise_null(sel: CampaignSelection, ew: np.ndarray, A: np.ndarray) -> tuple[float, np.ndarray]:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ShareTest", "position_share_test", "column_basis"]
+__all__ = ["ShareTest", "position_share_test", "column_basis", "time_trend_p"]
 
 #: Monte-Carlo draws of the null distribution (seeded: the same data give the same p)
 DRAWS = 20000
@@ -90,3 +90,21 @@ def position_share_test(e_white: np.ndarray, A: np.ndarray, position: np.ndarray
     sim_max = ((sim - mean) / sd).max(axis=0)
     p = (1.0 + np.count_nonzero(sim_max >= obs.max())) / (1.0 + DRAWS)
     return ShareTest(positions[int(np.argmax(obs))], min(p, 1.0), shares)
+
+
+def time_trend_p(e_white: np.ndarray, A: np.ndarray, T_white: np.ndarray) -> float:
+    """Whether the whitened residuals ``e_white`` (3N,) of the fit with whitened columns ``A`` still follow the
+    whitened time columns ``T_white`` (3N, k: each point's time along x, y, z of {W}, whitened as the residual):
+    the F-test of those columns, made orthogonal to ``A``, against what is left. An excess spread evenly over the
+    positions may still drift through the campaign (a warm-up no effect's form matched): then it is structure,
+    not a noisier device. 1 when there are no residual degrees of freedom to judge it."""
+    from scipy.stats import f as f_dist
+    Q = column_basis(A)
+    Tp = T_white - Q @ (Q.T @ T_white)
+    Qt = column_basis(Tp)
+    k, dof = Qt.shape[1], e_white.size - Q.shape[1] - Qt.shape[1]
+    if k == 0 or dof < 3:
+        return 1.0
+    ss_t = float(np.sum((Qt.T @ e_white) ** 2))
+    ss_rest = max(float(e_white @ e_white) - ss_t, 1e-300)
+    return float(f_dist.sf((ss_t / k) / (ss_rest / dof), k, dof))

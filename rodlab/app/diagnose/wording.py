@@ -80,6 +80,9 @@ def evidence_text(f: Finding) -> str:
                 f"compliance; inside the envelope (chi-square {ev['envelope_chi2']:.2f} on {ev['envelope_dof']} "
                 f"entries, p = {ev['envelope_p']:.2g}) of {ev.get('envelope', 'the simulation')}")
     share = explained_share(f)
+    if share < 0:          # it lowers the residual weighted by the noise model, not the plain rms
+        return (f"raises the plain rms ({f.rms_before_mm * 1e3:.2f} -> {f.rms_after_mm * 1e3:.2f} um) while it lowers "
+                f"the residual weighted by the noise model; {certainty(f)}")
     pct = "—" if share != share else f"{100 * share:.0f} %" if share < 0.995 else f"{100 * share:.1f} %"
     return (f"explains {pct} of the residual's mean square (rms {f.rms_before_mm * 1e3:.2f} -> "
             f"{f.rms_after_mm * 1e3:.2f} um); {certainty(f)}")

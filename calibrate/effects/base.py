@@ -61,7 +61,8 @@ class Refit:
 
     rod : the compliance file to compensate with; freed : parameter names freed (fixture offsets);
     keep : shape=(N,) bool, points kept (outliers dropped), required; joint_corrections_rad : {joint index (0-based):
-    (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the joint angles (also at validation points);
+    (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the
+    joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
     points referred back to the campaign start)
     """

@@ -32,6 +32,7 @@ CASES = {
     "thermal_drift": ({"growth_ppm_per_s": 0.045}, "time"),
     "outliers": ({"count": 2, "min_mm": 0.2, "max_mm": 0.4}, "points"),
     "device_axes": ({"misalign_deg": [2.0, -1.5, 1.0]}, None),
+    "lost_motion": ({"joint": 4, "lost_motion_deg": 0.03}, "joint:4"),
 }
 
 
@@ -77,6 +78,8 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
     if name == "device_axes":
         got = [f.parameters[n] for n in ("sensor2_x_deg", "sensor3_x_deg", "sensor3_y_deg")]
         assert got == pytest.approx([2.0, -1.5, 1.0], abs=0.5)
+    if name == "lost_motion":
+        assert f.parameters["lost_motion_deg"] == pytest.approx(0.03, rel=0.2)
     if name == "periodic_joint_error":
         amp = np.rad2deg(np.hypot(f.parameters["amp_sin_rad"], f.parameters["amp_cos_rad"]))
         assert amp == pytest.approx(0.007, rel=0.4)

@@ -195,7 +195,7 @@ class CampaignSelection:
     def candidates(self, max_outliers: int) -> list[_Candidate]:
         """Every hypothesis not yet accepted, and the point with the largest robust residual as an outlier (a
         least-squares fit smears a gross error onto its neighbours and can point at an innocent point)."""
-        cand = [self._candidate(h, bic_penalty(h.X.shape[1], self.n)) for h in self.hyps
+        cand = [self._candidate(h, bic_penalty(h.X.shape[1] + h.hidden, self.n)) for h in self.hyps
                 if not any(c[0] == h.effect and c[1] == h.location for c in self.chosen)]
         A = np.column_stack([self.J] + self.cols) if self.cols else self.J
         norms = np.linalg.norm(robust_fit(A, self.r).residuals, axis=1)

@@ -324,8 +324,13 @@ def _spring_loaded(robot, world: _World, qt, T, Fm):
     truth, rod, rod_true, device = world.truth, world.rod, world.rod_true, world.device
 
     def centres(F):
-        fr, _ = ball_positions(robot, truth, qt, rod, force_W_N=F)
-        return fr, fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
+        fr, tau = ball_positions(robot, truth, qt, rod, force_W_N=F)
+        q_loaded = qt
+        for m, p in world.active:
+            q_loaded = m.torque_angles(q_loaded, tau, p)
+        if q_loaded is not qt:                      # a joint's spring beyond linear: at the torques just found
+            fr, _ = ball_positions(robot, truth, q_loaded, rod, force_W_N=F)
+        return fr, fr.pW + deflection_offsets(robot, truth, q_loaded, F, rod_true)
     fr, pW = centres(Fm)
     if device is not None and device.has_springs:
         Tinv = np.linalg.inv(T)

@@ -33,6 +33,7 @@ CASES = {
     "outliers": ({"count": 2, "min_mm": 0.2, "max_mm": 0.4}, "points"),
     "device_axes": ({"misalign_deg": [2.0, -1.5, 1.0]}, None),
     "lost_motion": ({"joint": 4, "lost_motion_deg": 0.03}, "joint:4"),
+    "joint_stiffening": ({"joint": 2, "stiffening_rad_per_Nm2": 4.0e-8}, "joint:2"),
 }
 
 
@@ -78,6 +79,8 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
     if name == "device_axes":
         got = [f.parameters[n] for n in ("sensor2_x_deg", "sensor3_x_deg", "sensor3_y_deg")]
         assert got == pytest.approx([2.0, -1.5, 1.0], abs=0.5)
+    if name == "joint_stiffening":
+        assert f.parameters["stiffening_rad_per_Nm2"] == pytest.approx(4.0e-8, rel=0.3)
     if name == "lost_motion":
         assert f.parameters["lost_motion_deg"] == pytest.approx(0.03, rel=0.2)
     if name == "periodic_joint_error":

@@ -6,6 +6,7 @@ Simulator hooks, each applied by every active effect in registry order (:func:`r
 
 1. ``true_rod`` — the rod as it really is (the compliance file the calibrator is given stays the nominal one);
 2. ``joint_angles`` — the angles the joints really take for the commanded ones (campaign and validation);
+   ``torque_angles`` — and, at a campaign's points, what their static torques add beyond the linear springs;
 3. ``reading_offset_W`` — an offset of the measured ball position in {W} that grows with the campaign's time;
 4. ``recorded_fixture`` — the clamping pose as the fixture file records it;
 5. ``corrupt`` — gross errors of single readings in {D}, drawn from a generator of their own.
@@ -37,7 +38,8 @@ class CampaignContext:
     time_s, temp_C : shape=(N,) or None, the campaign's time [s] and temperature [degC] columns;
     rod : the compliance file the campaign was calibrated with (None: no rod);
     frames : the identified model's ball-position frames at the campaign points
-    (:func:`~rodlab.calibrate.kinematics.ball_positions`)
+    (:func:`~rodlab.calibrate.kinematics.ball_positions`); tau_Nm : shape=(N, n), the joints' static torques there
+    [N m], or None
     """
 
     robot: object
@@ -49,6 +51,7 @@ class CampaignContext:
     temp_C: np.ndarray | None
     rod: object
     frames: object
+    tau_Nm: np.ndarray | None = None
 
     @property
     def n_points(self) -> int:
@@ -134,6 +137,11 @@ class CampaignEffectModel(EffectSchema):
         return rod
 
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
+        return q_rad
+
+    def torque_angles(self, q_rad: np.ndarray, tau_Nm: np.ndarray, p: dict) -> np.ndarray:
+        """The angles ``q_rad`` (m, n) [rad] with what the static torques ``tau_Nm`` (m, n) [N m] add beyond the
+        joints' linear springs (the model's ``c tau``)."""
         return q_rad
 
     def reading_offset_W(self, frames, time_s: np.ndarray, p: dict):

@@ -137,6 +137,7 @@ class CampaignSelection:
         self.r, self.J = r0 / self.birge, J0 / self.birge
         self.hyps = [replace(h, X=self.white(h.X)) for h in campaign_hypotheses(ctx)]
         self.cols: list = []
+        self.col_hyps: list[Hypothesis] = []   # the hypothesis of each accepted column block
         self.chosen: list = []           # (effect, location) accepted, outliers included
         self.used_points: list[int] = []
         self.findings: list[Finding] = []
@@ -248,6 +249,7 @@ class CampaignSelection:
                                               cv_sse_after=float(cv2))))
         self.chosen.append((h.effect, h.location))
         self.cols.append(h.X)
+        self.col_hyps.append(h)
         self.rss, self.cv = best.rss, cv2
 
     def _merge_point(self, h: Hypothesis) -> bool:
@@ -297,13 +299,34 @@ class CampaignSelection:
             k = weakest_term(physical, lambda k: self.fit(self.cols[:k] + self.cols[k + 1:])[1] - self.rss,
                              lambda k: self.cols[k].shape[1], self.n)
             if k is None:
-                return
+                break
             self._drop(k)
+        self._joint_parameters()
+
+    def _joint_parameters(self) -> None:
+        """Each finding's parameters and intervals from the final model's joint fit: a term accepted early was
+        estimated without the later ones, and two correlated terms (a periodic error and a non-linear spring of the
+        same joint) would otherwise both carry the part they share into the re-identification."""
+        if not self.cols:
+            return
+        coef = self.fit(self.cols)[0]
+        A = np.column_stack([self.J] + self.cols)
+        var = np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None)
+        k = self.J.shape[1]
+        for h, c in zip(self.col_hyps, self.cols):
+            w = c.shape[1]
+            if not campaign_effect(h.effect).per_point:
+                params, iv = h.reported(coef[k:k + w], np.sqrt(var[k:k + w]))
+                for f in self.findings:
+                    if f.effect == h.effect and f.location == h.location:
+                        f.parameters, f.intervals = params, iv
+            k += w
 
     def _drop(self, k: int) -> None:
         """Remove the ``k``-th accepted term and its finding (drop-one test)."""
         effect, location = self.chosen.pop(k)
         self.cols.pop(k)
+        self.col_hyps.pop(k)
         self.findings = [f for f in self.findings if not (f.effect == effect and f.location == location)]
         self.rss = self.fit(self.cols)[1]
         self.cv = self.cv_error(self.cols, self.used_points)
@@ -344,7 +367,7 @@ def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.nd
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
     return CampaignContext(robot, res, obs, np.asarray(camp.position), camp.labels(), camp.time_s, camp.temp_C, rod,
-                           fr), tau
+                           fr, tau), tau
 
 
 def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,

@@ -1,0 +1,78 @@
+"""``joint_stiffening``: one joint's gear is not a linear spring: its compliance changes with the torque it carries
+(a harmonic drive or a preloaded gear stiffens under load), so its angle departs from the model's ``c tau`` by
+``-s tau |tau|`` (rodlab's addition to the contract's vocabulary).
+
+On a joint that turns less than a revolution (the TX90's joints 2 and 3 in a MultiCal campaign) such an error is
+a smooth function of the angle, and a periodic error of that joint fitted it about as well: an independent
+simulator's torque-stiffened joint 2 had been named ``periodic_joint_error``. The two compete on the torque, which
+gravity and the rod's weight give each point, against the angle.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rodlab.core.hypothesis import ParamSpec, location_parts
+
+from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+
+__all__ = ["JointStiffening"]
+
+#: torques of a joint that spread less than this [N m] over the campaign cannot show a non-linear spring
+MIN_TORQUE_SPAN_NM = 5.0
+
+
+class JointStiffening(CampaignEffectModel):
+    effect = "joint_stiffening"
+    order = 80
+    params = (ParamSpec("joint", "-", "the joint (2-based: joint 1 carries no static torque about its axis)",
+                        kind="int", magnitude=False),
+              ParamSpec("stiffening_rad_per_Nm2", "rad/(N m)^2", "s: the joint's angle is c tau - s tau |tau| (s > 0: "
+                                                               "stiffer under load)"))
+    example = {"joint": 2, "stiffening_rad_per_Nm2": 3.0e-8}
+    physics = "one joint's gear is a non-linear spring: its compliance changes with the torque it carries"
+    signature = ("the residuals follow that joint's motion in proportion to tau |tau|, the square of its static "
+                 "torque with its sign")
+    locations = ("joint:K",)
+    reported = "`stiffening_rad_per_Nm2` [rad/(N m)^2]: joint K turns by `c tau - s tau |tau|` under its torque"
+    required = ("joint",)
+
+    def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
+        if not 2 <= int(p["joint"]) <= n_joints:
+            self.fail(f"effect {self.effect}: joint {p['joint']} must be one of joints 2..{n_joints} (joint 1 carries "
+                      "no static torque about its axis)", f"{self.effect}.joint")
+
+    def torque_angles(self, q_rad: np.ndarray, tau_Nm: np.ndarray, p: dict) -> np.ndarray:
+        k = int(p["joint"]) - 1
+        out = np.array(q_rad, float, copy=True)
+        out[:, k] -= float(p["stiffening_rad_per_Nm2"]) * tau_Nm[:, k] * np.abs(tau_Nm[:, k])
+        return out
+
+    def hypotheses(self, ctx: CampaignContext) -> list:
+        if ctx.tau_Nm is None:
+            return []
+        fr, N, out = ctx.frames, ctx.n_points, []
+        for k in range(1, ctx.robot.n):
+            t = ctx.tau_Nm[:, k]
+            if np.ptp(t) < MIN_TORQUE_SPAN_NM:
+                continue
+            g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
+            H = (g * (-t * np.abs(t))[:, None]).reshape(3 * N, 1)
+            out.append(hypothesis(self.effect, f"joint:{k + 1}", ["stiffening_rad_per_Nm2"], H,
+                                  f"joint {k + 1}'s gear is a non-linear spring: its compliance changes with the "
+                                  f"torque it carries ({np.min(t):.0f}..{np.max(t):.0f} N m here)"))
+        return out
+
+    def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
+        k = int(location_parts(location)[1]) - 1
+        shift = np.zeros_like(ctx.obs.q_rad)
+        t = ctx.tau_Nm[:, k]
+        shift[:, k] = -parameters["stiffening_rad_per_Nm2"] * t * np.abs(t)
+        fit.obs_edits.append(lambda obs: replace(obs, q_rad=obs.q_rad + shift))
+
+    def remedy(self, location: str, parameters: dict) -> str:
+        j = location_parts(location)[1]
+        return (f"joint {j}'s stiffness changes with its load: identify its compliance over the torques it works at "
+                f"(a load test of joint {j}), or calibrate with the robot loaded as in use; the linear c_{j} is an "
+                "average over this campaign's torques")

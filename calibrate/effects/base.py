@@ -25,7 +25,7 @@ from ..errors import CalibrationError
 if TYPE_CHECKING:                       # the registry builds the Enum from the effect modules
     from . import CampaignEffect
 
-__all__ = ["CampaignEffectModel", "CampaignContext", "Refit", "hypothesis"]
+__all__ = ["CampaignEffectModel", "CampaignContext", "Refit", "hypothesis", "joint_motion_W"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +75,12 @@ class Refit:
     freed: set = field(default_factory=set)
     joint_corrections_rad: dict = field(default_factory=dict)
     obs_edits: list = field(default_factory=list)
+
+
+def joint_motion_W(frames, k: int) -> np.ndarray:
+    """How each ball centre moves per radian of joint ``k`` (0-based), in {W} [mm/rad], shape=(N, 3): the column
+    through which an angle error of that joint shows in the residuals."""
+    return np.cross(frames.z_prev[:, k], frames.p0 - frames.o_prev[:, k]) @ frames.R_W0.T
 
 
 def hypothesis(effect, location, names, H, explanation, **kw) -> Hypothesis:

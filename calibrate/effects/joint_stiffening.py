@@ -15,7 +15,7 @@ import numpy as np
 
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
-from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis, joint_motion_W
 
 __all__ = ["JointStiffening"]
 
@@ -57,7 +57,7 @@ class JointStiffening(CampaignEffectModel):
             t = ctx.tau_Nm[:, k]
             if np.ptp(t) < MIN_TORQUE_SPAN_NM:
                 continue
-            g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
+            g = joint_motion_W(fr, k)
             H = (g * (-t * np.abs(t))[:, None]).reshape(3 * N, 1)
             out.append(hypothesis(self.effect, f"joint:{k + 1}", ["stiffening_rad_per_Nm2"], H,
                                   f"joint {k + 1}'s gear is a non-linear spring: its compliance changes with the "

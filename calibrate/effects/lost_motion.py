@@ -16,7 +16,7 @@ import numpy as np
 
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
-from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis, joint_motion_W
 
 __all__ = ["LostMotion", "approach_directions"]
 
@@ -95,7 +95,7 @@ class LostMotion(CampaignEffectModel):
         for k in range(ctx.robot.n):
             if np.unique(s[:, k][s[:, k] != 0]).size < 2:
                 continue                                             # never moved both ways: not testable
-            g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
+            g = joint_motion_W(fr, k)
             sk = _unknown_from_residual(s[:, k], g, ctx.result.residuals_mm)
             H = (g * (0.5 * sk)[:, None]).reshape(3 * N, 1)
             out.append(hypothesis(self.effect, f"joint:{k + 1}", ["lost_motion_deg"], H,
@@ -108,7 +108,7 @@ class LostMotion(CampaignEffectModel):
         k = int(location_parts(location)[1]) - 1
         shift = np.zeros_like(ctx.obs.q_rad)
         fr = ctx.frames
-        g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T
+        g = joint_motion_W(fr, k)
         sk = _unknown_from_residual(_directions(ctx)[:, k], g,
                                     ctx.result.residuals_mm)
         shift[:, k] = 0.5 * np.deg2rad(parameters["lost_motion_deg"]) * sk

@@ -10,7 +10,7 @@ import numpy as np
 
 from rodlab.core.hypothesis import ParamSpec, location_parts
 
-from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
+from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis, joint_motion_W
 
 __all__ = ["PeriodicJointError", "correct_joints"]
 
@@ -80,7 +80,7 @@ class PeriodicJointError(CampaignEffectModel):
         for k in range(ctx.robot.n):
             if k + 1 in modelled:
                 continue
-            g = np.cross(fr.z_prev[:, k], fr.p0 - fr.o_prev[:, k]) @ fr.R_W0.T       # dp/dtheta_k
+            g = joint_motion_W(fr, k)
             q = ctx.obs.q_rad[:, k]
             for m, names, what in ((1, ["amp_sin_rad", "amp_cos_rad"], "gear or encoder eccentricity"),
                                    (2, ["amp2_sin_rad", "amp2_cos_rad"], "an elliptical gear or encoder disc")):

@@ -75,7 +75,8 @@ def _ours(r: dict, truth_effects: list) -> str:
         where = {f"joint:{j}" for j in joints}
         named = [(f["effect"], f["location"], f.get("parameters", {})) for f in r["findings"]
                  if f["effect"] != "unexplained"]
-        if named and all(e == effect and loc in where and key in p for e, loc, p in named):
+        if named and all(e == effect and loc in where and key in p for e, loc, p in named) \
+                and {loc for _, loc, _ in named} == where:
             return "right"
     return r["score"]
 
@@ -108,15 +109,21 @@ def _set(label: str, results: dict) -> list[str]:
         v = r.get("validation") or {}
         val = (f"{v.get('diag_nominal', float('nan')):.3f} / {v.get('diag_before', float('nan')):.3f} / "
                f"{v.get('diag_after', float('nan')):.3f}" if v else "-")
+        if v and v.get("diag_after", 0) > v.get("diag_before", 0) + 0.005:
+            val += " (**worse**)"
+            grp["worse"] = grp.get("worse", 0) + 1
         rows.append(f"| {name} | {r['group']} | {r['truth']} | {r['verdict']} | {found} | {val} | {r['score']} | "
                     f"{ours} |")
     lines = [f"## {label.capitalize()} set", "",
              "| case | group | truth | verdict | findings | validation mean nominal / calibrated / with the found "
              "physics [mm] | author's score | rodlab's reading |", "|---|---|---|---|---|---|---|---|", *rows, "",
-             "| group | cases | right (author) | right (rodlab's reading) |", "|---|---:|---:|---:|"]
+             "| group | cases | right (author) | right (rodlab's reading) | validation worse with the found physics "
+             "(> 5 um) |", "|---|---:|---:|---:|---:|"]
     for g in sorted(tally):
         t = tally[g]
-        lines.append(f"| {g} | {t['cases']} | {t['author']} | {t['rodlab']} |")
+        lines.append(f"| {g} | {t['cases']} | {t['author']} | {t['rodlab']} | {t.get('worse', 0)} |")
+    tot = {k: sum(t.get(k, 0) for t in tally.values()) for k in ("cases", "author", "rodlab", "worse")}
+    lines.append(f"| all | {tot['cases']} | {tot['author']} | {tot['rodlab']} | {tot['worse']} |")
     return lines + [""]
 
 

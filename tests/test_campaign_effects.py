@@ -149,7 +149,7 @@ def test_cli_simulates_campaign_effects_by_name(tmp_path, capsys):
                  "--effect", "periodic_joint_error:joint=2,amp_deg=0.01", "--fixture-error", "3:0.1,0,0"]) == 0
     truth = json.loads((out / "truth.json").read_text())
     assert [e["effect"] for e in truth["effects"]] == ["fixture_pose", "periodic_joint_error"]
-    assert truth["periodic_joint_error"] == [2, 0.01, 0.0] and truth["fixture_error_mm"] == {"3": [0.1, 0.0, 0.0]}
+    assert truth["periodic_joint_error"] == [2, 0.01, 0.0, 1] and truth["fixture_error_mm"] == {"3": [0.1, 0.0, 0.0]}
     assert "effect periodic_joint_error: joint=2" in capsys.readouterr().out
     bad = tmp_path / "bad"
     assert main(["simulate-campaign", "--rod", str(rod), "-o", str(bad), "--effect", "thermal_drift:rate=1"]) == 2

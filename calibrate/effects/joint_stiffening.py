@@ -1,6 +1,6 @@
 """``joint_stiffening``: one joint's gear is not a linear spring: its compliance changes with the torque it carries
 (a harmonic drive or a preloaded gear stiffens under load), so its angle departs from the model's ``c tau`` by
-``-s tau |tau|`` (rodlab's addition to the contract's vocabulary).
+``-s tau abs(tau)`` (rodlab's addition to the contract's vocabulary).
 
 On a joint that turns less than a revolution (the TX90's joints 2 and 3 in a MultiCal campaign) such an error is
 a smooth function of the angle, and a periodic error of that joint fitted it about as well: an independent
@@ -28,14 +28,14 @@ class JointStiffening(CampaignEffectModel):
     order = 80
     params = (ParamSpec("joint", "-", "the joint (2-based: joint 1 carries no static torque about its axis)",
                         kind="int", magnitude=False),
-              ParamSpec("stiffening_rad_per_Nm2", "rad/(N m)^2", "s: the joint's angle is c tau - s tau |tau| (s > 0: "
+              ParamSpec("stiffening_rad_per_Nm2", "rad/(N m)^2", "s: the joint's angle is c tau - s tau abs(tau) (s > 0: "
                                                                "stiffer under load)"))
     example = {"joint": 2, "stiffening_rad_per_Nm2": 3.0e-8}
     physics = "one joint's gear is a non-linear spring: its compliance changes with the torque it carries"
-    signature = ("the residuals follow that joint's motion in proportion to tau |tau|, the square of its static "
+    signature = ("the residuals follow that joint's motion in proportion to tau abs(tau), the square of its static "
                  "torque with its sign")
     locations = ("joint:K",)
-    reported = "`stiffening_rad_per_Nm2` [rad/(N m)^2]: joint K turns by `c tau - s tau |tau|` under its torque"
+    reported = "`stiffening_rad_per_Nm2` [rad/(N m)^2]: joint K turns by `c tau - s tau abs(tau)` under its torque"
     required = ("joint",)
 
     def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:

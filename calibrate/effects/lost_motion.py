@@ -5,7 +5,8 @@ instrument points).
 The direction of each point is the sign of the joint's last move before it within its clamping position, in the
 order the points were recorded (``time_s`` when the campaign has it, else the file's order); before the joint's
 first move at a position (the robot came from the last position, through the device's re-alignment) it is
-unknown, and the residual chooses it (one hidden parameter in the BIC).
+unknown, and the residual chooses it, one choice per position (each a hidden parameter in the BIC). A joint whose
+static torque keeps one sign sits on one gear flank whatever its approach (gravity): it is not tested.
 A gear's backlash read as a once-per-revolution error had been named ``periodic_joint_error`` with outliers.
 """
 from __future__ import annotations
@@ -47,18 +48,30 @@ def _directions(ctx: CampaignContext) -> np.ndarray:
     return out
 
 
-def _unknown_from_residual(s: np.ndarray, g: np.ndarray, resid: np.ndarray) -> np.ndarray:
-    """``s`` (N,) with each unknown direction (0: before the joint's first recorded move, the robot came from
-    elsewhere) set to the one the residual ``resid`` (N, 3) [mm] points to, given the play the known points show
-    along the joint's motion ``g`` (N, 3) [mm/rad]; a choice the hypothesis counts as one hidden parameter."""
+def _unknown_from_residual(s: np.ndarray, g: np.ndarray, resid: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """``s`` (N,) with the unknown directions (0: before the joint's first move at a clamping position, the robot
+    came from the last one) set, one for each position's run of them, to the one the residual ``resid`` (N, 3)
+    [mm] points to, given the play the known points show along the joint's motion ``g`` (N, 3) [mm/rad]."""
     out = s.astype(float).copy()
     unknown = out == 0
     if not unknown.any():
         return out
     along = np.einsum("ij,ij->i", g, resid)
     half_play = float(np.sum(along[~unknown] * out[~unknown]) / max(np.sum(g[~unknown] ** 2), 1e-300))
-    out[unknown] = np.where(along[unknown] * half_play >= 0, 1.0, -1.0)
+    for j in np.unique(position[unknown]):
+        run = unknown & (position == j)
+        out[run] = 1.0 if float(np.sum(along[run])) * half_play >= 0 else -1.0
     return out
+
+
+def _one_flank(tau: np.ndarray) -> bool:
+    """The joint's static torque keeps one sign well away from zero: gravity holds its gear on one flank, so the
+    approach direction does not change where it sits."""
+    return bool(np.all(tau > TORQUE_FLANK_NM) or np.all(tau < -TORQUE_FLANK_NM))
+
+
+#: a joint whose static torque stays beyond this [N m] on one side sits on one gear flank whatever its approach
+TORQUE_FLANK_NM = 5.0
 
 
 class LostMotion(CampaignEffectModel):
@@ -72,7 +85,9 @@ class LostMotion(CampaignEffectModel):
     signature = ("the residuals follow that joint's motion and flip sign with the direction the joint was last moved "
                  "in (in the order the points were recorded)")
     locations = ("joint:K",)
-    reported = "`lost_motion_deg` [deg]: joint K's angle is off by +-b/2 with the direction it was last moved in"
+    reported = ("`lost_motion_deg` [deg]: joint K's angle is off by +-b/2 with the direction it was last moved in (b > 0: "
+                "past its reading in that direction; a gear behind a motor-side encoder lags: b < 0); not tested on a "
+                "joint whose static torque keeps one sign (gravity holds its gear on one flank)")
     required = ("joint",)
 
     def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
@@ -91,17 +106,19 @@ class LostMotion(CampaignEffectModel):
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         fr, N, out = ctx.frames, ctx.n_points, []
-        s = _directions(ctx)
+        s, pos = _directions(ctx), np.asarray(ctx.position)
         for k in range(ctx.robot.n):
             if np.unique(s[:, k][s[:, k] != 0]).size < 2:
                 continue                                             # never moved both ways: not testable
+            if ctx.tau_Nm is not None and _one_flank(ctx.tau_Nm[:, k]):
+                continue
             g = joint_motion_W(fr, k)
-            sk = _unknown_from_residual(s[:, k], g, ctx.result.residuals_mm)
+            sk = _unknown_from_residual(s[:, k], g, ctx.result.residuals_mm, pos)
             H = (g * (0.5 * sk)[:, None]).reshape(3 * N, 1)
             out.append(hypothesis(self.effect, f"joint:{k + 1}", ["lost_motion_deg"], H,
                                   f"backlash in joint {k + 1}'s gear: its angle is off by half the play, with the "
                                   "sign of the direction it was last moved in", report_scale=np.array([180 / np.pi]),
-                                  hidden=int(np.any(s[:, k] == 0))))
+                                  hidden=int(np.unique(pos[s[:, k] == 0]).size)))
         return out
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
@@ -109,8 +126,7 @@ class LostMotion(CampaignEffectModel):
         shift = np.zeros_like(ctx.obs.q_rad)
         fr = ctx.frames
         g = joint_motion_W(fr, k)
-        sk = _unknown_from_residual(_directions(ctx)[:, k], g,
-                                    ctx.result.residuals_mm)
+        sk = _unknown_from_residual(_directions(ctx)[:, k], g, ctx.result.residuals_mm, np.asarray(ctx.position))
         shift[:, k] = 0.5 * np.deg2rad(parameters["lost_motion_deg"]) * sk
         fit.obs_edits.append(lambda obs: replace(obs, q_rad=obs.q_rad + shift))
 

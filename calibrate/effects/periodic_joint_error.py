@@ -47,7 +47,8 @@ class PeriodicJointError(CampaignEffectModel):
                                                "gear or disc): q + A sin(m q + phase)", default=1, kind="int",
                         magnitude=False))
     example = {"joint": 4, "amp_deg": 0.006}
-    physics = "gear or encoder eccentricity: the joint's angle is off by a once-per-revolution error"
+    physics = ("gear or encoder eccentricity (once per revolution) or an elliptical gear or disc (twice): the joint's "
+               "angle is off by an error periodic in its reading")
     signature = "the residuals follow sin / cos of one joint's angle along that joint's motion"
     locations = ("joint:K",)
     reported = ("`amp_sin_rad`, `amp_cos_rad` [rad]: joint K turns `q + a_s sin q + a_c cos q`; or, twice per "
@@ -72,7 +73,8 @@ class PeriodicJointError(CampaignEffectModel):
 
     def truth(self, p: dict | None) -> dict:
         return {"periodic_joint_error": None if p is None else [int(p["joint"]), float(p["amp_deg"]),
-                                                                  float(p["phase_deg"])]}
+                                                                  float(p["phase_deg"]),
+                                                                  int(p.get("per_revolution", 1))]}
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         fr, N, out = ctx.frames, ctx.n_points, []

@@ -88,6 +88,10 @@ class RodDeflection(CampaignEffectModel):
 
     def remedy(self, location: str, parameters: dict) -> str:
         k = parameters.get("k")
+        if k is not None and k < -0.3:
+            return (f"the residuals run against the compensation (k = {k:.2g}): a rod stiffer than its file gives k "
+                    "near 0, not below; check the compliance file's frame and signs ({T} axes, the gravity "
+                    "direction, C_F's sign) and that it is this rod's file")
         if k is not None and k < 0.05:
             return (f"the rod deflects far less than its compliance file says (k = {k:.2g}): the file is of another, "
                     "softer rod or of the wrong method; calibrate with this rod's own file (`rodlab rig fit` or "

@@ -37,14 +37,21 @@ class ThermalDrift(CampaignEffectModel):
     physics = "the arm warms up during the campaign and its links grow"
     signature = "the residuals grow with time_s (or temp_C) away from the robot base"
     locations = ("time", "temp")
-    reported = "`growth_ppm_per_s` [ppm/s] or `growth_ppm_per_K` [ppm/K] (needs the campaign's `time_s` / `temp_C`)"
+    reported = ("`growth_ppm_per_s` [ppm/s] or `growth_ppm_per_K` [ppm/K] (needs the campaign's `time_s` / `temp_C`); "
+                "`rod_share` 0 (the links grow, the rod does not) or 1 (the rod grows with them)")
 
     def reading_offset_W(self, frames, time_s: np.ndarray, p: dict):
         share = float(p.get("rod_share", 1.0))
         return p["growth_ppm_per_s"] * 1e-6 * np.round(time_s)[:, None] * _lever_W(frames, share)
 
     def truth(self, p: dict | None) -> dict:
-        return {"thermal_ppm_per_s": 0.0 if p is None else float(p["growth_ppm_per_s"])}
+        return {"thermal_ppm_per_s": 0.0 if p is None else float(p["growth_ppm_per_s"]),
+                "thermal_rod_share": None if p is None else float(p.get("rod_share", 1.0))}
+
+    def check(self, p: dict) -> None:
+        if not 0.0 <= float(p.get("rod_share", 1.0)) <= 1.0:
+            self.fail(f"effect {self.effect}: rod_share must lie in [0, 1] (0: the links alone grow, 1: the rod "
+                      f"with them), got {p['rod_share']}", f"{self.effect}.rod_share")
 
     def hypotheses(self, ctx: CampaignContext) -> list:
         out = []

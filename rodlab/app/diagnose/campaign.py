@@ -6,16 +6,18 @@ projection on the complement of J). Selection by the diagnosers' one routine (:m
 acceptance rule the rig diagnosis uses (:mod:`.criteria`: delta BIC <= -10 with the known device noise,
 likelihood-ratio p <= 1e-3, leave-one-point-out cross-validation, a detection limit), then the campaign is
 identified again with the found physics (freed fixture offsets, rescaled rod compliance, dropped outliers,
-joint angles corrected by the fitted once-per-revolution errors — also at the validation points, as a
-controller would — and measured points referred back to the campaign start for thermal growth) to show the fit
+joint angles corrected by the fitted periodic errors — also at the validation points, as a controller would —,
+by backlash or a non-linear spring, and measured points referred back to the campaign start for thermal growth;
+:mod:`.campaign_refit`) to show the fit
 (and, with validation points, the positioning error) improve.
 
 Hypotheses come from the campaign effect registry (:data:`rodlab.calibrate.effects.CAMPAIGN_EFFECTS`, one
 module per effect of ``contract/effects.md``, subject ``campaign``): ``fixture_pose`` (offset of one clamping
 position), ``rod_deflection`` (compensation off by a factor: residuals follow R_T^W (C_g g + C_F F)),
-``periodic_joint_error`` (first harmonic of joint K: sin / cos q_K along the joint's motion),
-``thermal_drift`` (link growth with time_s / temp_C), ``outliers`` (isolated gross alignment errors: per-point
-candidates that do not use up the model terms). Each effect also says how its finding enters the
+``periodic_joint_error`` (once or twice per revolution of joint K along the joint's motion), ``thermal_drift``
+(link growth with time_s / temp_C), ``outliers`` (isolated gross alignment errors: per-point candidates that do
+not use up the model terms), and rodlab's additions ``device_axes``, ``lost_motion`` and ``joint_stiffening``; one
+angle error per joint. Each effect also says how its finding enters the
 re-identification (:class:`~rodlab.calibrate.effects.Refit`).
 """
 from __future__ import annotations
@@ -24,9 +26,8 @@ import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
-from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
-from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, Refit, campaign_effect, campaign_hypotheses,
-                                      correct_joints)
+from rodlab.calibrate import FitOptions, Rod, campaign_observations, identify
+from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, campaign_effect, campaign_hypotheses)
 from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.observations import noise_covariance
@@ -39,6 +40,7 @@ from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .campaign_excess import device_noise_null, unexplained_finding
+from .campaign_refit import deflection_of, reidentify, validation_errors
 
 __all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
 
@@ -197,7 +199,7 @@ class CampaignSelection:
         """Every hypothesis not yet accepted, and the point with the largest robust residual as an outlier (a
         least-squares fit smears a gross error onto its neighbours and can point at an innocent point)."""
         cand = [self._candidate(h, bic_penalty(h.X.shape[1] + h.hidden, self.n)) for h in self.hyps
-                if not any(c[0] == h.effect and c[1] == h.location for c in self.chosen)]
+                if not any(_same_place(c, h) for c in self.chosen)]
         A = np.column_stack([self.J] + self.cols) if self.cols else self.J
         norms = np.linalg.norm(robust_fit(A, self.r).residuals, axis=1)
         order = [int(i) for i in np.argsort(-norms) if int(i) not in self.used_points]
@@ -297,7 +299,7 @@ class CampaignSelection:
         while True:
             physical = [k for k, (effect, _) in enumerate(self.chosen) if not campaign_effect(effect).per_point]
             k = weakest_term(physical, lambda k: self.fit(self.cols[:k] + self.cols[k + 1:])[1] - self.rss,
-                             lambda k: self.cols[k].shape[1], self.n)
+                             lambda k: self.cols[k].shape[1] + self.col_hyps[k].hidden, self.n)
             if k is None:
                 break
             self._drop(k)
@@ -339,28 +341,14 @@ class CampaignSelection:
         search(self, self.max_terms + self.max_outliers + 1)
 
 
-def _deflection(rod):
-    """The deflection of the compliance file ``rod`` as it stands (its matrices, whatever its method says)."""
-    return RodDeflection(Rod.of(rod), str(rod.method))
-
-
-def _reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
-    """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
-    result and the :class:`Refit` it used."""
-    fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
-    for f in findings:
-        campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
-    obs2 = campaign_observations(camp, fix, fit.rod)
-    # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
-    obs2 = replace(obs2, q_rad=correct_joints(obs2.q_rad, fit.joint_corrections_rad))
-    for edit in fit.obs_edits:
-        obs2 = edit(obs2)
-    if not fit.keep.all():
-        obs2 = obs2.subset(fit.keep)
-    res2 = identify(robot, obs2, Rod.of(rod), [_deflection(fit.rod)],
-                    FitOptions(freed=fit.freed, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
-                               harmonics=tuple(ctx.result.harmonic_range_deg)))
-    return res2, fit
+def _same_place(chosen: tuple, h: Hypothesis) -> bool:
+    """``h`` is at a place the model already has: the same effect and location, or any angle error of a joint
+    that already has one (a periodic error, backlash and a non-linear spring of one joint are competing forms,
+    not parts: two of them split their shared part into large opposing terms that worsen the validation)."""
+    effect, location = chosen
+    if effect == h.effect and location == h.location:
+        return True
+    return bool(location) and location == h.location and str(location).startswith("joint:")
 
 
 def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
@@ -376,7 +364,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
-    res = identify(robot, obs, Rod.of(rod), [_deflection(rod)],
+    res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)],
                    FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics)))
     ctx, tau = campaign_context(robot, res, obs, camp, rod)
     sel = CampaignSelection(ctx, tau, noise_mm, fixture_sigma, max_terms)
@@ -384,7 +372,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     findings = sel.findings
     res2, refit = (None, None)
     if findings:
-        res2, refit = _reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
+        res2, refit = reidentify(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma)
     final_test = res2.residual_check if res2 is not None else res.residual_check
     verdict = Verdict.CONSISTENT if not findings else Verdict.EXPLAINED
     if final_test.missing:                 # calibrate's residual test: one story between the two
@@ -397,24 +385,7 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
                         q_deg=np.asarray(camp.q_deg, float),
                         time_s=None if camp.time_s is None else np.asarray(camp.time_s, float))
     if validate_points is not None:
-        fits.validation_errors_mm = _validation_errors(robot, fits, validate_points)
-        extra["validation"] = {k: _stats(e) for k, e in fits.validation_errors_mm.items()}
+        fits.validation_errors_mm = validation_errors(robot, fits, validate_points)
+        extra["validation"] = {k: error_stats(e).to_dict() for k, e in fits.validation_errors_mm.items()}
     rms_after = res2.rms_mm if res2 is not None else res.rms_mm
     return Diagnosis(Subject.CAMPAIGN, verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits
-
-
-def _validation_errors(robot, fits: CampaignFits, points) -> dict:
-    """Position errors at the validation points: nominal model, identified, identified with the found physics
-    (joint angles corrected as a controller would)."""
-    after_points = points
-    if fits.joint_corrections_rad:
-        after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
-                                                                       fits.joint_corrections_rad)))
-    after = fits.after if fits.after is not None else fits.before
-    return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
-            "before": validate(robot, fits.before.params, points)[1],
-            "after": validate(robot, after.params, after_points)[1]}
-
-
-def _stats(errors_mm: np.ndarray) -> dict:
-    return error_stats(errors_mm).to_dict()

@@ -39,12 +39,12 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
              f"spread over the positions but changing with the campaign's time (p = {p_time:.2g}): the robot or the "
              "device changed while it was recorded, in a way no effect's form matches" if p_time <= 0.01 else
              f"least expected at position {worst} (p = {p_even:.2g}), with no modelled cause")
-    return Finding(FindingKind.UNEXPLAINED, f"position:{worst}",
+    return Finding(FindingKind.UNEXPLAINED, "time" if p_time <= 0.01 else f"position:{worst}",
                    f"residuals {final_rms * 1e3:.1f} um remain {final_test.birge:.2f} times the expected scatter "
                    f"(device {sel.noise_mm * 1e3:.1f} um and fixture poses; {final_test.describe()}), {where}",
                    {"rms_mm": final_rms, "reduced_chi2": final_test.reduced, "birge_ratio": final_test.birge,
                     "spread": "even" if even else "time" if p_time <= 0.01 else "position", "scatter_um": scatter_um},
-                   {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even})
+                   {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even, "p_time": p_time})
 
 
 def _time_trend(sel, ew: np.ndarray, A: np.ndarray, camp) -> float:
@@ -53,7 +53,11 @@ def _time_trend(sel, ew: np.ndarray, A: np.ndarray, camp) -> float:
     if t is None or not np.isfinite(t).all() or np.ptp(t) <= 0:
         return 1.0
     T = np.kron(((t - t.mean()) / np.ptp(t))[:, None], np.eye(3))          # (3N, 3): x, y, z of each point
-    return time_trend_p(ew, A, sel.white(T))
+    # the trend within the positions: positions are recorded one after another, so a trend over the whole
+    # campaign would also read an offset of each position (a fixture pose less certain than stated) as drift
+    pos = np.asarray(camp.position)
+    P = np.kron((pos[:, None] == np.unique(pos)[None, :]).astype(float), np.eye(3))
+    return time_trend_p(ew, np.column_stack([A, sel.white(P)]), sel.white(T))
 
 
 def device_noise_null(sel, ew: np.ndarray, A: np.ndarray) -> tuple[float, np.ndarray]:

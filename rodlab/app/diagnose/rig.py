@@ -144,7 +144,8 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
     """``sigma``: the noise of one reading of ``data`` [mm] (:func:`.rig_noise.reading_noise`). Where the hold
     means are left scattering over the repeats beyond it (:func:`.rig_noise.repeat_scatter` R above
     :data:`.rig_steps.LACK_CHI_RED`: friction that varies from hold to hold, handling), the effects are selected
-    again against that scatter (``sigma * sqrt(R)`` for what is constant within a hold): thousands of readings
+    again against that scatter (``sigma * sqrt(R)`` on every reading: right for what is constant within a hold,
+    conservative for what changes within one): thousands of readings
     must not make a 2 % improvement of hold means that scatter 7x their noise look decisive. A misfit that every
     repeat shares (an effect beyond its hypothesis) is structure, not scatter, and changes nothing here."""
     diag, model = _diagnose_once(data, sim, design, max_terms, env, sigma)

@@ -1,0 +1,53 @@
+"""The campaign identified again with the diagnosis' findings, and the validation before and after.
+
+Each finding's effect says how it enters (:meth:`~rodlab.calibrate.effects.CampaignEffectModel.refit`): freed
+fixture offsets, a rescaled compliance, dropped outliers, joint-angle corrections (periodic errors also at the
+validation points, as a controller would apply them), edits of the observations (points referred back to the
+campaign start, backlash, a non-linear spring).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
+from rodlab.calibrate.effects import CampaignContext, Refit, campaign_effect, correct_joints
+
+__all__ = ["deflection_of", "reidentify", "validation_errors"]
+
+
+def deflection_of(rod):
+    """The deflection of the compliance file ``rod`` as it stands (its matrices, whatever its method says)."""
+    return RodDeflection(Rod.of(rod), str(rod.method))
+
+
+def reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
+    """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
+    result and the :class:`Refit` it used."""
+    fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
+    for f in findings:
+        campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
+    obs2 = campaign_observations(camp, fix, fit.rod)
+    # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
+    obs2 = replace(obs2, q_rad=correct_joints(obs2.q_rad, fit.joint_corrections_rad))
+    for edit in fit.obs_edits:
+        obs2 = edit(obs2)
+    if not fit.keep.all():
+        obs2 = obs2.subset(fit.keep)
+    res2 = identify(robot, obs2, Rod.of(rod), [deflection_of(fit.rod)],
+                    FitOptions(freed=fit.freed, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
+                               harmonics=tuple(ctx.result.harmonic_range_deg)))
+    return res2, fit
+
+
+def validation_errors(robot, fits, points) -> dict:
+    """Position errors at the validation points: nominal model, identified, identified with the found physics
+    (joint angles corrected as a controller would); ``fits``: the :class:`~.campaign.CampaignFits`."""
+    after_points = points
+    if fits.joint_corrections_rad:
+        after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
+                                                                       fits.joint_corrections_rad)))
+    after = fits.after if fits.after is not None else fits.before
+    return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
+            "before": validate(robot, fits.before.params, points)[1],
+            "after": validate(robot, after.params, after_points)[1]}

@@ -432,7 +432,13 @@ def _write_validation(path: Path, robot, truth, spec, rng, active) -> None:
     vtrue = truth.with_(tool=vt + rng.normal(0, 0.05, 3))
     lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
     vq = rng.uniform(lo * 0.6, hi * 0.6, (spec.validation_points, robot.n))
-    fr, _ = ball_positions(robot, vtrue, _true_angles(vq, active), Rod.rigid(vt, 0.3, [0, 0, -60]))
+    vrod, qt = Rod.rigid(vt, 0.3, [0, 0, -60]), _true_angles(vq, active)
+    fr, tau = ball_positions(robot, vtrue, qt, vrod)
+    q_loaded = qt
+    for m, p in active:                         # a joint's spring beyond linear, under the validation rod
+        q_loaded = m.torque_angles(q_loaded, tau, p)
+    if q_loaded is not qt:
+        fr, _ = ball_positions(robot, vtrue, q_loaded, vrod)
     vx = fr.pW + rng.normal(0, spec.instrument_noise_mm, fr.pW.shape)
     lines = ["# tool_mm: 0, 0, 150", "# rod_mass_kg: 0.3", "# rod_com_T_mm: 0, 0, -60", "# temp_C: 22.0",
              ",".join(f"q{i + 1}" for i in range(robot.n)) + ",x_mm,y_mm,z_mm"]

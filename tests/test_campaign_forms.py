@@ -80,3 +80,15 @@ def test_a_drift_through_the_campaign_is_structure_not_a_noisier_device():
     drifted = noise + 15.0 * T @ np.array([1.0, -0.5, 0.8])
     e = drifted - A @ np.linalg.lstsq(A, drifted, rcond=None)[0]
     assert time_trend_p(e, A, T) < 1e-3
+
+
+def test_a_stiffening_joint_is_corrected_at_the_validation_points_too(tmp_path):
+    """A joint whose spring stiffens under load: named at its joint, and the validation points (another rod,
+    other torques) corrected with their own torques improve; corrected at the campaign only, the low-torque
+    compliance the refit finds had predicted them worse."""
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=45),
+                      effects={"joint_stiffening": {"joint": 2, "stiffening_rad_per_Nm2": 4.0e-8}})
+    diag = _diagnose(tmp_path)
+    assert (diag.findings[0].effect, diag.findings[0].location) == ("joint_stiffening", "joint:2"), diag.summary()
+    v = diag.extra["validation"]
+    assert v["after"]["mean_mm"] < 0.8 * v["before"]["mean_mm"]

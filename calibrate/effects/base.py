@@ -67,7 +67,9 @@ class Refit:
     (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the
     joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
-    points referred back to the campaign start)
+    points referred back to the campaign start); torque_corrections : {joint index (0-based): s [rad/(N m)^2]}
+    the joint turns by ``-s tau abs(tau)`` beyond its linear spring under its static torque (also at validation
+    points, with their torques)
     """
 
     rod: object
@@ -75,6 +77,7 @@ class Refit:
     freed: set = field(default_factory=set)
     joint_corrections_rad: dict = field(default_factory=dict)
     obs_edits: list = field(default_factory=list)
+    torque_corrections: dict = field(default_factory=dict)
 
 
 def joint_motion_W(frames, k: int) -> np.ndarray:

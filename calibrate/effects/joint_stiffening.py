@@ -70,6 +70,7 @@ class JointStiffening(CampaignEffectModel):
         t = ctx.tau_Nm[:, k]
         shift[:, k] = -parameters["stiffening_rad_per_Nm2"] * t * np.abs(t)
         fit.obs_edits.append(lambda obs: replace(obs, q_rad=obs.q_rad + shift))
+        fit.torque_corrections[k] = float(parameters["stiffening_rad_per_Nm2"])
 
     def remedy(self, location: str, parameters: dict) -> str:
         j = location_parts(location)[1]

@@ -23,7 +23,7 @@ re-identification (:class:`~rodlab.calibrate.effects.Refit`).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from rodlab.calibrate import FitOptions, Rod, campaign_observations, identify
@@ -64,6 +64,8 @@ class CampaignFits:
     validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
     q_deg : shape=(N, n) joint angles of the campaign points [deg]
     time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
+    torque_corrections : {joint index (0-based): s [rad/(N m)^2]} of non-linear joint springs found (the joint
+    turns by ``-s tau abs(tau)`` beyond its linear one)
     """
 
     before: object
@@ -75,6 +77,7 @@ class CampaignFits:
     validation_errors_mm: dict | None = None
     q_deg: np.ndarray | None = None
     time_s: np.ndarray | None = None
+    torque_corrections: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         n = len(self.labels)
@@ -383,7 +386,8 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     fits = CampaignFits(res, res2, keep, camp.labels(), np.asarray(camp.position),
                         refit.joint_corrections_rad if refit is not None else {},
                         q_deg=np.asarray(camp.q_deg, float),
-                        time_s=None if camp.time_s is None else np.asarray(camp.time_s, float))
+                        time_s=None if camp.time_s is None else np.asarray(camp.time_s, float),
+                        torque_corrections=refit.torque_corrections if refit is not None else {})
     if validate_points is not None:
         fits.validation_errors_mm = validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: error_stats(e).to_dict() for k, e in fits.validation_errors_mm.items()}

@@ -12,6 +12,8 @@ from dataclasses import replace
 import numpy as np
 from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
 from rodlab.calibrate.effects import CampaignContext, Refit, campaign_effect, correct_joints
+from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.points import points_observations
 
 __all__ = ["deflection_of", "reidentify", "validation_errors"]
 
@@ -44,10 +46,23 @@ def validation_errors(robot, fits, points) -> dict:
     """Position errors at the validation points: nominal model, identified, identified with the found physics
     (joint angles corrected as a controller would); ``fits``: the :class:`~.campaign.CampaignFits`."""
     after_points = points
+    after = fits.after if fits.after is not None else fits.before
     if fits.joint_corrections_rad:
         after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
                                                                        fits.joint_corrections_rad)))
-    after = fits.after if fits.after is not None else fits.before
+    if fits.torque_corrections:
+        after_points = _torque_corrected(robot, after.params, after_points, fits.torque_corrections)
     return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
             "before": validate(robot, fits.before.params, points)[1],
             "after": validate(robot, after.params, after_points)[1]}
+
+
+def _torque_corrected(robot, params, points, corrections: dict):
+    """``points`` with each non-linear joint spring's turn ``-s tau abs(tau)`` added, at the static torques the
+    model ``params`` gives them under their own rod (the validation rod's weight)."""
+    obs = points_observations(points)
+    _, tau = ball_positions(robot, params, obs.q_rad, obs.rod)
+    q = np.deg2rad(np.asarray(points.q_deg, float)).copy()
+    for k, s in corrections.items():
+        q[:, k] -= s * tau[:, k] * np.abs(tau[:, k])
+    return replace(points, q_deg=np.rad2deg(q))

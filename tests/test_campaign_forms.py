@@ -56,12 +56,22 @@ def test_a_gear_error_twice_per_revolution_is_named_as_such(tmp_path):
     assert v["after"]["mean_mm"] < v["before"]["mean_mm"]
 
 
-def test_a_rod_far_stiffer_than_its_file_is_a_rigid_rod_not_an_error():
+def test_a_rod_far_stiffer_than_its_file_is_a_rigid_rod_not_an_error(tmp_path):
     """A fitted k at or below 0 (a rigid rod, a softer rod's file) gives a rigid rod to refit with; it had stopped
-    the diagnosis with a compliance-file error about r_rod."""
+    the diagnosis with a compliance-file error about r_rod. A campaign of a rigid rod diagnosed with a soft rod's
+    file: the diagnosis completes, names the factor near 0 and says the file is another rod's."""
     rigid = scaled_rod(ROD, -0.04)
     assert rigid.method is Method.NONE and not rigid.C_F.any() and not rigid.C_g.any()
     assert scaled_rod(ROD, 0.5).r_rod == pytest.approx(0.5 * ROD.r_rod)
+    from rodlab.core.compliance import RodCompliance
+    simulate_campaign(ROBOT, RodCompliance.none_like(ROD), tmp_path, CampaignSpec(seed=46))
+    soft = scaled_rod(ROD, 3.0)                              # the file of a rod 3x softer than rod 1#
+    diag = diagnose_campaign(ROBOT, read_campaign(tmp_path / "multical.campaign.csv"),
+                             read_fixture(tmp_path / "multical.fixture.json"), soft,
+                             validate_points=read_points(tmp_path / "multical.validation.csv"))[0]
+    f = next(f for f in diag.findings if f.effect == "rod_deflection")
+    assert abs(f.parameters["k"]) < 0.2, diag.summary()
+    assert "another" in remedy(f) or "far less" in remedy(f)
 
 
 def test_a_drift_through_the_campaign_is_structure_not_a_noisier_device():

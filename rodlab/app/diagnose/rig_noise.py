@@ -199,7 +199,8 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
             continue
         means = np.bincount(inv.ravel(), weights=r[m]) / counts
         k = steps.size
-        z2 += list((means - means.mean()) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
+        grand = float(np.average(means, weights=counts))           # holds of unequal length weigh as they inform
+        z2 += list((means - grand) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
 
 

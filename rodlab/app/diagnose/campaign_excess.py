@@ -10,7 +10,7 @@ from rodlab.core.enums import FindingKind
 from .report import Finding
 from .spread import column_basis, position_share_test, time_trend_p
 
-__all__ = ["unexplained_finding", "device_noise_null"]
+__all__ = ["unexplained_finding", "device_noise_null", "time_trend_test"]
 
 
 def unexplained_finding(sel, camp, final_test) -> Finding:
@@ -28,7 +28,7 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
     device_scale, null_cov = device_noise_null(sel, ew, A)
     share = position_share_test(ew, A, np.asarray(camp.position), kept, null_cov)
     worst, p_even = share.worst, share.p
-    p_time = _time_trend(sel, ew, A, camp) if p_even > 0.01 else 1.0
+    p_time = time_trend_test(sel, ew, A, camp) if p_even > 0.01 else 1.0
     even = p_even > 0.01 and p_time > 0.01
     scatter_um = sel.noise_mm * device_scale * 1e3
     noisier = (f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
@@ -47,8 +47,9 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
                    {}, final_rms, final_rms, {"position_rms_mm": pos_rms, "p_even": p_even, "p_time": p_time})
 
 
-def _time_trend(sel, ew: np.ndarray, A: np.ndarray, camp) -> float:
-    """:func:`.spread.time_trend_p` of the campaign's time column (1 without one)."""
+def time_trend_test(sel, ew: np.ndarray, A: np.ndarray, camp) -> float:
+    """:func:`.spread.time_trend_p` of the campaign's time column within its clamping positions (1 without one):
+    ``ew`` the whitened residual of the fit with whitened columns ``A`` of the selection ``sel``."""
     t = None if camp.time_s is None else np.asarray(camp.time_s, float)
     if t is None or not np.isfinite(t).all() or np.ptp(t) <= 0:
         return 1.0

@@ -64,6 +64,14 @@ def _unknown_from_residual(s: np.ndarray, g: np.ndarray, resid: np.ndarray, posi
     return out
 
 
+def _signs(ctx: CampaignContext, k: int, g: np.ndarray, s: np.ndarray | None = None) -> np.ndarray:
+    """The approach direction of joint ``k`` at every point, the unknown ones chosen from the residual (the
+    hypothesis and the re-identification use the same); ``g``: the joint's motion [mm/rad]; ``s``:
+    :func:`_directions`, when at hand."""
+    s = _directions(ctx) if s is None else s
+    return _unknown_from_residual(s[:, k], g, ctx.result.residuals_mm, np.asarray(ctx.position))
+
+
 def _one_flank(tau: np.ndarray) -> bool:
     """The joint's static torque keeps one sign well away from zero: gravity holds its gear on one flank, so the
     approach direction does not change where it sits."""
@@ -113,8 +121,7 @@ class LostMotion(CampaignEffectModel):
             if ctx.tau_Nm is not None and _one_flank(ctx.tau_Nm[:, k]):
                 continue
             g = joint_motion_W(fr, k)
-            sk = _unknown_from_residual(s[:, k], g, ctx.result.residuals_mm, pos)
-            H = (g * (0.5 * sk)[:, None]).reshape(3 * N, 1)
+            H = (g * (0.5 * _signs(ctx, k, g, s))[:, None]).reshape(3 * N, 1)
             out.append(hypothesis(self.effect, f"joint:{k + 1}", ["lost_motion_deg"], H,
                                   f"backlash in joint {k + 1}'s gear: its angle is off by half the play, with the "
                                   "sign of the direction it was last moved in", report_scale=np.array([180 / np.pi]),
@@ -124,10 +131,7 @@ class LostMotion(CampaignEffectModel):
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
         k = int(location_parts(location)[1]) - 1
         shift = np.zeros_like(ctx.obs.q_rad)
-        fr = ctx.frames
-        g = joint_motion_W(fr, k)
-        sk = _unknown_from_residual(_directions(ctx)[:, k], g, ctx.result.residuals_mm, np.asarray(ctx.position))
-        shift[:, k] = 0.5 * np.deg2rad(parameters["lost_motion_deg"]) * sk
+        shift[:, k] = 0.5 * np.deg2rad(parameters["lost_motion_deg"]) * _signs(ctx, k, joint_motion_W(ctx.frames, k))
         fit.obs_edits.append(lambda obs: replace(obs, q_rad=obs.q_rad + shift))
 
     def remedy(self, location: str, parameters: dict) -> str:

@@ -159,25 +159,32 @@ def _within_holds(data: RigSamples) -> tuple[float, int]:
     return float(np.nansum(resid ** 2)), dof
 
 
-def _between_repeats(data: RigSamples) -> tuple[float, int]:
-    """Between-hold sum of squares (each hold mean weighted by its readings) and degrees of freedom of the holds
-    that repeat one (gauge, load axis and sign, mass, branch); the series' zeroing holds left out."""
+def _repeated_hold_means(data: RigSamples, values: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(hold means of ``values``, readings per hold) of every set of holds that repeat one (gauge, load axis and
+    sign, mass, branch), two holds or more; the series' zeroing holds left out."""
     keep = ~data.reference
     if not keep.any():
-        return 0.0, 0
-    d = data.subset(keep)
+        return []
+    d, v = data.subset(keep), np.asarray(values, float)[keep]
     group = np.unique(np.column_stack([d.comp, d.axis, d.sign, np.round(d.mass, 6), d.unload]),
                       axis=0, return_inverse=True)[1].ravel()
-    ss, dof = 0.0, 0
+    out = []
     for g in np.unique(group):
         m = group == g
         steps, inv, counts = np.unique(d.step[m], return_inverse=True, return_counts=True)
-        if steps.size < 2:
-            continue
-        means = np.bincount(inv.ravel(), weights=d.y[m]) / counts
+        if steps.size >= 2:
+            out.append((np.bincount(inv.ravel(), weights=v[m]) / counts, counts))
+    return out
+
+
+def _between_repeats(data: RigSamples) -> tuple[float, int]:
+    """Between-hold sum of squares (each hold mean weighted by its readings) and degrees of freedom of the holds
+    that repeat one (:func:`_repeated_hold_means`)."""
+    ss, dof = 0.0, 0
+    for means, counts in _repeated_hold_means(data, data.y):
         grand = float((means * counts).sum() / counts.sum())
         ss += float((counts * (means - grand) ** 2).sum())
-        dof += steps.size - 1
+        dof += means.size - 1
     return ss, dof
 
 
@@ -187,18 +194,9 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
     ``sigma**2 / readings``: ~1 when the holds repeat to within their noise, whatever misfit they share; the
     median over the holds (divided by chi-square(1)'s median), so one stray hold does not set it. 1 when nothing
     repeats."""
-    keep = ~data.reference
-    d, r = data.subset(keep), np.asarray(resid, float)[keep]
-    group = np.unique(np.column_stack([d.comp, d.axis, d.sign, np.round(d.mass, 6), d.unload]),
-                      axis=0, return_inverse=True)[1].ravel()
     z2 = []
-    for g in np.unique(group):
-        m = group == g
-        steps, inv, counts = np.unique(d.step[m], return_inverse=True, return_counts=True)
-        if steps.size < 2:
-            continue
-        means = np.bincount(inv.ravel(), weights=r[m]) / counts
-        k = steps.size
+    for means, counts in _repeated_hold_means(data, resid):
+        k = means.size
         grand = float(np.average(means, weights=counts))           # holds of unequal length weigh as they inform
         z2 += list((means - grand) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0

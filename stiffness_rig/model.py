@@ -130,16 +130,24 @@ class RigModel:
     def temperature(self, t: float) -> float:
         return self.T0_C + self.temp_amplitude_K * np.sin(2 * np.pi * t / self.temp_period_s)
 
-    def force_on_rod(self, hold: Hold) -> np.ndarray:
-        """Force on the ball in {T} [N] during ``hold`` (friction and tare included)."""
+    def axial_force(self, hold: Hold) -> float:
+        """The load's magnitude [N] during ``hold``: the hung weight with friction and tare, what a load cell in
+        the load's line carries."""
         m = hold.mass_kg
         for eff, p in self._active:
             m = eff.mass(m, hold, p)
         F = m * G0
         for eff, p in self._active:
             F = eff.force(F, hold, p)
+        return F
+
+    def force_on_rod(self, hold: Hold) -> np.ndarray:
+        """Force on the ball in {T} [N] during ``hold`` (friction and tare included; along the load's line,
+        which an effect may tilt off the hold's axis)."""
         vec = np.zeros(3)
-        vec[hold.axis.index] = hold.axis.sign * F
+        vec[hold.axis.index] = hold.axis.sign * self.axial_force(hold)
+        for eff, p in self._active:
+            vec = eff.load_line(vec, hold, p)
         return vec
 
     @property
@@ -147,11 +155,11 @@ class RigModel:
         return self.load_cell_noise_N is not None
 
     def load_cell(self, hold: Hold) -> float:
-        """A load cell's reading [N]: the force the rod carries along the hold's load axis (friction and tare
+        """A load cell's reading [N]: the force the rod carries along the load's line (friction and tare
         included), with its noise, to 1 mN; NaN without a load cell."""
         if self.load_cell_noise_N is None:
             return float("nan")
-        F = float(self.force_on_rod(hold)[hold.axis.index] * hold.axis.sign)
+        F = self.axial_force(hold)
         return round(F + float(self.rng_load_cell.normal(0.0, self.load_cell_noise_N)), 3)
 
     def reading(self, t: float, hold: Hold, measured=(0, 1, 2)) -> tuple:

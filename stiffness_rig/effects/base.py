@@ -4,7 +4,8 @@ fixed order), its hypotheses for the diagnosis and its wording. One subclass per
 Forward model of a reading (``RigModel.reading``), each hook applied by every active effect in registry order:
 
 1. ``compliance`` — the rod's true C_F from the simulated one (structural effects);
-2. ``mass`` then ``force`` — the load that reaches the ball (tare, friction);
+2. ``mass`` then ``force`` — the load that reaches the ball (tare, friction); ``load_line`` — its direction
+   (a load line tilted off the hold's axis: crosstalk's load form);
 3. ``load_compliance`` — a compliance that depends on the load or the branch (nonlinearity, hysteresis);
 4. ``deflection`` — time-dependent deflection with state (creep);
 5. ``reading`` — what the gauges make of it (crosstalk, drift).
@@ -83,6 +84,10 @@ class RigEffectModel(EffectSchema):
     def force(self, F: float, hold, p: dict) -> float:
         return F
 
+    def load_line(self, F: np.ndarray, hold, p: dict) -> np.ndarray:
+        """The force vector [N] in {T} on the ball, from the one along the hold's axis ``F``."""
+        return F
+
     def load_compliance(self, C: np.ndarray, F: np.ndarray, hold, p: dict) -> np.ndarray:
         return C
 
@@ -94,6 +99,11 @@ class RigEffectModel(EffectSchema):
         return x
 
     # -- diagnosis ---------------------------------------------------------------------------------------------
+    def confirm_for(self, location: str | None) -> str:
+        """What would confirm a finding of this effect at ``location`` (the effect's sentence unless a form of it
+        needs another)."""
+        return self.confirm
+
     def caution(self, p: dict) -> str | None:
         """A warning for fitted parameters ``p`` that no rod or rig of this kind has (a units slip, another
         rod's data), or None."""

@@ -1,6 +1,11 @@
 """``crosstalk``: a gauge tilted by a small angle eps [rad] towards another axis reads cos(eps) of its own
 displacement plus sin(eps) of the other one's — a reading the rod's compliance cannot produce.
 
+Its second form (rodlab's, parameter ``load``): the load's line is tilted instead (a pulley or hanger off the
+axis): during the holds of that load direction the rod carries cos(eps) of the load along the axis and sin(eps)
+of it along another, so every gauge read in that series sees C_F times that side force. It differs from a tilted
+gauge where a gauge is read under two load axes: the tilted gauge errs in both series, the tilted load in its own.
+
 The hypothesis keeps both terms: its one column is the cross displacement plus (cos(eps) - 1) / eps of the
 gauge's own, at a first estimate of eps from the recording itself (the fitted coefficient is then eps to second
 order). Linear in eps alone, a tilt of 0.05-0.2 rad on a stiff rod leaves cos(eps) - 1 of the main reading
@@ -17,6 +22,7 @@ from .base import RigEffectModel
 __all__ = ["Crosstalk"]
 
 _AXES = "xyz"
+_LOADS = ("x", "-x", "y", "-y", "z", "-z")
 #: the largest tilt the hypothesis considers [rad] (its bound: a gauge off by more is visible by eye)
 _EPS_MAX = 0.2
 
@@ -24,17 +30,36 @@ _EPS_MAX = 0.2
 class Crosstalk(RigEffectModel):
     effect = "crosstalk"
     order = 80
-    params = ((ParamSpec("sensor", "-", "the tilted gauge", "z", kind="str", choices=tuple(_AXES)),)
-              + tuple(ParamSpec(f"eps_{a}_rad", "rad", f"tilt of the gauge towards {a}_T (set one)") for a in _AXES))
+    params = ((ParamSpec("sensor", "-", "the tilted gauge (default z)", kind="str", choices=tuple(_AXES)),
+               ParamSpec("load", "-", "instead of a gauge: the load direction whose line is tilted", kind="str",
+                         choices=_LOADS))
+              + tuple(ParamSpec(f"eps_{a}_rad", "rad", f"tilt of the gauge (or the load's line) towards {a}_T (set one)")
+                      for a in _AXES))
     example = {"eps_y_rad": 0.01}
     physics = "a displacement sensor not aligned with its axis"
-    signature = "a perpendicular reading that the rod's compliance cannot produce"
+    signature = ("a perpendicular reading that the rod's compliance cannot produce; rodlab's second form, a load line "
+                 "off its axis (`load:<direction>`), is a side force in that load's series only; where the data cannot "
+                 "tell a tilted gauge from a tilted load the location names both (`sensor:z|load:y`)")
     confirm = "check the gauge's alignment with a square or turn it on its mount: the cross reading should change"
-    locations = ("sensor:x", "sensor:y", "sensor:z")
+    locations = ("sensor:x", "sensor:y", "sensor:z") + tuple(f"load:{a}" for a in _LOADS)
+
+    def confirm_for(self, location):
+        if location and location.startswith("load:"):
+            return ("check the load's line against the axis (a plumb line or a square at the pulley and the ball) "
+                    "and realign it: the side readings of that series should go")
+        return self.confirm
+
+    def complete(self, given: dict) -> dict:
+        """As :meth:`EffectSchema.complete`, the gauge ``z`` tilted unless a gauge or a load is named."""
+        given = dict(given)
+        if "load" not in given and "sensor" not in given:
+            given["sensor"] = "z"
+        return super().complete(given)
 
     def example_for(self, p: dict) -> dict:
-        """A 0.01 rad tilt towards y, or towards z for the y gauge."""
-        return {"eps_z_rad" if p.get("sensor", "z") == "y" else "eps_y_rad": 0.01}
+        """A 0.01 rad tilt towards y, or towards z for the y gauge or a load along y."""
+        axis = p["load"][-1] if "load" in p else p.get("sensor", "z")
+        return {"eps_z_rad" if axis == "y" else "eps_y_rad": 0.01}
 
     def _tilt(self, p: dict) -> tuple[int, int, float]:
         i = _AXES.index(p["sensor"])
@@ -43,11 +68,31 @@ class Crosstalk(RigEffectModel):
 
     def check(self, p: dict) -> None:
         set_ = [a for a in _AXES if f"eps_{a}_rad" in p]
+        if "load" in p:
+            if "sensor" in p:
+                raise RigError("effect crosstalk: give either sensor (a tilted gauge) or load (a tilted load line), "
+                               "not both", key="crosstalk.load")
+            if len(set_) != 1 or set_[0] == p["load"][-1]:
+                raise RigError(f"effect crosstalk: give one tilt eps_<axis>_rad of the load's line towards an axis "
+                               f"other than its own {p['load']!r}, got {[f'eps_{a}_rad' for a in set_]}",
+                               key="crosstalk.eps")
+            return
         if len(set_) != 1 or set_[0] == p["sensor"]:
             raise RigError(f"effect crosstalk: give one tilt eps_<axis>_rad towards an axis other than the sensor "
                            f"{p['sensor']!r}, got {[f'eps_{a}_rad' for a in set_]}", key="crosstalk.eps")
 
+    def load_line(self, F, hold, p):
+        if p.get("load") != hold.axis.value:
+            return F
+        _, j, eps = self._tilt({**p, "sensor": p["load"][-1]})
+        magnitude = float(np.linalg.norm(F))
+        out = np.cos(eps) * F
+        out[j] += np.sin(eps) * magnitude
+        return out
+
     def reading(self, x, t, dtemp_K, p):
+        if "load" in p:
+            return x
         i, j, eps = self._tilt(p)
         xi = np.cos(eps) * x[i] + np.sin(eps) * x[j]
         x = x.copy()
@@ -70,7 +115,27 @@ class Crosstalk(RigEffectModel):
                                       [-_EPS_MAX], [_EPS_MAX],
                                       f"the {_AXES[c]} gauge is not aligned with its axis and reads a fraction of "
                                       f"the {_AXES[j]} displacement, which the rod's compliance cannot produce"))
-        return out
+        return out + _load_tilts(self.effect, data, ctx)
+
+
+def _load_tilts(effect, data, ctx) -> list[Hypothesis]:
+    """A tilted load line per load direction of the recording and side axis: the rod carries sin(eps) of the load
+    along the side axis j (every gauge of that series reads C_sim[gauge, j] x |F| x sin(eps)) and cos(eps) along its
+    own, one column as for a tilted gauge."""
+    out = []
+    for a, sign in sorted(set(zip(data.axis.tolist(), data.sign.tolist()))):
+        m = (data.axis == a) & (data.sign == sign)
+        name = ("-" if sign < 0 else "") + _AXES[a]
+        for j in (j for j in range(3) if j != a):
+            cross, own = np.zeros(data.y.size), np.zeros(data.y.size)
+            cross[m] = ctx.C_sim[data.comp[m], j] * np.abs(data.F[m])
+            own[m] = ctx.base[m]
+            col = cross + _cos_slope(_tilt_estimate(data.y[m] - own[m], cross[m], own[m])) * own
+            out.append(Hypothesis(effect, f"load:{name}", [f"eps_{_AXES[j]}_rad"], col[:, None], [-_EPS_MAX],
+                                  [_EPS_MAX], f"the load along {name} is not on its axis: its line leans towards "
+                                  f"{_AXES[j]}, so the rod also carries a side force along {_AXES[j]} that the load "
+                                  "schedule does not state"))
+    return out
 
 
 def _tilt_estimate(r: np.ndarray, cross: np.ndarray, own: np.ndarray) -> float:

@@ -135,11 +135,10 @@ def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: f
         ev = dict(evidence(drop[j][0], term.n_params, bic_penalty(term.n_params, n)).to_dict(),
                   cv_sse_before=float(drop[j][1]), cv_sse_after=float(cv_full))
         location = term.location
-        places = _other_places(library, ls, S, j, rss, sigma) if term.effect == "joint_compliance" else []
+        places = _other_places(library, ls, S, j, rss, sigma) if term.effect in _SEPARATE_BY else []
         if places:
             location = "|".join([term.location] + places)
-            ev["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): "
-                                       "the lever from each place to the ball differs in each")
+            ev["separate_by"] = _SEPARATE_BY[term.effect]
         alts_j = alternatives(library, ls, S, j, rss, sigma, n)
         if alts_j:
             ev["alternatives"] = alts_j
@@ -152,16 +151,26 @@ def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: f
     return findings
 
 
+#: effects whose places compete (the others of a place fitting within delta BIC 10 are named with it) and the
+#: measurement that tells the places apart
+_SEPARATE_BY = {
+    "joint_compliance": ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): the lever from "
+                         "each place to the ball differs in each"),
+    "crosstalk": ("read the gauge under a second load axis: a tilted gauge errs in every series it reads, a tilted "
+                  "load line only in its own"),
+}
+
+
 def _other_places(library, ls, S: tuple, j: int, rss: float, sigma: float) -> list[str]:
-    """Ambiguity among places: the other joint-spring places that, put in place of term ``j``, fit within
-    delta BIC 10."""
+    """Ambiguity among places: the other places of term ``j``'s effect (joint springs, tilted gauges and load
+    lines) that, put in place of term ``j``, fit within delta BIC 10."""
     alts = []
     for i, u in enumerate(library):
-        if u.effect == "joint_compliance" and i != j:
+        if u.effect == library[j].effect and i != j and u.location != library[j].location:
             alt = tuple(sorted([x for x in S if x != j] + [i]))
             if len(set(alt)) == len(alt) and all(compatible(library, tuple(x for x in alt if x != y), y)
                                                  for y in alt):
-                if (ls.fit(alt)[1] - rss) / sigma ** 2 < DBIC_MIN:
+                if u.location not in alts and (ls.fit(alt)[1] - rss) / sigma ** 2 < DBIC_MIN:
                     alts.append(u.location)
     return alts
 

@@ -28,7 +28,7 @@ def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     if effect == FindingKind.UNEXPLAINED:
         return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
                                              "that moves is handling")
-    return next((m.confirm for e, m in RIG_EFFECTS.items() if e.value == effect), None)
+    return next((m.confirm_for(location) for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
 
 def explained_share(f: Finding) -> float:

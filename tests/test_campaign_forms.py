@@ -102,3 +102,45 @@ def test_a_stiffening_joint_is_corrected_at_the_validation_points_too(tmp_path):
     assert (diag.findings[0].effect, diag.findings[0].location) == ("joint_stiffening", "joint:2"), diag.summary()
     v = diag.extra["validation"]
     assert v["after"]["mean_mm"] < 0.8 * v["before"]["mean_mm"]
+
+
+def test_a_spring_that_stiffens_until_nearly_rigid_is_its_saturating_form(tmp_path):
+    """Joint 2 as a hardening spring ``c tau / (1 + |tau| / tau_s)`` (an independent simulator's form): its
+    departure from ``c tau`` is ``-s tau |tau| / (1 + |tau| / tau_s)``, s = c / tau_s. Named joint_stiffening with a
+    saturation torque from the grid near tau_s (the quadratic alone had tied a twice-per-revolution error and lost
+    to it), and the validation improves."""
+    from rodlab.calibrate.effects.joint_stiffening import stiffening_turn
+    tau = np.array([-150.0, -20.0, 0.0, 60.0, 300.0])
+    np.testing.assert_allclose(stiffening_turn(tau, 2e-8, 100.0), -2e-8 * tau * np.abs(tau) / (1 + np.abs(tau) / 100))
+    np.testing.assert_allclose(stiffening_turn(tau, 2e-8), -2e-8 * tau * np.abs(tau))
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=47),
+                      effects={"joint_stiffening": {"joint": 2, "stiffening_rad_per_Nm2": 3.0e-7,
+                                                    "saturation_Nm": 40.0}})
+    diag = _diagnose(tmp_path)
+    f = diag.findings[0]
+    assert (f.effect, f.location) == ("joint_stiffening", "joint:2"), diag.summary()
+    assert 20.0 <= f.parameters["saturation_Nm"] <= 80.0
+    v = diag.extra["validation"]
+    assert v["after"]["mean_mm"] < 0.8 * v["before"]["mean_mm"]
+
+
+def test_a_form_the_data_do_not_pin_down_gives_way_to_one_they_do():
+    """A periodic error of a joint that turned less than a period fits any smooth error of it: where a rival form
+    at its place ties it (delta BIC within 2), the rival goes first; a clear winner or another place keeps its rank,
+    and the finding lists the forms within delta BIC 10."""
+    from types import SimpleNamespace as NS
+    from rodlab.app.diagnose.campaign_forms import resolved_first, rival_forms
+
+    def cand(effect, location, dbic, unresolved=False, names=("a",), settings=None):
+        return NS(ev=NS(dbic=dbic), hyp=NS(effect=effect, location=location, form_unresolved=unresolved,
+                                           names=list(names), settings=settings or {},
+                                           label=f"{effect} at {location}"))
+    periodic = cand("periodic_joint_error", "joint:2", -145.3, True, ("amp2_sin_rad", "amp2_cos_rad"))
+    stiff = cand("joint_stiffening", "joint:2", -145.2)
+    other = cand("thermal_drift", "time", -145.25)
+    assert resolved_first([periodic, other, stiff])[0] is stiff
+    assert resolved_first([periodic, cand("joint_stiffening", "joint:2", -140.0)])[0] is periodic
+    assert resolved_first([periodic, cand("joint_stiffening", "joint:3", -145.3)])[0] is periodic
+    resolved = cand("periodic_joint_error", "joint:2", -145.3, False)
+    assert resolved_first([resolved, stiff])[0] is resolved
+    assert rival_forms(stiff, [periodic, other, stiff]) == ["periodic_joint_error at joint:2 (twice per revolution)"]

@@ -67,9 +67,9 @@ class Refit:
     (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the
     joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
-    points referred back to the campaign start); torque_corrections : {joint index (0-based): s [rad/(N m)^2]}
-    the joint turns by ``-s tau abs(tau)`` beyond its linear spring under its static torque (also at validation
-    points, with their torques)
+    points referred back to the campaign start); torque_corrections : {joint index (0-based): (s [rad/(N m)^2],
+    saturation torque [N m] or None)} the joint turns by ``-s tau abs(tau) / (1 + abs(tau) / tau_s)`` beyond its
+    linear spring under its static torque (also at validation points, with their torques)
     """
 
     rod: object

@@ -87,9 +87,10 @@ class PeriodicJointError(CampaignEffectModel):
             for m, names, what in ((1, ["amp_sin_rad", "amp_cos_rad"], "gear or encoder eccentricity"),
                                    (2, ["amp2_sin_rad", "amp2_cos_rad"], "an elliptical gear or encoder disc")):
                 H = np.stack([g * np.sin(m * q)[:, None], g * np.cos(m * q)[:, None]], axis=-1).reshape(3 * N, 2)
+                partial = _partial_period(q, m)
                 out.append(hypothesis(self.effect, f"joint:{k + 1}", names, H,
                                       f"{what} of joint {k + 1}: an angle error {('once', 'twice')[m - 1]} per "
-                                      "revolution, periodic in q" + _partial_period(q, m)))
+                                      "revolution, periodic in q" + partial, form_unresolved=bool(partial)))
         return out
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:

@@ -96,6 +96,8 @@ class Hypothesis:
         cost alone that make a hypothesis dearer in the BIC than a rival that fits about as well (a gauge's gain,
         outside the vocabulary)
     settings : those hidden parameters' values in report units (creep's ``tau_s``), reported beside the fit
+    form_unresolved : the data do not pin this form down (a periodic error over less than one period fits any
+        smooth error of its joint): a rival form at the same place that fits as well (delta BIC within 2) goes first
     report_scale, report_offset : shape=(k,), ``reported = report_offset + report_scale * internal``
     """
 
@@ -109,6 +111,7 @@ class Hypothesis:
     dC: list | None = None
     hidden: int = 0
     settings: dict = field(default_factory=dict)
+    form_unresolved: bool = False
     report_scale: np.ndarray | None = None
     report_offset: np.ndarray | None = None
 

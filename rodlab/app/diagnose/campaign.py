@@ -40,6 +40,7 @@ from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .campaign_excess import device_noise_null, unexplained_finding
+from .campaign_forms import resolved_first, rival_forms, same_place
 from .campaign_refit import deflection_of, reidentify, validation_errors
 
 __all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
@@ -64,8 +65,9 @@ class CampaignFits:
     validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
     q_deg : shape=(N, n) joint angles of the campaign points [deg]
     time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
-    torque_corrections : {joint index (0-based): s [rad/(N m)^2]} of non-linear joint springs found (the joint
-    turns by ``-s tau abs(tau)`` beyond its linear one)
+    torque_corrections : {joint index (0-based): (s [rad/(N m)^2], saturation torque [N m] or None)} of
+    non-linear joint springs found (the joint turns by ``-s tau abs(tau) / (1 + abs(tau) / tau_s)`` beyond its
+    linear one)
     """
 
     before: object
@@ -146,6 +148,7 @@ class CampaignSelection:
         self.chosen: list = []           # (effect, location) accepted, outliers included
         self.used_points: list[int] = []
         self.findings: list[Finding] = []
+        self.ranked: list[_Candidate] = []   # the last ranking of the candidates (rival forms of a finding)
         # the baseline is the generalised-least-squares refit of the identified parameters (the identification
         # itself is unweighted): what that refit gains must not be credited to the first hypothesis
         self.rss = self.fit(self.cols)[1]
@@ -202,7 +205,7 @@ class CampaignSelection:
         """Every hypothesis not yet accepted, and the point with the largest robust residual as an outlier (a
         least-squares fit smears a gross error onto its neighbours and can point at an innocent point)."""
         cand = [self._candidate(h, bic_penalty(h.X.shape[1] + h.hidden, self.n)) for h in self.hyps
-                if not any(_same_place(c, h) for c in self.chosen)]
+                if not any(same_place(c, h) for c in self.chosen)]
         A = np.column_stack([self.J] + self.cols) if self.cols else self.J
         norms = np.linalg.norm(robust_fit(A, self.r).residuals, axis=1)
         order = [int(i) for i in np.argsort(-norms) if int(i) not in self.used_points]
@@ -213,7 +216,8 @@ class CampaignSelection:
                     # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
                     cand.append(self._candidate(replace(h, X=self.white(h.X)),
                                                 3 * np.log(self.n) + 2 * np.log(self.N)))
-        return sorted(cand, key=lambda c: c.ev.dbic)
+        self.ranked = resolved_first(sorted(cand, key=lambda c: c.ev.dbic))
+        return self.ranked
 
     def try_accept(self, best: _Candidate) -> bool:
         """Accept ``best`` if it passes delta BIC, the likelihood-ratio test, cross-validation and the detection
@@ -248,10 +252,12 @@ class CampaignSelection:
         merged = campaign_effect(h.effect).per_point and self._merge_point(h)
         if not merged:
             before = self.rms(self.cols) if self.cols else float(np.sqrt(np.mean(self.r_raw ** 2)))
+            ev = dict(best.ev.to_dict(), cv_sse_before=float(self.cv), cv_sse_after=float(cv2))
+            alts = rival_forms(best, self.ranked)
+            if alts:
+                ev["alternatives"] = alts
             self.findings.append(Finding(h.effect, h.location, h.explanation, params, iv, before,
-                                         self.rms(self.cols + [h.X]),
-                                         dict(best.ev.to_dict(), cv_sse_before=float(self.cv),
-                                              cv_sse_after=float(cv2))))
+                                         self.rms(self.cols + [h.X]), ev))
         self.chosen.append((h.effect, h.location))
         self.cols.append(h.X)
         self.col_hyps.append(h)
@@ -342,16 +348,6 @@ class CampaignSelection:
         no candidate passes. Every step accepts one term or ends the search, and outlier candidates are offered
         only while fewer than ``max_outliers`` points are dropped, so the step bound never cuts it short."""
         search(self, self.max_terms + self.max_outliers + 1)
-
-
-def _same_place(chosen: tuple, h: Hypothesis) -> bool:
-    """``h`` is at a place the model already has: the same effect and location, or any angle error of a joint
-    that already has one (a periodic error, backlash and a non-linear spring of one joint are competing forms,
-    not parts: two of them split their shared part into large opposing terms that worsen the validation)."""
-    effect, location = chosen
-    if effect == h.effect and location == h.location:
-        return True
-    return bool(location) and location == h.location and str(location).startswith("joint:")
 
 
 def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:

@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
 from rodlab.calibrate.effects import CampaignContext, Refit, campaign_effect, correct_joints
+from rodlab.calibrate.effects.joint_stiffening import stiffening_turn
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.points import points_observations
 
@@ -58,11 +59,12 @@ def validation_errors(robot, fits, points) -> dict:
 
 
 def _torque_corrected(robot, params, points, corrections: dict):
-    """``points`` with each non-linear joint spring's turn ``-s tau abs(tau)`` added, at the static torques the
-    model ``params`` gives them under their own rod (the validation rod's weight)."""
+    """``points`` with each non-linear joint spring's turn (:func:`~rodlab.calibrate.effects.joint_stiffening.
+    stiffening_turn`) added, at the static torques the model ``params`` gives them under their own rod (the
+    validation rod's weight); ``corrections``: {joint index: (s, saturation torque or None)}."""
     obs = points_observations(points)
     _, tau = ball_positions(robot, params, obs.q_rad, obs.rod)
     q = np.deg2rad(np.asarray(points.q_deg, float)).copy()
-    for k, s in corrections.items():
-        q[:, k] -= s * tau[:, k] * np.abs(tau[:, k])
+    for k, (s, saturation) in corrections.items():
+        q[:, k] += stiffening_turn(tau[:, k], s, saturation)
     return replace(points, q_deg=np.rad2deg(q))

@@ -1,0 +1,71 @@
+"""Which of the hypotheses at one place of a campaign goes first, and what a finding cannot rule out.
+
+One joint's angle error has competing forms (a periodic error once or twice per revolution, backlash, a spring
+that stiffens with the torque): they are forms of one place, not parts (:func:`same_place`). Where the best form is
+one the data do not pin down (a periodic error of a joint that turned less than one period fits any smooth error of
+that joint) and a rival form at its place fits as well, the rival goes first (:func:`resolved_first`): an
+independent simulator's torque-stiffened joint 2 had been named a twice-per-revolution error that tied it to 0.1
+in delta BIC, and the validation was worse with it (0.061 / 0.320 mm mean / max against 0.039 / 0.101). A
+finding lists the effects and forms at its place that fit within delta BIC 10 (:func:`rival_forms`).
+"""
+from __future__ import annotations
+
+from rodlab.core.hypothesis import Hypothesis
+
+from .criteria import DBIC_MIN
+
+__all__ = ["FORM_TIE", "resolved_first", "rival_forms", "same_place"]
+
+
+#: delta BIC within which two forms at one place tie (the one the data pin down goes first)
+FORM_TIE = 2.0
+
+
+def resolved_first(ranked: list) -> list:
+    """``ranked`` (best first) with the best moved behind a rival form at its place that fits within
+    :data:`FORM_TIE` when the best's form is one the data do not pin down (``form_unresolved``: a periodic
+    error of a joint that turned less than one period, which any smooth error of that joint fits)."""
+    if not ranked or not ranked[0].hyp.form_unresolved:
+        return ranked
+    top = ranked[0]
+    for i, c in enumerate(ranked[1:], 1):
+        if c.ev.dbic - top.ev.dbic > FORM_TIE:
+            break
+        if c.hyp.location == top.hyp.location and not c.hyp.form_unresolved:
+            return [c] + ranked[:i] + ranked[i + 1:]
+    return ranked
+
+
+def rival_forms(best, ranked: list) -> list[str]:
+    """Other effects or forms at the place of ``best`` that fit within delta BIC 10 of it: what the finding
+    cannot rule out (one label per effect and form)."""
+    out = []
+    for c in ranked:
+        h = c.hyp
+        if (h is best.hyp or h.location != best.hyp.location or c.ev.dbic - best.ev.dbic >= DBIC_MIN
+                or (h.effect == best.hyp.effect and h.names == best.hyp.names and h.settings == best.hyp.settings)):
+            continue
+        label = h.label + _form_of(h)
+        if label not in out:
+            out.append(label)
+    return out
+
+
+def _form_of(h: Hypothesis) -> str:
+    """The form of a hypothesis in words beyond its label's settings: a periodic error once or twice per
+    revolution (told by its parameter names), a stiffening spring without saturation."""
+    if h.effect == "periodic_joint_error":
+        return " (twice per revolution)" if any(n.startswith("amp2") for n in h.names) else " (once per revolution)"
+    if h.effect == "joint_stiffening" and not h.settings:
+        return " (no saturation)"
+    return ""
+
+
+def same_place(chosen: tuple, h: Hypothesis) -> bool:
+    """``h`` is at a place the model already has: the same effect and location, or any angle error of a joint
+    that already has one (a periodic error, backlash and a non-linear spring of one joint are competing forms,
+    not parts: two of them split their shared part into large opposing terms that worsen the validation)."""
+    effect, location = chosen
+    if effect == h.effect and location == h.location:
+        return True
+    return bool(location) and location == h.location and str(location).startswith("joint:")

@@ -50,13 +50,15 @@ def _param_error(e: dict, hit) -> float | None:
 
 
 def _score_kind(s: Counter, t: dict, diag, found) -> None:
-    """Nulls (false alarms), outside effects (honest ``unexplained``), decoys (not read as an effect)."""
+    """Nulls (false alarms), outside effects (honest ``unexplained``: and no vocabulary cause named beside it, since
+    2026-11-27 evening; a gauge's slip had been `unexplained` with a drift beside it), decoys (not read as an
+    effect)."""
     if t["kind"] == "null":
         s["nulls"] += 1
         s["false_alarms"] += diag.verdict != "consistent"
     if t["kind"] == "oolib":
         s["oolib"] += 1
-        s["honest"] += diag.verdict == "unexplained"
+        s["honest"] += diag.verdict == "unexplained" and not [f for f in found if f.effect != "model_form"]
     if t["kind"] == "decoy":
         s["decoys"] += 1
         s["decoy_ok"] += diag.verdict in ("consistent", "unexplained") and not found

@@ -62,7 +62,10 @@ def blind_definitions() -> dict:
 
 def unit_effect(name, rng, places, variants: bool = False):
     """(effects dict for a unit magnitude, location, scalable keys); ``variants``: other forms of an effect than
-    the diagnosis's first hypothesis (a nonlinearity quadratic in the load, or on one load axis only)."""
+    the diagnosis's first hypothesis (a nonlinearity quadratic in the load, or on one load axis only; another gauge
+    tilted, or a load line tilted instead of a gauge)."""
+    if name == "crosstalk" and variants:
+        return _crosstalk_variant(rng)
     if name == "nonlinearity" and variants:
         form = str(rng.choice(["linear", "quadratic", "axis"]))
         sign = float(rng.choice([-1, 1]))
@@ -101,15 +104,16 @@ def unit_effect(name, rng, places, variants: bool = False):
 
 
 def peak_change(C, effects, proto) -> float:
-    """Largest change of the noiseless readings an effect makes."""
+    """Largest change an effect makes to the noiseless readings of the gauges the schedule reads."""
     clean = RigModel(C, {}, noise_mm=0.0, resolution_mm=0.0)
     eff = RigModel(C, effects, noise_mm=0.0, resolution_mm=0.0)
     peak, t = 0.0, 0.0
     for k, (axis, rep, phase, mass) in enumerate(proto.holds()):
         h = Hold(k, axis, rep, phase, mass, t)
+        read = list(proto.measured.get(axis.value, (0, 1, 2)))
         for dt in (0.0, proto.hold_s * 0.5, proto.hold_s):
-            a = clean.reading(t + dt, h)[0]
-            b = eff.reading(t + dt, h)[0]
+            a = clean.reading(t + dt, h)[0][read]
+            b = eff.reading(t + dt, h)[0][read]
             peak = max(peak, float(np.max(np.abs(b - a))))
         t += proto.hold_s + proto.gap_s
     return peak
@@ -178,10 +182,9 @@ def generate_cases(out_dir, n: int = 60, seed: int = 1000, rod="rod1", wide: boo
         names = [] if kind in ("null", "decoy", "oolib") else list(rng.choice(LIBRARY, 1 if kind == "single" else 2,
                                                                            replace=False))
         for name in names:
-            unit, loc, keys = unit_effect(name, rng, places, variants)
+            first = unit_effect(name, rng, places, variants)
             snr = float(np.exp(rng.uniform(*np.log(draws["snr"]))))
-            pk = peak_change(C, unit, proto)
-            scaled = scaled_effects(unit, keys, snr * noise / pk)
+            unit, loc, keys, scaled, snr = _visible_effect(first, name, rng, places, variants, C, proto, snr, noise)
             effects.update(scaled)
             truth_effects.append({"effect": name, "location": loc, "snr": snr, "parameters": scaled[name]})
         model = RigModel(C, effects, noise_mm=noise, resolution_mm=0.001 if noise >= 0.0006 else 0.0001,
@@ -231,6 +234,43 @@ def _decoy(path, rng):
     _rewrite(path, fn)
 
 
+#: the largest tilt a crosstalk variant is drawn with [rad] (the hypothesis's bound is 0.2 rad): a stronger one
+#: is drawn at this tilt, at the signal-to-noise ratio it then has
+_MAX_BLIND_TILT = 0.15
+
+
+def _visible_effect(first, name, rng, places, variants, C, proto, snr, noise):
+    """(unit effect, location, keys, effect scaled to change the read gauges by ``snr`` x ``noise`` at most, the
+    ratio drawn) from the ``first`` draw of :func:`unit_effect`. A crosstalk variant that the schedule's gauges do
+    not see (a load tilted towards an axis none of its series' gauges reads) is drawn again; one that would need a
+    tilt beyond :data:`_MAX_BLIND_TILT` is drawn at that tilt."""
+    for attempt in range(20):
+        unit, loc, keys = first if attempt == 0 else unit_effect(name, rng, places, variants)
+        pk = peak_change(C, unit, proto)
+        if pk <= 1e-9:
+            continue
+        factor = snr * noise / pk
+        if name == "crosstalk" and variants:
+            tilt = max(abs(unit[name][k]) for k in keys)
+            factor = min(factor, _MAX_BLIND_TILT / tilt)
+        return unit, loc, keys, scaled_effects(unit, keys, factor), factor * pk / noise
+    raise RigError(f"blind cases: no form of {name} that this schedule's gauges see in 20 draws", key="blind")
+
+
+def _crosstalk_variant(rng):
+    """A tilted gauge or a tilted load line, either towards a random other axis (the schedules read the z gauge
+    under every load axis, x under x and z, y under y)."""
+    sign = float(rng.choice([-1, 1]))
+    if rng.random() < 0.5:
+        sensor = str(rng.choice(list("xz")))
+        towards = str(rng.choice([a for a in "xyz" if a != sensor]))
+        return {"crosstalk": {"sensor": sensor, f"eps_{towards}_rad": 0.01 * sign}}, f"sensor:{sensor}", \
+            [f"eps_{towards}_rad"]
+    load = str(rng.choice(list("xyz")))
+    towards = str(rng.choice([a for a in "xyz" if a != load]))
+    return {"crosstalk": {"load": load, f"eps_{towards}_rad": 0.01 * sign}}, f"load:{load}", [f"eps_{towards}_rad"]
+
+
 def out_of_library(path, rng, noise, variants: bool = False):
     """Gauge non-linearity (quadratic in the reading) or mains hum: not in the library; with ``variants`` also a
     gauge that slips once (a step of 15 noise SDs from a random time on, one gauge) or saturates (readings
@@ -240,8 +280,12 @@ def out_of_library(path, rng, noise, variants: bool = False):
     which = rng.choice(["quadratic", "hum", "slip", "saturation"] if variants else ["quadratic", "hum"])
     t_slip, col = 0.0, 6
     if which in ("slip", "saturation"):            # (drawn only then: the older batches keep their draws)
-        t_end = float(path.read_text().splitlines()[-1].split(",")[0])
-        t_slip, col = float(rng.uniform(*o["slip_time"])) * t_end, int(rng.choice([6, 7, 8]))
+        data = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+        t_slip = float(rng.uniform(*o["slip_time"])) * float(data[-1][0])
+        # a slip of a gauge that is not read from then to the end of its series would not be there: the gauge that
+        # slips is one being read at that moment (a series zeroes its gauges)
+        now = next(r for r in data if float(r[0]) >= t_slip)
+        col = int(rng.choice([c for c in (6, 7, 8) if now[c]] if which == "slip" else [6, 7, 8]))
 
     def fn(rows):
         vmax = max((abs(float(r[col])) for r in rows if r[col]), default=0.0)

@@ -35,6 +35,7 @@ from .envelope import Envelope, design_of, envelope_for
 from .report import Diagnosis, Finding
 from .rig_as_found import select_as_found
 from .rig_outside import OUTSIDE
+from .rig_range import at_range_limit, range_finding
 from .rig_select import demean
 from .rig_steps import LACK_CHI_RED, Prep, RigModelFit, lack_of_fit, term_findings
 from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, repeat_scatter
@@ -71,11 +72,17 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
         noise = reading_noise(clean)
     except RodlabError as e:
         raise RodlabError(f"{name}: {e}") from e
+    stopped = at_range_limit(clean, noise.sigma_mm)
+    if stopped.any():
+        limited, clean = clean, clean.subset(~stopped)
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
     diag, model = _without_a_stray_hold(clean, sim, design, max_terms, env, noise.sigma_mm)
     if glitch.any():
         _note_glitches(diag, data, glitch)
+    if stopped.any():
+        diag.findings += range_finding(limited, stopped, diag.rms_after_mm)
+        diag.verdict = Verdict.UNEXPLAINED
     _add_cautions(diag)
     diag.extra["noise_estimate"] = {"dof": noise.dof, "source": noise.source}
     return diag, model

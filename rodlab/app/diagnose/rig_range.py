@@ -80,12 +80,14 @@ def range_finding(data: RigSamples, limited: np.ndarray, rms_mm: float) -> list[
         at = limited & (data.comp == c)
         value = float(data.y[at][0])
         holds = np.unique(data.step[at])
+        loads = {(int(a), float(g), round(float(m), 6)) for a, g, m in zip(data.axis[at], data.sign[at], data.mass[at])}
+        why = ("of different loads (an elastic rod gives two loads two readings)" if len(loads) > 1 else
+               "without the noise its other holds show")
         out.append(Finding(
             FindingKind.UNEXPLAINED, f"sensor:{_AXES[int(c)]}",
-            f"the {_AXES[int(c)]} gauge read {value:.4f} mm in {int(at.sum())} readings over {holds.size} holds of "
-            "different loads: it sat at the end of its range (an elastic rod gives two loads two readings); those "
-            "readings were left out and the rest diagnosed without them: a property of the gauge's mounting, "
-            "outside the effect vocabulary",
+            f"the {_AXES[int(c)]} gauge read {value:.4f} mm in {int(at.sum())} readings over {holds.size} holds {why}: "
+            "it sat at the end of its range; those readings were left out and the rest diagnosed without them: a "
+            "property of the gauge's mounting, outside the effect vocabulary",
             {"range_limit_mm": value, "readings_left_out": int(at.sum())}, {}, rms_mm, rms_mm,
             {"outside_vocabulary": True, "holds": [int(h) for h in holds[:20]]}))
     return out

@@ -79,6 +79,8 @@ def evidence_text(f: Finding) -> str:
         return (f"the simulation misses the readings by rms {f.rms_before_mm * 1e3:.2f} um, all of it the linear "
                 f"compliance; inside the envelope (chi-square {ev['envelope_chi2']:.2f} on {ev['envelope_dof']} "
                 f"entries, p = {ev['envelope_p']:.2g}) of {ev.get('envelope', 'the simulation')}")
+    if "readings_left_out" in f.parameters:          # readings screened out before the fit: not a fitted term
+        return f"{f.parameters['readings_left_out']} readings left out before the diagnosis; nothing was fitted to them"
     share = explained_share(f)
     if share < 0:          # it lowers the residual weighted by the noise model, not the plain rms
         return (f"raises the plain rms ({f.rms_before_mm * 1e3:.2f} -> {f.rms_after_mm * 1e3:.2f} um) while it lowers "

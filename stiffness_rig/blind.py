@@ -278,7 +278,7 @@ def out_of_library(path, rng, noise, variants: bool = False):
     ``quadratic_min_noise_sd`` noise SDs at the largest reading (on a stiff rod 0.004/mm alone is nanometres)."""
     o = blind_definitions()["outside"]
     which = rng.choice(["quadratic", "hum", "slip", "saturation"] if variants else ["quadratic", "hum"])
-    t_slip, col = 0.0, 6
+    t_slip, col, series = 0.0, 6, None
     if which in ("slip", "saturation"):            # (drawn only then: the older batches keep their draws)
         data = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
         t_slip = float(rng.uniform(*o["slip_time"])) * float(data[-1][0])
@@ -286,6 +286,7 @@ def out_of_library(path, rng, noise, variants: bool = False):
         # slips is one being read at that moment (a series zeroes its gauges)
         now = next(r for r in data if float(r[0]) >= t_slip)
         col = int(rng.choice([c for c in (6, 7, 8) if now[c]] if which == "slip" else [6, 7, 8]))
+        series = now[4]                            # the load axis: the slip lasts to the end of its series
 
     def fn(rows):
         vmax = max((abs(float(r[col])) for r in rows if r[col]), default=0.0)
@@ -301,7 +302,7 @@ def out_of_library(path, rng, noise, variants: bool = False):
                     v += k * v * v
                 elif which == "hum":
                     v += o["hum_noise_sd"] * noise * np.sin(2 * np.pi * t / o["hum_period_s"])
-                elif which == "slip" and c == col and t >= t_slip:
+                elif which == "slip" and c == col and t >= t_slip and r[4] == series:
                     v += o["slip_noise_sd"] * noise
                 elif which == "saturation" and c == col:
                     v = float(np.clip(v, -o["saturation"] * vmax, o["saturation"] * vmax))

@@ -69,3 +69,55 @@ def test_a_gauge_that_slips_once_is_unexplained_at_the_gauge(tmp_path, accuracy)
     assert diag.verdict == "unexplained" and not _causes(diag), diag.summary()
     f = next(f for f in diag.findings if "slip_mm" in f.parameters)
     assert f.location == "sensor:x" and f.parameters["slip_mm"] == pytest.approx(step, rel=0.1)
+
+
+def test_a_stop_the_largest_load_alone_reaches_is_found_by_its_missing_noise(tmp_path):
+    """Clipped at 85 % of its largest reading, only the largest load's holds reach the stop (one load): they read
+    one value without the noise the gauge's other holds show. Named, the whole holds left out, and the noise is
+    that of the other readings (the stop's readings had pulled it down)."""
+    path = _recording(tmp_path)
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    stop = round(0.85 * max(abs(float(r[7])) for r in rows if r[7]), 4)
+
+    def clip(_, row):
+        if row["disp_y_mm"] and float(row["disp_y_mm"]) > stop:
+            row["disp_y_mm"] = f"{stop:.4f}"
+    clipped = rewrite_recording(path, tmp_path / "clipped.rig.csv", clip)
+    diag, _ = diagnose_rig(read_recording(clipped), SIM, DESIGN, accuracy="exact")
+    assert diag.verdict == "unexplained" and not _causes(diag), diag.summary()
+    f = next(f for f in diag.findings if "range_limit_mm" in f.parameters)
+    assert f.location == "sensor:y" and "without the noise" in f.explanation
+    assert diag.noise_mm == pytest.approx(0.0006, rel=0.15)
+
+
+def test_a_slip_in_a_negative_load_series_is_measured_in_that_series(tmp_path):
+    """Series x and -x are zeroed apart: a slip in the second half of the x series ends with it, and is
+    found at its size (it had run on into the -x series as one group and been half its size, or a drift)."""
+    model = RigModel(SIM.C_F, {}, noise_mm=0.0006, resolution_mm=0.0001, seed=23)
+    path = simulate_recording(model, LoadSchedule(axes=("x", "-x", "z"), repeats=3, hold_s=6.0),
+                              tmp_path / "rec.rig.csv", rod=DESIGN.name)
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    x_times = [float(r[0]) for r in rows if r[4] == "x"]
+    t0, step = 0.5 * (x_times[0] + x_times[-1]), 0.009
+
+    def slip(_, row):
+        if row["load_axis"] == "x" and row["disp_x_mm"] and float(row["time_s"]) >= t0:
+            row["disp_x_mm"] = f"{float(row['disp_x_mm']) + step:.5f}"
+    slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
+    for accuracy in ("exact", None):
+        diag, _ = diagnose_rig(read_recording(slipped), SIM, DESIGN, accuracy=accuracy)
+        assert not _causes(diag), diag.summary()
+        f = next(f for f in diag.findings if "slip_mm" in f.parameters)
+        assert f.location == "sensor:x" and f.parameters["slip_mm"] == pytest.approx(step, rel=0.1)
+
+
+@pytest.mark.parametrize("effects", [{"creep": {"phi": 0.03, "tau_s": 150.0}},
+                                     {"drift": {"rate_x_mm_per_s": 2e-6, "rate_z_mm_per_s": -1.5e-6}}])
+def test_a_slow_creep_or_a_drift_is_no_slip(tmp_path, effects):
+    """A creep slower than the grid's longest time constant and a drift change a gauge's mean as much as a slip,
+    but gradually: no slip is named."""
+    model = RigModel(SIM.C_F, effects, noise_mm=0.0006, resolution_mm=0.0001, seed=24)
+    path = simulate_recording(model, SCHEDULE, tmp_path / "rec.rig.csv", rod=DESIGN.name)
+    for accuracy in ("exact", None):
+        diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy=accuracy)
+        assert not [f for f in diag.findings if "slip_mm" in f.parameters], diag.summary()

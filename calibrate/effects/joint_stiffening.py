@@ -54,7 +54,8 @@ class JointStiffening(CampaignEffectModel):
     example = {"joint": 2, "stiffening_rad_per_Nm2": 3.0e-8}
     physics = "one joint's gear is a non-linear spring: its compliance changes with the torque it carries"
     signature = ("the residuals follow that joint's motion in proportion to tau abs(tau), the square of its static "
-                 "torque with its sign")
+                 "torque with its sign, or to tau abs(tau) / (1 + abs(tau) / tau_s) for a spring that stiffens until "
+                 "nearly rigid")
     locations = ("joint:K",)
     reported = ("`stiffening_rad_per_Nm2` [rad/(N m)^2], `saturation_Nm` [N m] when it saturates: joint K turns by "
                 "`c tau - s tau abs(tau) / (1 + abs(tau) / tau_s)` under its torque")
@@ -87,7 +88,7 @@ class JointStiffening(CampaignEffectModel):
             top = float(np.max(np.abs(t)))
             for sat in (None,) + tuple(round(top * f, 1) for f in SATURATION_GRID):
                 H = (g * stiffening_turn(t, 1.0, sat)[:, None]).reshape(3 * N, 1)
-                how = "" if sat is None else f", saturating above ~{sat:.0f} N m"
+                how = "" if sat is None else f", saturating above ~{sat:.3g} N m"
                 out.append(hypothesis(self.effect, f"joint:{k + 1}", ["stiffening_rad_per_Nm2"], H,
                                       f"joint {k + 1}'s gear is a non-linear spring: its compliance changes with the "
                                       f"torque it carries ({np.min(t):.0f}..{np.max(t):.0f} N m here{how})",

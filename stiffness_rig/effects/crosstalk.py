@@ -44,9 +44,13 @@ class Crosstalk(RigEffectModel):
     locations = ("sensor:x", "sensor:y", "sensor:z") + tuple(f"load:{a}" for a in _LOADS)
 
     def confirm_for(self, location):
-        if location and location.startswith("load:"):
-            return ("check the load's line against the axis (a plumb line or a square at the pulley and the ball) "
-                    "and realign it: the side readings of that series should go")
+        places = (location or "").split("|")
+        load = ("check the load's line against the axis (a plumb line or a square at the pulley and the ball) and "
+                "realign it: the side readings of that series should go")
+        if all(p.startswith("load:") for p in places):
+            return load
+        if any(p.startswith("load:") for p in places):
+            return self.confirm + "; or " + load
         return self.confirm
 
     def complete(self, given: dict) -> dict:
@@ -85,9 +89,9 @@ class Crosstalk(RigEffectModel):
         if p.get("load") != hold.axis.value:
             return F
         _, j, eps = self._tilt({**p, "sensor": p["load"][-1]})
-        magnitude = float(np.linalg.norm(F))
+        along = float(F[hold.axis.index] * hold.axis.sign)      # the load along its line (< 0: a net push)
         out = np.cos(eps) * F
-        out[j] += np.sin(eps) * magnitude
+        out[j] += np.sin(eps) * along
         return out
 
     def reading(self, x, t, dtemp_K, p):
@@ -128,7 +132,7 @@ def _load_tilts(effect, data, ctx) -> list[Hypothesis]:
         name = ("-" if sign < 0 else "") + _AXES[a]
         for j in (j for j in range(3) if j != a):
             cross, own = np.zeros(data.y.size), np.zeros(data.y.size)
-            cross[m] = ctx.C_sim[data.comp[m], j] * np.abs(data.F[m])
+            cross[m] = ctx.C_sim[data.comp[m], j] * data.F[m] * data.sign[m]      # the load along its line
             own[m] = ctx.base[m]
             col = cross + _cos_slope(_tilt_estimate(data.y[m] - own[m], cross[m], own[m])) * own
             out.append(Hypothesis(effect, f"load:{name}", [f"eps_{_AXES[j]}_rad"], col[:, None], [-_EPS_MAX],

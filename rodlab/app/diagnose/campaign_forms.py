@@ -43,7 +43,7 @@ def rival_forms(best, ranked: list) -> list[str]:
     for c in ranked:
         h = c.hyp
         if (h is best.hyp or h.location != best.hyp.location or c.ev.dbic - best.ev.dbic >= DBIC_MIN
-                or (h.effect == best.hyp.effect and h.names == best.hyp.names and h.settings == best.hyp.settings)):
+                or (h.effect == best.hyp.effect and h.names == best.hyp.names)):   # the same form at another grid setting
             continue
         label = h.label + _form_of(h)
         if label not in out:

@@ -73,8 +73,9 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     except RodlabError as e:
         raise RodlabError(f"{name}: {e}") from e
     stopped = at_range_limit(clean, noise.sigma_mm)
-    if stopped.any():
+    if stopped.any():                 # readings at a stop have no scatter: the noise is of the others
         limited, clean = clean, clean.subset(~stopped)
+        noise = reading_noise(clean)
     design = design_of(sim, design)
     env = envelope_for(sim, design, accuracy)
     diag, model = _without_a_stray_hold(clean, sim, design, max_terms, env, noise.sigma_mm)

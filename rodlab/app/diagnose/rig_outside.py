@@ -13,7 +13,8 @@ vocabulary effect that mimics it: a found one makes the verdict ``unexplained`` 
   independent simulator's gauge gain errors had been named a 7.6 deg crosstalk, a joint or a compliance scale.
 - a gauge that slips once (knocked, or its tip slid on the ball): from that moment to the end of the series every
   reading of that gauge is off by one step (the next series is zeroed again). Its moment and series are taken
-  from the residual (the largest change in its mean, per gauge), two hidden parameters. Rodlab's blind slips of 15
+  from the residual (the largest change in its mean, per gauge), two hidden parameters, where that change is a
+  step of at least 5 noise SDs that happens mostly at once (a slow creep or a warm-up drift is gradual). Rodlab's blind slips of 15
   noise SDs had been named a drift or a creep beside an ``unexplained`` step range.
 """
 from __future__ import annotations
@@ -64,20 +65,26 @@ def outside_hypotheses(data, base: np.ndarray) -> list[Hypothesis]:
 
 #: a slip leaves at least this many readings of its series on each side of it
 _SLIP_MIN_READINGS = 5
+#: a slip is a step of at least this many noise SDs of one reading ...
+_SLIP_MIN_SD = 5.0
+#: ... most of which (this share) happens between the readings next to it: abrupt, not a creep or a warm-up
+_SLIP_ABRUPT = 0.5
 
 
 def _slips(data, base: np.ndarray) -> list[Hypothesis]:
-    """Per gauge, a step from the moment and in the series where the residual ``y - base`` changes its mean most
-    (a single change point, in recording order); the step's column is 1 there on, to the end of the series."""
+    """Per gauge, a step from the moment and in the series (load axis and sign: each series is zeroed) where the
+    residual ``y - base`` changes its mean most (a single change point, in recording order), when that change is
+    a slip's (:func:`_is_slip`); the step's column is 1 there on, to the end of the series."""
     out = []
     r = np.asarray(data.y, float) - base
     for c in sorted(set(data.comp.tolist())):
         best = None
-        for a in np.unique(data.axis[data.comp == c]):
-            idx = np.nonzero((data.comp == c) & (data.axis == a))[0]
+        on = data.comp == c
+        for a, sign in sorted(set(zip(data.axis[on].tolist(), data.sign[on].tolist()))):
+            idx = np.nonzero(on & (data.axis == a) & (data.sign == sign))[0]
             idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
             split = _change_point(r[idx])
-            if split is not None and (best is None or split[1] > best[1]):
+            if split is not None and _is_slip(r[idx], split[0]) and (best is None or split[1] > best[1]):
                 best = (idx[split[0]:], split[1])
         if best is None:
             continue
@@ -105,6 +112,18 @@ def _change_point(r: np.ndarray):
     stat[: m - 1] = stat[n - m:] = -1.0
     j = int(np.argmax(stat))
     return j + 1, float(stat[j])
+
+
+def _is_slip(r: np.ndarray, j: int) -> bool:
+    """Whether the change of mean of ``r`` at ``j`` is a slip: a step of at least :data:`_SLIP_MIN_SD` noise SDs
+    (from the readings' successive differences, which one step hardly moves) of which at least
+    :data:`_SLIP_ABRUPT` happens between the :data:`_SLIP_MIN_READINGS` readings on each side of it. A slow creep or
+    a warm-up drift changes the mean as much, but gradually."""
+    m = _SLIP_MIN_READINGS
+    sd = 1.4826 * float(np.median(np.abs(np.diff(r)))) / np.sqrt(2.0)
+    step = float(np.mean(r[j:]) - np.mean(r[:j]))
+    local = float(np.mean(r[j:j + m]) - np.mean(r[j - m:j]))
+    return sd > 0 and abs(step) >= _SLIP_MIN_SD * sd and local * step > 0 and abs(local) >= _SLIP_ABRUPT * abs(step)
 
 
 def confirm_outside(location: str | None) -> str | None:

@@ -4,7 +4,7 @@ whatever the rod does (outside the effect vocabulary, and no property of the rod
 A gauge whose extreme reading recurs, to the last digit, over the holds of two or more different loads has stopped
 there: an elastic rod gives two loads two readings. So has one whose holds at the extreme read one value to the last
 digit, noise-free, in two or more holds while its other holds scatter (a stop reached by the largest load
-alone). Those readings are left out of the diagnosis and named
+alone). Those holds of the gauge are left out of the diagnosis and named
 (``unexplained`` at ``sensor:K``); fitted, a clipped gauge had been named a load non-linearity with a joint and a
 tare beside it. Readings near zero (a gauge across an axis with no cross-compliance) are never a stop: the
 extreme must be at least :data:`RANGE_MIN_SD` noise SDs.
@@ -40,7 +40,8 @@ def at_range_limit(data: RigSamples, sigma: float) -> np.ndarray:
             held = _holds_at(data, on, at)
             loads = {load for _, load in held}
             if len(loads) >= 2 or (len(held) >= 2 and _others_scatter(data, on, sigma, {s for s, _ in held})):
-                out |= at
+                # the whole hold of the gauge: its readings just below the stop are biased low too
+                out |= at | (on & np.isin(data.step, [s for s, _ in held]))
     return out
 
 
@@ -78,7 +79,7 @@ def range_finding(data: RigSamples, limited: np.ndarray, rms_mm: float) -> list[
     out = []
     for c in np.unique(data.comp[limited]):
         at = limited & (data.comp == c)
-        value = float(data.y[at][0])
+        value = float(data.y[at][np.argmax(np.abs(data.y[at]))])
         holds = np.unique(data.step[at])
         loads = {(int(a), float(g), round(float(m), 6)) for a, g, m in zip(data.axis[at], data.sign[at], data.mass[at])}
         why = ("of different loads (an elastic rod gives two loads two readings)" if len(loads) > 1 else

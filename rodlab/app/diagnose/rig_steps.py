@@ -138,7 +138,9 @@ def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: f
         places = _other_places(library, ls, S, j, rss, sigma) if term.effect in _SEPARATE_BY else []
         if places:
             location = "|".join([term.location] + places)
-            ev["separate_by"] = _SEPARATE_BY[term.effect]
+            kinds = {p.split(":")[0] for p in [term.location] + places}
+            if term.effect != "crosstalk" or kinds == {"sensor", "load"}:
+                ev["separate_by"] = _SEPARATE_BY[term.effect]
         alts_j = alternatives(library, ls, S, j, rss, sigma, n)
         if alts_j:
             ev["alternatives"] = alts_j

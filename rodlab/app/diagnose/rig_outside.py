@@ -14,8 +14,8 @@ vocabulary effect that mimics it: a found one makes the verdict ``unexplained`` 
 - a gauge that slips once (knocked, or its tip slid on the ball): from that moment to the end of the series every
   reading of that gauge is off by one step (the next series is zeroed again). Its moment and series are taken
   from the residual (the largest change in its mean, per gauge), two hidden parameters, where that change is a
-  step of at least 5 noise SDs that happens mostly at once (a slow creep or a warm-up drift is gradual). Rodlab's blind slips of 15
-  noise SDs had been named a drift or a creep beside an ``unexplained`` step range.
+  step of at least 5 noise SDs that happens mostly at once (a slow creep or a warm-up drift is gradual).
+  Rodlab's blind slips of 15 noise SDs had been named a drift or a creep beside an ``unexplained`` step range.
 """
 from __future__ import annotations
 

@@ -76,6 +76,11 @@ def _score_effects(s: Counter, t: dict, found, by_band: dict, confusion: Counter
         if hit and e["effect"] in ("joint_compliance",):
             s["loc_n"] += 1
             s["loc_ok"] += e["location"] in (hit[0].location or "").split("|")
+        if hit and e["effect"] == "crosstalk":        # a tilted gauge or a tilted load line: first named, or in the group
+            places = (hit[0].location or "").split("|")
+            s["xt_n"] += 1
+            s["xt_first"] += places[0] == e["location"]
+            s["xt_group"] += e["location"] in places
         if hit and e["effect"] in _PARAM:
             err = _param_error(e, hit[0])
             if err is not None:
@@ -120,6 +125,7 @@ def score(cases, results) -> dict:
             "wrong_cause_rate": s["wrong_cause"] / max(s["with_effects"], 1),
             "wrong_cause_rate_data": s["wrong_cause_data"] / max(s["with_effects"], 1),
             "location_accuracy": s["loc_ok"] / max(s["loc_n"], 1),
+            "crosstalk_place": (s["xt_first"], s["xt_group"], s["xt_n"]),
             "params_within_1.35": float(np.mean(np.array(perr) <= 1.35)) if perr else float("nan"),
             "honest_unexplained": s["honest"] / max(s["oolib"], 1),
             "decoys_not_misread": s["decoy_ok"] / max(s["decoys"], 1),
@@ -148,8 +154,9 @@ def main() -> int:
     sc = score(cases, results)
     times = [dt for _, dt in results]
     note = {"wide": "; wide protocols: 1-5 repeats, negative axes, 3-30 s holds at 2-20 Hz, 2-20 s gaps, up to 5 kg",
-            "variants": "; variants: nonlinearity linear, quadratic or on one axis; an effect beside a bumped hold; "
-                        "outside effects also a gauge slip and a saturating gauge"}.get(mode, "")
+            "variants": "; variants: nonlinearity linear, quadratic or on one axis; crosstalk of another gauge or of "
+                        "a load line; an effect beside a bumped hold; outside effects also a gauge slip and a "
+                        "saturating gauge"}.get(mode, "")
     lines = ["# Blind benchmark: rig diagnosis", "",
              f"`python benchmarks/diagnose_blind.py {n} {seed}{' ' + mode if mode else ''}"
              f"{' ' + rod if rod != 'rod1' else ''}`: {n} generated cases "
@@ -166,6 +173,8 @@ def main() -> int:
     lines += [f"| wrong cause | {sc['wrong_cause_rate']:.1%} |",
               f"| wrong cause, a creep relaxed before a hold's first reading taken as the compliance scale it is in "
               f"the data | {sc['wrong_cause_rate_data']:.1%} |", f"| location (joint springs) | {sc['location_accuracy']:.0%} |",
+              "| crosstalk's place (the gauge or the load line): named first / within the named group | "
+              f"{sc['crosstalk_place'][0]}/{sc['crosstalk_place'][2]} / {sc['crosstalk_place'][1]}/{sc['crosstalk_place'][2]} |",
               f"| parameters within 1.35x | {sc['params_within_1.35']:.0%} |",
               f"| honest `unexplained` on out-of-library effects | {sc['honest_unexplained']:.0%} |",
               f"| decoys (bumped hold) not read as an effect | {sc['decoys_not_misread']:.0%} |",

@@ -121,3 +121,22 @@ def test_a_slow_creep_or_a_drift_is_no_slip(tmp_path, effects):
     for accuracy in ("exact", None):
         diag, _ = diagnose_rig(read_recording(path), SIM, DESIGN, accuracy=accuracy)
         assert not [f for f in diag.findings if "slip_mm" in f.parameters], diag.summary()
+
+
+def test_a_gauge_stopped_at_both_ends_gets_a_finding_per_end(tmp_path):
+    """Loads along y and -y, the y gauge clipped at +-70 % of its largest reading: one finding per end, each with
+    its own value."""
+    model = RigModel(SIM.C_F, {}, noise_mm=0.0006, resolution_mm=0.001, seed=25)
+    path = simulate_recording(model, LoadSchedule(axes=("y", "-y"), repeats=3, hold_s=6.0), tmp_path / "rec.rig.csv",
+                              rod=DESIGN.name)
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    stop = round(0.7 * max(abs(float(r[7])) for r in rows if r[7]), 4)
+
+    def clip(_, row):
+        if row["disp_y_mm"] and abs(float(row["disp_y_mm"])) > stop:
+            row["disp_y_mm"] = f"{stop if float(row['disp_y_mm']) > 0 else -stop:.4f}"
+    clipped = rewrite_recording(path, tmp_path / "clipped.rig.csv", clip)
+    diag, _ = diagnose_rig(read_recording(clipped), SIM, DESIGN, accuracy="exact")
+    ends = sorted(f.parameters["range_limit_mm"] for f in diag.findings if "range_limit_mm" in f.parameters)
+    assert ends == pytest.approx([-stop, stop]), diag.summary()
+    assert not _causes(diag), diag.summary()

@@ -74,11 +74,11 @@ def _others_scatter(data: RigSamples, on: np.ndarray, sigma: float, stopped: set
 
 
 def range_finding(data: RigSamples, limited: np.ndarray, rms_mm: float) -> list[Finding]:
-    """One ``unexplained`` finding per gauge whose readings ``limited`` sat at a stop: the value, how many readings
-    and holds, that they were left out."""
+    """One ``unexplained`` finding per gauge and end of its range whose readings ``limited`` sat at a stop: the
+    value, how many readings and holds, that they were left out."""
     out = []
-    for c in np.unique(data.comp[limited]):
-        at = limited & (data.comp == c)
+    for c, side in sorted({(int(c), float(np.sign(y))) for c, y in zip(data.comp[limited], data.y[limited]) if y}):
+        at = limited & (data.comp == c) & (np.sign(data.y) == side)
         value = float(data.y[at][np.argmax(np.abs(data.y[at]))])
         holds = np.unique(data.step[at])
         loads = {(int(a), float(g), round(float(m), 6)) for a, g, m in zip(data.axis[at], data.sign[at], data.mass[at])}

@@ -22,22 +22,26 @@ def _recording(tmp_path, noise_mm=0.0006, resolution_mm=0.001, seed=21):
     return simulate_recording(model, SCHEDULE, tmp_path / "rec.rig.csv", rod=DESIGN.name)
 
 
+def _clip_y(path, share: float):
+    """(a copy of the recording ``path`` whose y gauge stops at +-``share`` of its largest reading, the stop [mm])."""
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    stop = round(share * max(abs(float(r[7])) for r in rows if r[7]), 4)
+
+    def clip(_, row):
+        if row["disp_y_mm"] and abs(float(row["disp_y_mm"])) > stop:
+            row["disp_y_mm"] = f"{stop if float(row['disp_y_mm']) > 0 else -stop:.4f}"
+    return rewrite_recording(path, path.with_name("clipped.rig.csv"), clip), stop
+
+
 def _causes(diag) -> list:
     return [f for f in diag.findings if f.effect not in ("unexplained", "model_form")]
 
 
 @pytest.mark.parametrize("accuracy", ["exact", None])
 def test_a_gauge_at_its_stop_is_unexplained_at_the_gauge_and_left_out(tmp_path, accuracy):
-    """The y gauge clipped at 70 % of its largest reading (the largest load alone reaches it, noise-free there):
-    its readings at the stop are left out and named; nothing else is found."""
-    path = _recording(tmp_path)
-    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
-    stop = round(0.7 * max(abs(float(r[7])) for r in rows if r[7]), 4)
-
-    def clip(_, row):
-        if row["disp_y_mm"] and abs(float(row["disp_y_mm"])) > stop:
-            row["disp_y_mm"] = f"{stop if float(row['disp_y_mm']) > 0 else -stop:.4f}"
-    clipped = rewrite_recording(path, tmp_path / "clipped.rig.csv", clip)
+    """The y gauge clipped at 70 % of its largest reading (the two largest loads reach it and read alike): its
+    holds at the stop are left out and named; nothing else is found."""
+    clipped, stop = _clip_y(_recording(tmp_path), 0.7)
     diag, _ = diagnose_rig(read_recording(clipped), SIM, DESIGN, accuracy=accuracy)
     assert diag.verdict == "unexplained" and not _causes(diag), diag.summary()
     f = next(f for f in diag.findings if "range_limit_mm" in f.parameters)
@@ -75,14 +79,7 @@ def test_a_stop_the_largest_load_alone_reaches_is_found_by_its_missing_noise(tmp
     """Clipped at 85 % of its largest reading, only the largest load's holds reach the stop (one load): they read
     one value without the noise the gauge's other holds show. Named, the whole holds left out, and the noise is
     that of the other readings (the stop's readings had pulled it down)."""
-    path = _recording(tmp_path)
-    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
-    stop = round(0.85 * max(abs(float(r[7])) for r in rows if r[7]), 4)
-
-    def clip(_, row):
-        if row["disp_y_mm"] and float(row["disp_y_mm"]) > stop:
-            row["disp_y_mm"] = f"{stop:.4f}"
-    clipped = rewrite_recording(path, tmp_path / "clipped.rig.csv", clip)
+    clipped, _ = _clip_y(_recording(tmp_path), 0.85)
     diag, _ = diagnose_rig(read_recording(clipped), SIM, DESIGN, accuracy="exact")
     assert diag.verdict == "unexplained" and not _causes(diag), diag.summary()
     f = next(f for f in diag.findings if "range_limit_mm" in f.parameters)
@@ -129,13 +126,7 @@ def test_a_gauge_stopped_at_both_ends_gets_a_finding_per_end(tmp_path):
     model = RigModel(SIM.C_F, {}, noise_mm=0.0006, resolution_mm=0.001, seed=25)
     path = simulate_recording(model, LoadSchedule(axes=("y", "-y"), repeats=3, hold_s=6.0), tmp_path / "rec.rig.csv",
                               rod=DESIGN.name)
-    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
-    stop = round(0.7 * max(abs(float(r[7])) for r in rows if r[7]), 4)
-
-    def clip(_, row):
-        if row["disp_y_mm"] and abs(float(row["disp_y_mm"])) > stop:
-            row["disp_y_mm"] = f"{stop if float(row['disp_y_mm']) > 0 else -stop:.4f}"
-    clipped = rewrite_recording(path, tmp_path / "clipped.rig.csv", clip)
+    clipped, stop = _clip_y(path, 0.7)
     diag, _ = diagnose_rig(read_recording(clipped), SIM, DESIGN, accuracy="exact")
     ends = sorted(f.parameters["range_limit_mm"] for f in diag.findings if "range_limit_mm" in f.parameters)
     assert ends == pytest.approx([-stop, stop]), diag.summary()

@@ -124,8 +124,8 @@ class Crosstalk(RigEffectModel):
 
 def _load_tilts(effect, data, ctx) -> list[Hypothesis]:
     """A tilted load line per load direction of the recording and side axis: the rod carries sin(eps) of the load
-    along the side axis j (every gauge of that series reads C_sim[gauge, j] x |F| x sin(eps)) and cos(eps) along its
-    own, one column as for a tilted gauge."""
+    along the side axis j (every gauge of that series reads C_sim[gauge, j] x F x sin(eps), F the load along its
+    line) and cos(eps) along its own, one column as for a tilted gauge."""
     out = []
     for a, sign in sorted(set(zip(data.axis.tolist(), data.sign.tolist()))):
         m = (data.axis == a) & (data.sign == sign)

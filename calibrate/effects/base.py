@@ -142,6 +142,17 @@ class CampaignEffectModel(EffectSchema):
         """Fail if the parameters do not fit a campaign of ``positions`` clamping positions and ``points``
         points of a robot with ``n_joints`` joints (checked before anything is written)."""
 
+    def check_joint(self, p: dict, n_joints: int, first: int = 1, why: str = "") -> None:
+        """Fail unless ``p["joint"]`` is one of the robot's joints ``first``..``n_joints`` (``why``: the reason
+        for a first joint other than 1)."""
+        if first <= int(p["joint"]) <= n_joints:
+            return
+        if first == 1:
+            self.fail(f"effect {self.effect}: joint {p['joint']} is not one of the robot's joints 1..{n_joints}",
+                      f"{self.effect}.joint")
+        self.fail(f"effect {self.effect}: joint {p['joint']} must be one of joints {first}..{n_joints} ({why})",
+                  f"{self.effect}.joint")
+
     def true_rod(self, rod, p: dict):
         return rod
 

@@ -62,9 +62,7 @@ class JointStiffening(CampaignEffectModel):
     required = ("joint",)
 
     def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
-        if not 2 <= int(p["joint"]) <= n_joints:
-            self.fail(f"effect {self.effect}: joint {p['joint']} must be one of joints 2..{n_joints} (joint 1 carries "
-                      "no static torque about its axis)", f"{self.effect}.joint")
+        self.check_joint(p, n_joints, 2, "joint 1 carries no static torque about its axis")
         if not float(p.get("saturation_Nm", 0.0)) >= 0:
             self.fail(f"effect {self.effect}: saturation_Nm must be >= 0 N m (0: no saturation), got "
                       f"{p['saturation_Nm']}",

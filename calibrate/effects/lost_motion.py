@@ -99,9 +99,7 @@ class LostMotion(CampaignEffectModel):
     required = ("joint",)
 
     def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
-        if not 1 <= int(p["joint"]) <= n_joints:
-            self.fail(f"effect {self.effect}: joint {p['joint']} is not one of the robot's joints 1..{n_joints}",
-                      f"{self.effect}.joint")
+        self.check_joint(p, n_joints)
 
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
         """The simulator's points of one clamping position, in their order; the first is approached upwards (the

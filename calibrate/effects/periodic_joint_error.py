@@ -57,9 +57,7 @@ class PeriodicJointError(CampaignEffectModel):
     required = ("joint",)
 
     def check_layout(self, positions: int, points: int, n_joints: int, p: dict) -> None:
-        if not 1 <= int(p["joint"]) <= n_joints:
-            self.fail(f"effect {self.effect}: joint {p['joint']} is not one of the robot's joints 1..{n_joints}",
-                      f"{self.effect}.joint")
+        self.check_joint(p, n_joints)
         if int(p.get("per_revolution", 1)) not in (1, 2):
             self.fail(f"effect {self.effect}: per_revolution must be 1 or 2, got {p['per_revolution']}",
                       f"{self.effect}.per_revolution")

@@ -111,10 +111,7 @@ class Crosstalk(RigEffectModel):
                 # the c gauge reads sin(eps) x the true displacement along j (the simulated one) and cos(eps) of
                 # its own: eps x (x_j + k x_c) with k = (cos(eps) - 1) / eps at this recording's own estimate of eps
                 m = data.comp == c
-                cross, own = np.zeros(data.y.size), np.zeros(data.y.size)
-                cross[m] = ctx.C_sim[j, data.axis[m]] * data.F[m]
-                own[m] = ctx.base[m]
-                col = cross + _cos_slope(_tilt_estimate(data.y[m] - own[m], cross[m], own[m])) * own
+                col = _tilt_column(data, ctx, m, ctx.C_sim[j, data.axis[m]] * data.F[m])
                 out.append(Hypothesis(self.effect, f"sensor:{_AXES[c]}", [f"eps_{_AXES[j]}_rad"], col[:, None],
                                       [-_EPS_MAX], [_EPS_MAX],
                                       f"the {_AXES[c]} gauge is not aligned with its axis and reads a fraction of "
@@ -131,15 +128,22 @@ def _load_tilts(effect, data, ctx) -> list[Hypothesis]:
         m = (data.axis == a) & (data.sign == sign)
         name = ("-" if sign < 0 else "") + _AXES[a]
         for j in (j for j in range(3) if j != a):
-            cross, own = np.zeros(data.y.size), np.zeros(data.y.size)
-            cross[m] = ctx.C_sim[data.comp[m], j] * data.F[m] * data.sign[m]      # the load along its line
-            own[m] = ctx.base[m]
-            col = cross + _cos_slope(_tilt_estimate(data.y[m] - own[m], cross[m], own[m])) * own
+            col = _tilt_column(data, ctx, m, ctx.C_sim[data.comp[m], j] * data.F[m] * data.sign[m])  # load along line
             out.append(Hypothesis(effect, f"load:{name}", [f"eps_{_AXES[j]}_rad"], col[:, None], [-_EPS_MAX],
                                   [_EPS_MAX], f"the load along {name} is not on its axis: its line leans towards "
                                   f"{_AXES[j]}, so the rod also carries a side force along {_AXES[j]} that the load "
                                   "schedule does not state"))
     return out
+
+
+def _tilt_column(data, ctx, m: np.ndarray, cross_m: np.ndarray) -> np.ndarray:
+    """A tilt's column over all samples, zero outside ``m``: the cross reading per unit sin(eps) ``cross_m`` [mm] on
+    the samples ``m``, plus (cos(eps) - 1) / eps of their own simulated reading at this recording's own estimate of
+    eps (the fitted coefficient is then eps to second order)."""
+    cross, own = np.zeros(data.y.size), np.zeros(data.y.size)
+    cross[m] = cross_m
+    own[m] = ctx.base[m]
+    return cross + _cos_slope(_tilt_estimate(data.y[m] - own[m], cross[m], own[m])) * own
 
 
 def _tilt_estimate(r: np.ndarray, cross: np.ndarray, own: np.ndarray) -> float:

@@ -52,9 +52,13 @@ def _holds_at(data: RigSamples, on: np.ndarray, at: np.ndarray) -> list:
     for s in np.unique(data.step[at]):
         hold = on & (data.step == s)
         if at[hold].mean() >= _HOLD_SHARE:
-            first = np.argmax(hold)
-            out.append((int(s), (int(data.axis[first]), float(data.sign[first]), round(float(data.mass[first]), 6))))
+            out.append((int(s), _load(data, int(np.argmax(hold)))))
     return out
+
+
+def _load(data: RigSamples, i: int) -> tuple:
+    """The load of sample ``i``: its axis, sign and mass."""
+    return int(data.axis[i]), float(data.sign[i]), round(float(data.mass[i]), 6)
 
 
 def _others_scatter(data: RigSamples, on: np.ndarray, sigma: float, stopped: set) -> bool:
@@ -81,7 +85,7 @@ def range_finding(data: RigSamples, limited: np.ndarray, rms_mm: float) -> list[
         at = limited & (data.comp == c) & (np.sign(data.y) == side)
         value = float(data.y[at][np.argmax(np.abs(data.y[at]))])
         holds = np.unique(data.step[at])
-        loads = {(int(a), float(g), round(float(m), 6)) for a, g, m in zip(data.axis[at], data.sign[at], data.mass[at])}
+        loads = {_load(data, int(i)) for i in np.nonzero(at)[0]}
         why = ("of different loads (an elastic rod gives two loads two readings)" if len(loads) > 1 else
                "without the noise its other holds show")
         out.append(Finding(

@@ -8,15 +8,27 @@ from __future__ import annotations
 
 from rodlab.core.units import G0
 
-__all__ = ["CARBON_LINEAR_LIMIT_N", "is_carbon", "linear_range_warnings"]
+__all__ = ["CARBON_LINEAR_LIMIT_N", "PAPER_MASSES_KG", "default_masses", "is_carbon", "linear_range_warnings"]
 
 #: the paper's linear range of a carbon-fibre rod [N]
 CARBON_LINEAR_LIMIT_N = 15.0
+
+#: the paper's loading masses (Section 5.1) [kg]
+PAPER_MASSES_KG = (0.5, 1.0, 1.5, 2.0)
 
 
 def is_carbon(design) -> bool:
     """Whether the rod's tubes (pipe I or pipe II) are carbon fibre (materials ``cfrp*``)."""
     return any(t.material.name.startswith("cfrp") for t in (design.pipe_I, design.pipe_II))
+
+
+def default_masses(design=None) -> tuple:
+    """The masses [kg] of a load plan nobody chose: the paper's (:data:`PAPER_MASSES_KG`); on a carbon rod only
+    those within the linear range the paper reports for it (1.5 kg = 14.7 N), so the default plan is one the rod
+    takes linearly. ``design`` None (the rod is not known): the paper's."""
+    if design is None or not is_carbon(design):
+        return PAPER_MASSES_KG
+    return tuple(m for m in PAPER_MASSES_KG if m * G0 <= CARBON_LINEAR_LIMIT_N)
 
 
 def linear_range_warnings(schedule, design, limit_N: float = CARBON_LINEAR_LIMIT_N) -> list[str]:

@@ -135,3 +135,18 @@ def test_plan_beyond_the_carbon_linear_range_names_the_holds(tmp_path, capsys):
                  str(tmp_path / "r.rig.csv")]) == 0
     err = capsys.readouterr().err
     assert "warning: 2 kg loads the carbon rod 1#" in err and "hold 3/15 (y, load, repeat 1)" in err
+
+
+def test_default_plan_stays_within_a_carbon_rods_linear_range(tmp_path, capsys):
+    """Without --masses, rig simulate loads the carbon rod 1# with the paper's masses up to 1.5 kg (14.7 N) and
+    warns of nothing; the stainless rod 4# gets the paper's whole schedule, 2 kg included."""
+    from rodlab.app.cli import main
+    from rodlab.stiffness_rig import default_masses, read_recording
+    assert default_masses(resolve_design("rod1")) == (0.5, 1.0, 1.5)
+    assert default_masses(resolve_design("rod4")) == (0.5, 1.0, 1.5, 2.0) == default_masses(None)
+    for rod, heaviest, holds in (("rod1", 1.5, 93), ("rod4", 2.0, 123)):
+        path = tmp_path / f"{rod}.rig.csv"
+        assert main(["rig", "simulate", "--sim", rod, "-o", str(path)]) == 0
+        out = capsys.readouterr()
+        assert "warning" not in out.err and f"{holds} holds" in out.out
+        assert read_recording(path).mass_kg.max() == heaviest

@@ -17,7 +17,7 @@ import numpy as np
 from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.fit import noise_text
-from rodlab.stiffness_rig.plan_check import linear_range_warnings
+from rodlab.stiffness_rig.plan_check import default_masses, linear_range_warnings
 from rodlab.stiffness_rig.plot import format_pm, format_zero
 
 from ...core.compliance import write_compliance
@@ -75,7 +75,9 @@ def _register_simulate(rsub) -> None:
     p.add_argument("--design", default=None, help="the rod's design (*.rod.toml or a built-in name) to place "
                                                   "joint springs exactly (default: guessed from the tool vector)")
     p.add_argument("--axes", default="y,z,x", help="load axes in order (default y,z,x)")
-    p.add_argument("--masses", default="0.5,1.0,1.5,2.0", help="masses [kg] (default 0.5,1.0,1.5,2.0)")
+    p.add_argument("--masses", default=None,
+                   help="masses [kg], e.g. 0.5,1.0,1.5,2.0 (default: the paper's 0.5,1.0,1.5,2.0; on a carbon rod "
+                        "those within its 15 N linear range, 0.5,1.0,1.5)")
     p.add_argument("--repeats", type=count, default=5)
     p.add_argument("--hold-s", type=pos_float, default=8.0)
     p.add_argument("--rate-hz", type=pos_float, default=10.0)
@@ -207,34 +209,41 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
+    design = _checked_design(args.design or sim.rod, explicit=args.design is not None)
     try:
-        masses = tuple(float(m) for m in args.masses.split(","))
+        masses = default_masses(design) if args.masses is None else tuple(float(m) for m in args.masses.split(","))
         axes = tuple(a.strip() for a in args.axes.split(","))
         for a in axes:
             LoadAxis.parse(a, "load axis")
     except ValueError as e:
         raise RodlabError(f"--masses / --axes: {e}") from e
     proto = LoadSchedule(axes=axes, masses=masses, repeats=args.repeats, hold_s=args.hold_s, rate_Hz=args.rate_hz)
-    _warn_linear_range(proto, args.design or sim.rod, explicit=args.design is not None)
+    _warn_linear_range(proto, design)
     model = RigModel(sim.C_F, effects, noise_mm=args.noise_um * 1e-3, seed=args.seed, places=_places(sim, args),
                      load_cell_noise_N=args.load_cell_noise_n)
     stated = {str(e): p for e, p in model.effects.items()}
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
                               extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})
-    print(f"wrote {path}: {len(proto.holds())} holds on rod {sim.rod}, effects: {stated or 'none'}")
+    print(f"wrote {path}: {len(proto.holds())} holds (masses {', '.join(f'{m:g}' for m in masses)} kg) on rod "
+          f"{sim.rod}, effects: {stated or 'none'}")
     return 0
 
 
-def _warn_linear_range(schedule, design_spec: str, explicit: bool) -> None:
-    """Warn (stderr) about every mass beyond a carbon rod's linear range, naming its holds. The design is the
-    one given, else the plan's rod when it is a built-in name (another rod: nothing to check against)."""
+def _checked_design(design_spec: str, explicit: bool):
+    """The rod's design to check a load plan against: the one given (errors raised), else the plan's or the
+    compliance file's rod when it is a built-in name (another rod: None, nothing to check against)."""
     try:
-        design = resolve_design(design_spec)
+        return resolve_design(design_spec)
     except RodlabError:
         if explicit:
             raise
-        return
-    for w in linear_range_warnings(schedule, design):
+        return None
+
+
+def _warn_linear_range(schedule, design) -> None:
+    """Warn (stderr) about every mass beyond a carbon rod's linear range, naming its holds (no design: nothing
+    to check against)."""
+    for w in linear_range_warnings(schedule, design) if design is not None else []:
         print(f"warning: {w}", file=sys.stderr)
 
 
@@ -243,7 +252,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     from rodlab.stiffness_rig.config import read_plan, read_profile
     from rodlab.stiffness_rig.resume import next_free_name, resume_point
     profile, plan = read_profile(args.profile), read_plan(args.plan)
-    _warn_linear_range(plan.schedule, args.design or plan.rod, explicit=args.design is not None)
+    _warn_linear_range(plan.schedule, _checked_design(args.design or plan.rod, explicit=args.design is not None))
     output = args.output
     if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
         output = str(next_free_name(output))

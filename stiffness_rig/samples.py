@@ -22,7 +22,8 @@ class RigSamples:
     t_hold : time since the hold started [s]; t_series : time since the series (load axis) started [s];
     temp : temperature relative to the series start [K] (NaN without ``temp_C``); step, repeat : hold index and
     repeat; t_abs : recording time [s]; F_se : standard error of the hold's mean load [N] (the load cell's
-    noise over its readings in the hold; 0 for mass x g0). All shape=(n,).
+    noise over its readings in the hold; 0 for mass x g0); series : the series the reading belongs to (one per
+    load axis and sign, in order of appearance; None: from ``axis`` and ``sign``). All shape=(n,).
     """
 
     y: np.ndarray
@@ -40,11 +41,14 @@ class RigSamples:
     repeat: np.ndarray
     t_abs: np.ndarray
     F_se: np.ndarray | None = None
+    series: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.y)
         if self.F_se is None:
             self.F_se = np.zeros(n)
+        if self.series is None:
+            self.series = 2 * np.asarray(self.axis, dtype=int) + (np.asarray(self.sign) > 0)
         for f in fields(self):
             if np.shape(getattr(self, f.name)) != n:
                 raise ValueError(f"RigSamples.{f.name} must have the shape of y {n}, got "
@@ -53,6 +57,12 @@ class RigSamples:
     @property
     def n(self) -> int:
         return int(self.y.size)
+
+    @property
+    def zero_groups(self) -> np.ndarray:
+        """shape=(n,) one integer per gauge and series: the readings that share a gauge zero (the gauges are zeroed
+        at every series' start, so the x and -x series of one gauge have a zero each)."""
+        return np.asarray(self.series, dtype=int) * 4 + self.comp
 
     def subset(self, keep: np.ndarray) -> "RigSamples":
         """The rows where ``keep`` is true."""
@@ -82,7 +92,7 @@ def rig_samples(rec) -> RigSamples:
         reference=(st == step[first]) & (np.asarray(rec.mass_kg)[idx] == 0),
         t_hold=t[idx] - t[first_of_step], t_series=t[idx] - t[first], temp=temp[idx] - temp[first],
         step=st.astype(int), repeat=np.asarray(rec.repeat, dtype=int)[idx], t_abs=t[idx],
-        F_se=np.array([load_se[k] for k in st.tolist()]))
+        F_se=np.array([load_se[k] for k in st.tolist()]), series=code[idx])
 
 
 def _first_rows(keys: np.ndarray) -> np.ndarray:

@@ -187,7 +187,7 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     base = sim.C_F[data.comp, data.axis] * data.F
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
-    groups = data.axis * 4 + data.comp
+    groups = data.zero_groups
     prep = Prep(groups)
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)

@@ -89,7 +89,7 @@ def fit_linear(data: RigSamples, entries, L: np.ndarray, y_minus_effects: np.nda
     the covariance of a joint fit with the effects' columns ``effects`` (gauge zeros removed; shape=(n, p)):
     ``sigma^2 [(L, X)^T (L, X)]^-1``'s linear block, times ``inflation`` (the lack of fit's reduced chi-square,
     at least 1). An effect that varies with the load as the compliance does (fast creep, hysteresis) widens it."""
-    groups = data.axis * 4 + data.comp
+    groups = data.zero_groups
     Ld = demean(L, groups)
     yd = demean(y_minus_effects, groups)
     coef, *_ = np.linalg.lstsq(Ld, yd, rcond=None)

@@ -42,7 +42,7 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     means' lack of fit against ``sigma``."""
     n = data.y.size
     sigma_sel = sigma * float(np.sqrt(max(scatter, 1.0)))
-    groups = data.axis * 4 + data.comp
+    groups = data.zero_groups
     entries = measured_entries(data, sim.C_F)
     L = linear_columns(data, entries)
     prep = Prep(groups, Projector(groups, L))

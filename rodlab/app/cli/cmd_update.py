@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from ...core.errors import DesignError, RodlabError
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
 from ...core.tolerances import design_value
+from .rodargs import same_rod, warn_rod_mismatch
 
 __all__ = ["register"]
 
@@ -78,21 +80,18 @@ def _measured(path: str, design, keys, model: str):
         C = model_compliance(model)(design)
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
                                         {"model": model})
-        diag, fitted = diagnose_rig(read_recording(path), sim, design)
+        rec = read_recording(path)
+        warn_rod_mismatch(rec.rod, sim, path)
+        diag, fitted = diagnose_rig(rec, sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
-        local = [f.effect + (f" at {f.location}" if f.location else "") for f in diag.findings
-                 if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
-        joints = [f"joints.{f.location.split('|')[0]}.s_bend_rad_per_Nm" for f in diag.findings
-                  if f.effect == "joint_compliance" and f.location]
-        if local:
-            raise RodlabError(f"{path}: the recording shows {', '.join(local)} beyond the design's tolerances "
-                              "(`rodlab diagnose --rig`): a local cause, not a design key the fit could move; "
-                              "repair or re-bond the rod and measure again, fit only what the tolerances explain, or "
-                              "free the joint's compliance (--free " + (",".join(joints) or "joints.PLACE.s_bend_rad_per_Nm")
-                              + ")")
+        _refuse_unfitted(path, [f for f in diag.findings if f.effect in _STRUCTURAL
+                                and not _explained_by_keys(f, keys, design)], design, model)
         lin = fitted.linear
         return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
+    if comp.rod and not same_rod(comp.rod, design.name):
+        print(f"warning: {path} is of rod {comp.rod!r} and the design of rod {design.name!r}: check that --measured is "
+              "this rod's measurement", file=sys.stderr)
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
     C = np.array([comp.C_F[e] for e in E])
     sd = MEAS_RELATIVE * np.abs(C)                      # remounting and refitting: 1 %, beside the stated fit error
@@ -100,6 +99,33 @@ def _measured(path: str, design, keys, model: str):
         stated = np.array([comp.C_F_sigma[e] for e in E])
         sd = np.hypot(np.where(np.isfinite(stated), stated, 0.0), sd)
     return Measured(E, C, np.diag(sd ** 2), path), []
+
+
+def _key_for(finding, design) -> str:
+    """The design key that would fit a structural finding: a joint's compliance at its (first) place, the tubes'
+    modulus E for a uniform scale, pipe I's shear modulus G for a torsion."""
+    if finding.effect == "joint_compliance":
+        return f"joints.{(finding.location or 'PLACE').split('|')[0]}.s_bend_rad_per_Nm"
+    m = design.pipe_I.material
+    return f"materials.{m.name}.{'E_GPa' if finding.effect == 'compliance_scale' else 'G_GPa'}"
+
+
+def _refuse_unfitted(path: str, findings: list, design, model: str) -> None:
+    """Refuse a recording whose diagnosis names structural causes the freed keys cannot fit, with what each one
+    is and the key that would fit it."""
+    if not findings:
+        return
+    what = {"joint_compliance": "a local cause (a bond, clamp or thread)",
+            "compliance_scale": "every member uniformly softer or stiffer (another laminate or material, a units slip)",
+            "torsion_compliance": "pipe I softer in torsion (its shear modulus or lay-up)"}
+    named = "; ".join(f"{f.effect}" + (f" at {f.location}" if f.location else "") + f": {what[f.effect]}"
+                      for f in findings)
+    keys = ",".join(dict.fromkeys(_key_for(f, design) for f in findings))
+    raise RodlabError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
+                      f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
+                      f"here. Free the key that fits it (--free {keys})"
+                      + (", or repair or re-bond the joint and measure again" if "joints." in keys else "")
+                      + " (`rodlab diagnose --rig` shows the findings)")
 
 
 def cmd_update(args: argparse.Namespace) -> int:

@@ -9,7 +9,7 @@ from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
 from ...core.design_io import builtin_designs, resolve_design
 
-__all__ = ["compliance_arg", "design_help", "builtin_designs_text"]
+__all__ = ["compliance_arg", "design_help", "builtin_designs_text", "same_rod", "warn_rod_mismatch"]
 
 
 def builtin_designs_text() -> str:
@@ -43,6 +43,11 @@ def compliance_arg(spec: str):
     return read_compliance(spec)
 
 
+def same_rod(a: str, b: str) -> bool:
+    """Whether two rod names are one rod (``rod1``, ``1#``, ``Rod 1`` and ``rod_1`` are)."""
+    return _rod_key(a) == _rod_key(b)
+
+
 def _rod_key(name: str) -> str:
     """A rod's name for comparing: ``rod1``, ``1#``, ``Rod 1`` and ``rod_1`` are one rod."""
     return re.sub(r"[\s#_\-]|^rod", "", str(name).strip().lower())
@@ -51,7 +56,7 @@ def _rod_key(name: str) -> str:
 def warn_rod_mismatch(recording_rod: str | None, sim, source: str) -> None:
     """Warn (stderr) when a recording's ``# rod:`` names another rod than the simulation ``sim`` is of: the
     comparison would then measure the difference between two rods, not this rod's physics."""
-    if not recording_rod or not getattr(sim, "rod", None) or _rod_key(recording_rod) == _rod_key(sim.rod):
+    if not recording_rod or not getattr(sim, "rod", None) or same_rod(recording_rod, sim.rod):
         return
     print(f"warning: {source} is of rod {recording_rod!r} (its '# rod:' line) and the simulation of rod {sim.rod!r}: "
           "check that --sim is this rod's compliance", file=sys.stderr)

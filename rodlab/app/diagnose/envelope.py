@@ -89,10 +89,29 @@ class Envelope:
         """C_F entries of the rod as built at ``u`` [mm/N]: the model of the perturbed design times :attr:`ratio`."""
         if self.n_free == 0:
             return self.accuracy.expected(self.C_sim, entries)
-        C = np.asarray(self.model(with_values(self.design, self.values(u[:len(self.params)]))), float) * self.ratio
+        C = np.asarray(self.model(self.design_at(u[:len(self.params)])), float) * self.ratio
         for (_, sd, dC), ub in zip(self.bonds, u[len(self.params):]):
             C = C + sd * ub * dC
         return np.array([C[m, n] for m, n in entries])
+
+    def design_at(self, u: np.ndarray):
+        """The design with the keys at standardised deviations ``u``; where the design rules refuse that design (keys
+        moved together past what each allows alone: a longer ring and a larger bend radius on a pipe with no free
+        length left), the accepted design nearest along the way from the nominal one (the deviations scaled down by
+        bisection), so a fit that strays there sees the model stop changing instead of an error."""
+        u = np.asarray(u, float)
+        try:
+            return with_values(self.design, self.values(u))
+        except DesignError:
+            pass
+        good, bad, found = 0.0, 1.0, self.design
+        for _ in range(12):
+            mid = 0.5 * (good + bad)
+            try:
+                found, good = with_values(self.design, self.values(mid * u)), mid
+            except DesignError:
+                bad = mid
+        return found
 
     def bond_columns(self, entries) -> np.ndarray:
         """d entries / d u of the bonds' standardised deviations [mm/N], shape=(len(entries), bonds): exact, the

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.errors import did_you_mean
-from rodlab.core.fileio import read_json, read_text_checked, atomic_write_json
+from rodlab.core.fileio import atomic_write_json, read_json, read_text_checked, separator_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
 
@@ -149,6 +149,8 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str]):
         i += 1
     if i >= len(lines):
         raise CalibrationError("no header line", path=p)
+    if (problem := separator_problem(lines[i])) is not None:
+        raise CalibrationError(problem, path=p, line=i + 1)
     header = [h.strip() for h in next(csv.reader([lines[i]]))]
     allowed = required + optional
     for h in header:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import csv
 import io
+import logging
 import math
 import os
 from dataclasses import dataclass, field
@@ -22,9 +23,11 @@ import numpy as np
 
 from rodlab.core.enums import LoadAxis, Phase
 from rodlab.core.errors import did_you_mean
-from rodlab.core.fileio import read_text_checked
+from rodlab.core.fileio import read_text_checked, separator_problem
 
 from .errors import RigError
+
+log = logging.getLogger(__name__)
 
 __all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
            "format_row"]
@@ -186,19 +189,13 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     if i >= len(lines):
         raise RigError("no header line", path=p, line=i + 1)
     header_line = i + 1
+    if (problem := separator_problem(lines[i])) is not None:
+        raise RigError(problem, path=p, line=header_line)
     header = [h.strip() for h in next(csv.reader([lines[i]]))]
     _check_header(header, p, header_line)
     ix = {c: header.index(c) for c in header}
     has_temp = "temp_C" in ix
-    rows = []
-    for k, row in enumerate(csv.reader(lines[i + 1:]), start=header_line + 1):
-        if not row or all(not c.strip() for c in row):
-            continue
-        if row[0].lstrip().startswith("#"):
-            continue
-        if len(row) != len(header):
-            raise RigError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
-        rows.append(_row(row, ix, p, k, has_temp))
+    rows = _data_rows(lines, i + 1, header, ix, p, has_temp)
     if not rows:
         raise RigError("no samples after the header", path=p, line=header_line)
     _check_holds(rows, p)
@@ -211,12 +208,34 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     return rec
 
 
+def _data_rows(lines: list[str], start: int, header: list[str], ix: dict, p: Path, has_temp: bool) -> list[tuple]:
+    """The sample rows from line index ``start`` on (comment and blank lines skipped). A last line with fewer cells
+    than the header is a sample cut off by an interrupted acquisition: it is left out with a warning (``rig
+    acquire`` resumes after the last complete hold); a line that repeats the header is two recordings joined."""
+    rows = []
+    numbered = [(k, row) for k, row in enumerate(csv.reader(lines[start:]), start=start + 1)
+                if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    for j, (k, row) in enumerate(numbered):
+        if [c.strip() for c in row] == header:
+            raise RigError(f"this line repeats the header: two recordings joined into one file? Split the file "
+                           f"before line {k}, or delete the repeated header if it is one recording", path=p, line=k)
+        if len(row) < len(header) and j == len(numbered) - 1 and j > 0:
+            log.warning("%s, line %d: the last line has %d of %d cells, a sample cut off (an interrupted "
+                        "recording?); left out", p, k, len(row), len(header))
+            break
+        if len(row) != len(header):
+            raise RigError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
+        rows.append(_row(row, ix, p, k, has_temp))
+    return rows
+
+
 def _check_holds(rows, p) -> None:
     first: dict[int, tuple] = {}
     last_time = -math.inf
     for k, t, step, rep, ph, ax, m, *_ in rows:
         if t < last_time:
-            raise RigError(f"time goes backwards ({t} after {last_time})", path=p, line=k, key="time_s")
+            raise RigError(f"time goes backwards ({t} after {last_time}): two recordings joined, or the clock reset? "
+                           "Split the file at this line", path=p, line=k, key="time_s")
         last_time = t
         if step not in first:
             first[step] = (k, rep, ph, ax, m)

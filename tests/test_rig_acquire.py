@@ -13,6 +13,7 @@ from rodlab.stiffness_rig.acquire import RecordingLock, acquire
 from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simdevice import Faults, SimulatedRig
+from rodlab.stiffness_rig.simulate import simulate_recording
 
 ROOT_DATA = Path(__file__).resolve().parents[1] / "stiffness_rig" / "plans"
 C = np.array([[0.0063, 0.0, -0.0151], [0.0, 0.2198, 0.0], [-0.0151, 0.0, 0.0666]])
@@ -206,3 +207,45 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
         server.send_signal(signal.SIGTERM)
         server.wait(timeout=10)
     assert server.returncode == 0 and not os.path.lexists(link)
+
+
+def test_a_sample_cut_off_mid_line_is_left_out_and_the_acquisition_resumes(tmp_path, caplog):
+    """Power lost while a line was written: the file ends in part of a sample. Reading it leaves that line out
+    with a warning naming it; re-running the acquisition resumes (the writer drops the partial line first)."""
+    model = RigModel(C, seed=5)
+    out = tmp_path / "r.rig.csv"
+    plan = _plan()
+    with SimulatedRig(model, tmp_path / "tty") as dev:
+        prof = _profile(dev.port)
+
+        def stop_after_two(st):
+            if st.holds_done == 2:
+                raise KeyboardInterrupt
+        with pytest.raises(KeyboardInterrupt):
+            acquire(prof, plan, out, use_loader=True, progress=stop_after_two)
+        whole = read_recording(out)
+        text = out.read_text()
+        out.write_text(text + text.splitlines()[-1 if text.splitlines()[-1][:1].isdigit() else -2][:25])
+        lines = out.read_text().splitlines()
+        with caplog.at_level("WARNING"):
+            cut = read_recording(out)
+        assert cut.n == whole.n and f"line {len(lines)}: the last line has" in caplog.text
+        acquire(prof, plan, out, use_loader=True)
+    rec = read_recording(out)
+    assert len(rec.steps()) == len(plan.schedule.holds()) and np.all(np.diff(rec.time_s) > 0)
+
+
+@pytest.mark.parametrize("edit,message", [
+    (lambda t: t.replace(",", ";"), "separated by semicolons, not commas"),
+    (lambda t: t.replace(",", "\t"), "separated by tabs, not commas"),
+    (lambda t: t + t[t.index("time_s"):], "repeats the header: two recordings joined"),
+    (lambda t: "\n".join(t.splitlines()[:-3] + [t.splitlines()[-2][:8], t.splitlines()[-1]]) + "\n",
+     "expected 10 cells, got 2"),                         # a cut line inside the file is an error, not dropped
+])
+def test_damaged_recordings_say_what_happened(tmp_path, edit, message):
+    path = tmp_path / "r.rig.csv"
+    simulate_recording(RigModel(C, seed=1), LoadSchedule(axes=("y",), masses=(1.0,), repeats=1, hold_s=1.0), path,
+                       rod="1#")
+    path.write_text(edit(path.read_text()))
+    with pytest.raises(RigError, match=message):
+        read_recording(path)

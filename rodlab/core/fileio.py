@@ -20,7 +20,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
-           "sha256_file", "read_text_checked", "read_toml", "read_json"]
+           "sha256_file", "read_text_checked", "read_toml", "read_json", "separator_problem"]
 
 
 def _umask() -> int:
@@ -115,6 +115,19 @@ def read_text_checked(path, error_cls) -> str:
         return raw.decode("utf-8-sig")          # a byte-order mark (Excel, Notepad) is not text
     except UnicodeDecodeError as e:
         raise error_cls(f"not UTF-8 text ({e.reason})", path=p, line=raw[:e.start].count(b"\n") + 1) from e
+
+
+def separator_problem(header_line: str) -> str | None:
+    """What is wrong with a CSV header line written with another separator than the comma (a spreadsheet in a
+    decimal-comma locale writes ``;``, a logger often a tab), or None: rodlab's tables are comma-separated."""
+    if "," in header_line:
+        return None
+    for sep, name in ((";", "semicolons"), ("\t", "tabs")):
+        if sep in header_line:
+            return (f"the header is separated by {name}, not commas: rodlab's CSV files are comma-separated with a "
+                    "decimal point; export the file again as CSV with ',' between cells (or replace the "
+                    f"{name}{' and decimal commas' if sep == ';' else ''})")
+    return None
 
 
 def read_toml(path, error_cls) -> tuple[dict, str]:

@@ -15,6 +15,7 @@ import math
 import re
 
 from .errors import did_you_mean
+from .fileio import separator_problem
 from .schema import Problem
 
 __all__ = ["table_problems", "MAX_PROBLEMS"]
@@ -163,6 +164,8 @@ def table_problems(text: str, schema: dict, path: str = "") -> list[Problem]:
     out = _comment_problems(meta, schema.get("comments", {}), path)
     if i >= len(lines):
         return out + [Problem(path, "no header line", i or None, None, "add the column header line")]
+    if (problem := separator_problem(lines[i])) is not None:
+        return out + [Problem(path, problem.split(": ", 1)[0], i + 1, None, problem.split(": ", 1)[1])]
     header = [h.strip() for h in next(csv.reader([lines[i]]))]
     cols = _columns(header, schema)
     out += _header_problems(header, cols, schema, path, i + 1)

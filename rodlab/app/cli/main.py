@@ -114,12 +114,21 @@ def console() -> int:
     return code
 
 
+class _UserFormatter(logging.Formatter):
+    """Log lines as the commands' own messages read (``warning: ...``); ``-v`` adds the level and the logger."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return f"{record.levelname.lower()}: {record.getMessage()}"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser(argv, every_command=False)
     args = parser.parse_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     level = [logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)]
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    handler = logging.StreamHandler()
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s") if args.verbose else _UserFormatter())
+    logging.basicConfig(level=level, handlers=[handler])
     progress.configure(sys.stderr.isatty() and not args.quiet)
     if not getattr(args, "func", None):
         parser.print_help()

@@ -10,7 +10,9 @@
 from __future__ import annotations
 
 import csv
+import logging
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,8 +29,12 @@ from .rod import Rod
 __all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "FIXTURE_FORMATS"]
 
+log = logging.getLogger(__name__)
+
 #: fixture formats read; /2 adds each pose's covariance
 FIXTURE_FORMATS = ("rodlab.fixture/1", "rodlab.fixture/2")
+#: a contact force beyond this [N] per axis is a unit slip, not MultiCal's springs (about 1 N): warned of on reading
+PLAUSIBLE_CONTACT_FORCE_N = 30.0
 
 
 @dataclass
@@ -153,6 +159,7 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str]):
         raise CalibrationError(problem, path=p, line=i + 1)
     header = [h.strip() for h in next(csv.reader([lines[i]]))]
     allowed = required + optional
+    _check_joint_columns(header, allowed, p, i + 1)
     for h in header:
         if h not in allowed:
             raise CalibrationError(f"unknown column {h!r}; expected {allowed}." + did_you_mean(h, allowed), path=p,
@@ -172,6 +179,20 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str]):
     if not rows:
         raise CalibrationError("no data rows", path=p, line=i + 1)
     return header, rows
+
+
+def _check_joint_columns(header: list[str], allowed: list[str], p: Path, line: int) -> None:
+    """A file with another number of joint columns (q1..qm) than the robot model has joints: named as that, with
+    the fix (the robot file), rather than as an unknown or missing column."""
+    joint = re.compile(r"q([1-9][0-9]*)")
+    have = sorted(int(m.group(1)) for h in header if (m := joint.fullmatch(h)))
+    want = sorted(int(m.group(1)) for h in allowed if (m := joint.fullmatch(h)))
+    if have and want and have != want and have == list(range(1, len(have) + 1)):
+        missing = [f"q{k}" for k in want if k not in have]
+        other = f"add the missing column(s) {', '.join(missing)}" if missing else "drop the extra joint columns"
+        raise CalibrationError(f"the file has {len(have)} joint columns (q1..q{len(have)}) and the robot model "
+                               f"{len(want)} joints: give the robot file of the robot that recorded it (--robot), or "
+                               f"{other}", path=p, line=line, key=f"q{max(len(want), len(have))}")
 
 
 XYZ_COLUMNS = ("x_mm", "y_mm", "z_mm")
@@ -244,6 +265,10 @@ def read_fixture(path) -> Fixture:
     fa = np.asarray(data.get("contact_force_N", [1.10, 1.25, 1.05]), dtype=float)
     if not np.all(np.isfinite(fa)):
         raise CalibrationError(f"expected 3 finite numbers [N], got {fa.tolist()}", path=p, key="contact_force_N")
+    if np.abs(fa).max() > PLAUSIBLE_CONTACT_FORCE_N:
+        log.warning("%s: contact_force_N %s: MultiCal's springs press the ball with about 1 N per axis; forces of "
+                    "%.0f N would deflect the rod far beyond its calibration (a factor 100 or 1000 slipped in?)",
+                    p, fa.tolist(), np.abs(fa).max())
     return Fixture(poses, fa, wp, p, _pose_covariances(p, data, poses), data.get("probing"))
 
 

@@ -17,7 +17,7 @@ from .campaign import RAW_COLUMNS, Campaign
 from .device import Device
 from .errors import CalibrationError
 
-__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM"]
+__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips"]
 
 log = logging.getLogger(__name__)
 
@@ -77,3 +77,27 @@ def far_points(camp: Campaign, limit_mm: float = ALIGNMENT_LIMIT_MM) -> list[Far
     idx = np.nonzero(d > limit_mm)[0]
     return [FarPoint(int(camp.position[i]), int(camp.point[i]), int(camp.lines[i]) if camp.lines.size else None,
                      float(d[i])) for i in idx]
+
+
+#: a campaign whose median point lies this far from the datum [mm] was not measured against it (a dial gauge's whole
+#: range is 10-25 mm; the paper aligns within 0.5 mm): its readings are in other units
+READINGS_UNIT_LIMIT_MM = 25.0
+
+
+def unit_slips(camp: Campaign, path) -> list[str]:
+    """What in a campaign's numbers says a column is in other units than the contract's, each with its fix: joint
+    angles that all lie within +-2 pi (radians where degrees are expected: no campaign turns its joints by less than
+    6.3 degrees), readings whose median point lies
+    :data:`READINGS_UNIT_LIMIT_MM` from the datum (um where mm are expected). Empty when none."""
+    out = []
+    q = np.asarray(camp.q_deg, float)
+    if q.size and np.all(np.abs(q) <= 2 * np.pi + 1e-9) and np.ptp(q, axis=0).max() > 0.05:
+        out.append(f"{path}: every joint angle lies within +-2 pi (largest |q| {np.abs(q).max():.3f}): the q columns look "
+                   "like radians; the campaign's joint angles are degrees: multiply them by 180/pi")
+    if camp.x_D_mm is not None and len(camp.x_D_mm):
+        d = float(np.median(np.linalg.norm(camp.x_D_mm, axis=1)))
+        if d > READINGS_UNIT_LIMIT_MM:
+            out.append(f"{path}: the median point lies {d:.1f} mm from the datum point (a MultiCal campaign's lie "
+                       f"within about {ALIGNMENT_LIMIT_MM:g} mm, a dial gauge's range is 10-25 mm): the readings look "
+                       "like um or another unit; x_mm, y_mm, z_mm are millimetres: divide um by 1000")
+    return out

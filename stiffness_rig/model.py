@@ -49,6 +49,10 @@ class LoadSchedule:
         for key, (value, expected, ok) in checks.items():
             if not ok:
                 raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
+        if round(self.hold_s * self.rate_Hz) < 1:
+            raise RigError(f"a hold of {self.hold_s:g} s at {self.rate_Hz:g} Hz takes no sample; give hold_s >= "
+                           f"{1 / self.rate_Hz:g} s (one sample) or a higher rate, e.g. the paper's 8 s at 10 Hz",
+                           key="hold_s")
         for ax in self.axes:
             LoadAxis.parse(ax, "load axis")
 

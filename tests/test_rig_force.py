@@ -150,3 +150,12 @@ def test_default_plan_stays_within_a_carbon_rods_linear_range(tmp_path, capsys):
         out = capsys.readouterr()
         assert "warning" not in out.err and f"{holds} holds" in out.out
         assert read_recording(path).mass_kg.max() == heaviest
+
+
+def test_a_hold_shorter_than_one_sample_is_refused(tmp_path, capsys):
+    """--hold-s 0.04 at 10 Hz would write a recording with only its header: refused, naming the key and the fix."""
+    from rodlab.app.cli import main
+    out = tmp_path / "q.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--hold-s", "0.04", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "rodlab rig simulate: error: key `hold_s`" in err and "takes no sample" in err and not out.exists()

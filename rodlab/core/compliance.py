@@ -38,6 +38,11 @@ DEFAULT_CONTACT_FORCE_N = np.array([1.10, 1.25, 1.05])
 SYMMETRY_RTOL = 0.05
 #: Largest plausible compliance entry [mm/N or mm per g0]
 MAX_COMPLIANCE = 1e3
+#: beyond these a compliance file's numbers are not a measuring rod's but a unit slip (warned of on reading): C_F
+#: diagonal [mm/N] (um/N written as mm/N), mass [kg] (grams), the tool vector's length [mm] (metres)
+PLAUSIBLE_C_F_MM_PER_N = 2.0
+PLAUSIBLE_MASS_KG = 25.0
+PLAUSIBLE_TOOL_MM = 20.0
 
 _KEYS = ("format", "rod", "method", "C_F_mm_per_N", "C_g_mm_per_g0", "r_rod", "c_rod_um", "mass_kg",
          "com_T_mm", "tool_mm", "provenance", "r_mn", "C_F_sigma_mm_per_N")
@@ -308,7 +313,25 @@ class RodCompliance:
         if stored is not None and abs(stored - comp.c_rod_um) > 0.01 * max(abs(comp.c_rod_um), 1.0):
             log.warning("%s: stored c_rod_um %.4g differs from Eq. 23 on the matrices (%.4g); the matrices are used",
                         path, stored, comp.c_rod_um)
+        for problem in comp.unit_slips():
+            log.warning("%s: %s", path, problem)
         return comp
+
+    def unit_slips(self) -> list[str]:
+        """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond
+        :data:`PLAUSIBLE_C_F_MM_PER_N` (um/N written as mm/N), a mass beyond :data:`PLAUSIBLE_MASS_KG` (grams),
+        a tool vector shorter than :data:`PLAUSIBLE_TOOL_MM` (metres)."""
+        out = []
+        worst = float(np.abs(np.diag(self.C_F)).max())
+        if worst > PLAUSIBLE_C_F_MM_PER_N:
+            out.append(f"C_F_mm_per_N reaches {worst:.4g} mm/N on its diagonal; a measuring rod deflects 0.001-0.3 mm "
+                       "per N at its ball: if the file is in um/N, divide C_F by 1000")
+        if self.mass_kg > PLAUSIBLE_MASS_KG:
+            out.append(f"mass_kg {self.mass_kg:g}: a measuring rod weighs 0.2-5 kg; if this is grams, divide by 1000")
+        if 0 < float(np.linalg.norm(self.tool_mm)) < PLAUSIBLE_TOOL_MM:
+            out.append(f"tool_mm {np.round(self.tool_mm, 4).tolist()} is {np.linalg.norm(self.tool_mm):.3g} mm long; a "
+                       "measuring rod's ball sits 100-1500 mm from the flange: if this is metres, multiply by 1000")
+        return out
 
 
 def _optional33(data: dict, key: str, path, lo: float, hi: float) -> np.ndarray | None:

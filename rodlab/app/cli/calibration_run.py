@@ -45,6 +45,7 @@ class CalibrationRun:
     rod: object = None                     # the rod on the flange (calibrate.Rod)
     compensations: list = field(default_factory=list)   # what the fit removed (calibrate.compensations entries)
     options: object = None                 # the identification's options (calibrate.FitOptions; cross-validation)
+    fixture: object = None                 # the fixture file as read (calibrate.Fixture)
 
     @property
     def label(self) -> str:
@@ -84,7 +85,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     res, pins = constrain_to_ranges(lambda p: identify(robot, obs, Rod.of(rod), compensations, replace(options, pinned=p)),
                                     options.pinned, options.freed)
     options = replace(options, pinned=pins)       # with the range holds: the cross-validation fits the same model
-    run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations,
+    run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
                          options=options)
     if args.validate:
         pts = read_points(args.validate, robot.n)

@@ -11,7 +11,6 @@ from rodlab.calibrate import (
     RodDeflection,
     campaign_observations,
     deflection_offsets,
-    read_fixture,
     read_points,
     result_dict,
     validate,
@@ -118,11 +117,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             written.append(plot_error_distributions(errors, args.png))
             print(f"wrote {written[-1]}")
     write_command_report(args, written, default_folder(args))
-    _note_uncompensated(robot, res, camp, args, rod, comp)
+    _note_uncompensated(robot, res, camp, run.fixture, args, rod, comp)
     if res.warnings:
         print_not_trusted(res)
         if res.residual_check is not None and res.residual_check.material:
-            _print_suspects(robot, camp, args, rod, comp, res.residual_check)
+            _print_suspects(robot, camp, run.fixture, args, rod, comp, res.residual_check)
         _note_ideal_device(args)
         return 3
     print_cautions(res)
@@ -148,11 +147,11 @@ def _note_ideal_device(args) -> None:
               f"a mm from the datum; give the device's calibrated axes", file=sys.stderr)
 
 
-def _note_uncompensated(robot, res, camp, args, rod, comp) -> None:
+def _note_uncompensated(robot, res, camp, fix, args, rod, comp) -> None:
     """With ``--compensation none`` and a file that has matrices: how far the uncompensated rod deflects."""
     if comp.active or not (rod.C_F.any() or rod.C_g.any()):
         return
-    obs = campaign_observations(camp, read_fixture(args.fixture), rod)
+    obs = campaign_observations(camp, fix, rod)
     off = deflection_offsets(robot, res.params, obs.q_rad, obs.force_W_N, rod)
     print(f"note: the rod's deflection is not compensated; by {args.rod} it moves the ball up to "
           f"{np.linalg.norm(off, axis=1).max() * 1e3:.0f} um in this campaign (--compensation file compensates it)")
@@ -175,14 +174,14 @@ def _warn_other_rod(tool_mm, rod, path) -> None:
               file=sys.stderr)
 
 
-def _print_suspects(robot, camp, args, rod, comp, test) -> None:
+def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses) and
     what to do about each."""
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     used = rod if comp.active else RodCompliance.none_like(rod)
     try:
-        diag, _ = diagnose_campaign(robot, camp, read_fixture(args.fixture), used, noise_mm=test.noise_mm,
+        diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm,
                                     fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     except RodlabError as e:   # the diagnosis identifies every parameter; the calibration held some at nominal
         print(f"suspects: the campaign diagnosis cannot run on this campaign ({e}); the verdict above stands",

@@ -6,7 +6,9 @@ import sys
 
 from rodlab.calibrate import read_campaign
 from rodlab.calibrate.device import read_device
-from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points
+from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, unit_slips
+
+from ...core.errors import RodlabError
 
 __all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "warn_flagged_fixture"]
 
@@ -25,6 +27,9 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
     named on stderr."""
     device = read_device(args.device) if getattr(args, "device", None) else None
     camp = read_campaign(args.campaign, n_joints, device)
+    slips = unit_slips(camp, args.campaign)
+    if slips:
+        raise RodlabError("; ".join(slips))
     if warn and camp.x_D_mm is not None:
         far = far_points(camp)
         if far:

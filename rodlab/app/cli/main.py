@@ -133,23 +133,24 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 1
+    name = " ".join(filter(None, (args.command, getattr(args, "rig_command", None))))
     try:
         _check_outputs(args)
         return int(args.func(args) or 0)
     except RodlabError as e:
         if args.debug:
             raise
-        print(f"rodlab {args.command}: error: {e}", file=sys.stderr)
+        print(f"rodlab {name}: error: {e}", file=sys.stderr)
         return 2
     except BrokenPipeError:                 # output piped into `head` and closed: not an error
         return 0
     except OSError as e:
         if args.debug:
             raise
-        print(f"rodlab {args.command}: error: {_os_error_text(e)}", file=sys.stderr)
+        print(f"rodlab {name}: error: {_os_error_text(e)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"rodlab {args.command}: interrupted", file=sys.stderr)
+        print(f"rodlab {name}: interrupted", file=sys.stderr)
         return 130
 
 

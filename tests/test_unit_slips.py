@@ -1,0 +1,98 @@
+"""Numbers no MultiCal campaign, rod or fixture has are named as the unit slip that gives them, with the fix: joint
+angles in radians, readings in um (refused: the calibration would be meaningless), a compliance file in um/N, a
+mass in grams, a tool vector in metres, contact forces 100x (warned of). A robot file with another number of
+joints than the campaign's columns is named as that."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli import main
+from rodlab.calibrate import read_campaign, read_fixture
+from rodlab.calibrate.readings import unit_slips
+from rodlab.core.compliance import read_compliance
+
+
+@pytest.fixture(scope="module")
+def camp(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("camp")
+    assert main(["fea", "rod1", "--model", "calc", "-o", str(folder / "rod1.compliance.json")]) == 0
+    assert main(["simulate-campaign", "--rod", str(folder / "rod1.compliance.json"), "-o", str(folder / "c")]) == 0
+    return folder
+
+
+def _scaled(src, dst, columns, factor):
+    lines = src.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    cols = lines[head].split(",")
+    out = lines[:head + 1]
+    for line in lines[head + 1:]:
+        cells = line.split(",")
+        out.append(",".join(f"{float(c) * factor:.9g}" if cols[i] in columns else c for i, c in enumerate(cells)))
+    dst.write_text("\n".join(out) + "\n")
+    return dst
+
+
+def _calibrate(camp, campaign, rod=None, fixture=None):
+    return main(["calibrate", str(campaign), "--fixture", str(fixture or camp / "c" / "multical.fixture.json"),
+                 "--rod", str(rod or camp / "rod1.compliance.json")])
+
+
+def test_the_simulated_campaign_has_no_unit_slip(camp):
+    path = camp / "c" / "multical.campaign.csv"
+    assert unit_slips(read_campaign(path), path) == []
+
+
+@pytest.mark.parametrize("columns,factor,message", [
+    (("q1", "q2", "q3", "q4", "q5", "q6"), np.pi / 180, "look like radians"),
+    (("x_mm", "y_mm", "z_mm"), 1000.0, "look like um"),
+])
+def test_campaign_columns_in_other_units_are_refused(camp, tmp_path, capsys, columns, factor, message):
+    bad = _scaled(camp / "c" / "multical.campaign.csv", tmp_path / "bad.campaign.csv", columns, factor)
+    assert _calibrate(camp, bad) == 2
+    err = capsys.readouterr().err
+    assert message in err and "bad.campaign.csv" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("edit,message", [
+    (lambda d: d.update(C_F_mm_per_N=(np.array(d["C_F_mm_per_N"]) * 1000).tolist()), "divide C_F by 1000"),
+    (lambda d: d.update(mass_kg=674.0), "if this is grams"),             # a 674 g rod
+    (lambda d: d.update(tool_mm=(np.array(d["tool_mm"]) / 1000).tolist()), "if this is metres"),
+])
+def test_a_compliance_file_in_other_units_is_warned_of(camp, tmp_path, caplog, edit, message):
+    data = json.loads((camp / "rod1.compliance.json").read_text())
+    edit(data)
+    data.pop("c_rod_um", None)
+    path = tmp_path / "bad.compliance.json"
+    path.write_text(json.dumps(data))
+    with caplog.at_level("WARNING"):
+        read_compliance(path)
+    assert message in caplog.text
+    caplog.clear()
+    with caplog.at_level("WARNING"):
+        read_compliance(camp / "rod1.compliance.json")
+    assert caplog.text == ""
+
+
+def test_contact_forces_a_hundred_times_too_large_are_warned_of(camp, tmp_path, caplog):
+    data = json.loads((camp / "c" / "multical.fixture.json").read_text())
+    data["contact_force_N"] = [110.0, 125.0, 105.0]
+    path = tmp_path / "f.fixture.json"
+    path.write_text(json.dumps(data))
+    with caplog.at_level("WARNING"):
+        read_fixture(path)
+    assert "contact_force_N [110.0, 125.0, 105.0]" in caplog.text
+
+
+def test_a_robot_file_with_another_joint_count_is_named(camp, tmp_path, capsys):
+    from conftest import ROOT
+    text = (ROOT / "calibrate" / "robots" / "tx90.toml").read_text()
+    five = text[:text.rindex("[[joint]]")]
+    (tmp_path / "five.toml").write_text(five)
+    code = main(["calibrate", str(camp / "c" / "multical.campaign.csv"), "--fixture",
+                 str(camp / "c" / "multical.fixture.json"), "--rod", str(camp / "rod1.compliance.json"), "--robot",
+                 str(tmp_path / "five.toml")])
+    err = capsys.readouterr().err
+    assert code == 2 and "6 joint columns (q1..q6) and the robot model 5 joints" in err and "--robot" in err

@@ -96,3 +96,4 @@ def test_a_robot_file_with_another_joint_count_is_named(camp, tmp_path, capsys):
                  str(tmp_path / "five.toml")])
     err = capsys.readouterr().err
     assert code == 2 and "6 joint columns (q1..q6) and the robot model 5 joints" in err and "--robot" in err
+

@@ -179,8 +179,9 @@ def _print(res, model: str) -> None:
               f"multiple correlation {c:.3f}; the priors split them): to separate them, {how}")
     for k, change, sd in res.beyond_tolerance():
         print(f"  note: {k} moved {change:+.1%}, more than 3x its tolerance ({sd:.1%}): the part is not what the design "
-              "says (another material or lay-up, a units slip, the wrong rod's data); check it before using the "
-              "as-built design")
+              "says (another material or lay-up, a units slip, the wrong rod's data), or keys left fixed carry part "
+              "of the difference within their own tolerances (free them too, e.g. the tube's wall_mm and od_mm, "
+              "as `rodlab diagnose --rig` weighs them all); check it before using the as-built design")
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

@@ -20,9 +20,19 @@ def print_verdict(res) -> None:
     """The two statements on stdout: usable? (with the predicted accuracy) and complete?."""
     pred = res.prediction
     acc = pred.describe() if pred is not None and pred.points else "no held-out prediction"
-    print(f"  usable? {'no' if res.warnings else 'yes'}: {acc}")
+    if res.warnings:
+        why = _short(res.warnings[0]) + (f" (and {len(res.warnings) - 1} more)" if len(res.warnings) > 1 else "")
+        print(f"  usable? no, because {why}: see NOT TRUSTED below; {acc}")
+    else:
+        print(f"  usable? yes: {acc}")
     print(f"  {completeness_statement(res)}")
     print(f"verdict: {'NOT TRUSTED' if res.warnings else 'TRUSTED'}")
+
+
+def _short(reason: str, limit: int = 90) -> str:
+    """A reason's first clause (to its first colon or semicolon), at most ``limit`` characters."""
+    head = reason.replace(";", ":").split(":", 1)[0].strip()
+    return head if len(head) <= limit else head[:limit - 3].rstrip() + "..."
 
 
 def print_held(res) -> None:

@@ -232,7 +232,8 @@ def read_plan(path) -> RigPlan:
     r = _Reader(Path(path), text)
     r.keys(data, {"format", "rod", "axes", "masses_kg", "repeats", "hold_s", "rate_Hz", "settle", "measured"}, "")
     if data.get("format") != FORMAT_PLAN:
-        raise r.err(f"expected format = \"{FORMAT_PLAN}\", got {data.get('format')!r}", "format")
+        raise r.err(f"expected format = \"{FORMAT_PLAN}\", " + (f"got {data['format']!r}" if data.get("format") else
+                                                              "the file has no format key"), "format")
     rod = r.string(data, "rod", "")
     axes = data.get("axes", ["y", "z", "x"])
     if not isinstance(axes, list) or not axes:

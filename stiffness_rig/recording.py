@@ -182,8 +182,9 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
     lines = text.splitlines()
     meta, i = _header(lines)
     if meta.get("format") != FORMAT_RIG:
-        raise RigError(f"expected a comment line '# format: {FORMAT_RIG}' before the header, got "
-                       f"{meta.get('format')!r}", path=p, line=1, key="format")
+        got = f"got {meta['format']!r}" if meta.get("format") else "the file has none (rig acquire and rig simulate write it)"
+        raise RigError(f"expected a comment line '# format: {FORMAT_RIG}' before the header; {got}", path=p, line=1,
+                       key="format")
     if "rod" not in meta:
         raise RigError("expected a comment line '# rod: NAME' before the header", path=p, line=1, key="rod")
     if i >= len(lines):

@@ -181,6 +181,10 @@ class RodDesign:
                 raise DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({e.detail}); gamma_deg is "
                                   f"in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
                                   key="gamma_deg") from e
+            if e.key in ("L1_mm", "L2_mm") and getattr(self, e.key) < 5.0:     # a length in metres
+                length = getattr(self, e.key)
+                raise DesignError(f"{e.detail}; {e.key} is in millimetres: did you give metres ({length:g} m = "
+                                  f"{1000 * length:g} mm)?", key=e.key) from e
             raise
 
     # -- derived geometry ---------------------------------------------------------------
@@ -289,15 +293,15 @@ class RodDesign:
         if free1 < -1e-9:
             need = self.L1_mm - free1
             raise DesignError(
-                f"L1 = {self.L1_mm} mm is too short for the parts placed on pipe I: pipe holder "
-                f"{self.pipe_holder.length_mm} + ring {self.rings.length_mm} + bend tangent {self.tangent_mm:.1f} "
+                f"L1 = {self.L1_mm:g} mm is too short for the parts placed on pipe I: pipe holder "
+                f"{self.pipe_holder.length_mm:g} + ring {self.rings.length_mm:.4g} + bend tangent {self.tangent_mm:.1f} "
                 f"= {need:.1f} mm; increase L1_mm to at least {need:.1f} or shorten those parts", key="L1_mm")
         free2 = self.pipe_II_free_mm()
         if free2 < -1e-9:
             need = self.L2_mm - free2
             raise DesignError(
-                f"L2 = {self.L2_mm} mm is too short for the parts placed on pipe II: bend tangent "
-                f"{self.tangent_mm:.1f} + ring {self.rings.length_mm} + ball holder {self.ball_holder.length_mm} "
+                f"L2 = {self.L2_mm:g} mm is too short for the parts placed on pipe II: bend tangent "
+                f"{self.tangent_mm:.1f} + ring {self.rings.length_mm:.4g} + ball holder {self.ball_holder.length_mm:g} "
                 f"(plug {self.plug_mm:g}) + ball radius {self.ball.radius_mm} = {need:.1f} mm; "
                 f"increase L2_mm to at least {need:.1f}",
                 key="L2_mm")

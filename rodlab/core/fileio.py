@@ -38,7 +38,10 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     if p.is_dir():                       # else the error would name the temporary file, not the user's path
         raise IsADirectoryError(errno.EISDIR, "this is a folder", str(p))
     p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
+    except OSError as e:                                       # name the user's path, never the temporary file
+        raise type(e)(e.errno, e.strerror, str(p)) from e
     try:
         os.fchmod(fd, 0o666 & ~_umask())       # mkstemp makes 0600; give the file normal permissions
         with os.fdopen(fd, "wb") as fh:
@@ -139,7 +142,8 @@ def read_toml(path, error_cls) -> tuple[dict, str]:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as e:
         m = re.search(r"line (\d+)", str(e))
-        raise error_cls(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+        raise error_cls(f"not valid TOML: {e}{_kind_hint(text, 'TOML')}", path=p,
+                        line=int(m.group(1)) if m else None) from e
 
 
 def read_json(path, error_cls) -> tuple[object, str]:
@@ -150,7 +154,24 @@ def read_json(path, error_cls) -> tuple[object, str]:
     try:
         return json.loads(text), text
     except json.JSONDecodeError as e:
-        raise error_cls(f"not valid JSON: {e.msg} (column {e.colno})", path=p, line=e.lineno) from e
+        raise error_cls(f"not valid JSON: {e.msg} (column {e.colno}){_kind_hint(text, 'JSON')}", path=p,
+                        line=e.lineno) from e
+
+
+def _kind_hint(text: str, expected: str) -> str:
+    """What kind of file ``text`` is when it is plainly not the ``expected`` one (TOML or JSON): a JSON file (a
+    compliance, fixture or result file), a rig recording or another CSV, so an error says which file was given."""
+    head = text.lstrip()
+    if expected != "JSON" and head.startswith("{"):
+        return "; this is a JSON file (a compliance, fixture or result file?), not the TOML file expected here"
+    if "# format: rodlab.rig/" in text[:400]:
+        return f"; this is a rig recording (*.rig.csv), not the {expected} file expected here"
+    first = next((ln for ln in head.splitlines() if ln.strip() and not ln.startswith("#")), "")
+    if first.count(",") >= 3 and "=" not in first and not first.startswith(("{", "[")):
+        return f"; this looks like a CSV table, not the {expected} file expected here"
+    if expected == "JSON" and re.match(r"(format|name)\s*=", first):
+        return "; this is a TOML file (a design or robot file?), not the JSON file expected here"
+    return ""
 
 
 def write_generated(path: str | Path, text: str, check: bool = False) -> int:

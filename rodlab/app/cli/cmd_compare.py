@@ -26,7 +26,7 @@ def register(sub) -> None:
                        description="Calibrate one campaign with several compliance files (and none) and print the "
                                    "validation statistics in the layout of the paper's Table 3.")
     p.add_argument("campaign")
-    p.add_argument("--fixture", required=True)
+    p.add_argument("--fixture", required=True, help="*.fixture.json (clamping poses, contact force)")
     add_device_option(p)
     p.add_argument("--rod", action="append", required=True, metavar="LABEL=FILE",
                    help="a compliance file per method, e.g. calc=rod1.calc.json fea=rod1.fea.json (repeatable)")

@@ -17,7 +17,7 @@ def register(sub) -> None:
                                    "method (Table 3) -> L1/L2 sweep (its frame joint-calibrated on the solid FEA); all files "
                                    "under the output folder.")
     p.add_argument("-o", "--output", default="out/demo", help="run folder (default out/demo)")
-    p.add_argument("--seed", type=seed, default=7)
+    p.add_argument("--seed", type=seed, default=7, help="random seed of the simulated rig and campaign (default 7)")
     p.add_argument("--no-report", action="store_true", help="do not write report.html")
     p.set_defaults(func=cmd_demo)
 

@@ -19,11 +19,12 @@ def register(sub) -> None:
                                    "joint limits), chosen to maximise the observability index O1; prints O1-O5 and "
                                    "writes the joint angles for the robot program.")
     add_robot_options(p)
-    p.add_argument("--fixture", required=True)
+    p.add_argument("--fixture", required=True, help="*.fixture.json (the clamping positions to plan at)")
     p.add_argument("--rod", required=True, help="a compliance file (tool, mass) or a *.rod.toml design")
-    p.add_argument("-k", type=count, default=6, help="orientations per position")
-    p.add_argument("--candidates", type=count, default=24)
-    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("-k", type=count, default=6, help="orientations per position (default 6)")
+    p.add_argument("--candidates", type=count, default=24,
+                   help="reachable candidate orientations drawn per position (default 24)")
+    p.add_argument("--seed", type=seed, default=0, help="random seed of the candidates (default 0)")
     p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
     p.set_defaults(func=cmd_plan)
 

@@ -78,14 +78,14 @@ def _register_simulate(rsub) -> None:
     p.add_argument("--masses", default=None,
                    help="masses [kg], e.g. 0.5,1.0,1.5,2.0 (default: the paper's 0.5,1.0,1.5,2.0; on a carbon rod "
                         "those within its 15 N linear range, 0.5,1.0,1.5)")
-    p.add_argument("--repeats", type=count, default=5)
-    p.add_argument("--hold-s", type=pos_float, default=8.0)
-    p.add_argument("--rate-hz", type=pos_float, default=10.0)
-    p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um]")
+    p.add_argument("--repeats", type=count, default=5, help="load-unload cycles per axis (default 5)")
+    p.add_argument("--hold-s", type=pos_float, default=8.0, help="duration of each hold [s] (default 8)")
+    p.add_argument("--rate-hz", type=pos_float, default=10.0, help="gauge sample rate [Hz] (default 10)")
+    p.add_argument("--noise-um", type=nonneg_float, default=0.6, help="per-reading noise SD [um] (default 0.6)")
     p.add_argument("--load-cell-noise-n", type=nonneg_float, default=None, metavar="SD_N",
                    help="add a load cell between the loading frame and the rod with this noise SD [N]: the "
                         "recording gets a force_N column (the force the rod carries, friction and tare included)")
-    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--seed", type=seed, default=0, help="random seed of the noise and effects (default 0)")
     p.add_argument("-o", "--output", required=True, help="*.rig.csv")
     p.set_defaults(func=cmd_simulate)
 
@@ -122,11 +122,13 @@ def _register_simulator(rsub) -> None:
                                                     "profile with its ports pointed at them")
     p.add_argument("--load-cell-noise-n", type=nonneg_float, default=0.005, metavar="SD_N",
                    help="with --profile: the simulated load cell's noise SD [N] (default 0.005)")
-    p.add_argument("--protocol", choices=[m.value for m in LineProtocol], default=LineProtocol.QUERY.value)
+    p.add_argument("--protocol", choices=[m.value for m in LineProtocol], default=LineProtocol.QUERY.value,
+                   help=f"the line protocol the simulated gauges speak (default {LineProtocol.QUERY.value})")
     p.add_argument("--effect", action="append", default=[], metavar="NAME[:key=value,...]",
                    help="add an effect (as for rig simulate; repeatable)")
     p.add_argument("--design", default=None, help="the rod's design, to place joint springs exactly")
-    p.add_argument("--checksum", choices=[m.value for m in Checksum], default=Checksum.NONE.value)
+    p.add_argument("--checksum", choices=[m.value for m in Checksum], default=Checksum.NONE.value,
+                   help=f"checksum appended to each answer (default {Checksum.NONE.value})")
     p.add_argument("--garbage", type=nonneg_float, default=0.0, help="probability of a garbage line per answer")
     p.add_argument("--seconds", type=nonneg_float, default=0.0, help="stop after this many seconds (0: until Ctrl-C)")
     p.set_defaults(func=cmd_simulator)

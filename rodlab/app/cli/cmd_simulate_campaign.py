@@ -30,9 +30,9 @@ def register(sub) -> None:
     add_robot_options(p)
     p.add_argument("--rod", required=True, help="the rod's compliance file (nominal)")
     p.add_argument("--rod-true", default=None, help="the rod as it really is (default: --rod)")
-    p.add_argument("--positions", type=count, default=5)
-    p.add_argument("--orientations", type=count, default=6)
-    p.add_argument("--noise-um", type=nonneg_float, default=3.0, help="device noise [um]")
+    p.add_argument("--positions", type=count, default=5, help="clamping positions (default 5, the paper's)")
+    p.add_argument("--orientations", type=count, default=6, help="rod orientations per position (default 6)")
+    p.add_argument("--noise-um", type=nonneg_float, default=3.0, help="device noise SD per reading [um] (default 3)")
     p.add_argument("--fixture-error", action="append", default=[], metavar="J:dx,dy,dz",
                    help="a wrong recorded pose: offset [mm] added to position J (the same as --effect "
                         "fixture_pose:position=J,offset_mm=dx;dy;dz)")
@@ -45,7 +45,7 @@ def register(sub) -> None:
                         "whose force follows each reading); nominal.device.json is the orthogonal design")
     p.add_argument("--misalign-deg", type=nonneg_float, default=1.0,
                    help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg]")
-    p.add_argument("--seed", type=seed, default=0)
+    p.add_argument("--seed", type=seed, default=0, help="random seed of the truth robot, noise and effects (default 0)")
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)
 

@@ -26,7 +26,8 @@ def register(sub) -> None:
     p.add_argument("--L1", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--L2", required=True, help="START:STOP:STEP or a,b,c [mm]")
     p.add_argument("--base", default="rod1", help="base design (file or built-in; default rod1)")
-    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.FRAME.value)
+    p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.FRAME.value,
+                   help=f"compliance model of every variant (default {FeaModel.FRAME.value})")
     p.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler")
     p.add_argument("--workers", type=count, default=2, help="workers of the local cluster (default 2)")
     p.add_argument("--serial", action="store_true", help="do not use Dask")

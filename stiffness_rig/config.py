@@ -164,8 +164,8 @@ def read_profile(path):
         return parse_profile_v2(data, r, path)
     r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")
     if data.get("format") != FORMAT_PROFILE:
-        raise r.err(f"expected format = \"{FORMAT_PROFILE}\" or \"{FORMAT_PROFILE_V2}\", got "
-                    f"{data.get('format')!r}", "format")
+        raise r.err(f"expected format = \"{FORMAT_PROFILE}\" or \"{FORMAT_PROFILE_V2}\", "
+                    + (f"got {data['format']!r}" if data.get("format") else "the file has no format key"), "format")
     dev = data.get("device")
     if dev is None:
         raise r.err("missing [device]", "device")

@@ -260,7 +260,7 @@ def format_row(t: float, step: int, repeat: int, phase: Phase, axis: LoadAxis, m
                disp: tuple, temp: float | None, decimals: int = 4, force: float | None = None) -> str:
     """One sample line; ``temp`` / ``force`` None: no such column, NaN: an empty cell."""
     cells = [f"{t:.3f}", str(step), str(repeat), str(phase), str(axis), f"{mass:.4f}"]
-    cells += ["" if (v is None or not math.isfinite(v)) else f"{v:.{decimals}f}" for v in disp]
+    cells += ["" if (v is None or not math.isfinite(v)) else f"{round(v, decimals) + 0.0:.{decimals}f}" for v in disp]
     if temp is not None:
         cells.append("" if not math.isfinite(temp) else f"{temp:.2f}")
     if force is not None:

@@ -224,7 +224,7 @@ def test_cli_fuzz(command, tmp_path_factory):
             assert lines, (argv, err)
             assert _names_the_place(lines[-1], argv, command), (argv, lines[-1])
             if not by_argparse:
-                assert lines[-1].startswith(f"rodlab {command.split()[0]}: error:"), (argv, err)
+                assert lines[-1].startswith(f"rodlab {command}: error:"), (argv, err)   # the subcommand named
         if code not in (0, 3):
             created = {p for p in out_dir.rglob("*")} - before
             assert not created, (argv, code, err, sorted(map(str, created)))

@@ -117,7 +117,8 @@ def cmd_fea(args: argparse.Namespace) -> int:
                   "(rodlab sweep --calibrate)")
     path = write_compliance(comp, args.output)
     np.set_printoptions(precision=6, suppress=True)
-    print(f"  C_F [mm/N] =\n{comp.C_F}\n  C_g [mm/g0] =\n{comp.C_g}")
+    shown = lambda M: np.round(M, 6) + 0.0   # noqa: E731  (as printed: no "-0." for what rounds to zero)
+    print(f"  C_F [mm/N] =\n{shown(comp.C_F)}\n  C_g [mm/g0] =\n{shown(comp.C_g)}")
     print(f"  c_rod = {comp.c_rod_um:.1f} um ({time.perf_counter() - t0:.1f} s); wrote {path}")
     written = [path] + [p for p in (png_file(args.png, "deformed.png"), args.joints_out) if p] + extra
     write_command_report(args, written, path.parent)

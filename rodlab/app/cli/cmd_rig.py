@@ -155,7 +155,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     for m, row in enumerate(comp.r_mn):
         print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
     np.set_printoptions(precision=6, suppress=True)
-    print(f"  measured C_F [mm/N] =\n{comp.C_F}")
+    print(f"  measured C_F [mm/N] =\n{np.round(comp.C_F, 6) + 0.0}")     # no "-0." for what rounds to zero
     _print_load(fit)
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")

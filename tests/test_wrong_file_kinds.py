@@ -65,3 +65,11 @@ def test_an_output_folder_that_cannot_hold_files_names_the_output(tmp_path, caps
     monkeypatch.setattr(fileio.tempfile, "mkstemp", refuse)
     err = _error(capsys, ["fea", "rod1", "--model", "calc", "-o", str(tmp_path / "x.json")])
     assert f"{tmp_path / 'x.json'}:" in err and ".tmp" not in err and not (tmp_path / "x.json").exists()
+
+
+def test_a_rig_only_option_with_a_campaign_is_refused(files, capsys):
+    c = files / "c"
+    err = _error(capsys, ["diagnose", "--campaign", str(c / "multical.campaign.csv"), "--fixture",
+                          str(c / "multical.fixture.json"), "--rod", str(files / "rod1.compliance.json"),
+                          "--sim-accuracy", "exact"])
+    assert "--sim-accuracy" in err and "with --rig" in err

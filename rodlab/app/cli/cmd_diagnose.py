@@ -88,6 +88,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
         raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
                           "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")
+    if args.sim_accuracy is not None and not args.rig:
+        raise RodlabError("--sim-accuracy is what a rig recording's simulation is worth (with --rig); a campaign's "
+                          "rod file is weighed by its own method: leave it out")
     if args.points:
         return _diagnose_points(args)
     if args.rig:

@@ -197,7 +197,8 @@ def _names_the_place(message: str, argv: list[str], command: str) -> bool:
     options = [o for a in COMMANDS[command] for o in a.option_strings]
     tokens = [t for t in argv if t.startswith("-") or os.sep in t or t in ("rod1", "tx90")] + options
     names = [n for t in argv if os.sep in t for n in (Path(t).name, str(Path(t).parent))]
-    return ("key `" in message or "argument " in message or any(t and t in message for t in tokens + names)
+    return ("key `" in message or "argument " in message or "arguments are required: " in message
+            or any(t and t in message for t in tokens + names)
             or "line " in message)
 
 

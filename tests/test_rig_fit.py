@@ -84,7 +84,7 @@ BAD = [
     ("axis changes in hold", HEADER, GOOD[:3] + ["1.1,2,1,load,z,0.5,,1.0,0.000"], 7, "load_axis", "inside hold"),
     ("no zero hold", HEADER, ["0.0,1,1,load,y,0.5,,1.0,0.0", "0.1,1,1,load,y,0.5,,1.0,0.0"], 4, "mass_kg",
      "mass-0 hold"),
-    ("wrong cell count", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,1.0"], 6, None, "cells"),
+    ("wrong cell count", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,1.0"] + GOOD[2:3], 6, None, "cells"),   # not last
     ("negative mass", HEADER, GOOD[:2] + ["1.0,2,1,load,y,-0.5,,1.0,0.0"], 6, "mass_kg", ">= 0"),
     ("nan", HEADER, GOOD[:2] + ["1.0,2,1,load,y,nan,,1.0,0.0"], 6, "mass_kg", "finite"),
     ("huge step", HEADER, GOOD[:2] + ["1.0,1e308,1,load,y,0.5,,1.0,0.0"], 6, "step", "below 2^31"),

@@ -26,6 +26,7 @@ from rodlab.core.fem_mesh import RodMesh
 from rodlab.core.layout import layout
 
 from .errors import GeometryError
+from .mesh_generate import generate_mesh
 from .parts import part_solids
 from .occ_parts import add_part_volumes
 
@@ -239,7 +240,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                grading[2] * h)
             _mesh_options(h, order, grading)
             t0 = time.perf_counter()
-            gmsh.model.mesh.generate(3)
+            high_order = generate_mesh(order)
             log.info("gmsh generate: %.2f s", time.perf_counter() - t0)
             node_tags, coords, _ = gmsh.model.mesh.getNodes()
             conn, part_idx, qual = _elements(solids, part_vols, order)
@@ -249,7 +250,8 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                 atomic_write_bytes(msh_path, Path(out).read_bytes())
         finally:
             gmsh.finalize()
-    return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half)
+    return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half,
+                     high_order)
 
 
 def _import_parts(solids: dict, tmp: str) -> dict:
@@ -367,7 +369,8 @@ def _half_solids(solids: dict) -> dict:
     return out
 
 
-def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False):
+def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False,
+              high_order: int = 0):
     from skfem import MeshTet1, MeshTet2
 
     index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
@@ -396,9 +399,10 @@ def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order,
     ball = mesh.facets_satisfying(lambda x: np.abs(np.linalg.norm(x, axis=0) - r) < tol, boundaries_only=True)
     sym = mesh.facets_satisfying(lambda x: np.abs(x[1]) < 1e-6, boundaries_only=True) if half else None
     digest = hashlib.sha256(np.round(p, 9).tobytes() + t.astype(np.int64).tobytes()).hexdigest()
-    rm = RodMesh(mesh, tuple(solids), part_idx.astype(np.int32), axes, flange, ball, h, order, worst, digest,
-                 None if msh_path is None else Path(msh_path), symmetry_facets=sym)
-    rm.stats = {"nodes": int(p.shape[0]), "elements": int(t.shape[0]), "size_mm": h, "order": order,
-                "min_quality_sicn": worst, "mean_quality_sicn": float(qual.mean()),
-                "flange_facets": int(flange.size), "ball_facets": int(ball.size), "half": bool(half)}
-    return rm
+    stats = {"nodes": int(p.shape[0]), "elements": int(t.shape[0]), "size_mm": h, "order": order,
+             "min_quality_sicn": worst, "mean_quality_sicn": float(qual.mean()),
+             "flange_facets": int(flange.size), "ball_facets": int(ball.size), "half": bool(half)}
+    if high_order == 2:          # the optimizer gave up and the elastic analogy went first (geometry.mesh_generate)
+        stats["high_order_optimize"] = "elastic+optimization"
+    return RodMesh(mesh, tuple(solids), part_idx.astype(np.int32), axes, flange, ball, h, order, worst, digest,
+                   None if msh_path is None else Path(msh_path), stats=stats, symmetry_facets=sym)

@@ -95,9 +95,9 @@ def main() -> int:
             counts["wrong"] += wrong
             counts["with_cause"] += bool(c.truth["effects"])
             found = ", ".join(f.effect + (f"@{f.location}" if f.location else "") for f in diag.findings) or "-"
-            truth = ", ".join(e["effect"] + (f"@{e['location']}" if e.get("location") else "") for e in
+            told = ", ".join(e["effect"] + (f"@{e['location']}" if e.get("location") else "") for e in
                               c.truth["effects"]) or (f"oolib:{c.truth['outside']}" if c.truth.get("outside") else k)
-            rows.append(f"| {c.path.stem} | {k} | {truth} | {diag.verdict} | {found} | {'yes' if ok else 'NO'} |")
+            rows.append(f"| {c.path.stem} | {k} | {told} | {diag.verdict} | {found} | {'yes' if ok else 'NO'} |")
     total_ok = sum(counts[k + "_ok"] for k in ("null", "effect", "joint", "scale", "pair", "oolib"))
     lines = ["# Blind benchmark: rig diagnosis of the rod as built", "",
              f"`python benchmarks/diagnose_blind_as_built.py {n} {seed} {rod} {method} {truth}` "

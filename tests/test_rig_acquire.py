@@ -48,18 +48,22 @@ def test_acquisition_with_faults_recovers_compliance(tmp_path):
             assert ln.zero_load_kg["load"] == pytest.approx(0.2 / 9.80665, rel=0.2)
 
 
+def _interrupted_after(holds: int, prof, plan, out) -> None:
+    """Acquire ``plan`` into ``out`` and stop (Ctrl-C) once ``holds`` holds are complete."""
+    def stop(st):
+        if st.holds_done == holds:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        acquire(prof, plan, out, use_loader=True, progress=stop)
+
+
 def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
     model = RigModel(C, seed=5)
     out = tmp_path / "r.rig.csv"
     plan = _plan()
     with SimulatedRig(model, tmp_path / "tty") as dev:
         prof = _profile(dev.port)
-
-        def stop_after_three(st):
-            if st.holds_done == 3:
-                raise KeyboardInterrupt
-        with pytest.raises(KeyboardInterrupt):
-            acquire(prof, plan, out, use_loader=True, progress=stop_after_three)
+        _interrupted_after(3, prof, plan, out)
         before = out.read_bytes()
         part = read_recording(out)
         acquire(prof, plan, out, use_loader=True)
@@ -217,12 +221,7 @@ def test_a_sample_cut_off_mid_line_is_left_out_and_the_acquisition_resumes(tmp_p
     plan = _plan()
     with SimulatedRig(model, tmp_path / "tty") as dev:
         prof = _profile(dev.port)
-
-        def stop_after_two(st):
-            if st.holds_done == 2:
-                raise KeyboardInterrupt
-        with pytest.raises(KeyboardInterrupt):
-            acquire(prof, plan, out, use_loader=True, progress=stop_after_two)
+        _interrupted_after(2, prof, plan, out)
         whole = read_recording(out)
         text = out.read_text()
         out.write_text(text + text.splitlines()[-1 if text.splitlines()[-1][:1].isdigit() else -2][:25])

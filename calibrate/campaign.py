@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 FIXTURE_FORMATS = ("rodlab.fixture/1", "rodlab.fixture/2")
 #: a contact force beyond this [N] per axis is a unit slip, not MultiCal's springs (about 1 N): warned of on reading
 PLAUSIBLE_CONTACT_FORCE_N = 30.0
+_WARNED_FORCES: set = set()
 
 
 @dataclass
@@ -265,7 +266,8 @@ def read_fixture(path) -> Fixture:
     fa = np.asarray(data.get("contact_force_N", [1.10, 1.25, 1.05]), dtype=float)
     if not np.all(np.isfinite(fa)):
         raise CalibrationError(f"expected 3 finite numbers [N], got {fa.tolist()}", path=p, key="contact_force_N")
-    if np.abs(fa).max() > PLAUSIBLE_CONTACT_FORCE_N:
+    if np.abs(fa).max() > PLAUSIBLE_CONTACT_FORCE_N and (str(p), tuple(fa)) not in _WARNED_FORCES:
+        _WARNED_FORCES.add((str(p), tuple(fa)))         # once per file, however often a command reads it
         log.warning("%s: contact_force_N %s: MultiCal's springs press the ball with about 1 N per axis; forces of "
                     "%.0f N would deflect the rod far beyond its calibration (a factor 100 or 1000 slipped in?)",
                     p, fa.tolist(), np.abs(fa).max())

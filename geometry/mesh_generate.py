@@ -27,9 +27,9 @@ OPTIMIZER_GAVE_UP = ("Failed to reach critical value", "Failed to reach target",
 
 
 def generate_mesh(order: int) -> int:
-    """Generate the 3-D mesh of the current gmsh model with the options set; returns the ``HighOrderOptimize``
-    mode the mesh was made with (0 for straight elements). Raises :class:`GeometryError` on a gmsh error that is
-    not the optimizer giving up."""
+    """Generate the 3-D mesh of the current gmsh model with the options set (the caller holds gmsh, between its
+    initialize and finalize); returns the ``HighOrderOptimize`` mode the mesh was made with (0 for straight
+    elements). Raises :class:`GeometryError` on a gmsh error that is not the optimizer giving up."""
     import gmsh
 
     mode = int(gmsh.option.getNumber("Mesh.HighOrderOptimize"))
@@ -41,6 +41,9 @@ def generate_mesh(order: int) -> int:
         mode = 2
         gmsh.option.setNumber("Mesh.HighOrderOptimize", mode)
         errors = _generate_reporting_errors()
+    if mode == 2 and _gave_up(errors):
+        log.warning("gmsh's high-order optimizer gave up also after the elastic analogy (%s); the mesh's quality "
+                    "check decides", "; ".join(errors))
     fatal = [e for e in errors if not _gave_up([e])]
     if fatal:
         raise GeometryError(f"gmsh could not mesh the rod: {fatal[0]}")
@@ -51,6 +54,7 @@ def _generate_reporting_errors() -> list[str]:
     """``gmsh.model.mesh.generate(3)`` with errors reported rather than thrown; gmsh's error messages."""
     import gmsh
 
+    before = gmsh.option.getNumber("General.AbortOnError")
     gmsh.option.setNumber("General.AbortOnError", 0)
     gmsh.logger.start()
     try:
@@ -58,7 +62,7 @@ def _generate_reporting_errors() -> list[str]:
         return [m.split(":", 1)[-1].strip() for m in gmsh.logger.get() if m.startswith("Error")]
     finally:
         gmsh.logger.stop()
-        gmsh.option.setNumber("General.AbortOnError", 2)
+        gmsh.option.setNumber("General.AbortOnError", before)
 
 
 def _gave_up(errors: list[str]) -> bool:

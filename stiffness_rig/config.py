@@ -256,9 +256,14 @@ def read_plan(path) -> RigPlan:
         if not isinstance(v, list) or any(c not in ("x", "y", "z") for c in v):
             raise r.err("each entry lists measured components, e.g. y = [\"y\", \"z\"]", f"measured.{k}")
         measured[k] = tuple("xyz".index(c) for c in v)
-    proto = LoadSchedule(axes=tuple(axes), masses=tuple(float(m) for m in masses),
-                     repeats=r.num(data, "repeats", "", 5, integer=True), hold_s=r.num(data, "hold_s", "", 8.0),
-                     rate_Hz=r.num(data, "rate_Hz", "", 10.0), measured=measured)
+    try:
+        proto = LoadSchedule(axes=tuple(axes), masses=tuple(float(m) for m in masses),
+                             repeats=r.num(data, "repeats", "", 5, integer=True), hold_s=r.num(data, "hold_s", "", 8.0),
+                             rate_Hz=r.num(data, "rate_Hz", "", 10.0), measured=measured)
+    except RigError as e:                       # a rule of the whole schedule (a hold shorter than one sample)
+        if e.path is not None:
+            raise
+        raise r.err(e.detail, e.key or "") from e
     _schema(data, FORMAT_PLAN, path, text)
     return RigPlan(rod, proto, r.num(settle, "window_s", "settle", 1.0), r.num(settle, "tolerance_mm", "settle", 0.003),
                    r.num(settle, "timeout_s", "settle", 30.0), Path(path))

@@ -212,15 +212,17 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
 def _data_rows(lines: list[str], start: int, header: list[str], ix: dict, p: Path, has_temp: bool) -> list[tuple]:
     """The sample rows from line index ``start`` on (comment and blank lines skipped). A last line with fewer cells
     than the header is a sample cut off by an interrupted acquisition: it is left out with a warning (``rig
-    acquire`` resumes after the last complete hold); a line that repeats the header is two recordings joined."""
+    acquire`` drops it and resumes after the last complete hold); a last line with every cell is kept, with or
+    without its newline (other tools end files without one). A line that repeats the header (or starts with
+    ``time_s``) is two recordings joined."""
     rows = []
     numbered = [(k, row) for k, row in enumerate(csv.reader(lines[start:]), start=start + 1)
                 if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
     for j, (k, row) in enumerate(numbered):
-        if [c.strip() for c in row] == header:
+        if row[0].strip() == "time_s":
             raise RigError(f"this line repeats the header: two recordings joined into one file? Split the file "
                            f"before line {k}, or delete the repeated header if it is one recording", path=p, line=k)
-        if len(row) < len(header) and j == len(numbered) - 1 and j > 0:
+        if j == len(numbered) - 1 and len(row) < len(header):
             log.warning("%s, line %d: the last line has %d of %d cells, a sample cut off (an interrupted "
                         "recording?); left out", p, k, len(row), len(header))
             break

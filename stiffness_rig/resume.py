@@ -113,8 +113,9 @@ def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> Resume
         if z:
             zeros[z.group(1)] = np.array([float(v) for v in z.group(2).split(",")])
     point = ResumePoint(done, total, zeros=zeros)
-    if any(ln.strip() and ln[0].isdigit() for ln in text.splitlines()):
-        rec = read_recording(path, text)
+    complete = text[:text.rfind("\n") + 1]            # a line cut off at the end is dropped by the writer
+    if any(ln.strip() and ln[0].isdigit() for ln in complete.splitlines()):
+        rec = read_recording(path, complete)
         point.last_step, point.last_time_s = int(rec.step.max()), float(rec.time_s.max())
     return point
 

@@ -23,7 +23,8 @@ class RigSamples:
     temp : temperature relative to the series start [K] (NaN without ``temp_C``); step, repeat : hold index and
     repeat; t_abs : recording time [s]; F_se : standard error of the hold's mean load [N] (the load cell's
     noise over its readings in the hold; 0 for mass x g0); series : the series the reading belongs to (one per
-    load axis and sign, in order of appearance; None: from ``axis`` and ``sign``). All shape=(n,).
+    run of one load axis and sign, in recording order: an axis loaded again later is a new series; None: from
+    ``axis`` and ``sign``). All shape=(n,).
     """
 
     y: np.ndarray
@@ -72,8 +73,11 @@ class RigSamples:
 def rig_samples(rec) -> RigSamples:
     """Flatten a :class:`~rodlab.stiffness_rig.RigRecording` into one row per measured reading (component by
     component, readings in recording order)."""
-    axes = list(dict.fromkeys(rec.load_axis))                       # the series, in order of appearance
-    code = np.array([axes.index(a) for a in rec.load_axis], dtype=int)
+    # a series runs while the load axis (and sign) stays the same: the gauges are zeroed whenever it changes, also
+    # when an axis is loaded a second time (y, z, y)
+    la = list(rec.load_axis)
+    code = np.cumsum([0] + [a != b for a, b in zip(la[1:], la[:-1])]).astype(int)
+    axes = [la[i] for i in np.unique(code, return_index=True)[1]]   # each series' load axis
     step = np.asarray(rec.step)
     idx = np.concatenate([np.nonzero(np.isfinite(rec.disp_mm[:, c]))[0] for c in range(3)])
     first = _first_rows(code)[idx]                                  # the first row of each reading's series

@@ -234,10 +234,31 @@ def test_a_sample_cut_off_mid_line_is_left_out_and_the_acquisition_resumes(tmp_p
     assert len(rec.steps()) == len(plan.schedule.holds()) and np.all(np.diff(rec.time_s) > 0)
 
 
+def test_a_file_cut_during_its_first_sample_resumes(tmp_path):
+    """The power failed while the first sample was written: the file ends in part of it, with no complete sample;
+    the acquisition starts again after the header (nothing is lost: there was nothing)."""
+    from rodlab.stiffness_rig.resume import resume_point
+    model = RigModel(C, seed=5)
+    out = tmp_path / "r.rig.csv"
+    plan = _plan()
+    with SimulatedRig(model, tmp_path / "tty") as dev:
+        prof = _profile(dev.port)
+        _interrupted_after(1, prof, plan, out)
+        lines = out.read_text().splitlines(True)
+        first = next(i for i, ln in enumerate(lines) if ln[:1].isdigit())
+        out.write_text("".join(lines[:first]) + lines[first][:20])
+        assert resume_point(out, prof, plan).holds_done == 0
+        acquire(prof, plan, out, use_loader=True)
+    rec = read_recording(out)
+    assert len(rec.steps()) == len(plan.schedule.holds())
+
+
 @pytest.mark.parametrize("edit,message", [
     (lambda t: t.replace(",", ";"), "separated by semicolons, not commas"),
     (lambda t: t.replace(",", "\t"), "separated by tabs, not commas"),
     (lambda t: t + t[t.index("time_s"):], "repeats the header: two recordings joined"),
+    (lambda t: t + t[t.index("time_s"):].replace(",temp_C", "").replace(",21.0", ","),     # without temperatures
+     "repeats the header: two recordings joined"),
     (lambda t: "\n".join(t.splitlines()[:-3] + [t.splitlines()[-2][:8], t.splitlines()[-1]]) + "\n",
      "expected 10 cells, got 2"),                         # a cut line inside the file is an error, not dropped
 ])

@@ -159,3 +159,25 @@ def test_a_hold_shorter_than_one_sample_is_refused(tmp_path, capsys):
     assert main(["rig", "simulate", "--sim", "rod1", "--hold-s", "0.04", "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert "rodlab rig simulate: error: key `hold_s`" in err and "takes no sample" in err and not out.exists()
+
+
+def test_the_default_plan_knows_a_carbon_rod_from_its_design_file(tmp_path, capsys):
+    """A compliance file of a user's carbon design (not a built-in name) gets the carbon default through the design
+    file its provenance names; a file with no design gets the paper's masses and a note saying why."""
+    import json
+
+    from conftest import ROOT
+    from rodlab.app.cli import main
+    text = (ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml").read_text()
+    lines = [('name = "myrod"' if ln.startswith("name") else ln) for ln in text.splitlines()]
+    (tmp_path / "my.rod.toml").write_text("\n".join(lines) + "\n")
+    assert main(["fea", str(tmp_path / "my.rod.toml"), "--model", "calc", "-o", str(tmp_path / "my.json")]) == 0
+    capsys.readouterr()
+    assert main(["rig", "simulate", "--sim", str(tmp_path / "my.json"), "-o", str(tmp_path / "a.rig.csv")]) == 0
+    assert "93 holds (masses 0.5, 1, 1.5 kg) on rod myrod" in capsys.readouterr().out
+    data = json.loads((tmp_path / "my.json").read_text())
+    data["provenance"].pop("design_file")
+    (tmp_path / "anon.json").write_text(json.dumps(data))
+    assert main(["rig", "simulate", "--sim", str(tmp_path / "anon.json"), "-o", str(tmp_path / "b.rig.csv")]) == 0
+    out = capsys.readouterr()
+    assert "123 holds" in out.out and "the rod's design is unknown" in out.err

@@ -18,11 +18,23 @@ ROD2 = resolve_design("rod2")
 def test_keys_moved_together_past_the_design_rules_stay_a_valid_design():
     """Rod 2# has no free length on pipe I between its ring and the bend: a longer ring with a larger bend radius,
     each within its own feasible range, is refused by the design rules; the as-built fit sees the nearest accepted
-    design instead of an error about L1_mm."""
+    design instead of an error about L1_mm: the geometric keys scaled back, the materials' kept."""
+    import pytest
+
+    from rodlab.core.errors import DesignError
+    from rodlab.core.sensitivity import with_values
     env = envelope_for(calc_rod_compliance(ROD2), ROD2)
-    u = env.u_bounds[:, 1].copy()                      # every key and bond at its own upper reach at once
-    C = env.entries_at(u, STRUCTURAL_ENTRIES)
-    assert np.all(np.isfinite(C)) and env.design_at(u[:len(env.params)]) is not None
+    k = len(env.params)
+    u = env.u_bounds[:k, 1].copy()                      # every key at its own upper reach at once
+    with pytest.raises(DesignError):
+        with_values(ROD2, env.values(u))
+    used = env.accepted_u(u)
+    geometric = np.array([not p.key.startswith("materials.") for p in env.params])
+    assert np.array_equal(used[~geometric], u[~geometric])                    # the moduli as asked
+    shrink = used[geometric] / u[geometric]
+    assert np.allclose(shrink, shrink[0]) and 0.0 <= shrink[0] < 1.0          # the geometry scaled back alike
+    with_values(ROD2, env.values(used))                                       # ... to a design the rules accept
+    assert np.all(np.isfinite(env.entries_at(np.r_[u, np.zeros(env.n_free - k)], STRUCTURAL_ENTRIES)))
 
 
 def test_diagnosing_another_rods_recording_on_rod2_names_it(tmp_path, capsys):
@@ -34,6 +46,8 @@ def test_diagnosing_another_rods_recording_on_rod2_names_it(tmp_path, capsys):
     code = main(["update", "rod2", "--measured", str(rec), "-o", str(tmp_path / "r2.rod.toml")])
     err = capsys.readouterr().err
     assert code != 0 and "L1_mm" not in err and "is of rod '1#'" in err and not (tmp_path / "r2.rod.toml").exists()
+    assert "check that --measured is this rod's measurement" in err and "a measurement of another rod" in err
+    assert "--free" not in err                          # no key to free makes another rod's recording this rod's
 
 
 def test_a_uniform_scale_is_not_called_a_local_cause(tmp_path, capsys):
@@ -45,4 +59,4 @@ def test_a_uniform_scale_is_not_called_a_local_cause(tmp_path, capsys):
     assert main(["update", "rod2", "--measured", str(rec), "--free", "rings.length_mm", "-o", str(out)]) != 0
     err = capsys.readouterr().err
     assert "compliance_scale" in err and "local cause" not in err and "re-bond" not in err
-    assert "--free materials.cfrp_tube.E_GPa" in err and not out.exists()
+    assert "--free rings.length_mm,materials.cfrp_tube.E_GPa)" in err and not out.exists()   # freed ones kept

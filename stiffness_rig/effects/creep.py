@@ -47,7 +47,7 @@ def _kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
     [s] (all of them at once: one pass over the readings)."""
     taus = np.atleast_1d(np.asarray(taus, float))
     out = np.zeros((base.size, taus.size))
-    keys = data.axis * 4 + data.comp
+    keys = data.zero_groups                    # per series: the rod is remounted, its creep starts afresh
     for k in np.unique(keys):
         idx = np.nonzero(keys == k)[0]
         idx = idx[np.argsort(data.t_abs[idx], kind="stable")]

@@ -211,7 +211,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
-    design = _checked_design(args.design or sim.rod, explicit=args.design is not None)
+    design = _checked_design(args.design, explicit=True) if args.design else _sim_design(sim)
+    if design is None and args.masses is None:
+        print("note: the rod's design is unknown (not a built-in, no design file in the compliance file's "
+              "provenance): the paper's masses up to 2 kg; on a carbon rod give --design or --masses 0.5,1,1.5 "
+              "(its 15 N linear range)", file=sys.stderr)
     try:
         masses = default_masses(design) if args.masses is None else tuple(float(m) for m in args.masses.split(","))
         axes = tuple(a.strip() for a in args.axes.split(","))
@@ -240,6 +244,13 @@ def _checked_design(design_spec: str, explicit: bool):
         if explicit:
             raise
         return None
+
+
+def _sim_design(sim):
+    """The design a compliance file was made from (the design file its provenance names, when that file still
+    hashes to it), else the built-in design of its rod's name; None when neither is known."""
+    from ..diagnose.envelope import design_of
+    return design_of(sim) or _checked_design(sim.rod, explicit=False)
 
 
 def _warn_linear_range(schedule, design) -> None:

@@ -81,11 +81,15 @@ def _measured(path: str, design, keys, model: str):
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
                                         {"model": model})
         rec = read_recording(path)
-        warn_rod_mismatch(rec.rod, sim, path)
+        other_rod = warn_rod_mismatch(rec.rod, sim, path, "--measured", "the design")
         diag, fitted = diagnose_rig(rec, sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
-        _refuse_unfitted(path, [f for f in diag.findings if f.effect in _STRUCTURAL
-                                and not _explained_by_keys(f, keys, design)], design, model)
+        unfitted = [f for f in diag.findings if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
+        if unfitted and other_rod:
+            raise RodlabError(f"{path}: the recording is of rod {rec.rod!r}, the design of rod {design.name!r}, and "
+                              "they differ beyond the design's tolerances: a measurement of another rod cannot make "
+                              "this rod's as-built design; give this rod's recording (or its design)")
+        _refuse_unfitted(path, unfitted, design, model, keys)
         lin = fitted.linear
         return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
@@ -110,9 +114,9 @@ def _key_for(finding, design) -> str:
     return f"materials.{m.name}.{'E_GPa' if finding.effect == 'compliance_scale' else 'G_GPa'}"
 
 
-def _refuse_unfitted(path: str, findings: list, design, model: str) -> None:
-    """Refuse a recording whose diagnosis names structural causes the freed keys cannot fit, with what each one
-    is and the key that would fit it."""
+def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list) -> None:
+    """Refuse a recording whose diagnosis names structural causes the ``freed`` keys cannot fit, with what each
+    one is and the keys to free (those freed and the one that would fit it)."""
     if not findings:
         return
     what = {"joint_compliance": "a local cause (a bond, clamp or thread)",
@@ -120,10 +124,10 @@ def _refuse_unfitted(path: str, findings: list, design, model: str) -> None:
             "torsion_compliance": "pipe I softer in torsion (its shear modulus or lay-up)"}
     named = "; ".join(f"{f.effect}" + (f" at {f.location}" if f.location else "") + f": {what[f.effect]}"
                       for f in findings)
-    keys = ",".join(dict.fromkeys(_key_for(f, design) for f in findings))
+    keys = ",".join(dict.fromkeys([*freed, *(_key_for(f, design) for f in findings)]))   # the keys freed, plus
     raise RodlabError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
                       f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
-                      f"here. Free the key that fits it (--free {keys})"
+                      f"here. Free the key that fits it too (--free {keys})"
                       + (", or repair or re-bond the joint and measure again" if "joints." in keys else "")
                       + " (`rodlab diagnose --rig` shows the findings)")
 
@@ -180,8 +184,9 @@ def _print(res, model: str) -> None:
     for k, change, sd in res.beyond_tolerance():
         print(f"  note: {k} moved {change:+.1%}, more than 3x its tolerance ({sd:.1%}): the part is not what the design "
               "says (another material or lay-up, a units slip, the wrong rod's data), or keys left fixed carry part "
-              "of the difference within their own tolerances (free them too, e.g. the tube's wall_mm and od_mm, "
-              "as `rodlab diagnose --rig` weighs them all); check it before using the as-built design")
+              "of the difference within their own tolerances (free them too, e.g. tube.wall_mm and "
+              "tube.outer_diameter_mm, as `rodlab diagnose --rig` weighs them all); check it before using the "
+              "as-built design")
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

@@ -53,10 +53,14 @@ def _rod_key(name: str) -> str:
     return re.sub(r"[\s#_\-]|^rod", "", str(name).strip().lower())
 
 
-def warn_rod_mismatch(recording_rod: str | None, sim, source: str) -> None:
-    """Warn (stderr) when a recording's ``# rod:`` names another rod than the simulation ``sim`` is of: the
-    comparison would then measure the difference between two rods, not this rod's physics."""
+def warn_rod_mismatch(recording_rod: str | None, sim, source: str, option: str = "--sim",
+                      against: str = "the simulation") -> bool:
+    """Warn (stderr) when a recording's ``# rod:`` names another rod than the simulation ``sim`` (or the design,
+    ``against``) is of: the comparison would then measure the difference between two rods, not this rod's
+    physics. Returns whether it warned."""
     if not recording_rod or not getattr(sim, "rod", None) or same_rod(recording_rod, sim.rod):
-        return
-    print(f"warning: {source} is of rod {recording_rod!r} (its '# rod:' line) and the simulation of rod {sim.rod!r}: "
-          "check that --sim is this rod's compliance", file=sys.stderr)
+        return False
+    what = "this rod's compliance" if option == "--sim" else "this rod's measurement"
+    print(f"warning: {source} is of rod {recording_rod!r} (its '# rod:' line) and {against} of rod {sim.rod!r}: "
+          f"check that {option} is {what}", file=sys.stderr)
+    return True

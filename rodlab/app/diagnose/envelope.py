@@ -95,22 +95,36 @@ class Envelope:
         return np.array([C[m, n] for m, n in entries])
 
     def design_at(self, u: np.ndarray):
-        """The design with the keys at standardised deviations ``u``; where the design rules refuse that design (keys
-        moved together past what each allows alone: a longer ring and a larger bend radius on a pipe with no free
-        length left), the accepted design nearest along the way from the nominal one (the deviations scaled down by
-        bisection), so a fit that strays there sees the model stop changing instead of an error."""
+        """The design with the keys at standardised deviations ``u``, or where the design rules refuse it, at
+        :meth:`accepted_u`."""
+        return self._accepted(u)[1]
+
+    def accepted_u(self, u: np.ndarray) -> np.ndarray:
+        """``u`` where the design rules accept the design; else ``u`` with its geometric keys (not the
+        materials', which no rule limits) scaled back towards the nominal design until they do (keys moved
+        together past what each allows alone: a longer ring and a larger bend radius on a pipe with no free length
+        left), so a fit that strays there sees the model stop changing instead of an error, and reports the keys
+        the model was evaluated at."""
+        return self._accepted(u)[0]
+
+    def _accepted(self, u: np.ndarray):
         u = np.asarray(u, float)
         try:
-            return with_values(self.design, self.values(u))
+            return u, with_values(self.design, self.values(u))
         except DesignError:
             pass
-        good, bad, found = 0.0, 1.0, self.design
+        geometric = np.array([not p.key.startswith("materials.") for p in self.params])
+        good, bad = 0.0, 1.0
+        found = (np.where(geometric, 0.0, u), None)
         for _ in range(12):
             mid = 0.5 * (good + bad)
+            trial = np.where(geometric, mid * u, u)
             try:
-                found, good = with_values(self.design, self.values(mid * u)), mid
+                found, good = (trial, with_values(self.design, self.values(trial))), mid
             except DesignError:
                 bad = mid
+        if found[1] is None:
+            found = (found[0], with_values(self.design, self.values(found[0])))
         return found
 
     def bond_columns(self, entries) -> np.ndarray:

@@ -240,7 +240,7 @@ def _model_form(linear: LinearPart, env: Envelope, fit: _AsBuilt, causes, rms, j
     if fit.k:
         A = np.vstack([fit.W @ fit.J, np.eye(fit.k)])
         sd_u = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A)), 0, None))
-        for p, u, su in zip(env.params, fit.u, sd_u):
+        for p, u, su in zip(env.params, env.accepted_u(fit.u[:len(env.params)]), sd_u):   # the keys the model saw
             if su > INFORMED:                      # the recording says next to nothing about this key
                 unresolved.append(p.key)
                 continue

@@ -193,7 +193,8 @@ def test_creep_columns_follow_the_kelvin_voigt_step_response():
     from rodlab.stiffness_rig.effects import CREEP_TAU_GRID_S, creep_hypothesis
     from rodlab.stiffness_rig.effects.creep import Creep
     t = np.concatenate([np.linspace(10.0, 40.0, 31), np.linspace(100.0, 160.0, 31)])
-    data = SimpleNamespace(axis=np.repeat([0, 1], 31), comp=np.repeat([2, 1], 31), t_abs=t)
+    axis, comp = np.repeat([0, 1], 31), np.repeat([2, 1], 31)
+    data = SimpleNamespace(axis=axis, comp=comp, t_abs=t, zero_groups=axis * 4 + comp)   # one series per axis
     base = np.concatenate([np.full(31, 2e-3), np.full(31, -5e-3)])
     t0 = np.repeat([10.0, 100.0], 31)
     for tau in (1.0, 4.0, 30.0):

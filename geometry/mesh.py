@@ -27,7 +27,7 @@ from rodlab.core.layout import layout
 
 from .errors import GeometryError
 from .mesh_generate import generate_mesh
-from .parts import part_solids
+from .parts import half_solids, part_solids
 from .occ_parts import add_part_volumes
 
 __all__ = ["mesh_rod", "default_size_mm", "feature_circles", "GMSH_TO_VTK_TET10"]
@@ -219,7 +219,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     if kernel == "build123d":
         solids = part_solids(design)
         if half:
-            solids = _half_solids(solids)
+            solids = half_solids(solids)
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
@@ -351,22 +351,6 @@ def _elements(solids: dict, part_vols: dict, order: int) -> tuple[np.ndarray, np
                 etags.append(tg)
     etags = np.concatenate(etags)
     return np.concatenate(conn), np.concatenate(part_idx), gmsh.model.mesh.getElementQualities(etags, "minSICN")
-
-
-def _half_solids(solids: dict) -> dict:
-    """Each part cut to the half-space ``y_T >= 0``."""
-    import build123d as bd
-
-    big = 1e4
-    keep = bd.Solid.make_box(2 * big, big, 2 * big, bd.Plane(origin=(-big, 0.0, -big)))
-    out = {}
-    for part, solid in solids.items():
-        cut = solid.intersect(keep)
-        pieces = [] if cut is None else cut.solids()
-        if not pieces:
-            raise GeometryError(f"part {part} has nothing on the side y_T >= 0 of its bend plane", key=str(part))
-        out[part] = pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
-    return out
 
 
 def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False,

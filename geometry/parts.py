@@ -17,7 +17,7 @@ from rodlab.core.layout import Layer, Segment, SegmentKind, layout
 
 from .errors import GeometryError
 
-__all__ = ["part_solids", "PART_COLOURS"]
+__all__ = ["part_solids", "half_solids", "PART_COLOURS"]
 
 #: RGB colours of the parts in STEP files and renderings.
 PART_COLOURS: dict[Part, tuple[float, float, float]] = {
@@ -122,3 +122,19 @@ def _check_clearances(design: RodDesign, solids: dict) -> None:
                     f"design {design.name!r}: {b} overlaps {a} ({vol:.1f} mm^3): with gamma = "
                     f"{design.gamma_deg:g} deg the far end of the rod folds back onto the flange end; increase "
                     f"gamma_deg or L1_mm, shorten L2_mm, or make {a} smaller", key="gamma_deg")
+
+
+def half_solids(solids: dict) -> dict:
+    """Each part cut to the half-space ``y_T >= 0``."""
+    import build123d as bd
+
+    big = 1e4
+    keep = bd.Solid.make_box(2 * big, big, 2 * big, bd.Plane(origin=(-big, 0.0, -big)))
+    out = {}
+    for part, solid in solids.items():
+        cut = solid.intersect(keep)
+        pieces = [] if cut is None else cut.solids()
+        if not pieces:
+            raise GeometryError(f"part {part} has nothing on the side y_T >= 0 of its bend plane", key=str(part))
+        out[part] = pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
+    return out

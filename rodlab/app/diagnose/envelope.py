@@ -114,18 +114,15 @@ class Envelope:
         except DesignError:
             pass
         geometric = np.array([not p.key.startswith("materials.") for p in self.params])
-        good, bad = 0.0, 1.0
-        found = (np.where(geometric, 0.0, u), None)
+        good, bad, design = 0.0, 1.0, None
         for _ in range(12):
             mid = 0.5 * (good + bad)
-            trial = np.where(geometric, mid * u, u)
             try:
-                found, good = (trial, with_values(self.design, self.values(trial))), mid
+                design, good = with_values(self.design, self.values(np.where(geometric, mid * u, u))), mid
             except DesignError:
                 bad = mid
-        if found[1] is None:
-            found = (found[0], with_values(self.design, self.values(found[0])))
-        return found
+        used = np.where(geometric, good * u, u)
+        return used, design if design is not None else with_values(self.design, self.values(used))
 
     def bond_columns(self, entries) -> np.ndarray:
         """d entries / d u of the bonds' standardised deviations [mm/N], shape=(len(entries), bonds): exact, the

@@ -1,6 +1,7 @@
 """Acquisition over a real pseudo-terminal (pyserial against the simulator, no mocks)."""
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 import numpy as np
@@ -48,22 +49,26 @@ def test_acquisition_with_faults_recovers_compliance(tmp_path):
             assert ln.zero_load_kg["load"] == pytest.approx(0.2 / 9.80665, rel=0.2)
 
 
-def _interrupted_after(holds: int, prof, plan, out) -> None:
-    """Acquire ``plan`` into ``out`` and stop (Ctrl-C) once ``holds`` holds are complete."""
-    def stop(st):
-        if st.holds_done == holds:
-            raise KeyboardInterrupt
-    with pytest.raises(KeyboardInterrupt):
-        acquire(prof, plan, out, use_loader=True, progress=stop)
-
-
-def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
+@contextlib.contextmanager
+def _interrupted(tmp_path, holds: int):
+    """A simulated rig whose acquisition of the plan into r.rig.csv was stopped (Ctrl-C) once ``holds`` holds were
+    complete; yields (model, profile, plan, output) with the rig still attached."""
     model = RigModel(C, seed=5)
     out = tmp_path / "r.rig.csv"
     plan = _plan()
     with SimulatedRig(model, tmp_path / "tty") as dev:
         prof = _profile(dev.port)
-        _interrupted_after(3, prof, plan, out)
+
+        def stop(st):
+            if st.holds_done == holds:
+                raise KeyboardInterrupt
+        with pytest.raises(KeyboardInterrupt):
+            acquire(prof, plan, out, use_loader=True, progress=stop)
+        yield model, prof, plan, out
+
+
+def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
+    with _interrupted(tmp_path, 3) as (model, prof, plan, out):
         before = out.read_bytes()
         part = read_recording(out)
         acquire(prof, plan, out, use_loader=True)
@@ -216,12 +221,7 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
 def test_a_sample_cut_off_mid_line_is_left_out_and_the_acquisition_resumes(tmp_path, caplog):
     """Power lost while a line was written: the file ends in part of a sample. Reading it leaves that line out
     with a warning naming it; re-running the acquisition resumes (the writer drops the partial line first)."""
-    model = RigModel(C, seed=5)
-    out = tmp_path / "r.rig.csv"
-    plan = _plan()
-    with SimulatedRig(model, tmp_path / "tty") as dev:
-        prof = _profile(dev.port)
-        _interrupted_after(2, prof, plan, out)
+    with _interrupted(tmp_path, 2) as (model, prof, plan, out):
         whole = read_recording(out)
         text = out.read_text()
         out.write_text(text + text.splitlines()[-1 if text.splitlines()[-1][:1].isdigit() else -2][:25])
@@ -238,12 +238,7 @@ def test_a_file_cut_during_its_first_sample_resumes(tmp_path):
     """The power failed while the first sample was written: the file ends in part of it, with no complete sample;
     the acquisition starts again after the header (nothing is lost: there was nothing)."""
     from rodlab.stiffness_rig.resume import resume_point
-    model = RigModel(C, seed=5)
-    out = tmp_path / "r.rig.csv"
-    plan = _plan()
-    with SimulatedRig(model, tmp_path / "tty") as dev:
-        prof = _profile(dev.port)
-        _interrupted_after(1, prof, plan, out)
+    with _interrupted(tmp_path, 1) as (model, prof, plan, out):
         lines = out.read_text().splitlines(True)
         first = next(i for i, ln in enumerate(lines) if ln[:1].isdigit())
         out.write_text("".join(lines[:first]) + lines[first][:20])

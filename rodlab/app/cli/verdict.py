@@ -30,8 +30,11 @@ def print_verdict(res) -> None:
 
 
 def _short(reason: str, limit: int = 90) -> str:
-    """A reason's first clause (to its first colon or semicolon), at most ``limit`` characters."""
+    """A reason's first clause (to its first colon or semicolon, without a parenthesis that clause leaves open),
+    at most ``limit`` characters."""
     head = reason.replace(";", ":").split(":", 1)[0].strip()
+    if head.count("(") > head.count(")"):
+        head = head[:head.rfind("(")].rstrip()
     return head if len(head) <= limit else head[:limit - 3].rstrip() + "..."
 
 

@@ -154,6 +154,11 @@ class RigProfile:
         return max(idx) + 1
 
 
+def _got_format(data: dict) -> str:
+    """What a file's ``format`` key says, for an error: its value, or that it has none."""
+    return f"got {data['format']!r}" if data.get("format") else "the file has no format key"
+
+
 def read_profile(path):
     """A rig profile: :class:`RigProfile` (``rodlab.rigprofile/1``, one port) or
     :class:`~.instrument_profile.InstrumentProfile` (``/2``, several instruments)."""
@@ -164,8 +169,7 @@ def read_profile(path):
         return parse_profile_v2(data, r, path)
     r.keys(data, {"format", "device", "channel", "temperature", "loader"}, "")
     if data.get("format") != FORMAT_PROFILE:
-        raise r.err(f"expected format = \"{FORMAT_PROFILE}\" or \"{FORMAT_PROFILE_V2}\", "
-                    + (f"got {data['format']!r}" if data.get("format") else "the file has no format key"), "format")
+        raise r.err(f"expected format = \"{FORMAT_PROFILE}\" or \"{FORMAT_PROFILE_V2}\", {_got_format(data)}", "format")
     dev = data.get("device")
     if dev is None:
         raise r.err("missing [device]", "device")
@@ -232,8 +236,7 @@ def read_plan(path) -> RigPlan:
     r = _Reader(Path(path), text)
     r.keys(data, {"format", "rod", "axes", "masses_kg", "repeats", "hold_s", "rate_Hz", "settle", "measured"}, "")
     if data.get("format") != FORMAT_PLAN:
-        raise r.err(f"expected format = \"{FORMAT_PLAN}\", " + (f"got {data['format']!r}" if data.get("format") else
-                                                              "the file has no format key"), "format")
+        raise r.err(f"expected format = \"{FORMAT_PLAN}\", {_got_format(data)}", "format")
     rod = r.string(data, "rod", "")
     axes = data.get("axes", ["y", "z", "x"])
     if not isinstance(axes, list) or not axes:

@@ -101,7 +101,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if _rig_design(args):
             design = resolve_design(args.design)
         rec = read_recording(args.rig)
-        warn_rod_mismatch(rec.rod, sim, args.rig)
+        warn_rod_mismatch(rec.rod, sim.rod, args.rig)
         try:                                # a recording without a load response is refused, with its cause
             fit = fit_recording(rec, sim)
         except NoLoadResponse:

@@ -137,7 +137,7 @@ def _register_simulator(rsub) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     rec = read_recording(args.recording)
     sim = compliance_arg(args.sim)
-    warn_rod_mismatch(rec.rod, sim, args.recording)
+    warn_rod_mismatch(rec.rod, sim.rod, args.recording)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")

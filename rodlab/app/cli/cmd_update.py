@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +15,7 @@ from ...core.errors import DesignError, RodlabError
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
 from ...core.tolerances import design_value
-from .rodargs import same_rod, warn_rod_mismatch
+from .rodargs import warn_rod_mismatch
 
 __all__ = ["register"]
 
@@ -81,7 +80,7 @@ def _measured(path: str, design, keys, model: str):
         sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
                                         {"model": model})
         rec = read_recording(path)
-        other_rod = warn_rod_mismatch(rec.rod, sim, path, "--measured", "the design")
+        other_rod = warn_rod_mismatch(rec.rod, design.name, path, "--measured", "the design")
         diag, fitted = diagnose_rig(rec, sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
         unfitted = [f for f in diag.findings if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
@@ -93,9 +92,7 @@ def _measured(path: str, design, keys, model: str):
         lin = fitted.linear
         return Measured(lin.entries, lin.C, lin.cov, path), rig
     comp = read_compliance(path)
-    if comp.rod and not same_rod(comp.rod, design.name):
-        print(f"warning: {path} is of rod {comp.rod!r} and the design of rod {design.name!r}: check that --measured is "
-              "this rod's measurement", file=sys.stderr)
+    warn_rod_mismatch(comp.rod, design.name, path, "--measured", "the design", named_by="")
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
     C = np.array([comp.C_F[e] for e in E])
     sd = MEAS_RELATIVE * np.abs(C)                      # remounting and refitting: 1 %, beside the stated fit error

@@ -53,14 +53,14 @@ def _rod_key(name: str) -> str:
     return re.sub(r"[\s#_\-]|^rod", "", str(name).strip().lower())
 
 
-def warn_rod_mismatch(recording_rod: str | None, sim, source: str, option: str = "--sim",
-                      against: str = "the simulation") -> bool:
-    """Warn (stderr) when a recording's ``# rod:`` names another rod than the simulation ``sim`` (or the design,
-    ``against``) is of: the comparison would then measure the difference between two rods, not this rod's
-    physics. Returns whether it warned."""
-    if not recording_rod or not getattr(sim, "rod", None) or same_rod(recording_rod, sim.rod):
+def warn_rod_mismatch(recording_rod: str | None, rod: str | None, source: str, option: str = "--sim",
+                      against: str = "the simulation", named_by: str = " (its '# rod:' line)") -> bool:
+    """Warn (stderr) when a recording's ``# rod:`` (or a measured file's rod, ``named_by``) names another rod than
+    ``rod``, the rod of the simulation (or the design, ``against``): the comparison would then measure the
+    difference between two rods, not this rod's physics. Returns whether it warned."""
+    if not recording_rod or not rod or same_rod(recording_rod, rod):
         return False
     what = "this rod's compliance" if option == "--sim" else "this rod's measurement"
-    print(f"warning: {source} is of rod {recording_rod!r} (its '# rod:' line) and {against} of rod {sim.rod!r}: "
+    print(f"warning: {source} is of rod {recording_rod!r}{named_by} and {against} of rod {rod!r}: "
           f"check that {option} is {what}", file=sys.stderr)
     return True

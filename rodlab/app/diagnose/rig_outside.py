@@ -72,7 +72,7 @@ _SLIP_ABRUPT = 0.5
 
 
 def _slips(data, base: np.ndarray) -> list[Hypothesis]:
-    """Per gauge, a step from the moment and in the series (load axis and sign: each series is zeroed) where the
+    """Per gauge, a step from the moment and in the series (:attr:`RigSamples.series`: each is zeroed) where the
     residual ``y - base`` changes its mean most (a single change point, in recording order), when that change is
     a slip's (:func:`_is_slip`); the step's column is 1 there on, to the end of the series."""
     out = []
@@ -80,8 +80,8 @@ def _slips(data, base: np.ndarray) -> list[Hypothesis]:
     for c in sorted(set(data.comp.tolist())):
         best = None
         on = data.comp == c
-        for a, sign in sorted(set(zip(data.axis[on].tolist(), data.sign[on].tolist()))):
-            idx = np.nonzero(on & (data.axis == a) & (data.sign == sign))[0]
+        for series in np.unique(data.series[on]):
+            idx = np.nonzero(on & (data.series == series))[0]
             idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
             split = _change_point(r[idx])
             if split is not None and _is_slip(r[idx], split[0]) and (best is None or split[1] > best[1]):

@@ -97,3 +97,16 @@ def test_a_robot_file_with_another_joint_count_is_named(camp, tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "6 joint columns (q1..q6) and the robot model 5 joints" in err and "--robot" in err
 
+
+
+def test_units_checked_turns_the_refusal_into_a_warning(camp, tmp_path, capsys):
+    """A campaign that really turns every joint by less than 6.3 deg is the user's to confirm: ``--units-checked``
+    uses the numbers as they are, with the warning kept."""
+    bad = _scaled(camp / "c" / "multical.campaign.csv", tmp_path / "small.campaign.csv", ("q1", "q2", "q3", "q4", "q5",
+                                                                                          "q6"), np.pi / 180)
+    code = main(["calibrate", str(bad), "--fixture", str(camp / "c" / "multical.fixture.json"),
+                 "--rod", str(camp / "rod1.compliance.json"), "--units-checked"])
+    err = capsys.readouterr().err
+    assert "look like radians" in err and "used as they are" in err and "Traceback" not in err
+    assert "error:" not in err.split("used as they are")[0]
+    assert code in (0, 1, 3)

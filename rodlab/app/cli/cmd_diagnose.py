@@ -18,7 +18,7 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_json, json_safe
 from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .deviceargs import DEVICE_HELP, campaign_from_args, warn_flagged_fixture
+from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg, warn_rod_mismatch
@@ -41,7 +41,7 @@ def register(sub) -> None:
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
-    p.add_argument("--device", default=None, metavar="DEV.device.json", help="campaign: " + DEVICE_HELP)
+    add_device_option(p, prefix="campaign: ")
     add_robot_options(p, help="campaign / points: " + robot_help())
     p.add_argument("--design", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the "
                                     "--sim file was made from, if it is still there)")

@@ -18,8 +18,15 @@ DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sens
                "its sensor's range is refused")
 
 
-def add_device_option(p) -> None:
-    p.add_argument("--device", default=None, metavar="DEV.device.json", help=DEVICE_HELP)
+UNITS_CHECKED_HELP = ("the campaign's units are right although its numbers look like radians or um (a campaign that "
+                      "turns every joint by less than 6.3 deg, or points measured far from the datum): warn instead "
+                      "of refusing")
+
+
+def add_device_option(p, prefix: str = "") -> None:
+    """``--device`` and ``--units-checked``, the options of a campaign read by :func:`campaign_from_args`."""
+    p.add_argument("--device", default=None, metavar="DEV.device.json", help=prefix + DEVICE_HELP)
+    p.add_argument("--units-checked", action="store_true", help=prefix + UNITS_CHECKED_HELP)
 
 
 def campaign_from_args(args, n_joints: int, warn: bool = True):
@@ -28,8 +35,10 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
     device = read_device(args.device) if getattr(args, "device", None) else None
     camp = read_campaign(args.campaign, n_joints, device)
     slips = unit_slips(camp, args.campaign)
-    if slips:
-        raise RodlabError("; ".join(slips))
+    if slips and not getattr(args, "units_checked", False):
+        raise RodlabError("; ".join(slips) + "; if the units are right, give --units-checked")
+    for slip in slips:
+        print(f"warning: {slip} (--units-checked: used as they are)", file=sys.stderr)
     if warn and camp.x_D_mm is not None:
         far = far_points(camp)
         if far:

@@ -207,14 +207,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     """
     import gmsh
 
-    if kernel not in ("gmsh", "build123d"):
-        raise GeometryError(f"kernel must be gmsh or build123d, got {kernel!r}", key="kernel")
-    if order not in (1, 2):
-        raise GeometryError(f"order must be 1 or 2, got {order!r}", key="order")
-    h = default_size_mm(design, order) if size_mm is None else float(size_mm)
-    if not (h > 0 and np.isfinite(h)):
-        raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
-    grading = _check_grading(grading)
+    h, grading = _check_mesh_args(design, size_mm, order, grading, kernel)
     solids = None
     if kernel == "build123d":
         solids = part_solids(design)
@@ -223,10 +216,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
-            gmsh.option.setNumber("General.Terminal", 0)
-            gmsh.option.setNumber("General.NumThreads", 1)        # parallel 2-D meshing is not repeatable
-            gmsh.option.setNumber("Geometry.OCCParallel", 1)      # the fragment in parallel: ~0.125 -> 0.08 s
-            gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+            _session_options()
             gmsh.model.add(f"rod_{design.name}")
             if solids is None:
                 solids = add_part_volumes(design, half)
@@ -252,6 +242,28 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             gmsh.finalize()
     return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half,
                      high_order)
+
+
+def _check_mesh_args(design: RodDesign, size_mm, order, grading, kernel) -> tuple[float, tuple | None]:
+    """The element size [mm] (the design's default when ``size_mm`` is None) and the checked grading."""
+    if kernel not in ("gmsh", "build123d"):
+        raise GeometryError(f"kernel must be gmsh or build123d, got {kernel!r}", key="kernel")
+    if order not in (1, 2):
+        raise GeometryError(f"order must be 1 or 2, got {order!r}", key="order")
+    h = default_size_mm(design, order) if size_mm is None else float(size_mm)
+    if not (h > 0 and np.isfinite(h)):
+        raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
+    return h, _check_grading(grading)
+
+
+def _session_options() -> None:
+    """gmsh's options for one meshing session: quiet, repeatable, the booleans in parallel, msh 4.1."""
+    import gmsh
+
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.option.setNumber("General.NumThreads", 1)        # parallel 2-D meshing is not repeatable
+    gmsh.option.setNumber("Geometry.OCCParallel", 1)      # the fragment in parallel: ~0.125 -> 0.08 s
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
 
 
 def _import_parts(solids: dict, tmp: str) -> dict:

@@ -81,74 +81,11 @@ def sim_accuracy(text: str):
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    written: list = []
-    if args.rig and args.joint_harmonics:
-        raise RodlabError("--joint-harmonics is for --points or --campaign (a robot's joints); a rig recording has "
-                          "none: leave it out")
-    if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
-        raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
-                          "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")
-    if args.sim_accuracy is not None and not args.rig:
-        raise RodlabError("--sim-accuracy is what a rig recording's simulation is worth (with --rig); a campaign's "
-                          "rod file is weighed by its own method: leave it out")
+    _check_modes(args)
     if args.points:
         return _diagnose_points(args)
-    if args.rig:
-        if not args.sim:
-            raise RodlabError("--rig needs --sim SIM.compliance.json")
-        sim = compliance_arg(args.sim)
-        design = None
-        if _rig_design(args):
-            design = resolve_design(args.design)
-        rec = read_recording(args.rig)
-        warn_rod_mismatch(rec.rod, sim.rod, args.rig)
-        try:                                # a recording without a load response is refused, with its cause
-            fit = fit_recording(rec, sim)
-        except NoLoadResponse:
-            raise
-        except RigError:
-            pass                            # anything else: the diagnosis says what it finds
-        else:
-            caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
-            if caution:
-                print(f"warning: {caution}", file=sys.stderr)
-        from ..diagnose import diagnose_rig
-        diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
-        print(diag.summary())
-        if args.png:
-            from ..diagnose.plots import plot_rig_diagnosis
-            for p in plot_rig_diagnosis(model, args.png, diag, rec.rod):
-                written.append(p)
-                print(f"wrote {p}")
-        if args.export:
-            from ..diagnose import corrected_compliance
-            written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
-            print(f"wrote {written[-1]}")
-    else:
-        if args.design:
-            raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
-                              "as --rod ROD.compliance.json")
-        if not (args.fixture and args.rod):
-            raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
-        robot = robot_from_args(args)
-        noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
-        pts = read_points(args.validate, robot.n) if args.validate else None
-        fix = read_fixture(args.fixture)
-        warn_flagged_fixture(fix, args.fixture)
-        from ..diagnose import diagnose_campaign
-        diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
-                                       read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
-        print(diag.summary())
-        if "validation" in diag.extra:
-            v = diag.extra["validation"]
-            print(f"  validation mean / max [mm]: nominal {v['nominal']['mean_mm']:.3f} / {v['nominal']['max_mm']:.3f}, "
-                  f"calibrated {v['before']['mean_mm']:.3f} / {v['before']['max_mm']:.3f}, with the found physics "
-                  f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
-        if args.png:
-            from ..diagnose.plots import plot_campaign_diagnosis
-            for p in plot_campaign_diagnosis(diag, fits, args.png, noise_mm):
-                written.append(p)
-                print(f"wrote {p}")
+    written: list = []
+    diag = _diagnose_rig(args, written) if args.rig else _diagnose_campaign(args, written)
     if args.json:
         written.insert(0, diag.write(args.json))
         print(f"wrote {written[0]}")
@@ -158,6 +95,88 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         written.insert(0, Source(report["format"], report))
     write_command_report(args, written, default_folder(args))
     return 0
+
+
+def _check_modes(args: argparse.Namespace) -> None:
+    """One of --rig, --campaign, --points, with only the options that apply to it."""
+    if args.rig and args.joint_harmonics:
+        raise RodlabError("--joint-harmonics is for --points or --campaign (a robot's joints); a rig recording has "
+                          "none: leave it out")
+    if sum(bool(x) for x in (args.rig, args.campaign, args.points)) != 1:
+        raise RodlabError("give one of --rig REC.rig.csv --sim SIM.compliance.json, --campaign C.csv --fixture F.json "
+                          "--rod ROD.compliance.json, or --points P.validation.csv --robot ROBOT")
+    if args.sim_accuracy is not None and not args.rig:
+        raise RodlabError("--sim-accuracy is what a rig recording's simulation is worth (with --rig); a campaign's "
+                          "rod file is weighed by its own method: leave it out")
+    if args.rig and not args.sim:
+        raise RodlabError("--rig needs --sim SIM.compliance.json")
+    if args.campaign and args.design:
+        raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
+                          "as --rod ROD.compliance.json")
+    if args.campaign and not (args.fixture and args.rod):
+        raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
+
+
+def _diagnose_rig(args: argparse.Namespace, written: list):
+    """``--rig REC --sim SIM``: the recording diagnosed against its simulation; figures and the corrected file
+    appended to ``written``."""
+    sim = compliance_arg(args.sim)
+    design = resolve_design(args.design) if _rig_design(args) else None
+    rec = read_recording(args.rig)
+    warn_rod_mismatch(rec.rod, sim.rod, args.rig)
+    _warn_r_rod(rec, sim)
+    from ..diagnose import diagnose_rig
+    diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
+    print(diag.summary())
+    if args.png:
+        from ..diagnose.plots import plot_rig_diagnosis
+        for p in plot_rig_diagnosis(model, args.png, diag, rec.rod):
+            written.append(p)
+            print(f"wrote {p}")
+    if args.export:
+        from ..diagnose import corrected_compliance
+        written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
+        print(f"wrote {written[-1]}")
+    return diag
+
+
+def _warn_r_rod(rec, sim) -> None:
+    """A recording without a load response is refused with its cause; an r_rod no rod of this kind has is warned
+    of; any other fit problem is left to the diagnosis, which says what it finds."""
+    try:
+        fit = fit_recording(rec, sim)
+    except NoLoadResponse:
+        raise
+    except RigError:
+        return
+    caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
+    if caution:
+        print(f"warning: {caution}", file=sys.stderr)
+
+
+def _diagnose_campaign(args: argparse.Namespace, written: list):
+    """``--campaign C --fixture F --rod ROD``: the campaign diagnosed (and validated with ``--validate``); figures
+    appended to ``written``."""
+    robot = robot_from_args(args)
+    noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
+    pts = read_points(args.validate, robot.n) if args.validate else None
+    fix = read_fixture(args.fixture)
+    warn_flagged_fixture(fix, args.fixture)
+    from ..diagnose import diagnose_campaign
+    diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
+                                   read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
+    print(diag.summary())
+    if "validation" in diag.extra:
+        v = diag.extra["validation"]
+        print(f"  validation mean / max [mm]: nominal {v['nominal']['mean_mm']:.3f} / {v['nominal']['max_mm']:.3f}, "
+              f"calibrated {v['before']['mean_mm']:.3f} / {v['before']['max_mm']:.3f}, with the found physics "
+              f"{v['after']['mean_mm']:.3f} / {v['after']['max_mm']:.3f}")
+    if args.png:
+        from ..diagnose.plots import plot_campaign_diagnosis
+        for p in plot_campaign_diagnosis(diag, fits, args.png, noise_mm):
+            written.append(p)
+            print(f"wrote {p}")
+    return diag
 
 
 def _rig_design(args) -> str | None:

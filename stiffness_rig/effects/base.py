@@ -44,9 +44,10 @@ class HypothesisContext:
 
 @dataclass
 class RigState:
-    """Mutable state of the forward model: creep deflection [mm] in {T} and the time of the last reading [s]."""
+    """Mutable state of the forward model: the deflection [mm] in {T} of each creep term, shape=(2, 3), and the
+    time of the last reading [s]."""
 
-    creep: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    creep: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
     t_last: float | None = None
 
 

@@ -1,5 +1,6 @@
 """``creep``: Kelvin-Voigt creep of the tubes or bonds — extra deflection phi C F approached with time constant
-tau [s] after every change of load; it starts from zero at each series (the rod is remounted, gauges zeroed)."""
+tau [s] after every change of load; it starts from zero at each series (the rod is remounted, gauges zeroed).
+A second Kelvin-Voigt term (``phi_2``, ``tau_2_s``: a laminate's fast and a bond's slow creep) adds its own."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,7 +10,7 @@ from rodlab.core.hypothesis import Hypothesis, ParamSpec
 from ..errors import RigError
 from .base import RigEffectModel
 
-__all__ = ["Creep", "creep_hypothesis", "CREEP_TAU_GRID_S"]
+__all__ = ["Creep", "kelvin_voigt", "creep_hypothesis", "two_term_creep_hypothesis", "CREEP_TAU_GRID_S"]
 
 #: time constants [s] of the creep hypotheses (a factor sqrt 2 apart); the chosen one is refined continuously
 CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 0.5), 3))
@@ -19,7 +20,10 @@ class Creep(RigEffectModel):
     effect = "creep"
     order = 70
     params = (ParamSpec("phi", "-", "creep deflection at equilibrium over the elastic one"),
-              ParamSpec("tau_s", "s", "creep time constant", 6.0, magnitude=False))
+              ParamSpec("tau_s", "s", "creep time constant", 6.0, magnitude=False),
+              ParamSpec("phi_2", "-", "a second creep term's deflection at equilibrium over the elastic one "
+                                      "(optional)"),
+              ParamSpec("tau_2_s", "s", "the second term's time constant (with phi_2)", magnitude=False))
     example = {"phi": 0.02}
     physics = "viscoelastic creep of tubes or bonds"
     signature = "deflection grows during a constant-load hold, faster at higher load"
@@ -28,44 +32,80 @@ class Creep(RigEffectModel):
     def check(self, p: dict) -> None:
         if not p["tau_s"] > 0:
             raise RigError(f"effect creep: tau_s must be > 0 s, got {p['tau_s']!r}", key="creep.tau_s")
+        if p.get("phi_2") is not None and not (p.get("tau_2_s") or 0) > 0:
+            raise RigError(f"effect creep: phi_2 needs its time constant tau_2_s > 0 s, got {p.get('tau_2_s')!r}",
+                           key="creep.tau_2_s")
 
     def deflection(self, x, C, F, t, state, p):
-        phi, tau = self.value(p, "phi"), float(p["tau_s"])
-        target = phi * (C @ F)
         dt = 0.0 if state.t_last is None else max(t - state.t_last, 0.0)
-        state.creep = target + (state.creep - target) * np.exp(-dt / tau)
-        return x + state.creep
+        terms = [(self.value(p, "phi"), float(p["tau_s"]))]
+        if p.get("phi_2") is not None:
+            terms.append((self.value(p, "phi_2"), float(p["tau_2_s"])))
+        for k, (phi, tau) in enumerate(terms):
+            target = phi * (C @ F)
+            state.creep[k] = target + (state.creep[k] - target) * np.exp(-dt / tau)
+        return x + state.creep.sum(axis=0)
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        columns = _kelvin_voigt(data, ctx.base, np.array(CREEP_TAU_GRID_S))
+        columns = kelvin_voigt(data, ctx.base, np.array(CREEP_TAU_GRID_S))
         return [creep_hypothesis(data, ctx.base, tau, columns[:, k]) for k, tau in enumerate(CREEP_TAU_GRID_S)]
 
 
-def _kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
+def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
     """Creep per unit phi of every sample, shape=(n, len(taus)), driven by the load history of each series: at
     every reading it relaxes towards the current elastic deflection ``base`` with each time constant ``taus``
-    [s] (all of them at once: one pass over the readings)."""
+    [s]: x_i = x_(i-1) exp(-dt_i / tau) + (1 - exp(-dt_i / tau)) base_i, summed in closed form
+    (:func:`_relax`)."""
     taus = np.atleast_1d(np.asarray(taus, float))
     out = np.zeros((base.size, taus.size))
     keys = data.zero_groups                    # per series: the rod is remounted, its creep starts afresh
     for k in np.unique(keys):
         idx = np.nonzero(keys == k)[0]
         idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
-        dt = np.diff(data.t_abs[idx], prepend=data.t_abs[idx[0]])
-        keep = np.exp(-dt[:, None] / taus[None, :])                   # what is left of the last creep, per tau
-        pull = (1.0 - keep) * base[idx][:, None]
-        x = np.zeros(taus.size)
-        for i, row in enumerate(idx):
-            x = x * keep[i] + pull[i]
-            out[row] = x
+        for m, tau in enumerate(taus):
+            out[idx, m] = _relax(data.t_abs[idx] / tau, base[idx])
+    return out
+
+
+#: the span of scaled time [time constants] summed in one block (exp(500) ~ 1e217 stays finite)
+_BLOCK = 500.0
+
+
+def _relax(s: np.ndarray, base: np.ndarray) -> np.ndarray:
+    """The recursion x_i = x_(i-1) e^-(s_i - s_(i-1)) + (1 - e^-(s_i - s_(i-1))) base_i from x = 0, over times
+    ``s`` in time constants (sorted), as x_i = sum_(k <= i) pull_k e^-(s_i - s_k): a cumulative sum per block of
+    :data:`_BLOCK` time constants, the state carried from block to block."""
+    pull = -np.expm1(-np.diff(s, prepend=s[:1])) * base
+    out = np.empty_like(pull)
+    x, s_last = 0.0, s[0]
+    edges = np.searchsorted(s, s[0] + _BLOCK * np.arange(1, int((s[-1] - s[0]) // _BLOCK) + 2))
+    start = 0
+    for stop in np.append(edges, s.size):
+        if stop <= start:
+            continue
+        w = np.exp(s[start:stop] - s[start])
+        out[start:stop] = (np.cumsum(pull[start:stop] * w) + x * np.exp(s_last - s[start])) / w
+        x, s_last, start = out[stop - 1], s[stop - 1], stop
     return out
 
 
 def creep_hypothesis(data, base: np.ndarray, tau: float, column: np.ndarray | None = None) -> Hypothesis:
     """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter (``column``:
     its response per unit phi, shape=(n,), when already computed)."""
-    X = (_kelvin_voigt(data, base, tau)[:, 0] if column is None else column)[:, None]
+    X = (kelvin_voigt(data, base, tau)[:, 0] if column is None else column)[:, None]
     return Hypothesis(Creep.effect, None, ["phi"], X, [0.0], [1.0],
                       f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
                       f"constant load (time constant {tau:.3g} s), more at higher load", hidden=1,
                       settings={"tau_s": float(tau)})
+
+
+def two_term_creep_hypothesis(data, base: np.ndarray, tau: float, tau_2: float) -> Hypothesis:
+    """Kelvin-Voigt creep of two terms, time constants ``tau`` and ``tau_2`` [s] (a laminate's fast and a bond's
+    slow creep); their amplitudes phi and phi_2 are the linear parameters, the two time constants hidden."""
+    X = kelvin_voigt(data, base, np.array([tau, tau_2]))
+    fast, slow = sorted((tau, tau_2))
+    return Hypothesis(Creep.effect, None, ["phi", "phi_2"], X, [0.0, 0.0], [1.0, 1.0],
+                      f"viscoelastic creep of the tubes or bonds in two terms: the deflection keeps growing during a "
+                      f"hold at constant load, part of it within seconds (time constant {fast:.3g} s) and part "
+                      f"slowly ({slow:.3g} s), more at higher load", hidden=2,
+                      settings={"tau_s": float(tau), "tau_2_s": float(tau_2)})

@@ -26,7 +26,7 @@ from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence, weakest_term
 from .search import search
 from .subset import SubsetLS
 
-__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "PTP_MIN", "BEAM"]
+__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "admissible", "PTP_MIN", "BEAM"]
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +47,7 @@ def compatible(library: list[Hypothesis], S: tuple, j: int) -> bool:
     return True
 
 
-def _admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.ndarray) -> bool:
+def admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.ndarray) -> bool:
     """Every term changes the readings of some series by >= PTP_MIN noise SDs peak to peak (detection limit) and
     none sits on a physical bound (then it is not this physics)."""
     k = 0
@@ -113,7 +113,7 @@ class _RigSpace:
     def trial(self, candidate) -> Trial:
         """An inadmissible subset lets the next try; the best admissible one is the step's only chance."""
         key, c, rss = candidate
-        if not _admissible(self.library, self.ls, key, c, self.sigma, self.groups):
+        if not admissible(self.library, self.ls, key, c, self.sigma, self.groups):
             return Trial.NEXT
         dk = self.k_of(key) - self.k_of(self.cur)
         if not evidence((self.cur_rss - rss) / self.sigma ** 2, dk, bic_penalty(dk, self.n)).significant:
@@ -172,7 +172,7 @@ def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: floa
             c, rss = ls.fit(key)
             dk = t.n_params - u.n_params
             if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-                    and _admissible(library, ls, key, c, sigma, groups)):
+                    and admissible(library, ls, key, c, sigma, groups)):
                 log.info("nested: %s -> %s", t.label, u.label)
                 return key, rss
     return None
@@ -196,7 +196,7 @@ def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of)
                 key = tuple(sorted(rest + (i,)))
                 c, rss = ls.fit(key)
                 if bic(key, rss) < bic(cur, cur_rss) - 1e-9 and (best is None or bic(key, rss) < bic(*best[:2])):
-                    if _admissible(library, ls, key, c, sigma, groups):
+                    if admissible(library, ls, key, c, sigma, groups):
                         best = (key, rss)
         if best is None:
             break

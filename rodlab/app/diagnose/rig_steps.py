@@ -14,6 +14,7 @@ from rodlab.stiffness_rig.samples import RigSamples
 
 from .criteria import DBIC_MIN, bic_penalty, evidence
 from .report import Finding
+from .rig_creep import two_term_step
 from .rig_outside import OUTSIDE
 from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
 
@@ -38,6 +39,11 @@ class Prep:
         self.raw[id(term)] = demean(term.X, self.groups)
         term.X = self.project(term.X) if self.project is not None else self.raw[id(term)]
         return term
+
+    def project_columns(self, X: np.ndarray) -> np.ndarray:
+        """Columns ``X`` (n, k) projected as a hypothesis' are (gauge zeros, the free linear part)."""
+        X = demean(X, self.groups)
+        return self.project(X) if self.project is not None else X
 
     def raw_columns(self, terms) -> np.ndarray:
         """The terms' columns before projection (gauge zeros removed), shape=(n, p)."""
@@ -85,8 +91,9 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
                           folds):
     """Select a model; creep's time constant was picked from a grid: refine it continuously in the chosen model
     and in each of its sub-models that keep creep, then select again among the refined ones (a grid mismatch
-    at high SNR must not be patched with extra terms such as a compliance scale). Returns (library, its
-    :class:`SubsetLS`, the chosen term indices)."""
+    at high SNR must not be patched with extra terms such as a compliance scale); then a creep of two terms is
+    tried in its place (:func:`.rig_creep.two_term_step`). Returns (library, its :class:`SubsetLS`, the chosen term
+    indices)."""
     S = select(library, ls, sigma, r0.size, max_terms, prep.groups)
     for _ in range(2):
         creep = [j for j in S if library[j].effect == "creep"]
@@ -106,7 +113,7 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
         S = select(library, ls, sigma, r0.size, max_terms, prep.groups)
-    return library, ls, S
+    return two_term_step(library, ls, S, data, base, r0, prep, sigma, folds)
 
 
 def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: float) -> list[Finding]:

@@ -144,3 +144,24 @@ def test_a_form_the_data_do_not_pin_down_gives_way_to_one_they_do():
     resolved = cand("periodic_joint_error", "joint:2", -145.3, False)
     assert resolved_first([resolved, stiff])[0] is resolved
     assert rival_forms(stiff, [periodic, other, stiff]) == ["periodic_joint_error at joint:2 (twice per revolution)"]
+
+
+def test_a_saturating_spring_is_applied_whole_or_with_its_slope_left_to_c(tmp_path):
+    """A saturating spring is nearly ``-s tau_s tau`` beyond its saturation torque: the re-identification applies it
+    whole and with that slope left to the joint's compliance, and keeps the better fit (a wrist joint's regularised
+    c could not take the slope back: a torque-sign backlash found as joint 5's stiffening had made the fit 10x
+    worse; here joint 5's linear spring itself is off, and the whole turn is needed)."""
+    from rodlab.calibrate.effects.joint_stiffening import TorqueCorrection, stiffening_turn
+    tau = np.linspace(-7.0, 7.0, 29)
+    whole = TorqueCorrection.over(tau, 3e-4, 0.9, linear_to_c=False)
+    split = TorqueCorrection.over(tau, 3e-4, 0.9, linear_to_c=True)
+    np.testing.assert_allclose(whole.turn(tau), stiffening_turn(tau, 3e-4, 0.9))
+    assert abs(tau @ split.turn(tau)) < 1e-12 * np.abs(tau) @ np.abs(whole.turn(tau))    # no slope left
+    np.testing.assert_allclose(split.turn(tau) - whole.turn(tau), -split.linear_rad_per_Nm * tau)
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=0),
+                      effects={"joint_stiffening": {"joint": 5, "stiffening_rad_per_Nm2": 3e-4, "saturation_Nm": 0.9}})
+    diag = _diagnose(tmp_path)
+    assert (diag.findings[0].effect, diag.findings[0].location) == ("joint_stiffening", "joint:5"), diag.summary()
+    assert diag.rms_after_mm < 0.2 * diag.rms_before_mm and "refit_warning" not in diag.extra
+    v = diag.extra["validation"]
+    assert v["after"]["mean_mm"] < 0.5 * v["before"]["mean_mm"]

@@ -67,9 +67,11 @@ class Refit:
     (a_sin, a_cos) [rad], or (a_sin, a_cos, b_sin, b_cos) with twice per revolution} periodic errors added to the
     joint angles (also at validation points);
     obs_edits : functions Observations -> Observations applied after the joint correction (e.g. measured
-    points referred back to the campaign start); torque_corrections : {joint index (0-based): (s [rad/(N m)^2],
-    saturation torque [N m] or None)} the joint turns by ``-s tau abs(tau) / (1 + abs(tau) / tau_s)`` beyond its
-    linear spring under its static torque (also at validation points, with their torques)
+    points referred back to the campaign start); torque_corrections : {joint index (0-based):
+    :class:`~rodlab.calibrate.effects.joint_stiffening.TorqueCorrection`} the joint's turn beyond its
+    linear spring under its static torque (also at validation points, with their torques);
+    torque_linear_to_c : a non-linear joint spring's part linear in the torque is left to the joint's compliance c
+    (else applied with the rest)
     """
 
     rod: object
@@ -78,6 +80,7 @@ class Refit:
     joint_corrections_rad: dict = field(default_factory=dict)
     obs_edits: list = field(default_factory=list)
     torque_corrections: dict = field(default_factory=dict)
+    torque_linear_to_c: bool = False
 
 
 def joint_motion_W(frames, k: int) -> np.ndarray:

@@ -14,7 +14,7 @@ torque ``tau_s`` (``saturation_Nm``; none: the quadratic). The diagnosis tries t
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from rodlab.core.hypothesis import ParamSpec, location_parts
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis, joint_motion_W
 
-__all__ = ["JointStiffening", "stiffening_turn"]
+__all__ = ["JointStiffening", "stiffening_turn", "TorqueCorrection"]
 
 #: torques of a joint that spread less than this [N m] over the campaign cannot show a non-linear spring
 MIN_TORQUE_SPAN_NM = 5.0
@@ -39,6 +39,40 @@ def stiffening_turn(tau_Nm: np.ndarray, s: float, saturation_Nm: float | None = 
     if not saturation_Nm or not np.isfinite(saturation_Nm):
         return -s * quad
     return -s * quad / (1.0 + np.abs(t) / float(saturation_Nm))
+
+
+@dataclass(frozen=True)
+class TorqueCorrection:
+    """A non-linear joint spring as the re-identification applies it: the joint turns by
+    :func:`stiffening_turn` beyond its linear spring, whole or less the part linear in the torque (its
+    least-squares slope over the campaign's torques), which the joint's compliance c then carries. A saturating
+    form is nearly ``-s tau_s tau`` beyond the saturation torque: where the selection found it with c free to
+    take that slope back, applying it whole asks c to fall by ``s tau_s``, which the regularised c of a wrist joint
+    cannot (a backlash that follows the torque's sign, found as joint 5's stiffening, had made the fit 10x worse:
+    new-user trial, 2026-11-28); where the joint's linear spring itself is off, the whole turn is right. The
+    re-identification tries both (:attr:`~rodlab.calibrate.effects.base.Refit.torque_linear_to_c`).
+
+    s_rad_per_Nm2 : s [rad/(N m)^2]; saturation_Nm : tau_s [N m] or None (the quadratic);
+    linear_rad_per_Nm : the slope taken out [rad/(N m)], carried by c
+    """
+
+    s_rad_per_Nm2: float
+    saturation_Nm: float | None
+    linear_rad_per_Nm: float
+
+    @classmethod
+    def over(cls, tau_Nm: np.ndarray, s: float, saturation_Nm: float | None, linear_to_c: bool) -> "TorqueCorrection":
+        """The correction over the campaign's torques ``tau_Nm`` [N m], with its linear part left to c when
+        ``linear_to_c``."""
+        t = np.asarray(tau_Nm, float)
+        turn = stiffening_turn(t, s, saturation_Nm)
+        slope = float(t @ turn / (t @ t)) if linear_to_c and np.any(t) else 0.0
+        return cls(float(s), None if saturation_Nm is None else float(saturation_Nm), slope)
+
+    def turn(self, tau_Nm: np.ndarray) -> np.ndarray:
+        """The joint's turn [rad] beyond its (identified) linear spring under the torques ``tau_Nm`` [N m]."""
+        t = np.asarray(tau_Nm, float)
+        return stiffening_turn(t, self.s_rad_per_Nm2, self.saturation_Nm) - self.linear_rad_per_Nm * t
 
 
 class JointStiffening(CampaignEffectModel):
@@ -95,11 +129,12 @@ class JointStiffening(CampaignEffectModel):
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
         k = int(location_parts(location)[1]) - 1
-        s, sat = parameters["stiffening_rad_per_Nm2"], parameters.get("saturation_Nm")
+        correction = TorqueCorrection.over(ctx.tau_Nm[:, k], parameters["stiffening_rad_per_Nm2"],
+                                           parameters.get("saturation_Nm") or None, fit.torque_linear_to_c)
         shift = np.zeros_like(ctx.obs.q_rad)
-        shift[:, k] = stiffening_turn(ctx.tau_Nm[:, k], s, sat)
+        shift[:, k] = correction.turn(ctx.tau_Nm[:, k])
         fit.obs_edits.append(lambda obs: replace(obs, q_rad=obs.q_rad + shift))
-        fit.torque_corrections[k] = (float(s), None if sat is None else float(sat))
+        fit.torque_corrections[k] = correction
 
     def remedy(self, location: str, parameters: dict) -> str:
         j = location_parts(location)[1]

@@ -65,9 +65,8 @@ class CampaignFits:
     validation_errors_mm : {"nominal" | "before" | "after": shape=(M,) [mm]} at the validation points, or None
     q_deg : shape=(N, n) joint angles of the campaign points [deg]
     time_s : shape=(N,) time of each point [s], or None when the campaign has no ``time_s`` column
-    torque_corrections : {joint index (0-based): (s [rad/(N m)^2], saturation torque [N m] or None)} of
-    non-linear joint springs found (the joint turns by ``-s tau abs(tau) / (1 + abs(tau) / tau_s)`` beyond its
-    linear one)
+    torque_corrections : {joint index (0-based): :class:`~rodlab.calibrate.effects.joint_stiffening.TorqueCorrection`}
+    of non-linear joint springs found
     """
 
     before: object
@@ -350,6 +349,10 @@ class CampaignSelection:
         search(self, self.max_terms + self.max_outliers + 1)
 
 
+#: the re-identification with the found physics is flagged when its rms exceeds the plain one by this factor
+REFIT_WORSE = 1.1
+
+
 def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.ndarray]:
     """The identified campaign as hypotheses see it, and the joint torques [N m] at its points."""
     fr, tau = ball_positions(robot, res.params, obs.q_rad, obs.rod, force_W_N=obs.force_W_N)
@@ -388,4 +391,8 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
         fits.validation_errors_mm = validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: error_stats(e).to_dict() for k, e in fits.validation_errors_mm.items()}
     rms_after = res2.rms_mm if res2 is not None else res.rms_mm
+    if rms_after > REFIT_WORSE * res.rms_mm:
+        extra["refit_warning"] = (f"the identification with the found physics fits worse than without it (rms "
+                                  f"{res.rms_mm * 1e3:.2f} -> {rms_after * 1e3:.2f} um): the findings' parameters "
+                                  "do not carry over to it; do not apply them, and report this campaign")
     return Diagnosis(Subject.CAMPAIGN, verdict, noise_mm, res.rms_mm, rms_after, findings, extra), fits

@@ -12,7 +12,6 @@ from dataclasses import replace
 import numpy as np
 from rodlab.calibrate import FitOptions, ModelParams, Rod, RodDeflection, campaign_observations, identify, validate
 from rodlab.calibrate.effects import CampaignContext, Refit, campaign_effect, correct_joints
-from rodlab.calibrate.effects.joint_stiffening import stiffening_turn
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.points import points_observations
 
@@ -26,10 +25,24 @@ def deflection_of(rod):
 
 def reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, fixture_sigma):
     """Identify the campaign again with the found physics (each effect says how: :meth:`refit`); returns the
-    result and the :class:`Refit` it used."""
-    fit = Refit(rod, np.ones(ctx.n_points, dtype=bool))
-    for f in findings:
-        campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
+    result and the :class:`Refit` it used. A non-linear joint spring is applied whole and with its linear part
+    left to the joint's compliance (:class:`~rodlab.calibrate.effects.joint_stiffening.TorqueCorrection`): the
+    better fit is kept."""
+    best = None
+    for linear_to_c in (False, True):
+        fit = Refit(rod, np.ones(ctx.n_points, dtype=bool), torque_linear_to_c=linear_to_c)
+        for f in findings:
+            campaign_effect(f.effect).refit(fit, f.location, f.parameters, ctx)
+        res2 = _identify_with(robot, camp, fix, rod, fit, noise_mm, fixture_sigma, ctx)
+        if best is None or res2.rms_mm < best[0].rms_mm:
+            best = (res2, fit)
+        if not fit.torque_corrections:
+            break
+    return best
+
+
+def _identify_with(robot, camp, fix, rod, fit: Refit, noise_mm, fixture_sigma, ctx: CampaignContext):
+    """The identification of the campaign edited by ``fit``."""
     obs2 = campaign_observations(camp, fix, fit.rod)
     # the joints really turn by q + a_s sin q + a_c cos q (residual = measured - model = g (a_s sin + a_c cos))
     obs2 = replace(obs2, q_rad=correct_joints(obs2.q_rad, fit.joint_corrections_rad))
@@ -37,10 +50,9 @@ def reidentify(robot, camp, fix, rod, ctx: CampaignContext, findings, noise_mm, 
         obs2 = edit(obs2)
     if not fit.keep.all():
         obs2 = obs2.subset(fit.keep)
-    res2 = identify(robot, obs2, Rod.of(rod), [deflection_of(fit.rod)],
+    return identify(robot, obs2, Rod.of(rod), [deflection_of(fit.rod)],
                     FitOptions(freed=fit.freed, expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma,
                                harmonics=tuple(ctx.result.harmonic_range_deg)))
-    return res2, fit
 
 
 def validation_errors(robot, fits, points) -> dict:
@@ -60,11 +72,11 @@ def validation_errors(robot, fits, points) -> dict:
 
 def _torque_corrected(robot, params, points, corrections: dict):
     """``points`` with each non-linear joint spring's turn (:func:`~rodlab.calibrate.effects.joint_stiffening.
-    stiffening_turn`) added, at the static torques the model ``params`` gives them under their own rod (the
-    validation rod's weight); ``corrections``: {joint index: (s, saturation torque or None)}."""
+    TorqueCorrection.turn`) added, at the static torques the model ``params`` gives them under their own rod (the
+    validation rod's weight); ``corrections``: {joint index: its TorqueCorrection}."""
     obs = points_observations(points)
     _, tau = ball_positions(robot, params, obs.q_rad, obs.rod)
     q = np.deg2rad(np.asarray(points.q_deg, float)).copy()
-    for k, (s, saturation) in corrections.items():
-        q[:, k] += stiffening_turn(tau[:, k], s, saturation)
+    for k, correction in corrections.items():
+        q[:, k] += correction.turn(tau[:, k])
     return replace(points, q_deg=np.rad2deg(q))

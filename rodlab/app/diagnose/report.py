@@ -85,4 +85,6 @@ class Diagnosis:
             if caution(f):
                 lines.append(f"     caution: {caution(f)}")
             lines.append(f"     {'to confirm' if self.subject == Subject.RIG else 'next step'}: {confirmation(f)}")
+        if self.extra.get("refit_warning"):
+            lines.append(f"  warning: {self.extra['refit_warning']}")
         return "\n".join(lines)

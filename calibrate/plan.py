@@ -2,8 +2,12 @@
 observable (Borm & Menq's O1; O2-O5 of Sun & Hollerbach / Joubair et al. reported).
 
 Candidates are reachable configurations that put the ball on each datum point (numeric IK from random
-seeds within the joint limits); a greedy exchange picks ``k`` per position maximising O1 of the
-column-scaled identification Jacobian of the free parameters.
+seeds within the joint limits) with the rod coming from the device's open side (within :data:`ROD_ANGLE_MAX_DEG`
+of the diagonal its three sensor axes point along: the sensors sit below the ball and push it up); a greedy
+exchange picks ``k`` per position maximising O1 of the column-scaled identification Jacobian of the free
+parameters. The configurations reach the datum points of the robot standing where ``base`` says ({0} in {W}): a
+calibration result's base, or a measured one; without it the standard layout (:func:`~calibrate.simulate.
+standard_base`) is assumed.
 """
 from __future__ import annotations
 
@@ -13,12 +17,17 @@ from .estimate import Selection, select_free
 from .errors import CalibrationError
 from .ik import PLAN_PULL_ITERATIONS, random_configurations, solve_ik_groups
 from .jacobian import position_jacobian
-from .kinematics import ModelParams, ball_positions
+from .kinematics import ModelParams, ball_positions, forward
 from .params import catalogue
 from .rod import Rod
 from .simulate import standard_base
 
-__all__ = ["observability", "plan_poses"]
+__all__ = ["observability", "plan_poses", "rod_angle_deg", "ROD_ANGLE_MAX_DEG"]
+
+#: the rod leaves the ball within this angle [deg] of its device's open diagonal ((1, 1, 1) / sqrt 3 in {D_j}); the
+#: contract's example campaigns reach 124 deg (a rod nearly level passes beside the sensors), a rod pointing down
+#: into the sensors (the new-user trial saw 142 deg) cannot be clamped
+ROD_ANGLE_MAX_DEG = 125.0
 
 
 def observability(J: np.ndarray) -> dict:
@@ -43,13 +52,26 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
     reached = solve_ik_groups(robot, params, targets, seeds, rod, pull_iterations=PLAN_PULL_ITERATIONS)
     cands = {}
     for j, got in reached.items():
+        n_reach = len(got)
+        if n_reach:
+            got = got[rod_angle_deg(params, got, fixture.transform(j)) <= ROD_ANGLE_MAX_DEG]
         got = got[:candidates]
         if len(got) < k:
             raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
-                                   f"the datum point, {k} needed; move the fixture within reach",
+                                   f"the datum point from the device's open side ({n_reach} reach it at all), {k} "
+                                   f"needed; move the fixture within reach, or check the robot's base pose (--base)",
                                    key=f"positions.{j}")
         cands[j] = got
     return cands
+
+
+def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray) -> np.ndarray:
+    """Angle [deg] between the rod as it leaves the ball (towards the bend: -x of {n}, pipe II) and the open
+    diagonal (1, 1, 1) / sqrt 3 of the device whose pose in {W} is ``T_WD``, shape=(N,)."""
+    fr = forward(params, np.atleast_2d(q_rad))
+    x_n_W = np.einsum("ij,njk->nik", fr.R_W0, fr.T[:, -1, :3, :3])[:, :, 0]
+    diag_W = np.asarray(T_WD, float)[:3, :3] @ (np.ones(3) / np.sqrt(3.0))
+    return np.degrees(np.arccos(np.clip(-x_n_W @ diag_W, -1.0, 1.0)))
 
 
 def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None):

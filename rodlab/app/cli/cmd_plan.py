@@ -6,7 +6,12 @@ from rodlab.calibrate import Rod, read_fixture
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
 from ...core.design_io import load_design
+from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
+import sys
+
+import numpy as np
+
 from .argtypes import count, seed
 from .robotargs import add_robot_options, robot_from_args
 
@@ -25,6 +30,14 @@ def register(sub) -> None:
     p.add_argument("--candidates", type=count, default=24,
                    help="reachable candidate orientations drawn per position (default 24)")
     p.add_argument("--seed", type=seed, default=0, help="random seed of the candidates (default 0)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--base", type=base_pose, default=None, metavar="X,Y,Z,A,B,C",
+                       help="where the robot stands: the pose of its base frame {0} in {W} [mm, deg], as a "
+                            "calibration result's base_x..base_c; write --base=-1107,46,... when X is negative "
+                            "(default: the standard layout, {W} 650 mm in front "
+                            "of the robot and 250 mm up, with a warning)")
+    where.add_argument("--calibration", default=None, metavar="CAL.json",
+                       help="take the base pose from an earlier calibration result of this robot and layout")
     p.add_argument("-o", "--output", default=None, help="CSV of joint angles (position,point,q1..qn)")
     p.set_defaults(func=cmd_plan)
 
@@ -37,7 +50,8 @@ def cmd_plan(args) -> int:
         rod = calc_rod_compliance(load_design(args.rod))
     else:
         rod = read_compliance(args.rod)
-    poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed)
+    base = _base(args)
+    poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed, base_guess=base)
     print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
           ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
     lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]
@@ -49,3 +63,36 @@ def cmd_plan(args) -> int:
     else:
         print("\n".join(lines))
     return 0
+
+
+BASE_KEYS = ("base_x", "base_y", "base_z", "base_a", "base_b", "base_c")
+
+
+def base_pose(text: str) -> np.ndarray:
+    """``--base X,Y,Z,A,B,C``: six finite numbers [mm, deg]."""
+    import argparse
+    try:
+        v = np.array([float(t) for t in text.split(",")])
+    except ValueError:
+        v = np.array([])
+    if v.shape != (6,) or not np.all(np.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected six numbers X,Y,Z,A,B,C (the base pose in {{W}}, mm and deg), "
+                                         f"got {text!r}")
+    return v
+
+
+def _base(args):
+    """The base pose [mm, deg] from --base or --calibration; None (with a warning) for the standard layout."""
+    if args.base is not None:
+        return args.base
+    if args.calibration:
+        from rodlab.calibrate.result import read_calibration
+        cal = read_calibration(args.calibration)
+        missing = [k for k in BASE_KEYS if k not in cal.parameters]
+        if missing:
+            raise RodlabError(f"{args.calibration}: no {', '.join(missing)} in its parameters: give --base instead")
+        return np.array([cal.parameters[k].value for k in BASE_KEYS])
+    print("warning: the robot's base pose in {W} is not given (--base or --calibration): the standard layout is "
+          "assumed ({W} 650 mm in front of the robot and 250 mm up, the device tilted as in the paper); the planned "
+          "angles reach the datum points only if the robot stands so", file=sys.stderr)
+    return None

@@ -1,0 +1,81 @@
+"""``rodlab plan`` plans for the robot where it stands: ``--base`` (or ``--calibration``'s base) puts the planned
+angles' ball on every datum point of that layout, without it the standard layout is assumed with a warning; every
+planned rod leaves the ball from the device's open side (new-user trial: a KR16 standing elsewhere got angles that
+missed the datums by 0.5-1 m, and half the rods pointed down into the sensors)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli import main
+from rodlab.calibrate import Rod, resolve_robot
+from rodlab.calibrate.campaign import write_fixture
+from rodlab.calibrate.kinematics import ModelParams, ball_positions
+from rodlab.calibrate.plan import ROD_ANGLE_MAX_DEG, rod_angle_deg
+from rodlab.calibrate.simulate import standard_base, standard_fixture
+from rodlab.core.calc import calc_rod_compliance
+from rodlab.core.compliance import write_compliance
+from rodlab.core.design_io import resolve_design
+from rodlab.core.frames import matrix_to_pose, pose_to_matrix
+
+ROBOT = resolve_robot("tx90")
+
+
+@pytest.fixture(scope="module")
+def layout(tmp_path_factory):
+    """A fixture in {W} and a robot standing 150 mm aside and turned 20 deg from the standard layout."""
+    folder = tmp_path_factory.mktemp("plan")
+    fix = standard_fixture()
+    write_fixture(fix, folder / "f.fixture.json")
+    rod = calc_rod_compliance(resolve_design("rod1"))
+    write_compliance(rod, folder / "rod.compliance.json")
+    moved = pose_to_matrix([0.0, 150.0, 0.0, 0.0, 0.0, 20.0]) @ pose_to_matrix(standard_base())
+    return folder, fix, rod, matrix_to_pose(moved)
+
+
+def _planned(path) -> dict:
+    rows = np.loadtxt(path, delimiter=",", skiprows=1)
+    return {int(j): np.deg2rad(rows[rows[:, 0] == j, 2:]) for j in np.unique(rows[:, 0])}
+
+
+def _misses_mm(fix, rod, base, planned) -> np.ndarray:
+    p = ModelParams.nominal(ROBOT, rod.tool_mm, base=base)
+    out = []
+    for j, q in planned.items():
+        fr, _ = ball_positions(ROBOT, p, q, Rod.of(rod))
+        out.append(np.linalg.norm(fr.pW - fix.transform(j)[:3, 3], axis=1))
+    return np.concatenate(out)
+
+
+def test_the_base_given_is_where_the_planned_ball_reaches_the_datums(layout, capsys):
+    folder, fix, rod, base = layout
+    out = folder / "plan.csv"
+    assert main(["plan", "--fixture", str(folder / "f.fixture.json"), "--rod", str(folder / "rod.compliance.json"),
+                 "--base=" + ",".join(f"{v:.6f}" for v in base), "-o", str(out)]) == 0
+    assert "standard layout is assumed" not in capsys.readouterr().err
+    planned = _planned(out)
+    assert _misses_mm(fix, rod, base, planned).max() < 0.05
+    assert _misses_mm(fix, rod, standard_base(), planned).min() > 10.0         # the standard layout would miss
+    p = ModelParams.nominal(ROBOT, rod.tool_mm, base=base)
+    for j, q in planned.items():
+        assert np.all(rod_angle_deg(p, q, fix.transform(j)) <= ROD_ANGLE_MAX_DEG)
+
+
+def test_the_base_from_a_calibration_result_and_the_warning_without_one(layout, tmp_path, capsys):
+    folder, fix, rod, base = layout
+    cal = {"format": "rodlab.calibration/1", "robot": "tx90", "compensation": "calc", "trusted": True,
+           "residual_rms_mm": 0.003,
+           "parameters": {k: {"value": float(v), "sigma": 0.01, "unit": "mm" if i < 3 else "deg",
+                              "status": "identified"}
+                          for i, (k, v) in enumerate(zip(("base_x", "base_y", "base_z", "base_a", "base_b", "base_c"),
+                                                         base))}}
+    (tmp_path / "cal.json").write_text(json.dumps(cal))
+    args = ["plan", "--fixture", str(folder / "f.fixture.json"), "--rod", str(folder / "rod.compliance.json")]
+    assert main(args + ["--calibration", str(tmp_path / "cal.json"), "-o", str(tmp_path / "a.csv")]) == 0
+    assert _misses_mm(fix, rod, base, _planned(tmp_path / "a.csv")).max() < 0.05
+    capsys.readouterr()
+    assert main(args + ["-o", str(tmp_path / "b.csv")]) == 0
+    assert "standard layout is assumed" in capsys.readouterr().err
+    assert _misses_mm(fix, rod, standard_base(), _planned(tmp_path / "b.csv")).max() < 0.05

@@ -17,7 +17,7 @@ from .campaign import RAW_COLUMNS, Campaign
 from .device import Device
 from .errors import CalibrationError
 
-__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips"]
+__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips", "point_unit_slips"]
 
 log = logging.getLogger(__name__)
 
@@ -84,20 +84,48 @@ def far_points(camp: Campaign, limit_mm: float = ALIGNMENT_LIMIT_MM) -> list[Far
 READINGS_UNIT_LIMIT_MM = 25.0
 
 
+#: ... and this close [mm]: no robot aligns the ball to the datum within 2 um (the paper: 0.5 mm): metres
+READINGS_METRES_LIMIT_MM = 0.002
+#: instrument points whose median lies within this distance [mm] of the instrument's origin are in metres (a
+#: robot's workspace spans hundreds of mm)
+POINTS_METRES_LIMIT_MM = 5.0
+
+
 def unit_slips(camp: Campaign, path) -> list[str]:
     """What in a campaign's numbers says a column is in other units than the contract's, each with its fix: joint
     angles that all lie within +-2 pi (radians where degrees are expected: no campaign turns its joints by less than
-    6.3 degrees), readings whose median point lies
-    :data:`READINGS_UNIT_LIMIT_MM` from the datum (um where mm are expected). Empty when none."""
-    out = []
-    q = np.asarray(camp.q_deg, float)
-    if q.size and np.all(np.abs(q) <= 2 * np.pi + 1e-9) and np.ptp(q, axis=0).max() > 0.05:
-        out.append(f"{path}: every joint angle lies within +-2 pi (largest |q| {np.abs(q).max():.3f}): the q columns look "
-                   "like radians; the campaign's joint angles are degrees: multiply them by 180/pi")
+    6.3 degrees), readings whose median point lies :data:`READINGS_UNIT_LIMIT_MM` from the datum (um where mm are
+    expected) or within :data:`READINGS_METRES_LIMIT_MM` of it (metres). Empty when none."""
+    out = _radians(camp.q_deg, path, "campaign")
     if camp.x_D_mm is not None and len(camp.x_D_mm):
         d = float(np.median(np.linalg.norm(camp.x_D_mm, axis=1)))
         if d > READINGS_UNIT_LIMIT_MM:
             out.append(f"{path}: the median point lies {d:.1f} mm from the datum point (a MultiCal campaign's lie "
                        f"within about {ALIGNMENT_LIMIT_MM:g} mm, a dial gauge's range is 10-25 mm): the readings look "
                        "like um or another unit; x_mm, y_mm, z_mm are millimetres: divide um by 1000")
+        elif d < READINGS_METRES_LIMIT_MM:
+            out.append(f"{path}: the median point lies {d * 1e3:.2f} um from the datum point (no robot aligns the ball "
+                       f"that closely; a MultiCal campaign's lie within about {ALIGNMENT_LIMIT_MM:g} mm): the readings "
+                       "look like metres; x_mm, y_mm, z_mm are millimetres: multiply metres by 1000")
     return out
+
+
+def point_unit_slips(points, path) -> list[str]:
+    """:func:`unit_slips` of instrument points (``*.validation.csv``): joint angles in radians, positions whose
+    median lies within :data:`POINTS_METRES_LIMIT_MM` of the instrument's origin (metres). Empty when none."""
+    out = _radians(points.q_deg, path, "points'")
+    x = np.asarray(points.x_W_mm, float)
+    if x.size and float(np.median(np.linalg.norm(x, axis=1))) < POINTS_METRES_LIMIT_MM:
+        out.append(f"{path}: the median point lies {np.median(np.linalg.norm(x, axis=1)):.3f} mm from the instrument's "
+                   "origin (a robot's workspace spans hundreds of mm): the positions look like metres; x_mm, y_mm, "
+                   "z_mm are millimetres: multiply metres by 1000")
+    return out
+
+
+def _radians(q_deg, path, whose: str) -> list[str]:
+    """Joint angles that all lie within +-2 pi and move: radians where degrees are expected."""
+    q = np.asarray(q_deg, float)
+    if q.size and np.all(np.abs(q) <= 2 * np.pi + 1e-9) and np.ptp(q, axis=0).max() > 0.05:
+        return [f"{path}: every joint angle lies within +-2 pi (largest |q| {np.abs(q).max():.3f}): the q columns look "
+                f"like radians; the {whose} joint angles are degrees: multiply them by 180/pi"]
+    return []

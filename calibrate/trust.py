@@ -53,10 +53,12 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     w += _dof_warnings(res)
     test = res.residual_check
     if test is not None and test.material and test.clamping:
+        causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod" if test.birge < GROSS_BIRGE
+                  else f"not a noisier device ({test.birge:.0f} times the stated scatter) but files that do not "
+                       f"describe this campaign: {GROSS_CAUSES}")
         w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
-                 "campaign the model covers the device's physics, so this is a wrong clamping pose, a noisier device "
-                 "or a rod file that is not this rod, and it biases every parameter: run `rodlab diagnose --campaign` "
-                 "on the same files to find which")
+                 f"campaign the model covers the device's physics, so this is {causes}, and it biases every "
+                 "parameter: run `rodlab diagnose --campaign` on the same files to find which")
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":
@@ -125,6 +127,14 @@ def completeness_statement(res: "CalibrationResult") -> str:
             f"unexplained (Birge ratio sqrt(chi-square / dof) {test.birge:.1f} by the residual test above, against "
             + (f"the device's {test.noise_mm * 1e3:.1f} um per reading and the clamping poses' uncertainty)"
                if test.clamping else f"the {test.source}'s noise of {test.noise_mm * 1e3:.1f} um per reading)"))
+
+
+#: a Birge ratio from which the campaign's residuals are no device's noise but files that do not fit together
+GROSS_BIRGE = 5.0
+#: what makes them so
+GROSS_CAUSES = ("the robot file's joints against the campaign's q columns (order, signs, zero offsets), the units "
+                "(readings in mm, joint angles in deg, fixture poses in mm and deg), another rod's compliance file, "
+                "or a fixture file of another layout")
 
 
 def trust_cautions(res: "CalibrationResult") -> list[str]:

@@ -110,3 +110,37 @@ def test_units_checked_turns_the_refusal_into_a_warning(camp, tmp_path, capsys):
     assert "look like radians" in err and "used as they are" in err and "Traceback" not in err
     assert "error:" not in err.split("used as they are")[0]
     assert code in (0, 1, 3)
+
+
+@pytest.mark.parametrize("columns,factor,message", [
+    (("x_mm", "y_mm", "z_mm"), 1e-3, "look like metres"),
+])
+def test_campaign_readings_in_metres_are_refused(camp, tmp_path, capsys, columns, factor, message):
+    bad = _scaled(camp / "c" / "multical.campaign.csv", tmp_path / "m.campaign.csv", columns, factor)
+    assert _calibrate(camp, bad) == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("columns,factor,message", [
+    (("q1", "q2", "q3", "q4", "q5", "q6"), np.pi / 180, "look like radians"),
+    (("x_mm", "y_mm", "z_mm"), 1e-3, "look like metres"),
+])
+def test_validation_points_in_other_units_are_refused(camp, tmp_path, capsys, columns, factor, message):
+    bad = _scaled(camp / "c" / "multical.validation.csv", tmp_path / "bad.validation.csv", columns, factor)
+    for argv in (["calibrate", str(camp / "c" / "multical.campaign.csv"), "--fixture",
+                  str(camp / "c" / "multical.fixture.json"), "--rod", str(camp / "rod1.compliance.json"),
+                  "--validate", str(bad)],
+                 ["calibrate", "--points", str(bad), "--robot", "tx90"], ["diagnose", "--points", str(bad), "--robot", "tx90"]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert message in err and "bad.validation.csv" in err and "Traceback" not in err
+
+
+def test_gross_residuals_do_not_advise_a_larger_noise(camp, tmp_path, capsys):
+    """Joint 2's sign flipped: residuals thousands of times the device's noise are files that do not fit together,
+    not a noisier device: the advice names the joints, units and files, never --noise-um."""
+    bad = _scaled(camp / "c" / "multical.campaign.csv", tmp_path / "q2.campaign.csv", ("q2",), -1.0)
+    _calibrate(camp, bad)
+    out = "".join(capsys.readouterr())
+    assert "not a noisier device" in out and "order, signs" in out
+    assert "state it with --noise-um" not in out

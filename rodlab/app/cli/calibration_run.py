@@ -8,7 +8,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
-                              read_points, validate)
+                              validate)
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
 
@@ -17,7 +17,7 @@ from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
-from .deviceargs import campaign_from_args, warn_flagged_fixture
+from .deviceargs import campaign_from_args, points_from_args, warn_flagged_fixture
 from .robotargs import robot_from_args
 
 __all__ = ["run_calibration", "CalibrationRun"]
@@ -88,7 +88,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
                          options=options)
     if args.validate:
-        pts = read_points(args.validate, robot.n)
+        pts = points_from_args(args, args.validate, robot.n)
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
         run.calibrated_mm = validate(robot, res.params, pts)[1]
     return run

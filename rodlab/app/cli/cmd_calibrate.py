@@ -11,7 +11,6 @@ from rodlab.calibrate import (
     RodDeflection,
     campaign_observations,
     deflection_offsets,
-    read_points,
     result_dict,
     validate,
 )
@@ -26,7 +25,7 @@ from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
 from .calibration_run import CalibrationRun, run_calibration
-from .deviceargs import add_device_option
+from .deviceargs import add_device_option, points_from_args
 from .reporting import default_folder, png_folder, write_command_report
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict
@@ -206,7 +205,7 @@ def _print_result(res, before, after, label) -> None:
 
 def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
-    pts, noise_mm = stated_noise_mm(read_points(args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
+    pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, options["pinned"] = constrain_to_ranges(
@@ -215,7 +214,7 @@ def _calibrate_points(args) -> int:
     before = after = None
     errors = {}
     if args.validate:
-        test = read_points(args.validate, robot.n)
+        test = points_from_args(args, args.validate, robot.n)
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
     _print_result(res, before, after, "instrument points")

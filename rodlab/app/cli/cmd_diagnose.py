@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from rodlab.calibrate import read_fixture, read_points
+from rodlab.calibrate import read_fixture
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
@@ -18,7 +18,7 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_json, json_safe
 from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
+from .deviceargs import add_device_option, campaign_from_args, points_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg, warn_rod_mismatch
@@ -159,7 +159,7 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     appended to ``written``."""
     robot = robot_from_args(args)
     noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
-    pts = read_points(args.validate, robot.n) if args.validate else None
+    pts = points_from_args(args, args.validate, robot.n) if args.validate else None
     fix = read_fixture(args.fixture)
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
@@ -195,7 +195,7 @@ def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
     from ..diagnose.points import diagnose_points
     robot = robot_from_args(args)
-    pts = read_points(args.points, robot.n)
+    pts = points_from_args(args, args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,
                           harmonics=args.joint_harmonics)

@@ -6,11 +6,12 @@ import sys
 
 from rodlab.calibrate import read_campaign
 from rodlab.calibrate.device import read_device
-from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, unit_slips
+from rodlab.calibrate import read_points
+from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, point_unit_slips, unit_slips
 
 from ...core.errors import RodlabError
 
-__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "warn_flagged_fixture"]
+__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "points_from_args", "warn_flagged_fixture"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
                "each point is solved from its readings, the sensors' noise (--noise-um, per reading) is propagated "
@@ -34,11 +35,7 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
     named on stderr."""
     device = read_device(args.device) if getattr(args, "device", None) else None
     camp = read_campaign(args.campaign, n_joints, device)
-    slips = unit_slips(camp, args.campaign)
-    if slips and not getattr(args, "units_checked", False):
-        raise RodlabError("; ".join(slips) + "; if the units are right, give --units-checked")
-    for slip in slips:
-        print(f"warning: {slip} (--units-checked: used as they are)", file=sys.stderr)
+    _refuse_slips(unit_slips(camp, args.campaign), args)
     if warn and camp.x_D_mm is not None:
         far = far_points(camp)
         if far:
@@ -47,6 +44,22 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
                   f"datum point (the alignment the paper assumes; the springs' force and the rod's deflection "
                   f"differ there): {shown}", file=sys.stderr)
     return camp
+
+
+def points_from_args(args, path, n_joints: int):
+    """Instrument points (``*.validation.csv``) read from ``path``, refused where their numbers look like radians
+    or metres (unless ``--units-checked``)."""
+    points = read_points(path, n_joints)
+    _refuse_slips(point_unit_slips(points, path), args)
+    return points
+
+
+def _refuse_slips(slips: list, args) -> None:
+    """Refuse what :func:`unit_slips` found, or with ``--units-checked`` warn of it."""
+    if slips and not getattr(args, "units_checked", False):
+        raise RodlabError("; ".join(slips) + "; if the units are right, give --units-checked")
+    for slip in slips:
+        print(f"warning: {slip} (--units-checked: used as they are)", file=sys.stderr)
 
 
 def warn_flagged_fixture(fix, path) -> None:

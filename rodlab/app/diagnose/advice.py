@@ -8,6 +8,7 @@ always says what to do next.
 from __future__ import annotations
 
 from rodlab.calibrate.effects import campaign_effect
+from rodlab.calibrate.trust import GROSS_BIRGE, GROSS_CAUSES
 
 from ...core.enums import FindingKind
 from ...core.errors import RodlabError
@@ -17,6 +18,9 @@ __all__ = ["remedy"]
 
 
 def _unexplained(f: Finding) -> str:
+    if f.parameters.get("spread") == "even" and f.parameters.get("birge_ratio", 0.0) >= GROSS_BIRGE:
+        return (f"no device is {f.parameters['birge_ratio']:.0f} times noisier than stated, so do not raise "
+                f"--noise-um: the files do not describe this campaign: check {GROSS_CAUSES}")
     if f.parameters.get("spread") == "even":
         return ("no structure by position or time: a device noisier than stated would give this; if its "
                 "specification or a repeatability test (the ball held still, read 30 times) shows a scatter of at "

@@ -32,11 +32,19 @@ def _umask() -> int:
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically: temp file in the same folder, fsync, rename.
 
-    A crash leaves either the old file or the new one, never a torn file.
+    A crash leaves either the old file or the new one, never a torn file. A symbolic link is followed (the file
+    it points to is replaced, the link kept); a device or pipe (``-o /dev/null``, ``/dev/stdout``) is written
+    into as it is: renamed over, it would be replaced by a regular file.
     """
     p = Path(path)
     if p.is_dir():                       # else the error would name the temporary file, not the user's path
         raise IsADirectoryError(errno.EISDIR, "this is a folder", str(p))
+    if p.is_symlink():
+        p = p.resolve()
+    if p.exists() and not p.is_file():
+        with open(p, "wb") as fh:
+            fh.write(data)
+        return Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)

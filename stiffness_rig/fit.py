@@ -19,6 +19,7 @@ from rodlab.core.fileio import sha256_file
 from rodlab.core.units import G0
 
 from .errors import RigError
+from .fit_checks import lack_of_fit_warnings, reciprocity_problems
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
@@ -41,6 +42,8 @@ class LineFit:
     branch : per-branch independent lines {phase: {"slope_mm_per_N", "intercept_mm", "zero_load_kg"}}
     zero_load_kg : {phase: mass where the common-slope line crosses zero displacement} (NaN if slope ~ 0)
     residual_rms_mm, n_holds : fit quality
+    unloaded_apart : the holds without a hanger lie off both branch lines (friction that lets go at mass 0): they
+        were given a level of their own and do not bear on the slope
     """
 
     axis: LoadAxis
@@ -52,12 +55,14 @@ class LineFit:
     branch: dict
     residual_rms_mm: float
     n_holds: int
+    unloaded_apart: bool = False
 
     def to_dict(self) -> dict:
         return {"load_axis": str(self.axis), "component": _AX[self.component],
                 "slope_mm_per_N": self.slope_mm_per_N, "se_mm_per_N": self.se_mm_per_N,
                 "intercept_mm": self.intercept_mm, "zero_load_kg": self.zero_load_kg, "branch": self.branch,
-                "residual_rms_mm": self.residual_rms_mm, "n_holds": self.n_holds}
+                "residual_rms_mm": self.residual_rms_mm, "n_holds": self.n_holds,
+                "unloaded_apart": self.unloaded_apart}
 
 
 @dataclass
@@ -66,7 +71,8 @@ class RigFit:
 
     C_F_meas : measured entries [mm/N], shape=(3, 3), NaN where not measured; C_F_se : their standard errors
     lines : every :class:`LineFit`; noise_mm : within-hold noise of one reading; holds : the hold table
-    r_rod : Eq. 21 (None without a simulated compliance); success, message : whether the fit can be used
+    r_rod : Eq. 21 (None without a simulated compliance); success, message : whether the fit can be used;
+    warnings : what the fit checked in itself and a user must know (:mod:`.fit_checks`: reciprocity, lack of fit)
     load : nominal (mass x g0) against measured load per hold and branch (:class:`LoadCheck`), None without a
     load cell; with one, the lines are fitted against the measured load
     """
@@ -81,6 +87,7 @@ class RigFit:
     message: str = ""
     residuals_mm: np.ndarray = field(default_factory=lambda: np.zeros(0))
     load: LoadCheck | None = None
+    warnings: list = field(default_factory=list)
 
     def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
         """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
@@ -105,7 +112,8 @@ class RigFit:
                 "measured_entries": [[bool(np.isfinite(v)) for v in row] for row in M],
                 "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
                 "unmeasured_entries": "r_rod x simulated",
-                "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0"}
+                "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0",
+                "warnings": list(self.warnings)}
         if self.load is not None:
             prov["measured_load"] = self.load.to_dict()
         if recording is not None and recording.path is not None:
@@ -159,6 +167,10 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     _check_load_response(lines, rec)
     M, S = _combine_lines(lines)
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
+    refuse, warn = reciprocity_problems(M, S)
+    fit.warnings = refuse + warn + lack_of_fit_warnings(lines, holds, noise)
+    if refuse:
+        fit.success, fit.message = False, "; ".join(refuse) + "; nothing was written"
     if sim is not None:
         try:
             fit.r_rod = eq21(fit, sim)
@@ -168,6 +180,8 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
             _check_plausible_r_rod(fit, rec, sim)
     if fit.success:
         fit.message = f"{len(lines)} lines fitted; {noise_text(noise)}"
+    elif fit.message.count("nothing was written") > 1:
+        fit.message = fit.message.replace("; nothing was written", "", 1)
     return fit
 
 
@@ -243,6 +257,11 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
     X = np.column_stack([~uo, uo, Fo]).astype(float) if two else np.column_stack([np.ones_like(Fo), Fo])
     coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
     res = yo - X @ coef
+    apart = _unloaded_apart(X, yo, res, h.mass_kg[ok] == 0.0, Fo)
+    if apart is not None:
+        X = apart
+        coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
+        res = yo - X @ coef
     dof = max(len(yo) - X.shape[1], 1)
     s2 = float(res @ res / dof)
     cov = s2 * np.linalg.pinv(X.T @ X)
@@ -256,7 +275,34 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
             b, a = np.polyfit(Fo[m], yo[m], 1)
             branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
                             "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
-    return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo)), res
+    return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo),
+                   unloaded_apart=apart is not None), res
+
+
+#: the holds without a hanger get a level of their own when that lowers the lines' residual this significantly
+UNLOADED_APART_P = 1e-3
+
+
+def _unloaded_apart(X: np.ndarray, y: np.ndarray, res: np.ndarray, unloaded: np.ndarray, F: np.ndarray):
+    """The design matrix with the holds at mass 0 on a level of their own (their own intercept: they no longer
+    bear on the slope), or None. Used when they lie off both branch lines beyond chance (F-test, p below
+    :data:`UNLOADED_APART_P`): friction that lets go when the hanger is taken off puts them between the branches,
+    and on the lines they had pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads
+    besides."""
+    loaded = ~unloaded
+    if not unloaded.any() or loaded.sum() < X.shape[1] or np.unique(F[loaded]).size < 2:
+        return None
+    X2 = np.column_stack([X[:, :-1] * loaded[:, None], unloaded.astype(float), X[:, -1]])
+    if np.linalg.matrix_rank(X2) < X2.shape[1]:
+        return None
+    coef2 = np.linalg.lstsq(X2, y, rcond=None)[0]
+    rss1, rss2 = float(res @ res), float(np.sum((y - X2 @ coef2) ** 2))
+    dof2 = len(y) - X2.shape[1]
+    if dof2 < 1 or rss1 <= rss2:
+        return None
+    from scipy.stats import f as f_dist
+    stat = (rss1 - rss2) / max(rss2 / dof2, 1e-300)
+    return X2 if f_dist.sf(stat, 1, dof2) < UNLOADED_APART_P else None
 
 
 def _combine_lines(lines: list) -> tuple[np.ndarray, np.ndarray]:

@@ -142,6 +142,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
+    for w in fit.warnings:
+        print(f"warning: {args.recording}: {w}", file=sys.stderr)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, {noise_text(fit.noise_mm)}")
     print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
     for ln in fit.lines:

@@ -1,0 +1,67 @@
+"""What a load-deflection fit (:mod:`.fit`) checks in its own result before a measured compliance file is
+written: the rod's compliance is symmetric (reciprocity: c_mn = c_nm), and the hold averages lie on their lines
+to within their noise. Both failed silently before (new-user trial, 2026-11-28): a perpendicular gauge reversed
+for one series gave c13 = -1.19 and c31 = +1.20 um/N, averaged to 0.003 in the file; a gauge bumped by 20 um
+mid-recording or one mistyped mass moved c22 by 1-5 % with nothing said.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "RECIPROCITY_Z", "LACK_FACTOR"]
+
+_AX = "xyz"
+#: two measured entries c_mn, c_nm further apart than this many standard errors break reciprocity ...
+RECIPROCITY_Z = 10.0
+#: ... when they also differ by this share of the larger one (a tilted load or gauge gives a few per cent)
+RECIPROCITY_SHARE = 0.2
+#: the hold averages of a line scatter about it by more than this many times a hold average's noise
+LACK_FACTOR = 5.0
+
+
+def reciprocity_problems(M: np.ndarray, S: np.ndarray) -> tuple[list[str], list[str]]:
+    """(refusals, warnings) from the measured entries ``M`` [mm/N] and their standard errors ``S`` (NaN where not
+    measured), shape=(3, 3): a pair of opposite signs, each clearly measured, is a gauge reversed in one series
+    (the file would average it away: refused); a pair that differs otherwise beyond :data:`RECIPROCITY_Z` SEs and
+    :data:`RECIPROCITY_SHARE` is warned of."""
+    refuse, warn = [], []
+    for i in range(3):
+        for j in range(i + 1, 3):
+            a, b, sa, sb = M[i, j], M[j, i], S[i, j], S[j, i]
+            if not (np.isfinite(a) and np.isfinite(b)):
+                continue
+            z = abs(a - b) / max(np.hypot(sa, sb), 1e-15)
+            if z <= RECIPROCITY_Z or abs(a - b) <= RECIPROCITY_SHARE * max(abs(a), abs(b)):
+                continue
+            what = (f"c{i + 1}{j + 1} = {a * 1e3:+.4g} um/N (load {_AX[j]}, {_AX[i]} gauge) but c{j + 1}{i + 1} = "
+                    f"{b * 1e3:+.4g} um/N (load {_AX[i]}, {_AX[j]} gauge), {z:.0f} standard errors apart; a rod's "
+                    f"compliance is symmetric")
+            if a * b < 0 and abs(a) > 5 * sa and abs(b) > 5 * sb:
+                refuse.append(f"{what}: opposite signs are a gauge reversed in one series (the {_AX[i]} gauge under "
+                              f"the {_AX[j]} load or the {_AX[j]} gauge under the {_AX[i]} load: its sign in the "
+                              "profile, or mounted the other way round); averaged, the file would say ~0. Compare "
+                              "the signs of those two gauges' readings in the x, y and z series, fix the reversed "
+                              "one and fit again")
+            else:
+                warn.append(f"{what}: a load or gauge off its axis, or a gauge whose gain differs; "
+                            "`rodlab diagnose --rig` tells which (the file takes their mean)")
+    return refuse, warn
+
+
+def lack_of_fit_warnings(lines: list, holds, noise_mm: float) -> list[str]:
+    """A warning per load axis whose hold averages scatter about its on-axis line by more than
+    :data:`LACK_FACTOR` times a hold average's noise (within-hold noise / sqrt(readings per hold))."""
+    if not np.isfinite(noise_mm) or noise_mm <= 0:
+        return []
+    per_hold = noise_mm / np.sqrt(max(float(np.median(holds.n)), 1.0))
+    out = []
+    for ln in lines:
+        if ln.component != ln.axis.index:
+            continue
+        ratio = ln.residual_rms_mm / per_hold
+        if ratio > LACK_FACTOR:
+            out.append(f"the holds of load axis {ln.axis.value} scatter {ratio:.0f} times their noise about the line "
+                       f"({ln.residual_rms_mm * 1e3:.2f} um rms against {per_hold * 1e3:.2f} um): a gauge that slipped, "
+                       "a mass typed wrong, a drift or a hold that had not settled; the slope may be biased: run "
+                       "`rodlab diagnose --rig` on it (its --export writes the compliance with what it finds removed)")
+    return out

@@ -1,0 +1,72 @@
+"""``rodlab rig fit`` checks its own result before it writes a measured compliance file (new-user trial): friction
+that lets go when the hanger is off no longer biases the slope (the unloaded holds get a level of their own), a
+perpendicular gauge reversed in one series is refused (reciprocity), and hold averages far off their line (a
+bumped gauge, a mistyped mass) are warned of with the way to the diagnosis."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli import main
+from rodlab.core.calc import calc_rod_compliance
+from rodlab.core.design_io import resolve_design
+from rodlab.stiffness_rig import fit_recording, read_recording
+
+SIM = calc_rod_compliance(resolve_design("rod1"))
+TRUE = 1.1 * SIM.C_F
+
+
+def _recording(path, friction_N=0.0, flip=None, bump_um=0.0, seed=1):
+    """A hand-made recording (not rodlab's simulator): 10 Hz, 8 s holds, y, z, x series of 0-0.5-1-1.5-1-0.5-0 kg,
+    three repeats; friction opposing the motion while a hanger is on, none at mass 0; ``flip``: (gauge, series)
+    read reversed; ``bump_um``: the y gauge jumps from the 9th hold of the y series on."""
+    rng = np.random.default_rng(seed)
+    lines = ["# format: rodlab.rig/1", "# rod: 1#", "# sample_rate_Hz: 10",
+             "time_s,step,repeat,phase,load_axis,mass_kg,disp_x_mm,disp_y_mm,disp_z_mm"]
+    t, step = 0.0, 0
+    for axis in "yzx":
+        k = "xyz".index(axis)
+        n_hold = 0
+        for rep in range(1, 4):
+            for m, phase in ((0.0, "load"), (0.5, "load"), (1.0, "load"), (1.5, "load"), (1.0, "unload"),
+                             (0.5, "unload"), (0.0, "unload")):
+                step += 1
+                n_hold += 1
+                F = m * 9.80665 - (friction_N if phase == "load" else -friction_N) * (m > 0)
+                x = TRUE[:, k] * F
+                if flip is not None and flip[1] == axis:
+                    x["xyz".index(flip[0])] *= -1
+                if bump_um and axis == "y" and n_hold >= 9:
+                    x = x + np.array([0.0, bump_um * 1e-3, 0.0])
+                for _ in range(80):
+                    r = x + rng.normal(0, 0.6e-3, 3)
+                    lines.append(f"{t:.2f},{step},{rep},{phase},{axis},{m},{r[0]:.5f},{r[1]:.5f},{r[2]:.5f}")
+                    t += 0.1
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_friction_that_lets_go_at_mass_zero_does_not_bias_the_slope(tmp_path):
+    fit = fit_recording(read_recording(_recording(tmp_path / "f.rig.csv", friction_N=1.0)), SIM)
+    assert fit.success and not fit.warnings
+    for i, j in ((0, 0), (1, 1), (2, 2), (0, 2)):
+        assert fit.C_F_meas[i, j] == pytest.approx(TRUE[i, j], rel=0.01)
+    assert all(ln.unloaded_apart for ln in fit.lines if ln.component == ln.axis.index)
+    clean = fit_recording(read_recording(_recording(tmp_path / "c.rig.csv")), SIM)
+    assert not any(ln.unloaded_apart for ln in clean.lines) and not clean.warnings
+
+
+def test_a_gauge_reversed_in_one_series_is_refused(tmp_path, capsys):
+    rec = _recording(tmp_path / "flip.rig.csv", flip=("x", "z"))
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert "reversed in one series" in err and "flip.rig.csv" in err
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_holds_off_their_line_are_warned_of(tmp_path, capsys):
+    rec = _recording(tmp_path / "bump.rig.csv", bump_um=20.0)
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "m.json")]) == 0
+    err = capsys.readouterr().err
+    assert "load axis y scatter" in err and "rodlab diagnose --rig" in err
+    assert "load axis z scatter" not in err

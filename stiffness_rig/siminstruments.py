@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import os
 import random
-import re
 import select
 import struct
 import threading
@@ -28,6 +27,7 @@ from .instrument_profile import UNITS
 from .model import Hold, RigModel
 from .ptylink import PtyLink
 from .protocol import encode_values
+from .regex_template import template_of
 from .simdevice import Faults
 
 __all__ = ["SimBench", "PtyInstrument", "SimNumericLine", "SimAsciiRegex", "SimDigimatic", "SimModbusRTU",
@@ -332,28 +332,6 @@ class SimModbusRTU(PtyInstrument):
         return buf
 
 
-def template_of(pattern: str) -> str:
-    """An answer template from a simple answer pattern: anchors and escapes dropped, each named group
-    ``(?P<name>...)`` replaced by ``{name:+.5f}`` (enough for the usual ``^M0,(?P<a>...),(?P<b>...)$``)."""
-    out, i = [], 0
-    body = pattern.strip("^$")
-    while i < len(body):
-        m = re.match(r"\(\?P<(\w+)>", body[i:])
-        if m:
-            depth, j = 1, i + m.end()
-            while j < len(body) and depth:
-                depth += {"(": 1, ")": -1}.get(body[j], 0)
-                j += 1
-            out.append("{" + m.group(1) + ":+.5f}")
-            i = j
-            continue
-        if body[i] == "\\" and i + 1 < len(body):
-            i += 1
-        out.append(body[i].replace("{", "{{").replace("}", "}}"))
-        i += 1
-    return "".join(out)
-
-
 def _source(bench: SimBench, channel):
     return lambda: bench.value(channel)
 
@@ -374,7 +352,8 @@ def simulators_for(profile, bench: SimBench, links: dict, faults: Faults | None 
             sims.append(SimNumericLine(**kw, fields=fields, request=unescape(c["request"]).strip(),
                                        stream=c["mode"] == "stream", checksum=c["checksum"], separator=c["separator"]))
         elif ins.protocol == "ascii_regex":
-            sims.append(SimAsciiRegex(**kw, template=template_of(c["pattern"]), request=unescape(c["request"]).strip(),
+            template = template_of(c["pattern"], key=f"instruments.{ins.name}.pattern")
+            sims.append(SimAsciiRegex(**kw, template=template, request=unescape(c["request"]).strip(),
                                       eol=unescape(c.get("eol", "\\n")), sources=by_value))
         elif ins.protocol == "modbus_rtu":
             regs = {}

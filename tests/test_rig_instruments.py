@@ -3,6 +3,7 @@ every driver of the registry end to end with garbage, stalls and a replug, a mix
 indicators + a Modbus load cell) that fits the truth and measures the slides' friction, resume, profile errors."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -302,3 +303,34 @@ def test_commanding_a_loader_the_profile_lacks_writes_nothing(tmp_path):
     with pytest.raises(RigError, match="no \\[loader\\]"):
         acquire(profile, _plan(), tmp_path / "r.rig.csv", use_loader=True)
     assert sorted(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("pattern", [r"^G1\s+(?P<out1>[-+]?\d+\.\d+)\s*(mm|MM)$", r"^ST,GS,(?P<out1>[-+0-9.]+) ?kgf$",
+                                     r"^\[(?P<out1>-?\d+\.\d{3})\]{1,2}[^,]*$"])
+def test_the_simulator_answers_in_the_form_of_any_pattern(pattern):
+    """The simulated controller's answers match its profile's pattern however it is written (escapes, optional
+    spaces, alternations, classes): a new-user trial's ``\\s+`` and ``(mm|MM)`` had been sent literally."""
+    from rodlab.stiffness_rig.regex_template import template_of
+    template = template_of(pattern)
+    for v in (-0.0567, 0.0, 1.25):
+        m = re.search(pattern, template.format(out1=v))
+        assert m and float(m.group("out1")) == pytest.approx(v, abs=1e-3)
+
+
+def test_a_pattern_the_simulator_cannot_answer_is_named():
+    from rodlab.stiffness_rig.regex_template import template_of
+    with pytest.raises(RigError, match="cannot answer in the form of pattern"):
+        template_of(r"^(?P<out1>\d+)(?P=out1)$", key="instruments.ctl.pattern")
+
+
+def test_a_profile_with_a_spaced_pattern_acquires_on_its_simulator(tmp_path):
+    bench = SimBench(RigModel(C, seed=8))
+    links = {"ctl": tmp_path / "ttyC"}
+    body = _instrument("ctl", links["ctl"], "ascii_regex",
+                       [{"quantity": "displacement", "axis": "y", "value": "out1", "units": "mm"},
+                        {"quantity": "displacement", "axis": "z", "value": "out2", "units": "mm"}],
+                       request="M0\\r",
+                       pattern=r"^M0\s+(?P<out1>[-+]?\d+\.\d+)\s*;\s*(?P<out2>[-+]?\d+\.\d+)\s*(mm|MM)$".replace("\\", "\\\\"))
+    profile = _profile(tmp_path, body, "ctl")
+    devices = si.simulators_for(read_profile(profile), bench, links)
+    _check_fit(_run(tmp_path, devices, profile))

@@ -277,9 +277,8 @@ def test_cli_simulator_serves_an_example_profile(tmp_path):
             if (links / "load_cell").is_symlink():
                 break
             time.sleep(0.05)
-        served = links / "sim.profile.toml"
-        served.write_text(served.read_text() + LOADER.format(who="dial_y"))
-        profile = read_profile(served)
+        profile = read_profile(links / "sim.profile.toml")    # with the [loader] the simulator added
+        assert profile.loader_instrument == "dial_y"
         assert [i.port for i in profile.instruments] == [str(links / n) for n in ("dial_y", "dial_z", "load_cell")]
         out = acquire(profile, _plan(axes=("y",)), tmp_path / "r.rig.csv", use_loader=True)
     finally:
@@ -334,3 +333,14 @@ def test_a_profile_with_a_spaced_pattern_acquires_on_its_simulator(tmp_path):
     profile = _profile(tmp_path, body, "ctl")
     devices = si.simulators_for(read_profile(profile), bench, links)
     _check_fit(_run(tmp_path, devices, profile))
+
+
+def test_acquire_without_a_terminal_is_refused_before_any_file_is_made(tmp_path, capsys):
+    """Without --non-interactive nobody can be prompted to hang the weights: refused up front, no header-only
+    recording left behind (new-user trial)."""
+    from rodlab.app.cli import main
+    out = tmp_path / "lab.rig.csv"
+    assert main(["rig", "acquire", "--profile", str(PLANS / "two-digimatic.profile.toml"), "--plan",
+                 str(PLANS / "quick.plan.toml"), "-o", str(out)]) == 2
+    assert "no terminal" in capsys.readouterr().err
+    assert not out.exists()

@@ -114,11 +114,11 @@ def test_reader_rules_beyond_the_schema_are_reported(tmp_path, capsys):
     validate reports the reader's problem with its line."""
     plan = (ROOT / "stiffness_rig" / "plans" / "quick.plan.toml").read_text()
     p = tmp_path / "same.plan.toml"
-    p.write_text(plan.replace("masses_kg = [1.0, 2.0]", "masses_kg = [1.0, 1.0]"))
+    p.write_text(plan.replace("masses_kg = [0.5, 1.0]", "masses_kg = [1.0, 1.0]"))
     assert check_file(p).ok
     check = validate_file(p)
     assert not check.ok and check.problems[0].key == "masses_kg" and "strictly" in check.problems[0].message
-    assert check.problems[0].line == plan.splitlines().index("masses_kg = [1.0, 2.0]") + 1
+    assert check.problems[0].line == plan.splitlines().index("masses_kg = [0.5, 1.0]") + 1
 
 
 def test_output_records_without_a_schema_are_named_not_refused(tmp_path, capsys):
@@ -138,7 +138,7 @@ def test_plan_refuses_infinite_or_nan_masses_naming_file_and_key(tmp_path, masse
     from rodlab.stiffness_rig.errors import RigError
     plan = (ROOT / "stiffness_rig" / "plans" / "quick.plan.toml").read_text()
     p = tmp_path / "m.plan.toml"
-    p.write_text(plan.replace("masses_kg = [1.0, 2.0]", f"masses_kg = {masses}"))
+    p.write_text(plan.replace("masses_kg = [0.5, 1.0]", f"masses_kg = {masses}"))
     with pytest.raises(RigError) as e:
         read_plan(p)
     assert e.value.key == "masses_kg" and "m.plan.toml" in str(e.value) and "finite" in str(e.value)

@@ -272,6 +272,9 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     if args.new_file and os.path.exists(output) and os.path.getsize(output) > 0:
         output = str(next_free_name(output))
         print(f"{args.output} exists; recording into {output}")
+    if not args.non_interactive and not (sys.stdin and sys.stdin.isatty()):   # before any file is made
+        raise RodlabError("no terminal to prompt the operator to hang the weights; use --non-interactive with a "
+                          "[loader] in the profile, or run in a terminal")
     start = resume_point(output, profile, plan)              # refuses another plan, rate or device up front
     if start.complete:
         print(f"{output} already holds all {start.holds_total} holds of this plan; nothing to record")
@@ -337,6 +340,19 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     return 0
 
 
+def _served_loader(profile) -> str:
+    """A ``[loader]`` for the served profile when it has none: the simulated rig's loader answers on every text
+    instrument's port, so ``rig acquire --non-interactive`` runs on the served profile as it is."""
+    from rodlab.stiffness_rig.drivers import DRIVERS
+    if profile.loader_instrument is not None:
+        return ""
+    text = [i.name for i in profile.instruments if DRIVERS[i.protocol].text_lines]
+    if not text:
+        return ""
+    return ("\n# added by `rodlab rig simulator`: the simulated rig's loader answers on this instrument's port\n"
+            f'[loader]\ninstrument = "{text[0]}"\ncommand = "LOAD {{axis}} {{phase}} {{mass_kg:.4f}}\\r\\n"\n')
+
+
 def _profile_simulators(args, model, faults):
     """The simulators of every instrument of ``--profile`` under ``--link-dir``, and ``sim.profile.toml``
     there: the profile with each instrument's port pointed at its simulator."""
@@ -355,6 +371,7 @@ def _profile_simulators(args, model, faults):
     ports = iter(str(links[ins.name]) for ins in profile.instruments)
     text = re.sub(r"""(?m)^(\s*port\s*=\s*)(".*?"|'.*?')""", lambda m: f'{m.group(1)}"{next(ports)}"',
                   Path(args.profile).read_text(encoding="utf-8"))
+    text += _served_loader(profile)
     written = atomic_write_text(folder / "sim.profile.toml", text)
     sims = simulators_for(profile, SimBench(model), links, faults)
     names = ", ".join(f"{i.name} ({i.protocol})" for i in profile.instruments)

@@ -19,7 +19,7 @@ from rodlab.core.fileio import sha256_file
 from rodlab.core.units import G0
 
 from .errors import RigError
-from .fit_checks import lack_of_fit_warnings, reciprocity_problems
+from .fit_checks import gauge_scale_problems, lack_of_fit_warnings, reciprocity_problems
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
@@ -168,6 +168,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     M, S = _combine_lines(lines)
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     refuse, warn = reciprocity_problems(M, S)
+    refuse += gauge_scale_problems(M, sim.C_F) if sim is not None else []
     fit.warnings = refuse + warn + lack_of_fit_warnings(lines, holds, noise)
     if refuse:
         fit.success, fit.message = False, "; ".join(refuse) + "; nothing was written"
@@ -223,11 +224,15 @@ def _check_load_response(lines: list, rec: RigRecording) -> None:
             continue
         if ln.slope_mm_per_N > 3 * ln.se_mm_per_N and ln.slope_mm_per_N > 0:
             continue
+        backwards = ln.slope_mm_per_N < -10 * ln.se_mm_per_N
+        check = (f"the {_AX[ln.component]} gauge reads the rod's motion backwards: give it sign = -1 in the profile "
+                 f"(or multiply the disp_{_AX[ln.component]}_mm column by -1), or check the load's direction" if backwards
+                 else "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
+                      "hung on that axis)")
         raise NoLoadResponse(f"no load response on axis {ln.axis.value}: the {_AX[ln.component]} gauge moves "
-                       f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
-                       f"{ln.axis.value} ({ln.n_holds} holds), nothing a rod does; check the gauges (connected, "
-                       f"touching the rod, the right channel) and the loading (weights hung on that axis)",
-                       path=rec.path, key="load_axis")
+                             f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
+                             f"{ln.axis.value} ({ln.n_holds} holds), nothing a rod does; {check}",
+                             path=rec.path, key="load_axis")
 
 
 def _reference_holds(holds) -> np.ndarray:

@@ -8,13 +8,17 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "RECIPROCITY_Z", "LACK_FACTOR"]
+__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "RECIPROCITY_Z", "LACK_FACTOR",
+           "GAUGE_SCALE_RATIO"]
 
 _AX = "xyz"
 #: two measured entries c_mn, c_nm further apart than this many standard errors break reciprocity ...
 RECIPROCITY_Z = 10.0
 #: ... when they also differ by this share of the larger one (a tilted load or gauge gives a few per cent)
 RECIPROCITY_SHARE = 0.2
+#: on-axis entries measured / simulated that differ by more than this factor between gauges: one reads in
+#: other units (inches 25.4, um 1000) or through a lever; no rod is that much softer along one axis alone
+GAUGE_SCALE_RATIO = 5.0
 #: the hold averages of a line scatter about it by more than this many times a hold average's noise
 LACK_FACTOR = 5.0
 
@@ -65,3 +69,21 @@ def lack_of_fit_warnings(lines: list, holds, noise_mm: float) -> list[str]:
                        "a mass typed wrong, a drift or a hold that had not settled; the slope may be biased: run "
                        "`rodlab diagnose --rig` on it (its --export writes the compliance with what it finds removed)")
     return out
+
+
+def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:
+    """A refusal when the on-axis entries measured / simulated of the gauges differ by more than
+    :data:`GAUGE_SCALE_RATIO` (``M``: measured [mm/N], NaN where not measured; ``C_sim``: simulated C_F):
+    the gauge farthest from the others reads in other units."""
+    r = {i: M[i, i] / C_sim[i, i] for i in range(3) if np.isfinite(M[i, i]) and C_sim[i, i] > 0 and M[i, i] > 0}
+    if len(r) < 2 or max(r.values()) / min(r.values()) <= GAUGE_SCALE_RATIO:
+        return []
+    mid = float(np.exp(np.median(np.log(list(r.values())))))
+    odd = max(r, key=lambda i: abs(np.log(r[i] / mid)))
+    others = [i for i in r if i != odd]
+    factor = max(r[odd], r[others[0]]) / min(r[odd], r[others[0]])
+    which = (f"the {_AX[odd]} gauge" if len(r) > 2 else f"the {_AX[odd]} or the {_AX[others[0]]} gauge")
+    listed = ", ".join(f"r_{i + 1}{i + 1} {r[i]:.3g}" for i in sorted(r))
+    return [f"{which} reads {factor:.3g} times {'less' if r[odd] < r[others[0]] else 'more'} than the others against "
+            f"the simulation ({listed}; no rod is that much softer along one axis alone): its units (inches: 25.4, "
+            "um: 1000) or its scale in the profile; fix the column and fit again"]

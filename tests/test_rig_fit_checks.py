@@ -4,6 +4,8 @@ perpendicular gauge reversed in one series is refused (reciprocity), and hold av
 bumped gauge, a mistyped mass) are warned of with the way to the diagnosis."""
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -16,7 +18,7 @@ SIM = calc_rod_compliance(resolve_design("rod1"))
 TRUE = 1.1 * SIM.C_F
 
 
-def _recording(path, friction_N=0.0, flip=None, bump_um=0.0, seed=1):
+def _recording(path, friction_N=0.0, flip=None, bump_um=0.0, seed=1, gauge_scale=(1.0, 1.0, 1.0)):
     """A hand-made recording (not rodlab's simulator): 10 Hz, 8 s holds, y, z, x series of 0-0.5-1-1.5-1-0.5-0 kg,
     three repeats; friction opposing the motion while a hanger is on, none at mass 0; ``flip``: (gauge, series)
     read reversed; ``bump_um``: the y gauge jumps from the 9th hold of the y series on."""
@@ -39,7 +41,7 @@ def _recording(path, friction_N=0.0, flip=None, bump_um=0.0, seed=1):
                 if bump_um and axis == "y" and n_hold >= 9:
                     x = x + np.array([0.0, bump_um * 1e-3, 0.0])
                 for _ in range(80):
-                    r = x + rng.normal(0, 0.6e-3, 3)
+                    r = (x + rng.normal(0, 0.6e-3, 3)) * np.asarray(gauge_scale)
                     lines.append(f"{t:.2f},{step},{rep},{phase},{axis},{m},{r[0]:.5f},{r[1]:.5f},{r[2]:.5f}")
                     t += 0.1
     path.write_text("\n".join(lines) + "\n")
@@ -70,3 +72,17 @@ def test_holds_off_their_line_are_warned_of(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "load axis y scatter" in err and "rodlab diagnose --rig" in err
     assert "load axis z scatter" not in err
+
+
+def test_a_gauge_in_inches_is_named(tmp_path, capsys):
+    rec = _recording(tmp_path / "in.rig.csv", gauge_scale=(1.0, 1.0, 1 / 25.4))
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert re.search(r"the z gauge reads 2[45]\.\d times less", err) and "inches" in err and "Traceback" not in err
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_a_gauge_mounted_backwards_gets_the_sign_hint(tmp_path, capsys):
+    rec = _recording(tmp_path / "back.rig.csv", gauge_scale=(1.0, 1.0, -1.0))
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "m.json")]) == 2
+    assert "reads the rod's motion backwards: give it sign = -1" in capsys.readouterr().err

@@ -153,10 +153,13 @@ def cmd_update(args: argparse.Namespace) -> int:
     _print(res, args.model)
     if not res.explains:
         raise RodlabError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
-                          f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit, p = {res.p_after:.1e}): the "
-                          "rod differs in a way these keys cannot move. Look for a local cause (`rodlab diagnose "
-                          "--rig` on the recording) or free other keys (a joint's compliance "
-                          "joints.PLACE.s_bend_rad_per_Nm, the tube's sizes); nothing was written")
+                          f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
+                          f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
+                          f"diagnose --rig {args.measured} --design {args.design}` weighs every toleranced key at once: "
+                          "where it names a local cause, free that cause's key (a joint's "
+                          "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
+                          "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
+                          "tube.outer_diameter_mm); nothing was written")
     text = read_text_checked(design.source, DesignError)
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")
@@ -185,5 +188,7 @@ def _print(res, model: str) -> None:
               "tube.outer_diameter_mm, as `rodlab diagnose --rig` weighs them all); check it before using the "
               "as-built design")
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
+    print(f"  r_mn = measured / the {model} model's prediction with its known bias against the solid FEA removed "
+          f"(`rig fit` divides by the simulated file as it is):")
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

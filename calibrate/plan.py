@@ -42,7 +42,8 @@ def observability(J: np.ndarray) -> dict:
             "parameters": m}
 
 
-def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng) -> dict:
+def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng,
+                         max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG) -> dict:
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
     robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
     position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`)."""
@@ -53,8 +54,8 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
     cands = {}
     for j, got in reached.items():
         n_reach = len(got)
-        if n_reach:
-            got = got[rod_angle_deg(params, got, fixture.transform(j)) <= ROD_ANGLE_MAX_DEG]
+        if n_reach and max_rod_angle_deg is not None:
+            got = got[rod_angle_deg(params, got, fixture.transform(j)) <= max_rod_angle_deg]
         got = got[:candidates]
         if len(got) < k:
             raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
@@ -74,9 +75,11 @@ def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray) -> n
     return np.degrees(np.arccos(np.clip(-x_n_W @ diag_W, -1.0, 1.0)))
 
 
-def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None):
+def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None,
+               max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG):
     """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices, for the
-    rod ``rod`` (:class:`~rodlab.calibrate.rod.Rod`: its tool vector and its weight; ``Rod.of(compliance)``)."""
+    rod ``rod`` (:class:`~rodlab.calibrate.rod.Rod`: its tool vector and its weight; ``Rod.of(compliance)``);
+    ``max_rod_angle_deg``: the rod leaves the ball within this angle of the device's open diagonal (None: any)."""
     if not isinstance(rod, Rod):
         raise TypeError(f"plan_poses takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm, mass_kg, "
                         f"com_T_mm)), got {type(rod).__name__}")
@@ -84,7 +87,7 @@ def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed:
     p = ModelParams.nominal(robot, rod.tool_mm, base=base_guess)
     if base_guess is None:
         p = p.with_(base=standard_base())      # {W} 650 mm in front, 250 mm up, device tilted as in the paper
-    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng)
+    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng, max_rod_angle_deg)
     allq = np.concatenate(list(cands.values()))
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod)

@@ -180,8 +180,8 @@ def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bo
                 else "Measure more poses spread over the workspace (every joint moved, varied configurations)")
         raise CalibrationError(
             f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
-            f"parameter(s): {lines}. {more}, hold them with --pin NAME=VALUE, or hold all of them at nominal with "
-            f"--fix-unidentifiable", key="campaign" if obs.group is not None else "points")
+            f"parameter(s): {lines}. {more}, or hold them with --pin NAME=VALUE (without --strict rodlab holds them "
+            f"at nominal itself)", key="campaign" if obs.group is not None else "points")
 
 
 @dataclass

@@ -17,6 +17,8 @@ Errors name the file, line and key.
 """
 from __future__ import annotations
 
+import logging
+
 import re
 import sys
 from pathlib import Path
@@ -36,6 +38,8 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
+
+log = logging.getLogger(__name__)
 
 __all__ = ["read_robot_toml", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS", "ROBOT_FORMAT"]
 
@@ -159,6 +163,8 @@ def read_robot_toml(path) -> Robot:
     text, data = _load(p)
     convention, source = _header(p, text, data)
     cols, names = _joint_rows(p, text, data.get("joint"), convention)
+    for problem in unit_slips(cols):
+        log.warning("%s: %s", p, problem)
     gravity = _gravity(p, text, data)
     flange = pose_to_matrix(_numbers(data.get("flange_pose", [0.0] * 6), (6,),
                                      {"path": p, "key": "flange_pose", "line": _line(text, None, "flange_pose")}))
@@ -169,6 +175,33 @@ def read_robot_toml(path) -> Robot:
     cols, n_T_tip = _end_on_flange(cols, flange)
     return Robot(name, *(cols[k] for k in _ROW_KEYS), gravity_base=gravity, path=p, n_T_tip=n_T_tip,
                  joint_names=tuple(names), source=source or str(p))
+
+
+#: no industrial arm's link offset or length exceeds this [mm] ...
+LINK_MAX_MM = 5000.0
+#: ... and every arm has one at least this long [mm] (a file whose longest is shorter is in metres)
+LINK_MIN_MM = 5.0
+
+
+def unit_slips(cols: dict) -> list[str]:
+    """Numbers of DH rows no arm has, each with the slip that gives them: twists or offsets at +-pi/2 or +-pi
+    (radians where degrees are expected), every length below :data:`LINK_MIN_MM` (metres), a length beyond
+    :data:`LINK_MAX_MM`. Empty when none."""
+    out = []
+    for key in ("alpha_deg", "theta_offset_deg"):
+        v = np.abs(np.asarray(cols[key], float))
+        rad = [i + 1 for i, x in enumerate(v) if min(abs(x - np.pi / 2), abs(x - np.pi)) < 1e-3]
+        if rad:
+            out.append(f"{key} of joint(s) {rad} is +-pi/2 or +-pi as a number ({', '.join(f'{v[i - 1]:.4f}' for i in rad)}): "
+                       "radians where degrees are expected? write 90 or 180")
+    lengths = np.abs(np.concatenate([np.asarray(cols["d_mm"], float), np.asarray(cols["a_mm"], float)]))
+    if lengths.max() < LINK_MIN_MM and lengths.max() > 0:
+        out.append(f"every d_mm and a_mm is below {LINK_MIN_MM:g} mm (longest {lengths.max():.4g}): metres where "
+                   "millimetres are expected? multiply by 1000")
+    if lengths.max() > LINK_MAX_MM:
+        out.append(f"a d_mm or a_mm of {lengths.max():.6g} mm: beyond any industrial arm ({LINK_MAX_MM:g} mm): a typo "
+                   "or another unit?")
+    return out
 
 
 def _end_on_flange(cols: dict, flange_T: np.ndarray) -> tuple[dict, np.ndarray]:

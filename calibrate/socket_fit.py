@@ -236,7 +236,7 @@ def _remedy(deficient: dict, prob: _Problem) -> str:
         out.append("a joint compliance c_i is seen only through the torque on its joint (the links' and the "
                    "ball's weight): vary the arm's configurations more, or hold it with --pin c_i=0")
     out.append("record more varied arm configurations per socket and placements spread over the workspace, hold "
-               "them with --pin NAME=VALUE, or hold all of them at nominal with --fix-unidentifiable")
+               "them with --pin NAME=VALUE (without --strict rodlab holds them at nominal itself)")
     text = "; ".join(out)
     return text[0].upper() + text[1:]
 

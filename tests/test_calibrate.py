@@ -180,7 +180,7 @@ def test_single_joint_sweeps_need_fix_unidentifiable(robot):
     q = np.deg2rad(q)
     x = ball_positions(robot, true, q)[0].pW + rng.normal(0, 0.01, (60, 3))
     obs = Observations(q, x, np.zeros_like(x))
-    with pytest.raises(CalibrationError, match="--fix-unidentifiable"):
+    with pytest.raises(CalibrationError, match="without --strict rodlab holds them"):
         identify(robot, obs, Rod.rigid([0.0, 30.0, 180.0]), options=FitOptions(freed={"tool_y"}))
     res = identify(robot, obs, Rod.rigid([0.0, 30.0, 180.0]),
                    options=FitOptions(freed={"tool_y"}, fix_unidentifiable=True, expected_noise_mm=None))

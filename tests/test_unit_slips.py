@@ -5,6 +5,7 @@ joints than the campaign's columns is named as that."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -144,3 +145,23 @@ def test_gross_residuals_do_not_advise_a_larger_noise(camp, tmp_path, capsys):
     out = "".join(capsys.readouterr())
     assert "not a noisier device" in out and "order, signs" in out
     assert "state it with --noise-um" not in out
+
+
+@pytest.mark.parametrize("edit,message", [
+    (lambda t: re.sub(r"(?m)^(d_mm|a_mm) = (-?[0-9.]+)", lambda m: f"{m.group(1)} = {float(m.group(2)) / 1000}", t),
+     "metres where millimetres are expected"),
+    (lambda t: re.sub(r"(?m)^alpha_deg = (-?)90\.0", r"alpha_deg = \g<1>1.5708", t), "radians where degrees"),
+    (lambda t: t.replace("a_mm = 425.0", "a_mm = 42500.0"), "beyond any industrial arm"),
+])
+def test_a_robot_file_in_other_units_is_warned_of(tmp_path, caplog, edit, message):
+    """`rodlab validate` (and every command reading the file) warns of DH rows in metres or radians, or a link
+    no arm has; the built-in TX90 has none of them."""
+    from rodlab.calibrate.robot_formats import builtin_robots
+    text = builtin_robots()["tx90"].read_text()
+    (tmp_path / "r.toml").write_text(edit(text))
+    assert main(["validate", str(tmp_path / "r.toml")]) == 0
+    assert message in caplog.text
+    caplog.clear()
+    (tmp_path / "ok.toml").write_text(text)
+    assert main(["validate", str(tmp_path / "ok.toml")]) == 0
+    assert not [r for r in caplog.records if r.levelname == "WARNING"]

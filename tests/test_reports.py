@@ -40,7 +40,7 @@ def user_run(tmp_path_factory):
     assert _run("calibrate", *files, "--rod", camp / "rod.compliance.json", *val, "--json", d / "cal" / "cal.json",
                 "--png", d / "cal", "--report") == 3                      # NOT TRUSTED: the wrong position
     assert _run("compare", *files, "--rod", f"fea={camp / 'rod.compliance.json'}", *val, "--json",
-                d / "cmp" / "table3.json", "--png", d / "cmp" / "fig10.png", "--report") == 0
+                d / "cmp" / "table3.json", "--png", d / "cmp" / "fig10.png", "--report") == 3   # no method trusted
     assert _run("diagnose", "--campaign", *files, "--rod", camp / "rod.compliance.json", *val, "--png", d / "dg",
                 "--report") == 0                                          # no --json: rendered from memory
     assert _run("sweep", "--base", "rod1", "--L1", "250:350:100", "--L2", "700:800:100", "--serial", "-o",

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 from pathlib import Path
 
 from rodlab.calibrate import RodDeflection, read_fixture
@@ -68,13 +69,18 @@ def cmd_compare(args: argparse.Namespace) -> int:
     camp = campaign_from_args(args, robot_from_args(args).n)
     warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
-    print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11}")
+    print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11} "
+          f"{'trusted':>8}")
     before = runs[0][1].before
     print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
     for name, run in runs:
         after = run.after
         print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
-              f"{run.result.rms_mm * 1e3:11.2f}")
+              f"{run.result.rms_mm * 1e3:11.2f} {'yes' if not run.result.warnings else 'NO':>8}")
+    untrusted = [name for name, run in runs if run.result.warnings]
+    if untrusted:
+        print(f"NOT TRUSTED: {', '.join(untrusted)} (`rodlab calibrate` with that compensation says why; "
+              "`rodlab diagnose --campaign` finds what is missing)", file=sys.stderr)
     written = _write_comparison(args, runs)
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions
@@ -82,7 +88,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         written.append(plot_error_distributions(errors, args.png, "validation errors per compensation method"))
         print(f"wrote {written[-1]}")
     write_command_report(args, written, default_folder(args) if args.json or not args.png else Path(args.png).parent)
-    return 0
+    return 3 if len(untrusted) == len(runs) else 0          # as calibrate: 3 when no method's result is trusted
 
 
 def _write_comparison(args, runs: list) -> list:

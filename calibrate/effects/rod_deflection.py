@@ -27,6 +27,10 @@ def generic_rod(rod: RodCompliance) -> RodCompliance:
     return replace(rod, method=c.method, C_F=c.C_F, C_g=c.C_g * (rod.mass_kg / c.mass_kg if c.mass_kg > 0 else 1.0))
 
 
+def _has_matrices(rod: RodCompliance) -> bool:
+    return bool(np.any(rod.C_F) or np.any(rod.C_g))
+
+
 def scaled_rod(rod: RodCompliance, k: float, **provenance) -> RodCompliance:
     """``rod`` with both compliances (and r_rod) times ``k``; ``k <= 0`` (a fit's estimate of a rod far stiffer than
     its file, within its noise of 0) is a rigid rod: zero matrices, method ``none``."""
@@ -45,8 +49,9 @@ class RodDeflection(CampaignEffectModel):
     signature = "the residuals follow R_T^W (C_g g + C_F F), the compensated deflection, scaled"
     locations = ("null",)
     reported = ("`k` [-] (the true compliance over the file's; about 0: the rod is far stiffer than its file); "
-                "when the file's matrices are zero (method `none`: shape of a generic steel rod fitted to the tool "
-                "vector): `k_gravity`, `k_force` [-]")
+                "or `k_gravity`, `k_force` [-]: the deflection under the rod's weight and under the contact force "
+                "scaled apart (another rod's file; when the file's matrices are zero, method `none`, the shape of a "
+                "generic steel rod fitted to the tool vector)")
 
     def check(self, p: dict) -> None:
         if not p["k"] > 0:
@@ -63,9 +68,15 @@ class RodDeflection(CampaignEffectModel):
         defl = deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, rod)
         if not np.any(defl):
             return [self._uncompensated(ctx)]
+        parts = [deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(rod, C_F=0 * rod.C_F)),
+                 deflection_offsets(ctx.robot, ctx.result.params, obs.q_rad, obs.force_W_N, replace(rod, C_g=0 * rod.C_g))]
         return [hypothesis(self.effect, None, ["k"], defl.reshape(3 * N, 1),
                            "the rod's deflection is compensated with the wrong compliance: residuals follow "
-                           "R_T^W (C_g g^T + C_F F^T) scaled by a factor", report_offset=[1.0])]
+                           "R_T^W (C_g g^T + C_F F^T) scaled by a factor", report_offset=[1.0]),
+                hypothesis(self.effect, None, ["k_gravity", "k_force"],
+                           np.stack([c.reshape(-1) for c in parts], axis=1),
+                           "the compliance file is another rod's: residuals follow its deflection under its weight "
+                           "and under the contact force, each scaled by its own factor", report_offset=[1.0, 1.0])]
 
     def _uncompensated(self, ctx: CampaignContext):
         """The compliance file's matrices are zero: the residuals follow a rod's deflection (gravity and
@@ -79,9 +90,10 @@ class RodDeflection(CampaignEffectModel):
                           "residuals follow a cantilever's deflection under its weight and the contact force")
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
-        if "k_force" in parameters:                   # the file's matrices are zero: the stand-in's two parts
-            g = generic_rod(ctx.rod)
-            fit.rod = replace(g, C_F=g.C_F * parameters["k_force"], C_g=g.C_g * parameters["k_gravity"])
+        if "k_force" in parameters:        # the two parts scaled: the file's, or the stand-in's for a zero file
+            g = ctx.rod if _has_matrices(ctx.rod) else generic_rod(ctx.rod)
+            fit.rod = replace(g, C_F=g.C_F * max(parameters["k_force"], 0.0),
+                              C_g=g.C_g * max(parameters["k_gravity"], 0.0))
         else:
             k = parameters["k"]
             fit.rod = scaled_rod(ctx.rod, k, diagnosis_scale=k)
@@ -97,7 +109,9 @@ class RodDeflection(CampaignEffectModel):
                     "softer rod or of the wrong method; calibrate with this rod's own file (`rodlab rig fit` or "
                     "`rodlab fea`), or `--compensation none` for a rigid rod")
         if k is None:
-            return ("the rod's deflection is not compensated: calibrate with the rod's compliance file "
-                    "(`--rod FILE --compensation file`; `rodlab fea` or `rodlab rig fit` make one)")
+            return (f"the rod deflects {parameters['k_gravity']:.3g}x under its weight and {parameters['k_force']:.3g}x "
+                    "under the contact force what the compliance file says (a file of another rod, or with zero "
+                    "matrices: then of a generic steel rod's shape): calibrate with this rod's own file (`rodlab rig "
+                    "fit` writes a measured one, `rodlab fea` a simulated one; `--rod FILE --compensation file`)")
         return (f"the compliance file is off by a factor {k:.3g}: measure the rod on the stiffness rig "
                 "(`rodlab rig fit` writes a measured file) and calibrate with that file")

@@ -86,3 +86,22 @@ def test_a_gauge_mounted_backwards_gets_the_sign_hint(tmp_path, capsys):
     rec = _recording(tmp_path / "back.rig.csv", gauge_scale=(1.0, 1.0, -1.0))
     assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "m.json")]) == 2
     assert "reads the rod's motion backwards: give it sign = -1" in capsys.readouterr().err
+
+
+def test_a_load_cell_zero_offset_is_not_a_tare(tmp_path):
+    """A load cell reading +0.5 N without a hanger: its zero offset, taken off before friction and tare (had been
+    reported as a 51 g tare); the slopes are the same either way."""
+    rec = tmp_path / "lc.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--effect", "friction:F_f_N=0.3", "--load-cell-noise-n", "0.005",
+                 "-o", str(rec)]) == 0
+    lines = rec.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    k = lines[head].split(",").index("force_N")
+    shifted = lines[:head + 1] + [",".join(f"{float(c) + 0.5:.5f}" if i == k else c for i, c in enumerate(r.split(",")))
+                                  for r in lines[head + 1:]]
+    (tmp_path / "off.rig.csv").write_text("\n".join(shifted) + "\n")
+    plain, off = (fit_recording(read_recording(p), SIM) for p in (rec, tmp_path / "off.rig.csv"))
+    assert plain.load.zero_offset_N == 0.0 and off.load.zero_offset_N == pytest.approx(0.5, abs=0.01)
+    for axis, tare in off.load.tare_kg.items():
+        assert abs(tare) < 0.002 and off.load.friction_N[axis] == pytest.approx(0.3, rel=0.05)
+    np.testing.assert_allclose(off.C_F_meas, plain.C_F_meas, rtol=1e-9, atol=1e-12)

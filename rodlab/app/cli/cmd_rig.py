@@ -176,6 +176,9 @@ def _print_load(fit) -> None:
     ld = fit.load
     print(f"  load: force_N of the load cell (noise {ld.force_noise_N:.4f} N per reading); "
           f"mass_kg x g0 - force_N per branch (holds with a hanger on):")
+    if ld.zero_offset_N:
+        print(f"    load cell zero offset {ld.zero_offset_N:+.4f} N (its reading without a hanger), taken off before "
+              "friction and tare; zero the load cell before the next recording (the compliance does not depend on it)")
     for b in ld.branches:
         sd = f"SD {b.sd_N:.4f} N, " if np.isfinite(b.sd_N) else ""
         print(f"    {b.axis.value:>3} {b.phase.value:<7} {b.diff_N:+8.4f} N ({sd}{b.n_holds} holds)")

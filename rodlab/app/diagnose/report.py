@@ -73,7 +73,9 @@ class Diagnosis:
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
         for i, f in enumerate(self.findings, 1):
-            ps = ", ".join(f"{k} = {v:.4g} [{f.intervals[k][0]:.3g}, {f.intervals[k][1]:.3g}]"
+            bound = set(f.evidence.get("at_bound", ()))
+            ps = ", ".join(f"{k} = {v:.4g} " + ("(at its bound: the data ask for more; no interval)" if k in bound else
+                                                f"[{f.intervals[k][0]:.3g}, {f.intervals[k][1]:.3g}]")
                            for k, v in f.parameters.items() if isinstance(v, (int, float)) and k in f.intervals)
             lines.append(f"  {i}. {f.effect}" + (f" at {f.location}" if f.location else "") + f": {f.explanation}")
             if ps:

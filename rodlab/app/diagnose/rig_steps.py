@@ -154,6 +154,10 @@ def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: f
         if term.effect == OUTSIDE:
             ev["outside_vocabulary"] = True
         params, intervals = term.reported(val, se)
+        at_bound = [name for name, v, lo, hi in zip(term.names, val, term.lower, term.upper)
+                    if any(np.isfinite(b) and abs(v - b) <= 1e-9 * max(1.0, abs(b)) for b in (lo, hi))]
+        if at_bound:                      # a bound holds it: the interval of the fit says nothing
+            ev["at_bound"] = at_bound
         findings.append(Finding(term.effect, location, term.explanation, params, intervals,
                                 float(np.sqrt(rss_prev / n)), float(np.sqrt(rss_m / n)), ev))
         rss_prev = rss_m

@@ -68,10 +68,26 @@ def _schema(data: dict, format_id: str, path, text: str) -> None:
 
 
 def _line(text: str, key: str) -> int | None:
+    """The line of ``key`` (a dotted path such as ``instrument[2].channel[1].units``: 1-based indices of arrays of
+    tables; ``settle.window_s``) in the TOML ``text``: inside the table it names, else its first occurrence
+    anywhere (None when the key is not written)."""
+    *tables, leaf = [(m.group(1), int(m.group(2)) if m.group(2) else None)
+                     for m in re.finditer(r"([^.\[\]]+)(?:\[(\d+)\])?", key)] or [(key, None)]
+    first, here, counts = None, [], {}
     for i, raw in enumerate(text.splitlines(), start=1):
-        if re.match(rf"^\s*{re.escape(key)}\s*=", raw):
-            return i
-    return None
+        head = re.match(r"^\s*(\[\[?)\s*([\w.]+)\s*\]\]?", raw)
+        if head:
+            names = head.group(2).split(".")
+            parent = tuple(here[:len(names) - 1])
+            n = counts[(parent, names[-1])] = counts.get((parent, names[-1]), 0) + 1
+            here = list(parent) + [(names[-1], n if head.group(1) == "[[" else None)]
+            continue
+        if re.match(rf"^\s*{re.escape(leaf[0])}\s*=", raw):
+            first = first or i
+            if len(here) == len(tables) and all(a == b[0] and (j is None or j == b[1])
+                                                for (a, j), b in zip(tables, here)):
+                return i
+    return first
 
 
 class _Reader:

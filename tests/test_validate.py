@@ -142,3 +142,19 @@ def test_plan_refuses_infinite_or_nan_masses_naming_file_and_key(tmp_path, masse
     with pytest.raises(RigError) as e:
         read_plan(p)
     assert e.value.key == "masses_kg" and "m.plan.toml" in str(e.value) and "finite" in str(e.value)
+
+
+def test_a_problem_in_a_later_instrument_is_named_at_its_own_line(tmp_path, capsys):
+    """The line of `instrument[2].channel[1].units` is the second instrument's channel's, not the first `units` in
+    the file (new-user trial: line 17 for a key on line 31)."""
+    from rodlab.stiffness_rig.config import _line
+    text = (ROOT / "stiffness_rig" / "plans" / "two-digimatic.profile.toml").read_text()
+    lines = text.splitlines()
+    second = [i for i, s in enumerate(lines) if s.strip().startswith("[[instrument]]")][1]
+    units = next(i for i in range(second, len(lines)) if lines[i].strip().startswith("units"))
+    lines[units] = 'units = "inch"'
+    bad = tmp_path / "p.profile.toml"
+    bad.write_text("\n".join(lines) + "\n")
+    assert main(["validate", str(bad)]) == 2
+    assert f"line {units + 1}, key `instrument[2].channel[1].units`" in capsys.readouterr().err
+    assert _line(bad.read_text(), "instrument[2].channel[1].units") == units + 1

@@ -130,16 +130,18 @@ def _locate(text: str, kind: str, where: list) -> int | None:
     """The line of the key at path ``where`` (JSON: each key after the previous; TOML: the table header of the
     dotted path so far, array tables by index, else ``key =`` inside the current table); ``None`` if not
     found."""
-    pos, table, names = 0, None, []
+    pos, table, names, parent = 0, None, [], 0
     for part in where:
         if isinstance(part, int):
-            if kind == "toml" and table is not None:
-                hits = [m.start() for m in re.finditer(rf"(?m)^\s*\[\[\s*{re.escape(table)}\s*\]\]", text)]
+            if kind == "toml" and table is not None:         # counted within the enclosing element
+                hits = [parent + m.start() for m in
+                        re.finditer(rf"(?m)^\s*\[\[\s*{re.escape(table)}\s*\]\]", text[parent:])]
                 if part < len(hits):
                     pos = hits[part]
             continue
         names.append(str(part))
         table = ".".join(names)
+        parent = pos
         m = _find_key(text, kind, str(part), table, pos)
         if not m:
             return text.count("\n", 0, pos) + 1 if pos else None

@@ -105,3 +105,15 @@ def test_a_load_cell_zero_offset_is_not_a_tare(tmp_path):
     for axis, tare in off.load.tare_kg.items():
         assert abs(tare) < 0.002 and off.load.friction_N[axis] == pytest.approx(0.3, rel=0.05)
     np.testing.assert_allclose(off.C_F_meas, plain.C_F_meas, rtol=1e-9, atol=1e-12)
+
+
+def test_the_diagnosis_names_a_gauge_read_backwards_in_one_series(tmp_path):
+    """Told the simulation is exact (up to a scale), the diagnosis names the x gauge read backwards in the z series
+    (outside the vocabulary) instead of crosstalk at two places."""
+    from rodlab.app.diagnose import diagnose_rig
+    rec = read_recording(_recording(tmp_path / "flip.rig.csv", flip=("x", "z")))
+    diag, _ = diagnose_rig(rec, SIM, None, accuracy="exact")
+    named = [(f.effect.value, f.location) for f in diag.findings]
+    assert ("unexplained", "sensor:x") in named and "crosstalk" not in [e for e, _ in named], diag.summary()
+    f = next(f for f in diag.findings if f.location == "sensor:x")
+    assert "backwards in the z series" in f.explanation and f.parameters["reversal"] == pytest.approx(-1.0, abs=0.05)

@@ -16,6 +16,10 @@ vocabulary effect that mimics it: a found one makes the verdict ``unexplained`` 
   from the residual (the largest change in its mean, per gauge), two hidden parameters, where that change is a
   step of at least 5 noise SDs that happens mostly at once (a slow creep or a warm-up drift is gradual).
   Rodlab's blind slips of 15 noise SDs had been named a drift or a creep beside an ``unexplained`` step range.
+- a gauge read backwards in one series (re-mounted the other way round, its sign flipped in one file): its readings
+  there are ``-v``, a term ``g v`` with g held within :data:`_REVERSED_RANGE` of -2 in that series alone, one
+  hidden parameter (which gauge and series). A perpendicular gauge reversed for the z series had been named
+  crosstalk at two places and ``unexplained`` (new-user trial; ``rig fit`` refuses such a recording).
 """
 from __future__ import annotations
 
@@ -54,12 +58,36 @@ def outside_hypotheses(data, base: np.ndarray) -> list[Hypothesis]:
                               f"(its calibration factor is off): a property of the gauge, outside the effect "
                               f"vocabulary", hidden=1))
     out += _slips(data, base)
+    out += _reversed(data, base)
     if len(gauges) > 1:
         # on a rod whose axes differ in compliance the curvature follows each gauge's reading, not the load: a
         # load non-linearity on every axis with crosstalk would otherwise mimic it with three terms
         out.append(Hypothesis(OUTSIDE, "sensor:all", ["k_per_mm"], (base ** 2)[:, None], [-1.0], [1.0],
                               "every gauge's reading is not linear in the displacement, alike (readings scaled by "
                               "1 + k v: gauges of one type off their linear range): outside the effect vocabulary"))
+    return out
+
+
+#: a gauge read backwards in one series scales its readings there by 1 + g, g within this range (-2: exactly)
+_REVERSED_RANGE = (-2.1, -1.9)
+
+
+def _reversed(data, base: np.ndarray) -> list[Hypothesis]:
+    """Per gauge and series it reads in (when it reads in two or more, so that the others tell its sign), the
+    gauge read backwards in that series alone."""
+    out = []
+    for c in sorted(set(data.comp.tolist())):
+        on = data.comp == c
+        series = np.unique(data.series[on])
+        for s in series if series.size > 1 else ():
+            m = on & (data.series == s)
+            axis = _AXES[int(np.asarray(data.axis)[m][0])]
+            out.append(Hypothesis(OUTSIDE, f"sensor:{_AXES[c]}", ["reversal"], np.where(m, base, 0.0)[:, None],
+                                  [_REVERSED_RANGE[0]], [_REVERSED_RANGE[1]],
+                                  f"the {_AXES[c]} gauge reads backwards in the {axis} series (re-mounted the other "
+                                  "way round, or its sign flipped in that file): its readings there are the "
+                                  "displacement with the wrong sign; outside the effect vocabulary", hidden=1,
+                                  report_offset=[1.0]))
     return out
 
 

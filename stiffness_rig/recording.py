@@ -107,7 +107,9 @@ def _float(cell: str, path, line: int, col: str, allow_empty: bool = False) -> f
     except ValueError:
         raise RigError(f"expected a number, got {cell!r}", path=path, line=line, key=col) from None
     if not math.isfinite(v):
-        raise RigError(f"expected a finite number, got {cell!r}", path=path, line=line, key=col)
+        hint = ("; a reading the gauge did not give is an empty cell (pandas: to_csv(na_rep=''))"
+                if allow_empty and math.isnan(v) else "")
+        raise RigError(f"expected a finite number, got {cell!r}{hint}", path=path, line=line, key=col)
     return v
 
 

@@ -22,6 +22,7 @@ _EXPORTS = {
     "SolidModes": "modal_solid", "solid_frequencies": "modal_solid",
     "SolidRun": "solid_run", "run_solid": "solid_run",
     "PlanCache": "plan_cache",
+    "closed_form_notes": "closed_form_check",
 }
 
 __all__ = list(_EXPORTS)

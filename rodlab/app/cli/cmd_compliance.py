@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from ...core.calc import BendModel, calc_rod_compliance
 from ...core.compliance import RodCompliance, write_compliance
@@ -29,6 +30,13 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_compliance)
 
 
+def _closed_form_notes(design, comp) -> list[str]:
+    """:func:`rodlab.fea.closed_form_notes` for the default closed form (another bend model or shear setting is
+    the user's choice, compared as it is)."""
+    from rodlab.fea import closed_form_notes
+    return closed_form_notes(design, comp)
+
+
 def cmd_compliance(args: argparse.Namespace) -> int:
     design = resolve_design(args.design)
     comp = calc_rod_compliance(design, bend=BendModel(args.bend), shear=args.shear)
@@ -37,7 +45,12 @@ def cmd_compliance(args: argparse.Namespace) -> int:
     out = args.output or f"{design.name.replace('#', '')}.compliance.json"
     if not args.output and not out[0].isalpha():
         out = f"rod{out}"
+    notes = _closed_form_notes(design, comp) if args.method != Method.NONE.value else []
+    if notes:
+        comp = replace(comp, provenance=dict(comp.provenance, notes=notes))
     path = write_compliance(comp, out)
     print(f"wrote {path}: method {comp.method}, c_rod = {comp.c_rod_um:.1f} um, mass = {comp.mass_kg * 1e3:.1f} g")
+    for note in notes:
+        print(f"  note: {note}")
     write_command_report(args, [path], path.parent)
     return 0

@@ -63,4 +63,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     print("  closed-form C_g (gravity in {T} -> ball displacement):")
     print(_fmt_matrix(comp.C_g, "mm/g0"))
     print(f"  c_rod (Eq. 23) = {comp.c_rod_um:.1f} um")
+    from rodlab.fea import closed_form_notes
+    for note in closed_form_notes(design, comp):
+        print(f"  note: {note}")
     return 0

@@ -196,13 +196,14 @@ def test_a_flat_rig_recording_names_the_file_and_the_cause(tmp_path, capsys, axi
 # --- 5. a study prints every design it could not use, with the reason -----------------------------------------------
 
 def test_study_prints_every_unusable_design_with_its_reason(tmp_path, capsys):
-    # rod 1#'s bend radius is 65 mm: too tight to bend a 50 mm tube (at least 1.5 diameters)
-    assert main(["study", "rod1", "--tubes", "40x5,50x3", "--replicates", "1", "--methods", "calc", "--no-calibrate",
-                 "--no-budget", "--serial", "-o", str(tmp_path / "study")]) == 0
+    # a 20 mm tube with an 11 mm wall is a rod, not a tube; a 50 mm variant of rod 1# takes its bend radius in
+    # the base's ratio to the diameter (65 / 40), no longer 65 mm (below 1.5 diameters: had been invalid)
+    assert main(["study", "rod1", "--tubes", "40x5,20x11,50x3", "--replicates", "1", "--methods", "calc",
+                 "--no-calibrate", "--no-budget", "--serial", "-o", str(tmp_path / "study")]) == 0
     out = capsys.readouterr().out
-    assert "1 of 2 designs not usable:" in out
-    line = next(ln for ln in out.splitlines() if "50x3: invalid" in ln)
-    assert "bend radius 65.0 mm" in line and "kinking" in line
+    assert "1 of 3 designs not usable:" in out and "50x3: invalid" not in out
+    line = next(ln for ln in out.splitlines() if "20x11: invalid" in ln)
+    assert "wall 11.0 mm must be less than the outer radius 10.0 mm" in line
 
 
 # --- 8. study figures: labels kept, one colour scale, the sweep's colour map; the help's "%%" -------------------------
@@ -300,3 +301,27 @@ def test_png_is_a_folder_everywhere_and_a_file_for_one_figure(tmp_path, capsys):
         main(["diagnose", "--rig", str(rec), "--sim", "rod1", "--png", str(tmp_path / "d.png")])
     assert e.value.code == 2 and "give a folder" in capsys.readouterr().err
     assert not (tmp_path / "d.png").exists()
+
+
+def test_a_sweep_with_no_usable_design_fails_with_the_reasons(tmp_path, capsys):
+    """L1 / L2 given in metres: every design is invalid; the sweep still writes its table (each design's reason)
+    but exits 2 naming the first reasons (a new-user trial's had exited 0 with an all-grey figure)."""
+    out = tmp_path / "s.csv"
+    assert main(["sweep", "--base", "rod1", "--L1", "0.3:0.5:0.1", "--L2", "0.4:0.6:0.1", "--serial", "-o",
+                 str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "none of the 9 designs is usable" in err and "millimetr" in err
+    assert out.exists()
+
+
+@pytest.mark.parametrize("entry,message", [
+    ('"tube.outer_diameter_mm" = 50', "one standard deviation of 50 on a value of 40"),
+    ('"materials.cfrp_tube.E_GPa" = "8 percent"', 'a percentage such as "5%"'),
+])
+def test_a_tolerance_no_part_has_is_refused_with_the_fix(tmp_path, capsys, entry, message):
+    from rodlab.core.design_io import resolve_design
+    text = Path(resolve_design("rod1").source).read_text()
+    p = tmp_path / "t.rod.toml"
+    p.write_text(text.rstrip("\n") + "\n\n[tolerances]\n" + entry + "\n")
+    assert main(["validate", str(p)]) == 2
+    assert message in capsys.readouterr().err

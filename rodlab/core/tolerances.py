@@ -95,6 +95,11 @@ class ToleranceParam:
         return f"{self.key} = {self.nominal:g} +- {self.sigma:.3g} ({self.relative:.1%}, {self.source})"
 
 
+#: a stated tolerance (one standard deviation) of at least this share of its value is refused: no part is made
+#: that loosely, and the linear propagation of the envelope would not hold
+TOLERANCE_MAX_SHARE = 0.5
+
+
 def parse_tolerance_value(value, nominal: float, key: str) -> float:
     """One standard deviation in the key's unit from a tolerance entry: a number (absolute) or ``"N%"``."""
     if isinstance(value, str):
@@ -175,6 +180,11 @@ def check_tolerance_table(design: RodDesign, table: dict) -> dict[str, float]:
             raise DesignError(f"unknown key {key!r}: a tolerance names a numeric key of the design file." +
                               did_you_mean(key, list(numeric_keys(design))), key=f"tolerances.{key}")
         out[key] = parse_tolerance_value(value, nominal, key)
+        if nominal and out[key] >= TOLERANCE_MAX_SHARE * abs(nominal):
+            raise DesignError(f"one standard deviation of {out[key]:g} on a value of {nominal:g} (its tolerance is "
+                              f"{out[key] / abs(nominal):.0%} of it; {TOLERANCE_MAX_SHARE:.0%} or more is refused: "
+                              f"no part is made that loosely): an absolute tolerance in the wrong unit, or meant as a "
+                              f"percentage (\"{value}%\")?", key=f"tolerances.{key}")
     return out
 
 

@@ -122,6 +122,19 @@ def _check_numbers(args) -> None:
         raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
 
 
+def _assumptions(args) -> str:
+    """What the prediction assumes beyond the designs, with the options that change it (the study's page and
+    console show it: a designer must see why one design beats another)."""
+    return (f"the rod as built is r_rod x its simulation, r_rod uniform in {args.r_prior_metal} for metal tubes and "
+            f"{args.r_prior_composite} for carbon ones (the paper's measured rods; --r-prior-metal, "
+            f"--r-prior-composite: narrow it for a laminate you have coupon-tested); the rod's non-repeatable "
+            f"deflection (slip, hysteresis in its joints) {args.rod_slip:g} x its deflection under its own weight "
+            f"(--rod-slip; 0: none); the robot's own unmodelled error {args.robot_floor_mm:g} mm (--robot-floor-mm); "
+            f"device noise {args.device_noise * 1e3:g} um, validation instrument {args.instrument_noise * 1e3:g} um; "
+            f"the compliance's shape {args.shape_sigma:g} and the rig's measurement {args.meas_sigma:g} uncertain "
+            "(relative, 1 sigma)")
+
+
 def _print_unusable(table) -> None:
     """Every design the study could not use (invalid, unreachable, failed), with its reason (study.csv too)."""
     designs = table.drop_duplicates("design")
@@ -130,6 +143,9 @@ def _print_unusable(table) -> None:
         print(f"{len(bad)} of {len(designs)} designs not usable:")
     for r in bad.itertuples():
         print(f"  {r.design}: {r.status}: {r.message}")
+    for r in designs[designs["status"] == "ok"].itertuples():
+        if isinstance(r.message, str) and r.message.strip():
+            print(f"note: {r.design}: {r.message}")
 
 
 def cmd_study(args: argparse.Namespace) -> int:
@@ -164,12 +180,16 @@ def cmd_study(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
               "designs": len(cands), "predictor": how, "methods": ", ".join(methods),
-              "compliance": model_note, "time": f"{elapsed:.0f} s"}
+              "compliance": model_note, "assumptions": _assumptions(args), "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
                               {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed},
                               designs={c.label: c.design for c in cands})
     _print_unusable(res.table)
+    print(f"assumptions (each an option): {_assumptions(args)}")
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)
+    designs = res.table.drop_duplicates("design")
+    if not (designs["status"] == "ok").any():
+        raise RodlabError(f"none of the {len(designs)} designs is usable (listed above, and in {out / 'study.csv'})")
     return 0

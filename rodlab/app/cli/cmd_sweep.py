@@ -82,6 +82,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
               + (f" (no picture: {views.note})" if views.note else ""))
         written += views.pngs
     write_command_report(args, written, out.parent)
+    if not (df["status"] == "ok").any():
+        reasons = sorted({str(m) for m in df["message"] if isinstance(m, str) and m})
+        raise RodlabError(f"none of the {len(df)} designs is usable ({out} lists each one's reason): "
+                          + "; ".join(reasons[:3]) + (f"; and {len(reasons) - 3} more reasons" if len(reasons) > 3 else ""))
     return 0
 
 

@@ -46,7 +46,9 @@ def _describe(d: RodDesign) -> tuple[str, str]:
 
 def _with_tube(base: RodDesign, material: str | None, tube: tuple[float, float] | None) -> RodDesign:
     """``base`` with pipes I and II of another material and / or size (the bend, rings and holder follow the
-    size: same wall as the tubes, sleeves as much wider as before)."""
+    size: same wall as the tubes, the bend's radius in the same ratio to its diameter, sleeves as much wider as
+    before; a new-user trial's 45 mm variants of a 32 mm rod had kept its 60 mm bend radius, below the rule's 1.5
+    diameters, and were all invalid)."""
     kw = {}
     if material is not None:
         mat = get_material(material, {m.name: m for m in (base.pipe_I.material, base.pipe_II.material)},
@@ -59,7 +61,8 @@ def _with_tube(base: RodDesign, material: str | None, tube: tuple[float, float] 
     grow = od - d.pipe_I.outer_diameter_mm
     return replace(d, pipe_I=replace(d.pipe_I, outer_diameter_mm=od, wall_mm=wall),
                    pipe_II=replace(d.pipe_II, outer_diameter_mm=od, wall_mm=wall),
-                   bend=replace(d.bend, outer_diameter_mm=od, wall_mm=wall),
+                   bend=replace(d.bend, outer_diameter_mm=od, wall_mm=wall,
+                                radius_mm=d.bend.radius_mm * od / d.bend.outer_diameter_mm),
                    rings=replace(d.rings, outer_diameter_mm=d.rings.outer_diameter_mm + grow),
                    pipe_holder=replace(d.pipe_holder, outer_diameter_mm=d.pipe_holder.outer_diameter_mm + grow))
 

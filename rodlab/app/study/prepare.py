@@ -107,6 +107,9 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
         return DesignSetup(**row, status=DesignStatus.FAILED, message=f"{type(e).__name__}: {e}")
     setup = DesignSetup(**row, status=DesignStatus.OK, fea=fea, calc=calc, compliance_model=model,
                         r_prior=tuple(r_prior), **extras)
+    notes = fea.provenance.get("outside_calibrated_range") or []
+    if notes:                      # the global frame off its calibrated range: said on the row (fea and sweep say it)
+        setup.message = "frame: " + "; ".join(notes) + "; check this design with `rodlab fea --model solid`"
     try:
         # the study's poses are not yet held to the device's open side (calibrate.plan.ROD_ANGLE_MAX_DEG): with it
         # the predicted compensation gains move within their seed-to-seed scatter (rod 6#'s 0.005-0.018 mm), and

@@ -22,12 +22,14 @@ from .params import catalogue
 from .rod import Rod
 from .simulate import standard_base
 
-__all__ = ["observability", "plan_poses", "rod_angle_deg", "ROD_ANGLE_MAX_DEG"]
+__all__ = ["observability", "plan_poses", "rod_angle_deg", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT"]
 
 #: the rod leaves the ball within this angle [deg] of its device's open diagonal ((1, 1, 1) / sqrt 3 in {D_j}); the
 #: contract's example campaigns reach 124 deg (a rod nearly level passes beside the sensors), a rod pointing down
 #: into the sensors (the new-user trial saw 142 deg) cannot be clamped
 ROD_ANGLE_MAX_DEG = 125.0
+#: the direction in {n} along which an L-shaped rod (gamma 90 deg) leaves its ball: back along pipe II
+L_ROD_EXIT = (-1.0, 0.0, 0.0)
 
 
 def observability(J: np.ndarray) -> dict:
@@ -43,7 +45,7 @@ def observability(J: np.ndarray) -> dict:
 
 
 def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng,
-                         max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG) -> dict:
+                         max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT) -> dict:
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
     robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
     position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`)."""
@@ -55,7 +57,7 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
     for j, got in reached.items():
         n_reach = len(got)
         if n_reach and max_rod_angle_deg is not None:
-            got = got[rod_angle_deg(params, got, fixture.transform(j)) <= max_rod_angle_deg]
+            got = got[rod_angle_deg(params, got, fixture.transform(j), exit_n) <= max_rod_angle_deg]
         got = got[:candidates]
         if len(got) < k:
             raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
@@ -66,20 +68,23 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
     return cands
 
 
-def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray) -> np.ndarray:
-    """Angle [deg] between the rod as it leaves the ball (towards the bend: -x of {n}, pipe II) and the open
-    diagonal (1, 1, 1) / sqrt 3 of the device whose pose in {W} is ``T_WD``, shape=(N,)."""
+def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray, exit_n=L_ROD_EXIT) -> np.ndarray:
+    """Angle [deg] between the rod as it leaves the ball (``exit_n``: unit vector in {n} from the ball back along
+    pipe II, ``-RodDesign.pipe_II_direction``) and the open diagonal (1, 1, 1) / sqrt 3 of the device whose pose in
+    {W} is ``T_WD``, shape=(N,)."""
     fr = forward(params, np.atleast_2d(q_rad))
-    x_n_W = np.einsum("ij,njk->nik", fr.R_W0, fr.T[:, -1, :3, :3])[:, :, 0]
+    R_Wn = np.einsum("ij,njk->nik", fr.R_W0, fr.T[:, -1, :3, :3])
+    exit_W = R_Wn @ (np.asarray(exit_n, float) / np.linalg.norm(exit_n))
     diag_W = np.asarray(T_WD, float)[:3, :3] @ (np.ones(3) / np.sqrt(3.0))
-    return np.degrees(np.arccos(np.clip(-x_n_W @ diag_W, -1.0, 1.0)))
+    return np.degrees(np.arccos(np.clip(exit_W @ diag_W, -1.0, 1.0)))
 
 
 def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None,
-               max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG):
+               max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT):
     """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices, for the
     rod ``rod`` (:class:`~rodlab.calibrate.rod.Rod`: its tool vector and its weight; ``Rod.of(compliance)``);
-    ``max_rod_angle_deg``: the rod leaves the ball within this angle of the device's open diagonal (None: any)."""
+    ``max_rod_angle_deg``: the rod leaves the ball within this angle of the device's open diagonal (None: any),
+    along ``exit_n`` in {n} (:func:`rod_angle_deg`; an L-shaped rod's by default)."""
     if not isinstance(rod, Rod):
         raise TypeError(f"plan_poses takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm, mass_kg, "
                         f"com_T_mm)), got {type(rod).__name__}")
@@ -87,7 +92,7 @@ def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed:
     p = ModelParams.nominal(robot, rod.tool_mm, base=base_guess)
     if base_guess is None:
         p = p.with_(base=standard_base())      # {W} 650 mm in front, 250 mm up, device tilted as in the paper
-    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng, max_rod_angle_deg)
+    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng, max_rod_angle_deg, exit_n)
     allq = np.concatenate(list(cands.values()))
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod)

@@ -19,6 +19,11 @@ RECIPROCITY_SHARE = 0.2
 #: on-axis entries measured / simulated that differ by more than this factor between gauges: one reads in
 #: other units (inches 25.4, um 1000) or through a lever; no rod is that much softer along one axis alone
 GAUGE_SCALE_RATIO = 5.0
+#: unit slips a gauge column can have, and their factors
+UNIT_FACTORS = {"inches and millimetres": 25.4, "micrometres and millimetres": 1000.0,
+                "centimetres and millimetres": 10.0}
+#: a ratio within this share of a units factor is that slip
+UNIT_FACTOR_TOLERANCE = 0.15
 #: the hold averages of a line scatter about it by more than this many times a hold average's noise
 LACK_FACTOR = 5.0
 
@@ -26,8 +31,10 @@ LACK_FACTOR = 5.0
 def reciprocity_problems(M: np.ndarray, S: np.ndarray) -> tuple[list[str], list[str]]:
     """(refusals, warnings) from the measured entries ``M`` [mm/N] and their standard errors ``S`` (NaN where not
     measured), shape=(3, 3): a pair of opposite signs, each clearly measured, is a gauge reversed in one series
-    (the file would average it away: refused); a pair that differs otherwise beyond :data:`RECIPROCITY_Z` SEs and
-    :data:`RECIPROCITY_SHARE` is warned of."""
+    (the file would average it away: refused) when they are also alike in size (b = -a within
+    :data:`RECIPROCITY_SHARE`: a gauge block turned a little makes an entry whose true value is 0 come out
+    +theta c22 and -theta c11, of opposite signs but unlike sizes); a pair that differs otherwise beyond
+    :data:`RECIPROCITY_Z` SEs and :data:`RECIPROCITY_SHARE` is warned of."""
     refuse, warn = [], []
     for i in range(3):
         for j in range(i + 1, 3):
@@ -40,7 +47,7 @@ def reciprocity_problems(M: np.ndarray, S: np.ndarray) -> tuple[list[str], list[
             what = (f"c{i + 1}{j + 1} = {a * 1e3:+.4g} um/N (load {_AX[j]}, {_AX[i]} gauge) but c{j + 1}{i + 1} = "
                     f"{b * 1e3:+.4g} um/N (load {_AX[i]}, {_AX[j]} gauge), {z:.0f} standard errors apart; a rod's "
                     f"compliance is symmetric")
-            if a * b < 0 and abs(a) > 5 * sa and abs(b) > 5 * sb:
+            if a * b < 0 and abs(a) > 5 * sa and abs(b) > 5 * sb and abs(a + b) <= RECIPROCITY_SHARE * abs(a - b):
                 refuse.append(f"{what}: opposite signs are a gauge reversed in one series (the {_AX[i]} gauge under "
                               f"the {_AX[j]} load or the {_AX[j]} gauge under the {_AX[i]} load: its sign in the "
                               "profile, or mounted the other way round); averaged, the file would say ~0. Compare "
@@ -72,18 +79,24 @@ def lack_of_fit_warnings(lines: list, holds, noise_mm: float) -> list[str]:
 
 
 def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:
-    """A refusal when the on-axis entries measured / simulated of the gauges differ by more than
-    :data:`GAUGE_SCALE_RATIO` (``M``: measured [mm/N], NaN where not measured; ``C_sim``: simulated C_F):
-    the gauge farthest from the others reads in other units."""
+    """A refusal when one gauge's on-axis entry measured / simulated differs from the others' by a units factor
+    (:data:`UNIT_FACTORS` within :data:`UNIT_FACTOR_TOLERANCE`, and beyond :data:`GAUGE_SCALE_RATIO`): that gauge
+    reads in other units. A ratio that is no units factor is left to the diagnosis: a compliant flange clamp
+    raises the small c11 of an L-shaped rod several times more than c22 and c33 (``M``: measured [mm/N], NaN
+    where not measured; ``C_sim``: simulated C_F)."""
     r = {i: M[i, i] / C_sim[i, i] for i in range(3) if np.isfinite(M[i, i]) and C_sim[i, i] > 0 and M[i, i] > 0}
     if len(r) < 2 or max(r.values()) / min(r.values()) <= GAUGE_SCALE_RATIO:
         return []
     mid = float(np.exp(np.median(np.log(list(r.values())))))
     odd = max(r, key=lambda i: abs(np.log(r[i] / mid)))
     others = [i for i in r if i != odd]
-    factor = max(r[odd], r[others[0]]) / min(r[odd], r[others[0]])
+    ref = float(np.exp(np.mean([np.log(r[i]) for i in others])))
+    factor = max(r[odd], ref) / min(r[odd], ref)
+    unit = next((name for name, f in UNIT_FACTORS.items() if abs(factor / f - 1.0) <= UNIT_FACTOR_TOLERANCE), None)
+    if unit is None:
+        return []
     which = (f"the {_AX[odd]} gauge" if len(r) > 2 else f"the {_AX[odd]} or the {_AX[others[0]]} gauge")
     listed = ", ".join(f"r_{i + 1}{i + 1} {r[i]:.3g}" for i in sorted(r))
-    return [f"{which} reads {factor:.3g} times {'less' if r[odd] < r[others[0]] else 'more'} than the others against "
-            f"the simulation ({listed}; no rod is that much softer along one axis alone): its units (inches: 25.4, "
-            "um: 1000) or its scale in the profile; fix the column and fit again"]
+    return [f"{which} reads {factor:.3g} times {'less' if r[odd] < ref else 'more'} than the others against "
+            f"the simulation ({listed}): the factor between {unit}; its units or its scale in the profile; fix the "
+            "column and fit again"]

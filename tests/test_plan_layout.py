@@ -5,6 +5,8 @@ missed the datums by 0.5-1 m, and half the rods pointed down into the sensors)."
 from __future__ import annotations
 
 import json
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -79,3 +81,22 @@ def test_the_base_from_a_calibration_result_and_the_warning_without_one(layout, 
     assert main(args + ["-o", str(tmp_path / "b.csv")]) == 0
     assert "standard layout is assumed" in capsys.readouterr().err
     assert _misses_mm(fix, rod, standard_base(), _planned(tmp_path / "b.csv")).max() < 0.05
+
+
+@pytest.mark.parametrize("gamma", [135.0, 180.0])
+def test_a_rod_bent_otherwise_leaves_the_ball_along_its_own_pipe(layout, tmp_path, gamma):
+    """The open-side rule follows pipe II of the rod given (a review found -x of the flange taken for every rod:
+    a straight rod's plan pointed into the sensors)."""
+    from rodlab.core.design_io import load_design
+    folder, fix, _, base = layout
+    text = Path(resolve_design("rod1").source).read_text()
+    path = tmp_path / "g.rod.toml"
+    path.write_text(re.sub(r"(?m)^gamma_deg = .*$", f"gamma_deg = {gamma}", text))
+    d = load_design(path)
+    assert d.gamma_deg == gamma
+    out = tmp_path / "plan.csv"
+    assert main(["plan", "--fixture", str(folder / "f.fixture.json"), "--rod", str(path),
+                 "--base=" + ",".join(f"{v:.6f}" for v in base), "-o", str(out)]) == 0
+    p = ModelParams.nominal(ROBOT, d.tool_mm, base=base)
+    for j, q in _planned(out).items():
+        assert np.all(rod_angle_deg(p, q, fix.transform(j), -d.pipe_II_direction) <= ROD_ANGLE_MAX_DEG + 1e-9)

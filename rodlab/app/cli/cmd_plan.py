@@ -1,17 +1,18 @@
 """``rodlab plan``: rod orientations per clamping position chosen by observability (O1)."""
 from __future__ import annotations
 
-from rodlab.calibrate import Rod, read_fixture
-
-from ...core.calc import calc_rod_compliance
-from ...core.compliance import read_compliance
-from ...core.design_io import load_design
-from ...core.errors import RodlabError
-from ...core.fileio import atomic_write_text
+import argparse
 import sys
 
 import numpy as np
 
+from rodlab.calibrate import Rod, read_fixture
+
+from ...core.calc import calc_rod_compliance
+from ...core.compliance import read_compliance
+from ...core.design_io import load_design, resolve_design
+from ...core.errors import RodlabError
+from ...core.fileio import atomic_write_text
 from .argtypes import count, seed
 from .robotargs import add_robot_options, robot_from_args
 
@@ -46,12 +47,11 @@ def cmd_plan(args) -> int:
     from rodlab.calibrate.plan import plan_poses
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
-    if str(args.rod).endswith(".toml"):
-        rod = calc_rod_compliance(load_design(args.rod))
-    else:
-        rod = read_compliance(args.rod)
+    design = load_design(args.rod) if str(args.rod).endswith(".toml") else None
+    rod = calc_rod_compliance(design) if design is not None else read_compliance(args.rod)
     base = _base(args)
-    poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed, base_guess=base)
+    poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed, base_guess=base,
+                            exit_n=_rod_exit(args, design, rod))
     print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
           ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
     lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]
@@ -70,7 +70,6 @@ BASE_KEYS = ("base_x", "base_y", "base_z", "base_a", "base_b", "base_c")
 
 def base_pose(text: str) -> np.ndarray:
     """``--base X,Y,Z,A,B,C``: six finite numbers [mm, deg]."""
-    import argparse
     try:
         v = np.array([float(t) for t in text.split(",")])
     except ValueError:
@@ -79,6 +78,28 @@ def base_pose(text: str) -> np.ndarray:
         raise argparse.ArgumentTypeError(f"expected six numbers X,Y,Z,A,B,C (the base pose in {{W}}, mm and deg), "
                                          f"got {text!r}")
     return v
+
+
+def _rod_exit(args, design, rod) -> np.ndarray:
+    """The direction in {n} along which the rod leaves its ball (back along pipe II: its bend angle gamma decides
+    it), from the design given, the design file the compliance file names, or the built-in design of its rod's
+    name with the same tool vector; without one an L-shaped rod (gamma 90) is assumed, with a warning."""
+    if design is None:
+        from ..diagnose.envelope import design_of
+        design = design_of(rod)
+        if design is None:
+            try:
+                design = resolve_design(rod.rod)
+            except RodlabError:
+                design = None
+        if design is not None and not np.allclose(design.tool_mm, rod.tool_mm, atol=1.0):
+            design = None
+    if design is None:
+        print(f"warning: {args.rod}: the rod's bend angle is not known (no design file): it is taken to leave the "
+              "ball along -x of the flange (an L-shaped rod, gamma 90 deg); give its *.rod.toml as --rod to plan "
+              "with its own", file=sys.stderr)
+        return np.array([-1.0, 0.0, 0.0])
+    return -design.pipe_II_direction
 
 
 def _base(args):

@@ -53,9 +53,9 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     w += _dof_warnings(res)
     test = res.residual_check
     if test is not None and test.material and test.clamping:
-        causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod" if test.birge < GROSS_BIRGE
-                  else f"not a noisier device ({test.birge:.0f} times the stated scatter) but files that do not "
-                       f"describe this campaign: {GROSS_CAUSES}")
+        causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod" if not gross(test, res)
+                  else f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms, {test.birge:.0f} times the stated "
+                       f"scatter) but files that do not describe this campaign: {GROSS_CAUSES}")
         w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
                  f"campaign the model covers the device's physics, so this is {causes}, and it biases every "
                  "parameter: run `rodlab diagnose --campaign` on the same files to find which")
@@ -129,12 +129,20 @@ def completeness_statement(res: "CalibrationResult") -> str:
                if test.clamping else f"the {test.source}'s noise of {test.noise_mm * 1e3:.1f} um per reading)"))
 
 
-#: a Birge ratio from which the campaign's residuals are no device's noise but files that do not fit together
-GROSS_BIRGE = 5.0
+#: residuals this large [mm rms] and this many times the stated scatter are no device's noise and no physics a
+#: campaign misses (backlash, thermal growth, a gear error give tens of um) but files that do not fit together
+GROSS_RMS_MM = 0.2
+GROSS_BIRGE = 20.0
 #: what makes them so
 GROSS_CAUSES = ("the robot file's joints against the campaign's q columns (order, signs, zero offsets), the units "
                 "(readings in mm, joint angles in deg, fixture poses in mm and deg), another rod's compliance file, "
                 "or a fixture file of another layout")
+
+
+def gross(test, res) -> bool:
+    """Whether a campaign's misfit (its residual ``test``, the result ``res``) is beyond any device noise or missing
+    physics: :data:`GROSS_RMS_MM` and :data:`GROSS_BIRGE` both exceeded."""
+    return res.rms_mm >= GROSS_RMS_MM and test.birge >= GROSS_BIRGE
 
 
 def trust_cautions(res: "CalibrationResult") -> list[str]:

@@ -175,10 +175,12 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     if sim is not None:
         try:
             fit.r_rod = eq21(fit, sim)
-        except RigError as e:
-            fit.success, fit.message = False, e.detail
+        except RigError as e:            # after a refusal of the checks, its message first
+            fit.message = "; ".join(m for m in (fit.message, e.detail) if m)
+            fit.success = False
         else:
-            _check_plausible_r_rod(fit, rec, sim)
+            if fit.success:
+                _check_plausible_r_rod(fit, rec, sim)
     if fit.success:
         fit.message = f"{len(lines)} lines fitted; {noise_text(noise)}"
     elif fit.message.count("nothing was written") > 1:
@@ -290,24 +292,36 @@ UNLOADED_APART_P = 1e-3
 
 def _unloaded_apart(X: np.ndarray, y: np.ndarray, res: np.ndarray, unloaded: np.ndarray, F: np.ndarray):
     """The design matrix with the holds at mass 0 on a level of their own (their own intercept: they no longer
-    bear on the slope), or None. Used when they lie off both branch lines beyond chance (F-test, p below
-    :data:`UNLOADED_APART_P`): friction that lets go when the hanger is taken off puts them between the branches,
-    and on the lines they had pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads
-    besides."""
+    bear on the slope), or None. Used where friction lets go when the hanger is taken off: both branches present
+    and apart (their intercepts more than 5 standard errors apart), the unloaded holds between them, and off both
+    lines beyond chance (F-test of the same least squares, p below :data:`UNLOADED_APART_P`); on the lines they had
+    pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads besides. (``res``: unused, the
+    test refits both by least squares.)"""
     loaded = ~unloaded
-    if not unloaded.any() or loaded.sum() < X.shape[1] or np.unique(F[loaded]).size < 2:
+    if (X.shape[1] != 3 or not unloaded.any() or loaded.sum() < X.shape[1] + 1
+            or np.unique(F[loaded]).size < 2):
         return None
     X2 = np.column_stack([X[:, :-1] * loaded[:, None], unloaded.astype(float), X[:, -1]])
     if np.linalg.matrix_rank(X2) < X2.shape[1]:
         return None
-    coef2 = np.linalg.lstsq(X2, y, rcond=None)[0]
-    rss1, rss2 = float(res @ res), float(np.sum((y - X2 @ coef2) ** 2))
+    coef1, rss1 = _ols(X, y)
+    coef2, rss2 = _ols(X2, y)
     dof2 = len(y) - X2.shape[1]
     if dof2 < 1 or rss1 <= rss2:
+        return None
+    cov = rss2 / dof2 * np.linalg.pinv(X2.T @ X2)
+    split, split_se = coef2[1] - coef2[0], np.sqrt(max(cov[0, 0] + cov[1, 1] - 2 * cov[0, 1], 0.0))
+    between = min(coef2[0], coef2[1]) <= coef2[2] <= max(coef2[0], coef2[1])
+    if not (between and abs(split) > 5 * split_se):
         return None
     from scipy.stats import f as f_dist
     stat = (rss1 - rss2) / max(rss2 / dof2, 1e-300)
     return X2 if f_dist.sf(stat, 1, dof2) < UNLOADED_APART_P else None
+
+
+def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
+    coef = np.linalg.lstsq(X, y, rcond=None)[0]
+    return coef, float(np.sum((y - X @ coef) ** 2))
 
 
 def _combine_lines(lines: list) -> tuple[np.ndarray, np.ndarray]:

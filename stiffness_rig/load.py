@@ -7,7 +7,7 @@ the slides (``+F_f`` while loading, ``-F_f`` while unloading) and a dead load mi
 
     friction_N = (d_load - d_unload) / 2        tare_kg = -(d_load + d_unload) / (2 g0)
 
-over the holds with a hanger on (mass > 0). A series' first hold without a hanger carries no load (no friction
+over the holds with a hanger on (mass > 0). The first hold of each load axis, without a hanger, carries no load (no friction
 engaged yet): what the load cell reads there is its zero offset (``zero_offset_N``), taken off before friction and
 tare (a 0.5 N offset had
 been reported as a 51 g tare: new-user trial); the lines' slopes do not depend on it.

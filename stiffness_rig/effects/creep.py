@@ -32,6 +32,9 @@ class Creep(RigEffectModel):
     def check(self, p: dict) -> None:
         if not p["tau_s"] > 0:
             raise RigError(f"effect creep: tau_s must be > 0 s, got {p['tau_s']!r}", key="creep.tau_s")
+        if p.get("tau_2_s") is not None and p.get("phi_2") is None:
+            raise RigError("effect creep: tau_2_s is the second term's time constant: give its phi_2 too",
+                           key="creep.phi_2")
         if p.get("phi_2") is not None and not (p.get("tau_2_s") or 0) > 0:
             raise RigError(f"effect creep: phi_2 needs its time constant tau_2_s > 0 s, got {p.get('tau_2_s')!r}",
                            key="creep.tau_2_s")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from rodlab.calibrate import RodDeflection, read_fixture
+from rodlab.calibrate.crossval import Prediction
 
 from ...core.compliance import read_compliance
 from ...core.errors import RodlabError
@@ -16,6 +17,7 @@ from .calibration_run import run_calibration
 from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
 from .reporting import default_folder, write_command_report
 from .robotargs import robot_from_args
+from .verdict import judge
 
 __all__ = ["register", "cmd_compare"]
 
@@ -69,6 +71,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     camp = campaign_from_args(args, robot_from_args(args).n)
     warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
+    for _, run in runs:                  # the verdict of `rodlab calibrate`: its own reasons and the validation's
+        judge(run.result, Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm))
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11} "
           f"{'trusted':>8}")
     before = runs[0][1].before

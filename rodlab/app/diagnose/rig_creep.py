@@ -18,7 +18,7 @@ from scipy.optimize import minimize
 from rodlab.stiffness_rig.effects import CREEP_TAU_GRID_S, two_term_creep_hypothesis
 from rodlab.stiffness_rig.effects.creep import kelvin_voigt
 
-from .criteria import bic_penalty, evidence
+from .criteria import bic_penalty, cv_improves, evidence
 from .rig_select import admissible, subset_ls
 
 __all__ = ["two_term_step", "FAST_CREEP_LOOKALIKES"]
@@ -55,7 +55,8 @@ def two_term_step(library, ls, S: tuple, data, base, r0, prep, sigma: float, fol
         dbic = (rss - cur_rss) / sigma ** 2 + dk * np.log(n)
         log.debug("two-term creep (%s) for %s: delta BIC %.1f", term.settings, [library[i].effect for i in drop], dbic)
         better = dbic <= 0 if lenient else evidence((cur_rss - rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-        if better and admissible(lib, new_ls, key, c, sigma, prep.groups):
+        if better and admissible(lib, new_ls, key, c, sigma, prep.groups) and cv_improves(ls.cv_error(S),
+                                                                                          new_ls.cv_error(key)):
             log.info("creep of two terms (%s) in place of %s: delta BIC %.1f", term.settings,
                      [library[i].effect for i in drop], dbic)
             return lib, new_ls, key

@@ -95,7 +95,7 @@ class _Reader:
         self.path, self.text = path, text
 
     def err(self, msg, key):
-        return RigError(msg, path=self.path, line=_line(self.text, key.split(".")[-1]) if key else None, key=key)
+        return RigError(msg, path=self.path, line=_line(self.text, key) if key else None, key=key)
 
     def keys(self, tbl, allowed, where):
         if not isinstance(tbl, dict):

@@ -176,7 +176,7 @@ def _protocol_config(r, ins: dict, where: str, cls) -> dict:
 
 
 def _instrument(r, ins, k: int) -> Instrument:
-    where = "instrument"
+    where = f"instrument[{k + 1}]"            # as the schema names it: the line is the k-th instrument's
     if not isinstance(ins, dict):
         raise _err(r, "each [[instrument]] is a table", where)
     protocol = r.string(ins, "protocol", where, choices=tuple(DRIVERS))
@@ -197,7 +197,7 @@ def _instrument(r, ins, k: int) -> Instrument:
         raise _err(r, f"instrument {name!r}: {e}", f"{where}.{e.key}") from e
     except Exception as e:  # noqa: BLE001 - e.g. a regular expression that does not compile
         raise _err(r, f"instrument {name!r}: {e}", where) from e
-    channels = tuple(_channel(r, c, f"{where}.channel", driver) for c in chans)
+    channels = tuple(_channel(r, c, f"{where}.channel[{i + 1}]", driver) for i, c in enumerate(chans))
     return Instrument(name, r.string(ins, "port", where), protocol, config, channels,
                       r.num(ins, "baudrate", where, 9600, integer=True), r.num(ins, "bytesize", where, 8, integer=True),
                       r.string(ins, "parity", where, "N", ("N", "E", "O")), r.num(ins, "stopbits", where, 1.0),

@@ -215,10 +215,10 @@ def test_an_instrument_that_answers_nothing_usable(tmp_path):
 
 PROFILE_ERRORS = [
     ("unknown protocol", {"protocol": "keyence"}, "instrument", "keyence"),
-    ("regex without pattern", {"protocol": "ascii_regex"}, "instrument.pattern", "needs `pattern`"),
-    ("value not given", {"value": "force"}, "instrument.channel.value", "gives the values ['value']"),
-    ("axis of a force", {"quantity": "force", "axis": "y"}, "instrument.channel.axis", "only a displacement"),
-    ("bad units", {"units": "N"}, "instrument.channel.units", "units"),
+    ("regex without pattern", {"protocol": "ascii_regex"}, "instrument[1].pattern", "needs `pattern`"),
+    ("value not given", {"value": "force"}, "instrument[1].channel[1].value", "gives the values ['value']"),
+    ("axis of a force", {"quantity": "force", "axis": "y"}, "instrument[1].channel[1].axis", "only a displacement"),
+    ("bad units", {"units": "N"}, "instrument[1].channel[1].units", "units"),
 ]
 
 
@@ -232,6 +232,9 @@ def test_profile_errors_name_the_key(tmp_path, label, change, key, words):
     with pytest.raises(RigError) as ei:
         read_profile(_profile(tmp_path, body, None))
     assert ei.value.key.startswith(key) and words in str(ei.value), str(ei.value)
+    if label == "bad units":                         # the reader names the channel's own line, as validate does
+        text = (tmp_path / "rig.profile.toml").read_text().splitlines()
+        assert text[ei.value.line - 1].strip().startswith("units")
 
 
 def test_modbus_and_loader_errors(tmp_path):
@@ -240,7 +243,7 @@ def test_modbus_and_loader_errors(tmp_path):
     with pytest.raises(RigError, match="float32") as ei:
         read_profile(_profile(tmp_path, _instrument("d", "/dev/null", "digimatic",
                                                      [{"quantity": "displacement", "axis": "y"}]) + body, None))
-    assert ei.value.key == "instrument.registers[0].type"
+    assert ei.value.key == "instrument[2].registers[0].type"
     good = body.replace("float64", "float32")
     with pytest.raises(RigError, match="text-protocol") as ei:
         read_profile(_profile(tmp_path, _instrument("d", "/dev/null", "digimatic",

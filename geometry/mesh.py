@@ -26,7 +26,7 @@ from rodlab.core.fem_mesh import RodMesh
 from rodlab.core.layout import layout
 
 from .errors import GeometryError
-from .mesh_generate import generate_mesh
+from .mesh_generate import generate_mesh, session_options
 from .parts import half_solids, part_solids
 from .occ_parts import add_part_volumes
 
@@ -216,7 +216,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
         try:
-            _session_options()
+            session_options()
             gmsh.model.add(f"rod_{design.name}")
             if solids is None:
                 solids = add_part_volumes(design, half)
@@ -254,16 +254,6 @@ def _check_mesh_args(design: RodDesign, size_mm, order, grading, kernel) -> tupl
     if not (h > 0 and np.isfinite(h)):
         raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
     return h, _check_grading(grading)
-
-
-def _session_options() -> None:
-    """gmsh's options for one meshing session: quiet, repeatable, the booleans in parallel, msh 4.1."""
-    import gmsh
-
-    gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.option.setNumber("General.NumThreads", 1)        # parallel 2-D meshing is not repeatable
-    gmsh.option.setNumber("Geometry.OCCParallel", 1)      # the fragment in parallel: ~0.125 -> 0.08 s
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
 
 
 def _import_parts(solids: dict, tmp: str) -> dict:

@@ -17,7 +17,7 @@ import logging
 
 from .errors import GeometryError
 
-__all__ = ["generate_mesh", "OPTIMIZER_GAVE_UP"]
+__all__ = ["generate_mesh", "session_options", "OPTIMIZER_GAVE_UP"]
 
 log = logging.getLogger(__name__)
 
@@ -68,3 +68,12 @@ def _generate_reporting_errors() -> list[str]:
 def _gave_up(errors: list[str]) -> bool:
     return any(s in e for e in errors for s in OPTIMIZER_GAVE_UP)
 
+
+def session_options() -> None:
+    """gmsh's options for one meshing session: quiet, repeatable, the booleans in parallel, msh 4.1."""
+    import gmsh
+
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.option.setNumber("General.NumThreads", 1)        # parallel 2-D meshing is not repeatable
+    gmsh.option.setNumber("Geometry.OCCParallel", 1)      # the fragment in parallel: ~0.125 -> 0.08 s
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 
 from rodlab.calibrate import Rod, read_fixture
+from rodlab.calibrate.result import read_calibration
 
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
@@ -107,7 +108,6 @@ def _base(args):
     if args.base is not None:
         return args.base
     if args.calibration:
-        from rodlab.calibrate.result import read_calibration
         cal = read_calibration(args.calibration)
         missing = [k for k in BASE_KEYS if k not in cal.parameters]
         if missing:

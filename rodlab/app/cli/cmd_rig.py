@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+from rodlab.stiffness_rig.drivers import DRIVERS
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.fit import noise_text
 from rodlab.stiffness_rig.plan_check import default_masses, linear_range_warnings
@@ -346,7 +347,6 @@ def cmd_simulator(args: argparse.Namespace) -> int:
 def _served_loader(profile) -> str:
     """A ``[loader]`` for the served profile when it has none: the simulated rig's loader answers on every text
     instrument's port, so ``rig acquire --non-interactive`` runs on the served profile as it is."""
-    from rodlab.stiffness_rig.drivers import DRIVERS
     if profile.loader_instrument is not None:
         return ""
     text = [i.name for i in profile.instruments if DRIVERS[i.protocol].text_lines]

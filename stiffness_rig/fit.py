@@ -314,9 +314,9 @@ def _unloaded_apart(X: np.ndarray, y: np.ndarray, res: np.ndarray, unloaded: np.
     between = min(coef2[0], coef2[1]) <= coef2[2] <= max(coef2[0], coef2[1])
     if not (between and abs(split) > 5 * split_se):
         return None
-    from scipy.stats import f as f_dist
+    from scipy.special import fdtrc        # the F distribution's survival function (scipy.stats takes ~0.6 s)
     stat = (rss1 - rss2) / max(rss2 / dof2, 1e-300)
-    return X2 if f_dist.sf(stat, 1, dof2) < UNLOADED_APART_P else None
+    return X2 if fdtrc(1, dof2, stat) < UNLOADED_APART_P else None
 
 
 def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:

@@ -53,9 +53,10 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     w += _dof_warnings(res)
     test = res.residual_check
     if test is not None and test.material and test.clamping:
-        causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod" if not gross(test, res)
-                  else f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms, {test.birge:.0f} times the stated "
-                       f"scatter) but files that do not describe this campaign: {GROSS_CAUSES}")
+        causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod"
+                  if not gross(test.birge, res.rms_mm) else
+                  f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms, {test.birge:.0f} times the stated scatter) "
+                  f"but files that do not describe this campaign: {GROSS_CAUSES}")
         w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
                  f"campaign the model covers the device's physics, so this is {causes}, and it biases every "
                  "parameter: run `rodlab diagnose --campaign` on the same files to find which")
@@ -139,10 +140,10 @@ GROSS_CAUSES = ("the robot file's joints against the campaign's q columns (order
                 "or a fixture file of another layout")
 
 
-def gross(test, res) -> bool:
-    """Whether a campaign's misfit (its residual ``test``, the result ``res``) is beyond any device noise or missing
+def gross(birge: float, rms_mm: float) -> bool:
+    """Whether a campaign's misfit (its Birge ratio, its residuals' rms [mm]) is beyond any device noise or missing
     physics: :data:`GROSS_RMS_MM` and :data:`GROSS_BIRGE` both exceeded."""
-    return res.rms_mm >= GROSS_RMS_MM and test.birge >= GROSS_BIRGE
+    return rms_mm >= GROSS_RMS_MM and birge >= GROSS_BIRGE
 
 
 def trust_cautions(res: "CalibrationResult") -> list[str]:

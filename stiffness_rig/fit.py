@@ -264,7 +264,7 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
     X = np.column_stack([~uo, uo, Fo]).astype(float) if two else np.column_stack([np.ones_like(Fo), Fo])
     coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
     res = yo - X @ coef
-    apart = _unloaded_apart(X, yo, res, h.mass_kg[ok] == 0.0, Fo)
+    apart = _unloaded_apart(X, yo, h.mass_kg[ok] == 0.0, Fo)
     if apart is not None:
         X = apart
         coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
@@ -290,13 +290,13 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
 UNLOADED_APART_P = 1e-3
 
 
-def _unloaded_apart(X: np.ndarray, y: np.ndarray, res: np.ndarray, unloaded: np.ndarray, F: np.ndarray):
+def _unloaded_apart(X: np.ndarray, y: np.ndarray, unloaded: np.ndarray, F: np.ndarray):
     """The design matrix with the holds at mass 0 on a level of their own (their own intercept: they no longer
     bear on the slope), or None. Used where friction lets go when the hanger is taken off: both branches present
     and apart (their intercepts more than 5 standard errors apart), the unloaded holds between them, and off both
     lines beyond chance (F-test of the same least squares, p below :data:`UNLOADED_APART_P`); on the lines they had
-    pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads besides. (``res``: unused, the
-    test refits both by least squares.)"""
+    pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads besides; both models are
+    refitted by least squares (the line's own fit may be robust)."""
     loaded = ~unloaded
     if (X.shape[1] != 3 or not unloaded.any() or loaded.sum() < X.shape[1] + 1
             or np.unique(F[loaded]).size < 2):

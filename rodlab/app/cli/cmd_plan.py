@@ -11,11 +11,12 @@ from rodlab.calibrate.result import read_calibration
 
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
-from ...core.design_io import load_design, resolve_design
+from ...core.design_io import load_design
 from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
 from .argtypes import count, seed
 from .robotargs import add_robot_options, robot_from_args
+from .rodargs import design_of_compliance
 
 __all__ = ["register", "cmd_plan"]
 
@@ -86,13 +87,7 @@ def _rod_exit(args, design, rod) -> np.ndarray:
     it), from the design given, the design file the compliance file names, or the built-in design of its rod's
     name with the same tool vector; without one an L-shaped rod (gamma 90) is assumed, with a warning."""
     if design is None:
-        from ..diagnose.envelope import design_of
-        design = design_of(rod)
-        if design is None:
-            try:
-                design = resolve_design(rod.rod)
-            except RodlabError:
-                design = None
+        design = design_of_compliance(rod)
         if design is not None and not np.allclose(design.tool_mm, rod.tool_mm, atol=1.0):
             design = None
     if design is None:

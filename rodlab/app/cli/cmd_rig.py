@@ -30,7 +30,7 @@ from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
-from .rodargs import compliance_arg, warn_rod_mismatch
+from .rodargs import compliance_arg, design_of_compliance, warn_rod_mismatch
 
 __all__ = ["register"]
 
@@ -217,7 +217,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     sim = compliance_arg(args.sim)
     effects = parse_effects(args.effect)
-    design = _checked_design(args.design, explicit=True) if args.design else _sim_design(sim)
+    design = _checked_design(args.design, explicit=True) if args.design else design_of_compliance(sim)
     if design is None and args.masses is None:
         print("note: the rod's design is unknown (not a built-in, no design file in the compliance file's "
               "provenance): the paper's masses up to 2 kg; on a carbon rod give --design or --masses 0.5,1,1.5 "
@@ -250,13 +250,6 @@ def _checked_design(design_spec: str, explicit: bool):
         if explicit:
             raise
         return None
-
-
-def _sim_design(sim):
-    """The design a compliance file was made from (the design file its provenance names, when that file still
-    hashes to it), else the built-in design of its rod's name; None when neither is known."""
-    from ..diagnose.envelope import design_of
-    return design_of(sim) or _checked_design(sim.rod, explicit=False)
 
 
 def _warn_linear_range(schedule, design) -> None:

@@ -136,7 +136,9 @@ def _assumptions(args) -> str:
 
 
 def _print_unusable(table) -> None:
-    """Every design the study could not use (invalid, unreachable, failed), with its reason (study.csv too)."""
+    """Every design the study could not use (invalid, unreachable, failed), with its reason (study.csv too), and
+    every usable one's note."""
+    from rodlab.app.study.report import has_message
     designs = table.drop_duplicates("design")
     bad = designs[designs["status"] != "ok"]
     if len(bad):
@@ -144,7 +146,7 @@ def _print_unusable(table) -> None:
     for r in bad.itertuples():
         print(f"  {r.design}: {r.status}: {r.message}")
     for r in designs[designs["status"] == "ok"].itertuples():
-        if isinstance(r.message, str) and r.message.strip():
+        if has_message(r.message):
             print(f"note: {r.design}: {r.message}")
 
 

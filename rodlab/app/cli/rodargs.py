@@ -8,8 +8,10 @@ from pathlib import Path
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import read_compliance
 from ...core.design_io import builtin_designs, resolve_design
+from ...core.errors import RodlabError
 
-__all__ = ["compliance_arg", "design_help", "builtin_designs_text", "same_rod", "warn_rod_mismatch"]
+__all__ = ["compliance_arg", "design_help", "builtin_designs_text", "same_rod", "warn_rod_mismatch",
+           "design_of_compliance"]
 
 
 def builtin_designs_text() -> str:
@@ -64,3 +66,16 @@ def warn_rod_mismatch(recording_rod: str | None, rod: str | None, source: str, o
     print(f"warning: {source} is of rod {recording_rod!r}{named_by} and {against} of rod {rod!r}: "
           f"check that {option} is {what}", file=sys.stderr)
     return True
+
+
+def design_of_compliance(comp):
+    """The design a compliance file was made from (the design file its provenance names, when that file still
+    hashes to it), else the built-in design of its rod's name; None when neither is known."""
+    from ..diagnose.envelope import design_of
+    found = design_of(comp)
+    if found is not None:
+        return found
+    try:
+        return resolve_design(comp.rod)
+    except RodlabError:
+        return None

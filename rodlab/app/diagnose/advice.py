@@ -8,7 +8,7 @@ always says what to do next.
 from __future__ import annotations
 
 from rodlab.calibrate.effects import campaign_effect
-from rodlab.calibrate.trust import GROSS_BIRGE, GROSS_CAUSES, GROSS_RMS_MM
+from rodlab.calibrate.trust import GROSS_CAUSES, gross
 
 from ...core.enums import FindingKind
 from ...core.errors import RodlabError
@@ -18,8 +18,8 @@ __all__ = ["remedy"]
 
 
 def _unexplained(f: Finding) -> str:
-    if (f.parameters.get("spread") == "even" and f.parameters.get("birge_ratio", 0.0) >= GROSS_BIRGE
-            and f.parameters.get("rms_mm", 0.0) >= GROSS_RMS_MM):
+    if f.parameters.get("spread") == "even" and gross(f.parameters.get("birge_ratio", 0.0),
+                                                      f.parameters.get("rms_mm", 0.0)):
         return (f"no device is {f.parameters['birge_ratio']:.0f} times noisier than stated, so do not raise "
                 f"--noise-um: the files do not describe this campaign: check {GROSS_CAUSES}")
     if f.parameters.get("spread") == "even":

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.calibrate.trust import GROSS_BIRGE, GROSS_RMS_MM
+from rodlab.calibrate.trust import gross
 from rodlab.core.enums import FindingKind
 
 from .report import Finding
@@ -33,7 +33,7 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
     even = p_even > 0.01 and p_time > 0.01
     scatter_um = sel.noise_mm * device_scale * 1e3
     noisier = (f"no device is that noisy (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um): the "
-               "files do not describe this campaign" if final_test.birge >= GROSS_BIRGE and final_rms >= GROSS_RMS_MM else
+               "files do not describe this campaign" if gross(final_test.birge, final_rms) else
                f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
                "would give this" if device_scale > 1.0 + 1e-6 else
                "the device noise as stated cannot give this: the fixture poses may be less certain than stated")

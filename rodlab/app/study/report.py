@@ -8,7 +8,7 @@ from pathlib import Path
 from rodlab.core.fileio import atomic_write_text
 from rodlab.app.report.html import CSS, img_tag
 
-__all__ = ["write_study_report"]
+__all__ = ["write_study_report", "has_message"]
 
 
 def _f(v, fmt):
@@ -28,7 +28,7 @@ def _design_table(df) -> str:
                     f"<td>{_f(r.mass_kg * 1e3 if r.mass_kg == r.mass_kg else float('nan'), '.0f')}</td>"
                     f"<td>{_f(r.O1, '.4f')}</td><td>{_f(r.thermal_um_per_K, '.2f')}</td><td>{_f(r.f1_Hz, '.1f')}</td>"
                     f"<td>{_f(r.tube_margin, '.0f')}</td><td>{_f(r.bond_margin, '.0f')}</td>"
-                    f"<td>{html.escape(str(r.status))}{': ' + html.escape(str(r.message)) if _has(r.message) else ''}"
+                    f"<td>{html.escape(str(r.status))}{': ' + html.escape(str(r.message)) if has_message(r.message) else ''}"
                     "</td></tr>")
     return f"<table>{head}{''.join(rows)}</table>"
 
@@ -67,6 +67,6 @@ def write_study_report(out_dir, df, recommendation: str, figures: dict, header: 
     return atomic_write_text(out / "study.html", "\n".join(parts))
 
 
-def _has(message) -> bool:
+def has_message(message) -> bool:
     """A row's message is there (not empty, not NaN from the CSV)."""
     return isinstance(message, str) and bool(message.strip())

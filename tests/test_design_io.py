@@ -133,6 +133,36 @@ def test_validation_rule(tmp_path, rod1_dict, label, mutate, key, words):
         assert key.split(".")[-1] in line or line.startswith("["), (err.line, line)
 
 
+def test_every_broken_rule_is_reported_at_once_with_its_line(tmp_path, rod1_dict):
+    """Three rules broken at once (bend radius, L1 and L2 too short): the error leads with the first and carries
+    the others, each with its own key and line; ``rodlab validate`` lists all three."""
+    from rodlab.app.cli.cmd_validate import validate_file
+    _set(("bend", "radius_mm"), 0.9 * rod1_dict["bend"]["outer_diameter_mm"])(rod1_dict)
+    _set(("L1_mm",), 60.0)(rod1_dict)
+    _set(("L2_mm",), 50.0)(rod1_dict)
+    path = write_toml(tmp_path / "bad.rod.toml", rod1_dict)
+    with pytest.raises(DesignError) as ei:
+        load_design(path)
+    keys = [e.key for e in (ei.value, *ei.value.also)]
+    assert keys == ["bend.radius_mm", "L1_mm", "L2_mm"]
+    lines = path.read_text().splitlines()
+    for e in (ei.value, *ei.value.also):
+        assert e.path == str(path) and e.key.split(".")[-1] in lines[e.line - 1]
+    assert str(ei.value).count("too short") == 2          # the CLI's message shows every problem
+    check = validate_file(path)
+    assert [p.key for p in check.problems] == keys
+
+
+def test_every_broken_part_is_reported_at_once(tmp_path, rod1_dict):
+    """Two parts broken (the tubes' wall, the bend's own wall): both named; a units slip still names one cause."""
+    _set(("tube", "wall_mm"), 0.6 * rod1_dict["tube"]["outer_diameter_mm"])(rod1_dict)
+    rod1_dict["bend"].update(material="steel_304", outer_diameter_mm=40.0, wall_mm=30.0)
+    path = write_toml(tmp_path / "bad.rod.toml", rod1_dict)
+    with pytest.raises(DesignError) as ei:
+        load_design(path)
+    assert [e.key for e in (ei.value, *ei.value.also)] == ["tube.wall_mm", "bend.wall_mm"]
+
+
 def test_range_warnings_name_key_range_and_line(tmp_path, rod1_dict, caplog):
     """Inside the checked range a design loads silently; outside it, a warning per key with the range and the
     file's line; a long rod also gets the linear model's second-order error (sag^2 / reach)."""

@@ -173,19 +173,24 @@ class RodDesign:
         g = self.gamma_deg
         if isinstance(g, bool) or not isinstance(g, (int, float)) or not math.isfinite(g) or not (0 < g <= 180):
             raise DesignError(f"gamma_deg must lie in (0, 180] (180 = straight rod), got {g!r}", key="gamma_deg")
-        try:
-            self._check_fits()
-            self._check_lengths()
-        except DesignError as e:
-            if g <= math.pi:            # a bend angle given in radians folds the rod onto itself
-                raise DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({e.detail}); gamma_deg is "
-                                  f"in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
-                                  key="gamma_deg") from e
+        problems = self._fit_problems() + self._length_problems()
+        if problems:
+            raise self._explained(problems)
+
+    def _explained(self, problems: list[DesignError]) -> DesignError:
+        """The error for the broken rules ``problems`` (all of them, the first leading): one cause named instead
+        when they come from a bend angle in radians or a length in metres."""
+        g, first = self.gamma_deg, problems[0]
+        if g <= math.pi:            # a bend angle given in radians folds the rod onto itself
+            return DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({first.detail}); gamma_deg "
+                               f"is in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
+                               key="gamma_deg")
+        for e in problems:
             if e.key in ("L1_mm", "L2_mm") and getattr(self, e.key) < 5.0:     # a length in metres
                 length = getattr(self, e.key)
-                raise DesignError(f"{e.detail}; {e.key} is in millimetres: did you give metres ({length:g} m = "
-                                  f"{1000 * length:g} mm)?", key=e.key) from e
-            raise
+                return DesignError(f"{e.detail}; {e.key} is in millimetres: did you give metres ({length:g} m = "
+                                   f"{1000 * length:g} mm)?", key=e.key)
+        return DesignError(first.detail, key=first.key, also=problems[1:])
 
     # -- derived geometry ---------------------------------------------------------------
     @property
@@ -249,62 +254,68 @@ class RodDesign:
         return self.pipe_II_length_mm() - self.rings.length_mm - self.plug_mm
 
     # -- rules ---------------------------------------------------------------------------
-    def _check_fits(self) -> None:
+    def _fit_problems(self) -> list[DesignError]:
+        """The part-fit rules this design breaks."""
+        out = []
         for ring_tube, label in ((self.pipe_I, "pipe_I"), (self.pipe_II, "pipe_II")):
             if self.rings.present and self.rings.outer_diameter_mm <= ring_tube.outer_diameter_mm:
-                raise DesignError(
+                out.append(DesignError(
                     f"the rings (OD {self.rings.outer_diameter_mm} mm) do not fit over {label} "
                     f"(OD {ring_tube.outer_diameter_mm} mm): a ring's outer diameter must exceed the tube's; "
-                    f"increase rings.outer_diameter_mm", key="rings.outer_diameter_mm")
+                    f"increase rings.outer_diameter_mm", key="rings.outer_diameter_mm"))
         if self.pipe_holder.present and self.pipe_holder.outer_diameter_mm <= self.pipe_I.outer_diameter_mm:
-            raise DesignError(
+            out.append(DesignError(
                 f"the pipe holder (OD {self.pipe_holder.outer_diameter_mm} mm) does not fit over pipe_I "
                 f"(OD {self.pipe_I.outer_diameter_mm} mm); increase pipe_holder.outer_diameter_mm",
-                key="pipe_holder.outer_diameter_mm")
+                key="pipe_holder.outer_diameter_mm"))
         if self.ball_holder.present and self.ball_holder.outer_diameter_mm >= self.ball.diameter_mm:
-            raise DesignError(
+            out.append(DesignError(
                 f"the ball holder (OD {self.ball_holder.outer_diameter_mm} mm) must be narrower than the ball "
                 f"({self.ball.diameter_mm} mm); reduce ball_holder.outer_diameter_mm",
-                key="ball_holder.outer_diameter_mm")
+                key="ball_holder.outer_diameter_mm"))
         if not self.ball_holder.present and self.pipe_II.outer_diameter_mm >= self.ball.diameter_mm:
-            raise DesignError(
+            out.append(DesignError(
                 f"without a ball holder pipe II (OD {self.pipe_II.outer_diameter_mm} mm) is bonded to the ball and "
                 f"must be narrower than it ({self.ball.diameter_mm} mm); add a [ball_holder] or enlarge the ball",
-                key="ball.diameter_mm")
+                key="ball.diameter_mm"))
         if self.has_bend:
             for tube, label in ((self.pipe_I, "pipe_I"), (self.pipe_II, "pipe_II")):
                 if max(tube.inner_diameter_mm, self.bend.inner_diameter_mm) >= min(
                         tube.outer_diameter_mm, self.bend.outer_diameter_mm):
-                    raise DesignError(
+                    out.append(DesignError(
                         f"the bend pipe (OD {self.bend.outer_diameter_mm}, bore {self.bend.inner_diameter_mm:g} mm) "
                         f"and {label} (OD {tube.outer_diameter_mm}, bore {tube.inner_diameter_mm:g} mm) do not "
                         f"overlap at their joint, so they cannot be bonded; match bend.outer_diameter_mm / wall_mm "
-                        f"to the tube", key="bend.outer_diameter_mm")
+                        f"to the tube", key="bend.outer_diameter_mm"))
             ratio = self.bend.radius_mm / self.bend.outer_diameter_mm
             if ratio < MIN_BEND_RATIO - 1e-9:
-                raise DesignError(
+                out.append(DesignError(
                     f"bend radius {self.bend.radius_mm} mm is {ratio:.2f} x the bend pipe's diameter "
                     f"{self.bend.outer_diameter_mm} mm; at least {MIN_BEND_RATIO} x is needed "
                     f"(>= {MIN_BEND_RATIO * self.bend.outer_diameter_mm:g} mm) to bend a tube without kinking",
-                    key="bend.radius_mm")
+                    key="bend.radius_mm"))
+        return out
 
-    def _check_lengths(self) -> None:
+    def _length_problems(self) -> list[DesignError]:
+        """The length rules this design breaks (the parts placed on each pipe must fit on it)."""
+        out = []
         free1 = self.pipe_I_free_mm()
         if free1 < -1e-9:
             need = self.L1_mm - free1
-            raise DesignError(
+            out.append(DesignError(
                 f"L1 = {self.L1_mm:g} mm is too short for the parts placed on pipe I: pipe holder "
                 f"{self.pipe_holder.length_mm:g} + ring {self.rings.length_mm:.4g} + bend tangent {self.tangent_mm:.1f} "
-                f"= {need:.1f} mm; increase L1_mm to at least {need:.1f} or shorten those parts", key="L1_mm")
+                f"= {need:.1f} mm; increase L1_mm to at least {need:.1f} or shorten those parts", key="L1_mm"))
         free2 = self.pipe_II_free_mm()
         if free2 < -1e-9:
             need = self.L2_mm - free2
-            raise DesignError(
+            out.append(DesignError(
                 f"L2 = {self.L2_mm:g} mm is too short for the parts placed on pipe II: bend tangent "
                 f"{self.tangent_mm:.1f} + ring {self.rings.length_mm:.4g} + ball holder {self.ball_holder.length_mm:g} "
                 f"(plug {self.plug_mm:g}) + ball radius {self.ball.radius_mm} = {need:.1f} mm; "
                 f"increase L2_mm to at least {need:.1f}",
-                key="L2_mm")
+                key="L2_mm"))
+        return out
 
     def material_of(self, part) -> Material:
         """The material of a part (:class:`~rodlab.core.enums.Part` or its name)."""

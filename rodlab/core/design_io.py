@@ -79,9 +79,16 @@ class _Ctx:
         self.path = path
         self.text = text
 
-    def err(self, msg: str, table: str | None, key: str | None, cls=DesignError) -> DesignError:
+    def err(self, msg: str, table: str | None, key: str | None, cls=DesignError, also=()) -> DesignError:
         full_key = f"{table}.{key}" if table and key else (table or key)
-        return cls(msg, path=self.path, line=_line_of(self.text, table, key), key=full_key)
+        return cls(msg, path=self.path, line=_line_of(self.text, table, key), key=full_key, also=also)
+
+    def locate(self, e: FormatError) -> FormatError:
+        """``e`` (and the problems in its ``also``) with this file and the line of its key, unless located."""
+        if e.path is not None or self.path is None:
+            return e
+        t, _, k = (e.key or "").rpartition(".")
+        return self.err(e.detail, t or None, k or None, type(e), also=[self.locate(a) for a in e.also])
 
     def number(self, tbl: Mapping, table: str | None, key: str, default=None) -> float:
         if key not in tbl:
@@ -122,10 +129,10 @@ def design_from_dict(data: Mapping, path: str | Path | None = None, text: str | 
     try:
         return _build(data, c, path)
     except FormatError as e:
-        if e.path is not None or path is None:
+        located = c.locate(e)
+        if located is e:
             raise
-        t, _, k = (e.key or "").rpartition(".")
-        raise c.err(e.detail, t or None, k or None, type(e)) from e
+        raise located from e
 
 
 def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
@@ -147,20 +154,53 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     if "tube" not in data and not ("pipe_I" in data and "pipe_II" in data):
         raise c.err("missing [tube] (or both [pipe_I] and [pipe_II])", None, "tube")
     c.check_keys(data.get("tube", {}), "tube", _TUBE_KEYS)
-    p1, p2 = _tube(data, c, "pipe_I", materials), _tube(data, c, "pipe_II", materials)
-    od = p1.outer_diameter_mm
-    ball_t = data.get("ball", {})
-    c.check_keys(ball_t, "ball", _BALL_KEYS)
-    ball = BallSpec(c.material(ball_t.get("material", "alumina"), "ball", materials),
-                    c.number(ball_t, "ball", "diameter_mm", 30.0))
-    bend = _bend(data, c, p1, materials)
-    rings = _sleeve(data, c, "rings", materials, "al_7075", od + 6.0, 2.0 * od)
-    holder = _sleeve(data, c, "pipe_holder", materials, "al_7075", od + 15.0, 40.0)
-    stud = _sleeve(data, c, "ball_holder", materials, "al_7075",
-                   min(0.8 * p2.outer_diameter_mm, 0.7 * ball.diameter_mm), 20.0)
-    design = RodDesign(name.strip(), L1, L2, gamma, p1, p2, bend, rings, holder, stud, ball,
+    parts = _parts(data, c, materials)
+    design = RodDesign(name.strip(), L1, L2, gamma, parts["pipe_I"], parts["pipe_II"], parts["bend"], parts["rings"],
+                       parts["pipe_holder"], parts["ball_holder"], parts["ball"],
                        source=None if path is None else Path(path), joints=_joints(data.get("joints", {}), c))
     return _with_tolerances(design, data.get("tolerances", {}), c)
+
+
+def _parts(data: Mapping, c: _Ctx, materials: dict) -> dict:
+    """The design's parts by table name, every part checked before any error is raised: the first problem leads
+    and the others come in its ``also`` (a part whose defaults come from a broken one is not checked)."""
+    parts: dict = {}
+    problems: list[FormatError] = []
+
+    def attempt(label: str, make, *needs: str) -> None:
+        if all(parts.get(n) is not None for n in needs):
+            try:
+                parts[label] = make()
+                return
+            except FormatError as e:
+                e = c.locate(e)
+                if all(str(e) != str(p) for p in problems):       # [tube]'s own error, met by both pipes
+                    problems.append(e)
+        parts[label] = None
+
+    def od() -> float:
+        return parts["pipe_I"].outer_diameter_mm
+    attempt("pipe_I", lambda: _tube(data, c, "pipe_I", materials))
+    attempt("pipe_II", lambda: _tube(data, c, "pipe_II", materials))
+    attempt("ball", lambda: _ball(data, c, materials))
+    own_section = isinstance(data.get("bend"), Mapping) and {"material", "outer_diameter_mm", "wall_mm"} <= set(data["bend"])
+    attempt("bend", lambda: _bend(data, c, parts["pipe_I"], materials), *(() if own_section else ("pipe_I",)))
+    attempt("rings", lambda: _sleeve(data, c, "rings", materials, "al_7075", od() + 6.0, 2.0 * od()), "pipe_I")
+    attempt("pipe_holder", lambda: _sleeve(data, c, "pipe_holder", materials, "al_7075", od() + 15.0, 40.0), "pipe_I")
+    attempt("ball_holder", lambda: _sleeve(data, c, "ball_holder", materials, "al_7075",
+                                           min(0.8 * parts["pipe_II"].outer_diameter_mm,
+                                               0.7 * parts["ball"].diameter_mm), 20.0), "pipe_II", "ball")
+    if problems:
+        first = problems[0]
+        raise type(first)(first.detail, first.path, first.line, first.key, also=problems[1:])
+    return parts
+
+
+def _ball(data: Mapping, c: _Ctx, materials: dict) -> BallSpec:
+    ball_t = data.get("ball", {})
+    c.check_keys(ball_t, "ball", _BALL_KEYS)
+    return BallSpec(c.material(ball_t.get("material", "alumina"), "ball", materials),
+                    c.number(ball_t, "ball", "diameter_mm", 30.0))
 
 
 def _joints(table, c: _Ctx) -> dict[str, JointSpring]:
@@ -229,13 +269,14 @@ def _tube(data: Mapping, c: _Ctx, label: str, materials: dict) -> TubeSpec:
     return TubeSpec(mat, od, wall, key=label if "wall_mm" in over else src)
 
 
-def _bend(data: Mapping, c: _Ctx, p1: TubeSpec, materials: dict) -> BendSpec:
-    """The bend: pipe I's material and section unless ``[bend]`` says otherwise; radius 2 x its diameter."""
+def _bend(data: Mapping, c: _Ctx, p1: TubeSpec | None, materials: dict) -> BendSpec:
+    """The bend: pipe I's material and section unless ``[bend]`` says otherwise; radius 2 x its diameter.
+    ``p1`` None (pipe I is broken): ``[bend]`` must give its material and section itself."""
     bend_t = data.get("bend", {})
     c.check_keys(bend_t, "bend", _BEND_KEYS)
     bend_mat = c.material(bend_t["material"], "bend", materials) if "material" in bend_t else p1.material
-    bod = c.number(bend_t, "bend", "outer_diameter_mm", p1.outer_diameter_mm)
-    bwall = c.number(bend_t, "bend", "wall_mm", p1.wall_mm)
+    bod = c.number(bend_t, "bend", "outer_diameter_mm", p1.outer_diameter_mm if p1 else None)
+    bwall = c.number(bend_t, "bend", "wall_mm", p1.wall_mm if p1 else None)
     brad = c.number(bend_t, "bend", "radius_mm", 2.0 * bod)
     return BendSpec(bend_mat, bod, bwall, key="bend", radius_mm=brad)
 
@@ -292,7 +333,7 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
     try:
         check_design(design)
     except DesignError as e:
-        raise DesignError(e.detail, path=p, line=_line_of(text, None, e.key), key=e.key) from e
+        raise DesignError(e.detail, path=p, line=_line_of(text, None, e.key), key=e.key, also=e.also) from e
     for w in range_warnings(design):
         line = _line_of(text, None, w.key)
         log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())

@@ -50,14 +50,17 @@ class LocatedError(RodlabError):
     line : 1-based line number where known
     key : the offending key / column where known
     detail : the message without the location prefix
+    also : further problems found in the same pass (a design's rules are all checked: ``rodlab validate`` lists
+        each), shown after this one's message
     """
 
     def __init__(self, message: str, path: str | Path | None = None,
-                 line: int | None = None, key: str | None = None) -> None:
+                 line: int | None = None, key: str | None = None, also: Iterable[LocatedError] = ()) -> None:
         self.path = None if path is None else str(path)
         self.detail = message
         self.line = line
         self.key = key
+        self.also = tuple(also)
         where = []
         if self.path is not None:
             where.append(self.path)
@@ -66,7 +69,8 @@ class LocatedError(RodlabError):
         if key is not None:
             where.append(f"key `{key}`")
         prefix = ", ".join(where)
-        super().__init__(f"{prefix}: {message}" if prefix else message)
+        more = "".join(f"\n  and: {a}" for a in self.also)
+        super().__init__((f"{prefix}: {message}" if prefix else message) + more)
 
 
 class FormatError(LocatedError):

@@ -95,8 +95,8 @@ def _reader(format_id: str):
 
 
 def validate_file(path, format_id: str | None = None) -> FileCheck:
-    """The schema check of ``path`` and, if it passes, its reader's rules (a reader refuses at its first
-    problem; the schema lists all of its own)."""
+    """The schema check of ``path`` and, if it passes, its reader's rules (the schema lists all of its own
+    problems; a reader those it found in one pass: a rod design's parts, then its rules, each all at once)."""
     robot_format = _schemaless_format(path, format_id)
     if robot_format is not None:
         check = FileCheck(str(path), robot_format)
@@ -107,7 +107,7 @@ def validate_file(path, format_id: str | None = None) -> FileCheck:
         try:
             reader(path)
         except LocatedError as e:
-            check.problems.append(Problem(e.path or str(path), e.detail, e.line, e.key))
+            check.problems.extend(Problem(p.path or str(path), p.detail, p.line, p.key) for p in (e, *e.also))
         except ValueError as e:
             check.problems.append(Problem(str(path), str(e)))
     return check

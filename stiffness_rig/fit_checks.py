@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "RECIPROCITY_Z", "LACK_FACTOR",
+__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings",
+           "RECIPROCITY_Z", "LACK_FACTOR",
            "GAUGE_SCALE_RATIO"]
 
 _AX = "xyz"
@@ -76,6 +77,18 @@ def lack_of_fit_warnings(lines: list, holds, noise_mm: float) -> list[str]:
                        "a mass typed wrong, a drift or a hold that had not settled; the slope may be biased: run "
                        "`rodlab diagnose --rig` on it (its --export writes the compliance with what it finds removed)")
     return out
+
+
+def load_drift_warnings(load) -> list[str]:
+    """A warning when the load cell's zero drifts (``load``: the fit's :class:`~.load.LoadCheck`, or None)."""
+    d = load.drift if load is not None else None
+    if d is None or not d.found:
+        return []
+    return [f"the load cell's zero drifts by {d.span_N:+.3f} N over the recording ({d.rate_N_per_s:+.2e} +- "
+            f"{d.se_N_per_s:.1e} N/s, seen in mass x g0 - force_N of the holds with a hanger on, where friction and "
+            "tare stay constant): its readings are then not the loads, and the tares and friction printed are off by "
+            "up to that much; re-zero the load cell before each series, and run `rodlab diagnose --rig` on the "
+            "recording: it tells whether the deflections follow the load cell or the masses"]
 
 
 def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:

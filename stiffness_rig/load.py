@@ -11,6 +11,11 @@ over the holds with a hanger on (mass > 0). The first hold of each load axis, wi
 engaged yet): what the load cell reads there is its zero offset (``zero_offset_N``), taken off before friction and
 tare (a 0.5 N offset had
 been reported as a 51 g tare: new-user trial); the lines' slopes do not depend on it.
+
+A load cell whose zero drifts during the recording (:func:`zero_drift`) shows as a trend in time of the
+differences within each branch, where friction and tare are constant: its readings are then not the loads (a
+drift of 1e-4 N/s had been reported as tares of 2-11 g and, by the diagnosis, as the gauges drifting: new-user
+trial).
 """
 from __future__ import annotations
 
@@ -24,7 +29,7 @@ from rodlab.core.units import G0
 
 from .holds import Holds
 
-__all__ = ["BranchLoad", "LoadCheck", "measured_load"]
+__all__ = ["BranchLoad", "LoadCheck", "ZeroDrift", "measured_load", "zero_drift", "DRIFT_Z"]
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +53,54 @@ class BranchLoad:
                 "diff_N": self.diff_N, "sd_N": self.sd_N}
 
 
+#: a load cell's zero drift is reported when its rate lies this many standard errors from 0 ...
+DRIFT_Z = 6.0
+#: ... and it moves the zero by at least this much over the recording [N] (a load cell's resolution)
+DRIFT_MIN_N = 0.005
+
+
+@dataclass(frozen=True)
+class ZeroDrift:
+    """A load cell's zero moving linearly in time, from ``mass_kg x g0 - force_N`` of the holds with a hanger on.
+
+    rate_N_per_s : the zero's rate [N/s] (the reading grows by it: the differences fall); se_N_per_s : its
+    standard error; span_N : the zero's move over the holds' time span [N]; holds : holds used
+    """
+
+    rate_N_per_s: float
+    se_N_per_s: float
+    span_N: float
+    holds: int
+
+    @property
+    def found(self) -> bool:
+        """The drift stands out: :data:`DRIFT_Z` standard errors and at least :data:`DRIFT_MIN_N` over the run."""
+        return (np.isfinite(self.se_N_per_s) and abs(self.rate_N_per_s) >= DRIFT_Z * self.se_N_per_s
+                and abs(self.span_N) >= DRIFT_MIN_N)
+
+    def to_dict(self) -> dict:
+        return {"rate_N_per_s": self.rate_N_per_s, "se_N_per_s": self.se_N_per_s, "span_N": self.span_N,
+                "holds": self.holds, "found": bool(self.found)}
+
+
+def zero_drift(t_s: np.ndarray, diff_N: np.ndarray, branch: np.ndarray) -> ZeroDrift | None:
+    """The common time trend of ``diff_N`` (``mass x g0 - load-cell reading`` per hold with a hanger on [N], at
+    the holds' times ``t_s`` [s]) with one level per ``branch`` label (friction and tare are constant on a branch;
+    shape=(m,) each): least squares, its standard error from the scatter about the fit. None with too few holds."""
+    t_s, diff_N = np.asarray(t_s, float), np.asarray(diff_N, float)
+    labels, idx = np.unique(np.asarray(branch), return_inverse=True)
+    ok = np.isfinite(diff_N) & np.isfinite(t_s)
+    dof = int(ok.sum()) - labels.size - 1
+    if dof < 3 or np.ptp(t_s[ok]) <= 0:
+        return None
+    X = np.column_stack([np.eye(labels.size)[idx], t_s])[ok]
+    coef, *_ = np.linalg.lstsq(X, diff_N[ok], rcond=None)
+    resid = diff_N[ok] - X @ coef
+    cov = np.linalg.pinv(X.T @ X) * float(resid @ resid) / dof
+    rate = -float(coef[-1])
+    return ZeroDrift(rate, float(np.sqrt(max(cov[-1, -1], 0.0))), rate * float(np.ptp(t_s[ok])), int(ok.sum()))
+
+
 @dataclass(frozen=True)
 class LoadCheck:
     """Nominal (mass x g0) against measured load (a load cell).
@@ -56,7 +109,8 @@ class LoadCheck:
     branches : one :class:`BranchLoad` per (axis, phase); friction_N, tare_kg : {load axis: value} from the
     branch means ([N], [kg]); force_noise_N : within-hold SD of one load-cell reading [N];
     zero_offset_N : the load cell's mean reading on the holds without a hanger [N], taken off the others (0 when it
-    is within noise of 0 or no hold is without a hanger)
+    is within noise of 0 or no hold is without a hanger); drift : :class:`ZeroDrift` of its zero (None: too few
+    holds)
     """
 
     per_hold_N: np.ndarray
@@ -65,12 +119,13 @@ class LoadCheck:
     tare_kg: dict
     force_noise_N: float
     zero_offset_N: float = 0.0
+    drift: ZeroDrift | None = None
 
     def to_dict(self) -> dict:
         return {"per_hold_N": [float(v) for v in self.per_hold_N], "branches": [b.to_dict() for b in self.branches],
                 "friction_N": {str(a): v for a, v in self.friction_N.items()},
                 "tare_kg": {str(a): v for a, v in self.tare_kg.items()}, "force_noise_N": self.force_noise_N,
-                "zero_offset_N": self.zero_offset_N}
+                "zero_offset_N": self.zero_offset_N, "zero_drift": self.drift.to_dict() if self.drift else None}
 
 
 def measured_load(holds: Holds) -> LoadCheck | None:
@@ -98,7 +153,11 @@ def measured_load(holds: Holds) -> LoadCheck | None:
             tare[axis] = -0.5 * (means[Phase.LOAD] + means[Phase.UNLOAD]) / G0
         elif means:
             tare[axis] = -next(iter(means.values())) / G0
-    return LoadCheck(diff, tuple(branches), friction, tare, holds.force_noise_N(), zero)
+    on = holds.mass_kg > 0
+    mid = 0.5 * (holds.t_start_s + holds.t_end_s)
+    branch = np.array([f"{a.value}:{p.value}" for a, p in zip(holds.axis, holds.phase)])
+    drift = zero_drift(mid[on], diff[on], branch[on])
+    return LoadCheck(diff, tuple(branches), friction, tare, holds.force_noise_N(), zero, drift)
 
 
 def _zero_offset(holds: Holds) -> float:

@@ -20,6 +20,13 @@ vocabulary effect that mimics it: a found one makes the verdict ``unexplained`` 
   there are ``-v``, a term ``g v`` with g held within :data:`_REVERSED_RANGE` of -2 in that series alone, one
   hidden parameter (which gauge and series). A perpendicular gauge reversed for the z series had been named
   crosstalk at two places and ``unexplained`` (new-user trial; ``rig fit`` refuses such a recording).
+- a load cell whose zero drifts (a recording with ``force_N``: the fit takes its readings as the loads): the
+  readings then depart from the loads the rod carries by ``rate x time`` since the series started, and each gauge
+  reads ``-(its compliance to the series' load) x sign x rate x time``: one parameter over every series. Offered
+  only where the load cell's own readings drift (:func:`~rodlab.stiffness_rig.load.zero_drift`: a trend in
+  ``mass x g0 - force_N`` within the branches, where friction and tare stay constant), so a gauge's own drift is
+  never taken for it; the deflections then tell whether they follow the load cell or the masses. A drift of
+  1e-4 N/s had been named the gauges drifting, "decisive" (new-user trial).
 """
 from __future__ import annotations
 
@@ -27,6 +34,8 @@ import numpy as np
 
 from rodlab.core.enums import FindingKind
 from rodlab.core.hypothesis import Hypothesis
+from rodlab.core.units import G0
+from rodlab.stiffness_rig.load import zero_drift
 
 __all__ = ["outside_hypotheses", "OUTSIDE", "confirm_outside"]
 
@@ -59,6 +68,7 @@ def outside_hypotheses(data, base: np.ndarray) -> list[Hypothesis]:
                               f"vocabulary", hidden=1))
     out += _slips(data, base)
     out += _reversed(data, base)
+    out += _load_cell_drift(data, base)
     if len(gauges) > 1:
         # on a rod whose axes differ in compliance the curvature follows each gauge's reading, not the load: a
         # load non-linearity on every axis with crosstalk would otherwise mimic it with three terms
@@ -89,6 +99,35 @@ def _reversed(data, base: np.ndarray) -> list[Hypothesis]:
                                   "displacement with the wrong sign; outside the effect vocabulary", hidden=1,
                                   report_offset=[1.0]))
     return out
+
+
+def _load_cell_drift(data, base: np.ndarray) -> list[Hypothesis]:
+    """The load cell's zero drifting, when the recording's loads are a load cell's (``F_se > 0``) and its readings
+    drift beyond chance within the branches of the holds with a hanger on."""
+    if not np.any(np.asarray(data.F_se) > 0):
+        return []
+    keys = np.stack([data.series, data.step, data.repeat], axis=1)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    t_hold = np.bincount(inverse, weights=data.t_abs) / np.bincount(inverse)
+    mass, F, sign = data.mass[first], data.F[first], data.sign[first]
+    on = mass > 0
+    branch = np.array([f"{s}:{u}" for s, u in zip(data.series[first], data.unload[first])])
+    drift = zero_drift(t_hold[on], mass[on] * G0 - sign[on] * F[on], branch[on])
+    if drift is None or not drift.found:
+        return []
+    col = np.zeros(data.n)
+    for c in np.unique(data.comp):
+        for s in np.unique(data.series):
+            m = (data.comp == c) & (data.series == s)
+            FF = float(data.F[m] @ data.F[m])
+            if FF > 0:            # the gauge's reading per N of the series' signed load (the simulated compliance)
+                col[m] = -float(base[m] @ data.F[m]) / FF * data.sign[m] * data.t_series[m]
+    return [Hypothesis(OUTSIDE, "load_cell", ["rate_N_per_s"], col[:, None], [-np.inf], [np.inf],
+                       f"the load cell's zero drifts ({drift.span_N:+.3f} N over the recording in its own readings): "
+                       "the loads the fit takes from it depart from those the rod carries, and the gauges read the "
+                       "rod's compliance times that departure; a property of the load cell, outside the effect "
+                       "vocabulary")]
 
 
 #: a slip leaves at least this many readings of its series on each side of it
@@ -156,6 +195,9 @@ def _is_slip(r: np.ndarray, j: int) -> bool:
 
 def confirm_outside(location: str | None) -> str | None:
     """What would confirm an outside finding at ``location`` (None: not one of this module's)."""
+    if location == "load_cell":
+        return ("record the load cell with the hanger off for as long as a run: its zero should move at the fitted "
+                "rate; re-zero it before each series (or leave force_N out: the fit then uses mass x g0)")
     if location and location.startswith("sensor:"):
         g = location.split(":", 1)[1]
         which = "each gauge" if g == "all" else f"the {g} gauge"

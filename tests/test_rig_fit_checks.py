@@ -154,3 +154,20 @@ def test_a_load_cell_zero_drift_is_named_not_taken_for_the_gauges(tmp_path, caps
             assert f.parameters["rate_N_per_s"] == pytest.approx(1e-3, rel=0.06), diag.summary()
             assert diag.verdict.value == "unexplained", diag.summary()
             assert not any(g.effect.value == "drift" for g in diag.findings), diag.summary()
+
+
+def test_diagnose_refuses_a_simulation_in_other_units(tmp_path, capsys):
+    """A simulation file whose C_F is in um/N (r_rod 0.001 against it) is refused with the units named, not
+    'explained' by a compliance scale of 0.001; --units-checked diagnoses it as it is."""
+    import json
+    rec = _recording(tmp_path / "r.rig.csv")
+    sim = tmp_path / "um.compliance.json"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    d = json.loads(sim.read_text())
+    d["C_F_mm_per_N"] = (np.asarray(d["C_F_mm_per_N"]) * 1000).tolist()
+    sim.write_text(json.dumps(d))
+    capsys.readouterr()
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(sim)]) == 2
+    err = capsys.readouterr().err
+    assert "beyond any rod" in err and "nothing was diagnosed" in err and "--units-checked" in err
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(sim), "--units-checked"]) == 0

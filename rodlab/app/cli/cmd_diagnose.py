@@ -41,7 +41,8 @@ def register(sub) -> None:
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
                                     "joint angle, approach direction, measurement order and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
-    add_device_option(p, prefix="campaign: ")
+    add_device_option(p, prefix="campaign: ", units_also="; rig: diagnose a recording whose r_rod against the "
+                      "simulation lies beyond any rod (0.1-10: a units slip or another rod's file is refused)")
     add_robot_options(p, help="campaign / points: " + robot_help())
     p.add_argument("--design", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the "
                                     "--sim file was made from, if it is still there)")
@@ -124,7 +125,7 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
     design = resolve_design(args.design) if _rig_design(args) else None
     rec = read_recording(args.rig)
     warn_rod_mismatch(rec.rod, sim.rod, args.rig)
-    _warn_r_rod(rec, sim)
+    _check_r_rod(rec, sim, args)
     from ..diagnose import diagnose_rig
     diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
     print(diag.summary())
@@ -140,9 +141,11 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
     return diag
 
 
-def _warn_r_rod(rec, sim) -> None:
-    """A recording without a load response is refused with its cause; an r_rod no rod of this kind has is warned
-    of; any other fit problem is left to the diagnosis, which says what it finds."""
+def _check_r_rod(rec, sim, args) -> None:
+    """A recording without a load response is refused with its cause, and so is an r_rod no rod of this kind has
+    against its own simulation (a units slip or another rod's file: the diagnosis would fit a compliance scale of
+    0.001 and call the recording explained; ``--units-checked`` warns instead); any other fit problem is left to
+    the diagnosis, which says what it finds."""
     try:
         fit = fit_recording(rec, sim)
     except NoLoadResponse:
@@ -150,8 +153,11 @@ def _warn_r_rod(rec, sim) -> None:
     except RigError:
         return
     caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
+    if caution and not getattr(args, "units_checked", False):
+        raise RigError(f"{caution}; nothing was diagnosed (if both files are right, give --units-checked)",
+                       path=rec.path)
     if caution:
-        print(f"warning: {caution}", file=sys.stderr)
+        print(f"warning: {caution} (--units-checked: diagnosed as they are)", file=sys.stderr)
 
 
 def _diagnose_campaign(args: argparse.Namespace, written: list):

@@ -24,10 +24,11 @@ UNITS_CHECKED_HELP = ("the campaign's units are right although its numbers look 
                       "of refusing")
 
 
-def add_device_option(p, prefix: str = "") -> None:
-    """``--device`` and ``--units-checked``, the options of a campaign read by :func:`campaign_from_args`."""
+def add_device_option(p, prefix: str = "", units_also: str = "") -> None:
+    """``--device`` and ``--units-checked``, the options of a campaign read by :func:`campaign_from_args`;
+    ``units_also``: what else the command's ``--units-checked`` lets through."""
     p.add_argument("--device", default=None, metavar="DEV.device.json", help=prefix + DEVICE_HELP)
-    p.add_argument("--units-checked", action="store_true", help=prefix + UNITS_CHECKED_HELP)
+    p.add_argument("--units-checked", action="store_true", help=prefix + UNITS_CHECKED_HELP + units_also)
 
 
 def campaign_from_args(args, n_joints: int, warn: bool = True):

@@ -199,3 +199,23 @@ def test_bond_columns_are_the_exact_derivatives_of_the_entries():
         np.testing.assert_allclose(cols[:, j], fd, rtol=1e-9, atol=1e-15)
     assert np.abs(cols).max() > 0
     assert env.bond_columns([]).shape == (0, len(env.bonds))
+
+
+def test_update_widens_its_uncertainties_when_the_keys_fit_only_roughly():
+    """Entries the freed modulus reproduces (E 10 % low): uncertainties as the fit gives them; c22 alone 4 % off
+    besides (what E cannot move alone): the chi-square after the fit is beyond chance and every uncertainty is
+    widened by the Birge ratio sqrt(chi2 / dof)."""
+    from rodlab.core.sensitivity import METHOD_ACCURACY
+    from rodlab.app.update import ROUGH_P
+    design = legacy_design("rod1")
+    key = f"materials.{design.pipe_I.material.name}.E_GPa"
+    E = ((0, 0), (0, 2), (1, 1), (2, 2))
+    soft, _ = frame_compliance(with_values(design, {key: 0.9 * design.pipe_I.material.E_GPa}))
+    C = METHOD_ACCURACY["frame"].expected(soft, E)
+    cov = np.diag((0.002 * C) ** 2)
+    clean = update_design(design, Measured(E, C, cov, "clean"), [key])
+    assert clean.sigma_scale == 1.0 and clean.p_after > ROUGH_P
+    bent = C * np.array([1.0, 1.0, 1.04, 1.0])
+    rough = update_design(design, Measured(E, bent, cov, "rough"), [key])
+    assert rough.p_after < ROUGH_P
+    assert rough.sigma_scale == pytest.approx(np.sqrt(rough.chi2_after / 3), rel=1e-9) and rough.sigma_scale > 1

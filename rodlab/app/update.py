@@ -23,10 +23,12 @@ from ..core.massprops import mass_properties
 from ..core.sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
-__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR", "EXPLAIN_P"]
+__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR", "EXPLAIN_P", "ROUGH_P"]
 
 #: below this tail probability of the chi-square after the fit, the freed keys do not explain the measurement
 EXPLAIN_P = 1e-3
+#: below this one they explain it roughly: the uncertainties are widened by the Birge ratio sqrt(chi2 / dof)
+ROUGH_P = 0.05
 #: two freed keys whose estimates correlate beyond this are reported as not separable
 SEPARATE_CORR = 0.95
 #: prior of a freed key the design gives no tolerance for: this relative standard deviation (weak)
@@ -85,6 +87,7 @@ class UpdateResult:
     message: str
     p_after: float = 1.0        #: chance of a chi-square this large after the fit if the freed keys explain it
     prior_sd: np.ndarray | None = None   #: each key's prior standard deviation [key units] (its tolerance), shape=(k,)
+    sigma_scale: float = 1.0    #: the Birge ratio ``sigma`` is widened by when ``p_after`` < :data:`ROUGH_P` [-]
 
     def beyond_tolerance(self, factor: float = 3.0) -> list[tuple[str, float, float]]:
         """(key, relative change, relative prior SD) of the keys other than joints that moved more than ``factor``
@@ -182,10 +185,12 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     z0, z1 = W @ (C0 - measured.C), W @ (C1 - measured.C)
     as_built = with_values(design, dict(zip(keys, res.x)))
     insep = _inseparable(design, keys, res.x, J[:len(E)], fn, E)
-    p_after = float(chdtrc(max(len(E) - len(keys), 1), float(z1 @ z1)))
-    return UpdateResult(keys, nominal, res.x, sd, corr, insep, E, measured.C / C0, measured.C / C1,
+    dof = max(len(E) - len(keys), 1)
+    p_after = float(chdtrc(dof, float(z1 @ z1)))
+    scale = max(1.0, float(np.sqrt(z1 @ z1 / dof))) if p_after < ROUGH_P else 1.0
+    return UpdateResult(keys, nominal, res.x, sd * scale, corr, insep, E, measured.C / C0, measured.C / C1,
                         float(z0 @ z0), float(z1 @ z1), as_built, bool(res.success), str(res.message), p_after,
-                        prior_sd)
+                        prior_sd, scale)
 
 
 def _collinearity(A: np.ndarray, a: int) -> tuple[float, list]:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -68,6 +69,16 @@ def _explained_by_keys(finding, keys, design) -> bool:
     return bool(wanted & set(keys))
 
 
+def _warn_unexplained(path: str, diag) -> None:
+    """A recording the diagnosis leaves partly unexplained: its linear part may carry what is left."""
+    left = [f for f in diag.findings if f.effect == "unexplained"]
+    if left:
+        where = ", ".join(dict.fromkeys(f.location or "?" for f in left))
+        print(f"warning: {path}: the diagnosis leaves part of the recording unexplained (at {where}); the linear "
+              "compliance fitted here may carry some of it: see `rodlab diagnose --rig` before using the as-built "
+              "design", file=sys.stderr)
+
+
 def _measured(path: str, design, keys, model: str):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
     ``model`` the keys are fitted through)."""
@@ -90,7 +101,10 @@ def _measured(path: str, design, keys, model: str):
                               "this rod's as-built design; give this rod's recording (or its design)")
         _refuse_unfitted(path, unfitted, design, model, keys)
         lin = fitted.linear
-        return Measured(lin.entries, lin.C, lin.cov, path), rig
+        _warn_unexplained(path, diag)
+        # one mounting of the rod: remounting repeats C_F to MEAS_RELATIVE, as for a measured file (below)
+        cov = lin.cov + np.diag((MEAS_RELATIVE * np.abs(lin.C)) ** 2)
+        return Measured(lin.entries, lin.C, cov, path), rig
     comp = read_compliance(path)
     warn_rod_mismatch(comp.rod, design.name, path, "--measured", "the design", named_by="")
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
@@ -171,6 +185,10 @@ def cmd_update(args: argparse.Namespace) -> int:
 def _print(res, model: str) -> None:
     print(f"fitted through the {model} model: chi-square of the {len(res.entries)} entries "
           f"{res.chi2_before:.2f} -> {res.chi2_after:.2f}")
+    if res.sigma_scale > 1.0:
+        print(f"  note: the freed keys fit the entries only roughly (p = {res.p_after:.1e} after the fit): their "
+              f"uncertainties are widened x{res.sigma_scale:.2f} (the Birge ratio); freeing the key that carries the "
+              "rest (`rodlab diagnose --rig` lists the resolved keys) would fit better")
     print(f"  {'key':34s} {'design':>10s} {'as built':>10s} {'+-':>9s}")
     for k, v0, v, s in zip(res.keys, res.nominal, res.x, res.sigma):
         change = f"({(v / v0 - 1):+.1%})" if v0 else "(the design has it rigid)"

@@ -279,7 +279,8 @@ def frame_range_notes(design: RodDesign) -> list[str]:
     def check(key, value, what):
         lo, hi = CALIBRATED_RANGE[key]
         if not lo <= value <= hi:
-            notes.append(f"{what} = {value:.2f} is outside the frame's calibrated range {lo:g}-{hi:g}")
+            shown = f"{value:.2f}" if f"{value:.2f}" not in (f"{lo:.2f}", f"{hi:.2f}") else f"{value:.4f}"
+            notes.append(f"{what} = {shown} is outside the frame's calibrated range {lo:g}-{hi:g}")
     for label, t in (("pipe_I", design.pipe_I), ("pipe_II", design.pipe_II)):
         check("tube_slenderness", (t.outer_diameter_mm - t.wall_mm) / 2.0 / t.wall_mm, f"{label} r_m / t")
     if design.has_bend:

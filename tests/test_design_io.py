@@ -114,6 +114,7 @@ RULES = [
     ("gamma in radians", _set(("gamma_deg",), 1.9), "gamma_deg", "did you give radians"),
     ("absurd size", _set(("tube", "outer_diameter_mm"), 1e300), "tube.outer_diameter_mm", "<= 10000 mm"),
     ("length in um", _set(("L1_mm",), 300000.0), "L1_mm", "millimetres"),
+    ("diameter in metres", _set(("tube", "outer_diameter_mm"), 0.04), "tube.outer_diameter_mm", "did you give metres"),
 ]
 
 

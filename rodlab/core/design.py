@@ -65,6 +65,11 @@ class TubeSpec:
     def __post_init__(self) -> None:
         _check_pos("outer_diameter_mm", self.outer_diameter_mm, f"{self.key}.outer_diameter_mm")
         _check_pos("wall_mm", self.wall_mm, f"{self.key}.wall_mm")
+        if self.wall_mm >= self.outer_diameter_mm / 2 and self.outer_diameter_mm < 1.0 <= self.wall_mm:
+            raise DesignError(
+                f"outer diameter {self.outer_diameter_mm:g} mm is smaller than the wall {self.wall_mm:g} mm: "
+                f"outer_diameter_mm is in millimetres: did you give metres ({self.outer_diameter_mm:g} m = "
+                f"{1000 * self.outer_diameter_mm:g} mm)?", key=f"{self.key}.outer_diameter_mm")
         if self.wall_mm >= self.outer_diameter_mm / 2:
             raise DesignError(
                 f"wall {self.wall_mm} mm must be less than the outer radius {self.outer_diameter_mm / 2} mm "

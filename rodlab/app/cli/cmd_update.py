@@ -166,10 +166,12 @@ def cmd_update(args: argparse.Namespace) -> int:
     res = update_design(design, measured, keys, args.model)
     _print(res, args.model)
     if not res.explains:
+        recording = args.measured if args.measured.endswith(".rig.csv") else (
+            read_compliance(args.measured).provenance.get("recording") or "RECORDING.rig.csv (the file's own recording)")
         raise RodlabError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
                           f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
                           f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
-                          f"diagnose --rig {args.measured} --design {args.design}` weighs every toleranced key at once: "
+                          f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
                           "where it names a local cause, free that cause's key (a joint's "
                           "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
                           "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "

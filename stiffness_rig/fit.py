@@ -19,7 +19,8 @@ from rodlab.core.fileio import sha256_file
 from rodlab.core.units import G0
 
 from .errors import RigError
-from .fit_checks import gauge_scale_problems, lack_of_fit_warnings, load_drift_warnings, reciprocity_problems
+from .fit_checks import (creep_warnings, gauge_scale_problems, lack_of_fit_warnings, load_drift_warnings,
+                         reciprocity_problems)
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
@@ -169,7 +170,8 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     refuse, warn = reciprocity_problems(M, S)
     refuse += gauge_scale_problems(M, sim.C_F) if sim is not None else []
-    fit.warnings = refuse + warn + lack_of_fit_warnings(lines, holds, noise) + load_drift_warnings(fit.load)
+    fit.warnings = (refuse + warn + lack_of_fit_warnings(lines, holds, noise) + load_drift_warnings(fit.load)
+                    + creep_warnings(holds))
     if refuse:
         fit.success, fit.message = False, "; ".join(refuse) + "; nothing was written"
     if sim is not None:

@@ -166,10 +166,14 @@ def test_another_rods_recording_is_warned_and_a_bom_is_read(examples, tmp_path):
     assert run.returncode == 0 and "warning" not in run.stderr, run.stderr
 
 
-def test_diagnose_warns_of_an_implausible_r_rod(examples, tmp_path):
+def test_diagnose_refuses_an_implausible_r_rod(examples, tmp_path):
+    """Masses in g (r_rod 0.001): refused with the units named; --units-checked diagnoses with the warning."""
     import subprocess
     import sys
     bad = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "bad.rig.csv", mass=1000.0)
-    run = subprocess.run([sys.executable, "-m", "rodlab", "diagnose", "--rig", str(bad), "--sim",
-                          str(examples / "rod1.compliance.json")], capture_output=True, text=True)
-    assert run.returncode in (0, 3) and "warning: r_rod = 0.001" in run.stderr and "mass_kg in kg" in run.stderr
+    cmd = [sys.executable, "-m", "rodlab", "diagnose", "--rig", str(bad), "--sim", str(examples / "rod1.compliance.json")]
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    assert run.returncode == 2 and "r_rod = 0.001" in run.stderr and "mass_kg in kg" in run.stderr
+    assert "nothing was diagnosed" in run.stderr
+    run = subprocess.run(cmd + ["--units-checked"], capture_output=True, text=True)
+    assert run.returncode in (0, 3) and "warning: r_rod = 0.001" in run.stderr

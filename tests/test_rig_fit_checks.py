@@ -171,3 +171,15 @@ def test_diagnose_refuses_a_simulation_in_other_units(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "beyond any rod" in err and "nothing was diagnosed" in err and "--units-checked" in err
     assert main(["diagnose", "--rig", str(rec), "--sim", str(sim), "--units-checked"]) == 0
+
+
+def test_rig_fit_warns_of_creep_and_only_of_creep(tmp_path):
+    """A creeping steel rod 6# (phi 2 %, tau 5 s): the holds' own slopes follow the load step into them and rig fit
+    says its hold means depend on the hold length; the same rod with friction only: no such warning."""
+    sim = calc_rod_compliance(resolve_design("rod6"))
+    out = {}
+    for name, effect in (("creep", "creep:phi=0.02,tau_s=5"), ("friction", "friction:F_f_N=0.3")):
+        rec = tmp_path / f"{name}.rig.csv"
+        assert main(["rig", "simulate", "--sim", "rod6", "--effect", effect, "--seed", "2", "-o", str(rec)]) == 0
+        out[name] = [w for w in fit_recording(read_recording(rec), sim).warnings if "the rod creeps" in w]
+    assert len(out["creep"]) == 2 and not out["friction"]

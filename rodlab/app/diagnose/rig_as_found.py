@@ -38,9 +38,10 @@ def _library(data: RigSamples, C_sim: np.ndarray, C_other: np.ndarray, places: d
     d = data if data_other is None else data_other
     ctx_sim = HypothesisContext(C_sim, C_sim[data.comp, data.axis] * data.F, places, tool)
     ctx = HypothesisContext(C_other, C_other[d.comp, d.axis] * d.F, places, tool)
-    return ([h for m in RIG_EFFECTS.values()
-             for h in (m.hypotheses(data, ctx_sim) if m.structural else m.hypotheses(d, ctx))]
-            + outside_hypotheses(d, ctx.base))
+    vocabulary = [h for m in RIG_EFFECTS.values()
+                  for h in (m.hypotheses(data, ctx_sim) if m.structural else m.hypotheses(d, ctx))]
+    nuisance = [h.X for h in vocabulary if not h.dC]       # the rig's own effects: a slip is sought without them too
+    return vocabulary + outside_hypotheses(d, ctx.base, np.column_stack(nuisance) if nuisance else None)
 
 
 def select_as_found(data: RigSamples, C_sim: np.ndarray, places: dict, tool: np.ndarray, prep, r0: np.ndarray,

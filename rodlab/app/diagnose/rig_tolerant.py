@@ -51,7 +51,10 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     base = lin0.C_F[data.comp, data.axis] * data.F
     r_sim = demean(data.y - sim.C_F[data.comp, data.axis] * data.F, groups)
     r0 = prep.project(data.y)
-    library = [prep(t) for t in _hypotheses(data, lin0.C_F, places, tool, False) + outside_hypotheses(data, base)]
+    vocabulary = _hypotheses(data, lin0.C_F, places, tool, False)
+    nuisance = [h.X for h in vocabulary if not h.dC]
+    library = [prep(t) for t in vocabulary + outside_hypotheses(data, base, np.column_stack(nuisance) if nuisance
+                                                                else None)]
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None
     library, ls, S = select_refining_creep(library, subset_ls(library, r0, folds), data, base, r0, prep, sigma_sel,
                                            max_terms, folds)

@@ -59,8 +59,12 @@ def params_yaml(robot, cal: CalibrationFile, params: ModelParams, origins: dict 
     if params.h.any():
         _harmonics_yaml(out, robot, cal, params)
     out.write("parameters:   # every parameter of the identification\n")
+    twist = f"dtheta_{robot.n}"
     for name, v in cal.parameters.items():
-        out.write(f"  {name}: {{value: {_num(v.value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}\n")
+        note = "   # with the rod's mounting twist about the flange axis (one rod cannot separate them)" \
+            if name == twist else ""
+        out.write(f"  {name}: {{value: {_num(v.value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}"
+                  f"{note}\n")
     return out.getvalue()
 
 

@@ -55,3 +55,22 @@ def test_points_png_draws_the_validation_error_distributions(ur5_points, tmp_pat
     main(["calibrate", "--points", str(ur5_points), "--robot", "ur5", "--fix-unidentifiable", "--png",
           str(tmp_path / "none")])
     assert "give --validate" in capsys.readouterr().err and not (tmp_path / "none").exists()
+
+
+def test_the_last_joint_offset_is_said_to_carry_the_rod_twist(examples, tmp_path, capsys):
+    """A campaign's dtheta_6 (the robot's zero plus the rod's mounting twist, which one rod cannot separate): the
+    export says so on stderr and beside it in the YAML; -o X.urdf with a DH robot says no URDF was written."""
+    camp = examples / "campaign-null"
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate", str(camp / "multical.campaign.csv"), "--fixture", str(camp / "multical.fixture.json"),
+                 "--rod", str(camp / "rod1.compliance.json"), "--robot", "tx90", "--json", str(cal)]) in (0, 3)
+    data = json.loads(cal.read_text())
+    assert data["parameters"]["dtheta_6"]["status"] == "identified"
+    data["parameters"]["dtheta_6"]["value"] = 0.15                  # a rod mounted 0.15 deg turned on the flange
+    cal.write_text(json.dumps(data))
+    capsys.readouterr()
+    assert main(["export", str(cal), "--robot", "tx90", "-o", str(tmp_path / "tx90.urdf")]) == 0
+    err = capsys.readouterr().err
+    assert "dtheta_6 = +0.1500 deg" in err and "mounting twist" in err and "no URDF written" in err
+    yaml = (tmp_path / "tx90.yaml").read_text()
+    assert next(ln for ln in yaml.splitlines() if ln.strip().startswith("dtheta_6:")).endswith("separate them)")

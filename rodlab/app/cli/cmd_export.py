@@ -82,6 +82,19 @@ def _warn_ik_assumptions(robot, params) -> None:
               "TARGETS.csv -o COMMANDS.csv`", file=sys.stderr)
 
 
+def _warn_rod_twist(robot, cal) -> None:
+    """The last joint's zero offset, identified with a rod, carries the rod's mounting twist about the flange axis
+    (calibrate.params: one rod cannot separate them): said, with what it does to a production tool."""
+    p = cal.parameters.get(f"dtheta_{robot.n}")
+    if p is None or p.status != "identified" or abs(p.value) < 0.01:
+        return
+    print(f"warning: dtheta_{robot.n} = {p.value:+.4f} deg (written as the joint's zero offset) is the robot's joint-"
+          f"{robot.n} zero plus the rod's mounting twist about the flange axis, which one rod cannot separate; a "
+          f"production tool turns with it ({abs(p.value) * 3.4907:.2f} mm per 200 mm off the flange axis): before "
+          "a controller relies on it, measure the twist (the rod's pin against the flange, or a second clamping of "
+          "the rod turned on the flange) or keep that offset at its nominal value", file=sys.stderr)
+
+
 def _urdf_file(spec: str) -> str:
     """--urdf takes a URDF file or a built-in robot's name (ur5: its own URDF); a folder does not hide the name."""
     path = robot_path(spec)
@@ -110,6 +123,9 @@ def cmd_export(args) -> int:
         args.urdf = str(robot.path)                     # a URDF robot: its own file is written back calibrated
     params = calibrated_params(robot, cal)
     urdf_out, yaml_out, csv_out = _outputs(args, robot)
+    if urdf_out is None and Path(args.output).suffix.lower() == ".urdf":
+        print(f"note: no URDF written: {robot.name} is a DH table, not a URDF (give --urdf ROBOT.urdf to write one "
+              "calibrated); the YAML and the DH table carry the calibration", file=sys.stderr)
     origins = None
     if urdf_out is not None:
         from rodlab.calibrate.export_urdf import write_calibrated_urdf
@@ -138,6 +154,7 @@ def cmd_export(args) -> int:
                   f"leaves the gravity sag to the compliance; for such a consumer, calibrate again with "
                   f"--kinematic-only and export that result", file=sys.stderr)
     _warn_ik_assumptions(robot, params)
+    _warn_rod_twist(robot, cal)
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
     if not cal.trusted:

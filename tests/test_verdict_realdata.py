@@ -231,3 +231,13 @@ def test_real_ur10_b_to_c_is_trusted(tmp_path):
                  str(d / "ur10_C.validation.csv"), "--json", str(out)]) == 0
     pred = json.loads(out.read_text())["fit"]["prediction"]
     assert pred["mean_mm"] < 0.5 * pred["nominal_mean_mm"] and pred["clearly_better"]
+
+
+def test_a_validation_file_that_is_the_fit_is_no_held_out_test(capsys):
+    """The FANUC's N1 points validated on themselves: said, and judged by cross-validation instead (the
+    validation's errors are the fit's own)."""
+    n1 = Path(__file__).resolve().parents[1] / "benchmarks" / "data" / "boby2021" / "r2000ic_N1.validation.csv"
+    main(["calibrate", "--points", str(n1), "--robot", "r2000ic165f", "--validate", str(n1)])
+    io = capsys.readouterr()
+    assert "100% of its joint configurations are the fit's own" in io.err
+    assert "by 5-fold cross-validation" in io.out

@@ -203,6 +203,14 @@ def _print_result(res, before, after, label) -> None:
             print(f"    {name:<34} {st.mean_mm:6.3f} {st.max_mm:7.3f} {st.median_mm:7.3f} {st.sd_mm:7.3f}")
 
 
+def _shared_share(q_fit: np.ndarray, q_test: np.ndarray, tol_deg: float = 1e-3) -> float:
+    """The share of the configurations ``q_test`` (m, n) [deg] that are one of ``q_fit`` (k, n) within ``tol_deg``
+    on every joint."""
+    fit = {tuple(row) for row in np.round(np.asarray(q_fit, float) / tol_deg).astype(np.int64)}
+    test = np.round(np.asarray(q_test, float) / tol_deg).astype(np.int64)
+    return float(np.mean([tuple(row) in fit for row in test])) if len(test) else 0.0
+
+
 def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
@@ -217,6 +225,12 @@ def _calibrate_points(args) -> int:
         test = points_from_args(args, args.validate, robot.n)
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
+        if _shared_share(pts.q_deg, test.q_deg) >= 0.5:
+            print(f"warning: --validate {args.validate}: {_shared_share(pts.q_deg, test.q_deg):.0%} of its joint "
+                  f"configurations are the fit's own ({args.points}): its errors are no held-out test (they show the "
+                  "fit, or only the other target); the verdict is judged by cross-validation instead. Validate on "
+                  "configurations the fit has not seen", file=sys.stderr)
+            errors = {}
     _print_result(res, before, after, "instrument points")
     judge(res, Prediction.of_validation(errors["calibrated"], errors["nominal"], res.rms_mm) if errors
           else cross_validate_points(robot, pts, res.rms_mm, **options))

@@ -85,6 +85,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                               "with --robot (a built-in name such as ur5, a robot TOML or a URDF); the tx90 default "
                               "is only for MultiCal campaigns")
         args.robot = "tx90"
+        print("note: robot tx90 (the default, the paper's robot): give --robot NAME_OR_FILE for another",
+              file=sys.stderr)
     if (args.points or args.sockets) and args.device:
         raise RodlabError("--device converts a campaign's raw sensor readings; instrument points and socket readings "
                           "have none: leave --device out")

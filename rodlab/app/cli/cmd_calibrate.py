@@ -227,8 +227,9 @@ def _calibrate_points(args) -> int:
         test = points_from_args(args, args.validate, robot.n)
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
-        if _shared_share(pts.q_deg, test.q_deg) >= 0.5:
-            print(f"warning: --validate {args.validate}: {_shared_share(pts.q_deg, test.q_deg):.0%} of its joint "
+        shared = _shared_share(pts.q_deg, test.q_deg)
+        if shared >= 0.5:
+            print(f"warning: --validate {args.validate}: {shared:.0%} of its joint "
                   f"configurations are the fit's own ({args.points}): its errors are no held-out test (they show the "
                   "fit, or only the other target); the verdict is judged by cross-validation instead. Validate on "
                   "configurations the fit has not seen", file=sys.stderr)

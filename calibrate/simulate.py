@@ -366,6 +366,8 @@ def _readings(robot, world: _World, spec, rng) -> _Readings:
     for j in range(1, spec.positions + 1):
         q = reached[j]
         qt = _true_angles(q, active)                                   # the angles the joints really take
+        for eff, p in active:
+            qt = eff.position_angles(qt, j, p)
         m = len(q)
         Fm = np.broadcast_to(forces[j], (m, 3))
         fr, pW = _spring_loaded(robot, world, qt, Ts[j], Fm)

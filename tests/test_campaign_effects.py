@@ -34,6 +34,7 @@ CASES = {
     "device_axes": ({"misalign_deg": [2.0, -1.5, 1.0]}, None),
     "lost_motion": ({"joint": 4, "lost_motion_deg": 0.03}, "joint:4"),
     "joint_stiffening": ({"joint": 2, "stiffening_rad_per_Nm2": 4.0e-8}, "joint:2"),
+    "joint_zero_shift": ({"position": 3, "joint": 2, "dtheta_deg": 0.01}, "position:3"),
 }
 
 
@@ -81,6 +82,8 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
         assert got == pytest.approx([2.0, -1.5, 1.0], abs=0.5)
     if name == "joint_stiffening":
         assert f.parameters["stiffening_rad_per_Nm2"] == pytest.approx(4.0e-8, rel=0.3)
+    if name == "joint_zero_shift":
+        assert (f.parameters["joint"], f.parameters["dtheta_deg"]) == (2, pytest.approx(0.01, rel=0.2))
     if name == "lost_motion":
         assert f.parameters["lost_motion_deg"] == pytest.approx(0.03, rel=0.2)
     if name == "periodic_joint_error":

@@ -182,3 +182,39 @@ def test_another_rods_compliance_file_is_named(tmp_path):
     assert f.parameters["k_force"] > 10                       # the contact force's deflection: ~20x the file's
     # what the two factors leave is a third of what one left (Birge ratio 6-7 against 9-13 over seeds 11-16)
     assert diag.extra["residual_test"]["after"]["birge_ratio"] < 8
+
+
+def test_a_gear_both_eccentric_and_elliptical_is_named_with_both_harmonics(tmp_path):
+    """Joint 4 with an error once and twice per revolution (an IRB 4600 trial's: named once per revolution, the rest
+    left as 'no structure'): one finding with all four terms, each harmonic's amplitude recovered, the fit at the
+    noise and the validation better."""
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=45), effects={
+        "periodic_joint_error": {"joint": 4, "amp_deg": 0.015, "phase_deg": 40.0, "amp2_deg": 0.008,
+                                 "phase2_deg": 10.0}})
+    diag = _diagnose(tmp_path)
+    f = diag.findings[0]
+    assert (f.effect, f.location) == ("periodic_joint_error", "joint:4"), diag.summary()
+    p = f.parameters
+    assert np.rad2deg(np.hypot(p["amp_sin_rad"], p["amp_cos_rad"])) == pytest.approx(0.015, rel=0.15)
+    assert np.rad2deg(np.hypot(p["amp2_sin_rad"], p["amp2_cos_rad"])) == pytest.approx(0.008, rel=0.2)
+    assert "once- and twice-per-revolution" in remedy(f)
+    assert diag.verdict.value == "explained" and len(diag.findings) == 1, diag.summary()
+    v = diag.extra["validation"]
+    assert v["after"]["mean_mm"] < v["before"]["mean_mm"]
+
+
+def test_both_harmonics_are_not_offered_for_a_joint_that_turned_less_than_a_revolution():
+    """Four terms over part of a turn fit any smooth error and extrapolate (a bending forearm read so at joint 3
+    made the held-out error three times worse): over less than a revolution only the two-term forms compete."""
+    from types import SimpleNamespace
+    from rodlab.calibrate.effects.periodic_joint_error import PeriodicJointError
+    N = 12
+    q = np.zeros((N, 2))
+    q[:, 0] = np.linspace(-3.2, 3.2, N)               # joint 1: a full turn (367 deg)
+    q[:, 1] = np.linspace(-1.5, 1.5, N)               # joint 2: 172 deg
+    frames = SimpleNamespace(z_prev=np.tile([0.0, 0.0, 1.0], (N, 2, 1)), o_prev=np.zeros((N, 2, 3)),
+                             p0=np.tile([500.0, 0.0, 0.0], (N, 1)), R_W0=np.eye(3))
+    ctx = SimpleNamespace(frames=frames, n_points=N, obs=SimpleNamespace(q_rad=q), robot=SimpleNamespace(n=2),
+                          result=SimpleNamespace(harmonic_range_deg={}))
+    forms = {(h.location, len(h.names)) for h in PeriodicJointError().hypotheses(ctx)}
+    assert forms == {("joint:1", 2), ("joint:1", 4), ("joint:2", 2)}

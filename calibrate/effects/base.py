@@ -162,6 +162,11 @@ class CampaignEffectModel(EffectSchema):
     def joint_angles(self, q_rad: np.ndarray, p: dict) -> np.ndarray:
         return q_rad
 
+    def position_angles(self, q_rad: np.ndarray, j: int, p: dict) -> np.ndarray:
+        """The angles ``q_rad`` (m, n) [rad] the joints really take at clamping position ``j`` (an offset of that
+        position alone)."""
+        return q_rad
+
     def torque_angles(self, q_rad: np.ndarray, tau_Nm: np.ndarray, p: dict) -> np.ndarray:
         """The angles ``q_rad`` (m, n) [rad] with what the static torques ``tau_Nm`` (m, n) [N m] add beyond the
         joints' linear springs (the model's ``c tau``)."""

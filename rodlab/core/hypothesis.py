@@ -99,6 +99,9 @@ class Hypothesis:
     form_unresolved : the data do not pin this form down (a periodic error over less than one period fits any
         smooth error of its joint): a rival form at the same place that fits as well (delta BIC within 2) goes first
     report_scale, report_offset : shape=(k,), ``reported = report_offset + report_scale * internal``
+    defers_to : the effect of a commoner rival at the same location that goes first unless this hypothesis fits
+        clearly better, not merely as well with fewer parameters (a joint's zero shifted at one clamping position
+        defers to that position's fixture pose), or None
     """
 
     effect: str
@@ -114,6 +117,7 @@ class Hypothesis:
     form_unresolved: bool = False
     report_scale: np.ndarray | None = None
     report_offset: np.ndarray | None = None
+    defers_to: str | None = None
 
     def __post_init__(self) -> None:
         self.effect = str(self.effect)                 # the contract spelling (Enums print as their value)

@@ -40,7 +40,7 @@ from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .campaign_excess import device_noise_null, unexplained_finding
-from .campaign_forms import resolved_first, rival_forms, same_place
+from .campaign_forms import deferred, resolved_first, rival_forms, same_place
 from .campaign_refit import deflection_of, reidentify, validation_errors
 
 __all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
@@ -215,7 +215,7 @@ class CampaignSelection:
                     # a single point can absorb 3 dof: demand a large, isolated error (Bonferroni over N points)
                     cand.append(self._candidate(replace(h, X=self.white(h.X)),
                                                 3 * np.log(self.n) + 2 * np.log(self.N)))
-        self.ranked = resolved_first(sorted(cand, key=lambda c: c.ev.dbic))
+        self.ranked = deferred(resolved_first(sorted(cand, key=lambda c: c.ev.dbic)))
         return self.ranked
 
     def try_accept(self, best: _Candidate) -> bool:

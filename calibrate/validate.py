@@ -14,7 +14,7 @@ from .kinematics import ModelParams, ball_positions
 from .params import ParamInfo, apply
 from .points import points_observations
 
-__all__ = ["ErrorStats", "validate", "error_stats"]
+__all__ = ["ErrorStats", "validate", "error_stats", "clearly_worse", "WORSE_MIN_MM", "WORSE_MIN_SHARE"]
 
 
 @dataclass(frozen=True)
@@ -64,3 +64,20 @@ def validate(robot, model: ModelParams, pts: PointSet) -> tuple[ErrorStats, np.n
     p, (fr, _) = frames(res.x)
     err = np.linalg.norm(fr.pW - obs.x_W_mm, axis=1)
     return error_stats(err), err, p
+
+
+#: validation errors are clearly worse only by at least this much [mm] ...
+WORSE_MIN_MM = 0.002
+#: ... and this share of the mean of the errors they are compared with
+WORSE_MIN_SHARE = 0.05
+
+
+def clearly_worse(with_mm: np.ndarray, without_mm: np.ndarray) -> bool:
+    """Whether the validation errors ``with_mm`` [mm] are clearly worse than ``without_mm`` at the same points: the
+    mean of the paired difference above two of its standard errors, :data:`WORSE_MIN_MM` and
+    :data:`WORSE_MIN_SHARE` of the mean without."""
+    d = np.asarray(with_mm, float) - np.asarray(without_mm, float)
+    if d.size < 2:
+        return False
+    gain, se = float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
+    return gain > 2.0 * se and gain > max(WORSE_MIN_MM, WORSE_MIN_SHARE * float(np.mean(without_mm)))

@@ -218,3 +218,13 @@ def test_both_harmonics_are_not_offered_for_a_joint_that_turned_less_than_a_revo
                           result=SimpleNamespace(harmonic_range_deg={}))
     forms = {(h.location, len(h.names)) for h in PeriodicJointError().hypotheses(ctx)}
     assert forms == {("joint:1", 2), ("joint:1", 4), ("joint:2", 2)}
+
+
+def test_a_periodic_error_over_part_of_a_turn_is_not_advised_for_joint_harmonics():
+    """Over 235 deg the four terms `--joint-harmonics` identifies fit any smooth error and extrapolate (the trial's
+    bending forearm: held-out 0.049 -> 0.109 mm): the advice asks for a campaign over a full turn instead."""
+    from rodlab.calibrate.effects.periodic_joint_error import PeriodicJointError
+    part = PeriodicJointError().remedy("joint:3", {"amp_sin_rad": 1e-5, "amp_cos_rad": 2e-5, "span_deg": 235.0})
+    assert "turned over 235 deg only" in part and "do not identify it with `--joint-harmonics 3`" in part
+    full = PeriodicJointError().remedy("joint:4", {"amp_sin_rad": 1e-5, "amp_cos_rad": 2e-5})
+    assert "add joint 4 to `rodlab calibrate --joint-harmonics`" in full

@@ -111,9 +111,10 @@ class PeriodicJointError(CampaignEffectModel):
             partial = _partial_period(q, min(ms))
             if len(ms) > 1 and partial:
                 continue
+            span = {"span_deg": round(float(np.rad2deg(np.ptp(q))), 1)} if _partial_period(q, 1) else {}
             out.append(hypothesis(self.effect, f"joint:{k + 1}", names, np.hstack([cols[m] for m in ms]),
                                   f"{what} of joint {k + 1}: an angle error {times} per revolution, periodic in q"
-                                  + partial, form_unresolved=bool(partial)))
+                                  + partial, form_unresolved=bool(partial), settings=span))
         return out
 
     def refit(self, fit: Refit, location: str, parameters: dict, ctx: CampaignContext) -> None:
@@ -125,9 +126,17 @@ class PeriodicJointError(CampaignEffectModel):
             fit.joint_corrections_rad[k] = once
 
     def remedy(self, location: str, parameters: dict) -> str:
+        j = location_parts(location)[1]
         twice = "amp2_sin_rad" in parameters
         times = ("once- and twice" if "amp_sin_rad" in parameters else "twice") if twice else "once"
-        return (f"joint {location_parts(location)[1]} has a {times}-per-revolution angle error the kinematic model "
+        span = parameters.get("span_deg")
+        if span is not None and span < 360.0:
+            return (f"joint {j} turned over {span:.0f} deg only in this campaign, where a {times}-per-revolution error "
+                    "cannot be told from any smooth error of the joint (a bending link, a gear that stiffens with "
+                    f"the torque): do not identify it with `--joint-harmonics {j}` from this campaign (its four terms "
+                    f"fit the campaign and extrapolate); record a campaign that turns joint {j} over a full revolution "
+                    "and check the result on validation points, or have the gearbox / encoder checked")
+        return (f"joint {j} has a {times}-per-revolution angle error the kinematic model "
                 "does not hold: have the gearbox / encoder checked, or identify it with the robot (add joint "
-                f"{location_parts(location)[1]} to `rodlab calibrate --joint-harmonics`) and compensate it in the "
+                f"{j} to `rodlab calibrate --joint-harmonics`) and compensate it in the "
                 "controller")

@@ -46,6 +46,8 @@ class CalibrationRun:
     compensations: list = field(default_factory=list)   # what the fit removed (calibrate.compensations entries)
     options: object = None                 # the identification's options (calibrate.FitOptions; cross-validation)
     fixture: object = None                 # the fixture file as read (calibrate.Fixture)
+    without_harmonics_mm: np.ndarray | None = None   # with --joint-harmonics and --validate: the validation errors
+    #                                                  [mm] of the same calibration without the periodic terms
 
     @property
     def label(self) -> str:
@@ -91,6 +93,9 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
         pts = points_from_args(args, args.validate, robot.n)
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
         run.calibrated_mm = validate(robot, res.params, pts)[1]
+        if options.harmonics:             # the periodic terms checked on the held-out points before they are used
+            plain = identify(robot, obs, Rod.of(rod), compensations, replace(options, harmonics=()))
+            run.without_harmonics_mm = validate(robot, plain.params, pts)[1]
     return run
 
 

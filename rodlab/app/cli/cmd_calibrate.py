@@ -18,6 +18,7 @@ from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
+from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.errors import RodlabError
@@ -107,6 +108,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     _print_result(res, before, after, label)
     _warn_other_rod(res.params.tool, rod, args.rod)
     judge(res, _campaign_prediction(run))
+    res.warnings += _harmonics_held_out(run, args.joint_harmonics)
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.png:
@@ -175,14 +177,28 @@ def _warn_other_rod(tool_mm, rod, path) -> None:
               file=sys.stderr)
 
 
+def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:
+    """A reason not to use the result when the periodic terms of ``--joint-harmonics`` make the validation points
+    clearly worse than the same calibration without them (:func:`~rodlab.calibrate.validate.clearly_worse`): an
+    IRB 4600 trial's bending forearm fitted as joint 3's harmonics doubled the held-out error."""
+    if run.without_harmonics_mm is None or not clearly_worse(run.calibrated_mm, run.without_harmonics_mm):
+        return []
+    names = ", ".join(str(j) for j in joints)
+    return [f"the periodic terms of joint(s) {names} (--joint-harmonics) predict the validation points worse: mean "
+            f"{run.calibrated_mm.mean():.3f} mm with them, {run.without_harmonics_mm.mean():.3f} mm without; they fit "
+            "the campaign's poses, not the robot (over less than a turn of the joint any smooth error fits them): "
+            "calibrate without --joint-harmonics"]
+
+
 def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
-    """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses) and
-    what to do about each."""
+    """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses, each
+    checked on the validation points when there are some) and what to do about each."""
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     used = rod if comp.active else RodCompliance.none_like(rod)
+    points = points_from_args(args, args.validate, robot.n) if args.validate else None
     try:
-        diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm,
+        diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm, validate_points=points,
                                     fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     except RodlabError as e:   # the diagnosis identifies every parameter; the calibration held some at nominal
         print(f"suspects: the campaign diagnosis cannot run on this campaign ({e}); the verdict above stands",
@@ -191,7 +207,8 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""
-        print(f"  - {f.effect}{where}: {remedy(f)}", file=sys.stderr)
+        held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get("held_out_worse") else ""
+        print(f"  - {f.effect}{where}: {remedy(f)}{held}", file=sys.stderr)
 
 
 def _print_result(res, before, after, label) -> None:

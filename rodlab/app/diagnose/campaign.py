@@ -41,6 +41,7 @@ from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .campaign_excess import device_noise_null, unexplained_finding
 from .campaign_forms import deferred, resolved_first, rival_forms, same_place
+from .campaign_holdout import check_on_validation
 from .campaign_refit import deflection_of, reidentify, validation_errors
 
 __all__ = ["diagnose_campaign", "CampaignFits", "CampaignSelection", "campaign_context", "device_noise_null"]
@@ -390,6 +391,8 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     if validate_points is not None:
         fits.validation_errors_mm = validation_errors(robot, fits, validate_points)
         extra["validation"] = {k: error_stats(e).to_dict() for k, e in fits.validation_errors_mm.items()}
+        check_on_validation(robot, camp, fix, rod, ctx, findings, noise_mm, fixture_sigma, validate_points,
+                            fits.validation_errors_mm["after"])
     rms_after = res2.rms_mm if res2 is not None else res.rms_mm
     if rms_after > REFIT_WORSE * res.rms_mm:
         extra["refit_warning"] = (f"the identification with the found physics fits worse than without it (rms "

@@ -15,7 +15,7 @@ from rodlab.calibrate.effects import CampaignContext, Refit, campaign_effect, co
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.points import points_observations
 
-__all__ = ["deflection_of", "reidentify", "validation_errors"]
+__all__ = ["deflection_of", "reidentify", "validation_errors", "after_errors"]
 
 
 def deflection_of(rod):
@@ -58,16 +58,21 @@ def _identify_with(robot, camp, fix, rod, fit: Refit, noise_mm, fixture_sigma, c
 def validation_errors(robot, fits, points) -> dict:
     """Position errors at the validation points: nominal model, identified, identified with the found physics
     (joint angles corrected as a controller would); ``fits``: the :class:`~.campaign.CampaignFits`."""
-    after_points = points
     after = fits.after if fits.after is not None else fits.before
-    if fits.joint_corrections_rad:
-        after_points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg),
-                                                                       fits.joint_corrections_rad)))
-    if fits.torque_corrections:
-        after_points = _torque_corrected(robot, after.params, after_points, fits.torque_corrections)
     return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
             "before": validate(robot, fits.before.params, points)[1],
-            "after": validate(robot, after.params, after_points)[1]}
+            "after": after_errors(robot, after.params, fits.joint_corrections_rad, fits.torque_corrections, points)}
+
+
+def after_errors(robot, params, joint_corrections_rad: dict, torque_corrections: dict, points) -> np.ndarray:
+    """Position errors [mm] at the validation points of the model ``params`` with the found joint corrections
+    applied to the points' angles, as a controller would (periodic errors; non-linear springs at the points' own
+    torques)."""
+    if joint_corrections_rad:
+        points = replace(points, q_deg=np.rad2deg(correct_joints(np.deg2rad(points.q_deg), joint_corrections_rad)))
+    if torque_corrections:
+        points = _torque_corrected(robot, params, points, torque_corrections)
+    return validate(robot, params, points)[1]
 
 
 def _torque_corrected(robot, params, points, corrections: dict):

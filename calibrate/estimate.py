@@ -47,6 +47,8 @@ class FitOptions:
     expected_noise_mm : the measuring noise per coordinate [mm] the residual test judges against; None skips it
     fixture_sigma : 1-sigma uncertainty of each clamping pose (position [mm], angle [deg])
     max_compensation : most identification / compensation passes
+    max_nfev_per_parameter : most residual evaluations of one pass per free parameter (a quick screen of many
+        candidate fits stops a hopeless one early)
     initial : the model to start from (:class:`~rodlab.calibrate.kinematics.ModelParams`), or None: nominal with
         the base registered to the points
     """
@@ -60,6 +62,7 @@ class FitOptions:
     expected_noise_mm: float | None = DEVICE_NOISE_MM
     fixture_sigma: tuple = (0.01, 0.002)
     max_compensation: int = 6
+    max_nfev_per_parameter: int = 200
     initial: ModelParams | None = None
 
     def __post_init__(self) -> None:
@@ -68,6 +71,8 @@ class FitOptions:
         object.__setattr__(self, "harmonics", tuple(self.harmonics or ()))
         if int(self.max_compensation) < 1:
             raise ValueError(f"max_compensation must be >= 1, got {self.max_compensation!r}")
+        if int(self.max_nfev_per_parameter) < 1:
+            raise ValueError(f"max_nfev_per_parameter must be >= 1, got {self.max_nfev_per_parameter!r}")
 
 
 @dataclass(frozen=True)

@@ -259,7 +259,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
         fun, jac = _residual_functions(robot, obs, problem, _Pass(x, free, target, prior, noise_est))
-        res = solve(fun, jac, x[free], (lower[free], upper[free]), options.robust, 3 * noise_est, 200 * len(free))
+        res = solve(fun, jac, x[free], (lower[free], upper[free]), options.robust, 3 * noise_est,
+                    options.max_nfev_per_parameter * len(free))
         x[free] = res.x
         p = apply(start, infos, x)
         new_off = total_offsets(compensations, robot, p, obs)

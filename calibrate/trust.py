@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from .crossval import Prediction
     from .result import CalibrationResult
 
-__all__ = ["trust_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
+__all__ = ["trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
            "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]
 
 
@@ -60,6 +60,13 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
         w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
                  f"campaign the model covers the device's physics, so this is {causes}, and it biases every "
                  "parameter: run `rodlab diagnose --campaign` on the same files to find which")
+    return w + bound_warnings(robot, res)
+
+
+def bound_warnings(robot, res: "CalibrationResult") -> list[str]:
+    """Identified parameters beyond physical bounds: a geometric error no manufacturing leaves
+    (:data:`ERROR_BOUNDS` from the nominal), a joint compliance no gearbox has."""
+    w = []
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":

@@ -46,6 +46,7 @@ class CalibrationRun:
     compensations: list = field(default_factory=list)   # what the fit removed (calibrate.compensations entries)
     options: object = None                 # the identification's options (calibrate.FitOptions; cross-validation)
     fixture: object = None                 # the fixture file as read (calibrate.Fixture)
+    rod_file: object = None                # the compliance file as read (core.compliance.RodCompliance)
     without_harmonics_mm: np.ndarray | None = None   # with --joint-harmonics and --validate: the validation errors
     #                                                  [mm] of the same calibration without the periodic terms
 
@@ -88,6 +89,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
                                     options.pinned, options.freed)
     options = replace(options, pinned=pins)       # with the range holds: the cross-validation fits the same model
     run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
+                         rod_file=rod,
                          options=options)
     if args.validate:
         pts = points_from_args(args, args.validate, robot.n)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 
 import numpy as np
 
@@ -10,6 +11,7 @@ from rodlab.calibrate import (
     ModelParams,
     RodDeflection,
     campaign_observations,
+    identify,
     deflection_offsets,
     result_dict,
     validate,
@@ -18,6 +20,7 @@ from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
+from rodlab.calibrate.mixups import find_mixup
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
@@ -109,6 +112,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     _warn_other_rod(res.params.tool, rod, args.rod)
     judge(res, _campaign_prediction(run))
     res.warnings += _harmonics_held_out(run, args.joint_harmonics)
+    mixup = _mixup(run) if res.warnings else None
+    if mixup is not None:                          # the cause first: the other reasons follow from it
+        res.warnings.insert(0, mixup.reason())
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.png:
@@ -123,7 +129,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     _note_uncompensated(robot, res, camp, run.fixture, args, rod, comp)
     if res.warnings:
         print_not_trusted(res)
-        if res.residual_check is not None and res.residual_check.material:
+        if mixup is None and res.residual_check is not None and res.residual_check.material:
             _print_suspects(robot, camp, run.fixture, args, rod, comp, res.residual_check)
         _note_ideal_device(args)
         return 3
@@ -175,6 +181,25 @@ def _warn_other_rod(tool_mm, rod, path) -> None:
               f"flange) is {off:.0f} mm from the rod file's ({np.hypot(*f[:2]):.1f}, {f[2]:.1f} mm; {path}): is the "
               f"rod file this rod's? Its compliance, mass and centre of mass compensate the readings",
               file=sys.stderr)
+
+
+#: residual evaluations per free parameter of the quick fits that screen mix-ups (a plausible fit converges in
+#: tens; a hopeless one had taken thousands, 6 s of a refused calibration)
+QUICK_NFEV = 10
+
+
+def _mixup(run: CalibrationRun):
+    """A joint whose readings run the other way than the robot file's, or two clamping positions swapped, when the
+    campaign is refused (:func:`~rodlab.calibrate.mixups.find_mixup`), or None."""
+    quick = replace(run.options, max_compensation=1, expected_noise_mm=None, max_nfev_per_parameter=QUICK_NFEV)
+
+    def fit(obs, full):
+        return identify(run.robot, obs, run.rod, run.compensations, run.options if full else quick)
+
+    def relabelled(positions, full):
+        return fit(campaign_observations(replace(run.campaign, position=positions), run.fixture, run.rod_file), full)
+    return find_mixup(run.robot, run.result, run.observations.q_rad, run.campaign.position,
+                      lambda q, full: fit(replace(run.observations, q_rad=q), full), relabelled)
 
 
 def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:

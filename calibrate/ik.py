@@ -125,20 +125,23 @@ def _lm(robot, params, q0, batch: _Batch, q_pull=None, weight: float = 0.0):
 
 def solve_ik_positions(robot, params: ModelParams, targets_W, q_seed, rod: Rod | None = None, force_W_N=None, *,
                        pos_tol_mm: float = 1e-4, iterations: int = 60, pull: bool = True,
-                       pull_iterations: int | None = None) -> IkBatch:
+                       pull_iterations: int | None = None, margin_deg: float = 0.0) -> IkBatch:
     """Joint angles near ``q_seed`` [rad], shape=(M, n), that put the ball at ``targets_W`` [mm], shape=(M, 3)
     or (3,), with the weight of ``rod`` (:class:`~rodlab.calibrate.rod.Rod` or None) and a contact force
     ``force_W_N`` [N] ((M, 3), (3,) or None) deflecting the compliant joints of ``params``. All M problems are
     solved together (see the module docstring). ``pull=False`` skips stage 1, for seeds already near a solution
     (planned configurations); ``pull_iterations`` caps it (None: ``iterations``; a planner that tries many seeds:
-    :data:`PLAN_PULL_ITERATIONS`)."""
+    :data:`PLAN_PULL_ITERATIONS`); ``margin_deg``: solve within the limits narrowed by this much at each end (a
+    planner's configurations stay off the hard limits)."""
     q_seed = np.atleast_2d(np.asarray(q_seed, float))
     M, n = q_seed.shape
     if n != robot.n:
         raise CalibrationError(f"q_seed has {n} joints per row, the robot has {robot.n}", key="q_seed")
     targets = np.broadcast_to(np.asarray(targets_W, float), (M, 3))
     force = None if force_W_N is None else np.broadcast_to(np.asarray(force_W_N, float), (M, 3))
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
+    lo, hi = np.deg2rad(robot.limits_deg[:, 0] + margin_deg), np.deg2rad(robot.limits_deg[:, 1] - margin_deg)
+    if np.any(lo >= hi):
+        raise CalibrationError(f"margin_deg {margin_deg:g} leaves no range of some joint's limits", key="margin_deg")
     if pull_iterations is not None and pull_iterations < 1:
         raise CalibrationError(f"pull_iterations must be >= 1, got {pull_iterations}; to skip the pull towards "
                                f"the seeds give pull=False", key="pull_iterations")
@@ -170,16 +173,16 @@ def random_configurations(robot, rng, count: int, fraction: float = 0.7) -> np.n
 
 
 def solve_ik_groups(robot, params: ModelParams, targets: dict, seeds: np.ndarray, rod: Rod | None = None,
-                    forces: dict | None = None, pull_iterations: int | None = None) -> dict:
+                    forces: dict | None = None, pull_iterations: int | None = None, margin_deg: float = 0.0) -> dict:
     """Position IK of several groups of targets in one batch (a group: one clamping position).
 
     targets : {group: (m_g, 3) [mm]}; seeds : (sum m_g, n) [rad], in the groups' order; forces : {group: (3,)
-    [N]} contact force of each group, or None; pull_iterations : as :func:`solve_ik_positions`'. Returns {group:
+    [N]} contact force of each group, or None; pull_iterations, margin_deg : as :func:`solve_ik_positions`'. Returns {group:
     the configurations that reached their target, (k_g, n) [rad], in seed order}."""
     keys = list(targets)
     sizes = [len(targets[j]) for j in keys]
     F = None if forces is None else np.repeat(np.array([forces[j] for j in keys]), sizes, axis=0)
     res = solve_ik_positions(robot, params, np.concatenate([targets[j] for j in keys]), seeds, rod, F,
-                             pull_iterations=pull_iterations)
+                             pull_iterations=pull_iterations, margin_deg=margin_deg)
     edges = np.cumsum([0, *sizes])
     return {j: res.q_rad[a:b][res.ok[a:b]] for j, a, b in zip(keys, edges[:-1], edges[1:])}

@@ -11,6 +11,8 @@ standard_base`) is assumed.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .estimate import Selection, select_free
@@ -22,7 +24,8 @@ from .params import catalogue
 from .rod import Rod
 from .simulate import standard_base
 
-__all__ = ["observability", "plan_poses", "rod_angle_deg", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT"]
+__all__ = ["observability", "plan_poses", "rod_angle_deg", "feasible", "Reach", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT",
+           "LIMIT_MARGIN_DEG"]
 
 #: the rod leaves the ball within this angle [deg] of its device's open diagonal ((1, 1, 1) / sqrt 3 in {D_j}); the
 #: contract's example campaigns reach 124 deg (a rod nearly level passes beside the sensors), a rod pointing down
@@ -30,6 +33,36 @@ __all__ = ["observability", "plan_poses", "rod_angle_deg", "ROD_ANGLE_MAX_DEG", 
 ROD_ANGLE_MAX_DEG = 125.0
 #: the direction in {n} along which an L-shaped rod (gamma 90 deg) leaves its ball: back along pipe II
 L_ROD_EXIT = (-1.0, 0.0, 0.0)
+#: ``rodlab plan`` keeps every joint this far inside its limits [deg]: the IK projects onto the limits, and a pose on
+#: a hard limit is one a controller stops short of (an IRB 4600 trial's plan had q3 = -170.0000 of [-170, 170],
+#: q5 = -118 of [-118, 115] and q6 = 290 of [-290, 290])
+LIMIT_MARGIN_DEG = 5.0
+#: batches of random seeds a position short of candidates gets
+SEED_ROUNDS = 3
+
+
+@dataclass(frozen=True)
+class Reach:
+    """What a planned configuration must keep clear of.
+
+    margin_deg : every joint at least this far inside its limits [deg] (0: the limits themselves);
+    floor_mm : every joint's origin (shoulder, elbow, wrist) above this height [mm] in the robot's base frame {0},
+        measured against the robot's gravity (the floor or a table under the robot: a DH frame {0} may sit at the
+        shoulder or the floor, so only the user knows it), or None: no floor
+    """
+
+    margin_deg: float = 0.0
+    floor_mm: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.margin_deg) and self.margin_deg >= 0):
+            raise CalibrationError(f"the joint-limit margin must be >= 0 deg, got {self.margin_deg}", key="margin_deg")
+        if self.floor_mm is not None and not np.isfinite(self.floor_mm):
+            raise CalibrationError(f"the floor height must be a number of mm, got {self.floor_mm}", key="floor_mm")
+
+    def words(self) -> str:
+        out = f"{self.margin_deg:g} deg inside every joint limit"
+        return out + (f" with every joint above {self.floor_mm:g} mm" if self.floor_mm is not None else "")
 
 
 def observability(J: np.ndarray) -> dict:
@@ -45,27 +78,59 @@ def observability(J: np.ndarray) -> dict:
 
 
 def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, candidates: int, rng,
-                         max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT) -> dict:
+                         max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT,
+                         reach: Reach = Reach()) -> dict:
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
     robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
-    position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`)."""
+    position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`), within
+    the limits narrowed by ``reach.margin_deg``, kept where :func:`feasible` and the rod comes from the device's
+    open side; positions with fewer than ``k`` get up to :data:`SEED_ROUNDS` batches in all."""
     m = 4 * candidates
-    targets = {j: np.tile(fixture.transform(j)[:3, 3], (m, 1)) for j in fixture.poses}
-    seeds = random_configurations(robot, rng, len(targets) * m)
-    reached = solve_ik_groups(robot, params, targets, seeds, rod, pull_iterations=PLAN_PULL_ITERATIONS)
-    cands = {}
-    for j, got in reached.items():
-        n_reach = len(got)
-        if n_reach and max_rod_angle_deg is not None:
-            got = got[rod_angle_deg(params, got, fixture.transform(j), exit_n) <= max_rod_angle_deg]
-        got = got[:candidates]
-        if len(got) < k:
-            raise CalibrationError(f"clamping position {j}: only {len(got)} of {m} tried rod orientations reach "
-                                   f"the datum point from the device's open side ({n_reach} reach it at all), {k} "
-                                   f"needed; move the fixture within reach, or check the robot's base pose (--base)",
-                                   key=f"positions.{j}")
-        cands[j] = got
-    return cands
+    found = {j: [] for j in fixture.poses}
+    counts = {j: [0, 0] for j in fixture.poses}            # reached at all, of them feasible
+    for _ in range(SEED_ROUNDS):
+        short = [j for j in found if sum(len(g) for g in found[j]) < (candidates if not found[j] else k)]
+        if not short:
+            break
+        targets = {j: np.tile(fixture.transform(j)[:3, 3], (m, 1)) for j in short}
+        seeds = random_configurations(robot, rng, len(targets) * m)
+        reached = solve_ik_groups(robot, params, targets, seeds, rod, pull_iterations=PLAN_PULL_ITERATIONS,
+                                  margin_deg=reach.margin_deg)
+        for j, got in reached.items():
+            counts[j][0] += len(got)
+            got = got[feasible(robot, params, got, reach, rod)]
+            counts[j][1] += len(got)
+            if len(got) and max_rod_angle_deg is not None:
+                got = got[rod_angle_deg(params, got, fixture.transform(j), exit_n) <= max_rod_angle_deg]
+            found[j].append(got)
+    return {j: _enough(j, np.concatenate(found[j])[:candidates], k, counts[j], m * SEED_ROUNDS, reach) for j in found}
+
+
+def _enough(j, got: np.ndarray, k: int, counts: list, tried: int, reach: Reach) -> np.ndarray:
+    """``got`` if it has at least ``k`` configurations, else the error saying where they were lost."""
+    if len(got) >= k:
+        return got
+    raise CalibrationError(f"clamping position {j}: only {len(got)} of up to {tried} tried rod orientations reach the "
+                           f"datum point from the device's open side ({counts[0]} reach it at all, {counts[1]} of them "
+                           f"{reach.words()}), {k} needed; move the fixture within reach, or check the robot's base "
+                           f"pose (--base), its joint limits and the floor", key=f"positions.{j}")
+
+
+def feasible(robot, params: ModelParams, q_rad: np.ndarray, reach: Reach, rod: Rod | None = None) -> np.ndarray:
+    """Which configurations [rad] (M, n) keep clear of what ``reach`` says: every joint ``margin_deg`` inside its
+    limits and, with a floor, every joint's origin above it (height in {0} against the robot's gravity),
+    shape=(M,) bool."""
+    q = np.atleast_2d(q_rad)
+    tol = 1e-9
+    lo = np.deg2rad(robot.limits_deg[:, 0] + reach.margin_deg) - tol
+    hi = np.deg2rad(robot.limits_deg[:, 1] - reach.margin_deg) + tol
+    ok = np.all((q >= lo) & (q <= hi), axis=1)
+    if reach.floor_mm is None:
+        return ok
+    fr, _ = ball_positions(robot, params, q, rod)
+    up = -np.asarray(robot.gravity_base, float)
+    height = fr.o_prev[:, 1:, :] @ (up / np.linalg.norm(up))          # frames 1..n-1: shoulder, elbow, wrist
+    return ok & np.all(height >= reach.floor_mm, axis=1)
 
 
 def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray, exit_n=L_ROD_EXIT) -> np.ndarray:
@@ -80,11 +145,12 @@ def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray, exit
 
 
 def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed: int = 0, base_guess=None,
-               max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT):
+               max_rod_angle_deg: float | None = ROD_ANGLE_MAX_DEG, exit_n=L_ROD_EXIT, reach: Reach = Reach()):
     """Joint angles [deg] per clamping position (dict j -> (k, n) array) and the observability indices, for the
     rod ``rod`` (:class:`~rodlab.calibrate.rod.Rod`: its tool vector and its weight; ``Rod.of(compliance)``);
     ``max_rod_angle_deg``: the rod leaves the ball within this angle of the device's open diagonal (None: any),
-    along ``exit_n`` in {n} (:func:`rod_angle_deg`; an L-shaped rod's by default)."""
+    along ``exit_n`` in {n} (:func:`rod_angle_deg`; an L-shaped rod's by default); ``reach``: the limit margin and
+    floor the configurations keep clear of (:class:`Reach`; ``rodlab plan``: :data:`LIMIT_MARGIN_DEG`)."""
     if not isinstance(rod, Rod):
         raise TypeError(f"plan_poses takes the rod as a Rod (Rod.of(compliance) or Rod.rigid(tool_mm, mass_kg, "
                         f"com_T_mm)), got {type(rod).__name__}")
@@ -92,7 +158,7 @@ def plan_poses(robot, fixture, rod: Rod, k: int = 6, candidates: int = 30, seed:
     p = ModelParams.nominal(robot, rod.tool_mm, base=base_guess)
     if base_guess is None:
         p = p.with_(base=standard_base())      # {W} 650 mm in front, 250 mm up, device tilted as in the paper
-    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng, max_rod_angle_deg, exit_n)
+    cands = reachable_candidates(robot, p, fixture, rod, k, candidates, rng, max_rod_angle_deg, exit_n, reach)
     allq = np.concatenate(list(cands.values()))
     infos = catalogue(robot.n)
     fr, tau = ball_positions(robot, p, allq, rod)

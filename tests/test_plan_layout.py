@@ -100,3 +100,29 @@ def test_a_rod_bent_otherwise_leaves_the_ball_along_its_own_pipe(layout, tmp_pat
     p = ModelParams.nominal(ROBOT, d.tool_mm, base=base)
     for j, q in _planned(out).items():
         assert np.all(rod_angle_deg(p, q, fix.transform(j), -d.pipe_II_direction) <= ROD_ANGLE_MAX_DEG + 1e-9)
+
+
+def test_planned_poses_keep_off_the_joint_limits_and_above_the_floor(layout, tmp_path):
+    """An IRB 4600 trial's plan had joints exactly on their hard limits (q3 = -170.0000 of [-170, 170]) and elbows
+    below the base: every planned joint keeps 5 deg inside its limits by default (and --limit-margin-deg 0 may
+    reach them), and with --floor-mm every joint origin stays above the floor."""
+    folder, fix, rod, base = layout
+    args = ["plan", "--fixture", str(folder / "f.fixture.json"), "--rod", str(folder / "rod.compliance.json"),
+            "--base=" + ",".join(f"{v:.6f}" for v in base)]
+    assert main([*args, "-o", str(tmp_path / "p.csv")]) == 0
+    q = np.rad2deg(np.concatenate(list(_planned(tmp_path / "p.csv").values())))
+    lim = ROBOT.limits_deg
+    assert np.all(q >= lim[:, 0] + 5.0 - 1e-3) and np.all(q <= lim[:, 1] - 5.0 + 1e-3)
+    assert main([*args, "--floor-mm", "-100", "-o", str(tmp_path / "f.csv")]) == 0
+    qf = np.concatenate(list(_planned(tmp_path / "f.csv").values()))
+    fr, _ = ball_positions(ROBOT, ModelParams.nominal(ROBOT, rod.tool_mm, base=base), qf, Rod.of(rod))
+    assert np.all(fr.o_prev[:, 1:, 2] >= -100.0)
+    assert main([*args, "--limit-margin-deg", "0", "-o", str(tmp_path / "z.csv")]) == 0
+
+
+def test_a_floor_no_pose_clears_is_refused_with_the_reason(layout, capsys):
+    folder, fix, rod, base = layout
+    code = main(["plan", "--fixture", str(folder / "f.fixture.json"), "--rod", str(folder / "rod.compliance.json"),
+                 "--base=" + ",".join(f"{v:.6f}" for v in base), "--floor-mm", "5000"])
+    err = capsys.readouterr().err
+    assert code == 2 and "with every joint above 5000 mm" in err and "the floor" in err

@@ -33,6 +33,13 @@ def register(sub) -> None:
     p.add_argument("--candidates", type=count, default=24,
                    help="reachable candidate orientations drawn per position (default 24)")
     p.add_argument("--seed", type=seed, default=0, help="random seed of the candidates (default 0)")
+    p.add_argument("--limit-margin-deg", type=margin, default=None, metavar="DEG",
+                   help="keep every joint this far inside its limits (default 5: a pose on a hard limit is one a "
+                        "controller stops short of; 0: the limits themselves)")
+    p.add_argument("--floor-mm", type=finite, default=None, metavar="H",
+                   help="keep every joint's origin (shoulder, elbow, wrist) above this height [mm] in the robot's base "
+                        "frame {0}, measured up against gravity: the floor or table under the robot (default: no "
+                        "floor; where {0} sits, at the floor or at the shoulder, depends on the robot file)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--base", type=base_pose, default=None, metavar="X,Y,Z,A,B,C",
                        help="where the robot stands: the pose of its base frame {0} in {W} [mm, deg], as a "
@@ -46,14 +53,15 @@ def register(sub) -> None:
 
 
 def cmd_plan(args) -> int:
-    from rodlab.calibrate.plan import plan_poses
+    from rodlab.calibrate.plan import LIMIT_MARGIN_DEG, Reach, plan_poses
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     design = load_design(args.rod) if str(args.rod).endswith(".toml") else None
     rod = calc_rod_compliance(design) if design is not None else read_compliance(args.rod)
     base = _base(args)
+    margin = LIMIT_MARGIN_DEG if args.limit_margin_deg is None else args.limit_margin_deg
     poses, obs = plan_poses(robot, fix, Rod.of(rod), args.k, args.candidates, args.seed, base_guess=base,
-                            exit_n=_rod_exit(args, design, rod))
+                            exit_n=_rod_exit(args, design, rod), reach=Reach(margin, args.floor_mm))
     print(f"{sum(len(v) for v in poses.values())} poses over {len(poses)} positions; observability: " +
           ", ".join(f"{k} {v:.4g}" for k, v in obs.items()))
     lines = ["position,point," + ",".join(f"q{i + 1}" for i in range(robot.n))]
@@ -65,6 +73,24 @@ def cmd_plan(args) -> int:
     else:
         print("\n".join(lines))
     return 0
+
+
+def margin(text: str) -> float:
+    """``--limit-margin-deg``: a number of degrees >= 0."""
+    v = finite(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a margin of 0 deg or more, got {text!r}")
+    return v
+
+
+def finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not np.isfinite(v):
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}")
+    return v
 
 
 BASE_KEYS = ("base_x", "base_y", "base_z", "base_a", "base_b", "base_c")

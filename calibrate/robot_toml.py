@@ -163,6 +163,7 @@ def read_robot_toml(path) -> Robot:
     text, data = _load(p)
     convention, source = _header(p, text, data)
     cols, names = _joint_rows(p, text, data.get("joint"), convention)
+    _refuse_radians_and_metres(p, text, cols)
     for problem in unit_slips(cols):
         log.warning("%s: %s", p, problem)
     gravity = _gravity(p, text, data)
@@ -183,6 +184,35 @@ LINK_MAX_MM = 5000.0
 LINK_MIN_MM = 5.0
 
 
+#: twists or offsets at +-pi/2 or +-pi as numbers on this many joints are radians, not a robot: refused
+RADIAN_JOINTS = 2
+
+
+def _radian_joints(values) -> list[int]:
+    """1-based joints whose value is +-pi/2 or +-pi as a number (to 1e-3)."""
+    v = np.abs(np.asarray(values, float))
+    return [i + 1 for i, x in enumerate(v) if min(abs(x - np.pi / 2), abs(x - np.pi)) < 1e-3]
+
+
+def _refuse_radians_and_metres(p: Path, text: str, cols: dict) -> None:
+    """Refuse DH rows no arm has: twists or offsets at +-pi/2 or +-pi on :data:`RADIAN_JOINTS` joints or more
+    (radians where degrees are expected; an IRB 4600 trial's file with alpha -1.5708 had been read with a warning
+    and calibrated to 590 mm rms), or every length below :data:`LINK_MIN_MM` (metres). Errors name the first
+    joint's line and key, and the fix."""
+    for key in ("alpha_deg", "theta_offset_deg"):
+        rad = _radian_joints(cols[key])
+        if len(rad) >= RADIAN_JOINTS:
+            raise CalibrationError(f"{key} of joints {rad} is +-pi/2 or +-pi as a number ("
+                                   f"{', '.join(f'{cols[key][i - 1]:.4f}' for i in rad)}): radians where degrees are "
+                                   "expected; write the angles in degrees (90, -90, 180)", path=p,
+                                   line=_line(text, rad[0] - 1, key), key=f"joint[{rad[0]}].{key}")
+    lengths = np.abs(np.concatenate([np.asarray(cols["d_mm"], float), np.asarray(cols["a_mm"], float)]))
+    if 0 < lengths.max() < LINK_MIN_MM:
+        raise CalibrationError(f"every d_mm and a_mm is below {LINK_MIN_MM:g} mm (longest {lengths.max():.4g}): metres "
+                               "where millimetres are expected; multiply them by 1000", path=p, key="joint[1].d_mm",
+                               line=_line(text, 0, "d_mm"))
+
+
 def unit_slips(cols: dict) -> list[str]:
     """Numbers of DH rows no arm has, each with the slip that gives them: twists or offsets at +-pi/2 or +-pi
     (radians where degrees are expected), every length below :data:`LINK_MIN_MM` (metres), a length beyond
@@ -190,7 +220,7 @@ def unit_slips(cols: dict) -> list[str]:
     out = []
     for key in ("alpha_deg", "theta_offset_deg"):
         v = np.abs(np.asarray(cols[key], float))
-        rad = [i + 1 for i, x in enumerate(v) if min(abs(x - np.pi / 2), abs(x - np.pi)) < 1e-3]
+        rad = _radian_joints(v)
         if rad:
             out.append(f"{key} of joint(s) {rad} is +-pi/2 or +-pi as a number ({', '.join(f'{v[i - 1]:.4f}' for i in rad)}): "
                        "radians where degrees are expected? write 90 or 180")

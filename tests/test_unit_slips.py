@@ -148,14 +148,12 @@ def test_gross_residuals_do_not_advise_a_larger_noise(camp, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("edit,message", [
-    (lambda t: re.sub(r"(?m)^(d_mm|a_mm) = (-?[0-9.]+)", lambda m: f"{m.group(1)} = {float(m.group(2)) / 1000}", t),
-     "metres where millimetres are expected"),
-    (lambda t: re.sub(r"(?m)^alpha_deg = (-?)90\.0", r"alpha_deg = \g<1>1.5708", t), "radians where degrees"),
+    (lambda t: re.sub(r"(?m)^alpha_deg = (-?)90\.0", r"alpha_deg = \g<1>1.5708", t, count=1), "radians where degrees"),
     (lambda t: t.replace("a_mm = 425.0", "a_mm = 42500.0"), "beyond any industrial arm"),
 ])
 def test_a_robot_file_in_other_units_is_warned_of(tmp_path, caplog, edit, message):
-    """`rodlab validate` (and every command reading the file) warns of DH rows in metres or radians, or a link
-    no arm has; the built-in TX90 has none of them."""
+    """`rodlab validate` (and every command reading the file) warns of one twist at pi/2 as a number or a link no
+    arm has; the built-in TX90 has none of them."""
     from rodlab.calibrate.robot_formats import builtin_robots
     text = builtin_robots()["tx90"].read_text()
     (tmp_path / "r.toml").write_text(edit(text))
@@ -165,3 +163,19 @@ def test_a_robot_file_in_other_units_is_warned_of(tmp_path, caplog, edit, messag
     (tmp_path / "ok.toml").write_text(text)
     assert main(["validate", str(tmp_path / "ok.toml")]) == 0
     assert not [r for r in caplog.records if r.levelname == "WARNING"]
+
+
+@pytest.mark.parametrize("edit,message,key", [
+    (lambda t: re.sub(r"(?m)^(d_mm|a_mm) = (-?[0-9.]+)", lambda m: f"{m.group(1)} = {float(m.group(2)) / 1000}", t),
+     "metres where millimetres are expected; multiply them by 1000", "joint[1].d_mm"),
+    (lambda t: re.sub(r"(?m)^alpha_deg = (-?)90\.0", r"alpha_deg = \g<1>1.5708", t), "radians where degrees are expected",
+     "alpha_deg"),
+])
+def test_a_robot_file_in_radians_or_metres_is_refused(tmp_path, capsys, edit, message, key):
+    """Twists at pi/2 on several joints, or every length in metres, are no arm (an IRB 4600 trial's alpha in radians
+    had been a warning and a 590 mm calibration): refused with the file, line and key, and the fix."""
+    from rodlab.calibrate.robot_formats import builtin_robots
+    (tmp_path / "r.toml").write_text(edit(builtin_robots()["tx90"].read_text()))
+    assert main(["validate", str(tmp_path / "r.toml")]) != 0
+    err = capsys.readouterr().err
+    assert message in err and "r.toml" in err and key in err and "line" in err

@@ -15,6 +15,7 @@ from pathlib import Path
 __all__ = [
     "RodlabError",
     "LocatedError",
+    "VerdictError",
     "RenderError",
     "FormatError",
     "DesignError",
@@ -35,6 +36,11 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
 
 class RodlabError(ValueError):
     """Base of every rodlab error caused by input (files, parameters, designs)."""
+
+
+class VerdictError(RodlabError):
+    """Good input whose content refuses the result (a design update the freed keys cannot fit, a recording whose
+    diagnosis names a cause not freed): the CLI exits 3, as for a NOT TRUSTED calibration; bad input exits 2."""
 
 
 class RenderError(RodlabError):

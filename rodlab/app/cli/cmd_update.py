@@ -12,7 +12,7 @@ from rodlab.stiffness_rig import read_recording
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.design_io import resolve_design
-from ...core.errors import DesignError, RodlabError
+from ...core.errors import DesignError, RodlabError, VerdictError
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
 from ...core.tolerances import design_value
@@ -136,7 +136,7 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
     named = "; ".join(f"{f.effect}" + (f" at {f.location}" if f.location else "") + f": {what[f.effect]}"
                       for f in findings)
     keys = ",".join(dict.fromkeys([*freed, *(_key_for(f, design) for f in findings)]))   # the keys freed, plus
-    raise RodlabError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
+    raise VerdictError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
                       f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
                       f"here. Free the key that fits it too (--free {keys})"
                       + (", or repair or re-bond the joint and measure again" if "joints." in keys else "")
@@ -168,14 +168,14 @@ def cmd_update(args: argparse.Namespace) -> int:
     if not res.explains:
         recording = args.measured if args.measured.endswith(".rig.csv") else (
             read_compliance(args.measured).provenance.get("recording") or "RECORDING.rig.csv (the file's own recording)")
-        raise RodlabError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
-                          f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
-                          f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
-                          f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
-                          "where it names a local cause, free that cause's key (a joint's "
-                          "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
-                          "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
-                          "tube.outer_diameter_mm); nothing was written")
+        raise VerdictError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
+                           f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
+                           f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
+                           f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
+                           "where it names a local cause, free that cause's key (a joint's "
+                           "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
+                           "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
+                           "tube.outer_diameter_mm); nothing was written")
     text = read_text_checked(design.source, DesignError)
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")

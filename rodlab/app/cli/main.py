@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ... import __version__
 from ...core import progress
-from ...core.errors import RodlabError, did_you_mean
+from ...core.errors import RodlabError, VerdictError, did_you_mean
 
 __all__ = ["build_parser", "main", "console", "command_modules", "COMMAND_ORDER"]
 
@@ -140,8 +140,9 @@ def main(argv: list[str] | None = None) -> int:
     except RodlabError as e:
         if args.debug:
             raise
-        print(f"rodlab {name}: error: {e}", file=sys.stderr)
-        return 2
+        verdict = isinstance(e, VerdictError)
+        print(f"rodlab {name}: {'refused' if verdict else 'error'}: {e}", file=sys.stderr)
+        return 3 if verdict else 2
     except BrokenPipeError:                 # output piped into `head` and closed: not an error
         return 0
     except OSError as e:

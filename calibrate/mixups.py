@@ -23,9 +23,10 @@ from typing import Callable
 import numpy as np
 
 from .errors import CalibrationError
-from .trust import bound_warnings
+from .identify import campaign_observations, identify
+from .trust import bound_warnings, gross
 
-__all__ = ["Mixup", "find_mixup", "MIXUP_GAIN"]
+__all__ = ["Mixup", "find_mixup", "campaign_mixup", "MIXUP_GAIN", "QUICK_NFEV"]
 
 log = logging.getLogger(__name__)
 
@@ -33,6 +34,9 @@ log = logging.getLogger(__name__)
 MIXUP_GAIN = 0.5
 #: mix-ups identified in full after the quick screen (the best by its rms)
 SCREENED = 2
+#: residual evaluations per free parameter of the quick fits that screen mix-ups (a plausible fit converges in
+#: tens; a hopeless one had taken thousands, 6 s of a refused calibration)
+QUICK_NFEV = 10
 
 
 @dataclass(frozen=True)
@@ -69,17 +73,20 @@ class Mixup:
                 f"correct the position column or the fixture file")
 
 
-def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints: Callable, fit_positions: Callable
-               ) -> Mixup | None:
+def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints: Callable, fit_positions: Callable,
+               material: bool = True) -> Mixup | None:
     """The mix-up whose undoing fits the campaign plausibly (the best), or None. ``res``: the identification as
     given; ``q_rad`` (N, n) its joint readings; ``positions`` (N,) its position labels; ``fit_joints(q_rad, full)``
     and ``fit_positions(positions, full)``: the same identification with other readings or labels, a quick one
     (``full`` False: one pass, no residual test) to screen every mix-up and the full one to confirm the best.
     Tried only when ``res`` has parameters beyond their bounds or residuals the noise model does not explain by a
-    material margin (a swap of two nearby positions leaves 0.11 mm rms, not gross)."""
+    material margin (a swap of two nearby positions leaves 0.11 mm rms, not gross); with ``material`` False (a
+    diagnosis, where physics left out makes the residuals material) only beyond bounds or gross
+    (:func:`~calibrate.trust.gross`)."""
     test = res.residual_check
     beyond = bool(bound_warnings(robot, res))
-    if not beyond and not (test is None or test.material):
+    refused = test is None or (test.material if material else gross(test.birge, res.rms_mm))
+    if not beyond and not refused:
         return None
     limit = res.rms_mm * (1.0 if beyond else MIXUP_GAIN)
     trials = [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
@@ -122,3 +129,20 @@ def _negated(q_rad: np.ndarray, k: int) -> np.ndarray:
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:
     p = np.asarray(positions)
     return np.where(p == a, b, np.where(p == b, a, p))
+
+
+def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations, options, material: bool = True
+                   ) -> Mixup | None:
+    """:func:`find_mixup` for a MultiCal campaign: ``res`` its identification from ``obs`` (the observations of
+    ``camp`` with ``fixture`` and the compliance file ``rod_file``) with the rod ``rod``, ``compensations`` and the
+    :class:`~calibrate.estimate.FitOptions` ``options``; the screen runs one pass with :data:`QUICK_NFEV`;
+    ``material`` as :func:`find_mixup`'s."""
+    quick = replace(options, max_compensation=1, expected_noise_mm=None, max_nfev_per_parameter=QUICK_NFEV)
+
+    def fit(o, full):
+        return identify(robot, o, rod, compensations, options if full else quick)
+
+    def relabelled(positions, full):
+        return fit(campaign_observations(replace(camp, position=positions), fixture, rod_file), full)
+    return find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
+                      relabelled, material)

@@ -74,3 +74,15 @@ def test_a_mixup_is_a_joint_or_a_pair():
     with pytest.raises(ValueError):
         Mixup(2, (1, 3), 0.007, 0.013)
     assert "joint 2 negated" == Mixup(2, None, 0.007, 0.013).label
+
+
+def test_the_campaign_diagnosis_refuses_mixed_up_files(campaign, tmp_path, capsys):
+    """A reversed joint's traces are no physics: `diagnose --campaign` says what is mixed up instead of naming a
+    periodic error of that joint (the trial's suspect), and writes nothing."""
+    path = tmp_path / "reversed.campaign.csv"
+    _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"q3": f"{-float(r['q3']):.4f}"}))
+    out = tmp_path / "d.json"
+    code = main(["diagnose", "--campaign", str(path), "--fixture", str(campaign / "multical.fixture.json"),
+                 "--rod", str(next(campaign.glob("*.compliance.json"))), "--json", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "joint 3's readings run the other way" in err and not out.exists()

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 
 import numpy as np
 
@@ -11,7 +10,6 @@ from rodlab.calibrate import (
     ModelParams,
     RodDeflection,
     campaign_observations,
-    identify,
     deflection_offsets,
     result_dict,
     validate,
@@ -20,7 +18,7 @@ from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
-from rodlab.calibrate.mixups import find_mixup
+from rodlab.calibrate.mixups import campaign_mixup
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
@@ -183,23 +181,11 @@ def _warn_other_rod(tool_mm, rod, path) -> None:
               file=sys.stderr)
 
 
-#: residual evaluations per free parameter of the quick fits that screen mix-ups (a plausible fit converges in
-#: tens; a hopeless one had taken thousands, 6 s of a refused calibration)
-QUICK_NFEV = 10
-
-
 def _mixup(run: CalibrationRun):
     """A joint whose readings run the other way than the robot file's, or two clamping positions swapped, when the
-    campaign is refused (:func:`~rodlab.calibrate.mixups.find_mixup`), or None."""
-    quick = replace(run.options, max_compensation=1, expected_noise_mm=None, max_nfev_per_parameter=QUICK_NFEV)
-
-    def fit(obs, full):
-        return identify(run.robot, obs, run.rod, run.compensations, run.options if full else quick)
-
-    def relabelled(positions, full):
-        return fit(campaign_observations(replace(run.campaign, position=positions), run.fixture, run.rod_file), full)
-    return find_mixup(run.robot, run.result, run.observations.q_rad, run.campaign.position,
-                      lambda q, full: fit(replace(run.observations, q_rad=q), full), relabelled)
+    campaign is refused (:func:`~rodlab.calibrate.mixups.campaign_mixup`), or None."""
+    return campaign_mixup(run.robot, run.result, run.campaign, run.fixture, run.rod_file, run.observations, run.rod,
+                          run.compensations, run.options)
 
 
 def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:

@@ -29,7 +29,9 @@ import numpy as np
 from rodlab.calibrate import FitOptions, Rod, campaign_observations, identify
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, campaign_effect, campaign_hypotheses)
 from rodlab.calibrate.jacobian import position_jacobian
+from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import ball_positions
+from rodlab.calibrate.mixups import campaign_mixup
 from rodlab.calibrate.observations import noise_covariance
 from rodlab.calibrate.validate import error_stats
 from rodlab.core.enums import Subject, Trial, Verdict
@@ -367,8 +369,12 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
-    res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)],
-                   FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics)))
+    options = FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics))
+    res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)], options)
+    mixup = campaign_mixup(robot, res, camp, fix, rod, obs, Rod.of(rod), [deflection_of(rod)], options, material=False)
+    if mixup is not None:                  # the files do not describe one robot: no physics to diagnose
+        raise CalibrationError(f"{mixup.reason()}; the diagnosis of these files would name the mix-up's traces as "
+                               "physics", key="campaign")
     ctx, tau = campaign_context(robot, res, obs, camp, rod)
     sel = CampaignSelection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()

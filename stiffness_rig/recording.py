@@ -21,13 +21,19 @@ from pathlib import Path
 
 import numpy as np
 
+from rodlab.core.compliance import PLAUSIBLE_C_F_MM_PER_N
 from rodlab.core.enums import LoadAxis, Phase
 from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import read_text_checked, separator_problem
+from rodlab.core.units import G0
 
 from .errors import RigError
 
 log = logging.getLogger(__name__)
+
+#: an on-axis slope below this [mm/N] is 50 times stiffer than any measuring rod: metres, or grams as kg
+STIFF_LIMIT_MM_PER_N = 2e-5
+_AXES = "xyz"
 
 __all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
            "format_row"]
@@ -90,6 +96,28 @@ class RigRecording:
     def measured_axes(self) -> list[int]:
         """Components (0..2) that have at least one reading."""
         return [i for i in range(3) if np.isfinite(self.disp_mm[:, i]).any()]
+
+    def unit_slips(self) -> list[str]:
+        """Slopes no measuring rod has, each with the unit slip that gives them: a load axis whose own gauge moves
+        by more than :data:`~rodlab.core.compliance.PLAUSIBLE_C_F_MM_PER_N` per newton of its masses (um written
+        as mm) or less than :data:`STIFF_LIMIT_MM_PER_N` (metres written as mm, or grams as kg)."""
+        out = []
+        axis = np.array([str(getattr(v, "value", v)) for v in self.load_axis])
+        sign = np.where(np.char.startswith(axis, "-"), -1.0, 1.0)
+        for a in self.measured_axes():
+            on = (np.char.lstrip(axis, "-") == _AXES[a]) & np.isfinite(self.disp_mm[:, a])
+            load = sign[on] * self.mass_kg[on] * G0
+            if on.sum() < 3 or np.ptp(load) <= 0:
+                continue
+            slope = abs(float(np.polyfit(load, self.disp_mm[on, a], 1)[0]))
+            if slope > PLAUSIBLE_C_F_MM_PER_N:
+                out.append(f"the {_AXES[a]} gauge moves {slope:.4g} mm per N of the {_AXES[a]} load; a measuring rod "
+                           "deflects 0.001-0.3 mm per N: if disp_mm is in um, divide it by 1000")
+            elif slope < STIFF_LIMIT_MM_PER_N:
+                out.append(f"the {_AXES[a]} gauge moves {slope:.3g} mm per N of the {_AXES[a]} load; a measuring rod "
+                           "deflects 0.001-0.3 mm per N: a displacement in metres (multiply by 1000) or masses in "
+                           "grams (divide mass_kg by 1000)?")
+        return out
 
     def steps(self) -> np.ndarray:
         """Distinct step numbers in recording order."""
@@ -208,6 +236,8 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
                        arr(8) if has_temp else None, p, arr(9) if "force_N" in ix else None)
     if not rec.measured_axes():
         raise RigError("no displacement column has any reading", path=p, line=header_line, key="disp_x_mm")
+    for problem in rec.unit_slips():
+        log.warning("%s: %s", p, problem)
     return rec
 
 

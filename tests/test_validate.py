@@ -158,3 +158,40 @@ def test_a_problem_in_a_later_instrument_is_named_at_its_own_line(tmp_path, caps
     assert main(["validate", str(bad)]) == 2
     assert f"line {units + 1}, key `instrument[2].channel[1].units`" in capsys.readouterr().err
     assert _line(bad.read_text(), "instrument[2].channel[1].units") == units + 1
+
+
+def _scaled_rig(src: Path, dst: Path, factor: float) -> None:
+    lines, out, header = src.read_text().splitlines(), [], None
+    for line in lines:
+        if line.startswith("#") or header is None:
+            header = header if line.startswith("#") else line.split(",")
+            out.append(line)
+            continue
+        cells = line.split(",")
+        for i, h in enumerate(header):
+            if h.startswith("disp_") and cells[i]:
+                cells[i] = f"{float(cells[i]) * factor:.6g}"
+        out.append(",".join(cells))
+    dst.write_text("\n".join(out) + "\n")
+
+
+@pytest.mark.parametrize("factor, words", [(1000.0, "if disp_mm is in um, divide it by 1000"),
+                                           (0.001, "a displacement in metres")])
+def test_a_recording_or_compliance_file_in_other_units_is_valid_with_its_warning(tmp_path, capsys, factor, words):
+    """A new user's recording in um (or metres) and a compliance file in um/N pass their schema: `validate` says
+    so and lists the unit slips the readers find under the file, not only as log lines (new-user trial)."""
+    from rodlab.core.compliance import write_compliance
+    assert main(["rig", "simulate", "--sim", "rod1", "--repeats", "1", "--hold-s", "4", "-o",
+                 str(tmp_path / "ok.rig.csv")]) == 0
+    _scaled_rig(tmp_path / "ok.rig.csv", tmp_path / "slip.rig.csv", factor)
+    capsys.readouterr()
+    assert main(["validate", str(tmp_path / "ok.rig.csv"), str(tmp_path / "slip.rig.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "ok.rig.csv: rodlab.rig/1, valid\n" in out and "slip.rig.csv: rodlab.rig/1, valid, but with" in out
+    assert words in out
+    from dataclasses import replace
+    from rodlab import calc_rod_compliance, resolve_design
+    rod = calc_rod_compliance(resolve_design("rod1"))
+    write_compliance(replace(rod, C_F=rod.C_F * 1000.0), tmp_path / "um.compliance.json")
+    assert main(["validate", str(tmp_path / "um.compliance.json")]) == 0
+    assert "if the file is in um/N, divide C_F by 1000" in capsys.readouterr().out

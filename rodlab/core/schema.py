@@ -94,12 +94,14 @@ class Problem:
 
 @dataclass
 class FileCheck:
-    """The result of checking one file: its format (None if unknown) and every problem found."""
+    """The result of checking one file: its format (None if unknown), every problem found, and the warnings its
+    reader gave (numbers no rod or robot has: a unit slip) on a file that passes."""
 
     path: str
     format: str | None
     problems: list = field(default_factory=list)
     note: str = ""
+    warnings: list = field(default_factory=list)
 
     @property
     def ok(self) -> bool:

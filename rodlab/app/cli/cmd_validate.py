@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import importlib
+import logging
 import re
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from rodlab.calibrate import read_campaign, read_points
@@ -104,13 +106,42 @@ def validate_file(path, format_id: str | None = None) -> FileCheck:
         check = check_file(path, format_id)
     reader = _reader(check.format) if check.ok else None
     if reader is not None:
-        try:
-            reader(path)
-        except LocatedError as e:
-            check.problems.extend(Problem(p.path or str(path), p.detail, p.line, p.key) for p in (e, *e.also))
-        except ValueError as e:
-            check.problems.append(Problem(str(path), str(e)))
+        with _warnings_of("rodlab") as warned:
+            try:
+                reader(path)
+            except LocatedError as e:
+                check.problems.extend(Problem(p.path or str(path), p.detail, p.line, p.key) for p in (e, *e.also))
+            except ValueError as e:
+                check.problems.append(Problem(str(path), str(e)))
+        check.warnings = [_without_path(w, path) for w in warned]
     return check
+
+
+@contextmanager
+def _warnings_of(name: str):
+    """The WARNING messages the ``name`` logger's tree gives inside the block (a list filled as they come), kept
+    from the console: ``validate`` lists them under their file."""
+    logger, got = logging.getLogger(name), []
+
+    class _Keep(logging.Handler):
+        def emit(self, record):
+            got.append(record.getMessage())
+    handler, propagate = _Keep(logging.WARNING), logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
+    try:
+        yield got
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
+
+
+def _without_path(message: str, path) -> str:
+    """A reader's warning without the file's own path in front (validate prints it under the file)."""
+    for prefix in (f"{path}: ", f"{Path(path).name}: "):
+        if message.startswith(prefix):
+            return message[len(prefix):]
+    return message
 
 
 def register(sub) -> None:
@@ -120,7 +151,9 @@ def register(sub) -> None:
                                    "rodlab/schemas; docs/formats.md) with file, line, key, what was expected "
                                    "and the fix; a file that passes its schema is then read by its reader, "
                                    "whose own rules (a symmetric C_F, holds that keep their load, ...) it must "
-                                   "also pass. Exit 0 if every file is valid, 2 otherwise.")
+                                   "also pass; its warnings (numbers no rod or robot has: a recording in um, a "
+                                   "compliance file in um/N, a robot file in radians) are listed under the file. "
+                                   "Exit 0 if every file is valid, 2 otherwise.")
     p.add_argument("files", nargs="+", help="files to check")
     p.add_argument("--format", default=None,
                    choices=sorted(FORMATS) + sorted(ALIASES) + sorted(schemaless_robot_formats().values()),
@@ -134,7 +167,10 @@ def cmd_validate(args) -> int:
         check = validate_file(f, args.format)
         fmt = check.format or "unknown format"
         if check.ok:
-            print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else ""))
+            print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else "")
+                  + (f", but with {len(check.warnings)} warning(s):" if check.warnings else ""))
+            for w in check.warnings:
+                print(f"  warning: {w}")
             continue
         bad.append(f)
         print(f"{f}: {fmt}, {len(check.problems)} problem(s)", file=sys.stderr)

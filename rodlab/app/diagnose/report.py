@@ -70,8 +70,10 @@ class Diagnosis:
 
     def summary(self) -> str:
         from .wording import caution, confirmation, evidence_text   # cycle: wording imports Finding from this module
+        refit = (" (identified again with the findings; each finding's own share below is on the first fit's "
+                 "residuals)" if self.subject == Subject.CAMPAIGN and self.findings else "")
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
-                 f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um"]
+                 f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um{refit}"]
         for i, f in enumerate(self.findings, 1):
             bound = set(f.evidence.get("at_bound", ()))
             ps = ", ".join(f"{k} = {v:.4g} " + ("(at its bound: the data ask for more; no interval)" if k in bound else

@@ -85,7 +85,8 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
            "unidentifiable": res.unidentifiable, "residual_rms_mm": res.rms_mm, "points": int(res.residuals_mm.shape[0]),
            "fit": {"success": res.success, "message": res.message, "nfev": res.nfev,
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,
-                   "warnings": res.warnings, "cautions": res.cautions}}
+                   "warnings": res.warnings, "cautions": res.cautions,
+                   "correlation": {"names": list(res.free), "matrix": np.asarray(res.correlation).tolist()}}}
     if res.residual_check is not None:
         out["fit"]["residual_test"] = res.residual_check.to_dict()
         out["fit"]["completeness"] = {"verdict": str(completeness(res)), "statement": completeness_statement(res)}
@@ -120,7 +121,8 @@ class CalibratedParameter:
 class CalibrationFile:
     """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters; for a
     ``/2`` result the periodic terms' references (joint -> 4 means) and the readings they were identified over
-    (joint -> (min, max) [deg])."""
+    (joint -> (min, max) [deg]); the correlation matrix of the free parameters (``fit.correlation``: names, and
+    shape=(P, P)), or None in a file written before it was recorded."""
 
     path: Path
     robot: str
@@ -130,6 +132,8 @@ class CalibrationFile:
     parameters: dict
     harmonic_reference: dict = field(default_factory=dict)
     harmonic_range_deg: dict = field(default_factory=dict)
+    correlation_names: tuple = ()
+    correlation: np.ndarray | None = None
 
 
 def read_calibration(path) -> CalibrationFile:
@@ -151,9 +155,29 @@ def read_calibration(path) -> CalibrationFile:
     params = {name: CalibratedParameter(float(v["value"]), _sigma(v), str(v["unit"]), str(v.get("status", "")))
               for name, v in data["parameters"].items()}
     ref, rng = _harmonics(data, params, p)
+    names, corr = _correlation(data, params, p)
     return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
                            bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params,
-                           ref, rng)
+                           ref, rng, names, corr)
+
+
+def _correlation(data: dict, params: dict, p: Path) -> tuple[tuple, np.ndarray | None]:
+    """``fit.correlation``: (names, shape=(P, P) matrix), or ((), None) where the file has none."""
+    block = (data.get("fit") or {}).get("correlation")
+    if block is None:
+        return (), None
+    try:
+        names = tuple(str(n) for n in block["names"])
+        matrix = np.array(block["matrix"], float)
+    except (KeyError, TypeError, ValueError) as e:
+        raise CalibrationError(f"fit.correlation: expected {{\"names\": [...], \"matrix\": [[...]]}} ({e})", path=p,
+                               key="fit.correlation") from e
+    unknown = [n for n in names if n not in params]
+    if matrix.shape != (len(names), len(names)) or unknown or not np.all(np.isfinite(matrix)):
+        raise CalibrationError(f"fit.correlation: expected a finite {len(names)} x {len(names)} matrix over parameters of "
+                               f"the file, got shape {matrix.shape}" + (f" and unknown names {unknown}" if unknown else ""),
+                               path=p, key="fit.correlation")
+    return names, matrix
 
 
 def _harmonics(data: dict, params: dict, p: Path) -> tuple[dict, dict]:

@@ -96,9 +96,11 @@ def _number(row, idx: int, col: str, p: Path, line: int) -> float:
     return v
 
 
-def commands_csv(path, targets: Targets, correction, predicted_mm: float | None, header: list[str]) -> Path:
+def commands_csv(path, targets: Targets, correction, predicted_mm: float | None, header: list[str],
+                 param_sd_mm: np.ndarray | None = None) -> Path:
     """Write the commands: per target the joint commands [deg], the corrected target for a nominal controller
-    [mm], the IK residual [um], the uncorrected miss [mm], the calibration's predicted accuracy [mm], ok."""
+    [mm], the IK residual [um], the uncorrected miss [mm], the calibration's predicted accuracy [mm] (its held-out
+    mean), the TCP's 1-sigma uncertainty there from the identified parameters [mm] (empty without), ok."""
     n = correction.q_rad.shape[1]
     pose = targets.poses
     lines = [f"# {h}" for h in header]
@@ -106,7 +108,8 @@ def commands_csv(path, targets: Targets, correction, predicted_mm: float | None,
                           + [f"q{i + 1}" for i in range(n)]
                           + ["corrected_x_mm", "corrected_y_mm", "corrected_z_mm", "corrected_a_deg", "corrected_b_deg",
                              "corrected_c_deg", "residual_um"] + (["residual_urad"] if pose else [])
-                          + ["uncorrected_mm"] + (["uncorrected_mrad"] if pose else []) + ["predicted_mm", "ok"]))
+                          + ["uncorrected_mm"] + (["uncorrected_mrad"] if pose else [])
+                          + ["predicted_mm", "param_sd_mm", "ok"]))
     pred = "" if predicted_mm is None else f"{predicted_mm:.4f}"
     q_deg = np.rad2deg(correction.q_rad)
     for k in range(len(targets.targets_mm)):
@@ -118,6 +121,6 @@ def commands_csv(path, targets: Targets, correction, predicted_mm: float | None,
         cells += [f"{correction.residual_rad[k] * 1e6:.4f}"] if pose else []
         cells += [f"{correction.uncorrected_mm[k]:.4f}"]
         cells += [f"{correction.uncorrected_rad[k] * 1e3:.4f}"] if pose else []
-        cells += [pred, str(int(correction.ok[k]))]
+        cells += [pred, "" if param_sd_mm is None else f"{param_sd_mm[k]:.4f}", str(int(correction.ok[k]))]
         lines.append(",".join(cells))
     return atomic_write_text(path, "\n".join(lines) + "\n")

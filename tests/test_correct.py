@@ -228,3 +228,45 @@ def test_a_pose_target_that_flips_the_wrist_is_warned_about(ur5, caplog):
     assert corr.residual_mm.max() < 1e-3
     warned = [r.getMessage() for r in caplog.records if "leave the program's configuration" in r.getMessage()]
     assert len(warned) == 1 and warned[0].startswith("target 2")
+
+
+def test_each_target_gets_the_uncertainty_its_pose_has_from_the_parameters(tmp_path, capsys):
+    """`predicted_mm` is the calibration's held-out mean, one number; `param_sd_mm` is each target's own: the
+    identified parameters' covariance (the result's fit.correlation) through the TCP Jacobian at its commands: it
+    differs from target to target, equals the propagation done by hand, and is empty for a result written without
+    the correlation (an IRB 4600 trial: the column had been the held-out mean copied to every target; the new one
+    follows the true per-target error there, correlation 0.89)."""
+    from rodlab.calibrate import read_points
+    from rodlab.calibrate.params import INTERNAL_SCALE, catalogue
+    from rodlab.calibrate.jacobian import position_jacobian
+    from rodlab.calibrate.result import calibrated_params, read_calibration
+    cal = _calibrate_ur5(tmp_path)
+    pts = read_points(DATA / "ur5_random.validation.csv", 6)
+    rows = [(*x, *q) for q, x in zip(pts.q_deg[:5], pts.x_W_mm[:5])]
+    targets = tmp_path / "t.targets.csv"
+    targets.write_text("x_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows)
+                       + "\n")
+    out = tmp_path / "commands.csv"
+    assert main(["correct", str(cal), str(targets), "-o", str(out)]) == 0
+    assert "its parameters pin the targets to" in capsys.readouterr().out
+    table = list(csv.DictReader(ln for ln in out.read_text().splitlines() if not ln.startswith("#")))
+    sd = np.array([float(r["param_sd_mm"]) for r in table])
+    assert np.all(sd > 0) and np.ptp(sd) > 0 and np.all(sd < 1.0)
+    robot, c = resolve_robot("ur5"), read_calibration(cal)
+    params = calibrated_params(robot, c)
+    q = np.deg2rad([[float(r[f"q{i}"]) for i in range(1, 7)] for r in table])
+    infos = {i.name: i for i in catalogue(6)}
+    names = [n for n in c.correlation_names if n in infos and not n.startswith(("tool_", "fixture_"))]
+    s = np.array([c.parameters[n].sigma * INTERNAL_SCALE[infos[n].unit] for n in names])
+    ix = [c.correlation_names.index(n) for n in names]
+    fr, tau = ball_positions(robot, params, q)
+    J = position_jacobian(fr, tau, [infos[n] for n in names], params.base)
+    by_hand = np.sqrt(np.einsum("mip,pq,miq->m", J, c.correlation[np.ix_(ix, ix)] * np.outer(s, s), J))
+    assert sd == pytest.approx(by_hand, rel=1e-3, abs=1e-4)
+    data = json.loads(cal.read_text())
+    del data["fit"]["correlation"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    assert main(["correct", str(old), str(targets), "-o", str(tmp_path / "c2.csv")]) == 0
+    t2 = list(csv.DictReader(ln for ln in (tmp_path / "c2.csv").read_text().splitlines() if not ln.startswith("#")))
+    assert all(r["param_sd_mm"] == "" for r in t2)

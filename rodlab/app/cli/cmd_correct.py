@@ -65,6 +65,7 @@ def _predicted_mm(path) -> float | None:
 
 def cmd_correct(args) -> int:
     from rodlab.calibrate.correct import correct_targets
+    from rodlab.calibrate.target_uncertainty import tcp_sd_mm
     from rodlab.calibrate.targets import commands_csv, read_targets
     cal = read_calibration(args.calibration)
     if not args.robot:
@@ -90,19 +91,24 @@ def cmd_correct(args) -> int:
     else:
         corr = correct_targets(robot, params, nominal, targets.targets_mm, np.deg2rad(seeds))
     predicted = _predicted_mm(args.calibration)
+    sd = tcp_sd_mm(robot, params, corr.q_rad, cal)
     path = commands_csv(args.output, targets, corr, predicted,
                         [f"rodlab correct {Path(args.calibration).name} {Path(args.targets).name} (robot {robot.name})",
                          "q1..qn: joint commands [deg] that put the calibrated robot's TCP on the target; corrected_*: "
                          "the target to give a controller with the nominal model",
                          "residual_um: IK residual; uncorrected_mm: where the nominal program's joints put the "
-                         "calibrated TCP; predicted_mm: the calibration's held-out mean error"]
+                         "calibrated TCP; predicted_mm: the calibration's held-out mean error; param_sd_mm: the TCP's "
+                         "1-sigma uncertainty at the commands from the identified parameters (grows away from the "
+                         "measured poses; empty for a result without fit.correlation)"]
                         + (["pose targets: a_deg..c_deg and corrected_a_deg..: the tool frame, R = Rx(a) Ry(b) Rz(c) "
                             "in {W}; residual_urad, uncorrected_mrad: the same for the orientation"]
-                           if targets.poses else []))
+                           if targets.poses else []), sd)
     print(f"wrote {path}: {len(corr.ok)} targets, IK residual max {corr.residual_mm.max() * 1e3:.3f} um"
           + (f" and {corr.residual_rad.max() * 1e6:.3f} urad" if targets.poses else "") + "; the "
           f"uncorrected program misses by {corr.uncorrected_mm.mean():.3f} mm mean ({corr.uncorrected_mm.max():.3f} "
-          f"max)" + (f"; the calibration predicts {predicted:.3f} mm held-out mean error" if predicted else ""))
+          f"max)" + (f"; the calibration predicts {predicted:.3f} mm held-out mean error" if predicted else "")
+          + (f"; its parameters pin the targets to {np.min(sd):.3f}-{np.max(sd):.3f} mm (1 sigma, param_sd_mm)"
+             if sd is not None else ""))
     if not corr.ok.all():
         bad = np.nonzero(~corr.ok)[0] + 1
         print(f"warning: {len(bad)} target(s) not reached within the joint limits (rows {bad[:10].tolist()}); their "

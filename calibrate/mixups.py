@@ -60,7 +60,7 @@ class Mixup:
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
 
     def reason(self) -> str:
-        fit = (f"the campaign fits to {self.rms_mm * 1e3:.1f} um rms per reading (as given "
+        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading (as given "
                f"{self.rms_given_mm * 1e3:.1f} um) with every parameter within its bounds")
         if self.joint is not None:
             k = self.joint

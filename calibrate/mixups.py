@@ -11,7 +11,8 @@ Where a calibration is refused for parameters beyond their bounds or residuals t
 by a material margin, each joint's readings are negated in turn, and each pair of positions swapped,
 and the campaign identified again. A mix-up whose undoing gives plausible parameters and fits at least as well
 (where the given fit's parameters were beyond their bounds: the mirrored chain fits, 13 um against 7 um for the
-trial's joint 2) or to at most :data:`MIXUP_GAIN` of the rms (gross residuals, plausible parameters) is named.
+trial's joint 2; :data:`TIE_GAIN`) or to at most :data:`MIXUP_GAIN` of the rms (gross residuals, plausible
+parameters) is named.
 """
 from __future__ import annotations
 
@@ -32,6 +33,9 @@ log = logging.getLogger(__name__)
 
 #: where the given fit is gross but plausible, undoing the mix-up must bring the rms to at most this share of it
 MIXUP_GAIN = 0.5
+#: where the given fit is beyond its bounds, undoing the mix-up must fit at least this much better (not a near tie
+#: of a nearly symmetric change that lands inside the bounds): the trial's reversed joint 2 fits 0.53 times
+TIE_GAIN = 0.95
 #: mix-ups identified in full after the quick screen (the best by its rms)
 SCREENED = 2
 #: residual evaluations per free parameter of the quick fits that screen mix-ups (a plausible fit converges in
@@ -88,7 +92,7 @@ def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints:
     refused = test is None or (test.material if material else gross(test.birge, res.rms_mm))
     if not beyond and not refused:
         return None
-    limit = res.rms_mm * (1.0 if beyond else MIXUP_GAIN)
+    limit = res.rms_mm * (TIE_GAIN if beyond else MIXUP_GAIN)
     trials = [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
               for k in range(robot.n)]
     labels = sorted({int(p) for p in np.asarray(positions)})

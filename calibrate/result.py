@@ -168,13 +168,13 @@ def _correlation(data: dict, params: dict, p: Path) -> tuple[tuple, np.ndarray |
         return (), None
     try:
         names = tuple(str(n) for n in block["names"])
-        matrix = np.array(block["matrix"], float)
+        matrix = np.array([[np.nan if v is None else v for v in row] for row in block["matrix"]], float)
     except (KeyError, TypeError, ValueError) as e:
         raise CalibrationError(f"fit.correlation: expected {{\"names\": [...], \"matrix\": [[...]]}} ({e})", path=p,
                                key="fit.correlation") from e
     unknown = [n for n in names if n not in params]
-    if matrix.shape != (len(names), len(names)) or unknown or not np.all(np.isfinite(matrix)):
-        raise CalibrationError(f"fit.correlation: expected a finite {len(names)} x {len(names)} matrix over parameters of "
+    if matrix.shape != (len(names), len(names)) or unknown:                # null (NaN): a direction the data do not see
+        raise CalibrationError(f"fit.correlation: expected a {len(names)} x {len(names)} matrix over parameters of "
                                f"the file, got shape {matrix.shape}" + (f" and unknown names {unknown}" if unknown else ""),
                                path=p, key="fit.correlation")
     return names, matrix

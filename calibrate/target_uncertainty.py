@@ -24,15 +24,18 @@ LEFT_OUT = ("tool_", "fixture_")
 def tcp_sd_mm(robot, params: ModelParams, q_rad: np.ndarray, cal) -> np.ndarray | None:
     """1-sigma position uncertainty [mm], shape=(M,), of the TCP of ``params`` (the calibrated model with the
     production tool) at the joint commands ``q_rad`` (M, n), from the covariance of the calibration file ``cal``
-    (:class:`~calibrate.result.CalibrationFile`); None when the file records no correlation."""
+    (:class:`~calibrate.result.CalibrationFile`); None when the file records no correlation; infinite where a
+    parameter it uses has no finite sigma (a direction the data do not see)."""
     if cal.correlation is None:
         return None
     infos = {i.name: i for i in catalogue(robot.n, (), tuple(sorted(cal.harmonic_reference)))}
     names = [n for n in cal.correlation_names if n in infos and not n.startswith(LEFT_OUT)]
     idx = [cal.correlation_names.index(n) for n in names]
     sigma = np.array([cal.parameters[n].sigma * INTERNAL_SCALE[infos[n].unit] for n in names])
-    sigma = np.where(np.isfinite(sigma), sigma, 0.0)
     cov = cal.correlation[np.ix_(idx, idx)] * np.outer(sigma, sigma)
-    fr, tau = ball_positions(robot, params, np.atleast_2d(q_rad), None)
+    q = np.atleast_2d(q_rad)
+    if not np.all(np.isfinite(cov)):                 # a parameter the data do not see: unbounded
+        return np.full(len(q), np.inf)
+    fr, tau = ball_positions(robot, params, q, None)
     J = position_jacobian(fr, tau, [infos[n] for n in names], params.base)
     return np.sqrt(np.clip(np.einsum("mip,pq,miq->m", J, cov, J), 0.0, None))

@@ -31,8 +31,9 @@ from .errors import RigError
 
 log = logging.getLogger(__name__)
 
-#: an on-axis slope below this [mm/N] is 50 times stiffer than any measuring rod: metres, or grams as kg
-STIFF_LIMIT_MM_PER_N = 2e-5
+#: on-axis slopes all below this [mm/N] are no measuring rod's (a straight rod is ~1e-5 along its own axis alone):
+#: metres, or grams as kg
+STIFF_LIMIT_MM_PER_N = 1e-5
 _AXES = "xyz"
 
 __all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
@@ -100,23 +101,29 @@ class RigRecording:
     def unit_slips(self) -> list[str]:
         """Slopes no measuring rod has, each with the unit slip that gives them: a load axis whose own gauge moves
         by more than :data:`~rodlab.core.compliance.PLAUSIBLE_C_F_MM_PER_N` per newton of its masses (um written
-        as mm) or less than :data:`STIFF_LIMIT_MM_PER_N` (metres written as mm, or grams as kg)."""
-        out = []
+        as mm), or every measured axis less than :data:`STIFF_LIMIT_MM_PER_N` (metres written as mm, or grams as
+        kg, scale every axis alike; a straight rod is that stiff along its own axis alone)."""
+        slopes = self._on_axis_slopes()
+        out = [f"the {_AXES[a]} gauge moves {k:.4g} mm per N of the {_AXES[a]} load; no measuring rod is that soft "
+               "(rod 1# 0.0005-0.03 mm/N): if disp_mm is in um, divide it by 1000"
+               for a, k in slopes.items() if k > PLAUSIBLE_C_F_MM_PER_N]
+        if slopes and all(k < STIFF_LIMIT_MM_PER_N for k in slopes.values()):
+            out.append(f"every gauge moves less than {STIFF_LIMIT_MM_PER_N:g} mm per N of its own load ("
+                       + ", ".join(f"{_AXES[a]} {k:.3g}" for a, k in slopes.items()) + "); no measuring rod is that "
+                       "stiff on every axis: a displacement in metres (multiply by 1000) or masses in grams (divide "
+                       "mass_kg by 1000)?")
+        return out
+
+    def _on_axis_slopes(self) -> dict:
+        """{component: |slope| [mm/N]} of each measured gauge against its own load axis's signed load."""
         axis = np.array([str(getattr(v, "value", v)) for v in self.load_axis])
         sign = np.where(np.char.startswith(axis, "-"), -1.0, 1.0)
+        out = {}
         for a in self.measured_axes():
             on = (np.char.lstrip(axis, "-") == _AXES[a]) & np.isfinite(self.disp_mm[:, a])
             load = sign[on] * self.mass_kg[on] * G0
-            if on.sum() < 3 or np.ptp(load) <= 0:
-                continue
-            slope = abs(float(np.polyfit(load, self.disp_mm[on, a], 1)[0]))
-            if slope > PLAUSIBLE_C_F_MM_PER_N:
-                out.append(f"the {_AXES[a]} gauge moves {slope:.4g} mm per N of the {_AXES[a]} load; a measuring rod "
-                           "deflects 0.001-0.3 mm per N: if disp_mm is in um, divide it by 1000")
-            elif slope < STIFF_LIMIT_MM_PER_N:
-                out.append(f"the {_AXES[a]} gauge moves {slope:.3g} mm per N of the {_AXES[a]} load; a measuring rod "
-                           "deflects 0.001-0.3 mm per N: a displacement in metres (multiply by 1000) or masses in "
-                           "grams (divide mass_kg by 1000)?")
+            if on.sum() >= 3 and np.ptp(load) > 0:
+                out[a] = abs(float(np.polyfit(load, self.disp_mm[on, a], 1)[0]))
         return out
 
     def steps(self) -> np.ndarray:

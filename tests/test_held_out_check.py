@@ -47,3 +47,12 @@ def test_joint_harmonics_that_worsen_the_validation_make_the_result_untrusted():
     assert f"{BASE.mean():.3f} mm without" in why and "calibrate without --joint-harmonics" in why
     assert _harmonics_held_out(SimpleNamespace(calibrated_mm=BASE - 0.01, without_harmonics_mm=BASE), (3,)) == []
     assert _harmonics_held_out(SimpleNamespace(calibrated_mm=BASE, without_harmonics_mm=None), (3,)) == []
+
+
+def test_a_finding_the_validation_contradicts_is_advised_against():
+    from rodlab.app.diagnose.advice import remedy
+    f = Finding("periodic_joint_error", "joint:3", "x", {"amp_sin_rad": 1e-5, "amp_cos_rad": 1e-5}, {}, 0.013, 0.012,
+                {})
+    assert "--joint-harmonics" in remedy(f)
+    _judge(f, BASE + 0.03, BASE)
+    assert remedy(f).startswith("do not apply it to the robot") and "--joint-harmonics" not in remedy(f)

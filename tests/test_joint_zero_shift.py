@@ -56,3 +56,21 @@ def test_a_shift_outside_the_campaign_or_the_robot_is_refused(tmp_path, params, 
         simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=1), effects={"joint_zero_shift": params})
     assert e.value.key == key
     assert not list(tmp_path.iterdir())
+
+
+def test_every_shift_keeps_its_margin_against_the_fixture_pose_at_its_place():
+    """The search tries the next candidates when the first fails: a shift ranked second must still go behind the
+    fixture pose of its position when that pose fits within the margin (a review found only the first deferred)."""
+    from types import SimpleNamespace as NS
+
+    from rodlab.app.diagnose.campaign_forms import DEFER_MARGIN, deferred
+
+    def cand(effect, location, rss, defers_to=None):
+        return NS(rss=rss, hyp=NS(effect=effect, location=location, defers_to=defers_to))
+    outlier = cand("outliers", "points:2.3", 10.0)
+    shift = cand("joint_zero_shift", "position:3", 20.0, "fixture_pose")
+    other = cand("joint_zero_shift", "position:4", 21.0, "fixture_pose")
+    fixture = cand("fixture_pose", "position:3", 20.0 + 0.5 * DEFER_MARGIN)
+    assert deferred([outlier, shift, other, fixture]) == [outlier, fixture, shift, other]
+    clear = cand("fixture_pose", "position:3", 20.0 + 2 * DEFER_MARGIN)      # the shift fits clearly better
+    assert deferred([outlier, shift, other, clear]) == [outlier, shift, other, clear]

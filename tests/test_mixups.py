@@ -86,3 +86,12 @@ def test_the_campaign_diagnosis_refuses_mixed_up_files(campaign, tmp_path, capsy
                  "--rod", str(next(campaign.glob("*.compliance.json"))), "--json", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "joint 3's readings run the other way" in err and not out.exists()
+
+
+@pytest.mark.parametrize("effect, params", [("fixture_pose", {"position": 2, "offset_mm": [0.3, -0.2, 0.2]}),
+                                            ("lost_motion", {"joint": 4, "lost_motion_deg": 0.05})])
+def test_a_campaign_refused_for_physics_names_no_mixup(tmp_path, capsys, effect, params):
+    """Material residuals of physics the model leaves out start the search; undoing no mix-up fits them."""
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=2), effects={effect: params})
+    code, out = _calibrate(tmp_path, tmp_path / "multical.campaign.csv", capsys)
+    assert code == 3 and "run the other way" not in out.err and "look swapped" not in out.err

@@ -9,6 +9,8 @@ import numpy as np
 
 from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
                               validate)
+from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.kinematics import HARMONICS
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
 
@@ -96,9 +98,23 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
         run.calibrated_mm = validate(robot, res.params, pts)[1]
         if options.harmonics:             # the periodic terms checked on the held-out points before they are used
-            plain = identify(robot, obs, Rod.of(rod), compensations, replace(options, harmonics=()))
-            run.without_harmonics_mm = validate(robot, plain.params, pts)[1]
+            run.without_harmonics_mm = _without_harmonics(robot, obs, rod, compensations, options, pts)
     return run
+
+
+def _without_harmonics(robot, obs, rod, compensations, options, pts) -> np.ndarray | None:
+    """Validation errors [mm] of the same identification without the periodic terms (their pins and frees left
+    out too), or None when it is refused (the check is then skipped, with a note)."""
+    keep = [n for n in options.pinned if n.rpartition("_")[0] not in HARMONICS]
+    plain = replace(options, harmonics=(), pinned={n: options.pinned[n] for n in keep},
+                    freed=frozenset(n for n in options.freed if n.rpartition("_")[0] not in HARMONICS))
+    try:
+        res = identify(robot, obs, Rod.of(rod), compensations, plain)
+    except CalibrationError as e:
+        print(f"note: the calibration without --joint-harmonics, which the periodic terms are checked against on "
+              f"the validation points, was refused ({e}); that check is skipped", file=sys.stderr)
+        return None
+    return validate(robot, res.params, pts)[1]
 
 
 def _thermal(args, camp, rod) -> tuple:

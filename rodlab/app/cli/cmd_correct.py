@@ -63,6 +63,15 @@ def _predicted_mm(path) -> float | None:
     return pred.get("mean_mm")
 
 
+def _pinned_words(sd) -> str:
+    """The per-target uncertainty's range in the summary line (param_sd_mm), or nothing without one."""
+    if sd is None:
+        return ""
+    if not np.all(np.isfinite(sd)):
+        return "; a parameter the calibration could not see leaves the targets' uncertainty unbounded (param_sd_mm inf)"
+    return f"; its parameters pin the targets to {np.min(sd):.3f}-{np.max(sd):.3f} mm (1 sigma, param_sd_mm)"
+
+
 def cmd_correct(args) -> int:
     from rodlab.calibrate.correct import correct_targets
     from rodlab.calibrate.target_uncertainty import tcp_sd_mm
@@ -107,8 +116,7 @@ def cmd_correct(args) -> int:
           + (f" and {corr.residual_rad.max() * 1e6:.3f} urad" if targets.poses else "") + "; the "
           f"uncorrected program misses by {corr.uncorrected_mm.mean():.3f} mm mean ({corr.uncorrected_mm.max():.3f} "
           f"max)" + (f"; the calibration predicts {predicted:.3f} mm held-out mean error" if predicted else "")
-          + (f"; its parameters pin the targets to {np.min(sd):.3f}-{np.max(sd):.3f} mm (1 sigma, param_sd_mm)"
-             if sd is not None else ""))
+          + _pinned_words(sd))
     if not corr.ok.all():
         bad = np.nonzero(~corr.ok)[0] + 1
         print(f"warning: {len(bad)} target(s) not reached within the joint limits (rows {bad[:10].tolist()}); their "

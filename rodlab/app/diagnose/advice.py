@@ -41,6 +41,10 @@ def remedy(f: Finding) -> str:
     """One sentence: what to do about ``f`` (an effect of the campaign vocabulary: its module's remedy)."""
     if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
+    if f.evidence.get("held_out_worse"):
+        return ("do not apply it to the robot: the validation points are predicted worse with it (it fits the "
+                "campaign's poses, not others); record a campaign that covers the poses the robot works in (and, for "
+                "a joint's error, turns that joint over its range) and diagnose it again")
     try:
         model = campaign_effect(f.effect)
     except RodlabError:

@@ -42,21 +42,25 @@ DEFER_MARGIN = DBIC_MIN
 
 
 def deferred(ranked: list) -> list:
-    """``ranked`` (best first) with the best moved behind the rival it defers to (``defers_to``: same location) when
-    that rival fits within :data:`DEFER_MARGIN` of it. A joint's zero shifted at one clamping position costs one
-    parameter where the position's fixture pose costs three; where the ball's motion per radian of the joint hardly
-    changes over the position's poses (joint 1 always: the ball stays at one place) the shift is a translation of
-    that position and wins the BIC on any fixture offset along it: in rodlab's blind batch a 0.05 mm fixture offset
-    had been named a shift of a joint and the validation got worse (0.038 -> 0.041 mm)."""
-    if not ranked or ranked[0].hyp.defers_to is None:
-        return ranked
-    top = ranked[0]
-    for i, c in enumerate(ranked[1:], 1):
-        if c.hyp.effect == top.hyp.defers_to and c.hyp.location == top.hyp.location:
-            if c.rss - top.rss < DEFER_MARGIN:
-                return [c] + ranked[:i] + ranked[i + 1:]
-            break
-    return ranked
+    """``ranked`` (best first) with every candidate that defers to a rival at its place (``defers_to``: same
+    location) moved behind that rival when the rival fits within :data:`DEFER_MARGIN` of it (the search tries the
+    next candidates when the first fails, so every one keeps its margin, not only the best). A joint's zero shifted
+    at one clamping position costs one parameter where the position's fixture pose costs three; where the ball's
+    motion per radian of the joint hardly changes over the position's poses (joint 1 always: the ball stays at one
+    place) the shift is a translation of that position and wins the BIC on any fixture offset along it: in rodlab's
+    blind batch a 0.05 mm fixture offset had been named a shift of a joint and the validation got worse
+    (0.038 -> 0.041 mm)."""
+    out = list(ranked)
+    i = 0
+    while i < len(out):
+        c = out[i]
+        rival = next((j for j in range(i + 1, len(out)) if c.hyp.defers_to is not None
+                      and out[j].hyp.effect == c.hyp.defers_to and out[j].hyp.location == c.hyp.location), None)
+        if rival is not None and out[rival].rss - c.rss < DEFER_MARGIN:
+            out.insert(i, out.pop(rival))             # the rival takes this place; the deferring one moves down
+        else:
+            i += 1
+    return out
 
 
 def rival_forms(best, ranked: list) -> list[str]:

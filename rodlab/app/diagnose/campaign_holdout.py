@@ -16,6 +16,7 @@ import logging
 
 import numpy as np
 
+from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.validate import clearly_worse
 from rodlab.core.enums import FindingKind
 
@@ -39,7 +40,11 @@ def check_on_validation(robot, camp, fix, rod, ctx, findings: list, noise_mm: fl
         return
     for f in physical:
         others = [g for g in physical if g is not f]
-        without = _errors_without(robot, camp, fix, rod, ctx, others, noise_mm, fixture_sigma, points)
+        try:
+            without = _errors_without(robot, camp, fix, rod, ctx, others, noise_mm, fixture_sigma, points)
+        except CalibrationError as e:      # the campaign without it cannot be identified: no comparison
+            log.info("campaign diagnosis: %s %s not checked on the validation points (%s)", f.effect, f.location, e)
+            continue
         _judge(f, with_all, without)
 
 

@@ -3,7 +3,7 @@ gross alignment errors (outliers), a once-per-revolution joint error, thermal gr
 fixture pose with outliers. The cases come from :mod:`rodlab.calibrate.blind` (the simulator, never diagnosis
 code), defined in ``calibrate/blind_cases.toml``.
 
-    python benchmarks/campaign_blind.py [N] [SEED] [pairs|wide]   # writes docs/benchmarks/campaign_blind[_MODE].md
+    python benchmarks/campaign_blind.py [N] [SEED] [pairs|wide|shifts]   # writes docs/benchmarks/campaign_blind[_MODE].md
     CAMPAIGN_BLIND_DEBUG=K python ...                         # the selection's log for case K (0-based)
 """
 from __future__ import annotations
@@ -105,6 +105,14 @@ def _correct(truth: dict, diag, found: list) -> bool:
         ok = ok and first[0][1] == truth["location"]
     if kind.startswith("fixture_pose+outlier"):       # a pair: both named, the fixture at its position
         ok = ("fixture_pose", truth["location"]) in found and "outliers" in eff
+    if kind == "joint_zero_shift":                    # named first at its position, with its joint
+        first = next((f for f in diag.findings if str(f.effect) != "unexplained"), None)
+        ok = (first is not None and str(first.effect) == kind and first.location == truth["location"]
+              and int(first.parameters.get("joint", 0)) == truth["joint"])
+    if kind == "periodic_both":                       # the joint's error with both harmonics
+        first = next((f for f in diag.findings if str(f.effect) != "unexplained"), None)
+        ok = (first is not None and str(first.effect) == "periodic_joint_error" and first.location == truth["location"]
+              and {"amp_sin_rad", "amp2_sin_rad"} <= set(first.parameters))
     return bool(ok)
 
 
@@ -117,7 +125,10 @@ def _row(truth: dict, diag, dt: float, mode: str, found: list) -> str:
             "fixture_pose+outliers": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
             "fixture_pose+outlier_inside": f"{truth.get('location')} + {','.join(truth.get('points', []))}",
             "periodic_joint_error": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} deg",
-            "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s"}[kind]
+            "thermal_drift": f"{truth.get('ppm_per_s', 0):.4f} ppm/s",
+            "joint_zero_shift": f"{truth.get('location')}, joint {truth.get('joint')}, {truth.get('dtheta_deg', 0):+.4f} deg",
+            "periodic_both": f"{truth.get('location')}, A = {truth.get('amp_deg', 0):.4f} + "
+                             f"{truth.get('amp2_deg', 0):.4f} deg twice"}[kind]
     if mode == "wide":
         desc += f" ({truth['protocol']})"
     fstr = "; ".join(f"{e} {loc or ''}".strip() for e, loc in found) or "-"

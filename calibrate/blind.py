@@ -122,6 +122,18 @@ def _effects(kind: str, npos: int, n_joints: int, mag: dict, truth: dict, rng) -
         effects.append(("periodic_joint_error", {"joint": k, "amp_deg": amp, "phase_deg": phase}))
         truth["location"] = f"joint:{k}"
         truth["amp_deg"] = amp
+    if kind == "joint_zero_shift":                    # joints 2..n: joint 1's is a translation of the position
+        j, k = int(rng.integers(1, npos + 1)), int(rng.integers(2, n_joints + 1))
+        d = float(rng.choice([-1, 1]) * rng.uniform(*mag.get("zero_shift_deg", (0.004, 0.012))))
+        effects.append(("joint_zero_shift", {"position": j, "joint": k, "dtheta_deg": d}))
+        truth.update(location=f"position:{j}", joint=k, dtheta_deg=d)
+    if kind == "periodic_both":                       # a joint that turns a revolution in the campaign
+        k = int(rng.choice([4, 6]))
+        amp = float(rng.choice([-1, 1]) * rng.uniform(*mag["periodic_amp_deg"]))
+        amp2 = float(rng.uniform(*mag.get("periodic2_amp_deg", (0.003, 0.008))))
+        effects.append(("periodic_joint_error", {"joint": k, "amp_deg": amp, "phase_deg": float(rng.uniform(0, 360)),
+                                                 "amp2_deg": amp2, "phase2_deg": float(rng.uniform(0, 360))}))
+        truth.update(location=f"joint:{k}", amp_deg=amp, amp2_deg=amp2)
     if kind == "thermal_drift":
         therm = float(rng.uniform(*mag["thermal_ppm_per_s"]))
         effects.append(("thermal_drift", {"growth_ppm_per_s": therm}))

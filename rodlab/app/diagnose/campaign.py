@@ -42,7 +42,7 @@ from .report import Diagnosis, Finding
 from .robust import median_reduced_chi2, robust_fit
 from .search import search
 from .campaign_excess import device_noise_null, unexplained_finding
-from .campaign_forms import deferred, resolved_first, rival_forms, same_place
+from .campaign_forms import completes, deferred, merge_completed, resolved_first, rival_forms, same_place
 from .campaign_holdout import check_on_validation
 from .campaign_refit import deflection_of, reidentify, validation_errors
 
@@ -207,7 +207,7 @@ class CampaignSelection:
         """Every hypothesis not yet accepted, and the point with the largest robust residual as an outlier (a
         least-squares fit smears a gross error onto its neighbours and can point at an innocent point)."""
         cand = [self._candidate(h, bic_penalty(h.X.shape[1] + h.hidden, self.n)) for h in self.hyps
-                if not any(same_place(c, h) for c in self.chosen)]
+                if not any(same_place(c, h) for c in self.chosen) or completes(h, self.col_hyps)]
         A = np.column_stack([self.J] + self.cols) if self.cols else self.J
         norms = np.linalg.norm(robust_fit(A, self.r).residuals, axis=1)
         order = [int(i) for i in np.argsort(-norms) if int(i) not in self.used_points]
@@ -315,6 +315,7 @@ class CampaignSelection:
                 break
             self._drop(k)
         self._joint_parameters()
+        self.findings = merge_completed(self.findings)
 
     def _joint_parameters(self) -> None:
         """Each finding's parameters and intervals from the final model's joint fit: a term accepted early was
@@ -331,7 +332,7 @@ class CampaignSelection:
             if not campaign_effect(h.effect).per_point:
                 params, iv = h.reported(coef[k:k + w], np.sqrt(var[k:k + w]))
                 for f in self.findings:
-                    if f.effect == h.effect and f.location == h.location:
+                    if f.effect == h.effect and f.location == h.location and set(h.names) <= set(f.parameters):
                         f.parameters, f.intervals = params, iv
             k += w
 
@@ -339,8 +340,9 @@ class CampaignSelection:
         """Remove the ``k``-th accepted term and its finding (drop-one test)."""
         effect, location = self.chosen.pop(k)
         self.cols.pop(k)
-        self.col_hyps.pop(k)
-        self.findings = [f for f in self.findings if not (f.effect == effect and f.location == location)]
+        names = set(self.col_hyps.pop(k).names)          # a harmonic beside another at its joint: that one only
+        self.findings = [f for f in self.findings
+                         if not (f.effect == effect and f.location == location and names <= set(f.parameters))]
         self.rss = self.fit(self.cols)[1]
         self.cv = self.cv_error(self.cols, self.used_points)
         log.debug("campaign diagnosis: %s %s dropped: the final model does not need it", effect, location)

@@ -47,6 +47,15 @@ def legacy_file(path: Path, name: str) -> Path:
     return write_toml(path, legacy_dict(name))
 
 
+def diagnose_simulated(folder: Path, robot, rod):
+    """The campaign diagnosis of a simulated campaign folder (``multical.*`` files) with its validation points."""
+    from rodlab.app.diagnose import diagnose_campaign
+    from rodlab.calibrate import read_campaign, read_fixture, read_points
+    return diagnose_campaign(robot, read_campaign(folder / "multical.campaign.csv"),
+                             read_fixture(folder / "multical.fixture.json"), rod,
+                             validate_points=read_points(folder / "multical.validation.csv"))[0]
+
+
 def rewrite_recording(src: Path, dst: Path, edit=None, meta=None, prefix: str = "") -> Path:
     """A copy of the rig recording ``src`` at ``dst``: ``edit(i, row)`` changes data row ``i`` in place (``row``: column
     -> cell text), ``meta(line)`` returns each comment line as it should be, ``prefix`` goes before the first byte

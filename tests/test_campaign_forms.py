@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import legacy_design
+from conftest import diagnose_simulated, legacy_design
 from rodlab import calc_rod_compliance, resolve_design
 from rodlab.app.diagnose import diagnose_campaign
 from rodlab.app.diagnose.advice import remedy
@@ -20,9 +20,7 @@ ROD = calc_rod_compliance(legacy_design("rod1"))
 
 
 def _diagnose(folder):
-    return diagnose_campaign(ROBOT, read_campaign(folder / "multical.campaign.csv"),
-                             read_fixture(folder / "multical.fixture.json"), ROD,
-                             validate_points=read_points(folder / "multical.validation.csv"))[0]
+    return diagnose_simulated(folder, ROBOT, ROD)
 
 
 @pytest.mark.parametrize("share", [0.0, 1.0])

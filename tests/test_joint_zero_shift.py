@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import legacy_design
+from conftest import diagnose_simulated, legacy_design
 from rodlab import calc_rod_compliance
-from rodlab.app.diagnose import diagnose_campaign
 from rodlab.app.diagnose.advice import remedy
-from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
 
@@ -18,9 +17,7 @@ ROD = calc_rod_compliance(legacy_design("rod1"))
 
 
 def _diagnose(folder):
-    return diagnose_campaign(ROBOT, read_campaign(folder / "multical.campaign.csv"),
-                             read_fixture(folder / "multical.fixture.json"), ROD,
-                             validate_points=read_points(folder / "multical.validation.csv"))[0]
+    return diagnose_simulated(folder, ROBOT, ROD)
 
 
 def test_a_shift_over_two_positions_is_named_at_both_with_its_joint(tmp_path):

@@ -151,18 +151,24 @@ def test_gross_residuals_do_not_advise_a_larger_noise(camp, tmp_path, capsys):
     (lambda t: re.sub(r"(?m)^alpha_deg = (-?)90\.0", r"alpha_deg = \g<1>1.5708", t, count=1), "radians where degrees"),
     (lambda t: t.replace("a_mm = 425.0", "a_mm = 42500.0"), "beyond any industrial arm"),
 ])
-def test_a_robot_file_in_other_units_is_warned_of(tmp_path, caplog, edit, message):
-    """`rodlab validate` (and every command reading the file) warns of one twist at pi/2 as a number or a link no
-    arm has; the built-in TX90 has none of them."""
+def test_a_robot_file_in_other_units_is_warned_of(tmp_path, caplog, capsys, edit, message):
+    """Every command reading the file warns of one twist at pi/2 as a number or a link no arm has, and `rodlab
+    validate` lists the warning under the file; the built-in TX90 has none of them."""
+    from rodlab.calibrate import read_robot
     from rodlab.calibrate.robot_formats import builtin_robots
     text = builtin_robots()["tx90"].read_text()
     (tmp_path / "r.toml").write_text(edit(text))
-    assert main(["validate", str(tmp_path / "r.toml")]) == 0
+    read_robot(tmp_path / "r.toml")
     assert message in caplog.text
+    assert main(["validate", str(tmp_path / "r.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "r.toml: rodlab.robot/2, valid, but with 1 warning(s):" in out and message in out
     caplog.clear()
     (tmp_path / "ok.toml").write_text(text)
-    assert main(["validate", str(tmp_path / "ok.toml")]) == 0
+    read_robot(tmp_path / "ok.toml")
     assert not [r for r in caplog.records if r.levelname == "WARNING"]
+    assert main(["validate", str(tmp_path / "ok.toml")]) == 0
+    assert "warning" not in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("edit,message,key", [

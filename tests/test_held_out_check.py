@@ -34,7 +34,7 @@ def test_a_finding_that_worsens_the_validation_is_cautioned():
     assert f.evidence[HELD_OUT_WORSE] is True
     assert f.evidence["validation_mean_with_mm"] == pytest.approx(BASE.mean() + 0.03)
     assert "over part of a turn; the validation points are predicted worse with it" in f.evidence["caution"]
-    assert "do not apply it to the robot" in f.evidence["caution"]
+    assert "mm without it" in f.evidence["caution"]
     g = Finding("periodic_joint_error", "joint:4", "x", {}, {}, 0.013, 0.012, {})
     _judge(g, BASE - 0.01, BASE)
     assert g.evidence[HELD_OUT_WORSE] is False and "caution" not in g.evidence

@@ -42,9 +42,9 @@ def remedy(f: Finding) -> str:
     if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
     if f.evidence.get("held_out_worse"):
-        return ("do not apply it to the robot: the validation points are predicted worse with it (it fits the "
-                "campaign's poses, not others); record a campaign that covers the poses the robot works in (and, for "
-                "a joint's error, turns that joint over its range) and diagnose it again")
+        return ("do not apply it to the robot: it fits the campaign's poses, not the validation's; record a "
+                "campaign that covers the poses the robot works in (and, for a joint's error, turns that joint over "
+                "its range) and diagnose it again")
     try:
         model = campaign_effect(f.effect)
     except RodlabError:

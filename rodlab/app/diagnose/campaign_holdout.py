@@ -65,6 +65,5 @@ def _judge(f, with_all: np.ndarray, without: np.ndarray) -> None:
         log.debug("campaign diagnosis: %s %s worsens the validation (%.4f -> %.4f mm)", f.effect, f.location,
                   without.mean(), with_all.mean())
         note = (f"the validation points are predicted worse with it (mean {without.mean():.3f} mm without it, "
-                f"{with_all.mean():.3f} mm with it): it fits the campaign's poses but does not carry over to "
-                "others; do not apply it to the robot")
+                f"{with_all.mean():.3f} mm with it)")
         f.evidence["caution"] = "; ".join(c for c in (f.evidence.get("caution"), note) if c)

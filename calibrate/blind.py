@@ -21,7 +21,7 @@ from rodlab.core.schema import read_toml_checked
 from .errors import CalibrationError
 from .simulate import CampaignSpec, simulate_campaign
 
-__all__ = ["CampaignCase", "BlindDefinitions", "blind_definitions", "read_blind_definitions",
+__all__ = ["CampaignCase", "BlindDefinitions", "blind_definitions", "read_blind_definitions", "kind_effects",
            "generate_campaign_cases", "FORMAT_BLIND"]
 
 FORMAT_BLIND = "rodlab.blind_campaign/1"
@@ -101,6 +101,16 @@ def _case(robot, rod, out: Path, kind: str, mode: str, defs: BlindDefinitions, r
         truth["points"] = add_gross_errors(out / "multical.campaign.csv", rng, mag["outliers"], mag["outlier_mm"],
                                            int(truth["location"].split(":")[1]))
     return CampaignCase(out, spec.device_noise_mm, truth)
+
+
+#: blind kinds that are a form of one registry effect rather than its name
+KIND_FORMS = {"periodic_both": "periodic_joint_error", "outlier_inside": "outliers"}
+
+
+def kind_effects(kind: str) -> list[str]:
+    """The registry effects (contract spelling) a blind kind injects: ``null`` none, a pair ``a+b`` both, a form
+    (:data:`KIND_FORMS`: ``periodic_both``, a gear with both harmonics) its effect."""
+    return [] if kind == "null" else [KIND_FORMS.get(k, k) for k in kind.split("+")]
 
 
 def _effects(kind: str, npos: int, n_joints: int, mag: dict, truth: dict, rng) -> list:

@@ -102,13 +102,13 @@ def test_blind_campaign_definitions_draw_registry_effects(tmp_path, tx90, rod1_c
     """The blind campaign kinds are the registry's effects (or pairs of them); each generated case carries the
     truth it was simulated with: the misclamped position is not the world one, moved points are in the file."""
     from rodlab.calibrate import read_campaign, read_fixture
-    from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases
+    from rodlab.calibrate.blind import blind_definitions, generate_campaign_cases, kind_effects
     from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
     defs = blind_definitions()
     for mode in ("", *defs.modes):
         for kind in defs.kinds_of(mode):
-            assert kind == "null" or all(k.replace("outlier_inside", "outliers") in CAMPAIGN_EFFECTS
-                                         for k in kind.split("+")), kind
+            assert (kind == "null") != bool(kind_effects(kind)), kind
+            assert all(e in CAMPAIGN_EFFECTS for e in kind_effects(kind)), kind
     with pytest.raises(ValueError, match="unknown blind-case mode"):
         defs.kinds_of("widest")
     cases = generate_campaign_cases(tx90, rod1_calc, tmp_path, 8, 11, "pairs")

@@ -24,7 +24,7 @@ from .params import catalogue
 from .rod import Rod
 from .simulate import standard_base
 
-__all__ = ["observability", "plan_poses", "rod_angle_deg", "feasible", "Reach", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT",
+__all__ = ["observability", "plan_poses", "rod_angle_deg", "above_floor", "Reach", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT",
            "LIMIT_MARGIN_DEG"]
 
 #: the rod leaves the ball within this angle [deg] of its device's open diagonal ((1, 1, 1) / sqrt 3 in {D_j}); the
@@ -83,11 +83,11 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
     """Up to ``candidates`` reachable configurations [rad] per clamping position (dict j -> (m, n) array) of the
     robot ``params`` carrying ``rod``: position IK from ``4 * candidates`` random seeds per position, every
     position in one batch (its pull towards the seeds cut at :data:`~calibrate.ik.PLAN_PULL_ITERATIONS`), within
-    the limits narrowed by ``reach.margin_deg``, kept where :func:`feasible` and the rod comes from the device's
-    open side; positions with fewer than ``k`` get up to :data:`SEED_ROUNDS` batches in all."""
+    the limits narrowed by ``reach.margin_deg``, kept where they clear the floor (:func:`above_floor`) and the rod
+    comes from the device's open side; positions with fewer than ``k`` get up to :data:`SEED_ROUNDS` batches in all."""
     m = 4 * candidates
     found = {j: [] for j in fixture.poses}
-    counts = {j: [0, 0] for j in fixture.poses}            # reached at all, of them feasible
+    counts = {j: [0, 0] for j in fixture.poses}            # reached at all, of them above the floor
     for _ in range(SEED_ROUNDS):
         short = [j for j in found if sum(len(g) for g in found[j]) < (candidates if not found[j] else k)]
         if not short:
@@ -98,7 +98,8 @@ def reachable_candidates(robot, params: ModelParams, fixture, rod: Rod, k: int, 
                                   margin_deg=reach.margin_deg)
         for j, got in reached.items():
             counts[j][0] += len(got)
-            got = got[feasible(robot, params, got, reach, rod)]
+            if reach.floor_mm is not None:
+                got = got[above_floor(robot, params, got, reach.floor_mm, rod)]
             counts[j][1] += len(got)
             if len(got) and max_rod_angle_deg is not None:
                 got = got[rod_angle_deg(params, got, fixture.transform(j), exit_n) <= max_rod_angle_deg]
@@ -116,21 +117,14 @@ def _enough(j, got: np.ndarray, k: int, counts: list, tried: int, reach: Reach) 
                            f"pose (--base), its joint limits and the floor", key=f"positions.{j}")
 
 
-def feasible(robot, params: ModelParams, q_rad: np.ndarray, reach: Reach, rod: Rod | None = None) -> np.ndarray:
-    """Which configurations [rad] (M, n) keep clear of what ``reach`` says: every joint ``margin_deg`` inside its
-    limits and, with a floor, every joint's origin above it (height in {0} against the robot's gravity),
-    shape=(M,) bool."""
-    q = np.atleast_2d(q_rad)
-    tol = 1e-9
-    lo = np.deg2rad(robot.limits_deg[:, 0] + reach.margin_deg) - tol
-    hi = np.deg2rad(robot.limits_deg[:, 1] - reach.margin_deg) + tol
-    ok = np.all((q >= lo) & (q <= hi), axis=1)
-    if reach.floor_mm is None:
-        return ok
-    fr, _ = ball_positions(robot, params, q, rod)
+def above_floor(robot, params: ModelParams, q_rad: np.ndarray, floor_mm: float, rod: Rod | None = None) -> np.ndarray:
+    """Which configurations [rad] (M, n) keep every joint's origin (shoulder, elbow, wrist) above ``floor_mm``
+    [mm], the height in {0} against the robot's gravity, shape=(M,) bool. (The joint-limit margin needs no check
+    here: the IK solves within the narrowed limits.)"""
+    fr, _ = ball_positions(robot, params, np.atleast_2d(q_rad), rod)
     up = -np.asarray(robot.gravity_base, float)
     height = fr.o_prev[:, 1:, :] @ (up / np.linalg.norm(up))          # frames 1..n-1: shoulder, elbow, wrist
-    return ok & np.all(height >= reach.floor_mm, axis=1)
+    return np.all(height >= floor_mm, axis=1)
 
 
 def rod_angle_deg(params: ModelParams, q_rad: np.ndarray, T_WD: np.ndarray, exit_n=L_ROD_EXIT) -> np.ndarray:

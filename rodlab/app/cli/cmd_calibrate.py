@@ -206,6 +206,7 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     checked on the validation points when there are some) and what to do about each."""
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
+    from rodlab.app.diagnose.campaign_holdout import HELD_OUT_WORSE
     used = rod if comp.active else RodCompliance.none_like(rod)
     points = points_from_args(args, args.validate, robot.n) if args.validate else None
     try:
@@ -218,7 +219,7 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""
-        held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get("held_out_worse") else ""
+        held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get(HELD_OUT_WORSE) else ""
         print(f"  - {f.effect}{where}: {remedy(f)}{held}", file=sys.stderr)
 
 

@@ -90,7 +90,7 @@ def _warn_rod_twist(robot, cal) -> None:
         return
     print(f"warning: dtheta_{robot.n} = {p.value:+.4f} deg (written as the joint's zero offset) is the robot's joint-"
           f"{robot.n} zero plus the rod's mounting twist about the flange axis, which one rod cannot separate; a "
-          f"production tool turns with it ({abs(p.value) * 3.4907:.2f} mm per 200 mm off the flange axis): before "
+          f"production tool turns with it ({np.deg2rad(abs(p.value)) * 200.0:.2f} mm per 200 mm off the flange axis): before "
           "a controller relies on it, measure the twist (the rod's pin against the flange, or a second clamping of "
           "the rod turned on the flange) or keep that offset at its nominal value", file=sys.stderr)
 

@@ -83,7 +83,6 @@ def _measured(path: str, design, keys, model: str):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
     ``model`` the keys are fitted through)."""
     from ...core.sensitivity import STRUCTURAL_ENTRIES
-    from ..diagnose.envelope import MEAS_RELATIVE
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
         from ..diagnose import diagnose_rig
@@ -102,18 +101,22 @@ def _measured(path: str, design, keys, model: str):
         _refuse_unfitted(path, unfitted, design, model, keys)
         lin = fitted.linear
         _warn_unexplained(path, diag)
-        # one mounting of the rod: remounting repeats C_F to MEAS_RELATIVE, as for a measured file (below)
-        cov = lin.cov + np.diag((MEAS_RELATIVE * np.abs(lin.C)) ** 2)
-        return Measured(lin.entries, lin.C, cov, path), rig
+        return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig
     comp = read_compliance(path)
     warn_rod_mismatch(comp.rod, design.name, path, "--measured", "the design", named_by="")
     E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
     C = np.array([comp.C_F[e] for e in E])
-    sd = MEAS_RELATIVE * np.abs(C)                      # remounting and refitting: 1 %, beside the stated fit error
-    if comp.C_F_sigma is not None:
-        stated = np.array([comp.C_F_sigma[e] for e in E])
-        sd = np.hypot(np.where(np.isfinite(stated), stated, 0.0), sd)
-    return Measured(E, C, np.diag(sd ** 2), path), []
+    stated = np.zeros(len(E)) if comp.C_F_sigma is None else np.array([comp.C_F_sigma[e] for e in E])
+    stated = np.where(np.isfinite(stated), stated, 0.0)
+    return Measured(E, C, _with_remounting(C, np.diag(stated ** 2)), path), []
+
+
+def _with_remounting(C: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    """The covariance ``cov`` [(mm/N)^2] of measured entries ``C`` [mm/N] (a recording's fit, a file's stated
+    errors) with what one mounting of the rod adds: remounting and refitting repeat each entry to
+    :data:`~rodlab.app.diagnose.envelope.MEAS_RELATIVE` (1 %)."""
+    from ..diagnose.envelope import MEAS_RELATIVE
+    return cov + np.diag((MEAS_RELATIVE * np.abs(C)) ** 2)
 
 
 def _key_for(finding, design) -> str:

@@ -12,6 +12,7 @@ from rodlab.calibrate.trust import GROSS_CAUSES, gross
 
 from ...core.enums import FindingKind
 from ...core.errors import RodlabError
+from .campaign_holdout import HELD_OUT_WORSE
 from .report import Finding
 
 __all__ = ["remedy"]
@@ -41,7 +42,7 @@ def remedy(f: Finding) -> str:
     """One sentence: what to do about ``f`` (an effect of the campaign vocabulary: its module's remedy)."""
     if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
-    if f.evidence.get("held_out_worse"):
+    if f.evidence.get(HELD_OUT_WORSE):
         return ("do not apply it to the robot: it fits the campaign's poses, not the validation's; record a "
                 "campaign that covers the poses the robot works in (and, for a joint's error, turns that joint over "
                 "its range) and diagnose it again")

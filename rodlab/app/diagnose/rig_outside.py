@@ -148,9 +148,10 @@ def _slips(data, base: np.ndarray, nuisance: np.ndarray | None = None) -> list[H
     r = np.asarray(data.y, float) - base
     out, seen = [], set()
     for c in sorted(set(data.comp.tolist())):
-        found = [_slip_of_gauge(data, r, c)]
+        parts = _series_of_gauge(data, r, c)
+        found = [_slip_of_gauge(parts, r)]
         if nuisance is not None and nuisance.size:
-            found.append(_slip_beside(data, r, c, nuisance))
+            found.append(_slip_beside(data, r, parts, nuisance))
         for after in found:
             if after is None or (c, int(after[0])) in seen:
                 continue
@@ -159,10 +160,22 @@ def _slips(data, base: np.ndarray, nuisance: np.ndarray | None = None) -> list[H
     return out
 
 
-def _slip_beside(data, r: np.ndarray, c: int, nuisance: np.ndarray) -> np.ndarray | None:
-    """The readings of gauge ``c`` from its likeliest slip to the end of that series, the step fitted jointly with
-    the rig's own effects (``nuisance``) and the gauge's zero and slope in that series, at every moment at once
-    (the step column projected off their span, by cumulative sums), or None: the step must be
+def _series_of_gauge(data, r: np.ndarray, c: int) -> list[tuple[np.ndarray, tuple | None]]:
+    """Per series of gauge ``c``: its readings (indices, in recording order) and where its plain residual ``r``
+    changes its mean most (:func:`_change_point`), computed once for both slip searches."""
+    on = data.comp == c
+    out = []
+    for series in np.unique(data.series[on]):
+        idx = np.nonzero(on & (data.series == series))[0]
+        idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
+        out.append((idx, _change_point(r[idx])))
+    return out
+
+
+def _slip_beside(data, r: np.ndarray, parts: list, nuisance: np.ndarray) -> np.ndarray | None:
+    """The readings of the gauge of ``parts`` (:func:`_series_of_gauge`) from its likeliest slip to the end of that
+    series, the step fitted jointly with the rig's own effects (``nuisance``) and the gauge's zero and slope in that
+    series, at every moment at once (the step column projected off their span, by cumulative sums), or None: the step must be
     :data:`_SLIP_MIN_SD` noise SDs (of what neither the span nor the step explains), abrupt (the residual jumps
     by at least :data:`_SLIP_ABRUPT` of it across the moment itself), a step, not a bump (with it fitted, the
     residual keeps its level on each side of the moment: :func:`_level_before_and_after`), and either where the
@@ -170,10 +183,7 @@ def _slip_beside(data, r: np.ndarray, c: int, nuisance: np.ndarray) -> np.ndarra
     independent simulator's friction that lets go over the last holds of a series had been fitted as a slip
     there."""
     best = None
-    on = data.comp == c
-    for series in np.unique(data.series[on]):
-        idx = np.nonzero(on & (data.series == series))[0]
-        idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
+    for idx, raw in parts:                   # raw: where the plain residual changes its mean most
         n, m = idx.size, _SLIP_MIN_READINGS
         if n < 2 * m + 1:
             continue
@@ -196,7 +206,6 @@ def _slip_beside(data, r: np.ndarray, c: int, nuisance: np.ndarray) -> np.ndarra
         sd = max(1.4826 * float(np.median(np.abs(rest - np.median(rest)))),        # readings to 1 um: the MAD
                  1.4826 * float(np.median(np.abs(np.diff(rest)))) / np.sqrt(2.0))  # can fall below the noise
         local = float(np.mean(rp[j:j + m]) - np.mean(rp[j - m:j]))    # the jump across the moment itself
-        raw = _change_point(r[idx])          # where the plain residual changes its mean most
         placed = (raw is not None and abs(int(data.step[idx[raw[0]]]) - int(data.step[idx[j]])) <= 1) or 4 * (n - j) >= n
         abrupt = local * step > 0 and abs(local) >= _SLIP_ABRUPT * abs(step)
         if (placed and abrupt and abs(step) >= _SLIP_MIN_SD * sd
@@ -206,14 +215,11 @@ def _slip_beside(data, r: np.ndarray, c: int, nuisance: np.ndarray) -> np.ndarra
     return None if best is None else best[0]
 
 
-def _slip_of_gauge(data, r: np.ndarray, c: int) -> np.ndarray | None:
-    """The readings of gauge ``c`` from its likeliest slip to the end of that series (indices), or None."""
+def _slip_of_gauge(parts: list, r: np.ndarray) -> np.ndarray | None:
+    """The readings of the gauge of ``parts`` (:func:`_series_of_gauge`) from its likeliest slip to the end of that
+    series (indices), or None."""
     best = None
-    on = data.comp == c
-    for series in np.unique(data.series[on]):
-        idx = np.nonzero(on & (data.series == series))[0]
-        idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
-        split = _change_point(r[idx])
+    for idx, split in parts:
         if split is not None and _is_slip(r[idx], split[0]) and (best is None or split[1] > best[1]):
             best = (idx[split[0]:], split[1])
     return None if best is None else best[0]

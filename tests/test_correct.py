@@ -275,3 +275,39 @@ def test_each_target_gets_the_uncertainty_its_pose_has_from_the_parameters(tmp_p
     assert main(["correct", str(old), str(targets), "-o", str(tmp_path / "c2.csv")]) == 0
     t2 = list(csv.DictReader(ln for ln in (tmp_path / "c2.csv").read_text().splitlines() if not ln.startswith("#")))
     assert all(r["param_sd_mm"] == "" for r in t2)
+
+
+def test_a_parameter_the_data_do_not_see_is_unbounded_only_where_it_moves_the_tcp(tmp_path, capsys):
+    """A result whose dtheta_6 has no sigma (null: a direction the data did not see): the targets' uncertainty is
+    unbounded where that twist moves the TCP (a production tool off joint 6's axis) and unchanged where it does
+    not (a tool on the axis); it had been infinite for every target whatever the tool."""
+    from rodlab.calibrate import read_points
+    cal = _calibrate_ur5(tmp_path)
+    pts = read_points(DATA / "ur5_random.validation.csv", 6)
+    rows = [(*x, *q) for q, x in zip(pts.q_deg[:4], pts.x_W_mm[:4])]
+    targets = tmp_path / "t.targets.csv"
+    targets.write_text("x_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows)
+                       + "\n")
+    data = json.loads(cal.read_text())
+    corr = data["fit"]["correlation"]
+    n = len(corr["names"])
+    corr["names"].append("dtheta_6")
+    corr["matrix"] = [row + [0.0] for row in corr["matrix"]] + [[0.0] * n + [1.0]]
+    data["parameters"]["dtheta_6"].update(sigma=None, status="identified")
+    unseen = tmp_path / "unseen.json"
+    unseen.write_text(json.dumps(data))
+
+    def sd_of(path, tool):
+        out = tmp_path / f"{path.stem}-{tool.replace(',', '_')}.csv"
+        assert main(["correct", str(path), str(targets), "--tool", tool, "-o", str(out)]) == 0
+        table = list(csv.DictReader(ln for ln in out.read_text().splitlines() if not ln.startswith("#")))
+        return np.array([float(r["param_sd_mm"]) for r in table]), capsys.readouterr().out
+
+    on_axis, off_axis = "0,0,120", "40,0,120"
+    sd_seen, _ = sd_of(cal, on_axis)
+    sd_unseen, said = sd_of(unseen, on_axis)
+    assert np.all(np.isfinite(sd_unseen)) and sd_unseen == pytest.approx(sd_seen, rel=1e-9)
+    assert "pin the targets to" in said and "unbounded" not in said
+    sd_off, said = sd_of(unseen, off_axis)
+    assert np.all(np.isinf(sd_off)) and "unbounded (param_sd_mm inf)" in said
+    assert np.all(np.isfinite(sd_of(cal, off_axis)[0]))

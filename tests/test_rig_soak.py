@@ -32,6 +32,19 @@ acquire(prof, plan, out, use_loader=True)
 """
 
 
+def _zero_of_each_row(text: str, rec) -> list:
+    """The ``# zero AXIS`` line in effect [mm] for each data row of a recording, in file order."""
+    zeros, out = {}, []
+    for line in text.splitlines():
+        if line.startswith("# zero"):
+            ax, vals = line[7:].split(":")
+            zeros[ax.strip()] = np.array([float(v) for v in vals.split(",")])
+        elif line[:1].isdigit():
+            out.append(zeros[rec.load_axis[len(out)].value])
+    assert len(out) == rec.n
+    return out
+
+
 def test_soak_with_kills(tmp_path):
     out = tmp_path / "soak.rig.csv"
     faults = Faults(garbage=0.05, drop=0.03, partial=0.03, stall=0.02, stall_s=0.2, disconnect=0.01,
@@ -66,28 +79,22 @@ def test_soak_with_kills(tmp_path):
     assert text.count("complete: step") == 2 * (1 + 2 * 4)          # every hold of the plan, once
     rec = read_recording(out)                                          # parses: no torn line left
     assert np.all(np.diff(rec.time_s) >= 0)
-    zeros = {}
-    for line in text.splitlines():
-        if line.startswith("# zero"):
-            ax, vals = line[7:].split(":")
-            zeros.setdefault(ax.strip(), []).append(np.array([float(v) for v in vals.split(",")]))
-    # every recorded reading is one the device sent (device units: um with 4 decimals), none twice
-    matched = np.zeros(len(sent), dtype=bool)
-    for i in range(rec.n):
-        ax = rec.load_axis[i].value
+    # every recorded reading is one the device sent (device units: um with 4 decimals), none twice, in the order
+    # sent. The gauges resolve 1 um, so equal readings are common: each row is matched under the zero in effect
+    # where it stands in the file (a series killed after its zero and redone has two), to the earliest reading
+    # sent after the previous row's.
+    sent_order, last = [], -1
+    for i, zero in enumerate(_zero_of_each_row(text, rec)):
         comps = [c for c in range(3) if np.isfinite(rec.disp_mm[i, c])]
-        hits = None
-        for z in zeros[ax]:
-            raw = (rec.disp_mm[i] + z)[comps] * 1e3
-            d = np.abs(sent[:, comps] - raw).max(axis=1)
-            cand = np.nonzero(d < 2e-3)[0]
-            if cand.size:
-                hits = cand
-                break
-        assert hits is not None, f"row {i} was never sent by the device"
-        free = [h for h in hits if not matched[h]]
-        assert free, f"row {i} duplicates a reading already recorded"
-        matched[free[0]] = True
+        raw = (rec.disp_mm[i] + zero)[comps] * 1e3
+        hits = np.nonzero(np.abs(sent[:, comps] - raw).max(axis=1) < 2e-3)[0]
+        assert hits.size, f"row {i} was never sent by the device"
+        later = hits[hits > last]
+        assert later.size, f"row {i} duplicates a reading already recorded (or is out of order)"
+        last = int(later[0])
+        sent_order.append(last)
+    matched = np.zeros(len(sent), dtype=bool)
+    matched[sent_order] = True
     stats = {"kills": kills, "runs": runs, "rows": int(rec.n), "sent": int(len(sent)),
              "sent_not_recorded": int((~matched).sum()), "faults": sorted(events)}
     (tmp_path / "soak.json").write_text(json.dumps(stats))

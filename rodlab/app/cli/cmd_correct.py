@@ -67,9 +67,14 @@ def _pinned_words(sd) -> str:
     """The per-target uncertainty's range in the summary line (param_sd_mm), or nothing without one."""
     if sd is None:
         return ""
-    if not np.all(np.isfinite(sd)):
+    finite = sd[np.isfinite(sd)]
+    if finite.size == 0:
         return "; a parameter the calibration could not see leaves the targets' uncertainty unbounded (param_sd_mm inf)"
-    return f"; its parameters pin the targets to {np.min(sd):.3f}-{np.max(sd):.3f} mm (1 sigma, param_sd_mm)"
+    pinned = f"; its parameters pin the targets to {np.min(finite):.3f}-{np.max(finite):.3f} mm (1 sigma, param_sd_mm)"
+    if finite.size < sd.size:
+        pinned += (f"; at {sd.size - finite.size} of {sd.size} targets a parameter the calibration could not see moves "
+                   "the TCP: unbounded (param_sd_mm inf)")
+    return pinned
 
 
 def cmd_correct(args) -> int:

@@ -13,6 +13,12 @@ and the campaign identified again. A mix-up whose undoing gives plausible parame
 (where the given fit's parameters were beyond their bounds: the mirrored chain fits, 13 um against 7 um for the
 trial's joint 2; :data:`TIE_GAIN`) or to at most :data:`MIXUP_GAIN` of the rms (gross residuals, plausible
 parameters) is named.
+
+Instrument points are screened before they are identified (:func:`points_mixup`): their identification of a
+reversed joint is the slow kind (1-2.5 min on the UR5 tracker data with joint 2 or 3 negated, for a mirrored
+chain or parameters far beyond their bounds), while the nominal model with base and tool registered from scratch
+(:func:`~calibrate.observations.register_base_and_tool`, ~0.1 s) tells a robot a few mm off its nominal model
+from one whose joint turns the other way (hundreds of mm).
 """
 from __future__ import annotations
 
@@ -25,9 +31,13 @@ import numpy as np
 
 from .errors import CalibrationError
 from .identify import campaign_observations, identify
+from .kinematics import ModelParams
+from .observations import register_base_and_tool
+from .points import points_observations
 from .trust import bound_warnings, gross
 
-__all__ = ["Mixup", "find_mixup", "campaign_mixup", "MIXUP_GAIN", "QUICK_NFEV"]
+__all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "refuse_reversed_joint", "MIXUP_GAIN", "QUICK_NFEV",
+           "NOMINAL_GROSS_MM"]
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +51,13 @@ SCREENED = 2
 #: residual evaluations per free parameter of the quick fits that screen mix-ups (a plausible fit converges in
 #: tens; a hopeless one had taken thousands, 6 s of a refused calibration)
 QUICK_NFEV = 10
+#: instrument points whose nominal model, base and tool registered, misses them by more than this rms [mm] have
+#: their joints' signs checked (the real data sets' nominal models: 0.8-3 mm; a reversed joint: 24-200 mm); a
+#: joint's negation must bring it under this and to at most :data:`SCREEN_GAIN` of the rms as given
+SCREEN_GAIN = 0.2
+NOMINAL_GROSS_MM = 10.0
+#: base-and-tool registrations of the screen (to 0.01 mm; the first ones decide between mm and hundreds of mm)
+SCREEN_ITERATIONS = 15
 
 
 @dataclass(frozen=True)
@@ -64,8 +81,9 @@ class Mixup:
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
 
     def reason(self) -> str:
-        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading (as given "
-               f"{self.rms_given_mm * 1e3:.1f} um) with every parameter within its bounds")
+        given = (f"{self.rms_given_mm:.1f} mm" if self.rms_given_mm >= 1.0 else f"{self.rms_given_mm * 1e3:.1f} um")
+        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading (as given {given}) with every parameter "
+               "within its bounds")
         if self.joint is not None:
             k = self.joint
             return (f"joint {k}'s readings run the other way than the robot file's joint {k}: with them negated {fit}; "
@@ -150,3 +168,41 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
         return fit(campaign_observations(replace(camp, position=positions), fixture, rod_file), full)
     return find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
                       relabelled, material)
+
+
+def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
+    """A joint of the instrument points ``pts`` (:class:`~calibrate.campaign.PointSet`) whose readings run the other
+    way than ``robot``'s, or None: checked only when the nominal model, base and tool registered from scratch,
+    misses the points by more than :data:`NOMINAL_GROSS_MM` rms; the joint whose negation brings that under it
+    (the best one) is confirmed by ``identify_points_as(points)``, the identification the command runs: it must
+    converge with every parameter within its bounds. ``rms_given_mm`` is the registered nominal model's rms."""
+    given = _registered_rms(robot, pts, pts.q_deg)
+    if given <= NOMINAL_GROSS_MM:
+        return None
+    rms, k = min((_registered_rms(robot, pts, _negated(pts.q_deg, k)), k) for k in range(robot.n))
+    log.info("points: nominal rms %.1f mm as given, %.1f mm with joint %d negated", given, rms, k + 1)
+    if rms > min(NOMINAL_GROSS_MM, SCREEN_GAIN * given):
+        return None
+    try:
+        trial = identify_points_as(replace(pts, q_deg=_negated(pts.q_deg, k)))
+    except CalibrationError as e:
+        log.info("points with joint %d negated: the identification was refused (%s)", k + 1, e)
+        return None
+    if not (trial.success and not bound_warnings(robot, trial)):
+        return None
+    return Mixup(k + 1, None, float(trial.rms_mm), given)
+
+
+def refuse_reversed_joint(robot, pts, path, identify_points_as: Callable) -> None:
+    """Raise :class:`CalibrationError` naming the file ``path`` and the column when one of the instrument points'
+    joints runs the other way than ``robot``'s (:func:`points_mixup`): their identification would take minutes to
+    end in a mirrored chain or parameters far beyond their bounds."""
+    mixup = points_mixup(robot, pts, identify_points_as)
+    if mixup is not None:
+        raise CalibrationError(f"{mixup.reason()}; nothing was calibrated", path=path, key=f"q{mixup.joint}")
+
+
+def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:
+    """rms distance [mm] of the points from the nominal model with base and tool registered from scratch."""
+    obs = replace(points_observations(pts), q_rad=np.deg2rad(q_deg))
+    return register_base_and_tool(robot, ModelParams.nominal(robot, pts.tool_mm), obs, SCREEN_ITERATIONS, 0.01)[2]

@@ -18,7 +18,7 @@ from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
-from rodlab.calibrate.mixups import campaign_mixup
+from rodlab.calibrate.mixups import campaign_mixup, refuse_reversed_joint
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
@@ -246,6 +246,7 @@ def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
+    refuse_reversed_joint(robot, pts, args.points, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, options["pinned"] = constrain_to_ranges(
         lambda pins: identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict,
@@ -254,6 +255,8 @@ def _calibrate_points(args) -> int:
     errors = {}
     if args.validate:
         test = points_from_args(args, args.validate, robot.n)
+        refuse_reversed_joint(robot, test, args.validate,
+                              lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
         shared = _shared_share(pts.q_deg, test.q_deg)

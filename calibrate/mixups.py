@@ -70,13 +70,16 @@ class Mixup:
     positions: tuple | None
     rms_mm: float
     rms_given_mm: float
+    fixture_radians: bool = False
 
     def __post_init__(self) -> None:
-        if (self.joint is None) == (self.positions is None):
-            raise ValueError("Mixup: give either a joint or a pair of positions")
+        if (self.joint is not None) + (self.positions is not None) + self.fixture_radians != 1:
+            raise ValueError("Mixup: give a joint, a pair of positions or fixture_radians, one of them")
 
     @property
     def label(self) -> str:
+        if self.fixture_radians:
+            return "fixture angles read as radians"
         return (f"joint {self.joint} negated" if self.joint is not None else
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
 
@@ -84,6 +87,9 @@ class Mixup:
         given = (f"{self.rms_given_mm:.1f} mm" if self.rms_given_mm >= 1.0 else f"{self.rms_given_mm * 1e3:.1f} um")
         fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading (as given {given}) with every parameter "
                "within its bounds")
+        if self.fixture_radians:
+            return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
+                    "are degrees: convert them (degrees = radians x 180 / pi) and run again")
         if self.joint is not None:
             k = self.joint
             return (f"joint {k}'s readings run the other way than the robot file's joint {k}: with them negated {fit}; "
@@ -96,7 +102,7 @@ class Mixup:
 
 
 def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints: Callable, fit_positions: Callable,
-               material: bool = True) -> Mixup | None:
+               material: bool = True, extra: tuple = ()) -> Mixup | None:
     """The mix-up whose undoing fits the campaign plausibly (the best), or None. ``res``: the identification as
     given; ``q_rad`` (N, n) its joint readings; ``positions`` (N,) its position labels; ``fit_joints(q_rad, full)``
     and ``fit_positions(positions, full)``: the same identification with other readings or labels, a quick one
@@ -104,18 +110,23 @@ def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints:
     Tried only when ``res`` has parameters beyond their bounds or residuals the noise model does not explain by a
     material margin (a swap of two nearby positions leaves 0.11 mm rms, not gross); with ``material`` False (a
     diagnosis, where physics left out makes the residuals material) only beyond bounds or gross
-    (:func:`~calibrate.trust.gross`)."""
+    (:func:`~calibrate.trust.gross`). ``extra``: further (:class:`Mixup`, ``run(full)``) trials (a campaign's
+    fixture angles read as radians); ``fit_joints`` / ``fit_positions`` None: those trials left out."""
     test = res.residual_check
     beyond = bool(bound_warnings(robot, res))
     refused = test is None or (test.material if material else gross(test.birge, res.rms_mm))
     if not beyond and not refused:
         return None
     limit = res.rms_mm * (TIE_GAIN if beyond else MIXUP_GAIN)
-    trials = [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
-              for k in range(robot.n)]
-    labels = sorted({int(p) for p in np.asarray(positions)})
-    trials += [(Mixup(None, (a, b), 0.0, 0.0), lambda full, a=a, b=b: fit_positions(_swapped(positions, a, b), full))
-               for a, b in itertools.combinations(labels, 2)]
+    trials = list(extra)
+    if fit_joints is not None:
+        trials += [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
+                   for k in range(robot.n)]
+    if fit_positions is not None:
+        labels = sorted({int(p) for p in np.asarray(positions)})
+        trials += [(Mixup(None, (a, b), 0.0, 0.0), lambda full, a=a, b=b: fit_positions(_swapped(positions, a, b),
+                                                                                          full))
+                   for a, b in itertools.combinations(labels, 2)]
     screened = [(what, run, _attempt(run, False, what)) for what, run in trials]
     # the quick fit leaves the rod's deflection uncompensated (0.2 mm for the trial's joint 2, 7 um in full): the
     # two it fits best are identified in full and judged
@@ -158,7 +169,9 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
     """:func:`find_mixup` for a MultiCal campaign: ``res`` its identification from ``obs`` (the observations of
     ``camp`` with ``fixture`` and the compliance file ``rod_file``) with the rod ``rod``, ``compensations`` and the
     :class:`~calibrate.estimate.FitOptions` ``options``; the screen runs one pass with :data:`QUICK_NFEV`;
-    ``material`` as :func:`find_mixup`'s."""
+    ``material`` as :func:`find_mixup`'s. A fixture file whose angles could be radians
+    (:func:`_angles_could_be_radians`) is tried read as radians where no other mix-up is found, with residuals
+    material enough also in a diagnosis."""
     quick = replace(options, max_compensation=1, expected_noise_mm=None, max_nfev_per_parameter=QUICK_NFEV)
 
     def fit(o, full):
@@ -166,8 +179,30 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
 
     def relabelled(positions, full):
         return fit(campaign_observations(replace(camp, position=positions), fixture, rod_file), full)
-    return find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
-                      relabelled, material)
+    found = find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
+                       relabelled, material)
+    if found is None and _angles_could_be_radians(fixture):
+        # residuals material suffice here also in a diagnosis: read as radians, small angles become large turns,
+        # which no campaign of another physics fits better
+        found = find_mixup(robot, res, obs.q_rad, camp.position, None, None, True, (
+            (Mixup(None, None, 0.0, 0.0, fixture_radians=True),
+             lambda full: fit(campaign_observations(camp, _degrees_from_radians(fixture), rod_file), full)),))
+    return found
+
+
+def _angles_could_be_radians(fixture) -> bool:
+    """Every clamping pose's a, b, c within +-pi and some of them off zero: a file the reader could have been given
+    in radians (a fixture's clampings turn by tens of degrees between positions)."""
+    angles = np.array([np.asarray(p, float)[3:] for p in fixture.poses.values()])
+    return bool(np.all(np.abs(angles) <= np.pi) and np.any(np.abs(angles) > 1e-3))
+
+
+def _degrees_from_radians(fixture):
+    """``fixture`` with its angles (and their covariance) read as radians, in degrees."""
+    k = np.r_[np.ones(3), np.full(3, np.degrees(1.0))]
+    poses = {j: np.asarray(p, float) * k for j, p in fixture.poses.items()}
+    cov = None if fixture.pose_cov is None else {j: c * np.outer(k, k) for j, c in fixture.pose_cov.items()}
+    return replace(fixture, poses=poses, pose_cov=cov)
 
 
 def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:

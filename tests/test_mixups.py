@@ -6,6 +6,8 @@ data, a column negated) are refused before their identification."""
 from __future__ import annotations
 
 import csv
+import json
+import math
 from pathlib import Path
 
 import pytest
@@ -156,3 +158,46 @@ def test_calibrate_and_diagnose_refuse_points_with_a_reversed_joint(tmp_path, ca
     assert main(["calibrate", "--points", str(REAL / "boby2021" / "r2000ic_N1.validation.csv"), "--robot",
                  "r2000ic165f", "--validate", str(bad_val), "--json", str(out)]) == 2
     assert "val_q2.validation.csv, key `q2`" in capsys.readouterr().err and not out.exists()
+
+
+def _fixture_in_radians(src: Path, dst: Path) -> Path:
+    data = json.loads(src.read_text())
+    data["positions"] = {j: p[:3] + [math.radians(a) for a in p[3:]] for j, p in data["positions"].items()}
+    dst.write_text(json.dumps(data))
+    return dst
+
+
+def test_fixture_angles_in_radians_are_named(campaign, tmp_path, capsys):
+    """A fixture file written in radians (the format's angles are degrees): calibrate names it first among the
+    reasons (it had been NOT TRUSTED with 'device_axes' and an unexplained position as the suspects) and the
+    campaign diagnosis refuses the files, naming the fixture file."""
+    fix = _fixture_in_radians(campaign / "multical.fixture.json", tmp_path / "rad.fixture.json")
+    rod = str(next(campaign.glob("*.compliance.json")))
+    code = main(["calibrate", str(campaign / "multical.campaign.csv"), "--fixture", str(fix), "--rod", rod])
+    err = capsys.readouterr().err
+    assert code == 3 and "the fixture file's angles a, b, c look like radians" in err and "suspects" not in err
+    code = main(["diagnose", "--campaign", str(campaign / "multical.campaign.csv"), "--fixture", str(fix), "--rod", rod])
+    err = capsys.readouterr().err
+    assert code == 2 and "rad.fixture.json, key `positions`" in err and "look like radians" in err
+
+
+def test_a_fixture_of_small_angles_with_physics_left_out_is_not_called_radians(tmp_path, capsys, monkeypatch):
+    """A fixture whose clampings turn by under 3 deg (every angle could be radians) and a clamping pose off by
+    0.3 mm (material residuals): read as radians its small angles become large turns that fit worse; no mix-up."""
+    import rodlab.calibrate.simulate as sim
+
+    layout = sim.fixture_layout
+
+    class SmallYaws:
+        def __init__(self, rng):
+            self.rng = rng
+
+        def uniform(self, lo, hi):
+            return self.rng.uniform(lo / 25.0, hi / 25.0)
+    monkeypatch.setattr(sim, "fixture_layout", lambda positions, rng: layout(positions, SmallYaws(rng)))
+    simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=4),
+                      effects={"fixture_pose": {"position": 2, "offset_mm": [0.3, -0.2, 0.2]}})
+    angles = [a for p in json.loads((tmp_path / "multical.fixture.json").read_text())["positions"].values() for a in p[3:]]
+    assert max(abs(a) for a in angles) < math.pi                        # the radians trial runs
+    code, out = _calibrate(tmp_path, tmp_path / "multical.campaign.csv", capsys)
+    assert code == 3 and "look like radians" not in out.err

@@ -375,8 +375,9 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)], options)
     mixup = campaign_mixup(robot, res, camp, fix, rod, obs, Rod.of(rod), [deflection_of(rod)], options, material=False)
     if mixup is not None:                  # the files do not describe one robot: no physics to diagnose
+        where = dict(path=fix.path, key="positions") if mixup.fixture_radians else dict(path=camp.path, key="campaign")
         raise CalibrationError(f"{mixup.reason()}; the diagnosis of these files would name the mix-up's traces as "
-                               "physics", key="campaign")
+                               "physics", **where)
     ctx, tau = campaign_context(robot, res, obs, camp, rod)
     sel = CampaignSelection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()

@@ -71,15 +71,20 @@ class Mixup:
     rms_mm: float
     rms_given_mm: float
     fixture_radians: bool = False
+    columns: tuple | None = None
 
     def __post_init__(self) -> None:
-        if (self.joint is not None) + (self.positions is not None) + self.fixture_radians != 1:
-            raise ValueError("Mixup: give a joint, a pair of positions or fixture_radians, one of them")
+        kinds = (self.joint is not None) + (self.positions is not None) + self.fixture_radians + (self.columns is not None)
+        if kinds != 1:
+            raise ValueError("Mixup: give a joint, a pair of positions, a pair of joint columns or fixture_radians, "
+                             "one of them")
 
     @property
     def label(self) -> str:
         if self.fixture_radians:
             return "fixture angles read as radians"
+        if self.columns is not None:
+            return f"columns q{self.columns[0]} and q{self.columns[1]} exchanged"
         return (f"joint {self.joint} negated" if self.joint is not None else
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
 
@@ -90,6 +95,10 @@ class Mixup:
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
+        if self.columns is not None:
+            a, b = self.columns
+            return (f"the q{a} and q{b} columns look exchanged against the robot file's joints {a} and {b}: with them "
+                    f"swapped back {fit}; check the column order of the controller's export and swap them")
         if self.joint is not None:
             k = self.joint
             return (f"joint {k}'s readings run the other way than the robot file's joint {k}: with them negated {fit}; "
@@ -159,6 +168,12 @@ def _negated(q_rad: np.ndarray, k: int) -> np.ndarray:
     return q
 
 
+def _exchanged(q: np.ndarray, a: int, b: int) -> np.ndarray:
+    q = np.array(q, float, copy=True)
+    q[:, [a, b]] = q[:, [b, a]]
+    return q
+
+
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:
     p = np.asarray(positions)
     return np.where(p == a, b, np.where(p == b, a, p))
@@ -207,25 +222,30 @@ def _degrees_from_radians(fixture):
 
 def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     """A joint of the instrument points ``pts`` (:class:`~calibrate.campaign.PointSet`) whose readings run the other
-    way than ``robot``'s, or None: checked only when the nominal model, base and tool registered from scratch,
-    misses the points by more than :data:`NOMINAL_GROSS_MM` rms; the joint whose negation brings that under it
-    (the best one) is confirmed by ``identify_points_as(points)``, the identification the command runs: it must
-    converge with every parameter within its bounds. ``rms_given_mm`` is the registered nominal model's rms."""
+    way than ``robot``'s, or two joint columns exchanged, or None: checked only when the nominal model, base and
+    tool registered from scratch, misses the points by more than :data:`NOMINAL_GROSS_MM` rms; the negation or
+    exchange that brings that under it (the best one) is confirmed by ``identify_points_as(points)``, the
+    identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
+    the registered nominal model's rms."""
     given = _registered_rms(robot, pts, pts.q_deg)
     if given <= NOMINAL_GROSS_MM:
         return None
-    rms, k = min((_registered_rms(robot, pts, _negated(pts.q_deg, k)), k) for k in range(robot.n))
-    log.info("points: nominal rms %.1f mm as given, %.1f mm with joint %d negated", given, rms, k + 1)
+    trials = [(Mixup(k + 1, None, 0.0, 0.0), _negated(pts.q_deg, k)) for k in range(robot.n)]
+    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)), _exchanged(pts.q_deg, a, b))
+               for a, b in itertools.combinations(range(robot.n), 2)]
+    rms, i = min((_registered_rms(robot, pts, q), i) for i, (_, q) in enumerate(trials))
+    what, q = trials[i]
+    log.info("points: nominal rms %.1f mm as given, %.1f mm with %s", given, rms, what.label)
     if rms > min(NOMINAL_GROSS_MM, SCREEN_GAIN * given):
         return None
     try:
-        trial = identify_points_as(replace(pts, q_deg=_negated(pts.q_deg, k)))
+        trial = identify_points_as(replace(pts, q_deg=q))
     except CalibrationError as e:
-        log.info("points with joint %d negated: the identification was refused (%s)", k + 1, e)
+        log.info("points with %s: the identification was refused (%s)", what.label, e)
         return None
     if not (trial.success and not bound_warnings(robot, trial)):
         return None
-    return Mixup(k + 1, None, float(trial.rms_mm), given)
+    return replace(what, rms_mm=float(trial.rms_mm), rms_given_mm=given)
 
 
 def refuse_reversed_joint(robot, pts, path, identify_points_as: Callable) -> None:
@@ -234,7 +254,8 @@ def refuse_reversed_joint(robot, pts, path, identify_points_as: Callable) -> Non
     end in a mirrored chain or parameters far beyond their bounds."""
     mixup = points_mixup(robot, pts, identify_points_as)
     if mixup is not None:
-        raise CalibrationError(f"{mixup.reason()}; nothing was calibrated", path=path, key=f"q{mixup.joint}")
+        key = f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
+        raise CalibrationError(f"{mixup.reason()}; nothing was calibrated", path=path, key=key)
 
 
 def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:

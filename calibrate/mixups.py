@@ -34,10 +34,13 @@ from .identify import campaign_observations, identify
 from .kinematics import ModelParams
 from .observations import register_base_and_tool
 from .points import points_observations
+from .socket_check import check_sockets
+from .socket_fit import socket_start
+from .sockets import SocketReadings
 from .trust import bound_warnings, gross
 
-__all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "refuse_reversed_joint", "MIXUP_GAIN", "QUICK_NFEV",
-           "NOMINAL_GROSS_MM"]
+__all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mixup", "refuse_reversed_joint",
+           "MIXUP_GAIN", "QUICK_NFEV", "NOMINAL_GROSS_MM"]
 
 log = logging.getLogger(__name__)
 
@@ -227,32 +230,55 @@ def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     exchange that brings that under it (the best one) is confirmed by ``identify_points_as(points)``, the
     identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
     the registered nominal model's rms."""
-    given = _registered_rms(robot, pts, pts.q_deg)
+    return _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
+                         lambda q: identify_points_as(replace(pts, q_deg=q)))
+
+
+def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | None:
+    """:func:`points_mixup` for ball-in-socket (or ball-bar) readings
+    (:class:`~calibrate.sockets.SocketReadings`): the nominal model's spread about each socket's centre
+    (:func:`~calibrate.socket_check.check_sockets`, rms [mm]) decides, ``identify_sockets_as(readings)`` (a
+    :class:`~calibrate.result.CalibrationResult`) confirms. The public Panda, iiwa and Gen3 lite readings spread
+    by 1-8 mm about their sockets; a reversed joint by hundreds of mm."""
+    def spread(q):
+        r = replace(readings, q_rad=q)
+        return check_sockets(robot, socket_start(robot, r), r).spread_rms_mm
+    return _column_mixup(robot, readings.q_rad, spread, lambda q: identify_sockets_as(replace(readings, q_rad=q)))
+
+
+def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable) -> Mixup | None:
+    """The joint negation or column exchange of the joint readings ``q`` (N, n) that brings the nominal model's
+    ``misfit(q)`` [mm] from beyond :data:`NOMINAL_GROSS_MM` to under it and :data:`SCREEN_GAIN` of the given,
+    confirmed by ``identify_as(q)`` (converged, every parameter within its bounds); None otherwise."""
+    given = misfit(q)
     if given <= NOMINAL_GROSS_MM:
         return None
-    trials = [(Mixup(k + 1, None, 0.0, 0.0), _negated(pts.q_deg, k)) for k in range(robot.n)]
-    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)), _exchanged(pts.q_deg, a, b))
+    trials = [(Mixup(k + 1, None, 0.0, 0.0), _negated(q, k)) for k in range(robot.n)]
+    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)), _exchanged(q, a, b))
                for a, b in itertools.combinations(range(robot.n), 2)]
-    rms, i = min((_registered_rms(robot, pts, q), i) for i, (_, q) in enumerate(trials))
-    what, q = trials[i]
-    log.info("points: nominal rms %.1f mm as given, %.1f mm with %s", given, rms, what.label)
+    rms, i = min((misfit(qt), i) for i, (_, qt) in enumerate(trials))
+    what, fixed = trials[i]
+    log.info("joint readings: nominal misfit %.1f mm as given, %.1f mm with %s", given, rms, what.label)
     if rms > min(NOMINAL_GROSS_MM, SCREEN_GAIN * given):
         return None
     try:
-        trial = identify_points_as(replace(pts, q_deg=q))
+        trial = identify_as(fixed)
     except CalibrationError as e:
-        log.info("points with %s: the identification was refused (%s)", what.label, e)
+        log.info("readings with %s: the identification was refused (%s)", what.label, e)
         return None
     if not (trial.success and not bound_warnings(robot, trial)):
         return None
     return replace(what, rms_mm=float(trial.rms_mm), rms_given_mm=given)
 
 
-def refuse_reversed_joint(robot, pts, path, identify_points_as: Callable) -> None:
-    """Raise :class:`CalibrationError` naming the file ``path`` and the column when one of the instrument points'
-    joints runs the other way than ``robot``'s (:func:`points_mixup`): their identification would take minutes to
-    end in a mirrored chain or parameters far beyond their bounds."""
-    mixup = points_mixup(robot, pts, identify_points_as)
+def refuse_reversed_joint(robot, pts, path, identify_as: Callable) -> None:
+    """Raise :class:`CalibrationError` naming the file ``path`` and the columns when one of the joints of instrument
+    points (a :class:`~calibrate.campaign.PointSet`, :func:`points_mixup`) or socket readings (a
+    :class:`~calibrate.sockets.SocketReadings`, :func:`sockets_mixup`) runs the other way than ``robot``'s or two
+    joint columns are exchanged: their identification would take minutes to end in a mirrored chain or parameters
+    far beyond their bounds."""
+    find = sockets_mixup if isinstance(pts, SocketReadings) else points_mixup
+    mixup = find(robot, pts, identify_as)
     if mixup is not None:
         key = f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
         raise CalibrationError(f"{mixup.reason()}; nothing was calibrated", path=path, key=key)

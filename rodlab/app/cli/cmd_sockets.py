@@ -9,6 +9,7 @@ import numpy as np
 
 from rodlab.calibrate import CalibrationError, result_dict
 from rodlab.calibrate.socket_check import check_sockets
+from rodlab.calibrate.mixups import refuse_reversed_joint
 from rodlab.calibrate.socket_fit import identify_sockets, socket_start
 from rodlab.calibrate.sockets import read_sockets
 from rodlab.calibrate.crossval import Prediction
@@ -82,6 +83,9 @@ def run_sockets(args) -> SocketRun:
         raise RodlabError("--sockets is a calibration of its own: leave out the campaign, --points and --thermal")
     robot = robot_from_args(args)
     fitted, held = _readings(args, robot)
+    for path, r in ((args.sockets, fitted), (args.validate, held if args.validate else None)):
+        if r is not None:
+            refuse_reversed_joint(robot, r, path, lambda rr: identify_sockets(robot, rr, fix_unidentifiable=True).result)
     from rodlab.calibrate.plausible import constrain_to_ranges
     fits = []
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from rodlab.app.cli.main import main
-from rodlab.calibrate import ModelParams, ball_positions, resolve_robot
+from rodlab.calibrate import ModelParams, ball_positions, read_points, resolve_robot
 from rodlab.calibrate.correct import correct_targets, ik_assumptions
 from rodlab.calibrate.ik import solve_ik_positions
 
@@ -92,7 +92,6 @@ def test_cli_correct_and_the_export_warning(tmp_path, capsys):
     recorded joints as the program: the commands round-trip within 1 um and stay next to the recorded joints
     (the calibrated model explains those measurements to ~0.1 mm); export warns of the broken parallel axes."""
     cal = _calibrate_ur5(tmp_path)
-    from rodlab.calibrate import read_points
     from rodlab.calibrate.result import calibrated_params, read_calibration
     pts = read_points(DATA / "ur5_random.validation.csv", 6)
     targets = tmp_path / "t.targets.csv"
@@ -170,7 +169,6 @@ def test_cli_pose_targets_and_their_refusals(tmp_path, capsys):
     targets: the commands come back to those joints and the calibrated FK of the written commands is on the
     targets within 1 um / 1 urad. An unreachable pose, a quaternion column and a partial orientation are refused
     with the file and line, exit 2, and no output file."""
-    from rodlab.calibrate import read_points
     from rodlab.calibrate.result import calibrated_params, read_calibration
     from rodlab.calibrate.ik_pose import rotation_angle
     from rodlab.core.frames import matrix_to_pose, rotation_from_abc
@@ -230,6 +228,16 @@ def test_a_pose_target_that_flips_the_wrist_is_warned_about(ur5, caplog):
     assert len(warned) == 1 and warned[0].startswith("target 2")
 
 
+def _random_targets(tmp_path, k: int):
+    """A targets file of the UR5 random set's first ``k`` measured positions with their recorded joints."""
+    pts = read_points(DATA / "ur5_random.validation.csv", 6)
+    rows = [(*x, *q) for q, x in zip(pts.q_deg[:k], pts.x_W_mm[:k])]
+    targets = tmp_path / "t.targets.csv"
+    targets.write_text("x_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows)
+                       + "\n")
+    return targets
+
+
 def test_each_target_gets_the_uncertainty_its_pose_has_from_the_parameters(tmp_path, capsys):
     """`predicted_mm` is the calibration's held-out mean, one number; `param_sd_mm` is each target's own: the
     identified parameters' covariance (the result's fit.correlation) through the TCP Jacobian at its commands: it
@@ -238,14 +246,9 @@ def test_each_target_gets_the_uncertainty_its_pose_has_from_the_parameters(tmp_p
     to every target; the new one follows the true per-target error there, correlation 0.89)."""
     from dataclasses import replace
 
-    from rodlab.calibrate import read_points
     from rodlab.calibrate.result import calibrated_params, read_calibration
     cal = _calibrate_ur5(tmp_path)
-    pts = read_points(DATA / "ur5_random.validation.csv", 6)
-    rows = [(*x, *q) for q, x in zip(pts.q_deg[:5], pts.x_W_mm[:5])]
-    targets = tmp_path / "t.targets.csv"
-    targets.write_text("x_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows)
-                       + "\n")
+    targets = _random_targets(tmp_path, 5)
     out = tmp_path / "commands.csv"
     assert main(["correct", str(cal), str(targets), "-o", str(out)]) == 0
     assert "its parameters pin the targets to" in capsys.readouterr().out
@@ -281,13 +284,8 @@ def test_a_parameter_the_data_do_not_see_is_unbounded_only_where_it_moves_the_tc
     """A result whose dtheta_6 has no sigma (null: a direction the data did not see): the targets' uncertainty is
     unbounded where that twist moves the TCP (a production tool off joint 6's axis) and unchanged where it does
     not (a tool on the axis); it had been infinite for every target whatever the tool."""
-    from rodlab.calibrate import read_points
     cal = _calibrate_ur5(tmp_path)
-    pts = read_points(DATA / "ur5_random.validation.csv", 6)
-    rows = [(*x, *q) for q, x in zip(pts.q_deg[:4], pts.x_W_mm[:4])]
-    targets = tmp_path / "t.targets.csv"
-    targets.write_text("x_mm,y_mm,z_mm,q1,q2,q3,q4,q5,q6\n" + "\n".join(",".join(f"{v:.6f}" for v in r) for r in rows)
-                       + "\n")
+    targets = _random_targets(tmp_path, 4)
     data = json.loads(cal.read_text())
     corr = data["fit"]["correlation"]
     n = len(corr["names"])

@@ -8,8 +8,8 @@ it diverges or finds a mirrored chain. An IRB 4600 trial: joint 2 reversed gave 
 suspect: a periodic error of joint 2); joint 3 reversed or positions 4 and 5 swapped, residuals of 345-744 mm rms.
 
 Where a calibration is refused for parameters beyond their bounds or residuals the noise model does not explain
-by a material margin, each joint's readings are negated in turn, and each pair of positions swapped,
-and the campaign identified again. A mix-up whose undoing gives plausible parameters and fits at least as well
+by a material margin, each joint's readings are negated in turn, each pair of q columns exchanged and each pair of
+positions swapped, and the campaign identified again. A mix-up whose undoing gives plausible parameters and fits at least as well
 (where the given fit's parameters were beyond their bounds: the mirrored chain fits, 13 um against 7 um for the
 trial's joint 2; :data:`TIE_GAIN`) or to at most :data:`MIXUP_GAIN` of the rms (gross residuals, plausible
 parameters) is named.
@@ -134,6 +134,9 @@ def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints:
     if fit_joints is not None:
         trials += [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
                    for k in range(robot.n)]
+        trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)),
+                    lambda full, a=a, b=b: fit_joints(_exchanged(q_rad, a, b), full))
+                   for a, b in itertools.combinations(range(robot.n), 2)]
     if fit_positions is not None:
         labels = sorted({int(p) for p in np.asarray(positions)})
         trials += [(Mixup(None, (a, b), 0.0, 0.0), lambda full, a=a, b=b: fit_positions(_swapped(positions, a, b),

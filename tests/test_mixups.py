@@ -59,6 +59,15 @@ def test_a_reversed_joint_is_named(campaign, tmp_path, capsys, joint):
     assert "suspects" not in out.err                  # a diagnosis of the mirrored chain would mislead
 
 
+def test_two_exchanged_joint_columns_are_named(campaign, tmp_path, capsys):
+    """q2 and q3 exchanged in the campaign (an export's column order): 349 mm rms and a generic 'check the
+    columns (order, signs, ...)' before; now named, 6.4 um with them swapped back."""
+    path = tmp_path / "exchanged.campaign.csv"
+    _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"q2": r["q3"], "q3": r["q2"]}))
+    code, out = _calibrate(campaign, path, capsys)
+    assert code == 3 and "the q2 and q3 columns look exchanged against the robot file's joints 2 and 3" in out.err
+
+
 def test_two_swapped_positions_are_named(campaign, tmp_path, capsys):
     path = tmp_path / "swapped.campaign.csv"
     _edit(campaign / "multical.campaign.csv", path,

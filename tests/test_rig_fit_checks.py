@@ -80,6 +80,13 @@ def test_a_gauge_in_inches_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert re.search(r"the z gauge reads 2[45]\.\d times less", err) and "inches" in err and "Traceback" not in err
     assert not (tmp_path / "m.json").exists()
+    # the diagnosis refuses it too (it had named a compliance scale of 0.26 and a non-linearity along x), unless
+    # the units are checked
+    assert main(["diagnose", "--rig", str(rec), "--sim", "rod1"]) == 2
+    err = capsys.readouterr().err
+    assert "inches" in err and "nothing was diagnosed" in err and "--units-checked" in err
+    assert main(["diagnose", "--rig", str(rec), "--sim", "rod1", "--units-checked"]) in (0, 3)
+    assert "inches" in capsys.readouterr().err
 
 
 def test_a_gauge_mounted_backwards_gets_the_sign_hint(tmp_path, capsys):

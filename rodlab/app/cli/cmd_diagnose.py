@@ -10,6 +10,7 @@ from rodlab.calibrate.mixups import refuse_reversed_joint
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.fit import r_rod_caution
+from rodlab.stiffness_rig.fit_checks import gauge_scale_problems
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...core.compliance import read_compliance, write_compliance
@@ -145,8 +146,9 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
 def _check_r_rod(rec, sim, args) -> None:
     """A recording without a load response is refused with its cause, and so is an r_rod no rod of this kind has
     against its own simulation (a units slip or another rod's file: the diagnosis would fit a compliance scale of
-    0.001 and call the recording explained; ``--units-checked`` warns instead); any other fit problem is left to
-    the diagnosis, which says what it finds."""
+    0.001 and call the recording explained) or one gauge reading a units factor off the others against the
+    simulation (a gauge in inches: diagnosed as a compliance scale of 0.26 and a non-linearity along x);
+    ``--units-checked`` warns instead; any other fit problem is left to the diagnosis, which says what it finds."""
     try:
         fit = fit_recording(rec, sim)
     except NoLoadResponse:
@@ -154,6 +156,7 @@ def _check_r_rod(rec, sim, args) -> None:
     except RigError:
         return
     caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
+    caution = caution or "; ".join(gauge_scale_problems(fit.C_F_meas, sim.C_F)) or None
     if caution and not getattr(args, "units_checked", False):
         raise RigError(f"{caution}; nothing was diagnosed (if both files are right, give --units-checked)",
                        path=rec.path)

@@ -57,7 +57,7 @@ def _identify_with(robot, camp, fix, rod, fit: Refit, noise_mm, fixture_sigma, c
 
 def validation_errors(robot, fits, points) -> dict:
     """Position errors at the validation points: nominal model, identified, identified with the found physics
-    (joint angles corrected as a controller would); ``fits``: the :class:`~.campaign.CampaignFits`."""
+    (joint angles corrected as a controller would); ``fits``: the :class:`~.campaign_fits.CampaignFits`."""
     after = fits.after if fits.after is not None else fits.before
     return {"nominal": validate(robot, ModelParams.nominal(robot, points.tool_mm), points)[1],
             "before": validate(robot, fits.before.params, points)[1],

@@ -346,7 +346,7 @@ def _sigmas(robot, obs, p, free_infos: list, noise, fixture_sigma, full=False):
     if not full:
         return sig
     d = np.where(sig > 0, sig, 1.0)
-    with np.errstate(invalid="ignore"):                # a parameter the data do not see: its row is NaN (null)
+    with np.errstate(invalid="ignore"):                # a parameter the data do not see: inf / inf, NaN (null)
         corr = cov / np.outer(d, d)
     Jn = J / np.maximum(np.linalg.norm(J, axis=0), 1e-300)
     sv = np.linalg.svd(Jn, compute_uv=False)

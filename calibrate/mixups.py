@@ -58,6 +58,9 @@ QUICK_NFEV = 10
 #: their joints' signs checked (the real data sets' nominal models: 0.8-3 mm; a reversed joint: 24-200 mm); a
 #: joint's negation must bring it under this and to at most :data:`SCREEN_GAIN` of the rms as given
 SCREEN_GAIN = 0.2
+#: :data:`NOMINAL_GROSS_MM` of socket readings, whose nominal spread about each socket includes the arm's whole
+#: uncalibrated error (the public Panda readings: up to 10.7 mm as recorded)
+SOCKET_GROSS_MM = 25.0
 NOMINAL_GROSS_MM = 10.0
 #: base-and-tool registrations of the screen (to 0.01 mm; the first ones decide between mm and hundreds of mm)
 SCREEN_ITERATIONS = 15
@@ -75,6 +78,7 @@ class Mixup:
     rms_given_mm: float
     fixture_radians: bool = False
     columns: tuple | None = None
+    given_is_nominal: bool = False
 
     def __post_init__(self) -> None:
         kinds = (self.joint is not None) + (self.positions is not None) + self.fixture_radians + (self.columns is not None)
@@ -93,8 +97,10 @@ class Mixup:
 
     def reason(self) -> str:
         given = (f"{self.rms_given_mm:.1f} mm" if self.rms_given_mm >= 1.0 else f"{self.rms_given_mm * 1e3:.1f} um")
-        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading (as given {given}) with every parameter "
-               "within its bounds")
+        given = (f"the nominal model misses them by {given} rms as given" if self.given_is_nominal else
+                 f"as given {given}")
+        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading ({given}) with every parameter within "
+               "its bounds")
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
@@ -215,7 +221,7 @@ def _angles_could_be_radians(fixture) -> bool:
     """Every clamping pose's a, b, c within +-pi and some of them off zero: a file the reader could have been given
     in radians (a fixture's clampings turn by tens of degrees between positions)."""
     angles = np.array([np.asarray(p, float)[3:] for p in fixture.poses.values()])
-    return bool(np.all(np.abs(angles) <= np.pi) and np.any(np.abs(angles) > 1e-3))
+    return bool(np.all(np.abs(angles) <= np.pi + 1e-3) and np.any(np.abs(angles) > 1e-3))
 
 
 def _degrees_from_radians(fixture):
@@ -234,39 +240,42 @@ def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
     the registered nominal model's rms."""
     return _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
-                         lambda q: identify_points_as(replace(pts, q_deg=q)))
+                         lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM)
 
 
 def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | None:
     """:func:`points_mixup` for ball-in-socket (or ball-bar) readings
     (:class:`~calibrate.sockets.SocketReadings`): the nominal model's spread about each socket's centre
     (:func:`~calibrate.socket_check.check_sockets`, rms [mm]) decides, ``identify_sockets_as(readings)`` (a
-    :class:`~calibrate.result.CalibrationResult`) confirms. The public Panda, iiwa and Gen3 lite readings spread
-    by 1-8 mm about their sockets; a reversed joint by hundreds of mm."""
+    :class:`~calibrate.result.CalibrationResult`) confirms, with :data:`SOCKET_GROSS_MM` for
+    :data:`NOMINAL_GROSS_MM`: the public Panda, iiwa and Gen3 lite readings spread by 0.8-10.7 mm about their
+    sockets as recorded (an uncalibrated arm's nominal model), a reversed joint by 135-550 mm."""
     def spread(q):
         r = replace(readings, q_rad=q)
         return check_sockets(robot, socket_start(robot, r), r).spread_rms_mm
-    return _column_mixup(robot, readings.q_rad, spread, lambda q: identify_sockets_as(replace(readings, q_rad=q)))
+    return _column_mixup(robot, readings.q_rad, spread, lambda q: identify_sockets_as(replace(readings, q_rad=q)),
+                         SOCKET_GROSS_MM)
 
 
-def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable) -> Mixup | None:
+def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable, gross_mm: float) -> Mixup | None:
     """The joint negation or column exchange of the joint readings ``q`` (N, n) that brings the nominal model's
-    ``misfit(q)`` [mm] from beyond :data:`NOMINAL_GROSS_MM` to under it and :data:`SCREEN_GAIN` of the given,
-    confirmed by ``identify_as(q)`` (converged, every parameter within its bounds); None otherwise."""
-    given = misfit(q)
-    if given <= NOMINAL_GROSS_MM:
+    ``misfit(q)`` [mm] from beyond ``gross_mm`` to under it and :data:`SCREEN_GAIN` of the given, confirmed by
+    ``identify_as(q)`` (converged, every parameter within its bounds); None otherwise (also where a trial cannot
+    be computed: its misfit counts as infinite, its identification as refused)."""
+    given = _finite_misfit(misfit, q)
+    if not gross_mm < given < np.inf:
         return None
-    trials = [(Mixup(k + 1, None, 0.0, 0.0), _negated(q, k)) for k in range(robot.n)]
-    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)), _exchanged(q, a, b))
+    trials = [(Mixup(k + 1, None, 0.0, 0.0, given_is_nominal=True), _negated(q, k)) for k in range(robot.n)]
+    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1), given_is_nominal=True), _exchanged(q, a, b))
                for a, b in itertools.combinations(range(robot.n), 2)]
-    rms, i = min((misfit(qt), i) for i, (_, qt) in enumerate(trials))
+    rms, i = min((_finite_misfit(misfit, qt), i) for i, (_, qt) in enumerate(trials))
     what, fixed = trials[i]
     log.info("joint readings: nominal misfit %.1f mm as given, %.1f mm with %s", given, rms, what.label)
-    if rms > min(NOMINAL_GROSS_MM, SCREEN_GAIN * given):
+    if rms > min(gross_mm, SCREEN_GAIN * given):
         return None
     try:
         trial = identify_as(fixed)
-    except CalibrationError as e:
+    except (CalibrationError, ValueError, np.linalg.LinAlgError) as e:
         log.info("readings with %s: the identification was refused (%s)", what.label, e)
         return None
     if not (trial.success and not bound_warnings(robot, trial)):
@@ -274,17 +283,26 @@ def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable)
     return replace(what, rms_mm=float(trial.rms_mm), rms_given_mm=given)
 
 
-def refuse_reversed_joint(robot, pts, path, identify_as: Callable) -> None:
+def _finite_misfit(misfit: Callable, q: np.ndarray) -> float:
+    """``misfit(q)`` [mm], infinite where it cannot be computed or is not finite."""
+    try:
+        v = float(misfit(q))
+    except (CalibrationError, ValueError, np.linalg.LinAlgError):
+        return np.inf
+    return v if np.isfinite(v) else np.inf
+
+
+def refuse_reversed_joint(robot, pts, path, identify_as: Callable, done: str = "calibrated") -> None:
     """Raise :class:`CalibrationError` naming the file ``path`` and the columns when one of the joints of instrument
     points (a :class:`~calibrate.campaign.PointSet`, :func:`points_mixup`) or socket readings (a
     :class:`~calibrate.sockets.SocketReadings`, :func:`sockets_mixup`) runs the other way than ``robot``'s or two
     joint columns are exchanged: their identification would take minutes to end in a mirrored chain or parameters
-    far beyond their bounds."""
+    far beyond their bounds. ``done``: what the command would have done (the message's "nothing was ...")."""
     find = sockets_mixup if isinstance(pts, SocketReadings) else points_mixup
     mixup = find(robot, pts, identify_as)
     if mixup is not None:
         key = f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
-        raise CalibrationError(f"{mixup.reason()}; nothing was calibrated", path=path, key=key)
+        raise CalibrationError(f"{mixup.reason()}; nothing was {done}", path=path, key=key)
 
 
 def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:

@@ -246,17 +246,18 @@ def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
     pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
-    refuse_reversed_joint(robot, pts, args.points, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
+    test = points_from_args(args, args.validate, robot.n) if args.validate else None
+    for path, points in ((args.points, pts), (args.validate, test)):       # before minutes of a hopeless fit
+        if points is not None:
+            refuse_reversed_joint(robot, points, path,
+                                  lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, options["pinned"] = constrain_to_ranges(
         lambda pins: identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict,
                                      **(options | {"pinned": pins})), options["pinned"], options["freed"])
     before = after = None
     errors = {}
-    if args.validate:
-        test = points_from_args(args, args.validate, robot.n)
-        refuse_reversed_joint(robot, test, args.validate,
-                              lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
+    if test is not None:
         before, errors["nominal"], _ = validate(robot, ModelParams.nominal(robot, test.tool_mm), test)
         after, errors["calibrated"], _ = validate(robot, res.params, test)
         shared = _shared_share(pts.q_deg, test.q_deg)

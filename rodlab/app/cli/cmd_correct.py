@@ -71,8 +71,8 @@ def _pinned_words(sd) -> str:
     if finite.size == 0:
         return "; a parameter the calibration could not see leaves the targets' uncertainty unbounded (param_sd_mm inf)"
     pinned = f"; its parameters pin the targets to {np.min(finite):.3f}-{np.max(finite):.3f} mm (1 sigma, param_sd_mm)"
-    if finite.size < sd.size:
-        pinned += (f"; at {sd.size - finite.size} of {sd.size} targets a parameter the calibration could not see moves "
+    if np.isinf(sd).any():
+        pinned += (f"; at {int(np.isinf(sd).sum())} of {sd.size} targets a parameter the calibration could not see moves "
                    "the TCP: unbounded (param_sd_mm inf)")
     return pinned
 

@@ -207,7 +207,8 @@ def _diagnose_points(args) -> int:
     robot = robot_from_args(args)
     pts = points_from_args(args, args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
-    refuse_reversed_joint(robot, pts, args.points, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
+    refuse_reversed_joint(robot, pts, args.points, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True),
+                          "diagnosed")
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,
                           harmonics=args.joint_harmonics)
     diag = diagnose_points(robot, pts, res, noise_mm)

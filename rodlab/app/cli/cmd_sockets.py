@@ -64,6 +64,7 @@ def _readings(args, robot):
     if args.noise_um:
         key = "length_sigma_mm" if readings.ball_bar else "seat_sigma_mm"
         readings = replace(readings, **{key: args.noise_um * 1e-3})
+    _refuse_mixed_up(robot, readings, args.sockets)                  # the whole file, whichever placements are fitted
     chosen = _placements(args.fit_placements, readings)
     rest = sorted(set(readings.placement.tolist()) - set(chosen))
     held = readings.subset(rest) if rest else None
@@ -74,7 +75,14 @@ def _readings(args, robot):
             raise RodlabError(f"--validate {args.validate}: with --sockets the check is on other socket readings "
                               f"(a *.sockets.csv); instrument points check a --points calibration")
         held = read_sockets(args.validate, robot.n)
+        _refuse_mixed_up(robot, held, args.validate)
     return readings.subset(chosen), held
+
+
+def _refuse_mixed_up(robot, readings, path) -> None:
+    """Socket readings with a joint reversed or two q columns exchanged are refused before their fit
+    (:func:`~rodlab.calibrate.mixups.refuse_reversed_joint`)."""
+    refuse_reversed_joint(robot, readings, path, lambda r: identify_sockets(robot, r, fix_unidentifiable=True).result)
 
 
 def run_sockets(args) -> SocketRun:
@@ -83,9 +91,6 @@ def run_sockets(args) -> SocketRun:
         raise RodlabError("--sockets is a calibration of its own: leave out the campaign, --points and --thermal")
     robot = robot_from_args(args)
     fitted, held = _readings(args, robot)
-    for path, r in ((args.sockets, fitted), (args.validate, held if args.validate else None)):
-        if r is not None:
-            refuse_reversed_joint(robot, r, path, lambda rr: identify_sockets(robot, rr, fix_unidentifiable=True).result)
     from rodlab.calibrate.plausible import constrain_to_ranges
     fits = []
 

@@ -104,8 +104,9 @@ def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> Resume
         return ResumePoint(0, total, zeros={})
     text = path.read_text(encoding="utf-8", errors="replace")
     _check_identity(path, read_header(text), identity_meta(profile, plan))
+    complete = text[:text.rfind("\n") + 1]            # a line cut off at the end is dropped by the writer
     done, zeros = 0, {}
-    for line in text.splitlines():
+    for line in complete.splitlines():                # not that line: "complete: step 1" of a torn "step 12"
         m = _DONE.match(line)
         if m:
             done = int(m.group(1))
@@ -113,7 +114,6 @@ def resume_point(path: str | Path, profile: RigProfile, plan: RigPlan) -> Resume
         if z:
             zeros[z.group(1)] = np.array([float(v) for v in z.group(2).split(",")])
     point = ResumePoint(done, total, zeros=zeros)
-    complete = text[:text.rfind("\n") + 1]            # a line cut off at the end is dropped by the writer
     if any(ln.strip() and ln[0].isdigit() for ln in complete.splitlines()):
         rec = read_recording(path, complete)
         point.last_step, point.last_time_s = int(rec.step.max()), float(rec.time_s.max())

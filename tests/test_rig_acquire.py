@@ -248,6 +248,21 @@ def test_a_file_cut_during_its_first_sample_resumes(tmp_path):
     assert len(rec.steps()) == len(plan.schedule.holds())
 
 
+def test_a_hold_comment_cut_off_is_not_taken_for_a_complete_hold(tmp_path):
+    """Power lost while the comment after the last hold was written ("# hold 2/N complete: step 1" of "step 12"):
+    that torn line matches the pattern of a complete hold, but the writer drops it, so the resume starts at that
+    hold again instead of skipping it (the file would have lacked its comment)."""
+    from rodlab.stiffness_rig.resume import resume_point
+    with _interrupted(tmp_path, 2) as (model, prof, plan, out):
+        text = out.read_text()
+        done = resume_point(out, prof, plan).holds_done
+        out.write_text(text + f"# hold {done + 1}/{len(plan.schedule.holds())} complete: step 1")
+        assert resume_point(out, prof, plan).holds_done == done
+        acquire(prof, plan, out, use_loader=True)
+    text = out.read_text()
+    assert all(text.count(f"# hold {k}/") == 1 for k in range(1, len(plan.schedule.holds()) + 1))
+
+
 @pytest.mark.parametrize("edit,message", [
     (lambda t: t.replace(",", ";"), "separated by semicolons, not commas"),
     (lambda t: t.replace(",", "\t"), "separated by tabs, not commas"),

@@ -73,6 +73,8 @@ def test_soak_with_kills(tmp_path):
                 break
         sent = np.array([v[:3] for _, v in dev.sent])
         events = {k for _, k in dev.events}
+        # kept beside the recording: a failure below can be traced to the device's own log
+        (tmp_path / "device.json").write_text(json.dumps({"sent": dev.sent, "events": dev.events}))
     assert proc.returncode == 0, proc.stderr.read().decode()[-2000:]
     assert kills == 3 and {"garbage", "partial", "drop"} <= events
     text = out.read_text()

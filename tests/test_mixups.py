@@ -282,3 +282,13 @@ def test_a_few_outliers_do_not_make_real_points_untrusted():
     everywhere = dc_replace(res, residuals_mm=res.residuals_mm + 10.0, rms_mm=res.rms_mm + 17.0,
                             residual_check=dc_replace(res.residual_check, reduced=1e4))
     assert [w for w in trust_warnings(robot, everywhere) if "unmodelled physics" in w]
+
+
+def test_a_campaigns_validation_points_with_a_reversed_joint_are_refused_before_the_fit(campaign, tmp_path, capsys):
+    """The campaign's --validate points with q3 negated: refused naming that file and column (they had given a
+    held-out error of hundreds of mm and 'usable? no' after the campaign's fit)."""
+    bad = _negated_points(campaign / "multical.validation.csv", tmp_path / "val_q3.validation.csv", 3)
+    code = main(["calibrate", str(campaign / "multical.campaign.csv"), "--fixture", str(campaign / "multical.fixture.json"),
+                 "--rod", str(next(campaign.glob("*.compliance.json"))), "--validate", str(bad)])
+    err = capsys.readouterr().err
+    assert code == 2 and "val_q3.validation.csv, key `q3`" in err and "run the other way" in err

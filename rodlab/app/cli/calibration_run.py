@@ -11,6 +11,8 @@ from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campa
                               validate)
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import HARMONICS
+from rodlab.calibrate.mixups import refuse_reversed_joint
+from rodlab.calibrate.points import identify_points
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
 
@@ -81,6 +83,9 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     if camp is None:                                    # compare reads the campaign and warns once
         camp = campaign_from_args(args, robot.n)
         warn_flagged_fixture(fix, args.fixture)
+    pts = points_from_args(args, args.validate, robot.n) if args.validate else None
+    if pts is not None:                                 # before the campaign's fit, not after it
+        refuse_reversed_joint(robot, pts, args.validate, lambda p: identify_points(robot, p, None, fix_unidentifiable=True))
     obs = campaign_observations(camp, fix, rod)
     compensations = [deflection, *_thermal(args, camp, rod)]
     options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,
@@ -93,8 +98,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
                          rod_file=rod,
                          options=options)
-    if args.validate:
-        pts = points_from_args(args, args.validate, robot.n)
+    if pts is not None:
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
         run.calibrated_mm = validate(robot, res.params, pts)[1]
         if options.harmonics:             # the periodic terms checked on the held-out points before they are used

@@ -61,6 +61,10 @@ SCREEN_GAIN = 0.2
 #: :data:`NOMINAL_GROSS_MM` of socket readings, whose nominal spread about each socket includes the arm's whole
 #: uncalibrated error (the public Panda readings: up to 10.7 mm as recorded)
 SOCKET_GROSS_MM = 25.0
+#: undoings whose nominal misfit is within this factor and this many mm of the best are alike: the first in
+#: :func:`_column_trials`' order is named, the others beside it (a UR's q2 off by 180 deg and its joint 1 negated fit
+#: its tracker points alike, 0.77 mm; a wrist's q5 negated and q4 + 180 deg too)
+TIE_FACTOR, TIE_MM = 1.05, 0.05
 NOMINAL_GROSS_MM = 10.0
 #: base-and-tool registrations of the screen (to 0.01 mm; the first ones decide between mm and hundreds of mm)
 SCREEN_ITERATIONS = 15
@@ -79,23 +83,38 @@ class Mixup:
     fixture_radians: bool = False
     columns: tuple | None = None
     given_is_nominal: bool = False
+    zero_offset: tuple | None = None
+    coupling: tuple | None = None
+    alternatives: tuple = ()
 
     def __post_init__(self) -> None:
-        kinds = (self.joint is not None) + (self.positions is not None) + self.fixture_radians + (self.columns is not None)
+        kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
+                 + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None))
         if kinds != 1:
-            raise ValueError("Mixup: give a joint, a pair of positions, a pair of joint columns or fixture_radians, "
-                             "one of them")
+            raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
+                             "(joint, deg), a coupling (joint a, joint b, sign) or fixture_radians")
 
     @property
     def label(self) -> str:
         if self.fixture_radians:
             return "fixture angles read as radians"
+        if self.zero_offset is not None:
+            return f"q{self.zero_offset[0]} {self.zero_offset[1]:+g} deg"
+        if self.coupling is not None:
+            a, b, sign = self.coupling
+            return f"q{b} {'+' if sign > 0 else '-'} q{a}"
         if self.columns is not None:
             return f"columns q{self.columns[0]} and q{self.columns[1]} exchanged"
         return (f"joint {self.joint} negated" if self.joint is not None else
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
 
     def reason(self) -> str:
+        if not self.alternatives:
+            return self._reason()
+        return (f"{self._reason()}; the readings fit the nominal model as well with "
+                f"{' or '.join(self.alternatives)}, which they cannot tell from it: check which applies")
+
+    def _reason(self) -> str:
         given = (f"{self.rms_given_mm:.1f} mm" if self.rms_given_mm >= 1.0 else f"{self.rms_given_mm * 1e3:.1f} um")
         given = (f"the nominal model misses them by {given} rms as given" if self.given_is_nominal else
                  f"as given {given}")
@@ -104,6 +123,17 @@ class Mixup:
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
+        if self.zero_offset is not None:
+            k, deg = self.zero_offset
+            return (f"joint {k}'s zero differs from the robot file's by {deg:+g} deg: with {deg:+g} deg added to q{k} "
+                    f"{fit}; the controller counts joint {k} from another zero than the robot file: add {deg:+g} deg "
+                    f"to the q{k} column (or correct the robot file's joint offset)")
+        if self.coupling is not None:
+            a, b, sign = self.coupling
+            op = "+" if sign > 0 else "-"
+            return (f"q{b} looks read against joint {a} (a coupled convention: a FANUC controller gives J3 against the "
+                    f"horizontal, not against the upper arm): with q{b} {op} q{a} {fit}; convert the q{b} column to "
+                    f"q{b} {op} q{a} before calibrating")
         if self.columns is not None:
             a, b = self.columns
             return (f"the q{a} and q{b} columns look exchanged against the robot file's joints {a} and {b}: with them "
@@ -240,7 +270,7 @@ def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
     the registered nominal model's rms."""
     return _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
-                         lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM)
+                         lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM, 90.0)
 
 
 def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | None:
@@ -254,22 +284,46 @@ def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | Non
         r = replace(readings, q_rad=q)
         return check_sockets(robot, socket_start(robot, r), r).spread_rms_mm
     return _column_mixup(robot, readings.q_rad, spread, lambda q: identify_sockets_as(replace(readings, q_rad=q)),
-                         SOCKET_GROSS_MM)
+                         SOCKET_GROSS_MM, np.pi / 2)
 
 
-def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable, gross_mm: float) -> Mixup | None:
-    """The joint negation or column exchange of the joint readings ``q`` (N, n) that brings the nominal model's
+def _column_trials(n: int, q: np.ndarray, quarter: float) -> list:
+    """(:class:`Mixup`, the readings with it undone) of each joint negated, each pair of columns exchanged, each
+    joint's zero off by +-90 or 180 deg, and each joint read against the one before it (``q`` in units whose quarter
+    turn is ``quarter``: 90 for degrees, pi/2 for radians), the likeliest first: undoings the readings cannot tell
+    apart (a spherical wrist's q5 negated and q4 + 180 deg put a TCP on joint 6's axis alike) are named in this
+    order."""
+    m = dict(rms_mm=0.0, rms_given_mm=0.0, given_is_nominal=True)
+    trials = [(Mixup(k + 1, None, **m), _negated(q, k)) for k in range(n)]
+    trials += [(Mixup(None, None, columns=(a + 1, b + 1), **m), _exchanged(q, a, b))
+               for a, b in itertools.combinations(range(n), 2)]
+    for k, turns in itertools.product(range(n), (1, -1, 2)):
+        shifted = np.array(q, float, copy=True)
+        shifted[:, k] += turns * quarter
+        trials.append((Mixup(None, None, zero_offset=(k + 1, 90 * turns), **m), shifted))
+    for k, sign in itertools.product(range(1, n), (1, -1)):
+        coupled = np.array(q, float, copy=True)
+        coupled[:, k] += sign * q[:, k - 1]
+        trials.append((Mixup(None, None, coupling=(k, k + 1, sign), **m), coupled))
+    return trials
+
+
+def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable, gross_mm: float,
+                  quarter: float) -> Mixup | None:
+    """The joint negation, column exchange, zero offset or coupling of the joint readings ``q`` (N, n;
+    :func:`_column_trials`) that brings the nominal model's
     ``misfit(q)`` [mm] from beyond ``gross_mm`` to under it and :data:`SCREEN_GAIN` of the given, confirmed by
     ``identify_as(q)`` (converged, every parameter within its bounds); None otherwise (also where a trial cannot
     be computed: its misfit counts as infinite, its identification as refused)."""
     given = _finite_misfit(misfit, q)
     if not gross_mm < given < np.inf:
         return None
-    trials = [(Mixup(k + 1, None, 0.0, 0.0, given_is_nominal=True), _negated(q, k)) for k in range(robot.n)]
-    trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1), given_is_nominal=True), _exchanged(q, a, b))
-               for a, b in itertools.combinations(range(robot.n), 2)]
-    rms, i = min((_finite_misfit(misfit, qt), i) for i, (_, qt) in enumerate(trials))
-    what, fixed = trials[i]
+    trials = _column_trials(robot.n, q, quarter)
+    misfits = np.array([_finite_misfit(misfit, qt) for _, qt in trials])
+    near = np.nonzero(misfits <= TIE_FACTOR * misfits.min() + TIE_MM)[0]
+    i = int(near[0])                                  # of undoings alike, the likeliest: the trials' order
+    rms, (what, fixed) = float(misfits[i]), trials[i]
+    tied = [trials[j][0].label for j in near[1:]]
     log.info("joint readings: nominal misfit %.1f mm as given, %.1f mm with %s", given, rms, what.label)
     if rms > min(gross_mm, SCREEN_GAIN * given):
         return None
@@ -280,7 +334,7 @@ def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable,
         return None
     if not (trial.success and not bound_warnings(robot, trial)):
         return None
-    return replace(what, rms_mm=float(trial.rms_mm), rms_given_mm=given)
+    return replace(what, rms_mm=float(trial.rms_mm), rms_given_mm=given, alternatives=tuple(tied))
 
 
 def _finite_misfit(misfit: Callable, q: np.ndarray) -> float:
@@ -301,7 +355,9 @@ def refuse_reversed_joint(robot, pts, path, identify_as: Callable, done: str = "
     find = sockets_mixup if isinstance(pts, SocketReadings) else points_mixup
     mixup = find(robot, pts, identify_as)
     if mixup is not None:
-        key = f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
+        key = (f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
+               if mixup.columns is not None else f"q{mixup.zero_offset[0]}" if mixup.zero_offset is not None
+               else f"q{mixup.coupling[1]}")
         raise CalibrationError(f"{mixup.reason()}; nothing was {done}", path=path, key=key)
 
 

@@ -292,3 +292,43 @@ def test_a_campaigns_validation_points_with_a_reversed_joint_are_refused_before_
                  "--rod", str(next(campaign.glob("*.compliance.json"))), "--validate", str(bad)])
     err = capsys.readouterr().err
     assert code == 2 and "val_q3.validation.csv, key `q3`" in err and "run the other way" in err
+
+
+def _with_q(src: Path, edit) -> "object":
+    """The FANUC's points as a PointSet with ``edit(q_deg)`` applied (in place) to their joint readings."""
+    from dataclasses import replace as dc_replace
+    robot = resolve_robot("r2000ic165f")
+    pts = read_points(src, robot.n)
+    q = pts.q_deg.copy()
+    edit(q)
+    return robot, dc_replace(pts, q_deg=q)
+
+
+def _q2_minus_90(q):
+    q[:, 1] -= 90.0
+
+
+def _q3_coupled(q):
+    q[:, 2] += q[:, 1]
+
+
+@pytest.mark.parametrize("edit, label", [(_q2_minus_90, "q2 +90 deg"), (_q3_coupled, "q3 - q2")])
+def test_real_points_with_another_joint_convention_are_named(edit, label):
+    """The FANUC's points with joint 2 counted from another zero (90 deg off) or joint 3 read against the horizontal
+    (a FANUC controller's J3: q3 + q2 against the URDF's q3): named with the conversion that undoes it."""
+    robot, pts = _with_q(REAL / "boby2021" / "r2000ic_N1.validation.csv", edit)
+    m = points_mixup(robot, pts, lambda p: identify_points(robot, p, 0.05, fix_unidentifiable=True))
+    assert m is not None and m.label == label and m.rms_mm < 1.0 and not m.alternatives
+
+
+def test_undoings_the_points_cannot_tell_apart_are_both_named():
+    """A UR5's q2 off by 180 deg fits its tracker points as well as its joint 1 negated (a symmetry of the arm with
+    the base registered): the message names both, and says the readings cannot tell them apart."""
+    robot = resolve_robot("ur5")
+    pts = read_points(REAL / "jacobi2025" / "ur5_random.validation.csv", robot.n)
+    q = pts.q_deg.copy()
+    q[:, 1] += 180.0
+    from dataclasses import replace as dc_replace
+    m = points_mixup(robot, dc_replace(pts, q_deg=q), lambda p: identify_points(robot, p, 0.05, fix_unidentifiable=True))
+    assert m is not None and {m.label, *m.alternatives} >= {"joint 1 negated", "q2 +180 deg"}
+    assert "cannot tell from it" in m.reason()

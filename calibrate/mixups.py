@@ -236,8 +236,12 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
 
     def relabelled(positions, full):
         return fit(campaign_observations(replace(camp, position=positions), fixture, rod_file), full)
-    found = find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
-                       relabelled, material)
+    # the joint columns first by the nominal model's misfit (cheap: every convention, not only signs and order)
+    found = _column_mixup(robot, obs.q_rad, lambda q: _registered(robot, rod_file.tool_mm, replace(obs, q_rad=q)),
+                          lambda q: fit(replace(obs, q_rad=q), True), NOMINAL_GROSS_MM, np.pi / 2)
+    if found is None:
+        found = find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
+                           relabelled, material)
     if found is None and _angles_could_be_radians(fixture):
         # residuals material suffice here also in a diagnosis: read as radians, small angles become large turns,
         # which no campaign of another physics fits better
@@ -363,5 +367,10 @@ def refuse_reversed_joint(robot, pts, path, identify_as: Callable, done: str = "
 
 def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:
     """rms distance [mm] of the points from the nominal model with base and tool registered from scratch."""
-    obs = replace(points_observations(pts), q_rad=np.deg2rad(q_deg))
-    return register_base_and_tool(robot, ModelParams.nominal(robot, pts.tool_mm), obs, SCREEN_ITERATIONS, 0.01)[2]
+    return _registered(robot, pts.tool_mm, replace(points_observations(pts), q_rad=np.deg2rad(q_deg)))
+
+
+def _registered(robot, tool_mm, obs) -> float:
+    """rms distance [mm] of the observations' ball centres in {W} from the nominal model (the tool ``tool_mm`` to
+    start from) with base and tool registered from scratch (:data:`SCREEN_ITERATIONS`, to 0.01 mm)."""
+    return register_base_and_tool(robot, ModelParams.nominal(robot, tool_mm), obs, SCREEN_ITERATIONS, 0.01)[2]

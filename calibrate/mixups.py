@@ -33,13 +33,13 @@ from .errors import CalibrationError
 from .identify import campaign_observations, identify
 from .kinematics import ModelParams
 from .observations import register_base_and_tool
-from .points import points_observations
+from .points import identify_points, points_observations
 from .socket_check import check_sockets
-from .socket_fit import socket_start
+from .socket_fit import identify_sockets, socket_start
 from .sockets import SocketReadings
 from .trust import bound_warnings, gross
 
-__all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mixup", "refuse_reversed_joint",
+__all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mixup", "refuse_mixed_up_joints",
            "MIXUP_GAIN", "QUICK_NFEV", "NOMINAL_GROSS_MM"]
 
 log = logging.getLogger(__name__)
@@ -55,8 +55,9 @@ SCREENED = 2
 #: tens; a hopeless one had taken thousands, 6 s of a refused calibration)
 QUICK_NFEV = 10
 #: instrument points whose nominal model, base and tool registered, misses them by more than this rms [mm] have
-#: their joints' signs checked (the real data sets' nominal models: 0.8-3 mm; a reversed joint: 24-200 mm); a
-#: joint's negation must bring it under this and to at most :data:`SCREEN_GAIN` of the rms as given
+#: their joint columns checked (the real data sets' nominal models: 0.8-3 mm; a reversed joint: 17-770 mm); an
+#: undoing must bring it under this and to at most :data:`SCREEN_GAIN` of the rms as given
+NOMINAL_GROSS_MM = 10.0
 SCREEN_GAIN = 0.2
 #: :data:`NOMINAL_GROSS_MM` of socket readings, whose nominal spread about each socket includes the arm's whole
 #: uncalibrated error (the public Panda readings: up to 10.7 mm as recorded)
@@ -65,7 +66,6 @@ SOCKET_GROSS_MM = 25.0
 #: :func:`_column_trials`' order is named, the others beside it (a UR's q2 off by 180 deg and its joint 1 negated fit
 #: its tracker points alike, 0.77 mm; a wrist's q5 negated and q4 + 180 deg too)
 TIE_FACTOR, TIE_MM = 1.05, 0.05
-NOMINAL_GROSS_MM = 10.0
 #: base-and-tool registrations of the screen (to 0.01 mm; the first ones decide between mm and hundreds of mm)
 SCREEN_ITERATIONS = 15
 
@@ -107,6 +107,15 @@ class Mixup:
             return f"columns q{self.columns[0]} and q{self.columns[1]} exchanged"
         return (f"joint {self.joint} negated" if self.joint is not None else
                 f"positions {self.positions[0]} and {self.positions[1]} swapped")
+
+    @property
+    def column_key(self) -> str:
+        """The joint column(s) of the readings file to correct (a joint mix-up)."""
+        if self.columns is not None:
+            return f"q{self.columns[0]}, q{self.columns[1]}"
+        k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
+             else self.coupling[1])
+        return f"q{k}"
 
     def reason(self) -> str:
         if not self.alternatives:
@@ -168,11 +177,7 @@ def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints:
     limit = res.rms_mm * (TIE_GAIN if beyond else MIXUP_GAIN)
     trials = list(extra)
     if fit_joints is not None:
-        trials += [(Mixup(k + 1, None, 0.0, 0.0), lambda full, k=k: fit_joints(_negated(q_rad, k), full))
-                   for k in range(robot.n)]
-        trials += [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1)),
-                    lambda full, a=a, b=b: fit_joints(_exchanged(q_rad, a, b), full))
-                   for a, b in itertools.combinations(range(robot.n), 2)]
+        trials += [(what, lambda full, q=q: fit_joints(q, full)) for what, q in _sign_and_order_trials(robot.n, q_rad)]
     if fit_positions is not None:
         labels = sorted({int(p) for p in np.asarray(positions)})
         trials += [(Mixup(None, (a, b), 0.0, 0.0), lambda full, a=a, b=b: fit_positions(_swapped(positions, a, b),
@@ -204,8 +209,8 @@ def _attempt(run: Callable, full: bool, what: Mixup):
     return trial
 
 
-def _negated(q_rad: np.ndarray, k: int) -> np.ndarray:
-    q = np.array(q_rad, float, copy=True)
+def _negated(q: np.ndarray, k: int) -> np.ndarray:
+    q = np.array(q, float, copy=True)
     q[:, k] = -q[:, k]
     return q
 
@@ -291,6 +296,14 @@ def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | Non
                          SOCKET_GROSS_MM, np.pi / 2)
 
 
+def _sign_and_order_trials(n: int, q: np.ndarray, **fields) -> list:
+    """(:class:`Mixup`, the readings ``q`` (N, n) with it undone) of each joint negated, then each pair of columns
+    exchanged; ``fields``: further :class:`Mixup` fields."""
+    trials = [(Mixup(k + 1, None, 0.0, 0.0, **fields), _negated(q, k)) for k in range(n)]
+    return trials + [(Mixup(None, None, 0.0, 0.0, columns=(a + 1, b + 1), **fields), _exchanged(q, a, b))
+                     for a, b in itertools.combinations(range(n), 2)]
+
+
 def _column_trials(n: int, q: np.ndarray, quarter: float) -> list:
     """(:class:`Mixup`, the readings with it undone) of each joint negated, each pair of columns exchanged, each
     joint's zero off by +-90 or 180 deg, and each joint read against the one before it (``q`` in units whose quarter
@@ -298,9 +311,7 @@ def _column_trials(n: int, q: np.ndarray, quarter: float) -> list:
     apart (a spherical wrist's q5 negated and q4 + 180 deg put a TCP on joint 6's axis alike) are named in this
     order."""
     m = dict(rms_mm=0.0, rms_given_mm=0.0, given_is_nominal=True)
-    trials = [(Mixup(k + 1, None, **m), _negated(q, k)) for k in range(n)]
-    trials += [(Mixup(None, None, columns=(a + 1, b + 1), **m), _exchanged(q, a, b))
-               for a, b in itertools.combinations(range(n), 2)]
+    trials = _sign_and_order_trials(n, q, given_is_nominal=True)
     for k, turns in itertools.product(range(n), (1, -1, 2)):
         shifted = np.array(q, float, copy=True)
         shifted[:, k] += turns * quarter
@@ -315,10 +326,10 @@ def _column_trials(n: int, q: np.ndarray, quarter: float) -> list:
 def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable, gross_mm: float,
                   quarter: float) -> Mixup | None:
     """The joint negation, column exchange, zero offset or coupling of the joint readings ``q`` (N, n;
-    :func:`_column_trials`) that brings the nominal model's
-    ``misfit(q)`` [mm] from beyond ``gross_mm`` to under it and :data:`SCREEN_GAIN` of the given, confirmed by
-    ``identify_as(q)`` (converged, every parameter within its bounds); None otherwise (also where a trial cannot
-    be computed: its misfit counts as infinite, its identification as refused)."""
+    :func:`_column_trials`) that brings the nominal model's ``misfit(q)`` [mm] from beyond ``gross_mm`` to under it
+    and :data:`SCREEN_GAIN` of the given, confirmed by ``identify_as(q)`` (converged, every parameter within its
+    bounds); None otherwise (also where a trial cannot be computed: its misfit counts as infinite, its identification
+    as refused)."""
     given = _finite_misfit(misfit, q)
     if not gross_mm < given < np.inf:
         return None
@@ -350,19 +361,20 @@ def _finite_misfit(misfit: Callable, q: np.ndarray) -> float:
     return v if np.isfinite(v) else np.inf
 
 
-def refuse_reversed_joint(robot, pts, path, identify_as: Callable, done: str = "calibrated") -> None:
-    """Raise :class:`CalibrationError` naming the file ``path`` and the columns when one of the joints of instrument
-    points (a :class:`~calibrate.campaign.PointSet`, :func:`points_mixup`) or socket readings (a
-    :class:`~calibrate.sockets.SocketReadings`, :func:`sockets_mixup`) runs the other way than ``robot``'s or two
-    joint columns are exchanged: their identification would take minutes to end in a mirrored chain or parameters
-    far beyond their bounds. ``done``: what the command would have done (the message's "nothing was ...")."""
-    find = sockets_mixup if isinstance(pts, SocketReadings) else points_mixup
-    mixup = find(robot, pts, identify_as)
+def refuse_mixed_up_joints(robot, readings, path, noise_mm: float | None = None, done: str = "calibrated") -> None:
+    """Raise :class:`CalibrationError` naming the file ``path`` and the column(s) when the joint readings of
+    instrument points (a :class:`~calibrate.campaign.PointSet`, :func:`points_mixup`, confirmed by
+    :func:`~calibrate.points.identify_points` with ``noise_mm``) or socket readings (a
+    :class:`~calibrate.sockets.SocketReadings`, :func:`sockets_mixup`) are mixed up against ``robot``'s joints
+    (a reversed joint, two columns exchanged, another zero or a coupled convention): their identification would
+    take minutes to end in a mirrored chain or parameters far beyond their bounds. ``done``: what the command would
+    have done (the message's "nothing was ...")."""
+    if isinstance(readings, SocketReadings):
+        mixup = sockets_mixup(robot, readings, lambda r: identify_sockets(robot, r, fix_unidentifiable=True).result)
+    else:
+        mixup = points_mixup(robot, readings, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
     if mixup is not None:
-        key = (f"q{mixup.joint}" if mixup.joint is not None else f"q{mixup.columns[0]}, q{mixup.columns[1]}"
-               if mixup.columns is not None else f"q{mixup.zero_offset[0]}" if mixup.zero_offset is not None
-               else f"q{mixup.coupling[1]}")
-        raise CalibrationError(f"{mixup.reason()}; nothing was {done}", path=path, key=key)
+        raise CalibrationError(f"{mixup.reason()}; nothing was {done}", path=path, key=mixup.column_key)
 
 
 def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:

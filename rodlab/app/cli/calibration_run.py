@@ -11,8 +11,7 @@ from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campa
                               validate)
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import HARMONICS
-from rodlab.calibrate.mixups import refuse_reversed_joint
-from rodlab.calibrate.points import identify_points
+from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
 
@@ -85,7 +84,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
         warn_flagged_fixture(fix, args.fixture)
     pts = points_from_args(args, args.validate, robot.n) if args.validate else None
     if pts is not None:                                 # before the campaign's fit, not after it
-        refuse_reversed_joint(robot, pts, args.validate, lambda p: identify_points(robot, p, None, fix_unidentifiable=True))
+        refuse_mixed_up_joints(robot, pts, args.validate)
     obs = campaign_observations(camp, fix, rod)
     compensations = [deflection, *_thermal(args, camp, rod)]
     options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,

@@ -6,7 +6,7 @@ import sys
 
 from rodlab.calibrate import read_fixture
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
-from rodlab.calibrate.mixups import refuse_reversed_joint
+from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.fit import r_rod_caution
@@ -207,8 +207,7 @@ def _diagnose_points(args) -> int:
     robot = robot_from_args(args)
     pts = points_from_args(args, args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
-    refuse_reversed_joint(robot, pts, args.points, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True),
-                          "diagnosed")
+    refuse_mixed_up_joints(robot, pts, args.points, noise_mm, "diagnosed")
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,
                           harmonics=args.joint_harmonics)
     diag = diagnose_points(robot, pts, res, noise_mm)

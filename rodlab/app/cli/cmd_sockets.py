@@ -9,7 +9,7 @@ import numpy as np
 
 from rodlab.calibrate import CalibrationError, result_dict
 from rodlab.calibrate.socket_check import check_sockets
-from rodlab.calibrate.mixups import refuse_reversed_joint
+from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.socket_fit import identify_sockets, socket_start
 from rodlab.calibrate.sockets import read_sockets
 from rodlab.calibrate.crossval import Prediction
@@ -64,7 +64,7 @@ def _readings(args, robot):
     if args.noise_um:
         key = "length_sigma_mm" if readings.ball_bar else "seat_sigma_mm"
         readings = replace(readings, **{key: args.noise_um * 1e-3})
-    _refuse_mixed_up(robot, readings, args.sockets)                  # the whole file, whichever placements are fitted
+    refuse_mixed_up_joints(robot, readings, args.sockets)       # the whole file, whichever placements are fitted
     chosen = _placements(args.fit_placements, readings)
     rest = sorted(set(readings.placement.tolist()) - set(chosen))
     held = readings.subset(rest) if rest else None
@@ -75,14 +75,8 @@ def _readings(args, robot):
             raise RodlabError(f"--validate {args.validate}: with --sockets the check is on other socket readings "
                               f"(a *.sockets.csv); instrument points check a --points calibration")
         held = read_sockets(args.validate, robot.n)
-        _refuse_mixed_up(robot, held, args.validate)
+        refuse_mixed_up_joints(robot, held, args.validate)
     return readings.subset(chosen), held
-
-
-def _refuse_mixed_up(robot, readings, path) -> None:
-    """Socket readings with a joint reversed or two q columns exchanged are refused before their fit
-    (:func:`~rodlab.calibrate.mixups.refuse_reversed_joint`)."""
-    refuse_reversed_joint(robot, readings, path, lambda r: identify_sockets(robot, r, fix_unidentifiable=True).result)
 
 
 def run_sockets(args) -> SocketRun:

@@ -1,0 +1,66 @@
+"""The demo's CAD stage in a second process: its failure is the demo's clear error, it is stopped when the demo
+fails, and its numbers are those of the CAD built in this process."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import rodlab.app.pipeline as pipeline
+from rodlab.app.demo_cad import CadStage, start_cad_job
+from rodlab.core.errors import RodlabError
+
+cad = pytest.importorskip("build123d", reason="the cad extra")
+
+
+def test_a_failing_child_is_the_demos_error_with_its_message(tmp_path):
+    job = start_cad_job("no_such_rod", tmp_path / "cad")
+    with pytest.raises(RodlabError, match="CAD stage .* failed:\n.*no_such_rod: no such file or built-in design"):
+        job.result()
+    assert not (tmp_path / "cad").exists()
+
+
+def test_the_child_builds_what_this_process_builds(tmp_path):
+    import rodlab.geometry as geometry
+    from rodlab.core.design_io import resolve_design
+    made = start_cad_job("rod2", tmp_path / "cad").result()
+    here = geometry.build_cad(resolve_design("rod2"))
+    assert made.parts == len(here.solids)
+    assert made.mass_kg == pytest.approx(here.total_mass_properties().mass_kg, rel=1e-9)
+    assert [p.name for p in made.views] == ["view_iso.png", "view_xz.png", "view_xy.png", "view_yz.png"]
+    assert all(p.stat().st_size > 10_000 for p in made.views)
+    assert (tmp_path / "cad" / "rod.step").stat().st_size > 0 and (tmp_path / "cad" / "mass.json").exists()
+    assert 0 < made.seconds < 600
+
+
+def test_cancel_stops_a_running_child(tmp_path):
+    job = start_cad_job("rod1", tmp_path / "cad")
+    t0 = time.perf_counter()
+    job.cancel()
+    assert time.perf_counter() - t0 < 5
+    assert job._proc.poll() is not None
+
+
+def test_cad_stage_checks_its_numbers():
+    with pytest.raises(ValueError, match="parts 0"):
+        CadStage(0, 1.0, (), 1.0)
+
+
+class _FakeJob:
+    cancelled = False
+
+    def cancel(self):
+        _FakeJob.cancelled = True
+
+
+def test_a_failing_stage_stops_the_cad_child(tmp_path, monkeypatch):
+    def boom(self):
+        raise RuntimeError("the rig stage failed")
+    monkeypatch.setattr(pipeline, "start_cad_job", lambda design, out: _FakeJob())
+    monkeypatch.setattr(pipeline._DemoRun, "stage_rig", boom)
+    monkeypatch.setattr(pipeline._DemoRun, "stage_fea", lambda self: None)
+    with pytest.raises(RuntimeError, match="rig stage failed"):
+        pipeline.run_demo(tmp_path, sweep_grid=(np.array([300.0]), np.array([450.0])))
+    assert _FakeJob.cancelled
+    assert not (tmp_path / "run.json").exists()

@@ -50,6 +50,7 @@ from rodlab.stiffness_rig.simulate import simulate_recording
 from ..core.calc import calc_rod_compliance
 from ..core.compliance import RodCompliance, write_compliance
 from ..core.design_io import resolve_design
+from ..core.figures_bg import background_figures
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
 from ..core.units import PAPER_ROD_SLIP
 from .demo_cad import CadJob, start_cad_job
@@ -78,17 +79,8 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     say = progress or (lambda stage, msg: log.info("%s: %s", stage, msg))
     timings = {}
     try:
-        for name in STAGES:
-            t0 = time.perf_counter()
-            say(name, "started" if name != "cad" or not cad_available() else
-                "started in a second process, beside the stages after it")
-            getattr(run, f"stage_{name}")()
-            if name != "cad" or run.cad_job is None:
-                timings[name] = time.perf_counter() - t0
-                say(name, f"done in {timings[name]:.1f} s")
-        if run.cad_job is not None:
-            timings["cad"] = run.finish_cad()
-            say("cad", f"done in {timings['cad']:.1f} s (beside the other stages)")
+        with background_figures():               # every figure rendered in a second process; all written here
+            _run_stages(run, say, timings)
     finally:
         if run.cad_job is not None:
             run.cad_job.cancel()
@@ -96,6 +88,21 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     run.summary["timings_s"] = {name: timings[name] for name in STAGES}
     atomic_write_json(run.out / "run.json", json_safe(run.summary))
     return run.summary
+
+
+def _run_stages(run: _DemoRun, say, timings: dict) -> None:
+    """Every stage in :data:`STAGES` order; the CAD stage, started in a second process, finished last."""
+    for name in STAGES:
+        t0 = time.perf_counter()
+        say(name, "started" if name != "cad" or not run.cad else
+            "started in a second process, beside the stages after it")
+        getattr(run, f"stage_{name}")()
+        if name != "cad" or run.cad_job is None:
+            timings[name] = time.perf_counter() - t0
+            say(name, f"done in {timings[name]:.1f} s")
+    if run.cad_job is not None:
+        timings["cad"] = run.finish_cad()
+        say("cad", f"done in {timings['cad']:.1f} s (beside the other stages)")
 
 
 class _DemoRun:

@@ -10,6 +10,7 @@ import os
 import re
 import sys
 import tempfile
+from contextvars import ContextVar
 from pathlib import Path
 
 import numpy as np
@@ -68,9 +69,18 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
     return p
 
 
+#: where :func:`atomic_write_figure` hands its figures instead of rendering them (an object with
+#: ``submit(path, fig, dpi, savefig_kw) -> bool``): set inside :func:`rodlab.core.figures_bg.background_figures`
+FIGURE_SINK: ContextVar = ContextVar("rodlab_figure_sink", default=None)
+
+
 def atomic_write_figure(path: str | Path, fig, dpi: int = 120, **savefig_kw) -> Path:
     """Render a matplotlib figure to PNG in memory, close it, and write the file atomically (never a partial
-    image)."""
+    image). Inside :func:`rodlab.core.figures_bg.background_figures` the figure is handed to its worker process
+    and the file appears later (readers wait with :func:`~rodlab.core.figures_bg.wait_for_figure`)."""
+    bg = FIGURE_SINK.get()
+    if bg is not None and bg.submit(path, fig, dpi, savefig_kw):
+        return Path(path)
     import matplotlib.pyplot as plt
     buf = io.BytesIO()
     fig.savefig(buf, dpi=dpi, **savefig_kw)

@@ -10,6 +10,8 @@ import math
 import struct
 from pathlib import Path
 
+from rodlab.core.figures_bg import wait_for_figure
+
 __all__ = ["CSS", "esc", "img_tag", "figure", "table", "matrix_table", "fmt", "page"]
 
 CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1100px;margin:2em auto;
@@ -50,6 +52,7 @@ def img_tag(base: Path, rel, alt: str, scale: float | None = None) -> str:
     if not rel:
         return ""
     p = Path(base) / rel
+    wait_for_figure(p)                          # rendered in the background (rodlab demo): written first
     if not p.exists():
         return f"<p class='note'>missing figure {esc(rel)}</p>"
     raw = p.read_bytes()

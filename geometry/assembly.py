@@ -13,6 +13,7 @@ from rodlab.core.fileio import atomic_write_bytes, atomic_write_json
 from rodlab.core.massprops import MassProperties, combine
 from rodlab.core.units import kg_m3_to_kg_mm3
 
+from .cadlib import build123d
 from .parts import PART_COLOURS, part_solids
 
 __all__ = ["RodCad", "build_cad"]
@@ -42,7 +43,7 @@ class RodCad:
 
     def compound(self):
         """A build123d assembly: one labelled, coloured child per part."""
-        import build123d as bd
+        bd = build123d()
         children = []
         for part, solid in self.solids.items():
             child = bd.Compound([solid], label=str(part), color=bd.Color(*PART_COLOURS[part]))
@@ -52,7 +53,7 @@ class RodCad:
     # -- exports ---------------------------------------------------------------------------
     def export_step(self, path: str | Path) -> Path:
         """STEP assembly with part names and colours (written atomically)."""
-        import build123d as bd
+        bd = build123d()
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
         tmp = p.with_name(f".{p.name}.part")
@@ -63,7 +64,7 @@ class RodCad:
 
     def export_stl(self, path: str | Path, tolerance_mm: float = 0.02) -> Path:
         """One STL of the whole rod (binary, written atomically)."""
-        import build123d as bd
+        bd = build123d()
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
         tmp = p.with_name(f".{p.name}.part")

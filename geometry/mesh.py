@@ -25,6 +25,7 @@ from rodlab.core.fileio import atomic_write_bytes
 from rodlab.core.fem_mesh import RodMesh
 from rodlab.core.layout import layout
 
+from .cadlib import build123d
 from .errors import GeometryError
 from .mesh_generate import generate_mesh, session_options
 from .parts import half_solids, part_solids
@@ -259,7 +260,7 @@ def _check_mesh_args(design: RodDesign, size_mm, order, grading, kernel) -> tupl
 def _import_parts(solids: dict, tmp: str) -> dict:
     """Import each part's build123d solid into gmsh and fragment them into one conforming model; returns
     {part: its gmsh volume tags} (a part may split into several volumes)."""
-    import build123d as bd
+    bd = build123d()
     import gmsh
 
     src = {}

@@ -15,6 +15,7 @@ from rodlab.core.design import RodDesign
 from rodlab.core.enums import Part
 from rodlab.core.layout import Layer, Segment, SegmentKind, layout
 
+from .cadlib import build123d
 from .errors import GeometryError
 
 __all__ = ["part_solids", "half_solids", "PART_COLOURS"]
@@ -75,7 +76,7 @@ def part_solids(design: RodDesign) -> dict[Part, "object"]:
     Several layout layers of one part (a sleeve over two segments, the ball holder's plug and stud)
     are fused into one solid.
     """
-    import build123d as bd
+    bd = build123d()
 
     offset_T = -design.tool_mm          # {F} -> {T}
     pieces: dict[Part, list] = {}
@@ -126,7 +127,7 @@ def _check_clearances(design: RodDesign, solids: dict) -> None:
 
 def half_solids(solids: dict) -> dict:
     """Each part cut to the half-space ``y_T >= 0``."""
-    import build123d as bd
+    bd = build123d()
 
     big = 1e4
     keep = bd.Solid.make_box(2 * big, big, 2 * big, bd.Plane(origin=(-big, 0.0, -big)))

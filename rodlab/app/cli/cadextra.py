@@ -11,9 +11,10 @@ __all__ = ["require_cad", "require_mesher"]
 def require_cad():
     """Import the geometry package, or explain how to install the CAD extra."""
     try:
-        import build123d  # noqa: F401
         import gmsh  # noqa: F401
         import rodlab.geometry as geometry
+        from rodlab.geometry.cadlib import build123d
+        build123d()                         # imported here (without scikit-learn: geometry.cadlib), not later
     except ImportError as e:
         raise RodlabError(f"this command needs the CAD extra ({e.name} is missing): pip install 'rodlab[cad]'") from e
     return geometry

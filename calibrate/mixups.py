@@ -361,20 +361,23 @@ def _finite_misfit(misfit: Callable, q: np.ndarray) -> float:
     return v if np.isfinite(v) else np.inf
 
 
-def refuse_mixed_up_joints(robot, readings, path, noise_mm: float | None = None, done: str = "calibrated") -> None:
+def refuse_mixed_up_joints(robot, readings, path, noise_mm: float | None = None, done: str = "calibrated",
+                           checked: bool = False, hint: str = "") -> Mixup | None:
     """Raise :class:`CalibrationError` naming the file ``path`` and the column(s) when the joint readings of
     instrument points (a :class:`~calibrate.campaign.PointSet`, :func:`points_mixup`, confirmed by
     :func:`~calibrate.points.identify_points` with ``noise_mm``) or socket readings (a
     :class:`~calibrate.sockets.SocketReadings`, :func:`sockets_mixup`) are mixed up against ``robot``'s joints
     (a reversed joint, two columns exchanged, another zero or a coupled convention): their identification would
     take minutes to end in a mirrored chain or parameters far beyond their bounds. ``done``: what the command would
-    have done (the message's "nothing was ...")."""
+    have done (the message's "nothing was ..."); ``hint``: appended to the message (how to go on regardless).
+    With ``checked`` (the user states the columns are right) the mix-up is returned instead (None: none found)."""
     if isinstance(readings, SocketReadings):
         mixup = sockets_mixup(robot, readings, lambda r: identify_sockets(robot, r, fix_unidentifiable=True).result)
     else:
         mixup = points_mixup(robot, readings, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
-    if mixup is not None:
-        raise CalibrationError(f"{mixup.reason()}; nothing was {done}", path=path, key=mixup.column_key)
+    if mixup is not None and not checked:
+        raise CalibrationError(f"{mixup.reason()}; nothing was {done}{hint}", path=path, key=mixup.column_key)
+    return mixup
 
 
 def _registered_rms(robot, pts, q_deg: np.ndarray) -> float:

@@ -5,6 +5,7 @@ for another reason (another robot's file) names no mix-up. Instrument points wit
 data, a column negated) are refused before their identification."""
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import math
@@ -14,8 +15,10 @@ import numpy as np
 import pytest
 
 from rodlab import calc_rod_compliance, resolve_design
+from rodlab.app.cli.columnsargs import screen_joint_columns
 from rodlab.app.cli.main import main
 from rodlab.calibrate import read_points, resolve_robot
+from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.mixups import Mixup, points_mixup
 from rodlab.calibrate.points import identify_points
 from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
@@ -168,6 +171,21 @@ def test_calibrate_and_diagnose_refuse_points_with_a_reversed_joint(tmp_path, ca
     assert main(["calibrate", "--points", str(REAL / "boby2021" / "r2000ic_N1.validation.csv"), "--robot",
                  "r2000ic165f", "--validate", str(bad_val), "--json", str(out)]) == 2
     assert "val_q2.validation.csv, key `q2`" in capsys.readouterr().err and not out.exists()
+
+
+def test_columns_checked_warns_of_the_mixup_instead_of_refusing(tmp_path, capsys):
+    """A refusal says how to go on regardless (`--columns-checked`); with it the screen's finding is a warning on
+    stderr naming the file and the column, and the command goes on with the readings as they are."""
+    bad = _negated_points(REAL / "boby2021" / "r2000ic_N1.validation.csv", tmp_path / "fanuc_q4.validation.csv", 4)
+    robot, pts = resolve_robot("r2000ic165f"), read_points(bad, 6)
+    with pytest.raises(CalibrationError, match="give --columns-checked"):
+        screen_joint_columns(argparse.Namespace(columns_checked=False), robot, pts, bad)
+    screen_joint_columns(argparse.Namespace(columns_checked=True), robot, pts, bad)
+    err = capsys.readouterr().err
+    assert err.startswith(f"warning: {bad}: ") and "q4" in err and "(--columns-checked: calibrated as they are)" in err
+    good = REAL / "boby2021" / "r2000ic_N1.validation.csv"
+    screen_joint_columns(argparse.Namespace(columns_checked=True), robot, read_points(good, 6), good)
+    assert capsys.readouterr().err == ""
 
 
 def _fixture_in_radians(src: Path, dst: Path) -> Path:

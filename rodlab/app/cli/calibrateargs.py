@@ -4,6 +4,7 @@ from __future__ import annotations
 from ...core.errors import RodlabError
 from ...core.units import DEVICE_NOISE_MM, TRACKER_NOISE_MM
 from .argtypes import pos_float
+from .columnsargs import add_columns_checked
 from .reporting import add_report_option
 from .robotargs import add_robot_options, robot_help
 
@@ -28,6 +29,7 @@ def add_identify_options(p) -> None:
                         f"campaign; for --points the file's sigma_*_mm columns, else {TRACKER_NOISE_MM * 1e3:g} um: a laser "
                         f"tracker at a few metres; for --sockets the file's seat_sigma_mm / length_sigma_mm). Given, "
                         f"it replaces the per-point columns or the file's sigma")
+    add_columns_checked(p)
     add_report_option(p)
     p.add_argument("--strict", action="store_true",
                    help="refuse a data set that cannot identify every parameter (naming them and the remedy) "

@@ -11,7 +11,6 @@ from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campa
                               validate)
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import HARMONICS
-from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
 
@@ -21,6 +20,7 @@ from ...core.errors import RodlabError
 from ...core.units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
 from .deviceargs import campaign_from_args, points_from_args, warn_flagged_fixture
+from .columnsargs import screen_joint_columns
 from .robotargs import robot_from_args
 
 __all__ = ["run_calibration", "CalibrationRun"]
@@ -84,7 +84,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
         warn_flagged_fixture(fix, args.fixture)
     pts = points_from_args(args, args.validate, robot.n) if args.validate else None
     if pts is not None:                                 # before the campaign's fit, not after it
-        refuse_mixed_up_joints(robot, pts, args.validate)
+        screen_joint_columns(args, robot, pts, args.validate)
     obs = campaign_observations(camp, fix, rod)
     compensations = [deflection, *_thermal(args, camp, rod)]
     options = FitOptions(pinned=pins_from_args(args, robot.n), freed=set(args.free), robust=args.robust,

@@ -18,7 +18,7 @@ from rodlab.calibrate.device import read_device
 from rodlab.calibrate.points import cross_validate_points, identify_points, stated_noise_mm
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
-from rodlab.calibrate.mixups import campaign_mixup, refuse_mixed_up_joints
+from rodlab.calibrate.mixups import campaign_mixup
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
@@ -29,6 +29,7 @@ from .calibration_printers import print_cautions, print_not_trusted, print_param
 from .calibration_run import CalibrationRun, run_calibration
 from .deviceargs import add_device_option, points_from_args
 from .reporting import default_folder, png_folder, write_command_report
+from .columnsargs import screen_joint_columns
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict
 from .cmd_sockets import calibrate_sockets
@@ -249,7 +250,7 @@ def _calibrate_points(args) -> int:
     test = points_from_args(args, args.validate, robot.n) if args.validate else None
     for path, points in ((args.points, pts), (args.validate, test)):       # before minutes of a hopeless fit
         if points is not None:
-            refuse_mixed_up_joints(robot, points, path, noise_mm)
+            screen_joint_columns(args, robot, points, path, noise_mm)
     from rodlab.calibrate.plausible import constrain_to_ranges
     res, options["pinned"] = constrain_to_ranges(
         lambda pins: identify_points(robot, pts, noise_mm, fix_unidentifiable=not args.strict,

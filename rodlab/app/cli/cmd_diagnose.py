@@ -6,7 +6,6 @@ import sys
 
 from rodlab.calibrate import read_fixture
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
-from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.fit import r_rod_caution
@@ -22,6 +21,7 @@ from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
 from .deviceargs import add_device_option, campaign_from_args, points_from_args, warn_flagged_fixture
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
+from .columnsargs import add_columns_checked, screen_joint_columns
 from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg, warn_rod_mismatch
 
@@ -64,6 +64,7 @@ def register(sub) -> None:
     p.add_argument("--joint-harmonics", type=joint_list, default=(), metavar="LIST",
                    help="points / campaign: joints whose periodic errors the calibration already identifies (as "
                         "`rodlab calibrate --joint-harmonics`); they are modelled, not suspects")
+    add_columns_checked(p)
     add_report_option(p)
     p.set_defaults(func=cmd_diagnose)
 
@@ -207,7 +208,7 @@ def _diagnose_points(args) -> int:
     robot = robot_from_args(args)
     pts = points_from_args(args, args.points, robot.n)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
-    refuse_mixed_up_joints(robot, pts, args.points, noise_mm, "diagnosed")
+    screen_joint_columns(args, robot, pts, args.points, noise_mm, "diagnosed")
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,
                           harmonics=args.joint_harmonics)
     diag = diagnose_points(robot, pts, res, noise_mm)

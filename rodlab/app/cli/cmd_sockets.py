@@ -9,7 +9,6 @@ import numpy as np
 
 from rodlab.calibrate import CalibrationError, result_dict
 from rodlab.calibrate.socket_check import check_sockets
-from rodlab.calibrate.mixups import refuse_mixed_up_joints
 from rodlab.calibrate.socket_fit import identify_sockets, socket_start
 from rodlab.calibrate.sockets import read_sockets
 from rodlab.calibrate.crossval import Prediction
@@ -19,6 +18,7 @@ from ...core.errors import RodlabError
 from .calibrateargs import parse_pins
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
 from .reporting import default_folder, write_command_report
+from .columnsargs import screen_joint_columns
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict
 
@@ -64,7 +64,7 @@ def _readings(args, robot):
     if args.noise_um:
         key = "length_sigma_mm" if readings.ball_bar else "seat_sigma_mm"
         readings = replace(readings, **{key: args.noise_um * 1e-3})
-    refuse_mixed_up_joints(robot, readings, args.sockets)       # the whole file, whichever placements are fitted
+    screen_joint_columns(args, robot, readings, args.sockets)       # the whole file, whichever placements are fitted
     chosen = _placements(args.fit_placements, readings)
     rest = sorted(set(readings.placement.tolist()) - set(chosen))
     held = readings.subset(rest) if rest else None
@@ -75,7 +75,7 @@ def _readings(args, robot):
             raise RodlabError(f"--validate {args.validate}: with --sockets the check is on other socket readings "
                               f"(a *.sockets.csv); instrument points check a --points calibration")
         held = read_sockets(args.validate, robot.n)
-        refuse_mixed_up_joints(robot, held, args.validate)
+        screen_joint_columns(args, robot, held, args.validate)
     return readings.subset(chosen), held
 
 

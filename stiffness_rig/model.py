@@ -19,6 +19,10 @@ from .errors import RigError
 __all__ = ["LoadSchedule", "RigModel", "spring_compliance", "Hold"]
 
 
+#: more samples per hold than this is a unit slip, not a plan (a day's creep hold at 10 Hz is 864 000)
+MAX_SAMPLES_PER_HOLD = 1e7
+
+
 @dataclass
 class LoadSchedule:
     """Load schedule of a stiffness test: per load axis a mass-0 hold, then ``repeats`` x (loading up the ``masses``, unloading
@@ -49,6 +53,10 @@ class LoadSchedule:
         for key, (value, expected, ok) in checks.items():
             if not ok:
                 raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
+        if not self.hold_s * self.rate_Hz <= MAX_SAMPLES_PER_HOLD:        # and not inf: 1e308 s at 10 Hz
+            raise RigError(f"a hold of {self.hold_s:g} s at {self.rate_Hz:g} Hz takes {self.hold_s * self.rate_Hz:.3g} "
+                           f"samples, more than {MAX_SAMPLES_PER_HOLD:.0e}: is hold_s in seconds and rate_Hz in Hz? "
+                           f"(the paper: 8 s at 10 Hz; a day's creep hold at 10 Hz is 864 000 samples)", key="hold_s")
         if round(self.hold_s * self.rate_Hz) < 1:
             raise RigError(f"a hold of {self.hold_s:g} s at {self.rate_Hz:g} Hz takes no sample; give hold_s >= "
                            f"{1 / self.rate_Hz:g} s (one sample) or a higher rate, e.g. the paper's 8 s at 10 Hz",

@@ -161,6 +161,20 @@ def test_a_hold_shorter_than_one_sample_is_refused(tmp_path, capsys):
     assert "rodlab rig simulate: error: key `hold_s`" in err and "takes no sample" in err and not out.exists()
 
 
+def test_a_hold_of_absurdly_many_samples_is_refused_in_the_plan_file(tmp_path):
+    """A plan file's hold_s = 1e308 (found by the readers' fuzzing: an OverflowError traceback) or a hold in ms
+    written as s: refused naming the file, the key and the likely slip."""
+    from rodlab.core.errors import RodlabError
+    from conftest import ROOT
+    from rodlab.stiffness_rig.config import read_plan
+    src = ROOT / "stiffness_rig" / "plans" / "paper.plan.toml"
+    for hold in ("1e308", "8000000.0"):
+        bad = tmp_path / "bad.plan.toml"
+        bad.write_text(src.read_text().replace("hold_s = 8.0", f"hold_s = {hold}"))
+        with pytest.raises(RodlabError, match=r"bad\.plan\.toml.*hold_s.*is hold_s in seconds"):
+            read_plan(bad)
+
+
 def test_the_default_plan_knows_a_carbon_rod_from_its_design_file(tmp_path, capsys):
     """A compliance file of a user's carbon design (not a built-in name) gets the carbon default through the design
     file its provenance names; a file with no design gets the paper's masses and a note saying why."""

@@ -120,6 +120,14 @@ def test_report_of_nothing_is_refused(tmp_path, capsys):
     assert not (tmp_path / "report.html").exists()
 
 
+def test_a_result_written_under_another_suffix_is_still_reported(tmp_path, capsys):
+    """`compliance -o out.csv --report` writes its JSON under the name given; the report reads it by its content
+    (the CLI fuzzing found the command exit 2 after writing out.csv: "nothing to report")."""
+    out, report = tmp_path / "out.csv", tmp_path / "r.html"
+    assert main(["compliance", "rod1", "-o", str(out), "--report", str(report)]) == 0
+    assert json.loads(out.read_text())["format"].startswith("rodlab.compliance") and "c_rod" in report.read_text()
+
+
 def test_evidence_is_said_in_an_engineers_words():
     from rodlab.app.diagnose.report import Finding
     from rodlab.app.diagnose.wording import certainty, confirmation, evidence_text, explained_share

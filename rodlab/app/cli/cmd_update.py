@@ -149,7 +149,11 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
 def cmd_update(args: argparse.Namespace) -> int:
     from ...core.design_edit import write_edited_design
     from ..update import update_design
-    if not Path(args.measured).is_file():
+    try:
+        found = Path(args.measured).is_file()
+    except OSError as e:                                 # a name the file system refuses (too long, ...)
+        raise RodlabError(f"--measured {args.measured}: {e.strerror or e}; give the measured file's path") from e
+    if not found:
         raise RodlabError(f"--measured {args.measured}: no such file (give a measured *.compliance.json from `rodlab rig "
                           "fit` or a *.rig.csv recording)")
     design = resolve_design(args.design)

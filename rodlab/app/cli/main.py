@@ -189,6 +189,7 @@ _OS_ADVICE = {
     errno.EACCES: "permission denied; choose a folder you can write to",
     errno.EROFS: "the file system is read-only; choose another output path",
     errno.ENOSPC: "the disk is full; free space or write elsewhere (nothing partial was kept)",
+    errno.ENAMETOOLONG: "a file name longer than the file system allows (255 bytes per name); give a shorter path",
 }
 
 

@@ -49,18 +49,19 @@ def classify(path: Path) -> Source | None:
     """The :class:`Source` a file holds, or None when it is not a rodlab result (inputs, images, unknown)."""
     path = Path(path)
     try:
-        if path.suffix not in (".json", ".csv"):
+        if path.suffix == ".png" or not path.is_file():
             return None
-        with path.open() as fh:
-            head = fh.readline()
-        if path.suffix == ".json" or head.lstrip().startswith("{"):      # a JSON result written as -o out.csv
+        with path.open("rb") as fh:
+            first = fh.read(64).lstrip()[:1]
+        if path.suffix == ".json" or first == b"{":          # a JSON result under another name (-o out.csv, -o figs)
             data = json.loads(path.read_text())
             if not isinstance(data, dict):
                 return None
             fmt = data.get("format") or (FORMAT_MASS if {"parts", "total"} <= data.keys() else None)
             return Source(fmt, data, path) if fmt in SECTIONS else None
         if path.suffix == ".csv":
-            cols = set(head.strip().split(","))
+            with path.open() as fh:
+                cols = set(fh.readline().strip().split(","))
             if {"L1_mm", "L2_mm", "c_rod_um", "status"} <= cols and "method" not in cols:
                 import pandas as pd
                 return Source(FORMAT_SWEEP, pd.read_csv(path), path)

@@ -128,6 +128,14 @@ def test_a_result_written_under_another_suffix_is_still_reported(tmp_path, capsy
     assert json.loads(out.read_text())["format"].startswith("rodlab.compliance") and "c_rod" in report.read_text()
 
 
+def test_a_report_path_that_is_a_folder_is_refused_before_any_work(tmp_path, capsys):
+    """`--report DIR` (a folder) had been found only after the results were written (exit 2 with an output left)."""
+    (tmp_path / "reports").mkdir()
+    out = tmp_path / "rod1.compliance.json"
+    assert main(["compliance", "rod1", "-o", str(out), "--report", str(tmp_path / "reports")]) == 2
+    assert "--report" in capsys.readouterr().err and not out.exists()
+
+
 def test_evidence_is_said_in_an_engineers_words():
     from rodlab.app.diagnose.report import Finding
     from rodlab.app.diagnose.wording import certainty, confirmation, evidence_text, explained_share

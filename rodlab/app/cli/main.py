@@ -157,6 +157,8 @@ def main(argv: list[str] | None = None) -> int:
 
 #: argparse destinations that name something the command writes
 _OUTPUT_DESTS = ("output", "json", "png", "export", "joints_out", "report", "fields")
+#: of those, the ones that are always a file (``-o`` and ``--png`` may name folders)
+_FILE_DESTS = ("json", "report")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
@@ -172,6 +174,9 @@ def _check_outputs(args: argparse.Namespace) -> None:
         if path in seen:
             raise RodlabError(f"{option} {value}: the same path as {seen[path]}; give each output its own path")
         seen[path] = option
+        if dest in _FILE_DESTS and path.is_dir():
+            raise RodlabError(f"{option} {value}: this is a folder; give a file name (e.g. {Path(value) / 'x'}"
+                              f"{'.report.html' if dest == 'report' else '.json'})")
         for parent in path.parents:
             if parent.exists():
                 if not parent.is_dir():

@@ -21,6 +21,8 @@ __all__ = ["LoadSchedule", "RigModel", "spring_compliance", "Hold"]
 
 #: more samples per hold than this is a unit slip, not a plan (a day's creep hold at 10 Hz is 864 000)
 MAX_SAMPLES_PER_HOLD = 1e7
+#: and more samples than this in a whole plan (~100 holds of a day's creep hold)
+MAX_SAMPLES_PER_PLAN = 1e8
 
 
 @dataclass
@@ -53,10 +55,15 @@ class LoadSchedule:
         for key, (value, expected, ok) in checks.items():
             if not ok:
                 raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
-        if not self.hold_s * self.rate_Hz <= MAX_SAMPLES_PER_HOLD:        # and not inf: 1e308 s at 10 Hz
-            raise RigError(f"a hold of {self.hold_s:g} s at {self.rate_Hz:g} Hz takes {self.hold_s * self.rate_Hz:.3g} "
-                           f"samples, more than {MAX_SAMPLES_PER_HOLD:.0e}: is hold_s in seconds and rate_Hz in Hz? "
-                           f"(the paper: 8 s at 10 Hz; a day's creep hold at 10 Hz is 864 000 samples)", key="hold_s")
+        per_hold = self.hold_s * self.rate_Hz
+        holds = len(self.axes) * (1 + self.repeats * 2 * len(self.masses))     # :meth:`holds`, counted
+        if not per_hold <= MAX_SAMPLES_PER_HOLD or not holds * per_hold <= MAX_SAMPLES_PER_PLAN:   # and not inf
+            key = "rate_Hz" if self.rate_Hz > 1e3 else "repeats" if per_hold <= MAX_SAMPLES_PER_HOLD else "hold_s"
+            raise RigError(f"{holds} holds of {self.hold_s:g} s at {self.rate_Hz:g} Hz take {holds * per_hold:.3g} "
+                           f"samples ({per_hold:.3g} per hold), more than a plan's {MAX_SAMPLES_PER_PLAN:.0e} or a "
+                           f"hold's {MAX_SAMPLES_PER_HOLD:.0e}: is hold_s in seconds, rate_Hz in Hz and repeats a "
+                           f"count? (the paper: 8 s at 10 Hz, 5 repeats; a day's creep hold at 10 Hz is 864 000 "
+                           f"samples)", key=key)
         if round(self.hold_s * self.rate_Hz) < 1:
             raise RigError(f"a hold of {self.hold_s:g} s at {self.rate_Hz:g} Hz takes no sample; give hold_s >= "
                            f"{1 / self.rate_Hz:g} s (one sample) or a higher rate, e.g. the paper's 8 s at 10 Hz",

@@ -21,6 +21,17 @@ def test_a_failing_child_is_the_demos_error_with_its_message(tmp_path):
     assert not (tmp_path / "cad").exists()
 
 
+def test_the_child_imports_the_parents_rodlab_not_one_in_the_current_folder(tmp_path, monkeypatch):
+    """`python -m` would put the current folder first on the child's path (review): a `rodlab/` folder there
+    (a source checkout beside a non-editable install) must not be what the child imports."""
+    shadow = tmp_path / "rodlab"
+    shadow.mkdir()
+    (shadow / "__init__.py").write_text("raise ImportError('the shadow package was imported')\n")
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(RodlabError, match="no_such_rod: no such file or built-in design"):
+        start_cad_job("no_such_rod", tmp_path / "cad").result()
+
+
 def test_the_child_builds_what_this_process_builds(tmp_path):
     import rodlab.geometry as geometry
     from rodlab.core.design_io import resolve_design

@@ -2,6 +2,8 @@
 failures name the file, unpicklable figures are rendered here."""
 from __future__ import annotations
 
+import os
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -35,10 +37,14 @@ def test_background_figures_match_the_inline_render_and_readers_wait(tmp_path):
         wait_for_figure(out)
         assert out.read_bytes() == inline.read_bytes()
         unpicklable = atomic_write_figure(tmp_path / "lambda.png", _figure("c", FuncFormatter(lambda x, _: f"{x:g}")))
-        assert unpicklable.exists() and unpicklable not in bg.pending                # rendered here at once
+        assert unpicklable.exists() and os.path.abspath(unpicklable) not in bg.pending  # rendered here at once
+        atomic_write_figure(tmp_path / "mixed.png", _figure("picklable"), 90)
+        atomic_write_figure(tmp_path / "sub" / ".." / "mixed.png", _figure("d", FuncFormatter(lambda x, _: "")), 90)
+        mixed = (tmp_path / "mixed.png").read_bytes()                     # the second, rendered here, stays
     assert active_background() is None
     assert (tmp_path / "twice.png").read_bytes() == atomic_write_figure(tmp_path / "second.png",
                                                                        _figure("second"), 90).read_bytes()
+    assert (tmp_path / "mixed.png").read_bytes() == mixed
 
 
 def test_a_failed_render_names_the_file_and_writes_nothing(tmp_path):

@@ -94,7 +94,7 @@ def test_a_mixup_is_a_joint_or_a_pair():
     assert "joint 2 negated" == Mixup(2, None, 0.007, 0.013).label
 
 
-def test_the_campaign_diagnosis_refuses_mixed_up_files(campaign, tmp_path, capsys):
+def test_the_campaign_diagnosis_refuses_mixed_up_files(campaign, tmp_path, capsys, caplog):
     """A reversed joint's traces are no physics: `diagnose --campaign` says what is mixed up instead of naming a
     periodic error of that joint (the trial's suspect), and writes nothing."""
     path = tmp_path / "reversed.campaign.csv"
@@ -104,6 +104,12 @@ def test_the_campaign_diagnosis_refuses_mixed_up_files(campaign, tmp_path, capsy
                  "--rod", str(next(campaign.glob("*.compliance.json"))), "--json", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "joint 3's readings run the other way" in err and not out.exists()
+    assert "give --columns-checked" in err
+    code = main(["diagnose", "--campaign", str(path), "--fixture", str(campaign / "multical.fixture.json"),
+                 "--rod", str(next(campaign.glob("*.compliance.json"))), "--json", str(out), "--columns-checked"])
+    warned = caplog.text                         # stated right: diagnosed as they are, the mix-up warned of
+    assert code in (0, 3) and "joint 3's readings run the other way" in warned and "--columns-checked: diagnosed" in warned
+    assert out.exists()
 
 
 @pytest.mark.parametrize("effect, params", [("fixture_pose", {"position": 2, "offset_mm": [0.3, -0.2, 0.2]}),

@@ -173,6 +173,10 @@ def test_a_hold_of_absurdly_many_samples_is_refused_in_the_plan_file(tmp_path):
         bad.write_text(src.read_text().replace("hold_s = 8.0", f"hold_s = {hold}"))
         with pytest.raises(RodlabError, match=r"bad\.plan\.toml.*hold_s.*is hold_s in seconds"):
             read_plan(bad)
+    for old, new, key in (("rate_Hz = 10.0", "rate_Hz = 1e7", "rate_Hz"), ("repeats = 5", "repeats = 1000000", "repeats")):
+        bad.write_text(src.read_text().replace(old, new))             # the whole plan too long, the key named
+        with pytest.raises(RodlabError, match=rf"bad\.plan\.toml.*{key}.*more than a plan's 1e\+08"):
+            read_plan(bad)
 
 
 def test_the_default_plan_knows_a_carbon_rod_from_its_design_file(tmp_path, capsys):

@@ -1,9 +1,9 @@
 """The demo's CAD stage in a second process, beside the FEA and everything after it.
 
 Nothing in the demo reads the CAD assembly (the solid FEA meshes the rod with gmsh's own OpenCASCADE kernel), and
-its ~4-5 s (build123d's import alone ~2.4 s, the four matplotlib views ~1.5 s) are single-threaded Python, so
+its ~4-5 s (build123d's import ~2.4 s, the four views ~1.5 s with matplotlib) are single-threaded Python, so
 on 2 cores they overlap the other stages: ``rodlab demo`` ~3 s faster (docs/benchmarks/speed.md). The child is
-this module run as ``python -m rodlab.app.demo_cad DESIGN OUT_DIR`` with one BLAS/OpenMP thread (its
+this module's :func:`main` run as ``python -c ... DESIGN OUT_DIR`` (:data:`_CHILD`) with one BLAS/OpenMP thread (its
 work is OpenCASCADE and matplotlib; an idle second thread would only spin against the main process); it
 writes ``rod.step``, ``mass.json`` and the ``view_*.png`` files (each atomically) and prints one JSON line
 with the numbers the run summary needs. A failure in it is raised in the demo with the child's own message.
@@ -11,9 +11,11 @@ with the numbers the run summary needs. A failure in it is raised in the demo wi
 from __future__ import annotations
 
 import json
+import logging
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +26,8 @@ from ..core.design_io import resolve_design
 from ..core.errors import RodlabError
 
 __all__ = ["CadStage", "CadJob", "start_cad_job", "ONE_THREAD_ENV"]
+
+log = logging.getLogger(__name__)
 
 #: environment of the child: one BLAS / OpenMP thread (OpenBLAS, MKL, OpenMP)
 ONE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
@@ -48,36 +52,61 @@ class CadStage:
 class CadJob:
     """A running CAD stage (see :func:`start_cad_job`); :meth:`result` waits for it, :meth:`cancel` stops it."""
 
-    def __init__(self, proc: subprocess.Popen, out_dir: Path, started: float) -> None:
+    def __init__(self, proc: subprocess.Popen, out_dir: Path, started: float, out, err) -> None:
         self._proc, self.out_dir, self._started = proc, out_dir, started
+        self._out, self._err = out, err                  # temporary files: a chatty child never blocks on a pipe
 
     def result(self) -> CadStage:
-        """Wait for the child; its :class:`CadStage`, or :class:`RodlabError` with the child's message."""
-        out, err = self._proc.communicate()
+        """Wait for the child; its :class:`CadStage` (its stderr relayed to the log), or :class:`RodlabError` with
+        the child's message."""
+        self._proc.wait()
+        out, err = self._read()
         if self._proc.returncode != 0:
             tail = "\n".join(err.strip().splitlines()[-12:]) or f"exit status {self._proc.returncode}"
             raise RodlabError(f"the demo's CAD stage (building {self.out_dir}) failed:\n{tail}")
+        for line in err.strip().splitlines():
+            log.warning("CAD stage: %s", line)
         try:
             made = json.loads(out.strip().splitlines()[-1])
             return CadStage(int(made["parts"]), float(made["mass_kg"]), tuple(Path(v) for v in made["views"]),
                             float(made["finished"]) - self._started)
-        except (ValueError, KeyError, IndexError) as e:
-            raise RodlabError(f"the demo's CAD stage (building {self.out_dir}) gave no summary: {out[-300:]!r}") from e
+        except (ValueError, KeyError, IndexError, TypeError) as e:
+            raise RodlabError(f"the demo's CAD stage (building {self.out_dir}) gave no summary: {out[-300:]!r}; "
+                              f"build it alone with `rodlab cad` to see why") from e
 
     def cancel(self) -> None:
         """Stop the child if it still runs (the demo failed or was interrupted)."""
         if self._proc.poll() is None:
             self._proc.kill()
-            self._proc.communicate()
+            self._proc.wait()
+        self._read()
+
+    def _read(self) -> tuple[str, str]:
+        """The child's stdout and stderr (the temporary files closed, so removed)."""
+        texts = []
+        for f in (self._out, self._err):
+            if not f.closed:
+                f.seek(0)
+                texts.append(f.read())
+                f.close()
+            else:
+                texts.append("")
+        return texts[0], texts[1]
+
+
+#: the child's start: this module's main with the current folder off the import path (``python -m`` would put it
+#: first, so a ``rodlab/`` folder where the user stands would be imported by the child and not the parent)
+_CHILD = "import sys; sys.path.pop(0); from rodlab.app.demo_cad import main; sys.exit(main(sys.argv[1:]))"
 
 
 def start_cad_job(design: str, out_dir: str | Path) -> CadJob:
     """Start building the CAD of the built-in or file ``design`` into ``out_dir`` in a second process."""
     out_dir = Path(out_dir)
     env = {**os.environ, **ONE_THREAD_ENV}
-    proc = subprocess.Popen([sys.executable, "-m", __name__, str(design), str(out_dir)], env=env,
-                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    return CadJob(proc, out_dir, time.time())
+    out, err = tempfile.TemporaryFile("w+"), tempfile.TemporaryFile("w+")
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(design), str(out_dir)], env=env,
+                            stdin=subprocess.DEVNULL, stdout=out, stderr=err, text=True)
+    return CadJob(proc, out_dir, time.time(), out, err)
 
 
 def build_into(design: str, out_dir: Path) -> dict:

@@ -78,12 +78,12 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     run.out.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda stage, msg: log.info("%s: %s", stage, msg))
     timings = {}
-    try:
-        with background_figures():               # every figure rendered in a second process; all written here
+    with background_figures():                   # every figure rendered in a second process; all written here
+        try:
             _run_stages(run, say, timings)
-    finally:
-        if run.cad_job is not None:
-            run.cad_job.cancel()
+        finally:                                 # a stage failed or Ctrl-C: the CAD child stopped first
+            if run.cad_job is not None:
+                run.cad_job.cancel()
     run.summary["stages"] = {name: run.summary["stages"][name] for name in STAGES}
     run.summary["timings_s"] = {name: timings[name] for name in STAGES}
     atomic_write_json(run.out / "run.json", json_safe(run.summary))

@@ -6,15 +6,18 @@ constrained layout, PNG encoding) and hands it to one worker process, which rend
 as the call itself would have. A reader of a figure waits for it (:func:`wait_for_figure`, used by the HTML
 embedding); leaving the block waits for all of them and raises the first failure as a
 :class:`~rodlab.core.errors.RodlabError` naming the file. A figure that cannot be pickled (a formatter holding a
-lambda) is rendered in the caller's process, as outside the block. ``rodlab demo`` renders its figures so
-(docs/benchmarks/speed.md).
+lambda) is rendered in the caller's process, as outside the block, and so is every figure after the worker is
+lost. ``rodlab demo`` renders its figures so (docs/benchmarks/speed.md). The worker is a spawned process: a
+script that calls this (or ``rodlab.app.pipeline.run_demo``) needs the ``if __name__ == "__main__":`` guard.
 """
 from __future__ import annotations
 
 import logging
 import multiprocessing
+import os
 import pickle
-from concurrent.futures import Future, ProcessPoolExecutor
+import signal
+from concurrent.futures import BrokenExecutor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -29,27 +32,33 @@ class BackgroundFigures:
     """One worker process rendering pickled figures; ``pending``: path -> its render (see the module)."""
 
     def __init__(self) -> None:
-        self._pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+        self._pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                                         initializer=_ignore_interrupts)
         self._warm = self._pool.submit(_warm_up)          # the worker's imports overlap the caller's work
-        self.pending: dict[Path, Future] = {}
+        self.pending: dict[str, Future] = {}
 
     def submit(self, path: str | Path, fig, dpi: int, savefig_kw: dict) -> bool:
-        """Hand ``fig`` over (closed here); False when it cannot be pickled (the caller renders it)."""
+        """Hand ``fig`` over (closed here); False when it cannot be pickled or the worker is gone (the caller
+        renders it)."""
+        self.wait(path)                              # the same file twice: in order, whoever renders the second
         try:
             data = pickle.dumps(fig)
         except (pickle.PicklingError, TypeError, AttributeError) as e:
             log.debug("figure %s rendered here: it cannot be pickled (%s)", path, e)
             return False
+        try:
+            future = self._pool.submit(_render, str(path), data, dpi, savefig_kw)
+        except (BrokenExecutor, RuntimeError) as e:  # the worker died (killed, out of memory): render here
+            log.warning("figure %s rendered in this process: the figure worker is gone (%s)", path, e)
+            return False
         import matplotlib.pyplot as plt             # heavy: loaded by whoever made the figure already
         plt.close(fig)
-        key = Path(path).absolute()
-        self.wait(key)                               # the same file twice: in order
-        self.pending[key] = self._pool.submit(_render, str(path), data, dpi, savefig_kw)
+        self.pending[_key(path)] = future
         return True
 
     def wait(self, path: str | Path | None = None) -> None:
         """Wait for ``path``'s figure (None: every figure); a failed render raises :class:`RodlabError`."""
-        keys = list(self.pending) if path is None else [k for k in (Path(path).absolute(),) if k in self.pending]
+        keys = list(self.pending) if path is None else [k for k in (_key(path),) if k in self.pending]
         for key in keys:
             future = self.pending.pop(key)
             try:
@@ -57,7 +66,8 @@ class BackgroundFigures:
             except RodlabError:
                 raise
             except Exception as e:                   # the worker's error (or its loss) names the figure
-                raise RodlabError(f"{key}: the figure could not be rendered: {type(e).__name__}: {e}") from e
+                raise RodlabError(f"{key}: the figure could not be rendered: {type(e).__name__}: {e}; run the "
+                                  "command again (a lost worker: memory?), or report it with the figure's name") from e
 
     def shutdown(self) -> None:
         """Stop the worker; renders not yet started are dropped (after a failure or an interrupt)."""
@@ -89,6 +99,16 @@ def wait_for_figure(path: str | Path) -> None:
     bg = active_background()
     if bg is not None:
         bg.wait(path)
+
+
+def _key(path: str | Path) -> str:
+    """One spelling of a path (``..`` and ``.`` collapsed) for the pending renders."""
+    return os.path.abspath(path)
+
+
+def _ignore_interrupts() -> None:
+    """In the worker: Ctrl-C is the caller's to handle (it shuts the worker down); no traceback from here."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _warm_up() -> None:

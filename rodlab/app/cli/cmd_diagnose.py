@@ -175,7 +175,8 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
     diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
-                                   read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics)
+                                   read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics,
+                                   columns_checked=args.columns_checked)
     print(diag.summary())
     if "validation" in diag.extra:
         v = diag.extra["validation"]

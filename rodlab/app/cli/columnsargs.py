@@ -7,9 +7,9 @@ from rodlab.calibrate.mixups import refuse_mixed_up_joints
 
 __all__ = ["COLUMNS_CHECKED_HELP", "add_columns_checked", "screen_joint_columns"]
 
-COLUMNS_CHECKED_HELP = ("the joint columns of the points or socket readings are right as they are (each joint's sign, "
-                        "order and zero as the robot file's): warn of a mix-up the screen finds instead of refusing "
-                        "the file")
+COLUMNS_CHECKED_HELP = ("the joint columns of the points, socket readings or campaign are right as they are (each "
+                        "joint's sign, order and zero as the robot file's; a campaign's positions and fixture as "
+                        "given): warn of a mix-up the screen finds instead of refusing the files")
 
 #: appended to a refusal: how to go on regardless
 _HINT = " (if the file's joint columns are right as they are, give --columns-checked)"

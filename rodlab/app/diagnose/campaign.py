@@ -328,18 +328,22 @@ def campaign_context(robot, res, obs, camp, rod) -> tuple[CampaignContext, np.nd
 
 
 def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_points=None, max_terms: int = 3,
-                      fixture_sigma=(0.01, 0.002), harmonics=()):
+                      fixture_sigma=(0.01, 0.002), harmonics=(), columns_checked: bool = False):
     """Diagnose a campaign; returns the report and the :class:`CampaignFits` behind it. ``harmonics``: joints
-    whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then."""
+    whose periodic errors the calibration already identifies (``--joint-harmonics``), not hypotheses then.
+    A mix-up of the files (a reversed joint, swapped positions, a fixture in radians) is refused, or with
+    ``columns_checked`` (``--columns-checked``: the user states the files are right) logged and diagnosed."""
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     options = FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics))
     res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)], options)
     mixup = campaign_mixup(robot, res, camp, fix, rod, obs, Rod.of(rod), [deflection_of(rod)], options, material=False)
-    if mixup is not None:                  # the files do not describe one robot: no physics to diagnose
+    if mixup is not None and columns_checked:
+        log.warning("%s: %s (--columns-checked: diagnosed as they are)", camp.path, mixup.reason())
+    elif mixup is not None:                # the files do not describe one robot: no physics to diagnose
         where = dict(path=fix.path, key="positions") if mixup.fixture_radians else dict(path=camp.path, key="campaign")
         raise CalibrationError(f"{mixup.reason()}; the diagnosis of these files would name the mix-up's traces as "
-                               "physics", **where)
+                               "physics (if the files are right as they are, give --columns-checked)", **where)
     ctx, tau = campaign_context(robot, res, obs, camp, rod)
     sel = CampaignSelection(ctx, tau, noise_mm, fixture_sigma, max_terms)
     sel.run()

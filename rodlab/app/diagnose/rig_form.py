@@ -153,7 +153,7 @@ class _AsBuilt:
         """The cause's columns fitted together with the keys (nonlinear, from the bounded linear step at u = 0;
         ``s0``, the Gauss-Newton estimate, sets the coefficients' scale): (coefficients, standard errors,
         chi-square drop)."""
-        k = self.k
+        k, p = self.k, B.shape[1]
         scale = np.maximum(np.abs(np.asarray(s0, float)), 1e-3 * np.maximum(np.abs(upper), 1e-12))
 
         def res(x):
@@ -162,11 +162,10 @@ class _AsBuilt:
 
         def jac(x):                          # the keys' columns as the as-built fit's, the cause's exact
             return np.hstack([self._residual_jacobian(x[:k]), np.vstack([self.W @ (B * scale), np.zeros((k, p))])])
-        p = B.shape[1]
         b = self.env.u_bounds if k else np.zeros((0, 2))
         lo = np.concatenate([b[:, 0], np.asarray(lower, float) / scale])
         hi = np.concatenate([b[:, 1], np.asarray(upper, float) / scale])
-        zero = np.zeros(k + p)                   # start: the bounded linear step from the design without the cause
+        zero = np.zeros(k + p)                   # start: the bounded linear step from the design, cause at 0
         x0 = np.clip(lsq_linear(jac(zero), -res(zero), bounds=(lo, hi), method="bvls").x, lo + 1e-6, hi - 1e-6)
         fit = least_squares(res, x0, bounds=(lo, hi), jac=jac)
         A = fit.jac

@@ -28,6 +28,7 @@ __all__ = ["background_figures", "BackgroundFigures", "wait_for_figure", "active
 
 log = logging.getLogger(__name__)
 
+
 class BackgroundFigures:
     """One worker process rendering pickled figures; ``pending``: path -> its render (see the module)."""
 

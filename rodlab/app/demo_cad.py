@@ -22,16 +22,13 @@ from pathlib import Path
 
 import rodlab.geometry as geometry
 
+from ..core.cluster import ONE_THREAD_ENV
 from ..core.design_io import resolve_design
 from ..core.errors import RodlabError
 
-__all__ = ["CadStage", "CadJob", "start_cad_job", "ONE_THREAD_ENV"]
+__all__ = ["CadStage", "CadJob", "start_cad_job"]
 
 log = logging.getLogger(__name__)
-
-#: environment of the child: one BLAS / OpenMP thread (OpenBLAS, MKL, OpenMP)
-ONE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-
 
 @dataclass(frozen=True)
 class CadStage:
@@ -82,16 +79,16 @@ class CadJob:
         self._read()
 
     def _read(self) -> tuple[str, str]:
-        """The child's stdout and stderr (the temporary files closed, so removed)."""
-        texts = []
-        for f in (self._out, self._err):
-            if not f.closed:
-                f.seek(0)
-                texts.append(f.read())
-                f.close()
-            else:
-                texts.append("")
-        return texts[0], texts[1]
+        """The child's stdout and stderr ("" once read: the temporary files are then closed, so removed)."""
+        return self._drain(self._out), self._drain(self._err)
+
+    @staticmethod
+    def _drain(f) -> str:
+        if f.closed:
+            return ""
+        f.seek(0)
+        with f:
+            return f.read()
 
 
 #: the child's start: this module's main with the current folder off the import path (``python -m`` would put it

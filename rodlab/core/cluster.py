@@ -12,7 +12,11 @@ import logging
 import os
 import warnings
 
-__all__ = ["local_cluster", "quiet_dask_logs", "DASHBOARD_ENV"]
+__all__ = ["local_cluster", "quiet_dask_logs", "DASHBOARD_ENV", "ONE_THREAD_ENV"]
+
+#: environment of a worker process that runs beside others on few cores: one BLAS / OpenMP thread (OpenBLAS, MKL,
+#: OpenMP); its small matrices gain nothing from a second thread, which would only spin against the other processes
+ONE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 log = logging.getLogger(__name__)
 

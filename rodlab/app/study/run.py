@@ -29,7 +29,7 @@ from rodlab.calibrate import CalibrationError
 from rodlab.calibrate.predict import Priors, ReplicateOutcome, run_replicate
 from rodlab.calibrate.simulate import standard_base
 from rodlab.calibrate.validate import ErrorStats
-from rodlab.core.cluster import local_cluster
+from rodlab.core.cluster import ONE_THREAD_ENV, local_cluster
 from rodlab.core.design_io import design_to_dict
 from rodlab.core.enums import Method
 from rodlab.core.fileio import atomic_write_json, json_safe
@@ -170,8 +170,7 @@ def dask_client(scheduler, workers):
             logging.getLogger(name).setLevel(logging.WARNING)
     if scheduler:
         return Client(scheduler), None
-    one = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}   # small matrices
-    cluster = local_cluster(workers, env=one)
+    cluster = local_cluster(workers, env=dict(ONE_THREAD_ENV))                # small matrices
     return Client(cluster), cluster
 
 

@@ -33,6 +33,7 @@ errors and of the compensation computed from the identified model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -58,6 +59,19 @@ __all__ = ["LinearCampaign", "ValidationDraws", "LinearPrediction", "linear_camp
 
 #: the parameters the validation keeps from the identification (base and tool are refitted)
 KINEMATIC_KINDS = ("dtheta", "a", "alpha", "d", "beta", "c")
+
+
+@dataclass(frozen=True)
+class _FitTerms:
+    """What :meth:`LinearCampaign.scatter` and :meth:`LinearCampaign.weak` need of the fit of the columns
+    ``cols`` (P,) bool: their Jacobian ``J`` (3N, p), its pseudo-inverse (p, 3N), the fixture uncertainty's
+    variance ``a`` (p,) and the noise's per unit variance ``b`` (p,) of each parameter [internal units^2]."""
+
+    cols: np.ndarray
+    J: np.ndarray
+    pinv: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -104,30 +118,48 @@ class LinearCampaign:
     def scatter(self, y: np.ndarray, cols: np.ndarray | None = None) -> np.ndarray:
         """The residual scatter [mm] (D,) of the plain least-squares fit of the columns ``cols`` (all by default)
         to each row of ``y`` (D, 3N), per degree of freedom, as identify estimates its noise level."""
-        J = self.J if cols is None else self.J[:, cols]
-        r = y - (y @ np.linalg.pinv(J).T) @ J.T
-        dof = max(J.shape[0] - J.shape[1], 1)
+        terms = self._terms(cols)
+        r = y - (y @ terms.pinv.T) @ terms.J.T
+        dof = max(terms.J.shape[0] - terms.J.shape[1], 1)
         return np.maximum(np.sqrt(np.sum(r ** 2, axis=1) / dof), 1e-6)
 
     def weak(self, noise_mm: np.ndarray, cols: np.ndarray | None = None) -> np.ndarray:
         """(D, P) which parameters identify regularises at each residual scatter ``noise_mm`` (D,): sandwich
         standard error of the fit of ``cols`` (``noise_mm`` in place of the device noise, and the fixture
         uncertainty) above the parameter's physical size (False outside ``cols``)."""
-        cols = np.ones(self.J.shape[1], bool) if cols is None else cols
-        A0 = np.linalg.pinv(self.J[:, cols])
-        fix = self.Sigma - self.device_noise_mm ** 2 * np.eye(self.Sigma.shape[0])
-        a = np.einsum("ij,jk,ik->i", A0, fix, A0)
-        b = np.sum(A0 ** 2, axis=1)
+        terms = self._terms(cols)
         out = np.zeros((len(noise_mm), self.J.shape[1]), bool)
-        out[:, cols] = a + np.asarray(noise_mm)[:, None] ** 2 * b > self.prior_scale[cols] ** 2
+        out[:, terms.cols] = terms.a + np.asarray(noise_mm)[:, None] ** 2 * terms.b > self.prior_scale[terms.cols] ** 2
         return out
 
+    def _terms(self, cols: np.ndarray | None) -> _FitTerms:
+        """The noise-independent terms of :meth:`scatter` and :meth:`weak` for the columns ``cols``, computed
+        once per column set (a campaign uses two: all, and all but the joint compliances)."""
+        cols = np.ones(self.J.shape[1], bool) if cols is None else np.asarray(cols, bool)
+        key = cols.tobytes()
+        if key not in self._terms_cache:
+            J = self.J[:, cols]
+            A0 = np.linalg.pinv(J)
+            fix = self.Sigma - self.device_noise_mm ** 2 * np.eye(self.Sigma.shape[0])
+            self._terms_cache[key] = _FitTerms(cols, J, A0, np.einsum("ij,jk,ik->i", A0, fix, A0, optimize=True),
+                                               np.sum(A0 ** 2, axis=1))
+        return self._terms_cache[key]
+
+    @cached_property
+    def _terms_cache(self) -> dict:
+        return {}
+
     def gains(self, y: np.ndarray, rough: bool, passes: int = 6) -> np.ndarray:
-        """``A`` (D, P, 3N) per campaign ``y`` (D, 3N): the identified parameters' response to the data, the
-        weak ones regularised at their start value (prior rows ``noise / physical size``) as identify does:
-        with a rod to compensate (``rough``) the first pass holds the joint compliances and judges the others
-        at its scatter; then each pass fits with the priors so far, takes its residual scatter as the noise
-        level and regularises what is weak at it (a prior, once given, stays), up to ``passes``."""
+        """``A = G J^T`` (D, P, 3N) per campaign ``y`` (D, 3N): the identified parameters' response to the data
+        (``G`` of :meth:`inverse_normals`)."""
+        return _right(self.inverse_normals(y, rough, passes), self.J.T)
+
+    def inverse_normals(self, y: np.ndarray, rough: bool, passes: int = 6) -> np.ndarray:
+        """``G = (J^T J + L^T L)^-1`` (D, P, P) per campaign ``y`` (D, 3N), so that ``G J^T y`` are the identified
+        parameters: the weak ones regularised at their start value (prior rows ``noise / physical size``) as
+        identify does: with a rod to compensate (``rough``) the first pass holds the joint compliances and judges
+        the others at its scatter; then each pass fits with the priors so far, takes its residual scatter as the
+        noise level and regularises what is weak at it (a prior, once given, stays), up to ``passes``."""
         weak = np.zeros((y.shape[0], self.J.shape[1]), bool)
         if rough and self.is_c.any():
             cols = ~self.is_c
@@ -140,8 +172,25 @@ class LinearCampaign:
             noise = np.maximum(np.sqrt(np.sum(r ** 2, axis=1) / dof), 1e-6)
             if not (self.weak(noise) & ~weak).any():
                 break
-        M = self._bounded(y, weak, noise)
-        return np.linalg.solve(M, np.broadcast_to(self.J.T, (y.shape[0],) + self.J.T.shape))
+        return np.linalg.inv(self._bounded(y, weak, noise))
+
+    def kinematic_rows(self, G: np.ndarray, K: int) -> np.ndarray:
+        """``E G`` (D, K, P) for a stack ``G`` (D, P, ...): the rows of the free kinematic parameters placed at
+        their index among the ``K`` (zero rows for those not free), without ``K x P`` products."""
+        out = np.zeros((G.shape[0], K) + G.shape[2:])
+        k = np.nonzero(self.kin_of_free >= 0)[0]
+        out[:, self.kin_of_free[k]] = G[:, k]
+        return out
+
+    @cached_property
+    def JtJ_kin(self) -> np.ndarray:
+        """``J^T J_kin`` (P, K): the free parameters' normal equations' right-hand side per truth error."""
+        return self.J.T @ self.J_kin
+
+    @cached_property
+    def JtSigmaJ(self) -> np.ndarray:
+        """``J^T Sigma J`` (P, P): the normal equations' right-hand side's covariance under the noise."""
+        return self.J.T @ self.Sigma @ self.J
 
     def _bounded(self, y: np.ndarray, weak: np.ndarray, noise: np.ndarray) -> np.ndarray:
         """The normal matrices (D, P, P) with identify's bounds: a joint compliance the fit would make negative
@@ -161,10 +210,17 @@ class LinearCampaign:
         """``J^T J + diag(lambda)`` per draw (D, P, P): the priors of the weak parameters, and a stiff one
         holding the ``pinned`` at their start value."""
         lam = np.where(weak, (noise[:, None] / self.prior_scale) ** 2, 0.0)
-        JtJ = self.J.T @ self.J
+        JtJ = self._JtJ
         if pinned is not None:
             lam = np.where(pinned, 1e10 * float(np.abs(np.diag(JtJ)).max()), lam)
-        return JtJ[None] + lam[:, :, None] * np.eye(JtJ.shape[0])[None]
+        M = np.repeat(JtJ[None], lam.shape[0], axis=0)
+        i = np.arange(JtJ.shape[0])
+        M[:, i, i] += lam
+        return M
+
+    @cached_property
+    def _JtJ(self) -> np.ndarray:
+        return self.J.T @ self.J
 
     def _fit(self, y: np.ndarray, M: np.ndarray) -> np.ndarray:
         """The identified parameters (D, P) from the data ``y`` (D, 3N) with the normal matrices ``M``."""
@@ -388,28 +444,28 @@ def _validation_floor(robot, vd: ValidationDraws, priors: Priors, seed: int) -> 
 _VFLOOR: dict = {}
 
 
-def exact_mean_square(lc: LinearCampaign, vd: ValidationDraws, A: np.ndarray, dC: np.ndarray, prior: tuple,
+def exact_mean_square(lc: LinearCampaign, vd: ValidationDraws, G: np.ndarray, dC: np.ndarray, prior: tuple,
                       extra: np.ndarray | None = None, val_extra: np.ndarray | None = None) -> float:
     """Mean-square validation error [mm^2] (without the validation noise) over the draws' compliances,
     regularisations and validation sets, the Gaussian parts (campaign noise, the truth's spread) by their
     covariance: ``mean_d (|P J_v v_d|^2 + tr(W_d Cov_d)) / M`` (``W_d = (P J_v)^T P J_v``, ``vd.W``).
 
-    A : (D, P, 3N) each draw's gains (:meth:`LinearCampaign.gains`); dC : (D, 18) what the compensation leaves of
-    each draw's compliance, ``vec(C_true - C_file)`` (the data's bias ``B dC``); prior : (mean, sd) (K,) of the
-    truth's kinematic errors (:func:`robot_prior`); extra : (D, 3N) [mm] further bias of the data (the rod's
-    slip, the robot floor at the campaign's poses; None: none); val_extra : (D, 3M) [mm] on validation (the
-    robot floor there, projected; None: none)."""
+    G : (D, P, P) each draw's inverse normal matrix (:meth:`LinearCampaign.inverse_normals`; the gains are
+    ``A = G J^T``, so ``E A Sigma A^T E^T = E G (J^T Sigma J) G E^T``: P x P products instead of 3N x 3N);
+    dC : (D, 18) what the compensation leaves of each draw's compliance, ``vec(C_true - C_file)`` (the data's
+    bias ``B dC``); prior : (mean, sd) (K,) of the truth's kinematic errors (:func:`robot_prior`); extra :
+    (D, 3N) [mm] further bias of the data (the rod's slip, the robot floor at the campaign's poses; None: none);
+    val_extra : (D, 3M) [mm] on validation (the robot floor there, projected; None: none)."""
     mean, sd = prior
-    W, E = vd.W, lc.kinematic_map(vd.PJ.shape[2])
-    EA = E @ A                                                        # (D, K, 3N)
-    K = EA.shape[1]
-    R = _right(EA, lc.J_kin) - np.eye(K)
+    K = vd.PJ.shape[2]
+    X = lc.kinematic_rows(G, K)                                       # (D, K, P) E G
+    R = _right(X, lc.JtJ_kin) - np.eye(K)                             # E A J_kin - I
     bias = dC @ lc.B.T if extra is None else dC @ lc.B.T + extra
-    v = _mv(EA, bias) + R @ mean                                      # (D, K) mean kinematic error
+    v = _mv(X, bias @ lc.J) + R @ mean                                # (D, K) mean kinematic error
     ev = _mv(vd.PJ, v) if val_extra is None else _mv(vd.PJ, v) + val_extra
     bias = np.sum(ev ** 2, axis=1)
-    cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + _right(EA, lc.Sigma) @ np.swapaxes(EA, 1, 2)
-    return float(np.mean(bias + np.sum(W * cov, axis=(1, 2)))) / vd.points
+    cov = (R * sd ** 2) @ np.swapaxes(R, 1, 2) + _right(X, lc.JtSigmaJ) @ np.swapaxes(X, 1, 2)
+    return float(np.mean(bias + np.sum(vd.W * cov, axis=(1, 2)))) / vd.points
 
 
 def _right(A: np.ndarray, B: np.ndarray) -> np.ndarray:
@@ -454,15 +510,15 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     Pn = rnd.Pn if vf is None else rnd.Pn + vf                        # validation scatter: noise and floor
     ms_clean = ms_noise if vf is None else ms_noise + float(np.mean(np.sum(vf ** 2, axis=1))) / M
     y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
-    A_true = lc.gains(y_robot, rough=True)
-    ms_true = exact_mean_square(lc, vd, A_true, np.zeros((D, 18)), (mean, sd), extra, vf) + ms_noise
+    G_true = lc.inverse_normals(y_robot, rough=True)
+    ms_true = exact_mean_square(lc, vd, G_true, np.zeros((D, 18)), (mean, sd), extra, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
-        A = lc.gains(y, rough=m is not Method.NONE)
-        delta = _mv(A, y) @ E.T - rnd.xi
+        G = lc.inverse_normals(y, rough=m is not Method.NONE)
+        delta = _mv(G, y @ lc.J) @ E.T - rnd.xi
         means, maxs, medians = _stats(_mv(vd.PJ, delta) + Pn)
-        ms = exact_mean_square(lc, vd, A, dC[m], (mean, sd), extra, vf) + ms_noise
+        ms = exact_mean_square(lc, vd, G, dC[m], (mean, sd), extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
                                    float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,

@@ -87,10 +87,12 @@ def test_exact_mean_square_is_the_draws_expectation(rod4_plan):
     _, dC, _ = compliance_draws(rod, None, [Method.FEA], pri, D, 5)
     E = lc.kinematic_map(vd.PJ.shape[2])
     y = rnd.xi @ lc.J_kin.T + rnd.eps + dC[Method.FEA] @ lc.B.T
+    G = lc.inverse_normals(y, rough=True)
     A = lc.gains(y, rough=True)
+    np.testing.assert_allclose(A, G @ lc.J.T, rtol=1e-12, atol=1e-14 * np.abs(A).max())
     e = np.einsum("dij,dj->di", vd.PJ, np.einsum("dpi,di->dp", A, y) @ E.T - rnd.xi) + rnd.Pn
     per = np.sum(e ** 2, axis=1) / vd.points
-    exact = exact_mean_square(lc, vd, A, dC[Method.FEA], (mean, sd)) + \
+    exact = exact_mean_square(lc, vd, G, dC[Method.FEA], (mean, sd)) + \
         pri.instrument_noise_mm ** 2 * (3 * vd.points - 9) / vd.points
     assert abs(per.mean() - exact) < 4 * per.std() / np.sqrt(D)
 
@@ -106,3 +108,19 @@ def test_linear_predictor_agrees_with_monte_carlo(rod4_plan):
         se = np.std(mc[m].means_mm, ddof=1) / np.sqrt(R)
         assert abs(lin[m].mean_mm - mc[m].mean_mm) <= 3 * se + 0.03 * mc[m].mean_mm, (m, lin[m], mc[m], se)
     assert lin[Method.NONE].mean_mm > 1.5 * lin[Method.FEA].mean_mm
+
+
+def test_kinematic_rows_and_precomputed_products_are_the_matrix_forms(rod4_plan):
+    """``kinematic_rows`` is ``E G`` and the cached products are ``J^T J_kin`` and ``J^T Sigma J``: the exact mean
+    square's P x P route equals the 3N x 3N one it replaced."""
+    robot, fixture, plan, rod = rod4_plan
+    lc = linear_campaign(robot, plan, fixture, standard_base(), rod)
+    G = lc.inverse_normals(np.random.default_rng(2).normal(0, 0.01, (3, lc.J.shape[0])), rough=True)
+    K = lc.J_kin.shape[1]
+    E = lc.kinematic_map(K)
+    np.testing.assert_array_equal(lc.kinematic_rows(G, K), E @ G)
+    EA = E @ G @ lc.J.T
+    scale = np.abs(EA @ lc.Sigma @ np.swapaxes(EA, 1, 2)).max()
+    np.testing.assert_allclose(lc.kinematic_rows(G, K) @ lc.JtSigmaJ @ np.swapaxes(lc.kinematic_rows(G, K), 1, 2),
+                               EA @ lc.Sigma @ np.swapaxes(EA, 1, 2), rtol=1e-9, atol=1e-12 * scale)
+    np.testing.assert_allclose(EA @ lc.J_kin, lc.kinematic_rows(G, K) @ lc.JtJ_kin, rtol=1e-9, atol=1e-12)

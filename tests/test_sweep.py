@@ -121,3 +121,25 @@ def test_sweep_cli_calibrate_matches_the_solid_family(tmp_path, capsys):
             mine = np.array([[row[col.format(i + 1, j + 1)] for j in range(3)] for i in range(3)])
             big = np.abs(ref) > 0.02 * np.abs(ref).max()
             assert np.abs(mine[big] / ref[big] - 1).max() < 0.001, (name, key)
+
+
+def _worker_environment():
+    import os
+    return {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
+
+
+def test_local_cluster_workers_keep_glibcs_allocator_defaults(monkeypatch):
+    """The workers of rodlab's local cluster run one BLAS thread and without Dask's ``MALLOC_TRIM_THRESHOLD_``
+    (a fixed threshold maps and unmaps every array above 128 kB: a fifth of the study's worker time went to the
+    kernel)."""
+    pytest.importorskip("dask.distributed")
+    from dask.distributed import Client
+    from rodlab.core.cluster import ONE_THREAD_ENV, local_cluster
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    cluster = local_cluster(1, env=dict(ONE_THREAD_ENV))
+    try:
+        with Client(cluster) as client:
+            (env,) = client.run(_worker_environment).values()
+    finally:
+        cluster.close()
+    assert env == {"MALLOC_TRIM_THRESHOLD_": None, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}

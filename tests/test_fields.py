@@ -415,6 +415,25 @@ def test_no_opengl_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "v.png").exists()
 
 
+@pytest.mark.skipif(bool(ctypes.util.find_library("OSMesa")), reason="OSMesa is installed: it would render")
+def test_an_offscreen_probe_started_early_gives_the_same_answer(monkeypatch):
+    """start_offscreen_check runs the probe in the background; check_offscreen waits for it: where VTK cannot
+    render (forced onto the absent OSMesa) the same clear error as the probe run in place, and once known the
+    answer is not asked again."""
+    pytest.importorskip("pyvista")
+    import rodlab.core.view3d as view3d
+    monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkOSMesaRenderWindow")
+    monkeypatch.setattr(view3d, "_offscreen_ok", None)
+    monkeypatch.setattr(view3d, "_probe", None)
+    view3d.start_offscreen_check()
+    assert view3d._probe is not None
+    with pytest.raises(view3d.RenderError, match="3-D rendering is impossible here"):
+        view3d.check_offscreen()
+    assert view3d._probe is None and view3d._offscreen_ok is False
+    view3d.start_offscreen_check()                     # known: no second probe
+    assert view3d._probe is None
+
+
 def test_sweep_report_shows_the_base_design_in_3d(tmp_path):
     """rodlab sweep --report: the base design's centreline beside the table, its picture in the page."""
     from rodlab.app.cli import main

@@ -23,8 +23,8 @@ from .errors import LocatedError, RenderError
 from .vtkio import decode_strings
 from .fileio import atomic_write_bytes
 
-__all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen", "render_view",
-           "require_pyvista", "render_triangle_sets", "field_peak"]
+__all__ = ["RenderError", "FieldView", "LOAD_KEYS", "parse_load", "read_field_view", "check_offscreen",
+           "start_offscreen_check", "render_view", "require_pyvista", "render_triangle_sets", "field_peak"]
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +36,7 @@ _PART_LABEL = {"pipe_holder": "pipe holder", "pipe_I": "pipe I", "ring_1": "ring
 _HINT = ("install the EGL or OSMesa library that VTK loads (Debian / Ubuntu: `apt-get install libegl1 "
          "libgl1-mesa-dri`, or `libosmesa6`), or run where a display is available")
 _offscreen_ok: bool | None = None
+_probe: subprocess.Popen | None = None              # started early by start_offscreen_check
 
 
 def require_pyvista():
@@ -52,19 +53,42 @@ _PROBE = ("import pyvista as pv; p = pv.Plotter(off_screen=True, window_size=(48
           "raise SystemExit(0 if img is not None and img.max() > 0 else 3)")
 
 
+def start_offscreen_check() -> None:
+    """Start :func:`check_offscreen`'s probe now, in a child process, and go on: a command that renders 3-D views
+    after other work (the study's figures: ~1.6 s) has the answer waiting (the probe takes ~2 s: VTK's import).
+    Does nothing when the answer is known or pyvista is missing (:func:`check_offscreen` then says so)."""
+    global _probe
+    if _offscreen_ok is not None or _probe is not None:
+        return
+    try:
+        require_pyvista()
+        _probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.PIPE, text=True)
+    except (RenderError, OSError) as e:
+        log.debug("off-screen probe not started early: %s", e)
+
+
 def check_offscreen() -> None:
     """Raise :class:`RenderError` unless VTK renders off-screen here (tried once per process, in a child
-    process: where no OpenGL exists VTK's render window ends the process with a segmentation fault)."""
-    global _offscreen_ok
+    process: where no OpenGL exists VTK's render window ends the process with a segmentation fault; the probe
+    :func:`start_offscreen_check` started is waited for)."""
+    global _offscreen_ok, _probe
     require_pyvista()
     if _offscreen_ok is None:
+        probe, _probe = _probe, None
         try:
-            r = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=120)
-            _offscreen_ok = r.returncode == 0
+            if probe is None:
+                probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
+                                         stderr=subprocess.PIPE, text=True)
+            _, err = probe.communicate(timeout=120)
+            _offscreen_ok = probe.returncode == 0
             if not _offscreen_ok:
-                log.info("off-screen rendering probe failed (exit %s): %s", r.returncode, r.stderr[-2000:])
+                log.info("off-screen rendering probe failed (exit %s): %s", probe.returncode, err[-2000:])
         except (OSError, subprocess.TimeoutExpired) as e:
             log.info("off-screen rendering probe failed: %s", e)
+            if probe is not None:
+                probe.kill()
+                probe.wait()
             _offscreen_ok = False
     if not _offscreen_ok:
         raise RenderError(f"3-D rendering is impossible here: VTK found no OpenGL to render off-screen; {_HINT}")

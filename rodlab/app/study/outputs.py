@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from rodlab.core.fileio import atomic_write_json, atomic_write_text, json_safe
+from rodlab.core.view3d import start_offscreen_check
 from rodlab.app.report.views import frame_views
 
 from .plots import plot_heatmaps, plot_pareto
@@ -41,6 +42,8 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     ``extra_json`` is merged into ``study.json``; ``designs`` {label: RodDesign}: the recommended one is drawn in
     3-D (its frame centreline, ``recommended.vtp`` and a picture of its weakest load case)."""
     out = Path(out_dir)
+    if designs:
+        start_offscreen_check()                  # the 3-D views' probe runs while the figures below are drawn
     df = study_table(run)
     rec = recommend(df)
     atomic_write_text(out / "study.csv", df.to_csv(index=False))

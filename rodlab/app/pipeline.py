@@ -53,6 +53,7 @@ from ..core.design_io import resolve_design
 from ..core.figures_bg import background_figures
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
 from ..core.units import PAPER_ROD_SLIP
+from ..core.view3d import start_offscreen_check
 from .demo_cad import CadJob, start_cad_job
 from .diagnose import corrected_compliance, diagnose_rig
 from .diagnose.plots import plot_rig_diagnosis
@@ -78,6 +79,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
     run.out.mkdir(parents=True, exist_ok=True)
     say = progress or (lambda stage, msg: log.info("%s: %s", stage, msg))
     timings = {}
+    start_offscreen_check()                      # the 3-D views' probe (~2 s) runs beside the solid FEA
     with background_figures():                   # every figure rendered in a second process; all written here
         try:
             _run_stages(run, say, timings)

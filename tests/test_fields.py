@@ -409,6 +409,7 @@ def test_no_opengl_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
     vtp = write_frame_fields(tmp_path / "rod1.vtp", resolve_design("rod1"))
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkOSMesaRenderWindow")
     monkeypatch.setattr(view3d, "_offscreen_ok", None)
+    monkeypatch.setattr(view3d, "_probe", None)                # not a probe another test started
     assert main(["view", str(vtp), "-o", str(tmp_path / "v.png")]) == 2
     err = capsys.readouterr().err
     assert "3-D rendering is impossible here" in err and "libegl1" in err
@@ -424,7 +425,7 @@ def test_an_offscreen_probe_started_early_gives_the_same_answer(monkeypatch):
     import rodlab.core.view3d as view3d
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkOSMesaRenderWindow")
     monkeypatch.setattr(view3d, "_offscreen_ok", None)
-    monkeypatch.setattr(view3d, "_probe", None)
+    monkeypatch.setattr(view3d, "_probe", None)                # not a probe another test started
     view3d.start_offscreen_check()
     assert view3d._probe is not None
     with pytest.raises(view3d.RenderError, match="3-D rendering is impossible here"):
@@ -473,6 +474,7 @@ def test_without_pyvista_view_says_what_to_install_and_reports_go_on(tmp_path, m
     from rodlab.app.cli import main
     monkeypatch.setitem(sys.modules, "pyvista", None)          # as if the viz extra were not installed
     monkeypatch.setattr(view3d, "_offscreen_ok", None)
+    monkeypatch.setattr(view3d, "_probe", None)                # not a probe another test started
     vtp = tmp_path / "rod1.vtp"
     assert main(["fea", "rod1", "--model", "frame", "-o", str(tmp_path / "f.json"), "--fields", str(vtp),
                  "--report"]) == 0

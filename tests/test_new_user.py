@@ -325,3 +325,21 @@ def test_a_tolerance_no_part_has_is_refused_with_the_fix(tmp_path, capsys, entry
     p.write_text(text.rstrip("\n") + "\n\n[tolerances]\n" + entry + "\n")
     assert main(["validate", str(p)]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_pareto_labels_stay_inside_the_axes_and_leave_out_what_has_no_room():
+    """A crowded front: labels never cover each other nor leave the axes' frame; those without room are left out."""
+    from rodlab.app.study.plots import pareto_labels
+    xy = [(100.0 + 3.0 * k, 50.0 + 1.0 * k) for k in range(12)]           # twelve points a few pt apart
+    frame = (60.0, 40.0, 400.0, 300.0)
+    labels = pareto_labels(xy, [f"1# {150 + 50 * k}-300" for k in range(12)], frame)
+    assert 0 < len(labels) < 12
+    boxes = []
+    for i, text, (dx, dy), ha in labels:
+        w = 4.3 * len(text)
+        x0 = xy[i][0] + dx - (w if ha == "right" else 0.0)
+        boxes.append((x0, xy[i][1] + dy, x0 + w, xy[i][1] + dy + 9.0))
+    for a, A in enumerate(boxes):
+        assert frame[0] <= A[0] and A[2] <= frame[2] and frame[1] <= A[1] and A[3] <= frame[3], labels[a]
+        for B in boxes[:a]:
+            assert not (A[0] < B[2] and B[0] < A[2] and A[1] < B[3] and B[1] < A[3])

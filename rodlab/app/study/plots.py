@@ -32,11 +32,13 @@ _CHAR_PT, _LINE_PT = 4.3, 9.0        # a 7-point label's character width and lin
 _OFFSETS = [(4, -10), (4, 3), (-4, -10), (-4, 3), (4, -19), (4, 12), (-4, -19), (-4, 12), (4, -28), (4, 21)]
 
 
-def pareto_labels(xy_pt, names) -> list[tuple[int, str, tuple[float, float], str]]:
+def pareto_labels(xy_pt, names, frame=None) -> list[tuple[int, str, tuple[float, float], str]]:
     """Where the point labels go: (index of the point, text, offset [pt], horizontal alignment), with the
     points' display positions ``xy_pt`` [pt]. Designs at the same point share one label; every other label
-    takes the first of a few offsets around its point where it covers no label placed before it, so two
-    designs at the same reach (another tube) both keep their names."""
+    takes the first of a few offsets around its point where it covers no label placed before it (and stays
+    inside ``frame`` = (x0, y0, x1, y1) [pt], the axes, when given), so two designs at the same reach (another
+    tube) both keep their names; a label with no such place is left out (a crowded front: every design is in
+    study.csv) rather than drawn over another."""
     xy = np.asarray(xy_pt, float).reshape(-1, 2)
     groups: dict[tuple, list] = {}
     for i, (p, name) in enumerate(zip(xy, names)):
@@ -44,15 +46,27 @@ def pareto_labels(xy_pt, names) -> list[tuple[int, str, tuple[float, float], str
     placed, out = [], []
     for (px, py), members in sorted(groups.items(), key=lambda g: (-g[0][1], g[0][0])):
         text = ", ".join(name for _, name in members)
-        w = _CHAR_PT * len(text)
-        for dx, dy in _OFFSETS:
-            x0 = px + dx if dx > 0 else px + dx - w
-            box = (x0, py + dy, x0 + w, py + dy + _LINE_PT)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
-                break
+        spot = _free_spot(px, py, _CHAR_PT * len(text), placed, frame)
+        if spot is None:
+            continue
+        (dx, dy), box = spot
         placed.append(box)
         out.append((members[0][0], text, (float(dx), float(dy)), "left" if dx > 0 else "right"))
     return out
+
+
+def _free_spot(px: float, py: float, w: float, placed: list, frame) -> tuple | None:
+    """The first offset of :data:`_OFFSETS` whose label box (width ``w`` [pt]) at the point covers no box in
+    ``placed`` and lies inside ``frame``: ((dx, dy), box), or None."""
+    for dx, dy in _OFFSETS:
+        x0 = px + dx if dx > 0 else px + dx - w
+        box = (x0, py + dy, x0 + w, py + dy + _LINE_PT)
+        if frame is not None and not (frame[0] <= box[0] and box[2] <= frame[2] and frame[1] <= box[1]
+                                      and box[3] <= frame[3]):
+            continue
+        if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
+            return (dx, dy), box
+    return None
 
 
 def _save(fig, path) -> Path:
@@ -72,8 +86,9 @@ def _pareto_panel(ax, rows, xcol, xlabel, xscale, method, more_is_better=False):
     shown = np.ones_like(front) if front.size <= _LABEL_ALL else front
     ax.autoscale_view()
     xy_pt = ax.transData.transform(np.column_stack([x, y])[shown]) * 72.0 / ax.figure.dpi
+    frame = ax.get_window_extent().extents * 72.0 / ax.figure.dpi
     px, py = x[shown], y[shown]
-    for i, text, offset, ha in pareto_labels(xy_pt, names[shown]):
+    for i, text, offset, ha in pareto_labels(xy_pt, names[shown], frame):
         ax.annotate(text, (px[i], py[i]), xytext=offset, textcoords="offset points", fontsize=7, ha=ha)
     ax.set_xlabel(xlabel)
     ax.set_ylabel("predicted validation error, mean [mm]")

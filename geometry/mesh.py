@@ -27,6 +27,7 @@ from rodlab.core.layout import layout
 
 from .cadlib import build123d
 from .errors import GeometryError
+from .gmsh_signals import initialize_gmsh
 from .mesh_generate import generate_mesh, session_options
 from .parts import half_solids, part_solids
 from .occ_parts import add_part_volumes
@@ -215,7 +216,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
         if half:
             solids = half_solids(solids)
     with _GMSH_LOCK, tempfile.TemporaryDirectory(prefix="rodlab-mesh-") as tmp:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
+        initialize_gmsh()
         try:
             session_options()
             gmsh.model.add(f"rod_{design.name}")

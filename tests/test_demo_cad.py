@@ -2,6 +2,8 @@
 fails, and its numbers are those of the CAD built in this process."""
 from __future__ import annotations
 
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -75,3 +77,32 @@ def test_a_failing_stage_stops_the_cad_child(tmp_path, monkeypatch):
         pipeline.run_demo(tmp_path, sweep_grid=(np.array([300.0]), np.array([450.0])))
     assert _FakeJob.cancelled
     assert not (tmp_path / "run.json").exists()
+
+
+def _cad_children(pid: int) -> list:
+    psutil = pytest.importorskip("psutil")
+    try:
+        return [c for c in psutil.Process(pid).children(recursive=True) if "demo_cad" in " ".join(c.cmdline())]
+    except psutil.NoSuchProcess:
+        return []
+
+
+def test_a_killed_demo_stops_its_cad_child(tmp_path):
+    """``kill`` (SIGTERM) ends the demo as Ctrl-C does: the CAD child is stopped, exit 130, "interrupted"."""
+    psutil = pytest.importorskip("psutil")
+    proc = subprocess.Popen([sys.executable, "-m", "rodlab", "demo", "-o", str(tmp_path / "demo")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        children = []
+        while not children and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+            children = _cad_children(proc.pid)
+        assert children, "the demo's CAD child never started"
+        proc.terminate()
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130 and "interrupted" in err, err
+    gone, alive = psutil.wait_procs(children, timeout=10)
+    assert not alive

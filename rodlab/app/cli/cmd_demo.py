@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 
@@ -29,7 +30,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     def progress(stage, msg):
         k = STAGES.index(stage) + 1
         print(f"[{k}/{len(STAGES)}] {stage:<9} {msg}", file=sys.stderr, flush=True)
-    s = run_demo(args.output, progress, seed=args.seed)
+    def stop(signum, frame):                   # kill / hang-up stop the demo as Ctrl-C does: its CAD child first
+        raise KeyboardInterrupt
+    before = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    try:
+        s = run_demo(args.output, progress, seed=args.seed)
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
     st = s["stages"]
     print(f"\nrod 1#: c_rod calc {st['design']['c_rod_um_calc']:.0f} um, {st['fea']['model']} c_rod "
           f"{st['fea']['c_rod_um']:.0f} um; rig r_rod {st['fit']['r_rod']:.3f}")

@@ -135,7 +135,13 @@ class LinearCampaign:
     def _terms(self, cols: np.ndarray | None) -> _FitTerms:
         """The noise-independent terms of :meth:`scatter` and :meth:`weak` for the columns ``cols``, computed
         once per column set (a campaign uses two: all, and all but the joint compliances)."""
-        cols = np.ones(self.J.shape[1], bool) if cols is None else np.asarray(cols, bool)
+        P = self.J.shape[1]
+        if cols is None:
+            cols = np.ones(P, bool)
+        else:                                        # a bool mask or column indices; a copy of the caller's
+            mask = np.zeros(P, bool)
+            mask[np.asarray(cols)] = True
+            cols = mask
         key = cols.tobytes()
         if key not in self._terms_cache:
             J = self.J[:, cols]

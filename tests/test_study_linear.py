@@ -52,6 +52,17 @@ def test_unregularised_fit_recovers_the_parameters_exactly(rod4_plan):
     A = lc.gains(np.zeros((2, lc.J.shape[0])), rough=True)
     assert A.shape == (2, lc.J.shape[1], lc.J.shape[0])
     np.testing.assert_allclose(A[0] @ lc.J, np.eye(lc.J.shape[1]), atol=1e-8)
+    # the gains through the inverse normal matrix are the solve of the normal equations
+    ref = np.linalg.solve(lc.J.T @ lc.J, lc.J.T)
+    np.testing.assert_allclose(A[0], ref, rtol=1e-7, atol=1e-9 * np.abs(ref).max())
+    # scatter and weak take a bool mask or column indices alike, and keep no reference to the caller's mask
+    mask = ~lc.is_c
+    idx = np.nonzero(mask)[0]
+    y = np.random.default_rng(3).normal(0, 0.01, (2, lc.J.shape[0]))
+    s1 = lc.scatter(y, mask)
+    mask[:] = True
+    np.testing.assert_array_equal(lc.scatter(y, idx), s1)
+    np.testing.assert_array_equal(lc.weak(s1, idx), lc.weak(s1, ~lc.is_c))
     # a large scatter regularises the weakly seen parameters: their response shrinks
     big = lc.gains(np.full((1, lc.J.shape[0]), 0.0) + np.random.default_rng(1).normal(0, 5.0, (1, lc.J.shape[0])),
                    rough=False)

@@ -22,7 +22,8 @@ ONE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_
 #: ``MALLOC_TRIM_THRESHOLD_=65536`` before it spawns a worker (to hand freed memory back to the OS at once); a fixed
 #: threshold also fixes glibc's mmap threshold at 128 kB, so every NumPy array above it (a design's (256, 34, 90)
 #: stacks are ~6 MB) is mapped and unmapped again, its pages faulted in each time: the study's workers spent ~20 %
-#: of their time in the kernel (17.6 s system time of 86 s; 1 s in a serial run)
+#: of their time in the kernel (17.6 s system time of 86 s; 1 s in a serial run). This key of the user's own Dask
+#: configuration is overridden for rodlab's local cluster; workers of a remote ``--scheduler`` keep their own
 KEEP_MALLOC_DEFAULTS = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
 
 log = logging.getLogger(__name__)

@@ -7,6 +7,8 @@ process is tried in a child process first (:func:`check_offscreen`), and a clear
 """
 from __future__ import annotations
 
+import atexit
+import importlib.util
 import io
 import logging
 import os
@@ -58,14 +60,24 @@ def start_offscreen_check() -> None:
     after other work (the study's figures: ~1.6 s) has the answer waiting (the probe takes ~2 s: VTK's import).
     Does nothing when the answer is known or pyvista is missing (:func:`check_offscreen` then says so)."""
     global _probe
-    if _offscreen_ok is not None or _probe is not None:
-        return
+    if _offscreen_ok is not None or _probe is not None or importlib.util.find_spec("pyvista") is None:
+        return                                   # (pyvista found, not imported: the child imports it)
     try:
-        require_pyvista()
         _probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
                                   stderr=subprocess.PIPE, text=True)
-    except (RenderError, OSError) as e:
+    except OSError as e:
         log.debug("off-screen probe not started early: %s", e)
+        return
+    atexit.register(_drop_probe)                 # a command that stops before its views: no child left
+
+
+def _drop_probe() -> None:
+    """Stop a probe nobody waited for (the process ends before its 3-D views)."""
+    global _probe
+    probe, _probe = _probe, None
+    if probe is not None and probe.poll() is None:
+        probe.kill()
+        probe.wait()
 
 
 def check_offscreen() -> None:
@@ -80,7 +92,12 @@ def check_offscreen() -> None:
             if probe is None:
                 probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
                                          stderr=subprocess.PIPE, text=True)
-            _, err = probe.communicate(timeout=120)
+            try:
+                _, err = probe.communicate(timeout=120)
+            except KeyboardInterrupt:
+                probe.kill()
+                probe.wait()
+                raise
             _offscreen_ok = probe.returncode == 0
             if not _offscreen_ok:
                 log.info("off-screen rendering probe failed (exit %s): %s", probe.returncode, err[-2000:])

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import signal
 import sys
+import threading
 import time
 
 from .argtypes import seed
@@ -32,7 +33,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
         print(f"[{k}/{len(STAGES)}] {stage:<9} {msg}", file=sys.stderr, flush=True)
     def stop(signum, frame):                   # kill / hang-up stop the demo as Ctrl-C does: its CAD child first
         raise KeyboardInterrupt
-    before = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGHUP)}
+    # SIGHUP does not exist on Windows; handlers can be set from the main thread only
+    sigs = [getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)]
+    main_thread = threading.current_thread() is threading.main_thread()
+    before = {sig: signal.signal(sig, stop) for sig in sigs} if main_thread else {}
     try:
         s = run_demo(args.output, progress, seed=args.seed)
     finally:

@@ -63,21 +63,31 @@ def start_offscreen_check() -> None:
     if _offscreen_ok is not None or _probe is not None or importlib.util.find_spec("pyvista") is None:
         return                                   # (pyvista found, not imported: the child imports it)
     try:
-        _probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.PIPE, text=True)
+        _probe = _start_probe()
     except OSError as e:
         log.debug("off-screen probe not started early: %s", e)
         return
     atexit.register(_drop_probe)                 # a command that stops before its views: no child left
 
 
+def _start_probe() -> subprocess.Popen:
+    """The probe's child process (its stderr kept for the log)."""
+    return subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True)
+
+
+def _stop(probe: subprocess.Popen | None) -> None:
+    """Kill a probe still running and reap it."""
+    if probe is not None and probe.poll() is None:
+        probe.kill()
+        probe.wait()
+
+
 def _drop_probe() -> None:
     """Stop a probe nobody waited for (the process ends before its 3-D views)."""
     global _probe
     probe, _probe = _probe, None
-    if probe is not None and probe.poll() is None:
-        probe.kill()
-        probe.wait()
+    _stop(probe)
 
 
 def check_offscreen() -> None:
@@ -89,23 +99,18 @@ def check_offscreen() -> None:
     if _offscreen_ok is None:
         probe, _probe = _probe, None
         try:
-            if probe is None:
-                probe = subprocess.Popen([sys.executable, "-c", _PROBE], stdout=subprocess.DEVNULL,
-                                         stderr=subprocess.PIPE, text=True)
+            probe = probe or _start_probe()
             try:
                 _, err = probe.communicate(timeout=120)
             except KeyboardInterrupt:
-                probe.kill()
-                probe.wait()
+                _stop(probe)
                 raise
             _offscreen_ok = probe.returncode == 0
             if not _offscreen_ok:
                 log.info("off-screen rendering probe failed (exit %s): %s", probe.returncode, err[-2000:])
         except (OSError, subprocess.TimeoutExpired) as e:
             log.info("off-screen rendering probe failed: %s", e)
-            if probe is not None:
-                probe.kill()
-                probe.wait()
+            _stop(probe)
             _offscreen_ok = False
     if not _offscreen_ok:
         raise RenderError(f"3-D rendering is impossible here: VTK found no OpenGL to render off-screen; {_HINT}")

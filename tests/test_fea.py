@@ -152,6 +152,11 @@ def test_half_model_equals_mirrored_whole():
     assert np.abs(half.mesh.p[1]).min() == 0.0 and half.mesh.p[1].min() > -1e-9
     whole = half.mirrored()
     assert not whole.is_half and whole.mesh.p.shape[1] < 2 * half.mesh.p.shape[1]   # plane nodes shared
+    assert half.mirrored() is whole                        # made once: the picture and the field file share it
+    import pickle
+    again = pickle.loads(pickle.dumps(half))               # the mesh cache keeps the half only
+    assert again._whole is None and again.mirrored().sha256 == whole.sha256
+    np.testing.assert_array_equal(again.mirrored().mesh.t, whole.mesh.t)
     from rodlab.fea.stiffness_assembly import scalar_basis
     b = scalar_basis(whole.mesh)
     assert (b.mapping.detDF(b.X) > 0).all()                # images re-ordered: no inverted element

@@ -55,7 +55,7 @@ def _quoteattr(text: str) -> str:
 
 def _encode(a: np.ndarray) -> str:
     raw = np.ascontiguousarray(a).tobytes()
-    comp = zlib.compress(raw, 6)
+    comp = zlib.compress(raw, 1)       # level 6 took ~0.3 s on a solid field file for 1 % less size
     header = np.array([1, len(raw), len(raw), len(comp)], dtype="<u8").tobytes()
     return base64.b64encode(header).decode() + base64.b64encode(comp).decode()
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import logging
 import time
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Callable
 
@@ -47,6 +48,7 @@ from rodlab.stiffness_rig.effects import joint_places
 from rodlab.stiffness_rig.model import LoadSchedule, RigModel
 from rodlab.stiffness_rig.simulate import simulate_recording
 
+from ..core.blas_threads import one_blas_thread
 from ..core.calc import calc_rod_compliance
 from ..core.compliance import RodCompliance, write_compliance
 from ..core.design_io import resolve_design
@@ -93,15 +95,20 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
 
 
 def _run_stages(run: _DemoRun, say, timings: dict) -> None:
-    """Every stage in :data:`STAGES` order; the CAD stage, started in a second process, finished last."""
-    for name in STAGES:
-        t0 = time.perf_counter()
-        say(name, "started" if name != "cad" or not run.cad else
-            "started in a second process, beside the stages after it")
-        getattr(run, f"stage_{name}")()
-        if name != "cad" or run.cad_job is None:
-            timings[name] = time.perf_counter() - t0
-            say(name, f"done in {timings[name]:.1f} s")
+    """Every stage in :data:`STAGES` order; the CAD stage, started in a second process, finished last. The
+    stages after the FEA's solve run with one BLAS thread (:func:`~rodlab.core.blas_threads.one_blas_thread`):
+    the CAD and figure processes run beside them."""
+    with ExitStack() as beside:
+        for name in STAGES:
+            if name == "cad":
+                beside.enter_context(one_blas_thread())
+            t0 = time.perf_counter()
+            say(name, "started" if name != "cad" or not run.cad else
+                "started in a second process, beside the stages after it")
+            getattr(run, f"stage_{name}")()
+            if name != "cad" or run.cad_job is None:
+                timings[name] = time.perf_counter() - t0
+                say(name, f"done in {timings[name]:.1f} s")
     if run.cad_job is not None:
         timings["cad"] = run.finish_cad()
         say("cad", f"done in {timings['cad']:.1f} s (beside the other stages)")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -153,7 +154,6 @@ def test_half_model_equals_mirrored_whole():
     whole = half.mirrored()
     assert not whole.is_half and whole.mesh.p.shape[1] < 2 * half.mesh.p.shape[1]   # plane nodes shared
     assert half.mirrored() is whole                        # made once: the picture and the field file share it
-    import pickle
     again = pickle.loads(pickle.dumps(half))               # the mesh cache keeps the half only
     assert again._whole is None and again.mirrored().sha256 == whole.sha256
     np.testing.assert_array_equal(again.mirrored().mesh.t, whole.mesh.t)

@@ -46,6 +46,7 @@ class RodMesh:
     msh_path: Path | None = None
     stats: dict = field(default_factory=dict)
     symmetry_facets: np.ndarray | None = None
+    #: the whole rod, once :meth:`mirrored` made it (not pickled: :meth:`__getstate__`; dataclasses.asdict would copy it)
     _whole: "RodMesh | None" = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

@@ -55,7 +55,7 @@ def _quoteattr(text: str) -> str:
 
 def _encode(a: np.ndarray) -> str:
     raw = np.ascontiguousarray(a).tobytes()
-    comp = zlib.compress(raw, 1)       # level 6 took ~0.3 s on a solid field file for 1 % less size
+    comp = zlib.compress(raw, 1)       # rod 1#'s solid fields (7.5 MB): level 6 0.30 s, level 1 0.23 s, 1 % larger
     header = np.array([1, len(raw), len(raw), len(comp)], dtype="<u8").tobytes()
     return base64.b64encode(header).decode() + base64.b64encode(comp).decode()
 

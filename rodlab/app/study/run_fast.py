@@ -81,7 +81,7 @@ def run_fast(cands, robot, fixture, spec, joints: dict, cache_dir, scheduler, wo
         if client is not None:
             _dask(client, cands, keys, todo, got, robot, fixture, spec, joints, cache, tick)
         else:
-            with one_blas_thread():       # a design's small matrices: 1.5x faster than two threads
+            with one_blas_thread():       # a design's small matrices: 1.5x faster than two OpenBLAS threads
                 for i in todo:
                     got[i] = _fast_task(cands[i], robot, fixture, spec, joints.get(cands[i].label))
                     cache.put(keys[i], "fast.json", got[i])

@@ -96,7 +96,7 @@ def run_demo(out_dir, progress: Callable[[str, str], None] | None = None, seed: 
 
 def _run_stages(run: _DemoRun, say, timings: dict) -> None:
     """Every stage in :data:`STAGES` order; the CAD stage, started in a second process, finished last. The
-    stages after the FEA's solve run with one BLAS thread (:func:`~rodlab.core.blas_threads.one_blas_thread`):
+    stages from the CAD stage on run with one OpenBLAS thread (:func:`~rodlab.core.blas_threads.one_blas_thread`):
     the CAD and figure processes run beside them."""
     with ExitStack() as beside:
         for name in STAGES:

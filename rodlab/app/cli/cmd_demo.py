@@ -2,12 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 import time
 
 from .argtypes import seed
+from .interrupts import kill_as_interrupt
 
 __all__ = ["register"]
 
@@ -31,17 +30,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     def progress(stage, msg):
         k = STAGES.index(stage) + 1
         print(f"[{k}/{len(STAGES)}] {stage:<9} {msg}", file=sys.stderr, flush=True)
-    def stop(signum, frame):                   # kill / hang-up stop the demo as Ctrl-C does: its CAD child first
-        raise KeyboardInterrupt
-    # SIGHUP does not exist on Windows; handlers can be set from the main thread only
-    sigs = [getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n)]
-    main_thread = threading.current_thread() is threading.main_thread()
-    before = {sig: signal.signal(sig, stop) for sig in sigs} if main_thread else {}
-    try:
+    with kill_as_interrupt():                  # kill / hang-up stop the demo as Ctrl-C does: its CAD child first
         s = run_demo(args.output, progress, seed=args.seed)
-    finally:
-        for sig, handler in before.items():
-            signal.signal(sig, handler)
     st = s["stages"]
     print(f"\nrod 1#: c_rod calc {st['design']['c_rod_um_calc']:.0f} um, {st['fea']['model']} c_rod "
           f"{st['fea']['c_rod_um']:.0f} um; rig r_rod {st['fit']['r_rod']:.3f}")

@@ -6,7 +6,6 @@ import contextlib
 import json
 import os
 import re
-import signal
 import sys
 import textwrap
 import time
@@ -28,6 +27,7 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
 from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
+from .interrupts import kill_as_interrupt
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
 from .rodargs import compliance_arg, design_of_compliance, warn_rod_mismatch
@@ -319,11 +319,8 @@ def cmd_simulator(args: argparse.Namespace) -> int:
         devices = [SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                                 faults=Faults(garbage=args.garbage))]
         what = f"on {args.link} ({args.protocol}, 3 gauges in um + temperature"
-    def stop(signum, frame):                   # kill / hang-up end the simulator as Ctrl-C does: link removed
-        raise KeyboardInterrupt
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, stop)
-    with contextlib.ExitStack() as stack:
+    # kill / hang-up end the simulator as Ctrl-C does: its links removed
+    with kill_as_interrupt(), contextlib.ExitStack() as stack:
         for dev in devices:
             stack.enter_context(dev)
         print(f"simulated rig of rod {sim.rod} {what}; loader: 'LOAD <axis> <phase> <mass_kg>'); Ctrl-C to stop",

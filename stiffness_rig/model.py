@@ -6,6 +6,8 @@ adds its own physics. Every effect is one module of :mod:`rodlab.stiffness_rig.e
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,9 +59,10 @@ class LoadSchedule:
                 raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
         per_hold = self.hold_s * self.rate_Hz
         holds = len(self.axes) * (1 + self.repeats * 2 * len(self.masses))     # :meth:`holds`, counted
+        holds = float(holds) if holds < 1e300 else math.inf    # repeats = 1e308 (an int beyond any float: overflow)
         if not per_hold <= MAX_SAMPLES_PER_HOLD or not holds * per_hold <= MAX_SAMPLES_PER_PLAN:   # and not inf
             key = "rate_Hz" if self.rate_Hz > 1e3 else "repeats" if per_hold <= MAX_SAMPLES_PER_HOLD else "hold_s"
-            raise RigError(f"{holds} holds of {self.hold_s:g} s at {self.rate_Hz:g} Hz take {holds * per_hold:.3g} "
+            raise RigError(f"{holds:.6g} holds of {self.hold_s:g} s at {self.rate_Hz:g} Hz take {holds * per_hold:.3g} "
                            f"samples ({per_hold:.3g} per hold), more than a plan's {MAX_SAMPLES_PER_PLAN:.0e} or a "
                            f"hold's {MAX_SAMPLES_PER_HOLD:.0e}: is hold_s in seconds, rate_Hz in Hz and repeats a "
                            f"count? (the paper: 8 s at 10 Hz, 5 repeats; a day's creep hold at 10 Hz is 864 000 "

@@ -162,8 +162,8 @@ def test_a_hold_shorter_than_one_sample_is_refused(tmp_path, capsys):
 
 
 def test_a_hold_of_absurdly_many_samples_is_refused_in_the_plan_file(tmp_path):
-    """A plan file's hold_s = 1e308 (found by the readers' fuzzing: an OverflowError traceback) or a hold in ms
-    written as s: refused naming the file, the key and the likely slip."""
+    """A plan file's hold_s = 1e308 or repeats = 1e308 (each found by the readers' fuzzing: an OverflowError
+    traceback) or a hold in ms written as s: refused naming the file, the key and the likely slip."""
     from rodlab.core.errors import RodlabError
     from conftest import ROOT
     from rodlab.stiffness_rig.config import read_plan
@@ -173,7 +173,8 @@ def test_a_hold_of_absurdly_many_samples_is_refused_in_the_plan_file(tmp_path):
         bad.write_text(src.read_text().replace("hold_s = 8.0", f"hold_s = {hold}"))
         with pytest.raises(RodlabError, match=r"bad\.plan\.toml.*hold_s.*is hold_s in seconds"):
             read_plan(bad)
-    for old, new, key in (("rate_Hz = 10.0", "rate_Hz = 1e7", "rate_Hz"), ("repeats = 5", "repeats = 1000000", "repeats")):
+    for old, new, key in (("rate_Hz = 10.0", "rate_Hz = 1e7", "rate_Hz"), ("repeats = 5", "repeats = 1000000", "repeats"),
+                          ("repeats = 5", "repeats = 1e308", "repeats")):    # 1e308 holds: an int beyond any float
         bad.write_text(src.read_text().replace(old, new))             # the whole plan too long, the key named
         with pytest.raises(RodlabError, match=rf"bad\.plan\.toml.*{key}.*more than a plan's 1e\+08"):
             read_plan(bad)

@@ -19,6 +19,7 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
+from rodlab.calibrate.trust import gross
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance, read_compliance
@@ -137,9 +138,16 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def _campaign_prediction(run: CalibrationRun):
-    """The held-out accuracy: the validation points when given, else cross-validation over clamping positions."""
+    """The held-out accuracy: the validation points when given, else cross-validation over clamping positions; None
+    where the fit itself is gross (:func:`~rodlab.calibrate.trust.gross`: files that do not fit together, refused
+    whatever five more identifications of them would predict; a campaign of another robot's file: ~10 s saved)."""
     if run.calibrated_mm is not None:
         return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
+    test = run.result.residual_check
+    if test is not None and gross(test.birge, run.result.rms_mm):
+        print(f"note: no cross-validation: the fit itself leaves {run.result.rms_mm:.3g} mm rms ({test.birge:.0f} times "
+              "the noise model), which no held-out error would make usable", file=sys.stderr)
+        return None
     return cross_validate_identify(run.robot, run.observations, run.rod, run.compensations, run.options,
                                    fit_rms_mm=run.result.rms_mm)
 

@@ -6,8 +6,6 @@ adds its own physics. Every effect is one module of :mod:`rodlab.stiffness_rig.e
 """
 from __future__ import annotations
 
-import math
-
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,7 +48,9 @@ class LoadSchedule:
         if list(self.masses) != sorted(self.masses):
             raise RigError(f"masses must increase (they are loaded one after the other), got {list(self.masses)}",
                            key="masses")
-        checks = {"repeats": (self.repeats, "a whole number >= 1", self.repeats >= 1 and int(self.repeats) == self.repeats),
+        r = self.repeats                                 # an int of any size, or a float that is whole
+        whole = r >= 1 and (isinstance(r, (int, np.integer)) or (bool(np.isfinite(r)) and int(r) == r))
+        checks = {"repeats": (self.repeats, "a whole number >= 1", whole),
                   "hold_s": (self.hold_s, "a duration > 0 s", np.isfinite(self.hold_s) and self.hold_s > 0),
                   "rate_Hz": (self.rate_Hz, "a rate > 0 Hz", np.isfinite(self.rate_Hz) and self.rate_Hz > 0),
                   "gap_s": (self.gap_s, "a duration >= 0 s", np.isfinite(self.gap_s) and self.gap_s >= 0)}
@@ -59,10 +59,11 @@ class LoadSchedule:
                 raise RigError(f"{key} must be {expected}, got {value!r}", key=key)
         per_hold = self.hold_s * self.rate_Hz
         holds = len(self.axes) * (1 + self.repeats * 2 * len(self.masses))     # :meth:`holds`, counted
-        holds = float(holds) if holds < 1e300 else math.inf    # repeats = 1e308 (an int beyond any float: overflow)
+        holds = float(holds) if holds < 1e300 else np.inf      # repeats = 1e308 (an int beyond any float: overflow)
         if not per_hold <= MAX_SAMPLES_PER_HOLD or not holds * per_hold <= MAX_SAMPLES_PER_PLAN:   # and not inf
             key = "rate_Hz" if self.rate_Hz > 1e3 else "repeats" if per_hold <= MAX_SAMPLES_PER_HOLD else "hold_s"
-            raise RigError(f"{holds:.6g} holds of {self.hold_s:g} s at {self.rate_Hz:g} Hz take {holds * per_hold:.3g} "
+            count = f"{holds:.6g}" if holds < 1e300 else "more than 1e300"
+            raise RigError(f"{count} holds of {self.hold_s:g} s at {self.rate_Hz:g} Hz take {holds * per_hold:.3g} "
                            f"samples ({per_hold:.3g} per hold), more than a plan's {MAX_SAMPLES_PER_PLAN:.0e} or a "
                            f"hold's {MAX_SAMPLES_PER_HOLD:.0e}: is hold_s in seconds, rate_Hz in Hz and repeats a "
                            f"count? (the paper: 8 s at 10 Hz, 5 repeats; a day's creep hold at 10 Hz is 864 000 "

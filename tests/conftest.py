@@ -22,15 +22,25 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
         os.environ.setdefault(_var, "1")
 
 
+#: the most workers ``-n auto`` starts (each may run gmsh, VTK, Chromium or a Dask cluster: ~1 GB at most)
+MAX_AUTO_WORKERS = 8
+
+
+@pytest.hookimpl(optionalhook=True)                     # pytest without xdist (-p no:xdist) runs as before
 def pytest_xdist_auto_num_workers(config):
-    """``-n auto``: one worker more than the cores this process may run on. The rig's tests wait for their
-    simulators in real time (~230 s of the suite's ~1160 s run one after the other), and the extra worker computes
-    meanwhile (2 cores: 8:29 with three workers, 9:58 with two, in one hour's runs)."""
+    """``-n auto``: one worker more than the cores this process may run on, at most :data:`MAX_AUTO_WORKERS`;
+    xdist's ``PYTEST_XDIST_AUTO_NUM_WORKERS`` overrides it. The rig's tests wait for their simulators in real time
+    (~230 s of the suite's ~1160 s run one after the other), and the extra worker computes meanwhile (2 cores: 8:29
+    with three workers, 9:58 with two, in one hour's runs). The multithreaded paths (PARDISO and OpenBLAS on every
+    core, a Dask cluster beside a multithreaded main process) run in a bare ``python -m pytest``, not under xdist."""
+    override = os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS", "").strip()
+    if override:
+        return int(override)
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:                               # no affinity on this platform
         cores = os.cpu_count() or 1
-    return cores + 1
+    return min(cores + 1, MAX_AUTO_WORKERS)
 
 
 @pytest.fixture(scope="session", autouse=True)

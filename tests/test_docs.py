@@ -24,5 +24,7 @@ def test_readme_first_lines_give_the_two_commands():
     assert "pip install -e" in text and "rodlab demo" in text
     assert 'pip install -e ".[test,cad,viz]"' in text and "python -m pytest" in text
     ci = (ROOT / ".ci" / "run").read_text()
-    pytest_line = re.search(r"python -m pytest [^\n]*", ci).group(0)       # CI runs the README's test command
+    found = re.search(r"python -m pytest [^\n]*", ci)
+    assert found, ".ci/run runs no `python -m pytest ...` line"
+    pytest_line = found.group(0)                                           # CI runs the README's test command
     assert pytest_line.startswith('python -m pytest -m "not slow"') and text.rstrip().endswith(pytest_line + "\n```")

@@ -161,6 +161,17 @@ def test_a_hold_shorter_than_one_sample_is_refused(tmp_path, capsys):
     assert "rodlab rig simulate: error: key `hold_s`" in err and "takes no sample" in err and not out.exists()
 
 
+def test_a_schedule_of_endless_repeats_is_refused_from_python():
+    """``LoadSchedule(repeats=...)`` as an acquisition script may change it: inf and an int beyond any float are
+    refused naming ``repeats`` (both had been an OverflowError)."""
+    import math
+    from rodlab.stiffness_rig.errors import RigError
+    from rodlab.stiffness_rig.model import LoadSchedule
+    for repeats in (math.inf, 10 ** 400):
+        with pytest.raises(RigError, match="repeats"):
+            LoadSchedule(repeats=repeats)
+
+
 def test_a_hold_of_absurdly_many_samples_is_refused_in_the_plan_file(tmp_path):
     """A plan file's hold_s = 1e308 or repeats = 1e308 (each found by the readers' fuzzing: an OverflowError
     traceback) or a hold in ms written as s: refused naming the file, the key and the likely slip."""

@@ -135,7 +135,8 @@ def test_local_cluster_workers_keep_glibcs_allocator_defaults(monkeypatch):
     pytest.importorskip("dask.distributed")
     from dask.distributed import Client
     from rodlab.core.cluster import ONE_THREAD_ENV, local_cluster
-    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    for var in ("MALLOC_TRIM_THRESHOLD_", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):   # not inherited (conftest)
+        monkeypatch.delenv(var, raising=False)
     cluster = local_cluster(1, env=dict(ONE_THREAD_ENV))
     try:
         with Client(cluster) as client:

@@ -17,7 +17,9 @@ TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
 def test_tutorial_runs(path, tmp_path):
     blocks = re.findall(r"```bash\n(.*?)```", path.read_text(), flags=re.S)
     assert blocks
-    script = "set -euo pipefail\n" + "\n".join(blocks) + "\nwait || true\n"
+    # a failing step stops the tutorial's background jobs too (a simulator would hold the output pipe to its end)
+    script = ("set -euo pipefail\ntrap 'kill $(jobs -p) 2>/dev/null || true' EXIT\n" + "\n".join(blocks)
+              + "\nwait || true\n")
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}:{os.environ['PATH']}", MPLBACKEND="Agg")
     r = subprocess.run(["bash", "-c", script], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]

@@ -144,9 +144,9 @@ def _campaign_prediction(run: CalibrationRun):
     if run.calibrated_mm is not None:
         return Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm)
     test = run.result.residual_check
-    if test is not None and gross(test.birge, run.result.rms_mm):
+    if run.result.warnings and test is not None and gross(test.birge, run.result.rms_mm):     # refused already
         print(f"note: no cross-validation: the fit itself leaves {run.result.rms_mm:.3g} mm rms ({test.birge:.0f} times "
-              "the noise model), which no held-out error would make usable", file=sys.stderr)
+              "the stated scatter), which no held-out error would make usable", file=sys.stderr)
         return None
     return cross_validate_identify(run.robot, run.observations, run.rod, run.compensations, run.options,
                                    fit_rms_mm=run.result.rms_mm)

@@ -16,7 +16,8 @@ ROD1 = ROOT / "rodlab" / "data" / "rods" / "rod1.rod.toml"
 # Under pytest-xdist (`-n auto`, the README's test command; see pytest_xdist_auto_num_workers below) each worker's
 # BLAS, MKL (PARDISO) and OpenMP keep to one thread, or the workers' threads outnumber the cores many times over
 # (measured on 2 cores with two workers: 13 % more wall time and 20 % more CPU time for the FEA, mix-up and spread
-# tests). Set before NumPy or MKL is loaded (the CLI's subprocesses inherit it); a value the user set is kept.
+# tests). Set before NumPy or MKL is loaded (the CLI's subprocesses inherit it); a value the user set is kept. The
+# variables are rodlab.core.cluster.ONE_THREAD_ENV's (a Dask worker's), written out: importing rodlab loads NumPy.
 if os.environ.get("PYTEST_XDIST_WORKER"):
     for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS"):
         os.environ.setdefault(_var, "1")

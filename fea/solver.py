@@ -24,6 +24,7 @@ import sys
 import numpy as np
 import scipy.sparse as sp
 
+from rodlab.core.cores import usable_cores
 from rodlab.core.enums import SolverBackend
 
 from .errors import FeaError
@@ -245,8 +246,8 @@ def _mkl_threads(libmkl) -> None:
     """Let MKL use every core this process may run on (or ``MKL_NUM_THREADS``): gmsh's mesher sets the
     process-wide OpenMP thread count to 1, which MKL would otherwise inherit (2x slower on 2 cores)."""
     try:
-        n = int(os.environ.get("MKL_NUM_THREADS", "0")) or len(os.sched_getaffinity(0))
-    except (ValueError, AttributeError):
+        n = int(os.environ.get("MKL_NUM_THREADS", "0")) or usable_cores()
+    except ValueError:                                   # not a number: every core of the machine, as before
         n = os.cpu_count() or 1
     try:
         libmkl.MKL_Set_Num_Threads(max(1, n))

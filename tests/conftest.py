@@ -37,11 +37,8 @@ def pytest_xdist_auto_num_workers(config):
     override = os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS", "").strip()
     if override:
         return int(override)
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:                               # no affinity on this platform
-        cores = os.cpu_count() or 1
-    return min(cores + 1, MAX_AUTO_WORKERS)
+    from rodlab.core.cores import usable_cores          # here, not above: the workers' variables come first
+    return min(usable_cores() + 1, MAX_AUTO_WORKERS)
 
 
 @pytest.fixture(scope="session", autouse=True)

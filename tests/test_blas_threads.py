@@ -1,13 +1,13 @@
 """One OpenBLAS thread while the demo's other processes run beside it (rodlab.core.blas_threads)."""
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
 from threadpoolctl import ThreadpoolController, threadpool_info
 
 from rodlab.core.blas_threads import one_blas_thread
+from rodlab.core.cores import usable_cores
 from rodlab.fea import solver
 
 
@@ -48,7 +48,7 @@ def test_mkl_is_left_to_the_solver(monkeypatch):
     if not solver.backend_available("pardiso"):
         pytest.skip("PARDISO (MKL) is not available here")
     monkeypatch.delenv("MKL_NUM_THREADS", raising=False)    # a test worker's one thread (conftest): the machine's count
-    if len(os.sched_getaffinity(0)) < 2:
+    if usable_cores() < 2:
         pytest.skip("one core: the solver's count is 1, which the bug would also leave")
     lib = solver._pardiso_library().libmkl
     solver._mkl_threads(lib)

@@ -27,6 +27,7 @@ from rodlab.core.fem_mesh import RodMesh
 from .errors import FeaError
 from .frame import CALIBRATION, FRAME_REVISION, asme_bend_flexibility, frame_compliance, frame_range_notes
 from .joints import JointFit, joint_frame_compliance
+from .ahead import SolveAhead, solve_ahead
 from .mesh_request import DEFAULT_GRADING, MAX_DOFS, default_solid_size_mm, estimated_dofs, solid_mesh_request
 from .solid import solve_compliance
 
@@ -40,9 +41,25 @@ RICHARDSON_ORDER = 3.0
 
 
 class Mesher(Protocol):
-    """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it."""
+    """What the solid model needs to mesh a design: ``rodlab.geometry.mesh_rod`` satisfies it. A mesher that
+    works in the background may also offer ``linear_topology(design, **kw) -> LinearTopology | None``, the
+    straight tetrahedra of the mesh it is making (:class:`rodlab.geometry.MeshPrefetch`): the solid model then
+    makes its assembly plan from them while the mesh is finished (:func:`_solve_ahead`)."""
 
     def __call__(self, design: RodDesign, *, size_mm: float, grading, half: bool) -> RodMesh: ...
+
+
+def _solve_ahead(design: RodDesign, mesher, kw: dict, backend: str | None) -> SolveAhead | None:
+    """The assembly plan and the solver's analysis of the mesh ``mesher`` is making, from its straight tetrahedra
+    (when it offers them, :class:`Mesher`), made while the mesher curves the elements; None otherwise."""
+    offer = getattr(mesher, "linear_topology", None)
+    topology = offer(design, **kw) if offer is not None else None
+    if topology is None:
+        return None
+    ahead = solve_ahead(topology, backend)
+    log.info("assembly plan and analysis of %s from the straight mesh, beside the mesher: %.2f s", design.name,
+             ahead.seconds)
+    return ahead
 
 
 def _coarse_solve(design, mesher, size_mm, grading, symmetry, backend, bar):
@@ -92,11 +109,13 @@ def solid_compliance(design: RodDesign, mesher, size_mm: float | None = None,
     with stages(f"solid FEA of {design.name}", names) as bar:
         with bar.step("mesh"):
             t0 = time.perf_counter()
+            ahead = _solve_ahead(design, mesher, request.kwargs, backend)
             rm = mesher(design, **request.kwargs)
             t_mesh = time.perf_counter() - t0
         with bar.step("solve"):
             res = solve_compliance(design, rm, keep_displacements=keep_displacements, backend=backend,
-                                   tip_moments=tip_moments, error_estimate=how is ErrorEstimate.RECOVERY, plans=plans)
+                                   tip_moments=tip_moments, error_estimate=how is ErrorEstimate.RECOVERY, plans=plans,
+                                   ahead=ahead)
         coarse = _coarse_solve(design, mesher, 1.5 * h, grading, symmetry, backend, bar) if richardson else None
     prov = {"generator": "rodlab solid FEA (scikit-fem, curved P2 tetrahedra)",
             "model": "solid", "mesh": dict(rm.stats, sha256=rm.sha256, grading=list(grading) if grading else None),

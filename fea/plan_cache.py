@@ -10,6 +10,9 @@ without pickle and only when the user owns it; before it is used it is checked a
 (:func:`_fits`): one that cannot be read or is not this mesh's plan is made again and replaced. Files are written
 atomically; the folder (``plans`` in :func:`rodlab.core.cache.cache_root`) is pruned to :data:`MAX_BYTES`, least
 recently used first.
+
+A first run's plan can be made before its mesh is finished (:mod:`fea.ahead`, from the straight tetrahedra while
+gmsh curves them): :meth:`PlanCache.plan` takes it (``made``) after the same check against the finished mesh.
 """
 from __future__ import annotations
 
@@ -53,11 +56,11 @@ def _code_and_versions() -> str:
 class PlanCache:
     """Assembly plans kept on disk: ``PlanCache().plan(basis, mesh_sha256, backend)`` reads the plan of that mesh
     and backend, or makes (:func:`plan_for`), stores and returns it. ``folder=None`` keeps nothing; ``hits`` /
-    ``misses`` count calls."""
+    ``misses`` count calls, ``ahead`` the plans made beforehand that were used."""
 
     def __init__(self, folder: Path | str | None = "default") -> None:
         self.folder = cache_subfolder("plans") if folder == "default" else (Path(folder) if folder else None)
-        self.hits = self.misses = 0
+        self.hits = self.misses = self.ahead = 0
 
     def key(self, basis, mesh_sha256: str, backend: str) -> str:
         """The SHA-256 naming the plan of the mesh ``mesh_sha256`` (its basis ``basis``) for ``backend``."""
@@ -65,13 +68,13 @@ class PlanCache:
                            "backend": backend, "code": _code_and_versions(), "revision": PLAN_REVISION}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def plan(self, basis, mesh_sha256: str, backend: str | None = None) -> AssemblyPlan:
+    def plan(self, basis, mesh_sha256: str, backend: str | None = None, made: AssemblyPlan | None = None) -> AssemblyPlan:
         """The plan of ``basis`` (the mesh whose hash is ``mesh_sha256``) for ``backend`` (default: the one that
-        runs here): from the cache when an entry there is this mesh's plan (:func:`_fits`), else made and
-        stored."""
+        runs here): from the cache when an entry there is this mesh's plan (:func:`_fits`), else ``made`` (a plan
+        made beforehand for ``backend``, :func:`fea.ahead.solve_ahead`) when it is this mesh's, else made anew; stored."""
         backend = SolverBackend(backend or available_backend()).value
         if self.folder is None or not mesh_sha256:
-            return plan_for(basis, backend)
+            return self._made_or_new(basis, backend, made)
         path = self.folder / f"{self.key(basis, mesh_sha256, backend)}.npz"
         found = self._read(path, basis)
         if found is not None:
@@ -79,9 +82,17 @@ class PlanCache:
             log.info("assembly plan from the cache (%s)", path)
             return found
         self.misses += 1
-        made = plan_for(basis, backend)
-        self._write(path, made)
-        return made
+        plan = self._made_or_new(basis, backend, made)
+        self._write(path, plan)
+        return plan
+
+    def _made_or_new(self, basis, backend: str, made: AssemblyPlan | None) -> AssemblyPlan:
+        if made is not None:
+            if _fits(made, basis):
+                self.ahead += 1
+                return made
+            log.warning("the assembly plan made from the straight mesh does not fit the finished one; making it again")
+        return plan_for(basis, backend)
 
     def _read(self, path: Path, basis) -> AssemblyPlan | None:
         return load(path, lambda p: _unpack(p, basis.N), lambda plan: _fits(plan, basis), "assembly plan")

@@ -26,6 +26,7 @@ from rodlab.core.design import RodDesign
 from rodlab.core.enums import Part
 from rodlab.core.units import G0, kg_m3_to_kg_mm3
 
+from .ahead import SolveAhead
 from .plan_cache import PlanCache
 from .stiffness_assembly import assemble_body_force, assemble_stiffness, scalar_basis, scalar_element
 from .elasticity import element_tensors
@@ -115,13 +116,14 @@ def _ball_loads(x_q: np.ndarray, w: np.ndarray, half: bool, moments: bool = Fals
 
 def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = False,
                      backend: str | None = None, tip_moments: bool = False, error_estimate: bool = False,
-                     plans: PlanCache | None = None) -> SolidResult:
+                     plans: PlanCache | None = None, ahead: SolveAhead | None = None) -> SolidResult:
     """Solve the six load cases on ``rod_mesh`` (a :class:`geometry.RodMesh` of ``design``, whole or half);
     ``tip_moments`` adds three unit moments at the ball centre (columns 6-8; same factorisations), which the
     joint fit of the frame model needs (:mod:`fea.joints`); ``error_estimate`` adds the stress-recovery
     estimate of the discretisation error (``SolidResult.error_matrix``, from this solve alone); ``plans``: where
     the mesh's assembly plan (node ordering, block pattern) is kept between runs (:class:`~fea.plan_cache.PlanCache`;
-    None makes it anew)."""
+    None makes it anew); ``ahead``: the plan and the solver's analysis made from the mesh's straight tetrahedra
+    while it was curved (:func:`~fea.ahead.solve_ahead`), each used where it fits this mesh."""
     t0 = time.perf_counter()
     timings = {}
     half = rod_mesh.is_half
@@ -131,7 +133,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     timings["basis_and_materials"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     backend = backend or available_backend()
-    plan = (plans or PlanCache(None)).plan(basis, rod_mesh.sha256, backend)
+    plan = (plans or PlanCache(None)).plan(basis, rod_mesh.sha256, backend, made=ahead.plan if ahead else None)
     nodes = plan.node_order                                # None: the solver orders (SuperLU)
     timings["ordering"] = time.perf_counter() - t1
     t1 = time.perf_counter()
@@ -143,7 +145,8 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     n_cases = 9 if tip_moments else 6
     loads, mass = _load_cases(basis, rod_mesh, materials, n_cases)
     timings["loads"] = time.perf_counter() - t1
-    U, solver_backend = _clamped_solve(basis, rod_mesh, K, loads, backend, nodes, timings)
+    analysed = ahead.solver_for(K) if ahead is not None else None
+    U, solver_backend = _clamped_solve(basis, rod_mesh, K, loads, backend, nodes, timings, analysed)
     del K
     # ball-centre displacement
     ball = np.nonzero(rod_mesh.part_index == rod_mesh.parts.index(Part.BALL))[0]
@@ -159,6 +162,8 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
         E = _recovery_estimate(rod_mesh, C, U)
         timings["error_estimate"] = time.perf_counter() - t1
     timings["total"] = time.perf_counter() - t0
+    if ahead is not None:
+        timings["ahead_beside_mesher"] = ahead.seconds       # not in the total: done while the mesh was curved
     log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, U.shape[0], " (half mesh, two solves)" if half else "",
              solver_backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return SolidResult(CF, Cg, defect, U.shape[0], mass, timings, solver_backend, theta,
@@ -192,9 +197,11 @@ def _load_cases(basis, rod_mesh, materials, n_cases: int) -> tuple[np.ndarray, f
     return loads, mass
 
 
-def _clamped_solve(basis, rod_mesh, K, loads: np.ndarray, backend, nodes, timings: dict) -> tuple[np.ndarray, str]:
+def _clamped_solve(basis, rod_mesh, K, loads: np.ndarray, backend, nodes, timings: dict,
+                   analysed: PatternSolver | None = None) -> tuple[np.ndarray, str]:
     """Clamp the flange face and solve every load case (``K`` in the solver's numbering ``nodes``): one
-    problem, or on a half mesh the symmetric and the antisymmetric half with the plane held accordingly.
+    problem, or on a half mesh the symmetric and the antisymmetric half with the plane held accordingly;
+    ``analysed``: a solver already analysed for ``K``'s pattern.
     Returns the displacements (mesh numbering, shape of ``loads``) and the solver backend used; adds the
     analyse / factorise / solve times to ``timings``."""
     t1 = time.perf_counter()
@@ -207,7 +214,7 @@ def _clamped_solve(basis, rod_mesh, K, loads: np.ndarray, backend, nodes, timing
     fixed = np.zeros(N, dtype=bool)
     fixed[(3 * fixed_scalar[:, None] + np.arange(3)).ravel()] = True
     system = HeldSystem(K)                                  # clamp and plane held in place: no sliced copies
-    solver = PatternSolver(system.pattern, backend, ordering_method="amd" if nodes is None else "natural")
+    solver = analysed or PatternSolver(system.pattern, backend, ordering_method="amd" if nodes is None else "natural")
     timings["analyze"] = time.perf_counter() - t1
     if rod_mesh.is_half:
         plane = basis.get_dofs(rod_mesh.symmetry_facets).all()

@@ -15,6 +15,7 @@ import os
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -22,12 +23,13 @@ import numpy as np
 from rodlab.core.design import RodDesign
 from rodlab.core.enums import Part, SegmentKind
 from rodlab.core.fileio import atomic_write_bytes
-from rodlab.core.fem_mesh import RodMesh
+from rodlab.core.fem_mesh import LinearTopology, RodMesh
 from rodlab.core.layout import layout
 
 from .cadlib import build123d
 from .errors import GeometryError
 from .gmsh_signals import initialize_gmsh
+from .mesh_elements import elements, linear_topology
 from .mesh_generate import generate_mesh, session_options
 from .parts import half_solids, part_solids
 from .occ_parts import add_part_volumes
@@ -187,7 +189,8 @@ def _nearest_arc_sample(x: np.ndarray, seg, u: np.ndarray, tool_mm) -> tuple[np.
 
 def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
              msh_path: str | Path | None = None, grading: tuple[float, ...] | None = None,
-             half: bool = False, kernel: str = "gmsh") -> RodMesh:
+             half: bool = False, kernel: str = "gmsh",
+             on_topology: Callable[[LinearTopology], None] | None = None) -> RodMesh:
     """Mesh ``design`` with gmsh; optionally write ``msh_path`` (gmsh 4.1, atomically).
 
     ``half=True`` meshes only the half ``y_T >= 0``: every rod is mirror-symmetric about its bend plane
@@ -204,6 +207,10 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
     ``kernel``: ``gmsh`` builds the parts in gmsh's own OpenCASCADE kernel (:mod:`geometry.occ_parts`; no
     build123d import), ``build123d`` imports the CAD assembly's solids (:func:`geometry.parts.part_solids`):
     the same geometry.
+
+    ``on_topology``: for an order-2 mesh, called once (in the caller's thread) with the straight tetrahedra
+    (:class:`~rodlab.core.fem_mesh.LinearTopology`) before gmsh curves them: the same mesh, made in two steps
+    (:func:`geometry.mesh_generate.generate_mesh`), so that a solver can plan its assembly meanwhile.
 
     Raises :class:`~geometry.errors.GeometryError` on a mesh with inverted elements or missing parts.
     """
@@ -232,10 +239,11 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                grading[2] * h)
             _mesh_options(h, order, grading)
             t0 = time.perf_counter()
-            high_order = generate_mesh(order)
+            on_linear = None if on_topology is None else lambda: on_topology(linear_topology(solids, part_vols))
+            high_order = generate_mesh(order, on_linear)
             log.info("gmsh generate: %.2f s", time.perf_counter() - t0)
             node_tags, coords, _ = gmsh.model.mesh.getNodes()
-            conn, part_idx, qual = _elements(solids, part_vols, order)
+            conn, part_idx, qual = elements(solids, part_vols, order)
             if msh_path is not None:
                 out = os.path.join(tmp, "rod.msh")
                 gmsh.write(out)
@@ -335,26 +343,6 @@ def _mesh_options(h: float, order: int, grading) -> None:
     gmsh.option.setNumber("Mesh.HighOrderOptimize", 1 if order == 2 else 0)   # untangle curved P2
     gmsh.option.setNumber("Mesh.Algorithm", 6)      # Frontal-Delaunay surfaces
     gmsh.option.setNumber("Mesh.Algorithm3D", 10)   # HXT: ~25 % faster than Delaunay, same quality
-
-
-def _elements(solids: dict, part_vols: dict, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The tetrahedra of the generated mesh: (connectivity in gmsh node tags, shape=(ne, 4 or 10); the part
-    index of each; its minimum scaled inverse condition number)."""
-    import gmsh
-
-    etype = 11 if order == 2 else 4
-    conn, part_idx, etags = [], [], []
-    for i, part in enumerate(solids):
-        for v in sorted(set(part_vols[part])):
-            types, tags, nodes = gmsh.model.mesh.getElements(3, v)
-            for ty, tg, nd in zip(types, tags, nodes):
-                if ty != etype:
-                    raise GeometryError(f"unexpected gmsh element type {ty} in {part}")
-                conn.append(nd.reshape(len(tg), -1))
-                part_idx.append(np.full(len(tg), i))
-                etags.append(tg)
-    etags = np.concatenate(etags)
-    return np.concatenate(conn), np.concatenate(part_idx), gmsh.model.mesh.getElementQualities(etags, "minSICN")
 
 
 def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False,

@@ -59,7 +59,9 @@ def _unpickle(path: Path):
 
 class MeshCache:
     """A :class:`~fea.compute.Mesher` that remembers: ``MeshCache(mesh_rod)(design, size_mm=..., grading=...,
-    half=...)`` returns the cached mesh or meshes, stores and returns it. ``hits`` / ``misses`` count calls."""
+    half=...)`` returns the cached mesh or meshes, stores and returns it. ``hits`` / ``misses`` count calls.
+    ``on_topology`` (:func:`~geometry.mesh.mesh_rod`'s) is not part of the key: it goes to the mesher when it
+    meshes, and is not called for a mesh from the cache."""
 
     def __init__(self, mesher, folder: Path | None | str = "default") -> None:
         self.mesher = mesher
@@ -72,9 +74,10 @@ class MeshCache:
                            "code": _code_and_versions(), "revision": MESH_REVISION}, sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()
 
-    def __call__(self, design: RodDesign, **kw) -> RodMesh:
+    def __call__(self, design: RodDesign, on_topology=None, **kw) -> RodMesh:
+        kw_mesher = kw if on_topology is None else dict(kw, on_topology=on_topology)
         if self.folder is None:
-            return self.mesher(design, **kw)
+            return self.mesher(design, **kw_mesher)
         path = self.folder / f"{self.key(design, **kw)}.pickle"
         found = self._read(path)
         if found is not None:
@@ -82,7 +85,7 @@ class MeshCache:
             log.info("mesh of %s from the cache (%s)", design.name, path)
             return found
         self.misses += 1
-        rm = self.mesher(design, **kw)
+        rm = self.mesher(design, **kw_mesher)
         self._write(path, rm)
         return rm
 

@@ -46,6 +46,9 @@ def test_demo_stages_and_results(run):
         df = pd.read_csv(run / "sweep" / "sweep.csv")
         row = df[(df["L1_mm"] == 300.0) & (df["L2_mm"] == 450.0)].iloc[0]
         assert row["c_rod_um"] == pytest.approx(st["fea"]["c_rod_um"], rel=0.002)
+        # its mesh was made in the background, the plan and the analysis beside it (rodlab.app.solid_mesher)
+        prov = json.loads((run / "rod1.fea.compliance.json").read_text())["provenance"]
+        assert prov["timings_s"]["ahead_beside_mesher"] > 0
 
 
 def test_demo_study_of_the_carbon_rods(run):

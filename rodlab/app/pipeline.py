@@ -21,7 +21,6 @@ from typing import Callable
 
 import numpy as np
 
-import rodlab.geometry as geometry
 from rodlab.calibrate import (
     ModelParams,
     Rod,
@@ -55,6 +54,7 @@ from ..core.design_io import resolve_design
 from ..core.figures_bg import background_figures
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
 from ..core.units import PAPER_ROD_SLIP
+from .solid_mesher import solid_mesher
 from ..core.view3d import start_offscreen_check
 from .demo_cad import CadJob, start_cad_job
 from .diagnose import corrected_compliance, diagnose_rig
@@ -154,7 +154,7 @@ class _DemoRun:
     def stage_fea(self) -> None:
         if self.cad:
             # one solid run: the compliance, the deformed shape, and the joints that calibrate the sweep's frame
-            self.solid_run = run_solid(self.design, geometry.mesh_rod, error_estimate=False, joints=True,
+            self.solid_run = run_solid(self.design, solid_mesher(self.design), error_estimate=False, joints=True,
                                        deformed_png=self.out / "fea" / "deformed.png")
             self.fea = self.solid_run.compliance
             self.summary["files"]["fea_deformed"] = "fea/deformed.png"

@@ -8,7 +8,7 @@ import numpy as np
 
 from .enums import Part
 
-__all__ = ["RodMesh"]
+__all__ = ["RodMesh", "LinearTopology"]
 
 
 @dataclass
@@ -114,3 +114,28 @@ class RodMesh:
         basis = Basis(self.mesh, ElementTetP0(), intorder=2) if self.order == 2 else Basis(self.mesh, ElementTetP0())
         vol = Functional(lambda w: 1.0 + 0 * w.x[0]).elemental(basis)
         return {p: float(vol[self.elements_of(p)].sum()) for p in self.parts}
+
+
+@dataclass(frozen=True)
+class LinearTopology:
+    """The tetrahedra of a mesh before its elements are curved: all that a solver's node ordering and assembly
+    plan depend on, known while the mesher still places and optimises the edge nodes of an order-2 mesh.
+
+    Attributes
+    ----------
+    t : shape=(4, n_elements) int64, each element's vertices in the finished mesh's vertex numbering and its
+        element order (``RodMesh.mesh.t``; dimensionless indices)
+    n_vertices : the finished mesh's vertex count (every vertex is some element's)
+    """
+
+    t: np.ndarray
+    n_vertices: int
+
+    def __post_init__(self) -> None:
+        t = self.t
+        if not isinstance(t, np.ndarray) or t.ndim != 2 or t.shape[0] != 4 or t.dtype != np.int64:
+            raise ValueError(f"LinearTopology: t must be an int64 array of shape (4, n_elements), got "
+                             f"{getattr(t, 'dtype', type(t).__name__)} {getattr(t, 'shape', '')}")
+        if t.size and (t.min() < 0 or t.max() >= self.n_vertices):
+            raise ValueError(f"LinearTopology: vertex indices must lie in 0..{self.n_vertices - 1}, got "
+                             f"{t.min()}..{t.max()}")

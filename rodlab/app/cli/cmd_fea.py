@@ -127,14 +127,13 @@ def cmd_fea(args: argparse.Namespace) -> int:
 
 def _prefetching_mesher(args: argparse.Namespace, design):
     """The solid model's mesher (cached unless ``--no-cache``), already at work on ``design`` in the background
-    while the solver's modules load (:class:`rodlab.geometry.MeshPrefetch`: a rerun of rod 1# ~0.2 s less). The
-    size and the model's size limit are checked first."""
-    from rodlab.fea.mesh_request import solid_mesh_request   # the core only: no solver imports yet
-    geometry = require_mesher()
+    while the solver's modules load (a rerun of rod 1# ~0.2 s less), handing over the straight tetrahedra so that
+    the assembly plan and the solver's analysis are made while gmsh curves them (:func:`rodlab.app.solid_mesher.
+    solid_mesher`). The CAD extra, the size and the model's size limit are checked first."""
+    from rodlab.app.solid_mesher import solid_mesher   # the core only: no solver imports yet
+    require_mesher()
     _estimate(args)
-    request = solid_mesh_request(design, args.size, symmetry=not args.no_symmetry)
-    mesher = geometry.mesh_rod if args.no_cache else geometry.MeshCache(geometry.mesh_rod)
-    return geometry.MeshPrefetch(mesher, design, **request.kwargs)
+    return solid_mesher(design, args.size, symmetry=not args.no_symmetry, cache=not args.no_cache)
 
 
 def _check_fields_option(args: argparse.Namespace) -> None:

@@ -8,13 +8,14 @@ import logging
 from importlib.util import find_spec
 from pathlib import Path
 
-import rodlab.geometry as geometry
 from rodlab.core.design import RodDesign
 from rodlab.core.design_io import design_to_dict
 from rodlab.core.errors import RodlabError
 from rodlab.fea import run_solid
 from rodlab.fea.family import calibration_member
 from rodlab.fea.joints_io import read_joints, write_joints
+
+from ..solid_mesher import solid_mesher
 
 __all__ = ["solid_family_calibration", "cad_available", "family_joints"]
 
@@ -35,7 +36,7 @@ def solid_family_calibration(base: RodDesign, L1s=(), L2s=()):
 
 def _solve(member: RodDesign, base: RodDesign):
     log.info("joint calibration of %s's family on a solid run of %s", base.name, member.name)
-    return run_solid(member, geometry.mesh_rod, error_estimate=False, joints=True).joints
+    return run_solid(member, solid_mesher(member), error_estimate=False, joints=True).joints
 
 
 def _family_joints(base, L1s, L2s, cache: Path):

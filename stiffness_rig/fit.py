@@ -18,6 +18,7 @@ from rodlab.core.enums import LoadAxis, Method, Phase
 from rodlab.core.fileio import sha256_file
 from rodlab.core.units import G0
 
+from .completion import complete_c_f
 from .errors import RigError
 from .fit_checks import (creep_warnings, gauge_scale_problems, lack_of_fit_warnings, load_drift_warnings,
                          reciprocity_problems)
@@ -91,21 +92,15 @@ class RigFit:
     warnings: list = field(default_factory=list)
 
     def compliance(self, sim: RodCompliance, recording: RigRecording | None = None) -> RodCompliance:
-        """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated),
+        """The measured compliance file: measured C_F (symmetrised; unmeasured entries r_rod x simulated, an
+        unmeasured diagonal entry raised where the measured entries need more: :mod:`.completion`, said in the
+        provenance's ``warnings``),
         C_g = r_rod x C_g_sim (Eq. 22), mass / COM / tool of the simulated file; the per-entry factors r_mn
         (Eq. 20) and the standard errors of the measured entries (``C_F_sigma``), NaN where not measured."""
         r = self.r_rod if self.r_rod is not None else eq21(self, sim)
-        C = r * sim.C_F.copy()
         M = self.C_F_meas
-        for i in range(3):
-            for j in range(3):
-                a, b = M[i, j], M[j, i]
-                if np.isfinite(a) and np.isfinite(b):
-                    C[i, j] = 0.5 * (a + b)
-                elif np.isfinite(a):
-                    C[i, j] = C[j, i] = a
-                elif np.isfinite(b):
-                    C[i, j] = C[j, i] = b
+        source = str(recording.path) if recording is not None and recording.path is not None else ""
+        C, notes = complete_c_f(M, r * sim.C_F, source)
         prov = {"rodlab_version": __version__, "method": "meas", "generator": "rodlab rig fit",
                 "simulated": {"method": str(sim.method), "C_F_mm_per_N": sim.C_F.tolist(),
                               "provenance": sim.provenance},
@@ -114,7 +109,7 @@ class RigFit:
                 "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
                 "unmeasured_entries": "r_rod x simulated",
                 "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0",
-                "warnings": list(self.warnings)}
+                "warnings": list(self.warnings) + notes}
         if self.load is not None:
             prov["measured_load"] = self.load.to_dict()
         if recording is not None and recording.path is not None:

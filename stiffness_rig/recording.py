@@ -98,6 +98,11 @@ class RigRecording:
         """Components (0..2) that have at least one reading."""
         return [i for i in range(3) if np.isfinite(self.disp_mm[:, i]).any()]
 
+    def loaded_axes(self) -> list[int]:
+        """The axes (0..2 for x..z, either sign) some load of the recording pulls along: the columns of C_F it
+        measures."""
+        return sorted({LoadAxis(a).index for a in self.load_axis})
+
     def unit_slips(self) -> list[str]:
         """Slopes no measuring rod has, each with the unit slip that gives them: a load axis whose own gauge moves
         by more than :data:`~rodlab.core.compliance.PLAUSIBLE_C_F_MM_PER_N` per newton of its masses (um written
@@ -274,7 +279,12 @@ def _data_rows(lines: list[str], start: int, header: list[str], ix: dict, p: Pat
 def _check_holds(rows, p) -> None:
     first: dict[int, tuple] = {}
     last_time = -math.inf
+    backwards = sum(b[1] < a[1] for a, b in zip(rows, rows[1:]))
     for k, t, step, rep, ph, ax, m, *_ in rows:
+        if t < last_time and backwards > 1:
+            raise RigError(f"the rows are not in time order: time goes backwards {backwards} times, first here ({t} "
+                           f"after {last_time}); were they sorted by another column or shuffled? Sort the data rows "
+                           f"by time_s (a recording is written in time order)", path=p, line=k, key="time_s")
         if t < last_time:
             raise RigError(f"time goes backwards ({t} after {last_time}): two recordings joined, or the clock reset? "
                            "Split the file at this line", path=p, line=k, key="time_s")

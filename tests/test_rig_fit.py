@@ -88,7 +88,9 @@ BAD = [
     ("negative mass", HEADER, GOOD[:2] + ["1.0,2,1,load,y,-0.5,,1.0,0.0"], 6, "mass_kg", ">= 0"),
     ("nan", HEADER, GOOD[:2] + ["1.0,2,1,load,y,nan,,1.0,0.0"], 6, "mass_kg", "finite"),
     ("huge step", HEADER, GOOD[:2] + ["1.0,1e308,1,load,y,0.5,,1.0,0.0"], 6, "step", "below 2^31"),
-    ("time backwards", HEADER, GOOD[:2] + ["0.05,2,1,load,y,0.5,,1.0,0.0"], 6, "time_s", "backwards"),
+    ("time backwards", HEADER, GOOD[:2] + ["0.05,2,1,load,y,0.5,,1.0,0.0"], 6, "time_s", "Split the file"),
+    # rows shuffled (a new user's trial): not two recordings joined, so not "split the file" but sort it
+    ("rows shuffled", HEADER, [GOOD[2], GOOD[0], GOOD[3], GOOD[1]], 5, "time_s", "Sort the data rows by time_s"),
     ("no format", HEADER.replace("# format: rodlab.rig/1\n", ""), GOOD, 1, "format", "format"),
 ]
 
@@ -150,7 +152,9 @@ def test_a_units_slip_is_refused_with_what_to_check(examples, sim, tmp_path, mas
     assert run.returncode != 0 and "units" in run.stderr and not (tmp_path / "out.json").exists()
 
 
-def test_another_rods_recording_is_warned_and_a_bom_is_read(examples, tmp_path):
+def test_another_rods_recording_is_refused_and_a_bom_is_read(examples, tmp_path):
+    """`rig fit` writes a compliance file: of one rod's recording and another's simulation it would mix the two
+    (found by a new user: exit 0 and a file naming the simulation's rod with the other rod's C_F)."""
     import subprocess
     import sys
     other = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "o.rig.csv", rod="6#", bom=True)
@@ -158,7 +162,8 @@ def test_another_rods_recording_is_warned_and_a_bom_is_read(examples, tmp_path):
     run = subprocess.run([sys.executable, "-m", "rodlab", "rig", "fit", str(other), "--sim",
                           str(examples / "rod1.compliance.json"), "-o", str(tmp_path / "out.json")],
                          capture_output=True, text=True)
-    assert "of rod '6#'" in run.stderr and "check that --sim is this rod's" in run.stderr
+    assert run.returncode != 0 and "of rod '6#'" in run.stderr and "Give --sim this rod's simulation" in run.stderr
+    assert not (tmp_path / "out.json").exists()
     same = _scaled_copy(examples / "rig-null.rig.csv", tmp_path / "s.rig.csv", rod="rod1")
     run = subprocess.run([sys.executable, "-m", "rodlab", "rig", "fit", str(same), "--sim",
                           str(examples / "rod1.compliance.json"), "-o", str(tmp_path / "out2.json")],

@@ -22,7 +22,7 @@ from rodlab.calibrate.mixups import campaign_mixup
 from rodlab.calibrate.trust import gross
 from rodlab.calibrate.validate import clearly_worse
 
-from ...core.compliance import RodCompliance, read_compliance
+from ...core.compliance import RodCompliance
 from ...core.errors import RodlabError
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
@@ -30,6 +30,7 @@ from .calibration_printers import print_cautions, print_not_trusted, print_param
 from .calibration_run import CalibrationRun, run_calibration
 from .deviceargs import add_device_option, points_from_args
 from .reporting import default_folder, png_folder, write_command_report
+from .rodargs import compliance_arg
 from .columnsargs import screen_joint_columns
 from .robotargs import robot_from_args
 from .verdict import judge, print_verdict
@@ -47,7 +48,8 @@ def register(sub) -> None:
     p.add_argument("campaign", nargs="?", help="*.campaign.csv (omit with --points)")
     p.add_argument("--fixture", help="*.fixture.json (clamping poses, contact force)")
     add_device_option(p)
-    p.add_argument("--rod", help="the rod's *.compliance.json (tool, mass, COM, C_F, C_g)")
+    p.add_argument("--rod", help="the rod's *.compliance.json (tool, mass, COM, C_F, C_g), or a design (rod1 .. rod6, "
+                                 "a *.rod.toml) for its closed-form (calc) compliance")
     p.add_argument("--compensation", choices=["none", "file"], default="file",
                    help="file: compensate with the rod file's matrices (its method: calc / fea / meas); none: no "
                         "rod-deflection compensation")
@@ -103,7 +105,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
-    rod = read_compliance(args.rod)
+    rod = compliance_arg(args.rod)
     comp = RodDeflection.of(None if args.compensation == "none" else rod)
     run = run_calibration(args, rod, comp)
     label = run.label

@@ -12,7 +12,7 @@ from rodlab.stiffness_rig.fit import r_rod_caution
 from rodlab.stiffness_rig.fit_checks import gauge_scale_problems
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
-from ...core.compliance import read_compliance, write_compliance
+from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
 from ...core.enums import MODEL_FORM
 from ...core.errors import RodlabError
@@ -48,7 +48,8 @@ def register(sub) -> None:
     add_robot_options(p, help="campaign / points: " + robot_help())
     p.add_argument("--design", help="rig: the *.rod.toml design (joint places, tolerances; default: the design the "
                                     "--sim file was made from, if it is still there)")
-    p.add_argument("--rod", help="campaign: the *.compliance.json used (as in `rodlab calibrate`)")
+    p.add_argument("--rod", help="campaign: the *.compliance.json used (as in `rodlab calibrate`; a design for its "
+                                 "calc compliance)")
     p.add_argument("--sim-accuracy", type=sim_accuracy, default=None, metavar="ACC",
                    help="rig: what the simulation is worth. Default: the design's tolerances ([tolerances] of the "
                         "design file over documented defaults) and the simulation method's accuracy; a measured "
@@ -139,7 +140,10 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
             print(f"wrote {p}")
     if args.export:
         from ..diagnose import corrected_compliance
-        written.append(write_compliance(corrected_compliance(sim, diag, model), args.export))
+        corrected = corrected_compliance(sim, diag, model, rec.loaded_axes(), args.rig)
+        for w in corrected.provenance["warnings"]:
+            print(f"warning: {args.export}: {w}", file=sys.stderr)
+        written.append(write_compliance(corrected, args.export))
         print(f"wrote {written[-1]}")
     return diag
 
@@ -175,7 +179,7 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
     diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
-                                   read_compliance(args.rod), noise_mm, pts, harmonics=args.joint_harmonics,
+                                   compliance_arg(args.rod), noise_mm, pts, harmonics=args.joint_harmonics,
                                    columns_checked=args.columns_checked)
     print(diag.summary())
     if "validation" in diag.extra:

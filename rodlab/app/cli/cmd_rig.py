@@ -30,7 +30,7 @@ from .argtypes import count, nonneg_float, pos_float, seed
 from .interrupts import kill_as_interrupt
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
-from .rodargs import compliance_arg, design_of_compliance, warn_rod_mismatch
+from .rodargs import compliance_arg, design_of_compliance, same_rod
 
 __all__ = ["register"]
 
@@ -138,12 +138,16 @@ def _register_simulator(rsub) -> None:
 def cmd_fit(args: argparse.Namespace) -> int:
     rec = read_recording(args.recording)
     sim = compliance_arg(args.sim)
-    warn_rod_mismatch(rec.rod, sim.rod, args.recording)
+    if rec.rod and sim.rod and not same_rod(rec.rod, sim.rod):    # the file written would mix the two rods
+        raise RodlabError(f"{args.recording} is of rod {rec.rod!r} (its '# rod:' line) and --sim {args.sim} of rod "
+                          f"{sim.rod!r}: the measured compliance file would hold one rod's measurement with the other's "
+                          f"mass, centre of mass and tool. Give --sim this rod's simulation (rodlab fea <its design> -o "
+                          f"FILE), or correct the recording's '# rod:' line if it names the wrong rod")
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
-    for w in fit.warnings:
+    for w in comp.provenance["warnings"]:        # the fit's, and how the unmeasured entries were completed
         print(f"warning: {args.recording}: {w}", file=sys.stderr)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, {noise_text(fit.noise_mm)}")
     print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")

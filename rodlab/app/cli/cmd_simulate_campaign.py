@@ -10,11 +10,11 @@ import numpy as np
 from rodlab.calibrate.device import ideal_device, misaligned_device, write_device
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect
 
-from ...core.compliance import read_compliance
 from ...core.errors import RodlabError
 from .argtypes import count, nonneg_float, seed
 from .effectargs import effects_help, parse_effect_specs
 from .robotargs import add_robot_options, robot_from_args
+from .rodargs import compliance_arg
 
 __all__ = ["register", "cmd_simulate_campaign"]
 
@@ -28,8 +28,9 @@ def register(sub) -> None:
                                    "model leaves out and their parameters (defaults: a typical magnitude):\n"
                                    + effects_help(CAMPAIGN_EFFECTS))
     add_robot_options(p)
-    p.add_argument("--rod", required=True, help="the rod's compliance file (nominal)")
-    p.add_argument("--rod-true", default=None, help="the rod as it really is (default: --rod)")
+    p.add_argument("--rod", required=True, help="the rod's compliance file (nominal), or a design (rod1 .. rod6, a "
+                                                    "*.rod.toml) for its closed-form (calc) compliance")
+    p.add_argument("--rod-true", default=None, help="the rod as it really is: a compliance file or a design (default: --rod)")
     p.add_argument("--positions", type=count, default=5, help="clamping positions (default 5, the paper's)")
     p.add_argument("--orientations", type=count, default=6, help="rod orientations per position (default 6)")
     p.add_argument("--noise-um", type=nonneg_float, default=3.0, help="device noise SD per reading [um] (default 3)")
@@ -53,8 +54,8 @@ def register(sub) -> None:
 def cmd_simulate_campaign(args) -> int:
     from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
     robot = robot_from_args(args)
-    rod = read_compliance(args.rod)
-    rod_true = read_compliance(args.rod_true) if args.rod_true else None
+    rod = compliance_arg(args.rod)
+    rod_true = compliance_arg(args.rod_true) if args.rod_true else None
     effects = []
     for it in args.fixture_error:
         j, _, v = it.partition(":")

@@ -42,6 +42,10 @@ def compliance_arg(spec: str):
     if design or (p.is_file() and str(spec).lower().endswith(".toml")):
         print(f"{spec}: the design's closed-form (calc) compliance")
         return calc_rod_compliance(resolve_design(spec))
+    if not p.exists():
+        raise RodlabError(f"{spec}: no such file, and not a built-in design. Give a *.compliance.json (rodlab fea "
+                          f"DESIGN -o FILE makes one), or a design ({', '.join(sorted(names))}, or a *.rod.toml) for "
+                          f"its closed-form (calc) compliance")
     return read_compliance(spec)
 
 

@@ -1,0 +1,42 @@
+"""What a new user tripped over in session 41's trial: a built-in rod name where a compliance file is expected
+(calibrate, simulate-campaign, diagnose --campaign), and a misleading fix for a column in the wrong unit."""
+from __future__ import annotations
+
+import pytest
+
+from rodlab.app.cli.main import main
+
+
+def test_a_builtin_rod_name_gives_its_closed_form_compliance_everywhere_a_compliance_file_goes(tmp_path, capsys):
+    camp = tmp_path / "camp"
+    assert main(["-q", "simulate-campaign", "--rod", "rod1",
+                 "-o", str(camp)]) == 0
+    assert main(["calibrate", str(camp / "multical.campaign.csv"), "--fixture", str(camp / "multical.fixture.json"),
+                 "--rod", "1#", "--json", str(tmp_path / "cal.json")]) == 0
+    assert "1#: the design's closed-form (calc) compliance" in capsys.readouterr().out
+
+
+def test_a_rod_that_is_neither_a_file_nor_a_builtin_says_what_to_give(tmp_path, capsys):
+    assert main(["simulate-campaign", "--rod", "rod9", "-o", str(tmp_path / "c")]) != 0
+    err = capsys.readouterr().err
+    assert "rod9: no such file, and not a built-in design" in err and "rodlab fea DESIGN -o FILE" in err
+    assert "rod1" in err and not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("word, choices, words", [
+    ("disp_x_um", ["disp_x_mm", "mass_kg"], "multiply the values by 0.001"),
+    ("mass_g", ["disp_x_mm", "mass_kg"], "multiply the values by 0.001"),
+    ("wall_in", ["wall_mm", "outer_diameter_mm"], "multiply the values by 25.4"),
+    ("force_lbf", ["force_N"], "convert the values from lbf to N"),
+])
+def test_a_name_in_another_unit_says_to_convert_as_well_as_rename(word, choices, words):
+    from rodlab.core.errors import did_you_mean
+    hint = did_you_mean(word, choices)
+    assert "in another unit" in hint and words in hint and "a rename alone" in hint
+
+
+def test_names_without_a_unit_slip_keep_their_suggestion():
+    from rodlab.core.errors import did_you_mean
+    assert did_you_mean("L1", ["L1_mm", "L2_mm"]) == " Did you mean `L1_mm`?"
+    assert did_you_mean("dsip_x_mm", ["disp_x_mm"]) == " Did you mean `disp_x_mm`?"
+    assert did_you_mean("zzz", ["disp_x_mm"]) == ""

@@ -1,0 +1,82 @@
+"""A recording that did not load every axis: the measured compliance file's unmeasured entries (stiffness_rig.
+completion). Found by a new user: a y,z recording of a rod with a soft ring joint was refused by `rig fit` with an
+error naming neither the file nor a fix (the guessed c_xx was too small for the measured c_xz, c_zz)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rodlab.stiffness_rig.completion import complete_c_f
+from rodlab.stiffness_rig.errors import RigError
+
+NAN = np.nan
+
+#: rod "steel-a" of the new user's trial: steel pipe I, aluminium pipe II
+STEEL_A = """format = "rodlab.rod/1"
+name = "steel-a"
+L1_mm = 250.0
+L2_mm = 500.0
+gamma_deg = 120.0
+[pipe_I]
+material = "steel_304"
+outer_diameter_mm = 35.0
+wall_mm = 3.0
+[pipe_II]
+material = "al_7075"
+outer_diameter_mm = 30.0
+wall_mm = 2.5
+[bend]
+radius_mm = 60.0
+"""
+
+
+def _measured_yz(C):
+    """The entries a recording with loads along y and z measures (columns y, z and their mirror images)."""
+    M = C.copy()
+    M[0, 0] = NAN
+    return M
+
+
+def test_a_consistent_completion_is_kept():
+    C = np.array([[2.0, 0.1, -1.0], [0.1, 5.0, 0.2], [-1.0, 0.2, 3.0]]) * 1e-3
+    out, notes = complete_c_f(_measured_yz(C), C)
+    assert np.array_equal(out, C) and notes == []
+
+
+def test_a_guess_too_small_for_the_measured_entries_is_raised_to_the_least_it_may_be():
+    measured = np.array([[NAN, 0.0, -2.0], [0.0, 5.0, 0.0], [-2.0, 0.0, 3.0]]) * 1e-3
+    guess = np.array([[1.0, 0.0, -1.5], [0.0, 4.0, 0.0], [-1.5, 0.0, 2.8]]) * 1e-3
+    out, notes = complete_c_f(measured, guess, "rec.rig.csv")
+    least = (2.0e-3) ** 2 / 3.0e-3                       # c_xx >= c_xz^2 / c_zz (the Schur complement)
+    assert out[0, 0] == pytest.approx(least * 1.001, rel=1e-9)
+    assert np.linalg.eigvalsh(out).min() > 0
+    assert np.array_equal(np.delete(out.ravel(), 0), np.delete(np.nan_to_num(measured).ravel(), 0))
+    assert len(notes) == 1 and "c_xx not measured" in notes[0] and "Record a load along x" in notes[0]
+
+
+def test_measured_entries_that_contradict_one_another_are_refused_naming_the_recording():
+    measured = np.array([[1.0, 0.0, 3.0], [0.0, 5.0, 0.0], [3.0, 0.0, 2.0]]) * 1e-3
+    with pytest.raises(RigError, match="rec.rig.csv: the measured compliance entries contradict"):
+        complete_c_f(measured, measured, "rec.rig.csv")
+
+
+def test_rig_fit_and_diagnose_export_accept_a_yz_recording_of_a_rod_with_a_soft_joint(tmp_path, capsys):
+    from rodlab.app.cli import main
+    design = tmp_path / "steel-a.rod.toml"
+    design.write_text(STEEL_A)
+    sim, rec = tmp_path / "sim.json", tmp_path / "yz.rig.csv"
+    assert main(["-q", "fea", str(design), "--model", "frame", "-o", str(sim)]) == 0
+    assert main(["-q", "rig", "simulate", "--sim", str(sim), "--design", str(design), "--axes", "y,z",
+                 "--effect", "joint_compliance:location=ring_1,s_bend_rad_per_Nm=1e-5", "-o", str(rec)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "meas.json"
+    assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(out)]) == 0
+    assert "c_xx not measured" in capsys.readouterr().err
+    data = json.loads(out.read_text())
+    assert np.linalg.eigvalsh(np.array(data["C_F_mm_per_N"])).min() > 0
+    assert any("c_xx not measured" in w for w in data["provenance"]["warnings"])
+    export = tmp_path / "corrected.json"
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(sim), "--export", str(export)]) == 0
+    assert np.linalg.eigvalsh(np.array(json.loads(export.read_text())["C_F_mm_per_N"])).min() > 0

@@ -24,7 +24,7 @@ from rodlab.core.fileio import atomic_write_json
 
 from .compute import FeaModel, compute_compliance
 from .errors import FeaError
-from .frame import CALIBRATION, FRAME_REVISION
+from .frame import CALIBRATED_RANGE, CALIBRATION, FRAME_REVISION
 
 __all__ = ["parse_range", "sweep_designs", "run_sweep", "SWEEP_COLUMNS"]
 
@@ -51,7 +51,7 @@ def parse_range(text: str, name: str) -> np.ndarray:
 
 def _key(design_summary: dict, model: str, calibration=None) -> str:
     blob = json.dumps({"d": design_summary, "m": model, "v": __version__, "cal": repr(calibration or CALIBRATION),
-                       "frame": FRAME_REVISION}, sort_keys=True)
+                       "frame": FRAME_REVISION, "range": repr(sorted(CALIBRATED_RANGE.items()))}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 

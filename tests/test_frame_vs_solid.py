@@ -220,3 +220,39 @@ def test_the_builtin_carbon_rods_lie_inside_the_frames_range_and_within_1_percen
     solid, frame = compute_compliance(d, "solid", mesher=mesh_rod), compute_compliance(d, "frame")
     for a, b in ((frame.C_F, solid.C_F), (frame.C_g, solid.C_g)):
         assert np.abs(a - b).max() < 0.01 * np.abs(b).max()
+
+
+CARBON_BEND = """format = "rodlab.rod/1"
+name = "carbon-tol"
+L1_mm = 350.0
+L2_mm = 400.0
+gamma_deg = 90.0
+[tube]
+material = "mycfrp"
+outer_diameter_mm = 32.0
+wall_mm = 3.0
+[materials.mycfrp]
+E_GPa = 120
+E_transverse_GPa = 9
+G_GPa = 5
+nu = 0.3
+density_kg_m3 = 1600
+"""
+
+
+def test_a_curved_carbon_bend_is_flagged_where_the_frame_is_far_off(tmp_path):
+    """A new user's unidirectional-carbon rod whose bend is of the tube's carbon (no [bend] table): the frame's bend
+    flexibility is calibrated on metal bends only, and here its c33 is ~40 % below the solid's; the frame's notes
+    name the bend's material ratios (they said nothing before)."""
+    from rodlab.core.design_io import resolve_design
+    from rodlab.fea import compute_compliance
+    from rodlab.geometry import mesh_rod
+    path = tmp_path / "carbon-tol.rod.toml"
+    path.write_text(CARBON_BEND)
+    d = resolve_design(str(path))
+    frame = compute_compliance(d, "frame")
+    notes = frame.provenance["outside_calibrated_range"]
+    assert any("bend material mycfrp: E / G = 24.00" in n for n in notes)
+    assert any("E / E_T = 13.33" in n for n in notes)
+    solid = compute_compliance(d, "solid", mesher=mesh_rod, error_estimate=False)
+    assert frame.C_F[2, 2] < 0.7 * solid.C_F[2, 2]              # what the note warns of

@@ -25,6 +25,10 @@ P_MISSING = 1e-3
 #: the model leaves out is at most about the noise model's own (sqrt(1.5^2 - 1) = 1.1 times), so its pull on
 #: each parameter is of the order of the standard errors, which are computed from the residuals' scatter anyway
 BIRGE_MATERIAL = 1.5
+#: below this p-value (and above :data:`P_MISSING`) the residuals are at the edge of the noise model: not a
+#: finding, but not worded as "consistent with noise" either (a new user read "consistent ... p = 0.0038" as a
+#: contradiction)
+P_EDGE = 1e-2
 
 
 @dataclass(frozen=True)
@@ -55,6 +59,18 @@ class ResidualTest:
     @property
     def material(self) -> bool:
         return self.missing and self.birge > BIRGE_MATERIAL
+
+    @property
+    def wording(self) -> str:
+        """How the residuals compare with the noise model, in words: ``NOT noise``, ``slightly above noise``, ``at
+        the edge of the noise model (not significant at p < 0.001)``, ``consistent with noise``."""
+        if self.material:
+            return "NOT noise"
+        if self.missing:
+            return "slightly above noise"
+        if self.p_value < P_EDGE:
+            return f"at the edge of the noise model (not significant at p < {P_MISSING:g})"
+        return "consistent with noise"
 
     def to_dict(self) -> dict:
         """The test as the calibration result and the diagnosis report record it."""

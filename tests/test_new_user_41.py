@@ -40,3 +40,14 @@ def test_names_without_a_unit_slip_keep_their_suggestion():
     assert did_you_mean("L1", ["L1_mm", "L2_mm"]) == " Did you mean `L1_mm`?"
     assert did_you_mean("dsip_x_mm", ["disp_x_mm"]) == " Did you mean `disp_x_mm`?"
     assert did_you_mean("zzz", ["disp_x_mm"]) == ""
+
+
+@pytest.mark.parametrize("p, reduced, words", [(0.5, 1.0, "consistent with noise"),
+                                               (0.0038, 1.57, "at the edge of the noise model"),
+                                               (1e-5, 1.8, "slightly above noise"), (1e-9, 4.0, "NOT noise")])
+def test_the_residual_verdict_never_calls_a_small_p_value_consistent(p, reduced, words):
+    """A new user read "residuals consistent with noise ... (p = 0.0038)" as the result contradicting itself."""
+    from rodlab.calibrate.residual_test import P_MISSING, ResidualTest
+    t = ResidualTest(chi2=reduced * 50, dof=50, reduced=reduced, p_value=p, noise_mm=0.003,
+                     fixture_sigma=(0.01, 0.002), missing=p < P_MISSING)
+    assert t.wording.startswith(words)

@@ -23,8 +23,7 @@ def print_parameters(res) -> None:
     print_held(res)
     if res.residual_check is not None:
         t = res.residual_check
-        verdict = "NOT noise" if t.material else "slightly above noise" if t.missing else "consistent with noise"
-        print(f"  residuals {verdict}: {res.residual_check.describe()}")
+        print(f"  residuals {t.wording}: {t.describe()}")
 
 
 def print_cautions(res) -> None:

@@ -88,7 +88,7 @@ def _verdict(trusted: bool, warnings: list, cautions: list = ()) -> str:
         items = "".join(f"<li>{esc(c)}</li>" for c in cautions)
         return f"<p class=good>TRUSTED, with cautions: the parameters may be loaded.</p><ul>{items}</ul>"
     if trusted:
-        return "<p class=good>TRUSTED: the residuals are the device's noise; the parameters may be loaded.</p>"
+        return "<p class=good>TRUSTED: the residuals are within the noise model; the parameters may be loaded.</p>"
     items = "".join(f"<li>{esc(w)}</li>" for w in warnings)
     items += "".join(f"<li>caution: {esc(c)}</li>" for c in cautions)
     return f"<p class=bad>NOT TRUSTED: do not load these parameters into the robot.</p><ul>{items}</ul>"

@@ -51,3 +51,19 @@ def test_the_residual_verdict_never_calls_a_small_p_value_consistent(p, reduced,
     t = ResidualTest(chi2=reduced * 50, dof=50, reduced=reduced, p_value=p, noise_mm=0.003,
                      fixture_sigma=(0.01, 0.002), missing=p < P_MISSING)
     assert t.wording.startswith(words)
+
+
+def test_a_study_with_materials_on_a_grid_draws_the_best_design_per_cell(tmp_path):
+    """--materials on an L1 x L2 grid: several designs per cell; the heat maps were silently left out."""
+    import pandas as pd
+
+    from rodlab.app.study.plots import plot_heatmaps
+    rows = []
+    for L1 in (250.0, 350.0):
+        for L2 in (400.0, 500.0):
+            for mat, err in (("steel", 0.05), ("cfrp", 0.03)):
+                for method, f in (("none", 2.0), ("meas", 1.0)):
+                    rows.append(dict(design=f"{mat} {L1:g}-{L2:g}", L1_mm=L1, L2_mm=L2, method=method,
+                                     mean_mm=f * err * (1 + L1 / 1000)))
+    png = plot_heatmaps(pd.DataFrame(rows), tmp_path / "heatmaps.png", "tx90")
+    assert png is not None and png.stat().st_size > 10_000

@@ -57,7 +57,7 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     extra = _recommended_views(out, rec, designs or {})
     figs.update({f"Recommended design {rec.design} under a unit force at the ball (frame model, displacement "
                  f"x the factor written; all load cases in {extra[0]})": p for p in extra[1:]})
-    write_study_report(out, df, rec.text, figs, header)
+    write_study_report(out, df, rec.text, figs, header, run.spec.monte_carlo)
     atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
                                                      "spec": spec_dict(run.spec), "robot": robot_name,
                                                      "designs": len(run.setups), **(extra_json or {})}))

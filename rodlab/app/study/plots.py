@@ -130,15 +130,19 @@ def heat_scale(df, methods):
 
 def plot_heatmaps(df, path, title: str = "") -> Path | None:
     """Predicted mean error over L1 x L2, one panel per method on one colour scale (the sweep's colour map:
-    yellow is worse), contours for the variation within a method; None unless the designs form a grid."""
+    yellow is worse), contours for the variation within a method; None unless the designs form a grid. Where a
+    cell holds several designs (``--materials`` on a grid) it shows the best of them, and the title says so."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     L1, L2 = np.unique(df["L1_mm"].to_numpy(float)), np.unique(df["L2_mm"].to_numpy(float))
     methods = [m for m in ("none", "calc", "fea", "meas") if (df["method"] == m).any()]
-    if L1.size < 2 or L2.size < 2 or not methods or df["design"].nunique() != L1.size * L2.size:
+    per_cell = df.groupby(["L1_mm", "L2_mm"])["design"].nunique()
+    if L1.size < 2 or L2.size < 2 or not methods or per_cell.size != L1.size * L2.size:
         return None
+    if per_cell.max() > 1:
+        title = f"{title} — the best of {per_cell.max()} designs in each cell"
     norm = heat_scale(df, methods)
     fig, axes = plt.subplots(1, len(methods), figsize=(4.4 * len(methods) + 1.0, 4.0), constrained_layout=True,
                              squeeze=False)
@@ -146,7 +150,8 @@ def plot_heatmaps(df, path, title: str = "") -> Path | None:
     for ax, m in zip(axes[0], methods):
         Z = np.full((L2.size, L1.size), np.nan)
         for r in df[df["method"] == m].itertuples():
-            Z[np.searchsorted(L2, r.L2_mm), np.searchsorted(L1, r.L1_mm)] = r.mean_mm
+            i, j = np.searchsorted(L2, r.L2_mm), np.searchsorted(L1, r.L1_mm)
+            Z[i, j] = np.fmin(Z[i, j], r.mean_mm)            # NaN (not usable) only where every design is
         ax.set_facecolor("#dddddd")
         pc = ax.pcolormesh(L1, L2, Z, shading="nearest", cmap=HEAT_CMAP, norm=norm)
         if L1.size > 2 and L2.size > 2 and np.isfinite(Z).sum() > 4 and np.nanmax(Z) > np.nanmin(Z):

@@ -45,8 +45,10 @@ def _accuracy_table(df) -> str:
     return f"<table>{head}{rows}</table>"
 
 
-def write_study_report(out_dir, df, recommendation: str, figures: dict, header: dict) -> Path:
-    """Write ``out_dir/study.html``; ``figures`` {caption: file name in out_dir}; ``header`` {label: text}."""
+def write_study_report(out_dir, df, recommendation: str, figures: dict, header: dict,
+                       monte_carlo: bool = False) -> Path:
+    """Write ``out_dir/study.html``; ``figures`` {caption: file name in out_dir}; ``header`` {label: text};
+    ``monte_carlo``: the numbers are of simulated campaigns (else of the linear predictor)."""
     out = Path(out_dir)
     parts = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab study</title><style>{CSS}"
              "</style></head><body><h1>rodlab study: which rod gives the best calibration?</h1>",
@@ -55,9 +57,12 @@ def write_study_report(out_dir, df, recommendation: str, figures: dict, header: 
                        for k, v in header.items()) + "</table>"]
     for caption, name in figures.items():
         parts.append(f"<h2>{html.escape(caption)}</h2>" + img_tag(out, name, caption))
+    how = ("averaged over the simulated campaigns; the band is the 5-95 % range of the campaigns' mean error"
+           if monte_carlo else "predicted by the linear predictor (the identification's covariance and the "
+           "compensation's bias propagated to the validation points; draws of that linear model, not simulated "
+           "campaigns); the band is the 5-95 % range of a campaign's mean error over those draws")
     parts.append("<h2>Predicted calibration accuracy and its error budget</h2><p class=note>Validation errors after "
-                 "calibration, averaged over the simulated campaigns; the band is the 5-95 % range of the campaigns' "
-                 "mean error. Budget: the shares of the mean-square error left by the rod's deflection after "
+                 f"calibration, {how}. Budget: the shares of the mean-square error left by the rod's deflection after "
                  "compensation, by the identification (campaign noise through the observability), and by the "
                  "validation instrument's own noise.</p>" + _accuracy_table(df))
     parts.append("<h2>Designs</h2><p class=note>Thermal growth of the tool vector per kelvin; f1 the first natural "

@@ -67,3 +67,15 @@ def test_a_study_with_materials_on_a_grid_draws_the_best_design_per_cell(tmp_pat
                                      mean_mm=f * err * (1 + L1 / 1000)))
     png = plot_heatmaps(pd.DataFrame(rows), tmp_path / "heatmaps.png", "tx90")
     assert png is not None and png.stat().st_size > 10_000
+
+
+def test_the_3d_views_of_rodlab_fea_go_into_the_png_folder(tmp_path):
+    """`rodlab fea ... --png figs --fields steel.vtu --report` wrote steel.3d_F*.png beside the .vtu, not in figs/."""
+    from argparse import Namespace
+    from pathlib import Path
+
+    from rodlab.app.cli.cmd_fea import _views_stem
+    stem = Path("out") / "steel"
+    assert _views_stem(Namespace(png=str(tmp_path / "figs")), stem) == tmp_path / "figs" / "steel"
+    assert _views_stem(Namespace(png=str(tmp_path / "deformed.png")), stem) == stem   # one file: the views stay
+    assert _views_stem(Namespace(png=None), stem) == stem

@@ -44,7 +44,7 @@ def register(sub) -> None:
     p.add_argument("--no-symmetry", action="store_true",
                    help="solid: mesh and solve the whole rod instead of the half y_T >= 0 (same result, ~2x slower)")
     p.add_argument("--png", default=None, help="solid: the deformed shape (self-weight along -z_T): FILE.png, or a "
-                                               "folder (it gets deformed.png)")
+                                               "folder (it gets deformed.png, and with --report the 3-D views)")
     p.add_argument("--fields", default=None, metavar="OUT",
                    help="solid: the displacement and von Mises stress fields of the six unit load cases on the mesh "
                         "(*.vtu, for ParaView and `rodlab view`); frame: the centreline's displacements and its sections' "
@@ -164,14 +164,22 @@ def _solid_views(args: argparse.Namespace, design, res) -> list:
             return []
         try:
             out = Path(args.output)
-            pngs = render_field_pngs(path, Path(args.fields).with_suffix("") if args.fields
-                                     else out.parent / out.name.split(".")[0])
+            pngs = render_field_pngs(path, _views_stem(args, Path(args.fields).with_suffix("") if args.fields
+                                                       else out.parent / out.name.split(".")[0]))
         except RenderError as e:
             print(f"  note: no 3-D views in the report: {e}")
             return []
     for p in pngs:
         print(f"  wrote {p}")
     return pngs
+
+
+def _views_stem(args: argparse.Namespace, stem: Path) -> Path:
+    """Where the 3-D views (``STEM.3d_Fx.png`` ...) go: into ``--png`` when it names a folder, as the other
+    figures do, else beside ``stem``."""
+    if args.png and Path(args.png).suffix.lower() != ".png":
+        return Path(args.png) / stem.name
+    return stem
 
 
 def _frame_views(args: argparse.Namespace, design) -> list:
@@ -186,7 +194,7 @@ def _frame_views(args: argparse.Namespace, design) -> list:
         return []
     from ..report.views import render_field_pngs
     try:
-        return render_field_pngs(path, path.with_suffix(""))
+        return render_field_pngs(path, _views_stem(args, path.with_suffix("")))
     except RenderError as e:
         print(f"  note: no 3-D views in the report: {e}")
         return []

@@ -79,3 +79,22 @@ def test_the_3d_views_of_rodlab_fea_go_into_the_png_folder(tmp_path):
     assert _views_stem(Namespace(png=str(tmp_path / "figs")), stem) == tmp_path / "figs" / "steel"
     assert _views_stem(Namespace(png=str(tmp_path / "deformed.png")), stem) == stem   # one file: the views stay
     assert _views_stem(Namespace(png=None), stem) == stem
+
+
+def test_validate_lists_a_campaign_in_radians_as_calibrate_refuses_it(tmp_path, capsys):
+    """`rodlab validate` said "valid" of a campaign whose joint angles are radians; `calibrate` refuses it."""
+    import csv
+    import math
+    camp = tmp_path / "camp"
+    assert main(["-q", "simulate-campaign", "--rod", "rod1", "-o", str(camp)]) == 0
+    rows = list(csv.reader((camp / "multical.campaign.csv").open()))
+    rad = tmp_path / "rad.campaign.csv"
+    with rad.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(rows[0])
+        for r in rows[1:]:
+            w.writerow([f"{math.radians(float(v)):.6f}" if rows[0][i].startswith("q") else v for i, v in enumerate(r)])
+    capsys.readouterr()
+    assert main(["validate", str(rad), str(camp / "multical.campaign.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "look like radians" in err and "multiply them by 180/pi" in err and "1 of 2 file(s) not valid" in err

@@ -9,6 +9,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from rodlab.calibrate import read_campaign, read_points
+from rodlab.calibrate.readings import point_unit_slips, unit_slips
 from rodlab.calibrate.robot_formats import ROBOT_READERS
 from rodlab.calibrate.sockets import read_sockets
 
@@ -25,12 +26,14 @@ def _joints(path) -> int:
     return max(1, len([h for h in header.split(",") if re.fullmatch(r"\s*q[1-9][0-9]*\s*", h)]))
 
 
-def _read_campaign(path):
-    return read_campaign(path, _joints(path))
+def _read_campaign(path) -> list[str]:
+    """The campaign read, and what in its numbers says a column is in other units (radians, um, metres): what
+    ``rodlab calibrate`` refuses without ``--units-checked``."""
+    return unit_slips(read_campaign(path, _joints(path)), path)
 
 
-def _read_points(path):
-    return read_points(path, _joints(path))
+def _read_points(path) -> list[str]:
+    return point_unit_slips(read_points(path, _joints(path)), path)
 
 
 def _read_sockets(path):
@@ -43,7 +46,8 @@ def _lazy(module: str, name: str):
     return read
 
 
-#: format id -> the reader whose rules go beyond the schema (None: the schema is all there is)
+#: format id -> the reader whose rules go beyond the schema (None: the schema is all there is); a reader that
+#: returns a list returns the problems it found in the numbers (units), each a message with its fix
 READERS = {
     "rodlab.rod/1": _lazy("rodlab.core.design_io", "load_design"),
     "rodlab.rod/2": _lazy("rodlab.core.design_io", "load_design"),
@@ -108,7 +112,9 @@ def validate_file(path, format_id: str | None = None) -> FileCheck:
     if reader is not None:
         with _warnings_of("rodlab") as warned:
             try:
-                reader(path)
+                found = reader(path)
+                if isinstance(found, list):
+                    check.problems.extend(Problem(str(path), _without_path(m, path)) for m in found)
             except LocatedError as e:
                 check.problems.extend(Problem(p.path or str(path), p.detail, p.line, p.key) for p in (e, *e.also))
             except ValueError as e:

@@ -98,3 +98,21 @@ def test_validate_lists_a_campaign_in_radians_as_calibrate_refuses_it(tmp_path, 
     assert main(["validate", str(rad), str(camp / "multical.campaign.csv")]) == 2
     err = capsys.readouterr().err
     assert "look like radians" in err and "multiply them by 180/pi" in err and "1 of 2 file(s) not valid" in err
+
+
+def test_a_folder_report_shows_fig8_with_the_fit_that_drew_it(tmp_path):
+    """Two measured files in one folder, the second fitted with --png: its Fig. 8 was shown under the first."""
+    import re as _re
+    rec = tmp_path / "r.rig.csv"
+    assert main(["-q", "rig", "simulate", "--sim", "rod1", "-o", str(rec)]) == 0
+    assert main(["-q", "rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "a_first.compliance.json")]) == 0
+    assert main(["-q", "rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "b_second.compliance.json"),
+                 "--png", str(tmp_path)]) == 0
+    out = tmp_path / "report.html"
+    assert main(["-q", "report", str(tmp_path), "-o", str(out)]) == 0
+    html = out.read_text()
+    sections = _re.split(r"<h2>", html)
+    first = next(s for s in sections if "a_first.compliance.json" in s)
+    second = next(s for s in sections if "b_second.compliance.json" in s)
+    assert "data:image/png;base64," not in first and "data:image/png;base64," in second
+    assert "row x: (" in second                                   # r_mn rows no longer "x: - - 1.0031"

@@ -164,10 +164,13 @@ def cmd_fit(args: argparse.Namespace) -> int:
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{np.round(comp.C_F, 6) + 0.0}")     # no "-0." for what rounds to zero
     _print_load(fit)
+    fig = png_file(args.png, "fig8.png")
+    if fig is not None:     # the file names its figure: a folder report shows it with this file, not another's
+        comp.provenance["figures"] = [os.path.relpath(fig, Path(args.output).parent)]
     written = [write_compliance(comp, args.output)]
     print(f"  wrote {written[0]}")
-    if args.png:
-        written.append(plot_fit(fit, png_file(args.png, "fig8.png"), sim, title=f"rod {rec.rod}"))
+    if fig is not None:
+        written.append(plot_fit(fit, fig, sim, title=f"rod {rec.rod}"))
         print(f"  wrote {written[-1]}")
     write_command_report(args, written, written[0].parent)
     return 0

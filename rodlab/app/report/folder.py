@@ -88,14 +88,30 @@ def discover(folder: Path, depth: int = 2) -> tuple[list[Source], list[Path]]:
     return sources, figures
 
 
-def _claim(src: Source, figures: list[Path], used: set) -> list[Path]:
-    """The figures of ``src``'s section found in its folder (any folder for a result not written), not yet
-    shown."""
+def _named_figures(src: Source) -> list[Path] | None:
+    """The figures a result names as its own (``provenance.figures``, relative to its file: ``rig fit --png``),
+    or None when it names none."""
+    prov = src.data.get("provenance") if isinstance(src.data, dict) else None
+    names = prov.get("figures") if isinstance(prov, dict) else None
+    if not names or src.path is None:
+        return None
+    return [(src.path.parent / str(n)).resolve() for n in names]
+
+
+def _claim(src: Source, figures: list[Path], used: set, reserved: set = frozenset()) -> list[Path]:
+    """The figures ``src`` names as its own, else those of its section found in its folder (any folder for a
+    result not written), not yet shown (figures another result names are left to it)."""
+    named = _named_figures(src)
+    if named is not None:
+        mine = [f for f in figures if f.resolve() in named and f not in used]
+        used.update(mine)
+        return mine
     pats = SECTIONS[src.format].figures
+    free = [f for f in figures if f not in used and f not in reserved]
     if src.path is None:
-        mine = [f for f in figures if f not in used and any(fnmatch(f.name, p) for p in pats)]
+        mine = [f for f in free if any(fnmatch(f.name, p) for p in pats)]
     else:
-        mine = [f for f in figures if f.parent == src.path.parent and f not in used
+        mine = [f for f in free if f.parent == src.path.parent
                 and (f.stem == src.path.stem or any(fnmatch(f.name, p) for p in pats))]
     used.update(mine)
     return mine
@@ -109,11 +125,12 @@ def render_sources(sources: list[Source], figures: list[Path], title: str, intro
         raise RodlabError("nothing to report: no rodlab result (compliance, calibration, diagnosis, study, sweep, "
                           "comparison, mass) or figure here; run a command with -o / --json / --png into this folder")
     used: set = set()
+    reserved = {f for src in sources for f in figures if f.resolve() in (_named_figures(src) or ())}
     body = []
     for i, src in enumerate(sorted(sources, key=lambda s: (SECTIONS[s.format].order, str(s.path))), 1):
         sec = SECTIONS[src.format]
         where = f" <span class=note>(<code>{esc(src.label(base))}</code>)</span>" if src.path else ""
-        figs = _claim(src, figures, used)
+        figs = _claim(src, figures, used, reserved)
         scale = 0.5 if src.format == FORMAT_MASS else None
         body.append(f"<h2>{i}. {esc(sec.title)}{where}</h2>" + sec.render(src)
                     + ("<div class=views>" if scale else "")

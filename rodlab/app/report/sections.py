@@ -70,9 +70,9 @@ def _compliance(src: Source) -> str:
     if prov.get("sparse_solver"):
         rows.append(("sparse solver", str(prov["sparse_solver"])))
     if d.get("r_mn"):
-        cells = "; ".join(f"{'xyz'[m]}: " + " ".join("-" if v is None else f"{v:.4f}" for v in row)
+        cells = "; ".join(f"row {'xyz'[m]}: (" + ", ".join("n/m" if v is None else f"{v:.4f}" for v in row) + ")"
                           for m, row in enumerate(d["r_mn"]))
-        rows.append(("r_mn (Eq. 20, measured / simulated per entry; - not measured)", cells))
+        rows.append(("r_mn (Eq. 20, measured / simulated per entry, columns x, y, z; n/m: not measured)", cells))
     load = prov.get("measured_load") or {}
     if load.get("friction_N"):
         rows.append(("slides' friction, measured by the load cell",

@@ -14,7 +14,7 @@ from rodlab.core.massprops import MassProperties, combine
 from rodlab.core.units import kg_m3_to_kg_mm3
 
 from .cadlib import build123d
-from .parts import PART_COLOURS, part_solids
+from .parts import part_colours, part_solids
 
 __all__ = ["RodCad", "build_cad"]
 
@@ -45,8 +45,9 @@ class RodCad:
         """A build123d assembly: one labelled, coloured child per part."""
         bd = build123d()
         children = []
+        colours = part_colours(self.design)
         for part, solid in self.solids.items():
-            child = bd.Compound([solid], label=str(part), color=bd.Color(*PART_COLOURS[part]))
+            child = bd.Compound([solid], label=str(part), color=bd.Color(*colours[part]))
             children.append(child)
         return bd.Compound(children=children, label=f"rod {self.design.name}")
 

@@ -18,7 +18,7 @@ from rodlab.core.layout import Layer, Segment, SegmentKind, layout
 from .cadlib import build123d
 from .errors import GeometryError
 
-__all__ = ["part_solids", "half_solids", "PART_COLOURS"]
+__all__ = ["part_solids", "half_solids", "PART_COLOURS", "part_colours"]
 
 #: RGB colours of the parts in STEP files and renderings.
 PART_COLOURS: dict[Part, tuple[float, float, float]] = {
@@ -31,6 +31,27 @@ PART_COLOURS: dict[Part, tuple[float, float, float]] = {
     Part.BALL_HOLDER: (0.70, 0.72, 0.78),
     Part.BALL: (0.95, 0.93, 0.86),
 }
+
+#: RGB colours of a tube by its material's kind (the first name prefix that matches), so that a steel pipe I or an
+#: aluminium pipe II is not drawn black like carbon (a new user's trial); other materials keep the part's colour
+_MATERIAL_COLOURS = (("cfrp", (0.15, 0.15, 0.17)), ("carbon", (0.15, 0.15, 0.17)), ("steel", (0.55, 0.57, 0.60)),
+                     ("al_", (0.74, 0.76, 0.80)), ("ti_", (0.58, 0.56, 0.53)))
+
+
+def part_colours(design) -> dict:
+    """RGB colour of each part of ``design`` [0-1]: the tubes (pipes I, II and the bend) by their material's kind
+    (carbon dark, steel and aluminium metallic; an anisotropic material not named so, a user's laminate, as
+    carbon), the sleeves, holders and ball in :data:`PART_COLOURS` (their shades tell them apart)."""
+    out = dict(PART_COLOURS)
+    for part in (Part.PIPE_I, Part.BEND, Part.PIPE_II):
+        default = PART_COLOURS[part]
+        m = design.material_of(part)
+        name = m.name.lower()
+        found = next((rgb for prefix, rgb in _MATERIAL_COLOURS if name.startswith(prefix)), None)
+        if found is None and m.E_transverse_GPa is not None and m.E_transverse_GPa < 0.5 * m.E_GPa:
+            found = _MATERIAL_COLOURS[0][1]
+        out[part] = found or default
+    return out
 
 
 def _annulus_solid(bd, layer: Layer, seg: Segment, offset_T: np.ndarray):

@@ -8,7 +8,7 @@ import numpy as np
 
 from rodlab.core.render3d import VIEWS, TriangleSet, pick_renderer, render_png
 
-from .parts import PART_COLOURS
+from .parts import part_colours
 
 __all__ = ["render_views", "tessellate"]
 
@@ -25,7 +25,8 @@ def tessellate(solids: dict, tolerance_mm: float = 0.1):
 def render_views(cad, out_dir: str | Path, prefix: str = "view", dpi: int = 130, renderer: str = "auto") -> list[Path]:
     """Write ``{prefix}_iso.png``, ``_xz.png``, ``_xy.png``, ``_yz.png`` into ``out_dir``; return the paths.
     ``renderer``: one of :data:`rodlab.core.render3d.RENDERERS`."""
-    sets = [TriangleSet(str(p), v, t, PART_COLOURS[p]) for p, (v, t) in tessellate(cad.solids).items()]
+    colours = part_colours(cad.design)
+    sets = [TriangleSet(str(p), v, t, colours[p]) for p, (v, t) in tessellate(cad.solids).items()]
     d = cad.design
     renderer = pick_renderer(renderer)
     return [render_png(sets, Path(out_dir) / f"{prefix}_{name}.png", name, dpi=dpi, renderer=renderer,

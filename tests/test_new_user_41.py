@@ -116,3 +116,14 @@ def test_a_folder_report_shows_fig8_with_the_fit_that_drew_it(tmp_path):
     second = next(s for s in sections if "b_second.compliance.json" in s)
     assert "data:image/png;base64," not in first and "data:image/png;base64," in second
     assert "row x: (" in second                                   # r_mn rows no longer "x: - - 1.0031"
+
+
+def test_tubes_are_drawn_in_their_material_s_colour():
+    """A steel pipe I and an aluminium pipe II were drawn black like carbon in the CAD views."""
+    from rodlab.core.design_io import resolve_design
+    from rodlab.core.enums import Part
+    from rodlab.geometry.parts import PART_COLOURS, part_colours
+    carbon, steel = part_colours(resolve_design("rod1")), part_colours(resolve_design("rod4"))
+    assert carbon[Part.PIPE_I] == PART_COLOURS[Part.PIPE_I] and max(carbon[Part.PIPE_I]) < 0.2   # carbon: dark
+    assert min(steel[Part.PIPE_I]) > 0.4 and steel[Part.PIPE_I] == steel[Part.BEND]              # steel: metallic
+    assert steel[Part.RING_1] == PART_COLOURS[Part.RING_1]                                         # sleeves keep theirs

@@ -248,9 +248,24 @@ def read_recording(path: str | Path, text: str | None = None) -> RigRecording:
                        arr(8) if has_temp else None, p, arr(9) if "force_N" in ix else None)
     if not rec.measured_axes():
         raise RigError("no displacement column has any reading", path=p, line=header_line, key="disp_x_mm")
-    for problem in rec.unit_slips():
+    for problem in rec.unit_slips() + _unread_unit_lines(meta):
         log.warning("%s: %s", p, problem)
     return rec
+
+
+#: what a ``# load_N:`` header line may say (rodlab writes it to document the load; it is not read)
+_LOAD_SOURCES = ("mass_kg * 9.80665", "force_N")
+
+
+def _unread_unit_lines(meta: dict[str, str]) -> list[str]:
+    """Header lines that try to redefine a column or the load (``# load_N: mass_lb * 4.448``, ``# mass_kg: lb``):
+    rodlab reads no units or formulas from a recording's header (its columns' names fix their units), so such a
+    line changes nothing; said, not silent. rodlab's own documenting ``load_N`` lines pass."""
+    edited = [k for k, v in meta.items() if k in COLUMNS + OPTIONAL_COLUMNS
+              or (k == "load_N" and not v.startswith(_LOAD_SOURCES))]
+    return [f"the header line '# {k}: {meta[k]}' is not read: a recording takes no units or formulas from its header, "
+            f"the columns' names fix their units and the load is mass_kg x 9.80665 N/kg, or the force_N column "
+            f"(docs/formats.md): convert the values in the columns instead" for k in edited]
 
 
 def _data_rows(lines: list[str], start: int, header: list[str], ix: dict, p: Path, has_temp: bool) -> list[tuple]:

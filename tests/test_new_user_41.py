@@ -127,3 +127,21 @@ def test_tubes_are_drawn_in_their_material_s_colour():
     assert carbon[Part.PIPE_I] == PART_COLOURS[Part.PIPE_I] and max(carbon[Part.PIPE_I]) < 0.2   # carbon: dark
     assert min(steel[Part.PIPE_I]) > 0.4 and steel[Part.PIPE_I] == steel[Part.BEND]              # steel: metallic
     assert steel[Part.RING_1] == PART_COLOURS[Part.RING_1]                                         # sleeves keep theirs
+
+
+def test_a_header_line_that_redefines_the_load_is_said_to_be_unread(tmp_path, caplog):
+    """`# load_N: mass_lb * 4.448` was silently ignored; rodlab's own documenting line passes without a word."""
+    import logging
+
+    from rodlab.stiffness_rig import read_recording
+    rec = tmp_path / "r.rig.csv"
+    assert main(["-q", "rig", "simulate", "--sim", "rod1", "-o", str(rec)]) == 0
+    with caplog.at_level(logging.WARNING):
+        read_recording(rec)
+    assert "is not read" not in caplog.text
+    edited = tmp_path / "lb.rig.csv"
+    edited.write_text("\n".join("# load_N: mass_lb * 4.448" if ln.startswith("# load_N:") else ln
+                                for ln in rec.read_text().splitlines()) + "\n")
+    with caplog.at_level(logging.WARNING):
+        read_recording(edited)
+    assert "'# load_N: mass_lb * 4.448' is not read" in caplog.text and "convert the values" in caplog.text

@@ -73,14 +73,16 @@ class SolveAhead:
 
     def solver_for(self, K: sp.spmatrix) -> PatternSolver | None:
         """The solver analysed ahead, when ``K`` (CSR, as assembled) has the pattern it was analysed for; else
-        None (the caller analyses ``K``)."""
+        None (the caller analyses ``K``), and the analysis is let go (PARDISO's memory)."""
         if self.solver is None or self.pattern is None:
             return None
         same = (K.shape == self.pattern.shape and np.array_equal(K.indptr, self.pattern.indptr)
                 and np.array_equal(K.indices, self.pattern.indices))
-        if not same:
-            log.warning("the solver's analysis made from the straight mesh does not fit the matrix; analysing again")
-        return self.solver if same else None
+        if same:
+            return self.solver
+        log.warning("the solver's analysis made from the straight mesh does not fit the matrix; analysing again")
+        self.solver = None
+        return None
 
 
 def solve_ahead(topology: LinearTopology, backend: str | None = None) -> SolveAhead:

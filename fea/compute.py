@@ -56,7 +56,11 @@ def _solve_ahead(design: RodDesign, mesher, kw: dict, backend: str | None) -> So
     topology = offer(design, **kw) if offer is not None else None
     if topology is None:
         return None
-    ahead = solve_ahead(topology, backend)
+    try:
+        ahead = solve_ahead(topology, backend)
+    except Exception as e:  # noqa: BLE001 - optional work: the solve makes the plan and analysis itself then
+        log.warning("no plan made beside the mesher (%s: %s); the solve makes it", type(e).__name__, e)
+        return None
     log.info("assembly plan and analysis of %s from the straight mesh, beside the mesher: %.2f s", design.name,
              ahead.seconds)
     return ahead

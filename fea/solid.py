@@ -134,6 +134,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     t1 = time.perf_counter()
     backend = backend or available_backend()
     plan = (plans or PlanCache(None)).plan(basis, rod_mesh.sha256, backend, made=ahead.plan if ahead else None)
+    plan_ahead = ahead is not None and plan is ahead.plan
     nodes = plan.node_order                                # None: the solver orders (SuperLU)
     timings["ordering"] = time.perf_counter() - t1
     t1 = time.perf_counter()
@@ -145,7 +146,8 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     n_cases = 9 if tip_moments else 6
     loads, mass = _load_cases(basis, rod_mesh, materials, n_cases)
     timings["loads"] = time.perf_counter() - t1
-    analysed = ahead.solver_for(K) if ahead is not None else None
+    analysed = ahead.solver_for(K) if plan_ahead else None
+    used_ahead = plan_ahead and (analysed is not None or ahead.pattern is None)
     U, solver_backend = _clamped_solve(basis, rod_mesh, K, loads, backend, nodes, timings, analysed)
     del K
     # ball-centre displacement
@@ -162,7 +164,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
         E = _recovery_estimate(rod_mesh, C, U)
         timings["error_estimate"] = time.perf_counter() - t1
     timings["total"] = time.perf_counter() - t0
-    if ahead is not None:
+    if used_ahead:
         timings["ahead_beside_mesher"] = ahead.seconds       # not in the total: done while the mesh was curved
     log.info("solid FEA %s: %d DOFs%s, %s, %s", design.name, U.shape[0], " (half mesh, two solves)" if half else "",
              solver_backend, ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))

@@ -239,7 +239,7 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
                                grading[2] * h)
             _mesh_options(h, order, grading)
             t0 = time.perf_counter()
-            on_linear = None if on_topology is None else lambda: on_topology(linear_topology(solids, part_vols))
+            on_linear = None if on_topology is None else lambda: _hand_over(on_topology, solids, part_vols)
             high_order = generate_mesh(order, on_linear)
             log.info("gmsh generate: %.2f s", time.perf_counter() - t0)
             node_tags, coords, _ = gmsh.model.mesh.getNodes()
@@ -252,6 +252,15 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             gmsh.finalize()
     return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half,
                      high_order)
+
+
+def _hand_over(on_topology: Callable[[LinearTopology], None], solids: dict, part_vols: dict) -> None:
+    """``on_topology(the straight mesh's tetrahedra)``: optional work for the caller, so a failure is logged and
+    the mesh goes on (the caller then has no topology and does that work on the finished mesh)."""
+    try:
+        on_topology(linear_topology(solids, part_vols))
+    except Exception as e:  # noqa: BLE001 - never fail the mesh for the caller's optional work
+        log.warning("the straight mesh was not handed over (%s: %s); meshing goes on", type(e).__name__, e)
 
 
 def _check_mesh_args(design: RodDesign, size_mm, order, grading, kernel) -> tuple[float, tuple | None]:

@@ -25,25 +25,32 @@ def complete_c_f(measured: np.ndarray, guess: np.ndarray, source: str = "",
     """C_F [mm/N], shape=(3, 3): the ``measured`` entries (NaN where not measured; the two of a pair averaged),
     ``guess`` (r_rod x simulated) for the rest, unmeasured diagonal entries raised where the measured entries
     need it; and the notes to tell the user. ``source``: the recording, ``guess_is``: what ``guess`` is, for the
-    messages."""
+    messages. Raises :class:`RigError` where no raise of the unmeasured diagonal makes it a compliance."""
     C = _filled(measured, guess)
     if _is_psd(C):
         return C, []
     seen = np.isfinite(np.diag(measured))
     m, u = np.nonzero(seen)[0], np.nonzero(~seen)[0]
-    where = f"{source}: " if source else ""
-    if u.size == 0 or not _is_psd(C[np.ix_(m, m)]):
-        raise RigError(f"{where}the measured compliance entries contradict one another (C_F is not positive "
-                       f"semi-definite: eigenvalues {np.linalg.eigvalsh(0.5 * (C + C.T))}); check the gauges' "
-                       f"signs and axes and the load column, or fit with --robust", key="C_F")
+    if u.size == 0 or m.size == 0 or not _is_psd(C[np.ix_(m, m)]):
+        raise _contradiction(C, source)
     raised = _raise_unmeasured(C, m, u)
-    names = ", ".join(f"c_{'xyz'[i]}{'xyz'[i]}" for i in u)
-    note = (f"{names} not measured (no load along {', '.join('xyz'[i] for i in u)}): {guess_is} "
-            f"({', '.join(f'{guess[i, i]:.4g}' for i in u)} mm/N) is too small for the measured entries (a joint "
-            f"or bond softer than simulated?); raised to the smallest value they allow "
-            f"({', '.join(f'{raised[i, i]:.4g}' for i in u)} mm/N): a lower bound. Record a load along "
-            f"{', '.join('xyz'[i] for i in u)} to measure it")
+    if not _is_psd(raised):
+        raise _contradiction(C, source)
+    changed = [i for i in u if raised[i, i] != C[i, i]]
+    axes = ", ".join("xyz"[i] for i in changed)
+    note = (f"{', '.join(f'c_{a}{a}' for a in axes.split(', '))} not measured (no load along {axes}): {guess_is} "
+            f"({', '.join(f'{guess[i, i]:.4g}' for i in changed)} mm/N) is too small for the measured entries (a "
+            f"joint or bond softer than simulated?); raised to the least the measured entries allow "
+            f"({', '.join(f'{raised[i, i]:.4g}' for i in changed)} mm/N): a lower bound. Record a load along "
+            f"{axes} to measure it")
     return raised, [note]
+
+
+def _contradiction(C: np.ndarray, source: str) -> RigError:
+    where = f"{source}: " if source else ""
+    return RigError(f"{where}the measured compliance entries contradict one another (C_F is not positive "
+                    f"semi-definite: eigenvalues {np.linalg.eigvalsh(0.5 * (C + C.T))}); check the gauges' signs "
+                    f"and axes and the load column", key="C_F")
 
 
 def _filled(measured: np.ndarray, guess: np.ndarray) -> np.ndarray:
@@ -66,11 +73,12 @@ def _is_psd(C: np.ndarray) -> bool:
 
 
 def _raise_unmeasured(C: np.ndarray, m: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """``C`` with its unmeasured block ``C_uu`` raised by the least multiple of the identity that makes the Schur
-    complement ``C_uu - C_um C_mm^+ C_mu`` positive semi-definite (plus :data:`_MARGIN` of the diagonal)."""
+    """``C`` with its unmeasured block ``C_uu`` raised along the directions where the Schur complement
+    ``S = C_uu - C_um C_mm^+ C_mu`` is negative, by just that much (``C_uu += V max(-L, 0) V^T`` of ``S = V L V^T``,
+    plus :data:`_MARGIN` of the lift): an unmeasured entry the measured ones do not constrain is not changed."""
     out = C.copy()
     S = C[np.ix_(u, u)] - C[np.ix_(u, m)] @ np.linalg.pinv(C[np.ix_(m, m)]) @ C[np.ix_(m, u)]
-    lift = max(0.0, -float(np.linalg.eigvalsh(0.5 * (S + S.T)).min()))
-    out[np.ix_(u, u)] += np.eye(u.size) * lift
-    out[u, u] *= 1.0 + _MARGIN
+    lam, V = np.linalg.eigh(0.5 * (S + S.T))
+    lift = (V * np.maximum(-lam, 0.0)) @ V.T
+    out[np.ix_(u, u)] += lift * (1.0 + _MARGIN)
     return out

@@ -107,7 +107,8 @@ class RigFit:
                 "noise_mm": self.noise_mm, "lines": [ln.to_dict() for ln in self.lines],
                 "measured_entries": [[bool(np.isfinite(v)) for v in row] for row in M],
                 "C_F_se_mm_per_N": np.where(np.isfinite(self.C_F_se), self.C_F_se, -1.0).tolist(),
-                "unmeasured_entries": "r_rod x simulated",
+                "unmeasured_entries": "r_rod x simulated" + ("; a diagonal one raised to the least the measured "
+                                                             "entries allow (warnings)" if notes else ""),
                 "load": "force_N (load cell)" if self.load is not None else "mass_kg x g0",
                 "warnings": list(self.warnings) + notes}
         if self.load is not None:

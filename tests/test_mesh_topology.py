@@ -188,3 +188,36 @@ def test_the_command_plans_beside_the_mesher_on_a_first_run_only(tmp_path, monke
     assert runs[0]["provenance"]["timings_s"]["ahead_beside_mesher"] > 0
     assert "ahead_beside_mesher" not in runs[1]["provenance"]["timings_s"]
     assert runs[0]["C_F_mm_per_N"] == runs[1]["C_F_mm_per_N"]
+
+
+def test_a_failing_hand_over_does_not_fail_the_mesh(caplog):
+    import logging
+
+    def broken(topology):
+        raise RuntimeError("the caller's optional work broke")
+
+    d = resolve_design("rod1")
+    with caplog.at_level(logging.WARNING):
+        mesh = mesh_rod(d, size_mm=30.0, half=True, on_topology=broken)
+    assert mesh.mesh.nelements > 0 and "was not handed over" in caplog.text
+
+
+def test_a_topology_that_is_not_the_mesh_s_is_not_used(rod1_meshes):
+    """A mesher that hands over another mesh's tetrahedra: the plan is rejected block by block, the solve makes
+    its own, the compliance is the same, and the provenance does not claim the work beside the mesher."""
+    from rodlab.fea.compute import solid_compliance
+    d, mesh, _, got = rod1_meshes
+    t = got[0].t.copy()
+    t[[0, 1], 0] = t[[1, 0], 0]
+
+    class Handing:
+        def linear_topology(self, design, **kw):
+            return LinearTopology(t, got[0].n_vertices)
+
+        def __call__(self, design, **kw):
+            return mesh
+
+    comp, res = solid_compliance(d, Handing(), error_estimate=False)
+    ref = solve_compliance(d, mesh)
+    assert "ahead_beside_mesher" not in res.timings_s
+    assert np.allclose(res.C_F, ref.C_F, rtol=1e-12, atol=0)

@@ -27,12 +27,24 @@ def test_a_rod_that_is_neither_a_file_nor_a_builtin_says_what_to_give(tmp_path, 
     ("disp_x_um", ["disp_x_mm", "mass_kg"], "multiply the values by 0.001"),
     ("mass_g", ["disp_x_mm", "mass_kg"], "multiply the values by 0.001"),
     ("wall_in", ["wall_mm", "outer_diameter_mm"], "multiply the values by 25.4"),
-    ("force_lbf", ["force_N"], "convert the values from lbf to N"),
+    ("force_kN", ["force_N"], "multiply the values by 1000"),
 ])
 def test_a_name_in_another_unit_says_to_convert_as_well_as_rename(word, choices, words):
     from rodlab.core.errors import did_you_mean
-    hint = did_you_mean(word, choices)
+    hint = did_you_mean(word, choices, units=True)
     assert "in another unit" in hint and words in hint and "a rename alone" in hint
+
+
+@pytest.mark.parametrize("word, choices", [
+    ("C_F_mm_per_kN", ["C_F_mm_per_N"]),           # a compound unit: the factor would be the inverse
+    ("C_g", ["C_F"]),                              # g and F are not one kind of unit
+    ("cte_ppm_C", ["cte_ppm_K"]),                  # temperatures: no hint
+    ("upper_arm_lnk", ["upper_arm_link"]),         # not a unit at all
+])
+def test_no_unit_hint_where_a_factor_would_be_wrong(word, choices):
+    from rodlab.core.errors import did_you_mean
+    assert "in another unit" not in did_you_mean(word, choices, units=True)
+    assert "in another unit" not in did_you_mean("disp_x_um", ["disp_x_mm"])   # only where the caller asks
 
 
 def test_names_without_a_unit_slip_keep_their_suggestion():

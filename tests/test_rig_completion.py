@@ -50,10 +50,28 @@ def test_a_guess_too_small_for_the_measured_entries_is_raised_to_the_least_it_ma
     guess = np.array([[1.0, 0.0, -1.5], [0.0, 4.0, 0.0], [-1.5, 0.0, 2.8]]) * 1e-3
     out, notes = complete_c_f(measured, guess, "rec.rig.csv")
     least = (2.0e-3) ** 2 / 3.0e-3                       # c_xx >= c_xz^2 / c_zz (the Schur complement)
-    assert out[0, 0] == pytest.approx(least * 1.001, rel=1e-9)
+    assert out[0, 0] == pytest.approx(guess[0, 0] + 1.001 * (least - guess[0, 0]), rel=1e-9)
     assert np.linalg.eigvalsh(out).min() > 0
     assert np.array_equal(np.delete(out.ravel(), 0), np.delete(np.nan_to_num(measured).ravel(), 0))
     assert len(notes) == 1 and "c_xx not measured" in notes[0] and "Record a load along x" in notes[0]
+
+
+def test_with_two_axes_unloaded_only_the_entry_the_measured_ones_constrain_is_raised():
+    """A recording along x alone: c_yy is too small for the measured c_xy, c_zz is not constrained by anything
+    measured (c_xz = 0) and stays the guess (a lift by a multiple of the identity had raised it too)."""
+    measured = np.full((3, 3), NAN)
+    measured[:, 0] = measured[0, :] = [1.0, 1.5, 0.0]
+    guess = np.diag([1.0, 1.0, 10.0])
+    out, notes = complete_c_f(measured, guess)
+    assert out[2, 2] == 10.0 and out[1, 1] == pytest.approx(2.25, rel=2e-3) and np.linalg.eigvalsh(out).min() > 0
+    assert len(notes) == 1 and "c_yy not measured" in notes[0] and "c_zz" not in notes[0]
+
+
+def test_no_measured_diagonal_entry_is_refused_clearly():
+    measured = np.full((3, 3), NAN)
+    measured[0, 1] = measured[1, 0] = 5.0
+    with pytest.raises(RigError, match="contradict"):
+        complete_c_f(measured, np.eye(3), "rec.rig.csv")
 
 
 def test_measured_entries_that_contradict_one_another_are_refused_naming_the_recording():

@@ -54,12 +54,12 @@ from ..core.design_io import resolve_design
 from ..core.figures_bg import background_figures
 from ..core.fileio import atomic_write_json, atomic_write_text, json_safe
 from ..core.units import PAPER_ROD_SLIP
-from .solid_mesher import solid_mesher
 from ..core.view3d import start_offscreen_check
 from .demo_cad import CadJob, start_cad_job
 from .diagnose import corrected_compliance, diagnose_rig
 from .diagnose.plots import plot_rig_diagnosis
 from .report.views import frame_views, solid_views
+from .solid_mesher import solid_mesher
 from .study import StudySpec, list_candidates, run_study, write_study_outputs
 from .study.family import cad_available
 from .update import Measured, update_design

@@ -24,37 +24,42 @@ __all__ = [
 ]
 
 
-#: factors from a unit a name may carry to the unit rodlab's name for that quantity carries (value x factor)
-_UNIT_FACTORS = {("um", "mm"): 1e-3, ("m", "mm"): 1e3, ("cm", "mm"): 10.0, ("in", "mm"): 25.4, ("g", "kg"): 1e-3,
-                 ("lb", "kg"): 0.45359237, ("kN", "N"): 1e3, ("mN", "N"): 1e-3, ("MPa", "GPa"): 1e-3,
-                 ("Pa", "GPa"): 1e-9, ("ms", "s"): 1e-3, ("min", "s"): 60.0, ("deg", "rad"): 0.017453292519943295,
-                 ("rad", "deg"): 57.29577951308232}
+#: unit families: the factor from each unit to the family's others is the ratio of their sizes (in the first unit
+#: of the family); a hint is given only between two units of one family (no temperatures: their offsets)
+_UNIT_SIZES = ({"mm": 1.0, "um": 1e-3, "nm": 1e-6, "m": 1e3, "cm": 10.0, "in": 25.4},
+               {"kg": 1.0, "g": 1e-3, "lb": 0.45359237},
+               {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": 4.4482216152605},
+               {"GPa": 1.0, "MPa": 1e-3, "Pa": 1e-9},
+               {"s": 1.0, "ms": 1e-3, "min": 60.0},
+               {"rad": 1.0, "deg": 0.017453292519943295})
 
 
-#: unit suffixes a name may end in (the others are not units: ``upper_arm_lnk`` is a typo of ``upper_arm_link``)
-_UNITS = {u for pair in _UNIT_FACTORS for u in pair} | {"nm", "lbf", "N", "Nm", "Nmm", "C", "F", "K", "Hz", "g0"}
+def _family(unit: str) -> dict | None:
+    return next((f for f in _UNIT_SIZES if unit in f), None)
 
 
 def _other_unit(word: str, choices: list[str]) -> str:
-    """`` `x_um` is `x_mm` in another unit ...`` when ``word`` is one of ``choices`` with another unit suffix."""
+    """`` `x_um` is `x_mm` in another unit ...`` when ``word`` is one of ``choices`` with another unit of the same
+    kind as its last suffix (not a compound unit: ``_per_`` names are left alone)."""
     stem, _, unit = word.rpartition("_")
-    if not stem or unit not in _UNITS:
+    family = _family(unit)
+    if not stem or family is None or "_per" in f"_{stem}":
         return ""
     for c in choices:
         c_stem, _, c_unit = c.rpartition("_")
-        if c_stem.casefold() == stem.casefold() and c_unit in _UNITS and c_unit != unit:
-            factor = _UNIT_FACTORS.get((unit, c_unit))
-            how = f"multiply the values by {factor:g}" if factor else f"convert the values from {unit} to {c_unit}"
-            return (f" `{word}` is `{c}` in another unit: rodlab reads {c_unit} there, so {how} as you rename the "
-                    f"column (a rename alone would read them as {c_unit}).")
+        if c_stem.casefold() == stem.casefold() and c_unit != unit and c_unit in family:
+            factor = family[unit] / family[c_unit]
+            return (f" `{word}` is `{c}` in another unit: rodlab reads {c_unit} there, so multiply the values by "
+                    f"{factor:g} as you rename the column (a rename alone would read them as {c_unit}).")
     return ""
 
 
-def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """Return `` Did you mean `x`?`` for the closest of ``choices``, or ``""``; for a name with another unit
-    suffix than one of ``choices`` (``disp_x_um`` for ``disp_x_mm``) what to convert as well."""
+def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
+    """Return `` Did you mean `x`?`` for the closest of ``choices``, or ``""``. ``units``: ``word`` is the user's
+    name and ``choices`` the expected ones (a table's columns): a name with another unit of the same kind than one
+    of them (``disp_x_um`` for ``disp_x_mm``) is told what to convert as well."""
     word, choices = str(word), [str(c) for c in choices]
-    unit = _other_unit(word, choices)
+    unit = _other_unit(word, choices) if units else ""
     if unit:
         return unit
     folded = [c for c in choices if c.casefold() == word.casefold()]

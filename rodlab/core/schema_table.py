@@ -78,7 +78,7 @@ def _header_problems(header: list[str], cols: dict, schema: dict, path: str, lin
     for h in header:
         if h not in cols:
             out.append(Problem(path, f"unknown column {h!r}; expected {list(cols)}", line, h,
-                               did_you_mean(h, cols).strip() or "remove it or rename it"))
+                               did_you_mean(h, cols, units=True).strip() or "remove it or rename it"))
     for name, c in cols.items():
         if c.get("required") and name not in header:
             out.append(Problem(path, f"missing column {name!r}", line, name, f"add the column {name}"))

@@ -165,13 +165,13 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"  measured C_F [mm/N] =\n{np.round(comp.C_F, 6) + 0.0}")     # no "-0." for what rounds to zero
     _print_load(fit)
     fig = png_file(args.png, "fig8.png")
-    if fig is not None:     # the file names its figure: a folder report shows it with this file, not another's
-        comp.provenance["figures"] = [os.path.relpath(fig, Path(args.output).parent)]
-    written = [write_compliance(comp, args.output)]
-    print(f"  wrote {written[0]}")
-    if fig is not None:
+    written = []
+    if fig is not None:     # drawn first, then named by the file: a folder report shows it with this file only
         written.append(plot_fit(fit, fig, sim, title=f"rod {rec.rod}"))
-        print(f"  wrote {written[-1]}")
+        comp.provenance["figures"] = [os.path.relpath(written[-1], Path(args.output).parent)]
+    written.insert(0, write_compliance(comp, args.output))
+    for p in written:
+        print(f"  wrote {p}")
     write_command_report(args, written, written[0].parent)
     return 0
 

@@ -24,10 +24,10 @@ def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2
             for val, dC in zip(v, term.dC):
                 C = C + val * dC
     C = 0.5 * (C + C.T)
+    r = float((C[1, 1] + C[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2]))    # of the model, before any completion
     loaded = np.zeros((3, 3), dtype=bool)
     loaded[:, list(measured_axes)] = True
     C, notes = complete_c_f(np.where(loaded | loaded.T, C, np.nan), C, source, "the corrected model's")
-    r = float((C[1, 1] + C[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2]))
     return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm,
                          r * sim.r_rod, {"generator": "rodlab diagnose --export", "simulated": sim.provenance,
                                          "findings": [f.to_dict() for f in diag.findings], "warnings": notes})

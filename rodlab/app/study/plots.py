@@ -142,7 +142,7 @@ def plot_heatmaps(df, path, title: str = "") -> Path | None:
     if L1.size < 2 or L2.size < 2 or not methods or per_cell.size != L1.size * L2.size:
         return None
     if per_cell.max() > 1:
-        title = f"{title} — the best of {per_cell.max()} designs in each cell"
+        title = " — ".join(t for t in (title, f"the best of {per_cell.max()} designs in each cell") if t)
     norm = heat_scale(df, methods)
     fig, axes = plt.subplots(1, len(methods), figsize=(4.4 * len(methods) + 1.0, 4.0), constrained_layout=True,
                              squeeze=False)

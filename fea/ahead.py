@@ -63,21 +63,22 @@ def plan_pattern(plan: AssemblyPlan) -> sp.csr_matrix:
 @dataclass
 class SolveAhead:
     """The work done on the straight tetrahedra: the assembly ``plan`` and, for PARDISO and CHOLMOD, the
-    ``solver`` with its symbolic analysis of the plan's pattern (None for SuperLU, which analyses as it factorises);
-    ``seconds``: the time it took (beside the mesher)."""
+    ``solver`` with its symbolic analysis of the plan's pattern (None for SuperLU, which analyses as it factorises),
+    the pattern's CSR ``indptr`` and ``indices`` (None without an analysis); ``seconds``: the time it took (beside
+    the mesher)."""
 
     plan: AssemblyPlan
     solver: PatternSolver | None
-    pattern: sp.csr_matrix | None
+    indptr: np.ndarray | None
+    indices: np.ndarray | None
     seconds: float
 
     def solver_for(self, K: sp.spmatrix) -> PatternSolver | None:
         """The solver analysed ahead, when ``K`` (CSR, as assembled) has the pattern it was analysed for; else
         None (the caller analyses ``K``), and the analysis is let go (PARDISO's memory)."""
-        if self.solver is None or self.pattern is None:
+        if self.solver is None or self.indptr is None:
             return None
-        same = (K.shape == self.pattern.shape and np.array_equal(K.indptr, self.pattern.indptr)
-                and np.array_equal(K.indices, self.pattern.indices))
+        same = np.array_equal(K.indptr, self.indptr) and np.array_equal(K.indices, self.indices)
         if same:
             return self.solver
         log.warning("the solver's analysis made from the straight mesh does not fit the matrix; analysing again")
@@ -91,8 +92,9 @@ def solve_ahead(topology: LinearTopology, backend: str | None = None) -> SolveAh
     t0 = time.perf_counter()
     backend = SolverBackend(backend or available_backend()).value
     plan = topology_plan(topology, 2, backend)
-    solver = pattern = None
+    solver = indptr = indices = None
     if plan.node_order is not None:                      # PARDISO, CHOLMOD: analysed in this (natural) order
         pattern = plan_pattern(plan)
         solver = PatternSolver(pattern.T, backend, ordering_method="natural")
-    return SolveAhead(plan, solver, pattern, time.perf_counter() - t0)
+        indptr, indices = pattern.indptr, pattern.indices     # the ones of its data let go
+    return SolveAhead(plan, solver, indptr, indices, time.perf_counter() - t0)

@@ -147,7 +147,7 @@ def solve_compliance(design: RodDesign, rod_mesh, keep_displacements: bool = Fal
     loads, mass = _load_cases(basis, rod_mesh, materials, n_cases)
     timings["loads"] = time.perf_counter() - t1
     analysed = ahead.solver_for(K) if plan_ahead else None
-    used_ahead = plan_ahead and (analysed is not None or ahead.pattern is None)
+    used_ahead = plan_ahead and (analysed is not None or ahead.indptr is None)
     U, solver_backend = _clamped_solve(basis, rod_mesh, K, loads, backend, nodes, timings, analysed)
     del K
     # ball-centre displacement

@@ -157,3 +157,33 @@ def test_a_header_line_that_redefines_the_load_is_said_to_be_unread(tmp_path, ca
     with caplog.at_level(logging.WARNING):
         read_recording(edited)
     assert "'# load_N: mass_lb * 4.448' is not read" in caplog.text and "convert the values" in caplog.text
+
+
+TWO_TOLERANCE_SLIPS = """format = "rodlab.rod/1"
+name = "t"
+L1_mm = 300.0
+L2_mm = 450.0
+gamma_deg = 90.0
+[tube]
+material = "cfrp"
+outer_diameter_mm = 40.0
+wall_mm = 5.0
+[tolerances]
+"tube.wal_mm" = 0.1
+"L1_mm" = "8 percent"
+"""
+
+
+def test_every_problem_of_a_tolerance_table_at_once(tmp_path, capsys):
+    """An unknown key and a malformed value: `validate` listed only the second (the schema's), `info` only the
+    first (the reader's)."""
+    from rodlab.core.design_io import load_design
+    from rodlab.core.errors import DesignError
+    path = tmp_path / "t.rod.toml"
+    path.write_text(TWO_TOLERANCE_SLIPS)
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "2 problem(s)" in err and "unknown key 'tube.wal_mm'" in err and "'8 percent'" in err
+    with pytest.raises(DesignError) as e:
+        load_design(path)
+    assert {x.key for x in (e.value, *e.value.also)} == {'tolerances."tube.wal_mm"', "tolerances.L1_mm"}

@@ -233,9 +233,20 @@ def _with_tolerances(design: RodDesign, table, c: _Ctx) -> RodDesign:
     try:
         check_tolerance_table(design, design.tolerances)
     except DesignError as e:
-        key = (e.key or "").removeprefix("tolerances.")
-        raise c.err(e.detail, "tolerances", f'"{key}"' if "." in key else key) from e
+        located = [_tolerance_error(x, c) for x in (e, *e.also)]     # every problem of the table, each at its line
+        first = located[0]
+        raise c.err(first.detail, "tolerances", _quoted(e.key), also=located[1:]) from e
     return design
+
+
+def _quoted(key: str | None) -> str:
+    """A ``tolerances.KEY`` error's key as the table spells it (a dotted key in quotes)."""
+    key = (key or "").removeprefix("tolerances.")
+    return f'"{key}"' if "." in key else key
+
+
+def _tolerance_error(e: DesignError, c: _Ctx) -> DesignError:
+    return c.err(e.detail, "tolerances", _quoted(e.key))
 
 
 def _materials(data: Mapping, c: _Ctx) -> dict[str, Material]:

@@ -162,30 +162,43 @@ def design_value(design: RodDesign, key: str) -> float:
 
 
 def check_tolerance_table(design: RodDesign, table: dict) -> dict[str, float]:
-    """{key: one standard deviation} of a ``[tolerances]`` table, every key checked against the design."""
-    out = {}
+    """{key: one standard deviation} of a ``[tolerances]`` table, every key checked against the design; every
+    problem of the table at once (the first raised, the others in its ``also``)."""
+    out, problems = {}, []
     for key, value in table.items():
-        place = _bond_key(key)
-        if place is not None:
-            if place not in JOINT_PLACES:
-                raise DesignError(f"unknown joint place {place!r}; places: {list(JOINT_PLACES)}." +
-                                  did_you_mean(place, JOINT_PLACES), key=f"tolerances.{key}")
-            if isinstance(value, str):
-                raise DesignError(f"a bond's tolerance is absolute [rad/(N m)] (its design value is 0), got {value!r}",
-                                  key=f"tolerances.{key}")
-            out[key] = parse_tolerance_value(value, 0.0, key)
-            continue
-        nominal = design_value(design, key) if key in numeric_keys(design) else None
-        if nominal is None:
-            raise DesignError(f"unknown key {key!r}: a tolerance names a numeric key of the design file." +
-                              did_you_mean(key, list(numeric_keys(design))), key=f"tolerances.{key}")
-        out[key] = parse_tolerance_value(value, nominal, key)
-        if nominal and out[key] >= TOLERANCE_MAX_SHARE * abs(nominal):
-            raise DesignError(f"one standard deviation of {out[key]:g} on a value of {nominal:g} (its tolerance is "
-                              f"{out[key] / abs(nominal):.0%} of it; {TOLERANCE_MAX_SHARE:.0%} or more is refused: "
-                              f"no part is made that loosely): an absolute tolerance in the wrong unit, or meant as a "
-                              f"percentage (\"{value}%\")?", key=f"tolerances.{key}")
+        try:
+            out[key] = _tolerance_entry(design, key, value)
+        except DesignError as e:
+            problems.append(e)
+    if problems:
+        first = problems[0]
+        raise DesignError(first.detail, path=first.path, line=first.line, key=first.key, also=problems[1:])
     return out
+
+
+def _tolerance_entry(design: RodDesign, key: str, value) -> float:
+    """One standard deviation of the tolerance ``key = value`` (a bond's absolute, else in the key's unit or a
+    percentage of its design value); raises :class:`DesignError` naming ``tolerances.KEY``."""
+    place = _bond_key(key)
+    if place is not None:
+        if place not in JOINT_PLACES:
+            raise DesignError(f"unknown joint place {place!r}; places: {list(JOINT_PLACES)}." +
+                              did_you_mean(place, JOINT_PLACES), key=f"tolerances.{key}")
+        if isinstance(value, str):
+            raise DesignError(f"a bond's tolerance is absolute [rad/(N m)] (its design value is 0), got {value!r}",
+                              key=f"tolerances.{key}")
+        return parse_tolerance_value(value, 0.0, key)
+    nominal = design_value(design, key) if key in numeric_keys(design) else None
+    if nominal is None:
+        raise DesignError(f"unknown key {key!r}: a tolerance names a numeric key of the design file." +
+                          did_you_mean(key, list(numeric_keys(design))), key=f"tolerances.{key}")
+    sd = parse_tolerance_value(value, nominal, key)
+    if nominal and sd >= TOLERANCE_MAX_SHARE * abs(nominal):
+        raise DesignError(f"one standard deviation of {sd:g} on a value of {nominal:g} (its tolerance is "
+                          f"{sd / abs(nominal):.0%} of it; {TOLERANCE_MAX_SHARE:.0%} or more is refused: "
+                          f"no part is made that loosely): an absolute tolerance in the wrong unit, or meant as a "
+                          f"percentage (\"{value}%\")?", key=f"tolerances.{key}")
+    return sd
 
 
 def design_tolerances(design: RodDesign) -> list[ToleranceParam]:

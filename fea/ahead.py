@@ -22,7 +22,7 @@ from rodlab.core.fem_mesh import LinearTopology
 
 from .plan_cache import plan_for
 from .solver import PatternSolver, SolverBackend, available_backend
-from .stiffness_assembly import AssemblyPlan
+from .stiffness_assembly import AssemblyPlan, plan_matrix
 
 __all__ = ["SolveAhead", "solve_ahead", "topology_plan", "plan_pattern"]
 
@@ -54,10 +54,7 @@ def topology_plan(topology: LinearTopology, order: int = 2, backend: str | None 
 def plan_pattern(plan: AssemblyPlan) -> sp.csr_matrix:
     """The sparsity pattern of the matrix :func:`~fea.stiffness_assembly.assemble_stiffness` makes with ``plan``
     (every entry of each stored 3x3 block, ones), shape=(3N, 3N)."""
-    n = plan.n_nodes
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(plan.brow, minlength=n))])
-    blocks = np.ones((plan.n_blocks, 3, 3))
-    return sp.bsr_matrix((blocks, plan.bcol, indptr), shape=(3 * n, 3 * n)).tocsr()
+    return plan_matrix(plan, np.ones((plan.n_blocks, 3, 3)))
 
 
 @dataclass

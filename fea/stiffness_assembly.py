@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from rodlab.core.cores import in_parts
 
 __all__ = ["scalar_element", "scalar_basis", "block_pattern", "AssemblyPlan", "assembly_plan", "assemble_stiffness",
-           "assemble_body_force", "vector_dofs"]
+           "assemble_body_force", "vector_dofs", "plan_matrix"]
 
 
 def scalar_element(mesh):
@@ -167,11 +167,15 @@ def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, plan: AssemblyPl
     # gradients as [e, (k, a), q]: the element's gradient products are one (3 nloc x nq) @ (nq x 3 nloc) product
     G = np.stack([basis.basis[a][0].grad for a in range(nloc)], axis=1).transpose(2, 0, 1, 3).reshape(ne, 3 * nloc, nq)
     blocks = _summed_blocks(G, dx, C, plan, chunk)
-    nb = plan.n_blocks
-    # BSR with 3x3 blocks: rows of blocks must be sorted (they are: row-major sorted keys)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(plan.brow, minlength=basis.N))])
-    bsr = sp.bsr_matrix((blocks.T.reshape(nb, 3, 3), plan.bcol, indptr), shape=(3 * basis.N, 3 * basis.N))
-    return bsr.tocsr()
+    return plan_matrix(plan, blocks.T.reshape(plan.n_blocks, 3, 3))
+
+
+def plan_matrix(plan: AssemblyPlan, blocks: np.ndarray) -> sp.csr_matrix:
+    """The matrix, shape=(3N, 3N), whose stored 3x3 blocks, shape=(n_blocks, 3, 3), go where ``plan`` puts them:
+    BSR (rows of blocks sorted: the plan's keys are row-major) expanded once to CSR."""
+    n = plan.n_nodes
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(plan.brow, minlength=n))])
+    return sp.bsr_matrix((blocks, plan.bcol, indptr), shape=(3 * n, 3 * n)).tocsr()
 
 
 def _summed_blocks(G: np.ndarray, dx: np.ndarray, C: np.ndarray, plan: AssemblyPlan, chunk: int) -> np.ndarray:

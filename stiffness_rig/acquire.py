@@ -32,6 +32,7 @@ from .device import GaugeClient
 from .instruments import RigClient, Sample
 from .errors import RigError
 from .recording import RecordingWriter
+from .recording_header import LOAD_BY_CELL, LOAD_BY_MASS
 from .resume import ResumePoint, identity_meta, resume_point
 
 __all__ = ["AcquisitionStatus", "acquire", "RecordingLock"]
@@ -109,7 +110,7 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
         client = client or make_client(profile)
         with_force = bool(getattr(profile, "has_force", False))
         meta = {"rod": plan.rod, **identity_meta(profile, plan),
-                "load_N": "force_N (load cell)" if with_force else "mass_kg * 9.80665",
+                "load_N": f"{LOAD_BY_CELL})" if with_force else LOAD_BY_MASS,
                 "plan": str(plan.path or ""), "profile": str(profile.path or ""), "generator": "rodlab rig acquire"}
         with_temp = profile.has_temperature if hasattr(profile, "has_temperature") else \
             profile.temperature_index is not None

@@ -8,7 +8,7 @@ from rodlab.core.errors import did_you_mean
 from .errors import RigError
 
 __all__ = ["FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS", "split_header", "read_header", "check_header",
-           "unread_unit_lines"]
+           "unread_unit_lines", "LOAD_BY_MASS", "LOAD_BY_CELL"]
 
 FORMAT_RIG = "rodlab.rig/1"
 COLUMNS = ("time_s", "step", "repeat", "phase", "load_axis", "mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm")
@@ -47,8 +47,10 @@ def check_header(header: list[str], p: Path, line: int) -> None:
         raise RigError(f"duplicated column {dup!r}", path=p, line=line, key=dup)
 
 
-#: what a ``# load_N:`` header line may say (rodlab writes it to document the load; it is not read)
-_LOAD_SOURCES = ("mass_kg * 9.80665", "force_N")
+#: the ``# load_N:`` header line rodlab writes to document the load (not read): by mass, or by the load cell
+LOAD_BY_MASS = "mass_kg * 9.80665"
+LOAD_BY_CELL = "force_N (load cell"
+_LOAD_SOURCES = (LOAD_BY_MASS, "force_N")     # what the line may say and pass unwarned
 
 
 def unread_unit_lines(meta: dict[str, str]) -> list[str]:

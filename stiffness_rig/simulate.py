@@ -8,6 +8,7 @@ import numpy as np
 
 from .model import Hold, LoadSchedule, RigModel
 from .recording import RecordingWriter
+from .recording_header import LOAD_BY_CELL, LOAD_BY_MASS
 
 __all__ = ["simulate_recording"]
 
@@ -15,9 +16,9 @@ def simulate_recording(model: RigModel, schedule: LoadSchedule, path: str | Path
                        extra_meta: dict | None = None) -> Path:
     """Run the load ``schedule`` on ``model`` and write every sample to ``path`` (contract ``rodlab.rig/1``)."""
     meta = {"rod": rod, "sample_rate_Hz": f"{schedule.rate_Hz:g}", "resolution_mm": f"{model.resolution_mm:g}",
-            "load_N": "mass_kg * 9.80665", "generator": "rodlab rig simulate"}
+            "load_N": LOAD_BY_MASS, "generator": "rodlab rig simulate"}
     if model.has_load_cell:
-        meta["load_N"] = f"force_N (load cell, noise {model.load_cell_noise_N:g} N)"
+        meta["load_N"] = f"{LOAD_BY_CELL}, noise {model.load_cell_noise_N:g} N)"
     meta.update(extra_meta or {})
     p = Path(path)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.part")     # written whole, then renamed: never a partial file

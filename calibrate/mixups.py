@@ -44,6 +44,8 @@ __all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mix
 
 log = logging.getLogger(__name__)
 
+_READ = ("x_mm", "y_mm", "z_mm")
+
 #: where the given fit is gross but plausible, undoing the mix-up must bring the rms to at most this share of it
 MIXUP_GAIN = 0.5
 #: where the given fit is beyond its bounds, undoing the mix-up must fit at least this much better (not a near tie
@@ -74,7 +76,8 @@ SCREEN_ITERATIONS = 15
 class Mixup:
     """joint : 1-based joint whose readings are reversed, or None; positions : the two clamping positions whose
     labels are swapped, or None; rms_mm : the identification's rms per reading [mm] with the mix-up undone;
-    rms_given_mm : the rms as the files were given [mm]."""
+    rms_given_mm : the rms as the files were given [mm]; readings : the two reading columns (0-2: x_mm, y_mm, z_mm)
+    exchanged, or None."""
 
     joint: int | None
     positions: tuple | None
@@ -86,18 +89,23 @@ class Mixup:
     zero_offset: tuple | None = None
     coupling: tuple | None = None
     alternatives: tuple = ()
+    readings: tuple | None = None
 
     def __post_init__(self) -> None:
         kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
-                 + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None))
+                 + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None)
+                 + (self.readings is not None))
         if kinds != 1:
             raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
-                             "(joint, deg), a coupling (joint a, joint b, sign) or fixture_radians")
+                             "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns or "
+                             "fixture_radians")
 
     @property
     def label(self) -> str:
         if self.fixture_radians:
             return "fixture angles read as radians"
+        if self.readings is not None:
+            return f"columns {_READ[self.readings[0]]} and {_READ[self.readings[1]]} exchanged"
         if self.zero_offset is not None:
             return f"q{self.zero_offset[0]} {self.zero_offset[1]:+g} deg"
         if self.coupling is not None:
@@ -132,6 +140,10 @@ class Mixup:
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
+        if self.readings is not None:
+            a, b = (_READ[k] for k in self.readings)
+            return (f"the {a} and {b} columns look exchanged (the device's sensors wired or exported in another "
+                    f"order): with them swapped back {fit}; check the device's channel order and swap the columns")
         if self.zero_offset is not None:
             k, deg = self.zero_offset
             return (f"joint {k}'s zero differs from the robot file's by {deg:+g} deg: with {deg:+g} deg added to q{k} "
@@ -221,6 +233,15 @@ def _exchanged(q: np.ndarray, a: int, b: int) -> np.ndarray:
     return q
 
 
+def _reading_trials(camp, fit_readings: Callable) -> tuple:
+    """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged."""
+    def run(a, b):
+        x = np.array(camp.x_D_mm, float, copy=True)
+        x[:, [a, b]] = x[:, [b, a]]
+        return lambda full: fit_readings(x, full)
+    return tuple((Mixup(None, None, 0.0, 0.0, readings=(a, b)), run(a, b)) for a, b in itertools.combinations(range(3), 2))
+
+
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:
     p = np.asarray(positions)
     return np.where(p == a, b, np.where(p == b, a, p))
@@ -245,8 +266,10 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
     found = _column_mixup(robot, obs.q_rad, lambda q: _registered(robot, rod_file.tool_mm, replace(obs, q_rad=q)),
                           lambda q: fit(replace(obs, q_rad=q), True), NOMINAL_GROSS_MM, np.pi / 2)
     if found is None:
+        reread = _reading_trials(camp, lambda x, full: fit(campaign_observations(replace(camp, x_D_mm=x), fixture,
+                                                                                 rod_file), full))
         found = find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
-                           relabelled, material)
+                           relabelled, material, reread)
     if found is None and _angles_could_be_radians(fixture):
         # residuals material suffice here also in a diagnosis: read as radians, small angles become large turns,
         # which no campaign of another physics fits better

@@ -96,7 +96,7 @@ def unit_slips(camp: Campaign, path) -> list[str]:
     angles that all lie within +-2 pi (radians where degrees are expected: no campaign turns its joints by less than
     6.3 degrees), readings whose median point lies :data:`READINGS_UNIT_LIMIT_MM` from the datum (um where mm are
     expected) or within :data:`READINGS_METRES_LIMIT_MM` of it (metres). Empty when none."""
-    out = _radians(camp.q_deg, path, "campaign")
+    out = _radians(camp.q_deg, path, "campaign") or _radian_rows(camp.q_deg, camp.lines, path, "campaign")
     if camp.x_D_mm is not None and len(camp.x_D_mm):
         d = float(np.median(np.linalg.norm(camp.x_D_mm, axis=1)))
         if d > READINGS_UNIT_LIMIT_MM:
@@ -113,7 +113,7 @@ def unit_slips(camp: Campaign, path) -> list[str]:
 def point_unit_slips(points, path) -> list[str]:
     """:func:`unit_slips` of instrument points (``*.validation.csv``): joint angles in radians, positions whose
     median lies within :data:`POINTS_METRES_LIMIT_MM` of the instrument's origin (metres). Empty when none."""
-    out = _radians(points.q_deg, path, "points'")
+    out = _radians(points.q_deg, path, "points'") or _radian_rows(points.q_deg, None, path, "points'")
     x = np.asarray(points.x_W_mm, float)
     if x.size and float(np.median(np.linalg.norm(x, axis=1))) < POINTS_METRES_LIMIT_MM:
         out.append(f"{path}: the median point lies {np.median(np.linalg.norm(x, axis=1)):.3f} mm from the instrument's "
@@ -129,3 +129,28 @@ def _radians(q_deg, path, whose: str) -> list[str]:
         return [f"{path}: every joint angle lies within +-2 pi (largest |q| {np.abs(q).max():.3f}): the q columns look "
                 f"like radians; the {whose} joint angles are degrees: multiply them by 180/pi"]
     return []
+
+
+#: a row with at least two joint angles beyond this [rad] moves its joints by tens of degrees if it is in radians;
+#: in degrees it is within 6.3 degrees of the zero on every joint and yet not at it, which a campaign's pose hardly is
+_MOVING_RAD = 0.5
+
+
+def _radian_rows(q_deg, lines, path, whose: str) -> list[str]:
+    """Rows in radians among rows in degrees (new-user trial, 2026-11-29: one point, or one clamping position,
+    converted to radians passed ``validate``): a row whose joint angles all lie within +-2 pi, with two or more
+    beyond :data:`_MOVING_RAD`, while most rows have one beyond 2 pi."""
+    q = np.asarray(q_deg, float)
+    if q.ndim != 2 or q.shape[0] < 3:
+        return []
+    degrees = np.abs(q).max(axis=1) > 2 * np.pi
+    if degrees.mean() < 0.5:
+        return []
+    flagged = np.nonzero(~degrees & ((np.abs(q) > _MOVING_RAD).sum(axis=1) >= 2))[0]
+    if not flagged.size:
+        return []
+    where = ", ".join(str(int(lines[i])) for i in flagged) if lines is not None and len(lines) else \
+        ", ".join(f"#{i + 1}" for i in flagged)
+    return [f"{path}: {flagged.size} row(s) (line {where}) have every joint angle within +-2 pi while the other rows "
+            f"are in degrees: they look like radians; the {whose} joint angles are degrees: multiply those rows' q "
+            "columns by 180/pi (a pose truly within 6.3 degrees of the zero on every joint: --units-checked)"]

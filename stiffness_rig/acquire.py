@@ -120,6 +120,10 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
             if start.holds_done:
                 writer.comment(f"resumed after hold {start.holds_done}/{start.holds_total}")
             _Session(plan, client, writer, start, operator if not use_loader else None, progress).run()
+        except BaseException:
+            if writer.discard_if_empty():
+                log.info("%s: removed (no sample was recorded)", out)
+            raise
         finally:
             writer.close()
             if own_client:

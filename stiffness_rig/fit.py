@@ -21,6 +21,7 @@ from rodlab.core.units import G0
 from .completion import complete_c_f
 from .errors import RigError
 from .fit_checks import (creep_warnings, gauge_scale_problems, lack_of_fit_warnings, load_drift_warnings,
+                         load_scale_problems,
                          reciprocity_problems)
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
@@ -161,11 +162,14 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     if not lines:
         raise RigError("no load axis has a measured component with at least 3 holds at different loads",
                        path=rec.path, key="mass_kg")
-    _check_load_response(lines, rec)
+    _check_load_response(lines, rec, holds)
     M, S = _combine_lines(lines)
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     refuse, warn = reciprocity_problems(M, S)
     refuse += gauge_scale_problems(M, sim.C_F) if sim is not None else []
+    scale_refuse, scale_warn = load_scale_problems(fit.load)
+    refuse += scale_refuse
+    warn += scale_warn
     fit.warnings = (refuse + warn + lack_of_fit_warnings(lines, holds, noise) + load_drift_warnings(fit.load)
                     + creep_warnings(holds))
     if refuse:
@@ -216,9 +220,10 @@ def noise_text(noise_mm: float) -> str:
     return "noise not measurable within the holds (one reading each; `rodlab diagnose --rig` uses the repeats)"
 
 
-def _check_load_response(lines: list, rec: RigRecording) -> None:
+def _check_load_response(lines: list, rec: RigRecording, holds: Holds) -> None:
     """Refuse a recording in which a load axis does not deflect the rod along itself (gauges not connected or
-    not touching, no weight hung): its on-axis slope must be positive and above its standard error x 3."""
+    not touching, no weight hung, a load cell that saw no load): its on-axis slope must be positive and above its
+    standard error x 3."""
     for ln in lines:
         if ln.component != ln.axis.index:
             continue
@@ -227,12 +232,28 @@ def _check_load_response(lines: list, rec: RigRecording) -> None:
         backwards = ln.slope_mm_per_N < -10 * ln.se_mm_per_N
         check = (f"the {_AX[ln.component]} gauge reads the rod's motion backwards: give it sign = -1 in the profile "
                  f"(or multiply the disp_{_AX[ln.component]}_mm column by -1), or check the load's direction" if backwards
-                 else "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
-                      "hung on that axis)")
+                 else _idle_load_cell(holds, ln.axis) or
+                 "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
+                 "hung on that axis)")
         raise NoLoadResponse(f"no load response on axis {ln.axis.value}: the {_AX[ln.component]} gauge moves "
                              f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
                              f"{ln.axis.value} ({ln.n_holds} holds), nothing a rod does; {check}",
                              path=rec.path, key="load_axis")
+
+
+def _idle_load_cell(holds: Holds, axis) -> str | None:
+    """What to check when the load is the load cell's and it hardly moved on ``axis``'s holds while the hung weights
+    did (below a tenth of their span): it saw no load there; else None."""
+    if not holds.has_force:
+        return None
+    on = np.array([a is axis for a in holds.axis])
+    span_w = float(np.ptp(holds.mass_kg[on] * G0)) if on.any() else 0.0
+    span_f = float(np.ptp(holds.force_N[on])) if on.any() else 0.0
+    if span_w <= 0 or span_f >= 0.1 * span_w:
+        return None
+    return (f"the load cell's force_N spans {span_f:.3g} N over these holds while the hung weights span {span_w:.3g} N: "
+            f"it saw no load along {axis.value} (not in the load path of that axis, or not connected); check it, or "
+            "fit on the hung masses with `rig fit --load mass`")
 
 
 def _reference_holds(holds) -> np.ndarray:

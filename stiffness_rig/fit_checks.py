@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings", "creep_warnings",
-           "RECIPROCITY_Z", "LACK_FACTOR",
-           "GAUGE_SCALE_RATIO"]
+           "load_scale_problems", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
 _AX = "xyz"
 #: two measured entries c_mn, c_nm further apart than this many standard errors break reciprocity ...
@@ -25,6 +24,15 @@ UNIT_FACTORS = {"inches and millimetres": 25.4, "micrometres and millimetres": 1
                 "centimetres and millimetres": 10.0}
 #: a ratio within this share of a units factor is that slip
 UNIT_FACTOR_TOLERANCE = 0.15
+#: a load cell whose readings grow with the hung weight this share faster or slower than it (beyond 5 standard
+#: errors) reads another unit or through a wrong calibration factor: the fit is refused (a calibrated cell is off by
+#: well under 1 %; kgf read as N is 0.102, lbf 0.225) ...
+LOAD_SCALE_REFUSE = 0.10
+#: ... and from this share on it is warned of (the fit then uses the cell's readings, as it should)
+LOAD_SCALE_WARN = 0.02
+#: force units a load cell can be set to, and how many of them one newton is
+FORCE_UNITS = {"kgf": 1 / 9.80665, "lbf": 1 / 4.4482216, "daN": 0.1, "kN": 1e-3, "gf": 1e3 / 9.80665,
+               "ozf": 1 / 0.2780139, "mN": 1e3}
 #: the hold averages of a line scatter about it by more than this many times a hold average's noise
 LACK_FACTOR = 5.0
 #: the holds' own slopes follow the load step into them by this many standard errors: the rod creeps
@@ -91,6 +99,40 @@ def load_drift_warnings(load) -> list[str]:
             "tare stay constant): its readings are then not the loads, and the tares and friction printed are off by "
             "up to that much; re-zero the load cell before each series, and run `rodlab diagnose --rig` on the "
             "recording: it tells whether the deflections follow the load cell or the masses"]
+
+
+def load_scale_problems(load) -> tuple[list[str], list[str]]:
+    """(refusals, warnings) when the load cell's readings do not grow as the hung weight on a load axis (``load``:
+    the fit's :class:`~.load.LoadCheck`, or None): a unit slip (kgf, lbf read as N) or a wrong calibration factor
+    gives a compliance off by that factor with every other check passing (new-user trial, 2026-11-29: kgf as N gave
+    r_rod 9.8, written without a word); a cell out of one axis's load path reads nothing there."""
+    refuse, warn = [], []
+    for sc in (load.scale if load is not None else ()):
+        off = abs(sc.ratio - 1.0)
+        if not np.isfinite(sc.ratio) or off <= LOAD_SCALE_WARN or off <= 5 * sc.se:
+            continue
+        said = (f"on the {sc.axis.value} holds the load cell's force_N grows {sc.ratio:.4g} +- {sc.se:.2g} times as fast "
+                f"as mass_kg x g0 ({sc.n_holds} holds with a hanger on; a calibrated cell: 1)")
+        if off <= LOAD_SCALE_REFUSE:
+            warn.append(f"{said}: its calibration factor is {100 * (sc.ratio - 1):+.1f} % off, or the masses are; the "
+                        "fit uses the load cell's readings: check it against a known weight")
+            continue
+        unit = _force_unit(sc.ratio)
+        why = (f"its readings look like {unit}, not N: set the load-cell channel's units = \"{unit}\" in the rig "
+               "profile and record again" if unit else
+               f"it saw no load along {sc.axis.value} (not in that axis's load path, or not connected)"
+               if abs(sc.ratio) < LOAD_SCALE_REFUSE else "a wrong calibration factor or unit in the rig profile's "
+               "load-cell channel (its units / scale): correct it and record again")
+        refuse.append(f"{said}: {why}; or fit this recording on the hung masses alone with `rig fit --load mass`")
+    return refuse, warn
+
+
+def _force_unit(ratio: float) -> str | None:
+    """The force unit whose readings per newton are within 5 % of ``ratio``, if any."""
+    for unit, per_N in FORCE_UNITS.items():
+        if abs(ratio / per_N - 1.0) < 0.05:
+            return unit
+    return None
 
 
 def creep_warnings(holds) -> list[str]:

@@ -85,6 +85,14 @@ class InstrumentClient:
             raise DeviceError(f"cannot open {self._where()}: {e}; check the cable, the port name in the profile and "
                               f"that no other program holds the port", path=self.profile_path,
                               key="instrument.port") from e
+        except Exception as e:  # termios.error: the port refused its line settings (not an OSError)
+            if termios is None or not isinstance(e, termios.error):
+                raise
+            raise DeviceError(f"cannot open {self._where()}: the port refused its settings (baudrate {i.baudrate}, "
+                              f"bytesize {i.bytesize}, parity {i.parity}, stopbits {i.stopbits:g}: {e}); check them "
+                              f"against the instrument's manual in the profile; a pseudo-terminal (a simulator) has "
+                              f"no parity bits: use parity = \"N\" there", path=self.profile_path,
+                              key="instrument.parity") from e
         self.link = Link(ser)
         self.driver.after_reopen()
 

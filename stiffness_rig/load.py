@@ -29,7 +29,8 @@ from rodlab.core.units import G0
 
 from .holds import Holds
 
-__all__ = ["BranchLoad", "LoadCheck", "ZeroDrift", "measured_load", "zero_drift", "DRIFT_Z"]
+__all__ = ["BranchLoad", "LoadCheck", "LoadScale", "ZeroDrift", "measured_load", "zero_drift", "load_scale",
+           "DRIFT_Z"]
 
 log = logging.getLogger(__name__)
 
@@ -102,6 +103,25 @@ def zero_drift(t_s: np.ndarray, diff_N: np.ndarray, branch: np.ndarray) -> ZeroD
 
 
 @dataclass(frozen=True)
+class LoadScale:
+    """How fast the load cell's reading grows with the hung weight: the slope of ``force_N`` on ``mass_kg x g0``
+    over the holds with a hanger on, one intercept per branch (friction and tare are constant on a branch).
+
+    axis : the load axis of the holds; ratio : the slope [-] (1 for a load cell that reads newtons of the weights;
+    0.102 for one reading kgf, 0.225 lbf, 0 for one out of that axis's load path); se : its standard error [-];
+    n_holds : the holds it is fitted on
+    """
+
+    axis: LoadAxis
+    ratio: float
+    se: float
+    n_holds: int
+
+    def to_dict(self) -> dict:
+        return {"axis": self.axis.value, "ratio": self.ratio, "se": self.se, "n_holds": self.n_holds}
+
+
+@dataclass(frozen=True)
 class LoadCheck:
     """Nominal (mass x g0) against measured load (a load cell).
 
@@ -110,7 +130,7 @@ class LoadCheck:
     branch means ([N], [kg]); force_noise_N : within-hold SD of one load-cell reading [N];
     zero_offset_N : the load cell's mean reading on the holds without a hanger [N], taken off the others (0 when it
     is within noise of 0 or no hold is without a hanger); drift : :class:`ZeroDrift` of its zero (None: too few
-    holds)
+    holds); scale : one :class:`LoadScale` per load axis where it can be fitted
     """
 
     per_hold_N: np.ndarray
@@ -120,12 +140,14 @@ class LoadCheck:
     force_noise_N: float
     zero_offset_N: float = 0.0
     drift: ZeroDrift | None = None
+    scale: tuple = ()
 
     def to_dict(self) -> dict:
         return {"per_hold_N": [float(v) for v in self.per_hold_N], "branches": [b.to_dict() for b in self.branches],
                 "friction_N": {str(a): v for a, v in self.friction_N.items()},
                 "tare_kg": {str(a): v for a, v in self.tare_kg.items()}, "force_noise_N": self.force_noise_N,
-                "zero_offset_N": self.zero_offset_N, "zero_drift": self.drift.to_dict() if self.drift else None}
+                "zero_offset_N": self.zero_offset_N, "zero_drift": self.drift.to_dict() if self.drift else None,
+                "scale": [sc.to_dict() for sc in self.scale]}
 
 
 def measured_load(holds: Holds) -> LoadCheck | None:
@@ -157,7 +179,30 @@ def measured_load(holds: Holds) -> LoadCheck | None:
     mid = 0.5 * (holds.t_start_s + holds.t_end_s)
     branch = np.array([f"{a.value}:{p.value}" for a, p in zip(holds.axis, holds.phase)])
     drift = zero_drift(mid[on], diff[on], branch[on])
-    return LoadCheck(diff, tuple(branches), friction, tare, holds.force_noise_N(), zero, drift)
+    scale = []
+    for axis in sorted(set(holds.axis), key=lambda a: a.value):
+        m = on & np.array([a is axis for a in holds.axis])
+        sc = load_scale(axis, holds.mass_kg[m] * G0, holds.force_N[m], branch[m])
+        scale += [sc] if sc is not None else []
+    return LoadCheck(diff, tuple(branches), friction, tare, holds.force_noise_N(), zero, drift, tuple(scale))
+
+
+def load_scale(axis: LoadAxis, weight_N: np.ndarray, force_N: np.ndarray, branch: np.ndarray) -> LoadScale | None:
+    """The slope of ``force_N`` on ``weight_N`` (:class:`LoadScale`) with one intercept per ``branch`` label, over
+    the holds of load axis ``axis`` given (shape=(m,) each); None when no branch has two different weights or nothing
+    is left for the residuals."""
+    labels = sorted(set(branch.tolist()))
+    varied = [b for b in labels if np.ptp(weight_N[branch == b]) > 0]
+    if not varied:
+        return None
+    X = np.column_stack([weight_N] + [(branch == b).astype(float) for b in labels])
+    dof = X.shape[0] - X.shape[1]
+    if dof < 1:
+        return None
+    coef, *_ = np.linalg.lstsq(X, force_N, rcond=None)
+    r = force_N - X @ coef
+    cov = np.linalg.pinv(X.T @ X) * float(r @ r) / dof
+    return LoadScale(axis, float(coef[0]), float(np.sqrt(max(cov[0, 0], 0.0))), int(X.shape[0]))
 
 
 def _zero_offset(holds: Holds) -> float:

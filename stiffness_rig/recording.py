@@ -290,7 +290,8 @@ class RecordingWriter:
 
     Opening an existing file keeps every complete line; a torn last line (a crash mid-write) is cut off.
     ``fsync_every`` rows the file is fsync'ed (always on :meth:`close`). ``with_force``: a ``force_N`` column
-    (a load cell).
+    (a load cell). ``created``: the file was made by this writer (it did not exist or was empty); ``rows``: the
+    samples written by it.
     """
 
     def __init__(self, path: str | Path, meta: dict, with_temp: bool = True, fsync_every: int = 50,
@@ -301,8 +302,10 @@ class RecordingWriter:
         self.with_force = with_force
         self.fsync_every = fsync_every
         self._since_sync = 0
+        self.rows = 0
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        if self.path.exists() and self.path.stat().st_size > 0:
+        self.created = not (self.path.exists() and self.path.stat().st_size > 0)
+        if not self.created:
             with open(self.path, "rb+") as fh:
                 data = fh.read()
                 cut = data.rfind(b"\n") + 1
@@ -330,6 +333,7 @@ class RecordingWriter:
         self._fh.write(format_row(t, step, repeat, Phase(phase), LoadAxis(axis), mass, disp,
                                   (math.nan if temp is None else temp) if self.with_temp else None, self.decimals, f))
         self._fh.flush()
+        self.rows += 1
         self._since_sync += 1
         if self._since_sync >= self.fsync_every:
             self._sync()
@@ -354,6 +358,15 @@ class RecordingWriter:
         if not self._fh.closed:
             self._sync()
             self._fh.close()
+
+    def discard_if_empty(self) -> bool:
+        """Close, and remove the file when this writer made it and wrote no sample into it (a run that failed
+        before its first sample leaves no header-only file behind); True when removed."""
+        self.close()
+        if self.created and self.rows == 0:
+            self.path.unlink(missing_ok=True)
+            return True
+        return False
 
     def __enter__(self):
         return self

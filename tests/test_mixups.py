@@ -119,6 +119,17 @@ def test_a_campaign_refused_for_physics_names_no_mixup(tmp_path, capsys, effect,
     simulate_campaign(ROBOT, ROD, tmp_path, CampaignSpec(seed=2), effects={effect: params})
     code, out = _calibrate(tmp_path, tmp_path / "multical.campaign.csv", capsys)
     assert code == 3 and "run the other way" not in out.err and "look swapped" not in out.err
+    assert "look exchanged" not in out.err
+
+
+def test_two_exchanged_reading_columns_are_named(campaign, tmp_path, capsys):
+    """x_mm and y_mm exchanged (the device's sensors in another order; new-user trial 2026-11-29: named as outliers
+    and a zero shift of joint 3, with advice to state a 57 um device noise): named, the fit swapped back ~3 um."""
+    path = tmp_path / "xy.campaign.csv"
+    _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"x_mm": r["y_mm"], "y_mm": r["x_mm"]}))
+    code, out = _calibrate(campaign, path, capsys)
+    assert code == 3 and "the x_mm and y_mm columns look exchanged" in out.err
+    assert "q2 and q3" not in out.err
 
 
 REAL = Path(__file__).resolve().parents[1] / "benchmarks" / "data"

@@ -36,8 +36,8 @@ class ComplianceScale(RigEffectModel):
         if PLAUSIBLE_R[0] <= r <= PLAUSIBLE_R[1]:
             return None
         return (f"r = {r:.3g} is beyond what any material or lay-up gives ({PLAUSIBLE_R[0]:g}-{PLAUSIBLE_R[1]:g}): check the "
-                "recording's units (mass_kg in kg, not g; disp_*_mm in mm, not um) and that the simulation is this "
-                "rod's")
+                "recording's units (mass_kg in kg, not g; a load cell's force_N in N, not kgf or lbf; disp_*_mm in mm, "
+                "not um) and that the simulation is this rod's")
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
         # r from 0.001 to 1000: a units slip (g for kg, um for mm) is fitted and named, not clipped

@@ -19,7 +19,7 @@ from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.units import DEVICE_NOISE_MM
 from .calibrateargs import pins_from_args
-from .deviceargs import campaign_from_args, points_from_args, warn_flagged_fixture
+from .deviceargs import campaign_from_args, flagged_fixture_reasons, points_from_args, warn_flagged_fixture
 from .columnsargs import screen_joint_columns
 from .robotargs import robot_from_args
 
@@ -94,6 +94,8 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     res, pins = constrain_to_ranges(lambda p: identify(robot, obs, Rod.of(rod), compensations, replace(options, pinned=p)),
                                     options.pinned, options.freed)
     options = replace(options, pinned=pins)       # with the range holds: the cross-validation fits the same model
+    if res.warnings:                              # not trusted: a flagged probing is the first place to look
+        res.warnings[:0] = flagged_fixture_reasons(fix, args.fixture)
     run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
                          rod_file=rod,
                          options=options)

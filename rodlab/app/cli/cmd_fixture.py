@@ -59,6 +59,15 @@ def cmd_fixture(args) -> int:
               f"{s[2] * 1e3:5.1f}   {s[3] * 1e3:6.1f} {s[4] * 1e3:6.1f} {s[5] * 1e3:6.1f}{mark}")
     path = write_fixture(fit.fixture, args.output)
     print(f"wrote {path}")
+    if len(fit.flagged) >= 2 and len(fit.flagged) == len(fit.fits):
+        suspects = sorted({f.suspect[0] for f in fit.flagged})
+        same = f"the same suspect feature {suspects[0]!r} at each" if len(suspects) == 1 else "at every"
+        moved = f", or {suspects[0]!r} moved on the device (a loose seat)" if len(suspects) == 1 else ""
+        print(f"FLAGGED all {len(fit.flagged)} positions, {same}: the device file {args.device} does not describe the "
+              f"device that was probed (its features_D_mm are another device's, the probe file's feature names are "
+              f"swapped{moved}); give this device's file (rodlab.device/1) or re-measure the feature, then run "
+              f"`rodlab fixture` again", file=sys.stderr)
+        return 3
     for f in fit.flagged:
         name, d = f.suspect
         print(f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
 import re
@@ -58,6 +59,9 @@ def _register_fit(rsub) -> None:
     p.add_argument("--png", default=None, help="the paper's Fig. 8 for this recording: FILE.png, or a folder (it "
                                                "gets fig8.png)")
     p.add_argument("--robust", action="store_true", help="soft-L1 loss: outlying holds lose weight")
+    p.add_argument("--load", choices=("cell", "mass"), default="cell",
+                   help="the load of each hold: the load cell's force_N where the recording has one (cell, the "
+                        "default), or mass_kg x g0 of the hung masses (mass: a load cell that read in another unit)")
     add_report_option(p)
     p.set_defaults(func=cmd_fit)
 
@@ -143,6 +147,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
                           f"{sim.rod!r}: the measured compliance file would hold one rod's measurement with the other's "
                           f"mass, centre of mass and tool. Give --sim this rod's simulation (rodlab fea <its design> -o "
                           f"FILE), or correct the recording's '# rod:' line if it names the wrong rod")
+    if args.load == "mass" and rec.has_force:
+        print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0",
+              file=sys.stderr)
+        rec = dataclasses.replace(rec, force_N=None)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")
@@ -371,6 +379,10 @@ def _profile_simulators(args, model, faults):
     ports = iter(str(links[ins.name]) for ins in profile.instruments)
     text = re.sub(r"""(?m)^(\s*port\s*=\s*)(".*?"|'.*?')""", lambda m: f'{m.group(1)}"{next(ports)}"',
                   Path(args.profile).read_text(encoding="utf-8"))
+    # a pty has no parity bits: Linux drops PARENB and glibc then refuses the settings (EINVAL)
+    text = re.sub(r"""(?m)^(\s*parity\s*=\s*)(".*?"|'.*?')(.*)$""",
+                  lambda m: f'{m.group(1)}"N"{m.group(3)}  # served on a pseudo-terminal, which has no parity bits',
+                  text)
     text += _served_loader(profile)
     written = atomic_write_text(folder / "sim.profile.toml", text)
     sims = simulators_for(profile, SimBench(model), links, faults)

@@ -11,7 +11,8 @@ from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, point_unit
 
 from ...core.errors import RodlabError
 
-__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "points_from_args", "warn_flagged_fixture"]
+__all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "points_from_args", "warn_flagged_fixture",
+           "flagged_fixture_reasons"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
                "each point is solved from its readings, the sensors' noise (--noise-um, per reading) is propagated "
@@ -70,3 +71,14 @@ def warn_flagged_fixture(fix, path) -> None:
         where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
         print(f"warning: {path}: its probing flagged {where} (residuals above the instrument's accuracy); those "
               f"poses may be wrong: probe again", file=sys.stderr)
+
+
+def flagged_fixture_reasons(fix, path) -> list[str]:
+    """A reason not to trust a calibration that names the fixture file's flagged probing (empty when none): with
+    residuals that are not noise, a pose the probing already doubted is the likeliest cause."""
+    flagged = (fix.probing or {}).get("flagged") or {}
+    if not flagged:
+        return []
+    where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
+    return [f"the fixture file {path} was written with its probing flagged ({where}): those clamping poses are the "
+            "first suspects; probe them again (`rodlab fixture`) and calibrate with the new fixture file"]

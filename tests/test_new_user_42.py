@@ -1,0 +1,163 @@
+"""What a new-user trial (2026-11-29, lab technician and calibration engineer) found, fixed: a load cell in kgf read
+as N (a compliance 9.8x too large, written without a word), a failed acquisition's header-only file, the simulator's
+Modbus port refusing a second client with a traceback, campaign rows in radians among rows in degrees, a typo in a
+probe file's header key, a device file of another device, a flagged fixture missing from NOT TRUSTED, a load cell
+that saw no load."""
+from __future__ import annotations
+
+import argparse
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli.deviceargs import flagged_fixture_reasons
+from rodlab.app.cli.main import main
+from rodlab.calibrate.readings import point_unit_slips, unit_slips
+from rodlab.stiffness_rig import DeviceError, fit_recording, read_recording
+from rodlab.stiffness_rig import instruments
+from rodlab.stiffness_rig.instrument_profile import Instrument
+from rodlab.stiffness_rig.recording import RecordingWriter
+
+termios = pytest.importorskip("termios")
+
+
+# ---------------------------------------------------------------- the load cell's unit
+
+def _with_force(tmp_path, factor: float = 1.0, name: str = "r.rig.csv") -> Path:
+    """A simulated recording of rod1 with a load cell, its force_N column times ``factor``."""
+    src = tmp_path / "src.rig.csv"
+    if not src.exists():
+        assert main(["rig", "simulate", "--sim", "rod1", "--effect", "friction:F_f_N=0.5", "--load-cell-noise-n",
+                     "0.01", "--seed", "3", "-o", str(src)]) == 0
+    out, head = [], None
+    for ln in src.read_text().splitlines():
+        if ln.startswith("#") or head is None and not ln.startswith("#"):
+            if not ln.startswith("#"):
+                head = ln.split(",")
+            out.append(ln)
+            continue
+        cells = ln.split(",")
+        k = head.index("force_N")
+        if cells[k]:
+            cells[k] = f"{float(cells[k]) * factor:.5f}"
+        out.append(",".join(cells))
+    path = tmp_path / name
+    path.write_text("\n".join(out) + "\n")
+    return path
+
+
+def test_a_load_cell_in_kgf_is_refused_and_named(tmp_path, capsys):
+    rec = _with_force(tmp_path, 1 / 9.80665, "kgf.rig.csv")
+    out = tmp_path / "m.compliance.json"
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "grows 0.10" in err and "look like kgf" in err and "--load mass" in err and not out.exists()
+    # on the hung masses the file is right: the same c22 as the load cell in N gives
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(out), "--load", "mass"]) == 0
+    good = fit_recording(read_recording(_with_force(tmp_path)))
+    import json
+    c22 = json.loads(out.read_text())["C_F_mm_per_N"][1][1]
+    assert c22 == pytest.approx(good.C_F_meas[1, 1], rel=0.02)
+
+
+def test_a_calibrated_load_cell_passes_and_a_few_per_cent_is_warned(tmp_path):
+    good = fit_recording(read_recording(_with_force(tmp_path)))
+    assert good.success and all(sc.ratio == pytest.approx(1.0, abs=0.01) for sc in good.load.scale)
+    assert not [w for w in good.warnings if "grows" in w]
+    off = fit_recording(read_recording(_with_force(tmp_path, 1.05, "off.rig.csv")))
+    assert off.success and any("calibration factor is +5.0 % off" in w for w in off.warnings)
+
+
+def test_a_load_cell_that_saw_no_load_is_named(tmp_path, capsys):
+    src = _with_force(tmp_path)
+    lines, head = [], None
+    for ln in src.read_text().splitlines():
+        if ln.startswith("#") or head is None:
+            head = head if ln.startswith("#") else ln.split(",")
+            lines.append(ln)
+            continue
+        cells = ln.split(",")
+        if cells[head.index("load_axis")] == "z" and cells[head.index("force_N")]:
+            cells[head.index("force_N")] = "0.00010"
+        lines.append(",".join(cells))
+    rec = tmp_path / "noz.rig.csv"
+    rec.write_text("\n".join(lines) + "\n")
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "x.json")]) == 2
+    assert "it saw no load along z" in capsys.readouterr().err.replace("\n", " ")
+
+
+# ---------------------------------------------------------------- the instruments' ports and the recording
+
+def test_a_port_refusing_its_settings_is_a_device_error(monkeypatch):
+    def refuse(*a, **k):
+        raise termios.error(22, "Invalid argument")
+    monkeypatch.setattr(instruments.serial, "serial_for_url", refuse)
+    ins = Instrument("dial_y", "/dev/ttyUSB9", "digimatic", {"request": "1\\r"}, (), 19200, 8, "E", 1.0, 0.2, 3)
+    with pytest.raises(DeviceError) as e:
+        instruments.InstrumentClient(ins)
+    assert "parity E" in str(e.value) and "parity = \"N\"" in str(e.value) and e.value.key == "instrument.parity"
+
+
+def test_a_writer_that_recorded_nothing_leaves_no_file(tmp_path):
+    w = RecordingWriter(tmp_path / "r.rig.csv", {"rod": "1#"})
+    assert (tmp_path / "r.rig.csv").exists() and w.discard_if_empty() and not (tmp_path / "r.rig.csv").exists()
+    w = RecordingWriter(tmp_path / "s.rig.csv", {"rod": "1#"})
+    w.write(0.0, 0, 0, "load", "y", 0.0, (0.0, 0.0, 0.0), 20.0)
+    assert not w.discard_if_empty() and (tmp_path / "s.rig.csv").exists()
+    before = (tmp_path / "s.rig.csv").read_bytes()
+    again = RecordingWriter(tmp_path / "s.rig.csv", {"rod": "1#"})       # a resume: kept whatever happens
+    assert not again.discard_if_empty() and (tmp_path / "s.rig.csv").read_bytes() == before
+
+
+def test_the_served_profile_has_no_parity(tmp_path):
+    """The example profile's load cell speaks Modbus with parity E; a pty has none (Linux drops PARENB and glibc
+    refuses the settings: the trial's second acquisition stopped with a traceback)."""
+    from rodlab.app.cli import cmd_rig
+    from rodlab.stiffness_rig.model import RigModel
+    src = Path(cmd_rig.__file__).resolve().parents[3] / "stiffness_rig" / "plans" / "two-digimatic-loadcell.profile.toml"
+    args = argparse.Namespace(profile=str(src), link_dir=str(tmp_path / "rig"))
+    sims, _ = cmd_rig._profile_simulators(args, RigModel(np.eye(3) * 1e-3), None)
+    for s in sims:
+        s.stop()
+    served = (tmp_path / "rig" / "sim.profile.toml").read_text()
+    assert 'parity = "E"' in src.read_text() and 'parity = "E"' not in served and 'parity = "N"' in served
+
+
+# ---------------------------------------------------------------- campaigns, probes, fixtures
+
+def _campaign(q_deg):
+    n = len(q_deg)
+    return types.SimpleNamespace(q_deg=np.asarray(q_deg, float), lines=np.arange(2, n + 2), x_D_mm=np.full((n, 3), 0.1))
+
+
+def test_rows_in_radians_among_degrees_are_named():
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-150, 150, (12, 6))
+    q[4] = np.radians(q[4])
+    q[7:9] = np.radians(q[7:9])
+    slips = unit_slips(_campaign(q), "c.campaign.csv")
+    assert len(slips) == 1 and "3 row(s) (line 6, 9, 10)" in slips[0] and "180/pi" in slips[0]
+    near_zero = q.copy()
+    near_zero[4] = [0.5, -1.0, 0.2, 0.0, 0.1, 0.0]          # within a degree of the zero on all but one joint
+    near_zero[7:9] = rng.uniform(-150, 150, (2, 6))
+    assert unit_slips(_campaign(near_zero), "c.campaign.csv") == []
+    pts = types.SimpleNamespace(q_deg=q, x_W_mm=np.full((12, 3), 900.0))
+    assert "#5, #8, #9" in point_unit_slips(pts, "p.validation.csv")[0]
+
+
+def test_a_typo_in_the_probe_files_accuracy_key_is_named(tmp_path):
+    path = tmp_path / "p.probe.csv"
+    path.write_text("# acuracy_mm: 0.005\nposition,feature,x_mm,y_mm,z_mm\n1,ball_1,0,0,0\n")
+    from rodlab.calibrate import CalibrationError, read_probe
+    with pytest.raises(CalibrationError) as e:
+        read_probe(path)
+    assert "Did you mean `accuracy_mm`" in str(e.value) and e.value.key == "acuracy_mm"
+
+
+def test_a_flagged_fixture_is_the_first_reason_not_to_trust():
+    fix = types.SimpleNamespace(probing={"flagged": {"1": "ball_2 350.4643 mm off"}})
+    (reason,) = flagged_fixture_reasons(fix, "f.fixture.json")
+    assert "position 1: ball_2 350.4643 mm off" in reason and "probe them again" in reason
+    assert flagged_fixture_reasons(types.SimpleNamespace(probing=None), "f.fixture.json") == []

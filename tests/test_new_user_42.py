@@ -161,3 +161,19 @@ def test_a_flagged_fixture_is_the_first_reason_not_to_trust():
     (reason,) = flagged_fixture_reasons(fix, "f.fixture.json")
     assert "position 1: ball_2 350.4643 mm off" in reason and "probe them again" in reason
     assert flagged_fixture_reasons(types.SimpleNamespace(probing=None), "f.fixture.json") == []
+
+
+def test_points_far_by_one_offset_name_the_device_files_zero():
+    from rodlab.app.cli.deviceargs import _common_offset
+    rng = np.random.default_rng(2)
+    shifted = np.array([2.5, 2.4, 2.45]) + rng.normal(0, 0.1, (30, 3))
+    said = _common_offset(shifted, 30, argparse.Namespace(device="s.device.json"))
+    assert "(+2.5" in said and "s.device.json has another zero (zero_mm)" in said
+    assert _common_offset(rng.normal(0, 3.0, (30, 3)), 25, argparse.Namespace(device=None)) == ""   # scattered
+
+
+def test_a_joint_compliance_at_its_bound_is_marked():
+    from rodlab.app.cli.calibration_printers import _at_bound
+    from rodlab.calibrate.estimate import C_MAX
+    assert _at_bound(6.5e-17, 3.8e-6) == " (at its bound)" and _at_bound(C_MAX, 1e-6) == " (at its bound)"
+    assert _at_bound(3.0e-6, 3.8e-6) == ""

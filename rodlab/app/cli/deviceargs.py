@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+import numpy as np
+
 from rodlab.calibrate import read_campaign
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate import read_points
@@ -44,8 +46,22 @@ def campaign_from_args(args, n_joints: int, warn: bool = True):
             shown = "; ".join(str(f) for f in far[:5]) + (f"; and {len(far) - 5} more" if len(far) > 5 else "")
             print(f"warning: {args.campaign}: {len(far)} point(s) farther than {ALIGNMENT_LIMIT_MM:g} mm from the "
                   f"datum point (the alignment the paper assumes; the springs' force and the rod's deflection "
-                  f"differ there): {shown}", file=sys.stderr)
+                  f"differ there): {shown}{_common_offset(camp.x_D_mm, len(far), args)}", file=sys.stderr)
     return camp
+
+
+def _common_offset(x_D_mm, n_far: int, args) -> str:
+    """Where most points are far from the datum by one offset (their scatter about it under a quarter of it): what
+    that says (a device file with another zero, or readings zeroed elsewhere); else ""."""
+    x = np.asarray(x_D_mm, float)
+    mean = x.mean(axis=0)
+    if n_far < 0.8 * len(x) or np.linalg.norm(x.std(axis=0)) > 0.25 * np.linalg.norm(mean):
+        return ""
+    offset = ", ".join(f"{v:+.2f}" for v in mean)
+    zero = (f"the device file {args.device} has another zero (zero_mm) or datum than the device that recorded "
+            "them" if getattr(args, "device", None) else "the sensors were zeroed elsewhere than at the datum point")
+    return f"; they share one offset ({offset}) mm in {{D}}: {zero}"
+
 
 
 def points_from_args(args, path, n_joints: int):

@@ -43,10 +43,12 @@ class _TopologyDofs:
 def topology_plan(topology: LinearTopology, order: int = 2, backend: str | None = None) -> AssemblyPlan:
     """The plan (:func:`~fea.plan_cache.plan_for`) of the order-``order`` mesh whose straight tetrahedra are
     ``topology``: the plan the finished mesh's basis gives, as the node numbering depends on the vertices alone."""
-    from skfem import ElementTetP1, ElementTetP2, MeshTet1  # heavy: scikit-fem (~0.2 s), loaded by the solver anyway
+    from skfem import ElementTetP1, ElementTetP2  # heavy: scikit-fem (~0.2 s), loaded by the solver anyway
     from skfem.assembly import Dofs
 
-    mesh = MeshTet1(np.zeros((3, topology.n_vertices)), topology.t)
+    from rodlab.core.skfem_tet import MeshTet1Keyed  # heavy: scikit-fem
+
+    mesh = MeshTet1Keyed(np.zeros((3, topology.n_vertices)), topology.t)
     dofs = Dofs(mesh, ElementTetP2() if order == 2 else ElementTetP1())
     return plan_for(_TopologyDofs(mesh, dofs.element_dofs, int(dofs.N)), backend)
 

@@ -106,31 +106,67 @@ class AssemblyPlan:
 
 def assembly_plan(basis, node_order: np.ndarray | None = None, upper: bool = False) -> AssemblyPlan:
     """The :class:`AssemblyPlan` of ``basis``'s mesh in the numbering ``node_order`` (new -> old, or None), storing
-    the upper block triangle only with ``upper``: the :func:`block_pattern` renumbered and, with ``upper``, cut."""
+    the upper block triangle only with ``upper`` (:func:`_upper_plan`: one sort of the stored pairs); else the
+    :func:`block_pattern` renumbered."""
+    if upper:
+        return _upper_plan(basis, node_order)
     brow, bcol, inv = block_pattern(basis)
     ne, nloc = inv.shape[:2]
     inv = inv.reshape(ne, nloc * nloc)
-    local = np.broadcast_to(np.arange(nloc * nloc, dtype=np.int8 if nloc * nloc < 128 else np.int16), inv.shape)
+    local = np.broadcast_to(np.arange(nloc * nloc, dtype=_local_dtype(nloc)), inv.shape)
     if node_order is not None:
         node_order = np.asarray(node_order, dtype=np.int64)
         iperm = np.empty_like(node_order)
         iperm[node_order] = np.arange(node_order.size, dtype=node_order.dtype)
         brow, bcol = iperm[brow], iperm[bcol]
-    if node_order is not None or upper:
-        # every block's place in the final list (sorted row-major in the new numbering), the blocks below the
-        # diagonal dropped with ``upper``: of an element's pair of blocks (a, b) and (b, a) exactly one stays
-        keep = brow <= bcol if upper else np.ones(brow.size, dtype=bool)
-        key = np.where(keep, brow.astype(np.int64) * basis.N + bcol, np.iinfo(np.int64).max)
-        order = np.argsort(key)[:int(keep.sum())]
-        new = np.full(brow.size, -1, dtype=inv.dtype)
+        # every block's place in the final list (sorted row-major in the new numbering)
+        order = np.argsort(brow.astype(np.int64) * basis.N + bcol)
+        new = np.empty(brow.size, dtype=inv.dtype)
         new[order] = np.arange(order.size, dtype=inv.dtype)
         brow, bcol, inv = brow[order], bcol[order], new[inv]
-        if upper:
-            stored = inv >= 0
-            m = nloc * (nloc + 1) // 2
-            local = np.nonzero(stored)[1].reshape(ne, m).astype(local.dtype)
-            inv = inv[stored].reshape(ne, m)
-    return AssemblyPlan(int(basis.N), node_order, bool(upper), brow, bcol, np.ascontiguousarray(local), inv)
+    return AssemblyPlan(int(basis.N), node_order, False, brow, bcol, np.ascontiguousarray(local), inv)
+
+
+def _upper_plan(basis, node_order: np.ndarray | None) -> AssemblyPlan:
+    """The plan storing the upper block triangle in the numbering ``node_order``: of each element's node pairs
+    (a, b) those whose new numbers come in that order (the diagonal and one of each pair: ``nloc (nloc + 1) / 2``),
+    their (row, column) sorted once, row-major (:func:`_row_major_order`: a radix sort on 16-bit numbers, ~3x faster
+    than sorting every pair's key and then renumbering the blocks; the same plan)."""
+    N = int(basis.N)
+    ed = basis.element_dofs.T.astype(np.int64)                     # (ne, nloc)
+    ne, nloc = ed.shape
+    if node_order is not None:
+        node_order = np.asarray(node_order, dtype=np.int64)
+        iperm = np.empty_like(node_order)
+        iperm[node_order] = np.arange(N, dtype=np.int64)
+        ed = iperm[ed]
+    keep = ed[:, :, None] <= ed[:, None, :]                        # (ne, nloc, nloc)
+    m = nloc * (nloc + 1) // 2
+    local = np.nonzero(keep.reshape(ne, nloc * nloc))[1].reshape(ne, m).astype(_local_dtype(nloc))
+    rows = np.broadcast_to(ed[:, :, None], keep.shape)[keep]
+    cols = np.broadcast_to(ed[:, None, :], keep.shape)[keep]
+    order = _row_major_order(rows, cols, N)
+    rows, cols = rows[order], cols[order]
+    first = np.empty(order.size, dtype=bool)
+    first[:1] = True
+    np.logical_or(rows[1:] != rows[:-1], cols[1:] != cols[:-1], out=first[1:])
+    slot = np.empty(order.size, dtype=np.int32 if order.size < 2**31 else np.int64)
+    slot[order] = np.cumsum(first) - 1
+    return AssemblyPlan(N, node_order, True, rows[first], cols[first], local, slot.reshape(ne, m))
+
+
+def _row_major_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
+    """The permutation sorting the pairs (``rows``, ``cols``) row-major (stable): two radix passes when the
+    numbers fit 16 bits (``n`` < 65536; numpy's stable sort of 16-bit integers is a radix sort), else one sort of
+    the combined keys."""
+    if n < 2**16:
+        order = np.argsort(cols.astype(np.uint16), kind="stable")
+        return order[np.argsort(rows[order].astype(np.uint16), kind="stable")]
+    return np.argsort(rows * n + cols, kind="stable")
+
+
+def _local_dtype(nloc: int):
+    return np.int8 if nloc * nloc < 128 else np.int16
 
 
 def assemble_stiffness(basis, C: np.ndarray, chunk: int = 2000, plan: AssemblyPlan | None = None,

@@ -356,7 +356,7 @@ def _mesh_options(h: float, order: int, grading) -> None:
 
 def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order, msh_path, half=False,
               high_order: int = 0):
-    from skfem import MeshTet1, MeshTet2
+    from rodlab.core.skfem_tet import MeshTet1Keyed, MeshTet2Keyed  # heavy: scikit-fem
 
     index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
     index[node_tags.astype(np.int64)] = np.arange(node_tags.size)
@@ -368,9 +368,9 @@ def _to_skfem(design, solids, node_tags, coords, conn, part_idx, qual, h, order,
     p = coords[used]
     if order == 2:
         t = t[:, GMSH_TO_VTK_TET10]
-        mesh = MeshTet2(p.T.copy(), t.T.copy())
+        mesh = MeshTet2Keyed(p.T.copy(), t.T.copy())
     else:
-        mesh = MeshTet1(p.T.copy(), t.T.copy())
+        mesh = MeshTet1Keyed(p.T.copy(), t.T.copy())
     worst = float(qual.min())
     if worst <= 0:
         raise GeometryError(f"rod {design.name!r}: the mesh has inverted elements (worst quality {worst:.3g}); "

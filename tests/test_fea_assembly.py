@@ -136,3 +136,12 @@ def test_an_ordered_triangular_plan_round_trips_and_a_wrong_one_is_refused(tmp_p
     assert foreign.hits == 0 and foreign.misses == 1
     with pytest.raises(ValueError, match="not both"):
         assemble_stiffness(basis, C, plan=made, upper=True)
+
+
+def test_the_row_major_order_of_node_pairs_is_the_same_by_radix_and_by_keys():
+    from rodlab.fea.stiffness_assembly import _row_major_order
+    rng = np.random.default_rng(5)
+    rows, cols = rng.integers(0, 3000, 20000), rng.integers(0, 3000, 20000)
+    want = np.lexsort((cols, rows))                       # stable: ties keep their order, as both branches do
+    np.testing.assert_array_equal(_row_major_order(rows, cols, 3000), want)          # 16-bit radix passes
+    np.testing.assert_array_equal(_row_major_order(rows, cols, 70000), want)         # one sort of the keys

@@ -221,3 +221,24 @@ def test_a_topology_that_is_not_the_mesh_s_is_not_used(rod1_meshes):
     ref = solve_compliance(d, mesh)
     assert "ahead_beside_mesher" not in res.timings_s
     assert np.allclose(res.C_F, ref.C_F, rtol=1e-12, atol=0)
+
+
+def test_keyed_entities_are_scikit_fems():
+    """Edges and facets from integer keys (rodlab.core.skfem_tet): the same arrays, order and inverse as
+    scikit-fem's own np.unique(axis=1), on a curved P2 mesh and its straight tetrahedra."""
+    from skfem import MeshTet1, MeshTet2
+
+    from rodlab.core.skfem_tet import MeshTet1Keyed, MeshTet2Keyed, keyed_entities
+    base = MeshTet1.init_ball().refined(2)
+    p2 = MeshTet2.init_ball().refined(1) if hasattr(MeshTet2, "init_ball") else MeshTet2.from_mesh(base)
+    for plain, keyed in ((base, MeshTet1Keyed(base.p, base.t)),
+                         (p2, MeshTet2Keyed(p2.doflocs, p2.dofs.element_dofs))):
+        for attr in ("edges", "t2e", "facets", "t2f", "f2t", "boundary_facets"):
+            a, b = getattr(plain, attr), getattr(keyed, attr)
+            a, b = (a() if callable(a) else a), (b() if callable(b) else b)
+            assert a.dtype == b.dtype and np.array_equal(a, b), attr
+    t = base.t.astype(np.int64)
+    edges = base.elem.refdom.edges
+    unsorted = keyed_entities(t, edges, sort=False)
+    want = MeshTet1.build_entities(t, edges, sort=False)
+    assert all(np.array_equal(x, y) for x, y in zip(unsorted, want))

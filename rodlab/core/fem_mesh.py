@@ -77,8 +77,10 @@ class RodMesh:
 
     def _mirror(self) -> "RodMesh":
         """The whole rod, made anew (see :meth:`mirrored`)."""
-        from skfem import Basis, MeshTet1, MeshTet2
+        from skfem import Basis
         from skfem.element import ElementTetP1, ElementTetP2
+
+        from .skfem_tet import MeshTet1Keyed, MeshTet2Keyed  # heavy: scikit-fem
 
         elem = ElementTetP2() if self.order == 2 else ElementTetP1()
         basis = Basis(self.mesh, elem, intorder=1)
@@ -91,7 +93,7 @@ class RodMesh:
         xm = np.concatenate([x, x[:, off] * np.array([[1.0], [-1.0], [1.0]])], axis=1)
         swap = [0, 2, 1, 3, 6, 5, 4, 7, 9, 8] if t.shape[0] == 10 else [0, 2, 1, 3]   # edges 01 12 02 03 13 23
         tm = np.concatenate([t, image[t][swap]], axis=1)
-        mesh = (MeshTet2 if self.order == 2 else MeshTet1)(xm, tm)
+        mesh = (MeshTet2Keyed if self.order == 2 else MeshTet1Keyed)(xm, tm)
         flip = np.array([1.0, -1.0, 1.0])
         z0 = float(self.mesh.p[2, self.mesh.facets[:, self.flange_facets]].mean())
         flange = mesh.facets_satisfying(lambda p: np.abs(p[2] - z0) < 1e-6, boundaries_only=True)

@@ -14,6 +14,7 @@ mirror-symmetric rod differ only in which DOFs of the plane are held) with one f
 """
 from __future__ import annotations
 
+import ctypes
 import functools
 import glob
 import logging
@@ -255,6 +256,23 @@ def _mkl_threads(libmkl) -> None:
         pass
 
 
+def _pardiso_call(ps, phase: int, U: sp.csr_matrix, ia: np.ndarray, ja: np.ndarray, B: np.ndarray,
+                  X: np.ndarray) -> int:
+    """MKL's ``pardiso`` through pypardiso's handle ``ps`` (its ``pt``, ``iparm``, ``perm``, ``mtype``), as its
+    ``_call_pardiso`` makes it, with the one-based index arrays ``ia``, ``ja`` of ``U`` given; ``B`` and ``X``
+    Fortran-ordered (n, nrhs) float64. Returns PARDISO's error code (0: success)."""
+    i32, f64 = ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(ctypes.c_double)
+    error = ctypes.c_int32(0)
+    ps._mkl_pardiso(ps.pt.ctypes.data_as(ctypes.POINTER(ps._pt_type[0])), ctypes.byref(ctypes.c_int32(1)),
+                    ctypes.byref(ctypes.c_int32(1)), ctypes.byref(ctypes.c_int32(ps.mtype)),
+                    ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(U.shape[0])),
+                    U.data.ctypes.data_as(f64), ia.ctypes.data_as(i32), ja.ctypes.data_as(i32),
+                    ps.perm.ctypes.data_as(i32), ctypes.byref(ctypes.c_int32(B.shape[1])),
+                    ps.iparm.ctypes.data_as(i32), ctypes.byref(ctypes.c_int32(ps.msglvl)),
+                    B.ctypes.data_as(f64), X.ctypes.data_as(f64), ctypes.byref(error))
+    return int(error.value)
+
+
 class _Pardiso:
     """MKL PARDISO for a real SPD matrix given by its upper triangle in CSR (the arrays of a CSC lower
     triangle, as :class:`HeldSystem` stores it, are exactly that). The symbolic analysis (METIS) is done
@@ -275,18 +293,21 @@ class _Pardiso:
         self._ps = ps = _configured_pardiso(iparm, np.arange(1, n + 1, dtype=np.int32) if natural
                                             else np.zeros(0, dtype=np.int32))
         ps._check_A(self._U)   # sorted indices, no empty rows, CSR (no transpose)
+        # one-based index arrays made once (pypardiso's own call converts them on every phase: ~5 ms each time)
+        self._ia = self._U.indptr.astype(np.int32) + 1
+        self._ja = self._U.indices.astype(np.int32) + 1
         self._call(11, np.zeros((n, 1)))
         self.factor_nonzeros = int(ps.iparm[17])               # the analysis's count of the factor's nonzeros
 
     def _call(self, phase: int, B: np.ndarray) -> np.ndarray:
-        from pypardiso.pardiso_wrapper import PyPardisoError
         _mkl_threads(self._ps.libmkl)
-        self._ps.set_phase(phase)
-        try:
-            return self._ps._call_pardiso(self._U, np.asfortranarray(B, dtype=np.float64))
-        except PyPardisoError as e:
-            raise FeaError(f"PARDISO failed in phase {phase} ({e}); the stiffness matrix is singular or not "
-                           f"positive definite: is every part connected to the clamp?", key="solver") from e
+        B = np.asfortranarray(B, dtype=np.float64)
+        X = np.zeros_like(B)
+        error = _pardiso_call(self._ps, phase, self._U, self._ia, self._ja, B, X)
+        if error:
+            raise FeaError(f"PARDISO failed in phase {phase} (error {error}); the stiffness matrix is singular or not "
+                           f"positive definite: is every part connected to the clamp?", key="solver")
+        return np.ascontiguousarray(X)
 
     def factor(self, A: sp.spmatrix):
         Ac = sp.csc_matrix(A)

@@ -80,7 +80,7 @@ class RodMesh:
         from skfem import Basis
         from skfem.element import ElementTetP1, ElementTetP2
 
-        from .skfem_tet import MeshTet1Keyed, MeshTet2Keyed  # heavy: scikit-fem
+        from .skfem_tet import MeshTet1Keyed, MeshTet2Keyed  # heavy: skfem (scikit-fem, ~0.2 s)
 
         elem = ElementTetP2() if self.order == 2 else ElementTetP1()
         basis = Basis(self.mesh, elem, intorder=1)

@@ -206,7 +206,7 @@ class _DemoRun:
         # tolerances and the FEA's accuracy, and names only what lies beyond them (docs/diagnose.md)
         diag, model = diagnose_rig(self.rec, self.fea, self.design)
         diag.write(self.out / "diagnosis.rig.json")
-        self.corrected = corrected_compliance(self.fea, diag, model)
+        self.corrected = corrected_compliance(self.fea, diag, model, self.rec.loaded_axes(), design=self.design)
         write_compliance(self.corrected, self.out / "rod1.corrected.compliance.json")
         plot_rig_diagnosis(model, self.out / "rig", diag, "1#")
         self.summary["files"]["diagnosis"] = "rig/diagnosis_rig.png"

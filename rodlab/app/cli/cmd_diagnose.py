@@ -140,7 +140,7 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
             print(f"wrote {p}")
     if args.export:
         from ..diagnose import corrected_compliance
-        corrected = corrected_compliance(sim, diag, model, rec.loaded_axes(), args.rig)
+        corrected = corrected_compliance(sim, diag, model, rec.loaded_axes(), args.rig, design)
         for w in corrected.provenance["warnings"]:
             print(f"warning: {args.export}: {w}", file=sys.stderr)
         written.append(write_compliance(corrected, args.export))

@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from rodlab.stiffness_rig.completion import complete_c_f
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, RigEffect
+from rodlab.stiffness_rig.effects.springs import joint_places
 
 from ...core.compliance import RodCompliance
 from ...core.enums import Method
@@ -11,23 +13,63 @@ from ...core.enums import Method
 __all__ = ["corrected_compliance"]
 
 
-def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2), source: str = "") -> RodCompliance:
+def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2), source: str = "",
+                         design=None) -> RodCompliance:
     """``sim`` plus the fitted structural terms (compliance scale, torsion, joint springs); C_g scaled by the
     change of c22 + c33 (as Eq. 22 does for the measured file). Where the linear compliance was fitted freely
     (the simulation not taken to be exact), that fit is the corrected C_F. Rig effects (friction, tare, drift, crosstalk,
     creep) belong to the rig, not the rod, and are left out. ``measured_axes``: the load axes the recording
-    ``source`` loaded (0-2 for x-z); a diagonal entry of an axis it did not load is raised where the others need
-    it to be a compliance (:func:`~stiffness_rig.completion.complete_c_f`, noted in the provenance)."""
-    C = sim.C_F.copy() if model.linear is None else model.linear.C_F.copy()
-    for term, v in model.term_values():
-        if term.dC:
-            for val, dC in zip(v, term.dC):
+    ``source`` loaded (0-2 for x-z); where the linear compliance was fitted freely, the entries it could not fit
+    (an axis not loaded) are the simulation with the structural findings applied (:func:`_with_findings`: a
+    compliant flange joint found from the loaded axes adds to c11 too; ``design`` places the joints); a diagonal
+    entry is then raised where the others need it to be a compliance (:func:`~stiffness_rig.completion.complete_c_f`,
+    noted in the provenance)."""
+    notes = []
+    if model.linear is None:
+        C = sim.C_F.copy()
+        for term, v in model.term_values():
+            for val, dC in zip(v, term.dC or ()):
                 C = C + val * dC
+    else:                                   # the free fit holds every effect on the entries it fits
+        C = _with_findings(sim, diag, design)
+        notes += _predicted_note(C, sim, diag, measured_axes)
+        for m, n in model.linear.entries:
+            C[m, n] = C[n, m] = model.linear.C_F[m, n]
     C = 0.5 * (C + C.T)
     r = float((C[1, 1] + C[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2]))    # of the model, before any completion
     loaded = np.zeros((3, 3), dtype=bool)
     loaded[:, list(measured_axes)] = True
-    C, notes = complete_c_f(np.where(loaded | loaded.T, C, np.nan), C, source, "the corrected model's")
+    C, raised = complete_c_f(np.where(loaded | loaded.T, C, np.nan), C, source, "the corrected model's")
+    notes += raised
     return RodCompliance(sim.rod, Method.MEAS, C, r * sim.C_g, sim.mass_kg, sim.com_T_mm, sim.tool_mm,
                          r * sim.r_rod, {"generator": "rodlab diagnose --export", "simulated": sim.provenance,
                                          "findings": [f.to_dict() for f in diag.findings], "warnings": notes})
+
+
+def _with_findings(sim: RodCompliance, diag, design=None) -> np.ndarray:
+    """The simulated C_F [mm/N] with each structural rig finding's fitted parameters put through its effect's
+    forward model (:meth:`~stiffness_rig.effects.base.RigEffectModel.compliance`, the joints placed on ``design``
+    or guessed from the tool vector)."""
+    C = sim.C_F.copy()
+    places = joint_places(sim.tool_mm, design)
+    for f in diag.findings:
+        if not isinstance(f.effect, RigEffect) or not RIG_EFFECTS[f.effect].structural:
+            continue
+        params = dict(f.parameters, **({"location": f.location} if f.location else {}))
+        C = RIG_EFFECTS[f.effect].compliance(C, params, places)
+    return C
+
+
+def _predicted_note(C: np.ndarray, sim: RodCompliance, diag, measured_axes) -> list[str]:
+    """What the corrected file holds on the diagonal of the axes the recording did not load: a prediction of the
+    simulation with the structural findings (named), not a measurement."""
+    unloaded = [i for i in range(3) if i not in set(measured_axes)]
+    if not unloaded:
+        return []
+    found = [f"{f.effect}" + (f" at {f.location}" if f.location else "") for f in diag.findings
+             if isinstance(f.effect, RigEffect) and RIG_EFFECTS[f.effect].structural]
+    what = f"the simulation with {' and '.join(found)} as found" if found else "the simulation"
+    values = ", ".join(f"c_{'xyz'[i]}{'xyz'[i]} {C[i, i]:.4g} mm/N (simulated {sim.C_F[i, i]:.4g})" for i in unloaded)
+    axes = ", ".join("xyz"[i] for i in unloaded)
+    return [f"no load along {axes}: {values} from {what}, a prediction, not a measurement; record a load along "
+            f"{axes} to measure it"]

@@ -102,6 +102,7 @@ class RigFit:
         M = self.C_F_meas
         source = str(recording.path) if recording is not None and recording.path is not None else ""
         C, notes = complete_c_f(M, r * sim.C_F, source)
+        notes = [n + "; or let `rodlab diagnose --rig` find the joint and predict it (--design, --export)" for n in notes]
         prov = {"rodlab_version": __version__, "method": "meas", "generator": "rodlab rig fit",
                 "simulated": {"method": str(sim.method), "C_F_mm_per_N": sim.C_F.tolist(),
                               "provenance": sim.provenance},

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import itertools
 import logging
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -32,6 +32,7 @@ import numpy as np
 from .errors import CalibrationError
 from .identify import campaign_observations, identify
 from .kinematics import ModelParams
+from .mixup import Mixup
 from .observations import register_base_and_tool
 from .points import identify_points, points_observations
 from .socket_check import check_sockets
@@ -43,8 +44,6 @@ __all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mix
            "MIXUP_GAIN", "QUICK_NFEV", "NOMINAL_GROSS_MM"]
 
 log = logging.getLogger(__name__)
-
-_READ = ("x_mm", "y_mm", "z_mm")
 
 #: where the given fit is gross but plausible, undoing the mix-up must bring the rms to at most this share of it
 MIXUP_GAIN = 0.5
@@ -70,104 +69,6 @@ SOCKET_GROSS_MM = 25.0
 TIE_FACTOR, TIE_MM = 1.05, 0.05
 #: base-and-tool registrations of the screen (to 0.01 mm; the first ones decide between mm and hundreds of mm)
 SCREEN_ITERATIONS = 15
-
-
-@dataclass(frozen=True)
-class Mixup:
-    """joint : 1-based joint whose readings are reversed, or None; positions : the two clamping positions whose
-    labels are swapped, or None; rms_mm : the identification's rms per reading [mm] with the mix-up undone;
-    rms_given_mm : the rms as the files were given [mm]; readings : the two reading columns (0-2: x_mm, y_mm, z_mm)
-    exchanged, or None."""
-
-    joint: int | None
-    positions: tuple | None
-    rms_mm: float
-    rms_given_mm: float
-    fixture_radians: bool = False
-    columns: tuple | None = None
-    given_is_nominal: bool = False
-    zero_offset: tuple | None = None
-    coupling: tuple | None = None
-    alternatives: tuple = ()
-    readings: tuple | None = None
-
-    def __post_init__(self) -> None:
-        kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
-                 + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None)
-                 + (self.readings is not None))
-        if kinds != 1:
-            raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
-                             "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns or "
-                             "fixture_radians")
-
-    @property
-    def label(self) -> str:
-        if self.fixture_radians:
-            return "fixture angles read as radians"
-        if self.readings is not None:
-            return f"columns {_READ[self.readings[0]]} and {_READ[self.readings[1]]} exchanged"
-        if self.zero_offset is not None:
-            return f"q{self.zero_offset[0]} {self.zero_offset[1]:+g} deg"
-        if self.coupling is not None:
-            a, b, sign = self.coupling
-            return f"q{b} {'+' if sign > 0 else '-'} q{a}"
-        if self.columns is not None:
-            return f"columns q{self.columns[0]} and q{self.columns[1]} exchanged"
-        return (f"joint {self.joint} negated" if self.joint is not None else
-                f"positions {self.positions[0]} and {self.positions[1]} swapped")
-
-    @property
-    def column_key(self) -> str:
-        """The joint column(s) of the readings file to correct (a joint mix-up)."""
-        if self.columns is not None:
-            return f"q{self.columns[0]}, q{self.columns[1]}"
-        k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
-             else self.coupling[1])
-        return f"q{k}"
-
-    def reason(self) -> str:
-        if not self.alternatives:
-            return self._reason()
-        return (f"{self._reason()}; the readings fit the nominal model as well with "
-                f"{' or '.join(self.alternatives)}, which they cannot tell from it: check which applies")
-
-    def _reason(self) -> str:
-        given = (f"{self.rms_given_mm:.1f} mm" if self.rms_given_mm >= 1.0 else f"{self.rms_given_mm * 1e3:.1f} um")
-        given = (f"the nominal model misses them by {given} rms as given" if self.given_is_nominal else
-                 f"as given {given}")
-        fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading ({given}) with every parameter within "
-               "its bounds")
-        if self.fixture_radians:
-            return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
-                    "are degrees: convert them (degrees = radians x 180 / pi) and run again")
-        if self.readings is not None:
-            a, b = (_READ[k] for k in self.readings)
-            return (f"the {a} and {b} columns look exchanged (the device's sensors wired or exported in another "
-                    f"order): with them swapped back {fit}; check the device's channel order and swap the columns")
-        if self.zero_offset is not None:
-            k, deg = self.zero_offset
-            return (f"joint {k}'s zero differs from the robot file's by {deg:+g} deg: with {deg:+g} deg added to q{k} "
-                    f"{fit}; the controller counts joint {k} from another zero than the robot file: add {deg:+g} deg "
-                    f"to the q{k} column (or correct the robot file's joint offset)")
-        if self.coupling is not None:
-            a, b, sign = self.coupling
-            op = "+" if sign > 0 else "-"
-            return (f"q{b} looks read against joint {a} (a coupled convention: a FANUC controller gives J3 against the "
-                    f"horizontal, not against the upper arm): with q{b} {op} q{a} {fit}; convert the q{b} column to "
-                    f"q{b} {op} q{a} before calibrating")
-        if self.columns is not None:
-            a, b = self.columns
-            return (f"the q{a} and q{b} columns look exchanged against the robot file's joints {a} and {b}: with them "
-                    f"swapped back {fit}; check the column order of the controller's export and swap them")
-        if self.joint is not None:
-            k = self.joint
-            return (f"joint {k}'s readings run the other way than the robot file's joint {k}: with them negated {fit}; "
-                    f"check the sign of joint {k} in the controller's export and in the robot file (its axis "
-                    f"direction), and negate the q{k} column or correct the robot file")
-        a, b = self.positions
-        return (f"clamping positions {a} and {b} look swapped between the campaign and the fixture file: with their "
-                f"labels exchanged {fit}; check which clamping each block of the campaign was recorded at and "
-                f"correct the position column or the fixture file")
 
 
 def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints: Callable, fit_positions: Callable,
@@ -234,7 +135,10 @@ def _exchanged(q: np.ndarray, a: int, b: int) -> np.ndarray:
 
 
 def _reading_trials(camp, fit_readings: Callable) -> tuple:
-    """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged."""
+    """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged; none for raw
+    sensor readings (a device file's axes are not the columns: their exchange is another mix-up)."""
+    if camp.raw:
+        return ()
     def run(a, b):
         x = np.array(camp.x_D_mm, float, copy=True)
         x[:, [a, b]] = x[:, [b, a]]

@@ -60,10 +60,10 @@ def read_probe(path) -> ProbeSet:
     text = read_text_checked(p, CalibrationError)
     meta = {key: (k, val) for k, key, val in leading_comments(text)}
     if "accuracy_mm" not in meta:
-        near = [key for key in meta if did_you_mean(key, ["accuracy_mm"])]
+        near = [key for key in meta if did_you_mean(key, ["accuracy_mm"], units=True)]
         if near:                                  # a typo in the key: name the line it is on
             k = meta[near[0]][0]
-            raise CalibrationError(f"unknown comment key '# {near[0]}:'{did_you_mean(near[0], ['accuracy_mm'])} (the "
+            raise CalibrationError(f"unknown comment key '# {near[0]}:'{did_you_mean(near[0], ['accuracy_mm'], units=True)} (the "
                                    "instrument's accuracy per coordinate, 1 sigma [mm])", path=p, line=k, key=near[0])
         raise CalibrationError("missing comment line '# accuracy_mm: ...' (the instrument's accuracy per coordinate,"
                                " 1 sigma [mm]) before the header", path=p, line=1, key="accuracy_mm")

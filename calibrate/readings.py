@@ -95,7 +95,8 @@ def unit_slips(camp: Campaign, path) -> list[str]:
     """What in a campaign's numbers says a column is in other units than the contract's, each with its fix: joint
     angles that all lie within +-2 pi (radians where degrees are expected: no campaign turns its joints by less than
     6.3 degrees), readings whose median point lies :data:`READINGS_UNIT_LIMIT_MM` from the datum (um where mm are
-    expected) or within :data:`READINGS_METRES_LIMIT_MM` of it (metres). Empty when none."""
+    expected) or within :data:`READINGS_METRES_LIMIT_MM` of it (metres); rows in radians among rows in degrees
+    (:func:`_radian_rows`). Empty when none."""
     out = _radians(camp.q_deg, path, "campaign") or _radian_rows(camp.q_deg, camp.lines, path, "campaign")
     if camp.x_D_mm is not None and len(camp.x_D_mm):
         d = float(np.median(np.linalg.norm(camp.x_D_mm, axis=1)))
@@ -131,26 +132,27 @@ def _radians(q_deg, path, whose: str) -> list[str]:
     return []
 
 
-#: a row with at least two joint angles beyond this [rad] moves its joints by tens of degrees if it is in radians;
-#: in degrees it is within 6.3 degrees of the zero on every joint and yet not at it, which a campaign's pose hardly is
+#: a row with at least three joint angles beyond this [rad], one of them beyond 1 rad, moves its joints by tens of
+#: degrees if it is in radians; in degrees it is within 6.3 degrees of the zero on every joint and yet clearly off it
+#: on three, which a campaign's pose hardly is (a robot's home, all zeros, is not flagged)
 _MOVING_RAD = 0.5
 
 
 def _radian_rows(q_deg, lines, path, whose: str) -> list[str]:
     """Rows in radians among rows in degrees (new-user trial, 2026-11-29: one point, or one clamping position,
     converted to radians passed ``validate``): a row whose joint angles all lie within +-2 pi, with two or more
-    beyond :data:`_MOVING_RAD`, while most rows have one beyond 2 pi."""
+    beyond :data:`_MOVING_RAD` and one beyond 1, while most rows have one beyond 2 pi."""
     q = np.asarray(q_deg, float)
     if q.ndim != 2 or q.shape[0] < 3:
         return []
     degrees = np.abs(q).max(axis=1) > 2 * np.pi
     if degrees.mean() < 0.5:
         return []
-    flagged = np.nonzero(~degrees & ((np.abs(q) > _MOVING_RAD).sum(axis=1) >= 2))[0]
+    flagged = np.nonzero(~degrees & ((np.abs(q) > _MOVING_RAD).sum(axis=1) >= 3) & (np.abs(q).max(axis=1) > 1.0))[0]
     if not flagged.size:
         return []
-    where = ", ".join(str(int(lines[i])) for i in flagged) if lines is not None and len(lines) else \
-        ", ".join(f"#{i + 1}" for i in flagged)
-    return [f"{path}: {flagged.size} row(s) (line {where}) have every joint angle within +-2 pi while the other rows "
+    where = ("line " + ", ".join(str(int(lines[i])) for i in flagged) if lines is not None and len(lines) else
+             "data row " + ", ".join(str(i + 1) for i in flagged))
+    return [f"{path}: {flagged.size} row(s) ({where}) have every joint angle within +-2 pi while the other rows "
             f"are in degrees: they look like radians; the {whose} joint angles are degrees: multiply those rows' q "
             "columns by 180/pi (a pose truly within 6.3 degrees of the zero on every joint: --units-checked)"]

@@ -301,13 +301,14 @@ class _Pardiso:
 
     def _call(self, phase: int, B: np.ndarray) -> np.ndarray:
         _mkl_threads(self._ps.libmkl)
-        B = np.asfortranarray(B, dtype=np.float64)
+        vector = np.ndim(B) == 1
+        B = np.asfortranarray(B[:, None] if vector else B, dtype=np.float64)
         X = np.zeros_like(B)
         error = _pardiso_call(self._ps, phase, self._U, self._ia, self._ja, B, X)
         if error:
             raise FeaError(f"PARDISO failed in phase {phase} (error {error}); the stiffness matrix is singular or not "
                            f"positive definite: is every part connected to the clamp?", key="solver")
-        return np.ascontiguousarray(X)
+        return np.ascontiguousarray(X[:, 0] if vector else X)
 
     def factor(self, A: sp.spmatrix):
         Ac = sp.csc_matrix(A)

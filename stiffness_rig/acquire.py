@@ -121,8 +121,11 @@ def acquire(profile: RigProfile, plan: RigPlan, out: str | Path, operator: Calla
                 writer.comment(f"resumed after hold {start.holds_done}/{start.holds_total}")
             _Session(plan, client, writer, start, operator if not use_loader else None, progress).run()
         except BaseException:
-            if writer.discard_if_empty():
-                log.info("%s: removed (no sample was recorded)", out)
+            try:
+                if writer.discard_if_empty():
+                    log.info("%s: removed (no sample was recorded)", out)
+            except OSError as e:                   # the original error is the one to see
+                log.warning("%s: not removed (%s); it holds no sample", out, e)
             raise
         finally:
             writer.close()

@@ -231,10 +231,10 @@ def _check_load_response(lines: list, rec: RigRecording, holds: Holds) -> None:
         if ln.slope_mm_per_N > 3 * ln.se_mm_per_N and ln.slope_mm_per_N > 0:
             continue
         backwards = ln.slope_mm_per_N < -10 * ln.se_mm_per_N
-        check = (f"the {_AX[ln.component]} gauge reads the rod's motion backwards: give it sign = -1 in the profile "
-                 f"(or multiply the disp_{_AX[ln.component]}_mm column by -1), or check the load's direction" if backwards
-                 else _idle_load_cell(holds, ln.axis) or
-                 "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
+        check = _load_cell_cause(holds, ln.axis) or (
+            f"the {_AX[ln.component]} gauge reads the rod's motion backwards: give it sign = -1 in the profile "
+            f"(or multiply the disp_{_AX[ln.component]}_mm column by -1), or check the load's direction" if backwards
+            else "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
                  "hung on that axis)")
         raise NoLoadResponse(f"no load response on axis {ln.axis.value}: the {_AX[ln.component]} gauge moves "
                              f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
@@ -242,19 +242,27 @@ def _check_load_response(lines: list, rec: RigRecording, holds: Holds) -> None:
                              path=rec.path, key="load_axis")
 
 
-def _idle_load_cell(holds: Holds, axis) -> str | None:
-    """What to check when the load is the load cell's and it hardly moved on ``axis``'s holds while the hung weights
-    did (below a tenth of their span): it saw no load there; else None."""
+def _load_cell_cause(holds: Holds, axis) -> str | None:
+    """What to check when the load is the load cell's and it is the cause on ``axis``'s holds: it hardly moved while
+    the hung weights did (below a tenth of their span: it saw no load), or it fell as they rose (wired or set the
+    other way, which reads as gauges reading backwards); else None."""
     if not holds.has_force:
         return None
     on = np.array([a is axis for a in holds.axis])
-    span_w = float(np.ptp(holds.mass_kg[on] * G0)) if on.any() else 0.0
-    span_f = float(np.ptp(holds.force_N[on])) if on.any() else 0.0
-    if span_w <= 0 or span_f >= 0.1 * span_w:
+    w, f = holds.mass_kg[on] * G0, holds.force_N[on]
+    span_w = float(np.ptp(w)) if on.any() else 0.0
+    span_f = float(np.ptp(f)) if on.any() else 0.0
+    if span_w <= 0:
         return None
-    return (f"the load cell's force_N spans {span_f:.3g} N over these holds while the hung weights span {span_w:.3g} N: "
-            f"it saw no load along {axis.value} (not in the load path of that axis, or not connected); check it, or "
-            "fit on the hung masses with `rig fit --load mass`")
+    if span_f < 0.1 * span_w:
+        return (f"the load cell's force_N spans {span_f:.3g} N over these holds while the hung weights span {span_w:.3g} "
+                f"N: it saw no load along {axis.value} (not in the load path of that axis, or not connected); check "
+                "it, or fit on the hung masses with `rig fit --load mass`")
+    if np.corrcoef(w, f)[0, 1] < -0.9:
+        return ("the load cell's force_N falls as the hung weight rises: it reads with the opposite sign (the gauges "
+                "are not the cause); give its channel sign = -1 in the rig profile, negate this recording's force_N "
+                "column, or fit on the hung masses with `rig fit --load mass`")
+    return None
 
 
 def _reference_holds(holds) -> np.ndarray:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .instrument_profile import UNITS
+
 __all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings", "creep_warnings",
            "load_scale_problems", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
@@ -30,9 +32,6 @@ UNIT_FACTOR_TOLERANCE = 0.15
 LOAD_SCALE_REFUSE = 0.10
 #: ... and from this share on it is warned of (the fit then uses the cell's readings, as it should)
 LOAD_SCALE_WARN = 0.02
-#: force units a load cell can be set to, and how many of them one newton is
-FORCE_UNITS = {"kgf": 1 / 9.80665, "lbf": 1 / 4.4482216, "daN": 0.1, "kN": 1e-3, "gf": 1e3 / 9.80665,
-               "ozf": 1 / 0.2780139, "mN": 1e3}
 #: the hold averages of a line scatter about it by more than this many times a hold average's noise
 LACK_FACTOR = 5.0
 #: the holds' own slopes follow the load step into them by this many standard errors: the rod creeps
@@ -105,34 +104,44 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
     """(refusals, warnings) when the load cell's readings do not grow as the hung weight on a load axis (``load``:
     the fit's :class:`~.load.LoadCheck`, or None): a unit slip (kgf, lbf read as N) or a wrong calibration factor
     gives a compliance off by that factor with every other check passing (new-user trial, 2026-11-29: kgf as N gave
-    r_rod 9.8, written without a word); a cell out of one axis's load path reads nothing there."""
-    refuse, warn = [], []
+    r_rod 9.8, written without a word); a cell wired the other way reads -1; one out of an axis's load path 0.
+    One refusal for all the axes, its fix said once."""
+    causes, warn, fixes = [], [], []
     for sc in (load.scale if load is not None else ()):
         off = abs(sc.ratio - 1.0)
         if not np.isfinite(sc.ratio) or off <= LOAD_SCALE_WARN or off <= 5 * sc.se:
             continue
-        said = (f"on the {sc.axis.value} holds the load cell's force_N grows {sc.ratio:.4g} +- {sc.se:.2g} times as fast "
-                f"as mass_kg x g0 ({sc.n_holds} holds with a hanger on; a calibrated cell: 1)")
+        said = (f"on the {sc.axis.value} holds force_N grows {sc.ratio:.4g} +- {sc.se:.2g} times as fast as mass_kg x "
+                f"g0 ({sc.n_holds} holds with a hanger on; a calibrated load cell: 1)")
         if off <= LOAD_SCALE_REFUSE:
             warn.append(f"{said}: its calibration factor is {100 * (sc.ratio - 1):+.1f} % off, or the masses are; the "
                         "fit uses the load cell's readings: check it against a known weight")
             continue
-        unit = _force_unit(sc.ratio)
-        why = (f"its readings look like {unit}, not N: set the load-cell channel's units = \"{unit}\" in the rig "
-               "profile and record again" if unit else
-               f"it saw no load along {sc.axis.value} (not in that axis's load path, or not connected)"
-               if abs(sc.ratio) < LOAD_SCALE_REFUSE else "a wrong calibration factor or unit in the rig profile's "
-               "load-cell channel (its units / scale): correct it and record again")
-        refuse.append(f"{said}: {why}; or fit this recording on the hung masses alone with `rig fit --load mass`")
-    return refuse, warn
+        cause, fix = _scale_cause(sc.ratio, sc.axis.value)
+        causes.append(f"{said}: {cause}")
+        fixes += [fix] if fix not in fixes else []
+    if not causes:
+        return [], warn
+    return ["; ".join(causes) + f"; {' '.join(fixes)} Or fit this recording on the hung masses alone with "
+            "`rig fit --load mass`"], warn
 
 
-def _force_unit(ratio: float) -> str | None:
-    """The force unit whose readings per newton are within 5 % of ``ratio``, if any."""
-    for unit, per_N in FORCE_UNITS.items():
-        if abs(ratio / per_N - 1.0) < 0.05:
-            return unit
-    return None
+def _scale_cause(ratio: float, axis: str) -> tuple[str, str]:
+    """(what a load-cell scale ``ratio`` far from 1 says, its fix)."""
+    if abs(ratio + 1.0) < 0.05:
+        return ("the load cell reads with the opposite sign", "Give its channel sign = -1 in the rig profile for "
+                "the next recordings; for this one, negate the force_N column.")
+    if abs(ratio) < LOAD_SCALE_REFUSE:
+        return (f"it saw no load along {axis} (not in that axis's load path, or not connected)",
+                "Check the load cell's place in the load path.")
+    miss, unit = min((abs(ratio * factor - 1.0), unit) for unit, factor in UNITS["force"].items() if unit != "N")
+    if miss < 0.05:                                  # the nearest unit (kgf and daN are 2 % apart)
+        factor = UNITS["force"][unit]
+        return (f"its readings look like {unit}, not N",
+                f"Set the load-cell channel's units = \"{unit}\" in the rig profile for the next recordings; "
+                f"for this one, multiply force_N by {factor:.6g}.")
+    return ("a wrong calibration factor or unit in the rig profile's load-cell channel",
+            f"Correct its units or scale (the readings x {1 / ratio:.4g} would be newtons) and record again.")
 
 
 def creep_warnings(holds) -> list[str]:

@@ -39,7 +39,8 @@ __all__ = ["FORMAT_PROFILE_V2", "UNITS", "InstrumentChannel", "Instrument", "Ins
 FORMAT_PROFILE_V2 = "rodlab.rigprofile/2"
 #: quantity -> {unit: factor to mm / N / degC}
 UNITS = {"displacement": {"mm": 1.0, "um": 1e-3, "in": 25.4},
-         "force": {"N": 1.0, "kN": 1e3, "kgf": 9.80665, "lbf": 4.4482216152605},
+         "force": {"N": 1.0, "kN": 1e3, "daN": 10.0, "kgf": 9.80665, "lbf": 4.4482216152605, "gf": 9.80665e-3,
+                   "ozf": 0.27801385095378, "mN": 1e-3},
          "temperature": {"degC": 1.0}}
 _LINE_KEYS = {"name", "port", "protocol", "baudrate", "bytesize", "parity", "stopbits", "timeout_s", "retries",
               "channel"}

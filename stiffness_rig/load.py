@@ -140,7 +140,7 @@ class LoadCheck:
     force_noise_N: float
     zero_offset_N: float = 0.0
     drift: ZeroDrift | None = None
-    scale: tuple = ()
+    scale: tuple[LoadScale, ...] = ()
 
     def to_dict(self) -> dict:
         return {"per_hold_N": [float(v) for v in self.per_hold_N], "branches": [b.to_dict() for b in self.branches],

@@ -144,7 +144,7 @@ def test_rows_in_radians_among_degrees_are_named():
     near_zero[7:9] = rng.uniform(-150, 150, (2, 6))
     assert unit_slips(_campaign(near_zero), "c.campaign.csv") == []
     pts = types.SimpleNamespace(q_deg=q, x_W_mm=np.full((12, 3), 900.0))
-    assert "#5, #8, #9" in point_unit_slips(pts, "p.validation.csv")[0]
+    assert "data row 5, 8, 9" in point_unit_slips(pts, "p.validation.csv")[0]
 
 
 def test_a_typo_in_the_probe_files_accuracy_key_is_named(tmp_path):
@@ -177,3 +177,90 @@ def test_a_joint_compliance_at_its_bound_is_marked():
     from rodlab.calibrate.estimate import C_MAX
     assert _at_bound(6.5e-17, 3.8e-6) == " (at its bound)" and _at_bound(C_MAX, 1e-6) == " (at its bound)"
     assert _at_bound(3.0e-6, 3.8e-6) == ""
+
+
+def test_an_acquisition_that_fails_before_its_first_sample_leaves_no_file(tmp_path):
+    """The trial's wrong-protocol instrument answered nothing for 23 s and left a header-only recording."""
+    from rodlab.stiffness_rig.acquire import acquire
+    from rodlab.stiffness_rig.config import Channel, RigPlan, RigProfile
+    from rodlab.stiffness_rig.model import LoadSchedule
+
+    class Silent:                                  # an instrument that never answers usably
+        garbage = reconnects = 0
+
+        def command_loader(self, *a):
+            pass
+
+        def read_sample(self):
+            raise DeviceError("instrument 'controller' answers nothing usable")
+
+        read = read_sample
+
+    prof = RigProfile(port="/dev/null", protocol="query", channels=tuple(Channel(i, i, 1.0, 0.001) for i in range(3)),
+                      loader_command="LOAD {axis} {phase} {mass_kg:.4f}\r\n")
+    plan = RigPlan("1#", LoadSchedule(axes=("y",), masses=(1.0,), repeats=1, hold_s=0.5, rate_Hz=20.0),
+                   settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=1.0)
+    out = tmp_path / "r.rig.csv"
+    with pytest.raises(DeviceError):
+        acquire(prof, plan, out, use_loader=True, client=Silent())
+    assert not out.exists()
+
+
+def test_a_load_cell_wired_the_other_way_is_named_not_the_gauges(tmp_path, capsys):
+    rec = _with_force(tmp_path, -1.0, "neg.rig.csv")
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(tmp_path / "x.json")]) == 2
+    err = capsys.readouterr().err.replace("\n", " ")
+    assert "opposite sign" in err and "gauge reads the rod's motion backwards" not in err
+
+
+def test_diagnose_refuses_a_load_cell_in_another_unit(tmp_path, capsys):
+    rec = _with_force(tmp_path, 1 / 4.4482216, "lbf.rig.csv")
+    assert main(["diagnose", "--rig", str(rec), "--sim", "rod1"]) == 2
+    err = capsys.readouterr().err.replace("\n", " ")
+    assert "look like lbf" in err and "--units-checked" in err
+
+
+def test_fit_on_the_masses_keeps_what_the_load_cell_said(tmp_path, capsys):
+    import json
+    rec = _with_force(tmp_path, 1 / 9.80665, "kgf.rig.csv")
+    out = tmp_path / "m.json"
+    assert main(["rig", "fit", str(rec), "--sim", "rod1", "-o", str(out), "--load", "mass"]) == 0
+    left = json.loads(out.read_text())["provenance"]["load_cell_left_out"]
+    assert left["scale"] and all(abs(s["ratio"] - 0.102) < 0.002 for s in left["scale"])
+    assert "look like kgf" in left["problems"][0] and "look like kgf" in capsys.readouterr().err
+
+
+def test_every_position_flagged_names_the_device_file_or_the_accuracy():
+    from rodlab.app.cli.cmd_fixture import _all_flagged
+    pos = lambda j, name: types.SimpleNamespace(position=j, suspect=(name, 7.8))   # noqa: E731
+    same = types.SimpleNamespace(flagged=[pos(j, "ball_3") for j in (1, 2, 3)], accuracy_mm=0.005)
+    said = _all_flagged(same, "other.device.json")
+    assert "same suspect feature 'ball_3'" in said and "other.device.json does not describe" in said
+    mixed = types.SimpleNamespace(flagged=[pos(1, "ball_1"), pos(2, "pin")], accuracy_mm=0.001)
+    said = _all_flagged(mixed, "d.device.json")
+    assert said.index("accuracy_mm (0.001 mm)") < said.index("d.device.json")
+
+
+def test_the_units_the_load_scale_check_names_are_units_a_profile_takes(tmp_path):
+    """The check's advice (units = "gf") must be a setting the profile reader and its schema accept."""
+    from rodlab.app.cli.cmd_validate import validate_file
+    from rodlab.stiffness_rig.config import read_profile
+    from rodlab.stiffness_rig.instrument_profile import UNITS
+    src = Path(__file__).resolve().parents[1] / "stiffness_rig" / "plans" / "two-digimatic-loadcell.profile.toml"
+    text = src.read_text()
+    assert 'units = "N"' in text
+    for unit in UNITS["force"]:
+        mine = tmp_path / f"{unit}.profile.toml"
+        mine.write_text(text.replace('units = "N"', f'units = "{unit}"'))
+        assert read_profile(mine) and validate_file(mine).ok, unit
+
+
+def test_pardiso_solves_a_single_right_hand_side():
+    import scipy.sparse as sp
+    from rodlab.fea.solver import PatternSolver, available_backend
+    if available_backend() != "pardiso":
+        pytest.skip("PARDISO is not available here")
+    A = sp.diags([[-1.0] * 9, [4.0] * 10, [-1.0] * 9], [-1, 0, 1], format="csc")
+    b = np.arange(10.0)
+    x = PatternSolver(A, "pardiso").factor(A)(b)
+    assert x.shape == (10,) and np.allclose(A @ x, b)

@@ -9,7 +9,7 @@ from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.fit import r_rod_caution
-from rodlab.stiffness_rig.fit_checks import gauge_scale_problems
+from rodlab.stiffness_rig.fit_checks import gauge_scale_problems, load_scale_problems
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...core.compliance import write_compliance
@@ -152,7 +152,8 @@ def _check_r_rod(rec, sim, args) -> None:
     """A recording without a load response is refused with its cause, and so is an r_rod no rod of this kind has
     against its own simulation (a units slip or another rod's file: the diagnosis would fit a compliance scale of
     0.001 and call the recording explained) or one gauge reading a units factor off the others against the
-    simulation (a gauge in inches: diagnosed as a compliance scale of 0.26 and a non-linearity along x);
+    simulation (a gauge in inches: diagnosed as a compliance scale of 0.26 and a non-linearity along x) or a load
+    cell whose readings do not grow as the hung weight (:func:`~stiffness_rig.fit_checks.load_scale_problems`);
     ``--units-checked`` warns instead; any other fit problem is left to the diagnosis, which says what it finds."""
     try:
         fit = fit_recording(rec, sim)
@@ -162,6 +163,9 @@ def _check_r_rod(rec, sim, args) -> None:
         return
     caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
     caution = caution or "; ".join(gauge_scale_problems(fit.C_F_meas, sim.C_F)) or None
+    # a load cell in another unit, wired the other way or out of the load path: the diagnosis would name a
+    # compliance scale of that factor (a cell in lbf: r = 4.33, "decisive")
+    caution = caution or "; ".join(load_scale_problems(fit.load)[0]) or None
     if caution and not getattr(args, "units_checked", False):
         raise RigError(f"{caution}; nothing was diagnosed (if both files are right, give --units-checked)",
                        path=rec.path)

@@ -46,6 +46,22 @@ def _force(text):
     return v
 
 
+def _all_flagged(fit, device) -> str:
+    """What every position flagged says: one suspect feature at each, the device file (another device's
+    features, swapped names, or that feature moved); different ones, first the stated accuracy (a repeatability
+    given as the 1-sigma accuracy), then the device file."""
+    suspects = sorted({f.suspect[0] for f in fit.flagged})
+    n = len(fit.flagged)
+    if len(suspects) == 1:
+        return (f"FLAGGED all {n} positions with the same suspect feature {suspects[0]!r}: the device file {device} "
+                f"does not describe the device that was probed (its features_D_mm are another device's, the probe "
+                f"file's feature names are swapped, or {suspects[0]!r} moved on the device: a loose seat); give this "
+                f"device's file (rodlab.device/1) or re-measure the feature, then run `rodlab fixture` again")
+    return (f"FLAGGED all {n} positions, with different suspect features: the probe file's accuracy_mm "
+            f"({fit.accuracy_mm:g} mm) may be the instrument's repeatability rather than its 1-sigma accuracy (state "
+            f"the accuracy), or the device file {device} is another device's")
+
+
 def cmd_fixture(args) -> int:
     force = _force(args.contact_force)
     fit = fit_fixture(read_probe(args.probe), read_device(args.device), args.world_position, force)
@@ -60,14 +76,7 @@ def cmd_fixture(args) -> int:
     path = write_fixture(fit.fixture, args.output)
     print(f"wrote {path}")
     if len(fit.flagged) >= 2 and len(fit.flagged) == len(fit.fits):
-        suspects = sorted({f.suspect[0] for f in fit.flagged})
-        same = f"the same suspect feature {suspects[0]!r} at each" if len(suspects) == 1 else "at every"
-        moved = f", or {suspects[0]!r} moved on the device (a loose seat)" if len(suspects) == 1 else ""
-        print(f"FLAGGED all {len(fit.flagged)} positions, {same}: the device file {args.device} does not describe the "
-              f"device that was probed (its features_D_mm are another device's, the probe file's feature names are "
-              f"swapped{moved}); give this device's file (rodlab.device/1) or re-measure the feature, then run "
-              f"`rodlab fixture` again", file=sys.stderr)
-        return 3
+        print(_all_flagged(fit, args.device), file=sys.stderr)
     for f in fit.flagged:
         name, d = f.suspect
         print(f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "

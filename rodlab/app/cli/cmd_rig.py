@@ -18,6 +18,7 @@ from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
 from rodlab.stiffness_rig.drivers import DRIVERS
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.fit import noise_text
+from rodlab.stiffness_rig.fit_checks import load_scale_problems
 from rodlab.stiffness_rig.plan_check import default_masses, linear_range_warnings
 from rodlab.stiffness_rig.plot import format_pm, format_zero
 
@@ -139,6 +140,16 @@ def _register_simulator(rsub) -> None:
     p.set_defaults(func=cmd_simulator)
 
 
+def _load_cell_left_out(rec, sim, args) -> dict:
+    """``--load mass``: what the load cell said (its scale per load axis, what was wrong with it) before it is left
+    out, for the provenance of the file written, and the note on stderr."""
+    cell = fit_recording(rec, sim, robust=args.robust)
+    refused, warned = load_scale_problems(cell.load)
+    print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0"
+          + (f" (the load cell: {(refused + warned)[0]})" if refused + warned else ""), file=sys.stderr)
+    return {"scale": [sc.to_dict() for sc in (cell.load.scale if cell.load else ())], "problems": refused + warned}
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     rec = read_recording(args.recording)
     sim = compliance_arg(args.sim)
@@ -147,14 +158,16 @@ def cmd_fit(args: argparse.Namespace) -> int:
                           f"{sim.rod!r}: the measured compliance file would hold one rod's measurement with the other's "
                           f"mass, centre of mass and tool. Give --sim this rod's simulation (rodlab fea <its design> -o "
                           f"FILE), or correct the recording's '# rod:' line if it names the wrong rod")
+    left_out = None
     if args.load == "mass" and rec.has_force:
-        print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0",
-              file=sys.stderr)
+        left_out = _load_cell_left_out(rec, sim, args)
         rec = dataclasses.replace(rec, force_N=None)
     fit = fit_recording(rec, sim, robust=args.robust)
     if not fit.success:
         raise RodlabError(f"{args.recording}: {fit.message}")
     comp = fit.compliance(sim, rec)
+    if left_out is not None:
+        comp.provenance["load_cell_left_out"] = left_out
     for w in comp.provenance["warnings"]:        # the fit's, and how the unmeasured entries were completed
         print(f"warning: {args.recording}: {w}", file=sys.stderr)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, {noise_text(fit.noise_mm)}")

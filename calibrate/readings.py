@@ -17,7 +17,8 @@ from .campaign import RAW_COLUMNS, Campaign
 from .device import Device
 from .errors import CalibrationError
 
-__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips", "point_unit_slips"]
+__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips", "point_unit_slips",
+           "limit_breaches", "LIMIT_SLACK_DEG"]
 
 log = logging.getLogger(__name__)
 
@@ -156,3 +157,33 @@ def _radian_rows(q_deg, lines, path, whose: str) -> list[str]:
     return [f"{path}: {flagged.size} row(s) ({where}) have every joint angle within +-2 pi while the other rows "
             f"are in degrees: they look like radians; the {whose} joint angles are degrees: multiply those rows' q "
             "columns by 180/pi (a pose truly within 6.3 degrees of the zero on every joint: --units-checked)"]
+
+
+#: a joint reading this far [deg] beyond the robot file's limit is beyond it (a controller stops at its limit; a
+#: reading rounds or overshoots by a hair)
+LIMIT_SLACK_DEG = 0.5
+
+
+def limit_breaches(q_deg, lines, robot, path) -> list[str]:
+    """Rows whose joint readings lie beyond the robot file's limits (by more than :data:`LIMIT_SLACK_DEG`): the robot
+    file is another robot's, or the controller counts those joints from another zero or the other way. One message
+    naming the first rows (file line, or data row without ``lines``) and joints; empty when none."""
+    q = np.asarray(q_deg, float)
+    if q.ndim != 2 or q.shape[1] != robot.n or not q.size:
+        return []
+    lo, hi = robot.limits_deg[:, 0] - LIMIT_SLACK_DEG, robot.limits_deg[:, 1] + LIMIT_SLACK_DEG
+    out = (q < lo) | (q > hi)
+    rows = np.nonzero(out.any(axis=1))[0]
+    if not rows.size:
+        return []
+    shown = []
+    for i in rows[:5]:
+        k = int(np.nonzero(out[i])[0][0])
+        where = f"line {int(lines[i])}" if lines is not None and len(lines) else f"data row {i + 1}"
+        shown.append(f"{where} q{k + 1} = {q[i, k]:.2f} of [{robot.limits_deg[k, 0]:g}, {robot.limits_deg[k, 1]:g}]")
+    more = f"; and {rows.size - 5} more" if rows.size > 5 else ""
+    joints = sorted({int(k) + 1 for k in np.nonzero(out.any(axis=0))[0]})
+    return [f"{path}: {rows.size} row(s) have joints beyond the limits of the robot file ({robot.name}): "
+            f"{'; '.join(shown)}{more}; the robot file is another robot's, or the controller counts joint(s) "
+            f"{', '.join(map(str, joints))} from another zero or the other way: check the robot file and the "
+            "controller's export"]

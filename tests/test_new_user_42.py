@@ -264,3 +264,28 @@ def test_pardiso_solves_a_single_right_hand_side():
     b = np.arange(10.0)
     x = PatternSolver(A, "pardiso").factor(A)(b)
     assert x.shape == (10,) and np.allclose(A @ x, b)
+
+
+def test_validate_and_calibrate_name_joint_readings_beyond_the_robots_limits(tmp_path, capsys):
+    """`validate` took no robot (the trial: campaigns of other robots could only be checked in part); a campaign
+    of another robot beyond the TX90's limits is named row by row, a 5-column file against a 6-axis robot refused."""
+    from rodlab.calibrate import resolve_robot
+    from rodlab.calibrate.readings import limit_breaches
+    tx90 = resolve_robot("tx90")
+    q = np.zeros((4, 6))
+    q[2, 1] = tx90.limits_deg[1, 0] - 5.0                       # q2 5 deg below its lower limit
+    (said,) = limit_breaches(q, np.arange(2, 6), tx90, "c.campaign.csv")
+    assert "1 row(s)" in said and f"line 4 q2 = {q[2, 1]:.2f}" in said and "joint(s) 2" in said
+    assert limit_breaches(np.zeros((4, 6)), None, tx90, "p.csv") == []
+    camp = tmp_path / "c.campaign.csv"
+    rows = ["position,point,q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm"]
+    rows += [f"1,{k},10,{-140 if k == 2 else -40},90,0,45,0,0.1,0.0,0.0" for k in range(1, 4)]
+    camp.write_text("\n".join(rows) + "\n")
+    assert main(["validate", str(camp), "--robot", "tx90"]) == 0
+    out = capsys.readouterr().out
+    assert "1 warning(s)" in out and "line 3 q2 = -140.00" in out
+    five = tmp_path / "five.campaign.csv"
+    five.write_text("\n".join(r.rsplit(",q6", 1)[0] + ",x_mm,y_mm,z_mm" if i == 0 else
+                              ",".join(r.split(",")[:7] + r.split(",")[8:]) for i, r in enumerate(rows)) + "\n")
+    assert main(["validate", str(five), "--robot", "tx90"]) == 2
+    assert "q6" in capsys.readouterr().err

@@ -80,9 +80,9 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     robot = robot_from_args(args)
     fix = read_fixture(args.fixture)
     if camp is None:                                    # compare reads the campaign and warns once
-        camp = campaign_from_args(args, robot.n)
+        camp = campaign_from_args(args, robot)
         warn_flagged_fixture(fix, args.fixture)
-    pts = points_from_args(args, args.validate, robot.n) if args.validate else None
+    pts = points_from_args(args, args.validate, robot) if args.validate else None
     if pts is not None:                                 # before the campaign's fit, not after it
         screen_joint_columns(args, robot, pts, args.validate)
     obs = campaign_observations(camp, fix, rod)

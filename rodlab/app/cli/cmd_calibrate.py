@@ -219,7 +219,7 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     from rodlab.app.diagnose.advice import remedy
     from rodlab.app.diagnose.campaign_holdout import HELD_OUT_WORSE
     used = rod if comp.active else RodCompliance.none_like(rod)
-    points = points_from_args(args, args.validate, robot.n) if args.validate else None
+    points = points_from_args(args, args.validate, robot) if args.validate else None
     try:
         diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm, validate_points=points,
                                     fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
@@ -255,9 +255,9 @@ def _shared_share(q_fit: np.ndarray, q_test: np.ndarray, tol_deg: float = 1e-3) 
 
 def _calibrate_points(args) -> int:
     robot = robot_from_args(args)
-    pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot.n), args.noise_um * 1e-3 if args.noise_um else None)
+    pts, noise_mm = stated_noise_mm(points_from_args(args, args.points, robot), args.noise_um * 1e-3 if args.noise_um else None)
     options = dict(pinned=pins_from_args(args, robot.n), freed=args.free, robust=args.robust, harmonics=args.joint_harmonics)
-    test = points_from_args(args, args.validate, robot.n) if args.validate else None
+    test = points_from_args(args, args.validate, robot) if args.validate else None
     for path, points in ((args.points, pts), (args.validate, test)):       # before minutes of a hopeless fit
         if points is not None:
             screen_joint_columns(args, robot, points, path, noise_mm)

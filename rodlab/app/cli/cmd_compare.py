@@ -68,7 +68,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
                           "campaign's *.validation.csv")
     planned = _compare_runs(args.rod)
-    camp = campaign_from_args(args, robot_from_args(args).n)
+    camp = campaign_from_args(args, robot_from_args(args))
     warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
     for _, run in runs:                  # the verdict of `rodlab calibrate`: its own reasons and the validation's

@@ -178,11 +178,11 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     appended to ``written``."""
     robot = robot_from_args(args)
     noise_mm = args.noise_um * 1e-3 if args.noise_um else DEVICE_NOISE_MM
-    pts = points_from_args(args, args.validate, robot.n) if args.validate else None
+    pts = points_from_args(args, args.validate, robot) if args.validate else None
     fix = read_fixture(args.fixture)
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
-    diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot.n), fix,
+    diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot), fix,
                                    compliance_arg(args.rod), noise_mm, pts, harmonics=args.joint_harmonics,
                                    columns_checked=args.columns_checked)
     print(diag.summary())
@@ -215,7 +215,7 @@ def _diagnose_points(args) -> int:
     """Instrument points: the calibration of ``calibrate --points``, then its residuals explained."""
     from ..diagnose.points import diagnose_points
     robot = robot_from_args(args)
-    pts = points_from_args(args, args.points, robot.n)
+    pts = points_from_args(args, args.points, robot)
     pts, noise_mm = stated_noise_mm(pts, args.noise_um * 1e-3 if args.noise_um else None)
     screen_joint_columns(args, robot, pts, args.points, noise_mm, "diagnosed")
     res = identify_points(robot, pts, noise_mm, fix_unidentifiable=True,

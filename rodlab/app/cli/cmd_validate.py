@@ -8,8 +8,8 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
-from rodlab.calibrate import read_campaign, read_points
-from rodlab.calibrate.readings import point_unit_slips, unit_slips
+from rodlab.calibrate import read_campaign, read_points, resolve_robot
+from rodlab.calibrate.readings import limit_breaches, point_unit_slips, unit_slips
 from rodlab.calibrate.robot_formats import ROBOT_READERS
 from rodlab.calibrate.sockets import read_sockets
 
@@ -169,6 +169,23 @@ def _without_path(message: str, path) -> str:
     return message
 
 
+#: formats whose rows are joint readings of one robot, and how to read them for ``robot.n`` joints
+_ROBOT_CHECKED = {"rodlab.campaign/1": lambda path, n: read_campaign(path, n),
+                  "rodlab.points/1": lambda path, n: read_points(path, n)}
+
+
+def _check_against_robot(check: FileCheck, path, robot) -> None:
+    """``--robot``: the file's joint columns against the robot's joints (a problem: the reader's error), its rows
+    against the robot's joint limits (warnings, :func:`~calibrate.readings.limit_breaches`)."""
+    try:
+        data = _ROBOT_CHECKED[check.format](path, robot.n)
+    except LocatedError as e:
+        check.problems.append(Problem(e.path or str(path), e.detail, e.line, e.key))
+        return
+    lines = getattr(data, "lines", None)
+    check.warnings += [_without_path(w, path) for w in limit_breaches(data.q_deg, lines, robot, path)]
+
+
 def register(sub) -> None:
     p = sub.add_parser("validate", help="check files against rodlab's formats; every problem at once",
                        description="Names each file's format (its `format` key, its `# format:` line or its "
@@ -180,6 +197,9 @@ def register(sub) -> None:
                                    "compliance file in um/N, a robot file in radians) are listed under the file. "
                                    "Exit 0 if every file is valid, 2 otherwise.")
     p.add_argument("files", nargs="+", help="files to check")
+    p.add_argument("--robot", default=None, metavar="ROBOT",
+                   help="also check campaigns and instrument points against this robot (a built-in name or a robot "
+                        "file): their joint columns against its joints, their readings against its joint limits")
     p.add_argument("--format", default=None,
                    choices=sorted(FORMATS) + sorted(ALIASES) + sorted(schemaless_robot_formats().values()),
                    help="check as this format instead of the one the file names")
@@ -188,8 +208,13 @@ def register(sub) -> None:
 
 def cmd_validate(args) -> int:
     bad = []
+    robot = None
+    if args.robot:
+        robot = resolve_robot(args.robot)
     for f in args.files:
         check = validate_file(f, args.format)
+        if robot is not None and check.ok and check.format in _ROBOT_CHECKED:
+            _check_against_robot(check, f, robot)
         fmt = check.format or "unknown format"
         if check.ok:
             print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else "")

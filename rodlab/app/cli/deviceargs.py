@@ -9,7 +9,7 @@ import numpy as np
 from rodlab.calibrate import read_campaign
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate import read_points
-from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, point_unit_slips, unit_slips
+from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, limit_breaches, point_unit_slips, unit_slips
 
 from ...core.errors import RodlabError
 
@@ -34,12 +34,14 @@ def add_device_option(p, prefix: str = "", units_also: str = "") -> None:
     p.add_argument("--units-checked", action="store_true", help=prefix + UNITS_CHECKED_HELP + units_also)
 
 
-def campaign_from_args(args, n_joints: int, warn: bool = True):
-    """``args.campaign`` read (with ``args.device`` when given); with ``warn`` the points far from the datum are
-    named on stderr."""
+def campaign_from_args(args, robot, warn: bool = True):
+    """``args.campaign`` read for ``robot`` (with ``args.device`` when given); with ``warn`` the points far from the
+    datum and the rows beyond the robot's joint limits are named on stderr."""
     device = read_device(args.device) if getattr(args, "device", None) else None
-    camp = read_campaign(args.campaign, n_joints, device)
+    camp = read_campaign(args.campaign, robot.n, device)
     _refuse_slips(unit_slips(camp, args.campaign), args)
+    if warn:
+        _warn_limits(camp.q_deg, camp.lines, robot, args.campaign)
     if warn and camp.x_D_mm is not None:
         far = far_points(camp)
         if far:
@@ -64,12 +66,18 @@ def _common_offset(x_D_mm, n_far: int, args) -> str:
 
 
 
-def points_from_args(args, path, n_joints: int):
-    """Instrument points (``*.validation.csv``) read from ``path``, refused where their numbers look like radians
-    or metres (unless ``--units-checked``)."""
-    points = read_points(path, n_joints)
+def points_from_args(args, path, robot):
+    """Instrument points (``*.validation.csv``) read from ``path`` for ``robot``, refused where their numbers look
+    like radians or metres (unless ``--units-checked``); rows beyond the robot's joint limits named on stderr."""
+    points = read_points(path, robot.n)
     _refuse_slips(point_unit_slips(points, path), args)
+    _warn_limits(points.q_deg, None, robot, path)
     return points
+
+
+def _warn_limits(q_deg, lines, robot, path) -> None:
+    for breach in limit_breaches(q_deg, lines, robot, path):
+        print(f"warning: {breach}", file=sys.stderr)
 
 
 def _refuse_slips(slips: list, args) -> None:

@@ -28,7 +28,7 @@ import numpy as np
 from rodlab.core.cache import cache_subfolder, code_digest, load, store
 
 from .solver import SolverBackend, available_backend, node_ordering
-from .stiffness_assembly import AssemblyPlan, assembly_plan
+from .stiffness_assembly import AssemblyPlan, assembly_plan, upper_pairs
 
 __all__ = ["PlanCache", "PLAN_REVISION", "MAX_BYTES", "plan_for"]
 
@@ -136,6 +136,11 @@ def _fits(plan: AssemblyPlan, basis) -> bool:
     new = np.arange(n) if plan.node_order is None else np.argsort(plan.node_order)    # old -> new node
     ed = new[basis.element_dofs.T]                                                    # (ne, nloc), new numbering
     local = plan.local.astype(np.intp)
+    if plan.upper:                                  # column t is the pair upper_pairs()[t], either way round
+        ia, ib = upper_pairs(nloc)
+        lo, hi = np.minimum(local // nloc, local % nloc), np.maximum(local // nloc, local % nloc)
+        if not (np.array_equal(lo, np.broadcast_to(ia, lo.shape)) and np.array_equal(hi, np.broadcast_to(ib, hi.shape))):
+            return False
     a = np.take_along_axis(ed, local // nloc, axis=1)
     b = np.take_along_axis(ed, local % nloc, axis=1)
     return bool(np.array_equal(plan.brow[plan.slot], a) and np.array_equal(plan.bcol[plan.slot], b))

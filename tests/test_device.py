@@ -313,3 +313,27 @@ def test_cli_names_an_orthogonal_design_when_the_fit_is_not_trusted(sims, tmp_pa
     assert main(args + ["--device", str(nominal)]) == 3
     assert "states exactly orthogonal sensors" in capsys.readouterr().err
     assert main(args + ["--device", str(built / "multical.device.json")]) == 0
+
+
+def test_a_flagged_fixture_heads_the_reasons_not_to_trust(sims, tmp_path, capsys):
+    """A probe file with a decimal point slipped (the new-user trial's 389.4049 -> 38.94049): `rodlab fixture`
+    flags the position, and the calibration with that fixture names the flagged probing first, not the innocent
+    positions the residuals point at."""
+    built = sims[3][0]
+    probe = tmp_path / "p.probe.csv"
+    lines = (built / "multical.probe.csv").read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("1,ball_2,"))
+    cells = lines[k].split(",")
+    cells[2] = f"{float(cells[2]) / 10:.5f}"
+    lines[k] = ",".join(cells)
+    probe.write_text("\n".join(lines) + "\n")
+    fixture = tmp_path / "f.fixture.json"
+    assert main(["fixture", str(probe), "--device", str(built / "multical.device.json"), "--world-position", "3",
+                 "-o", str(fixture)]) == 3
+    capsys.readouterr()
+    rc = main(["calibrate", str(built / "multical.campaign.csv"), "--fixture", str(fixture), "--rod",
+               str(built / "rod.compliance.json"), "--device", str(built / "multical.device.json")])
+    err = capsys.readouterr().err
+    assert rc == 3
+    reasons = err.split("NOT TRUSTED - do not load these parameters into the robot:", 1)[1].lstrip()
+    assert reasons.startswith(f"- the fixture file {fixture} was written with its probing flagged (position 1:")

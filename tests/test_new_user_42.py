@@ -289,3 +289,43 @@ def test_validate_and_calibrate_name_joint_readings_beyond_the_robots_limits(tmp
                               ",".join(r.split(",")[:7] + r.split(",")[8:]) for i, r in enumerate(rows)) + "\n")
     assert main(["validate", str(five), "--robot", "tx90"]) == 2
     assert "q6" in capsys.readouterr().err
+
+
+def test_mesh_refuses_a_size_that_would_never_finish_and_another_format(tmp_path, capsys):
+    """The designer trial's `--size 0.01` ran for ten minutes without a word; `-o x.vtk` got gmsh's format."""
+    assert main(["mesh", "rod1", "-o", str(tmp_path / "r.msh"), "--size", "0.01"]) == 2
+    err = capsys.readouterr().err
+    assert "tetrahedra" in err and "give --size" in err and not (tmp_path / "r.msh").exists()
+    assert main(["mesh", "rod1", "-o", str(tmp_path / "r.vtk")]) == 2
+    assert "ending in .msh" in capsys.readouterr().err and not (tmp_path / "r.vtk").exists()
+
+
+def test_update_names_the_closed_form_a_simulated_recording_came_from(tmp_path, capsys):
+    """rig simulate --sim DESIGN is the closed form; update fits through the frame: on a shear-soft carbon rod with
+    a titanium bend (c33 21 % apart) the unchanged design was refused with no word of why."""
+    design = tmp_path / "t1.rod.toml"
+    design.write_text('format = "rodlab.rod/1"\nname = "T1"\nL1_mm = 350.0\nL2_mm = 700.0\ngamma_deg = 90.0\n'
+                      '[tube]\nmaterial = "my_cf"\nouter_diameter_mm = 36.0\nwall_mm = 3.0\n'
+                      '[bend]\nmaterial = "ti_6al4v"\nwall_mm = 3.0\nradius_mm = 72.0\n'
+                      '[materials.my_cf]\nE_GPa = 135.0\nE_transverse_GPa = 8.0\nG_GPa = 5.0\nnu = 0.3\n'
+                      'density_kg_m3 = 1580\n[tolerances]\n"materials.my_cf.E_GPa" = "10%"\n'
+                      '"materials.my_cf.G_GPa" = "25%"\n')
+    rec = tmp_path / "self.rig.csv"
+    assert main(["-q", "rig", "simulate", "--sim", str(design), "-o", str(rec)]) == 0
+    capsys.readouterr()
+    assert main(["update", str(design), "--measured", str(rec), "-o", str(tmp_path / "t1.asbuilt.rod.toml")]) == 3
+    err = capsys.readouterr().err.replace("\n", " ")
+    assert "that is the design's closed form, which differs from the frame model by" in err and "c33" in err
+
+
+def test_a_study_tells_a_designer_what_an_unidentifiable_campaign_means():
+    from rodlab.app.study.prepare import study_reason
+    from rodlab.calibrate import CalibrationError
+    e = CalibrationError("this campaign cannot identify 2 parameter(s): dtheta_6 has no effect on the measured "
+                         "points; c_6 has no effect on the measured points. Add clamping positions or rod orientations "
+                         "(more varied joint angles), or hold them with --pin NAME=VALUE (without --strict rodlab "
+                         "holds them at nominal itself)")
+    said = study_reason(e)
+    assert "--pin" not in said and "--strict" not in said and "dtheta_6 has no effect" in said
+    assert "gamma below 180" in said and "--orientations" in said
+    assert study_reason(CalibrationError("something else")) == "prediction: something else"

@@ -3,8 +3,10 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 from ...core.design_io import resolve_design
+from ...core.errors import RodlabError
 from .argtypes import pos_float
 from .cadextra import require_mesher
 from .rodargs import design_help
@@ -26,6 +28,9 @@ def register(sub) -> None:
 
 
 def cmd_mesh(args: argparse.Namespace) -> int:
+    if Path(args.output).suffix.lower() != ".msh":
+        raise RodlabError(f"-o {args.output}: rodlab mesh writes gmsh's format (4.1): give a name ending in .msh "
+                          f"(for VTK fields of the solved rod: rodlab fea DESIGN --model solid --fields OUT.vtu)")
     geometry = require_mesher()
     design = resolve_design(args.design)
     t0 = time.perf_counter()

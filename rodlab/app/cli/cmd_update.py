@@ -146,6 +146,27 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
                       + " (`rodlab diagnose --rig` shows the findings)")
 
 
+def _closed_form_hint(args, design) -> str:
+    """Where the recording was made by ``rodlab rig simulate`` (whose ``--sim DESIGN`` is the design's closed form)
+    and the closed form differs from the model fitted through by more than 3 % on a diagonal entry: say so (a
+    trial's shear-soft carbon rod with a titanium bend: c33 26 % apart, the unchanged design refused)."""
+    if args.model == "calc" or not str(args.measured).endswith(".rig.csv"):
+        return ""
+    head = Path(args.measured).read_text(encoding="utf-8", errors="replace")[:2000]
+    if "# generator: rodlab rig simulate" not in head:
+        return ""
+    from ..update import model_compliance
+    calc, model = np.diag(calc_rod_compliance(design).C_F), np.diag(model_compliance(args.model)(design))
+    apart = np.abs(calc / model - 1.0)
+    k = int(np.argmax(apart))
+    if apart[k] <= 0.03:
+        return ""
+    return (f". The recording was made by `rodlab rig simulate`: if with --sim {args.design}, that is the design's "
+            f"closed form, which differs from the {args.model} model by {100 * apart[k]:.0f} % in c{k + 1}{k + 1} on this "
+            f"design: simulate from `rodlab fea {args.design} --model {args.model} -o SIM.json` (--sim SIM.json) to "
+            f"test update on its own model, or update with --model calc")
+
+
 def cmd_update(args: argparse.Namespace) -> int:
     from ...core.design_edit import write_edited_design
     from ..update import update_design
@@ -182,7 +203,7 @@ def cmd_update(args: argparse.Namespace) -> int:
                            "where it names a local cause, free that cause's key (a joint's "
                            "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
                            "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
-                           "tube.outer_diameter_mm); nothing was written")
+                           "tube.outer_diameter_mm); nothing was written" + _closed_form_hint(args, design))
     text = read_text_checked(design.source, DesignError)
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
               f"--model {args.model}\n")

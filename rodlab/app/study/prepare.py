@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -21,7 +22,7 @@ from rodlab.fea.modal import frame_frequencies
 
 from .designs import Candidate
 
-__all__ = ["DesignSetup", "prepare_design"]
+__all__ = ["DesignSetup", "prepare_design", "study_reason"]
 
 log = logging.getLogger(__name__)
 
@@ -122,3 +123,17 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
     setup.plan_q_rad = {int(j): np.deg2rad(q) for j, q in q_deg.items()}
     setup.observability = {k: float(v) for k, v in obs.items()}
     return setup
+
+
+def study_reason(e: Exception) -> str:
+    """A prediction's refusal in a designer's terms: a campaign that cannot identify the robot's parameters is told
+    what about the rod causes it and what to change (the identification's own advice, ``--pin`` / ``--strict``, is
+    a calibration's, which ``rodlab study`` has not)."""
+    text = str(e)
+    found = re.search(r"cannot identify (\d+) parameter\(s\): (.*?)\. (Add|Measure)", text)
+    if not found:
+        return f"prediction: {text}"
+    return (f"prediction: the planned campaign cannot identify {found.group(1)} parameter(s) of the robot with this "
+            f"rod ({found.group(2)}): the rod's poses leave them unseen; a straight rod (gamma 180) puts the ball on "
+            "the flange's axis, where the last joint's turn moves nothing: give it a bend (gamma below 180), or plan "
+            "more rod orientations (--orientations)")

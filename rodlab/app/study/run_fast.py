@@ -14,7 +14,7 @@ from rodlab.core.blas_threads import one_blas_thread
 from rodlab.core.enums import DesignStatus, Method
 
 from .designs import r_prior_of
-from .prepare import DesignSetup, prepare_design
+from .prepare import DesignSetup, prepare_design, study_reason
 from .run import ResultCache, StudyRun, cache_key, dask_client, progress_ticker, replicate_priors
 
 __all__ = ["run_fast", "prediction_to_dict", "prediction_from_dict", "DASK_MIN_DESIGNS"]
@@ -61,7 +61,7 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
         lp = predict_linear(robot, s.plan_q_rad, fixture, standard_base(), s.fea, s.calc, spec.methods,
                             replicate_priors(spec, s.r_prior), spec.draws, spec.seed)
     except CalibrationError as e:
-        s.status, s.message = DesignStatus.FAILED, f"prediction: {e}"
+        s.status, s.message = DesignStatus.FAILED, study_reason(e)
         return {"setup": s.to_dict(), "prediction": None}
     return {"setup": s.to_dict(), "prediction": prediction_to_dict(lp)}
 

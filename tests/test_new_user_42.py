@@ -329,3 +329,15 @@ def test_a_study_tells_a_designer_what_an_unidentifiable_campaign_means():
     assert "--pin" not in said and "--strict" not in said and "dtheta_6 has no effect" in said
     assert "gamma below 180" in said and "--orientations" in said
     assert study_reason(CalibrationError("something else")) == "prediction: something else"
+
+
+def test_tolerance_problems_name_their_own_lines(tmp_path, capsys):
+    """Quoted dotted keys ("tube.wall_mm" = ...) were located at their table's header line."""
+    design = tmp_path / "t.rod.toml"
+    design.write_text('format = "rodlab.rod/1"\nname = "T"\nL1_mm = 300.0\nL2_mm = 450.0\ngamma_deg = 90.0\n'
+                      '[tube]\nmaterial = "cfrp"\nouter_diameter_mm = 40.0\nwall_mm = 5.0\n[tolerances]\n'
+                      '"tube.outer_diameter" = 0.1\n"tube.wall_mm" = "ten%"\n"materials.cfrp.E_GPa" = -5\n')
+    assert main(["validate", str(design)]) == 2
+    err = capsys.readouterr().err
+    assert "line 11, key `tolerances.\"tube.outer_diameter\"`" in err
+    assert "line 12, key `tolerances.tube.wall_mm`" in err and "line 13, key `tolerances.materials" in err

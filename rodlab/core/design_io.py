@@ -67,9 +67,14 @@ def _line_of(text: str | None, table: str | None, key: str | None) -> int | None
                 if key is None:
                     return i
             continue
-        if key is not None and current == table and re.match(rf"^{re.escape(key)}\s*=", line):
+        if key is not None and current == table and re.match(rf"^(\"|')?{re.escape(_unquote(key))}(\"|')?\s*=", line):
             return i
     return header_line
+
+
+def _unquote(key: str) -> str:
+    """A TOML key as written without its quotes (``"tube.wall_mm"`` -> ``tube.wall_mm``)."""
+    return key[1:-1] if len(key) > 1 and key[0] == key[-1] and key[0] in "\"'" else key
 
 
 class _Ctx:

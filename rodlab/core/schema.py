@@ -163,7 +163,8 @@ def _find_key(text: str, kind: str, key: str, dotted: str, pos: int):
     if text.startswith("[", start):
         start = text.find("\n", start) + 1 or len(text)
     nxt = re.compile(r"(?m)^[ \t]*\[").search(text, start)
-    return re.compile(rf"(?m)^\s*{re.escape(key)}\s*=").search(text, pos, nxt.start() if nxt else len(text))
+    # a key with a dot in it is quoted in TOML ("tube.wall_mm" = ...)
+    return re.compile(rf"(?m)^\s*([\"']?){re.escape(key)}\1\s*=").search(text, pos, nxt.start() if nxt else len(text))
 
 
 def _dotted(where) -> str | None:

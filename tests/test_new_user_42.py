@@ -341,3 +341,17 @@ def test_tolerance_problems_name_their_own_lines(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "line 11, key `tolerances.\"tube.outer_diameter\"`" in err
     assert "line 12, key `tolerances.tube.wall_mm`" in err and "line 13, key `tolerances.materials" in err
+
+
+def test_a_common_material_name_and_lengths_in_metres_are_named_first():
+    from rodlab.core.errors import DesignError
+    from rodlab.core.materials import get_material
+    with pytest.raises(DesignError, match="Did you mean `cfrp`"):
+        get_material("carbon")
+    import tomllib
+    from rodlab.core.design_io import design_from_dict
+    text = ('format = "rodlab.rod/1"\nname = "M"\nL1_mm = 0.3\nL2_mm = 0.6\ngamma_deg = 90.0\n[tube]\n'
+            'material = "cfrp"\nouter_diameter_mm = 30.0\nwall_mm = 2.0\n')
+    with pytest.raises(DesignError) as e:
+        design_from_dict(tomllib.loads(text), text=text)
+    assert str(e.value).index("did you give metres (0.3 m = 300 mm, 0.6 m = 600 mm)") < str(e.value).index("too short")

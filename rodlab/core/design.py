@@ -190,11 +190,12 @@ class RodDesign:
             return DesignError(f"gamma_deg = {g:g} degrees folds the rod back onto itself ({first.detail}); gamma_deg "
                                f"is in degrees: did you give radians ({g:g} rad = {math.degrees(g):.1f} deg)?",
                                key="gamma_deg")
-        for e in problems:
-            if e.key in ("L1_mm", "L2_mm") and getattr(self, e.key) < 5.0:     # a length in metres
-                length = getattr(self, e.key)
-                return DesignError(f"{e.detail}; {e.key} is in millimetres: did you give metres ({length:g} m = "
-                                   f"{1000 * length:g} mm)?", key=e.key)
+        metres = [k for k in ("L1_mm", "L2_mm") if getattr(self, k) < 5.0]      # lengths in metres
+        if metres and any(e.key in metres for e in problems):
+            said = ", ".join(f"{k} = {getattr(self, k):g}" for k in metres)
+            given = ", ".join(f"{getattr(self, k):g} m = {1000 * getattr(self, k):g} mm" for k in metres)
+            return DesignError(f"{said}: lengths are in millimetres: did you give metres ({given})? As given, "
+                               f"{next(e.detail for e in problems if e.key in metres)}", key=metres[0])
         return DesignError(first.detail, key=first.key, also=problems[1:])
 
     # -- derived geometry ---------------------------------------------------------------

@@ -208,5 +208,13 @@ def get_material(name: str, extra: Mapping[str, Material] | None = None, path=No
         pool.update(extra)
     if name in pool:
         return pool[name]
-    raise DesignError(f"unknown material {name!r}; known: {sorted(pool)}." + did_you_mean(name, pool),
-                      path=path, key=key)
+    common = COMMON_NAMES.get(str(name).casefold().replace(" ", "_"))
+    hint = (f" Did you mean `{common}`?" if common in pool else "") or did_you_mean(name, pool)
+    raise DesignError(f"unknown material {name!r}; known: {sorted(pool)}." + hint, path=path, key=key)
+
+
+#: what a user may call a built-in material (a designer trial wrote material = "carbon")
+COMMON_NAMES = {"carbon": "cfrp", "carbon_fibre": "cfrp", "carbon_fiber": "cfrp", "cf": "cfrp", "cfk": "cfrp",
+                "steel": "steel_304", "stainless": "steel_304", "stainless_steel": "steel_304",
+                "aluminium": "al_6061", "aluminum": "al_6061", "alu": "al_6061", "titanium": "ti_6al4v",
+                "ceramic": "alumina"}

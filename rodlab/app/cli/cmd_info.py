@@ -7,6 +7,7 @@ import json
 import numpy as np
 
 from ...core.calc import calc_rod_compliance
+from ...core.compliance import DEFAULT_CONTACT_FORCE_N
 from ...core.design_io import resolve_design
 from ...core.massprops import mass_properties, part_mass_properties
 from .rodargs import design_help
@@ -62,7 +63,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     print(_fmt_matrix(comp.C_F, "mm/N"))
     print("  closed-form C_g (gravity in {T} -> ball displacement):")
     print(_fmt_matrix(comp.C_g, "mm/g0"))
-    print(f"  c_rod (Eq. 23) = {comp.c_rod_um:.1f} um")
+    print(f"  c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (sum of C_g + sum of C_F x |F|, F the paper's contact force "
+          f"[1.10, 1.25, 1.05] N: |F| = {np.linalg.norm(DEFAULT_CONTACT_FORCE_N):.2f} N; closed form)")
     from rodlab.fea import closed_form_notes
     for note in closed_form_notes(design, comp):
         print(f"  note: {note}")

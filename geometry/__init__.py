@@ -14,7 +14,7 @@ from rodlab.core.lazy import lazy_exports
 _EXPORTS = {
     "RodCad": "assembly", "build_cad": "assembly",
     "GeometryError": "errors",
-    "mesh_rod": "mesh", "default_size_mm": "mesh", "feature_circles": "mesh",
+    "mesh_rod": "mesh", "default_size_mm": "mesh_size", "feature_circles": "mesh",
     "MeshCache": "mesh_cache", "MeshPrefetch": "mesh_prefetch",
     "PART_COLOURS": "parts", "part_solids": "parts",
     "render_views": "render",

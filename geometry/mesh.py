@@ -25,14 +25,13 @@ from rodlab.core.enums import Part, SegmentKind
 from rodlab.core.fileio import atomic_write_bytes
 from rodlab.core.fem_mesh import LinearTopology, RodMesh
 from rodlab.core.layout import layout
-from rodlab.core.massprops import part_mass_properties
-from rodlab.core.units import kg_m3_to_kg_mm3
 
 from .cadlib import build123d
 from .errors import GeometryError
 from .gmsh_signals import initialize_gmsh
 from .mesh_elements import elements, linear_topology
 from .mesh_generate import generate_mesh, session_options
+from .mesh_size import check_element_count, default_size_mm
 from .parts import half_solids, part_solids
 from .occ_parts import add_part_volumes
 
@@ -43,15 +42,6 @@ _GMSH_LOCK = threading.Lock()   # gmsh has global state
 
 #: gmsh tet10 node order (v0..v3, e01, e12, e02, e03, e23, e13) -> VTK / skfem / CalculiX (.., e13, e23)
 GMSH_TO_VTK_TET10 = np.array([0, 1, 2, 3, 4, 5, 6, 7, 9, 8])
-
-
-def default_size_mm(design: RodDesign, order: int = 2) -> float:
-    """Element size from the thinnest wall: 2 x wall for curved P2 (<= 0.15 % from converged), wall/2 for P1."""
-    walls = [design.pipe_I.wall_mm, design.pipe_II.wall_mm]
-    if design.has_bend:
-        walls.append(design.bend.wall_mm)
-    wall = min(walls)
-    return 2.0 * wall if order == 2 else 0.5 * wall
 
 
 def feature_circles(design: RodDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -274,29 +264,8 @@ def _check_mesh_args(design: RodDesign, size_mm, order, grading, kernel) -> tupl
     h = default_size_mm(design, order) if size_mm is None else float(size_mm)
     if not (h > 0 and np.isfinite(h)):
         raise GeometryError(f"size must be a positive number of mm, got {size_mm!r}", key="size")
-    _check_element_count(design, h, order)
+    check_element_count(design, h, order)
     return h, _check_grading(grading)
-
-
-#: meshes beyond this many tetrahedra (estimated from the rod's volume) are refused: gmsh would run for hours and
-#: the solve needs tens of GB (rod 1#'s default mesh: ~16 000 tetrahedra whole)
-MAX_ELEMENTS = 3_000_000
-
-
-def _check_element_count(design: RodDesign, h: float, order: int) -> None:
-    """Refuse an element size that would give more than :data:`MAX_ELEMENTS` tetrahedra: the rod's volume (its
-    parts' masses over their densities) over a regular tetrahedron's (h^3 / (6 sqrt 2)); a new user's ``--size
-    0.01`` ran for ten minutes without a word."""
-    volume = sum(mp.mass_kg / kg_m3_to_kg_mm3(design.material_of(part).density_kg_m3)
-                 for part, mp in part_mass_properties(design).items())
-    per = h ** 3 / (6 * np.sqrt(2))
-    estimate = volume / per
-    if estimate > MAX_ELEMENTS:
-        least = (volume / MAX_ELEMENTS * 6 * np.sqrt(2)) ** (1 / 3)
-        raise GeometryError(f"size {h:g} mm would make ~{estimate:.2g} tetrahedra of rod {design.name!r} "
-                            f"({volume:.3g} mm^3; at most {MAX_ELEMENTS:.0e}: hours of meshing, tens of GB to "
-                            f"solve); give --size {least:.2g} mm or more (the default, 2 x the thinnest wall for "
-                            f"order 2: {default_size_mm(design, order):g} mm)", key="size")
 
 
 def _import_parts(solids: dict, tmp: str) -> dict:

@@ -114,11 +114,11 @@ def test_a_writer_that_recorded_nothing_leaves_no_file(tmp_path):
 def test_the_served_profile_has_no_parity(tmp_path):
     """The example profile's load cell speaks Modbus with parity E; a pty has none (Linux drops PARENB and glibc
     refuses the settings: the trial's second acquisition stopped with a traceback)."""
-    from rodlab.app.cli import cmd_rig
+    from rodlab.app.cli.rig_served import profile_simulators
     from rodlab.stiffness_rig.model import RigModel
-    src = Path(cmd_rig.__file__).resolve().parents[3] / "stiffness_rig" / "plans" / "two-digimatic-loadcell.profile.toml"
+    src = Path(__file__).resolve().parents[1] / "stiffness_rig" / "plans" / "two-digimatic-loadcell.profile.toml"
     args = argparse.Namespace(profile=str(src), link_dir=str(tmp_path / "rig"))
-    sims, _ = cmd_rig._profile_simulators(args, RigModel(np.eye(3) * 1e-3), None)
+    sims, _ = profile_simulators(args, RigModel(np.eye(3) * 1e-3), None)
     for s in sims:
         s.stop()
     served = (tmp_path / "rig" / "sim.profile.toml").read_text()

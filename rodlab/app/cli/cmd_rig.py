@@ -6,7 +6,6 @@ import contextlib
 import dataclasses
 import json
 import os
-import re
 import sys
 import textwrap
 import time
@@ -15,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
-from rodlab.stiffness_rig.drivers import DRIVERS
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.fit import noise_text
 from rodlab.stiffness_rig.fit_checks import load_scale_problems
@@ -26,12 +24,12 @@ from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
 from ...core.enums import Checksum, LineProtocol, LoadAxis
 from ...core.errors import RodlabError
-from ...core.fileio import atomic_write_text
 from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
 from .interrupts import kill_as_interrupt
 from .effectargs import effects_help, parse_effect_specs
 from .reporting import add_report_option, png_file, write_command_report
+from .rig_served import profile_simulators
 from .rodargs import compliance_arg, design_of_compliance, same_rod
 
 __all__ = ["register"]
@@ -341,7 +339,7 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     if args.profile is not None:
         model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args),
                          load_cell_noise_N=args.load_cell_noise_n)
-        devices, what = _profile_simulators(args, model, Faults(garbage=args.garbage))
+        devices, what = profile_simulators(args, model, Faults(garbage=args.garbage))
     else:
         model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
         devices = [SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
@@ -360,44 +358,3 @@ def cmd_simulator(args: argparse.Namespace) -> int:
         except KeyboardInterrupt:
             pass
     return 0
-
-
-def _served_loader(profile) -> str:
-    """A ``[loader]`` for the served profile when it has none: the simulated rig's loader answers on every text
-    instrument's port, so ``rig acquire --non-interactive`` runs on the served profile as it is."""
-    if profile.loader_instrument is not None:
-        return ""
-    text = [i.name for i in profile.instruments if DRIVERS[i.protocol].text_lines]
-    if not text:
-        return ""
-    return ("\n# added by `rodlab rig simulator`: the simulated rig's loader answers on this instrument's port\n"
-            f'[loader]\ninstrument = "{text[0]}"\ncommand = "LOAD {{axis}} {{phase}} {{mass_kg:.4f}}\\r\\n"\n')
-
-
-def _profile_simulators(args, model, faults):
-    """The simulators of every instrument of ``--profile`` under ``--link-dir``, and ``sim.profile.toml``
-    there: the profile with each instrument's port pointed at its simulator."""
-    from rodlab.stiffness_rig.config import read_profile
-    from rodlab.stiffness_rig.siminstruments import SimBench, simulators_for
-
-    profile = read_profile(args.profile)
-    if not hasattr(profile, "instruments"):
-        raise RodlabError(f"{args.profile}: --profile takes a rodlab.rigprofile/2 profile; serve a /1 profile's "
-                          f"counter with --link")
-    if args.link_dir is None:
-        raise RodlabError("--profile needs --link-dir (where the instruments' pty links go)")
-    folder = Path(args.link_dir)
-    folder.mkdir(parents=True, exist_ok=True)
-    links = {ins.name: folder / ins.name for ins in profile.instruments}
-    ports = iter(str(links[ins.name]) for ins in profile.instruments)
-    text = re.sub(r"""(?m)^(\s*port\s*=\s*)(".*?"|'.*?')""", lambda m: f'{m.group(1)}"{next(ports)}"',
-                  Path(args.profile).read_text(encoding="utf-8"))
-    # a pty has no parity bits: Linux drops PARENB and glibc then refuses the settings (EINVAL)
-    text = re.sub(r"""(?m)^(\s*parity\s*=\s*)(".*?"|'.*?')(.*)$""",
-                  lambda m: f'{m.group(1)}"N"{m.group(3)}  # served on a pseudo-terminal, which has no parity bits',
-                  text)
-    text += _served_loader(profile)
-    written = atomic_write_text(folder / "sim.profile.toml", text)
-    sims = simulators_for(profile, SimBench(model), links, faults)
-    names = ", ".join(f"{i.name} ({i.protocol})" for i in profile.instruments)
-    return sims, f"as {names} under {folder}; profile {written}"

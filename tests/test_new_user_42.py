@@ -355,3 +355,16 @@ def test_a_common_material_name_and_lengths_in_metres_are_named_first():
     with pytest.raises(DesignError) as e:
         design_from_dict(tomllib.loads(text), text=text)
     assert str(e.value).index("did you give metres (0.3 m = 300 mm, 0.6 m = 600 mm)") < str(e.value).index("too short")
+
+
+def test_a_bend_angle_in_radians_is_said_beside_an_unknown_material():
+    """`validate` lists every problem at once: a part's problem (material "carbon") had hidden gamma_deg = 1.5708."""
+    import tomllib
+    from rodlab.core.design_io import design_from_dict
+    from rodlab.core.errors import DesignError
+    text = ('format = "rodlab.rod/1"\nname = "R"\nL1_mm = 300.0\nL2_mm = 450.0\ngamma_deg = 1.5708\n[tube]\n'
+            'material = "carbon"\nouter_diameter_mm = 30.0\nwall_mm = 2.0\n')
+    with pytest.raises(DesignError) as e:
+        design_from_dict(tomllib.loads(text), text=text)
+    assert e.value.key == "tube.material" and [a.key for a in e.value.also] == ["gamma_deg"]
+    assert "looks like radians" in str(e.value.also[0]) and e.value.also[0].line == 5

@@ -159,11 +159,31 @@ def _build(data: Mapping, c: _Ctx, path) -> RodDesign:
     if "tube" not in data and not ("pipe_I" in data and "pipe_II" in data):
         raise c.err("missing [tube] (or both [pipe_I] and [pipe_II])", None, "tube")
     c.check_keys(data.get("tube", {}), "tube", _TUBE_KEYS)
-    parts = _parts(data, c, materials)
+    try:
+        parts = _parts(data, c, materials)
+    except FormatError as e:               # the design's own numbers in other units are said beside it
+        hints = _unit_hints(L1, L2, gamma, c)
+        if not hints:
+            raise
+        raise type(e)(e.detail, e.path, e.line, e.key, also=(*e.also, *hints)) from None
     design = RodDesign(name.strip(), L1, L2, gamma, parts["pipe_I"], parts["pipe_II"], parts["bend"], parts["rings"],
                        parts["pipe_holder"], parts["ball_holder"], parts["ball"],
                        source=None if path is None else Path(path), joints=_joints(data.get("joints", {}), c))
     return _with_tolerances(design, data.get("tolerances", {}), c)
+
+
+def _unit_hints(L1: float, L2: float, gamma: float, c: _Ctx) -> list[DesignError]:
+    """A bend angle that looks like radians, lengths that look like metres: the design rules say so too, but only
+    once the parts are read; a part's problem (an unknown material) had hidden them (a designer trial)."""
+    out = []
+    if 0 < gamma <= math.pi:
+        out.append(c.err(f"gamma_deg = {gamma:g} looks like radians ({gamma:g} rad = {math.degrees(gamma):.1f} deg): "
+                         "gamma_deg is in degrees", None, "gamma_deg"))
+    for key, v in (("L1_mm", L1), ("L2_mm", L2)):
+        if 0 < v < 5.0:
+            out.append(c.err(f"{key} = {v:g} looks like metres ({v:g} m = {1000 * v:g} mm): lengths are in "
+                             "millimetres", None, key))
+    return out
 
 
 def _parts(data: Mapping, c: _Ctx, materials: dict) -> dict:

@@ -28,7 +28,9 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output *.compliance.json")
     p.add_argument("--model", choices=[m.value for m in FeaModel], default=FeaModel.SOLID.value,
                    help=f"the compliance model (default {FeaModel.SOLID.value}; frame: ~1 %% of it in milliseconds, "
-                        "calc: the paper's closed form)")
+                        "calc: the paper's closed form). The file's method is the contract's: fea for solid and "
+                        "frame (its provenance's model says which: a calibrator's fea compensation takes either), "
+                        "calc for calc")
     p.add_argument("--size", type=pos_float, default=None, help="solid: element size far from the section changes "
                    "[mm] (default 3 x the thinnest wall; inside the tubes graded down to 0.9 x wall at the section "
                    "changes, at most 2.1 x wall in the bend)")

@@ -94,12 +94,18 @@ def zero_drift(t_s: np.ndarray, diff_N: np.ndarray, branch: np.ndarray) -> ZeroD
     dof = int(ok.sum()) - labels.size - 1
     if dof < 3 or np.ptp(t_s[ok]) <= 0:
         return None
-    X = np.column_stack([np.eye(labels.size)[idx], t_s])[ok]
-    coef, *_ = np.linalg.lstsq(X, diff_N[ok], rcond=None)
-    resid = diff_N[ok] - X @ coef
-    cov = np.linalg.pinv(X.T @ X) * float(resid @ resid) / dof
-    rate = -float(coef[-1])
-    return ZeroDrift(rate, float(np.sqrt(max(cov[-1, -1], 0.0))), rate * float(np.ptp(t_s[ok])), int(ok.sum()))
+    slope, se = _slope_with_levels(t_s[ok], diff_N[ok], idx[ok], labels.size)
+    return ZeroDrift(-slope, se, -slope * float(np.ptp(t_s[ok])), int(ok.sum()))
+
+
+def _slope_with_levels(x: np.ndarray, y: np.ndarray, level: np.ndarray, n_levels: int) -> tuple[float, float]:
+    """(slope, its standard error) of ``y`` on ``x`` with one level per group (``level``: 0 .. n_levels - 1 per
+    point): least squares, the error from the scatter about the fit (needs more points than n_levels + 1)."""
+    X = np.column_stack([x, np.eye(n_levels)[level]])
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ coef
+    cov = np.linalg.pinv(X.T @ X) * float(r @ r) / (X.shape[0] - X.shape[1])
+    return float(coef[0]), float(np.sqrt(max(cov[0, 0], 0.0)))
 
 
 @dataclass(frozen=True)
@@ -191,18 +197,11 @@ def load_scale(axis: LoadAxis, weight_N: np.ndarray, force_N: np.ndarray, branch
     """The slope of ``force_N`` on ``weight_N`` (:class:`LoadScale`) with one intercept per ``branch`` label, over
     the holds of load axis ``axis`` given (shape=(m,) each); None when no branch has two different weights or nothing
     is left for the residuals."""
-    labels = sorted(set(branch.tolist()))
-    varied = [b for b in labels if np.ptp(weight_N[branch == b]) > 0]
-    if not varied:
+    labels, idx = np.unique(np.asarray(branch), return_inverse=True)
+    if not any(np.ptp(weight_N[idx == k]) > 0 for k in range(labels.size)) or weight_N.size - labels.size - 1 < 1:
         return None
-    X = np.column_stack([weight_N] + [(branch == b).astype(float) for b in labels])
-    dof = X.shape[0] - X.shape[1]
-    if dof < 1:
-        return None
-    coef, *_ = np.linalg.lstsq(X, force_N, rcond=None)
-    r = force_N - X @ coef
-    cov = np.linalg.pinv(X.T @ X) * float(r @ r) / dof
-    return LoadScale(axis, float(coef[0]), float(np.sqrt(max(cov[0, 0], 0.0))), int(X.shape[0]))
+    ratio, se = _slope_with_levels(weight_N, force_N, idx, labels.size)
+    return LoadScale(axis, ratio, se, int(weight_N.size))
 
 
 def _zero_offset(holds: Holds) -> float:

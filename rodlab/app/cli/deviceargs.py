@@ -90,9 +90,8 @@ def _refuse_slips(slips: list, args) -> None:
 
 def warn_flagged_fixture(fix, path) -> None:
     """A fixture file whose probing flagged positions (``rodlab fixture`` exit 3) is named on stderr."""
-    flagged = (fix.probing or {}).get("flagged") or {}
-    if flagged:
-        where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
+    where = _flagged_where(fix)
+    if where:
         print(f"warning: {path}: its probing flagged {where} (residuals above the instrument's accuracy); those "
               f"poses may be wrong: probe again", file=sys.stderr)
 
@@ -100,9 +99,14 @@ def warn_flagged_fixture(fix, path) -> None:
 def flagged_fixture_reasons(fix, path) -> list[str]:
     """A reason not to trust a calibration that names the fixture file's flagged probing (empty when none): with
     residuals that are not noise, a pose the probing already doubted is the likeliest cause."""
-    flagged = (fix.probing or {}).get("flagged") or {}
-    if not flagged:
+    where = _flagged_where(fix)
+    if not where:
         return []
-    where = "; ".join(f"position {j}: {what}" for j, what in flagged.items())
     return [f"the fixture file {path} was written with its probing flagged ({where}): those clamping poses are the "
             "first suspects; probe them again (`rodlab fixture`) and calibrate with the new fixture file"]
+
+
+def _flagged_where(fix) -> str:
+    """The fixture file's flagged probing, ``position j: what; ...`` ("" when none)."""
+    flagged = (fix.probing or {}).get("flagged") or {}
+    return "; ".join(f"position {j}: {what}" for j, what in flagged.items())

@@ -14,18 +14,19 @@ One *replicate* is one campaign as it happens in practice (paper Section 5.2), s
    rig's ``r_rod`` within its fit's uncertainty times the reference (paper Eq. 22); then validation.
 
 With ``priors.rod_slip`` the true rod's deflection is off its elastic one at every point by a random
-non-repeatable part (:mod:`calibrate.rod_slip`); no method compensates it, so it counts as identification error.
+non-repeatable part (:mod:`calibrate.rod_slip`); no method compensates it: the budget gives it its own share.
 
 The error budget of each method splits its mean-square validation error (:class:`AccuracySummary`):
 ``deflection`` — what the compensation leaves of the rod's deflection (this method minus calibrating with the
 true rod's compliance); ``identification`` — the campaign's noise and fixture uncertainty propagated through
 the identification, i.e. its observability, and the pull of the priors on weak parameters (calibrated with
 the true rod minus the true robot itself); ``noise`` — what the true robot's own model shows on validation:
-the instrument's noise.
+the instrument's noise; ``slip`` — the rod's non-repeatable deflection (calibrated with the true rod on the
+campaign with the slip minus on the same campaign without it). :mod:`calibrate.budget` defines them.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from rodlab.core.frames import pose_to_matrix
 from .campaign import Fixture, PointSet
 from .compensations import RodDeflection, deflection_offsets
 from .errors import CalibrationError
+from .budget import BudgetShares, budget_shares
 from .estimate import FitOptions
 from .rod_slip import slip_directions, slip_offsets
 from .identify import Observations, identify
@@ -114,7 +116,9 @@ class ReplicateOutcome:
     seed : the replicate's seed; r_true : the rod's true / reference compliance ratio [-]
     stats : {method: validation statistics after calibration}; ms_mm2 : {method: mean-square validation error
     [mm^2]}; ms_true_rod_mm2 : the same calibrated with the true rod [mm^2]; ms_clean_mm2 : of the true robot's
-    own model [mm^2]; success : {method: identification converged}; before : validation of the nominal model
+    own model [mm^2]; success : {method: identification converged}; before : validation of the nominal model;
+    ms_true_no_slip_mm2 : calibrated with the true rod on the campaign without the rod's slip [mm^2] (NaN: the
+    priors have no slip, or no budget was asked for)
     """
 
     seed: int
@@ -125,16 +129,7 @@ class ReplicateOutcome:
     ms_clean_mm2: float
     success: dict
     before: ErrorStats
-
-
-@dataclass(frozen=True)
-class BudgetShares:
-    """Shares of the mean-square validation error [-] (sum 1): deflection left after compensation,
-    identification (noise through observability), validation noise (see the module docstring)."""
-
-    deflection: float
-    identification: float
-    noise: float
+    ms_true_no_slip_mm2: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -197,7 +192,8 @@ def _reach(robot, truth, setup: _Setup, rng):
 class SimulatedCampaign:
     """One simulated campaign: q_rad (N, n) commanded angles; group (N,) clamping position; x_D_mm (N, 3) the
     device readings (with noise); force_W_N (N, 3); rod the rod the calibrator is given (:class:`~.rod.Rod`);
-    recorded_poses {j: (6,)} the fixture poses as recorded (with their uncertainty); true_T {j: 4 x 4}."""
+    recorded_poses {j: (6,)} the fixture poses as recorded (with their uncertainty); true_T {j: 4 x 4};
+    slip_D_mm (N, 3) the rod's slip in the readings, in {D} [mm] (None: no slip), for :meth:`without_slip`."""
 
     q_rad: np.ndarray
     group: np.ndarray
@@ -206,6 +202,13 @@ class SimulatedCampaign:
     recorded_poses: dict
     true_T: dict
     rod: Rod
+    slip_D_mm: np.ndarray | None = None
+
+    def without_slip(self) -> "SimulatedCampaign":
+        """The same campaign (the same noise and fixture records) had the rod no slip."""
+        if self.slip_D_mm is None:
+            return self
+        return replace(self, x_D_mm=self.x_D_mm - self.slip_D_mm, slip_D_mm=None)
 
     def observations(self) -> Observations:
         """What identification sees: the readings through the recorded poses (Eq. 2)."""
@@ -228,22 +231,27 @@ def _campaign(robot, truth, rod_true, floor, setup: _Setup, rng, slip_rng=None) 
     qt = q if floor is None else floor.angles(q)                      # the angles the joints really take
     fr, _ = ball_positions(robot, truth, qt, Rod.of(reference), force_W_N=F)
     pW = fr.pW + deflection_offsets(robot, truth, qt, F, rod_true)
+    slip_W = None
     if priors.rod_slip:                                              # the rod's non-repeatable part
         u = slip_directions(rng if slip_rng is None else slip_rng, len(q))
-        pW = pW + slip_offsets(robot, truth, qt, F, rod_true, priors.rod_slip, u)
+        slip_W = slip_offsets(robot, truth, qt, F, rod_true, priors.rod_slip, u)
+        pW = pW + slip_W
     st, sr = priors.fixture_sigma
     xD = np.empty_like(pW)
+    slip_D = None if slip_W is None else np.empty_like(pW)
     recorded = {}
     for j in np.unique(group):
         m = group == j
         T = Ts[int(j)]
         xD[m] = (pW[m] - T[:3, 3]) @ T[:3, :3] + rng.normal(0, priors.device_noise_mm, (int(m.sum()), 3))
+        if slip_D is not None:
+            slip_D[m] = slip_W[m] @ T[:3, :3]
         pose = np.asarray(fixture.poses[int(j)], float)
         if int(j) != fixture.world_position:
             pose = pose + np.concatenate([rng.normal(0, st, 3), rng.normal(0, sr, 3)])
         recorded[int(j)] = pose
     return SimulatedCampaign(q, group, xD, F, recorded, {int(j): Ts[int(j)] for j in np.unique(group)},
-                             Rod.of(reference))
+                             Rod.of(reference), slip_D)
 
 
 def _validation(robot, truth, priors: Priors, rng, floor=None) -> tuple[PointSet, PointSet]:
@@ -346,22 +354,16 @@ def run_replicate(robot, plan_q: dict, fixture: Fixture, base, reference: RodCom
     rod = Rod.of(reference)
     for m, file in sim.files.items():
         stats[m], ms[m], ok[m] = _calibrated_ms(robot, obs, rod, RodDeflection.of(file), pts)
-    ms_true = ms_clean = float("nan")
+    ms_true = ms_clean = ms_no_slip = float("nan")
     if budget:
         exact = RodDeflection.of(sim.rod_true, "true rod")
         ms_true = _calibrated_ms(robot, obs, rod, exact, pts)[1]
+        if sim.campaign.slip_D_mm is not None:                        # the slip's own share: one more fit
+            ms_no_slip = _calibrated_ms(robot, sim.campaign.without_slip().observations(), rod, exact, pts)[1]
         _, err, _ = validate(robot, sim.truth, pts)                  # the true robot itself, base / tool refitted
         ms_clean = float(np.mean(err ** 2))
     before = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[0]
-    return ReplicateOutcome(int(seed), sim.r_true, stats, ms, ms_true, ms_clean, ok, before)
-
-
-def _shares(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:
-    if not np.isfinite(ms_true) or ms <= 0:
-        return BudgetShares(float("nan"), float("nan"), float("nan"))
-    parts = np.maximum([ms - ms_true, ms_true - ms_clean, ms_clean], 0.0)
-    parts = parts / max(parts.sum(), 1e-300)
-    return BudgetShares(*(float(p) for p in parts))
+    return ReplicateOutcome(int(seed), sim.r_true, stats, ms, ms_true, ms_clean, ok, before, ms_no_slip)
 
 
 def _finite_mean(values) -> float:
@@ -373,7 +375,8 @@ def _finite_mean(values) -> float:
 def summarise(outcomes: list[ReplicateOutcome], methods) -> list[AccuracySummary]:
     """One :class:`AccuracySummary` per method over the replicates."""
     out = []
-    ms_true, ms_clean = (_finite_mean([getattr(o, k) for o in outcomes]) for k in ("ms_true_rod_mm2", "ms_clean_mm2"))
+    ms_true, ms_clean, ms_no_slip = (_finite_mean([getattr(o, k) for o in outcomes])
+                                     for k in ("ms_true_rod_mm2", "ms_clean_mm2", "ms_true_no_slip_mm2"))
     for m in (Method.parse(x, "method") for x in methods):
         got = [o for o in outcomes if m in o.stats]
         means = np.array([o.stats[m].mean_mm for o in got])
@@ -383,7 +386,8 @@ def summarise(outcomes: list[ReplicateOutcome], methods) -> list[AccuracySummary
         out.append(AccuracySummary(
             m, float(means.mean()), float(np.mean([o.stats[m].max_mm for o in got])),
             float(np.mean([o.stats[m].median_mm for o in got])), float(np.percentile(means, 5)),
-            float(np.percentile(means, 95)), float(np.sqrt(ms)), _shares(ms, ms_true, ms_clean), len(got),
+            float(np.percentile(means, 95)), float(np.sqrt(ms)), budget_shares(ms, ms_true, ms_clean, ms_no_slip),
+            len(got),
             sum(not o.success[m] for o in got), tuple(float(v) for v in means)))
     return out
 

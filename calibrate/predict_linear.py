@@ -24,7 +24,8 @@ averaged over ``draws`` values of ``r`` (stratified over its prior), of the comp
 validation configurations; the mean / max / median of the per-point error norms, and the 5-95 % band of a
 campaign's mean error, have no closed form and come from the same draws of the linear model, which cost
 milliseconds. The error budget follows :mod:`calibrate.predict`: *deflection* = this method minus the true
-rod's compliance, *identification* = the true rod's minus the true robot's own model, *noise* = the latter.
+rod's compliance, *slip* = the true rod's with the rod's slip minus without it, *identification* = the latter minus
+the true robot's own model, *noise* = the latter (:mod:`calibrate.budget`).
 
 Not modelled (Monte Carlo, :mod:`calibrate.predict`, has them): the campaign's joint angles are the planned
 ones (the true robot stops within the alignment tolerance elsewhere), and second-order terms of the robot's
@@ -32,7 +33,7 @@ errors and of the compensation computed from the identified model.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -48,7 +49,8 @@ from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions
 from .observations import Observations, noise_covariance
 from .params import INTERNAL_SCALE, PRIOR_SCALE, ParamInfo, apply, catalogue
-from .predict import VALIDATION_ROD, AccuracySummary, BudgetShares, Priors
+from .budget import budget_shares
+from .predict import VALIDATION_ROD, AccuracySummary, Priors
 from .rod import Rod
 from .unmodelled import campaign_offsets, validation_floor_offsets
 from .errors import CalibrationError
@@ -504,11 +506,7 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     mean, sd = robot_prior(robot, priors)
     rnd = random_parts(lc, vd, (mean, sd), priors, seed)
     _, dC, true = compliance_draws(reference, calc, methods, priors, D, seed)
-    extra = np.zeros((D, lc.J.shape[0]))             # the rod's slip and the robot floor in the campaign's data
-    if priors.rod_slip or priors.robot_floor_mm > 0:
-        model = linearisation_model(robot, reference.tool_mm, base, priors)
-        obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
-        extra = campaign_offsets(robot, model, obs, priors, true, seed)
+    extra, floor_only = _unmodelled_data(robot, plan_q, fixture, base, reference, priors, true, seed, D, lc)
     E = lc.kinematic_map(K)
     M = vd.points
     ms_noise = _validation_sd(priors, vd) ** 2 * (3 * M - vd.Q.shape[2]) / M
@@ -518,6 +516,10 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
     y_robot = rnd.xi @ lc.J_kin.T + rnd.eps + extra
     G_true = lc.inverse_normals(y_robot, rough=True)
     ms_true = exact_mean_square(lc, vd, G_true, np.zeros((D, 18)), (mean, sd), extra, vf) + ms_noise
+    ms_no_slip = float("nan")
+    if priors.rod_slip:                                               # the slip's own share of the budget
+        G_ns = lc.inverse_normals(rnd.xi @ lc.J_kin.T + rnd.eps + floor_only, rough=True)
+        ms_no_slip = exact_mean_square(lc, vd, G_ns, np.zeros((D, 18)), (mean, sd), floor_only, vf) + ms_noise
     out = []
     for m in methods:
         y = y_robot + dC[m] @ lc.B.T
@@ -527,13 +529,24 @@ def predict_linear(robot, plan_q: dict, fixture: Fixture, base, reference: RodCo
         ms = exact_mean_square(lc, vd, G, dC[m], (mean, sd), extra, vf) + ms_noise
         out.append(AccuracySummary(m, float(means.mean()), float(maxs.mean()), float(medians.mean()),
                                    float(np.percentile(means, 5)), float(np.percentile(means, 95)),
-                                   float(np.sqrt(ms)), _budget(ms, ms_true, ms_clean), D, 0,
+                                   float(np.sqrt(ms)), budget_shares(ms, ms_true, ms_clean, ms_no_slip), D, 0,
                                    tuple(float(v) for v in means)))
     nominal = _stats(Pn - _mv(vd.PJ, rnd.xi))[0]
     return LinearPrediction(out, float(nominal.mean()), float(ms_clean), D)
 
 
-def _budget(ms: float, ms_true: float, ms_clean: float) -> BudgetShares:
-    parts = np.maximum([ms - ms_true, ms_true - ms_clean, ms_clean], 0.0)
-    parts = parts / max(parts.sum(), 1e-300)
-    return BudgetShares(*(float(p) for p in parts))
+def _unmodelled_data(robot, plan_q, fixture, base, reference, priors: Priors, true: np.ndarray, seed: int, D: int,
+                     lc: LinearCampaign) -> tuple[np.ndarray, np.ndarray]:
+    """(D, 3N) [mm] twice: what neither model nor compensation describes in the campaign's data per draw — the
+    rod's slip and the robot floor at its poses — and the robot floor alone (zeros where the priors have none)."""
+    zero = np.zeros((D, lc.J.shape[0]))
+    if not priors.rod_slip and priors.robot_floor_mm <= 0:
+        return zero, zero
+    model = linearisation_model(robot, reference.tool_mm, base, priors)
+    obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
+    extra = campaign_offsets(robot, model, obs, priors, true, seed)
+    if not priors.rod_slip:
+        return extra, extra
+    floor = (campaign_offsets(robot, model, obs, replace(priors, rod_slip=0.0), true, seed)
+             if priors.robot_floor_mm > 0 else zero)
+    return extra, floor

@@ -75,7 +75,7 @@ def test_report_is_self_contained(run):
 
 
 def test_report_in_headless_chromium(run, render_in_chromium):
-    render_in_chromium([run / "report.html"], run / "chrome-profile")
+    render_in_chromium([write_report(run)], run / "chrome-profile")     # written here: tests may run in any order
 
 
 def _page_text(page: str) -> str:

@@ -68,3 +68,48 @@ def test_linear_predictor_agrees_with_monte_carlo_with_slip_and_floor(rod4_plan)
     for m in (Method.NONE, Method.FEA):
         se = np.std(mc[m].means_mm, ddof=1) / np.sqrt(R)
         assert abs(lin[m].mean_mm - mc[m].mean_mm) <= 3 * se + 0.05 * mc[m].mean_mm, (m, lin[m], mc[m], se)
+
+
+def test_budget_gives_the_slip_its_own_share():
+    """The four mean squares split as the module says; without the no-slip fit the slip stays in identification;
+    a budget written before the split reads with slip 0."""
+    from rodlab.calibrate.budget import BudgetShares, budget_shares
+    b = budget_shares(ms=10.0, ms_true=8.0, ms_clean=1.0, ms_true_no_slip=3.0)
+    assert (b.deflection, b.slip, b.identification, b.noise) == pytest.approx((0.2, 0.5, 0.2, 0.1))
+    old = budget_shares(10.0, 8.0, 1.0)
+    assert (old.deflection, old.slip, old.identification, old.noise) == pytest.approx((0.2, 0.0, 0.7, 0.1))
+    assert BudgetShares.from_dict({"deflection": 0.2, "identification": 0.7, "noise": 0.1}).slip == 0.0
+    assert BudgetShares.from_dict(b.to_dict()) == b
+
+
+def test_a_campaign_without_its_slip_is_the_campaign_simulated_without_slip(rod4_plan):
+    """Monte Carlo's slip share refits the campaign with the slip taken out of the readings: that must be, reading
+    for reading, the campaign the same seed gives with no slip (the slip's directions come from their own
+    generator, so nothing else moves)."""
+    from rodlab.calibrate.predict import simulate_replicate
+    robot, fixture, plan, rod = rod4_plan
+    args = (robot, plan, fixture, standard_base(), rod, None, ["fea"])
+    slipped = simulate_replicate(*args, Priors(rod_slip=2.4), seed=3).campaign
+    elastic = simulate_replicate(*args, Priors(rod_slip=0.0), seed=3).campaign
+    assert elastic.slip_D_mm is None and slipped.slip_D_mm is not None
+    assert np.abs(slipped.x_D_mm - elastic.x_D_mm).max() > 0.01
+    np.testing.assert_allclose(slipped.without_slip().x_D_mm, elastic.x_D_mm, atol=1e-9)
+
+
+def test_both_predictors_put_the_soft_rods_error_on_its_slip(rod4_plan):
+    """Rod 4# (steel, the paper's slip): most of every compensated method's error is the slip in both predictors
+    (Monte Carlo with its extra fit, the linear one exactly), none of it without slip, and the shares agree."""
+    from rodlab.calibrate.predict import predict_accuracy
+    robot, fixture, plan, rod = rod4_plan
+    pri = Priors(r_rod=(1.01, 1.05), validation_points=50, rod_slip=2.4)
+    args = (robot, plan, fixture, standard_base(), rod, None, ["none", "fea"])
+    lin = {a.method: a for a in predict_linear(*args, pri, draws=128).summaries}
+    mc = {a.method: a for a in predict_accuracy(*args, pri, replicates=3, seed=0)}
+    elastic = predict_linear(*args, Priors(r_rod=(1.01, 1.05), validation_points=50), draws=128).summaries
+    for a in elastic:
+        assert a.budget.slip == 0.0
+    assert lin[Method.FEA].budget.slip > 0.8 and mc[Method.FEA].budget.slip > 0.8
+    assert lin[Method.FEA].budget.slip == pytest.approx(mc[Method.FEA].budget.slip, abs=0.1)
+    for a in (*lin.values(), *mc.values()):
+        parts = (a.budget.deflection, a.budget.slip, a.budget.identification, a.budget.noise)
+        assert sum(parts) == pytest.approx(1.0)

@@ -310,7 +310,7 @@ def _study(out: Path, robot, design, calibration) -> dict:
                                                             "compliance": note},
                               designs={c.label: c.design for c in cands})
     cols = ["design", "c_rod_um", "mass_kg", "O1", "method", "mean_mm", "mean_p05_mm", "mean_p95_mm", "max_mm",
-            "share_deflection", "share_identification", "share_noise"]
+            "share_deflection", "share_slip", "share_identification", "share_noise"]
     rows = res.table[res.table["method"].notna()][cols]
     return {"designs": [c.label for c in cands], "replicates": spec.replicates, "compliance": note,
             "predictor": f"linear predictor ({spec.draws} draws of the planned campaign's linear model)",

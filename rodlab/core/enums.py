@@ -13,7 +13,7 @@ from .errors import RodlabError, did_you_mean
 
 __all__ = ["Method", "Part", "LoadAxis", "Phase", "DesignStatus", "Trial", "AccuracySource", "Completeness", "Verdict",
            "Subject", "FindingKind", "MODEL_FORM", "id_enum", "BendModel", "SegmentKind", "FeaModel", "SolverBackend",
-           "LineProtocol", "Checksum", "ErrorEstimate"]
+           "LineProtocol", "Checksum", "ErrorEstimate", "StudyWarning"]
 
 
 class _StrEnum(str, Enum):
@@ -100,6 +100,14 @@ class DesignStatus(_StrEnum):
     INVALID = "invalid"          #: the design itself cannot be built (the message says why)
     UNREACHABLE = "unreachable"  #: the robot cannot use it (which clamping position, which limit)
     FAILED = "failed"            #: a computation failed (the message)
+
+
+class StudyWarning(_StrEnum):
+    """What a study says about a usable design's predicted accuracy beyond its numbers (``study.json`` ``warnings``)."""
+
+    WORSE_THAN_NOMINAL = "worse_than_nominal"  #: every method leaves the robot less accurate than its nominal model
+    SLIP_DOMINATES = "slip_dominates"          #: the rod's slip is most of the best method's error
+    SLIP_EXTRAPOLATED = "slip_extrapolated"    #: the rod is far softer than the rods the slip was fitted on
 
 
 class Trial(_StrEnum):

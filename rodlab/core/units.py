@@ -19,6 +19,7 @@ __all__ = [
     "DEVICE_NOISE_MM",
     "TRACKER_NOISE_MM",
     "PAPER_ROD_SLIP",
+    "PAPER_C_ROD_UM_RANGE",
 ]
 
 #: Standard gravity [m/s^2]; loads in the contract are ``mass_kg * G0`` newtons.
@@ -32,6 +33,10 @@ TRACKER_NOISE_MM: float = 0.025
 #: The study's default rod slip (the rod's non-repeatable deflection, in multiples of its own weight in a random
 #: direction; docs/study.md: fitted to the paper's Table 3 Meas column): ``rodlab study`` and the demo's study.
 PAPER_ROD_SLIP: float = 2.4
+
+#: The compliance index c_rod [um] of the paper's measured rods (Table 2: 57.9 um carbon 1# .. 1306.2 um steel 6#):
+#: the range :data:`PAPER_ROD_SLIP` was fitted on.
+PAPER_C_ROD_UM_RANGE: tuple[float, float] = (57.9, 1306.2)
 
 
 def gpa_to_mpa(value_gpa: float) -> float:

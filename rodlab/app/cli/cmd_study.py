@@ -188,6 +188,8 @@ def cmd_study(args: argparse.Namespace) -> int:
                               designs={c.label: c.design for c in cands})
     _print_unusable(res.table)
     print(f"assumptions (each an option): {_assumptions(args)}")
+    for w in res.warnings:
+        print(f"warning: {w.text}")
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)

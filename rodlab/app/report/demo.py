@@ -119,7 +119,8 @@ def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
         f"<tr><td>{html.escape(str(r['design']))}</td><td>{r['c_rod_um']:.0f}</td><td>{r['mass_kg'] * 1e3:.0f}</td>"
         f"<td>{html.escape(str(r['method']))}</td><td>{r['mean_mm']:.3f}</td><td>{r['mean_p05_mm']:.3f}-"
         f"{r['mean_p95_mm']:.3f}</td><td>{r['max_mm']:.3f}</td><td>{_pct(r['share_deflection'])} / "
-        f"{_pct(r['share_identification'])} / {_pct(r['share_noise'])}</td></tr>" for r in sy["rows"])
+        f"{_pct(r.get('share_slip'))} / {_pct(r['share_identification'])} / {_pct(r['share_noise'])}</td></tr>"
+        for r in sy["rows"])
     return (f"<h2>8. Which rod? Predicted calibration accuracy (rodlab study)</h2><p><b>Recommendation.</b> "
             f"{html.escape(sy['recommendation'])}</p>{rod_note}<p class=note>{len(sy['designs'])} designs "
             f"({html.escape(', '.join(sy['designs']))}) on the TX90, "
@@ -129,10 +130,11 @@ def _study_section(run: Path, sy: dict, files: dict, rod_note: str = "") -> str:
             "<code>rodlab study rod1 rod2 rod3 --robot tx90</code> with its defaults; the demo reuses the solid run "
             "of section 3 instead of making its own). "
             "Mean validation error after calibration, its 5-95 % band over the campaigns, and the error budget: the "
-            "shares of the mean-square error from the rod's deflection left after compensation, the identification "
+            "shares of the mean-square error from the rod's deflection left after compensation, its slip (the "
+            "non-repeatable deflection no compensation removes), the identification "
             "and the validation instrument's noise. The whole study: <code>study/study.html</code>.</p>"
             "<table><tr><th>design</th><th>c_rod um</th><th>mass g</th><th>method</th><th>mean mm</th>"
-            f"<th>90 % band mm</th><th>max mm</th><th>budget % (defl. / ident. / noise)</th></tr>{rows}</table>"
+            f"<th>90 % band mm</th><th>max mm</th><th>budget % (defl. / slip / ident. / noise)</th></tr>{rows}</table>"
             + img_tag(run, files.get("study_pareto"), "study Pareto fronts") + _study_views(run, files))
 
 

@@ -10,7 +10,8 @@ from .prepare import DesignSetup, prepare_design
 from .run import StudyRun, StudySpec, run_study
 from .table import STUDY_COLUMNS, Recommendation, recommend, study_table
 from .outputs import StudyOutputs, best_method, write_study_outputs
+from .design_warnings import DesignWarning, study_warnings
 
 __all__ = ["Candidate", "grid_candidates", "list_candidates", "r_prior_of", "DesignSetup", "prepare_design",
            "StudyRun", "StudySpec", "run_study", "STUDY_COLUMNS", "Recommendation", "recommend", "study_table",
-           "StudyOutputs", "best_method", "write_study_outputs"]
+           "StudyOutputs", "best_method", "write_study_outputs", "DesignWarning", "study_warnings"]

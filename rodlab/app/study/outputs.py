@@ -12,6 +12,7 @@ from rodlab.app.report.views import frame_views
 from .plots import plot_heatmaps, plot_pareto
 from .report import write_study_report
 from .run import StudyRun, spec_dict
+from .design_warnings import DesignWarning, study_warnings
 from .table import Recommendation, recommend, study_table
 
 __all__ = ["StudyOutputs", "write_study_outputs", "best_method"]
@@ -23,12 +24,13 @@ _PREFERENCE = ("meas", "fea", "calc", "none")
 @dataclass(frozen=True)
 class StudyOutputs:
     """What :func:`write_study_outputs` wrote: the study table (one row per design and method), the
-    recommendation, the figures ({caption: file name in the folder}) and the files."""
+    recommendation, the figures ({caption: file name in the folder}), the files and the warnings on designs."""
 
     table: object
     recommendation: Recommendation
     figures: dict
     files: tuple
+    warnings: tuple[DesignWarning, ...] = ()
 
 
 def best_method(methods) -> str:
@@ -46,6 +48,7 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
         start_offscreen_check()                  # the 3-D views' probe runs while the figures below are drawn
     df = study_table(run)
     rec = recommend(df)
+    warns = tuple(study_warnings(df, run.spec.priors.rod_slip))
     atomic_write_text(out / "study.csv", df.to_csv(index=False))
     title = (f"{robot_name}, {run.spec.replicates} simulated campaigns per design" if run.spec.monte_carlo
              else f"{robot_name}, linear predictor ({run.spec.draws} draws per design)")
@@ -57,12 +60,13 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     extra = _recommended_views(out, rec, designs or {})
     figs.update({f"Recommended design {rec.design} under a unit force at the ball (frame model, displacement "
                  f"x the factor written; all load cases in {extra[0]})": p for p in extra[1:]})
-    write_study_report(out, df, rec.text, figs, header, run.spec.monte_carlo)
+    write_study_report(out, df, rec.text, figs, header, run.spec.monte_carlo, [w.text for w in warns])
     atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
+                                                     "warnings": [w.to_dict() for w in warns],
                                                      "spec": spec_dict(run.spec), "robot": robot_name,
                                                      "designs": len(run.setups), **(extra_json or {})}))
     files = ("study.csv", *figs.values(), "study.html", "study.json", *extra[:1])
-    return StudyOutputs(df, rec, figs, files)
+    return StudyOutputs(df, rec, figs, files, warns)
 
 
 def _recommended_views(out: Path, rec: Recommendation, designs: dict) -> tuple:

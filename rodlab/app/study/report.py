@@ -35,24 +35,28 @@ def _design_table(df) -> str:
 
 def _accuracy_table(df) -> str:
     head = ("<tr><th>design</th><th>method</th><th>mean mm</th><th>90 % band</th><th>max mm</th><th>median mm</th>"
-            "<th>deflection</th><th>identification</th><th>noise</th></tr>")
+            "<th>deflection</th><th>slip</th><th>identification</th><th>noise</th></tr>")
     ok = df[df["method"].notna()]
     rows = "".join(
         f"<tr><td>{html.escape(str(r.design))}</td><td>{html.escape(str(r.method))}</td><td>{r.mean_mm:.4f}</td>"
         f"<td>{r.mean_p05_mm:.4f}-{r.mean_p95_mm:.4f}</td><td>{r.max_mm:.3f}</td><td>{r.median_mm:.4f}</td>"
-        f"<td>{_f(100 * r.share_deflection, '.0f')} %</td><td>{_f(100 * r.share_identification, '.0f')} %</td>"
+        f"<td>{_f(100 * r.share_deflection, '.0f')} %</td><td>{_f(100 * r.share_slip, '.0f')} %</td>"
+        f"<td>{_f(100 * r.share_identification, '.0f')} %</td>"
         f"<td>{_f(100 * r.share_noise, '.0f')} %</td></tr>" for r in ok.itertuples())
     return f"<table>{head}{rows}</table>"
 
 
 def write_study_report(out_dir, df, recommendation: str, figures: dict, header: dict,
-                       monte_carlo: bool = False) -> Path:
+                       monte_carlo: bool = False, warnings: list[str] = ()) -> Path:
     """Write ``out_dir/study.html``; ``figures`` {caption: file name in out_dir}; ``header`` {label: text};
-    ``monte_carlo``: the numbers are of simulated campaigns (else of the linear predictor)."""
+    ``monte_carlo``: the numbers are of simulated campaigns (else of the linear predictor); ``warnings``: the
+    sentences on designs (:func:`~.design_warnings.study_warnings`), under the recommendation."""
     out = Path(out_dir)
     parts = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab study</title><style>{CSS}"
              "</style></head><body><h1>rodlab study: which rod gives the best calibration?</h1>",
-             f"<p><b>Recommendation.</b> {html.escape(recommendation)}</p><table>"
+             f"<p><b>Recommendation.</b> {html.escape(recommendation)}</p>"
+             + ("<p><b>Warnings.</b></p><ul>" + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul>"
+                if warnings else "") + "<table>"
              + "".join(f"<tr><td>{html.escape(k)}</td><td style='text-align:left'>{html.escape(str(v))}</td></tr>"
                        for k, v in header.items()) + "</table>"]
     for caption, name in figures.items():
@@ -63,7 +67,8 @@ def write_study_report(out_dir, df, recommendation: str, figures: dict, header: 
            "campaigns); the band is the 5-95 % range of a campaign's mean error over those draws")
     parts.append("<h2>Predicted calibration accuracy and its error budget</h2><p class=note>Validation errors after "
                  f"calibration, {how}. Budget: the shares of the mean-square error left by the rod's deflection after "
-                 "compensation, by the identification (campaign noise through the observability), and by the "
+                 "compensation, by the rod's slip (its non-repeatable deflection, --rod-slip: no compensation removes it), "
+                 "by the identification (campaign noise through the observability), and by the "
                  "validation instrument's own noise.</p>" + _accuracy_table(df))
     parts.append("<h2>Designs</h2><p class=note>Thermal growth of the tool vector per kelvin; f1 the first natural "
                  "frequency on the flange (frame model); margins are allowable / peak stress under the campaign's "

@@ -101,7 +101,7 @@ def outcome_to_dict(o) -> dict:
     return {"seed": o.seed, "r_true": o.r_true, "stats": {str(m): s.to_dict() for m, s in o.stats.items()},
             "ms_mm2": {str(m): v for m, v in o.ms_mm2.items()}, "ms_true_rod_mm2": o.ms_true_rod_mm2,
             "ms_clean_mm2": o.ms_clean_mm2, "success": {str(m): v for m, v in o.success.items()},
-            "before": o.before.to_dict()}
+            "before": o.before.to_dict(), "ms_true_no_slip_mm2": o.ms_true_no_slip_mm2}
 
 
 def _float(v) -> float:
@@ -113,7 +113,8 @@ def outcome_from_dict(d: dict):
                             {Method.parse(m): ErrorStats(**s) for m, s in d["stats"].items()},
                             {Method.parse(m): float(v) for m, v in d["ms_mm2"].items()},
                             _float(d["ms_true_rod_mm2"]), _float(d["ms_clean_mm2"]),
-                            {Method.parse(m): bool(v) for m, v in d["success"].items()}, ErrorStats(**d["before"]))
+                            {Method.parse(m): bool(v) for m, v in d["success"].items()}, ErrorStats(**d["before"]),
+                            _float(d.get("ms_true_no_slip_mm2")))
 
 
 def _prepare_task(cand, robot, fixture, spec, joints) -> dict:

@@ -31,8 +31,7 @@ def prediction_to_dict(lp) -> dict:
     keys = ("mean_mm", "max_mm", "median_mm", "mean_p05_mm", "mean_p95_mm", "rms_mm", "replicates", "failed")
     return {"draws": lp.draws, "nominal_mean_mm": lp.nominal_mean_mm, "ms_noise_mm2": lp.ms_noise_mm2,
             "summaries": [{"method": str(a.method), **{k: getattr(a, k) for k in keys},
-                           "budget": {"deflection": a.budget.deflection, "identification": a.budget.identification,
-                                      "noise": a.budget.noise}} for a in lp.summaries]}
+                           "budget": a.budget.to_dict()} for a in lp.summaries]}
 
 
 def _f(v) -> float:
@@ -42,7 +41,7 @@ def _f(v) -> float:
 def prediction_from_dict(d: dict):
     out = []
     for a in d["summaries"]:
-        b = BudgetShares(*(_f(a["budget"][k]) for k in ("deflection", "identification", "noise")))
+        b = BudgetShares.from_dict(a["budget"])
         out.append(AccuracySummary(Method.parse(a["method"]), *(_f(a[k]) for k in (
             "mean_mm", "max_mm", "median_mm", "mean_p05_mm", "mean_p95_mm", "rms_mm")), b, int(a["replicates"]),
             int(a["failed"])))

@@ -15,7 +15,7 @@ __all__ = ["STUDY_COLUMNS", "study_table", "recommend", "Recommendation"]
 STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "message", "c_rod_um", "mass_kg",
                  "com_x_mm", "com_z_mm", "reach_mm", "O1", "O2", "O3", "O4", "O5", "method", "mean_mm", "max_mm",
                  "median_mm", "mean_p05_mm", "mean_p95_mm", "rms_mm", "share_deflection", "share_identification",
-                 "share_noise", "nominal_mean_mm", "r_rod_low", "r_rod_high", "replicates", "failed",
+                 "share_noise", "share_slip", "nominal_mean_mm", "r_rod_low", "r_rod_high", "replicates", "failed",
                  "thermal_um_per_K", "thermal_x_um_per_K", "thermal_z_um_per_K", "f1_Hz", "f2_Hz", "f3_Hz",
                  "tube_stress_MPa", "tube_margin", "bond_stress_MPa", "bond_margin", "compliance_model"]
 
@@ -58,7 +58,7 @@ def study_table(run: StudyRun):
             rows.append(dict(base, method=str(a.method), mean_mm=a.mean_mm, max_mm=a.max_mm, median_mm=a.median_mm,
                              mean_p05_mm=a.mean_p05_mm, mean_p95_mm=a.mean_p95_mm, rms_mm=a.rms_mm,
                              share_deflection=b.deflection, share_identification=b.identification,
-                             share_noise=b.noise, nominal_mean_mm=nominal, replicates=a.replicates,
+                             share_noise=b.noise, share_slip=b.slip, nominal_mean_mm=nominal, replicates=a.replicates,
                              failed=a.failed))
     df = pd.DataFrame(rows)
     for c in STUDY_COLUMNS:
@@ -91,22 +91,37 @@ class Recommendation:
 
 def recommend(df) -> Recommendation:
     """The design to build and why. Among the designs whose predicted mean (with the best method studied:
-    Meas, else FEA, ...) lies within the 90 % band of the best one, the lightest."""
+    Meas, else FEA, ...) lies within the 90 % band of the best one, the lightest; designs that would leave the
+    robot less accurate than its nominal model are left out while any other is usable (and said)."""
     ok = df[(df["status"] == "ok") & df["method"].notna()]
     if ok.empty:
         reasons = "; ".join(sorted({f"{r.design}: {r.message}" for r in df.itertuples()})[:3])
         return Recommendation(None, math.nan, math.nan, None, f"no design is usable on this robot ({reasons})")
     m = _method_for(ok)
     rows = ok[ok["method"] == m]
-    best = rows.loc[rows["mean_mm"].idxmin()]
-    close = rows[rows["mean_mm"] <= best["mean_p95_mm"]]
+    helps = rows[~(rows["mean_mm"] >= rows["nominal_mean_mm"])]    # better than uncalibrated (or no nominal)
+    pool = helps if len(helps) else rows
+    best = pool.loc[pool["mean_mm"].idxmin()]
+    close = pool[pool["mean_mm"] <= best["mean_p95_mm"]]
     pick = close.loc[close["mass_kg"].idxmin()]
     why = (f"predicted mean error {pick['mean_mm']:.3f} mm with {m} compensation (90 % band "
            f"{pick['mean_p05_mm']:.3f}-{pick['mean_p95_mm']:.3f} mm), c_rod {pick['c_rod_um']:.0f} um, mass "
            f"{pick['mass_kg']:.3f} kg")
     if pick["design"] == best["design"]:
-        text = f"build {pick['design']}: the most accurate of {len(rows)} designs; {why}"
+        text = f"build {pick['design']}: the most accurate of {len(pool)} designs; {why}"
     else:
         text = (f"build {pick['design']}: the lightest of the {len(close)} designs within the best one's band "
                 f"(best {best['design']}, {best['mean_mm']:.3f} mm); {why}")
-    return Recommendation(str(pick["design"]), float(pick["L1_mm"]), float(pick["L2_mm"]), m, text)
+    return Recommendation(str(pick["design"]), float(pick["L1_mm"]), float(pick["L2_mm"]), m,
+                          text + _harm_note(rows, helps, pick))
+
+
+def _harm_note(rows, helps, pick) -> str:
+    """What the recommendation must add when designs leave the robot less accurate than uncalibrated."""
+    if not len(helps):
+        return (f"; but no design improves on the robot's nominal model ({pick['nominal_mean_mm']:.3f} mm "
+                "uncalibrated): calibrating with any of them would do harm (see the warnings)")
+    if len(helps) < len(rows):
+        return (f" ({len(rows) - len(helps)} of {len(rows)} designs, left out, would leave the robot less accurate "
+                "than uncalibrated)")
+    return ""

@@ -1,0 +1,94 @@
+"""What a study says about a design's predicted accuracy beyond its numbers (:class:`~rodlab.core.enums.StudyWarning`).
+
+Three situations a designer must not read past in the table:
+
+- every compensation method leaves the robot *less* accurate than its nominal (uncalibrated) model: calibrating
+  with this rod does harm (a soft rod whose non-repeatable deflection swamps the campaign);
+- the rod's slip (:mod:`rodlab.calibrate.rod_slip`, ``--rod-slip``) is most of the best method's error: the methods
+  then differ by how the identification absorbs scatter, not by what they compensate, so their ranking says little
+  and a stiffer rod is what helps;
+- the rod is far softer than the rods the default slip was fitted on (the paper's Table 2,
+  :data:`~rodlab.core.units.PAPER_C_ROD_UM_RANGE`): the slip's size is an extrapolation; the study should be read
+  beside one with ``--rod-slip 0``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rodlab.core.enums import StudyWarning
+from rodlab.core.units import PAPER_C_ROD_UM_RANGE
+
+__all__ = ["DesignWarning", "study_warnings", "SLIP_DOMINANT_SHARE", "SLIP_EXTRAPOLATION_FACTOR"]
+
+#: the slip's share of the best method's mean-square error above which it is said to dominate (the paper's steel
+#: rods 4# and 6# on the TX90: 0.97-0.99, where Table 3's methods differ by 5 %; carbon 1#: 0.6)
+SLIP_DOMINANT_SHARE = 0.9
+#: c_rod beyond this factor times the softest rod the slip was fitted on is called an extrapolation
+SLIP_EXTRAPOLATION_FACTOR = 2.0
+
+
+@dataclass(frozen=True)
+class DesignWarning:
+    """One warning on one design: ``kind``, the ``design``'s label and the ``text`` a designer reads."""
+
+    kind: StudyWarning
+    design: str
+    text: str
+
+    def to_dict(self) -> dict:
+        return {"kind": str(self.kind), "design": self.design, "text": self.text}
+
+
+def _best(rows):
+    return rows.loc[rows["mean_mm"].idxmin()]
+
+
+def _worse_than_nominal(design: str, rows) -> DesignWarning | None:
+    nominal = float(rows["nominal_mean_mm"].iloc[0])
+    best = _best(rows)
+    if not math.isfinite(nominal) or float(best["mean_mm"]) <= nominal:
+        return None
+    return DesignWarning(StudyWarning.WORSE_THAN_NOMINAL, design, (
+        f"{design}: every method leaves the robot less accurate than its nominal model (best {best['method']} "
+        f"{best['mean_mm']:.3f} mm against {nominal:.3f} mm uncalibrated): calibrating with this rod would do harm"))
+
+
+def _slip_dominates(design: str, rows, rod_slip: float) -> DesignWarning | None:
+    best = _best(rows)
+    share = float(best.get("share_slip", math.nan))
+    if not rod_slip or not math.isfinite(share) or share <= SLIP_DOMINANT_SHARE:
+        return None
+    spread = float(rows["mean_mm"].max() - rows["mean_mm"].min())
+    return DesignWarning(StudyWarning.SLIP_DOMINATES, design, (
+        f"{design}: the rod's slip (--rod-slip {rod_slip:g}: its non-repeatable deflection, {rod_slip:g} x its "
+        f"deflection under its own weight, which no compensation removes) is {100 * share:.0f} % of the best "
+        f"method's mean-square error; the methods differ by {spread:.3f} mm, by how the identification absorbs "
+        "that scatter rather than by what they compensate: their ranking says little here, a stiffer rod is what "
+        "helps"))
+
+
+def _slip_extrapolated(design: str, rows, rod_slip: float) -> DesignWarning | None:
+    c_rod = float(rows["c_rod_um"].iloc[0])
+    limit = SLIP_EXTRAPOLATION_FACTOR * PAPER_C_ROD_UM_RANGE[1]
+    if not rod_slip or not math.isfinite(c_rod) or c_rod <= limit:
+        return None
+    lo, hi = PAPER_C_ROD_UM_RANGE
+    return DesignWarning(StudyWarning.SLIP_EXTRAPOLATED, design, (
+        f"{design}: c_rod {c_rod:.0f} um is {c_rod / hi:.1f} x the softest rod the slip {rod_slip:g} was fitted on "
+        f"(the paper's rods, c_rod {lo:g}-{hi:g} um): its size is an extrapolation; read this design beside a "
+        "study with --rod-slip 0 (the elastic rod: what the compensation methods can do)"))
+
+
+def study_warnings(df, rod_slip: float) -> list[DesignWarning]:
+    """The warnings on every usable design of the study table ``df`` (:func:`~.table.study_table`), in the
+    table's design order; ``rod_slip``: the priors' slip the predictions were made with."""
+    ok = df[(df["status"] == "ok") & df["method"].notna()]
+    out = []
+    for design, rows in ok.groupby("design", sort=False):
+        for check in (_worse_than_nominal, lambda d, r: _slip_dominates(d, r, rod_slip),
+                      lambda d, r: _slip_extrapolated(d, r, rod_slip)):
+            w = check(str(design), rows)
+            if w is not None:
+                out.append(w)
+    return out

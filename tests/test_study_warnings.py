@@ -1,0 +1,49 @@
+"""What the study says beyond its numbers (rodlab.app.study.design_warnings) and a recommendation that never
+sends a designer to a rod that makes the robot less accurate when another one helps."""
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from rodlab.app.study import recommend, study_warnings
+from rodlab.app.study.table import STUDY_COLUMNS
+from rodlab.core.enums import StudyWarning
+
+
+def _rows(design, c_rod, means, nominal, slip_share, mass=1.0):
+    return [dict({c: math.nan for c in STUDY_COLUMNS}, design=design, status="ok", method=m, mean_mm=v,
+                 mean_p05_mm=0.9 * v, mean_p95_mm=1.1 * v, nominal_mean_mm=nominal, share_slip=slip_share,
+                 c_rod_um=c_rod, mass_kg=mass, L1_mm=300.0, L2_mm=450.0)
+            for m, v in zip(("none", "fea", "meas"), means)]
+
+
+def _table(*designs):
+    return pd.DataFrame([r for d in designs for r in d])[STUDY_COLUMNS]
+
+
+def test_a_rod_that_harms_is_warned_about_and_not_recommended():
+    stiff = _rows("stiff", 60.0, (0.30, 0.25, 0.20), 1.6, 0.3, mass=1.4)
+    soft = _rows("soft", 6600.0, (2.5, 2.4, 2.36), 1.6, 0.99, mass=0.6)
+    df = _table(stiff, soft)
+    kinds = {(w.design, w.kind) for w in study_warnings(df, rod_slip=2.4)}
+    assert kinds == {("soft", StudyWarning.WORSE_THAN_NOMINAL), ("soft", StudyWarning.SLIP_DOMINATES),
+                     ("soft", StudyWarning.SLIP_EXTRAPOLATED)}
+    rec = recommend(df)
+    assert rec.design == "stiff"                       # the lighter soft rod would do harm: left out, and said
+    assert "1 of 2 designs" in rec.text and "less accurate than uncalibrated" in rec.text
+
+
+def test_when_every_rod_harms_the_recommendation_says_so():
+    df = _table(_rows("soft", 6600.0, (2.5, 2.4, 2.36), 1.6, 0.99))
+    rec = recommend(df)
+    assert rec.design == "soft" and "no design improves on the robot's nominal model (1.600 mm" in rec.text
+
+
+def test_without_slip_no_slip_warning_and_the_paper_rods_pass_quietly():
+    """At --rod-slip 0 the slip warnings cannot fire; a carbon rod like 1# (slip 60 % of its error, c_rod within the
+    paper's range) gets none."""
+    soft = _rows("soft", 6600.0, (1.2, 0.6, 0.28), 1.8, 0.0)
+    assert study_warnings(_table(soft), rod_slip=0.0) == []
+    one = _rows("1#", 44.0, (0.057, 0.054, 0.053), 1.6, 0.6)
+    assert study_warnings(_table(one), rod_slip=2.4) == []

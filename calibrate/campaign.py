@@ -22,6 +22,7 @@ from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import atomic_write_json, read_json, read_text_checked, separator_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
+from rodlab.core.schema_table import DECIMAL_COMMA
 
 from .errors import CalibrationError
 from .rod import Rod
@@ -128,7 +129,10 @@ def cell_number(cell, p, line: int, col: str) -> float:
     try:
         v = float(cell)
     except (TypeError, ValueError):
-        raise CalibrationError(f"expected a number, got {cell!r}", path=p, line=line, key=col) from None
+        comma = isinstance(cell, str) and DECIMAL_COMMA.fullmatch(cell.strip())
+        tail = (f": a decimal comma (a locale's export); write {cell.strip().replace(',', '.')}: export the file with a "
+                "decimal point") if comma else ""
+        raise CalibrationError(f"expected a number, got {cell!r}{tail}", path=p, line=line, key=col) from None
     if not math.isfinite(v):
         raise CalibrationError(f"expected a finite number, got {cell!r}", path=p, line=line, key=col)
     return v
@@ -212,6 +216,12 @@ def _campaign_columns(p: Path, text: str) -> tuple:
     return RAW_COLUMNS if has_raw else XYZ_COLUMNS
 
 
+def _sub_micrometre(values) -> bool:
+    """Some reading carries digits below a micrometre [mm]: two rows equal in it are a copy, not a repeat (an export
+    rounded to um could make a repeat equal)."""
+    return any(abs(v * 1e3 - round(v * 1e3)) > 1e-6 for v in values)
+
+
 def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
     """A campaign file; one of raw readings is converted with ``device`` (a :class:`~calibrate.device.Device`)
     when given, else kept as readings (``x_D_mm`` None: :func:`campaign_observations` then asks for it)."""
@@ -220,16 +230,24 @@ def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
     xyz = _campaign_columns(p, text)
     header, rows = read_table(p, text, ["position", "point"] + qs + list(xyz), ["time_s", "temp_C"])
     pos, pt, q, x, t, T, ln = [], [], [], [], [], [], []
-    seen = {}
+    seen, copies = {}, {}
     for k, r in rows:
         for col in ("position", "point"):
             if r[col] != int(r[col]) or r[col] < 1:
                 raise CalibrationError(f"expected a positive integer, got {r[col]:g}", path=p, line=k, key=col)
         key = (int(r["position"]), int(r["point"]))
+        content = tuple(r[c] for c in qs + list(xyz))
         if key in seen:
-            raise CalibrationError(f"point {key[0]}.{key[1]} appears twice (also on line {seen[key]})", path=p,
-                                   line=k, key="point")
+            same = copies.get(content) == seen[key]
+            raise CalibrationError(f"point {key[0]}.{key[1]} appears twice (also on line {seen[key]})" +
+                                   ("; the rows are the same: delete the repeated one" if same else
+                                    ": number every row uniquely"), path=p, line=k, key="point")
+        if content in copies and _sub_micrometre([r[c] for c in xyz]):
+            raise CalibrationError(f"the row repeats line {copies[content]} in every joint angle and reading (a copy: a "
+                                   "measurement repeated at the same pose reads differently by the device's noise); "
+                                   "delete the copied rows", path=p, line=k, key="point")
         seen[key] = k
+        copies.setdefault(content, k)
         pos.append(key[0])
         pt.append(key[1])
         q.append([r[c] for c in qs])
@@ -259,6 +277,7 @@ def read_fixture(path) -> Fixture:
         if not np.all(np.isfinite(arr)):                        # JSON's NaN / Infinity pass a number schema
             raise CalibrationError(f"expected a finite pose [x, y, z, a, b, c] (mm, deg), got {arr.tolist()}",
                                    path=p, key=f"positions.{j}")
+    _refuse_metres(p, poses)
     wp = data["world_position"]
     if wp not in poses:
         raise CalibrationError(f"world_position must name one of the positions {sorted(poses)}, got {wp!r}",
@@ -272,6 +291,25 @@ def read_fixture(path) -> Fixture:
                     "%.0f N would deflect the rod far beyond its calibration (a factor 100 or 1000 slipped in?)",
                     p, fa.tolist(), np.abs(fa).max())
     return Fixture(poses, fa, wp, p, _pose_covariances(p, data, poses), data.get("probing"))
+
+
+#: clamping positions all within this distance of each other [mm] are in metres (a MultiCal fixture's lie hundreds
+#: of mm apart: the paper's ring of positions around the robot; a trial's fixture file divided by 1000 was read as mm
+#: and calibrated to 78 mm rms, 'not a noisier device')
+FIXTURE_METRES_SPAN_MM = 2.0
+
+
+def _refuse_metres(p: Path, poses: dict) -> None:
+    """Refuse clamping positions whose translations all lie within :data:`FIXTURE_METRES_SPAN_MM` of each other
+    (and not all at one point): metres where millimetres are expected."""
+    xyz = np.array([np.asarray(v, float)[:3] for v in poses.values()])
+    if len(xyz) < 2:
+        return
+    span = float(np.max(np.linalg.norm(xyz[:, None] - xyz[None], axis=2)))
+    if 0.0 < span < FIXTURE_METRES_SPAN_MM:
+        raise CalibrationError(f"the clamping positions lie within {span:.4g} mm of each other (a MultiCal fixture's "
+                               "lie tens to hundreds of mm apart): their x, y, z look like metres; the fixture's "
+                               "positions are millimetres: multiply metres by 1000", path=p, key="positions")
 
 
 def _pose_covariances(p: Path, data: dict, poses: dict) -> dict | None:

@@ -16,7 +16,7 @@ class Mixup:
     """joint : 1-based joint whose readings are reversed, or None; positions : the two clamping positions whose
     labels are swapped, or None; rms_mm : the identification's rms per reading [mm] with the mix-up undone;
     rms_given_mm : the rms as the files were given [mm]; readings : the two reading columns (0-2: x_mm, y_mm, z_mm)
-    exchanged, or None."""
+    exchanged, or the one reading column negated (a 1-tuple), or None."""
 
     joint: int | None
     positions: tuple | None
@@ -43,6 +43,8 @@ class Mixup:
     def label(self) -> str:
         if self.fixture_radians:
             return "fixture angles read as radians"
+        if self.readings is not None and len(self.readings) == 1:
+            return f"column {_READ[self.readings[0]]} negated"
         if self.readings is not None:
             return f"columns {_READ[self.readings[0]]} and {_READ[self.readings[1]]} exchanged"
         if self.zero_offset is not None:
@@ -61,7 +63,7 @@ class Mixup:
         if self.columns is not None:
             return f"q{self.columns[0]}, q{self.columns[1]}"
         if self.readings is not None:
-            return f"{_READ[self.readings[0]]}, {_READ[self.readings[1]]}"
+            return ", ".join(_READ[k] for k in self.readings)
         k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
              else self.coupling[1])
         return f"q{k}"
@@ -81,6 +83,11 @@ class Mixup:
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
+        if self.readings is not None and len(self.readings) == 1:
+            a = _READ[self.readings[0]]
+            return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "
+                    f"a mirrored, left-handed reading frame no clamping pose can turn into the device's): with {a} "
+                    f"negated {fit}; check the sign of the device's {a[0]} channel and negate the {a} column")
         if self.readings is not None:
             a, b = (_READ[k] for k in self.readings)
             return (f"the {a} and {b} columns look exchanged (the device's sensors wired or exported in another "

@@ -72,7 +72,7 @@ SCREEN_ITERATIONS = 15
 
 
 def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints: Callable, fit_positions: Callable,
-               material: bool = True, extra: tuple = ()) -> Mixup | None:
+               material: bool = True, extra: tuple = (), suspect: bool = False) -> Mixup | None:
     """The mix-up whose undoing fits the campaign plausibly (the best), or None. ``res``: the identification as
     given; ``q_rad`` (N, n) its joint readings; ``positions`` (N,) its position labels; ``fit_joints(q_rad, full)``
     and ``fit_positions(positions, full)``: the same identification with other readings or labels, a quick one
@@ -81,10 +81,12 @@ def find_mixup(robot, res, q_rad: np.ndarray, positions: np.ndarray, fit_joints:
     material margin (a swap of two nearby positions leaves 0.11 mm rms, not gross); with ``material`` False (a
     diagnosis, where physics left out makes the residuals material) only beyond bounds or gross
     (:func:`~calibrate.trust.gross`). ``extra``: further (:class:`Mixup`, ``run(full)``) trials (a campaign's
-    fixture angles read as radians); ``fit_joints`` / ``fit_positions`` None: those trials left out."""
+    fixture angles read as radians); ``fit_joints`` / ``fit_positions`` None: those trials left out. ``suspect``:
+    tried whatever the residual test says (a test passed only at an implausible noise, a diagnosis with nothing
+    found)."""
     test = res.residual_check
     beyond = bool(bound_warnings(robot, res))
-    refused = test is None or (test.material if material else gross(test.birge, res.rms_mm))
+    refused = suspect or test is None or (test.material if material else gross(test.birge, res.rms_mm))
     if not beyond and not refused:
         return None
     limit = res.rms_mm * (TIE_GAIN if beyond else MIXUP_GAIN)
@@ -135,15 +137,21 @@ def _exchanged(q: np.ndarray, a: int, b: int) -> np.ndarray:
 
 
 def _reading_trials(camp, fit_readings: Callable) -> tuple:
-    """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged; none for raw
-    sensor readings (a device file's axes are not the columns: their exchange is another mix-up)."""
+    """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged and of each column
+    negated (a mirrored reading frame: no clamping pose turns it into the device's); none for raw sensor readings
+    (a device file's axes are not the columns: their exchange is another mix-up)."""
     if camp.raw:
         return ()
-    def run(a, b):
+
+    def run(cols: tuple):
         x = np.array(camp.x_D_mm, float, copy=True)
-        x[:, [a, b]] = x[:, [b, a]]
+        if len(cols) == 1:
+            x[:, cols[0]] = -x[:, cols[0]]
+        else:
+            x[:, list(cols)] = x[:, list(cols[::-1])]
         return lambda full: fit_readings(x, full)
-    return tuple((Mixup(None, None, 0.0, 0.0, readings=(a, b)), run(a, b)) for a, b in itertools.combinations(range(3), 2))
+    choices = [*itertools.combinations(range(3), 2), (0,), (1,), (2,)]
+    return tuple((Mixup(None, None, 0.0, 0.0, readings=c), run(c)) for c in choices)
 
 
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:
@@ -151,12 +159,12 @@ def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:
     return np.where(p == a, b, np.where(p == b, a, p))
 
 
-def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations, options, material: bool = True
-                   ) -> Mixup | None:
+def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations, options, material: bool = True,
+                   suspect: bool = False) -> Mixup | None:
     """:func:`find_mixup` for a MultiCal campaign: ``res`` its identification from ``obs`` (the observations of
     ``camp`` with ``fixture`` and the compliance file ``rod_file``) with the rod ``rod``, ``compensations`` and the
     :class:`~calibrate.estimate.FitOptions` ``options``; the screen runs one pass with :data:`QUICK_NFEV`;
-    ``material`` as :func:`find_mixup`'s. A fixture file whose angles could be radians
+    ``material`` and ``suspect`` as :func:`find_mixup`'s. A fixture file whose angles could be radians
     (:func:`_angles_could_be_radians`) is tried read as radians where no other mix-up is found, with residuals
     material enough also in a diagnosis."""
     quick = replace(options, max_compensation=1, expected_noise_mm=None, max_nfev_per_parameter=QUICK_NFEV)
@@ -173,7 +181,7 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
         reread = _reading_trials(camp, lambda x, full: fit(campaign_observations(replace(camp, x_D_mm=x), fixture,
                                                                                  rod_file), full))
         found = find_mixup(robot, res, obs.q_rad, camp.position, lambda q, full: fit(replace(obs, q_rad=q), full),
-                           relabelled, material, reread)
+                           relabelled, material, reread, suspect)
     if found is None and _angles_could_be_radians(fixture):
         # residuals material suffice here also in a diagnosis: read as radians, small angles become large turns,
         # which no campaign of another physics fits better

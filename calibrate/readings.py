@@ -121,6 +121,26 @@ def point_unit_slips(points, path) -> list[str]:
         out.append(f"{path}: the median point lies {np.median(np.linalg.norm(x, axis=1)):.3f} mm from the instrument's "
                    "origin (a robot's workspace spans hundreds of mm): the positions look like metres; x_mm, y_mm, "
                    "z_mm are millimetres: multiply metres by 1000")
+    return out + _rod_header_slips(points, path)
+
+
+#: a validation rod heavier than this [kg] is a mass in grams (a tracker's target on a short rod: 0.1-2 kg; a trial's
+#: 300 g written as 300 gave a 6.3 mm validation error blamed on overfitting)
+POINTS_ROD_MASS_LIMIT_KG = 50.0
+#: a tool vector shorter than this [mm] (and not zero: points at the flange) is in metres
+POINTS_TOOL_METRES_MM = 2.0
+
+
+def _rod_header_slips(points, path) -> list[str]:
+    """The points file's rod header in other units: ``rod_mass_kg`` in grams, ``tool_mm`` in metres."""
+    out = []
+    if points.rod_mass_kg > POINTS_ROD_MASS_LIMIT_KG:
+        out.append(f"{path}: # rod_mass_kg: {points.rod_mass_kg:g} (a measuring rod on a robot weighs 0.1-20 kg): it "
+                   f"looks like grams; rod_mass_kg is kilograms: write {points.rod_mass_kg / 1000:g}")
+    tool = float(np.linalg.norm(points.tool_mm))
+    if 0.0 < tool < POINTS_TOOL_METRES_MM:
+        out.append(f"{path}: # tool_mm is {tool:.4g} mm long (a tool or target holder reaches tens to hundreds of mm "
+                   "from the flange): it looks like metres; tool_mm is millimetres: multiply metres by 1000")
     return out
 
 

@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from .result import CalibrationResult
 
 __all__ = ["trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
-           "unmodelled_gross", "typical_miss_mm", "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]
+           "unmodelled_gross", "typical_miss_mm", "stated_noise_warning", "PLAUSIBLE_NOISE_FACTOR", "NOISY_FILE_CAUSES",
+           "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]
 
 
 #: physical bounds of the identified errors; beyond them a result is flagged
@@ -57,8 +58,8 @@ def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     if test is not None and test.material and test.clamping:
         causes = ("a wrong clamping pose, a noisier device or a rod file that is not this rod"
                   if not gross(test.birge, res.rms_mm) else
-                  f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms, {test.birge:.0f} times the stated scatter) "
-                  f"but files that do not describe this campaign: {GROSS_CAUSES}")
+                  f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms per reading against the stated "
+                  f"{test.noise_mm * 1e3:.1f} um) but files that do not describe this campaign: {GROSS_CAUSES}")
         w.append(f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; in a MultiCal "
                  f"campaign the model covers the device's physics, so this is {causes}, and it biases every "
                  "parameter: run `rodlab diagnose --campaign` on the same files to find which")
@@ -174,6 +175,32 @@ UNMODELLED_GROSS_CAUSES = ("the q columns against the robot file's joints (order
 GROSS_CAUSES = ("the robot file's joints against the campaign's q columns (order, signs, zero offsets), the units "
                 "(readings in mm, joint angles in deg, fixture poses in mm and deg), another rod's compliance file, "
                 "or a fixture file of another layout")
+
+
+#: a device noise stated (``--noise-um``) or implied (a diagnosis's even excess) beyond this factor times a MultiCal
+#: device's (:data:`~rodlab.core.units.DEVICE_NOISE_MM`: the paper's sensors, 3 um accuracy) is no device's scatter:
+#: a trial's campaign with its y column negated passed the residual test at 87 um (29x) and was TRUSTED, 6.5x less
+#: accurate than with the column right; another campaign's fixture file at 96 um
+PLAUSIBLE_NOISE_FACTOR = 5.0
+#: what makes a MultiCal campaign's residuals look like a far noisier device
+NOISY_FILE_CAUSES = ("a reading column's sign or order (the device's channels), a fixture file of another campaign "
+                     "(its clampings' recorded orientations), the units of the readings and the fixture")
+
+
+def stated_noise_warning(test, reference_mm: float) -> str | None:
+    """The reason not to trust a MultiCal campaign whose residual test passes only at a stated device noise beyond
+    :data:`PLAUSIBLE_NOISE_FACTOR` x ``reference_mm`` (a MultiCal device's, [mm]) and that would be material at the
+    reference; None otherwise (also for instrument points or socket readings: ``test.clamping`` False)."""
+    if test is None or not test.clamping or reference_mm <= 0:
+        return None
+    factor = test.noise_mm / reference_mm
+    if factor <= PLAUSIBLE_NOISE_FACTOR or test.birge * factor <= BIRGE_MATERIAL:
+        return None
+    return (f"the residuals pass the test only at the stated device noise of {test.noise_mm * 1e3:.1f} um, "
+            f"{factor:.0f} times a MultiCal device's {reference_mm * 1e3:.1f} um (at which they are "
+            f"{test.birge * factor:.0f} times the expected scatter): no such device scatters that much, so the files "
+            f"may not describe this campaign: check {NOISY_FILE_CAUSES}; if a repeatability test of this device (the "
+            "ball held still, read 30 times) really shows that scatter, give --noise-checked")
 
 
 def gross(birge: float, rms_mm: float) -> bool:

@@ -320,7 +320,8 @@ class RodCompliance:
     def unit_slips(self) -> list[str]:
         """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond
         :data:`PLAUSIBLE_C_F_MM_PER_N` (um/N written as mm/N), a mass beyond :data:`PLAUSIBLE_MASS_KG` (grams),
-        a tool vector shorter than :data:`PLAUSIBLE_TOOL_MM` (metres)."""
+        a tool vector shorter than :data:`PLAUSIBLE_TOOL_MM` (metres), a centre of mass that close to the ball of a
+        rod that long (metres)."""
         out = []
         worst = float(np.abs(np.diag(self.C_F)).max())
         if worst > PLAUSIBLE_C_F_MM_PER_N:
@@ -331,6 +332,11 @@ class RodCompliance:
         if 0 < float(np.linalg.norm(self.tool_mm)) < PLAUSIBLE_TOOL_MM:
             out.append(f"tool_mm {np.round(self.tool_mm, 4).tolist()} is {np.linalg.norm(self.tool_mm):.3g} mm long; a "
                        "measuring rod's ball sits 100-1500 mm from the flange: if this is metres, multiply by 1000")
+        com, reach = float(np.linalg.norm(self.com_T_mm)), float(np.linalg.norm(self.tool_mm))
+        if self.mass_kg > 0 and reach >= PLAUSIBLE_TOOL_MM and 0 < com < 0.02 * reach:
+            out.append(f"com_T_mm {np.round(self.com_T_mm, 4).tolist()} puts the rod's centre of mass {com:.3g} mm from "
+                       f"its ball, whose flange is {np.linalg.norm(self.tool_mm):.0f} mm away (a rod's centre of mass "
+                       "lies along it, tens to hundreds of mm from the ball): if this is metres, multiply by 1000")
         return out
 
 

@@ -9,6 +9,7 @@ suggest the fix where one is obvious ("Did you mean `wall_mm`?").
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -54,6 +55,10 @@ def _other_unit(word: str, choices: list[str]) -> str:
     return ""
 
 
+#: a controller's names of joint k's column (J1, A1, axis_1, joint1, q_1, J1_deg): the contract's q<k>
+_JOINT_ALIAS = re.compile(r"(?:j|a|ax|axis|joint|q)[ _]?([1-9][0-9]?)(?:[ _]?(?:deg|\(deg\)))?", re.IGNORECASE)
+
+
 def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
     """Return `` Did you mean `x`?`` for the closest of ``choices``, or ``""``. ``units``: ``word`` is the user's
     name and ``choices`` the expected ones (a table's columns): a name with another unit of the same kind than one
@@ -62,6 +67,10 @@ def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
     unit = _other_unit(word, choices) if units else ""
     if unit:
         return unit
+    joint = _JOINT_ALIAS.fullmatch(word)
+    if joint and "q1" in choices and word != f"q{int(joint.group(1))}":
+        return (f" Did you mean `q{int(joint.group(1))}`? (the joint angles are the columns q1, q2, ... in degrees: "
+                "rename each joint's column)")
     folded = [c for c in choices if c.casefold() == word.casefold()]
     # a key given without its unit suffix (``L1`` for ``L1_mm``, ``hold`` for ``hold_s``)
     stem = [c for c in choices if c.casefold().startswith(word.casefold() + "_")] if word else []

@@ -22,6 +22,8 @@ __all__ = ["table_problems", "MAX_PROBLEMS"]
 
 #: problems listed per file before the rest are counted
 MAX_PROBLEMS = 50
+#: a number written with a decimal comma (quoted in a comma-separated file)
+DECIMAL_COMMA = re.compile(r"[+-]?[0-9]*,[0-9]+")
 
 
 def _comments(lines: list[str]) -> tuple[dict, int]:
@@ -119,6 +121,9 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
     try:
         v = float(s)
     except ValueError:
+        if DECIMAL_COMMA.fullmatch(s):
+            return Problem(path, f"expected a number, got {s!r}: a decimal comma (a locale's export)", line, name,
+                           f"write {s.replace(',', '.')}: export the file with a decimal point")
         return Problem(path, f"expected a number, got {s!r}", line, name, "write a number with a decimal point")
     if not math.isfinite(v):
         return Problem(path, f"expected a finite number, got {s!r}", line, name, "write a finite number")
@@ -129,6 +134,12 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
             return Problem(path, f"expected a number {op} {c[k]} [{c.get('unit', '-')}], got {s!r}", line, name,
                            "correct the value")
     return None
+
+
+def _precise(cells: tuple) -> bool:
+    """Some cell has 4 or more decimals (sub-micrometre readings): rows equal in every such cell are copies, not
+    repeats (which a coarsely rounded export could make equal)."""
+    return any(len(c.partition(".")[2]) >= 4 for c in cells)
 
 
 def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem]:
@@ -147,13 +158,30 @@ def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem
                 out.append(p)
         for g in groups:
             key = tuple(row[header.index(c)].strip() for c in g)
+            content = tuple(c.strip() for name, c in zip(header, row) if name not in g)
             if (g, key) in seen:
-                out.append(Problem(path, f"{dict(zip(g, key))} appears twice (also on line {seen[(g, key)]})", k,
-                                   g[-1], "number every row uniquely"))
-            seen.setdefault((g, key), k)
+                first, same = seen[(g, key)]
+                out.append(Problem(path, f"{dict(zip(g, key))} appears twice (also on line {first})", k, g[-1],
+                                   "delete the repeated row" if same == content else "number every row uniquely"))
+            elif _precise(content) and (g, content) in seen:
+                out.append(Problem(path, f"repeats line {seen[(g, content)]} in every cell but {', '.join(g)} (a copy: "
+                                   "a measurement repeated at the same pose reads differently by the instrument's "
+                                   "noise)", k, g[-1], "delete the copied rows"))
+            seen.setdefault((g, key), (k, content))
+            seen.setdefault((g, content), k)
     if rows == 0:
         out.append(Problem(path, "no data rows after the header", start, None, "add the measurements"))
-    return out
+    return _one_decimal_comma(out, path)
+
+
+def _one_decimal_comma(problems: list[Problem], path: str) -> list[Problem]:
+    """A file written with decimal commas: its first such cell named, the others counted, not each listed."""
+    commas = [p for p in problems if "a decimal comma" in p.message]
+    if len(commas) <= 1:
+        return problems
+    rest = [p for p in problems if p not in commas]
+    return [commas[0], *rest, Problem(path, f"... and {len(commas) - 1} more cells with a decimal comma", None, None,
+                                      "export the file with a decimal point (a locale's setting)")]
 
 
 def table_problems(text: str, schema: dict, path: str = "") -> list[Problem]:

@@ -29,6 +29,10 @@ def add_identify_options(p) -> None:
                         f"campaign; for --points the file's sigma_*_mm columns, else {TRACKER_NOISE_MM * 1e3:g} um: a laser "
                         f"tracker at a few metres; for --sockets the file's seat_sigma_mm / length_sigma_mm). Given, "
                         f"it replaces the per-point columns or the file's sigma")
+    p.add_argument("--noise-checked", action="store_true",
+                   help="the --noise-um given is this device's, as a repeatability test shows it: a MultiCal campaign "
+                        "judged at more than 5x a MultiCal device's noise is otherwise not trusted (such scatter is "
+                        "the files': a reading column's sign, another campaign's fixture)")
     add_columns_checked(p)
     add_report_option(p)
     p.add_argument("--strict", action="store_true",

@@ -19,11 +19,12 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
-from rodlab.calibrate.trust import gross
+from rodlab.calibrate.trust import gross, stated_noise_warning
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance
 from ...core.errors import RodlabError
+from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
@@ -111,10 +112,13 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     label = run.label
     robot, camp, res, before, after = run.robot, run.campaign, run.result, run.before, run.after
     _print_result(res, before, after, label)
-    _warn_other_rod(res.params.tool, rod, args.rod)
+    other_rod_mm = _warn_other_rod(res.params.tool, rod, args.rod)
     judge(res, _campaign_prediction(run))
     res.warnings += _harmonics_held_out(run, args.joint_harmonics)
-    mixup = _mixup(run) if res.warnings else None
+    noisy = None if args.noise_checked else stated_noise_warning(res.residual_check, DEVICE_NOISE_MM)
+    if noisy is not None:
+        res.warnings.append(noisy)
+    mixup = _mixup(run, suspect=noisy is not None) if res.warnings else None
     if mixup is not None:                          # the cause first: the other reasons follow from it
         res.warnings.insert(0, mixup.reason())
     print_verdict(res)
@@ -132,7 +136,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if res.warnings:
         print_not_trusted(res)
         if mixup is None and res.residual_check is not None and res.residual_check.material:
-            _print_suspects(robot, camp, run.fixture, args, rod, comp, res.residual_check)
+            _print_suspects(robot, camp, run.fixture, args, rod, comp, res.residual_check, other_rod_mm)
         _note_ideal_device(args)
         return 3
     print_cautions(res)
@@ -179,7 +183,7 @@ def _note_uncompensated(robot, res, camp, fix, args, rod, comp) -> None:
 TOOL_MISMATCH_MM = 10.0
 
 
-def _warn_other_rod(tool_mm, rod, path) -> None:
+def _warn_other_rod(tool_mm, rod, path) -> float | None:
     """Warn when the identified ball centre is far from the rod file's tool vector (compared about the flange axis,
     which the identified flange twist turns the tool about): its compliance, mass and centre of mass would then
     be another rod's, and the compensation wrong."""
@@ -190,13 +194,16 @@ def _warn_other_rod(tool_mm, rod, path) -> None:
               f"flange) is {off:.0f} mm from the rod file's ({np.hypot(*f[:2]):.1f}, {f[2]:.1f} mm; {path}): is the "
               f"rod file this rod's? Its compliance, mass and centre of mass compensate the readings",
               file=sys.stderr)
+        return off
+    return None
 
 
-def _mixup(run: CalibrationRun):
+def _mixup(run: CalibrationRun, suspect: bool = False):
     """A joint whose readings run the other way than the robot file's, or two clamping positions swapped, when the
-    campaign is refused (:func:`~rodlab.calibrate.mixups.campaign_mixup`), or None."""
+    campaign is refused (:func:`~rodlab.calibrate.mixups.campaign_mixup`; ``suspect``: whatever its residual test
+    says), or None."""
     return campaign_mixup(run.robot, run.result, run.campaign, run.fixture, run.rod_file, run.observations, run.rod,
-                          run.compensations, run.options)
+                          run.compensations, run.options, suspect=suspect)
 
 
 def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:
@@ -212,9 +219,11 @@ def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:
             "calibrate without --joint-harmonics"]
 
 
-def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
+def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float | None = None) -> None:
     """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses, each
-    checked on the validation points when there are some) and what to do about each."""
+    checked on the validation points when there are some) and what to do about each; ``other_rod_mm``: how far the
+    identified ball centre is from the rod file's (:func:`_warn_other_rod`), when the file looks like another rod's:
+    a compliance found off is then that file's, not this rod's to measure."""
     from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     from rodlab.app.diagnose.campaign_holdout import HELD_OUT_WORSE
@@ -231,7 +240,11 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test) -> None:
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""
         held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get(HELD_OUT_WORSE) else ""
-        print(f"  - {f.effect}{where}: {remedy(f)}{held}", file=sys.stderr)
+        todo = remedy(f)
+        if other_rod_mm is not None and f.effect == "rod_deflection":
+            todo = (f"the rod file looks like another rod's (its ball {other_rod_mm:.0f} mm from the identified one, "
+                    f"warned above): calibrate with this rod's compliance file first; {todo}")
+        print(f"  - {f.effect}{where}: {todo}{held}", file=sys.stderr)
 
 
 def _print_result(res, before, after, label) -> None:

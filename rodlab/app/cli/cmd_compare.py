@@ -26,8 +26,8 @@ log = logging.getLogger(__name__)
 
 def register(sub) -> None:
     p = sub.add_parser("compare", help="run every compensation method on one campaign (the paper's Table 3)",
-                       description="Calibrate one campaign with several compliance files (and none) and print the "
-                                   "validation statistics in the layout of the paper's Table 3.")
+                       description="Calibrate one campaign with several compliance files (and with none, always added) "
+                                   "and print the validation statistics in the layout of the paper's Table 3.")
     p.add_argument("campaign")
     p.add_argument("--fixture", required=True, help="*.fixture.json (clamping poses, contact force)")
     add_device_option(p)
@@ -49,6 +49,9 @@ def _compare_runs(items) -> list:
         label, eq, path = item.partition("=")
         if not eq or not label.strip() or not path.strip():
             raise RodlabError(f"--rod {item!r}: expected LABEL=FILE (e.g. fea=rod1.fea.compliance.json)")
+        if path.strip().lower() == "none":
+            raise RodlabError(f"--rod {item!r}: compare runs the uncompensated calibration itself (the 'None' row): "
+                              "leave it out and give the compliance files to compare with it")
         rod = read_compliance(path)
         if not runs:
             runs.append(("None", rod, RodDeflection.of(None)))

@@ -206,15 +206,37 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_validate)
 
 
+def _check_positions(checks: list) -> None:
+    """Every valid campaign given beside one valid fixture file: its clamping positions must be the fixture's (a
+    problem of the campaign's, as ``rodlab calibrate`` refuses it). More than one fixture: not paired."""
+    fixtures = [(f, c) for f, c in checks if c.ok and c.format in ("rodlab.fixture/1", "rodlab.fixture/2")]
+    if len(fixtures) != 1:
+        return
+    from rodlab.calibrate import read_campaign, read_fixture   # CLI-lazy: the readers only where both are given
+    fpath = fixtures[0][0]
+    have = set(read_fixture(fpath).poses)
+    for f, c in checks:
+        if c.ok and c.format == "rodlab.campaign/1":
+            missing = sorted({int(j) for j in read_campaign(f, _joints(f)).position} - have)
+            if missing:
+                c.problems.append(Problem(str(f), f"clamping position(s) {missing} have no pose in {fpath} (it has "
+                                          f"{sorted(have)}): the fixture file is another campaign's or incomplete",
+                                          None, "position", "give the fixture file this campaign was recorded with"))
+
+
 def cmd_validate(args) -> int:
     bad = []
     robot = None
     if args.robot:
         robot = resolve_robot(args.robot)
+    checks = []
     for f in args.files:
         check = validate_file(f, args.format)
         if robot is not None and check.ok and check.format in _ROBOT_CHECKED:
             _check_against_robot(check, f, robot)
+        checks.append((f, check))
+    _check_positions(checks)
+    for f, check in checks:
         fmt = check.format or "unknown format"
         if check.ok:
             print(f"{f}: {fmt}, valid" + (f" ({check.note})" if check.note else "")

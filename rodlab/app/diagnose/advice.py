@@ -8,10 +8,11 @@ always says what to do next.
 from __future__ import annotations
 
 from rodlab.calibrate.effects import campaign_effect
-from rodlab.calibrate.trust import GROSS_CAUSES, gross
+from rodlab.calibrate.trust import GROSS_CAUSES, NOISY_FILE_CAUSES, PLAUSIBLE_NOISE_FACTOR, gross
 
 from ...core.enums import FindingKind
 from ...core.errors import RodlabError
+from ...core.units import DEVICE_NOISE_MM
 from .campaign_holdout import HELD_OUT_WORSE
 from .report import Finding
 
@@ -23,6 +24,10 @@ def _unexplained(f: Finding) -> str:
                                                       f.parameters.get("rms_mm", 0.0)):
         return (f"no device is {f.parameters['birge_ratio']:.0f} times noisier than stated, so do not raise "
                 f"--noise-um: the files do not describe this campaign: check {GROSS_CAUSES}")
+    if f.parameters.get("spread") == "even" and _implausible_device(f):
+        return (f"no structure by position or time, but a scatter of {f.parameters['scatter_um']:.1f} um is no "
+                f"MultiCal device's (more than {PLAUSIBLE_NOISE_FACTOR:g} times its {DEVICE_NOISE_MM * 1e3:g} um), so "
+                f"do not raise --noise-um: check {NOISY_FILE_CAUSES}")
     if f.parameters.get("spread") == "even":
         return ("no structure by position or time: a device noisier than stated would give this; if its "
                 "specification or a repeatability test (the ball held still, read 30 times) shows a scatter of at "
@@ -36,6 +41,12 @@ def _unexplained(f: Finding) -> str:
     return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "
             f"{f.location or 'the worst position'}, and compare with the simulated campaign of "
             "`rodlab simulate-campaign`")
+
+
+def _implausible_device(f: Finding) -> bool:
+    """The excess would need a device more than :data:`~calibrate.trust.PLAUSIBLE_NOISE_FACTOR` times a MultiCal
+    device's noise."""
+    return float(f.parameters.get("scatter_um", 0.0)) > PLAUSIBLE_NOISE_FACTOR * DEVICE_NOISE_MM * 1e3
 
 
 def remedy(f: Finding) -> str:

@@ -358,6 +358,10 @@ def read_points(path, n_joints: int = 6) -> PointSet:
         if arr.size != n or not np.all(np.isfinite(arr)):
             raise CalibrationError(f"expected {n} finite numbers, got {val!r}", path=p, line=k, key=key)
         return arr
+    if "units" in meta and meta["units"][1].strip().lower() not in ("mm", "millimetres", "millimeters"):
+        raise CalibrationError(f"'# units: {meta['units'][1].strip()}' is not read: a points file's units are in its "
+                               "column names (x_mm: millimetres, q: degrees); convert the numbers (metres x 1000) and "
+                               "delete the line", path=p, line=meta["units"][0], key="units")
     tool = vec("tool_mm", 3)
     mass = float(vec("rod_mass_kg", 1)[0]) if "rod_mass_kg" in meta else 0.0
     com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)

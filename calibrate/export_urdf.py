@@ -27,9 +27,9 @@ from rodlab.core.frames import pose_to_matrix
 from .errors import CalibrationError
 from .kinematics import HARMONICS, ModelParams, ball_positions, forward
 from .robot_lines import chain_matrices, row_matrix
-from .robot_urdf import UrdfChain, chain_poses, load_urdf, urdf_chain
+from .robot_urdf import UrdfChain, chain_poses, load_urdf, quiet_mesh_names, urdf_chain
 
-__all__ = ["UrdfExport", "calibrated_origins", "write_calibrated_urdf", "MEASUREMENT_LINK", "TCP_LINK"]
+__all__ = ["UrdfExport", "calibrated_origins", "write_calibrated_urdf", "MEASUREMENT_LINK", "TCP_LINK", "omitted_mm"]
 
 MEASUREMENT_LINK = "rodlab_measurement"
 TCP_LINK = "rodlab_tcp"
@@ -137,18 +137,19 @@ def write_calibrated_urdf(urdf_path, robot, params: ModelParams, out_path, q_che
         by_name[name].origin = _metres(T)
     _add_frames(model, ch, base, tcp)
     from lxml import etree                              # yourdfpy's own XML library
-    text = etree.tostring(model.write_xml(), pretty_print=True, encoding="unicode")
+    with quiet_mesh_names():
+        text = etree.tostring(model.write_xml(), pretty_print=True, encoding="unicode")
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + _note(robot, params, source) + "\n" + text
     out = Path(out_path)
     err = _check(text, out, params, q_check_rad)
     atomic_write_text(out, text)
     return UrdfExport(out, int(np.atleast_2d(q_check_rad).shape[0]), err, dict(zip(ch.revolute, origins)),
-                      _omitted_mm(robot, params, q_check_rad))
+                      omitted_mm(robot, params, q_check_rad))
 
 
-def _omitted_mm(robot, params: ModelParams, q) -> tuple[float, float]:
-    """Largest TCP effect [mm] of the joint compliance (no payload) and of the periodic joint errors: what the
-    URDF, the model's geometric part, leaves out."""
+def omitted_mm(robot, params: ModelParams, q) -> tuple[float, float]:
+    """Largest TCP effect [mm] over the configurations ``q`` (k, n) [rad] of the joint compliance (no payload) and of
+    the periodic joint errors: what the model's geometric part (a URDF, a DH table) leaves out."""
     q = np.atleast_2d(q)
     no_h = params.with_(h=np.zeros_like(params.h))
     compliance = ball_positions(robot, no_h, q)[0].pW - forward(no_h, q).pW

@@ -121,7 +121,7 @@ def point_unit_slips(points, path) -> list[str]:
         out.append(f"{path}: the median point lies {np.median(np.linalg.norm(x, axis=1)):.3f} mm from the instrument's "
                    "origin (a robot's workspace spans hundreds of mm): the positions look like metres; x_mm, y_mm, "
                    "z_mm are millimetres: multiply metres by 1000")
-    return out + _rod_header_slips(points, path)
+    return out + _rod_header_slips(points, path) + _sigma_slips(points, path)
 
 
 #: a validation rod heavier than this [kg] is a mass in grams (a tracker's target on a short rod: 0.1-2 kg; a trial's
@@ -129,6 +129,21 @@ def point_unit_slips(points, path) -> list[str]:
 POINTS_ROD_MASS_LIMIT_KG = 50.0
 #: a tool vector shorter than this [mm] (and not zero: points at the flange) is in metres
 POINTS_TOOL_METRES_MM = 2.0
+
+
+#: per-point uncertainties whose median exceeds this [mm] are in um (a tracker's: 0.005-0.1 mm per coordinate; a
+#: trial's 12 um written as 12 made the residual test pass at chi-square 0 with a 13 mm noise)
+POINTS_SIGMA_LIMIT_MM = 1.0
+
+
+def _sigma_slips(points, path) -> list[str]:
+    """The per-point uncertainty columns in um where mm are expected."""
+    s = getattr(points, "sigma_mm", None)
+    if s is None or not np.size(s) or float(np.median(s)) <= POINTS_SIGMA_LIMIT_MM:
+        return []
+    return [f"{path}: the per-point uncertainties' median is {float(np.median(s)):g} mm (an instrument's: 0.005-0.1 "
+            "mm per coordinate): sigma_x_mm, sigma_y_mm, sigma_z_mm look like um; they are millimetres: divide um by "
+            "1000"]
 
 
 def _rod_header_slips(points, path) -> list[str]:

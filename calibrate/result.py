@@ -70,6 +70,16 @@ class CalibrationResult:
     prediction: object = None              # calibrate.crossval.Prediction (held-out accuracy), or None
 
 
+#: the robot description's nominal rows a result records (``description``): the ``dtheta`` are relative to its
+#: ``theta_offset_deg``, so a result applied to a description with other joint zeros is another robot
+DESCRIPTION_ROWS = ("theta_offset_deg", "d_mm", "a_mm", "alpha_deg", "beta_deg")
+
+
+def description_of(robot) -> dict:
+    """The description's nominal DH rows [deg, mm] a calibration of ``robot`` is made against."""
+    return {k: [float(v) for v in getattr(robot, k)] for k in DESCRIPTION_ROWS}
+
+
 def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorStats | None = None,
                 after: ErrorStats | None = None, extra: dict | None = None) -> dict:
     """Contract calibration result. DH ``d, a, alpha, beta`` are absolute values (nominal + error), ``dtheta``
@@ -81,7 +91,7 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
     harmonic = any(info.kind in HARMONICS for info in res.infos)
     out = {"format": FORMAT_CALIBRATION_HARMONICS if harmonic else FORMAT_CALIBRATION, "robot": robot.name,
            "compensation": compensation, "trusted": not res.warnings,
-           "parameters": params,
+           "parameters": params, "description": description_of(robot),
            "unidentifiable": res.unidentifiable, "residual_rms_mm": res.rms_mm, "points": int(res.residuals_mm.shape[0]),
            "fit": {"success": res.success, "message": res.message, "nfev": res.nfev,
                    "compensation_passes": res.iterations, "noise_mm": res.noise_mm, "condition": res.condition,
@@ -122,7 +132,9 @@ class CalibrationFile:
     """A calibration result: the robot's name, the compensation, whether it is trusted, the parameters; for a
     ``/2`` result the periodic terms' references (joint -> 4 means) and the readings they were identified over
     (joint -> (min, max) [deg]); the correlation matrix of the free parameters (``fit.correlation``: names, and
-    shape=(P, P)), or None in a file written before it was recorded."""
+    shape=(P, P)), or None in a file written before it was recorded; the robot ``description``'s nominal rows the
+    calibration was made against ({row: (n,) list}, :data:`DESCRIPTION_ROWS`), or None in a file written before it
+    was recorded."""
 
     path: Path
     robot: str
@@ -134,6 +146,7 @@ class CalibrationFile:
     harmonic_range_deg: dict = field(default_factory=dict)
     correlation_names: tuple = ()
     correlation: np.ndarray | None = None
+    description: dict | None = None
 
 
 def read_calibration(path) -> CalibrationFile:
@@ -158,7 +171,22 @@ def read_calibration(path) -> CalibrationFile:
     names, corr = _correlation(data, params, p)
     return CalibrationFile(p, str(data.get("robot", "")), str(data.get("compensation", "")),
                            bool(data.get("trusted", False)), float(data.get("residual_rms_mm", float("nan"))), params,
-                           ref, rng, names, corr)
+                           ref, rng, names, corr, _description(data, p))
+
+
+def _description(data: dict, p: Path) -> dict | None:
+    """``description``: every row of :data:`DESCRIPTION_ROWS`, as many finite numbers each; None when absent."""
+    block = data.get("description")
+    if block is None:
+        return None
+    try:
+        rows = {k: [float(v) for v in block[k]] for k in DESCRIPTION_ROWS}
+    except (KeyError, TypeError, ValueError) as e:
+        raise CalibrationError(f"description: expected {{{', '.join(DESCRIPTION_ROWS)}: [one number per joint]}} "
+                               f"({e})", path=p, key="description") from e
+    if len({len(v) for v in rows.values()}) != 1 or not all(np.isfinite(v).all() for v in rows.values()):
+        raise CalibrationError("description: expected as many finite numbers in every row", path=p, key="description")
+    return rows
 
 
 def _correlation(data: dict, params: dict, p: Path) -> tuple[tuple, np.ndarray | None]:
@@ -244,9 +272,33 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
                        np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h, h_ref)
 
 
+def _check_joint_zeros(robot, cal: CalibrationFile) -> None:
+    """The description's joint zeros against those the calibration recorded (its ``dtheta`` are relative to them)."""
+    if cal.description is None:
+        return
+    theirs = np.asarray(cal.description["theta_offset_deg"], float)
+    ours = np.asarray(robot.theta_offset_deg, float)
+    if theirs.shape != ours.shape:
+        raise CalibrationError(f"the calibration was made against a {theirs.size}-joint description, this robot "
+                               f"({robot.name!r}) has {ours.size} joints: export with the one the calibration used (it "
+                               f"names {cal.robot!r})", path=cal.path, key="description")
+    off = np.nonzero(np.abs((ours - theirs + 180.0) % 360.0 - 180.0) > 1e-6)[0]
+    if off.size:
+        rows = "; ".join(f"joint {j + 1}: {round(theirs[j], 6) + 0.0:g} deg there, {round(ours[j], 6) + 0.0:g} deg here"
+                         for j in off)
+        raise CalibrationError(f"this robot description ({robot.name!r}) counts joints from other zeros than the one the "
+                               f"calibration used (it names {cal.robot!r}; theta_offset {rows}): the identified dtheta "
+                               "are relative to those zeros, so the exported model would be off by the difference; "
+                               "export with the description the calibration used", path=cal.path,
+                               key="description.theta_offset_deg")
+
+
 def _check_description(robot, cal: CalibrationFile) -> None:
-    """Rows the calibration held at nominal must be this description's nominal: else it is another robot file
-    (a URDF's rows differ from a hand-written DH table of the same arm)."""
+    """Rows the calibration held at nominal must be this description's nominal, and its joint zeros
+    (``theta_offset_deg``, which the ``dtheta`` are relative to) the description's the calibration recorded: else it
+    is another robot file (a URDF's rows differ from a hand-written DH table of the same arm; a trial's URDF with an
+    elbow zero 2.9 deg off had been exported 6.8 mm wrong with a passing read-back)."""
+    _check_joint_zeros(robot, cal)
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for name, v in cal.parameters.items():
         kind, _, idx = name.rpartition("_")

@@ -9,6 +9,7 @@ q = 0; fixed joints are folded in, the links' ``<inertial>`` masses are lumped o
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ from .robot_lines import ZeroChain
 from .robot_reader import RobotFormat
 from .urdf_check import check_urdf_structure
 
-__all__ = ["read_urdf", "load_urdf", "UrdfChain", "urdf_chain", "chain_poses", "zero_chain", "ROBOT_FORMAT"]
+__all__ = ["read_urdf", "load_urdf", "quiet_mesh_names", "UrdfChain", "urdf_chain", "chain_poses", "zero_chain", "ROBOT_FORMAT"]
 
 log = logging.getLogger(__name__)
 _MOVING = ("revolute", "continuous")
@@ -67,10 +68,24 @@ def load_urdf(path):
     check_urdf_structure(text, p)
     import yourdfpy                                      # heavy (trimesh): only for URDF robots
     try:
-        return yourdfpy.URDF.load(str(p), build_scene_graph=False, load_meshes=False,
-                                  load_collision_meshes=False)
+        with quiet_mesh_names():
+            return yourdfpy.URDF.load(str(p), build_scene_graph=False, load_meshes=False,
+                                      load_collision_meshes=False)
     except Exception as e:  # noqa: BLE001 - the parser's own errors carry no common base
         raise CalibrationError(f"the URDF parser refused the file: {e}", path=p) from e
+
+
+@contextlib.contextmanager
+def quiet_mesh_names():
+    """yourdfpy resolves the mesh file names of a URDF it reads or writes, meshes unused: a URDF copied away from its
+    package logs one warning per mesh (11 for a Panda). Its warnings are held back meanwhile; errors pass."""
+    log = logging.getLogger("yourdfpy")
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        log.setLevel(level)
 
 
 def _pose(joint, q: float = 0.0) -> np.ndarray:

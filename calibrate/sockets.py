@@ -128,9 +128,15 @@ class SocketReadings:
 _KEYS = ("distance_mm", "tool_mm", "seat_sigma_mm", "distance_sigma_mm", "length_sigma_mm")
 
 
+#: a comment key that names a quantity (a unit suffix, or ``units``): meant as data, refused when unknown; other
+#: comment keys (``Source``, ``robot``, ``date``) are the user's notes
+_DATA_KEY = re.compile(r"units?|[a-z0-9_]+_(mm|m|um|deg|rad|kg|g|n|s)")
+
+
 def _meta(p: Path, text: str) -> dict:
-    """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key is refused,
-    other comments (``# Source: ...``) are ignored."""
+    """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key and an unknown key
+    naming a quantity (:data:`_DATA_KEY`: ``tool_offset_mm``, ``units``) are refused, other comments (``# Source:
+    ...``) are ignored."""
     meta = {}
     for k, key, value in leading_comments(text):
         if not re.fullmatch(r"[A-Za-z_]+", key):
@@ -140,6 +146,10 @@ def _meta(p: Path, text: str) -> dict:
             if near:                                      # a misspelt key, not a comment of the user's
                 raise CalibrationError(f"unknown key {key!r}; did you mean {near[0]!r}? A sockets file knows "
                                        f"{list(_KEYS)}", path=p, line=k, key=key)
+            if _DATA_KEY.fullmatch(key):                  # a number with a unit the user meant to be read
+                raise CalibrationError(f"unknown key {key!r}: a sockets file knows {list(_KEYS)}; rodlab would not "
+                                       "read it. Remove the line or give the value under one of those keys", path=p,
+                                       line=k, key=key)
             continue
         if key in meta:
             raise CalibrationError(f"{key!r} is given twice (also on line {meta[key][0]})", path=p, line=k, key=key)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -105,6 +106,55 @@ def _urdf_file(spec: str) -> str:
     return str(path)
 
 
+@dataclass(frozen=True)
+class _LeftOut:
+    """What the exported geometry (URDF joint origins, DH table) leaves out of the calibrated model: the joint
+    compliance's and the periodic joint errors' largest TCP effect [mm] over the check configurations."""
+
+    compliance_mm: float
+    periodic_mm: float
+
+    @property
+    def text(self) -> str:
+        parts = ([f"joint compliance (up to {self.compliance_mm:.3f} mm at the TCP there, no payload)"]
+                 if self.compliance_mm > 0 else []) + \
+            ([f"the periodic joint errors (up to {self.periodic_mm:.3f} mm)"] if self.periodic_mm > 0 else [])
+        return f"{' and '.join(parts)} {'are' if len(parts) > 1 else 'is'}" if parts else ""
+
+
+def _left_out(robot, params: ModelParams, q_check) -> _LeftOut:
+    from rodlab.calibrate.export_urdf import omitted_mm
+    c_mm, h_mm = omitted_mm(robot, params, q_check)
+    return _LeftOut(c_mm if params.c.any() else 0.0, h_mm if params.h.any() else 0.0)
+
+
+def _warn_geometry_alone(cal, left: _LeftOut, where: str) -> None:
+    """A consumer of the exported geometry that does not add what it leaves out (ROS, most controllers) loses
+    accuracy: a warning where that is more than the model's own error, a note where it is more than 0.02 mm."""
+    rms = cal.residual_rms_mm
+    for what, mm, fix in (("the joint compliance", left.compliance_mm, "with --kinematic-only"),
+                          ("the periodic joint errors", left.periodic_mm, "without --joint-harmonics")):
+        if mm <= 0.02:
+            continue
+        worse = mm > rms
+        print(f"{'warning' if worse else 'note'}: a consumer of {where} that does not add {what} (ROS, most "
+              f"controllers) gets up to {mm:.3f} mm more error than the calibrated model"
+              + (f", more than the model's own error ({rms:.3f} mm rms)" if worse else "")
+              + f": for such a consumer calibrate again {fix} (`rodlab calibrate ...`) and export that result",
+              file=sys.stderr)
+
+
+def _note_description(cal, robot) -> None:
+    """A result without the description it was made against cannot be checked; another name is worth a note."""
+    if cal.description is None:
+        print(f"warning: {cal.path.name} does not record the robot description it was calibrated against (written "
+              "before rodlab recorded it): make sure this robot file is that description, joint zeros included; "
+              "calibrate again to have it checked", file=sys.stderr)
+    elif cal.robot and cal.robot != robot.name:
+        print(f"note: the calibration names the robot {cal.robot!r}, this description {robot.name!r}; its joint zeros "
+              "and held rows match the calibration's", file=sys.stderr)
+
+
 def cmd_export(args) -> int:
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
@@ -122,42 +172,35 @@ def cmd_export(args) -> int:
     if not args.urdf and str(getattr(robot, "path", "") or "").lower().endswith(".urdf"):
         args.urdf = str(robot.path)                     # a URDF robot: its own file is written back calibrated
     params = calibrated_params(robot, cal)
+    _note_description(cal, robot)
     urdf_out, yaml_out, csv_out = _outputs(args, robot)
     if urdf_out is None and Path(args.output).suffix.lower() == ".urdf":
         print(f"note: no URDF written: {robot.name} is a DH table, not a URDF (give --urdf ROBOT.urdf to write one "
               "calibrated); the YAML and the DH table carry the calibration", file=sys.stderr)
+    q_check = _check_configurations(args, robot)
+    left_out = _left_out(robot, params, q_check)
     origins = None
     if urdf_out is not None:
         from rodlab.calibrate.export_urdf import write_calibrated_urdf
-        q_check = _check_configurations(args, robot)
         res = write_calibrated_urdf(args.urdf, robot, params, urdf_out, q_check,
                                     args.base_link, args.tip_link, source=Path(args.calibration).name)
         origins = res.origins
-        c_mm, h_mm = res.omitted_max_mm
-        parts = ([f"joint compliance (up to {c_mm:.3f} mm at the TCP there, no payload)"] if params.c.any() else []) + \
-            ([f"the periodic joint errors (up to {h_mm:.3f} mm)"] if params.h.any() else [])
-        left_out = f"; {' and '.join(parts)} {'are' if len(parts) > 1 else 'is'} not in the URDF, see the YAML" \
-            if parts else ""
-        if c_mm > max(0.02, cal.residual_rms_mm):
-            print(f"warning: a consumer of this URDF that does not add the joint compliance (ROS, most controllers) "
-                  f"gets up to {c_mm:.3f} mm more error than the calibrated model, more than the model's own error "
-                  f"({cal.residual_rms_mm:.3f} mm rms): the calibrated geometry leaves the gravity sag to the "
-                  f"compliance. For URDF consumers the kinematic-only calibration is the one to export: "
-                  f"calibrate again with --kinematic-only (`rodlab calibrate ... --kinematic-only`) and export that "
-                  f"result", file=sys.stderr)
+        note = f"; {left_out.text} not in the URDF, see the YAML" if left_out.text else ""
         print(f"wrote {res.path} (read back: TCP within {res.max_error_um:.2g} um of the calibrated model's geometry "
-              f"over {res.configurations} configurations{left_out})")
+              f"over {res.configurations} configurations{note})")
         _warn_outside_range(cal, q_check)
-        if 0.02 < c_mm <= cal.residual_rms_mm:
-            print(f"note: a consumer of this URDF that does not add the joint compliance (ROS, most controllers) "
-                  f"gets up to {c_mm:.3f} mm more error than the calibrated model, because the calibrated geometry "
-                  f"leaves the gravity sag to the compliance; for such a consumer, calibrate again with "
-                  f"--kinematic-only and export that result", file=sys.stderr)
+        if args.tip_link:
+            from rodlab.calibrate.export_urdf import TCP_LINK
+            print(f"note: the calibrated tool point is the link {TCP_LINK!r} of {res.path.name}, not {args.tip_link!r} "
+                  f"(kept as the robot had it): load it with --tip-link {TCP_LINK} to calibrate or validate with the "
+                  "calibrated model", file=sys.stderr)
+    _warn_geometry_alone(cal, left_out, "the URDF or the DH table" if urdf_out is not None else "the DH table")
     _warn_ik_assumptions(robot, params)
     _warn_rod_twist(robot, cal)
     print(f"wrote {write_params_yaml(yaml_out, robot, cal, params, origins)}")
     print(f"wrote {write_dh_csv(csv_out, robot, cal, params)}")
-    if not cal.trusted:
-        print(f"note: {Path(args.calibration).name} says trusted: false; read its warnings before loading these "
-              "parameters into a controller")
+    if not cal.trusted:                 # written, as calibrate writes its result: exit 3 as calibrate's does
+        print(f"warning: {Path(args.calibration).name} says trusted: false (NOT TRUSTED): read its warnings "
+              "(fit.warnings) before loading these parameters into a controller", file=sys.stderr)
+        return 3
     return 0

@@ -90,6 +90,9 @@ def _schemaless_format(path, format_id: str | None) -> str | None:
     kinds = schemaless_robot_formats()
     if format_id is not None:
         return format_id if format_id in kinds.values() else None
+    suffixes = [x.lower() for x in Path(path).suffixes]
+    if suffixes[-2:] == [".urdf", ".xacro"]:        # its reader says how to expand it
+        return kinds.get(".urdf")
     return kinds.get(Path(path).suffix.lower())
 
 

@@ -1,0 +1,127 @@
+"""What a new-user trial (2026-11-29, an integrator calibrating with a laser tracker and URDF / modified-DH robots)
+found, fixed: a calibration exported onto a robot description with other joint zeros (a model 6.8 mm wrong with a
+passing read-back), a compliant calibration exported as a DH table without a word on the sag it leaves out, an
+untrusted result exported with exit 0, sigma columns in um, a `# units: m` line and unknown quantity keys read past,
+a xacro file `validate` could not name, the calibrated TCP link not named after a `--tip-link` export, and a
+warning per mesh of a URDF copied away from its package."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rodlab.app.cli.main import main
+from rodlab.calibrate import read_points, robot_path
+from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.readings import point_unit_slips
+from rodlab.calibrate.result import read_calibration
+from rodlab.calibrate.sockets import read_sockets
+
+DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data"
+
+
+@pytest.fixture(scope="module")
+def ur5(tmp_path_factory) -> tuple[Path, Path, Path]:
+    """(every fourth UR5 grid pose, its kinematic-only and its full calibration result)."""
+    tmp = tmp_path_factory.mktemp("ur5_47")
+    lines = (DATA / "jacobi2025" / "ur5_grid.validation.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")] + [next(ln for ln in lines if ln.startswith("q1"))]
+    rows = [ln for ln in lines if ln and not ln.startswith(("#", "q1"))][::4]
+    pts = tmp / "ur5.validation.csv"
+    pts.write_text("\n".join(head + rows) + "\n")
+    kin, full = tmp / "kin.json", tmp / "full.json"
+    for out, extra in ((kin, ["--kinematic-only"]), (full, [])):
+        main(["calibrate", "--points", str(pts), "--robot", "ur5", "--fix-unidentifiable", "--json", str(out), *extra])
+    return pts, kin, full
+
+
+def test_a_result_records_its_description_and_export_refuses_other_joint_zeros(ur5, tmp_path, capsys):
+    """The elbow's origin turned by 0.05 rad (its zero 2.9 deg off): the export had written a URDF 6.8 mm off the
+    calibrated model and said 'read back: TCP within 1e-9 um'. Refused now, naming joint 3 and both zeros."""
+    _, kin, _ = ur5
+    cal = read_calibration(kin)
+    assert cal.description is not None and len(cal.description["theta_offset_deg"]) == 6
+    urdf = robot_path("ur5").read_text()
+    moved = urdf.replace('<origin xyz="0 -0.1197 0.425" rpy="0 0 0"/>', '<origin xyz="0 -0.1197 0.425" rpy="0 0.05 0"/>')
+    assert moved != urdf
+    other = tmp_path / "ur5_zero3.urdf"
+    other.write_text(moved)
+    capsys.readouterr()
+    assert main(["export", str(kin), "--urdf", str(other), "-o", str(tmp_path / "x.urdf")]) == 2
+    err = capsys.readouterr().err
+    assert "counts joints from other zeros" in err and "joint 3:" in err and not (tmp_path / "x.urdf").exists()
+    assert main(["export", str(kin), "-o", str(tmp_path / "ok.urdf")]) == 0             # its own description
+
+
+def test_a_result_without_its_description_is_exported_with_a_warning(ur5, tmp_path, capsys):
+    _, kin, _ = ur5
+    data = json.loads(kin.read_text())
+    del data["description"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(data))
+    capsys.readouterr()
+    assert main(["export", str(old), "-o", str(tmp_path / "old.urdf")]) == 0
+    assert "does not record the robot description" in capsys.readouterr().err
+
+
+def test_a_compliant_result_exported_as_a_dh_table_is_warned_of(tmp_path, capsys, examples):
+    """A DH robot (no URDF): the table alone leaves the gravity sag to the compliance; said as for a URDF."""
+    camp = examples / "campaign-null"
+    cal = tmp_path / "cal.json"
+    main(["calibrate", str(camp / "multical.campaign.csv"), "--fixture", str(camp / "multical.fixture.json"),
+          "--rod", str(next(camp.glob("*.compliance.json"))), "--json", str(cal)])
+    capsys.readouterr()
+    main(["export", str(cal), "--robot", "tx90", "-o", str(tmp_path / "tx90")])
+    err = capsys.readouterr().err
+    assert "a consumer of the DH table that does not add the joint compliance" in err and "--kinematic-only" in err
+
+
+def test_an_untrusted_result_exports_with_exit_3(ur5, tmp_path, capsys):
+    _, kin, _ = ur5
+    data = json.loads(kin.read_text())
+    data["trusted"] = False
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(data))
+    assert main(["export", str(bad), "-o", str(tmp_path / "bad.urdf")]) == 3
+    assert "NOT TRUSTED" in capsys.readouterr().err and (tmp_path / "bad.urdf").exists()
+
+
+def test_points_sigmas_in_um_and_a_units_line_are_named(ur5, tmp_path):
+    pts, _, _ = ur5
+    lines = pts.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("q1"))
+    um = lines[:i] + [lines[i] + ",sigma_x_mm,sigma_y_mm,sigma_z_mm"] + [ln + ",12,12,15" for ln in lines[i + 1:]]
+    path = tmp_path / "um.validation.csv"
+    path.write_text("\n".join(um) + "\n")
+    assert any("look like um" in s for s in point_unit_slips(read_points(path), path))
+    assert not any("look like um" in s for s in point_unit_slips(read_points(pts), pts))
+    units = tmp_path / "units.validation.csv"
+    units.write_text("\n".join(lines[:i] + ["# units: m"] + lines[i:]) + "\n")
+    with pytest.raises(CalibrationError, match="is not read") as e:
+        read_points(units)
+    assert e.value.key == "units"
+    mm = tmp_path / "mm.validation.csv"
+    mm.write_text("\n".join(lines[:i] + ["# units: mm"] + lines[i:]) + "\n")
+    assert len(read_points(mm).q_deg) == len(lines) - i - 1
+
+
+def test_an_unknown_quantity_key_in_a_sockets_file_is_refused(tmp_path):
+    src = DATA / "mukca2025" / "panda_2.sockets.csv"
+    read_sockets(src, 7)
+    text = src.read_text()
+    keyed = tmp_path / "k.sockets.csv"
+    keyed.write_text("# tool_offset_mm: 0, 0, 10\n" + text)
+    with pytest.raises(CalibrationError, match="unknown key 'tool_offset_mm'"):
+        read_sockets(keyed, 7)
+    noted = tmp_path / "n.sockets.csv"
+    noted.write_text("# Source: a note of the user's\n" + text)
+    read_sockets(noted, 7)
+
+
+def test_validate_names_a_xacro_file(tmp_path, capsys):
+    x = tmp_path / "arm.urdf.xacro"
+    x.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="arm"><xacro:property name="l" '
+                 'value="1"/></robot>')
+    assert main(["validate", str(x)]) == 2
+    assert "expand it first" in capsys.readouterr().err

@@ -29,6 +29,9 @@ BIRGE_MATERIAL = 1.5
 #: finding, but not worded as "consistent with noise" either (a new user read "consistent ... p = 0.0038" as a
 #: contradiction)
 P_EDGE = 1e-2
+#: degrees of freedom below which the residuals say nothing about the noise (a trial's 8 points for 24 parameters:
+#: reduced chi-square 0.00 over 1 degree of freedom, 'consistent with noise' and 'complete? yes')
+MIN_TEST_DOF = 5
 
 
 @dataclass(frozen=True)
@@ -61,9 +64,17 @@ class ResidualTest:
         return self.missing and self.birge > BIRGE_MATERIAL
 
     @property
+    def testable(self) -> bool:
+        """Enough degrees of freedom (:data:`MIN_TEST_DOF`) for the residuals to say anything about the noise."""
+        return self.dof >= MIN_TEST_DOF
+
+    @property
     def wording(self) -> str:
         """How the residuals compare with the noise model, in words: ``NOT noise``, ``slightly above noise``, ``at
-        the edge of the noise model (not significant at p < 0.001)``, ``consistent with noise``."""
+        the edge of the noise model (not significant at p < 0.001)``, ``consistent with noise``; ``not testable``
+        with fewer than :data:`MIN_TEST_DOF` degrees of freedom."""
+        if not self.testable:
+            return f"not testable ({self.dof} degree(s) of freedom: the fit can absorb any noise)"
         if self.material:
             return "NOT noise"
         if self.missing:

@@ -153,6 +153,9 @@ def completeness_statement(res: "CalibrationResult") -> str:
     test = res.residual_check
     if test is None:
         return "complete? not tested (no noise level stated)"
+    if not test.testable:
+        return (f"complete? not tested: {test.dof} degree(s) of freedom are too few for the residuals to show what the "
+                "model leaves out")
     word = {Completeness.COMPLETE: "yes", Completeness.NEARLY: "nearly", Completeness.INCOMPLETE: "no"}
     return (f"complete? {word[completeness(res)]}: the model leaves {res.rms_mm * 1e3:.1f} um rms per reading "
             f"unexplained (Birge ratio sqrt(chi-square / dof) {test.birge:.1f} by the residual test above, against "
@@ -169,8 +172,9 @@ GROSS_BIRGE = 20.0
 #: R-2000iC 0.65 mm) but readings of another robot's joints: two q columns exchanged had been TRUSTED at 24 mm
 UNMODELLED_GROSS_RMS_MM = 5.0
 #: what makes them so
-UNMODELLED_GROSS_CAUSES = ("the q columns against the robot file's joints (order, signs, zero offsets), the units and "
-                           "whether the robot file is this robot's")
+UNMODELLED_GROSS_CAUSES = ("the q columns against the robot file's joints (order, signs, zero offsets), the units, "
+                           "whether the robot file is this robot's, and whether the target or tool changed part-way "
+                           "through the file (two reflectors, a re-mounted target: calibrate each part on its own)")
 #: what makes them so
 GROSS_CAUSES = ("the robot file's joints against the campaign's q columns (order, signs, zero offsets), the units "
                 "(readings in mm, joint angles in deg, fixture poses in mm and deg), another rod's compliance file, "

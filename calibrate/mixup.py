@@ -16,7 +16,9 @@ class Mixup:
     """joint : 1-based joint whose readings are reversed, or None; positions : the two clamping positions whose
     labels are swapped, or None; rms_mm : the identification's rms per reading [mm] with the mix-up undone;
     rms_given_mm : the rms as the files were given [mm]; readings : the two reading columns (0-2: x_mm, y_mm, z_mm)
-    exchanged, or the one reading column negated (a 1-tuple), or None."""
+    exchanged, or the one reading column negated (a 1-tuple), or None; target_change : (the first data row of the
+    second part (1-based), each part's registered nominal misfit [mm]) of instrument points whose target or tool
+    changed part-way through, or None."""
 
     joint: int | None
     positions: tuple | None
@@ -29,11 +31,12 @@ class Mixup:
     coupling: tuple | None = None
     alternatives: tuple = ()
     readings: tuple | None = None
+    target_change: tuple | None = None
 
     def __post_init__(self) -> None:
         kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
                  + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None)
-                 + (self.readings is not None))
+                 + (self.readings is not None) + (self.target_change is not None))
         if kinds != 1:
             raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
                              "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns or "
@@ -41,6 +44,8 @@ class Mixup:
 
     @property
     def label(self) -> str:
+        if self.target_change is not None:
+            return f"target changed at data row {self.target_change[0]}"
         if self.fixture_radians:
             return "fixture angles read as radians"
         if self.readings is not None and len(self.readings) == 1:
@@ -64,6 +69,8 @@ class Mixup:
             return f"q{self.columns[0]}, q{self.columns[1]}"
         if self.readings is not None:
             return ", ".join(_READ[k] for k in self.readings)
+        if self.target_change is not None:
+            return "x_mm, y_mm, z_mm"
         k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
              else self.coupling[1])
         return f"q{k}"
@@ -80,6 +87,12 @@ class Mixup:
                  f"as given {given}")
         fit = (f"the data fit to {self.rms_mm * 1e3:.1f} um rms per reading ({given}) with every parameter within "
                "its bounds")
+        if self.target_change is not None:
+            k, a, b = self.target_change
+            return (f"the points before data row {k} and from it on each fit the nominal model on their own ({a:.1f} "
+                    f"and {b:.1f} mm rms, base and tool registered for each) but not together ({self.rms_given_mm:.1f} "
+                    f"mm): the target or tool changed at data row {k} (two reflectors, a re-mounted target); give each "
+                    "part its own file and calibrate each, or measure again with one target")
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")

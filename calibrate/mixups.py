@@ -38,6 +38,7 @@ from .points import identify_points, points_observations
 from .socket_check import check_sockets
 from .socket_fit import identify_sockets, socket_start
 from .sockets import SocketReadings
+from .target_change import target_change
 from .trust import bound_warnings, gross
 
 __all__ = ["Mixup", "find_mixup", "campaign_mixup", "points_mixup", "sockets_mixup", "refuse_mixed_up_joints",
@@ -208,13 +209,19 @@ def _degrees_from_radians(fixture):
 
 def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     """A joint of the instrument points ``pts`` (:class:`~calibrate.campaign.PointSet`) whose readings run the other
-    way than ``robot``'s, or two joint columns exchanged, or None: checked only when the nominal model, base and
+    way than ``robot``'s, or two joint columns exchanged, or a target changed part-way through the file
+    (:func:`~calibrate.target_change.target_change`), or None: checked only when the nominal model, base and
     tool registered from scratch, misses the points by more than :data:`NOMINAL_GROSS_MM` rms; the negation or
     exchange that brings that under it (the best one) is confirmed by ``identify_points_as(points)``, the
     identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
     the registered nominal model's rms."""
-    return _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
-                         lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM, 90.0)
+    found = _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
+                          lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM, 90.0)
+    if found is None:                      # no column explains it: a target changed part-way through the file?
+        given = _finite_misfit(lambda q: _registered_rms(robot, pts, q), pts.q_deg)
+        found = target_change(pts, lambda part: _finite_misfit(lambda q: _registered_rms(robot, part, q), part.q_deg),
+                              given, NOMINAL_GROSS_MM, SCREEN_GAIN)
+    return found
 
 
 def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | None:

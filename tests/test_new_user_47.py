@@ -125,3 +125,22 @@ def test_validate_names_a_xacro_file(tmp_path, capsys):
                  'value="1"/></robot>')
     assert main(["validate", str(x)]) == 2
     assert "expand it first" in capsys.readouterr().err
+
+
+def test_points_of_two_targets_in_one_file_are_named(tmp_path, capsys):
+    """The public FANUC points of reflector N1 (poses 1-30) then N2 (31-59) in one file: refused at 156 mm with the
+    joint columns, units and robot file as suspects, then named: each part fits the nominal model on its own."""
+    def rows(name):
+        lines = (DATA / "boby2021" / name).read_text().splitlines()
+        i = next(k for k, ln in enumerate(lines) if ln.startswith("q1"))
+        return lines[:i + 1], lines[i + 1:]
+    head, n1 = rows("r2000ic_N1.validation.csv")
+    _, n2 = rows("r2000ic_N2.validation.csv")
+    mixed = tmp_path / "mixed.validation.csv"
+    mixed.write_text("\n".join(head + n1[:30] + n2[30:]) + "\n")
+    assert main(["calibrate", "--points", str(mixed), "--robot", "r2000ic165f"]) == 2
+    err = capsys.readouterr().err
+    assert "the target or tool changed at data row 31" in err
+    assert main(["calibrate", "--points", str(DATA / "boby2021" / "r2000ic_N2.validation.csv"), "--robot",
+                 "r2000ic165f"]) in (0, 3)
+    assert "target or tool changed" not in capsys.readouterr().err

@@ -169,6 +169,11 @@ def _deficient(robot, sel: Selection, reasons: dict) -> dict:
     return {nm: why for nm, why in reasons.items() if nm not in structural and why.startswith(("combined", "has no"))}
 
 
+#: the end of the refusal of a data set that cannot identify what it must: true for `calibrate --strict`, not for
+#: a diagnosis, which identifies every parameter (its callers strip it)
+STRICT_HINT = " (without --strict rodlab holds them at nominal itself)"
+
+
 def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bool) -> None:
     """A data set that cannot identify what it must is refused with the parameters and the remedy, or (with
     ``fix_unidentifiable``) those parameters are held at nominal and logged."""
@@ -180,8 +185,8 @@ def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bo
                 else "Measure more poses spread over the workspace (every joint moved, varied configurations)")
         raise CalibrationError(
             f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
-            f"parameter(s): {lines}. {more}, or hold them with --pin NAME=VALUE (without --strict rodlab holds them "
-            f"at nominal itself)", key="campaign" if obs.group is not None else "points")
+            f"parameter(s): {lines}. {more}, or hold them with --pin NAME=VALUE{STRICT_HINT}",
+            key="campaign" if obs.group is not None else "points")
 
 
 @dataclass

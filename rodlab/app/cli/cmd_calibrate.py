@@ -233,8 +233,9 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float
         diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm, validate_points=points,
                                     fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     except RodlabError as e:   # the diagnosis identifies every parameter; the calibration held some at nominal
-        print(f"suspects: the campaign diagnosis cannot run on this campaign ({e}); the verdict above stands",
-              file=sys.stderr)
+        from rodlab.calibrate.identify import STRICT_HINT
+        print(f"suspects: the campaign diagnosis, which identifies every parameter, cannot run on this campaign "
+              f"({str(e).replace(STRICT_HINT, '')}); the verdict above stands", file=sys.stderr)
         return
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:

@@ -27,7 +27,8 @@ def _unexplained(f: Finding) -> str:
     if f.parameters.get("spread") == "even" and _implausible_device(f):
         return (f"no structure by position or time, but a scatter of {f.parameters['scatter_um']:.1f} um is no "
                 f"MultiCal device's (more than {PLAUSIBLE_NOISE_FACTOR:g} times its {DEVICE_NOISE_MM * 1e3:g} um), so "
-                f"do not raise --noise-um: check {NOISY_FILE_CAUSES}")
+                f"do not raise --noise-um: check the files first ({NOISY_FILE_CAUSES}), then the robot and the fixture "
+                "for play no effect models (backlash in a wrist joint, a loose ball, device or mount)")
     if f.parameters.get("spread") == "even":
         return ("no structure by position or time: a device noisier than stated would give this; if its "
                 "specification or a repeatability test (the ball held still, read 30 times) shows a scatter of at "

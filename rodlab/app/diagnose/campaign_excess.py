@@ -35,7 +35,8 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
     noisier = (f"no device is that noisy (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um): the "
                "files do not describe this campaign" if gross(final_test.birge, final_rms) else
                f"no MultiCal device is {device_scale:.0f} times noisier than stated (about {scatter_um:.1f} um instead "
-               f"of {sel.noise_mm * 1e3:.1f} um): the files may not describe this campaign"
+               f"of {sel.noise_mm * 1e3:.1f} um): the files may not describe this campaign, or play no effect models is "
+               "at work"
                if device_scale > PLAUSIBLE_NOISE_FACTOR else
                f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
                "would give this" if device_scale > 1.0 + 1e-6 else

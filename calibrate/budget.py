@@ -15,15 +15,18 @@ leaves of the rod's elastic deflection), ``slip = ms_true - ms_true_no_slip`` (t
 deflection: no compensation removes it), ``identification = ms_true_no_slip - ms_clean`` (the campaign's noise
 and fixture uncertainty through the observability, the priors' pull on weak parameters) and ``noise =
 ms_clean``. A difference the sampling makes negative counts 0; the shares are normalised to sum 1.
+:class:`AccuracySummary` is what a predictor says of one method: its errors and their budget.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["BudgetShares", "budget_shares"]
+from rodlab.core.enums import Method
+
+__all__ = ["BudgetShares", "budget_shares", "AccuracySummary"]
 
 
 @dataclass(frozen=True)
@@ -61,3 +64,25 @@ def budget_shares(ms: float, ms_true: float, ms_clean: float,
     parts = np.maximum([ms - ms_true, ms_ns - ms_clean, ms_clean, ms_true - ms_ns], 0.0)
     parts = parts / max(parts.sum(), 1e-300)
     return BudgetShares(*(float(p) for p in parts))
+
+
+@dataclass(frozen=True)
+class AccuracySummary:
+    """Predicted validation errors of one method over the replicates [mm].
+
+    mean_mm, max_mm, median_mm : averages over replicates of each campaign's mean / max / median error;
+    mean_p05_mm, mean_p95_mm : the 5 % and 95 % points of the campaigns' mean error (the 90 % band);
+    rms_mm : root of the average mean-square error; budget : its shares; replicates, failed : counts
+    """
+
+    method: Method
+    mean_mm: float
+    max_mm: float
+    median_mm: float
+    mean_p05_mm: float
+    mean_p95_mm: float
+    rms_mm: float
+    budget: BudgetShares
+    replicates: int
+    failed: int = 0
+    means_mm: tuple = field(default=(), repr=False)

@@ -22,7 +22,7 @@ from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import atomic_write_json, read_json, read_text_checked, separator_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
-from rodlab.core.schema_table import DECIMAL_COMMA
+from rodlab.core.schema_table import DECIMAL_COMMA, sub_micrometre
 
 from .errors import CalibrationError
 from .rod import Rod
@@ -216,12 +216,6 @@ def _campaign_columns(p: Path, text: str) -> tuple:
     return RAW_COLUMNS if has_raw else XYZ_COLUMNS
 
 
-def _sub_micrometre(values) -> bool:
-    """Some reading carries digits below a micrometre [mm]: two rows equal in it are a copy, not a repeat (an export
-    rounded to um could make a repeat equal)."""
-    return any(abs(v * 1e3 - round(v * 1e3)) > 1e-6 for v in values)
-
-
 def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
     """A campaign file; one of raw readings is converted with ``device`` (a :class:`~calibrate.device.Device`)
     when given, else kept as readings (``x_D_mm`` None: :func:`campaign_observations` then asks for it)."""
@@ -242,7 +236,7 @@ def read_campaign(path, n_joints: int = 6, device=None) -> Campaign:
             raise CalibrationError(f"point {key[0]}.{key[1]} appears twice (also on line {seen[key]})" +
                                    ("; the rows are the same: delete the repeated one" if same else
                                     ": number every row uniquely"), path=p, line=k, key="point")
-        if content in copies and _sub_micrometre([r[c] for c in xyz]):
+        if content in copies and sub_micrometre([r[c] for c in xyz]):
             raise CalibrationError(f"the row repeats line {copies[content]} in every joint angle and reading (a copy: a "
                                    "measurement repeated at the same pose reads differently by the device's noise); "
                                    "delete the copied rows", path=p, line=k, key="point")
@@ -299,14 +293,19 @@ def read_fixture(path) -> Fixture:
 FIXTURE_METRES_SPAN_MM = 2.0
 
 
+#: ... the span a fixture's positions have in mm [mm]: read as metres they must span this (the paper's layout: about
+#: 250 mm; the simulator's 1 and 5 share one place, 0.03 mm apart, the device turned: not metres)
+FIXTURE_SPAN_MM = (50.0, 5000.0)
+
+
 def _refuse_metres(p: Path, poses: dict) -> None:
-    """Refuse clamping positions whose translations all lie within :data:`FIXTURE_METRES_SPAN_MM` of each other
-    (and not all at one point): metres where millimetres are expected."""
+    """Refuse three or more clamping positions whose translations all lie within :data:`FIXTURE_METRES_SPAN_MM` of
+    each other and would span a fixture's :data:`FIXTURE_SPAN_MM` x 1000: metres where millimetres are expected."""
     xyz = np.array([np.asarray(v, float)[:3] for v in poses.values()])
-    if len(xyz) < 2:
+    if len(xyz) < 3:
         return
     span = float(np.max(np.linalg.norm(xyz[:, None] - xyz[None], axis=2)))
-    if 0.0 < span < FIXTURE_METRES_SPAN_MM:
+    if span < FIXTURE_METRES_SPAN_MM and FIXTURE_SPAN_MM[0] <= 1000.0 * span <= FIXTURE_SPAN_MM[1]:
         raise CalibrationError(f"the clamping positions lie within {span:.4g} mm of each other (a MultiCal fixture's "
                                "lie tens to hundreds of mm apart): their x, y, z look like metres; the fixture's "
                                "positions are millimetres: multiply metres by 1000", path=p, key="positions")
@@ -343,6 +342,22 @@ def write_fixture(fix: Fixture, path) -> Path:
     return atomic_write_json(path, data)
 
 
+#: length units a ``# units:`` line may name that are not the formats' millimetres, and their factor to mm
+_OTHER_LENGTHS = {"m": 1000.0, "metre": 1000.0, "metres": 1000.0, "meter": 1000.0, "meters": 1000.0, "cm": 10.0,
+                  "um": 1e-3, "µm": 1e-3, "micron": 1e-3, "microns": 1e-3, "in": 25.4, "inch": 25.4, "inches": 25.4}
+
+
+def units_line_problem(value: str) -> str | None:
+    """What a ``# units: ...`` line of a points or sockets file says wrongly: a length unit other than millimetres
+    (the lengths are millimetres whatever the line says: ``x_mm``); None for mm (and deg)."""
+    other = [t for t in re.findall(r"[a-zµ]+", value.lower()) if t in _OTHER_LENGTHS]
+    if not other:
+        return None
+    return (f"'# units: {value.strip()}' names {other[0]}: rodlab reads the lengths as millimetres whatever the line "
+            f"says (the columns' _mm); convert the numbers ({other[0]} x {_OTHER_LENGTHS[other[0]]:g} = mm) and write "
+            "mm on the line, or delete it")
+
+
 def read_points(path, n_joints: int = 6) -> PointSet:
     p, text = read_text_file(path)
     meta = {key: (k, val) for k, key, val in leading_comments(text)}
@@ -358,10 +373,9 @@ def read_points(path, n_joints: int = 6) -> PointSet:
         if arr.size != n or not np.all(np.isfinite(arr)):
             raise CalibrationError(f"expected {n} finite numbers, got {val!r}", path=p, line=k, key=key)
         return arr
-    if "units" in meta and meta["units"][1].strip().lower() not in ("mm", "millimetres", "millimeters"):
-        raise CalibrationError(f"'# units: {meta['units'][1].strip()}' is not read: a points file's units are in its "
-                               "column names (x_mm: millimetres, q: degrees); convert the numbers (metres x 1000) and "
-                               "delete the line", path=p, line=meta["units"][0], key="units")
+    for key, (k, val) in meta.items():
+        if key.lower() == "units" and (problem := units_line_problem(val)):
+            raise CalibrationError(problem, path=p, line=k, key=key)
     tool = vec("tool_mm", 3)
     mass = float(vec("rod_mass_kg", 1)[0]) if "rod_mass_kg" in meta else 0.0
     com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)

@@ -26,7 +26,7 @@ campaign with the slip minus on the same campaign without it). :mod:`calibrate.b
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from rodlab.core.frames import pose_to_matrix
 from .campaign import Fixture, PointSet
 from .compensations import RodDeflection, deflection_offsets
 from .errors import CalibrationError
-from .budget import BudgetShares, budget_shares
+from .budget import AccuracySummary, BudgetShares, budget_shares
 from .estimate import FitOptions
 from .rod_slip import slip_directions, slip_offsets
 from .identify import Observations, identify
@@ -130,28 +130,6 @@ class ReplicateOutcome:
     success: dict
     before: ErrorStats
     ms_true_no_slip_mm2: float = float("nan")
-
-
-@dataclass(frozen=True)
-class AccuracySummary:
-    """Predicted validation errors of one method over the replicates [mm].
-
-    mean_mm, max_mm, median_mm : averages over replicates of each campaign's mean / max / median error;
-    mean_p05_mm, mean_p95_mm : the 5 % and 95 % points of the campaigns' mean error (the 90 % band);
-    rms_mm : root of the average mean-square error; budget : its shares; replicates, failed : counts
-    """
-
-    method: Method
-    mean_mm: float
-    max_mm: float
-    median_mm: float
-    mean_p05_mm: float
-    mean_p95_mm: float
-    rms_mm: float
-    budget: BudgetShares
-    replicates: int
-    failed: int = 0
-    means_mm: tuple = field(default=(), repr=False)
 
 
 def _draw_truth(robot, tool_mm, base, priors: Priors, rng) -> ModelParams:

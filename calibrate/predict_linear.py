@@ -544,9 +544,8 @@ def _unmodelled_data(robot, plan_q, fixture, base, reference, priors: Priors, tr
         return zero, zero
     model = linearisation_model(robot, reference.tool_mm, base, priors)
     obs = _campaign_observations(robot, model, plan_q, fixture, Rod.of(reference))
-    extra = campaign_offsets(robot, model, obs, priors, true, seed)
-    if not priors.rod_slip:
-        return extra, extra
     floor = (campaign_offsets(robot, model, obs, replace(priors, rod_slip=0.0), true, seed)
              if priors.robot_floor_mm > 0 else zero)
-    return extra, floor
+    slip = (campaign_offsets(robot, model, obs, replace(priors, robot_floor_mm=0.0), true, seed)
+            if priors.rod_slip else zero)                 # each from its own generator: their sum is the draws' both
+    return slip + floor, floor

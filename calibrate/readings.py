@@ -112,16 +112,17 @@ def unit_slips(camp: Campaign, path) -> list[str]:
     return out
 
 
-def point_unit_slips(points, path) -> list[str]:
+def point_unit_slips(points, path, sigmas: bool = True) -> list[str]:
     """:func:`unit_slips` of instrument points (``*.validation.csv``): joint angles in radians, positions whose
-    median lies within :data:`POINTS_METRES_LIMIT_MM` of the instrument's origin (metres). Empty when none."""
+    median lies within :data:`POINTS_METRES_LIMIT_MM` of the instrument's origin (metres), the rod header in other
+    units, and (``sigmas``: unless a stated noise replaces them) sigma columns in um. Empty when none."""
     out = _radians(points.q_deg, path, "points'") or _radian_rows(points.q_deg, None, path, "points'")
     x = np.asarray(points.x_W_mm, float)
     if x.size and float(np.median(np.linalg.norm(x, axis=1))) < POINTS_METRES_LIMIT_MM:
         out.append(f"{path}: the median point lies {np.median(np.linalg.norm(x, axis=1)):.3f} mm from the instrument's "
                    "origin (a robot's workspace spans hundreds of mm): the positions look like metres; x_mm, y_mm, "
                    "z_mm are millimetres: multiply metres by 1000")
-    return out + _rod_header_slips(points, path) + _sigma_slips(points, path)
+    return out + _rod_header_slips(points, path) + (_sigma_slips(points, path) if sigmas else [])
 
 
 #: a validation rod heavier than this [kg] is a mass in grams (a tracker's target on a short rod: 0.1-2 kg; a trial's

@@ -22,7 +22,8 @@ if TYPE_CHECKING:                                      # validate -> points -> i
     from .validate import ErrorStats
 
 __all__ = ["CalibrationResult", "result_dict", "write_result", "FORMAT_CALIBRATION", "FORMAT_CALIBRATION_HARMONICS",
-           "CALIBRATION_FORMATS", "CalibratedParameter", "CalibrationFile", "read_calibration", "calibrated_params"]
+           "CALIBRATION_FORMATS", "CalibratedParameter", "CalibrationFile", "read_calibration", "calibrated_params",
+           "description_notes", "joint_zero_shifts_deg", "description_of"]
 
 FORMAT_CALIBRATION = "rodlab.calibration/1"
 #: the same with the periodic joint-error parameters ``h1s_j .. h2c_j``: a new version, so that a reader of
@@ -243,7 +244,8 @@ def _sigma(v: dict) -> float:
 
 
 def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
-    """The identified model (internal units) of ``robot``; parameters absent from the file stay nominal."""
+    """The identified model (internal units) of ``robot``; parameters absent from the file stay nominal; the joint
+    offsets re-referenced to ``robot``'s joint zeros where the result records others (:func:`joint_zero_shifts_deg`)."""
     n = robot.n
     joints = {int(k.split("_")[1]) for k in cal.parameters if k.startswith("dtheta_") and k[7:].isdigit()}
     if joints != set(range(1, n + 1)):
@@ -264,6 +266,7 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
     rows = {k: np.array([get(f"{k}_{i + 1}", float(v[i])) for i in range(n)])
             for k, v in (("d", robot.d_mm), ("a", robot.a_mm), ("alpha", robot.alpha_deg), ("beta", robot.beta_deg),
                          ("dtheta", np.zeros(n)), ("c", np.zeros(n)))}
+    rows["dtheta"] = rows["dtheta"] + joint_zero_shifts_deg(robot, cal)     # relative to the calibration's zeros
     h = np.deg2rad([[get(f"{t}_{i + 1}", 0.0) for t in HARMONICS] for i in range(n)])
     h_ref = np.array([cal.harmonic_reference.get(i + 1, [0.0] * len(HARMONICS)) for i in range(n)], float)
     return ModelParams(np.deg2rad(robot.theta_offset_deg + rows["dtheta"]), rows["d"], rows["a"],
@@ -272,33 +275,46 @@ def calibrated_params(robot, cal: CalibrationFile) -> ModelParams:
                        np.array([get(f"tool_{k}", float(p.tool[i])) for i, k in enumerate("xyz")]), h, h_ref)
 
 
-def _check_joint_zeros(robot, cal: CalibrationFile) -> None:
-    """The description's joint zeros against those the calibration recorded (its ``dtheta`` are relative to them)."""
-    if cal.description is None:
-        return
-    theirs = np.asarray(cal.description["theta_offset_deg"], float)
+def joint_zero_shifts_deg(robot, cal: CalibrationFile) -> np.ndarray:
+    """(n,) [deg] the joint zeros the calibration recorded (``description.theta_offset_deg``) minus ``robot``'s,
+    wrapped to +-180: what re-references its ``dtheta`` to this description; zeros for a result that does not record
+    them. Raises :class:`CalibrationError` for a description of another number of joints."""
     ours = np.asarray(robot.theta_offset_deg, float)
+    if cal.description is None:
+        return np.zeros_like(ours)
+    theirs = np.asarray(cal.description["theta_offset_deg"], float)
     if theirs.shape != ours.shape:
         raise CalibrationError(f"the calibration was made against a {theirs.size}-joint description, this robot "
                                f"({robot.name!r}) has {ours.size} joints: export with the one the calibration used (it "
                                f"names {cal.robot!r})", path=cal.path, key="description")
-    off = np.nonzero(np.abs((ours - theirs + 180.0) % 360.0 - 180.0) > 1e-6)[0]
-    if off.size:
-        rows = "; ".join(f"joint {j + 1}: {round(theirs[j], 6) + 0.0:g} deg there, {round(ours[j], 6) + 0.0:g} deg here"
-                         for j in off)
-        raise CalibrationError(f"this robot description ({robot.name!r}) counts joints from other zeros than the one the "
-                               f"calibration used (it names {cal.robot!r}; theta_offset {rows}): the identified dtheta "
-                               "are relative to those zeros, so the exported model would be off by the difference; "
-                               "export with the description the calibration used", path=cal.path,
-                               key="description.theta_offset_deg")
+    shift = (theirs - ours + 180.0) % 360.0 - 180.0
+    return np.where(np.abs(shift) > 1e-9, shift, 0.0)
+
+
+def description_notes(robot, cal: CalibrationFile) -> list[str]:
+    """What to tell a user who applies ``cal`` to ``robot``: a result that does not record its description (it
+    cannot be checked), joints this description counts from other zeros (their offsets re-referenced)."""
+    if cal.description is None:
+        return [f"warning: {cal.path.name} does not record the robot description it was calibrated against (written "
+                "before rodlab recorded it): make sure this robot file is that description, joint zeros included; "
+                "calibrate again to have it checked"]
+    shift = joint_zero_shifts_deg(robot, cal)
+    moved = np.nonzero(shift)[0]
+    if not moved.size:
+        return []
+    theirs = cal.description["theta_offset_deg"]
+    rows = "; ".join(f"joint {j + 1}: {round(theirs[j], 6) + 0.0:g} deg there, "
+                     f"{round(float(robot.theta_offset_deg[j]), 6) + 0.0:g} deg here" for j in moved)
+    return [f"note: this robot description ({robot.name!r}) counts joints from other zeros than the one the calibration "
+            f"used ({rows}): their identified offsets are re-referenced to this description's zeros, so the model "
+            "written is the calibrated one (the YAML's parameters stay as identified)"]
 
 
 def _check_description(robot, cal: CalibrationFile) -> None:
-    """Rows the calibration held at nominal must be this description's nominal, and its joint zeros
-    (``theta_offset_deg``, which the ``dtheta`` are relative to) the description's the calibration recorded: else it
-    is another robot file (a URDF's rows differ from a hand-written DH table of the same arm; a trial's URDF with an
-    elbow zero 2.9 deg off had been exported 6.8 mm wrong with a passing read-back)."""
-    _check_joint_zeros(robot, cal)
+    """Rows the calibration held at nominal must be this description's nominal: else it is another robot file (a
+    URDF's rows differ from a hand-written DH table of the same arm). Joint zeros are re-referenced instead
+    (:func:`joint_zero_shifts_deg`: a trial's URDF with an elbow zero 2.9 deg off had been exported 6.8 mm wrong with
+    a passing read-back)."""
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for name, v in cal.parameters.items():
         kind, _, idx = name.rpartition("_")

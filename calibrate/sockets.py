@@ -23,7 +23,7 @@ import numpy as np
 
 from rodlab.core.fileio import atomic_write_text
 
-from .campaign import read_text_file, read_table, leading_comments
+from .campaign import leading_comments, read_table, read_text_file, units_line_problem
 from .errors import CalibrationError
 
 __all__ = ["SocketDistance", "SocketReadings", "read_sockets", "write_sockets", "SEAT_SIGMA_MM", "DISTANCE_SIGMA_MM",
@@ -130,16 +130,20 @@ _KEYS = ("distance_mm", "tool_mm", "seat_sigma_mm", "distance_sigma_mm", "length
 
 #: a comment key that names a quantity (a unit suffix, or ``units``): meant as data, refused when unknown; other
 #: comment keys (``Source``, ``robot``, ``date``) are the user's notes
-_DATA_KEY = re.compile(r"units?|[a-z0-9_]+_(mm|m|um|deg|rad|kg|g|n|s)")
+_DATA_KEY = re.compile(r"[a-z0-9_]+_(mm|m|um|deg|rad|kg|g|n|s)", re.IGNORECASE)
 
 
 def _meta(p: Path, text: str) -> dict:
-    """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key and an unknown key
-    naming a quantity (:data:`_DATA_KEY`: ``tool_offset_mm``, ``units``) are refused, other comments (``# Source:
-    ...``) are ignored."""
+    """``# key: value`` lines before the header: {key: (line, value)}; a near miss of a known key, an unknown key
+    naming a quantity (:data:`_DATA_KEY`: ``tool_offset_mm``) and a units line naming a length other than mm are
+    refused, other comments (``# Source: ...``) are ignored."""
     meta = {}
     for k, key, value in leading_comments(text):
         if not re.fullmatch(r"[A-Za-z_]+", key):
+            continue
+        if key.lower() in ("unit", "units"):                # a units line: read for what it says, not kept
+            if (problem := units_line_problem(value)):
+                raise CalibrationError(problem, path=p, line=k, key=key)
             continue
         if key not in _KEYS:
             near = difflib.get_close_matches(key, _KEYS, n=1, cutoff=0.8)

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rodlab.core.enums import Completeness
+from rodlab.core.units import DEVICE_NOISE_MM
 
 from .residual_test import BIRGE_MATERIAL
 
@@ -24,7 +25,8 @@ if TYPE_CHECKING:
     from .result import CalibrationResult
 
 __all__ = ["trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
-           "unmodelled_gross", "typical_miss_mm", "stated_noise_warning", "PLAUSIBLE_NOISE_FACTOR", "NOISY_FILE_CAUSES",
+           "unmodelled_gross", "typical_miss_mm", "stated_noise_warning", "implausible_device",
+           "PLAUSIBLE_NOISE_FACTOR", "NOISY_FILE_CAUSES",
            "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE"]
 
 
@@ -191,20 +193,27 @@ NOISY_FILE_CAUSES = ("a reading column's sign or order (the device's channels), 
                      "(its clampings' recorded orientations), the units of the readings and the fixture")
 
 
-def stated_noise_warning(test, reference_mm: float) -> str | None:
-    """The reason not to trust a MultiCal campaign whose residual test passes only at a stated device noise beyond
-    :data:`PLAUSIBLE_NOISE_FACTOR` x ``reference_mm`` (a MultiCal device's, [mm]) and that would be material at the
-    reference; None otherwise (also for instrument points or socket readings: ``test.clamping`` False)."""
-    if test is None or not test.clamping or reference_mm <= 0:
+def implausible_device(scatter_mm: float) -> bool:
+    """A device noise [mm] (stated, or one a diagnosis's even excess would need) beyond
+    :data:`PLAUSIBLE_NOISE_FACTOR` times a MultiCal device's: no device's scatter."""
+    return scatter_mm > PLAUSIBLE_NOISE_FACTOR * DEVICE_NOISE_MM
+
+
+def stated_noise_warning(test, at_device) -> str | None:
+    """The reason not to trust a MultiCal campaign whose residual test ``test`` passed at a stated device noise no
+    MultiCal device has (:func:`implausible_device`) while the same test at the device's own noise ``at_device``
+    (:func:`~calibrate.residual_test.residual_test` with :data:`~rodlab.core.units.DEVICE_NOISE_MM` and the same
+    clamping-pose uncertainty) finds the residuals material; None otherwise (also for instrument points or socket
+    readings: ``test.clamping`` False; a good campaign judged cautiously at 16-40 um stays trusted)."""
+    if test is None or at_device is None or not test.clamping or not implausible_device(test.noise_mm):
         return None
-    factor = test.noise_mm / reference_mm
-    if factor <= PLAUSIBLE_NOISE_FACTOR or test.birge * factor <= BIRGE_MATERIAL:
+    if not at_device.material:
         return None
     return (f"the residuals pass the test only at the stated device noise of {test.noise_mm * 1e3:.1f} um, "
-            f"{factor:.0f} times a MultiCal device's {reference_mm * 1e3:.1f} um (at which they are "
-            f"{test.birge * factor:.0f} times the expected scatter): no such device scatters that much, so the files "
-            f"may not describe this campaign: check {NOISY_FILE_CAUSES}; if a repeatability test of this device (the "
-            "ball held still, read 30 times) really shows that scatter, give --noise-checked")
+            f"{test.noise_mm / DEVICE_NOISE_MM:.0f} times a MultiCal device's {DEVICE_NOISE_MM * 1e3:.1f} um (at which "
+            f"they are {at_device.birge:.0f} times the expected scatter): no such device scatters that much, so the "
+            f"files may not describe this campaign: check {NOISY_FILE_CAUSES}; if a repeatability test of this device "
+            "(the ball held still, read 30 times) really shows that scatter, give --noise-checked")
 
 
 def gross(birge: float, rms_mm: float) -> bool:

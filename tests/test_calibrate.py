@@ -269,7 +269,8 @@ def test_a_not_trusted_campaign_the_diagnosis_cannot_identify_exits_3_not_2(exam
                           "--validate", str(src / "multical.validation.csv")], capture_output=True, text=True,
                          cwd=tmp_path)
     assert run.returncode == 3, run.stderr[-2000:]
-    assert "NOT TRUSTED" in run.stderr and "the campaign diagnosis, which identifies every parameter, cannot run on this campaign" in run.stderr
+    assert "NOT TRUSTED" in run.stderr
+    assert "the campaign diagnosis, which identifies every parameter, cannot run on this campaign" in run.stderr
 
 
 def test_a_rod_file_of_another_rod_is_warned(examples, tmp_path):

@@ -421,3 +421,19 @@ def test_another_campaigns_fixture_is_not_trusted_at_a_stated_noise_no_device_ha
                  "--rod", rod])
     out = capsys.readouterr().out
     assert "do not raise --noise-um" in out and "state it with --noise-um" not in out
+
+
+def test_a_good_campaign_judged_cautiously_stays_trusted_and_compare_applies_the_rule(campaign, tmp_path, capsys):
+    """The noise rule judges the residuals again at the device's own 3 um: the clean campaign stated at 20 um (a
+    cautious user) stays trusted (it had been refused, the review found); `compare` applies the rule as calibrate."""
+    rod = str(next(campaign.glob("*.compliance.json")))
+    fix = str(campaign / "multical.fixture.json")
+    code = main(["calibrate", str(campaign / "multical.campaign.csv"), "--fixture", fix, "--rod", rod, "--robot",
+                 "tx90", "--noise-um", "20"])
+    assert code == 0 and "pass the test only at the stated" not in capsys.readouterr().err
+    path = tmp_path / "neg.campaign.csv"
+    _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"y_mm": f"{-float(r['y_mm']):.6f}"}))
+    code = main(["compare", str(path), "--fixture", fix, "--validate", str(campaign / "multical.validation.csv"),
+                 "--rod", f"fea={rod}", "--noise-um", "90"])
+    io = capsys.readouterr()
+    assert code == 3 and "NOT TRUSTED" in io.err

@@ -74,6 +74,11 @@ def test_a_fixture_in_metres_is_refused_by_its_reader(camp, tmp_path):
         read_fixture(path)
     assert e.value.key == "positions"
     read_fixture(camp / "multical.fixture.json")                         # the file as written passes
+    same_place = dict(data, positions={"1": [122.466, 0.0, 86.607, 24.7, 24.5, -30.6],
+                                       "5": [122.465, -0.01, 86.584, -12.2, -37.3, 24.8],
+                                       "3": [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]}, world_position=3)
+    (tmp_path / "s.fixture.json").write_text(json.dumps(same_place))     # two clampings at one place: not metres
+    read_fixture(tmp_path / "s.fixture.json")
 
 
 def test_a_centre_of_mass_in_metres_is_warned_of(tmp_path):
@@ -84,6 +89,9 @@ def test_a_centre_of_mass_in_metres_is_warned_of(tmp_path):
     (tmp_path / "m.compliance.json").write_text(json.dumps(data))
     slips = read_compliance(tmp_path / "m.compliance.json").unit_slips()
     assert len(slips) == 1 and "com_T_mm" in slips[0] and "multiply by 1000" in slips[0]
+    data["com_T_mm"] = [8.5, 0.0, 0.0]                                    # near the ball, but not metres (8.5 m)
+    (tmp_path / "n.compliance.json").write_text(json.dumps(data))
+    assert read_compliance(tmp_path / "n.compliance.json").unit_slips() == []
 
 
 def test_copied_rows_are_refused_and_repeats_are_not(camp, tmp_path, capsys):
@@ -105,7 +113,9 @@ def test_copied_rows_are_refused_and_repeats_are_not(camp, tmp_path, capsys):
     ix = [header.index(c) for c in ("x_mm", "y_mm", "z_mm")]
     rounded = [[f"{float(c):.3f}" if i in ix else c for i, c in enumerate(r)] for r in rows]
     repeat = [rounded[0][:ip] + ["99"] + rounded[0][ip + 1:]]
-    assert len(read_campaign(_write(tmp_path / "rep.campaign.csv", header, rounded + repeat)).position) == len(rows) + 1
+    rep = _write(tmp_path / "rep.campaign.csv", header, rounded + repeat)
+    assert len(read_campaign(rep).position) == len(rows) + 1
+    assert main(["validate", str(rep)]) == 0                              # validate and the reader agree
 
 
 def test_joint_columns_named_j1_are_told_to_be_q1(camp, tmp_path, capsys):
@@ -115,6 +125,7 @@ def test_joint_columns_named_j1_are_told_to_be_q1(camp, tmp_path, capsys):
     assert "Did you mean `q1`? (the joint angles are the columns q1" in capsys.readouterr().err
     assert "`q3`" in did_you_mean("A3", ["position", "q1", "x_mm"]) and "`q2`" in did_you_mean("joint_2", ["q1"])
     assert did_you_mean("J1", ["x_mm", "y_mm"]) == ""                   # no joint columns expected: no hint
+    assert "q7" not in did_you_mean("J7", [f"q{k}" for k in range(1, 7)])  # no such joint: no such hint
 
 
 def test_decimal_commas_are_one_problem_not_hundreds(camp, tmp_path, capsys):

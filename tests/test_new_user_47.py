@@ -12,10 +12,13 @@ from pathlib import Path
 import pytest
 
 from rodlab.app.cli.main import main
-from rodlab.calibrate import read_points, robot_path
+import numpy as np
+
+from rodlab.calibrate import read_points, read_robot, resolve_robot, robot_path
+from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.readings import point_unit_slips
-from rodlab.calibrate.result import read_calibration
+from rodlab.calibrate.result import calibrated_params, read_calibration
 from rodlab.calibrate.sockets import read_sockets
 
 DATA = Path(__file__).resolve().parents[1] / "benchmarks" / "data"
@@ -36,9 +39,10 @@ def ur5(tmp_path_factory) -> tuple[Path, Path, Path]:
     return pts, kin, full
 
 
-def test_a_result_records_its_description_and_export_refuses_other_joint_zeros(ur5, tmp_path, capsys):
+def test_a_result_records_its_description_and_export_re_references_other_joint_zeros(ur5, tmp_path, capsys):
     """The elbow's origin turned by 0.05 rad (its zero 2.9 deg off): the export had written a URDF 6.8 mm off the
-    calibrated model and said 'read back: TCP within 1e-9 um'. Refused now, naming joint 3 and both zeros."""
+    calibrated model and said 'read back: TCP within 1e-9 um'. The result records its description's zeros, and the
+    offsets are re-referenced to the other description's: its model is the calibrated one, said in a note."""
     _, kin, _ = ur5
     cal = read_calibration(kin)
     assert cal.description is not None and len(cal.description["theta_offset_deg"]) == 6
@@ -48,10 +52,16 @@ def test_a_result_records_its_description_and_export_refuses_other_joint_zeros(u
     other = tmp_path / "ur5_zero3.urdf"
     other.write_text(moved)
     capsys.readouterr()
-    assert main(["export", str(kin), "--urdf", str(other), "-o", str(tmp_path / "x.urdf")]) == 2
+    assert main(["export", str(kin), "--urdf", str(other), "-o", str(tmp_path / "x.urdf")]) == 0
     err = capsys.readouterr().err
-    assert "counts joints from other zeros" in err and "joint 3:" in err and not (tmp_path / "x.urdf").exists()
+    assert "counts joints from other zeros" in err and "joint 3:" in err and "re-referenced" in err
     assert main(["export", str(kin), "-o", str(tmp_path / "ok.urdf")]) == 0             # its own description
+    assert "other zeros" not in capsys.readouterr().err
+    mine, theirs = resolve_robot("ur5"), read_robot(other)
+    q = np.random.default_rng(1).uniform(-2.0, 2.0, (50, 6))
+    p_own = ball_positions(mine, calibrated_params(mine, cal), q)[0].pW
+    p_other = ball_positions(theirs, calibrated_params(theirs, cal), q)[0].pW
+    np.testing.assert_allclose(p_other, p_own, atol=1e-6)                 # the same calibrated model
 
 
 def test_a_result_without_its_description_is_exported_with_a_warning(ur5, tmp_path, capsys):
@@ -95,15 +105,17 @@ def test_points_sigmas_in_um_and_a_units_line_are_named(ur5, tmp_path):
     path = tmp_path / "um.validation.csv"
     path.write_text("\n".join(um) + "\n")
     assert any("look like um" in s for s in point_unit_slips(read_points(path), path))
+    assert not point_unit_slips(read_points(path), path, sigmas=False)      # --noise-um replaces them: not judged
     assert not any("look like um" in s for s in point_unit_slips(read_points(pts), pts))
     units = tmp_path / "units.validation.csv"
     units.write_text("\n".join(lines[:i] + ["# units: m"] + lines[i:]) + "\n")
-    with pytest.raises(CalibrationError, match="is not read") as e:
+    with pytest.raises(CalibrationError, match="names m: rodlab reads the lengths as millimetres") as e:
         read_points(units)
     assert e.value.key == "units"
-    mm = tmp_path / "mm.validation.csv"
-    mm.write_text("\n".join(lines[:i] + ["# units: mm"] + lines[i:]) + "\n")
-    assert len(read_points(mm).q_deg) == len(lines) - i - 1
+    for ok in ("mm", "mm, deg", "millimetres"):
+        mm = tmp_path / "mm.validation.csv"
+        mm.write_text("\n".join(lines[:i] + [f"# units: {ok}"] + lines[i:]) + "\n")
+        assert len(read_points(mm).q_deg) == len(lines) - i - 1
 
 
 def test_an_unknown_quantity_key_in_a_sockets_file_is_refused(tmp_path):
@@ -115,8 +127,13 @@ def test_an_unknown_quantity_key_in_a_sockets_file_is_refused(tmp_path):
     with pytest.raises(CalibrationError, match="unknown key 'tool_offset_mm'"):
         read_sockets(keyed, 7)
     noted = tmp_path / "n.sockets.csv"
-    noted.write_text("# Source: a note of the user's\n" + text)
+    noted.write_text("# Source: a note of the user's\n# units: mm\n" + text)
     read_sockets(noted, 7)
+    for line in ("# Units: inch", "# UNITS: m", "# Tool_Offset_MM: 1, 2, 3"):
+        bad = tmp_path / "b.sockets.csv"
+        bad.write_text(line + "\n" + text)
+        with pytest.raises(CalibrationError):
+            read_sockets(bad, 7)
 
 
 def test_validate_names_a_xacro_file(tmp_path, capsys):

@@ -34,6 +34,21 @@ def test_a_rod_that_harms_is_warned_about_and_not_recommended():
     assert "1 of 2 designs" in rec.text and "less accurate than uncalibrated" in rec.text
 
 
+def test_a_lighter_harmful_design_within_the_best_band_is_left_out_and_warned_by_the_same_rule():
+    """The harmful design is lighter and within the best one's band, so without the rule it would be picked; its
+    fea helps and meas (the recommendation's method) harms: the warning and the recommendation judge by meas."""
+    best = _rows("best", 60.0, (0.30, 0.25, 1.500), 1.6, 0.3, mass=1.4)
+    light = _rows("light", 70.0, (0.30, 0.90, 1.650), 1.6, 0.3, mass=0.6)
+    light[2]["mean_p05_mm"] = 1.40                  # inside best's band (1.35-1.65) if the rule were off
+    df = _table(best, light)
+    rec = recommend(df)
+    assert rec.design == "best" and "1 of 2 designs" in rec.text
+    warned = [w for w in study_warnings(df, rod_slip=0.0) if w.design == "light"]
+    assert [w.kind for w in warned] == [StudyWarning.WORSE_THAN_NOMINAL]
+    assert "with meas compensation" in warned[0].text and "fea 0.900 mm would not" in warned[0].text
+    assert study_warnings(_table(best), rod_slip=0.0) == []
+
+
 def test_when_every_rod_harms_the_recommendation_says_so():
     df = _table(_rows("soft", 6600.0, (2.5, 2.4, 2.36), 1.6, 0.99))
     rec = recommend(df)

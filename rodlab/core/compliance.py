@@ -333,7 +333,7 @@ class RodCompliance:
             out.append(f"tool_mm {np.round(self.tool_mm, 4).tolist()} is {np.linalg.norm(self.tool_mm):.3g} mm long; a "
                        "measuring rod's ball sits 100-1500 mm from the flange: if this is metres, multiply by 1000")
         com, reach = float(np.linalg.norm(self.com_T_mm)), float(np.linalg.norm(self.tool_mm))
-        if self.mass_kg > 0 and reach >= PLAUSIBLE_TOOL_MM and 0 < com < 0.02 * reach:
+        if self.mass_kg > 0 and reach >= PLAUSIBLE_TOOL_MM and 0 < com < 0.02 * reach and 1000.0 * com <= 2.0 * reach:
             out.append(f"com_T_mm {np.round(self.com_T_mm, 4).tolist()} puts the rod's centre of mass {com:.3g} mm from "
                        f"its ball, whose flange is {np.linalg.norm(self.tool_mm):.0f} mm away (a rod's centre of mass "
                        "lies along it, tens to hundreds of mm from the ball): if this is metres, multiply by 1000")

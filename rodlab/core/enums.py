@@ -105,7 +105,7 @@ class DesignStatus(_StrEnum):
 class StudyWarning(_StrEnum):
     """What a study says about a usable design's predicted accuracy beyond its numbers (``study.json`` ``warnings``)."""
 
-    WORSE_THAN_NOMINAL = "worse_than_nominal"  #: every method leaves the robot less accurate than its nominal model
+    WORSE_THAN_NOMINAL = "worse_than_nominal"  #: the recommendation's method leaves the robot worse than uncalibrated
     SLIP_DOMINATES = "slip_dominates"          #: the rod's slip is most of the best method's error
     SLIP_EXTRAPOLATED = "slip_extrapolated"    #: the rod is far softer than the rods the slip was fitted on
 

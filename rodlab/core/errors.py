@@ -68,8 +68,10 @@ def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
     if unit:
         return unit
     joint = _JOINT_ALIAS.fullmatch(word)
-    if joint and "q1" in choices and word != f"q{int(joint.group(1))}":
-        return (f" Did you mean `q{int(joint.group(1))}`? (the joint angles are the columns q1, q2, ... in degrees: "
+    listed = {c for c in choices if re.fullmatch(r"q[0-9]+", c)}          # the joints' columns, or q1 for the pattern
+    k = int(joint.group(1)) if joint else 0
+    if joint and "q1" in choices and word != f"q{k}" and (f"q{k}" in listed or listed == {"q1"}):
+        return (f" Did you mean `q{k}`? (the joint angles are the columns q1, q2, ... in degrees: "
                 "rename each joint's column)")
     folded = [c for c in choices if c.casefold() == word.casefold()]
     # a key given without its unit suffix (``L1`` for ``L1_mm``, ``hold`` for ``hold_s``)

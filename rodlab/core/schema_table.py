@@ -136,10 +136,26 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
     return None
 
 
-def _precise(cells: tuple) -> bool:
-    """Some cell has 4 or more decimals (sub-micrometre readings): rows equal in every such cell are copies, not
-    repeats (which a coarsely rounded export could make equal)."""
-    return any(len(c.partition(".")[2]) >= 4 for c in cells)
+#: columns a copied row may differ in and still be a copy (when, at what temperature: not what was measured)
+NOT_MEASURED = ("time_s", "temp_C")
+
+
+def sub_micrometre(values_mm) -> bool:
+    """Some reading [mm] carries digits below a micrometre: rows equal in every reading and joint angle are then a
+    copy, not a repeat of a pose (an export rounded to um could make a repeat equal)."""
+    return any(abs(v * 1e3 - round(v * 1e3)) > 1e-6 for v in values_mm)
+
+
+def _readings_mm(header, row) -> list[float]:
+    """The row's numeric cells of ``*_mm`` columns (its readings), those that parse."""
+    out = []
+    for name, cell in zip(header, row):
+        if name.endswith("_mm"):
+            try:
+                out.append(float(cell))
+            except ValueError:
+                pass
+    return out
 
 
 def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem]:
@@ -158,12 +174,12 @@ def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem
                 out.append(p)
         for g in groups:
             key = tuple(row[header.index(c)].strip() for c in g)
-            content = tuple(c.strip() for name, c in zip(header, row) if name not in g)
+            content = tuple(c.strip() for name, c in zip(header, row) if name not in g and name not in NOT_MEASURED)
             if (g, key) in seen:
                 first, same = seen[(g, key)]
                 out.append(Problem(path, f"{dict(zip(g, key))} appears twice (also on line {first})", k, g[-1],
                                    "delete the repeated row" if same == content else "number every row uniquely"))
-            elif _precise(content) and (g, content) in seen:
+            elif (g, content) in seen and sub_micrometre(_readings_mm(header, row)):
                 out.append(Problem(path, f"repeats line {seen[(g, content)]} in every cell but {', '.join(g)} (a copy: "
                                    "a measurement repeated at the same pose reads differently by the instrument's "
                                    "noise)", k, g[-1], "delete the copied rows"))

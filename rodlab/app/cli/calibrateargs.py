@@ -31,8 +31,8 @@ def add_identify_options(p) -> None:
                         f"it replaces the per-point columns or the file's sigma")
     p.add_argument("--noise-checked", action="store_true",
                    help="the --noise-um given is this device's, as a repeatability test shows it: a MultiCal campaign "
-                        "judged at more than 5x a MultiCal device's noise is otherwise not trusted (such scatter is "
-                        "the files': a reading column's sign, another campaign's fixture)")
+                        "whose residuals pass only at more than 5x a MultiCal device's noise is otherwise not trusted "
+                        "(such scatter is the files': a reading column's sign, another campaign's fixture)")
     add_columns_checked(p)
     add_report_option(p)
     p.add_argument("--strict", action="store_true",

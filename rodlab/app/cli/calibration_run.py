@@ -137,3 +137,16 @@ def _thermal(args, camp, rod) -> tuple:
     log.info("thermal growth of the tool vector: %s um/K; temp_C %.2f..%.2f", np.round(growth.growth_T_mm_per_K * 1e3, 3),
              np.min(camp.temp_C), np.max(camp.temp_C))
     return (growth,)
+
+
+def stated_noise_reason(run: CalibrationRun, args) -> str | None:
+    """:func:`~rodlab.calibrate.trust.stated_noise_warning` of a campaign's calibration (None with
+    ``--noise-checked``): where a stated --noise-um no MultiCal device has passed the residual test, the same test at
+    the device's own noise decides."""
+    from rodlab.calibrate.residual_test import residual_test   # CLI-lazy: only where a noise was stated
+    from rodlab.calibrate.trust import implausible_device, stated_noise_warning
+    test = run.result.residual_check
+    if getattr(args, "noise_checked", False) or test is None or not test.clamping or not implausible_device(test.noise_mm):
+        return None
+    at_device = residual_test(run.robot, run.result, run.observations, DEVICE_NOISE_MM, test.fixture_sigma)
+    return stated_noise_warning(test, at_device)

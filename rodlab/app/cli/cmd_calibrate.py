@@ -19,16 +19,15 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
-from rodlab.calibrate.trust import gross, stated_noise_warning
+from rodlab.calibrate.trust import gross
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.compliance import RodCompliance
 from ...core.errors import RodlabError
-from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
-from .calibration_run import CalibrationRun, run_calibration
+from .calibration_run import CalibrationRun, run_calibration, stated_noise_reason
 from .deviceargs import add_device_option, points_from_args
 from .reporting import default_folder, png_folder, write_command_report
 from .rodargs import compliance_arg
@@ -115,7 +114,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     other_rod_mm = _warn_other_rod(res.params.tool, rod, args.rod)
     judge(res, _campaign_prediction(run))
     res.warnings += _harmonics_held_out(run, args.joint_harmonics)
-    noisy = None if args.noise_checked else stated_noise_warning(res.residual_check, DEVICE_NOISE_MM)
+    noisy = stated_noise_reason(run, args)
     if noisy is not None:
         res.warnings.append(noisy)
     mixup = _mixup(run, suspect=noisy is not None) if res.warnings else None

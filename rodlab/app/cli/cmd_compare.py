@@ -13,7 +13,7 @@ from ...core.compliance import read_compliance
 from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_json, json_safe
 from .calibrateargs import add_identify_options
-from .calibration_run import run_calibration
+from .calibration_run import run_calibration, stated_noise_reason
 from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
 from .reporting import default_folder, write_command_report
 from .robotargs import robot_from_args
@@ -76,6 +76,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]
     for _, run in runs:                  # the verdict of `rodlab calibrate`: its own reasons and the validation's
         judge(run.result, Prediction.of_validation(run.calibrated_mm, run.nominal_mm, run.result.rms_mm))
+        noisy = stated_noise_reason(run, args)
+        if noisy is not None:
+            run.result.warnings.append(noisy)
     print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11} "
           f"{'trusted':>8}")
     before = runs[0][1].before

@@ -10,7 +10,7 @@ import numpy as np
 
 from rodlab.calibrate import CalibrationError, builtin_robots
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.result import calibrated_params, read_calibration
+from rodlab.calibrate.result import calibrated_params, description_notes, read_calibration
 from rodlab.core.frames import rotation_from_abc
 
 from ...core.errors import RodlabError
@@ -89,6 +89,8 @@ def cmd_correct(args) -> int:
         args.robot = cal.robot
     robot = robot_from_args(args)
     params = calibrated_params(robot, cal)
+    for line in description_notes(robot, cal):
+        print(line, file=sys.stderr)
     tool = _vector(args.tool, 3, "--tool")
     if tool is not None:
         params = params.with_(tool=tool)

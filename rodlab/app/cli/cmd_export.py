@@ -9,7 +9,7 @@ import numpy as np
 
 from rodlab.calibrate import builtin_robots, read_points, robot_path
 from rodlab.calibrate.kinematics import ModelParams
-from rodlab.calibrate.result import calibrated_params, read_calibration
+from rodlab.calibrate.result import calibrated_params, description_notes, read_calibration
 
 from ...core.errors import RodlabError
 from .argtypes import seed
@@ -144,17 +144,6 @@ def _warn_geometry_alone(cal, left: _LeftOut, where: str) -> None:
               file=sys.stderr)
 
 
-def _note_description(cal, robot) -> None:
-    """A result without the description it was made against cannot be checked; another name is worth a note."""
-    if cal.description is None:
-        print(f"warning: {cal.path.name} does not record the robot description it was calibrated against (written "
-              "before rodlab recorded it): make sure this robot file is that description, joint zeros included; "
-              "calibrate again to have it checked", file=sys.stderr)
-    elif cal.robot and cal.robot != robot.name:
-        print(f"note: the calibration names the robot {cal.robot!r}, this description {robot.name!r}; its joint zeros "
-              "and held rows match the calibration's", file=sys.stderr)
-
-
 def cmd_export(args) -> int:
     from rodlab.calibrate.export_tables import write_dh_csv, write_params_yaml
     if args.urdf and args.robot:
@@ -172,7 +161,8 @@ def cmd_export(args) -> int:
     if not args.urdf and str(getattr(robot, "path", "") or "").lower().endswith(".urdf"):
         args.urdf = str(robot.path)                     # a URDF robot: its own file is written back calibrated
     params = calibrated_params(robot, cal)
-    _note_description(cal, robot)
+    for line in description_notes(robot, cal):
+        print(line, file=sys.stderr)
     urdf_out, yaml_out, csv_out = _outputs(args, robot)
     if urdf_out is None and Path(args.output).suffix.lower() == ".urdf":
         print(f"note: no URDF written: {robot.name} is a DH table, not a URDF (give --urdf ROBOT.urdf to write one "

@@ -68,9 +68,10 @@ def _common_offset(x_D_mm, n_far: int, args) -> str:
 
 def points_from_args(args, path, robot):
     """Instrument points (``*.validation.csv``) read from ``path`` for ``robot``, refused where their numbers look
-    like radians or metres (unless ``--units-checked``); rows beyond the robot's joint limits named on stderr."""
+    like radians or metres (unless ``--units-checked``; their sigma columns not judged where ``--noise-um`` replaces
+    them); rows beyond the robot's joint limits named on stderr."""
     points = read_points(path, robot.n)
-    _refuse_slips(point_unit_slips(points, path), args)
+    _refuse_slips(point_unit_slips(points, path, sigmas=not getattr(args, "noise_um", None)), args)
     _warn_limits(points.q_deg, None, robot, path)
     return points
 

@@ -8,7 +8,7 @@ always says what to do next.
 from __future__ import annotations
 
 from rodlab.calibrate.effects import campaign_effect
-from rodlab.calibrate.trust import GROSS_CAUSES, NOISY_FILE_CAUSES, PLAUSIBLE_NOISE_FACTOR, gross
+from rodlab.calibrate.trust import GROSS_CAUSES, NOISY_FILE_CAUSES, PLAUSIBLE_NOISE_FACTOR, gross, implausible_device
 
 from ...core.enums import FindingKind
 from ...core.errors import RodlabError
@@ -45,9 +45,8 @@ def _unexplained(f: Finding) -> str:
 
 
 def _implausible_device(f: Finding) -> bool:
-    """The excess would need a device more than :data:`~calibrate.trust.PLAUSIBLE_NOISE_FACTOR` times a MultiCal
-    device's noise."""
-    return float(f.parameters.get("scatter_um", 0.0)) > PLAUSIBLE_NOISE_FACTOR * DEVICE_NOISE_MM * 1e3
+    """The excess would need a device no MultiCal device is (:func:`~calibrate.trust.implausible_device`)."""
+    return implausible_device(float(f.parameters.get("scatter_um", 0.0)) * 1e-3)
 
 
 def remedy(f: Finding) -> str:

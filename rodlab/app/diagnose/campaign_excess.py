@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rodlab.calibrate.trust import PLAUSIBLE_NOISE_FACTOR, gross
+from rodlab.calibrate.trust import gross, implausible_device
 from rodlab.core.enums import FindingKind
 
 from .report import Finding
@@ -34,10 +34,9 @@ def unexplained_finding(sel, camp, final_test) -> Finding:
     scatter_um = sel.noise_mm * device_scale * 1e3
     noisier = (f"no device is that noisy (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um): the "
                "files do not describe this campaign" if gross(final_test.birge, final_rms) else
-               f"no MultiCal device is {device_scale:.0f} times noisier than stated (about {scatter_um:.1f} um instead "
-               f"of {sel.noise_mm * 1e3:.1f} um): the files may not describe this campaign, or play no effect models is "
-               "at work"
-               if device_scale > PLAUSIBLE_NOISE_FACTOR else
+               f"no MultiCal device scatters about {scatter_um:.1f} um (stated {sel.noise_mm * 1e3:.1f} um): the files "
+               "may not describe this campaign, or play that no effect models is at work"
+               if implausible_device(scatter_um * 1e-3) else
                f"a device noisier than stated (about {scatter_um:.1f} um instead of {sel.noise_mm * 1e3:.1f} um) "
                "would give this" if device_scale > 1.0 + 1e-6 else
                "the device noise as stated cannot give this: the fixture poses may be less certain than stated")

@@ -2,8 +2,9 @@
 
 Three situations a designer must not read past in the table:
 
-- every compensation method leaves the robot *less* accurate than its nominal (uncalibrated) model: calibrating
-  with this rod does harm (a soft rod whose non-repeatable deflection swamps the campaign);
+- the method the recommendation is for (Meas, else FEA, ...) leaves the robot *less* accurate than its nominal
+  (uncalibrated) model: calibrating with this rod does harm (a soft rod whose non-repeatable deflection swamps the
+  campaign); the recommendation leaves such a design out by the same rule;
 - the rod's slip (:mod:`rodlab.calibrate.rod_slip`, ``--rod-slip``) is most of the best method's error: the methods
   then differ by how the identification absorbs scatter, not by what they compensate, so their ranking says little
   and a stiffer rod is what helps;
@@ -18,6 +19,8 @@ from dataclasses import dataclass
 
 from rodlab.core.enums import StudyWarning
 from rodlab.core.units import PAPER_C_ROD_UM_RANGE
+
+from .table import harms, headline_method
 
 __all__ = ["DesignWarning", "study_warnings", "SLIP_DOMINANT_SHARE", "SLIP_EXTRAPOLATION_FACTOR"]
 
@@ -44,14 +47,19 @@ def _best(rows):
     return rows.loc[rows["mean_mm"].idxmin()]
 
 
-def _worse_than_nominal(design: str, rows) -> DesignWarning | None:
-    nominal = float(rows["nominal_mean_mm"].iloc[0])
-    best = _best(rows)
-    if not math.isfinite(nominal) or float(best["mean_mm"]) <= nominal:
+def _worse_than_nominal(design: str, rows, method: str) -> DesignWarning | None:
+    """With the recommendation's ``method`` (:func:`~.table.headline_method`) the design leaves the robot less
+    accurate than uncalibrated (:func:`~.table.harms`, as the recommendation judges it)."""
+    head = rows[rows["method"] == method]
+    if head.empty or not bool(harms(head).iloc[0]):
         return None
+    nominal = float(head["nominal_mean_mm"].iloc[0])
+    others = rows[~harms(rows)]
+    tail = (f"; {', '.join(f'{r.method} {r.mean_mm:.3f} mm' for r in others.itertuples())} would not"
+            if len(others) else ": calibrating with this rod would do harm with every method")
     return DesignWarning(StudyWarning.WORSE_THAN_NOMINAL, design, (
-        f"{design}: every method leaves the robot less accurate than its nominal model (best {best['method']} "
-        f"{best['mean_mm']:.3f} mm against {nominal:.3f} mm uncalibrated): calibrating with this rod would do harm"))
+        f"{design}: with {method} compensation it leaves the robot less accurate than its nominal model "
+        f"({head['mean_mm'].iloc[0]:.3f} mm against {nominal:.3f} mm uncalibrated){tail}"))
 
 
 def _slip_dominates(design: str, rows, rod_slip: float) -> DesignWarning | None:
@@ -85,8 +93,11 @@ def study_warnings(df, rod_slip: float) -> list[DesignWarning]:
     table's design order; ``rod_slip``: the priors' slip the predictions were made with."""
     ok = df[(df["status"] == "ok") & df["method"].notna()]
     out = []
+    if ok.empty:
+        return out
+    method = headline_method(ok)
     for design, rows in ok.groupby("design", sort=False):
-        for check in (_worse_than_nominal, lambda d, r: _slip_dominates(d, r, rod_slip),
+        for check in (lambda d, r: _worse_than_nominal(d, r, method), lambda d, r: _slip_dominates(d, r, rod_slip),
                       lambda d, r: _slip_extrapolated(d, r, rod_slip)):
             w = check(str(design), rows)
             if w is not None:

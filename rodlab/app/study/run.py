@@ -89,11 +89,16 @@ def joints_identity(joints) -> str | None:
                       sort_keys=True, default=str)
 
 
+#: what a cache entry holds; raised when that changes within one rodlab version (2: the budget's slip share, which
+#: an entry written before would read as 0)
+CACHE_FORMAT = 2
+
+
 def cache_key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
             "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": joints_identity(joints),
-            "v": __version__}
+            "v": __version__, "cache": CACHE_FORMAT}
     return hashlib.sha256(json.dumps(blob, sort_keys=True, default=str).encode()).hexdigest()[:20]
 
 

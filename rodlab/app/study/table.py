@@ -10,7 +10,7 @@ from rodlab.calibrate.predict import summarise
 from .prepare import DesignSetup
 from .run import StudyRun
 
-__all__ = ["STUDY_COLUMNS", "study_table", "recommend", "Recommendation"]
+__all__ = ["STUDY_COLUMNS", "study_table", "recommend", "Recommendation", "headline_method", "harms"]
 
 STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "message", "c_rod_um", "mass_kg",
                  "com_x_mm", "com_z_mm", "reach_mm", "O1", "O2", "O3", "O4", "O5", "method", "mean_mm", "max_mm",
@@ -67,11 +67,18 @@ def study_table(run: StudyRun):
     return df[STUDY_COLUMNS]
 
 
-def _method_for(df) -> str:
+def headline_method(df) -> str:
+    """The method a study's recommendation is for: the best compensation studied (Meas, else FEA, Calc, None)."""
     for m in ("meas", "fea", "calc", "none"):
         if (df["method"] == m).any():
             return m
     return str(df["method"].dropna().iloc[0])
+
+
+def harms(rows):
+    """Which rows (one design and method each) leave the robot less accurate than its nominal model (a boolean
+    Series; False where the nominal is not known)."""
+    return rows["mean_mm"] >= rows["nominal_mean_mm"]
 
 
 @dataclass(frozen=True)
@@ -97,9 +104,9 @@ def recommend(df) -> Recommendation:
     if ok.empty:
         reasons = "; ".join(sorted({f"{r.design}: {r.message}" for r in df.itertuples()})[:3])
         return Recommendation(None, math.nan, math.nan, None, f"no design is usable on this robot ({reasons})")
-    m = _method_for(ok)
+    m = headline_method(ok)
     rows = ok[ok["method"] == m]
-    helps = rows[~(rows["mean_mm"] >= rows["nominal_mean_mm"])]    # better than uncalibrated (or no nominal)
+    helps = rows[~harms(rows)]                                      # better than uncalibrated (or no nominal)
     pool = helps if len(helps) else rows
     best = pool.loc[pool["mean_mm"].idxmin()]
     close = pool[pool["mean_mm"] <= best["mean_p95_mm"]]

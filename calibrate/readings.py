@@ -150,10 +150,11 @@ def _sigma_slips(points, path) -> list[str]:
 def _rod_header_slips(points, path) -> list[str]:
     """The points file's rod header in other units: ``rod_mass_kg`` in grams, ``tool_mm`` in metres."""
     out = []
-    if points.rod_mass_kg > POINTS_ROD_MASS_LIMIT_KG:
-        out.append(f"{path}: # rod_mass_kg: {points.rod_mass_kg:g} (a measuring rod on a robot weighs 0.1-20 kg): it "
-                   f"looks like grams; rod_mass_kg is kilograms: write {points.rod_mass_kg / 1000:g}")
-    tool = float(np.linalg.norm(points.tool_mm))
+    mass = float(getattr(points, "rod_mass_kg", 0.0))
+    if mass > POINTS_ROD_MASS_LIMIT_KG:
+        out.append(f"{path}: # rod_mass_kg: {mass:g} (a measuring rod on a robot weighs 0.1-20 kg): it looks like "
+                   f"grams; rod_mass_kg is kilograms: write {mass / 1000:g}")
+    tool = float(np.linalg.norm(getattr(points, "tool_mm", np.zeros(3))))
     if 0.0 < tool < POINTS_TOOL_METRES_MM:
         out.append(f"{path}: # tool_mm is {tool:.4g} mm long (a tool or target holder reaches tens to hundreds of mm "
                    "from the flange): it looks like metres; tool_mm is millimetres: multiply metres by 1000")

@@ -10,6 +10,8 @@ import numpy as np
 from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
                               validate)
 from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.residual_test import residual_test
+from rodlab.calibrate.trust import implausible_device, stated_noise_warning
 from rodlab.calibrate.kinematics import HARMONICS
 from rodlab.calibrate.validate import error_stats
 from rodlab.calibrate.compensations import compensation_label
@@ -143,8 +145,6 @@ def stated_noise_reason(run: CalibrationRun, args) -> str | None:
     """:func:`~rodlab.calibrate.trust.stated_noise_warning` of a campaign's calibration (None with
     ``--noise-checked``): where a stated --noise-um no MultiCal device has passed the residual test, the same test at
     the device's own noise decides."""
-    from rodlab.calibrate.residual_test import residual_test   # CLI-lazy: only where a noise was stated
-    from rodlab.calibrate.trust import implausible_device, stated_noise_warning
     test = run.result.residual_check
     if getattr(args, "noise_checked", False) or test is None or not test.clamping or not implausible_device(test.noise_mm):
         return None

@@ -19,6 +19,7 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
+from rodlab.calibrate.identify import STRICT_HINT
 from rodlab.calibrate.trust import gross
 from rodlab.calibrate.validate import clearly_worse
 
@@ -232,7 +233,6 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float
         diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm, validate_points=points,
                                     fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
     except RodlabError as e:   # the diagnosis identifies every parameter; the calibration held some at nominal
-        from rodlab.calibrate.identify import STRICT_HINT
         print(f"suspects: the campaign diagnosis, which identifies every parameter, cannot run on this campaign "
               f"({str(e).replace(STRICT_HINT, '')}); the verdict above stands", file=sys.stderr)
         return

@@ -8,7 +8,7 @@ import sys
 from contextlib import contextmanager
 from pathlib import Path
 
-from rodlab.calibrate import read_campaign, read_points, resolve_robot
+from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
 from rodlab.calibrate.readings import limit_breaches, point_unit_slips, unit_slips
 from rodlab.calibrate.robot_formats import ROBOT_READERS
 from rodlab.calibrate.sockets import read_sockets
@@ -215,7 +215,6 @@ def _check_positions(checks: list) -> None:
     fixtures = [(f, c) for f, c in checks if c.ok and c.format in ("rodlab.fixture/1", "rodlab.fixture/2")]
     if len(fixtures) != 1:
         return
-    from rodlab.calibrate import read_campaign, read_fixture   # CLI-lazy: the readers only where both are given
     fpath = fixtures[0][0]
     have = set(read_fixture(fpath).poses)
     for f, c in checks:

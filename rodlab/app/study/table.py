@@ -115,7 +115,8 @@ def recommend(df) -> Recommendation:
            f"{pick['mean_p05_mm']:.3f}-{pick['mean_p95_mm']:.3f} mm), c_rod {pick['c_rod_um']:.0f} um, mass "
            f"{pick['mass_kg']:.3f} kg")
     if pick["design"] == best["design"]:
-        text = f"build {pick['design']}: the most accurate of {len(pool)} designs; {why}"
+        text = (f"build {pick['design']}: the most accurate of {len(pool)} designs; {why}" if len(pool) > 1 else
+                f"build {pick['design']}: the only design studied that can be recommended; {why}")
     else:
         text = (f"build {pick['design']}: the lightest of the {len(close)} designs within the best one's band "
                 f"(best {best['design']}, {best['mean_mm']:.3f} mm); {why}")

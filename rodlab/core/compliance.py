@@ -313,7 +313,7 @@ class RodCompliance:
         if stored is not None and abs(stored - comp.c_rod_um) > 0.01 * max(abs(comp.c_rod_um), 1.0):
             log.warning("%s: stored c_rod_um %.4g differs from Eq. 23 on the matrices (%.4g); the matrices are used",
                         path, stored, comp.c_rod_um)
-        for problem in comp.unit_slips():
+        for problem in (comp.unit_slips() if path is not None else ()):   # a user's file; not rodlab's own data
             log.warning("%s: %s", path, problem)
         return comp
 

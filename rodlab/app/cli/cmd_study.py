@@ -98,20 +98,47 @@ def _methods(text: str) -> tuple:
     return ms
 
 
+def _read_designs(names: list[str]) -> list:
+    """Every design named (a file or a built-in), or one error listing each that cannot be read."""
+    designs, bad = [], []
+    for name in names:
+        try:
+            designs.append(resolve_design(name))
+        except RodlabError as e:
+            bad.append(str(e) if name in str(e) else f"{name}: {e}")       # a file's error names it already
+    if bad:
+        raise RodlabError(f"{len(bad)} of {len(names)} designs cannot be read (`rodlab validate` lists every problem "
+                          "of each):\n  " + "\n  ".join(bad))
+    return designs
+
+
+def _lengths_mm(values, name: str, given: str) -> list:
+    """``--L1`` / ``--L2`` values [mm]; all below 10 mm is a range in metres (no rod's tube is that short)."""
+    if max(values) < 10.0:
+        raise RodlabError(f"--{name} {given}: lengths are millimetres, and every value is below 10 mm: did you give "
+                          f"metres? ({max(values):g} m = {1000 * max(values):g} mm): multiply by 1000")
+    return values
+
+
 def _candidates(args):
     from rodlab.app.study.designs import grid_candidates, list_candidates, parse_tube
     from rodlab.fea.sweep import parse_range
     grid = args.L1 is not None or args.L2 is not None or args.materials or args.tubes
     if not grid:
-        return list_candidates([resolve_design(d) for d in args.designs]), None
+        return list_candidates(_read_designs(args.designs)), None
     if len(args.designs) != 1:
         raise RodlabError("--L1/--L2/--materials/--tubes vary one base design; give exactly one")
     base = resolve_design(args.designs[0])
-    L1s = parse_range(args.L1, "L1") if args.L1 else [base.L1_mm]
-    L2s = parse_range(args.L2, "L2") if args.L2 else [base.L2_mm]
+    L1s = _lengths_mm(parse_range(args.L1, "L1"), "L1", args.L1) if args.L1 else [base.L1_mm]
+    L2s = _lengths_mm(parse_range(args.L2, "L2"), "L2", args.L2) if args.L2 else [base.L2_mm]
     mats = [m.strip() for m in args.materials.split(",")] if args.materials else [None]
     tubes = [parse_tube(t) for t in args.tubes.split(",")] if args.tubes else [None]
     return grid_candidates(base, L1s, L2s, mats, tubes), (L1s, L2s)
+
+
+#: the largest rod slip a study takes (4x the paper's fit): past ~10-50 the scatter makes every weak parameter fall
+#: to its prior and the predicted error tends back to the nominal model's, not up with the slip
+MAX_ROD_SLIP = 10.0
 
 
 def _check_numbers(args) -> None:
@@ -120,6 +147,11 @@ def _check_numbers(args) -> None:
             raise RodlabError(f"--{name} must be >= 1, got {getattr(args, name)}")
     if args.orientations < 2:
         raise RodlabError("--orientations must be >= 2 (the rod's orientations at a clamping position)")
+    if args.rod_slip > MAX_ROD_SLIP:
+        raise RodlabError(f"--rod-slip {args.rod_slip:g}: expected 0-{MAX_ROD_SLIP:g} (the rod's non-repeatable "
+                          f"deflection in multiples of its own weight; the paper's rods: {PAPER_ROD_SLIP:g}); beyond that "
+                          "the identification's priors hold the robot at its nominal model and the prediction stops "
+                          "growing with the slip (it fell again from 50 to 1000)")
 
 
 def _assumptions(args) -> str:

@@ -15,7 +15,8 @@ __all__ = ["STUDY_COLUMNS", "study_table", "recommend", "Recommendation", "headl
 STUDY_COLUMNS = ["design", "L1_mm", "L2_mm", "material", "tube", "status", "message", "c_rod_um", "mass_kg",
                  "com_x_mm", "com_z_mm", "reach_mm", "O1", "O2", "O3", "O4", "O5", "method", "mean_mm", "max_mm",
                  "median_mm", "mean_p05_mm", "mean_p95_mm", "rms_mm", "share_deflection", "share_identification",
-                 "share_noise", "share_slip", "nominal_mean_mm", "r_rod_low", "r_rod_high", "replicates", "failed",
+                 "share_noise", "share_slip", "slip_scatter_um", "nominal_mean_mm", "r_rod_low", "r_rod_high",
+                 "replicates", "failed",
                  "thermal_um_per_K", "thermal_x_um_per_K", "thermal_z_um_per_K", "f1_Hz", "f2_Hz", "f3_Hz",
                  "tube_stress_MPa", "tube_margin", "bond_stress_MPa", "bond_margin", "compliance_model"]
 
@@ -37,6 +38,15 @@ def _design_part(s: DesignSetup) -> dict:
     return row
 
 
+def _slip_scatter_um(s: DesignSetup, slip: float) -> float:
+    """The scatter the rod's slip adds to each reading of a campaign [um, rms per coordinate]: ``slip C_g u`` with
+    ``u ~ N(0, I/3)`` has ``E|.|^2 = slip^2 tr(C_g C_g^T) / 3`` over three coordinates (the simulated rod's C_g)."""
+    if s.fea is None or not slip:
+        return 0.0 if s.fea is not None else math.nan
+    Cg = np.asarray(s.fea.C_g, float)
+    return float(1e3 * slip * np.sqrt(np.trace(Cg @ Cg.T) / 9.0))
+
+
 def study_table(run: StudyRun):
     """A pandas DataFrame with :data:`STUDY_COLUMNS`: a row per design and method (one row, without a method,
     for a design that is invalid, unreachable or failed)."""
@@ -45,7 +55,7 @@ def study_table(run: StudyRun):
     rows = []
     preds = run.predictions or [None] * len(run.setups)
     for s, outs, pred in zip(run.setups, run.outcomes, preds):
-        base = _design_part(s)
+        base = dict(_design_part(s), slip_scatter_um=_slip_scatter_um(s, run.spec.priors.rod_slip))
         if pred is not None:
             nominal, summaries = pred.nominal_mean_mm, pred.summaries
         elif not s.ok or not outs:

@@ -350,8 +350,9 @@ _OTHER_LENGTHS = {"m": 1000.0, "metre": 1000.0, "metres": 1000.0, "meter": 1000.
 def units_line_problem(value: str) -> str | None:
     """What a ``# units: ...`` line of a points or sockets file says wrongly: a length unit other than millimetres
     (the lengths are millimetres whatever the line says: ``x_mm``); None for mm (and deg)."""
-    other = [t for t in re.findall(r"[a-zµ]+", value.lower()) if t in _OTHER_LENGTHS]
-    if not other:
+    tokens = re.findall(r"[a-zµ]+", value.lower())
+    other = tokens[:1] if tokens and tokens[0] in _OTHER_LENGTHS else []     # the unit the line leads with ("mm in
+    if not other:                                                           # the tracker frame" is millimetres)
         return None
     return (f"'# units: {value.strip()}' names {other[0]}: rodlab reads the lengths as millimetres whatever the line "
             f"says (the columns' _mm); convert the numbers ({other[0]} x {_OTHER_LENGTHS[other[0]]:g} = mm) and write "

@@ -170,8 +170,8 @@ def _deficient(robot, sel: Selection, reasons: dict) -> dict:
 
 
 #: the end of the refusal of a data set that cannot identify what it must: true for `calibrate --strict`, not for
-#: a diagnosis, which identifies every parameter (its callers strip it)
-STRICT_HINT = " (without --strict rodlab holds them at nominal itself)"
+#: a diagnosis, which identifies every parameter and has no --pin (its callers strip it)
+STRICT_HINT = ", or hold them with --pin NAME=VALUE (without --strict rodlab holds them at nominal itself)"
 
 
 def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bool) -> None:
@@ -185,7 +185,7 @@ def _refuse_deficient(obs: Observations, deficient: dict, fix_unidentifiable: bo
                 else "Measure more poses spread over the workspace (every joint moved, varied configurations)")
         raise CalibrationError(
             f"{'this campaign' if obs.group is not None else 'these points'} cannot identify {len(deficient)} "
-            f"parameter(s): {lines}. {more}, or hold them with --pin NAME=VALUE{STRICT_HINT}",
+            f"parameter(s): {lines}. {more}{STRICT_HINT}",
             key="campaign" if obs.group is not None else "points")
 
 

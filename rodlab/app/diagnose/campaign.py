@@ -30,6 +30,7 @@ from rodlab.calibrate import FitOptions, Rod, campaign_observations, identify
 from rodlab.calibrate.effects import (CAMPAIGN_EFFECTS, CampaignContext, campaign_effect, campaign_hypotheses)
 from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.identify import STRICT_HINT
 from rodlab.calibrate.kinematics import ball_positions
 from rodlab.calibrate.mixups import campaign_mixup
 from rodlab.calibrate.observations import noise_covariance
@@ -347,7 +348,13 @@ def diagnose_campaign(robot, camp, fix, rod, noise_mm: float = 0.003, validate_p
     obs = campaign_observations(camp, fix, rod)
     # the identification runs the residual test of `rodlab calibrate` (its trust verdict), with this noise model
     options = FitOptions(expected_noise_mm=noise_mm, fixture_sigma=fixture_sigma, harmonics=tuple(harmonics))
-    res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)], options)
+    try:
+        res = identify(robot, obs, Rod.of(rod), [deflection_of(rod)], options)
+    except CalibrationError as e:      # the diagnosis identifies every parameter: no --strict to drop here
+        if STRICT_HINT not in e.detail:
+            raise
+        raise CalibrationError(e.detail.replace(STRICT_HINT, "") + " (the diagnosis identifies every parameter)",
+                               path=e.path or camp.path, key=e.key) from e
     mixup = campaign_mixup(robot, res, camp, fix, rod, obs, Rod.of(rod), [deflection_of(rod)], options, material=False)
     if mixup is not None and columns_checked:
         log.warning("%s: %s (--columns-checked: diagnosed as they are)", camp.path, mixup.reason())

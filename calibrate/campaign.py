@@ -26,6 +26,7 @@ from rodlab.core.schema_table import DECIMAL_COMMA, sub_micrometre
 
 from .errors import CalibrationError
 from .rod import Rod
+from .units_line import units_line_problem
 
 __all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "FIXTURE_FORMATS"]
@@ -299,10 +300,10 @@ FIXTURE_SPAN_MM = (50.0, 5000.0)
 
 
 def _refuse_metres(p: Path, poses: dict) -> None:
-    """Refuse three or more clamping positions whose translations all lie within :data:`FIXTURE_METRES_SPAN_MM` of
+    """Refuse two or more clamping positions whose translations all lie within :data:`FIXTURE_METRES_SPAN_MM` of
     each other and would span a fixture's :data:`FIXTURE_SPAN_MM` x 1000: metres where millimetres are expected."""
     xyz = np.array([np.asarray(v, float)[:3] for v in poses.values()])
-    if len(xyz) < 3:
+    if len(xyz) < 2:
         return
     span = float(np.max(np.linalg.norm(xyz[:, None] - xyz[None], axis=2)))
     if span < FIXTURE_METRES_SPAN_MM and FIXTURE_SPAN_MM[0] <= 1000.0 * span <= FIXTURE_SPAN_MM[1]:
@@ -342,23 +343,6 @@ def write_fixture(fix: Fixture, path) -> Path:
     return atomic_write_json(path, data)
 
 
-#: length units a ``# units:`` line may name that are not the formats' millimetres, and their factor to mm
-_OTHER_LENGTHS = {"m": 1000.0, "metre": 1000.0, "metres": 1000.0, "meter": 1000.0, "meters": 1000.0, "cm": 10.0,
-                  "um": 1e-3, "µm": 1e-3, "micron": 1e-3, "microns": 1e-3, "in": 25.4, "inch": 25.4, "inches": 25.4}
-
-
-def units_line_problem(value: str) -> str | None:
-    """What a ``# units: ...`` line of a points or sockets file says wrongly: a length unit other than millimetres
-    (the lengths are millimetres whatever the line says: ``x_mm``); None for mm (and deg)."""
-    tokens = re.findall(r"[a-zµ]+", value.lower())
-    other = tokens[:1] if tokens and tokens[0] in _OTHER_LENGTHS else []     # the unit the line leads with ("mm in
-    if not other:                                                           # the tracker frame" is millimetres)
-        return None
-    return (f"'# units: {value.strip()}' names {other[0]}: rodlab reads the lengths as millimetres whatever the line "
-            f"says (the columns' _mm); convert the numbers ({other[0]} x {_OTHER_LENGTHS[other[0]]:g} = mm) and write "
-            "mm on the line, or delete it")
-
-
 def read_points(path, n_joints: int = 6) -> PointSet:
     p, text = read_text_file(path)
     meta = {key: (k, val) for k, key, val in leading_comments(text)}
@@ -375,7 +359,7 @@ def read_points(path, n_joints: int = 6) -> PointSet:
             raise CalibrationError(f"expected {n} finite numbers, got {val!r}", path=p, line=k, key=key)
         return arr
     for key, (k, val) in meta.items():
-        if key.lower() == "units" and (problem := units_line_problem(val)):
+        if key.lower() in ("unit", "units") and (problem := units_line_problem(val)):
             raise CalibrationError(problem, path=p, line=k, key=key)
     tool = vec("tool_mm", 3)
     mass = float(vec("rod_mass_kg", 1)[0]) if "rod_mass_kg" in meta else 0.0

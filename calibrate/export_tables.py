@@ -16,7 +16,7 @@ import numpy as np
 
 from rodlab.core.fileio import atomic_write_text
 
-from .result import CalibrationFile
+from .result import CalibrationFile, joint_zero_shifts_deg
 from .kinematics import HARMONICS, ModelParams
 
 __all__ = ["params_yaml", "dh_table_csv", "write_params_yaml", "write_dh_csv"]
@@ -60,10 +60,17 @@ def params_yaml(robot, cal: CalibrationFile, params: ModelParams, origins: dict 
         _harmonics_yaml(out, robot, cal, params)
     out.write("parameters:   # every parameter of the identification\n")
     twist = f"dtheta_{robot.n}"
+    shift = joint_zero_shifts_deg(robot, cal)
     for name, v in cal.parameters.items():
         note = "   # with the rod's mounting twist about the flange axis (one rod cannot separate them)" \
             if name == twist else ""
-        out.write(f"  {name}: {{value: {_num(v.value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}"
+        value = v.value
+        kind, _, j = name.rpartition("_")
+        if kind == "dtheta" and j.isdigit() and shift[int(j) - 1]:     # to this description's zero of the joint
+            value = v.value + shift[int(j) - 1]
+            note = (f"   # re-referenced to this description's zero ({_num(v.value)} identified against the "
+                    f"calibration's, {_num(cal.description['theta_offset_deg'][int(j) - 1])} deg)") + note
+        out.write(f"  {name}: {{value: {_num(value)}, sigma: {_num(v.sigma)}, unit: {v.unit}, status: {v.status}}}"
                   f"{note}\n")
     return out.getvalue()
 
@@ -89,7 +96,8 @@ def _nominal_row(robot, i: int) -> dict:
 
 
 def _calibrated_row(params: ModelParams, i: int) -> dict:
-    return {"theta_offset": np.rad2deg(params.theta_offset[i]), "d": params.d[i], "a": params.a[i],
+    theta = (np.rad2deg(params.theta_offset[i]) + 180.0) % 360.0 - 180.0       # within +-180 deg
+    return {"theta_offset": theta, "d": params.d[i], "a": params.a[i],
             "alpha": np.rad2deg(params.alpha[i]), "beta": np.rad2deg(params.beta[i]), "c": params.c[i]}
 
 

@@ -89,7 +89,8 @@ class Mixup:
                "its bounds")
         if self.target_change is not None:
             k, a, b = self.target_change
-            return (f"the points before data row {k} and from it on each fit the nominal model on their own ({a:.1f} "
+            return (f"the points before data row {k} (the {k}th row after the header, comments not counted) and "
+                    f"from it on each fit the nominal model on their own ({a:.1f} "
                     f"and {b:.1f} mm rms, base and tool registered for each) but not together ({self.rms_given_mm:.1f} "
                     f"mm): the target or tool changed at data row {k} (two reflectors, a re-mounted target); give each "
                     "part its own file and calibrate each, or measure again with one target")

@@ -317,8 +317,9 @@ def refuse_mixed_up_joints(robot, readings, path, noise_mm: float | None = None,
         mixup = sockets_mixup(robot, readings, lambda r: identify_sockets(robot, r, fix_unidentifiable=True).result)
     else:
         mixup = points_mixup(robot, readings, lambda p: identify_points(robot, p, noise_mm, fix_unidentifiable=True))
-    if mixup is not None and not checked:
-        raise CalibrationError(f"{mixup.reason()}; nothing was {done}{hint}", path=path, key=mixup.column_key)
+    if mixup is not None and not checked:             # the hint is about the joint columns: not a target's change
+        tail = hint if mixup.target_change is None else ""
+        raise CalibrationError(f"{mixup.reason()}; nothing was {done}{tail}", path=path, key=mixup.column_key)
     return mixup
 
 

@@ -307,7 +307,7 @@ def description_notes(robot, cal: CalibrationFile) -> list[str]:
                      f"{round(float(robot.theta_offset_deg[j]), 6) + 0.0:g} deg here" for j in moved)
     return [f"note: this robot description ({robot.name!r}) counts joints from other zeros than the one the calibration "
             f"used ({rows}): their identified offsets are re-referenced to this description's zeros, so the model "
-            "written is the calibrated one (the YAML's parameters stay as identified)"]
+            "written is the calibrated one (the YAML's dtheta too, each with the identified value in a comment)"]
 
 
 def _check_description(robot, cal: CalibrationFile) -> None:

@@ -23,7 +23,8 @@ import numpy as np
 
 from rodlab.core.fileio import atomic_write_text
 
-from .campaign import leading_comments, read_table, read_text_file, units_line_problem
+from .campaign import leading_comments, read_table, read_text_file
+from .units_line import units_line_problem
 from .errors import CalibrationError
 
 __all__ = ["SocketDistance", "SocketReadings", "read_sockets", "write_sockets", "SEAT_SIGMA_MM", "DISTANCE_SIGMA_MM",

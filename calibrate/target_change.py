@@ -19,7 +19,7 @@ import numpy as np
 
 from .mixup import Mixup
 
-__all__ = ["target_change", "MIN_PART_POINTS", "MAX_CUTS"]
+__all__ = ["target_change", "MIN_PART_POINTS", "MAX_CUTS", "SEARCH_POINTS"]
 
 log = logging.getLogger(__name__)
 
@@ -27,18 +27,24 @@ log = logging.getLogger(__name__)
 MIN_PART_POINTS = 10
 #: cuts tried on a first pass over long files (then every row around the best)
 MAX_CUTS = 40
+#: points of each part a cut is judged on during the search (evenly spaced; the cut named is judged on all)
+SEARCH_POINTS = 60
 
 
-def _part(pts, lo: int, hi: int):
+def _part(pts, lo: int, hi: int, cap: int | None = None):
+    """The rows ``lo`` .. ``hi`` - 1 of ``pts``; at most ``cap`` of them, evenly spaced (the search's subsample)."""
     idx = np.arange(lo, hi)
+    if cap is not None and len(idx) > cap:
+        idx = idx[np.linspace(0, len(idx) - 1, cap).round().astype(int)]
     sigma = None if pts.sigma_mm is None else pts.sigma_mm[idx]
     return replace(pts, q_deg=pts.q_deg[idx], x_W_mm=pts.x_W_mm[idx], sigma_mm=sigma)
 
 
 def _worse_part(pts, k: int, misfit: Callable) -> float:
-    """The larger registered nominal misfit [mm] of the rows before ``k`` and from ``k`` on."""
+    """The larger registered nominal misfit [mm] of the rows before ``k`` and from ``k`` on, each part registered on
+    at most :data:`SEARCH_POINTS` of its points (a long file's cut costs what a short one's does)."""
     N = len(pts.q_deg)
-    return max(misfit(_part(pts, 0, k)), misfit(_part(pts, k, N)))
+    return max(misfit(_part(pts, 0, k, SEARCH_POINTS)), misfit(_part(pts, k, N, SEARCH_POINTS)))
 
 
 def _best_cut(pts, misfit: Callable) -> tuple[int, float]:
@@ -61,9 +67,10 @@ def target_change(pts, misfit: Callable, given_mm: float, gross_mm: float, gain:
     N = len(pts.q_deg)
     if N < 2 * MIN_PART_POINTS or not given_mm > gross_mm:
         return None
-    k, worse = _best_cut(pts, misfit)
+    k, _ = _best_cut(pts, misfit)
+    parts = (misfit(_part(pts, 0, k)), misfit(_part(pts, k, N)))           # the cut named, judged on every point
+    worse = max(parts)
     log.info("instrument points cut at data row %d: the worse part %.2f mm (the whole %.1f mm)", k + 1, worse, given_mm)
     if not worse <= min(gross_mm, gain * given_mm):
         return None
-    parts = (misfit(_part(pts, 0, k)), misfit(_part(pts, k, N)))
     return Mixup(None, None, max(parts), given_mm, target_change=(k + 1, *parts), given_is_nominal=True)

@@ -62,6 +62,12 @@ def test_a_result_records_its_description_and_export_re_references_other_joint_z
     p_own = ball_positions(mine, calibrated_params(mine, cal), q)[0].pW
     p_other = ball_positions(theirs, calibrated_params(theirs, cal), q)[0].pW
     np.testing.assert_allclose(p_other, p_own, atol=1e-6)                 # the same calibrated model
+    yaml = (tmp_path / "x.yaml").read_text()                              # its dtheta_3 is this description's
+    line = next(ln for ln in yaml.splitlines() if ln.strip().startswith("dtheta_3:"))
+    assert "re-referenced to this description's zero" in line
+    shift = float(theirs.theta_offset_deg[2] - mine.theta_offset_deg[2])
+    written = float(line.split("value:")[1].split(",")[0])
+    assert written == pytest.approx(cal.parameters["dtheta_3"].value - shift, abs=1e-6)
 
 
 def test_a_result_without_its_description_is_exported_with_a_warning(ur5, tmp_path, capsys):

@@ -230,6 +230,7 @@ def _print(res, model: str) -> None:
         print(f"  the measurement cannot separate {a} from {b} (together they move the measured entries alike, "
               f"multiple correlation {c:.3f}; the priors split them): to separate them, {how}")
     for k, change, sd in res.beyond_tolerance(2.0):
+        sd = abs(sd)
         if abs(change) > 3.0 * sd:
             print(f"  note: {k} moved {change:+.1%}, more than 3x its tolerance ({sd:.1%}): the part is not what the "
                   "design says (another material or lay-up, a units slip, the wrong rod's data), or keys left fixed "

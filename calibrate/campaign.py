@@ -154,7 +154,8 @@ def leading_comments(text: str) -> list[tuple[int, str, str]]:
     return out
 
 
-def read_table(p: Path, text: str, required: list[str], optional: list[str]):
+def read_table(p: Path, text: str, required: list[str], optional: list[str], text_columns: tuple = ()):
+    """The header and the data rows ``(line, {column: number})`` of a CSV table (``text_columns`` kept as text)."""
     lines = text.splitlines()
     i = 0
     while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
@@ -181,7 +182,7 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str]):
             continue
         if len(row) != len(header):
             raise CalibrationError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
-        rows.append((k, {h: cell_number(c, p, k, h) for h, c in zip(header, row)}))
+        rows.append((k, {h: c.strip() if h in text_columns else cell_number(c, p, k, h) for h, c in zip(header, row)}))
     if not rows:
         raise CalibrationError("no data rows", path=p, line=i + 1)
     return header, rows
@@ -366,7 +367,8 @@ def read_points(path, n_joints: int = 6) -> PointSet:
     com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)
     temp = float(vec("temp_C", 1)[0]) if "temp_C" in meta else None
     qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = read_table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS))
+    header, rows = read_table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS) + list(POINT_EXTRAS),
+                              text_columns=POINT_TEXT)
     q = np.array([[r[c] for c in qs] for _, r in rows])
     x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
     return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows))
@@ -374,6 +376,10 @@ def read_points(path, n_joints: int = 6) -> PointSet:
 
 #: optional per-point uncertainty columns of a points file: one standard deviation per coordinate [mm]
 SIGMA_COLUMNS = ("sigma_x_mm", "sigma_y_mm", "sigma_z_mm")
+#: optional columns a tracker's export carries that a points file may keep (not read): the point's name or label, its
+#: time stamp as text, its time [s]
+POINT_TEXT = ("name", "point_name", "label", "timestamp", "date")
+POINT_EXTRAS = (*POINT_TEXT, "time_s")
 
 
 def _point_sigmas(p: Path, header: list[str], rows) -> np.ndarray | None:

@@ -167,3 +167,21 @@ def test_points_of_two_targets_in_one_file_are_named(tmp_path, capsys):
     assert main(["calibrate", "--points", str(DATA / "boby2021" / "r2000ic_N2.validation.csv"), "--robot",
                  "r2000ic165f"]) in (0, 3)
     assert "target or tool changed" not in capsys.readouterr().err
+
+
+def test_a_tracker_export_keeps_its_names_and_time_stamps(ur5, tmp_path, capsys):
+    """point_name and timestamp columns (a trial: refused, names lost for tracing) are kept and not read; any other
+    unknown column is still refused."""
+    pts, _, _ = ur5
+    lines = pts.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("q1"))
+    rows = [f"P{k:04d},2025-03-01T10:00:{k % 60:02d}," + ln for k, ln in enumerate(lines[i + 1:])]
+    named = tmp_path / "named.validation.csv"
+    named.write_text("\n".join(lines[:i] + ["point_name,timestamp," + lines[i]] + rows) + "\n")
+    got, plain = read_points(named), read_points(pts)
+    np.testing.assert_array_equal(got.x_W_mm, plain.x_W_mm)
+    assert main(["validate", str(named)]) == 0
+    other = tmp_path / "other.validation.csv"
+    other.write_text("\n".join(lines[:i] + ["remark," + lines[i]] + ["x," + ln for ln in lines[i + 1:]]) + "\n")
+    with pytest.raises(CalibrationError, match="unknown column 'remark'"):
+        read_points(other)

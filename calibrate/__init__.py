@@ -19,8 +19,10 @@ from .socket_check import SocketCheck, check_sockets
 from .socket_fit import SocketFit, identify_sockets
 from .sockets import SocketDistance, SocketReadings, read_sockets, write_sockets
 from .validate import ErrorStats, validate
+from rodlab.core.lazy import lazy_exports
 
-__all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
+__all__ = ["CampaignSpec", "simulate_campaign", "standard_fixture", "Priors",
+           "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
            "Device", "Sensor", "read_device", "write_device", "apply_device", "far_points",
            "FixtureFit", "ProbeSet", "fit_fixture", "read_probe", "CalibrationError",
            "Rod", "FitOptions", "COMPENSATIONS", "Compensation", "RodDeflection", "deflection_offsets", "ThermalGrowth",
@@ -30,3 +32,8 @@ __all__ = ["Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "
            "Robot", "robot_from_chain", "ROBOT_READERS", "builtin_robots", "read_robot",
            "resolve_robot", "robot_path", "ErrorStats", "validate", "SocketCheck", "check_sockets", "SocketFit",
            "identify_sockets", "SocketDistance", "SocketReadings", "read_sockets", "write_sockets"]
+
+#: loaded on first use (simulation and prediction: ~30 ms of imports most commands do not need)
+_LAZY = {"CampaignSpec": "simulate", "simulate_campaign": "simulate", "standard_fixture": "simulate",
+         "Priors": "predict"}
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -8,12 +8,14 @@ deflection compensation (:class:`~rodlab.calibrate.compensations.RodDeflection`)
 """
 from __future__ import annotations
 
+
 from dataclasses import dataclass
 
 import numpy as np
 
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.enums import Method
+from rodlab.core.errors import expect_type
 
 from .errors import CalibrationError
 
@@ -69,6 +71,8 @@ class Rod:
     @classmethod
     def of(cls, compliance: RodCompliance) -> "Rod":
         """The rod a compliance file describes (tool, mass, COM, matrices, method)."""
+        expect_type(compliance, RodCompliance, "compliance", "a compliance file: rodlab.calc_rod_compliance(design), "
+                    "rodlab.read_compliance(FILE) or rodlab.fea.compute_compliance(design)")
         return cls(compliance.tool_mm, compliance.mass_kg, compliance.com_T_mm, compliance.C_F, compliance.C_g,
                    compliance.method, compliance.rod)
 

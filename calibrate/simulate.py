@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.compliance import RodCompliance, write_compliance
+from rodlab.core.errors import expect_type
 from rodlab.core.fileio import atomic_write_json, atomic_write_text
 from rodlab.core.frames import matrix_to_pose, rotation_from_abc
 
@@ -25,6 +26,7 @@ from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, de
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
 from .ik import random_configurations, solve_ik_groups, solve_ik_positions
 from .kinematics import ModelParams, ball_positions
+from .robot import Robot
 from .rod import Rod
 from .probe import simulated_probe_text
 from .device import write_device
@@ -33,9 +35,15 @@ __all__ = ["CampaignSpec", "simulate_campaign", "random_truth", "standard_base",
            "RobotFloor", "robot_floor"]
 
 
+#: the largest device noise a simulated campaign takes [mm] (a dial gauge's is 0.001-0.01 mm)
+MAX_DEVICE_NOISE_MM = 0.5
+
+
 @dataclass
 class CampaignSpec:
-    """positions, orientations per position, noise [mm], joint resolution [deg], alignment [mm], error scale."""
+    """positions, orientations per position, noise [mm], joint resolution [deg], alignment [mm], error scale;
+    checked on construction (whole numbers >= 1, finite numbers >= 0, a device noise of at most
+    :data:`MAX_DEVICE_NOISE_MM`: the library's noise is in mm where the CLI's flag is in um)."""
 
     positions: int = 5
     orientations: int = 6
@@ -48,6 +56,22 @@ class CampaignSpec:
     error_scale: float = 1.0
     validation_points: int = 100
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        for key in ("positions", "orientations", "validation_points"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
+                raise CalibrationError(f"CampaignSpec.{key}: expected a whole number >= 1, got {v!r}", key=key)
+        for key in ("device_noise_mm", "instrument_noise_mm", "q_resolution_deg", "alignment_mm", "probe_accuracy_mm",
+                    "error_scale"):
+            v = getattr(self, key)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) or not np.isfinite(v) or v < 0:
+                raise CalibrationError(f"CampaignSpec.{key}: expected a finite number >= 0, got {v!r}", key=key)
+        if self.device_noise_mm > MAX_DEVICE_NOISE_MM:
+            raise CalibrationError(f"CampaignSpec.device_noise_mm = {self.device_noise_mm:g} mm: the noise is in mm (the "
+                                   f"CLI's --noise-um {self.device_noise_mm:g} is {self.device_noise_mm / 1000:g} mm); "
+                                   f"a MultiCal device's is 0.003 mm, at most {MAX_DEVICE_NOISE_MM:g} mm is taken",
+                                   key="device_noise_mm")
 
 
 def random_truth(robot, tool_mm, rng, scale=1.0) -> ModelParams:
@@ -232,6 +256,9 @@ def simulate_campaign(robot, rod: RodCompliance, out_dir, spec: CampaignSpec = C
     device : a :class:`~calibrate.device.Device` as built: the campaign then holds its sensors' raw readings
         (``s1_mm, s2_mm, s3_mm``, each with the device noise), the springs push the ball with the force at each
         reading, and ``multical.device.json`` is written (the caller may write another, e.g. a nominal one)."""
+    expect_type(robot, Robot, "robot", "load one with rodlab.calibrate.resolve_robot('tx90' or a robot file)")
+    expect_type(rod, RodCompliance, "rod", "a compliance file: rodlab.calc_rod_compliance(design) or "
+                "rodlab.read_compliance(FILE)")
     active = complete_campaign_effects(effects)
     _check_compensations(compensations)
     for m, p in active:

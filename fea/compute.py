@@ -22,6 +22,7 @@ from rodlab.core.progress import stages
 from rodlab.core.compliance import RodCompliance
 from rodlab.core.design import RodDesign
 from rodlab.core.enums import ErrorEstimate, FeaModel, Method
+from rodlab.core.errors import expect_type
 from rodlab.core.fem_mesh import RodMesh
 
 from .errors import FeaError
@@ -153,7 +154,11 @@ def compute_compliance(design: RodDesign, model: FeaModel | str = FeaModel.FRAME
 
     ``calibration`` (frame only): a :class:`fea.frame.FrameCalibration` (constants) or a
     :class:`fea.joints.JointFit` (one solid run of the design's family, :mod:`fea.family`)."""
-    model = FeaModel(model)
+    expect_type(design, RodDesign, "design", "load one with rodlab.resolve_design('rod1' or 'FILE.rod.toml')")
+    try:
+        model = FeaModel(model)
+    except ValueError as e:
+        raise FeaError(f"model {model!r}: expected one of {[m.value for m in FeaModel]}", key="model") from e
     if model is FeaModel.SOLID:
         if mesher is None:
             raise FeaError("the solid model needs a mesher (geometry.mesh_rod)", key="mesher")

@@ -28,7 +28,7 @@ from .compliance import RodCompliance
 from .design import RodDesign
 from .enums import BendModel, Method, Part
 from .frames import skew as _skew
-from .errors import DesignError
+from .errors import DesignError, expect_type
 from .joint_springs import declared_joint_compliance
 from .layout import Layer, Segment, SegmentKind, layout
 from .massprops import ball_mass_properties, gauss_legendre
@@ -196,6 +196,7 @@ def calc_compliance(design: RodDesign, *, pipes_only: bool = False, shear: bool 
     bend_flexibility : factors (in-plane, out-of-plane) on the bending compliance of the bend arc
         (pipe-bend ovalisation, e.g. ASME B31.3 k = 1.65 / h); 1 = plain curved beam
     """
+    expect_type(design, RodDesign, "design", "load one with rodlab.resolve_design('rod1' or 'FILE.rod.toml')")
     bend = BendModel(bend)
     if pipes_only:
         segs = pipes_only_segments(design)

@@ -56,16 +56,42 @@ def c_rod_um(C_F: np.ndarray, C_g: np.ndarray, force_N: float | None = None) -> 
 
     ``force_N`` is the magnitude of the contact force; default ``|[1.10, 1.25, 1.05]|`` N.
     """
-    f = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N)) if force_N is None else float(force_N)
+    C_F, C_g = _matrix33(C_F, "C_F"), _matrix33(C_g, "C_g")
+    if force_N is None:
+        f = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N))
+    else:
+        f = np.asarray(force_N, float)
+        if f.shape == (3,):                      # the contact force as a vector: its magnitude (Eq. 23's |F|)
+            f = np.linalg.norm(f)
+        if f.ndim not in (0, 1) or f.size != 1 or not np.isfinite(f) or float(f) <= 0:
+            raise ComplianceError(f"force_N: expected the contact force's magnitude [N] > 0 (or its 3-vector), got "
+                                  f"{force_N!r}", key="force_N")
+        f = float(f)
     return float(1e3 * (np.sum(C_g) + np.sum(C_F) * f))
 
 
+def _matrix33(M, name: str) -> np.ndarray:
+    """``M`` as a 3 x 3 float array (NaN: an entry not measured), or a :class:`ComplianceError` naming ``name``."""
+    try:
+        A = np.asarray(M, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ComplianceError(f"{name}: expected a 3 x 3 matrix of numbers, got {type(M).__name__}", key=name) from e
+    if A.shape != (3, 3):
+        raise ComplianceError(f"{name}: expected a 3 x 3 matrix [mm/N or mm/g0], got shape {A.shape}", key=name)
+    return A
+
+
 def r_rod(C_F_meas: np.ndarray, C_F_sim: np.ndarray) -> float:
-    """Overall correction factor (paper Eq. 21): ``(c22 + c33)_meas / (c22 + c33)_sim``."""
+    """Overall correction factor (paper Eq. 21): ``(c22 + c33)_meas / (c22 + c33)_sim``; both 3 x 3 [mm/N], each
+    ``c22 + c33`` > 0."""
+    C_F_meas, C_F_sim = _matrix33(C_F_meas, "C_F_meas"), _matrix33(C_F_sim, "C_F_sim")
     num = float(C_F_meas[1, 1] + C_F_meas[2, 2])
     den = float(C_F_sim[1, 1] + C_F_sim[2, 2])
     if not den > 0:
         raise ComplianceError(f"simulated c22 + c33 must be > 0 to form r_rod, got {den}")
+    if not num > 0:
+        raise ComplianceError(f"measured c22 + c33 must be > 0 to form r_rod, got {num} (an unmeasured or zero C_F?)",
+                              key="C_F_meas")
     return num / den
 
 

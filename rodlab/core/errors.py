@@ -22,6 +22,7 @@ __all__ = [
     "DesignError",
     "ComplianceError",
     "did_you_mean",
+    "expect_type",
 ]
 
 
@@ -135,3 +136,11 @@ class DesignError(FormatError):
 
 class ComplianceError(FormatError):
     """A compliance file or compliance matrix is invalid."""
+
+
+def expect_type(value, cls, name: str, fix: str) -> None:
+    """Raise :class:`TypeError` naming the argument ``name``, the type expected and given, and ``fix`` (how to make one),
+    unless ``value`` is a ``cls`` (a library call given a name where an object is expected fails here, not deep
+    inside: ``calc_compliance("rod1")``)."""
+    if not isinstance(value, cls):
+        raise TypeError(f"{name}: expected a {cls.__name__}, got {type(value).__name__} {value!r:.60}; {fix}")

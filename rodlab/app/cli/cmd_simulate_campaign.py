@@ -52,7 +52,7 @@ def register(sub) -> None:
 
 
 def cmd_simulate_campaign(args) -> int:
-    from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+    from rodlab.calibrate.simulate import MAX_DEVICE_NOISE_MM, CampaignSpec, simulate_campaign
     robot = robot_from_args(args)
     rod = compliance_arg(args.rod)
     rod_true = compliance_arg(args.rod_true) if args.rod_true else None
@@ -68,6 +68,9 @@ def cmd_simulate_campaign(args) -> int:
                               f"[mm]), e.g. 2:0.05,0,-0.02")
         effects.append(("fixture_pose", {"position": pos, "offset_mm": off}))
     effects += parse_effect_specs(args.effect, campaign_effect)
+    if args.noise_um * 1e-3 > MAX_DEVICE_NOISE_MM:
+        raise RodlabError(f"--noise-um {args.noise_um:g}: at most {MAX_DEVICE_NOISE_MM * 1e3:g} um (a MultiCal device's "
+                          "is 3 um)")
     spec = CampaignSpec(positions=args.positions, orientations=args.orientations, device_noise_mm=args.noise_um * 1e-3,
                         seed=args.seed)
     device = _simulated_device(args)

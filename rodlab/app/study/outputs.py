@@ -48,7 +48,7 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
         start_offscreen_check()                  # the 3-D views' probe runs while the figures below are drawn
     df = study_table(run)
     rec = recommend(df)
-    warns = tuple(study_warnings(df, run.spec.priors.rod_slip))
+    warns = tuple(study_warnings(df, run.spec.priors.rod_slip if run.spec.priors is not None else 0.0))
     atomic_write_text(out / "study.csv", df.to_csv(index=False))
     title = (f"{robot_name}, {run.spec.replicates} simulated campaigns per design" if run.spec.monte_carlo
              else f"{robot_name}, linear predictor ({run.spec.draws} draws per design)")

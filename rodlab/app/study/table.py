@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rodlab.calibrate.predict import summarise
+from rodlab.calibrate.predict import Priors, summarise
 from .prepare import DesignSetup
 from .run import StudyRun
 
@@ -53,9 +53,10 @@ def study_table(run: StudyRun):
     import pandas as pd
 
     rows = []
+    slip = run.spec.priors.rod_slip if run.spec.priors is not None else Priors().rod_slip   # None: the defaults
     preds = run.predictions or [None] * len(run.setups)
     for s, outs, pred in zip(run.setups, run.outcomes, preds):
-        base = dict(_design_part(s), slip_scatter_um=_slip_scatter_um(s, run.spec.priors.rod_slip))
+        base = dict(_design_part(s), slip_scatter_um=_slip_scatter_um(s, slip))
         if pred is not None:
             nominal, summaries = pred.nominal_mean_mm, pred.summaries
         elif not s.ok or not outs:

@@ -105,10 +105,12 @@ def _read_designs(names: list[str]) -> list:
         try:
             designs.append(resolve_design(name))
         except RodlabError as e:
-            bad.append(str(e) if name in str(e) else f"{name}: {e}")       # a file's error names it already
-    if bad:
+            bad.append((name, e))
+    if len(bad) == 1:
+        raise bad[0][1]
+    if bad:                                                             # one line, each file named in it
         raise RodlabError(f"{len(bad)} of {len(names)} designs cannot be read (`rodlab validate` lists every problem "
-                          "of each):\n  " + "\n  ".join(bad))
+                          "of each): " + "; ".join(str(e) if name in str(e) else f"{name}: {e}" for name, e in bad))
     return designs
 
 

@@ -22,7 +22,7 @@ from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import atomic_write_json, read_json, read_text_checked, separator_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
-from rodlab.core.schema_table import DECIMAL_COMMA, sub_micrometre
+from rodlab.core.schema_table import decimal_comma_fix, sub_micrometre
 
 from .errors import CalibrationError
 from .rod import Rod
@@ -130,9 +130,8 @@ def cell_number(cell, p, line: int, col: str) -> float:
     try:
         v = float(cell)
     except (TypeError, ValueError):
-        comma = isinstance(cell, str) and DECIMAL_COMMA.fullmatch(cell.strip())
-        tail = (f": a decimal comma (a locale's export); write {cell.strip().replace(',', '.')}: export the file with a "
-                "decimal point") if comma else ""
+        fix = decimal_comma_fix(cell) if isinstance(cell, str) else None
+        tail = f": a decimal comma (a locale's export); {fix}" if fix else ""
         raise CalibrationError(f"expected a number, got {cell!r}{tail}", path=p, line=line, key=col) from None
     if not math.isfinite(v):
         raise CalibrationError(f"expected a finite number, got {cell!r}", path=p, line=line, key=col)

@@ -215,13 +215,17 @@ def points_mixup(robot, pts, identify_points_as: Callable) -> Mixup | None:
     exchange that brings that under it (the best one) is confirmed by ``identify_points_as(points)``, the
     identification the command runs: it must converge with every parameter within its bounds. ``rms_given_mm`` is
     the registered nominal model's rms."""
+    given = _points_misfit(robot, pts)
     found = _column_mixup(robot, pts.q_deg, lambda q: _registered_rms(robot, pts, q),
-                          lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM, 90.0)
+                          lambda q: identify_points_as(replace(pts, q_deg=q)), NOMINAL_GROSS_MM, 90.0, given)
     if found is None:                      # no column explains it: a target changed part-way through the file?
-        given = _finite_misfit(lambda q: _registered_rms(robot, pts, q), pts.q_deg)
-        found = target_change(pts, lambda part: _finite_misfit(lambda q: _registered_rms(robot, part, q), part.q_deg),
-                              given, NOMINAL_GROSS_MM, SCREEN_GAIN)
+        found = target_change(pts, lambda part: _points_misfit(robot, part), given, NOMINAL_GROSS_MM, SCREEN_GAIN)
     return found
+
+
+def _points_misfit(robot, pts) -> float:
+    """The registered nominal misfit [mm] of instrument points as given (infinite where it cannot be computed)."""
+    return _finite_misfit(lambda q: _registered_rms(robot, pts, q), pts.q_deg)
 
 
 def sockets_mixup(robot, readings, identify_sockets_as: Callable) -> Mixup | None:
@@ -266,13 +270,13 @@ def _column_trials(n: int, q: np.ndarray, quarter: float) -> list:
 
 
 def _column_mixup(robot, q: np.ndarray, misfit: Callable, identify_as: Callable, gross_mm: float,
-                  quarter: float) -> Mixup | None:
+                  quarter: float, given: float | None = None) -> Mixup | None:
     """The joint negation, column exchange, zero offset or coupling of the joint readings ``q`` (N, n;
     :func:`_column_trials`) that brings the nominal model's ``misfit(q)`` [mm] from beyond ``gross_mm`` to under it
     and :data:`SCREEN_GAIN` of the given, confirmed by ``identify_as(q)`` (converged, every parameter within its
     bounds); None otherwise (also where a trial cannot be computed: its misfit counts as infinite, its identification
-    as refused)."""
-    given = _finite_misfit(misfit, q)
+    as refused); ``given``: ``misfit(q)`` when the caller has it already."""
+    given = _finite_misfit(misfit, q) if given is None else given
     if not gross_mm < given < np.inf:
         return None
     trials = _column_trials(robot.n, q, quarter)

@@ -60,13 +60,14 @@ def c_rod_um(C_F: np.ndarray, C_g: np.ndarray, force_N: float | None = None) -> 
     if force_N is None:
         f = float(np.linalg.norm(DEFAULT_CONTACT_FORCE_N))
     else:
-        f = np.asarray(force_N, float)
-        if f.shape == (3,):                      # the contact force as a vector: its magnitude (Eq. 23's |F|)
-            f = np.linalg.norm(f)
-        if f.ndim not in (0, 1) or f.size != 1 or not np.isfinite(f) or float(f) <= 0:
+        try:
+            v = np.asarray(force_N, float).reshape(-1)
+        except (TypeError, ValueError):
+            v = np.array([np.nan])
+        f = float(np.linalg.norm(v)) if v.size == 3 else float(v[0]) if v.size == 1 else float("nan")
+        if not (np.isfinite(f) and f > 0):       # a 3-vector is the contact force: its magnitude (Eq. 23's |F|)
             raise ComplianceError(f"force_N: expected the contact force's magnitude [N] > 0 (or its 3-vector), got "
                                   f"{force_N!r}", key="force_N")
-        f = float(f)
     return float(1e3 * (np.sum(C_g) + np.sum(C_F) * f))
 
 

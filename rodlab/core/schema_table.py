@@ -121,9 +121,8 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
     try:
         v = float(s)
     except ValueError:
-        if DECIMAL_COMMA.fullmatch(s):
-            return Problem(path, f"expected a number, got {s!r}: a decimal comma (a locale's export)", line, name,
-                           f"write {s.replace(',', '.')}: export the file with a decimal point")
+        if (fix := decimal_comma_fix(s)) is not None:
+            return Problem(path, f"expected a number, got {s!r}: a decimal comma (a locale's export)", line, name, fix)
         return Problem(path, f"expected a number, got {s!r}", line, name, "write a number with a decimal point")
     if not math.isfinite(v):
         return Problem(path, f"expected a finite number, got {s!r}", line, name, "write a finite number")
@@ -138,6 +137,12 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
 
 #: columns a copied row may differ in and still be a copy (when, at what temperature: not what was measured)
 NOT_MEASURED = ("time_s", "temp_C")
+
+
+def decimal_comma_fix(cell: str) -> str | None:
+    """How to mend a number written with a decimal comma (``"40,7296"``), or None for any other text."""
+    s = cell.strip()
+    return f"write {s.replace(',', '.')}: export the file with a decimal point" if DECIMAL_COMMA.fullmatch(s) else None
 
 
 def sub_micrometre(values_mm) -> bool:

@@ -22,7 +22,7 @@ from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions, forward
 from .params import catalogue
 from .rod import Rod
-from .simulate import standard_base
+from .setup_layout import standard_base
 
 __all__ = ["observability", "plan_poses", "rod_angle_deg", "above_floor", "Reach", "ROD_ANGLE_MAX_DEG", "L_ROD_EXIT",
            "LIMIT_MARGIN_DEG"]

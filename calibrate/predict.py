@@ -44,7 +44,8 @@ from .identify import Observations, identify
 from .ik import solve_ik_positions
 from .kinematics import ModelParams, ball_positions
 from .rod import Rod
-from .simulate import random_truth, robot_floor
+from .robot_floor import robot_floor
+from .simulate import random_truth
 from .validate import ErrorStats, validate
 
 __all__ = ["Priors", "SimulatedCampaign", "SimulatedReplicate", "simulate_replicate", "ReplicateOutcome",
@@ -72,7 +73,7 @@ class Priors:
         of ``S - I`` in ``C_true = r S C_sim S^T``: joints, anisotropy, bonds the model does not see) [-]
     meas_sigma : relative uncertainty (1 sigma) of the rig's measurement (``C_F`` entries and r_rod) [-]
     validation_points : configurations of the validation set
-    robot_floor_mm : the robot's own unmodelled error (:class:`~rodlab.calibrate.simulate.RobotFloor`: smooth
+    robot_floor_mm : the robot's own unmodelled error (:class:`~rodlab.calibrate.robot_floor.RobotFloor`: smooth
         joint-angle errors whose mean on rigid-tool validation is this) [mm]; 0 = none
     rod_slip : the rod's non-repeatable deflection (:mod:`~rodlab.calibrate.rod_slip`: slip and hysteresis in
         its joints), as the deflection under this many times its own weight in a random direction [-]; 0 = elastic

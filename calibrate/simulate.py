@@ -18,9 +18,8 @@ import numpy as np
 from rodlab.core.compliance import RodCompliance, write_compliance
 from rodlab.core.errors import expect_type
 from rodlab.core.fileio import atomic_write_json, atomic_write_text
-from rodlab.core.frames import matrix_to_pose, rotation_from_abc
+from rodlab.core.frames import matrix_to_pose
 
-from .campaign import Fixture
 from .errors import CalibrationError
 from .compensations import COMPENSATIONS, Compensation, Poses, RodDeflection, deflection_offsets
 from .effects import CAMPAIGN_EFFECTS, complete_campaign_effects
@@ -28,6 +27,8 @@ from .ik import random_configurations, solve_ik_groups, solve_ik_positions
 from .kinematics import ModelParams, ball_positions
 from .robot import Robot
 from .rod import Rod
+from .robot_floor import RobotFloor, robot_floor
+from .setup_layout import CONTACT_FORCE_D_N, fixture_layout, standard_base, standard_fixture
 from .probe import simulated_probe_text
 from .device import write_device
 
@@ -86,128 +87,6 @@ def random_truth(robot, tool_mm, rng, scale=1.0) -> ModelParams:
     th = p.theta_offset + scale * np.deg2rad(rng.normal(0, 0.06, n))
     c = np.concatenate([[0.0], rng.uniform(3e-6, 6e-6, n - 1)])
     return p.with_(d=d, a=a, alpha=al, beta=be, theta_offset=th, c=c)
-
-
-#: harmonics of a joint's own angle in the robot floor (gear transmission, cyclic errors); the first is left out:
-#: the identified joint offsets and link lengths absorb most of it
-FLOOR_HARMONICS = (2, 3)
-#: rigid validation tool and poses the floor is sized on (as the study's validation: 150 mm, 60 % of the limits)
-FLOOR_TOOL_MM = (0.0, 0.0, 150.0)
-FLOOR_POSES = 400
-
-
-@dataclass(frozen=True)
-class RobotFloor:
-    """The robot's own unmodelled error: smooth joint-angle errors outside the calibration model.
-
-    ``q_true = q + sum_k a_ik sin(k q_i + phi_ik) + b_i cos(2 s_i)`` per joint i: harmonics ``FLOOR_HARMONICS``
-    of the joint's own angle (gear transmission and cyclic errors) and, for joints 2 and 3, a link-deflection
-    term in the angle of the arm to the vertical (``s_2 = q_2``, ``s_3 = q_2 + q_3``; cos 2s, not the gravity
-    torque the model's joint compliance absorbs).
-
-    amp_rad : a, shape=(n, len(FLOOR_HARMONICS)) [rad]; phase_rad : phi, same shape [rad]; sag_rad : b, shape=(n,)
-    [rad]; floor_mm : the mean position error of a rigid 150 mm tool these errors give on random poses [mm]
-    """
-
-    amp_rad: np.ndarray
-    phase_rad: np.ndarray
-    sag_rad: np.ndarray
-    floor_mm: float
-
-    def __post_init__(self) -> None:
-        n = np.shape(self.sag_rad)[0]
-        for key in ("amp_rad", "phase_rad"):
-            if np.shape(getattr(self, key)) != (n, len(FLOOR_HARMONICS)):
-                raise CalibrationError(f"expected shape ({n}, {len(FLOOR_HARMONICS)}), got "
-                                       f"{np.shape(getattr(self, key))}", key=key)
-
-    def angles(self, q_rad: np.ndarray) -> np.ndarray:
-        """The angles the joints really take at commanded ``q_rad`` (N, n) [rad]."""
-        q = np.atleast_2d(np.asarray(q_rad, float))
-        k = np.asarray(FLOOR_HARMONICS, float)
-        e = np.sum(self.amp_rad * np.sin(q[:, :, None] * k + self.phase_rad), axis=2)
-        arm = np.zeros_like(q)
-        if q.shape[1] >= 3:
-            arm[:, 1], arm[:, 2] = q[:, 1], q[:, 1] + q[:, 2]
-        return q + e + self.sag_rad * np.cos(2.0 * arm)
-
-
-def _floor_mean_mm(robot, floor: RobotFloor, q: np.ndarray) -> float:
-    nominal = ModelParams.nominal(robot, np.asarray(FLOOR_TOOL_MM, float))
-    p0, _ = ball_positions(robot, nominal, q)
-    p1, _ = ball_positions(robot, nominal, floor.angles(q))
-    return float(np.mean(np.linalg.norm(p1.pW - p0.pW, axis=1)))
-
-
-def robot_floor(robot, floor_mm: float, seed: int) -> RobotFloor | None:
-    """A random :class:`RobotFloor` of the robot, scaled so that its mean position error on a rigid 150 mm tool
-    over random poses within 60 % of the joint limits is ``floor_mm`` (``None`` at 0). Drawn from a generator of
-    its own (``seed``), so the other draws of a simulation stay those without it. The calibration absorbs
-    little of it (harmonics >= 2, cos 2s are outside the kinematic and joint-compliance model): calibrated with
-    a perfect instrument the robot ends near ``floor_mm``, as the paper's laser-scanner calibration did."""
-    if not np.isfinite(floor_mm) or floor_mm < 0:
-        raise CalibrationError(f"must be a finite number >= 0, got {floor_mm!r}", key="robot_floor_mm")
-    if floor_mm == 0:
-        return None
-    rng = np.random.default_rng([int(seed), 45])
-    n, h = robot.n, len(FLOOR_HARMONICS)
-    unit = RobotFloor(rng.normal(0, 1e-4, (n, h)), rng.uniform(0, 2 * np.pi, (n, h)),
-                      np.where(np.isin(np.arange(n), (1, 2)), rng.normal(0, 1e-4, n), 0.0), 0.0)
-    lo, hi = np.deg2rad(robot.limits_deg[:, 0]), np.deg2rad(robot.limits_deg[:, 1])
-    q = rng.uniform(lo * 0.6, hi * 0.6, (FLOOR_POSES, n))
-    scale = floor_mm / _floor_mean_mm(robot, unit, q)
-    out = RobotFloor(unit.amp_rad * scale, unit.phase_rad, unit.sag_rad * scale, float(floor_mm))
-    scale *= floor_mm / _floor_mean_mm(robot, out, q)        # one correction for the small non-linearity
-    return RobotFloor(unit.amp_rad * scale, unit.phase_rad, unit.sag_rad * scale, float(floor_mm))
-
-
-#: {W} (the world clamping position's device frame) in the robot base {0}: 650 mm in front, 250 mm up [mm]
-WORLD_IN_BASE_MM = np.array([650.0, 0.0, 250.0])
-#: the device frames' tilt (ABC [deg]): Rx(-45) Ry(35.26), so z_D lies along (1, 1, 1)/sqrt(3), up
-DEVICE_TILT_ABC_DEG = np.array([-45.0, 35.26438968, 0.0])
-#: the sensors' contact force in {D_j} [N] of the simulated device
-CONTACT_FORCE_D_N = np.array([1.10, 1.25, 1.05])
-
-
-def standard_base() -> np.ndarray:
-    """Pose of the robot base {0} in {W} [mm, deg], shape=(6,): {W} 650 mm in front of the robot, 250 mm up,
-    the device frame tilted 54.7 deg (axes up at equal angles) — the simulator's and the planner's setup."""
-    return matrix_to_pose(_base_in_world())
-
-
-def _base_in_world() -> np.ndarray:
-    T_base_W = np.eye(4)
-    T_base_W[:3, :3] = rotation_from_abc(DEVICE_TILT_ABC_DEG)
-    T_base_W[:3, 3] = WORLD_IN_BASE_MM
-    return np.linalg.inv(T_base_W)
-
-
-def fixture_layout(positions: int, rng) -> tuple[int, dict]:
-    """The simulator's clamping positions: (the world position, {j: pose of {D_j} in {W}, 4 x 4}); the positions
-    on an ellipse 150 x 180 mm around {W} (80 mm up and down), each device turned by a random yaw (+-60 deg)."""
-    R_WD = rotation_from_abc(DEVICE_TILT_ABC_DEG)
-    T_W_base = _base_in_world()
-    wp = 1 + positions // 2
-    Ts = {}
-    for j in range(1, positions + 1):
-        if j == wp:
-            Ts[j] = np.eye(4)
-            continue
-        ang = 2 * np.pi * (j - 1) / max(positions - 1, 1)
-        off_base = np.array([150 * np.cos(ang), 180 * np.sin(ang), 80 * np.sin(2 * ang)])
-        yaw = rng.uniform(-60, 60)
-        Tb = np.eye(4)
-        Tb[:3, :3] = rotation_from_abc([0, 0, yaw]) @ R_WD
-        Tb[:3, 3] = WORLD_IN_BASE_MM + off_base
-        Ts[j] = T_W_base @ Tb
-    return wp, Ts
-
-
-def standard_fixture(positions: int = 5, seed: int = 0) -> Fixture:
-    """A fixture of the simulator's layout (:func:`fixture_layout`), poses exact, for planning and studies
-    without a fixture file."""
-    wp, Ts = fixture_layout(positions, np.random.default_rng(seed))
-    return Fixture({j: matrix_to_pose(T) for j, T in Ts.items()}, CONTACT_FORCE_D_N.copy(), wp)
 
 
 def _reach_positions(robot, truth, rod, Ts: dict, forces: dict, spec, rng) -> dict:

@@ -4,7 +4,7 @@ Two effects perturb a real campaign beyond the robot's modelled errors and the r
 :mod:`calibrate.predict` (Monte Carlo) simulates both; the linear predictor (:mod:`calibrate.predict_linear`)
 draws them here, per draw, as data offsets added to its linear model:
 
-- the robot's own unmodelled error (:class:`~calibrate.simulate.RobotFloor`, ``priors.robot_floor_mm``): one
+- the robot's own unmodelled error (:class:`~calibrate.robot_floor.RobotFloor`, ``priors.robot_floor_mm``): one
   floor per draw (seeds ``seed + d``, as Monte Carlo's replicates), the same in the campaign (at the planned
   poses, with the rod's lever) and on the validation points (projected off base and tool);
 - the rod's non-repeatable deflection (:mod:`calibrate.rod_slip`, ``priors.rod_slip``) with each draw's true
@@ -19,7 +19,7 @@ from .kinematics import ModelParams, ball_positions
 from .observations import Observations
 from .rod import Rod
 from .rod_slip import slip_directions
-from .simulate import robot_floor
+from .robot_floor import robot_floor
 
 __all__ = ["cached_floor_draws", "campaign_offsets", "validation_floor_offsets"]
 
@@ -27,7 +27,7 @@ _FLOORS: dict = {}
 
 
 def cached_floor_draws(robot, floor_mm: float, draws: int, seed: int = 0) -> list:
-    """:func:`calibrate.simulate.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
+    """:func:`calibrate.robot_floor.robot_floor` of seeds ``seed .. seed + draws - 1``, kept for the process's next
     design (one robot and floor at a time)."""
     key = (repr(robot), float(floor_mm), int(draws), int(seed))
     if key not in _FLOORS:

@@ -1,11 +1,11 @@
-"""The robot's own unmodelled error of the simulated robot (calibrate.simulate.RobotFloor, study --robot-floor-mm)."""
+"""The robot's own unmodelled error of the simulated robot (calibrate.robot_floor.RobotFloor, study --robot-floor-mm)."""
 import numpy as np
 import pytest
 
 from rodlab.calibrate import resolve_robot
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.kinematics import ModelParams, ball_positions
-from rodlab.calibrate.simulate import FLOOR_TOOL_MM, robot_floor
+from rodlab.calibrate.robot_floor import FLOOR_TOOL_MM, robot_floor
 
 
 @pytest.fixture(scope="module")

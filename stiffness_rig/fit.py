@@ -20,9 +20,8 @@ from rodlab.core.units import G0
 
 from .completion import complete_c_f
 from .errors import RigError
-from .fit_checks import (creep_warnings, gauge_scale_problems, lack_of_fit_warnings, load_drift_warnings,
-                         load_scale_problems,
-                         reciprocity_problems)
+from .fit_checks import (creep_warnings, dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
+                         load_drift_warnings, load_scale_problems, reciprocity_problems)
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .recording import RigRecording
@@ -45,8 +44,11 @@ class LineFit:
     branch : per-branch independent lines {phase: {"slope_mm_per_N", "intercept_mm", "zero_load_kg"}}
     zero_load_kg : {phase: mass where the common-slope line crosses zero displacement} (NaN if slope ~ 0)
     residual_rms_mm, n_holds : fit quality
-    unloaded_apart : the holds without a hanger lie off both branch lines (friction that lets go at mass 0): they
-        were given a level of their own and do not bear on the slope
+    unloaded_apart : the holds without a hanger lie off both branch lines (friction that lets go at mass 0, or a
+        dead load missing from ``mass_kg``): they were given a level of their own and do not bear on the slope
+    dead_load_kg : (low, high) the load [kg] missing from ``mass_kg`` whenever the hanger is on that puts the unloaded
+        holds where they are, from the loading and the unloading branch (a hanger or loading frame not logged; friction
+        in the rig puts the two apart); None where they are not apart that way
     """
 
     axis: LoadAxis
@@ -59,13 +61,15 @@ class LineFit:
     residual_rms_mm: float
     n_holds: int
     unloaded_apart: bool = False
+    dead_load_kg: tuple | None = None
 
     def to_dict(self) -> dict:
         return {"load_axis": str(self.axis), "component": _AX[self.component],
                 "slope_mm_per_N": self.slope_mm_per_N, "se_mm_per_N": self.se_mm_per_N,
                 "intercept_mm": self.intercept_mm, "zero_load_kg": self.zero_load_kg, "branch": self.branch,
                 "residual_rms_mm": self.residual_rms_mm, "n_holds": self.n_holds,
-                "unloaded_apart": self.unloaded_apart}
+                "unloaded_apart": self.unloaded_apart,
+                "dead_load_kg": None if self.dead_load_kg is None else list(self.dead_load_kg)}
 
 
 @dataclass
@@ -172,7 +176,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     refuse += scale_refuse
     warn += scale_warn
     fit.warnings = (refuse + warn + lack_of_fit_warnings(lines, holds, noise) + load_drift_warnings(fit.load)
-                    + creep_warnings(holds))
+                    + creep_warnings(holds) + dead_load_warnings(lines))
     if refuse:
         fit.success, fit.message = False, "; ".join(refuse) + "; nothing was written"
     if sim is not None:
@@ -293,10 +297,14 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
     coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
     res = yo - X @ coef
     apart = _unloaded_apart(X, yo, h.mass_kg[ok] == 0.0, Fo)
+    dead_load = None
     if apart is not None:
         X = apart
         coef = _lsq(X, yo, robust, 3 * noise if np.isfinite(noise) else 1e-3)
         res = yo - X @ coef
+        if _dead_load_missing(coef, np.sign(np.mean(Fo[h.mass_kg[ok] != 0.0]))):
+            kg = (coef[:-2] - coef[-2]) / (coef[-1] * G0 * axis.sign)
+            dead_load = (float(kg.min()), float(kg.max()))
     dof = max(len(yo) - X.shape[1], 1)
     s2 = float(res @ res / dof)
     cov = s2 * np.linalg.pinv(X.T @ X)
@@ -311,7 +319,7 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
             branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
                             "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
     return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo),
-                   unloaded_apart=apart is not None), res
+                   unloaded_apart=apart is not None, dead_load_kg=dead_load), res
 
 
 #: the holds without a hanger get a level of their own when that lowers the lines' residual this significantly
@@ -320,14 +328,16 @@ UNLOADED_APART_P = 1e-3
 
 def _unloaded_apart(X: np.ndarray, y: np.ndarray, unloaded: np.ndarray, F: np.ndarray):
     """The design matrix with the holds at mass 0 on a level of their own (their own intercept: they no longer
-    bear on the slope), or None. Used where friction lets go when the hanger is taken off: both branches present
-    and apart (their intercepts more than 5 standard errors apart), the unloaded holds between them, and off both
-    lines beyond chance (F-test of the same least squares, p below :data:`UNLOADED_APART_P`); on the lines they had
-    pulled the slope (new-user trial: c22 +5 % with 1 N friction). Needs two loads besides; both models are
-    refitted by least squares (the line's own fit may be robust)."""
+    bear on the slope), or None. Used where the unloaded holds lie off the loaded lines beyond chance (F-test of
+    the same least squares, p below :data:`UNLOADED_APART_P`) in one of two patterns: friction that lets go when
+    the hanger is taken off (both branches apart, their intercepts more than 5 standard errors apart, the unloaded
+    holds between them: new-user trial, c22 +5 % with 1 N friction), or a dead load missing from ``mass_kg``
+    whenever the hanger is on (a hanger or loading frame not logged: every loaded hold sits one slope times that
+    load beyond the unloaded level, which lies on the side of less load than every branch: new-user trial, r_rod
+    1.696 for 1.600 with a 120 g hanger). Needs two loads besides; both models are refitted by least squares (the
+    line's own fit may be robust)."""
     loaded = ~unloaded
-    if (X.shape[1] != 3 or not unloaded.any() or loaded.sum() < X.shape[1] + 1
-            or np.unique(F[loaded]).size < 2):
+    if not unloaded.any() or loaded.sum() < X.shape[1] + 1 or np.unique(F[loaded]).size < 2:
         return None
     X2 = np.column_stack([X[:, :-1] * loaded[:, None], unloaded.astype(float), X[:, -1]])
     if np.linalg.matrix_rank(X2) < X2.shape[1]:
@@ -338,13 +348,27 @@ def _unloaded_apart(X: np.ndarray, y: np.ndarray, unloaded: np.ndarray, F: np.nd
     if dof2 < 1 or rss1 <= rss2:
         return None
     cov = rss2 / dof2 * np.linalg.pinv(X2.T @ X2)
-    split, split_se = coef2[1] - coef2[0], np.sqrt(max(cov[0, 0] + cov[1, 1] - 2 * cov[0, 1], 0.0))
-    between = min(coef2[0], coef2[1]) <= coef2[2] <= max(coef2[0], coef2[1])
-    if not (between and abs(split) > 5 * split_se):
+    if not (_friction_lets_go(coef2, cov) or _dead_load_missing(coef2, np.sign(np.mean(F[loaded])))):
         return None
     from scipy.special import fdtrc        # the F distribution's survival function (scipy.stats takes ~0.6 s)
     stat = (rss1 - rss2) / max(rss2 / dof2, 1e-300)
     return X2 if fdtrc(1, dof2, stat) < UNLOADED_APART_P else None
+
+
+def _friction_lets_go(coef2: np.ndarray, cov: np.ndarray) -> bool:
+    """Two branches apart (> 5 standard errors) with the unloaded level between them."""
+    if coef2.size != 4:
+        return False
+    split, split_se = coef2[1] - coef2[0], np.sqrt(max(cov[0, 0] + cov[1, 1] - 2 * cov[0, 1], 0.0))
+    between = min(coef2[0], coef2[1]) <= coef2[2] <= max(coef2[0], coef2[1])
+    return bool(between and abs(split) > 5 * split_se)
+
+
+def _dead_load_missing(coef2: np.ndarray, load_sign: float) -> bool:
+    """Every branch's intercept beyond the unloaded level as a load of the loads' sign ``load_sign`` would put it:
+    a load the log leaves out."""
+    branches, level, slope = coef2[:-2], coef2[-2], coef2[-1]
+    return bool(slope != 0 and np.all((branches - level) * np.sign(slope) * load_sign > 0))
 
 
 def _ols(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:

@@ -192,3 +192,18 @@ def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:
     return [f"{which} reads {factor:.3g} times {'less' if r[odd] < ref else 'more'} than the others against "
             f"the simulation ({listed}): the factor between {unit}; its units or its scale in the profile; fix the "
             "column and fit again"]
+
+
+def dead_load_warnings(lines: list) -> list[str]:
+    """The holds without a hanger lie off the loaded lines as a load missing from ``mass_kg`` whenever the hanger
+    is on would put them (a hanger or loading frame not logged, :attr:`~stiffness_rig.fit.LineFit.dead_load_kg`),
+    on an on-axis line: the slopes were fitted without those holds, so the file is right; the log is not."""
+    kg = np.array([ln.dead_load_kg for ln in lines if ln.component == ln.axis.index and ln.dead_load_kg is not None])
+    if not kg.size:
+        return []
+    low, high = 1e3 * np.median(kg, axis=0)
+    size = f"~{low:.0f} g" if high - low < 0.1 * high else f"{low:.0f}-{high:.0f} g (loading / unloading: friction)"
+    return [f"the holds without a hanger lie off the loaded lines as a load of {size} "
+            f"missing from mass_kg whenever the hanger is on would put them (the hanger or loading frame not counted?): "
+            f"the slopes are fitted without those holds, so the compliance is not biased by it; count the hanger in "
+            f"mass_kg, or check with `rodlab diagnose --rig` (its tare)"]

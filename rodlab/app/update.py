@@ -20,10 +20,13 @@ from ..core.calc import calc_rod_compliance
 from ..core.design import RodDesign
 from ..core.errors import LocatedError, DesignError, RodlabError
 from ..core.massprops import mass_properties
-from ..core.sensitivity import METHOD_ACCURACY, STRUCTURAL_ENTRIES, with_values
+from ..core.design_io import design_to_dict
+from ..core.sensitivity import (METHOD_ACCURACY, MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES, scale_moduli,
+                                with_values)
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
-__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR", "EXPLAIN_P", "ROUGH_P"]
+__all__ = ["Measured", "UpdateResult", "update_design", "model_compliance", "SEPARATE_CORR", "EXPLAIN_P", "ROUGH_P",
+           "MODULI", "design_with", "as_built_values", "key_value"]
 
 #: below this tail probability of the chi-square after the fit, the freed keys do not explain the measurement
 EXPLAIN_P = 1e-3
@@ -117,13 +120,51 @@ def _is_joint(key: str) -> bool:
     return key.startswith("joints.")
 
 
+def key_value(design: RodDesign, key: str) -> float:
+    """The design value of a freed key: 1 for :data:`MODULI`, else the dotted key's value."""
+    return 1.0 if key == MODULI else design_value(design, key)
+
+
+def design_with(design: RodDesign, keys, x) -> RodDesign:
+    """``design`` with the freed ``keys`` at ``x`` (:data:`MODULI` scales every modulus first)."""
+    values = dict(zip(keys, (float(v) for v in x)))
+    factor = values.pop(MODULI, None)
+    base = design if factor is None else scale_moduli(design, factor)
+    return with_values(base, values) if values else base
+
+
+def as_built_values(design: RodDesign, keys, x) -> dict:
+    """The dotted keys a file of the rod as built sets: :data:`MODULI` spelt out as every material's moduli."""
+    values = dict(zip(keys, (float(v) for v in x)))
+    factor = values.pop(MODULI, None)
+    if factor is not None:
+        for name, table in design_to_dict(design)["materials"].items():
+            values.update({f"materials.{name}.{k}": float(table[k]) * factor for k in MODULUS_KEYS
+                           if table.get(k) is not None})
+    return values
+
+
+def _check_keys(design: RodDesign, keys: tuple) -> None:
+    """Refuse keys that cannot be fitted: no key, a key without a positive value, moduli freed twice."""
+    if not keys:
+        raise LocatedError("no key to fit: give --free KEY[,KEY...]", key="free")
+    for k in keys:
+        if not _is_joint(k) and not key_value(design, k) > 0:
+            raise LocatedError(f"--free {k}: its design value is {key_value(design, k):g}; only a key with a "
+                              "positive value (a size, a modulus) can be fitted", key="free")
+    twice = [k for k in keys if k.startswith("materials.") and k.rpartition(".")[2] in MODULUS_KEYS]
+    if MODULI in keys and twice:
+        raise LocatedError(f"--free {MODULI} scales every modulus already; {', '.join(twice)} would be fitted twice: "
+                          f"give {MODULI} or the materials' moduli, not both", key="free")
+
+
 def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
     """(nominal, prior sd) of each key: the design's tolerance where it has one, a bond's tolerance
     (:func:`rodlab.core.tolerances.bond_tolerances`, :data:`~rodlab.core.tolerances.BOND_SD` for torsion) for a joint's
     compliance, else a weak prior."""
     tol = {p.key: p.sigma for p in design_tolerances(design)}
     bonds = bond_tolerances(design)
-    nominal = np.array([design_value(design, k) for k in keys])
+    nominal = np.array([key_value(design, k) for k in keys])
     sd = []
     for k, v in zip(keys, nominal):
         if _is_joint(k):     # freed because the rod shows it: weak, JOINT_PRIOR x the tolerance of a sound bond
@@ -147,14 +188,10 @@ def _bounds_and_start(keys, nominal, prior_sd) -> tuple[np.ndarray, np.ndarray, 
 
 
 def update_design(design: RodDesign, measured: Measured, keys, model: str = "frame") -> UpdateResult:
-    """Fit ``keys`` of ``design`` to ``measured`` (bounded to 0.2-5x the design value, priors from the tolerances)."""
+    """Fit ``keys`` of ``design`` to ``measured`` (bounded to 0.2-5x the design value, priors from the tolerances);
+    :data:`MODULI` among them fits one factor of every modulus of the rod."""
     keys = tuple(keys)
-    if not keys:
-        raise LocatedError("no key to fit: give --free KEY[,KEY...]", key="free")
-    for k in keys:
-        if not _is_joint(k) and not design_value(design, k) > 0:
-            raise LocatedError(f"--free {k}: its design value is {design_value(design, k):g}; only a key with a "
-                              "positive value (a size, a modulus) can be fitted", key="free")
+    _check_keys(design, keys)
     fn = model_compliance(model)
     E = measured.entries
     acc = METHOD_ACCURACY[model]
@@ -162,7 +199,7 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
 
     def entries_of(x):
         """The rod's entries the model predicts for keys ``x``, its bias against the solid FEA removed."""
-        return acc.expected(fn(with_values(design, dict(zip(keys, x)))), E)
+        return acc.expected(fn(design_with(design, keys, x)), E)
 
     C0 = entries_of(nominal)
     S = measured.cov + acc.covariance(fn(design), E)
@@ -183,7 +220,7 @@ def update_design(design: RodDesign, measured: Measured, keys, model: str = "fra
     corr = cov / np.outer(np.where(sd > 0, sd, 1), np.where(sd > 0, sd, 1))
     C1 = entries_of(res.x)
     z0, z1 = W @ (C0 - measured.C), W @ (C1 - measured.C)
-    as_built = with_values(design, dict(zip(keys, res.x)))
+    as_built = design_with(design, keys, res.x)
     insep = _inseparable(design, keys, res.x, J[:len(E)], fn, E)
     dof = max(len(E) - len(keys), 1)
     p_after = float(chdtrc(dof, float(z1 @ z1)))
@@ -244,11 +281,11 @@ def _candidate_rows(design, keys, x, fn, E):
     for m, n in STRUCTURAL_ENTRIES:
         if (m, n) in E:
             continue
-        d = derivs(lambda v: fn(with_values(design, dict(zip(keys, v))))[m, n])
-        c = fn(with_values(design, dict(zip(keys, x))))[m, n]
+        d = derivs(lambda v: fn(design_with(design, keys, v))[m, n])
+        c = fn(design_with(design, keys, x))[m, n]
         if abs(c) > 0:
             yield (f"load along {names[n]}_T and read the {names[m]} gauge (c{m + 1}{n + 1})", d / (_ENTRY_REL * abs(c)))
-    d = derivs(lambda v: mass_properties(with_values(design, dict(zip(keys, v)))).mass_kg)
+    d = derivs(lambda v: mass_properties(design_with(design, keys, v)).mass_kg)
     yield f"weigh the rod (to {_MASS_SD_KG * 1e3:g} g)", d / _MASS_SD_KG
     for i, k in enumerate(keys):
         row = np.zeros(len(keys))

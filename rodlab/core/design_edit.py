@@ -57,12 +57,23 @@ def _material_table(design: RodDesign, name: str) -> dict:
     return design_to_dict(design)["materials"][name]
 
 
+def _value_of(design: RodDesign, key: str) -> float:
+    """The design's value of ``key``; a material's number also for the parts whose keys the tolerances do not list
+    (the rings' and holders' materials, whose moduli ``rodlab update --free moduli`` scales)."""
+    table, _, name = key.rpartition(".")
+    if table.startswith("materials."):
+        numbers = design_to_dict(design)["materials"].get(table.split(".", 1)[1], {})
+        if numbers.get(name) is not None:
+            return float(numbers[name])
+    return design_value(design, key)
+
+
 def edited_design_text(text: str, design: RodDesign, values: dict, header: str = "") -> str:
     """``text`` (the design's file) with the dotted keys of ``values`` set; ``tube.*`` keys are written to
     ``[tube]``, ``materials.NAME.*`` to ``[materials.NAME]`` (created with the material's numbers if absent)."""
     lines = text.splitlines()
     for key, value in values.items():
-        was = design_value(design, key)
+        was = _value_of(design, key)
         table, _, name = key.rpartition(".")
         if table.startswith("materials.") and table not in _table_spans(lines):
             for k, v in _material_table(design, table.split(".", 1)[1]).items():

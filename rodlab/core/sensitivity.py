@@ -1,6 +1,7 @@
 """How a rod's compliance moves with its uncertain keys, and how far a simulation method is from the rod.
 
-- :func:`with_values`: the design with some dotted keys set (a rod as built);
+- :func:`with_values`: the design with some dotted keys set (a rod as built); :func:`scale_moduli`: every modulus
+  times one factor (a rod uniformly softer or stiffer);
 - :func:`compliance_sensitivity`: C_F and its derivatives with respect to design keys (central differences on a
   compliance model: the closed form here, the frame model when the application passes it);
 - :data:`METHOD_ACCURACY`: the bias, scatter and correlation of a simulation method's C_F entries against the solid
@@ -19,8 +20,8 @@ from .design_io import FORMAT_ROD_V2, design_from_dict, design_to_dict
 from .errors import DesignError
 from .tolerances import design_value
 
-__all__ = ["with_values", "compliance_sensitivity", "Sensitivity", "METHOD_ACCURACY", "STRUCTURAL_ENTRIES",
-           "method_accuracy", "MethodAccuracy"]
+__all__ = ["with_values", "scale_moduli", "MODULUS_KEYS", "MODULI", "compliance_sensitivity", "Sensitivity", "METHOD_ACCURACY",
+           "STRUCTURAL_ENTRIES", "method_accuracy", "MethodAccuracy"]
 
 #: the C_F entries a planar rod has (x, z in its plane, y out of it): (m, n) with m <= n
 STRUCTURAL_ENTRIES = ((0, 0), (0, 2), (1, 1), (2, 2))
@@ -109,6 +110,26 @@ def with_values(design: RodDesign, values: dict) -> RodDesign:
             data[table][name] = float(value)
         else:
             data[name] = float(value)
+    return design_from_dict(data)
+
+
+#: the keys of a material that are moduli (scaled together by :func:`scale_moduli`)
+MODULUS_KEYS = ("E_GPa", "G_GPa", "E_transverse_GPa")
+#: ``rodlab update``'s key for one factor of every modulus of the rod (:func:`scale_moduli`; design value 1)
+MODULI = "moduli"
+
+
+def scale_moduli(design: RodDesign, factor: float) -> RodDesign:
+    """``design`` with every modulus (:data:`MODULUS_KEYS`) of every material it uses — tubes, bend, rings, holders,
+    ball — times ``factor`` [-]: the rod uniformly stiffer (``factor`` > 1) or softer, each compliance entry of the
+    elastic models divided by ``factor`` (the paper's r_rod = 1 / factor where the rod differs that way)."""
+    if not np.isfinite(factor) or factor <= 0:
+        raise DesignError(f"a modulus factor must be a positive number, got {factor!r}", key="moduli")
+    data = design_to_dict(design)
+    for table in data["materials"].values():
+        for key in MODULUS_KEYS:
+            if table.get(key) is not None:
+                table[key] = float(table[key]) * float(factor)
     return design_from_dict(data)
 
 

@@ -20,6 +20,7 @@ __all__ = [
     "TRACKER_NOISE_MM",
     "PAPER_ROD_SLIP",
     "PAPER_C_ROD_UM_RANGE",
+    "PAPER_R_ROD",
 ]
 
 #: Standard gravity [m/s^2]; loads in the contract are ``mass_kg * G0`` newtons.
@@ -37,6 +38,10 @@ PAPER_ROD_SLIP: float = 2.4
 #: The compliance index c_rod [um] of the paper's measured rods (Table 2: 57.9 um carbon 1# .. 1306.2 um steel 6#):
 #: the range :data:`PAPER_ROD_SLIP` was fitted on.
 PAPER_C_ROD_UM_RANGE: tuple[float, float] = (57.9, 1306.2)
+
+#: The correction factor r_rod (Eq. 21: measured / simulated) of the paper's measured rods (Table 2): 1.01 (the steel
+#: rods) to 2.30 (carbon 3#)
+PAPER_R_ROD: tuple[float, float] = (1.01, 2.30)
 
 
 def gpa_to_mpa(value_gpa: float) -> float:

@@ -15,7 +15,9 @@ from ...core.design_io import resolve_design
 from ...core.errors import DesignError, RodlabError, VerdictError
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
+from ...core.sensitivity import MODULI, MODULUS_KEYS
 from ...core.tolerances import design_value
+from ...core.units import PAPER_R_ROD
 from .rodargs import warn_rod_mismatch
 
 __all__ = ["register"]
@@ -37,7 +39,9 @@ def register(sub) -> None:
                    help="a measured *.compliance.json (rodlab rig fit) or a *.rig.csv recording (diagnosed first: "
                         "friction, creep, drift ... are separated from the linear compliance)")
     p.add_argument("--free", default=None, metavar="KEY[,KEY...]",
-                   help="dotted keys of the design file to fit (default: E_GPa and G_GPa of the tube material); a "
+                   help="dotted keys of the design file to fit (default: E_GPa and G_GPa of the tube material, and "
+                        "where they cannot explain the measurement, moduli); moduli: every modulus of every material "
+                        "times one factor (a rod uniformly softer than its design, as the paper's r_rod 1.01-2.30); a "
                         f"joint's compliance joints.PLACE.s_bend_rad_per_Nm (PLACE: {', '.join(JOINT_PLACES)}) "
                         "declares it in the as-built design (rodlab.rod/2)")
     p.add_argument("--model", choices=("frame", "calc"), default="frame",
@@ -57,13 +61,13 @@ def _default_free(design) -> list[str]:
 
 def _explained_by_keys(finding, keys, design) -> bool:
     """Whether a structural finding is what the freed ``keys`` fit: a joint freed at its place (or at one of the
-    places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E freed, a torsion of
+    places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E or the moduli freed, a torsion of
     pipe I with its material's shear modulus G freed."""
     if finding.effect == "joint_compliance":
         freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
         return bool(set((finding.location or "").split("|")) & freed)
     if finding.effect == "compliance_scale":
-        wanted = {f"materials.{t.material.name}.E_GPa" for t in (design.pipe_I, design.pipe_II)}
+        wanted = {f"materials.{t.material.name}.E_GPa" for t in (design.pipe_I, design.pipe_II)} | {MODULI}
     else:
         wanted = {f"materials.{design.pipe_I.material.name}.G_GPa"}
     return bool(wanted & set(keys))
@@ -120,12 +124,13 @@ def _with_remounting(C: np.ndarray, cov: np.ndarray) -> np.ndarray:
 
 
 def _key_for(finding, design) -> str:
-    """The design key that would fit a structural finding: a joint's compliance at its (first) place, the tubes'
-    modulus E for a uniform scale, pipe I's shear modulus G for a torsion."""
+    """The design key that would fit a structural finding: a joint's compliance at its (first) place, every modulus
+    (:data:`~rodlab.app.update.MODULI`) for a uniform scale, pipe I's shear modulus G for a torsion."""
     if finding.effect == "joint_compliance":
         return f"joints.{(finding.location or 'PLACE').split('|')[0]}.s_bend_rad_per_Nm"
-    m = design.pipe_I.material
-    return f"materials.{m.name}.{'E_GPa' if finding.effect == 'compliance_scale' else 'G_GPa'}"
+    if finding.effect == "compliance_scale":
+        return MODULI
+    return f"materials.{design.pipe_I.material.name}.G_GPa"
 
 
 def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list) -> None:
@@ -138,7 +143,10 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
             "torsion_compliance": "pipe I softer in torsion (its shear modulus or lay-up)"}
     named = "; ".join(f"{f.effect}" + (f" at {f.location}" if f.location else "") + f": {what[f.effect]}"
                       for f in findings)
-    keys = ",".join(dict.fromkeys([*freed, *(_key_for(f, design) for f in findings)]))   # the keys freed, plus
+    wanted = [_key_for(f, design) for f in findings]
+    if MODULI in wanted:                                 # moduli scales the freed materials' moduli too
+        freed = [k for k in freed if not (k.startswith("materials.") and k.rpartition(".")[2] in MODULUS_KEYS)]
+    keys = ",".join(dict.fromkeys([*freed, *wanted]))   # the keys freed, plus
     raise VerdictError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
                       f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
                       f"here. Free the key that fits it too (--free {keys})"
@@ -169,7 +177,7 @@ def _closed_form_hint(args, design) -> str:
 
 def cmd_update(args: argparse.Namespace) -> int:
     from ...core.design_edit import write_edited_design
-    from ..update import update_design
+    from ..update import as_built_values, update_design
     try:
         found = Path(args.measured).is_file()
     except OSError as e:                                 # a name the file system refuses (too long, ...)
@@ -186,30 +194,53 @@ def cmd_update(args: argparse.Namespace) -> int:
                           f"{Path(design.source).name.replace('.rod.toml', '')}.asbuilt.rod.toml), so that the design "
                           "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
-        design_value(design, key)
+        if key != MODULI:
+            design_value(design, key)
     measured, causes = _measured(args.measured, design, keys, args.model)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
               "compliance; see `rodlab diagnose --rig`)")
     res = update_design(design, measured, keys, args.model)
+    if not res.explains and not args.free:             # the tube's moduli cannot: the rod uniformly softer?
+        res = _uniformly(design, measured, res, args.model)
     _print(res, args.model)
     if not res.explains:
-        recording = args.measured if args.measured.endswith(".rig.csv") else (
-            read_compliance(args.measured).provenance.get("recording") or "RECORDING.rig.csv (the file's own recording)")
-        raise VerdictError(f"{args.measured}: {', '.join(keys)} cannot explain the measurement (chi-square "
-                           f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
-                           f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
-                           f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
-                           "where it names a local cause, free that cause's key (a joint's "
-                           "joints.PLACE.s_bend_rad_per_Nm); where it calls the rod consistent (model_form), free the "
-                           "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
-                           "tube.outer_diameter_mm); nothing was written" + _closed_form_hint(args, design))
+        _refuse(args, res)
     text = read_text_checked(design.source, DesignError)
-    header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(keys)} "
+    header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(res.keys)} "
               f"--model {args.model}\n")
-    out = write_edited_design(text, design, dict(zip(res.keys, res.x)), args.output, header)
+    out = write_edited_design(text, design, as_built_values(design, res.keys, res.x), args.output, header)
     print(f"wrote {out}")
     return 0
+
+
+def _uniformly(design, measured, res, model: str):
+    """The default keys (the tube's E and G) leave the measurement unexplained: every modulus by one factor
+    (:data:`~rodlab.core.sensitivity.MODULI`) where that explains it (a paper trial: 3#, r_rod 2.30, with a steel
+    bend), with a note; else the first result."""
+    from ..update import update_design
+    uniform = update_design(design, measured, (MODULI,), model)
+    if not uniform.explains:
+        return res
+    print(f"note: {', '.join(res.keys)} alone cannot explain the measurement (chi-square {res.chi2_after:.3g} after "
+          f"their fit, p = {res.p_after:.1e}): the other members differ by the same factor; fitted instead: every "
+          f"modulus of every material by one factor (--free {MODULI})")
+    return uniform
+
+
+def _refuse(args, res) -> None:
+    recording = args.measured if args.measured.endswith(".rig.csv") else (
+        read_compliance(args.measured).provenance.get("recording") or "RECORDING.rig.csv (the file's own recording)")
+    design = resolve_design(args.design)
+    raise VerdictError(f"{args.measured}: {', '.join(res.keys)} cannot explain the measurement (chi-square "
+                       f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
+                       f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
+                       f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
+                       "where it names a local cause, free that cause's key (a joint's "
+                       "joints.PLACE.s_bend_rad_per_Nm); where it finds every member uniformly softer "
+                       f"(compliance_scale), free {MODULI}; where it calls the rod consistent (model_form), free the "
+                       "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
+                       "tube.outer_diameter_mm); nothing was written" + _closed_form_hint(args, design))
 
 
 def _print(res, model: str) -> None:
@@ -242,8 +273,21 @@ def _print(res, model: str) -> None:
                   "one key; keys left fixed may carry part of it within their own tolerances (a wall 0.2 mm thinner "
                   "reads as a lower E): `rodlab diagnose --rig` weighs every toleranced key at once, and weighing the "
                   "rod or measuring the wall tells them apart")
+    _moduli_note(res)
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
     print(f"  r_mn = measured / the {model} model's prediction with its known bias against the solid FEA removed "
           f"(`rig fit` divides by the simulated file as it is):")
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))
+
+
+def _moduli_note(res) -> None:
+    """Every modulus freed: what its factor says of the rod (1 / factor is the r_rod it carries), against the
+    paper's measured rods."""
+    if MODULI not in res.keys:
+        return
+    r = 1.0 / float(res.x[list(res.keys).index(MODULI)])
+    where = ("within" if PAPER_R_ROD[0] - 0.05 <= r <= PAPER_R_ROD[1] + 0.05 else "outside")
+    print(f"  note: every modulus x{1 / r:.3f}: the rod as built is {r:.2f}x as compliant as its design throughout "
+          f"(r_rod {r:.2f}; {where} the paper's measured rods, {PAPER_R_ROD[0]:.2f}-{PAPER_R_ROD[1]:.2f}); the "
+          "as-built file scales every material's E and G, including the bend's, rings' and holders'")

@@ -23,6 +23,7 @@ from rodlab.stiffness_rig.plot import format_pm, format_zero
 from ...core.compliance import write_compliance
 from ...core.design_io import resolve_design
 from ...core.enums import Checksum, LineProtocol, LoadAxis
+from ...core.sensitivity import STRUCTURAL_ENTRIES
 from ...core.errors import RodlabError
 from ...core.progress import progress as bar_of
 from .argtypes import count, nonneg_float, pos_float, seed
@@ -180,6 +181,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print("  r_mn (Eq. 20, measured / simulated per entry; - not measured):")
     for m, row in enumerate(comp.r_mn):
         print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
+    guessed = [f"c{m + 1}{n + 1}" for m, n in STRUCTURAL_ENTRIES if not np.isfinite(comp.r_mn[m, n])]
+    if guessed:
+        print(f"  not measured: {', '.join(guessed)} (the recording has no series that loads it): the file holds r_rod x "
+              "simulated there, with no uncertainty; `rodlab update` leaves it out")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{np.round(comp.C_F, 6) + 0.0}")     # no "-0." for what rounds to zero
     _print_load(fit)

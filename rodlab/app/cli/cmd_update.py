@@ -86,7 +86,6 @@ def _warn_unexplained(path: str, diag) -> None:
 def _measured(path: str, design, keys, model: str):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
     ``model`` the keys are fitted through)."""
-    from ...core.sensitivity import STRUCTURAL_ENTRIES
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
         from ..diagnose import diagnose_rig
@@ -108,11 +107,30 @@ def _measured(path: str, design, keys, model: str):
         return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig
     comp = read_compliance(path)
     warn_rod_mismatch(comp.rod, design.name, path, "--measured", "the design", named_by="")
-    E = tuple(e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max())
+    E = _measured_entries(comp, path)
     C = np.array([comp.C_F[e] for e in E])
     stated = np.zeros(len(E)) if comp.C_F_sigma is None else np.array([comp.C_F_sigma[e] for e in E])
-    stated = np.where(np.isfinite(stated), stated, 0.0)
     return Measured(E, C, _with_remounting(C, np.diag(stated ** 2)), path), []
+
+
+def _measured_entries(comp: RodCompliance, path: str) -> tuple:
+    """The structural entries a compliance file measured: nonzero ones, and where the file states uncertainties
+    (``rig fit``'s), only those with one: an entry without (a series the recording lacks, completed as r_rod x the
+    simulation) was never measured and is left out, with a note (a technician trial: an interrupted run's c11 had
+    been fitted as if measured)."""
+    from ...core.sensitivity import STRUCTURAL_ENTRIES
+    E = [e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max()]
+    if comp.C_F_sigma is None:
+        return tuple(E)
+    left = [e for e in E if not np.isfinite(comp.C_F_sigma[e])]
+    if left:
+        print(f"note: {path}: {', '.join(f'c{m + 1}{n + 1}' for m, n in left)} not measured (no uncertainty in the "
+              "file: completed from the simulation as r_rod x simulated); left out of the fit")
+    kept = tuple(e for e in E if e not in left)
+    if not kept:
+        raise RodlabError(f"--measured {path}: no C_F entry of the file was measured (C_F_sigma_mm_per_N is null "
+                          "everywhere); give rig fit's measured file of this rod")
+    return kept
 
 
 def _with_remounting(C: np.ndarray, cov: np.ndarray) -> np.ndarray:

@@ -26,3 +26,25 @@ def test_an_unmeasured_entry_is_said_and_left_out_of_update(tmp_path, capsys):
     assert main(["update", "rod1", "--measured", str(meas), "-o", str(out)]) == 0
     text = capsys.readouterr().out
     assert "c11 not measured" in text and "chi-square of the 3 entries" in text and "r_11" not in text
+
+
+def test_the_export_of_a_joint_at_a_group_of_places_is_written(tmp_path, capsys):
+    """The diagnosis names `pipe_II|ring_1` where the loads cannot tell the places apart; --export and --json had
+    failed on that name ("no place 'pipe_II|ring_1' on this rod"), writing nothing."""
+    sim, rec = tmp_path / "rod1.calc.json", tmp_path / "joint.rig.csv"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--design", "rod1", "--axes", "y,z", "--effect",
+                 "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=1e-4", "--repeats", "2", "--hold-s", "4",
+                 "-o", str(rec)]) == 0
+    capsys.readouterr()
+    corr, report = tmp_path / "joint.corr.json", tmp_path / "joint.diag.json"
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(sim), "--design", "rod1", "--export", str(corr),
+                 "--json", str(report)]) == 0
+    err = capsys.readouterr().err
+    data = json.loads(corr.read_text())
+    finding = json.loads(report.read_text())["findings"][0]
+    assert finding["effect"] == "joint_compliance"
+    assert finding["location"] == "pipe_II|ring_1"              # y and z loads cannot tell the two apart
+    assert "cannot tell these places apart" in err
+    assert any("the file puts it at pipe_II" in w for w in data["provenance"]["warnings"])
+    assert data["C_F_mm_per_N"][1][1] > json.loads(sim.read_text())["C_F_mm_per_N"][1][1]

@@ -31,8 +31,8 @@ def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2
             for val, dC in zip(v, term.dC or ()):
                 C = C + val * dC
     else:                                   # the free fit holds every effect on the entries it fits
-        C = _with_findings(sim, diag, design)
-        notes += _predicted_note(C, sim, diag, measured_axes)
+        C, grouped = _with_findings(sim, diag, design)
+        notes += _predicted_note(C, sim, diag, measured_axes) + _group_notes(grouped, measured_axes)
         for m, n in model.linear.entries:
             C[m, n] = C[n, m] = model.linear.C_F[m, n]
     C = 0.5 * (C + C.T)
@@ -46,18 +46,39 @@ def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2
                                          "findings": [f.to_dict() for f in diag.findings], "warnings": notes})
 
 
-def _with_findings(sim: RodCompliance, diag, design=None) -> np.ndarray:
+def _with_findings(sim: RodCompliance, diag, design=None) -> tuple[np.ndarray, list]:
     """The simulated C_F [mm/N] with each structural rig finding's fitted parameters put through its effect's
     forward model (:meth:`~stiffness_rig.effects.base.RigEffectModel.compliance`, the joints placed on ``design``
-    or guessed from the tool vector)."""
+    or guessed from the tool vector), and the findings at a group of places the recording could not tell apart
+    (``pipe_II|ring_1``): each is put at the first place, where the diagnosis fitted it (a technician trial: the
+    export had failed on the group's name)."""
     C = sim.C_F.copy()
     places = joint_places(sim.tool_mm, design)
+    grouped = []
     for f in diag.findings:
         if not isinstance(f.effect, RigEffect) or not RIG_EFFECTS[f.effect].structural:
             continue
-        params = dict(f.parameters, **({"location": f.location} if f.location else {}))
+        params = dict(f.parameters)
+        if f.location:
+            params["location"] = f.location.split("|")[0]
+            if "|" in f.location:
+                grouped.append(f)
         C = RIG_EFFECTS[f.effect].compliance(C, params, places)
-    return C
+    return C, grouped
+
+
+def _group_notes(grouped: list, measured_axes) -> list[str]:
+    """Which place the file takes for a finding at a group of places, and what that decides: the entries of the
+    axes the recording did not load."""
+    unloaded = [i for i in range(3) if i not in set(measured_axes)]
+    out = []
+    for f in grouped:
+        first, *others = f.location.split("|")
+        decides = (f"; its entries along {', '.join('xyz'[i] for i in unloaded)} (not loaded) depend on the place: load "
+                   f"along {', '.join('xyz'[i] for i in unloaded)} to tell them apart") if unloaded else ""
+        out.append(f"{f.effect} at {f.location}: the recording cannot tell these places apart; the file puts it at "
+                   f"{first}, where the diagnosis fitted it (not at {', '.join(others)}){decides}")
+    return out
 
 
 def _predicted_note(C: np.ndarray, sim: RodCompliance, diag, measured_axes) -> list[str]:

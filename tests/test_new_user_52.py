@@ -48,3 +48,20 @@ def test_the_export_of_a_joint_at_a_group_of_places_is_written(tmp_path, capsys)
     assert "cannot tell these places apart" in err
     assert any("the file puts it at pipe_II" in w for w in data["provenance"]["warnings"])
     assert data["C_F_mm_per_N"][1][1] > json.loads(sim.read_text())["C_F_mm_per_N"][1][1]
+
+
+def test_validate_accepts_a_recording_cut_off_in_its_last_line_as_the_readers_do(tmp_path, capsys):
+    sim, rec = tmp_path / "rod1.calc.json", tmp_path / "cut.rig.csv"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "--hold-s", "3", "-o", str(rec)]) == 0
+    text = rec.read_text()
+    rec.write_text(text[:text.rstrip("\n").rfind("\n") + 1] + "233.000,30,2,unlo")     # the last sample cut off
+    capsys.readouterr()
+    assert main(["validate", str(rec)]) == 0
+    out = capsys.readouterr()
+    assert "valid, but with 1 warning" in out.out + out.err and "a sample cut off" in out.out + out.err
+    bad = tmp_path / "mid.rig.csv"                     # a short line inside the file is still refused
+    lines = text.splitlines()
+    lines[len(lines) // 2] = lines[len(lines) // 2][:12]
+    bad.write_text("\n".join(lines) + "\n")
+    assert main(["validate", str(bad)]) != 0

@@ -166,9 +166,11 @@ def _readings_mm(header, row) -> list[float]:
 def _row_problems(lines, start: int, header, cols, schema, path) -> list[Problem]:
     out, seen, rows = [], {}, 0
     groups = [tuple(g) for g in schema.get("unique", []) if all(k in header for k in g)]
-    for k, row in enumerate(csv.reader(lines[start:]), start=start + 1):
-        if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
-            continue
+    numbered = [(k, row) for k, row in enumerate(csv.reader(lines[start:]), start=start + 1)
+                if row and "".join(row).strip() and not row[0].lstrip().startswith("#")]
+    if numbered and schema.get("cut_last_row") and len(numbered[-1][1]) < len(header):
+        numbered = numbered[:-1]                  # a sample cut off: the readers leave it out, with a warning
+    for k, row in numbered:
         rows += 1
         if len(row) != len(header):
             out.append(Problem(path, f"expected {len(header)} cells, got {len(row)}", k, None,

@@ -65,3 +65,25 @@ def test_validate_accepts_a_recording_cut_off_in_its_last_line_as_the_readers_do
     lines[len(lines) // 2] = lines[len(lines) // 2][:12]
     bad.write_text("\n".join(lines) + "\n")
     assert main(["validate", str(bad)]) != 0
+
+
+def test_the_diagnosis_names_a_gauge_reversed_in_one_series_as_rig_fit_does(tmp_path, capsys):
+    """The z gauge read reversed in the x series only: `rig fit` refuses it by reciprocity; the diagnosis had named a
+    crosstalk at its bound, a tilted load line and a joint."""
+    sim, rec = tmp_path / "rod1.calc.json", tmp_path / "flip.rig.csv"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "2", "--hold-s", "4", "-o", str(rec)]) == 0
+    lines = rec.read_text().splitlines()
+    header = next(i for i, ln in enumerate(lines) if ln.startswith("time_s"))
+    cols = lines[header].split(",")
+    axis, z = cols.index("load_axis"), cols.index("disp_z_mm")
+    for i in range(header + 1, len(lines)):
+        cells = lines[i].split(",")
+        if cells[axis] == "x" and cells[z]:
+            cells[z] = repr(-float(cells[z]))
+            lines[i] = ",".join(cells)
+    rec.write_text("\n".join(lines) + "\n")
+    capsys.readouterr()
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(sim)]) == 2
+    err = capsys.readouterr().err
+    assert "a gauge reversed in one series" in err and "nothing was diagnosed" in err

@@ -9,7 +9,7 @@ from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
 from rodlab.calibrate.points import identify_points, stated_noise_mm
 from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
 from rodlab.stiffness_rig.fit import r_rod_caution
-from rodlab.stiffness_rig.fit_checks import gauge_scale_problems, load_scale_problems
+from rodlab.stiffness_rig.fit_checks import gauge_scale_problems, load_scale_problems, reciprocity_problems
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...core.compliance import write_compliance
@@ -153,7 +153,8 @@ def _check_r_rod(rec, sim, args) -> None:
     against its own simulation (a units slip or another rod's file: the diagnosis would fit a compliance scale of
     0.001 and call the recording explained) or one gauge reading a units factor off the others against the
     simulation (a gauge in inches: diagnosed as a compliance scale of 0.26 and a non-linearity along x) or a load
-    cell whose readings do not grow as the hung weight (:func:`~stiffness_rig.fit_checks.load_scale_problems`);
+    cell whose readings do not grow as the hung weight (:func:`~stiffness_rig.fit_checks.load_scale_problems`) or a
+    gauge reversed in one series (:func:`~stiffness_rig.fit_checks.reciprocity_problems`);
     ``--units-checked`` warns instead; any other fit problem is left to the diagnosis, which says what it finds."""
     try:
         fit = fit_recording(rec, sim)
@@ -166,6 +167,9 @@ def _check_r_rod(rec, sim, args) -> None:
     # a load cell in another unit, wired the other way or out of the load path: the diagnosis would name a
     # compliance scale of that factor (a cell in lbf: r = 4.33, "decisive")
     caution = caution or "; ".join(load_scale_problems(fit.load)[0]) or None
+    # a gauge reversed in one series: the diagnosis would fit a crosstalk at its bound, a tilted load line and a
+    # joint (a technician trial), where `rig fit` names the gauge
+    caution = caution or "; ".join(reciprocity_problems(fit.C_F_meas, fit.C_F_se)[0]) or None
     if caution and not getattr(args, "units_checked", False):
         raise RigError(f"{caution}; nothing was diagnosed (if both files are right, give --units-checked)",
                        path=rec.path)

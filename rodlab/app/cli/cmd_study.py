@@ -156,12 +156,16 @@ def _check_numbers(args) -> None:
                           "growing with the slip (it fell again from 50 to 1000)")
 
 
-def _assumptions(args) -> str:
+def _assumptions(args, cands=()) -> str:
     """What the prediction assumes beyond the designs, with the options that change it (the study's page and
     console show it: a designer must see why one design beats another)."""
+    from rodlab.app.study.designs import R_PRIOR_AS_BUILT, is_as_built
+    built = [c.label for c in cands if c.design is not None and is_as_built(c.design)]
+    as_built = (f"; {', '.join(built)}: written by `rodlab update` from a measurement, r_rod "
+                f"{R_PRIOR_AS_BUILT[0]:g}:{R_PRIOR_AS_BUILT[1]:g} (the measurement is in it)") if built else ""
     return (f"the rod as built is r_rod x its simulation, r_rod uniform in {args.r_prior_metal} for metal tubes and "
             f"{args.r_prior_composite} for carbon ones (the paper's measured rods; --r-prior-metal, "
-            f"--r-prior-composite: narrow it for a laminate you have coupon-tested); the rod's non-repeatable "
+            f"--r-prior-composite: narrow it for a laminate you have coupon-tested){as_built}; the rod's non-repeatable "
             f"deflection (slip, hysteresis in its joints) {args.rod_slip:g} x its deflection under its own weight "
             f"(--rod-slip; 0: none); the robot's own unmodelled error {args.robot_floor_mm:g} mm (--robot-floor-mm); "
             f"device noise {args.device_noise * 1e3:g} um, validation instrument {args.instrument_noise * 1e3:g} um; "
@@ -216,12 +220,12 @@ def cmd_study(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - t0
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
               "designs": len(cands), "predictor": how, "methods": ", ".join(methods),
-              "compliance": model_note, "assumptions": _assumptions(args), "time": f"{elapsed:.0f} s"}
+              "compliance": model_note, "assumptions": _assumptions(args, cands), "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,
                               {"fixture": args.fixture, "compliance": model_note, "elapsed_s": elapsed},
                               designs={c.label: c.design for c in cands})
     _print_unusable(res.table)
-    print(f"assumptions (each an option): {_assumptions(args)}")
+    print(f"assumptions (each an option): {_assumptions(args, cands)}")
     for w in res.warnings:
         print(f"warning: {w.text}")
     print(f"recommendation: {res.recommendation.text}")

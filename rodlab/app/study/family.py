@@ -55,6 +55,14 @@ def _family_joints(base, L1s, L2s, cache: Path):
     return jc
 
 
+def _family_key(design: RodDesign) -> str:
+    """What a family's members share: everything but the name, L1 and L2 (as :meth:`~fea.joints.JointFit.
+    check_member` asks); a rod as built (other moduli under the same material's name, a paper trial) is a family
+    of its own."""
+    data = {k: v for k, v in design_to_dict(design).items() if k not in ("name", "rod", "L1_mm", "L2_mm")}
+    return json.dumps(data, sort_keys=True, default=str)
+
+
 def family_joints(cands, grid: bool, use_solid: bool, cache: Path) -> tuple[dict, str]:
     """{candidate label: JointCalibration} per design family (the designs that differ only in L1 / L2; one solid
     run each, kept in ``cache``), or {} when ``use_solid`` is off or the cad extra is missing; and a note on the
@@ -67,8 +75,7 @@ def family_joints(cands, grid: bool, use_solid: bool, cache: Path) -> tuple[dict
     families: dict = {}
     for c in cands:
         if c.design is not None:
-            parts = {k: v for k, v in c.design.summary().items() if k not in ("name", "L1_mm", "L2_mm")}
-            families.setdefault(json.dumps(parts, sort_keys=True), []).append(c)
+            families.setdefault(_family_key(c.design), []).append(c)
     out, failed = {}, []
     for members in families.values():
         base = members[0].design

@@ -29,7 +29,7 @@ from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
 from .calibration_run import CalibrationRun, run_calibration, stated_noise_reason
-from .deviceargs import add_device_option, points_from_args
+from .deviceargs import add_device_option, points_from_args, refuse_rod_slips
 from .reporting import default_folder, png_folder, write_command_report
 from .rodargs import compliance_arg
 from .columnsargs import screen_joint_columns
@@ -107,6 +107,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
     rod = compliance_arg(args.rod)
+    refuse_rod_slips(rod, args.rod, args)
     comp = RodDeflection.of(None if args.compensation == "none" else rod)
     run = run_calibration(args, rod, comp)
     label = run.label

@@ -14,7 +14,7 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_json, json_safe
 from .calibrateargs import add_identify_options
 from .calibration_run import run_calibration, stated_noise_reason
-from .deviceargs import add_device_option, campaign_from_args, warn_flagged_fixture
+from .deviceargs import add_device_option, campaign_from_args, refuse_rod_slips, warn_flagged_fixture
 from .reporting import default_folder, write_command_report
 from .robotargs import robot_from_args
 from .verdict import judge
@@ -40,7 +40,7 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_compare)
 
 
-def _compare_runs(items) -> list:
+def _compare_runs(items, args) -> list:
     """(name, rod file, compensation) per ``--rod LABEL=FILE``, led by no compensation; checked before any run.
     A label is only a name: the file's matrices compensate whatever it is called (a file of method ``none``
     compensates nothing, and says so)."""
@@ -53,6 +53,7 @@ def _compare_runs(items) -> list:
             raise RodlabError(f"--rod {item!r}: compare runs the uncompensated calibration itself (the 'None' row): "
                               "leave it out and give the compliance files to compare with it")
         rod = read_compliance(path)
+        refuse_rod_slips(rod, item, args)
         if not runs:
             runs.append(("None", rod, RodDeflection.of(None)))
         if label.strip().lower() == "none" and rod.method.value != "none":
@@ -70,7 +71,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if not args.validate:
         raise RodlabError("compare needs --validate FILE (the statistics come from the validation points); add the "
                           "campaign's *.validation.csv")
-    planned = _compare_runs(args.rod)
+    planned = _compare_runs(args.rod, args)
     camp = campaign_from_args(args, robot_from_args(args))
     warn_flagged_fixture(read_fixture(args.fixture), args.fixture)
     runs = [(name, run_calibration(args, rod, comp, camp)) for name, rod, comp in planned]

@@ -19,7 +19,8 @@ from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_json, json_safe
 from ...core.units import DEVICE_NOISE_MM
 from .argtypes import joint_list, pos_float
-from .deviceargs import add_device_option, campaign_from_args, points_from_args, warn_flagged_fixture
+from .deviceargs import (add_device_option, campaign_from_args, points_from_args, refuse_rod_slips,
+                         warn_flagged_fixture)
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .columnsargs import add_columns_checked, screen_joint_columns
 from .robotargs import add_robot_options, robot_from_args, robot_help
@@ -186,8 +187,10 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     fix = read_fixture(args.fixture)
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
+    rod = compliance_arg(args.rod)
+    refuse_rod_slips(rod, args.rod, args)
     diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot), fix,
-                                   compliance_arg(args.rod), noise_mm, pts, harmonics=args.joint_harmonics,
+                                   rod, noise_mm, pts, harmonics=args.joint_harmonics,
                                    columns_checked=args.columns_checked)
     print(diag.summary())
     if "validation" in diag.extra:

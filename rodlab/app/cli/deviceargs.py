@@ -14,6 +14,7 @@ from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, limit_brea
 from ...core.errors import RodlabError
 
 __all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "points_from_args", "warn_flagged_fixture",
+           "refuse_rod_slips",
            "flagged_fixture_reasons"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
@@ -23,8 +24,8 @@ DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sens
 
 
 UNITS_CHECKED_HELP = ("the campaign's units are right although its numbers look like radians or um (a campaign that "
-                      "turns every joint by less than 6.3 deg, or points measured far from the datum): warn instead "
-                      "of refusing")
+                      "turns every joint by less than 6.3 deg, or points measured far from the datum), and the rod's "
+                      "compliance file's although it looks like um/N, grams or metres: warn instead of refusing")
 
 
 def add_device_option(p, prefix: str = "", units_also: str = "") -> None:
@@ -79,6 +80,14 @@ def points_from_args(args, path, robot):
 def _warn_limits(q_deg, lines, robot, path) -> None:
     for breach in limit_breaches(q_deg, lines, robot, path):
         print(f"warning: {breach}", file=sys.stderr)
+
+
+def refuse_rod_slips(rod, spec: str, args, option: str = "--rod") -> None:
+    """A compliance file whose numbers no measuring rod has (C_F in um/N, a mass in grams, a tool in metres:
+    :meth:`~rodlab.core.compliance.RodCompliance.unit_slips`) is refused before a calibration uses it, or with
+    ``--units-checked`` warned of (a paper trial: C_F in um/N had been warned of and then compensated, 77 mm of
+    residuals blamed on the fixture)."""
+    _refuse_slips([f"{option} {spec}: {slip}" for slip in rod.unit_slips()], args)
 
 
 def _refuse_slips(slips: list, args) -> None:

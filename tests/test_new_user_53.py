@@ -29,3 +29,19 @@ def test_a_rod_and_its_as_built_design_are_two_candidates_and_two_families(tmp_p
     assert _family_key(rod1) != _family_key(built)                 # other moduli: another solid run
     assert _family_key(rod1) == _family_key(resolve_design("rod1"))
     assert r_prior_of(built) == R_PRIOR_AS_BUILT and r_prior_of(rod1) == R_PRIOR_COMPOSITE
+
+
+def test_an_r_rod_beyond_the_papers_rods_is_remarked(tmp_path, capsys):
+    sim, rec, meas = tmp_path / "rod1.frame.json", tmp_path / "soft.rig.csv", tmp_path / "soft.meas.json"
+    assert main(["fea", "rod1", "--model", "frame", "-o", str(sim)]) == 0
+    for r, says in ((3.5, "beyond the paper's softest rod"), (0.8, "stiffer than its simulation")):
+        assert main(["rig", "simulate", "--sim", str(sim), "--effect", f"compliance_scale:r={r}", "--repeats", "2",
+                     "--hold-s", "4", "-o", str(rec)]) == 0
+        capsys.readouterr()
+        assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(meas)]) == 0
+        assert says in capsys.readouterr().out
+    from rodlab.app.cli.cmd_study import _range2
+    assert _range2("3.5:3.5", "r-prior-composite") == (3.5, 3.5)
+    assert "beyond the paper's measured rods" in capsys.readouterr().err
+    _range2("1.23:2.30", "r-prior-composite")
+    assert capsys.readouterr().err == ""

@@ -15,7 +15,7 @@ import numpy as np
 
 from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
-from rodlab.stiffness_rig.fit import noise_text
+from rodlab.stiffness_rig.fit import noise_text, r_rod_note
 from rodlab.stiffness_rig.fit_checks import load_scale_problems
 from rodlab.stiffness_rig.plan_check import default_masses, linear_range_warnings
 from rodlab.stiffness_rig.plot import format_pm, format_zero
@@ -178,6 +178,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
               f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
               f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
+    if (note := r_rod_note(fit.r_rod, str(sim.method))) is not None:
+        print(f"  note: {note}")
     print("  r_mn (Eq. 20, measured / simulated per entry; - not measured):")
     for m, row in enumerate(comp.r_mn):
         print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -10,7 +11,7 @@ from rodlab.calibrate import read_fixture
 from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.progress import progress as bar_of
-from ...core.units import PAPER_ROD_SLIP
+from ...core.units import PAPER_R_ROD, PAPER_ROD_SLIP
 from .argtypes import count, nonneg_float, seed
 from .reporting import add_report_option, write_command_report
 from .robotargs import add_robot_options, robot_from_args
@@ -87,6 +88,11 @@ def _range2(text: str, name: str) -> tuple[float, float]:
         raise RodlabError(f"--{name} {text!r}: expected LOW:HIGH, e.g. 1.01:1.05") from None
     if not (0.1 <= lo <= hi <= 10):
         raise RodlabError(f"--{name} {text!r}: expected 0.1 <= LOW <= HIGH <= 10")
+    if lo < PAPER_R_ROD[0] - 0.05 or hi > PAPER_R_ROD[1] + 0.05:      # a paper trial: 0.8 and 3.5 passed unremarked
+        stiffer = "; below 1 a rod stiffer than its simulation, which none of them was" if lo < 1.0 else ""
+        print(f"warning: --{name} {text}: beyond the paper's measured rods (r_rod {PAPER_R_ROD[0]:.2f}-"
+              f"{PAPER_R_ROD[1]:.2f}){stiffer}; the rod slip (--rod-slip) was fitted on rods within that range, so its "
+              "share is an extrapolation there", file=sys.stderr)
     return lo, hi
 
 

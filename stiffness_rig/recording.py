@@ -107,7 +107,8 @@ class RigRecording:
         kg, scale every axis alike; a straight rod is that stiff along its own axis alone)."""
         slopes = self._on_axis_slopes()
         out = [f"the {_AXES[a]} gauge moves {k:.4g} mm per N of the {_AXES[a]} load; no measuring rod is that soft "
-               "(rod 1# 0.0005-0.03 mm/N): if disp_mm is in um, divide it by 1000"
+               f"(beyond {PLAUSIBLE_C_F_MM_PER_N:g} mm/N; the paper's carbon 1# 0.0005-0.006 mm/N, its steel 6# up to "
+               "0.12 mm/N): if disp_mm is in um, divide it by 1000"
                for a, k in slopes.items() if k > PLAUSIBLE_C_F_MM_PER_N]
         if slopes and all(k < STIFF_LIMIT_MM_PER_N for k in slopes.values()):
             out.append(f"every gauge moves less than {STIFF_LIMIT_MM_PER_N:g} mm per N of its own load ("

@@ -107,3 +107,24 @@ def test_tare_and_friction_are_fitted_beside_the_linear_compliance_they_bias(tmp
         assert finding["parameters"][key] == pytest.approx(true, rel=0.02)
         low, high = finding["intervals_95"][key]
         assert low <= true <= high
+
+
+def test_following_updates_advice_for_a_joint_writes_the_as_built_design(tmp_path, capsys):
+    """The refusal names the joint's key to free; freeing it had been refused again (the joint's prior, 100 sound
+    bonds, held a 2e-3 rad/(N m) joint at 1.7e-3): the joint's size is now the data's."""
+    from conftest import SHARED
+    import re
+
+    design = SHARED / "examples" / "rods" / "rod1.rod.toml"
+    sim, rec, out = tmp_path / "sim.json", tmp_path / "joint.rig.csv", tmp_path / "asbuilt.rod.toml"
+    assert main(["fea", str(design), "--model", "frame", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--design", str(design), "--effect",
+                 "joint_compliance:location=pipe_II,s_bend_rad_per_Nm=2e-3", "--repeats", "2", "--hold-s", "4",
+                 "-o", str(rec)]) == 0
+    capsys.readouterr()
+    assert main(["update", str(design), "--measured", str(rec), "-o", str(out)]) == 3
+    keys = re.search(r"--free ([\w.,]+)\)", capsys.readouterr().err).group(1)
+    assert "joints.pipe_II.s_bend_rad_per_Nm" in keys
+    assert main(["update", str(design), "--measured", str(rec), "-o", str(out), "--free", keys]) == 0
+    s = float(re.search(r"joints.pipe_II.s_bend_rad_per_Nm\s+\S+\s+(\S+)", capsys.readouterr().out).group(1))
+    assert abs(s / 2e-3 - 1) < 0.05 and out.exists()

@@ -36,9 +36,10 @@ ROUGH_P = 0.05
 SEPARATE_CORR = 0.95
 #: prior of a freed key the design gives no tolerance for: this relative standard deviation (weak)
 WEAK_PRIOR = 0.5
-#: prior of a freed joint compliance: this many times a sound bond's tolerance (weak: a joint is freed because the
-#: rod shows it, and the bond's tolerance describes sound bonds)
-JOINT_PRIOR = 100.0
+#: a freed joint's compliance: prior standard deviation and reach, this many times a sound bond's tolerance (1e-2
+#: rad/(N m) for the default 1e-6): a joint is freed because the rod shows it, so its size is the data's, not a
+#: prior's (a technician trial: a prior of 100 tolerances had held a 2e-3 joint at 1.7e-3, and the update refused)
+JOINT_REACH = 1e4
 #: extra measurements that may separate keys: (what, standard uncertainty)
 _MASS_SD_KG = 0.001
 _ENTRY_REL = 0.005
@@ -167,9 +168,9 @@ def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
     nominal = np.array([key_value(design, k) for k in keys])
     sd = []
     for k, v in zip(keys, nominal):
-        if _is_joint(k):     # freed because the rod shows it: weak, JOINT_PRIOR x the tolerance of a sound bond
+        if _is_joint(k):     # freed because the rod shows it: JOINT_REACH x the tolerance of a sound bond
             sound = bonds.get(k.split(".")[1], BOND_SD) if k.endswith("s_bend_rad_per_Nm") else BOND_SD
-            sd.append(max(JOINT_PRIOR * sound, WEAK_PRIOR * v))
+            sd.append(max(JOINT_REACH * sound, WEAK_PRIOR * v))
         else:
             sd.append(tol.get(k, WEAK_PRIOR * abs(v)) or WEAK_PRIOR * abs(v))
     return nominal, np.array(sd)
@@ -177,12 +178,12 @@ def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:
 
 def _bounds_and_start(keys, nominal, prior_sd) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(lower, upper, start): 0.2-5x the design value; a joint's compliance from 0 (rigid) to the larger of 5x its
-    declared value and 10 prior standard deviations, started strictly inside."""
+    declared value and its prior standard deviation (:data:`JOINT_REACH` sound bonds), started strictly inside."""
     lo, hi = 0.2 * np.abs(nominal), 5.0 * np.abs(nominal)
     start = np.array(nominal, float)
     for i, k in enumerate(keys):
         if _is_joint(k):
-            lo[i], hi[i] = 0.0, max(5.0 * nominal[i], 10.0 * prior_sd[i])
+            lo[i], hi[i] = 0.0, max(5.0 * nominal[i], prior_sd[i])
             start[i] = min(max(nominal[i], 0.01 * prior_sd[i]), 0.9 * hi[i])
     return lo, hi, start
 

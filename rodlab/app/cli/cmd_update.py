@@ -190,7 +190,8 @@ def _closed_form_hint(args, design) -> str:
     return (f". The recording was made by `rodlab rig simulate`: if with --sim {args.design}, that is the design's "
             f"closed form, which differs from the {args.model} model by {100 * apart[k]:.0f} % in c{k + 1}{k + 1} on this "
             f"design: simulate from `rodlab fea {args.design} --model {args.model} -o SIM.json` (--sim SIM.json) to "
-            f"test update on its own model, or update with --model calc")
+            f"test update on its own model (--model calc would not fit it either: it removes the closed form's known "
+            f"stiffness against the solid FEA, which the recording keeps)")
 
 
 def cmd_update(args: argparse.Namespace) -> int:

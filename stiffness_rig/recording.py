@@ -34,6 +34,8 @@ log = logging.getLogger(__name__)
 #: on-axis slopes all below this [mm/N] are no measuring rod's (a straight rod is ~1e-5 along its own axis alone):
 #: metres, or grams as kg
 STIFF_LIMIT_MM_PER_N = 1e-5
+#: a hung mass beyond this [kg] is no stiffness rig's (the paper's: 0.5-2 kg): grams
+PLAUSIBLE_RIG_MASS_KG = 50.0
 _AXES = "xyz"
 
 __all__ = ["RigRecording", "read_recording", "read_header", "RecordingWriter", "FORMAT_RIG", "COLUMNS", "OPTIONAL_COLUMNS",
@@ -104,7 +106,8 @@ class RigRecording:
         """Slopes no measuring rod has, each with the unit slip that gives them: a load axis whose own gauge moves
         by more than :data:`~rodlab.core.compliance.PLAUSIBLE_C_F_MM_PER_N` per newton of its masses (um written
         as mm), or every measured axis less than :data:`STIFF_LIMIT_MM_PER_N` (metres written as mm, or grams as
-        kg, scale every axis alike; a straight rod is that stiff along its own axis alone)."""
+        kg, scale every axis alike; a straight rod is that stiff along its own axis alone), or a mass beyond
+        :data:`PLAUSIBLE_RIG_MASS_KG` (grams)."""
         slopes = self._on_axis_slopes()
         out = [f"the {_AXES[a]} gauge moves {k:.4g} mm per N of the {_AXES[a]} load; no measuring rod is that soft "
                f"(beyond {PLAUSIBLE_C_F_MM_PER_N:g} mm/N; the paper's carbon 1# 0.0005-0.006 mm/N, its steel 6# up to "
@@ -115,6 +118,11 @@ class RigRecording:
                        + ", ".join(f"{_AXES[a]} {k:.3g}" for a, k in slopes.items()) + "); no measuring rod is that "
                        "stiff on every axis: a displacement in metres (multiply by 1000) or masses in grams (divide "
                        "mass_kg by 1000)?")
+        heaviest = float(np.nanmax(self.mass_kg)) if self.n else 0.0
+        if heaviest > PLAUSIBLE_RIG_MASS_KG:       # grams with readings in um: the slopes right, the rest not
+            out.append(f"mass_kg reaches {heaviest:g}; no rig hangs more than {PLAUSIBLE_RIG_MASS_KG:g} kg on a measuring "
+                       "rod (the paper's: 0.5-2 kg): if these are grams, divide mass_kg by 1000 (readings in um "
+                       "with masses in g give the right slopes, but not the noise, friction or zero crossings)")
         return out
 
     def _on_axis_slopes(self) -> dict:

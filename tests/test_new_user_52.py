@@ -128,3 +128,24 @@ def test_following_updates_advice_for_a_joint_writes_the_as_built_design(tmp_pat
     assert main(["update", str(design), "--measured", str(rec), "-o", str(out), "--free", keys]) == 0
     s = float(re.search(r"joints.pipe_II.s_bend_rad_per_Nm\s+\S+\s+(\S+)", capsys.readouterr().out).group(1))
     assert abs(s / 2e-3 - 1) < 0.05 and out.exists()
+
+
+def test_masses_in_grams_with_readings_in_um_are_named(tmp_path, capsys, caplog):
+    """The slopes come out right (both 1000x), the noise, friction and zero crossings do not: it had passed silently."""
+    sim, rec = tmp_path / "rod1.calc.json", tmp_path / "g.rig.csv"
+    assert main(["compliance", "rod1", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "--hold-s", "3", "-o", str(rec)]) == 0
+    lines = rec.read_text().splitlines()
+    header = next(i for i, ln in enumerate(lines) if ln.startswith("time_s"))
+    cols = lines[header].split(",")
+    for i in range(header + 1, len(lines)):
+        cells = lines[i].split(",")
+        for name in ("mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm"):
+            j = cols.index(name)
+            if cells[j]:
+                cells[j] = f"{float(cells[j]) * 1000:.4f}"
+        lines[i] = ",".join(cells)
+    rec.write_text("\n".join(lines) + "\n")
+    with caplog.at_level("WARNING"):
+        assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(tmp_path / "g.json")]) == 0
+    assert "if these are grams, divide mass_kg by 1000" in caplog.text

@@ -45,3 +45,15 @@ def test_an_r_rod_beyond_the_papers_rods_is_remarked(tmp_path, capsys):
     assert "beyond the paper's measured rods" in capsys.readouterr().err
     _range2("1.23:2.30", "r-prior-composite")
     assert capsys.readouterr().err == ""
+
+
+def test_info_names_a_rod_softer_than_the_papers(tmp_path, capsys):
+    """The contract's example tube (cfrp 25 x 2) gives a c_rod 3.5x steel 4#'s with no hint (a paper trial)."""
+    design = tmp_path / "soft.rod.toml"
+    design.write_text('format = "rodlab.rod/1"\nname = "soft"\nL1_mm = 300.0\nL2_mm = 450.0\ngamma_deg = 90.0\n'
+                      '[tube]\nmaterial = "cfrp"\nouter_diameter_mm = 25.0\nwall_mm = 2.0\n'
+                      '[ball]\nmaterial = "alumina"\ndiameter_mm = 30.0\n')
+    assert main(["info", str(design)]) == 0
+    assert "softer than every rod the paper measured" in capsys.readouterr().out
+    assert main(["info", "rod6"]) == 0
+    assert "softer than every rod" not in capsys.readouterr().out

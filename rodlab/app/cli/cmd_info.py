@@ -10,6 +10,7 @@ from ...core.calc import calc_rod_compliance
 from ...core.compliance import DEFAULT_CONTACT_FORCE_N
 from ...core.design_io import resolve_design
 from ...core.massprops import mass_properties, part_mass_properties
+from ...core.units import PAPER_C_ROD_UM_RANGE
 from .rodargs import design_help
 
 __all__ = ["register"]
@@ -66,6 +67,17 @@ def cmd_info(args: argparse.Namespace) -> int:
     print(f"  c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (sum of C_g + sum of C_F x |F|, F the paper's contact force "
           f"[1.10, 1.25, 1.05] N: |F| = {np.linalg.norm(DEFAULT_CONTACT_FORCE_N):.2f} N; closed form)")
     from rodlab.fea import closed_form_notes
-    for note in closed_form_notes(design, comp):
+    for note in closed_form_notes(design, comp) + _c_rod_notes(comp.c_rod_um):
         print(f"  note: {note}")
     return 0
+
+
+def _c_rod_notes(c_rod_um: float) -> list[str]:
+    """A c_rod beyond the paper's measured rods (57.9 um carbon 1# to 1306.2 um steel 6#): named, with what makes a
+    rod that soft (a paper trial: the contract's example tube, `cfrp` 25 x 2, gives 1521 um, 3.5x steel 4#)."""
+    lo, hi = PAPER_C_ROD_UM_RANGE
+    if c_rod_um <= hi:
+        return []
+    return [f"c_rod {c_rod_um:.0f} um is softer than every rod the paper measured ({lo:g} um carbon 1# to {hi:g} um steel "
+            f"6#): check the tube's size and material (a carbon laminate's E and G: docs/formats.md); `rodlab study` "
+            f"predicts what such a rod gives on a robot"]

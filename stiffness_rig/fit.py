@@ -16,7 +16,7 @@ from rodlab import __version__
 from rodlab.core.compliance import RodCompliance, r_mn as eq20_r_mn, r_rod as eq21_r_rod
 from rodlab.core.enums import LoadAxis, Method, Phase
 from rodlab.core.fileio import sha256_file
-from rodlab.core.units import G0, PAPER_R_ROD
+from rodlab.core.units import G0
 
 from .completion import complete_c_f
 from .errors import RigError
@@ -24,6 +24,7 @@ from .fit_checks import (creep_warnings, dead_load_warnings, gauge_scale_problem
                          load_drift_warnings, load_scale_problems, reciprocity_problems)
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
+from .r_rod_checks import PLAUSIBLE_R_ROD, r_rod_caution, r_rod_note
 from .recording import RigRecording
 
 __all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "r_rod_note", "PLAUSIBLE_R_ROD",
@@ -196,44 +197,11 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     return fit
 
 
-#: r_rod a rod can have against its own simulation (the paper's: 1.01-2.30); beyond it, a units slip is likelier
-PLAUSIBLE_R_ROD = (0.1, 10.0)
-
-
 def _check_plausible_r_rod(fit: "RigFit", rec: RigRecording, sim) -> None:
     """An r_rod no rod has against its own simulation makes the fit unusable (:func:`r_rod_caution`)."""
     caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod)
     if caution:
         fit.success, fit.message = False, caution + "; nothing was written"
-
-
-def r_rod_caution(r_rod: float, recording_rod: str | None, sim_rod: str) -> str | None:
-    """What to check when ``r_rod`` is beyond any rod against its own simulation (:data:`PLAUSIBLE_R_ROD`): a
-    mass in g, readings in um, another rod's file; None when it is plausible."""
-    lo, hi = PLAUSIBLE_R_ROD
-    if lo <= r_rod <= hi:
-        return None
-    said = f" (the recording says rod {recording_rod!r})" if recording_rod else ""
-    return (f"r_rod = {r_rod:.3g}: the rod is {r_rod:.3g} x as compliant as the simulation of rod {sim_rod!r}, beyond "
-            f"any rod ({lo:g}-{hi:g}; the paper's 1.01-2.30). Check the recording's units (mass_kg in kg, not g; "
-            f"disp_*_mm in mm, not um) and that the simulation is this rod's{said}")
-
-
-def r_rod_note(r_rod: float, method: str) -> str | None:
-    """What an r_rod within :data:`PLAUSIBLE_R_ROD` but outside the paper's measured rods (1.01-2.30,
-    :data:`~rodlab.core.units.PAPER_R_ROD`) says, against a simulation of ``method``; None within them (a paper
-    trial: r_rod 0.80 and 3.50 had passed without a remark)."""
-    lo, hi = PAPER_R_ROD
-    if lo - 0.05 <= r_rod <= hi + 0.05:
-        return None
-    if r_rod < lo:
-        stiffer = (" (the closed form is already 6-17 % stiffer than the solid FEA: a rod stiffer than it is rarer "
-                   "still)" if method == "calc" else "")
-        return (f"r_rod {r_rod:.2f}: the rod is stiffer than its simulation{stiffer}, and no rod the paper measured is "
-                f"(1.01-2.30): check the simulation's materials and sizes against the rod, the masses hung and the "
-                f"gauges' gain before using the file")
-    return (f"r_rod {r_rod:.2f}: beyond the paper's softest rod (carbon 3#, 2.30): bonds, clamps or creep may carry "
-            f"part of it (`rodlab diagnose --rig` locates a joint); the study's rod slip was fitted within 1.01-2.30")
 
 
 def noise_text(noise_mm: float) -> str:

@@ -149,3 +149,11 @@ def test_masses_in_grams_with_readings_in_um_are_named(tmp_path, capsys, caplog)
     with caplog.at_level("WARNING"):
         assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(tmp_path / "g.json")]) == 0
     assert "if these are grams, divide mass_kg by 1000" in caplog.text
+
+
+def test_did_you_mean_keeps_a_typos_first_letter_or_a_word_of_the_name():
+    from rodlab.core.errors import did_you_mean
+    cols = ["time_s", "step", "repeat", "phase", "load_axis", "mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm"]
+    assert did_you_mean("Achse", cols) == ""                     # German for axis: not `phase`
+    assert "`load_axis`" in did_you_mean("axis", cols)           # a word of the name
+    assert "`mass_kg`" in did_you_mean("mas_kg", cols)           # a typo

@@ -18,9 +18,9 @@ from scipy.special import chdtrc
 from rodlab.fea.frame import frame_compliance
 from ..core.calc import calc_rod_compliance
 from ..core.design import RodDesign
+from ..core.design_io import design_to_dict
 from ..core.errors import LocatedError, DesignError, RodlabError
 from ..core.massprops import mass_properties
-from ..core.design_io import design_to_dict
 from ..core.sensitivity import (METHOD_ACCURACY, MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES, scale_moduli,
                                 with_values)
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
@@ -127,7 +127,8 @@ def key_value(design: RodDesign, key: str) -> float:
 
 
 def design_with(design: RodDesign, keys, x) -> RodDesign:
-    """``design`` with the freed ``keys`` at ``x`` (:data:`MODULI` scales every modulus first)."""
+    """``design`` with the freed ``keys`` at ``x``: :data:`MODULI` scales every modulus and joint first, a key freed
+    beside it (a material's G for a torsion on top of a uniform scale) then takes its own fitted value."""
     values = dict(zip(keys, (float(v) for v in x)))
     factor = values.pop(MODULI, None)
     base = design if factor is None else scale_moduli(design, factor)
@@ -135,28 +136,31 @@ def design_with(design: RodDesign, keys, x) -> RodDesign:
 
 
 def as_built_values(design: RodDesign, keys, x) -> dict:
-    """The dotted keys a file of the rod as built sets: :data:`MODULI` spelt out as every material's moduli."""
+    """The dotted keys a file of the rod as built sets: :data:`MODULI` spelt out as every material's moduli and
+    every declared joint's compliance (a key fitted on its own keeps its fitted value)."""
     values = dict(zip(keys, (float(v) for v in x)))
     factor = values.pop(MODULI, None)
-    if factor is not None:
-        for name, table in design_to_dict(design)["materials"].items():
-            values.update({f"materials.{name}.{k}": float(table[k]) * factor for k in MODULUS_KEYS
-                           if table.get(k) is not None})
-    return values
+    if factor is None:
+        return values
+    scaled = {}
+    data = design_to_dict(design)
+    for name, table in data["materials"].items():
+        scaled.update({f"materials.{name}.{k}": float(table[k]) * factor for k in MODULUS_KEYS
+                       if table.get(k) is not None})
+    for place, spring in (data.get("joints") or {}).items():
+        scaled.update({f"joints.{place}.{k}": float(v) / factor for k, v in spring.items()
+                       if k.startswith("s_") and v})
+    return {**scaled, **values}
 
 
 def _check_keys(design: RodDesign, keys: tuple) -> None:
-    """Refuse keys that cannot be fitted: no key, a key without a positive value, moduli freed twice."""
+    """Refuse keys that cannot be fitted: no key, a key without a positive value."""
     if not keys:
         raise LocatedError("no key to fit: give --free KEY[,KEY...]", key="free")
     for k in keys:
         if not _is_joint(k) and not key_value(design, k) > 0:
             raise LocatedError(f"--free {k}: its design value is {key_value(design, k):g}; only a key with a "
                               "positive value (a size, a modulus) can be fitted", key="free")
-    twice = [k for k in keys if k.startswith("materials.") and k.rpartition(".")[2] in MODULUS_KEYS]
-    if MODULI in keys and twice:
-        raise LocatedError(f"--free {MODULI} scales every modulus already; {', '.join(twice)} would be fitted twice: "
-                          f"give {MODULI} or the materials' moduli, not both", key="free")
 
 
 def _priors(design: RodDesign, keys) -> tuple[np.ndarray, np.ndarray]:

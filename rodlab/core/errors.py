@@ -77,17 +77,17 @@ def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
     folded = [c for c in choices if c.casefold() == word.casefold()]
     # a key given without its unit suffix (``L1`` for ``L1_mm``, ``hold`` for ``hold_s``)
     stem = [c for c in choices if c.casefold().startswith(word.casefold() + "_")] if word else []
-    close = folded or (stem if len(stem) == 1 else []) or [c for c in difflib.get_close_matches(word, choices, n=1,
-                                                                                                cutoff=0.6)
-                                                            if _alike(word, c)]
+    close = (folded or (stem if len(stem) == 1 else [])
+             or [c for c in difflib.get_close_matches(word, choices, n=3, cutoff=0.6) if _alike(word, c)])
     return f" Did you mean `{close[0]}`?" if close else ""
 
 
 def _alike(word: str, choice: str) -> bool:
-    """A typo keeps the first letter; a word that does not is suggested only when much alike (a trial's German
-    ``Achse`` had been offered ``phase``)."""
-    same_start = word[:1].casefold() == choice[:1].casefold()
-    return same_start or difflib.SequenceMatcher(None, word.casefold(), choice.casefold()).ratio() >= 0.75
+    """A typo keeps the first letter, a shortened name one of the words (``axis`` for ``load_axis``); another word
+    is suggested only when much alike (a trial's German ``Achse`` had been offered ``phase``)."""
+    w, c = word.casefold(), choice.casefold()
+    same_start = w[:1] == c[:1]
+    return same_start or w in c.split("_") or difflib.SequenceMatcher(None, w, c).ratio() >= 0.75
 
 
 class RodlabError(ValueError):

@@ -121,8 +121,9 @@ MODULI = "moduli"
 
 def scale_moduli(design: RodDesign, factor: float) -> RodDesign:
     """``design`` with every modulus (:data:`MODULUS_KEYS`) of every material it uses — tubes, bend, rings, holders,
-    ball — times ``factor`` [-]: the rod uniformly stiffer (``factor`` > 1) or softer, each compliance entry of the
-    elastic models divided by ``factor`` (the paper's r_rod = 1 / factor where the rod differs that way)."""
+    ball — times ``factor`` [-] and every declared joint's compliance divided by it: the rod uniformly stiffer
+    (``factor`` > 1) or softer, each compliance entry of the elastic models divided by ``factor`` (the paper's
+    r_rod = 1 / factor where the rod differs that way)."""
     if not np.isfinite(factor) or factor <= 0:
         raise DesignError(f"a modulus factor must be a positive number, got {factor!r}", key="moduli")
     data = design_to_dict(design)
@@ -130,6 +131,10 @@ def scale_moduli(design: RodDesign, factor: float) -> RodDesign:
         for key in MODULUS_KEYS:
             if table.get(key) is not None:
                 table[key] = float(table[key]) * float(factor)
+    for spring in (data.get("joints") or {}).values():
+        for key, value in spring.items():
+            if key.startswith("s_") and value is not None:
+                spring[key] = float(value) / float(factor)
     return design_from_dict(data)
 
 

@@ -7,9 +7,7 @@ import sys
 from rodlab.calibrate import read_fixture
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS
 from rodlab.calibrate.points import identify_points, stated_noise_mm
-from rodlab.stiffness_rig import NoLoadResponse, RigError, fit_recording, read_recording
-from rodlab.stiffness_rig.fit import r_rod_caution
-from rodlab.stiffness_rig.fit_checks import gauge_scale_problems, load_scale_problems, reciprocity_problems
+from rodlab.stiffness_rig import read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS
 
 from ...core.compliance import write_compliance
@@ -23,6 +21,7 @@ from .deviceargs import (add_device_option, campaign_from_args, points_from_args
                          warn_flagged_fixture)
 from .reporting import add_report_option, default_folder, png_folder, write_command_report
 from .columnsargs import add_columns_checked, screen_joint_columns
+from .recording_checks import check_recording
 from .robotargs import add_robot_options, robot_from_args, robot_help
 from .rodargs import compliance_arg, warn_rod_mismatch
 
@@ -130,7 +129,7 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
     design = resolve_design(args.design) if _rig_design(args) else None
     rec = read_recording(args.rig)
     warn_rod_mismatch(rec.rod, sim.rod, args.rig)
-    _check_r_rod(rec, sim, args)
+    check_recording(rec, sim, getattr(args, "units_checked", False))
     from ..diagnose import diagnose_rig
     diag, model = diagnose_rig(rec, sim, design, accuracy=args.sim_accuracy)
     print(diag.summary())
@@ -147,35 +146,6 @@ def _diagnose_rig(args: argparse.Namespace, written: list):
         written.append(write_compliance(corrected, args.export))
         print(f"wrote {written[-1]}")
     return diag
-
-
-def _check_r_rod(rec, sim, args) -> None:
-    """A recording without a load response is refused with its cause, and so is an r_rod no rod of this kind has
-    against its own simulation (a units slip or another rod's file: the diagnosis would fit a compliance scale of
-    0.001 and call the recording explained) or one gauge reading a units factor off the others against the
-    simulation (a gauge in inches: diagnosed as a compliance scale of 0.26 and a non-linearity along x) or a load
-    cell whose readings do not grow as the hung weight (:func:`~stiffness_rig.fit_checks.load_scale_problems`) or a
-    gauge reversed in one series (:func:`~stiffness_rig.fit_checks.reciprocity_problems`);
-    ``--units-checked`` warns instead; any other fit problem is left to the diagnosis, which says what it finds."""
-    try:
-        fit = fit_recording(rec, sim)
-    except NoLoadResponse:
-        raise
-    except RigError:
-        return
-    caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
-    caution = caution or "; ".join(gauge_scale_problems(fit.C_F_meas, sim.C_F)) or None
-    # a load cell in another unit, wired the other way or out of the load path: the diagnosis would name a
-    # compliance scale of that factor (a cell in lbf: r = 4.33, "decisive")
-    caution = caution or "; ".join(load_scale_problems(fit.load)[0]) or None
-    # a gauge reversed in one series: the diagnosis would fit a crosstalk at its bound, a tilted load line and a
-    # joint (a technician trial), where `rig fit` names the gauge
-    caution = caution or "; ".join(reciprocity_problems(fit.C_F_meas, fit.C_F_se)[0]) or None
-    if caution and not getattr(args, "units_checked", False):
-        raise RigError(f"{caution}; nothing was diagnosed (if both files are right, give --units-checked)",
-                       path=rec.path)
-    if caution:
-        print(f"warning: {caution} (--units-checked: diagnosed as they are)", file=sys.stderr)
 
 
 def _diagnose_campaign(args: argparse.Namespace, written: list):

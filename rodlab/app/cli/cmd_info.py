@@ -73,11 +73,12 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def _c_rod_notes(c_rod_um: float) -> list[str]:
-    """A c_rod beyond the paper's measured rods (57.9 um carbon 1# to 1306.2 um steel 6#): named, with what makes a
-    rod that soft (a paper trial: the contract's example tube, `cfrp` 25 x 2, gives 1521 um, 3.5x steel 4#)."""
+    """A c_rod (here the closed form's) beyond the paper's measured rods (57.9 um carbon 1# to 1306.2 um steel 6#):
+    named, with what makes a rod that soft (a paper trial: the contract's example tube, `cfrp` 25 x 2, gives
+    1500-1700 um)."""
     lo, hi = PAPER_C_ROD_UM_RANGE
     if c_rod_um <= hi:
         return []
-    return [f"c_rod {c_rod_um:.0f} um is softer than every rod the paper measured ({lo:g} um carbon 1# to {hi:g} um steel "
-            f"6#): check the tube's size and material (a carbon laminate's E and G: docs/formats.md); `rodlab study` "
-            f"predicts what such a rod gives on a robot"]
+    return [f"c_rod {c_rod_um:.0f} um (closed form) is softer than every rod the paper measured ({lo:g} um carbon 1# "
+            f"to {hi:g} um steel 6#): check the tube's size and material (a carbon laminate's E and G: "
+            "docs/formats.md); `rodlab study` predicts what such a rod gives on a robot"]

@@ -183,7 +183,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print("  r_mn (Eq. 20, measured / simulated per entry; - not measured):")
     for m, row in enumerate(comp.r_mn):
         print("    " + " ".join(f"{v:8.4f}" if np.isfinite(v) else f"{'-':>8}" for v in row) + f"   {'xyz'[m]}")
-    guessed = [f"c{m + 1}{n + 1}" for m, n in STRUCTURAL_ENTRIES if not np.isfinite(comp.r_mn[m, n])]
+    guessed = [f"c{m + 1}{n + 1}" for m, n in STRUCTURAL_ENTRIES
+               if comp.C_F_sigma is not None and not np.isfinite(comp.C_F_sigma[m, n])]
     if guessed:
         print(f"  not measured: {', '.join(guessed)} (the recording has no series that loads it): the file holds r_rod x "
               "simulated there, with no uncertainty; `rodlab update` leaves it out")

@@ -12,12 +12,13 @@ from rodlab.stiffness_rig import read_recording
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.design_io import resolve_design
-from ...core.errors import DesignError, RodlabError, VerdictError
+from ...core.errors import DesignError, RodlabError, VerdictError, did_you_mean
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
-from ...core.sensitivity import MODULI, MODULUS_KEYS
+from ...core.sensitivity import MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES
 from ...core.tolerances import design_value
 from ...core.units import PAPER_R_ROD
+from .recording_checks import check_recording
 from .rodargs import warn_rod_mismatch
 
 __all__ = ["register"]
@@ -94,6 +95,7 @@ def _measured(path: str, design, keys, model: str):
                                         {"model": model})
         rec = read_recording(path)
         other_rod = warn_rod_mismatch(rec.rod, design.name, path, "--measured", "the design")
+        check_recording(rec, sim, override=None)
         diag, fitted = diagnose_rig(rec, sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
         unfitted = [f for f in diag.findings if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
@@ -118,7 +120,6 @@ def _measured_entries(comp: RodCompliance, path: str) -> tuple:
     (``rig fit``'s), only those with one: an entry without (a series the recording lacks, completed as r_rod x the
     simulation) was never measured and is left out, with a note (a technician trial: an interrupted run's c11 had
     been fitted as if measured)."""
-    from ...core.sensitivity import STRUCTURAL_ENTRIES
     E = [e for e in STRUCTURAL_ENTRIES if abs(comp.C_F[e]) > 1e-9 * np.abs(comp.C_F).max()]
     if comp.C_F_sigma is None:
         return tuple(E)
@@ -213,8 +214,7 @@ def cmd_update(args: argparse.Namespace) -> int:
                           f"{Path(design.source).name.replace('.rod.toml', '')}.asbuilt.rod.toml), so that the design "
                           "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
-        if key != MODULI:
-            design_value(design, key)
+        _check_key(design, key)
     measured, causes = _measured(args.measured, design, keys, args.model)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
@@ -231,6 +231,20 @@ def cmd_update(args: argparse.Namespace) -> int:
     out = write_edited_design(text, design, as_built_values(design, res.keys, res.x), args.output, header)
     print(f"wrote {out}")
     return 0
+
+
+def _check_key(design, key: str) -> None:
+    """A key of the design, or :data:`~rodlab.core.sensitivity.MODULI`; a misspelt ``moduli`` is told so."""
+    if key == MODULI:
+        return
+    try:
+        design_value(design, key)
+    except DesignError as e:
+        hint = did_you_mean(key, [MODULI])
+        if hint:
+            raise RodlabError(f"--free {key}: no such key of design {design.name!r}.{hint} (every modulus of the rod "
+                              "by one factor)") from e
+        raise
 
 
 def _uniformly(design, measured, res, model: str):

@@ -114,8 +114,9 @@ def _on_refined_linear(library, ls, S: tuple, coef, rss: float, rf: _Refit, pass
     built on the compliance fitted freely before any of them, which a tare or friction biases (the loaded holds
     off the unloaded ones: a technician trial, tare 0.111 kg [0.110, 0.113] for 0.120, friction 5 % high): each
     pass refits the linear part to the readings less the chosen terms' change, rebuilds those terms on it (the
-    same effect, place and settings) and refits their coefficients; the selection stands. Returns (library, its
-    :class:`SubsetLS`, coef, rss)."""
+    same effect, place, settings and physics) and refits their coefficients; the selection stands. A term with no
+    such twin (a creep whose time constant was refined off the grid, a term outside the vocabulary) keeps the
+    columns it was selected with. Returns (library, its :class:`SubsetLS`, coef, rss)."""
     for _ in range(passes):
         chosen = [library[j] for j in S]
         lin = fit_linear(rf.data, rf.entries, rf.L, rf.data.y - rf.prep.fitted_change(chosen, coef), rf.sigma,

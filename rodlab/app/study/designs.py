@@ -98,9 +98,13 @@ def _candidate(base, L1, L2, mat, tube) -> Candidate:
 
 def list_candidates(designs: list[RodDesign]) -> list[Candidate]:
     """One candidate per design (e.g. the six paper rods), labelled by its name; designs that share a name (a rod
-    and its as-built design from ``rodlab update``, a paper trial) by name and file."""
+    and its as-built design from ``rodlab update``, a paper trial) by name and file, and by their place in the list
+    where even that repeats."""
     twice = {n for n, k in Counter(d.name for d in designs).items() if k > 1}
-    return [Candidate(_label(d, d.name in twice), d.L1_mm, d.L2_mm, *_describe(d), d) for d in designs]
+    labels = [_label(d, d.name in twice) for d in designs]
+    repeated = {lb for lb, k in Counter(labels).items() if k > 1}
+    labels = [f"{lb} #{i + 1}" if lb in repeated else lb for i, lb in enumerate(labels)]
+    return [Candidate(lb, d.L1_mm, d.L2_mm, *_describe(d), d) for lb, d in zip(labels, designs)]
 
 
 def _label(design: RodDesign, shared: bool) -> str:
@@ -110,14 +114,20 @@ def _label(design: RodDesign, shared: bool) -> str:
 
 
 def is_as_built(design: RodDesign) -> bool:
-    """Whether ``design``'s file was written by ``rodlab update`` from a measurement (its first line)."""
+    """Whether ``design``'s file was written by ``rodlab update`` from a measurement: its header line among the
+    comment lines that open the file (a user's comment above it is allowed)."""
     if not design.source:
         return False
     try:
         with open(design.source, encoding="utf-8", errors="replace") as f:
-            return f.readline().startswith(AS_BUILT_HEADER)
+            for line in f:
+                if line.startswith(AS_BUILT_HEADER):
+                    return True
+                if line.strip() and not line.lstrip().startswith("#"):
+                    return False
     except OSError:
         return False
+    return False
 
 
 def r_prior_of(design: RodDesign, metal=R_PRIOR_METAL, composite=R_PRIOR_COMPOSITE) -> tuple[float, float]:

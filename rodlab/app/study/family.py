@@ -59,7 +59,7 @@ def _family_key(design: RodDesign) -> str:
     """What a family's members share: everything but the name, L1 and L2 (as :meth:`~fea.joints.JointFit.
     check_member` asks); a rod as built (other moduli under the same material's name, a paper trial) is a family
     of its own."""
-    data = {k: v for k, v in design_to_dict(design).items() if k not in ("name", "rod", "L1_mm", "L2_mm")}
+    data = {k: v for k, v in design_to_dict(design).items() if k not in ("format", "name", "L1_mm", "L2_mm")}
     return json.dumps(data, sort_keys=True, default=str)
 
 

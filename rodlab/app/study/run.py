@@ -98,7 +98,8 @@ def cache_key(cand: Candidate, robot, fixture, spec: StudySpec, joints) -> str:
     blob = {"design": design_to_dict(cand.design) if cand.design else cand.invalid, "label": cand.label,
             "robot": repr(robot), "fixture": {str(k): list(map(float, v)) for k, v in fixture.poses.items()},
             "force": list(map(float, fixture.force_D_N)), "spec": repr(spec), "joints": joints_identity(joints),
-            "v": __version__, "cache": CACHE_FORMAT}
+            "v": __version__, "cache": CACHE_FORMAT,     # the r_rod prior: an as-built design's comes from its file
+            "r_prior": (r_prior_of(cand.design, spec.r_prior_metal, spec.r_prior_composite) if cand.design else None)}
     return hashlib.sha256(json.dumps(blob, sort_keys=True, default=str).encode()).hexdigest()[:20]
 
 

@@ -219,17 +219,8 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
         try:
             session_options()
             gmsh.model.add(f"rod_{design.name}")
-            if solids is None:
-                solids = add_part_volumes(design, half)
-                part_vols = _fragment(solids)
-            else:
-                part_vols = _import_parts(solids, tmp)
-            _physical_groups(design, solids, part_vols, half)
-            if grading is not None:
-                graded = sorted({v for p in GRADED_PARTS for v in part_vols.get(p, [])})
-                _grading_field(design, grading[0] * h, h, grading[1], graded, part_vols.get(Part.BEND, []),
-                               grading[2] * h)
-            _mesh_options(h, order, grading)
+            solids, part_vols = _model(design, solids, half, tmp)
+            _size_and_order(design, part_vols, h, order, grading)
             t0 = time.perf_counter()
             on_linear = None if on_topology is None else lambda: _hand_over(on_topology, solids, part_vols)
             high_order = generate_mesh(order, on_linear)
@@ -237,13 +228,40 @@ def mesh_rod(design: RodDesign, size_mm: float | None = None, order: int = 2,
             node_tags, coords, _ = gmsh.model.mesh.getNodes()
             conn, part_idx, qual = elements(solids, part_vols, order)
             if msh_path is not None:
-                out = os.path.join(tmp, "rod.msh")
-                gmsh.write(out)
-                atomic_write_bytes(msh_path, Path(out).read_bytes())
+                _write_msh(msh_path, tmp)
         finally:
             gmsh.finalize()
     return _to_skfem(design, solids, node_tags, coords.reshape(-1, 3), conn, part_idx, qual, h, order, msh_path, half,
                      high_order)
+
+
+def _model(design: RodDesign, solids, half: bool, tmp: str) -> tuple[dict, dict]:
+    """The parts in the current gmsh model, fragmented into one conforming model with a physical group each: built in
+    gmsh's OCC kernel (``solids`` None) or imported from build123d's; (solids, {part: volume tags})."""
+    if solids is None:
+        solids = add_part_volumes(design, half)
+        part_vols = _fragment(solids)
+    else:
+        part_vols = _import_parts(solids, tmp)
+    _physical_groups(design, solids, part_vols, half)
+    return solids, part_vols
+
+
+def _size_and_order(design: RodDesign, part_vols: dict, h: float, order: int, grading) -> None:
+    """The element size (graded in the tubes when ``grading`` is given), order and algorithms."""
+    if grading is not None:
+        graded = sorted({v for p in GRADED_PARTS for v in part_vols.get(p, [])})
+        _grading_field(design, grading[0] * h, h, grading[1], graded, part_vols.get(Part.BEND, []), grading[2] * h)
+    _mesh_options(h, order, grading)
+
+
+def _write_msh(msh_path, tmp: str) -> None:
+    """The current mesh as gmsh 4.1 at ``msh_path``, atomically."""
+    import gmsh
+
+    out = os.path.join(tmp, "rod.msh")
+    gmsh.write(out)
+    atomic_write_bytes(msh_path, Path(out).read_bytes())
 
 
 def _hand_over(on_topology: Callable[[LinearTopology], None], solids: dict, part_vols: dict) -> None:

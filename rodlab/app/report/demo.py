@@ -47,66 +47,92 @@ def render_run(run_dir) -> str:
     run = Path(run_dir)
     s = read_run(run)
     st, files = s["stages"], s.get("files", {})
-    d = s["design"]
-    parts = [f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab run: rod {html.escape(d['name'])}"
-             f"</title><style>{CSS}</style></head><body>",
-             f"<h1>rodlab run: rod {html.escape(d['name'])} on a TX90</h1>",
-             "<p class=note>Rod 1# of Wan et al. (2023) from the built-in design; a simulated stiffness rig and a "
-             "simulated MultiCal campaign stand in for the hardware. Stage times: "
-             + ", ".join(f"{k} {v:.1f} s" for k, v in s.get("timings_s", {}).items()) + ".</p>",
-             conclusion_html(st), terms_html()]
-    parts.append("<h2>1. Design</h2><table><tr><th>quantity</th><th>value</th></tr>"
-                 f"<tr><td>L1 / L2 / gamma</td><td>{d['L1_mm']:g} mm / {d['L2_mm']:g} mm / {d['gamma_deg']:g} deg</td></tr>"
-                 f"<tr><td>tubes</td><td>{html.escape(d['pipe_I']['material'])} {d['pipe_I']['outer_diameter_mm']:g} x "
-                 f"{d['pipe_I']['wall_mm']:g} mm</td></tr><tr><td>bend</td><td>{html.escape(d['bend']['material'])}, "
-                 f"R {d['bend']['radius_mm']:g} mm</td></tr><tr><td>mass</td><td>{st['design']['mass_kg'] * 1e3:.1f} g</td></tr>"
-                 "</table>")
+    parts = [_head(s), _design_section(s["design"], st), _cad_section(run, st, files), _fea_section(run, st, files),
+             _fea_views(run, files, st["fea"]), _rig_section(run, st, files), _diagnosis_section(run, st, files),
+             _calibration_section(run, st, files), _sweep_section(run, st, files)]
+    if "study" in st:
+        parts.append(_study_section(run, st["study"], files, study_rod_note(st)))
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def _head(s: dict) -> str:
+    d, st = s["design"], s["stages"]
+    return (f"<!doctype html><html lang=en><head><meta charset=utf-8><title>rodlab run: rod {html.escape(d['name'])}"
+            f"</title><style>{CSS}</style></head><body>\n"
+            f"<h1>rodlab run: rod {html.escape(d['name'])} on a TX90</h1>\n"
+            "<p class=note>Rod 1# of Wan et al. (2023) from the built-in design; a simulated stiffness rig and a "
+            "simulated MultiCal campaign stand in for the hardware. Stage times: "
+            + ", ".join(f"{k} {v:.1f} s" for k, v in s.get("timings_s", {}).items()) + ".</p>\n"
+            + conclusion_html(st) + "\n" + terms_html())
+
+
+def _design_section(d: dict, st: dict) -> str:
+    return ("<h2>1. Design</h2><table><tr><th>quantity</th><th>value</th></tr>"
+            f"<tr><td>L1 / L2 / gamma</td><td>{d['L1_mm']:g} mm / {d['L2_mm']:g} mm / {d['gamma_deg']:g} deg</td></tr>"
+            f"<tr><td>tubes</td><td>{html.escape(d['pipe_I']['material'])} {d['pipe_I']['outer_diameter_mm']:g} x "
+            f"{d['pipe_I']['wall_mm']:g} mm</td></tr><tr><td>bend</td><td>{html.escape(d['bend']['material'])}, "
+            f"R {d['bend']['radius_mm']:g} mm</td></tr><tr><td>mass</td><td>{st['design']['mass_kg'] * 1e3:.1f} g</td></tr>"
+            "</table>")
+
+
+def _cad_section(run: Path, st: dict, files: dict) -> str:
     views = files.get("cad_views", [])
-    parts.append("<h2>2. CAD</h2>" + (_cad_views(run, views) if views
-                                        else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>"))
+    return "<h2>2. CAD</h2>" + (_cad_views(run, views) if views
+                                else f"<p class=note>{html.escape(st['cad'].get('skipped', ''))}</p>")
+
+
+def _fea_section(run: Path, st: dict, files: dict) -> str:
     fe = st["fea"]
-    parts.append(f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid>"
-                 f"<div><b>C_F</b>: ball displacement per tip force {matrix_table(fe['C_F_mm_per_N'], 'um/N', 'force')}"
-                 f"</div><div><b>C_g</b>: ball displacement under the rod's own weight, per unit of gravity along each "
-                 f"axis {matrix_table(fe['C_g_mm_per_g0'], 'um per g0', 'gravity')}</div></div>"
-                 f"<p>c_rod (compliance index, Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: "
-                 f"{st['design']['c_rod_um_calc']:.1f} um). "
-                 "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
-                 + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
-                 " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
-    parts.append(_fea_views(run, files, fe))
+    return (f"<h2>3. Compliance ({html.escape(fe['model'])})</h2><div class=grid>"
+            f"<div><b>C_F</b>: ball displacement per tip force {matrix_table(fe['C_F_mm_per_N'], 'um/N', 'force')}"
+            f"</div><div><b>C_g</b>: ball displacement under the rod's own weight, per unit of gravity along each "
+            f"axis {matrix_table(fe['C_g_mm_per_g0'], 'um per g0', 'gravity')}</div></div>"
+            f"<p>c_rod (compliance index, Eq. 23) = {fe['c_rod_um']:.1f} um (closed form: "
+            f"{st['design']['c_rod_um_calc']:.1f} um). "
+            "Closed form / FEA on the diagonal of C_F: " + ", ".join(f"{v:.3f}" for v in fe["calc_over_fea_diag"])
+            + " (the closed form misses shear, the bend's ovalisation and the sleeves' load transfer; verification"
+            " in docs/fea.md).</p>" + img_tag(run, files.get("fea_deformed"), "deformed shape"))
+
+
+def _rig_section(run: Path, st: dict, files: dict) -> str:
     ft = st["fit"]
-    parts.append(f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (measured / "
-                 f"simulated compliance, Eq. 21) = "
-                 f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))
+    return (f"<h2>4. Stiffness rig</h2><p>Recording with a concealed effect; fitted r_rod (measured / "
+            f"simulated compliance, Eq. 21) = "
+            f"{ft['r_rod']:.4f}, noise {ft['noise_um']:.2f} um per reading.</p>" + img_tag(run, files.get("fig8"), "Fig. 8"))
+
+
+def _diagnosis_section(run: Path, st: dict, files: dict) -> str:
     dg = st["diagnose"]
     rows = "".join(f"<tr><td>{html.escape(f['effect'])}</td><td>{html.escape(str(f['location'] or '-'))}</td><td>"
                    + html.escape(", ".join(f"{k} = {v:.4g}" for k, v in f["parameters"].items()
                                            if isinstance(v, (int, float)) and abs(v) > 1e-15))
                    + f"</td><td>{html.escape(_evidence(f))}</td><td>"
                    f"{html.escape(f['explanation'])}</td></tr>" for f in dg["findings"])
-    parts.append(f"<h2>5. Diagnosis</h2><p>Verdict <b>{html.escape(dg['verdict'])}</b>; noise {dg['noise_mm'] * 1e3:.2f} um; "
-                 f"rms {dg['rms_before_mm'] * 1e3:.2f} -> {dg['rms_after_mm'] * 1e3:.2f} um. The truth was "
-                 f"{html.escape(st['rig']['concealed_effect'])}; the corrected compliance differs from the true "
-                 f"C_F by at most {100 * dg['corrected_vs_true_max_rel']:.2f} % of its largest entry.</p>"
-                 "<table><tr><th>effect</th><th>location</th><th>parameters</th>"
-                 f"<th>what it explains</th><th>physics</th></tr>{rows}</table>"
-                 + img_tag(run, files.get("diagnosis"), "diagnosis") + _update_table(st))
+    return (f"<h2>5. Diagnosis</h2><p>Verdict <b>{html.escape(dg['verdict'])}</b>; noise {dg['noise_mm'] * 1e3:.2f} um; "
+            f"rms {dg['rms_before_mm'] * 1e3:.2f} -> {dg['rms_after_mm'] * 1e3:.2f} um. The truth was "
+            f"{html.escape(st['rig']['concealed_effect'])}; the corrected compliance differs from the true "
+            f"C_F by at most {100 * dg['corrected_vs_true_max_rel']:.2f} % of its largest entry.</p>"
+            "<table><tr><th>effect</th><th>location</th><th>parameters</th>"
+            f"<th>what it explains</th><th>physics</th></tr>{rows}</table>"
+            + img_tag(run, files.get("diagnosis"), "diagnosis") + _update_table(st))
+
+
+def _calibration_section(run: Path, st: dict, files: dict) -> str:
     t3 = st["calibrate"]["table3"]
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v['mean_mm']:.3f}</td><td>{v['max_mm']:.3f}</td>"
                    f"<td>{v['median_mm']:.3f}</td><td>{v['sd_mm']:.3f}</td></tr>" for k, v in t3.items())
-    parts.append("<h2>6. Calibration (the paper's Table 3 and Fig. 10)</h2>" + campaign_rod_note(st)
-                 + "<table><tr><th>method</th><th>Mean/[mm]</th>"
-                 f"<th>Max/[mm]</th><th>Median/[mm]</th><th>SD/[mm]</th></tr>{rows}</table>"
-                 + img_tag(run, files.get("fig10"), "Fig. 10"))
+    return ("<h2>6. Calibration (the paper's Table 3 and Fig. 10)</h2>" + campaign_rod_note(st)
+            + "<table><tr><th>method</th><th>Mean/[mm]</th>"
+            f"<th>Max/[mm]</th><th>Median/[mm]</th><th>SD/[mm]</th></tr>{rows}</table>"
+            + img_tag(run, files.get("fig10"), "Fig. 10"))
+
+
+def _sweep_section(run: Path, st: dict, files: dict) -> str:
     sw = st["sweep"]
-    parts.append(f"<h2>7. L1 / L2 sweep</h2><p>{sw['designs']} designs ({sw['ok']} valid); stiffest L1 = "
-                 f"{sw['stiffest']['L1_mm']:g} mm, L2 = {sw['stiffest']['L2_mm']:g} mm, c_rod "
-                 f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + img_tag(run, files.get("sweep"), "sweep heat maps"))
-    if "study" in st:
-        parts.append(_study_section(run, st["study"], files, study_rod_note(st)))
-    parts.append("</body></html>")
-    return "\n".join(parts)
+    return (f"<h2>7. L1 / L2 sweep</h2><p>{sw['designs']} designs ({sw['ok']} valid); stiffest L1 = "
+            f"{sw['stiffest']['L1_mm']:g} mm, L2 = {sw['stiffest']['L2_mm']:g} mm, c_rod "
+            f"{sw['stiffest']['c_rod_um']:.0f} um.</p>" + img_tag(run, files.get("sweep"), "sweep heat maps"))
 
 
 def _pct(share) -> str:

@@ -125,6 +125,12 @@ def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
 
 
+#: what an empty reading of a point needs (a device trial: "write a value" had been the advice for a sensor that
+#: lost the ball)
+EMPTY_CELL_FIX = ("a point without this reading (the sensor lost the ball, the instrument missed the target) cannot "
+                  "be used: measure the point again, or delete its row")
+
+
 def cell_number(cell, p, line: int, col: str) -> float:
     """A CSV cell as a finite number; :class:`CalibrationError` naming the file, line and column otherwise."""
     try:
@@ -132,6 +138,8 @@ def cell_number(cell, p, line: int, col: str) -> float:
     except (TypeError, ValueError):
         fix = decimal_comma_fix(cell) if isinstance(cell, str) else None
         tail = f": a decimal comma (a locale's export); {fix}" if fix else ""
+        if not tail and isinstance(cell, str) and not cell.strip():
+            tail = f": {EMPTY_CELL_FIX}" if col.endswith("_mm") else ""
         raise CalibrationError(f"expected a number, got {cell!r}{tail}", path=p, line=line, key=col) from None
     if not math.isfinite(v):
         raise CalibrationError(f"expected a finite number, got {cell!r}", path=p, line=line, key=col)
@@ -168,8 +176,8 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str], tex
     _check_joint_columns(header, allowed, p, i + 1)
     for h in header:
         if h not in allowed:
-            raise CalibrationError(f"unknown column {h!r}; expected {allowed}." + did_you_mean(h, allowed), path=p,
-                                   line=i + 1, key=h)
+            raise CalibrationError(f"unknown column {h!r}; expected {allowed}." + did_you_mean(h, allowed, units=True),
+                                   path=p, line=i + 1, key=h)
     for h in required:
         if h not in header:
             raise CalibrationError(f"missing column {h!r}", path=p, line=i + 1, key=h)
@@ -210,7 +218,10 @@ def _campaign_columns(p: Path, text: str) -> tuple:
     """x, y, z or the raw readings, whichever set the header has (exactly one)."""
     first = next((ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")), "")
     header = [h.strip() for h in next(csv.reader([first]))] if first else []
-    has_raw, has_xyz = any(c in header for c in RAW_COLUMNS), any(c in header for c in XYZ_COLUMNS)
+    has_xyz = any(c in header for c in XYZ_COLUMNS)
+    # raw readings in another unit (s1_um) are raw readings too: their unknown column is then told the conversion
+    has_raw = any(c in header for c in RAW_COLUMNS) or (not has_xyz and any(re.fullmatch(r"s[1-3]_[a-z]+", c)
+                                                                              for c in header))
     if has_raw and has_xyz:
         raise CalibrationError(f"give the ball centre ({', '.join(XYZ_COLUMNS)}) or the raw sensor readings "
                                f"({', '.join(RAW_COLUMNS)}), not both", path=p, key=RAW_COLUMNS[0])

@@ -212,7 +212,13 @@ def _check_convention(p: Path, sensors: list) -> None:
     if abs(A[1, 2]) > CONVENTION_TOL:
         raise CalibrationError(f"{{D}} has y in the plane of sensors 1 and 2: sensor 2's z must be 0, got "
                                f"{A[1, 2]:g}; express the axes in that frame", path=p, key="sensors[2].axis_D")
-    if np.linalg.det(A) <= 0 or np.linalg.cond(A) > MAX_CONDITION:
-        raise CalibrationError(f"the three sensor axes are (nearly) coplanar or left-handed (det {np.linalg.det(A):.3g},"
-                               f" condition {np.linalg.cond(A):.3g}; expected det > 0, condition <= {MAX_CONDITION:g})",
-                               path=p, key="sensors")
+    if np.linalg.cond(A) > MAX_CONDITION:
+        raise CalibrationError(f"the three sensor axes are (nearly) coplanar (condition {np.linalg.cond(A):.3g}; expected "
+                               f"<= {MAX_CONDITION:g}): each sensor's axis_D is the direction its reading grows in "
+                               "{D}; give the three as measured", path=p, key="sensors")
+    if np.linalg.det(A) <= 0:             # a device trial: a reversed sensor 3 written as -z had no fix
+        raise CalibrationError(f"the three sensor axes are left-handed (det {np.linalg.det(A):.3g}; expected > 0): "
+                               "sensor 3 must point to the side of +z that sensors 1 and 2 make right-handed. A sensor "
+                               "mounted the other way round (its reading falling as the ball moves along its axis) is "
+                               "not a device axis: keep axis_D as designed and turn the sensor round, or write its "
+                               "readings as 2 x zero_mm - reading", path=p, key="sensors[3].axis_D")

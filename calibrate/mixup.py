@@ -18,7 +18,8 @@ class Mixup:
     rms_given_mm : the rms as the files were given [mm]; readings : the two reading columns (0-2: x_mm, y_mm, z_mm)
     exchanged, or the one reading column negated (a 1-tuple), or None; target_change : (the first data row of the
     second part (1-based), each part's registered nominal misfit [mm]) of instrument points whose target or tool
-    changed part-way through, or None."""
+    changed part-way through, or None; sensor : (1-based sensor, its zero [mm]) of raw device readings that read
+    reversed, or None."""
 
     joint: int | None
     positions: tuple | None
@@ -32,15 +33,16 @@ class Mixup:
     alternatives: tuple = ()
     readings: tuple | None = None
     target_change: tuple | None = None
+    sensor: tuple | None = None
 
     def __post_init__(self) -> None:
         kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
                  + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None)
-                 + (self.readings is not None) + (self.target_change is not None))
+                 + (self.readings is not None) + (self.target_change is not None) + (self.sensor is not None))
         if kinds != 1:
             raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
-                             "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns or "
-                             "fixture_radians")
+                             "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns, a "
+                             "reversed sensor or fixture_radians")
 
     @property
     def label(self) -> str:
@@ -48,6 +50,8 @@ class Mixup:
             return f"target changed at data row {self.target_change[0]}"
         if self.fixture_radians:
             return "fixture angles read as radians"
+        if self.sensor is not None:
+            return f"sensor {self.sensor[0]} reversed"
         if self.readings is not None and len(self.readings) == 1:
             return f"column {_READ[self.readings[0]]} negated"
         if self.readings is not None:
@@ -69,6 +73,8 @@ class Mixup:
             return f"q{self.columns[0]}, q{self.columns[1]}"
         if self.readings is not None:
             return ", ".join(_READ[k] for k in self.readings)
+        if self.sensor is not None:
+            return f"s{self.sensor[0]}_mm"
         if self.target_change is not None:
             return "x_mm, y_mm, z_mm"
         k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
@@ -97,6 +103,11 @@ class Mixup:
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
+        if self.sensor is not None:
+            k, zero = self.sensor
+            return (f"sensor {k}'s readings look reversed (the sensor mounted the other way round, or its channel "
+                    f"exported with the other sign): with s{k}_mm mirrored about its zero ({zero:g} mm) {fit}; turn "
+                    f"the sensor round, or write its readings as {2 * zero:g} - s{k}_mm")
         if self.readings is not None and len(self.readings) == 1:
             a = _READ[self.readings[0]]
             return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "

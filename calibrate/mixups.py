@@ -139,10 +139,10 @@ def _exchanged(q: np.ndarray, a: int, b: int) -> np.ndarray:
 
 def _reading_trials(camp, fit_readings: Callable) -> tuple:
     """(:class:`Mixup`, ``run(full)``) of each pair of the campaign's reading columns exchanged and of each column
-    negated (a mirrored reading frame: no clamping pose turns it into the device's); none for raw sensor readings
-    (a device file's axes are not the columns: their exchange is another mix-up)."""
+    negated (a mirrored reading frame: no clamping pose turns it into the device's); for raw sensor readings, each
+    sensor reversed (:func:`_sensor_trials`)."""
     if camp.raw:
-        return ()
+        return _sensor_trials(camp, fit_readings)
 
     def run(cols: tuple):
         x = np.array(camp.x_D_mm, float, copy=True)
@@ -153,6 +153,26 @@ def _reading_trials(camp, fit_readings: Callable) -> tuple:
         return lambda full: fit_readings(x, full)
     choices = [*itertools.combinations(range(3), 2), (0,), (1,), (2,)]
     return tuple((Mixup(None, None, 0.0, 0.0, readings=c), run(c)) for c in choices)
+
+
+def _sensor_trials(camp, fit_readings: Callable) -> tuple:
+    """(:class:`Mixup`, ``run(full)``) of each raw sensor reading reversed, mirrored about its zero (a device trial:
+    sensor 2 mounted the other way round had been called unexplained). The device's map ``s = A x + zero`` is
+    recovered from the campaign's readings and their converted ball centres (exact: the conversion is linear)."""
+    if camp.x_D_mm is None or camp.readings_mm is None or camp.n < 4:
+        return ()
+    M = np.column_stack([camp.x_D_mm, np.ones(camp.n)])
+    coef, *_ = np.linalg.lstsq(M, camp.readings_mm, rcond=None)
+    A, zero = coef[:3].T, coef[3]
+    if not abs(np.linalg.det(A)) > 1e-9:
+        return ()
+
+    def run(k: int):
+        d = camp.readings_mm - zero
+        d[:, k] = -d[:, k]
+        x = np.linalg.solve(A, d.T).T
+        return lambda full: fit_readings(x, full)
+    return tuple((Mixup(None, None, 0.0, 0.0, sensor=(k + 1, round(float(zero[k]), 4))), run(k)) for k in range(3))
 
 
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:

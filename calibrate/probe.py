@@ -31,6 +31,11 @@ __all__ = ["ProbeSet", "PositionFit", "FixtureFit", "read_probe", "fit_fixture",
 
 #: a position whose residuals' chi-square has a p-value below this is flagged
 FLAG_P = 1e-3
+#: the coarsest accuracy per coordinate a probing instrument states [mm] (a CMM's 0.001-0.005, a tracker's or an
+#: arm's 0.01-0.1): beyond, the number is in um
+MAX_ACCURACY_MM = 1.0
+#: the probe file's distances between features over the device file's: within these, the same unit and device
+DISTANCE_RATIO = (0.5, 2.0)
 PROBE_COLUMNS = ("position", "feature", "x_mm", "y_mm", "z_mm")
 
 
@@ -71,6 +76,10 @@ def read_probe(path) -> ProbeSet:
     acc = cell_number(val, p, k, "accuracy_mm")
     if not acc > 0:
         raise CalibrationError(f"expected an accuracy > 0 [mm], got {val!r}", path=p, line=k, key="accuracy_mm")
+    if acc > MAX_ACCURACY_MM:            # a device trial: 5 (meant um) had made every pose uncertain by 10-17 mm
+        raise CalibrationError(f"an accuracy of {acc:g} mm per coordinate is no probing instrument's (a CMM's "
+                               f"0.001-0.005 mm, an arm's or a tracker's 0.01-0.1 mm): if it is in um, write "
+                               f"{acc / 1000:g}", path=p, line=k, key="accuracy_mm")
     lines = text.splitlines()
     i = next((n for n, ln in enumerate(lines) if ln.strip() and not ln.lstrip().startswith("#")), None)
     if i is None:
@@ -111,7 +120,8 @@ class PositionFit:
     left perturbation (translation [mm], rotation vector [rad] in {A}), residuals_mm (k, 3) per feature,
     features (k,) names, chi2 over dof = 3k - 6, p its p-value, flagged (p < FLAG_P); suspect (feature, how far
     [mm] its probe lies from the fit of the others) the feature whose removal leaves the best fit (with 4 or
-    more features; else the largest residual)."""
+    more features; else the largest residual); swapped (feature, feature) two labels that, exchanged, make the fit
+    agree with the accuracy, else None."""
 
     position: int
     T_A_D: np.ndarray
@@ -122,6 +132,7 @@ class PositionFit:
     dof: int
     p: float
     suspect: tuple = ("", 0.0)
+    swapped: tuple | None = None
 
     @property
     def flagged(self) -> bool:
@@ -160,6 +171,7 @@ def fit_fixture(probes: ProbeSet, device: Device, world_position: int, contact_f
         raise CalibrationError("the device file lists no reference features (features_D_mm): add the coordinates "
                                "in {D} of the points the arm probes", path=device.path, key="features_D_mm")
     _check_features(probes, device)
+    _check_scale(probes, device)
     fits = {int(j): _fit_position(probes, device, int(j)) for j in np.unique(probes.position)}
     if world_position not in fits:
         raise CalibrationError(f"--world-position {world_position} was not probed (positions {sorted(fits)})",
@@ -192,6 +204,33 @@ def _check_features(probes: ProbeSet, device: Device) -> None:
                                    + did_you_mean(name, known), path=probes.path, line=int(line), key="feature")
 
 
+def _check_scale(probes: ProbeSet, device: Device) -> None:
+    """Refuse a probe file whose distances between features are not the device file's (outside
+    :data:`DISTANCE_RATIO`): metres, um or inches, or another device (a device trial: a probe file in metres had
+    been fitted, every position flagged, and written)."""
+    ratios = []
+    for j in np.unique(probes.position):
+        m = np.nonzero(probes.position == j)[0]
+        if m.size < 2:
+            continue
+        F = np.array([device.features_D_mm[probes.feature[i]] for i in m])
+        P = probes.x_A_mm[m]
+        spread_F = np.linalg.norm(F - F.mean(0))
+        if spread_F > 0:
+            ratios.append(np.linalg.norm(P - P.mean(0)) / spread_F)
+    if not ratios:
+        return
+    r = float(np.median(ratios))
+    if DISTANCE_RATIO[0] <= r <= DISTANCE_RATIO[1]:
+        return
+    unit = min(((0.001, "in metres: multiply x_mm, y_mm, z_mm by 1000"), (1000.0, "in um: divide them by 1000"),
+                (1 / 25.4, "in inches: multiply them by 25.4")), key=lambda u: abs(np.log(r / u[0])))
+    cause = unit[1] if abs(np.log(r / unit[0])) < np.log(1.5) else "not those of this device file's features"
+    raise CalibrationError(f"the probed features lie {r:.4g} x as far apart as the device file's features_D_mm "
+                           f"({device.path or device.name}): the coordinates are {cause}", path=probes.path,
+                           key="x_mm")
+
+
 def _fit_position(probes: ProbeSet, device: Device, j: int) -> PositionFit:
     m = np.nonzero(probes.position == j)[0]
     names = [probes.feature[i] for i in m]
@@ -214,7 +253,26 @@ def _fit_position(probes: ProbeSet, device: Device, j: int) -> PositionFit:
     dof = 3 * m.size - 6
     from scipy.stats import chi2 as chi2_dist                           # heavy (scipy.stats, ~0.6 s)
     p = float(chi2_dist.sf(chi2, dof)) if dof > 0 else 1.0
-    return PositionFit(j, T, cov, r, names, chi2, dof, p, _suspect(F, P, r, names))
+    swapped = _swapped_labels(F, P, names, s2, dof) if p < FLAG_P else None
+    return PositionFit(j, T, cov, r, names, chi2, dof, p, _suspect(F, P, r, names), swapped)
+
+
+def _swapped_labels(F: np.ndarray, P: np.ndarray, names: list, s2: float, dof: int) -> tuple | None:
+    """Two features whose labels, exchanged, make the position's fit agree with the instrument's accuracy (a device
+    trial: ``ball_2`` and ``ball_3`` swapped had been 90 mm off and sent to be probed again); None otherwise."""
+    from scipy.stats import chi2 as chi2_dist                           # heavy (scipy.stats, ~0.6 s)
+    best = None
+    for a in range(len(names)):
+        for b in range(a + 1, len(names)):
+            order = np.arange(len(names))
+            order[[a, b]] = order[[b, a]]
+            T = _kabsch(F[order], P)
+            chi2 = float(((P - F[order] @ T[:3, :3].T - T[:3, 3]) ** 2).sum() / s2)
+            if best is None or chi2 < best[0]:
+                best = (chi2, names[a], names[b])
+    if best is None or dof <= 0 or chi2_dist.sf(best[0], dof) < FLAG_P:
+        return None
+    return best[1], best[2]
 
 
 def _suspect(F: np.ndarray, P: np.ndarray, r: np.ndarray, names: list) -> tuple:

@@ -17,7 +17,7 @@ from .campaign import RAW_COLUMNS, Campaign
 from .device import Device
 from .errors import CalibrationError
 
-__all__ = ["apply_device", "far_points", "FarPoint", "ALIGNMENT_LIMIT_MM", "unit_slips", "point_unit_slips",
+__all__ = ["apply_device", "far_points", "FarPoint", "common_offset", "ALIGNMENT_LIMIT_MM", "unit_slips", "point_unit_slips",
            "limit_breaches", "LIMIT_SLACK_DEG"]
 
 log = logging.getLogger(__name__)
@@ -53,9 +53,21 @@ def _check_ranges(camp: Campaign, device: Device) -> None:
             more = f" ({bad.size - 1} more readings of this sensor are outside too)" if bad.size > 1 else ""
             raise CalibrationError(
                 f"position {camp.position[i]} point {camp.point[i]}: sensor {k + 1} reads {s[i]:g} mm, outside "
-                f"its range [{lo:g}, {hi:g}] mm (device {device.path or device.name}){more}; the tip lost the ball "
-                f"or hit its stop: align the ball nearer the datum and measure the point again, or delete the row",
-                path=camp.path, line=int(camp.lines[i]) if camp.lines.size else None, key=RAW_COLUMNS[k])
+                f"its range [{lo:g}, {hi:g}] mm (device {device.path or device.name}){more}; "
+                + _range_cause(s, bad, lo, hi), path=camp.path, line=int(camp.lines[i]) if camp.lines.size else None,
+                key=RAW_COLUMNS[k])
+
+
+def _range_cause(s: np.ndarray, bad: np.ndarray, lo: float, hi: float) -> str:
+    """Why a sensor's readings leave its range: most of them, and all within it once divided by 1000, are in um (a
+    device trial: 12416.5 'mm' on a 25 mm stroke had been read as a tip that lost the ball); else the tip lost
+    the ball or hit its stop."""
+    finite = s[np.isfinite(s)]
+    if bad.size > 0.5 * max(finite.size, 1) and np.all((finite / 1000 >= lo) & (finite / 1000 <= hi)):
+        return ("every reading of this sensor lies within its range once divided by 1000: the readings are in um; "
+                "divide the s*_mm columns by 1000")
+    return ("the tip lost the ball or hit its stop: align the ball nearer the datum and measure the point again, or "
+            "delete the row")
 
 
 @dataclass(frozen=True)
@@ -70,6 +82,20 @@ class FarPoint:
     def __str__(self) -> str:
         at = f" (line {self.line})" if self.line else ""
         return f"position {self.position} point {self.point}{at}: {self.distance_mm:.2f} mm"
+
+
+def common_offset(x_D_mm: np.ndarray, limit_mm: float = ALIGNMENT_LIMIT_MM) -> np.ndarray | None:
+    """The one offset [mm] in {D} most points share (at least 80 % of them farther than ``limit_mm`` from the datum,
+    their scatter about their mean under a quarter of it): readings converted with another zero than the device
+    aligned with; None otherwise."""
+    x = np.asarray(x_D_mm, float)
+    if x.ndim != 2 or len(x) < 2:
+        return None
+    mean = x.mean(axis=0)
+    far = int(np.sum(np.linalg.norm(x, axis=1) > limit_mm))
+    if far < 0.8 * len(x) or np.linalg.norm(x.std(axis=0)) > 0.25 * np.linalg.norm(mean):
+        return None
+    return mean
 
 
 def far_points(camp: Campaign, limit_mm: float = ALIGNMENT_LIMIT_MM) -> list[FarPoint]:

@@ -32,6 +32,7 @@ CASES = {
     "thermal_drift": ({"growth_ppm_per_s": 0.045}, "time"),
     "outliers": ({"count": 2, "min_mm": 0.2, "max_mm": 0.4}, "points"),
     "device_axes": ({"misalign_deg": [2.0, -1.5, 1.0]}, None),
+    "device_zero": ({"offset_mm": [0.6, -0.4, 0.3]}, None),
     "lost_motion": ({"joint": 4, "lost_motion_deg": 0.03}, "joint:4"),
     "joint_stiffening": ({"joint": 2, "stiffening_rad_per_Nm2": 4.0e-8}, "joint:2"),
     "joint_zero_shift": ({"position": 3, "joint": 2, "dtheta_deg": 0.01}, "position:3"),
@@ -80,6 +81,9 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, name):
     if name == "device_axes":
         got = [f.parameters[n] for n in ("sensor2_x_deg", "sensor3_x_deg", "sensor3_y_deg")]
         assert got == pytest.approx([2.0, -1.5, 1.0], abs=0.5)
+    if name == "device_zero":
+        got = f.parameters["share"] * np.array([f.parameters[n] for n in ("dx_mm", "dy_mm", "dz_mm")])
+        assert got == pytest.approx([0.6, -0.4, 0.3], abs=0.25)    # the soft legacy rod's alignment adds its own mean
     if name == "joint_stiffening":
         assert f.parameters["stiffening_rad_per_Nm2"] == pytest.approx(4.0e-8, rel=0.3)
     if name == "joint_zero_shift":

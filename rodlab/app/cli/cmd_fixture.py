@@ -79,8 +79,14 @@ def cmd_fixture(args) -> int:
         print(_all_flagged(fit, args.device), file=sys.stderr)
     for f in fit.flagged:
         name, d = f.suspect
-        print(f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "
-              f"over {f.dof} degrees of freedom, p = {f.p:.1e}); suspect feature {name!r}, {d * 1e3:.0f} um off the "
-              f"fit of the others. "
+        head = (f"FLAGGED position {f.position}: residuals exceed the instrument's accuracy (chi-square {f.chi2:.1f} "
+                f"over {f.dof} degrees of freedom, p = {f.p:.1e}); ")
+        if f.swapped is not None:
+            a, b = f.swapped
+            print(head + f"features {a!r} and {b!r} are swapped: with their labels exchanged the position fits within "
+                  f"the accuracy. Exchange them in {args.probe} at position {f.position} and run `rodlab fixture` "
+                  "again", file=sys.stderr)
+            continue
+        print(head + f"suspect feature {name!r}, {d * 1e3:.0f} um off the fit of the others. "
               f"Probe it again or check the device's seat before calibrating", file=sys.stderr)
     return 3 if fit.flagged else 0

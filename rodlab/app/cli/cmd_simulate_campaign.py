@@ -44,8 +44,9 @@ def register(sub) -> None:
                    help="write the device's three raw sensor readings (s1_mm, s2_mm, s3_mm; --noise-um per reading) "
                         "and its file multical.device.json (as built: sensors 2 and 3 off by --misalign-deg, springs "
                         "whose force follows each reading); nominal.device.json is the orthogonal design")
-    p.add_argument("--misalign-deg", type=nonneg_float, default=1.0,
-                   help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg]")
+    p.add_argument("--misalign-deg", type=nonneg_float, default=None,
+                   help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg] "
+                        "(default 1)")
     p.add_argument("--seed", type=seed, default=0, help="random seed of the truth robot, noise and effects (default 0)")
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)
@@ -90,5 +91,9 @@ def _simulated_device(args):
     """``--raw``: the device as built, its misalignment drawn from a generator of its own (the campaign's other
     draws stay those of the same seed)."""
     if not args.raw:
+        if args.misalign_deg is not None:        # a device trial: it had been ignored without a word
+            raise RodlabError("--misalign-deg tilts the simulated device's sensors, which only the raw readings show: "
+                              "give --raw with it (or leave it out)")
         return None
-    return misaligned_device(ideal_device(), args.misalign_deg, np.random.default_rng([args.seed, 2]))
+    misalign = 1.0 if args.misalign_deg is None else args.misalign_deg
+    return misaligned_device(ideal_device(), misalign, np.random.default_rng([args.seed, 2]))

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
 
 from rodlab.calibrate import read_campaign
 from rodlab.calibrate.device import read_device
 from rodlab.calibrate import read_points
-from rodlab.calibrate.readings import ALIGNMENT_LIMIT_MM, far_points, limit_breaches, point_unit_slips, unit_slips
+from rodlab.calibrate.readings import (ALIGNMENT_LIMIT_MM, common_offset, far_points, limit_breaches,
+                                      point_unit_slips, unit_slips)
 
 from ...core.errors import RodlabError
 
@@ -49,16 +49,15 @@ def campaign_from_args(args, robot, warn: bool = True):
             shown = "; ".join(str(f) for f in far[:5]) + (f"; and {len(far) - 5} more" if len(far) > 5 else "")
             print(f"warning: {args.campaign}: {len(far)} point(s) farther than {ALIGNMENT_LIMIT_MM:g} mm from the "
                   f"datum point (the alignment the paper assumes; the springs' force and the rod's deflection "
-                  f"differ there): {shown}{_common_offset(camp.x_D_mm, len(far), args)}", file=sys.stderr)
+                  f"differ there): {shown}{_common_offset(camp.x_D_mm, args)}", file=sys.stderr)
     return camp
 
 
-def _common_offset(x_D_mm, n_far: int, args) -> str:
-    """Where most points are far from the datum by one offset (their scatter about it under a quarter of it): what
+def _common_offset(x_D_mm, args) -> str:
+    """Where most points are far from the datum by one offset (:func:`~calibrate.readings.common_offset`): what
     that says (a device file with another zero, or readings zeroed elsewhere); else ""."""
-    x = np.asarray(x_D_mm, float)
-    mean = x.mean(axis=0)
-    if n_far < 0.8 * len(x) or np.linalg.norm(x.std(axis=0)) > 0.25 * np.linalg.norm(mean):
+    mean = common_offset(x_D_mm)
+    if mean is None:
         return ""
     offset = ", ".join(f"{v:+.2f}" for v in mean)
     zero = (f"the device file {args.device} has another zero (zero_mm) or datum than the device that recorded "

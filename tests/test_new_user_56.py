@@ -1,0 +1,122 @@
+"""A calibration engineer's trial with a MultiCal-like device of their own (2026-11-29, helper-56): raw readings
+converted with another zero, a sensor mounted reversed, readings in um, probe files with swapped labels, in metres or
+with an accuracy in um, a missing reading."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rodlab.app.cli import main
+
+
+@pytest.fixture(scope="module")
+def raw(tmp_path_factory):
+    """A simulated raw-reading campaign with its device and probe files."""
+    out = tmp_path_factory.mktemp("raw") / "c"
+    assert main(["simulate-campaign", "--rod", "rod1", "--raw", "-o", str(out)]) == 0
+    return out
+
+
+def _args(folder, campaign=None):
+    return [str(campaign or folder / "multical.campaign.csv"), "--device", str(folder / "multical.device.json"),
+            "--fixture", str(folder / "multical.fixture.json"), "--rod", str(folder / "rod.compliance.json")]
+
+
+def _edited(folder, tmp_path, name, edit):
+    lines = (folder / "multical.campaign.csv").read_text().splitlines()
+    cols = lines[0].split(",")
+    for i in range(1, len(lines)):
+        cells = lines[i].split(",")
+        edit(cols, cells)
+        lines[i] = ",".join(cells)
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_readings_converted_with_another_zero_are_named_device_zero(tmp_path, capsys):
+    """The diagnosis had called it unexplained at one position; the offset is now found from the readings."""
+    out = tmp_path / "dz"
+    assert main(["simulate-campaign", "--rod", "rod1", "--effect", "device_zero:offset_mm=0.8;-0.3;0.2", "-o",
+                 str(out)]) == 0
+    report = tmp_path / "dz.json"
+    assert main(["diagnose", "--campaign", str(out / "multical.campaign.csv"), "--fixture",
+                 str(out / "multical.fixture.json"), "--rod", str(out / "rod.compliance.json"), "--json",
+                 str(report)]) == 0
+    findings = json.loads(report.read_text())["findings"]
+    assert findings[0]["effect"] == "device_zero"
+    p = findings[0]["parameters"]
+    found = p["share"] * np.array([p["dx_mm"], p["dy_mm"], p["dz_mm"]])
+    assert np.allclose(found, [0.8, -0.3, 0.2], atol=0.05)
+
+
+def test_no_device_zero_without_a_common_offset(raw, tmp_path):
+    report = tmp_path / "null.json"
+    assert main(["diagnose", "--campaign", *_args(raw), "--json", str(report)]) == 0
+    assert not any(f["effect"] == "device_zero" for f in json.loads(report.read_text())["findings"])
+
+
+def test_a_reversed_sensor_is_named(raw, tmp_path, capsys):
+    """Sensor 2 mirrored about its zero: 'unexplained' and 'check a reading column's sign or order' before."""
+    zero = json.loads((raw / "multical.device.json").read_text())["sensors"][1]["zero_mm"]
+
+    def mirror(cols, cells):
+        j = cols.index("s2_mm")
+        cells[j] = f"{2 * zero - float(cells[j]):.4f}"
+    rev = _edited(raw, tmp_path, "rev.campaign.csv", mirror)
+    capsys.readouterr()
+    assert main(["calibrate", *_args(raw, rev)]) == 3
+    assert "sensor 2's readings look reversed" in capsys.readouterr().err
+
+
+def test_readings_in_um_and_a_missing_reading_are_told_their_fix(raw, tmp_path, capsys):
+    def in_um(cols, cells):
+        for c in ("s1_mm", "s2_mm", "s3_mm"):
+            cells[cols.index(c)] = f"{1000 * float(cells[cols.index(c)]):.1f}"
+    assert main(["calibrate", *_args(raw, _edited(raw, tmp_path, "um.campaign.csv", in_um))]) == 2
+    assert "the readings are in um; divide the s*_mm columns by 1000" in capsys.readouterr().err
+
+    def lost(cols, cells):
+        if cells[1] == "3":
+            cells[cols.index("s2_mm")] = ""
+    assert main(["calibrate", *_args(raw, _edited(raw, tmp_path, "lost.campaign.csv", lost))]) == 2
+    assert "measure the point again, or delete its row" in capsys.readouterr().err
+
+
+def _probe(raw, tmp_path, name, edit):
+    lines = (raw / "multical.probe.csv").read_text().splitlines()
+    path = tmp_path / name
+    path.write_text("\n".join(edit(lines)) + "\n")
+    world = json.loads((raw / "multical.fixture.json").read_text())["world_position"]
+    return ["fixture", str(path), "--device", str(raw / "multical.device.json"), "--world-position", str(world),
+            "-o", str(tmp_path / f"{name}.fixture.json")]
+
+
+def test_probe_files_swapped_in_metres_or_with_an_accuracy_in_um(raw, tmp_path, capsys):
+    def swap(lines):
+        rows = [ln.split(",") for ln in lines]
+        i2 = next(i for i, r in enumerate(rows) if r[:2] == ["2", "ball_2"])
+        i3 = next(i for i, r in enumerate(rows) if r[:2] == ["2", "ball_3"])
+        rows[i2][1], rows[i3][1] = "ball_3", "ball_2"
+        return [",".join(r) for r in rows]
+    assert main(_probe(raw, tmp_path, "swap.probe.csv", swap)) == 3
+    err = capsys.readouterr().err
+    assert "are swapped" in err and "ball_2" in err and "ball_3" in err
+
+    def metres(lines):
+        out = []
+        for ln in lines:
+            r = ln.split(",")
+            out.append(",".join(r[:2] + [f"{float(v) / 1000:.7f}" for v in r[2:]]) if r[0].isdigit() else ln)
+        return out
+    assert main(_probe(raw, tmp_path, "m.probe.csv", metres)) == 2
+    assert "in metres: multiply x_mm, y_mm, z_mm by 1000" in capsys.readouterr().err
+    assert main(_probe(raw, tmp_path, "acc.probe.csv", lambda ls: ["# accuracy_mm: 5"] + ls[1:])) == 2
+    assert "if it is in um, write 0.005" in capsys.readouterr().err
+
+
+def test_misalign_without_raw_readings_is_refused(tmp_path, capsys):
+    assert main(["simulate-campaign", "--rod", "rod1", "--misalign-deg", "2", "-o", str(tmp_path / "x")]) == 2
+    assert "give --raw with it" in capsys.readouterr().err and not (tmp_path / "x").exists()

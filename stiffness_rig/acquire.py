@@ -197,7 +197,7 @@ class _Session:
 
     def _emit(self, hold, t, x, temp, force=math.nan) -> None:
         axis, rep, phase, mass = hold
-        measured = self.plan.schedule.measured.get(axis.value, (0, 1, 2))
+        measured = self.plan.recorded(axis.value)
         rel = x - self.zeros.get(axis.value, np.zeros(3))
         disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan for c in range(3))
         self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp, force)
@@ -223,7 +223,7 @@ class _Session:
         """Read until the measured gauges stay within the tolerance for the window (or the timeout); returns
         (the last window's readings, the buffered samples) when ``buffer`` (a new series has no zero yet)."""
         plan = self.plan
-        measured = list(plan.schedule.measured.get(hold[0].value, (0, 1, 2)))
+        measured = list(plan.recorded(hold[0].value))
         window = max(int(round(plan.settle_window_s * plan.schedule.rate_Hz)), 2)
         recent, buffered = [], []
         t_start = time.monotonic()

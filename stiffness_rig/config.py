@@ -71,8 +71,9 @@ def _line(text: str, key: str) -> int | None:
     """The line of ``key`` (a dotted path such as ``instrument[2].channel[1].units``: 1-based indices of arrays of
     tables; ``settle.window_s``) in the TOML ``text``: inside the table it names, else its first occurrence
     anywhere (None when the key is not written)."""
-    *tables, leaf = [(m.group(1), int(m.group(2)) if m.group(2) else None)
-                     for m in re.finditer(r"([^.\[\]]+)(?:\[(\d+)\])?", key)] or [(key, None)]
+    path = [(m.group(1), int(m.group(2)) if m.group(2) else None)
+            for m in re.finditer(r"([^.\[\]]+)(?:\[(\d+)\])?", key)] or [(key, None)]
+    *tables, leaf = path
     first, here, counts = None, [], {}
     for i, raw in enumerate(text.splitlines(), start=1):
         head = re.match(r"^\s*(\[\[?)\s*([\w.]+)\s*\]\]?", raw)
@@ -81,6 +82,8 @@ def _line(text: str, key: str) -> int | None:
             parent = tuple(here[:len(names) - 1])
             n = counts[(parent, names[-1])] = counts.get((parent, names[-1]), 0) + 1
             here = list(parent) + [(names[-1], n if head.group(1) == "[[" else None)]
+            if leaf[1] is not None and here == path:      # the key names an array's table: its header line
+                return i
             continue
         if re.match(rf"^\s*{re.escape(leaf[0])}\s*=", raw):
             first = first or i
@@ -237,7 +240,8 @@ def read_profile(path):
 
 @dataclass(frozen=True)
 class RigPlan:
-    """What to record: the load schedule, the settle rule [s, mm], the rod's name."""
+    """What to record: the load schedule, the settle rule [s, mm], the rod's name; ``measured_stated``: the load axes
+    whose measured components the plan file lists (``[measured]``)."""
 
     rod: str
     schedule: LoadSchedule
@@ -245,6 +249,13 @@ class RigPlan:
     settle_tolerance_mm: float = 0.003
     settle_timeout_s: float = 30.0
     path: Path | None = field(default=None, compare=False)
+    measured_stated: frozenset = frozenset()
+
+    def recorded(self, axis: str) -> tuple:
+        """The components (0..2) an acquisition records under the load ``axis``: those the plan lists for it, else
+        every gauge the rig has (a technician trial: the schedule's default x and z under a z load had dropped a
+        wired y gauge's readings without a word)."""
+        return tuple(self.schedule.measured[axis]) if axis in self.measured_stated else (0, 1, 2)
 
 
 def read_plan(path) -> RigPlan:
@@ -284,5 +295,9 @@ def read_plan(path) -> RigPlan:
             raise
         raise r.err(e.detail, e.key or "") from e
     _schema(data, FORMAT_PLAN, path, text)
+    if len(proto.masses) == 1 and int(proto.repeats) == 1:     # a technician trial: acquired, then not fittable
+        raise r.err(f"one mass hung once gives each load axis two holds besides its zero reference "
+                    f"({proto.masses[0]:g} kg and 0 kg unloading); the load-deflection fit needs three: add a mass or "
+                    "a repeat", "repeats" if "repeats" in data else "masses_kg")
     return RigPlan(rod, proto, r.num(settle, "window_s", "settle", 1.0), r.num(settle, "tolerance_mm", "settle", 0.003),
-                   r.num(settle, "timeout_s", "settle", 30.0), Path(path))
+                   r.num(settle, "timeout_s", "settle", 30.0), Path(path), frozenset(meas))

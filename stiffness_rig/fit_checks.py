@@ -134,14 +134,17 @@ def _scale_cause(ratio: float, axis: str) -> tuple[str, str]:
     if abs(ratio) < LOAD_SCALE_REFUSE:
         return (f"it saw no load along {axis} (not in that axis's load path, or not connected)",
                 "Check the load cell's place in the load path.")
+    if abs(np.log(abs(ratio) / 65536.0)) < np.log(1.05):    # 2^16: a technician trial's int32 with swapped words
+        return ("a 32-bit reading whose two 16-bit Modbus registers are taken in the wrong order (2^16 = 65536)",
+                "Set the load-cell instrument's word_order to the other value in the rig profile and record again.")
     miss, unit = min((abs(ratio * factor - 1.0), unit) for unit, factor in UNITS["force"].items() if unit != "N")
     if miss < 0.05:                                  # the nearest unit (kgf and daN are 2 % apart)
         factor = UNITS["force"][unit]
         return (f"its readings look like {unit}, not N",
                 f"Set the load-cell channel's units = \"{unit}\" in the rig profile for the next recordings; "
                 f"for this one, multiply force_N by {factor:.6g}.")
-    return ("a wrong calibration factor or unit in the rig profile's load-cell channel",
-            f"Correct its units or scale (the readings x {1 / ratio:.4g} would be newtons) and record again.")
+    return (f"a wrong calibration factor or unit in the rig profile's load-cell channel (the readings x {1 / ratio:.4g} "
+            "would be newtons)", "Correct its units or scale and record again.")
 
 
 def creep_warnings(holds) -> list[str]:

@@ -27,6 +27,8 @@ Version 1 profiles (one port, one line of numbers) are still read by :func:`.con
 """
 from __future__ import annotations
 
+import re
+
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -196,7 +198,10 @@ def _instrument(r, ins, k: int) -> Instrument:
         driver = cls(config)
     except SettingError as e:
         raise _err(r, f"instrument {name!r}: {e}", f"{where}.{e.key}") from e
-    except Exception as e:  # noqa: BLE001 - e.g. a regular expression that does not compile
+    except re.error as e:                  # a technician trial: reported at the [loader]'s `instrument =` line
+        raise _err(r, f"instrument {name!r}: pattern {config.get('pattern')!r} is not a regular expression ({e}): "
+                      "check its brackets and escape a literal ( ) [ ] . + * ? with a backslash", f"{where}.pattern") from e
+    except Exception as e:  # noqa: BLE001 - a setting a driver refuses in its own words
         raise _err(r, f"instrument {name!r}: {e}", where) from e
     channels = tuple(_channel(r, c, f"{where}.channel[{i + 1}]", driver) for i, c in enumerate(chans))
     return Instrument(name, r.string(ins, "port", where), protocol, config, channels,

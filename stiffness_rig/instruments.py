@@ -69,6 +69,7 @@ class InstrumentClient:
         self.driver = instrument.driver()
         self.garbage = 0
         self.timeouts = 0
+        self.last_garbage = ""
         self.reconnects = 0
         self.link: Link | None = None
         self._open()
@@ -126,6 +127,7 @@ class InstrumentClient:
             return self.driver.poll(self.link)
         except Garbage as g:
             self.garbage += 1
+            self.last_garbage = str(g)
             log.info("%s: garbage ignored (%d so far): %s", self._where(), self.garbage, g)
         except NoAnswer:
             self.timeouts += 1
@@ -144,10 +146,13 @@ class InstrumentClient:
             if failures >= self.instrument.retries:
                 cycles += 1
                 if cycles > self.reconnect_attempts:
+                    last = (f"; the last: {self.last_garbage}" if self.last_garbage else
+                            "; no answer at all (the request, the Modbus slave address or the baud rate?)")
                     raise DeviceError(f"{self._where()} answers nothing usable ({self.garbage} garbage answers, "
-                                      f"{self.timeouts} timeouts) although its port opens; check its protocol "
-                                      f"settings, baud rate and cable, then re-run the same command: it resumes "
-                                      f"after the last complete hold", path=self.profile_path, key="instrument")
+                                      f"{self.timeouts} timeouts) although its port opens{last}; check its protocol "
+                                      f"settings, baud rate and cable, then re-run the same command (a recording "
+                                      f"already started resumes after its last complete hold)",
+                                      path=self.profile_path, key="instrument")
                 self._reconnect(f"no valid reading in {failures} attempts")
                 failures = 0
 

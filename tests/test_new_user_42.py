@@ -167,9 +167,9 @@ def test_points_far_by_one_offset_name_the_device_files_zero():
     from rodlab.app.cli.deviceargs import _common_offset
     rng = np.random.default_rng(2)
     shifted = np.array([2.5, 2.4, 2.45]) + rng.normal(0, 0.1, (30, 3))
-    said = _common_offset(shifted, 30, argparse.Namespace(device="s.device.json"))
+    said = _common_offset(shifted, argparse.Namespace(device="s.device.json"))
     assert "one offset (+2.4" in said and "s.device.json has another zero (zero_mm)" in said
-    assert _common_offset(rng.normal(0, 3.0, (30, 3)), 25, argparse.Namespace(device=None)) == ""   # scattered
+    assert _common_offset(rng.normal(0, 3.0, (30, 3)), argparse.Namespace(device=None)) == ""   # scattered
 
 
 def test_a_joint_compliance_at_its_bound_is_marked():

@@ -199,7 +199,7 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
             acquire(read_profile(profile), read_plan(plan), out, use_loader=True, progress=stop_after_two)
         n_holds = len(read_plan(plan).schedule.holds())
         args = ["rig", "acquire", "--profile", str(profile), "-o", str(out), "--non-interactive", "-q"]
-        other = _write_plan(tmp_path / "b.plan.toml", (2.0,), 10.0)
+        other = _write_plan(tmp_path / "b.plan.toml", (1.0, 2.0), 10.0)
         recorded = out.read_bytes()
         assert main([*args, "--plan", str(other)]) == 2
         err = capsys.readouterr().err

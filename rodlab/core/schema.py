@@ -240,7 +240,10 @@ def data_problems(data, format_id: str, path: str = "", text: str = "", kind: st
     out = []
     for err in validator.iter_errors(data):
         message, fix, where = _explain(err)
-        located = where if err.validator != "required" else where[:-1]      # a missing key: its table's line
+        located = where if err.validator != "required" else where[:-1]      # a missing key: its table's line,
+        misspelt = re.match(r"rename `([^`]+)`", fix)                        # or the line of its misspelling
+        if err.validator == "required" and misspelt:
+            located = where[:-1] + [misspelt.group(1)]
         out.append(Problem(path, message, _locate(text, kind, located) if text else None, _dotted(where), fix))
     return sorted(out, key=lambda p: (p.line or 0, p.key or ""))
 

@@ -41,7 +41,7 @@ class AsciiRegex(Driver):
         text = raw.decode("ascii", "replace").strip()
         m = self.regex.search(text)
         if not m:
-            raise Garbage(raw, "no match")
+            raise Garbage(raw, f"the pattern {self.regex.pattern!r} does not match it")
         out = {}
         for k in self.values:
             try:

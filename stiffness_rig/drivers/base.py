@@ -26,7 +26,8 @@ class Garbage(Exception):
     """An answer that is not a reading (bad checksum, wrong format, an error code); ``raw`` is what came."""
 
     def __init__(self, raw: bytes, why: str = "") -> None:
-        super().__init__(why or repr(raw[:60]))
+        shown = f"received {raw[:60]!r}" if raw else ""
+        super().__init__("; ".join(p for p in (shown, why) if p) or "an unreadable answer")
         self.raw = raw
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from rodlab.core.enums import Checksum, LineProtocol
 
-from ..protocol import parse_line
+from ..protocol import garbage_reason, parse_line
 from .base import Driver, Garbage, Link, Setting, unescape
 
 __all__ = ["NumericLine"]
@@ -38,5 +38,6 @@ class NumericLine(Driver):
             raw = link.latest_line()
         vals = parse_line(raw, int(c["n_values"]), c.get("separator", ","), c.get("checksum", "none"))
         if vals is None:
-            raise Garbage(raw)
+            raise Garbage(raw, garbage_reason(raw, int(c["n_values"]), c.get("separator", ","),
+                                              c.get("checksum", "none")))
         return {str(i): v for i, v in enumerate(vals)}

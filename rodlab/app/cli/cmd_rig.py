@@ -294,7 +294,7 @@ def _warn_linear_range(schedule, design) -> None:
 
 
 def cmd_acquire(args: argparse.Namespace) -> int:
-    from rodlab.stiffness_rig.acquire import acquire
+    from rodlab.stiffness_rig.acquire import RecordingLock, acquire
     from rodlab.stiffness_rig.config import read_plan, read_profile
     from rodlab.stiffness_rig.resume import next_free_name, resume_point
     profile, plan = read_profile(args.profile), read_plan(args.plan)
@@ -311,6 +311,7 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         print(f"{output} already holds all {start.holds_total} holds of this plan; nothing to record")
         return 0
     if start.resuming:
+        RecordingLock(Path(output)).release()      # another acquisition at work is named before "resuming" is said
         print(f"resuming after hold {start.holds_done}/{start.holds_total} (plan {plan.path}, {output})")
 
     def operator(prompt: str) -> None:
@@ -319,8 +320,10 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         input(f"\n{prompt} ")
 
     bar = bar_of(total=None, desc="rig acquisition", unit="hold")
+    last = []
 
     def progress(st) -> None:                      # tqdm's estimate of the plan's remaining time from its rate
+        last[:] = [st]
         if bar.total != st.holds_total:
             bar.total = st.holds_total
         bar.update(st.holds_done - bar.n)
@@ -334,6 +337,9 @@ def cmd_acquire(args: argparse.Namespace) -> int:
         print(f"\ninterrupted: every sample so far is in {output}; re-run the same command (-o {output}) to resume")
         return 130
     print(f"\nwrote {out}")
+    if last and (last[0].garbage or last[0].reconnects):    # counted while recording: said once at the end
+        print(f"  the instruments sent {last[0].garbage} garbage line(s) (skipped) and the ports were reconnected "
+              f"{last[0].reconnects} time(s) in this run; `-v` shows each")
     return 0
 
 

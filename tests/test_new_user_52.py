@@ -9,6 +9,20 @@ import pytest
 from rodlab.app.cli import main
 
 
+def _edit_rows(rec, edit) -> None:
+    """Rewrite a recording's data rows in place: ``edit(header cells, row cells)`` changes the row's cells."""
+    lines = rec.read_text().splitlines()
+    header = next(i for i, ln in enumerate(lines) if ln.startswith("time_s"))
+    cols = lines[header].split(",")
+    for i in range(header + 1, len(lines)):
+        if lines[i].startswith("#"):
+            continue
+        cells = lines[i].split(",")
+        edit(cols, cells)
+        lines[i] = ",".join(cells)
+    rec.write_text("\n".join(lines) + "\n")
+
+
 def _interrupted(tmp_path, capsys):
     """A recording without the x series (the run stopped before it) and its measured file."""
     sim, rec, meas = tmp_path / "rod1.calc.json", tmp_path / "yz.rig.csv", tmp_path / "yz.meas.json"
@@ -75,16 +89,11 @@ def test_the_diagnosis_names_a_gauge_reversed_in_one_series_as_rig_fit_does(tmp_
     sim, rec = tmp_path / "rod1.calc.json", tmp_path / "flip.rig.csv"
     assert main(["compliance", "rod1", "-o", str(sim)]) == 0
     assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "2", "--hold-s", "4", "-o", str(rec)]) == 0
-    lines = rec.read_text().splitlines()
-    header = next(i for i, ln in enumerate(lines) if ln.startswith("time_s"))
-    cols = lines[header].split(",")
-    axis, z = cols.index("load_axis"), cols.index("disp_z_mm")
-    for i in range(header + 1, len(lines)):
-        cells = lines[i].split(",")
+    def flip(cols, cells):
+        axis, z = cols.index("load_axis"), cols.index("disp_z_mm")
         if cells[axis] == "x" and cells[z]:
             cells[z] = repr(-float(cells[z]))
-            lines[i] = ",".join(cells)
-    rec.write_text("\n".join(lines) + "\n")
+    _edit_rows(rec, flip)
     capsys.readouterr()
     assert main(["diagnose", "--rig", str(rec), "--sim", str(sim)]) == 2
     err = capsys.readouterr().err
@@ -135,17 +144,12 @@ def test_masses_in_grams_with_readings_in_um_are_named(tmp_path, capsys, caplog)
     sim, rec = tmp_path / "rod1.calc.json", tmp_path / "g.rig.csv"
     assert main(["compliance", "rod1", "-o", str(sim)]) == 0
     assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "--hold-s", "3", "-o", str(rec)]) == 0
-    lines = rec.read_text().splitlines()
-    header = next(i for i, ln in enumerate(lines) if ln.startswith("time_s"))
-    cols = lines[header].split(",")
-    for i in range(header + 1, len(lines)):
-        cells = lines[i].split(",")
+    def thousandfold(cols, cells):
         for name in ("mass_kg", "disp_x_mm", "disp_y_mm", "disp_z_mm"):
             j = cols.index(name)
             if cells[j]:
                 cells[j] = f"{float(cells[j]) * 1000:.4f}"
-        lines[i] = ",".join(cells)
-    rec.write_text("\n".join(lines) + "\n")
+    _edit_rows(rec, thousandfold)
     with caplog.at_level("WARNING"):
         assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(tmp_path / "g.json")]) == 0
     assert "if these are grams, divide mass_kg by 1000" in caplog.text

@@ -57,3 +57,17 @@ def test_info_names_a_rod_softer_than_the_papers(tmp_path, capsys):
     assert "softer than every rod the paper measured" in capsys.readouterr().out
     assert main(["info", "rod6"]) == 0
     assert "softer than every rod" not in capsys.readouterr().out
+
+
+def test_a_rod_and_its_as_built_twin_of_one_mass_recommend_the_more_accurate():
+    """The lightest within the band: between designs of the same mass (a rod and its as-built design) the more
+    accurate one, not the first listed."""
+    import pandas as pd
+
+    from rodlab.app.study.table import recommend
+    rows = []
+    for design, mean in (("1# (rod1.rod.toml)", 0.053), ("1# (rod1.asbuilt.rod.toml)", 0.044)):
+        rows.append({"design": design, "status": "ok", "method": "meas", "mean_mm": mean, "mean_p05_mm": mean - 0.01,
+                     "mean_p95_mm": mean + 0.03, "mass_kg": 1.333, "c_rod_um": 44.0, "L1_mm": 300.0, "L2_mm": 450.0,
+                     "nominal_mean_mm": 1.7})
+    assert recommend(pd.DataFrame(rows)).design == "1# (rod1.asbuilt.rod.toml)"

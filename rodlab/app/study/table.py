@@ -121,7 +121,8 @@ def recommend(df) -> Recommendation:
     pool = helps if len(helps) else rows
     best = pool.loc[pool["mean_mm"].idxmin()]
     close = pool[pool["mean_mm"] <= best["mean_p95_mm"]]
-    pick = close.loc[close["mass_kg"].idxmin()]
+    # the lightest, and among designs as light (a rod and its as-built design) the most accurate
+    pick = close.loc[close.sort_values(["mass_kg", "mean_mm"]).index[0]]
     why = (f"predicted mean error {pick['mean_mm']:.3f} mm with {m} compensation (90 % band "
            f"{pick['mean_p05_mm']:.3f}-{pick['mean_p95_mm']:.3f} mm), c_rod {pick['c_rod_um']:.0f} um, mass "
            f"{pick['mass_kg']:.3f} kg")

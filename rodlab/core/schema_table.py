@@ -109,14 +109,18 @@ def _one_of_problems(header: list[str], schema: dict, path: str, line: int) -> l
     return out
 
 
+#: what an empty reading of a point needs (a device trial: "write a value" had been the advice for a sensor that
+#: lost the ball); the schema check and the campaign reader say it alike
+EMPTY_READING_FIX = ("a point without this reading (the sensor lost the ball, the instrument missed the target) cannot "
+                     "be used: measure the point again, or delete its row")
+
+
 def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Problem | None:
     s = cell.strip()
     if not s:
         if c.get("nullable"):
             return None
-        return Problem(path, "empty cell", line, name, "write a value" if c.get("unit") != "mm"
-                       else "a point without this reading (the sensor lost the ball, the instrument missed the "
-                            "target) cannot be used: measure the point again, or delete its row")
+        return Problem(path, "empty cell", line, name, "write a value" if c.get("unit") != "mm" else EMPTY_READING_FIX)
     if c["type"] == "string":
         if "enum" in c and s not in c["enum"]:
             return Problem(path, f"expected one of {c['enum']}, got {s!r}", line, name,

@@ -30,29 +30,87 @@ def _digest(obj) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def plan_hash(plan: RigPlan) -> str:
-    """16 hex digits of what a plan records: rod, holds in order, hold time, rate, settle rule, gauges read."""
+def _plan_identity(plan: RigPlan) -> dict:
+    """What a plan records, by key: rod, holds in order, hold time, rate, settle rule, gauges read."""
     pr = plan.schedule
-    return _digest({"rod": plan.rod, "holds": [[a.value, r, str(ph), m] for a, r, ph, m in pr.holds()],
-                    "hold_s": pr.hold_s, "rate_Hz": pr.rate_Hz,
-                    "measured": {k: list(v) for k, v in sorted(pr.measured.items())},
-                    "settle": [plan.settle_window_s, plan.settle_tolerance_mm, plan.settle_timeout_s]})
+    return {"rod": plan.rod, "holds": [[a.value, r, str(ph), m] for a, r, ph, m in pr.holds()],
+            "hold_s": pr.hold_s, "rate_Hz": pr.rate_Hz,
+            "measured": {k: list(v) for k, v in sorted(pr.measured.items())},
+            "settle": [plan.settle_window_s, plan.settle_tolerance_mm, plan.settle_timeout_s]}
+
+
+def _device_identity(profile: RigProfile) -> dict:
+    """The wiring, by key: port, protocol, and each channel's index, axis, sign and scale (a profile of several
+    instruments: each one's name, port, protocol and its settings, channels; the loader is not wiring)."""
+    if hasattr(profile, "instruments"):
+        return {"instruments": [i.identity() for i in profile.instruments]}
+    return {"port": profile.port, "protocol": profile.protocol,
+            "channels": [[c.index, c.axis, c.sign, c.scale_mm] for c in profile.channels],
+            "temperature": profile.temperature_index}
+
+
+def plan_hash(plan: RigPlan) -> str:
+    """16 hex digits of what a plan records (:func:`_plan_identity`)."""
+    return _digest(_plan_identity(plan))
 
 
 def device_hash(profile: RigProfile) -> str:
-    """16 hex digits of the wiring: port, protocol, and each channel's index, axis, sign and scale (a profile of
-    several instruments: each one's name, port, protocol and its settings, channels; the loader is not wiring)."""
-    if hasattr(profile, "instruments"):
-        return _digest({"instruments": [i.identity() for i in profile.instruments]})
-    return _digest({"port": profile.port, "protocol": profile.protocol,
-                    "channels": [[c.index, c.axis, c.sign, c.scale_mm] for c in profile.channels],
-                    "temperature": profile.temperature_index})
+    """16 hex digits of the wiring (:func:`_device_identity`)."""
+    return _digest(_device_identity(profile))
+
+
+def _fields(identity: dict) -> str:
+    """One header value naming each part of an identity: a number or short name as it is, anything longer by
+    6 hex digits of its digest (``rod=rod1 hold_s=8 holds=3f2a1c ...``), so a refused resume can say which
+    part changed."""
+    parts = []
+    for key, value in identity.items():
+        if isinstance(value, list) and value and isinstance(value[0], list) and key != "settle":
+            for k, item in enumerate(value):            # one entry per hold, channel or instrument
+                parts.append(f"{key}[{k}]={_digest(item)[:6]}")
+            parts.append(f"{key}.count={len(value)}")
+            continue
+        text = json.dumps(value, sort_keys=True, separators=(",", ":"))
+        parts.append(f"{key}={text if len(text) <= 24 and ' ' not in text else _digest(value)[:6]}")
+    return " ".join(parts)
 
 
 def identity_meta(profile: RigProfile, plan: RigPlan) -> dict:
-    """The header entries a resume is checked against."""
+    """The header entries a resume is checked against (the hashes decide; the fields name what changed)."""
     return {"sample_rate_Hz": f"{plan.schedule.rate_Hz:g}", "plan_hash": plan_hash(plan), "device": profile.port,
-            "device_hash": device_hash(profile)}
+            "device_hash": device_hash(profile), "plan_fields": _fields(_plan_identity(plan)),
+            "device_fields": _fields(_device_identity(profile))}
+
+
+def _changed(recorded: str | None, expected: str) -> str:
+    """`` (changed: hold_s 8 -> 5, holds from the 2nd on, holds.count 10 -> 8)`` from two ``*_fields`` header
+    values; empty where the file has none."""
+    if not recorded:
+        return ""
+    old = dict(p.split("=", 1) for p in recorded.split() if "=" in p)
+    new = dict(p.split("=", 1) for p in expected.split() if "=" in p)
+    keys = [k for k in dict.fromkeys([*old, *new]) if old.get(k) != new.get(k)]
+    said = [f"{k} {old[k]} -> {new[k]}" for k in keys if "[" not in k and k in old and k in new
+            and not _is_digest(old[k])]
+    said += [k for k in keys if "[" not in k and k in old and k in new and _is_digest(old[k])]
+    items: dict[str, list[int]] = {}
+    for k in keys:
+        if "[" in k:
+            items.setdefault(k[:k.index("[")], []).append(int(k[k.index("[") + 1:-1]))
+    said += [f"{base} {_ordinals(idx)}" for base, idx in items.items()]
+    return f" (changed: {', '.join(said)})" if said else ""
+
+
+def _ordinals(index: list[int]) -> str:
+    """[1, 2, 3, 4] -> 'from number 2 on'; [0, 4] -> 'number 1, 5' (counted from 1)."""
+    if len(index) > 3 and index == list(range(index[0], index[0] + len(index))):
+        n = index[0] + 1
+        return f"from number {n} on"
+    return "number " + ", ".join(str(i + 1) for i in index)
+
+
+def _is_digest(value: str) -> bool:
+    return re.fullmatch(r"[0-9a-f]{6}", value) is not None
 
 
 @dataclass
@@ -92,7 +150,9 @@ def _check_identity(path: Path, recorded: dict, expected: dict) -> None:
             raise RigError(f"this recording has no `{key}` in its header (written by another program or an older "
                            f"rodlab), so a resume cannot be checked against it; {fix}", path=path, key=key)
         if recorded[key] != expected[key]:
-            raise RigError(f"the recording was started with another {label}: {recorded[key]!r} in the file, "
+            fields = key.replace("_hash", "_fields")
+            changed = _changed(recorded.get(fields), expected[fields]) if fields in expected else ""
+            raise RigError(f"the recording was started with another {label}{changed}: {recorded[key]!r} in the file, "
                            f"{expected[key]!r} now; {fix}", path=path, key=key)
 
 

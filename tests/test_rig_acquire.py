@@ -86,17 +86,22 @@ def test_interrupted_acquisition_resumes_without_losing_samples(tmp_path):
     assert not (tmp_path / "r.rig.csv.lock").exists()       # the lock goes with the run
 
 
-@pytest.mark.parametrize("change,key", [
+@pytest.mark.parametrize("change,key,named", [
     (lambda prof, plan: (prof, RigPlan("1#", LoadSchedule(axes=("y",), masses=(2.0,), repeats=1, hold_s=0.5, rate_Hz=20.0),
                                        settle_window_s=0.25, settle_tolerance_mm=0.004, settle_timeout_s=3.0)),
-     "plan_hash"),
+     "plan_hash", "holds.count 10 -> 3, holds from number 2 on"),
     (lambda prof, plan: (prof, RigPlan("1#", LoadSchedule(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5,
-                                                      rate_Hz=10.0))), "sample_rate_Hz"),
-    (lambda prof, plan: (RigProfile(**{**prof.__dict__, "port": prof.port + "-other"}), plan), "device"),
+                                                      rate_Hz=10.0))), "sample_rate_Hz", None),
+    (lambda prof, plan: (RigProfile(**{**prof.__dict__, "port": prof.port + "-other"}), plan), "device", None),
     (lambda prof, plan: (RigProfile(**{**prof.__dict__, "channels": tuple(Channel(i, i, -1.0, 0.001)
-                                                                           for i in range(3))}), plan), "device_hash"),
-], ids=["other plan", "other rate", "other port", "other wiring"])
-def test_resume_with_another_plan_rate_or_device_is_refused(tmp_path, change, key):
+                                                                           for i in range(3))}), plan), "device_hash",
+     "channels number 1, 2, 3"),
+    (lambda prof, plan: (prof, RigPlan("1#", LoadSchedule(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=1.5,
+                                                          rate_Hz=20.0), settle_window_s=0.25,
+                                       settle_tolerance_mm=0.004, settle_timeout_s=3.0)),
+     "plan_hash", "(changed: hold_s 0.5 -> 1.5)"),
+], ids=["other plan", "other rate", "other port", "other wiring", "other hold time"])
+def test_resume_with_another_plan_rate_or_device_is_refused(tmp_path, change, key, named):
     """A re-run into a partly recorded file with another plan, rate or device changes nothing on disk and says
     what to do; the same plan resumes after the last complete hold."""
     from rodlab.stiffness_rig.resume import resume_point
@@ -114,6 +119,7 @@ def test_resume_with_another_plan_rate_or_device_is_refused(tmp_path, change, ke
         with pytest.raises(RigError) as ei:
             acquire(prof2, plan2, out, use_loader=True)
         assert ei.value.key == key and str(out) in str(ei.value) and "--new-file" in str(ei.value)
+        assert named is None or named in str(ei.value)          # the part that changed is named
         assert out.read_bytes() == recorded and not (tmp_path / "r.rig.csv.lock").exists()
         start = resume_point(out, prof, plan)
         assert (start.holds_done, start.holds_total, start.resuming) == (2, len(plan.schedule.holds()), True)

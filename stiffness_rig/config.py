@@ -9,7 +9,7 @@ Profile (``rodlab.rigprofile/1``)::
     protocol = "query"           # "query": request / one-line answer; "stream": the device pushes lines
     request = "R\\r\\n"            # query only: what asks for a reading
     separator = ","              # between channel values in a line
-    checksum = "none"            # "none" | "xor" (line ends with *HH, XOR of the bytes before '*')
+    checksum = "none"            # "none" | "xor" | "sum8" (line ends with *HH over the bytes before '*')
     retries = 5                  # attempts before the device counts as not answering
     [[channel]]                  # one per gauge: its position in the line, the tool axis, sign and scale
     index = 0

@@ -96,6 +96,12 @@ class InstrumentClient:
                               key="instrument.parity") from e
         self.link = Link(ser)
         self.driver.after_reopen()
+        try:
+            self.driver.startup(self.link)
+        except _port_errors() as e:
+            self.close()
+            raise DeviceError(f"cannot initialise {self._where()}: sending its init line failed ({e}); check the "
+                              f"cable and the profile's `init`", path=self.profile_path, key="instrument.init") from e
 
     def _reconnect(self, why: str) -> None:
         log.warning("%s: %s; reconnecting", self._where(), why)

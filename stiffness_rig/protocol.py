@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["xor_checksum", "encode_values", "parse_line"]
+__all__ = ["xor_checksum", "line_checksum", "encode_values", "parse_line", "garbage_reason"]
 
 
 def xor_checksum(payload: bytes) -> str:
@@ -14,11 +14,21 @@ def xor_checksum(payload: bytes) -> str:
     return f"{c:02X}"
 
 
+def line_checksum(payload: bytes, kind: str) -> str:
+    """Two upper-case hex digits of ``payload``'s checksum: ``xor`` (NMEA-style) or ``sum8`` (the bytes' sum
+    modulo 256)."""
+    if kind == "xor":
+        return xor_checksum(payload)
+    if kind == "sum8":
+        return f"{sum(payload) & 0xFF:02X}"
+    raise ValueError(f"unknown checksum {kind!r}; known: xor, sum8")
+
+
 def encode_values(values, separator: str = ",", checksum: str = "none") -> bytes:
     """One device line (with CR LF) carrying ``values`` in device units."""
     payload = separator.join(f"{v:+.4f}" for v in values).encode("ascii")
-    if checksum == "xor":
-        payload += b"*" + xor_checksum(payload).encode("ascii")
+    if checksum != "none":
+        payload += b"*" + line_checksum(payload, checksum).encode("ascii")
     return payload + b"\r\n"
 
 
@@ -42,11 +52,15 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
     if not text:
         return None, "an empty line"
     body, star, cs = text.rpartition("*")
-    if checksum == "xor":
+    if checksum != "none":
         if not star or len(cs) != 2:
             return None, "no '*HH' checksum at its end (checksum = \"none\" for a device that sends none)"
-        if xor_checksum(body.encode("ascii")) != cs.upper():
-            return None, "its XOR checksum does not match (noise on the line, or another checksum)"
+        if line_checksum(body.encode("ascii"), checksum) != cs.upper():
+            other = "sum8" if checksum == "xor" else "xor"
+            named = (f"its {checksum} checksum does not match, the {other} one does: set checksum = \"{other}\""
+                     if line_checksum(body.encode("ascii"), other) == cs.upper() else
+                     f"its {checksum} checksum does not match (noise on the line, or another checksum)")
+            return None, named
         text = body
     parts = text.split(separator)
     try:
@@ -55,8 +69,9 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
         vals = None
     if vals is not None and all(math.isfinite(v) for v in vals):
         return vals, ""
-    if checksum != "xor" and star and len(cs) == 2 and all(ch in "0123456789abcdefABCDEF" for ch in cs):
-        return None, "it ends with '*HH', a checksum: set checksum = \"xor\""
+    if checksum == "none" and star and len(cs) == 2 and all(ch in "0123456789abcdefABCDEF" for ch in cs):
+        kind = next((k for k in ("xor", "sum8") if line_checksum(body.encode("ascii"), k) == cs.upper()), "xor")
+        return None, f"it ends with '*HH', a checksum: set checksum = \"{kind}\""
     if len(parts) != n_values:
         return None, f"{len(parts)} value(s) separated by {separator!r}, the profile expects n_values = {n_values}"
     return None, "a value that is not a finite number (units or a status word in the line?)"

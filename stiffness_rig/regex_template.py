@@ -1,7 +1,8 @@
 """An answer template that an ``ascii_regex`` instrument's pattern accepts, for its simulator (``rodlab rig
 simulator``): the pattern is parsed with Python's own regular-expression parser and walked to its shortest
 matching text (a repeat its fewest times, an alternation its first branch, a class its first member), each named
-group becoming a number field ``{name:FORMAT}`` in the first format the pattern accepts. The text is checked
+group becoming a number field ``{name:FORMAT}`` in the first format the pattern accepts (a checked line's ``body``
+group is walked as its contents, its ``cs`` group is the field ``{cs}``, filled by the simulator). The text is checked
 against the pattern before it is used. A new-user trial's ``^G1\\s+(?P<pos>...)\\s*(mm|MM)$`` had been answered
 ``G1s+-0.05670s*(mm|MM)`` by the character-wise template it replaced, and acquisition then blamed the cable.
 """
@@ -16,6 +17,7 @@ except ImportError:                             # pragma: no cover - Python 3.10
     import sre_constants as _c
     import sre_parse as _p
 
+from .drivers.ascii_regex import CHECKED_GROUPS
 from .errors import RigError
 
 __all__ = ["template_of", "NUMBER_FORMATS"]
@@ -32,7 +34,7 @@ def template_of(pattern: str, key: str = "pattern") -> str:
         parsed = _p.parse(pattern)
     except re.error as e:
         raise RigError(f"pattern {pattern!r} is not a regular expression: {e}", key=key) from e
-    names = {index: name for name, index in parsed.state.groupdict.items()}
+    names = {index: name for name, index in parsed.state.groupdict.items() if name != "body"}
     regex = re.compile(pattern)
     for fmt in NUMBER_FORMATS:
         template = _walk(parsed, names, fmt)
@@ -44,8 +46,8 @@ def template_of(pattern: str, key: str = "pattern") -> str:
 
 
 def _accepts(regex, template: str, value: float) -> bool:
-    fields = {name: value for name in regex.groupindex}
-    text = template.format(**fields)
+    fields = {name: value for name in regex.groupindex if name not in CHECKED_GROUPS}
+    text = template.format(**fields, cs="00")
     m = regex.search(text.strip())
     return m is not None and all(abs(float(m.group(n)) - value) <= 1e-3 * max(1.0, abs(value)) for n in fields)
 
@@ -77,7 +79,7 @@ def _token(op, av, names: dict, fmt: str) -> str | None:
     if op is _c.SUBPATTERN:
         group, sub = av[0], av[-1]
         if group in names:
-            return "{" + names[group] + ":" + fmt + "}"
+            return "{cs}" if names[group] == "cs" else "{" + names[group] + ":" + fmt + "}"
         return _walk(sub, names, fmt)
     if op is getattr(_c, "ATOMIC_GROUP", None):
         return _walk(av, names, fmt)

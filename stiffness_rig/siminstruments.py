@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import select
 import struct
 import threading
@@ -26,7 +27,7 @@ from .drivers.digimatic import format_digimatic
 from .instrument_profile import UNITS
 from .model import Hold, RigModel
 from .ptylink import PtyLink
-from .protocol import encode_values
+from .protocol import encode_values, line_checksum
 from .regex_template import template_of
 from .simdevice import Faults
 
@@ -186,19 +187,30 @@ def _lines(buf: bytes, eol: bytes = b"\n"):
 
 
 class _TextInstrument(PtyInstrument):
-    """A text protocol: a ``LOAD ...`` line commands the loader, a request line is answered."""
+    """A text protocol: a ``LOAD ...`` line commands the loader, a request line is answered. With ``init`` set
+    (an instrument in remote mode only on request) it answers and pushes nothing until that line came
+    (acknowledged ``OK``)."""
 
     request = ""
+    init = ""
+    initialised = False
 
     def reply(self) -> bytes:
         raise NotImplementedError
+
+    @property
+    def ready(self) -> bool:
+        return not self.init or self.initialised
 
     def handle(self, buf: bytes) -> bytes:
         lines, rest = _lines(buf)
         for text in lines:
             if text.upper().startswith("LOAD"):
                 self._write(self.bench.command(text))
-            elif text == self.request.strip():
+            elif self.init and text == self.init.strip():
+                self.initialised = True
+                self._write(b"OK\r\n")
+            elif text == self.request.strip() and self.ready:
                 self.answer(self.reply)
         return rest
 
@@ -239,13 +251,23 @@ class SimAsciiRegex(_TextInstrument):
 
     sources: dict = field(default_factory=dict)    # {template field: callable} beside the state's keys
 
+    checksum: str = "none"
+    pattern: str = ""              # the instrument's pattern: where its groups body and cs lie (a checksum)
+    init: str = ""
+
     def reply(self) -> bytes:
         values = self._values()
         values.update({k: f() for k, f in self.sources.items()})
-        return (self.template.format(**values) + self.eol).encode("ascii")
+        text = self.template.format(**values, cs="00")
+        if self.checksum != "none":
+            m = re.search(self.pattern, text)
+            cs = line_checksum(m.group("body").encode("ascii"), self.checksum)
+            text = text[:m.start("cs")] + cs + text[m.end("cs"):]
+        return (text + self.eol).encode("ascii")
 
     def push(self) -> None:
-        self.answer(self.reply)
+        if self.ready:
+            self.answer(self.reply)
 
 
 @dataclass
@@ -270,8 +292,11 @@ class SimNumericLine(_TextInstrument):
         return encode_values([round(f() if callable(f) else st[f], 4) for f in self.fields], self.separator,
                              self.checksum)
 
+    init: str = ""
+
     def push(self) -> None:
-        self.answer(self.reply)
+        if self.ready:
+            self.answer(self.reply)
 
 
 def modbus_crc(frame: bytes) -> bytes:
@@ -350,11 +375,13 @@ def simulators_for(profile, bench: SimBench, links: dict, faults: Faults | None 
         elif ins.protocol == "numeric_line":
             fields = tuple(by_value.get(str(i), lambda: 0.0) for i in range(int(c["n_values"])))
             sims.append(SimNumericLine(**kw, fields=fields, request=unescape(c["request"]).strip(),
-                                       stream=c["mode"] == "stream", checksum=c["checksum"], separator=c["separator"]))
+                                       stream=c["mode"] == "stream", checksum=c["checksum"], separator=c["separator"],
+                                       init=unescape(c.get("init", "")).strip()))
         elif ins.protocol == "ascii_regex":
             template = template_of(c["pattern"], key=f"instruments.{ins.name}.pattern")
             sims.append(SimAsciiRegex(**kw, template=template, request=unescape(c["request"]).strip(),
-                                      eol=unescape(c.get("eol", "\\n")), sources=by_value))
+                                      eol=unescape(c.get("eol", "\\n")), sources=by_value, pattern=c["pattern"],
+                                      checksum=c.get("checksum", "none"), init=unescape(c.get("init", "")).strip()))
         elif ins.protocol == "modbus_rtu":
             regs = {}
             for r in ins.driver().registers:

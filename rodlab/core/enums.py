@@ -261,3 +261,4 @@ class Checksum(_StrEnum):
 
     NONE = "none"        #: no checksum
     XOR = "xor"          #: the line ends with ``*HH``, the XOR of the bytes before ``*``
+    SUM8 = "sum8"        #: the line ends with ``*HH``, the sum of the bytes before ``*`` modulo 256

@@ -1,15 +1,20 @@
 """``ascii_regex``: a sensor controller's ASCII protocol (Keyence, Ono Sokki, most amplifiers): a request line
 and an answer matched by a regular expression whose named groups are the values, e.g. ``request = "M0\\r"``,
 ``pattern = "^M0,(?P<out1>[-+0-9.]+),(?P<out2>[-+0-9.]+)$"``. Scale and units of each value are the channel's
-(the profile). An empty request: the controller pushes its lines."""
+(the profile). An empty request: the controller pushes its lines. A checked line names the checksummed text
+``(?P<body>...)`` and its two hex digits ``(?P<cs>..)``, e.g.
+``pattern = "^(?P<body>M0,(?P<out1>[-+0-9.]+))\\*(?P<cs>[0-9A-Fa-f]{2})$"`` with ``checksum = "xor"`` or ``"sum8"``."""
 from __future__ import annotations
 
 import math
 import re
 
-from .base import Driver, Garbage, Link, Setting, unescape
+from rodlab.core.enums import Checksum
 
-__all__ = ["AsciiRegex"]
+from ..protocol import line_checksum
+from .base import INIT_SETTING, Driver, Garbage, Link, Setting, SettingError, unescape
+
+__all__ = ["AsciiRegex", "CHECKED_GROUPS"]
 
 
 class AsciiRegex(Driver):
@@ -18,16 +23,26 @@ class AsciiRegex(Driver):
     settings = (Setting("request", str, "", "what asks for a reading (empty: the controller pushes lines)"),
                 Setting("pattern", str, None, "regular expression of one answer line (stripped), a named group "
                                               "(?P<name>...) per value"),
-                Setting("eol", str, "\\n", "the character that ends an answer line"))
+                Setting("eol", str, "\\n", "the character that ends an answer line"),
+                Setting("checksum", str, Checksum.NONE.value, "none, xor or sum8 of the pattern's group body, "
+                        "compared with its group cs (two hex digits)", tuple(m.value for m in Checksum)),
+                INIT_SETTING)
     simulator = "SimAsciiRegex"
 
     def __init__(self, config: dict) -> None:
         super().__init__(config)
         self.regex = re.compile(config["pattern"])
+        self.checksum = str(config.get("checksum", Checksum.NONE.value))
+        missing = [g for g in CHECKED_GROUPS if g not in self.regex.groupindex]
+        if self.checksum != Checksum.NONE.value and missing:
+            raise SettingError("pattern", f"checksum = {self.checksum!r} needs the pattern's groups (?P<body>...) "
+                                          f"(the checksummed text) and (?P<cs>..) (its two hex digits); missing: "
+                                          f"{', '.join(missing)}, e.g. pattern = "
+                                          f"\"^(?P<body>M0,(?P<out1>[-+0-9.]+))\\\\*(?P<cs>[0-9A-Fa-f]{{2}})$\"")
 
     @property
     def values(self) -> tuple:
-        return tuple(self.regex.groupindex)
+        return tuple(g for g in self.regex.groupindex if g not in CHECKED_GROUPS)
 
     def poll(self, link: Link) -> dict:
         request = unescape(self.config.get("request", ""))
@@ -42,6 +57,7 @@ class AsciiRegex(Driver):
         m = self.regex.search(text)
         if not m:
             raise Garbage(raw, f"the pattern {self.regex.pattern!r} does not match it")
+        self._check(raw, m)
         out = {}
         for k in self.values:
             try:
@@ -52,3 +68,19 @@ class AsciiRegex(Driver):
                 raise Garbage(raw, f"group {k} is not finite")
             out[k] = v
         return out
+
+    def _check(self, raw: bytes, m: re.Match) -> None:
+        """Garbage where the line's checksum does not match its body's."""
+        if self.checksum == Checksum.NONE.value:
+            return
+        body, cs = m.group("body") or "", (m.group("cs") or "").upper()
+        if line_checksum(body.encode("ascii", "replace"), self.checksum) != cs:
+            other = next((k.value for k in Checksum if k.value not in (Checksum.NONE.value, self.checksum)
+                          and line_checksum(body.encode("ascii", "replace"), k.value) == cs), None)
+            raise Garbage(raw, f"its {self.checksum} checksum does not match" + (
+                f", the {other} one does: set checksum = \"{other}\"" if other else " (noise on the line, or "
+                "another checksum, or another body group)"))
+
+
+#: the pattern's groups of a checked line, not values
+CHECKED_GROUPS = ("body", "cs")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-__all__ = ["Setting", "SettingError", "Driver", "Link", "Garbage", "NoAnswer", "unescape"]
+__all__ = ["Setting", "SettingError", "Driver", "Link", "Garbage", "NoAnswer", "unescape", "INIT_SETTING"]
 
 
 class SettingError(ValueError):
@@ -115,3 +115,23 @@ class Driver:
 
     def after_reopen(self) -> None:
         """Called when the port was reopened (a driver holding state on the old port drops it)."""
+
+    def startup(self, link: Link) -> None:
+        """Called after each opening of the port: a text driver sends its ``init`` line (remote mode, start
+        streaming) and drops what answers it; nothing by default."""
+        init = unescape(str(self.config.get("init", "")))
+        if not init:
+            return
+        link.clear_input()
+        link.write(init.encode("ascii"))
+        try:
+            link.readline(unescape(str(self.config.get("eol", "\\n"))).encode("ascii"))   # its acknowledgement, if any
+        except NoAnswer:
+            pass
+        link.clear_input()
+
+
+#: the ``init`` setting of a text protocol (:meth:`Driver.startup`)
+INIT_SETTING = Setting("init", str, "", "sent once after each opening of the port (remote mode, start streaming; "
+                                        "its answer is dropped); not a zero or tare: rodlab zeroes each series "
+                                        "from its unloaded start hold, and a tare at a reconnect would shift it")

@@ -1,0 +1,94 @@
+"""A controller's line checksum over the text its pattern names, both checksums of the line protocols, and an
+instrument that answers only once its ``init`` line came (remote mode): end to end on the pty simulators."""
+from __future__ import annotations
+
+import pytest
+
+from rodlab.stiffness_rig import RigError
+from rodlab.stiffness_rig.config import read_profile
+from rodlab.stiffness_rig.drivers import Garbage
+from rodlab.stiffness_rig.drivers.ascii_regex import AsciiRegex
+from rodlab.stiffness_rig.protocol import encode_values, garbage_reason, line_checksum, parse_line
+from rodlab.stiffness_rig import siminstruments as si
+from rodlab.stiffness_rig.model import RigModel
+from rodlab.stiffness_rig.siminstruments import Faults, SimBench
+
+from test_rig_instruments import C, _check_fit, _instrument, _profile, _run
+
+CHECKED = r"^(?P<body>M0,(?P<out1>[-+0-9.]+),(?P<out2>[-+0-9.]+))\*(?P<cs>[0-9A-Fa-f]{2})$"
+
+
+def test_sum8_is_the_bytes_sum_and_numeric_lines_carry_either_checksum():
+    assert line_checksum(b"AB", "sum8") == f"{(65 + 66) % 256:02X}" and line_checksum(b"AB", "xor") == "03"
+    for kind in ("xor", "sum8"):
+        line = encode_values([1.5, -2.25], ",", kind)
+        assert parse_line(line, 2, ",", kind) == [1.5, -2.25]
+        other = "sum8" if kind == "xor" else "xor"
+        assert parse_line(line, 2, ",", other) is None
+        assert f'set checksum = "{kind}"' in garbage_reason(line, 2, ",", other)
+        assert f'set checksum = "{kind}"' in garbage_reason(line, 2, ",", "none")
+
+
+class _Line:
+    """A link that gives one fixed answer line."""
+
+    def __init__(self, raw: bytes) -> None:
+        self.raw = raw
+
+    def clear_input(self) -> None:
+        pass
+
+    def write(self, data: bytes) -> None:
+        pass
+
+    def readline(self, eol: bytes = b"\n") -> bytes:
+        return self.raw
+
+
+def test_a_checked_controller_line_is_read_and_a_corrupted_one_is_garbage():
+    body = "M0,+12.500,-3.250"
+    d = AsciiRegex({"request": "M0\\r", "pattern": CHECKED, "checksum": "sum8"})
+    assert d.values == ("out1", "out2")                       # body and cs are not values
+    good = f"{body}*{line_checksum(body.encode(), 'sum8')}\r\n".encode()
+    assert d.poll(_Line(good)) == {"out1": 12.5, "out2": -3.25}
+    with pytest.raises(Garbage, match="sum8 checksum does not match"):
+        d.poll(_Line(good.replace(b"12.5", b"12.6")))          # one digit changed on the line
+    xor_line = f"{body}*{line_checksum(body.encode(), 'xor')}\r\n".encode()
+    with pytest.raises(Garbage, match='the xor one does: set checksum = "xor"'):
+        d.poll(_Line(xor_line))
+
+
+def test_a_checksum_without_the_body_and_cs_groups_is_refused_at_the_pattern(tmp_path):
+    body = _instrument("ctl", tmp_path / "ttyC", "ascii_regex",
+                       [{"quantity": "displacement", "axis": "y", "value": "out1"}], request="M0\\r",
+                       pattern=r"^M0,(?P<out1>[-+0-9.]+)\*[0-9A-F]{2}$".replace("\\", "\\\\"), checksum="xor")
+    with pytest.raises(RigError) as ei:
+        read_profile(_profile(tmp_path, body, None))
+    assert ei.value.key == "instrument[1].pattern" and "(?P<body>" in str(ei.value) and "cs" in str(ei.value)
+
+
+def test_a_checked_controller_in_remote_mode_records_the_truth_through_noise(tmp_path):
+    """A controller that answers only after its remote-mode line (``init``) and ends each answer with a sum8
+    checksum, on a line with 5 % garbage and a replug: the profile's simulator (made from the profile alone)
+    and the acquisition agree; the fit is the rod's compliance within 1 %."""
+    bench = SimBench(RigModel(C, seed=12))
+    links = {"ctl": tmp_path / "ttyC"}
+    body = _instrument("ctl", links["ctl"], "ascii_regex",
+                       [{"quantity": "displacement", "axis": "y", "value": "out1", "units": "mm"},
+                        {"quantity": "displacement", "axis": "z", "value": "out2", "units": "mm"}],
+                       request="M0\\r", pattern=CHECKED.replace("\\", "\\\\"), checksum="sum8", init="R0\\r")
+    profile = _profile(tmp_path, body, "ctl")
+    faults = Faults(garbage=0.05, disconnect=0.01, reconnect_after_s=0.2)
+    devices = si.simulators_for(read_profile(profile), bench, links, faults)
+    assert devices[0].init == "R0" and not devices[0].ready
+    _check_fit(_run(tmp_path, devices, profile))
+    assert devices[0].initialised
+    assert all(b"*" in data for _, data in devices[0].sent)
+
+
+def test_without_its_init_line_the_remote_mode_simulator_stays_silent(tmp_path):
+    """The simulator's side of the contract the test above relies on: no answer before ``init``."""
+    bench = SimBench(RigModel(C, seed=13))
+    ctl = si.SimAsciiRegex(bench, tmp_path / "ttyC", template="M0,{y_mm:+.5f},{z_mm:+.5f}", request="M0",
+                           init="R0")
+    assert ctl.handle(b"M0\r") == b"" and ctl.sent == []

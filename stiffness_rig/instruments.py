@@ -144,6 +144,8 @@ class InstrumentClient:
     def read(self) -> tuple[dict, float]:
         """One reading: ({value name: number}, answer time ``time.monotonic()`` [s])."""
         failures = cycles = 0
+        garbage0, timeouts0 = self.garbage, self.timeouts       # the counts of this reading, for its error
+        self.last_garbage = ""                                  # an old answer is not this silence's cause
         while True:
             got = self._poll_once()
             if got is not None:
@@ -154,8 +156,9 @@ class InstrumentClient:
                 if cycles > self.reconnect_attempts:
                     last = (f"; the last: {self.last_garbage}" if self.last_garbage else
                             "; no answer at all (the request, the Modbus slave address or the baud rate?)")
-                    raise DeviceError(f"{self._where()} answers nothing usable ({self.garbage} garbage answers, "
-                                      f"{self.timeouts} timeouts) although its port opens{last}; check its protocol "
+                    raise DeviceError(f"{self._where()} answers nothing usable ({self.garbage - garbage0} garbage "
+                                      f"answers, {self.timeouts - timeouts0} timeouts in a row) although its port "
+                                      f"opens{last}; check its protocol "
                                       f"settings, baud rate and cable, then re-run the same command (a recording "
                                       f"already started resumes after its last complete hold)",
                                       path=self.profile_path, key="instrument")

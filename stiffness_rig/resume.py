@@ -35,7 +35,7 @@ def _plan_identity(plan: RigPlan) -> dict:
     pr = plan.schedule
     return {"rod": plan.rod, "holds": [[a.value, r, str(ph), m] for a, r, ph, m in pr.holds()],
             "hold_s": pr.hold_s, "rate_Hz": pr.rate_Hz,
-            "measured": {k: list(v) for k, v in sorted(pr.measured.items())},
+            "measured": {k: list(plan.recorded(k)) for k in sorted(pr.measured)},     # what is recorded
             "settle": [plan.settle_window_s, plan.settle_tolerance_mm, plan.settle_timeout_s]}
 
 

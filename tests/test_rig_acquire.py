@@ -285,3 +285,16 @@ def test_damaged_recordings_say_what_happened(tmp_path, edit, message):
     path.write_text(edit(path.read_text()))
     with pytest.raises(RigError, match=message):
         read_recording(path)
+
+
+def test_a_plan_that_records_other_gauges_is_another_plan_to_a_resume():
+    """The schedule's default components and the same plan listing them in [measured] record different gauges
+    under a z load (every gauge against x and z): a resume must not join them (review)."""
+    import dataclasses
+
+    from rodlab.stiffness_rig.resume import plan_hash
+    plan = _plan(axes=("z",))
+    stated = dataclasses.replace(plan, measured_stated=frozenset({"z"}))
+    assert plan.recorded("z") != stated.recorded("z")
+    assert plan_hash(plan) != plan_hash(stated)
+    assert plan_hash(plan) == plan_hash(dataclasses.replace(plan))

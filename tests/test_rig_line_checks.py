@@ -92,3 +92,39 @@ def test_without_its_init_line_the_remote_mode_simulator_stays_silent(tmp_path):
     ctl = si.SimAsciiRegex(bench, tmp_path / "ttyC", template="M0,{y_mm:+.5f},{z_mm:+.5f}", request="M0",
                            init="R0")
     assert ctl.handle(b"M0\r") == b"" and ctl.sent == []
+
+
+def test_a_silent_instrument_is_not_blamed_on_an_old_garbage_line():
+    """An instrument that sent one garbage line, then a good reading, then nothing: the error says 'no answer at
+    all' with this reading's counts (review: the early garbage line had been shown as the cause)."""
+    from rodlab.stiffness_rig.drivers import NoAnswer
+    from rodlab.stiffness_rig.errors import DeviceError
+    from rodlab.stiffness_rig.instrument_profile import Instrument
+    from rodlab.stiffness_rig.instruments import InstrumentClient
+
+    class Script:
+        def __init__(self):
+            self.calls = 0
+
+        def after_reopen(self):
+            pass
+
+        def startup(self, link):
+            pass
+
+        def poll(self, link):
+            self.calls += 1
+            if self.calls == 1:
+                raise Garbage(b"ERR 7", "the pattern does not match it")
+            if self.calls == 2:
+                return {"out1": 1.0}
+            raise NoAnswer()
+
+    ins = Instrument("ctl", "loop://", "ascii_regex", {"pattern": "^(?P<out1>.*)$"}, (), retries=2, timeout_s=0.05)
+    client = InstrumentClient(ins, reconnect_attempts=1)
+    client.driver = Script()
+    assert client.read()[0] == {"out1": 1.0} and client.garbage == 1      # the garbage line, then the reading
+    with pytest.raises(DeviceError) as ei:
+        client.read()
+    text = str(ei.value)
+    assert "no answer at all" in text and "ERR 7" not in text and "0 garbage answers" in text

@@ -22,7 +22,7 @@ from rodlab.core.errors import did_you_mean
 from rodlab.core.fileio import atomic_write_json, read_json, read_text_checked, separator_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
-from rodlab.core.schema_table import EMPTY_READING_FIX, decimal_comma_fix, sub_micrometre
+from rodlab.core.schema_table import EMPTY_READING_FIX, READING_COLUMNS, decimal_comma_fix, sub_micrometre
 
 from .errors import CalibrationError
 from .rod import Rod
@@ -133,7 +133,7 @@ def cell_number(cell, p, line: int, col: str) -> float:
         fix = decimal_comma_fix(cell) if isinstance(cell, str) else None
         tail = f": a decimal comma (a locale's export); {fix}" if fix else ""
         if not tail and isinstance(cell, str) and not cell.strip():
-            tail = f": {EMPTY_READING_FIX}" if col.endswith("_mm") else ""
+            tail = f": {EMPTY_READING_FIX}" if col in READING_COLUMNS else ""
         raise CalibrationError(f"expected a number, got {cell!r}{tail}", path=p, line=line, key=col) from None
     if not math.isfinite(v):
         raise CalibrationError(f"expected a finite number, got {cell!r}", path=p, line=line, key=col)

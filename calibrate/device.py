@@ -212,6 +212,12 @@ def _check_convention(p: Path, sensors: list) -> None:
     if abs(A[1, 2]) > CONVENTION_TOL:
         raise CalibrationError(f"{{D}} has y in the plane of sensors 1 and 2: sensor 2's z must be 0, got "
                                f"{A[1, 2]:g}; express the axes in that frame", path=p, key="sensors[2].axis_D")
+    if A[1, 1] <= 0:                      # review: a reversed sensor 2 had been blamed on sensor 3
+        raise CalibrationError(f"{{D}} has y on sensor 2's side of the x axis: sensor 2's y must be > 0, got "
+                               f"{A[1, 1]:g}. A sensor mounted the other way round (its reading falling as the ball "
+                               f"moves along its axis) is not a device axis: keep axis_D as designed and turn the "
+                               f"sensor round, or write its readings as 2 x zero_mm - reading", path=p,
+                               key="sensors[2].axis_D")
     if np.linalg.cond(A) > MAX_CONDITION:
         raise CalibrationError(f"the three sensor axes are (nearly) coplanar (condition {np.linalg.cond(A):.3g}; expected "
                                f"<= {MAX_CONDITION:g}): each sensor's axis_D is the direction its reading grows in "

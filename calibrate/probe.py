@@ -223,12 +223,31 @@ def _check_scale(probes: ProbeSet, device: Device) -> None:
     r = float(np.median(ratios))
     if DISTANCE_RATIO[0] <= r <= DISTANCE_RATIO[1]:
         return
+    _check_device_scale(device, r)
     unit = min(((0.001, "in metres: multiply x_mm, y_mm, z_mm by 1000"), (1000.0, "in um: divide them by 1000"),
                 (1 / 25.4, "in inches: multiply them by 25.4")), key=lambda u: abs(np.log(r / u[0])))
     cause = unit[1] if abs(np.log(r / unit[0])) < np.log(1.5) else "not those of this device file's features"
     raise CalibrationError(f"the probed features lie {r:.4g} x as far apart as the device file's features_D_mm "
                            f"({device.path or device.name}): the coordinates are {cause}", path=probes.path,
                            key="x_mm")
+
+
+#: the span of a device's features [mm] a device file in mm can have (a MultiCal's balls and nests lie tens of mm
+#: apart); outside it the device file is the one in other units
+FEATURE_SPAN_MM = (2.0, 5000.0)
+
+
+def _check_device_scale(device: Device, ratio: float) -> None:
+    """Blame the device file, not the probe file, where its own features span no plausible size in mm (review: a
+    device file in metres had been reported as a probe file in um)."""
+    F = np.array(list(device.features_D_mm.values()), float)
+    span = float(np.max(np.linalg.norm(F[:, None] - F[None], axis=-1)))
+    if FEATURE_SPAN_MM[0] <= span <= FEATURE_SPAN_MM[1]:
+        return
+    unit = "metres (multiply them by 1000)" if span < FEATURE_SPAN_MM[0] else "um (divide them by 1000)"
+    raise CalibrationError(f"the device file's features_D_mm span {span:.4g} mm, the probed features lie {ratio:.4g} x "
+                           f"as far apart: the device file's features look written in {unit}", path=device.path,
+                           key="features_D_mm")
 
 
 def _fit_position(probes: ProbeSet, device: Device, j: int) -> PositionFit:

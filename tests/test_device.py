@@ -69,6 +69,8 @@ def test_device_round_trip_and_conversion(tmp_path):
     (lambda d: d["sensors"][1].update(axis_D=[0.0, 0.6, 0.8]), "sensors[2].axis_D"),
     (lambda d: d["sensors"][2].update(axis_D=[0.6, 0.8, 0.0]), "sensors"),
     (lambda d: d["sensors"][2].update(axis_D=[0.0, 0.0, 2.0]), "sensors[3].axis_D"),
+    (lambda d: d["sensors"][1].update(axis_D=[0.0, -1.0, 0.0]), "sensors[2].axis_D"),     # sensor 2 reversed
+    (lambda d: d["sensors"][2].update(axis_D=[0.0, 0.0, -1.0]), "sensors[3].axis_D"),     # sensor 3 reversed
     (lambda d: d["sensors"][1].update(zero_mm=40.0), "sensors[2].zero_mm"),
     (lambda d: d["sensors"][0].update(range_mm=[30.0, 0.0]), "sensors[1].range_mm"),
     (lambda d: d["sensors"][0].pop("zero_mm"), "sensors[1].zero_mm"),

@@ -115,6 +115,23 @@ def test_probe_files_swapped_in_metres_or_with_an_accuracy_in_um(raw, tmp_path, 
     assert "in metres: multiply x_mm, y_mm, z_mm by 1000" in capsys.readouterr().err
     assert main(_probe(raw, tmp_path, "acc.probe.csv", lambda ls: ["# accuracy_mm: 5"] + ls[1:])) == 2
     assert "if it is in um, write 0.005" in capsys.readouterr().err
+    assert main(_probe(raw, tmp_path, "noacc.probe.csv", lambda ls: ["# accuracy_mm: "] + ls[1:])) == 2
+    err = capsys.readouterr().err                     # not a reading: not 'the sensor lost the ball' (review)
+    assert "accuracy_mm" in err and "lost the ball" not in err
+
+
+def test_a_device_file_in_metres_is_named_not_the_probe_file(raw, tmp_path, capsys):
+    """The device file's features in metres, the probe file right: the device file and its key are named (review:
+    the probe file had been called 'in um')."""
+    data = json.loads((raw / "multical.device.json").read_text())
+    data["features_D_mm"] = {k: [v / 1000 for v in xyz] for k, xyz in data["features_D_mm"].items()}
+    device = tmp_path / "m.device.json"
+    device.write_text(json.dumps(data, indent=1))
+    args = _probe(raw, tmp_path, "ok.probe.csv", lambda ls: ls)
+    args[args.index("--device") + 1] = str(device)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "m.device.json" in err and "features_D_mm" in err and "metres" in err and "probe.csv" not in err
 
 
 def test_misalign_without_raw_readings_is_refused(tmp_path, capsys):

@@ -111,6 +111,9 @@ def _one_of_problems(header: list[str], schema: dict, path: str, line: int) -> l
 
 #: what an empty reading of a point needs (a device trial: "write a value" had been the advice for a sensor that
 #: lost the ball); the schema check and the campaign reader say it alike
+#: the columns that are a measured point's readings (a campaign's x/y/z or raw s1-s3, a probe file's x/y/z): an
+#: empty one of these gets :data:`EMPTY_READING_FIX`; any other empty mm cell (a length, a sigma) the plain fix
+READING_COLUMNS = frozenset({"x_mm", "y_mm", "z_mm", "s1_mm", "s2_mm", "s3_mm"})
 EMPTY_READING_FIX = ("a point without this reading (the sensor lost the ball, the instrument missed the target) cannot "
                      "be used: measure the point again, or delete its row")
 
@@ -120,7 +123,7 @@ def _cell_problem(cell: str, c: dict, name: str, path: str, line: int) -> Proble
     if not s:
         if c.get("nullable"):
             return None
-        return Problem(path, "empty cell", line, name, "write a value" if c.get("unit") != "mm" else EMPTY_READING_FIX)
+        return Problem(path, "empty cell", line, name, EMPTY_READING_FIX if name in READING_COLUMNS else "write a value")
     if c["type"] == "string":
         if "enum" in c and s not in c["enum"]:
             return Problem(path, f"expected one of {c['enum']}, got {s!r}", line, name,

@@ -73,5 +73,23 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
         kind = next((k for k in ("xor", "sum8") if line_checksum(body.encode("ascii"), k) == cs.upper()), "xor")
         return None, f"it ends with '*HH', a checksum: set checksum = \"{kind}\""
     if len(parts) != n_values:
+        other = _other_separator(text, n_values, separator)
+        if other is not None:
+            return None, f"{n_values} values separated by {other!r}: set separator = {other!r}"
         return None, f"{len(parts)} value(s) separated by {separator!r}, the profile expects n_values = {n_values}"
     return None, "a value that is not a finite number (units or a status word in the line?)"
+
+
+def _other_separator(text: str, n_values: int, separator: str) -> str | None:
+    """The common separator that splits ``text`` into ``n_values`` numbers where ``separator`` does not (review:
+    a ';' line had been blamed on n_values)."""
+    for sep in (",", ";", "\t", " "):
+        if sep == separator:
+            continue
+        parts = text.split(sep)
+        try:
+            if len(parts) == n_values and all(math.isfinite(float(p)) for p in parts):
+                return sep
+        except ValueError:
+            continue
+    return None

@@ -128,3 +128,36 @@ def test_a_silent_instrument_is_not_blamed_on_an_old_garbage_line():
         client.read()
     text = str(ei.value)
     assert "no answer at all" in text and "ERR 7" not in text and "0 garbage answers" in text
+
+
+def test_a_float32_load_cell_with_its_words_swapped_is_named_at_word_order(tmp_path):
+    """A Modbus amplifier sending its float32 low word first to a profile that says big: each reading is
+    garbage naming word_order (review: -5e32 N had been a number like any other), the right order reads the
+    load cell."""
+    import serial
+
+    from rodlab.stiffness_rig.drivers import Link
+    from rodlab.stiffness_rig.drivers.modbus_rtu import ModbusRTU
+    bench = SimBench(RigModel(C, seed=14, load_cell_noise_N=0.0))
+    cell = si.SimModbusRTU(bench, tmp_path / "ttyF", slave=1, registers={0: (lambda: 19.6133, "float32", "little", 3,
+                                                                             1.0)})
+    cell.start()
+    try:
+        ser = serial.serial_for_url(str(cell.port), timeout=0.5)
+        for order, expect in (("big", 'set word_order = "little"'), ("little", None)):
+            d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
+                                                       "word_order": order}]})
+            if expect:
+                with pytest.raises(Garbage, match=expect):
+                    d.poll(Link(ser))
+            else:
+                assert d.poll(Link(ser))["f"] == pytest.approx(19.6133, rel=1e-6)
+        ser.close()
+    finally:
+        cell.stop()
+
+
+def test_a_line_in_another_separator_names_the_separator():
+    assert "set separator = ';'" in garbage_reason(b"1.0;2.0;3.0\r\n", 3, ",")
+    assert "set separator = '\\t'" in garbage_reason(b"1.0\t2.0\t3.0\r\n", 3, ",")
+    assert "n_values = 3" in garbage_reason(b"1.0,2.0\r\n", 3, ",")          # a value short: the count

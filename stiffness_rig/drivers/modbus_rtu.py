@@ -45,6 +45,19 @@ def _register(entry, k: int) -> dict:
     return reg
 
 
+#: the magnitudes a float32 register of an instrument can hold; its two words swapped give ~1e-30 or ~1e30
+FLOAT32_PLAUSIBLE = (1e-20, 1e15)
+
+
+def _check_float(v: float, reg: dict) -> None:
+    """Garbage naming ``word_order`` for a float32 no instrument reads (review: a load cell's float32 with its
+    words swapped reads ~-5e32 N)."""
+    if v != 0.0 and math.isfinite(v) and not FLOAT32_PLAUSIBLE[0] <= abs(v) <= FLOAT32_PLAUSIBLE[1]:
+        other = "little" if reg["word_order"] == "big" else "big"
+        raise Garbage(b"", f"register {reg['name']} reads {v:.3g}, no instrument's value: its two words in the "
+                           f"other order? set word_order = \"{other}\"")
+
+
 class ModbusRTU(Driver):
     name = "modbus_rtu"
     summary = "Modbus RTU holding / input registers (int16/32, float32, word order, scale) via minimalmodbus"
@@ -93,6 +106,7 @@ class ModbusRTU(Driver):
             v = inst.read_long(a, fc, signed=t == "int32", byteorder=order)
         else:
             v = inst.read_float(a, fc, 2, byteorder=order)
+            _check_float(float(v), reg)
         return float(v) * float(reg["scale"])
 
     def poll(self, link: Link) -> dict:

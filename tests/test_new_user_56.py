@@ -4,6 +4,7 @@ with an accuracy in um, a missing reading."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -137,3 +138,23 @@ def test_a_device_file_in_metres_is_named_not_the_probe_file(raw, tmp_path, caps
 def test_misalign_without_raw_readings_is_refused(tmp_path, capsys):
     assert main(["simulate-campaign", "--rod", "rod1", "--misalign-deg", "2", "-o", str(tmp_path / "x")]) == 2
     assert "give --raw with it" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
+def test_the_same_two_labels_swapped_everywhere_names_the_device_file(raw, tmp_path, capsys):
+    """ball_2 and ball_3 exchanged at every position: the summary names the device file's two features, and no
+    fixture is written from exchanged labels (review: 'accuracy_mm may be the repeatability' and a fixture 90 mm
+    wrong)."""
+    def swap_all(lines):
+        out = []
+        for ln in lines:
+            r = ln.split(",")
+            if len(r) > 1 and r[1] in ("ball_2", "ball_3"):
+                r[1] = "ball_3" if r[1] == "ball_2" else "ball_2"
+            out.append(",".join(r))
+        return out
+    args = _probe(raw, tmp_path, "swapall.probe.csv", swap_all)
+    assert main(args) == 3
+    err = capsys.readouterr().err
+    assert "the same two labels swap everywhere" in err and "'ball_2' and 'ball_3'" in err
+    assert "repeatability" not in err and "not written" in err
+    assert not Path(args[args.index("-o") + 1]).exists()

@@ -52,6 +52,13 @@ def _all_flagged(fit, device) -> str:
     given as the 1-sigma accuracy), then the device file."""
     suspects = sorted({f.suspect[0] for f in fit.flagged})
     n = len(fit.flagged)
+    swaps = {tuple(sorted(f.swapped)) if f.swapped is not None else None for f in fit.flagged}
+    if len(swaps) == 1 and None not in swaps:
+        a, b = swaps.pop()
+        return (f"FLAGGED all {n} positions, each fitting with {a!r} and {b!r} exchanged: the same two labels swap "
+                f"everywhere, so the device file {device} most likely has their coordinates exchanged (or the probing "
+                f"routine names them so); exchange {a!r} and {b!r} in its features_D_mm (or in the routine) and run "
+                f"`rodlab fixture` again")
     if len(suspects) == 1:
         return (f"FLAGGED all {n} positions with the same suspect feature {suspects[0]!r}: the device file {device} "
                 f"does not describe the device that was probed (its features_D_mm are another device's, the probe "
@@ -73,8 +80,10 @@ def cmd_fixture(args) -> int:
         mark = "  FLAGGED" if f.flagged else ""
         print(f"  {j:>8}  {len(f.features):>8}  {f.rms_mm * 1e3:12.1f}   {s[0] * 1e3:5.1f} {s[1] * 1e3:5.1f} "
               f"{s[2] * 1e3:5.1f}   {s[3] * 1e3:6.1f} {s[4] * 1e3:6.1f} {s[5] * 1e3:6.1f}{mark}")
-    path = write_fixture(fit.fixture, args.output)
-    print(f"wrote {path}")
+    if any(f.swapped is not None for f in fit.flagged):    # poses fitted on exchanged labels are wrong by cm
+        print(f"not written: {args.output} (positions with exchanged labels, below)", file=sys.stderr)
+    else:
+        print(f"wrote {write_fixture(fit.fixture, args.output)}")
     if len(fit.flagged) >= 2 and len(fit.flagged) == len(fit.fits):
         print(_all_flagged(fit, args.device), file=sys.stderr)
     for f in fit.flagged:

@@ -198,7 +198,7 @@ def _instrument(r, ins, k: int) -> Instrument:
         driver = cls(config)
     except SettingError as e:
         raise _err(r, f"instrument {name!r}: {e}", f"{where}.{e.key}") from e
-    except re.error as e:                  # a technician trial: reported at the [loader]'s `instrument =` line
+    except re.error as e:                  # at the pattern's own line (a technician trial: it had been the [loader]'s)
         raise _err(r, f"instrument {name!r}: pattern {config.get('pattern')!r} is not a regular expression ({e}): "
                       "check its brackets and escape a literal ( ) [ ] . + * ? with a backslash", f"{where}.pattern") from e
     except Exception as e:  # noqa: BLE001 - a setting a driver refuses in its own words

@@ -185,8 +185,8 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
     from rodlab.stiffness_rig.config import read_plan, read_profile
     link = tmp_path / "tty"
     sim = write_compliance(SIM, tmp_path / "sim.compliance.json")
-    server = subprocess.Popen([sys.executable, "-m", "rodlab", "rig", "simulator", "--sim", str(sim), "--link", str(link)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    server = subprocess.Popen([sys.executable, "-m", "rodlab", "rig", "simulator", "--sim", str(sim), "--link", str(link),
+                               "--garbage", "0.05"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         for _ in range(200):
             if link.is_symlink():
@@ -211,8 +211,14 @@ def test_cli_resume_refusal_new_file_and_simulator_cleanup(tmp_path, capsys):
         err = capsys.readouterr().err
         assert "sample_rate_Hz" in err and "--new-file" in err and str(out) in err
         assert out.read_bytes() == recorded
+        with RecordingLock(out):                   # another acquisition at work: named, no "resuming" said first
+            assert main([*args, "--plan", str(plan)]) == 2
+            said = capsys.readouterr()
+            assert "another acquisition" in said.err and "resuming" not in said.out
         assert main([*args, "--plan", str(plan)]) == 0
-        assert f"resuming after hold 2/{n_holds}" in capsys.readouterr().out
+        said = capsys.readouterr().out
+        assert f"resuming after hold 2/{n_holds}" in said
+        assert "garbage line(s) (skipped)" in said                # the run's garbage said once at its end
         assert main([*args, "--plan", str(other), "--new-file"]) == 0
         assert "recording into" in capsys.readouterr().out
         assert read_recording(tmp_path / "r-2.rig.csv").meta["sample_rate_Hz"] == "10"

@@ -187,16 +187,26 @@ def _newer_version_hint(format_id: str | None, key: str) -> str:
     return ""
 
 
+def _missing_key(err) -> str:
+    """The key a ``required`` error misses."""
+    missing = re.findall(r"'([^']+)' is a required property", err.message)
+    return missing[0] if missing else "?"
+
+
+def _misspelt(err) -> str | None:
+    """The key present beside a ``required`` error's missing one that is its misspelling, or None."""
+    inst, key = err.instance, _missing_key(err)
+    present = [k for k in inst if k not in err.schema.get("properties", {})] if isinstance(inst, dict) else []
+    return next((k for k in present if did_you_mean(k, [key])), None)
+
+
 def _explain(err) -> tuple[str, str, list]:
     """(message, fix, path) of one jsonschema error, in rodlab's words."""
     where = list(err.absolute_path)
     v, inst, schema = err.validator, err.instance, err.schema
     if v == "required":
-        missing = re.findall(r"'([^']+)' is a required property", err.message)
-        key = missing[0] if missing else "?"
-        present = [k for k in inst if k not in schema.get("properties", {})] if isinstance(inst, dict) else []
-        close = [k for k in present if did_you_mean(k, [key])]
-        return (f"missing required key `{key}`", f"rename `{close[0]}` to `{key}`" if close else
+        key, close = _missing_key(err), _misspelt(err)
+        return (f"missing required key `{key}`", f"rename `{close}` to `{key}`" if close else
                 f"add `{key}` (see docs/formats.md)", where + [key])
     if v == "additionalProperties":
         allowed = sorted(schema.get("properties", {}))
@@ -240,10 +250,9 @@ def data_problems(data, format_id: str, path: str = "", text: str = "", kind: st
     out = []
     for err in validator.iter_errors(data):
         message, fix, where = _explain(err)
-        located = where if err.validator != "required" else where[:-1]      # a missing key: its table's line,
-        misspelt = re.match(r"rename `([^`]+)`", fix)                        # or the line of its misspelling
-        if err.validator == "required" and misspelt:
-            located = where[:-1] + [misspelt.group(1)]
+        located = where                                                      # a missing key: its table's line,
+        if err.validator == "required":                                      # or the line of its misspelling
+            located = where[:-1] + ([m] if (m := _misspelt(err)) else [])
         out.append(Problem(path, message, _locate(text, kind, located) if text else None, _dotted(where), fix))
     return sorted(out, key=lambda p: (p.line or 0, p.key or ""))
 

@@ -4,18 +4,15 @@ from __future__ import annotations
 
 import sys
 
-
-from rodlab.calibrate import read_campaign
+from rodlab.calibrate import read_campaign, read_points
 from rodlab.calibrate.device import read_device
-from rodlab.calibrate import read_points
 from rodlab.calibrate.readings import (ALIGNMENT_LIMIT_MM, common_offset, far_points, limit_breaches,
                                       point_unit_slips, unit_slips)
 
 from ...core.errors import RodlabError
 
 __all__ = ["DEVICE_HELP", "add_device_option", "campaign_from_args", "points_from_args", "warn_flagged_fixture",
-           "refuse_rod_slips",
-           "flagged_fixture_reasons"]
+           "refuse_rod_slips", "flagged_fixture_reasons"]
 
 DEVICE_HELP = ("the 3-D device's file (*.device.json) for a campaign of raw sensor readings (s1_mm, s2_mm, s3_mm): "
                "each point is solved from its readings, the sensors' noise (--noise-um, per reading) is propagated "

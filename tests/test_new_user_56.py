@@ -158,3 +158,23 @@ def test_the_same_two_labels_swapped_everywhere_names_the_device_file(raw, tmp_p
     assert "the same two labels swap everywhere" in err and "'ball_2' and 'ball_3'" in err
     assert "repeatability" not in err and "not written" in err
     assert not Path(args[args.index("-o") + 1]).exists()
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_device_zero_offered_on_an_honest_soft_rod_is_not_chosen(tmp_path, seed):
+    """The legacy rod 1# is soft enough for the device's springs to push its ball ~0.2 mm off the aligned point,
+    so with 96 points the readings' mean passes the offer rule: the hypothesis is offered on an honest campaign
+    and must not be found (review: the null test above never offered it)."""
+    from conftest import legacy_design
+    from rodlab import calc_rod_compliance
+    from rodlab.app.diagnose import diagnose_campaign
+    from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+    from rodlab.calibrate.effects.device_zero import readings_offset
+    from rodlab.calibrate.simulate import CampaignSpec, simulate_campaign
+    robot, rod = resolve_robot("tx90"), calc_rod_compliance(legacy_design("rod1"))
+    simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=seed, positions=8, orientations=12), effects={})
+    camp = read_campaign(tmp_path / "multical.campaign.csv")
+    assert readings_offset(camp.x_D_mm) is not None                      # offered
+    diag = diagnose_campaign(robot, camp, read_fixture(tmp_path / "multical.fixture.json"), rod,
+                             validate_points=read_points(tmp_path / "multical.validation.csv"))[0]
+    assert not any(f.effect == "device_zero" for f in diag.findings)

@@ -27,6 +27,8 @@ from typing import Callable
 import numpy as np
 from filelock import FileLock, Timeout
 
+from rodlab.core.units import G0
+
 from .config import RigPlan, RigProfile
 from .device import GaugeClient
 from .instruments import RigClient, Sample
@@ -38,6 +40,12 @@ from .resume import ResumePoint, identity_meta, resume_point
 __all__ = ["AcquisitionStatus", "acquire", "RecordingLock"]
 
 log = logging.getLogger(__name__)
+
+#: a load cell's reading above its unloaded start against the hung weight: outside this ratio it is said at once
+#: (friction of the slides and a hanger's tare stay well inside it from ~1 kg up)
+LOAD_RATIO = (0.5, 1.5)
+#: ... for weights of at least this much [N] (a light first mass is mostly friction and tare)
+LOAD_CHECK_MIN_N = 4.0
 
 @dataclass
 class AcquisitionStatus:
@@ -154,6 +162,9 @@ class _Session:
         self.t0 = time.monotonic() - (start.last_time_s + 1.0 if start.last_time_s >= 0 else 0.0)
         self.tick = time.monotonic()
         self.skew_s = 0.0
+        self.forces: list[float] = []              # the load cell's readings of the hold being recorded [N]
+        self.force_zero: dict[str, float] = {}     # per load axis, the load cell at its unloaded start [N]
+        self.load_warned = False
 
     def run(self) -> None:
         holds = self.plan.schedule.holds()
@@ -202,11 +213,14 @@ class _Session:
         disp = tuple(float(rel[c]) if c in measured and math.isfinite(rel[c]) else math.nan for c in range(3))
         self.writer.write(t, self.step, rep, phase, axis, mass, disp, temp, force)
         self.samples += 1
+        if math.isfinite(force):
+            self.forces.append(force)
 
     def _record_hold(self, axis, rep, phase, mass, label) -> None:
         """Settle (samples recorded too; a new series' zero is their settled mean), then ``hold_s`` seconds."""
         hold = (axis, rep, phase, mass)
         new_series = (mass == 0.0 and phase.value == "load" and rep == 1) or axis.value not in self.zeros
+        self.forces = []
         settled = self._settle(hold, label, buffer=new_series)
         if new_series:
             recent, buffered = settled
@@ -218,6 +232,29 @@ class _Session:
                 self._emit(hold, *item)
         for _ in range(int(round(self.plan.schedule.hold_s * self.plan.schedule.rate_Hz))):
             self._emit(hold, *self._sample())
+        self._check_load(hold, label, new_series)
+
+    def _check_load(self, hold, label: str, new_series: bool) -> None:
+        """Say at once (log and a comment line) when a load cell's reading above its unloaded start is not the hung
+        mass's weight within :data:`LOAD_RATIO` (its scale, units, sign or Modbus word order), instead of at the
+        fit after the whole plan (an instrument trial)."""
+        axis, _, _, mass = hold
+        if not self.forces:
+            return
+        mean = float(np.mean(self.forces))
+        if new_series or axis.value not in self.force_zero:
+            if mass == 0.0:
+                self.force_zero[axis.value] = mean
+            return
+        weight, read = mass * G0, mean - self.force_zero[axis.value]
+        if self.load_warned or weight < LOAD_CHECK_MIN_N or LOAD_RATIO[0] <= read / weight <= LOAD_RATIO[1]:
+            return
+        self.load_warned = True
+        text = (f"{label}: the load cell reads {read:.4g} N above its unloaded start for {mass:g} kg ({weight:.4g} "
+                f"N): check its scale, units, sign or Modbus word order; every sample is kept (Ctrl-C and the same "
+                f"command resumes)")
+        log.warning("%s", text)
+        self.writer.comment(f"load check: {text}")
 
     def _settle(self, hold, label, buffer: bool):
         """Read until the measured gauges stay within the tolerance for the window (or the timeout); returns

@@ -161,3 +161,22 @@ def test_a_line_in_another_separator_names_the_separator():
     assert "set separator = ';'" in garbage_reason(b"1.0;2.0;3.0\r\n", 3, ",")
     assert "set separator = '\\t'" in garbage_reason(b"1.0\t2.0\t3.0\r\n", 3, ",")
     assert "n_values = 3" in garbage_reason(b"1.0,2.0\r\n", 3, ",")          # a value short: the count
+
+
+@pytest.mark.parametrize("scale, warned", [(0.01, False), (0.001, True)])
+def test_a_load_cell_off_the_hung_weight_is_said_during_the_acquisition(tmp_path, caplog, scale, warned):
+    """A Modbus load cell in 0.01 N counts read with the right scale, and with a scale ten times too small: the
+    second is said at the first loaded hold (log and a comment in the recording), not only at the fit."""
+    from test_rig_instruments import _gauges, _plan
+    bench = SimBench(RigModel(C, {"friction": {"F_f_N": 0.3}}, seed=15, load_cell_noise_N=0.0))
+    gauges, body = _gauges(tmp_path, bench, Faults())
+    cell = si.SimModbusRTU(bench, tmp_path / "ttyF", seed=16, slave=7, registers={3: ("force_N", "int16", "big", 3,
+                                                                                       100.0)})
+    body += _instrument("cell", cell.port, "modbus_rtu", [{"quantity": "force", "value": "f"}], slave=7,
+                        registers=[{"name": "f", "address": 3, "type": "int16", "scale": scale}])
+    with caplog.at_level("WARNING"):
+        _run(tmp_path, [*gauges, cell], _profile(tmp_path, body, "dial_y"), _plan(axes=("y",), masses=(1.0, 2.0)))
+    text = (tmp_path / "r.rig.csv").read_text()
+    assert ("# load check:" in text) == warned and ("the load cell reads" in caplog.text) == warned
+    if warned:
+        assert "for 1 kg" in text and text.count("# load check:") == 1       # said once, at the first loaded hold

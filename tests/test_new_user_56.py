@@ -178,3 +178,36 @@ def test_device_zero_offered_on_an_honest_soft_rod_is_not_chosen(tmp_path, seed)
     diag = diagnose_campaign(robot, camp, read_fixture(tmp_path / "multical.fixture.json"), rod,
                              validate_points=read_points(tmp_path / "multical.validation.csv"))[0]
     assert not any(f.effect == "device_zero" for f in diag.findings)
+
+
+def test_validate_pairs_a_probe_file_with_its_device_file(raw, tmp_path, capsys):
+    """`rodlab validate DEV.device.json PROBE.csv` checks the probe file as `rodlab fixture` would fit it: a
+    feature the device lacks (at its line), two swapped labels, a device file in metres; an honest pair passes."""
+    device = str(raw / "multical.device.json")
+    assert main(["validate", device, str(raw / "multical.probe.csv")]) == 0
+
+    def typo(lines):
+        return [ln.replace(",ball_1,", ",ball_9,", 1) if ln.startswith("3,ball_1,") else ln for ln in lines]
+    bad = _probe(raw, tmp_path, "typo.probe.csv", typo)[1]
+    capsys.readouterr()
+    assert main(["validate", device, bad]) == 2
+    err = capsys.readouterr().err
+    assert "line" in err and "'ball_9' is not in the device file's features_D_mm" in err and "ball_1" in err
+
+    def swap(lines):
+        out = []
+        for ln in lines:
+            r = ln.split(",")
+            if r[0] == "2" and r[1] in ("ball_2", "ball_3"):
+                r[1] = "ball_3" if r[1] == "ball_2" else "ball_2"
+            out.append(",".join(r))
+        return out
+    assert main(["validate", device, _probe(raw, tmp_path, "swap.probe.csv", swap)[1]]) == 2
+    assert "are swapped" in capsys.readouterr().err
+
+    data = json.loads((raw / "multical.device.json").read_text())
+    data["features_D_mm"] = {k: [v / 1000 for v in xyz] for k, xyz in data["features_D_mm"].items()}
+    metres = tmp_path / "m.device.json"
+    metres.write_text(json.dumps(data, indent=1))
+    assert main(["validate", str(metres), str(raw / "multical.probe.csv")]) == 2
+    assert "m.device.json" in capsys.readouterr().err

@@ -9,6 +9,9 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from rodlab.calibrate import read_campaign, read_fixture, read_points, resolve_robot
+from rodlab.calibrate.device import read_device
+from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.probe import fit_fixture, read_probe
 from rodlab.calibrate.readings import limit_breaches, point_unit_slips, unit_slips
 from rodlab.calibrate.robot_formats import ROBOT_READERS
 from rodlab.calibrate.sockets import read_sockets
@@ -226,6 +229,38 @@ def _check_positions(checks: list) -> None:
                                           None, "position", "give the fixture file this campaign was recorded with"))
 
 
+def _check_probes(checks: list) -> None:
+    """Every valid probe file given beside one valid device file: probed with that device's features, as `rodlab
+    fixture` fits them (features the device lacks, another unit or device, too few or collinear features at a
+    position: problems of the probe file's; a position whose residuals exceed the accuracy, swapped labels:
+    warnings). More than one device file: not paired."""
+    devices = [f for f, c in checks if c.ok and c.format == "rodlab.device/1"]
+    if len(devices) != 1:
+        return
+    device = read_device(devices[0])
+    for f, c in checks:
+        if not (c.ok and c.format == "rodlab.probe/1"):
+            continue
+        probes = read_probe(f)
+        try:
+            fit = fit_fixture(probes, device, int(probes.position[0]))
+        except CalibrationError as e:
+            c.problems.append(Problem(e.path or str(f), f"against {devices[0]}: {e.detail}", e.line, e.key))
+            continue
+        for pf in fit.flagged:
+            if pf.swapped is not None:                     # certain: `rodlab fixture` writes nothing from it
+                a, b = pf.swapped
+                line = next((int(ln) for j, n, ln in zip(probes.position, probes.feature, probes.lines)
+                             if int(j) == pf.position and n == a), None)
+                c.problems.append(Problem(str(f), f"position {pf.position} against {devices[0]}: features {a!r} and "
+                                          f"{b!r} are swapped (exchanged, the position fits within the accuracy)",
+                                          line, "feature", f"exchange {a!r} and {b!r} at position {pf.position}"))
+                continue
+            c.warnings.append(f"position {pf.position} against {devices[0]}: feature {pf.suspect[0]!r} lies "
+                              f"{pf.suspect[1] * 1e3:.0f} um off the fit of the others (chi-square {pf.chi2:.1f} over "
+                              f"{pf.dof}); `rodlab fixture` flags it: probe it again or check the device's seat")
+
+
 def cmd_validate(args) -> int:
     bad = []
     robot = None
@@ -238,6 +273,7 @@ def cmd_validate(args) -> int:
             _check_against_robot(check, f, robot)
         checks.append((f, check))
     _check_positions(checks)
+    _check_probes(checks)
     for f, check in checks:
         fmt = check.format or "unknown format"
         if check.ok:

@@ -211,3 +211,35 @@ def test_validate_pairs_a_probe_file_with_its_device_file(raw, tmp_path, capsys)
     metres.write_text(json.dumps(data, indent=1))
     assert main(["validate", str(metres), str(raw / "multical.probe.csv")]) == 2
     assert "m.device.json" in capsys.readouterr().err
+
+
+def test_simulated_raw_readings_through_the_users_own_device(tmp_path, capsys):
+    """simulate-campaign --raw --device: dial gauges of 10 mm stroke zeroed near 5 mm, two sensors off
+    orthogonal, other springs and features; the readings lie about its zeros, the files are its, and rodlab
+    calibrate reads them through it to a trusted fit (the device trial: only the built-in device had been
+    simulated). --device without --raw is refused."""
+    s2, s3 = np.array([0.0349, 0.99939, 0.0]), np.array([0.0, -0.0262, 0.99966])
+    dev = {"format": "rodlab.device/1", "name": "lab-dev", "sensors": [
+        {"axis_D": [1.0, 0.0, 0.0], "zero_mm": 5.0, "range_mm": [0.0, 10.0], "force_at_zero_N": 0.6,
+         "rate_N_per_mm": 0.08},
+        {"axis_D": (s2 / np.linalg.norm(s2)).tolist(), "zero_mm": 5.2, "range_mm": [0.0, 10.0],
+         "force_at_zero_N": 0.7, "rate_N_per_mm": 0.08},
+        {"axis_D": (s3 / np.linalg.norm(s3)).tolist(), "zero_mm": 4.9, "range_mm": [0.0, 10.0],
+         "force_at_zero_N": 0.65, "rate_N_per_mm": 0.08}],
+        "features_D_mm": {"a": [30.0, 0.0, -50.0], "b": [-15.0, 26.0, -50.0], "c": [-15.0, -26.0, -50.0],
+                          "d": [0.0, 0.0, -35.0]}}
+    path = tmp_path / "lab.device.json"
+    path.write_text(json.dumps(dev))
+    out = tmp_path / "c"
+    assert main(["simulate-campaign", "--rod", "rod1", "--raw", "--device", str(path), "-o", str(out)]) == 0
+    written = json.loads((out / "multical.device.json").read_text())
+    assert written["name"] == "lab-dev" and set(written["features_D_mm"]) == {"a", "b", "c", "d"}
+    cols = (out / "multical.campaign.csv").read_text().splitlines()[0].split(",")
+    rows = np.array([[float(v) for v in ln.split(",")[cols.index("s1_mm"):cols.index("s3_mm") + 1]]
+                     for ln in (out / "multical.campaign.csv").read_text().splitlines()[1:]])
+    assert np.all(np.abs(rows - [5.0, 5.2, 4.9]).max(axis=0) < 2.0)       # about its zeros, inside its strokes
+    capsys.readouterr()
+    assert main(["calibrate", *_args(out), "--validate", str(out / "multical.validation.csv")]) == 0
+    assert "verdict: TRUSTED" in capsys.readouterr().out
+    assert main(["simulate-campaign", "--rod", "rod1", "--device", str(path), "-o", str(tmp_path / "x")]) == 2
+    assert "give --raw with it" in capsys.readouterr().err

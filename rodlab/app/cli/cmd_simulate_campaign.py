@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.calibrate.device import ideal_device, misaligned_device, write_device
+from rodlab.calibrate.device import ideal_device, misaligned_device, read_device, write_device
 from rodlab.calibrate.effects import CAMPAIGN_EFFECTS, campaign_effect
 
 from ...core.errors import RodlabError
@@ -46,7 +46,11 @@ def register(sub) -> None:
                         "whose force follows each reading); nominal.device.json is the orthogonal design")
     p.add_argument("--misalign-deg", type=nonneg_float, default=None,
                    help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg] "
-                        "(default 1)")
+                        "(default 1; with --device 0: the device as its file says)")
+    p.add_argument("--device", default=None, metavar="DEV.device.json",
+                   help="with --raw: your device's file (rodlab.device/1: its axes, zeros, ranges, springs, features) "
+                        "instead of the built-in orthogonal design; it is written as nominal.device.json, and as "
+                        "multical.device.json turned by --misalign-deg")
     p.add_argument("--seed", type=seed, default=0, help="random seed of the truth robot, noise and effects (default 0)")
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)
@@ -78,9 +82,10 @@ def cmd_simulate_campaign(args) -> int:
     truth = simulate_campaign(robot, rod, args.output, spec, rod_true=rod_true, effects=effects, device=device)
     print(f"wrote a {args.positions} x {args.orientations} campaign of {robot.name} with rod {rod.rod} to {args.output}")
     if device is not None:
-        write_device(ideal_device(), Path(args.output) / "nominal.device.json")
+        write_device(_base_device(args), Path(args.output) / "nominal.device.json")
         print(f"  raw sensor readings; device as built multical.device.json (sensor pairs off orthogonal by "
-              f"{', '.join(f'{v:.2f}' for v in device.misalignment_deg())} deg), nominal.device.json the design")
+              f"{', '.join(f'{v:.2f}' for v in device.misalignment_deg())} deg), nominal.device.json the design"
+              + (f" ({args.device})" if args.device else ""))
     for e in truth["effects"]:
         names = [p.name for p in campaign_effect(e["effect"]).params]
         print("  effect " + e["effect"] + ": " + ", ".join(f"{k}={e[k]}" for k in names if k in e))
@@ -91,9 +96,22 @@ def _simulated_device(args):
     """``--raw``: the device as built, its misalignment drawn from a generator of its own (the campaign's other
     draws stay those of the same seed)."""
     if not args.raw:
-        if args.misalign_deg is not None:        # a device trial: it had been ignored without a word
-            raise RodlabError("--misalign-deg tilts the simulated device's sensors, which only the raw readings show: "
-                              "give --raw with it (or leave it out)")
+        for given, what in ((args.misalign_deg is not None, "--misalign-deg tilts the simulated device's sensors"),
+                            (args.device is not None, "--device gives the simulated device")):
+            if given:                            # a device trial: --misalign-deg had been ignored without a word
+                raise RodlabError(f"{what}, which only the raw readings show: give --raw with it (or leave it out)")
         return None
-    misalign = 1.0 if args.misalign_deg is None else args.misalign_deg
-    return misaligned_device(ideal_device(), misalign, np.random.default_rng([args.seed, 2]))
+    misalign = (0.0 if args.device else 1.0) if args.misalign_deg is None else args.misalign_deg
+    return misaligned_device(_base_device(args), misalign, np.random.default_rng([args.seed, 2]))
+
+
+def _base_device(args):
+    """The device as designed: the user's file (``--device``) or the built-in orthogonal one."""
+    if args.device is None:
+        return ideal_device()
+    device = read_device(args.device)
+    if not device.features_D_mm:
+        raise RodlabError(f"{args.device}: the device file lists no features_D_mm, which the simulated probing of "
+                          f"its clamping positions needs (multical.probe.csv); add the coordinates in {{D}} of the "
+                          f"points an arm would probe (at least three, not on one line)")
+    return device

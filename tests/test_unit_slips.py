@@ -188,7 +188,7 @@ def test_a_robot_file_in_radians_or_metres_is_refused(tmp_path, capsys, edit, me
     assert message in err and "r.toml" in err and key in err and "line" in err
 
 
-def test_a_compliance_file_in_um_per_n_is_refused_before_a_calibration_uses_it(camp, tmp_path, capsys):
+def test_a_compliance_file_in_um_per_n_is_refused_before_a_calibration_uses_it(camp, tmp_path, capsys, caplog):
     """A paper trial: the warning had been printed and the file then compensated (77 mm of residuals, the fixture
     blamed, the result written); now refused, nothing written, and --units-checked lets it through."""
     data = json.loads((camp / "rod1.compliance.json").read_text())
@@ -201,7 +201,10 @@ def test_a_compliance_file_in_um_per_n_is_refused_before_a_calibration_uses_it(c
                  str(camp / "c" / "multical.fixture.json"), "--rod", str(bad), "--json", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "divide C_F by 1000" in err and "--units-checked" in err and not out.exists()
+    assert err.count("divide C_F by 1000") == 1                    # said once: the refusal, not a warning before it
+    assert "divide C_F by 1000" not in caplog.text
     code = main(["compare", str(camp / "c" / "multical.campaign.csv"), "--fixture",
                  str(camp / "c" / "multical.fixture.json"), "--rod", f"fea={bad}", "--validate",
                  str(camp / "c" / "multical.validation.csv")])
-    assert code == 2 and "divide C_F by 1000" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("divide C_F by 1000") == 1 and "divide C_F by 1000" not in caplog.text

@@ -296,7 +296,7 @@ class RodCompliance:
         return out
 
     @classmethod
-    def from_dict(cls, data, path=None) -> "RodCompliance":
+    def from_dict(cls, data, path=None, warn_unit_slips: bool = True) -> "RodCompliance":
         if not isinstance(data, dict):
             raise ComplianceError(f"expected a JSON object, got {type(data).__name__}", path=path)
         for k in data:
@@ -340,7 +340,7 @@ class RodCompliance:
         if stored is not None and abs(stored - comp.c_rod_um) > 0.01 * max(abs(comp.c_rod_um), 1.0):
             log.warning("%s: stored c_rod_um %.4g differs from Eq. 23 on the matrices (%.4g); the matrices are used",
                         path, stored, comp.c_rod_um)
-        for problem in (comp.unit_slips() if path is not None else ()):   # a user's file; not rodlab's own data
+        for problem in (comp.unit_slips() if path is not None and warn_unit_slips else ()):  # a user's file
             log.warning("%s: %s", path, problem)
         return comp
 
@@ -371,13 +371,14 @@ def _optional33(data: dict, key: str, path, lo: float, hi: float) -> np.ndarray 
     return None if data.get(key) is None else _as33_nullable(data[key], key, path, lo, hi)
 
 
-def read_compliance(path: str | Path) -> RodCompliance:
-    """Read and check a ``*.compliance.json`` (errors name the file, line and key)."""
+def read_compliance(path: str | Path, warn_unit_slips: bool = True) -> RodCompliance:
+    """Read and check a ``*.compliance.json`` (errors name the file, line and key); numbers no rod has (a unit slip:
+    :meth:`RodCompliance.unit_slips`) are logged unless ``warn_unit_slips`` is False (a caller that refuses them)."""
     p = Path(path)
     data, text = read_json(p, ComplianceError)
     if isinstance(data, dict) and data.get("format") in COMPLIANCE_FORMATS:
         require_schema(data, data["format"], p, text, ComplianceError)
-    return RodCompliance.from_dict(data, p)
+    return RodCompliance.from_dict(data, p, warn_unit_slips)
 
 
 def write_compliance(comp: RodCompliance, path: str | Path) -> Path:

@@ -106,7 +106,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         return _calibrate_points(args)
     if not (args.campaign and args.fixture and args.rod):
         raise RodlabError("a campaign needs --fixture and --rod (or use --points for instrument data)")
-    rod = compliance_arg(args.rod)
+    rod = compliance_arg(args.rod, slips_refused=True)
     refuse_rod_slips(rod, args.rod, args)
     comp = RodDeflection.of(None if args.compensation == "none" else rod)
     run = run_calibration(args, rod, comp)

@@ -52,7 +52,7 @@ def _compare_runs(items, args) -> list:
         if path.strip().lower() == "none":
             raise RodlabError(f"--rod {item!r}: compare runs the uncompensated calibration itself (the 'None' row): "
                               "leave it out and give the compliance files to compare with it")
-        rod = read_compliance(path)
+        rod = read_compliance(path, warn_unit_slips=False)
         refuse_rod_slips(rod, item, args)
         if not runs:
             runs.append(("None", rod, RodDeflection.of(None)))

@@ -157,7 +157,7 @@ def _diagnose_campaign(args: argparse.Namespace, written: list):
     fix = read_fixture(args.fixture)
     warn_flagged_fixture(fix, args.fixture)
     from ..diagnose import diagnose_campaign
-    rod = compliance_arg(args.rod)
+    rod = compliance_arg(args.rod, slips_refused=True)
     refuse_rod_slips(rod, args.rod, args)
     diag, fits = diagnose_campaign(robot, campaign_from_args(args, robot), fix,
                                    rod, noise_mm, pts, harmonics=args.joint_harmonics,

@@ -31,9 +31,10 @@ def design_help(paper: bool = False) -> str:
             + (" (the paper's rods 1# .. 6#)" if paper else ""))
 
 
-def compliance_arg(spec: str):
+def compliance_arg(spec: str, slips_refused: bool = False):
     """``*.compliance.json`` (read as it is), or a design (``rod1``, ``1#``, ``my.rod.toml``): its closed-form
-    (calc) compliance. A file wins over a built-in name only when it is a file."""
+    (calc) compliance. A file wins over a built-in name only when it is a file. ``slips_refused``: the caller refuses a
+    unit slip itself (:func:`~.deviceargs.refuse_rod_slips`), so the reader does not warn of it first."""
     p = Path(spec)
     names = builtin_designs()
     alias = {f"{k[3:]}#": k for k in names if k.startswith("rod")}
@@ -46,7 +47,7 @@ def compliance_arg(spec: str):
         raise RodlabError(f"{spec}: no such file, and not a built-in design. Give a *.compliance.json (rodlab fea "
                           f"DESIGN -o FILE makes one), or a design ({', '.join(sorted(names))}, or a *.rod.toml) for "
                           f"its closed-form (calc) compliance")
-    return read_compliance(spec)
+    return read_compliance(spec, warn_unit_slips=not slips_refused)
 
 
 def same_rod(a: str, b: str) -> bool:

@@ -177,7 +177,10 @@ def test_sim_accuracy_option(tmp_path, calc_sim):
                          capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     report = json.loads((tmp_path / "d.json").read_text())
-    assert report["verdict"] == "consistent" and report["simulation_accuracy"] == "relative"
+    # its design is known (the calc file's): the tolerances are kept beside the stated accuracy (a trial: a stated
+    # accuracy had dropped them)
+    assert report["verdict"] == "consistent" and report["simulation_accuracy"] == "design"
+    assert "tolerances" in run.stdout and "20.0% per entry (stated)" in run.stdout
 
 
 def test_bond_columns_are_the_exact_derivatives_of_the_entries():

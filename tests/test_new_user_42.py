@@ -232,7 +232,7 @@ def test_fit_on_the_masses_keeps_what_the_load_cell_said(tmp_path, capsys):
 
 def test_every_position_flagged_names_the_device_file_or_the_accuracy():
     from rodlab.app.cli.cmd_fixture import _all_flagged
-    pos = lambda j, name: types.SimpleNamespace(position=j, suspect=(name, 7.8))   # noqa: E731
+    pos = lambda j, name: types.SimpleNamespace(position=j, suspect=(name, 7.8), swapped=None)   # noqa: E731
     same = types.SimpleNamespace(flagged=[pos(j, "ball_3") for j in (1, 2, 3)], accuracy_mm=0.005)
     said = _all_flagged(same, "other.device.json")
     assert "same suspect feature 'ball_3'" in said and "other.device.json does not describe" in said

@@ -68,7 +68,11 @@ class MethodAccuracy:
 #: ln(method / solid FEA) of the C_F entries c11, c13, c22, c33 over rodlab's 60 bent solid references (rod1-rod6,
 #: full rods A-Z, part probes, thin bends, families; ``fea/data/solid_reference.json``; ``tests/test_tolerances.py``
 #: recomputes it). The closed form is stiffer (no shear, rigid joints, no bend ovalisation) by 6-17 % on average,
-#: scattering 3-22 %; the calibrated frame has no bias and ~1 % scatter; the solid FEA's discretisation ~0.2 %.
+#: scattering 3-22 %; the calibrated frame has no bias and ~1 % scatter. The solid FEA: 1 % per entry, its
+#: discretisation (~0.2 % on the default mesh, 0.5 % against an order-1 reference on the derived rod 1#, whose
+#: sleeves' corners converge slowly) and its idealised geometry (perfect bonds, sharp corners, no adhesive layer:
+#: a rod as built, or another code's model of it, differs from it by that much without a joint; a new-user trial's
+#: own 3-D beam model of an as-built rod had been diagnosed as a joint at 0.2 %).
 METHOD_ACCURACY = {
     "calc": MethodAccuracy("calc", [-0.094, -0.111, -0.061, -0.169], [0.105, 0.218, 0.033, 0.082],
                            [[1.0, 0.784, 0.255, 0.465], [0.784, 1.0, 0.388, 0.502], [0.255, 0.388, 1.0, 0.771],
@@ -76,7 +80,7 @@ METHOD_ACCURACY = {
     "frame": MethodAccuracy("frame", [0.0017, -0.0022, 0.0, -0.0011], [0.0089, 0.0094, 0.0059, 0.0129],
                             [[1.0, 0.599, 0.509, 0.619], [0.599, 1.0, 0.595, 0.728], [0.509, 0.595, 1.0, 0.865],
                              [0.619, 0.728, 0.865, 1.0]]),
-    "solid": MethodAccuracy.uniform("solid", 0.002),
+    "solid": MethodAccuracy.uniform("solid", 0.01),
 }
 
 

@@ -54,7 +54,8 @@ def register(sub) -> None:
                    help="rig: what the simulation is worth. Default: the design's tolerances ([tolerances] of the "
                         "design file over documented defaults) and the simulation method's accuracy; a measured "
                         "file: 1 %% per entry. `exact`: the simulation is the rod (a re-check against an earlier "
-                        "measurement); a number such as 0.05: that relative accuracy per C_F entry")
+                        "measurement); a number such as 0.05: that relative accuracy per C_F entry in place of the "
+                        "method's, the design's tolerances kept where the design is known")
     p.add_argument("--validate", help="campaign: validation points, to show the positioning error improve")
     p.add_argument("--noise-um", type=pos_float, default=None,
                    help="campaign: device noise [um] (default 3); points: the instrument's noise per coordinate "

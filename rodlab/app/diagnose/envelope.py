@@ -158,6 +158,9 @@ def envelope_for(sim: RodCompliance, design=None, accuracy: str | float | None =
     C = np.asarray(sim.C_F, float)
     if accuracy is not None and not isinstance(accuracy, str):
         rel = float(accuracy)
+        found = design_of(sim, design) if sim.method not in (Method.MEAS, Method.NONE) else None
+        if found is not None:                  # a trial: a stated accuracy had dropped the design's tolerances
+            return _design_envelope(sim, found, stated=rel)
         return Envelope(SimAccuracy.RELATIVE, C, accuracy=MethodAccuracy.uniform("stated", rel),
                         source=f"{rel:.1%} per C_F entry (stated)")
     kind = SimAccuracy.parse(accuracy or "design", "simulation accuracy")
@@ -190,9 +193,10 @@ def _measured_envelope(sim: RodCompliance) -> Envelope:
                            "(remounting and refitting)")
 
 
-def _design_envelope(sim: RodCompliance, design) -> Envelope:
+def _design_envelope(sim: RodCompliance, design, stated: float | None = None) -> Envelope:
     """Tolerances of ``design`` through the frame model of the perturbed design (its form scaled entry by entry to
-    the simulated compliance, the method's bias removed) plus the accuracy of the method that made ``sim``."""
+    the simulated compliance, the method's bias removed) plus the accuracy of the method that made ``sim``, or the
+    ``stated`` relative accuracy per entry instead of it."""
 
     def model(d):
         return frame_compliance(d)[0]
@@ -201,17 +205,20 @@ def _design_envelope(sim: RodCompliance, design) -> Envelope:
     C = np.asarray(sim.C_F, float)
     method = str(sim.method)
     kind = sim.provenance.get("model")
-    acc = method_accuracy(method, kind)
+    acc = method_accuracy(method, kind) if stated is None else MethodAccuracy.uniform("stated", stated)
     unbiased = np.ones((3, 3))
     for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias):
         unbiased[m, n] = unbiased[n, m] = np.exp(-b)
     ratio = np.where(np.abs(C_model) > 1e-12 * np.abs(C_model).max(), C / np.where(C_model == 0, 1, C_model), 1.0)
     label = f"{method}" + (f" ({kind})" if kind else "")
     keys = ", ".join(f"{p.key} {p.relative:.1%}" for p in params)
+    against = (f"{label}: {stated:.1%} per entry (stated)" if stated is not None else
+               f"{label}: {acc.sd[0]:.1%} per entry (its mesh and its idealised geometry: perfect bonds, sharp "
+               f"corners)" if kind == "solid" else f"{label} against the solid FEA: bias "
+               + ", ".join(f"c{m + 1}{n + 1} {b:+.1%}" for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias))
+               + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd))
     env = Envelope(SimAccuracy.DESIGN, C, params, acc,
-                   f"design {design.name}: tolerances {keys}; {label} against the solid FEA: bias "
-                   + ", ".join(f"c{m + 1}{n + 1} {b:+.1%}" for (m, n), b in zip(STRUCTURAL_ENTRIES, acc.bias))
-                   + ", scatter " + ", ".join(f"{v:.1%}" for v in acc.sd) + "; bonds "
+                   f"design {design.name}: tolerances {keys}; {against}; bonds "
                    + ", ".join(f"{p} {sd:.1g}" for p, sd in bond_tolerances(design).items()) + " rad/(N m)",
                    model, design, ratio * unbiased, _bonds(design))
     # a bond only softens below its design value: a rigid one (the default) from 0, a declared one down to 0

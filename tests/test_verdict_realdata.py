@@ -34,28 +34,44 @@ def ur5_quarter(tmp_path_factory) -> Path:
     return path
 
 
-def test_real_fanuc_data_with_default_options_is_trusted_with_its_completeness_caution(tmp_path, capsys):
-    """FANUC N1 -> N2 as a new user runs it (no --fix-unidentifiable): the single-joint sweeps' unidentifiable
-    parameters are held with the reason, the calibration predicts clearly better than nominal and is trusted
-    (exit 0) although its 0.65 mm residual is far above the tracker's noise (complete? no). N2 measures the same
-    joint configurations as N1 (another reflector): no held-out test of the configurations, so the verdict comes
-    from cross-validation, and that is said."""
+def test_real_fanuc_sweeps_are_cross_validated_by_whole_sweeps_and_not_trusted(tmp_path, capsys):
+    """FANUC N1 -> N2 as a new user runs it: N2 measures N1's joint configurations with another reflector, so the
+    verdict comes from cross-validation, and the poses are single-joint sweeps about one configuration, so whole
+    sweeps are held out (interleaved folds had trusted it at 1.160 -> 1.036 mm; a trial's fit of the source's
+    36-pose recording, trusted that way at 0.22 mm, then missed this 59-pose recording of the same robot by
+    1.17 mm against the nominal model's 1.14). Held out by sweeps it predicts no better than the nominal model:
+    NOT TRUSTED (exit 3), the unidentifiable parameters still held with their reason."""
     out = tmp_path / "cal.json"
     assert main(["calibrate", "--points", str(DATA / "boby2021" / "r2000ic_N1.validation.csv"), "--robot",
                  "r2000ic165f", "--validate", str(DATA / "boby2021" / "r2000ic_N2.validation.csv"),
-                 "--json", str(out)]) == 0
+                 "--json", str(out)]) == 3
     io = capsys.readouterr()
-    assert "usable? yes" in io.out and "complete? no" in io.out and "verdict: TRUSTED" in io.out
-    assert "caution (trusted): the model is incomplete" in io.err and "NOT TRUSTED" not in io.err
-    assert "held at nominal" in io.out and "--strict refuses" in io.err
+    assert "usable? no" in io.out and "complete? no" in io.out and "verdict: NOT TRUSTED" in io.out
+    assert "cross-validation over whole one-joint sweeps" in io.out and "held at nominal" in io.out
     cal = json.loads(out.read_text())
     pred = cal["fit"]["prediction"]
-    assert "are the fit's own" in io.err
-    assert cal["trusted"] and pred["source"] == "cross_validation" and pred["clearly_better"]
-    assert pred["mean_mm"] < 0.9 * pred["nominal_mean_mm"] and pred["gain_mm"] > 2 * pred["gain_se_mm"]
+    assert not cal["trusted"] and pred["source"] == "cross_validation" and not pred["clearly_better"]
+    assert pred["grouping"] == "whole one-joint sweeps"
     assert cal["fit"]["completeness"]["verdict"] == "incomplete"
     held = {u.split(" ")[0] for u in cal["unidentifiable"] if "in this data set" in u}
     assert {"d_3", "c_3"} <= held
+
+
+def test_sweeps_are_found_in_one_joint_at_a_time_poses_only():
+    """joint_sweeps: six sweeps of six poses about a home pose (the return steps moving two joints) are six
+    sweeps; random poses and a grid moving every joint are none."""
+    from rodlab.calibrate.crossval import joint_sweeps
+    home = np.radians([0.0, -30.0, 20.0, 0.0, -45.0, 10.0])
+    rows = []
+    for j in range(6):
+        for a in np.linspace(-30.0, 30.0, 6):
+            q = home.copy()
+            q[j] += np.radians(a)
+            rows.append(q)
+    labels = joint_sweeps(np.array(rows))
+    assert labels is not None and labels.tolist() == [j for j in range(6) for _ in range(6)]
+    rng = np.random.default_rng(1)
+    assert joint_sweeps(rng.uniform(-3, 3, (40, 6))) is None
 
 
 def test_strict_refuses_what_the_data_cannot_identify(capsys):

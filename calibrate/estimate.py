@@ -122,6 +122,12 @@ def pinned_vector(infos, start: ModelParams, pinned: dict) -> np.ndarray:
     x = np.zeros(len(infos))
     for nm, v in pinned.items():
         k = names.index(nm)
+        if infos[k].kind == "c" and not 0.0 <= v <= C_MAX:      # a trial: -3.2e-5 had become 0 without a word
+            unit = (f"; the value is in rad/(N m): {v:g} urad/(N m) is {v * 1e-6:g}" if 0 < v * 1e-6 <= C_MAX
+                    else "; a negative one is a sag of the wrong sign: check the sign of the measured points' "
+                         "columns or an axis direction" if v < 0 else "")
+            raise CalibrationError(f"--pin {nm}={v:g}: a joint compliance lies in [0, {C_MAX:g}] rad/(N m), the "
+                                   f"range the identification keeps it in{unit}", key=nm)
         x[k] = (v - parameter_value(start, infos[k], 0.0)) * INTERNAL_SCALE[infos[k].unit] if infos[k].kind in (
             "base_t", "base_r", "tool") else v * INTERNAL_SCALE[infos[k].unit]
     return x

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -306,8 +306,28 @@ def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_si
     res = st.res
     ok = bool(res.success) if res is not None else False
     msg = res.message if res is not None else "not run"
-    return CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, st.noise_est, corr,
-                             [infos[k].name for k in free], st.offsets, ok, str(msg), int(res.nfev), st.passes, cond)
+    out = CalibrationResult(p, infos, values, sigma, status, unid, resid, rms, st.noise_est, corr,
+                            [infos[k].name for k in free], st.offsets, ok, str(msg), int(res.nfev), st.passes, cond)
+    return replace(out, unconstrained=_unconstrained(robot, obs, problem, st))
+
+
+def _unconstrained(robot, obs, problem: _Problem, st: _Compensated) -> dict:
+    """{name: value [rad/(N m)]} of each free joint compliance the fit holds at its lower bound (0): where one
+    Gauss-Newton step from the fit, the bounds set aside, would put it (a trial: the sign convention of the measured
+    points had put c_2 or c_3 at 0 without a word of how far below it the data pushed)."""
+    free = st.free
+    low = [i for i, k in enumerate(free) if problem.infos[k].kind == "c" and st.x[k] <= problem.lower[k] + 1e-9]
+    if not low:
+        return {}
+    fun, jac = _residual_functions(robot, obs, problem, _Pass(st.x, free, obs.x_W_mm - st.offsets, st.prior,
+                                                                st.noise_est))
+    z = st.x[free]
+    step = np.linalg.lstsq(jac(z), -fun(z), rcond=None)[0]
+    out = {}
+    for i in low:
+        info = problem.infos[free[i]]
+        out[info.name] = float(problem.start.c[info.index] + (z[i] + step[i]) / INTERNAL_SCALE[info.unit])
+    return out
 
 
 def _memo_model(robot, start: ModelParams, infos, x: np.ndarray, free: list, obs: Observations):

@@ -44,7 +44,8 @@ class CalibrationResult:
     should still be read with (:func:`trust_cautions`); residual_check : the residual test, or None;
     harmonic_range_deg : {joint: (min, max) [deg]}: the readings the periodic terms were identified over;
     prediction : the held-out accuracy (:class:`~calibrate.crossval.Prediction`) once the caller has judged it
-    (:func:`~calibrate.trust.prediction_warnings`), else None
+    (:func:`~calibrate.trust.prediction_warnings`), else None; unconstrained : {name: value [rad/(N m)]} of each
+    joint compliance held at its lower bound 0, where one step from the fit without the bound puts it
     """
 
     params: ModelParams
@@ -69,6 +70,7 @@ class CalibrationResult:
     cautions: list = field(default_factory=list)
     harmonic_range_deg: dict = field(default_factory=dict)   # joint (1-based) -> (min, max) reading [deg] of the data
     prediction: object = None              # calibrate.crossval.Prediction (held-out accuracy), or None
+    unconstrained: dict = field(default_factory=dict)   # joint compliance held at 0 -> where the data put it
 
 
 #: the robot description's nominal rows a result records (``description``): the ``dtheta`` are relative to its
@@ -89,6 +91,9 @@ def result_dict(robot, res: CalibrationResult, compensation: str, before: ErrorS
     for info in res.infos:
         nm = info.name
         params[nm] = {"value": res.values[nm], "sigma": res.sigma[nm], "unit": info.unit, "status": res.status[nm]}
+        if nm in res.unconstrained:                 # held at 0: where the data, unbounded, put it
+            params[nm]["at_bound"] = True
+            params[nm]["unconstrained_value"] = res.unconstrained[nm]
     harmonic = any(info.kind in HARMONICS for info in res.infos)
     out = {"format": FORMAT_CALIBRATION_HARMONICS if harmonic else FORMAT_CALIBRATION, "robot": robot.name,
            "compensation": compensation, "trusted": not res.warnings,

@@ -260,3 +260,21 @@ def test_a_validation_file_that_is_the_fit_is_no_held_out_test(capsys):
     io = capsys.readouterr()
     assert "100% of its joint configurations are the fit's own" in io.err
     assert "by 5-fold cross-validation" in io.out
+
+
+def test_a_joint_compliance_the_data_push_below_zero_is_said_and_a_pin_outside_its_range_refused(tmp_path, capsys):
+    """The UR5 grid: c_3 is held at its bound 0 while the data, unbounded, put it ~9 sigma below it (a trial: with
+    the measured-minus-target column's other sign c_2 went to 0 and c_3 to 41 urad/(N m), both fits trusted):
+    said on stderr and in the JSON (at_bound, unconstrained_value). A pin outside [0, C_MAX] is refused, not
+    clipped."""
+    out = tmp_path / "cal.json"
+    grid, rnd = DATA / "jacobi2025" / "ur5_grid.validation.csv", DATA / "jacobi2025" / "ur5_random.validation.csv"
+    assert main(["calibrate", "--points", str(grid), "--robot", "ur5", "--validate", str(rnd), "--json",
+                 str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: c_3 is held at 0; unbounded, the data put it at -" in err
+    c3 = json.loads(out.read_text())["parameters"]["c_3"]
+    assert c3["at_bound"] and c3["unconstrained_value"] < -3 * c3["sigma"] and abs(c3["value"]) < 1e-12
+    for value, words in (("-3.2e-5", "sag of the wrong sign"), ("32", "32 urad/(N m) is 3.2e-05")):
+        assert main(["calibrate", "--points", str(grid), "--robot", "ur5", "--pin", f"c_2={value}"]) == 2
+        assert words in capsys.readouterr().err

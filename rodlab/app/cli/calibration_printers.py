@@ -28,10 +28,29 @@ def print_parameters(res) -> None:
         print(f"note: {', '.join(at_bound)} at a physical bound of a joint compliance (0 or {C_MAX:g} rad/(N m)): the "
               "data push it beyond, so its sigma describes one side only and the value is a limit, not a measurement",
               file=sys.stderr)
+    _warn_negative(res)
     print_held(res)
     if res.residual_check is not None:
         t = res.residual_check
         print(f"  residuals {t.wording}: {t.describe()}")
+
+
+#: a joint compliance held at 0 whose unbounded estimate lies this many sigma below 0 is a sag of the wrong sign
+NEGATIVE_SIGMAS = 3.0
+
+
+def _warn_negative(res) -> None:
+    """Each joint compliance held at 0 that the data, unbounded, put clearly below it: the points sag the wrong
+    way under gravity (a trial: a measured-minus-target column of the other sign moved the compliance from one joint
+    to another, both fits trusted)."""
+    for nm, v in res.unconstrained.items():
+        s = res.sigma.get(nm, 0.0)
+        if s > 0 and v < -NEGATIVE_SIGMAS * s:
+            print(f"warning: {nm} is held at 0; unbounded, the data put it at {v * 1e6:.1f} urad/(N m) ({v / s:.0f} "
+                  f"sigma): no joint is stiffer than rigid, so the points bend against the gravity sag the model "
+                  f"predicts there, and the other joint compliances of this fit carry what it cannot. Before reading "
+                  f"them as physics, check the sign convention of the measured points (measured - target or target "
+                  f"- measured?), the axis directions and the link masses of the robot file", file=sys.stderr)
 
 
 def _at_bound(value: float, sigma: float) -> str:

@@ -18,8 +18,10 @@ PAPER_MASSES_KG = (0.5, 1.0, 1.5, 2.0)
 
 
 def is_carbon(design) -> bool:
-    """Whether the rod's tubes (pipe I or pipe II) are carbon fibre (materials ``cfrp*``)."""
-    return any(t.material.name.startswith("cfrp") for t in (design.pipe_I, design.pipe_II))
+    """Whether the rod's tubes (pipe I or pipe II) are carbon fibre: a material ``cfrp*``, or a laminate of the
+    user's (a transverse or shear modulus of its own, as docs/formats.md defines a laminate; a trial's ``cf_t59``
+    had been loaded with 2 kg unwarned)."""
+    return any(t.material.name.startswith("cfrp") or not t.material.is_isotropic for t in (design.pipe_I, design.pipe_II))
 
 
 def default_masses(design=None) -> tuple:

@@ -130,6 +130,13 @@ def test_plan_beyond_the_carbon_linear_range_names_the_holds(tmp_path, capsys):
     assert "and 11 more" in w[0]                               # 15 holds of 2 kg: 5 repeats x 3 axes
     assert linear_range_warnings(plan.schedule, resolve_design("rod4")) == []
     assert linear_range_warnings(LoadSchedule(masses=(0.5, 1.0, 1.5)), resolve_design("rod1")) == []
+    import dataclasses                                        # a laminate of the user's under another name
+    from rodlab.core.materials import Material
+    rod1 = resolve_design("rod1")
+    own = Material("cf_own", 110.0, 0.3, 1580.0, E_transverse_GPa=9.0, G_GPa=12.0)
+    mine = dataclasses.replace(rod1, pipe_I=dataclasses.replace(rod1.pipe_I, material=own),
+                               pipe_II=dataclasses.replace(rod1.pipe_II, material=own))
+    assert len(linear_range_warnings(plan.schedule, mine)) == 1
     sim = write_compliance(SIM, tmp_path / "s.compliance.json")
     assert main(["rig", "simulate", "--sim", str(sim), "--repeats", "1", "--masses", "1,2", "-o",
                  str(tmp_path / "r.rig.csv")]) == 0

@@ -122,7 +122,9 @@ def test_joint_columns_named_j1_are_told_to_be_q1(camp, tmp_path, capsys):
     header, rows = _rows(camp / "multical.campaign.csv")
     path = _write(tmp_path / "J.campaign.csv", [h.replace("q", "J") for h in header], rows)
     assert main(["validate", str(path)]) == 2
-    assert "Did you mean `q1`? (the joint angles are the columns q1" in capsys.readouterr().err
+    err = capsys.readouterr().err                       # six renames: one problem naming each (a trial)
+    assert "the header names 6 columns otherwise" in err and "rename 'J1' to q1, 'J2' to q2" in err
+    assert "Did you mean `q1`? (the joint angles are the columns q1" in did_you_mean("J1", ["q1", "x_mm"])
     assert "`q3`" in did_you_mean("A3", ["position", "q1", "x_mm"]) and "`q2`" in did_you_mean("joint_2", ["q1"])
     assert did_you_mean("J1", ["x_mm", "y_mm"]) == ""                   # no joint columns expected: no hint
     assert "q7" not in did_you_mean("J7", [f"q{k}" for k in range(1, 7)])  # no such joint: no such hint
@@ -165,3 +167,13 @@ def test_another_rods_file_is_named_in_the_suspect_line(camp, tmp_path, capsys):
     assert code == 3 and "is the rod file this rod's?" in err
     line = next((ln for ln in err.splitlines() if ln.strip().startswith("- rod_deflection")), "")
     assert "the rod file looks like another rod's" in line and "calibrate with this rod's compliance file" in line
+
+
+def test_a_header_in_another_language_is_one_problem_with_every_rename(tmp_path, capsys):
+    """German joint names and units in brackets (a trial: 13 problems, the expected list showing only q1)."""
+    path = tmp_path / "de.validation.csv"
+    path.write_text("# tool_mm: 0, 0, 109\nAchse1,Achse2,Achse3,Achse4,Achse5,Achse6,X [mm],Y [mm],Z [mm]\n"
+                    "1,2,3,4,5,6,100,200,300\n")
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "1 problem(s)" in err and "'Achse6' to q6" in err and "'X [mm]' to x_mm" in err

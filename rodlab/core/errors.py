@@ -57,7 +57,10 @@ def _other_unit(word: str, choices: list[str]) -> str:
 
 
 #: a controller's names of joint k's column (J1, A1, axis_1, joint1, q_1, J1_deg): the contract's q<k>
-_JOINT_ALIAS = re.compile(r"(?:j|a|ax|axis|joint|q)[ _]?([1-9][0-9]?)(?:[ _]?(?:deg|\(deg\)))?", re.IGNORECASE)
+_JOINT_ALIAS = re.compile(r"(?:j|a|ax|axis|joint|q|achse|gelenk|axe)[ _]?([1-9][0-9]?)(?:[ _]?(?:deg|\(deg\)|\[deg\]))?",
+                          re.IGNORECASE)
+#: a name with its unit in brackets (``X [mm]``, ``x (mm)``): the contract writes ``x_mm``
+_BRACKET_UNIT = re.compile(r"(.+?)\s*[\[(]\s*(\w+)\s*[\])]")
 
 
 def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
@@ -74,6 +77,10 @@ def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:
     if joint and "q1" in choices and word != f"q{k}" and (f"q{k}" in listed or listed == {"q1"}):
         return (f" Did you mean `q{k}`? (the joint angles are the columns q1, q2, ... in degrees: "
                 "rename each joint's column)")
+    bracket = _BRACKET_UNIT.fullmatch(word)
+    named = f"{bracket.group(1).strip().lower()}_{bracket.group(2).lower()}" if bracket else ""
+    if named in choices:
+        return f" Did you mean `{named}`? (the unit goes after an underscore)"
     folded = [c for c in choices if c.casefold() == word.casefold()]
     # a key given without its unit suffix (``L1`` for ``L1_mm``, ``hold`` for ``hold_s``)
     stem = [c for c in choices if c.casefold().startswith(word.casefold() + "_")] if word else []

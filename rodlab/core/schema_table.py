@@ -76,13 +76,19 @@ def _columns(header: list[str], schema: dict) -> dict:
 
 
 def _header_problems(header: list[str], cols: dict, schema: dict, path: str, line: int) -> list[Problem]:
-    out = []
+    renames = _renames(header, cols, schema)
+    if len(renames) >= 3:                      # a header in another convention: one problem, every rename
+        out = [Problem(path, f"the header names {len(renames)} columns otherwise than the format", line,
+                       next(iter(renames)), "rename " + ", ".join(f"{h!r} to {n}" for h, n in renames.items()))]
+    else:
+        out = []
+    expected = _expected(cols)
     for h in header:
-        if h not in cols:
-            out.append(Problem(path, f"unknown column {h!r}; expected {list(cols)}", line, h,
+        if h not in cols and not (len(renames) >= 3 and h in renames):
+            out.append(Problem(path, f"unknown column {h!r}; expected {expected}", line, h,
                                did_you_mean(h, cols, units=True).strip() or "remove it or rename it"))
     for name, c in cols.items():
-        if c.get("required") and name not in header:
+        if c.get("required") and name not in header and not (len(renames) >= 3 and name in renames.values()):
             out.append(Problem(path, f"missing column {name!r}", line, name, f"add the column {name}"))
     for h in sorted({h for h in header if header.count(h) > 1}):
         out.append(Problem(path, f"duplicated column {h!r}", line, h, "keep one"))
@@ -94,6 +100,28 @@ def _header_problems(header: list[str], cols: dict, schema: dict, path: str, lin
                                f"add {missing} or remove {have}"))
     out += _one_of_problems(header, schema, path, line)
     return out
+
+
+def _renames(header: list[str], cols: dict, schema: dict) -> dict:
+    """{the user's column: the format's} for each unknown column whose name says which column it is (``Achse1`` ->
+    q1, ``X [mm]`` -> x_mm): the joints' columns of every number the header has, not only those it expands."""
+    names = list(cols) + [c["name"].replace("{i}", str(i)) for c in schema["columns"] if c.get("joints")
+                          for i in range(1, len(header) + 1)]
+    out = {}
+    for h in header:
+        if h in cols:
+            continue
+        hint = re.search(r"`([^`]+)`", did_you_mean(h, names, units=True))
+        if hint and hint.group(1) in names and hint.group(1) not in header:
+            out[h] = hint.group(1)
+    return out
+
+
+def _expected(cols: dict) -> str:
+    """The expected columns, the joints' as ``q1, q2, ...`` (a trial: the list had shown only q1)."""
+    shown = [c for c in cols if not re.fullmatch(r"q[0-9]+", c)]
+    joints = "q1, q2, ... (one per joint, degrees), " if len(shown) < len(cols) else ""
+    return "[" + joints + ", ".join(shown) + "]"
 
 
 def _one_of_problems(header: list[str], schema: dict, path: str, line: int) -> list[Problem]:

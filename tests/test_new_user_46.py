@@ -177,3 +177,10 @@ def test_a_header_in_another_language_is_one_problem_with_every_rename(tmp_path,
     assert main(["validate", str(path)]) == 2
     err = capsys.readouterr().err
     assert "1 problem(s)" in err and "'Achse6' to q6" in err and "'X [mm]' to x_mm" in err
+
+
+def test_diagnose_campaign_given_instrument_points_names_points(tmp_path, capsys):
+    path = tmp_path / "p.validation.csv"
+    path.write_text("# tool_mm: 0, 0, 109\nq1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n1,2,3,4,5,6,100,200,300\n")
+    assert main(["diagnose", "--campaign", str(path)]) == 2
+    assert f"diagnose it with --points {path}" in capsys.readouterr().err

@@ -120,7 +120,10 @@ def _check_modes(args: argparse.Namespace) -> None:
         raise RodlabError("--design is the rig's design (with --rig); a campaign takes the rod's compliance file "
                           "as --rod ROD.compliance.json")
     if args.campaign and not (args.fixture and args.rod):
-        raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json")
+        points = str(args.campaign).endswith((".validation.csv", ".points.csv"))
+        raise RodlabError("--campaign needs --fixture F.json and --rod ROD.compliance.json"
+                          + (f"; {args.campaign} looks like an instrument's points: diagnose it with --points "
+                             f"{args.campaign}" if points else " (or --points for an instrument's points)"))
 
 
 def _diagnose_rig(args: argparse.Namespace, written: list):

@@ -65,7 +65,7 @@ def identify(robot, obs: Observations, rod: Rod, compensations: Sequence[Compens
     if options.expected_noise_mm:
         out.residual_check = residual_test(robot, out, obs, options.expected_noise_mm, options.fixture_sigma)
     out.warnings = trust_warnings(robot, out)
-    out.cautions = trust_cautions(out)
+    out.cautions = trust_cautions(out, robot)
     return out
 
 

@@ -319,7 +319,7 @@ def _fit_result(robot, start, infos, reasons: dict, prob: _Problem, st: _State) 
                             str(sol.message), int(sol.nfev), 1, float(np.linalg.cond(Jn)) if P else float("nan"))
     out.residual_check = _residual_test(chi2, dof, r)
     out.warnings = trust_warnings(robot, out)     # residuals above the seat play: a caution (incomplete model)
-    out.cautions = trust_cautions(out)
+    out.cautions = trust_cautions(out, robot)
     keys = r.groups()
     cs = sig[P:].reshape(-1, 3)
     return SocketFit(out, {g: C[k] for k, g in enumerate(keys)}, {g: cs[k] for k, g in enumerate(keys)},

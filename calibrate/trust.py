@@ -162,7 +162,7 @@ def completeness_statement(res: "CalibrationResult") -> str:
     return (f"complete? {word[completeness(res)]}: the model leaves {res.rms_mm * 1e3:.1f} um rms per reading "
             f"unexplained (Birge ratio sqrt(chi-square / dof) {test.birge:.1f} by the residual test above, against "
             + (f"the device's {test.noise_mm * 1e3:.1f} um per reading and the clamping poses' uncertainty)"
-               if test.clamping else f"the {test.source}'s noise of {test.noise_mm * 1e3:.1f} um per reading)"))
+               if test.clamping else f"the {test.source}'s noise {test.noise_phrase()} per reading)"))
 
 
 #: residuals this large [mm rms] and this many times the stated scatter are no device's noise and no physics a
@@ -271,7 +271,7 @@ def _incomplete_caution(res: "CalibrationResult") -> list[str]:
     if test is None or not test.material or test.clamping:
         return []
     return [f"the model is incomplete: it leaves {res.rms_mm * 1e3:.1f} um rms per reading unexplained "
-            f"(Birge ratio {test.birge:.1f} against the stated {test.noise_mm * 1e3:.1f} um per reading); "
+            f"(Birge ratio {test.birge:.1f} against the stated noise {test.noise_phrase()} per reading); "
             f"{_CAUSES.get(test.source, _CAUSES['instrument'])}. The predicted accuracy already includes what is "
             "left out"]
 

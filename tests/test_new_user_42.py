@@ -315,7 +315,13 @@ def test_update_names_the_closed_form_a_simulated_recording_came_from(tmp_path, 
     capsys.readouterr()
     assert main(["update", str(design), "--measured", str(rec), "-o", str(tmp_path / "t1.asbuilt.rod.toml")]) == 3
     err = capsys.readouterr().err.replace("\n", " ")
-    assert "that is the design's closed form, which differs from the frame model by" in err and "c33" in err
+    assert "the design's closed form, which differs from the frame model by" in err and "c33" in err
+    assert f"with --sim {design} (calc)" in err                   # the header names what was simulated
+    text = rec.read_text().replace(f"# sim: {design} (calc)", "# sim: mine.compliance.json (fea, frame)")
+    other = tmp_path / "other.rig.csv"                             # another model's truth: no closed form to blame
+    other.write_text(text)
+    main(["update", str(design), "--measured", str(other), "-o", str(tmp_path / "t2.asbuilt.rod.toml")])
+    assert "closed form, which differs" not in capsys.readouterr().err
 
 
 def test_a_study_tells_a_designer_what_an_unidentifiable_campaign_means():

@@ -269,7 +269,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                      load_cell_noise_N=args.load_cell_noise_n)
     stated = {str(e): p for e, p in model.effects.items()}
     path = simulate_recording(model, proto, args.output, rod=sim.rod,
-                              extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed})
+                              extra_meta={"effects": json.dumps(stated) if stated else "none", "seed": args.seed,
+                                          "sim": f"{args.sim} ({sim.method}"
+                                                 + (f", {sim.provenance['model']})" if sim.provenance.get("model")
+                                                    else ")")})
     print(f"wrote {path}: {len(proto.holds())} holds (masses {', '.join(f'{m:g}' for m in masses)} kg) on rod "
           f"{sim.rod}, effects: {stated or 'none'}")
     return 0

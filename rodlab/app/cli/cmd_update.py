@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
@@ -182,15 +183,20 @@ def _closed_form_hint(args, design) -> str:
     head = Path(args.measured).read_text(encoding="utf-8", errors="replace")[:2000]
     if "# generator: rodlab rig simulate" not in head:
         return ""
+    sim = re.search(r"^# sim: (.*)$", head, re.MULTILINE)       # rodlab's since session 45: the truth it simulated
+    if sim and not sim.group(1).rstrip().endswith("(calc)"):
+        return ""                                           # not the closed form (a trial: the user's own model)
     from ..update import model_compliance
     calc, model = np.diag(calc_rod_compliance(design).C_F), np.diag(model_compliance(args.model)(design))
     apart = np.abs(calc / model - 1.0)
     k = int(np.argmax(apart))
     if apart[k] <= 0.03:
         return ""
-    return (f". The recording was made by `rodlab rig simulate`: if with --sim {args.design}, that is the design's "
-            f"closed form, which differs from the {args.model} model by {100 * apart[k]:.0f} % in c{k + 1}{k + 1} on this "
-            f"design: simulate from `rodlab fea {args.design} --model {args.model} -o SIM.json` (--sim SIM.json) to "
+    said = (f"with --sim {sim.group(1).strip()}, the design's closed form" if sim else
+            f"if with --sim {args.design}, that is the design's closed form")
+    return (f". The recording was made by `rodlab rig simulate`: {said}, which differs from the {args.model} model "
+            f"by {100 * apart[k]:.0f} % in c{k + 1}{k + 1} on this design: simulate from `rodlab fea {args.design} "
+            f"--model {args.model} -o SIM.json` (--sim SIM.json) to "
             f"test update on its own model (--model calc would not fit it either: it removes the closed form's known "
             f"stiffness against the solid FEA, which the recording keeps)")
 

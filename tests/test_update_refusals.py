@@ -80,3 +80,5 @@ def test_a_key_moved_two_tolerances_is_noted_with_the_keys_left_fixed(tmp_path, 
     out = capsys.readouterr().out
     note = next((ln for ln in out.splitlines() if "note:" in ln and "E_GPa" in ln), "")
     assert "x its tolerance" in note and "wall" in note
+    held = next((ln for ln in out.splitlines() if "note: the +- holds" in ln), "")
+    assert "tube.wall_mm" in held and "diagnose --rig" in held          # the +- assumes the wall exact (trial 59)

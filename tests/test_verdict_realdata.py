@@ -48,6 +48,8 @@ def test_real_fanuc_sweeps_are_cross_validated_by_whole_sweeps_and_not_trusted(t
     io = capsys.readouterr()
     assert "usable? no" in io.out and "complete? no" in io.out and "verdict: NOT TRUSTED" in io.out
     assert "cross-validation over whole one-joint sweeps" in io.out and "held at nominal" in io.out
+    periodic = [ln for ln in io.out.splitlines() + io.err.splitlines() if "periodic_joint_error (joint" in ln]
+    assert periodic and all("seen in joint" in ln and "--joint-harmonics 1" not in ln for ln in periodic)  # named
     cal = json.loads(out.read_text())
     pred = cal["fit"]["prediction"]
     assert not cal["trusted"] and pred["source"] == "cross_validation" and not pred["clearly_better"]

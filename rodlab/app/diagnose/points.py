@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rodlab.calibrate.crossval import joint_sweeps
 from rodlab.calibrate.kinematics import forward, harmonic_basis
 
 __all__ = ["PointFinding", "PointsDiagnosis", "diagnose_points", "point_candidates", "FORMAT_POINTS_DIAGNOSIS"]
@@ -123,8 +124,12 @@ def _through_joint(cols_j: np.ndarray, f: np.ndarray) -> np.ndarray:
 def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
     """(effect, where, design (3N, k), meaning) of every candidate explanation of the points' residuals, for joint
     angles ``q`` (N, n) [rad] and the joints' residual columns ``cols`` (N, n, 3) [mm/rad]; ``modelled``: joints
-    whose periodic error the identification already carries (left out)."""
+    whose periodic error the identification already carries (left out). Poses taken one joint at a time
+    (:func:`~calibrate.crossval.joint_sweeps`) see a joint's periodic error in its own sweep only, where it cannot
+    be told from whatever differs between the sweeps: named, not advised (a trial: following the advice made the
+    held-out error worse)."""
     N, n = q.shape
+    swept = joint_sweeps(q) is not None
     t = np.linspace(-1.0, 1.0, N)
     yield ("drift", "measurement order", np.kron(np.c_[t, t ** 2], np.eye(3)),
            "the error changes in the order the poses were measured: thermal growth of the arm or instrument drift "
@@ -137,10 +142,13 @@ def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
             continue
         if j + 1 not in modelled:
             flag = ",".join(str(k) for k in sorted({*modelled, j + 1}))
+            advice = (f"; the poses move one joint at a time, so it is seen in joint {j + 1}'s sweep only and cannot "
+                      f"be told from what differs between the sweeps: measure varied poses (`rodlab plan`) before "
+                      f"modelling it with --joint-harmonics" if swept else
+                      f": model it with `rodlab calibrate --joint-harmonics {flag}`")
             yield ("periodic_joint_error", f"joint {j + 1}", _through_joint(cols[:, j], harmonics[:, j]),
                    f"an angle error periodic in joint {j + 1}'s angle (gear eccentricity, encoder or transmission "
-                   f"error) that the geometric model cannot carry: model it with `rodlab calibrate "
-                   f"--joint-harmonics {flag}`")
+                   f"error) that the geometric model cannot carry{advice}")
         a = approach[:, j]
         if (a > 0).sum() >= 3 and (a < 0).sum() >= 3:
             yield ("lost_motion", f"joint {j + 1}", _through_joint(cols[:, j], a[:, None]),

@@ -139,3 +139,21 @@ def test_edited_design_refuses_an_invalid_result(tmp_path):
     with pytest.raises(DesignError, match="nothing was written"):
         write_edited_design(src.read_text(), d, {"bend.radius_mm": 10.0}, tmp_path / "bad.rod.toml")
     assert not (tmp_path / "bad.rod.toml").exists()
+
+
+def test_a_tube_key_moves_the_bend_that_is_the_tube_itself():
+    """A design without its own [bend] bends the tube itself: tube.wall_mm and tube.outer_diameter_mm set the bend
+    too (they had moved the pipes only); a bend of its own material keeps its section."""
+    import tomllib
+
+    from rodlab.core.design_io import design_from_dict
+
+    def load_design_text(t):
+        return design_from_dict(tomllib.loads(t))
+    text = ('format = "rodlab.rod/1"\nname = "al300"\nL1_mm = 300\nL2_mm = 450\ngamma_deg = 90.0\n[tube]\n'
+            'material = "al_6061"\nouter_diameter_mm = 30\nwall_mm = 2.5\n')
+    d = load_design_text(text)
+    moved = with_values(d, {"tube.wall_mm": 2.3, "tube.outer_diameter_mm": 29.9})
+    assert moved.bend.wall_mm == 2.3 and moved.bend.outer_diameter_mm == 29.9 and moved.pipe_II.wall_mm == 2.3
+    own = load_design_text(text + '[bend]\nmaterial = "steel_304"\nouter_diameter_mm = 30\nwall_mm = 2.5\n')
+    assert with_values(own, {"tube.wall_mm": 2.3}).bend.wall_mm == 2.5

@@ -21,7 +21,7 @@ from ..core.design import RodDesign
 from ..core.design_io import design_to_dict
 from ..core.errors import LocatedError, DesignError, RodlabError
 from ..core.massprops import mass_properties
-from ..core.sensitivity import (METHOD_ACCURACY, MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES, scale_moduli,
+from ..core.sensitivity import (METHOD_ACCURACY, method_accuracy, MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES, scale_moduli,
                                 with_values)
 from ..core.tolerances import BOND_SD, bond_tolerances, design_tolerances, design_value
 
@@ -108,8 +108,21 @@ class UpdateResult:
         return self.p_after > EXPLAIN_P
 
 
-def model_compliance(model: str):
-    """design -> C_F [mm/N] of the compliance model ``frame`` (calibrated beam frame) or ``calc`` (closed form)."""
+def model_compliance(model: str, sim=None, design: RodDesign | None = None):
+    """design -> C_F [mm/N] of the compliance model ``frame`` (calibrated beam frame) or ``calc`` (closed form);
+    with ``sim`` (the user's own simulated compliance of ``design``, :class:`~rodlab.core.compliance.RodCompliance`)
+    that file moved entry by entry as the frame moves with the keys: ``C_sim * frame(d) / frame(design)`` (a trial:
+    update had fitted through rodlab's frame only, refusing what the user's own simulation called consistent)."""
+    if sim is not None:
+        base = frame_compliance(design)[0]
+        C_sim = np.asarray(sim.C_F, float)
+        scale = np.abs(base).max()
+
+        def moved(d):
+            C = frame_compliance(d)[0]
+            ratio = np.where(np.abs(base) > 1e-9 * scale, C / np.where(base == 0, 1.0, base), 1.0)
+            return C_sim * ratio
+        return moved
     if model == "frame":
         return lambda d: frame_compliance(d)[0]
     if model == "calc":
@@ -192,14 +205,15 @@ def _bounds_and_start(keys, nominal, prior_sd) -> tuple[np.ndarray, np.ndarray, 
     return lo, hi, start
 
 
-def update_design(design: RodDesign, measured: Measured, keys, model: str = "frame") -> UpdateResult:
+def update_design(design: RodDesign, measured: Measured, keys, model: str = "frame", sim=None) -> UpdateResult:
     """Fit ``keys`` of ``design`` to ``measured`` (bounded to 0.2-5x the design value, priors from the tolerances);
-    :data:`MODULI` among them fits one factor of every modulus of the rod."""
+    :data:`MODULI` among them fits one factor of every modulus of the rod. ``sim``: the user's simulated compliance
+    of the design, moved by the frame's sensitivities (:func:`model_compliance`), with its method's accuracy."""
     keys = tuple(keys)
     _check_keys(design, keys)
-    fn = model_compliance(model)
+    fn = model_compliance(model, sim, design)
     E = measured.entries
-    acc = METHOD_ACCURACY[model]
+    acc = METHOD_ACCURACY[model] if sim is None else method_accuracy(str(sim.method), sim.provenance.get("model"))
     nominal, prior_sd = _priors(design, keys)
 
     def entries_of(x):

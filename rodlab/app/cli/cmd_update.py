@@ -13,6 +13,7 @@ from rodlab.stiffness_rig import read_recording
 from ...core.calc import calc_rod_compliance
 from ...core.compliance import RodCompliance, read_compliance
 from ...core.design_io import resolve_design
+from ...core.enums import Method
 from ...core.errors import DesignError, RodlabError, VerdictError, did_you_mean
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
@@ -49,6 +50,11 @@ def register(sub) -> None:
     p.add_argument("--model", choices=("frame", "calc"), default="frame",
                    help="compliance model the keys are fitted through (default: the calibrated frame, ~1 %% of the "
                         "solid FEA; calc: the closed form, 6-18 %%)")
+    p.add_argument("--sim", default=None, metavar="SIM.compliance.json",
+                   help="your own simulated compliance of the design (another code's FEA, a solid run): fitted "
+                        "through it, moved by the frame's sensitivities to the keys (C_sim x frame(as built) / "
+                        "frame(design)), with its method's accuracy, instead of through --model; the recording is "
+                        "diagnosed against it too")
     p.add_argument("-o", "--output", required=True, help="the as-built design to write (*.rod.toml)")
     p.set_defaults(func=cmd_update)
 
@@ -85,15 +91,15 @@ def _warn_unexplained(path: str, diag) -> None:
               "design", file=sys.stderr)
 
 
-def _measured(path: str, design, keys, model: str):
+def _measured(path: str, design, keys, model: str, own=None):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
-    ``model`` the keys are fitted through)."""
+    ``model`` the keys are fitted through, or the user's own simulation ``own``)."""
     from ..update import Measured, model_compliance
     if path.endswith(".rig.csv"):
         from ..diagnose import diagnose_rig
         C = model_compliance(model)(design)
-        sim = RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g, "fea" if model == "frame" else "calc",
-                                        {"model": model})
+        sim = own or RodCompliance.from_design(design, C, calc_rod_compliance(design).C_g,
+                                               "fea" if model == "frame" else "calc", {"model": model})
         rec = read_recording(path)
         other_rod = warn_rod_mismatch(rec.rod, design.name, path, "--measured", "the design")
         check_recording(rec, sim, override=None)
@@ -178,7 +184,7 @@ def _closed_form_hint(args, design) -> str:
     """Where the recording was made by ``rodlab rig simulate`` (whose ``--sim DESIGN`` is the design's closed form)
     and the closed form differs from the model fitted through by more than 3 % on a diagonal entry: say so (a
     trial's shear-soft carbon rod with a titanium bend: c33 26 % apart, the unchanged design refused)."""
-    if args.model == "calc" or not str(args.measured).endswith(".rig.csv"):
+    if args.model == "calc" or args.sim or not str(args.measured).endswith(".rig.csv"):
         return ""
     head = Path(args.measured).read_text(encoding="utf-8", errors="replace")[:2000]
     if "# generator: rodlab rig simulate" not in head:
@@ -221,20 +227,22 @@ def cmd_update(args: argparse.Namespace) -> int:
                           "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
         _check_key(design, key)
-    measured, causes = _measured(args.measured, design, keys, args.model)
+    own = _own_sim(args, design)
+    measured, causes = _measured(args.measured, design, keys, args.model, own)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
               "compliance; see `rodlab diagnose --rig`)")
-    res = update_design(design, measured, keys, args.model)
+    res = update_design(design, measured, keys, args.model, own)
     if not res.explains and not args.free:             # the tube's moduli cannot: the rod uniformly softer?
-        res = _uniformly(design, measured, res, args.model)
-    _print(res, args.model)
+        res = _uniformly(design, measured, res, args.model, own)
+    _print(res, f"{args.sim} (your simulation, moved by the frame's sensitivities to the keys)" if own else
+           f"the {args.model} model")
     _held_note(res, design)
     if not res.explains:
         _refuse(args, res)
     text = read_text_checked(design.source, DesignError)
     header = (f"# as built: rodlab update {args.design} --measured {args.measured} --free {','.join(res.keys)} "
-              f"--model {args.model}\n")
+              + (f"--sim {args.sim}\n" if args.sim else f"--model {args.model}\n"))
     out = write_edited_design(text, design, as_built_values(design, res.keys, res.x), args.output, header)
     print(f"wrote {out}")
     return 0
@@ -254,12 +262,24 @@ def _check_key(design, key: str) -> None:
         raise
 
 
-def _uniformly(design, measured, res, model: str):
+def _own_sim(args, design):
+    """``--sim``: the user's simulated compliance of the design, or None; a file of another rod is refused."""
+    if args.sim is None:
+        return None
+    sim = read_compliance(args.sim)
+    if sim.method is Method.MEAS:
+        raise RodlabError(f"--sim {args.sim} is a measured compliance (method meas): --sim is what the design was "
+                          f"simulated as; give the measurement with --measured")
+    warn_rod_mismatch(sim.rod, design.name, args.sim, "--sim", "the design")
+    return sim
+
+
+def _uniformly(design, measured, res, model: str, own=None):
     """The default keys (the tube's E and G) leave the measurement unexplained: every modulus by one factor
     (:data:`~rodlab.core.sensitivity.MODULI`) where that explains it (a paper trial: 3#, r_rod 2.30, with a steel
     bend), with a note; else the first result."""
     from ..update import update_design
-    uniform = update_design(design, measured, (MODULI,), model)
+    uniform = update_design(design, measured, (MODULI,), model, own)
     if not uniform.explains:
         return res
     print(f"note: {', '.join(res.keys)} alone cannot explain the measurement (chi-square {res.chi2_after:.3g} after "
@@ -283,8 +303,8 @@ def _refuse(args, res) -> None:
                        "tube.outer_diameter_mm); nothing was written" + _closed_form_hint(args, design))
 
 
-def _print(res, model: str) -> None:
-    print(f"fitted through the {model} model: chi-square of the {len(res.entries)} entries "
+def _print(res, through: str) -> None:
+    print(f"fitted through {through}: chi-square of the {len(res.entries)} entries "
           f"{res.chi2_before:.2f} -> {res.chi2_after:.2f}")
     if res.sigma_scale > 1.0:
         print(f"  note: the freed keys fit the entries only roughly (p = {res.p_after:.1e} after the fit): their "
@@ -315,7 +335,7 @@ def _print(res, model: str) -> None:
                   "rod or measuring the wall tells them apart")
     _moduli_note(res)
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
-    print(f"  r_mn = measured / the {model} model's prediction with its known bias against the solid FEA removed "
+    print(f"  r_mn = measured / the prediction of {through}, its known bias against the solid FEA removed "
           f"(`rig fit` divides by the simulated file as it is):")
     print("  r_mn before: " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_before)))
     print("  r_mn after:  " + ", ".join(f"{n} {r:.4f}" for n, r in zip(names, res.r_after)))

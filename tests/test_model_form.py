@@ -96,6 +96,8 @@ def test_form_difference_inside_tolerance_is_never_a_joint(tmp_path, seed):
     rec = _record(tmp_path, C, {"joint_compliance": {"location": "ring_1", "s_bend_rad_per_Nm": 2e-6}}, seed)
     diag, _ = diagnose_rig(rec, _sim(ROD1, "frame"), ROD1)
     assert diag.verdict == "consistent" and not _causes(diag)
+    bonds = {k: v for f in diag.findings for k, v in f.intervals.items() if k.startswith("joints.")}
+    assert all(lo >= 0.0 for lo, _ in bonds.values()), bonds              # no bond is stiffer than rigid
 
 
 def test_joint_outside_tolerance_is_still_named(tmp_path):
@@ -222,3 +224,9 @@ def test_update_widens_its_uncertainties_when_the_keys_fit_only_roughly():
     rough = update_design(design, Measured(E, bent, cov, "rough"), [key])
     assert rough.p_after < ROUGH_P
     assert rough.sigma_scale == pytest.approx(np.sqrt(rough.chi2_after / 3), rel=1e-9) and rough.sigma_scale > 1
+
+
+def test_intervals_tell_their_ends_apart_and_a_bond_ends_at_rigid():
+    from rodlab.app.diagnose.report import _interval_text
+    assert _interval_text(1.0693, 1.0714) == "[1.0693, 1.0714]"       # a trial: [1.07, 1.07]
+    assert _interval_text(95.3, 111.0) == "[95.3, 111]" and _interval_text(-0.0, 1.5e-6) == "[0, 1.5e-06]"

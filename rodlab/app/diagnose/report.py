@@ -1,6 +1,8 @@
 """The diagnosis report (contract ``rodlab.diagnosis/1``) and its findings."""
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -77,7 +79,7 @@ class Diagnosis:
         for i, f in enumerate(self.findings, 1):
             bound = set(f.evidence.get("at_bound", ()))
             ps = ", ".join(f"{k} = {v:.4g} " + ("(at its bound: the data ask for more; no interval)" if k in bound else
-                                                f"[{f.intervals[k][0]:.3g}, {f.intervals[k][1]:.3g}]")
+                                                _interval_text(*f.intervals[k]))
                            for k, v in f.parameters.items() if isinstance(v, (int, float)) and k in f.intervals)
             lines.append(f"  {i}. {f.effect}" + (f" at {f.location}" if f.location else "") + f": {f.explanation}")
             if ps:
@@ -92,3 +94,11 @@ class Diagnosis:
         if self.extra.get("refit_warning"):
             lines.append(f"  warning: {self.extra['refit_warning']}")
         return "\n".join(lines)
+
+
+def _interval_text(lo: float, hi: float) -> str:
+    """``[lo, hi]`` with the digits that tell its ends apart (a trial: r_11 [1.07, 1.07]), at least three."""
+    scale = max(abs(lo), abs(hi))
+    width = abs(hi - lo)
+    digits = 3 if width == 0 or scale == 0 else int(min(8, max(3, math.ceil(math.log10(scale / width)) + 2)))
+    return f"[{lo + 0.0:.{digits}g}, {hi + 0.0:.{digits}g}]"            # + 0.0: no "-0"

@@ -259,12 +259,14 @@ def _model_form(linear: LinearPart, env: Envelope, fit: _AsBuilt, causes, rms, j
                 continue
             lo, mid, hi = (p.nominal * float(np.exp(v * p.relative)) for v in (u - 1.96 * su, u, u + 1.96 * su))
             params[p.key], intervals[p.key] = mid, [lo, hi]
-        for (place, sd, _), u, su in zip(env.bonds, fit.u[len(env.params):], sd_u[len(env.params):]):
+        lowest = (env.u_bounds[len(env.params):, 0] if len(env.u_bounds) == len(env.params) + len(env.bonds)
+                  else np.full(len(env.bonds), -np.inf))
+        for (place, sd, _), u, su, u_lo in zip(env.bonds, fit.u[len(env.params):], sd_u[len(env.params):], lowest):
             key = f"joints.{place}.s_bend_rad_per_Nm"
             if su > INFORMED:
                 unresolved.append(key)
-                continue
-            params[key], intervals[key] = sd * float(u), [sd * float(u - 1.96 * su), sd * float(u + 1.96 * su)]
+                continue                           # a bond is no stiffer than rigid: the interval ends there
+            params[key], intervals[key] = sd * float(u), [sd * float(max(u - 1.96 * su, u_lo)), sd * float(u + 1.96 * su)]
     ev = dict(judged.to_dict(), resolve=_resolution(env, fit, causes), envelope=env.source)
     if fit.k:
         ev["keys_not_resolved"] = unresolved

@@ -27,7 +27,8 @@ if TYPE_CHECKING:
 __all__ = ["trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
            "unmodelled_gross", "typical_miss_mm", "stated_noise_warning", "implausible_device",
            "PLAUSIBLE_NOISE_FACTOR", "NOISY_FILE_CAUSES",
-           "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE", "USUAL_MOVE"]
+           "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE", "USUAL_MOVE",
+           "prediction_cautions"]
 
 
 #: physical bounds of the identified errors; beyond them a result is flagged
@@ -139,6 +140,18 @@ def prediction_warnings(pred: "Prediction | None") -> list[str]:
                  f"{pred.mean_mm / pred.nominal_mean_mm:.0%} of the nominal model's: the parameters fit these points "
                  "rather than the robot (overfitting); measure more poses or identify fewer parameters")
     return w
+
+
+def prediction_cautions(pred: "Prediction | None") -> list[str]:
+    """What a usable prediction holds for: along one-joint sweeps only, where the cross-validation held out poses
+    inside the sweeps (:data:`~calibrate.crossval.SWEEP_GROUPING`)."""
+    from .crossval import SWEEP_GROUPING                          # cycle: crossval imports this module's users
+    if pred is None or pred.grouping != SWEEP_GROUPING or not pred.points:
+        return []
+    return ["the poses turn one joint at a time about one configuration, so the held-out accuracy holds along those "
+            "sweeps only; elsewhere in the workspace it is not tested (a trial's FANUC fit, trusted at 0.22 mm that "
+            "way, missed another recording of the same robot by 1.17 mm against the nominal model's 1.14): check it "
+            "on varied poses (`rodlab plan`, or another recording with --validate) before relying on it there"]
 
 
 def completeness(res: "CalibrationResult") -> Completeness | None:

@@ -5,15 +5,17 @@ from __future__ import annotations
 
 import sys
 
-from rodlab.calibrate.trust import completeness_statement, prediction_warnings
+from rodlab.calibrate.trust import completeness_statement, prediction_cautions, prediction_warnings
 
 __all__ = ["judge", "print_verdict", "print_held"]
 
 
 def judge(res, prediction) -> None:
-    """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result."""
+    """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result, and the
+    caution of a prediction along one-joint sweeps only."""
     res.prediction = prediction
     res.warnings = list(res.warnings) + prediction_warnings(prediction)
+    res.cautions = list(res.cautions) + prediction_cautions(prediction)
 
 
 def print_verdict(res) -> None:

@@ -123,7 +123,7 @@ def pinned_vector(infos, start: ModelParams, pinned: dict) -> np.ndarray:
     for nm, v in pinned.items():
         k = names.index(nm)
         if infos[k].kind == "c" and not 0.0 <= v <= C_MAX:      # a trial: -3.2e-5 had become 0 without a word
-            unit = (f"; the value is in rad/(N m): {v:g} urad/(N m) is {v * 1e-6:g}" if 0 < v * 1e-6 <= C_MAX
+            unit = (f"; the value is in rad/(N m): {v:g} urad/(N m) is {v * 1e-6:g}" if v >= 1 and v * 1e-6 <= C_MAX
                     else "; a negative one is a sag of the wrong sign: check the sign of the measured points' "
                          "columns or an axis direction" if v < 0 else "")
             raise CalibrationError(f"--pin {nm}={v:g}: a joint compliance lies in [0, {C_MAX:g}] rad/(N m), the "

@@ -85,12 +85,12 @@ class ResidualTest:
         return "consistent with noise"
 
     def noise_phrase(self) -> str:
-        """``17.6 um``, or where each point states its sigma ``as each point states it (3.7-42.0 um, median 17.6
+        """``17.6 um``, or where each point states its sigma ``as each point states it (3.7-42.0 um, rms 17.6
         um)``: the test weighs each point by its own (a trial: a Birge ratio of 47 beside 238 um / 17.6 um = 13.5
         had read as a contradiction)."""
         if self.stated_range_mm:
             lo, hi = self.stated_range_mm
-            return (f"as each point states it ({lo * 1e3:.1f}-{hi * 1e3:.1f} um, median {self.noise_mm * 1e3:.1f} um; "
+            return (f"as each point states it ({lo * 1e3:.1f}-{hi * 1e3:.1f} um, rms {self.noise_mm * 1e3:.1f} um; "
                     f"each point weighed by its own)")
         return f"{self.noise_mm * 1e3:.1f} um"
 

@@ -256,15 +256,19 @@ def _large_move_cautions(robot, res: "CalibrationResult") -> list[str]:
     nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     moved = []
     for info in res.infos:
-        if info.kind in USUAL_MOVE and res.status[info.name] != "fixed":
+        if info.kind in USUAL_MOVE and res.status[info.name] == "identified":    # a regularised one is the prior's
             err = res.values[info.name] - nominal[info.kind][info.index]
-            if USUAL_MOVE[info.kind] < abs(err) <= ERROR_BOUNDS[info.kind]:
-                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {nominal[info.kind][info.index]:g})")
+            beyond = abs(err) - USUAL_MOVE[info.kind]
+            if 0 < beyond and beyond > 3 * res.sigma[info.name] and abs(err) <= ERROR_BOUNDS[info.kind]:
+                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {round(nominal[info.kind][info.index], 6):g})")
     if not moved:
         return []
+    held = [u.split(" ")[0] for u in res.unidentifiable if "in this data set" in u]
+    also = (f", or what the parameters held at nominal ({', '.join(held)}) leave for these to carry" if held else "")
     return [f"{', '.join(moved)}: farther from the robot file ({robot.name}) than a robot's manufacturing usually "
             f"leaves (~{USUAL_MOVE['a']:g} mm, ~{USUAL_MOVE['alpha']:g} deg): check those rows of the robot file (a "
-            f"typo, another variant of the robot); the improvement over its nominal model is then partly the file's"]
+            f"typo, another variant of the robot{also}); the improvement over its nominal model is then partly the "
+            f"file's"]
 
 
 #: what an incomplete model of instrument readings may miss, by the kind of reading (ResidualTest.source)

@@ -41,9 +41,10 @@ __all__ = ["AcquisitionStatus", "acquire", "RecordingLock"]
 
 log = logging.getLogger(__name__)
 
-#: a load cell's reading above its unloaded start against the hung weight: outside this ratio it is said at once
-#: (friction of the slides and a hanger's tare stay well inside it from ~1 kg up)
-LOAD_RATIO = (0.5, 1.5)
+#: a load cell's reading above its unloaded start against the hung weight: outside this ratio it is said at once,
+#: a gross slip (a scale 10x off, another unit, the sign); friction and a hanger's tare stay inside it (a review: a
+#: 0.3 kg tare on 0.5 kg reads 1.5x)
+LOAD_RATIO = (0.3, 3.0)
 #: ... for weights of at least this much [N] (a light first mass is mostly friction and tare)
 LOAD_CHECK_MIN_N = 4.0
 

@@ -158,6 +158,18 @@ def _channel(r, ch, where: str, driver) -> InstrumentChannel:
     return InstrumentChannel(q, value, axis, sign, scale, units)
 
 
+#: the settings a driver writes on the line as they are (after unescaping): ASCII only
+_SENT = ("request", "init", "eol")
+
+
+def _ascii(text: str) -> bool:
+    try:
+        unescape(text).encode("ascii")
+    except (UnicodeEncodeError, UnicodeDecodeError):
+        return False
+    return True
+
+
 def _protocol_config(r, ins: dict, where: str, cls) -> dict:
     config = {}
     for s in cls.settings:
@@ -174,6 +186,9 @@ def _protocol_config(r, ins: dict, where: str, cls) -> dict:
             raise _err(r, f"expected {kind[s.type.__name__]}, got {v!r}", f"{where}.{s.key}")
         if s.choices and v not in s.choices:
             raise _err(r, f"expected one of {list(s.choices)}, got {v!r}", f"{where}.{s.key}")
+        if s.key in _SENT and not _ascii(v):              # a review: "Rä\r" had loaded, then failed at the port
+            raise _err(r, f"expected ASCII characters (what is sent on the line), got {v!r}; write other bytes as "
+                          f"escapes such as \\x1b", f"{where}.{s.key}")
         config[s.key] = v
     return config
 

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+from rodlab.core.enums import Checksum
+
 __all__ = ["xor_checksum", "line_checksum", "encode_values", "parse_line", "garbage_reason"]
 
 
@@ -17,9 +19,9 @@ def xor_checksum(payload: bytes) -> str:
 def line_checksum(payload: bytes, kind: str) -> str:
     """Two upper-case hex digits of ``payload``'s checksum: ``xor`` (NMEA-style) or ``sum8`` (the bytes' sum
     modulo 256)."""
-    if kind == "xor":
+    if kind == Checksum.XOR:
         return xor_checksum(payload)
-    if kind == "sum8":
+    if kind == Checksum.SUM8:
         return f"{sum(payload) & 0xFF:02X}"
     raise ValueError(f"unknown checksum {kind!r}; known: xor, sum8")
 
@@ -27,7 +29,7 @@ def line_checksum(payload: bytes, kind: str) -> str:
 def encode_values(values, separator: str = ",", checksum: str = "none") -> bytes:
     """One device line (with CR LF) carrying ``values`` in device units."""
     payload = separator.join(f"{v:+.4f}" for v in values).encode("ascii")
-    if checksum != "none":
+    if checksum != Checksum.NONE:
         payload += b"*" + line_checksum(payload, checksum).encode("ascii")
     return payload + b"\r\n"
 
@@ -52,11 +54,11 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
     if not text:
         return None, "an empty line"
     body, star, cs = text.rpartition("*")
-    if checksum != "none":
+    if checksum != Checksum.NONE:
         if not star or len(cs) != 2:
             return None, "no '*HH' checksum at its end (checksum = \"none\" for a device that sends none)"
         if line_checksum(body.encode("ascii"), checksum) != cs.upper():
-            other = "sum8" if checksum == "xor" else "xor"
+            other = Checksum.SUM8.value if checksum == Checksum.XOR else Checksum.XOR.value
             named = (f"its {checksum} checksum does not match, the {other} one does: set checksum = \"{other}\""
                      if line_checksum(body.encode("ascii"), other) == cs.upper() else
                      f"its {checksum} checksum does not match (noise on the line, or another checksum)")
@@ -69,8 +71,9 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
         vals = None
     if vals is not None and all(math.isfinite(v) for v in vals):
         return vals, ""
-    if checksum == "none" and star and len(cs) == 2 and all(ch in "0123456789abcdefABCDEF" for ch in cs):
-        kind = next((k for k in ("xor", "sum8") if line_checksum(body.encode("ascii"), k) == cs.upper()), "xor")
+    if checksum == Checksum.NONE and star and len(cs) == 2 and all(ch in "0123456789abcdefABCDEF" for ch in cs):
+        kind = next((k.value for k in (Checksum.XOR, Checksum.SUM8)
+                     if line_checksum(body.encode("ascii"), k) == cs.upper()), Checksum.XOR.value)
         return None, f"it ends with '*HH', a checksum: set checksum = \"{kind}\""
     if len(parts) != n_values:
         other = _other_separator(text, n_values, separator)

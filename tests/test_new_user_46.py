@@ -184,3 +184,12 @@ def test_diagnose_campaign_given_instrument_points_names_points(tmp_path, capsys
     path.write_text("# tool_mm: 0, 0, 109\nq1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n1,2,3,4,5,6,100,200,300\n")
     assert main(["diagnose", "--campaign", str(path)]) == 2
     assert f"diagnose it with --points {path}" in capsys.readouterr().err
+
+
+def test_joints_counted_from_zero_are_renamed_one_up(tmp_path, capsys):
+    """J0..J5 are q1..q6 (a review: J1 had been told to be q1, shifting every joint by one)."""
+    path = tmp_path / "j0.validation.csv"
+    path.write_text("# tool_mm: 0, 0, 109\nJ0,J1,J2,J3,J4,J5,x_mm,y_mm,z_mm\n1,2,3,4,5,6,100,200,300\n")
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "'J0' to q1" in err and "'J5' to q6" in err and "'J1' to q1" not in err

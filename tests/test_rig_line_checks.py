@@ -180,3 +180,12 @@ def test_a_load_cell_off_the_hung_weight_is_said_during_the_acquisition(tmp_path
     assert ("# load check:" in text) == warned and ("the load cell reads" in caplog.text) == warned
     if warned:
         assert "for 1 kg" in text and text.count("# load check:") == 1       # said once, at the first loaded hold
+
+
+def test_a_non_ascii_init_line_is_refused_at_its_key(tmp_path):
+    body = _instrument("ctl", tmp_path / "ttyC", "ascii_regex",
+                       [{"quantity": "displacement", "axis": "y", "value": "out1"}], request="M0\\r",
+                       pattern="^M0,(?P<out1>[-+0-9.]+)$", init="R\u00e4\\r")
+    with pytest.raises(RigError) as ei:
+        read_profile(_profile(tmp_path, body, None))
+    assert ei.value.key == "instrument[1].init" and "ASCII" in str(ei.value)

@@ -57,8 +57,15 @@ def _other_unit(word: str, choices: list[str]) -> str:
 
 
 #: a controller's names of joint k's column (J1, A1, axis_1, joint1, q_1, J1_deg): the contract's q<k>
-_JOINT_ALIAS = re.compile(r"(?:j|a|ax|axis|joint|q|achse|gelenk|axe)[ _]?([1-9][0-9]?)(?:[ _]?(?:deg|\(deg\)|\[deg\]))?",
+_JOINT_ALIAS = re.compile(r"(?:j|a|ax|axis|joint|q|achse|gelenk|axe)[ _]?([0-9][0-9]?)(?:[ _]?(?:deg|\(deg\)|\[deg\]))?",
                           re.IGNORECASE)
+
+
+def joint_alias_number(word: str) -> int | None:
+    """The joint number a controller's column name gives (``J1``, ``A1``, ``axis_1``, ``Achse1``: 1; ``J0``: 0), or
+    None."""
+    m = _JOINT_ALIAS.fullmatch(str(word))
+    return int(m.group(1)) if m else None
 #: a name with its unit in brackets (``X [mm]``, ``x (mm)``): the contract writes ``x_mm``
 _BRACKET_UNIT = re.compile(r"(.+?)\s*[\[(]\s*(\w+)\s*[\])]")
 

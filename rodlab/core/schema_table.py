@@ -14,7 +14,7 @@ import csv
 import math
 import re
 
-from .errors import did_you_mean
+from .errors import did_you_mean, joint_alias_number
 from .fileio import separator_problem
 from .schema import Problem
 
@@ -108,8 +108,14 @@ def _renames(header: list[str], cols: dict, schema: dict) -> dict:
     names = list(cols) + [c["name"].replace("{i}", str(i)) for c in schema["columns"] if c.get("joints")
                           for i in range(1, len(header) + 1)]
     out = {}
+    numbers = [n for h in header if h not in cols and (n := joint_alias_number(h)) is not None]
+    shift = 1 if 0 in numbers else 0              # J0, J1, ...: counted from 0 (a review: J1 had become q1)
     for h in header:
         if h in cols:
+            continue
+        n = joint_alias_number(h)
+        if shift and n is not None and f"q{n + 1}" in names and f"q{n + 1}" not in header:
+            out[h] = f"q{n + 1}"
             continue
         hint = re.search(r"`([^`]+)`", did_you_mean(h, names, units=True))
         if hint and hint.group(1) in names and hint.group(1) not in header:

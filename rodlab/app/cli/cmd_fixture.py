@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 import sys
+from pathlib import Path
 
 from rodlab.calibrate import write_fixture
 from rodlab.calibrate.device import read_device
@@ -81,7 +82,9 @@ def cmd_fixture(args) -> int:
         print(f"  {j:>8}  {len(f.features):>8}  {f.rms_mm * 1e3:12.1f}   {s[0] * 1e3:5.1f} {s[1] * 1e3:5.1f} "
               f"{s[2] * 1e3:5.1f}   {s[3] * 1e3:6.1f} {s[4] * 1e3:6.1f} {s[5] * 1e3:6.1f}{mark}")
     if any(f.swapped is not None for f in fit.flagged):    # poses fitted on exchanged labels are wrong by cm
-        print(f"not written: {args.output} (positions with exchanged labels, below)", file=sys.stderr)
+        stale = (f"; the {args.output} already there is an earlier run's, not this probing's: do not calibrate with "
+                 f"it" if Path(args.output).exists() else "")
+        print(f"not written: {args.output} (positions with exchanged labels, below){stale}", file=sys.stderr)
     else:
         print(f"wrote {write_fixture(fit.fixture, args.output)}")
     if len(fit.flagged) >= 2 and len(fit.flagged) == len(fit.fits):

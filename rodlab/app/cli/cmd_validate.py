@@ -238,14 +238,17 @@ def _check_probes(checks: list) -> None:
     if len(devices) != 1:
         return
     device = read_device(devices[0])
+    device_check = next(c for f, c in checks if f == devices[0])
     for f, c in checks:
         if not (c.ok and c.format == "rodlab.probe/1"):
             continue
         probes = read_probe(f)
         try:
             fit = fit_fixture(probes, device, int(probes.position[0]))
-        except CalibrationError as e:
-            c.problems.append(Problem(e.path or str(f), f"against {devices[0]}: {e.detail}", e.line, e.key))
+        except CalibrationError as e:           # a fault of the device file is the device file's (a review)
+            own = e.path is not None and Path(e.path).resolve() == Path(devices[0]).resolve()
+            (device_check if own else c).problems.append(
+                Problem(e.path or str(f), e.detail if own else f"against {devices[0]}: {e.detail}", e.line, e.key))
             continue
         for pf in fit.flagged:
             if pf.swapped is not None:                     # certain: `rodlab fixture` writes nothing from it

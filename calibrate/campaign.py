@@ -5,7 +5,7 @@
   readings, converted with a device file (:func:`calibrate.readings.apply_device`).
 - ``*.fixture.json``: poses of {D_j} in {W} = {D_world_position}, the sensors' contact force in {D_j}.
 - ``*.validation.csv``: ``# tool_mm``, ``# rod_mass_kg``, ``# rod_com_T_mm``, ``[# temp_C]`` then
-  ``q1..qn,x_mm,y_mm,z_mm`` (ball centre in {W} from an external instrument).
+  ``q1..qn,x_mm,y_mm,z_mm[,temp_C]`` (ball centre in {W} from an external instrument).
 """
 from __future__ import annotations
 
@@ -114,6 +114,7 @@ class PointSet:
     temp_C: float | None = None
     path: Path | None = None
     sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
+    temp_each_C: np.ndarray | None = None   # (N,) temperature at each point [degC] (a temp_C column), optional
 
     @property
     def rod(self) -> Rod:
@@ -375,15 +376,15 @@ def read_points(path, n_joints: int = 6) -> PointSet:
                               text_columns=POINT_TEXT)
     q = np.array([[r[c] for c in qs] for _, r in rows])
     x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
-    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows))
+    each = np.array([r["temp_C"] for _, r in rows]) if "temp_C" in header else None
+    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows), each)
 
 
 #: optional per-point uncertainty columns of a points file: one standard deviation per coordinate [mm]
 SIGMA_COLUMNS = ("sigma_x_mm", "sigma_y_mm", "sigma_z_mm")
-#: optional columns a tracker's export carries that a points file may keep (not read): the point's name or label, its
-#: time stamp as text, its time [s]
+#: optional columns of a tracker's export: name or label, time stamp, time [s] (kept), temperature [degC] (read)
 POINT_TEXT = ("name", "point_name", "label", "timestamp", "date")
-POINT_EXTRAS = (*POINT_TEXT, "time_s")
+POINT_EXTRAS = (*POINT_TEXT, "time_s", "temp_C")
 
 
 def _point_sigmas(p: Path, header: list[str], rows) -> np.ndarray | None:

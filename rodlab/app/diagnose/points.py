@@ -156,6 +156,25 @@ def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
                    "motion); approach every pose from the same side")
 
 
+#: a points file's temperature column must span this much [K] for its thermal growth to be tested
+THERMAL_SPAN_K = 0.2
+
+
+def _thermal_candidate(params, q: np.ndarray, temp_C) -> list:
+    """The arm growing with the temperature of each point (a ``temp_C`` column): every point moved away from the
+    base by ``growth x (T - mean T)`` of its distance (links of steel or aluminium: 12-23 ppm/K), seen in the
+    instrument's frame; none without a column spanning :data:`THERMAL_SPAN_K` (a trial: the UR10's raw data had a
+    temperature per point and the points format had refused it)."""
+    if temp_C is None or not np.all(np.isfinite(temp_C)) or np.ptp(temp_C) < THERMAL_SPAN_K:
+        return []
+    fr = forward(params, q)
+    dT = np.asarray(temp_C, float) - float(np.mean(temp_C))
+    X = ((fr.p0 @ fr.R_W0.T) * dT[:, None]).reshape(-1, 1)
+    return [("thermal_drift", "temperature", X,
+             f"the arm grows with the temperature ({np.ptp(temp_C):.1f} K over the points): its links expand away from "
+             f"the base; calibrate at the working temperature, or measure a reference pose as it warms up")]
+
+
 def _greedy(r: np.ndarray, candidates: list) -> list:
     """Findings one at a time: the candidate that removes most of what is left, tested on what is left, then
     removed, so that two names for one pattern are not both reported. Shares are of the original residual."""
@@ -191,7 +210,9 @@ def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
     modelled = tuple(res.harmonic_range_deg)
-    findings = _greedy(r.ravel(), list(point_candidates(q, _joint_columns(res.params, q), modelled)))
+    candidates = list(point_candidates(q, _joint_columns(res.params, q), modelled))
+    candidates += _thermal_candidate(res.params, q, getattr(pts, "temp_each_C", None))
+    findings = _greedy(r.ravel(), candidates)
     dof = max(r.size - len(res.free), 1)
     p0 = forward(res.params, q).p0
     return PointsDiagnosis(len(r), float(np.sqrt(np.mean(r ** 2))), float(noise_mm),

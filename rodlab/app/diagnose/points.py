@@ -64,11 +64,13 @@ class PointsDiagnosis:
     def summary(self) -> str:
         lines = [f"instrument points: {self.points} poses, residual rms {self.rms_mm * 1e3:.1f} um per coordinate "
                  f"against {self.noise_mm * 1e3:.1f} um of instrument noise (reduced chi-square "
-                 f"{self.reduced_chi2:.1f})"]
+                 f"{self.reduced_chi2:.1f} at that one level; the residual test above weighs each point by its own "
+                 f"sigma where the file states them)"]
         if not self.findings:
-            lines.append("  no joint-, direction- or order-dependent pattern stands out"
-                         + ("" if self.consistent else "; the excess is spread over the workspace (check the "
-                            "instrument's noise or the model's link lengths)"))
+            lines.append("  no joint-, direction-, order- or temperature-dependent pattern stands out"
+                         + ("" if self.consistent else "; the excess is spread over the workspace (the instrument "
+                            "noisier than stated, or physics no candidate here describes: link or joint deflection "
+                            "beyond the joints' springs, a tool that moved)"))
         for f in self.findings:
             lines.append(f"  {f.effect} ({f.where}): removes {f.explained_share:.0%} of the residual "
                          f"(p = {f.p_value:.1e}): {f.meaning}")

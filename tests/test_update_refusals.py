@@ -128,3 +128,18 @@ def test_update_through_the_users_own_simulation(tmp_path, capsys):
     assert main(["update", str(tmp_path / "al300.rod.toml"), "--measured", str(rec), "--sim",
                  str(tmp_path / "m.compliance.json"), "-o", str(tmp_path / "x.rod.toml")]) == 2
     assert "is a measured compliance" in capsys.readouterr().err
+
+
+def test_a_key_the_model_does_not_depend_on_is_refused_before_the_fit(tmp_path, capsys):
+    """A material that gives its own G_GPa: its nu moves nothing the frame computes (a trial: fitted, then refused
+    as unexplained)."""
+    design = tmp_path / "cf.rod.toml"
+    design.write_text('format = "rodlab.rod/1"\nname = "cf"\nL1_mm = 300\nL2_mm = 450\ngamma_deg = 90.0\n[tube]\n'
+                      'material = "my_cf"\nouter_diameter_mm = 30\nwall_mm = 2.5\n[materials.my_cf]\nE_GPa = 110.0\n'
+                      'E_transverse_GPa = 9.0\nG_GPa = 12.0\nnu = 0.3\ndensity_kg_m3 = 1580\n')
+    rec = tmp_path / "cf.rig.csv"
+    assert main(["-q", "rig", "simulate", "--sim", str(design), "-o", str(rec)]) == 0
+    capsys.readouterr()
+    assert main(["update", str(design), "--measured", str(rec), "--free", "materials.my_cf.nu", "-o",
+                 str(tmp_path / "o.rod.toml")]) == 2
+    assert "does not depend on it" in capsys.readouterr().err and not (tmp_path / "o.rod.toml").exists()

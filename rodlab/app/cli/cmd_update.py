@@ -17,7 +17,7 @@ from ...core.enums import Method
 from ...core.errors import DesignError, RodlabError, VerdictError, did_you_mean
 from ...core.fileio import read_text_checked
 from ...core.joint_springs import JOINT_PLACES
-from ...core.sensitivity import MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES
+from ...core.sensitivity import MODULI, MODULUS_KEYS, STRUCTURAL_ENTRIES, with_values
 from ...core.tolerances import design_tolerances, design_value
 from ...core.units import PAPER_R_ROD
 from .recording_checks import check_recording
@@ -227,6 +227,7 @@ def cmd_update(args: argparse.Namespace) -> int:
                           "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
         _check_key(design, key)
+        _check_moves(design, key, args.model)
     own = _own_sim(args, design)
     measured, causes = _measured(args.measured, design, keys, args.model, own)
     if causes:
@@ -260,6 +261,21 @@ def _check_key(design, key: str) -> None:
             raise RodlabError(f"--free {key}: no such key of design {design.name!r}.{hint} (every modulus of the rod "
                               "by one factor)") from e
         raise
+
+
+def _check_moves(design, key: str, model: str) -> None:
+    """Refuse a key the compliance model does not depend on (a trial: ``materials.X.nu`` of a material giving its
+    own G_GPa had been fitted, then refused as unexplained): 5 % of it changes no C_F entry by 1e-9."""
+    if key == MODULI or key.startswith("joints."):
+        return
+    from ..update import model_compliance
+    fn = model_compliance(model)
+    value = design_value(design, key)
+    C0, C1 = fn(design), fn(with_values(design, {key: value * 1.05 if value else 0.05}))
+    if np.max(np.abs(C1 - C0)) <= 1e-9 * np.max(np.abs(C0)):
+        raise RodlabError(f"--free {key}: the {model} model's compliance does not depend on it (e.g. a Poisson's ratio "
+                          f"where the material gives its own G_GPa, a density): free a key that moves the rod's "
+                          f"compliance (`rodlab diagnose --rig` lists the keys the recording resolves)")
 
 
 def _own_sim(args, design):

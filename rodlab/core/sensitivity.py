@@ -10,8 +10,11 @@
 """
 from __future__ import annotations
 
+import copy
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -94,39 +97,64 @@ def method_accuracy(method: str, model: str | None = None) -> MethodAccuracy:
     raise DesignError(f"no simulation accuracy for method {method!r} (known: calc, fea)", key="method")
 
 
-def _bend_is_tube(design: RodDesign) -> bool:
-    """Whether the bend is the tube itself, bent (a design without its own ``[bend]`` section, or one giving the
-    tube's material and section): a ``tube.*`` key then sets the bend too (a trial: a wall 0.2 mm thinner had moved
-    the pipes only, the bend kept at the design's wall, and update's fit of it missed c33 by 4 %)."""
-    p, b = design.pipe_I, design.bend
-    return (p.key == "tube" and b.material.name == p.material.name and b.outer_diameter_mm == p.outer_diameter_mm
-            and b.wall_mm == p.wall_mm)
-
-
 def with_values(design: RodDesign, values: dict) -> RodDesign:
-    """``design`` with the dotted keys of ``values`` set (``tube.*`` sets every pipe that shares the tube, and the
-    bend where it is the tube itself, bent);
-    without its tolerances (the keys of a perturbed design are those of :func:`design_to_dict`)."""
-    data = design_to_dict(design)
+    """``design`` with the dotted keys of ``values`` set, without its tolerances. Where the design was read from a
+    file, the keys are set in that file's own tables and every default re-derived, as ``rodlab update -o`` writes
+    the as-built file (``tube.*`` then moves the bend that is the tube itself, bent, and the defaults that follow
+    the tube: a review found the fitted design and the written file 2-24 % apart in c33 where the defaults had been
+    frozen); otherwise in the design's full table (``tube.*`` sets every pipe that shares the tube)."""
+    raw = _source_table(design)
+    data = raw if raw is not None else design_to_dict(design)
     for key, value in values.items():
         design_value(design, key)                       # names the key when the design has none such
-        table, _, name = key.rpartition(".")
-        if table.startswith("joints."):
-            data["format"] = FORMAT_ROD_V2
-            data.setdefault("joints", {}).setdefault(table.split(".", 1)[1], {})[name] = float(value)
-        elif table.startswith("materials."):
-            data["materials"][table.split(".", 1)[1]][name] = float(value)
-        elif table == "tube":
-            for label in ("pipe_I", "pipe_II"):
-                if getattr(design, label).key == "tube":
-                    data[label][name] = float(value)
-            if _bend_is_tube(design) and name in data["bend"]:   # the tube itself, bent: its wall and OD move too
-                data["bend"][name] = float(value)
-        elif table:
-            data[table][name] = float(value)
-        else:
-            data[name] = float(value)
+        _set(design, data, key, float(value), raw is not None)
     return design_from_dict(data)
+
+
+def _set(design: RodDesign, data: dict, key: str, value: float, own_tables: bool) -> None:
+    """Set one dotted ``key`` in the design table ``data`` (the file's own tables, or the full one)."""
+    table, _, name = key.rpartition(".")
+    if table.startswith("joints."):
+        data["format"] = FORMAT_ROD_V2
+        data.setdefault("joints", {}).setdefault(table.split(".", 1)[1], {})[name] = value
+    elif table.startswith("materials."):
+        label = table.split(".", 1)[1]
+        materials = data.setdefault("materials", {})
+        if label not in materials:                      # a built-in material: its full table, then the key
+            materials[label] = dict(design_to_dict(design)["materials"][label])
+        materials[label][name] = value
+    elif table == "tube" and own_tables:
+        data["tube"][name] = value
+    elif table == "tube":
+        for label in ("pipe_I", "pipe_II"):
+            if getattr(design, label).key == "tube":
+                data[label][name] = value
+    elif table:
+        data.setdefault(table, {})[name] = value
+    else:
+        data[name] = value
+
+
+#: design -> its source file's own table where that reproduces it (path, mtime and design as the key)
+_SOURCES: dict = {}
+
+
+def _source_table(design: RodDesign) -> dict | None:
+    """A deep copy of the table of the file ``design`` was read from, without its tolerances, where reading it
+    gives ``design`` back; else None (a design built in memory, or changed since it was read)."""
+    src = design.source
+    if src is None or not Path(src).is_file():
+        return None
+    key = (str(src), Path(src).stat().st_mtime_ns, id(design))
+    if key not in _SOURCES:                            # the design is kept with its table: its id stays its own
+        try:
+            table = tomllib.loads(Path(src).read_text(encoding="utf-8"))
+            table.pop("tolerances", None)
+            _SOURCES[key] = (design, table if design_from_dict(copy.deepcopy(table)) == design else None)
+        except (OSError, ValueError, DesignError, TypeError):
+            _SOURCES[key] = (design, None)
+    table = _SOURCES[key][1]
+    return None if table is None else copy.deepcopy(table)
 
 
 #: the keys of a material that are moduli (scaled together by :func:`scale_moduli`)

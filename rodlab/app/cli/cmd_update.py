@@ -110,7 +110,7 @@ def _measured(path: str, design, keys, model: str, own=None):
             raise RodlabError(f"{path}: the recording is of rod {rec.rod!r}, the design of rod {design.name!r}, and "
                               "they differ beyond the design's tolerances: a measurement of another rod cannot make "
                               "this rod's as-built design; give this rod's recording (or its design)")
-        _refuse_unfitted(path, unfitted, design, model, keys)
+        _refuse_unfitted(path, unfitted, design, "your simulation (--sim)" if own else f"{model} model", keys)
         lin = fitted.linear
         _warn_unexplained(path, diag)
         return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig
@@ -173,7 +173,7 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
     if MODULI in wanted:                                 # moduli scales the freed materials' moduli too
         freed = [k for k in freed if not (k.startswith("materials.") and k.rpartition(".")[2] in MODULUS_KEYS)]
     keys = ",".join(dict.fromkeys([*freed, *wanted]))   # the keys freed, plus
-    raise VerdictError(f"{path}: diagnosed against the {model} model of {design.name} (the model update fits "
+    raise VerdictError(f"{path}: diagnosed against the {model} of {design.name} (what update fits "
                       f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
                       f"here. Free the key that fits it too (--free {keys})"
                       + (", or repair or re-bond the joint and measure again" if "joints." in keys else "")
@@ -227,7 +227,7 @@ def cmd_update(args: argparse.Namespace) -> int:
                           "as drawn is not lost")
     for key in keys:                                   # a misspelt key is named before the recording is diagnosed
         _check_key(design, key)
-        _check_moves(design, key, args.model)
+        _check_moves(design, key, "frame" if args.sim else args.model)
     own = _own_sim(args, design)
     measured, causes = _measured(args.measured, design, keys, args.model, own)
     if causes:
@@ -236,8 +236,7 @@ def cmd_update(args: argparse.Namespace) -> int:
     res = update_design(design, measured, keys, args.model, own)
     if not res.explains and not args.free:             # the tube's moduli cannot: the rod uniformly softer?
         res = _uniformly(design, measured, res, args.model, own)
-    _print(res, f"{args.sim} (your simulation, moved by the frame's sensitivities to the keys)" if own else
-           f"the {args.model} model")
+    _print(res, _through(args))
     _held_note(res, design)
     if not res.explains:
         _refuse(args, res)
@@ -271,8 +270,14 @@ def _check_moves(design, key: str, model: str) -> None:
     from ..update import model_compliance
     fn = model_compliance(model)
     value = design_value(design, key)
-    C0, C1 = fn(design), fn(with_values(design, {key: value * 1.05 if value else 0.05}))
-    if np.max(np.abs(C1 - C0)) <= 1e-9 * np.max(np.abs(C0)):
+    C0, moved = fn(design), 0.0
+    for step in (1.001, 0.999):                      # a small step either way: a value at its rule's edge
+        try:
+            C1 = fn(with_values(design, {key: value * step if value else step - 1.0}))
+        except DesignError:
+            continue
+        moved = max(moved, float(np.max(np.abs(C1 - C0))))
+    if moved <= 1e-12 * np.max(np.abs(C0)):
         raise RodlabError(f"--free {key}: the {model} model's compliance does not depend on it (e.g. a Poisson's ratio "
                           f"where the material gives its own G_GPa, a density): free a key that moves the rod's "
                           f"compliance (`rodlab diagnose --rig` lists the keys the recording resolves)")
@@ -304,13 +309,21 @@ def _uniformly(design, measured, res, model: str, own=None):
     return uniform
 
 
+def _through(args) -> str:
+    """What the keys were fitted through, as the output says it."""
+    return (f"{args.sim} (your simulation, moved by the frame's sensitivities to the keys)" if args.sim else
+            f"the {args.model} model")
+
+
 def _refuse(args, res) -> None:
     recording = args.measured if args.measured.endswith(".rig.csv") else (
         read_compliance(args.measured).provenance.get("recording") or "RECORDING.rig.csv (the file's own recording)")
     design = resolve_design(args.design)
     raise VerdictError(f"{args.measured}: {', '.join(res.keys)} cannot explain the measurement (chi-square "
-                       f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through the {args.model} "
-                       f"model, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move. `rodlab "
+                       f"{res.chi2_after:.3g} on {len(res.entries)} entries after the fit through "
+                       f"{_through(args)}, p = {res.p_after:.1e}): the rod differs in a way these keys cannot move"
+                       + (f" (or {args.sim} itself is off by more than its method's accuracy)" if args.sim else "")
+                       + ". `rodlab "
                        f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
                        "where it names a local cause, free that cause's key (a joint's "
                        "joints.PLACE.s_bend_rad_per_Nm); where it finds every member uniformly softer "

@@ -89,17 +89,24 @@ def unmodelled_gross(birge: float, typical_mm: float) -> bool:
     return typical_mm >= UNMODELLED_GROSS_RMS_MM and birge >= GROSS_BIRGE
 
 
+def _moved(robot, res: "CalibrationResult", info) -> float:
+    """How far a geometric parameter was identified from the robot file's nominal row [its unit] (``dtheta`` is the
+    offset error itself)."""
+    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
+    v = res.values[info.name]
+    return v if info.kind == "dtheta" else v - nominal[info.kind][info.index]
+
+
 def bound_warnings(robot, res: "CalibrationResult") -> list[str]:
     """Identified parameters beyond physical bounds: a geometric error no manufacturing leaves
     (:data:`ERROR_BOUNDS` from the nominal), a joint compliance no gearbox has."""
     w = []
-    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     for info in res.infos:
         if res.status[info.name] == "fixed":
             continue
         v = res.values[info.name]
         if info.kind in ERROR_BOUNDS:
-            err = v if info.kind == "dtheta" else v - nominal[info.kind][info.index]
+            err = _moved(robot, res, info)
             if abs(err) > ERROR_BOUNDS[info.kind]:
                 w.append(f"{info.name} moved {err:+.3g} {info.unit} from nominal (bound {ERROR_BOUNDS[info.kind]:g}): "
                          f"not a plausible manufacturing error")
@@ -253,14 +260,14 @@ USUAL_MOVE = {"d": 2.0, "a": 2.0, "alpha": 1.0, "beta": 1.0}
 def _large_move_cautions(robot, res: "CalibrationResult") -> list[str]:
     """One caution naming the lengths and angles identified beyond :data:`USUAL_MOVE` from the robot file (a trial:
     a_2 typed 5 mm off was identified back and trusted without a word, the gain over 'nominal' inflated)."""
-    nominal = {"d": robot.d_mm, "a": robot.a_mm, "alpha": robot.alpha_deg, "beta": robot.beta_deg}
     moved = []
     for info in res.infos:
         if info.kind in USUAL_MOVE and res.status[info.name] == "identified":    # a regularised one is the prior's
-            err = res.values[info.name] - nominal[info.kind][info.index]
+            err = _moved(robot, res, info)
             beyond = abs(err) - USUAL_MOVE[info.kind]
             if 0 < beyond and beyond > 3 * res.sigma[info.name] and abs(err) <= ERROR_BOUNDS[info.kind]:
-                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {round(nominal[info.kind][info.index], 6):g})")
+                nominal = res.values[info.name] - err
+                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {round(nominal, 6):g})")
     if not moved:
         return []
     held = [u.split(" ")[0] for u in res.unidentifiable if "in this data set" in u]

@@ -5,7 +5,7 @@ import math
 
 from rodlab.core.enums import Checksum
 
-__all__ = ["xor_checksum", "line_checksum", "encode_values", "parse_line", "garbage_reason"]
+__all__ = ["xor_checksum", "line_checksum", "checksum_mismatch", "encode_values", "parse_line", "garbage_reason"]
 
 
 def xor_checksum(payload: bytes) -> str:
@@ -24,6 +24,17 @@ def line_checksum(payload: bytes, kind: str) -> str:
     if kind == Checksum.SUM8:
         return f"{sum(payload) & 0xFF:02X}"
     raise ValueError(f"unknown checksum {kind!r}; known: xor, sum8")
+
+
+def checksum_mismatch(body: bytes, cs: str, kind: str, otherwise: str = "noise on the line, or another checksum") -> str:
+    """Why a line's checksum ``cs`` (two hex digits) does not fit its ``body`` under ``kind``: naming the other kind
+    where that one fits (set it), else ``otherwise``; "" where it fits."""
+    if line_checksum(body, kind) == cs.upper():
+        return ""
+    other = next((k.value for k in (Checksum.XOR, Checksum.SUM8) if k != kind and line_checksum(body, k) == cs.upper()),
+                 None)
+    return (f"its {kind} checksum does not match, the {other} one does: set checksum = \"{other}\"" if other else
+            f"its {kind} checksum does not match ({otherwise})")
 
 
 def encode_values(values, separator: str = ",", checksum: str = "none") -> bytes:
@@ -57,12 +68,9 @@ def _parse(raw: bytes, n_values: int, separator: str, checksum: str) -> tuple[li
     if checksum != Checksum.NONE:
         if not star or len(cs) != 2:
             return None, "no '*HH' checksum at its end (checksum = \"none\" for a device that sends none)"
-        if line_checksum(body.encode("ascii"), checksum) != cs.upper():
-            other = Checksum.SUM8.value if checksum == Checksum.XOR else Checksum.XOR.value
-            named = (f"its {checksum} checksum does not match, the {other} one does: set checksum = \"{other}\""
-                     if line_checksum(body.encode("ascii"), other) == cs.upper() else
-                     f"its {checksum} checksum does not match (noise on the line, or another checksum)")
-            return None, named
+        mismatch = checksum_mismatch(body.encode("ascii"), cs, checksum)
+        if mismatch:
+            return None, mismatch
         text = body
     parts = text.split(separator)
     try:

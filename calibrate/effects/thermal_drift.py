@@ -16,10 +16,10 @@ from rodlab.core.hypothesis import ParamSpec
 
 from .base import CampaignContext, CampaignEffectModel, Refit, hypothesis
 
-__all__ = ["ThermalDrift"]
+__all__ = ["ThermalDrift", "growth_lever_W"]
 
 
-def _lever_W(frames, rod_share: float) -> np.ndarray:
+def growth_lever_W(frames, rod_share: float) -> np.ndarray:
     """What a unit growth moves each ball centre by, in {W} [mm], shape=(N, 3): the flange's position about the
     base (the links), plus ``rod_share`` times the rod's tool vector (the rod growing with them)."""
     flange_W = frames.o_i[:, -1] @ frames.R_W0.T + frames.t_W0
@@ -42,7 +42,7 @@ class ThermalDrift(CampaignEffectModel):
 
     def reading_offset_W(self, frames, time_s: np.ndarray, p: dict):
         share = float(p.get("rod_share", 1.0))
-        return p["growth_ppm_per_s"] * 1e-6 * np.round(time_s)[:, None] * _lever_W(frames, share)
+        return p["growth_ppm_per_s"] * 1e-6 * np.round(time_s)[:, None] * growth_lever_W(frames, share)
 
     def truth(self, p: dict | None) -> dict:
         return {"thermal_ppm_per_s": 0.0 if p is None else float(p["growth_ppm_per_s"]),
@@ -59,7 +59,7 @@ class ThermalDrift(CampaignEffectModel):
             if vals is not None and np.isfinite(vals).all() and np.ptp(vals) > 0:
                 v = (vals - vals.min())[:, None]
                 for share in (0.0, 1.0):
-                    H = (v * _lever_W(ctx.frames, share)).reshape(3 * ctx.n_points, 1) * 1e-6
+                    H = (v * growth_lever_W(ctx.frames, share)).reshape(3 * ctx.n_points, 1) * 1e-6
                     grows = "the links grow" if share == 0 else "the links and the rod grow"
                     out.append(hypothesis(self.effect, key, [f"growth_ppm_per_{'s' if key == 'time' else 'K'}"], H,
                                           f"{grows} during the campaign: positions scale about the base with {key}",
@@ -71,7 +71,7 @@ class ThermalDrift(CampaignEffectModel):
         vals = ctx.time_s if location == "time" else ctx.temp_C
         rate = parameters["growth_ppm_per_s" if location == "time" else "growth_ppm_per_K"]
         g = rate * 1e-6 * (vals - vals.min())
-        shift = g[:, None] * _lever_W(ctx.frames, parameters.get("rod_share", 1.0))
+        shift = g[:, None] * growth_lever_W(ctx.frames, parameters.get("rod_share", 1.0))
         fit.obs_edits.append(lambda obs: replace(obs, x_W_mm=obs.x_W_mm - shift))
 
     def remedy(self, location: str, parameters: dict) -> str:

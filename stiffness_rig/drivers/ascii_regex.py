@@ -11,7 +11,7 @@ import re
 
 from rodlab.core.enums import Checksum
 
-from ..protocol import line_checksum
+from ..protocol import checksum_mismatch
 from .base import INIT_SETTING, Driver, Garbage, Link, Setting, SettingError, unescape
 
 __all__ = ["AsciiRegex", "CHECKED_GROUPS"]
@@ -73,13 +73,10 @@ class AsciiRegex(Driver):
         """Garbage where the line's checksum does not match its body's."""
         if self.checksum == Checksum.NONE.value:
             return
-        body, cs = m.group("body") or "", (m.group("cs") or "").upper()
-        if line_checksum(body.encode("ascii", "replace"), self.checksum) != cs:
-            other = next((k.value for k in Checksum if k.value not in (Checksum.NONE.value, self.checksum)
-                          and line_checksum(body.encode("ascii", "replace"), k.value) == cs), None)
-            raise Garbage(raw, f"its {self.checksum} checksum does not match" + (
-                f", the {other} one does: set checksum = \"{other}\"" if other else " (noise on the line, or "
-                "another checksum, or another body group)"))
+        mismatch = checksum_mismatch((m.group("body") or "").encode("ascii", "replace"), m.group("cs") or "",
+                                     self.checksum, "noise on the line, or another checksum, or another body group")
+        if mismatch:
+            raise Garbage(raw, mismatch)
 
 
 #: the pattern's groups of a checked line, not values

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rodlab.calibrate.crossval import joint_sweeps
+from rodlab.calibrate.effects.thermal_drift import growth_lever_W
 from rodlab.calibrate.kinematics import forward, harmonic_basis
 
 __all__ = ["PointFinding", "PointsDiagnosis", "diagnose_points", "point_candidates", "FORMAT_POINTS_DIAGNOSIS"]
@@ -169,9 +170,8 @@ def _thermal_candidate(params, q: np.ndarray, temp_C) -> list:
     temperature per point and the points format had refused it)."""
     if temp_C is None or not np.all(np.isfinite(temp_C)) or np.ptp(temp_C) < THERMAL_SPAN_K:
         return []
-    fr = forward(params, q)
     dT = np.asarray(temp_C, float) - float(np.mean(temp_C))
-    X = ((fr.p0 @ fr.R_W0.T) * dT[:, None]).reshape(-1, 1)
+    X = (growth_lever_W(forward(params, q), 1.0) * dT[:, None]).reshape(-1, 1)     # the campaign effect's lever
     return [("thermal_drift", "temperature", X,
              f"the arm grows with the temperature ({np.ptp(temp_C):.1f} K over the points): its links expand away from "
              f"the base; calibrate at the working temperature, or measure a reference pose as it warms up")]

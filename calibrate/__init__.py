@@ -2,7 +2,8 @@
 
 Uses compliance files from the FEA and the rig (the core's :class:`rodlab.RodCompliance`), never their code.
 """
-from .campaign import Campaign, Fixture, PointSet, read_campaign, read_fixture, read_points, write_fixture
+from .campaign import Campaign, Fixture, read_campaign, read_fixture, write_fixture
+from .points_file import PointSet, read_points
 from .device import Device, Sensor, read_device, write_device
 from .probe import FixtureFit, ProbeSet, fit_fixture, read_probe
 from .readings import apply_device, far_points

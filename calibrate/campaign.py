@@ -1,11 +1,10 @@
-"""Campaign, fixture and validation files of the contract, read with line / key errors.
+"""Campaign and fixture files of the contract, read with line / key errors, and the CSV table reader the points
+(validation) files share (:mod:`calibrate.points_file`).
 
 - ``*.campaign.csv``: ``position,point,q1..qn,x_mm,y_mm,z_mm[,time_s][,temp_C]`` (q in deg; x, y, z the
   device's reading of the ball centre in {D_j}); or (v1.1) ``s1_mm,s2_mm,s3_mm``, the three sensors' raw
   readings, converted with a device file (:func:`calibrate.readings.apply_device`).
 - ``*.fixture.json``: poses of {D_j} in {W} = {D_world_position}, the sensors' contact force in {D_j}.
-- ``*.validation.csv``: ``# tool_mm``, ``# rod_mass_kg``, ``# rod_com_T_mm``, ``[# temp_C]`` then
-  ``q1..qn,x_mm,y_mm,z_mm[,temp_C]`` (ball centre in {W} from an external instrument).
 """
 from __future__ import annotations
 
@@ -25,11 +24,8 @@ from rodlab.core.schema import require_schema
 from rodlab.core.schema_table import EMPTY_READING_FIX, READING_COLUMNS, decimal_comma_fix, sub_micrometre
 
 from .errors import CalibrationError
-from .rod import Rod
-from .units_line import units_line_problem
 
-__all__ = ["cell_number", "Campaign", "Fixture", "PointSet", "read_campaign", "read_fixture", "read_points", "write_fixture",
-           "FIXTURE_FORMATS"]
+__all__ = ["cell_number", "Campaign", "Fixture", "read_campaign", "read_fixture", "write_fixture", "FIXTURE_FORMATS"]
 
 log = logging.getLogger(__name__)
 
@@ -102,26 +98,6 @@ class Campaign:
         return [f"{j}.{i}" for j, i in zip(self.position, self.point)]
 
 
-@dataclass
-class PointSet:
-    """Ball centres measured in {W} by an external instrument (validation-file format)."""
-
-    q_deg: np.ndarray
-    x_W_mm: np.ndarray
-    tool_mm: np.ndarray
-    rod_mass_kg: float
-    rod_com_T_mm: np.ndarray
-    temp_C: float | None = None
-    path: Path | None = None
-    sigma_mm: np.ndarray | None = None      # (N, 3) stated standard uncertainty of each coordinate [mm], optional
-    temp_each_C: np.ndarray | None = None   # (N,) temperature at each point [degC] (a temp_C column), optional
-
-    @property
-    def rod(self) -> Rod:
-        """The instrument's rigid probe as a calibration takes it: the file's ``tool_mm`` and its payload
-        (``rod_mass_kg``, ``rod_com_T_mm``)."""
-        return Rod.rigid(self.tool_mm, self.rod_mass_kg, self.rod_com_T_mm)
-
 def read_text_file(path) -> tuple[Path, str]:
     return Path(path), read_text_checked(path, CalibrationError)
 
@@ -156,8 +132,10 @@ def leading_comments(text: str) -> list[tuple[int, str, str]]:
     return out
 
 
-def read_table(p: Path, text: str, required: list[str], optional: list[str], text_columns: tuple = ()):
-    """The header and the data rows ``(line, {column: number})`` of a CSV table (``text_columns`` kept as text)."""
+def read_table(p: Path, text: str, required: list[str], optional: list[str], text_columns: tuple = (),
+               blank_nan: tuple = ()):
+    """The header and the data rows ``(line, {column: number})`` of a CSV table (``text_columns`` kept as text;
+    a blank cell of ``blank_nan`` is NaN, "not recorded", where any other blank cell is refused)."""
     lines = text.splitlines()
     i = 0
     while i < len(lines) and (not lines[i].strip() or lines[i].lstrip().startswith("#")):
@@ -184,10 +162,18 @@ def read_table(p: Path, text: str, required: list[str], optional: list[str], tex
             continue
         if len(row) != len(header):
             raise CalibrationError(f"expected {len(header)} cells, got {len(row)}", path=p, line=k)
-        rows.append((k, {h: c.strip() if h in text_columns else cell_number(c, p, k, h) for h, c in zip(header, row)}))
+        rows.append((k, {h: _cell(c, p, k, h, text_columns, blank_nan) for h, c in zip(header, row)}))
     if not rows:
         raise CalibrationError("no data rows", path=p, line=i + 1)
     return header, rows
+
+
+def _cell(c: str, p: Path, line: int, h: str, text_columns: tuple, blank_nan: tuple):
+    if h in text_columns:
+        return c.strip()
+    if h in blank_nan and not c.strip():
+        return math.nan
+    return cell_number(c, p, line, h)
 
 
 def _check_joint_columns(header: list[str], allowed: list[str], p: Path, line: int) -> None:
@@ -347,57 +333,3 @@ def write_fixture(fix: Fixture, path) -> Path:
     if fix.probing:
         data["probing"] = fix.probing
     return atomic_write_json(path, data)
-
-
-def read_points(path, n_joints: int = 6) -> PointSet:
-    p, text = read_text_file(path)
-    meta = {key: (k, val) for k, key, val in leading_comments(text)}
-    def vec(key, n):
-        if key not in meta:
-            raise CalibrationError(f"missing comment line '# {key}: ...'", path=p, line=1, key=key)
-        k, val = meta[key]
-        try:
-            arr = np.array([float(v) for v in val.split(",")])
-        except ValueError:
-            raise CalibrationError(f"expected {n} comma-separated numbers, got {val!r}", path=p, line=k,
-                                   key=key) from None
-        if arr.size != n or not np.all(np.isfinite(arr)):
-            raise CalibrationError(f"expected {n} finite numbers, got {val!r}", path=p, line=k, key=key)
-        return arr
-    for key, (k, val) in meta.items():
-        if key.lower() in ("unit", "units") and (problem := units_line_problem(val)):
-            raise CalibrationError(problem, path=p, line=k, key=key)
-    tool = vec("tool_mm", 3)
-    mass = float(vec("rod_mass_kg", 1)[0]) if "rod_mass_kg" in meta else 0.0
-    com = vec("rod_com_T_mm", 3) if "rod_com_T_mm" in meta else np.zeros(3)
-    temp = float(vec("temp_C", 1)[0]) if "temp_C" in meta else None
-    qs = [f"q{i}" for i in range(1, n_joints + 1)]
-    header, rows = read_table(p, text, qs + ["x_mm", "y_mm", "z_mm"], list(SIGMA_COLUMNS) + list(POINT_EXTRAS),
-                              text_columns=POINT_TEXT)
-    q = np.array([[r[c] for c in qs] for _, r in rows])
-    x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
-    each = np.array([r["temp_C"] for _, r in rows]) if "temp_C" in header else None
-    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows), each)
-
-
-#: optional per-point uncertainty columns of a points file: one standard deviation per coordinate [mm]
-SIGMA_COLUMNS = ("sigma_x_mm", "sigma_y_mm", "sigma_z_mm")
-#: optional columns of a tracker's export: name or label, time stamp, time [s] (kept), temperature [degC] (read)
-POINT_TEXT = ("name", "point_name", "label", "timestamp", "date")
-POINT_EXTRAS = (*POINT_TEXT, "time_s", "temp_C")
-
-
-def _point_sigmas(p: Path, header: list[str], rows) -> np.ndarray | None:
-    """The per-point uncertainties (N, 3) [mm], all three columns or none, each > 0."""
-    present = [c for c in SIGMA_COLUMNS if c in header]
-    if not present:
-        return None
-    if len(present) != 3:
-        missing = [c for c in SIGMA_COLUMNS if c not in header]
-        raise CalibrationError(f"per-point uncertainty needs all of {list(SIGMA_COLUMNS)}; missing {missing}. Add "
-                               f"them or drop {present}", path=p, key=missing[0])
-    for k, r in rows:
-        for c in SIGMA_COLUMNS:
-            if not r[c] > 0:
-                raise CalibrationError(f"expected a standard deviation > 0 [mm], got {r[c]:g}", path=p, line=k, key=c)
-    return np.array([[r[c] for c in SIGMA_COLUMNS] for _, r in rows])

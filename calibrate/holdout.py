@@ -4,11 +4,11 @@ rest (base and tool refitted on every validation set, the paper's Section 5.2), 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from .campaign import PointSet
+from .points_file import PointSet
 from .params import ModelParams
 from .points import identify_points
 from .validate import ErrorStats, validate
@@ -39,8 +39,7 @@ class HoldoutRow:
 
 def subset(points: PointSet, mask: np.ndarray) -> PointSet:
     """The points selected by the boolean (or index) ``mask``."""
-    return replace(points, q_deg=points.q_deg[mask], x_W_mm=points.x_W_mm[mask],
-                   sigma_mm=None if points.sigma_mm is None else points.sigma_mm[mask])
+    return points.subset(mask)
 
 
 def interleaved(points: PointSet) -> tuple[PointSet, PointSet]:

@@ -12,7 +12,7 @@ import numpy as np
 
 from rodlab.core.units import TRACKER_NOISE_MM
 
-from .campaign import PointSet
+from .points_file import PointSet
 from .crossval import cross_validate_identify
 from .estimate import FitOptions
 from .identify import Observations, identify

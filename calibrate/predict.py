@@ -34,7 +34,8 @@ from rodlab.core.compliance import RodCompliance
 from rodlab.core.enums import Method
 from rodlab.core.frames import pose_to_matrix
 
-from .campaign import Fixture, PointSet
+from .campaign import Fixture
+from .points_file import PointSet
 from .compensations import RodDeflection, deflection_offsets
 from .errors import CalibrationError
 from .budget import AccuracySummary, BudgetShares, budget_shares

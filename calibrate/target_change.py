@@ -12,7 +12,6 @@ named (:class:`~calibrate.mixup.Mixup` ``target_change``).
 from __future__ import annotations
 
 import logging
-from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -36,8 +35,7 @@ def _part(pts, lo: int, hi: int, cap: int | None = None):
     idx = np.arange(lo, hi)
     if cap is not None and len(idx) > cap:
         idx = idx[np.linspace(0, len(idx) - 1, cap).round().astype(int)]
-    sigma = None if pts.sigma_mm is None else pts.sigma_mm[idx]
-    return replace(pts, q_deg=pts.q_deg[idx], x_W_mm=pts.x_W_mm[idx], sigma_mm=sigma)
+    return pts.subset(idx)
 
 
 def _worse_part(pts, k: int, misfit: Callable) -> float:

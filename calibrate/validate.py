@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .campaign import PointSet
+from .points_file import PointSet
 from .observations import register_base
 from .jacobian import position_jacobian
 from .kinematics import ModelParams, ball_positions

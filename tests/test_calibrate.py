@@ -146,7 +146,7 @@ def test_instrument_points_calibrate_another_robot(tmp_path):
     res = identify(robot, obs, Rod.rigid([20.0, 10.0, 150.0]),
                    options=FitOptions(freed={"tool_y"}, pinned={f"c_{i}": 0.0 for i in range(2, 7)}))
     assert res.rms_mm < 0.015
-    from rodlab.calibrate.campaign import PointSet
+    from rodlab.calibrate.points_file import PointSet
     test = PointSet(np.rad2deg(q[80:]), x[80:], np.array([20.0, 10.0, 150.0]), 0.0, np.zeros(3))
     after = validate(robot, res.params, test)[0]
     before = validate(robot, ModelParams.nominal(robot, [20.0, 10.0, 150.0]), test)[0]

@@ -6,7 +6,8 @@ import pytest
 
 from rodlab.app.cli import main
 from rodlab.calibrate import CalibrationError
-from rodlab.calibrate.campaign import read_campaign, read_points
+from rodlab.calibrate.campaign import read_campaign
+from rodlab.calibrate.points_file import read_points
 from rodlab.core.schema import check_file
 
 HEADER = "q1,q2,q3,q4,q5,q6,position,x_mm,y_mm,z_mm"

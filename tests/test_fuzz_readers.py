@@ -105,7 +105,8 @@ def _reader(kind):
         from rodlab.calibrate.device import ideal_device
         return {"device": read_device, "probe": read_probe,
                 "raw_campaign": lambda p: read_campaign(p, 6, ideal_device())}[kind]
-    from rodlab.calibrate.campaign import read_campaign, read_fixture, read_points
+    from rodlab.calibrate.campaign import read_campaign, read_fixture
+    from rodlab.calibrate.points_file import read_points
     return {"campaign": read_campaign, "fixture": read_fixture, "fixture2": read_fixture,
             "validation": read_points}[kind]
 

@@ -9,7 +9,7 @@ import pytest
 
 from rodlab.calibrate import ModelParams, resolve_robot, result_dict, write_result
 from rodlab.calibrate.result import calibrated_params, read_calibration
-from rodlab.calibrate.campaign import PointSet
+from rodlab.calibrate.points_file import PointSet
 from rodlab.calibrate.errors import CalibrationError
 from rodlab.calibrate.jacobian import position_jacobian
 from rodlab.calibrate.kinematics import HARMONICS, ball_positions, forward, harmonic_reference

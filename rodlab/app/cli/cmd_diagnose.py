@@ -41,7 +41,8 @@ def register(sub) -> None:
     p.add_argument("--sim", help="rig: the simulated compliance file, or a design (rod1: its closed-form compliance)")
     p.add_argument("--campaign", help="*.campaign.csv")
     p.add_argument("--points", help="instrument points (*.validation.csv): calibrate, then test the residuals per "
-                                    "joint angle, approach direction, measurement order and workspace region")
+                                    "joint angle, approach direction, time (time_s) or measurement order, "
+                                    "temperature (temp_C) and workspace region")
     p.add_argument("--fixture", help="campaign: *.fixture.json")
     add_device_option(p, prefix="campaign: ", units_also="; rig: diagnose a recording whose r_rod against the "
                       "simulation lies beyond any rod (0.1-10: a units slip or another rod's file is refused)")

@@ -7,7 +7,9 @@ residual vectors fitted by least squares and judged by an F-test of the sum of s
 - ``periodic_joint_error`` (per joint): first and second harmonics of the joint angle (gear eccentricity,
   encoder or transmission errors the geometric model cannot carry);
 - ``lost_motion`` (per joint): the direction the joint was last moved from (backlash, hysteresis);
-- ``drift``: a quadratic in measurement order (thermal growth, instrument drift);
+- ``drift``: a quadratic in each point's time (a ``time_s`` column) or else in measurement order (thermal growth,
+  instrument drift);
+- ``thermal_drift``: the arm's growth with each point's temperature (a ``temp_C`` column);
 and the rms per workspace region (reach and height terciles) shows where the model is worst. A candidate is
 a finding when it removes at least 5 % of the residual sum of squares with p < 1e-3; findings are taken
 one at a time, each tested on what the previous ones leave (:func:`_greedy`).
@@ -124,18 +126,21 @@ def _through_joint(cols_j: np.ndarray, f: np.ndarray) -> np.ndarray:
     return (cols_j[:, :, None] * f[:, None, :]).reshape(-1, f.shape[1])
 
 
-def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
+def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=(), time_s=None):
     """(effect, where, design (3N, k), meaning) of every candidate explanation of the points' residuals, for joint
     angles ``q`` (N, n) [rad] and the joints' residual columns ``cols`` (N, n, 3) [mm/rad]; ``modelled``: joints
     whose periodic error the identification already carries (left out). Poses taken one joint at a time
     (:func:`~calibrate.crossval.joint_sweeps`) see a joint's periodic error in its own sweep only, where it cannot
     be told from whatever differs between the sweeps: named, not advised (a trial: following the advice made the
-    held-out error worse)."""
+    held-out error worse). ``time_s`` (N,) each point's time [s] (NaN where not recorded) or None: the drift's
+    axis where it was recorded (a pause between poses is then a pause), else the measurement order."""
     N, n = q.shape
     swept = joint_sweeps(q) is not None
-    t = np.linspace(-1.0, 1.0, N)
-    yield ("drift", "measurement order", np.kron(np.c_[t, t ** 2], np.eye(3)),
-           "the error changes in the order the poses were measured: thermal growth of the arm or instrument drift "
+    t, clock = _clock(time_s, N)
+    yield ("drift", clock, np.kron(np.c_[t, t ** 2], np.eye(3)),
+           ("the error changes with the time each pose was measured at (time_s)" if clock == "time" else
+            "the error changes in the order the poses were measured") + ": thermal growth of the arm or "
+           "instrument drift "
            "(re-measure a reference pose during the session), or, when one joint was swept at a time, whatever "
            "differs between the sweeps")
     approach = _approach(q)
@@ -161,20 +166,49 @@ def point_candidates(q: np.ndarray, cols: np.ndarray, modelled=()):
 
 #: a points file's temperature column must span this much [K] for its thermal growth to be tested
 THERMAL_SPAN_K = 0.2
+#: a time or temperature column is used where at least this share of its cells were recorded (the rest
+#: interpolated between their neighbours in measurement order)
+RECORDED_SHARE = 0.8
+
+
+def _filled(values) -> tuple[np.ndarray | None, int]:
+    """A per-point column with its blank (NaN) cells interpolated linearly between their recorded neighbours in
+    measurement order (held at the end values beyond them), and how many were filled; (None, 0) where fewer than
+    :data:`RECORDED_SHARE` of the cells, or fewer than three, were recorded."""
+    if values is None:
+        return None, 0
+    v = np.asarray(values, float)
+    ok = np.isfinite(v)
+    if ok.sum() < max(3, RECORDED_SHARE * v.size):
+        return None, 0
+    at = np.arange(v.size)
+    return np.interp(at, at[ok], v[ok]), int((~ok).sum())
+
+
+def _clock(time_s, N: int) -> tuple[np.ndarray, str]:
+    """The drift's axis scaled to [-1, 1] and its name: each point's time where recorded and spanning a time,
+    else the measurement order."""
+    t, _ = _filled(time_s)
+    if t is None or np.ptp(t) <= 0:
+        return np.linspace(-1.0, 1.0, N), "measurement order"
+    return 2.0 * (t - t.min()) / np.ptp(t) - 1.0, "time"
 
 
 def _thermal_candidate(params, q: np.ndarray, temp_C) -> list:
     """The arm growing with the temperature of each point (a ``temp_C`` column): every point moved away from the
     base by ``growth x (T - mean T)`` of its distance (links of steel or aluminium: 12-23 ppm/K), seen in the
     instrument's frame; none without a column spanning :data:`THERMAL_SPAN_K` (a trial: the UR10's raw data had a
-    temperature per point and the points format had refused it)."""
-    if temp_C is None or not np.all(np.isfinite(temp_C)) or np.ptp(temp_C) < THERMAL_SPAN_K:
+    temperature per point and the points format had refused it). Blank cells are interpolated between their
+    neighbours (a trial: one blank cell had refused the whole file)."""
+    T, filled = _filled(temp_C)
+    if T is None or np.ptp(T) < THERMAL_SPAN_K:
         return []
-    dT = np.asarray(temp_C, float) - float(np.mean(temp_C))
+    dT = T - float(np.mean(T))
     X = (growth_lever_W(forward(params, q), 1.0) * dT[:, None]).reshape(-1, 1)     # the campaign effect's lever
+    gaps = f"; {filled} blank temp_C cell(s) interpolated between their neighbours" if filled else ""
     return [("thermal_drift", "temperature", X,
-             f"the arm grows with the temperature ({np.ptp(temp_C):.1f} K over the points): its links expand away from "
-             f"the base; calibrate at the working temperature, or measure a reference pose as it warms up")]
+             f"the arm grows with the temperature ({np.ptp(T):.1f} K over the points{gaps}): its links expand away "
+             f"from the base; calibrate at the working temperature, or measure a reference pose as it warms up")]
 
 
 def _greedy(r: np.ndarray, candidates: list) -> list:
@@ -212,8 +246,8 @@ def diagnose_points(robot, pts, res, noise_mm: float) -> PointsDiagnosis:
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.deg2rad(np.asarray(pts.q_deg, float))
     modelled = tuple(res.harmonic_range_deg)
-    candidates = list(point_candidates(q, _joint_columns(res.params, q), modelled))
-    candidates += _thermal_candidate(res.params, q, getattr(pts, "temp_each_C", None))
+    candidates = list(point_candidates(q, _joint_columns(res.params, q), modelled, pts.time_each_s))
+    candidates += _thermal_candidate(res.params, q, pts.temp_each_C)
     findings = _greedy(r.ravel(), candidates)
     dof = max(r.size - len(res.free), 1)
     p0 = forward(res.params, q).p0

@@ -41,7 +41,7 @@ else:  # pragma: no cover
 
 log = logging.getLogger(__name__)
 
-__all__ = ["read_robot_toml", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS", "ROBOT_FORMAT"]
+__all__ = ["read_robot_toml", "row_key_line", "FORMAT_ROBOT", "FORMATS_ROBOT", "CONVENTIONS", "ROBOT_FORMAT"]
 
 FORMAT_ROBOT = "rodlab.robot/2"
 FORMATS_ROBOT = ("rodlab.robot/1", "rodlab.robot/2")
@@ -61,6 +61,24 @@ def _line(text, idx, key):
         if (count == idx or (idx is None and count == -1)) and re.match(rf"^\s*{key}\s*=", raw):
             return i
     return None
+
+
+#: a geometric parameter's kind -> its key in a joint table
+ROW_KEYS = {"d": "d_mm", "a": "a_mm", "alpha": "alpha_deg", "beta": "beta_deg", "dtheta": "theta_offset_deg"}
+
+
+def row_key_line(path, joint: int, kind: str) -> int | None:
+    """The line of joint ``joint``'s (0-based) ``kind`` key (``d``, ``a``, ``alpha``, ``beta``, ``dtheta``) in the
+    robot TOML file ``path``; None for another kind of file, an unreadable one or a key the table leaves to its
+    default."""
+    p = Path(path)
+    if p.suffix.lower() != ".toml" or kind not in ROW_KEYS:
+        return None
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    return _line(text, joint, ROW_KEYS[kind])
 
 
 def _load(p: Path) -> tuple[str, dict]:

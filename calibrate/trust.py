@@ -19,6 +19,7 @@ from rodlab.core.enums import Completeness
 from rodlab.core.units import DEVICE_NOISE_MM
 
 from .residual_test import BIRGE_MATERIAL
+from .robot_toml import row_key_line
 
 if TYPE_CHECKING:
     from .crossval import Prediction
@@ -267,7 +268,8 @@ def _large_move_cautions(robot, res: "CalibrationResult") -> list[str]:
             beyond = abs(err) - USUAL_MOVE[info.kind]
             if 0 < beyond and beyond > 3 * res.sigma[info.name] and abs(err) <= ERROR_BOUNDS[info.kind]:
                 nominal = res.values[info.name] - err
-                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {round(nominal, 6):g})")
+                moved.append(f"{info.name} {err:+.2f} {info.unit} (from {round(nominal, 6):g}"
+                             f"{_file_line(robot, info)})")
     if not moved:
         return []
     held = [u.split(" ")[0] for u in res.unidentifiable if "in this data set" in u]
@@ -276,6 +278,12 @@ def _large_move_cautions(robot, res: "CalibrationResult") -> list[str]:
             f"leaves (~{USUAL_MOVE['a']:g} mm, ~{USUAL_MOVE['alpha']:g} deg): check those rows of the robot file (a "
             f"typo, another variant of the robot{also}); the improvement over its nominal model is then partly the "
             f"file's"]
+
+
+def _file_line(robot, info) -> str:
+    """``, robot.toml line 23`` where the robot file is a TOML file with the parameter's own key, else ``""``."""
+    line = None if robot.path is None else row_key_line(robot.path, info.index, info.kind)
+    return f", {robot.path.name} line {line}" if line else ""
 
 
 #: what an incomplete model of instrument readings may miss, by the kind of reading (ResidualTest.source)

@@ -360,3 +360,6 @@ def test_a_length_typed_off_in_the_robot_file_is_a_caution(tmp_path, capsys):
     assert main(["calibrate", "--points", str(b), "--robot", str(src), "--validate", str(c)]) == 0
     err = capsys.readouterr().err
     assert "caution (trusted): a_2 -5." in err and "check those rows of the robot file" in err
+    line = next(k for k, s in enumerate(UR10_A2_TYPO.splitlines(), start=1)
+                if s.startswith("a_mm = -607"))                        # the typed row's own a_mm
+    assert f"my_ur10.toml line {line})" in err

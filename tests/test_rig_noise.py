@@ -128,29 +128,51 @@ def test_rig_fit_says_why_it_has_no_noise_with_one_reading_per_hold(tmp_path):
     assert "one reading each" in fit.message and "nan" not in fit.message
 
 
-def _hold_scatter(path, sd_mm, seed):
+def _hold_scatter(path, sd_mm, seed, shared=None):
     """The recording with every hold's readings moved by one random offset per gauge (friction that varies from
-    hold to hold, handling): structure at the level of the holds that no effect of the vocabulary has."""
+    hold to hold, handling): structure at the level of the holds that no effect of the vocabulary has.
+    ``shared(row)`` [mm] adds a misfit every repeat of a hold shares."""
     rng, offsets = np.random.default_rng(seed), {}
 
     def move(_, row):
         off = offsets.setdefault(row["step"], rng.normal(0.0, sd_mm, 3))
         for k, c in enumerate(("disp_x_mm", "disp_y_mm", "disp_z_mm")):
             if row[c]:
-                row[c] = f"{float(row[c]) + off[k]:.6f}"
+                row[c] = f"{float(row[c]) + off[k] + (shared(row, c) if shared else 0.0):.6f}"
     return rewrite_recording(path, path.with_name("scattered-" + path.name), move)
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
-def test_hold_to_hold_scatter_is_unexplained_not_a_drift(tmp_path, seed):
-    """Hold means that scatter several times their reading noise (helper-22's friction scattering 15 % from hold
-    to hold): the friction is found, the scatter is `unexplained`, and no drift or creep is fitted to it (judged
-    against one reading's noise, a trend through the scatter explaining 2 % had been 'decisive')."""
+def _friction_recording(tmp_path, seed):
     design = resolve_design("rod4")                   # the steel rod: friction well above the scatter
     sim = calc_rod_compliance(design)
     model = RigModel(sim.C_F, {"friction": {"F_f_N": 0.2}}, noise_mm=0.001, resolution_mm=0.0001, seed=seed)
     path = simulate_recording(model, LoadSchedule(repeats=4, hold_s=4.0), tmp_path / "f.rig.csv", rod=design.name)
+    return path, sim, design
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_hold_to_hold_scatter_is_the_rigs_repeatability_not_a_drift(tmp_path, seed):
+    """Hold means that scatter several times their reading noise (helper-22's friction scattering 15 % from hold
+    to hold; a trial's 0.4 um from hold to hold on the paper's rods): the friction is found and no drift or creep
+    fitted to the scatter (judged against one reading's noise, a trend through it explaining 2 % had been
+    'decisive'); the scatter, sharing no misfit, is the rig's repeatability, said with its size, not an
+    `unexplained` finding (every recording of the paper's rods had been `unexplained` for it)."""
+    path, sim, design = _friction_recording(tmp_path, seed)
     diag, _ = diagnose_rig(read_recording(_hold_scatter(path, 0.0015, seed)), sim, design)
     named = {f.effect.value for f in diag.findings}
-    assert "friction" in named and named <= {"friction", "unexplained", "model_form"}, diag.summary()
-    assert diag.verdict.value == "unexplained" and diag.extra["selected_against_hold_scatter"] > 4
+    assert "friction" in named and named <= {"friction", "model_form"}, diag.summary()
+    assert diag.verdict.value == "explained" and diag.extra["selected_against_hold_scatter"] > 4
+    assert 0.0011 < diag.extra["repeatability_mm"] < 0.0021                  # 1.5 um per gauge and hold
+    assert "repeatability: the hold means scatter" in diag.summary()
+
+
+def test_a_misfit_every_repeat_shares_stays_unexplained_beside_the_scatter(tmp_path):
+    """The same scatter and, at every repeat, the 1 kg holds 3 um off (a weight that is not what its label says,
+    read by the one gauge of its axis): structure that returns is no repeatability."""
+    path, sim, design = _friction_recording(tmp_path, 1)
+
+    def off(row, c):
+        own = c == f"disp_{row['load_axis'].strip('+-')}_mm"
+        return 0.003 if own and abs(float(row["mass_kg"]) - 1.0) < 1e-9 else 0.0
+    diag, _ = diagnose_rig(read_recording(_hold_scatter(path, 0.0015, 1, off)), sim, design)
+    assert diag.verdict.value == "unexplained" and "repeatability_mm" not in diag.extra, diag.summary()

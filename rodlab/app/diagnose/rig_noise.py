@@ -15,7 +15,9 @@ A recording that allows none of these is refused with what to record instead.
 spike): one 0.5 mm reading among 10 000 had made the noise 5 um instead of 0.66 um and hidden a joint.
 
 :func:`repeat_scatter` measures how much a model's hold means scatter over the repeats beyond their noise
-(friction that varies from hold to hold, handling): random structure, unlike a misfit that every repeat shares.
+(friction that varies from hold to hold, handling): random structure, unlike a misfit that every repeat shares;
+:func:`shared_misfit` tests for such a shared misfit against that scatter, and :func:`hold_repeatability_mm` is
+the scatter's size, the rig's repeatability from hold to hold.
 """
 from __future__ import annotations
 
@@ -26,8 +28,10 @@ import numpy as np
 from rodlab.core.errors import RodlabError
 from rodlab.stiffness_rig.samples import RigSamples
 
+from .chi2 import chi2_sf
+
 __all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals", "repeat_scatter",
-           "MIN_DOF", "GLITCH_Z"]
+           "shared_misfit", "hold_repeatability_mm", "MIN_DOF", "GLITCH_Z"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
 MIN_DOF = 10
@@ -200,6 +204,30 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
         grand = float(np.average(means, weights=counts))           # holds of unequal length weigh as they inform
         z2 += list((means - grand) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
+
+
+def shared_misfit(data: RigSamples, resid: np.ndarray, sigma: float, scatter: float) -> float:
+    """The chance [-] that the hold-to-hold scatter alone leaves the mean residual of each set of repeated holds
+    (gauge, load axis and sign, mass, branch) as far from 0 as it is: each mean against the scatter ``scatter``
+    (:func:`repeat_scatter`, in units of the hold means' noise from ``sigma`` [mm] per reading), their squares
+    summed against a chi-square of as many degrees of freedom. Small where a misfit returns at every repeat
+    (structure a modelled effect leaves); 1 when nothing repeats."""
+    z2 = []
+    for means, counts in _repeated_hold_means(data, resid):
+        shared = float(np.average(means, weights=counts))
+        z2.append(shared ** 2 / (max(scatter, 1.0) * sigma ** 2 / counts.sum()))
+    return chi2_sf(float(np.sum(z2)), len(z2)) if z2 else 1.0
+
+
+def hold_repeatability_mm(data: RigSamples, resid: np.ndarray) -> float:
+    """The robust SD [mm] of one hold's mean about the mean of the holds that repeat it (:func:`repeat_scatter`'s
+    groups): the rig's repeatability from one loading to the next (re-seating, friction from hold to hold), the
+    readings' own noise included. NaN when nothing repeats."""
+    d2 = []
+    for means, counts in _repeated_hold_means(data, resid):
+        k = means.size
+        d2 += list((means - float(np.average(means, weights=counts))) ** 2 * k / (k - 1))
+    return float(np.sqrt(np.median(d2) / CHI2_1_MEDIAN)) if d2 else float("nan")
 
 
 #: the median of a chi-square of one degree of freedom

@@ -214,7 +214,7 @@ class LackOfFit:
             worst = self.keys[np.argmax(np.abs(self.z))]
             step_w, comp_w = worst // 4, worst % 4
             loc = f"axis:{'xyz'[comp_w]}"
-            bad_steps = np.unique(self.keys[np.abs(self.z) > 4] // 4)
+            bad_steps = np.unique(self.keys[(np.abs(self.z) > 4) & (self.keys % 4 == comp_w)] // 4)   # that gauge's
             if bad_steps.size:
                 loc += f", step:{bad_steps.min()}-{bad_steps.max()}"
             out.append(Finding(FindingKind.UNEXPLAINED, loc, "structure above the noise that no modelled effect explains "

@@ -27,7 +27,7 @@ from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import demean, subset_ls
 from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings
 
-__all__ = ["diagnose_tolerant"]
+__all__ = ["diagnose_tolerant", "verdict_of"]
 
 
 def _hypotheses(data: RigSamples, C: np.ndarray, places: dict, tool: np.ndarray, structural: bool) -> list:
@@ -75,7 +75,7 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
         causes = _hypotheses(data, np.asarray(sim.C_F, float), places, tool, True)
         judged = judge_linear(linear, env, causes, (rms_sim, rms_lin))
         findings += judged.findings
-    verdict = _verdict(findings)
+    verdict = verdict_of(findings)
     for finding in lack.findings(rms, sigma):
         findings.append(finding)
         verdict = Verdict.UNEXPLAINED
@@ -131,7 +131,7 @@ def _on_refined_linear(library, ls, S: tuple, coef, rss: float, rf: _Refit, pass
     return library, ls, coef, rss
 
 
-def _verdict(findings: list) -> Verdict:
+def verdict_of(findings: list) -> Verdict:
     """``model_form`` alone is nothing left out (consistent); any cause explains; ``unexplained`` wins."""
     if any(f.effect == OUTSIDE for f in findings):
         return Verdict.UNEXPLAINED

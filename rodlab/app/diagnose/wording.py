@@ -76,8 +76,9 @@ def evidence_text(f: Finding) -> str:
     """One line: explains X % of the residual (rms a -> b um); how sure."""
     if f.effect == MODEL_FORM:
         ev = f.evidence
-        return (f"the simulation misses the readings by rms {f.rms_before_mm * 1e3:.2f} um, all of it the linear "
-                f"compliance; inside the envelope (chi-square {ev['envelope_chi2']:.2f} on {ev['envelope_dof']} "
+        return (f"the linear compliance measured entry by entry takes the readings' rms against the simulation from "
+                f"{f.rms_before_mm * 1e3:.2f} to {f.rms_after_mm * 1e3:.2f} um (what is left is the other findings' "
+                f"and the noise); inside the envelope (chi-square {ev['envelope_chi2']:.2f} on {ev['envelope_dof']} "
                 f"entries, p = {ev['envelope_p']:.2g}) of {ev.get('envelope', 'the simulation')}")
     if "readings_left_out" in f.parameters:          # readings screened out before the fit: not a fitted term
         return f"{f.parameters['readings_left_out']} readings left out before the diagnosis; nothing was fitted to them"

@@ -95,3 +95,19 @@ def test_every_campaign_effect_has_a_remedy():
         text = remedy(Finding(eff, loc, "", params, {}, 0.0, 0.0))
         assert "docs/diagnose.md" not in text and len(text) > 40, (eff, text)
     assert "--free fixture_2_x" in remedy(Finding("fixture_pose", "position:2", "", {}, {}, 0.0, 0.0))
+
+
+def test_a_deflection_left_uncompensated_on_purpose_is_not_blamed_on_the_file(tmp_path, capsys):
+    """The soft steel rod 5# calibrated with --compensation none: NOT TRUSTED, and the suspect says the calibration
+    did not compensate the deflection, not that the (right) compliance file is another rod's (a trial: "0.208x ...
+    what the compliance file says (a file of another rod ...)")."""
+    from rodlab.app.cli import main
+    out = tmp_path / "c"
+    assert main(["simulate-campaign", "--rod", "rod5", "--seed", "4", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["calibrate", str(out / "multical.campaign.csv"), "--fixture", str(out / "multical.fixture.json"),
+                 "--rod", str(out / "rod.compliance.json"), "--compensation", "none"]) == 3
+    err = capsys.readouterr().err
+    said = next(line for line in err.splitlines() if line.startswith("  - rod_deflection"))
+    assert "this calibration does not compensate it (--compensation none)" in said
+    assert "another rod" not in said and "what the compliance file says" not in said

@@ -220,6 +220,19 @@ def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:
             "calibrate without --joint-harmonics"]
 
 
+def _uncompensated_todo(f) -> str:
+    """What to do about the rod's deflection found in the residuals of a calibration told not to compensate it
+    (a trial: "0.208x ... what the compliance file says (a file of another rod ...)" beside a right file, the
+    factors being of a generic steel rod's shape, what the identification had not already absorbed)."""
+    k = f.parameters
+    return ("the rod deflects and this calibration does not compensate it (--compensation "
+            "none): the residuals still follow a rod's deflection under its weight and the contact "
+            f"force ({k.get('k_gravity', float('nan')):.2f}x and {k.get('k_force', float('nan')):.2f}x a generic steel "
+            "rod's of this tool: what the identified joint compliances and lengths did not absorb, not this rod's "
+            "own factor); calibrate with the rod's compliance file compensated (`--rod FILE`, the default "
+            "compensation, or `rodlab compare` for every method)")
+
+
 def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float | None = None) -> None:
     """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses, each
     checked on the validation points when there are some) and what to do about each; ``other_rod_mm``: how far the
@@ -242,7 +255,9 @@ def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float
         where = f" at {f.location}" if f.location else ""
         held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get(HELD_OUT_WORSE) else ""
         todo = remedy(f)
-        if other_rod_mm is not None and f.effect == "rod_deflection":
+        if args.compensation == "none" and f.effect == "rod_deflection":
+            todo = _uncompensated_todo(f)
+        elif other_rod_mm is not None and f.effect == "rod_deflection":
             todo = (f"the rod file looks like another rod's (its ball {other_rod_mm:.0f} mm from the identified one, "
                     f"warned above): calibrate with this rod's compliance file first; {todo}")
         print(f"  - {f.effect}{where}: {todo}{held}", file=sys.stderr)

@@ -7,6 +7,7 @@ suspect line sent the user to the stiffness rig."""
 from __future__ import annotations
 
 import csv
+import re
 import json
 from pathlib import Path
 
@@ -193,3 +194,17 @@ def test_joints_counted_from_zero_are_renamed_one_up(tmp_path, capsys):
     assert main(["validate", str(path)]) == 2
     err = capsys.readouterr().err
     assert "'J0' to q1" in err and "'J5' to q6" in err and "'J1' to q1" not in err
+
+
+def test_compare_keeps_its_columns_under_a_long_label(camp, capsys):
+    """A --rod label longer than the method column (a trial's `as-built-through-my-own-model`) had pushed its row's
+    numbers out of line with the header's."""
+    rod = str(camp / "rod1.compliance.json") if (camp / "rod1.compliance.json").exists() else \
+        str(next(camp.glob("*.compliance.json")))
+    main(["compare", str(camp / "multical.campaign.csv"), "--fixture", str(camp / "multical.fixture.json"),
+          "--validate", str(camp / "multical.validation.csv"), "--rod", f"as-built-through-my-own-model={rod}"])
+    rows = [ln for ln in capsys.readouterr().out.splitlines() if ln.split() and ln.split()[0] in
+            ("method", "nominal", "None", "as-built-through-my-own-model")]
+    assert len(rows) == 4
+    ends = {re.match(r"\S+\s+\S+", ln).end() for ln in rows}        # where each row's first number ends
+    assert len(ends) == 1, rows

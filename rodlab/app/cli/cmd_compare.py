@@ -80,13 +80,14 @@ def cmd_compare(args: argparse.Namespace) -> int:
         noisy = stated_noise_reason(run, args)
         if noisy is not None:
             run.result.warnings.append(noisy)
-    print(f"{'method':<10} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11} "
+    w = max([10, *(len(name) for name, _ in runs)])        # long --rod labels keep the columns aligned
+    print(f"{'method':<{w}} {'Mean/[mm]':>10} {'Max/[mm]':>10} {'Median/[mm]':>12} {'SD/[mm]':>9} {'fit rms um':>11} "
           f"{'trusted':>8}")
     before = runs[0][1].before
-    print(f"{'nominal':<10} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
+    print(f"{'nominal':<{w}} {before.mean_mm:10.3f} {before.max_mm:10.3f} {before.median_mm:12.3f} {before.sd_mm:9.3f}")
     for name, run in runs:
         after = run.after
-        print(f"{name:<10} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
+        print(f"{name:<{w}} {after.mean_mm:10.3f} {after.max_mm:10.3f} {after.median_mm:12.3f} {after.sd_mm:9.3f} "
               f"{run.result.rms_mm * 1e3:11.2f} {'yes' if not run.result.warnings else 'NO':>8}")
     untrusted = [name for name, run in runs if run.result.warnings]
     if untrusted:

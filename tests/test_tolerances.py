@@ -164,3 +164,14 @@ def test_a_perturbed_design_is_the_file_update_writes(tmp_path):
     d = resolve_design(str(tmp_path / "tube.rod.toml"))
     assert with_values(d, {"tube.wall_mm": 2.3}).bend.wall_mm == 2.3
     assert with_values(resolve_design(str(tmp_path / "own_bend.rod.toml")), {"tube.wall_mm": 2.3}).bend.wall_mm == 2.5
+
+
+def test_another_codes_fea_file_gets_no_bias_of_rodlabs_frame():
+    """An fea file without rodlab's provenance.model (another code's FEA) is worth the solid's 1 % with no bias;
+    rodlab's own frame and solid files keep theirs."""
+    from rodlab.core.sensitivity import method_accuracy
+    other = method_accuracy("fea", None)
+    assert np.all(other.bias == 0) and np.allclose(other.sd, 0.01)
+    assert np.all(method_accuracy("fea", "my-abaqus").bias == 0)
+    assert method_accuracy("fea", "frame") is METHOD_ACCURACY["frame"]
+    assert method_accuracy("fea", "solid") is METHOD_ACCURACY["solid"]

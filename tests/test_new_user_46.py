@@ -208,3 +208,13 @@ def test_compare_keeps_its_columns_under_a_long_label(camp, capsys):
     assert len(rows) == 4
     ends = {re.match(r"\S+\s+\S+", ln).end() for ln in rows}        # where each row's first number ends
     assert len(ends) == 1, rows
+
+
+def test_calibrate_writes_a_campaigns_residuals_with_their_labels(camp, tmp_path, capsys):
+    out = tmp_path / "res.csv"
+    main(["calibrate", str(camp / "multical.campaign.csv"), "--fixture", str(camp / "multical.fixture.json"),
+          "--rod", str(next(camp.glob("*.compliance.json"))), "--residuals", str(out)])
+    rows = list(csv.DictReader(out.read_text().splitlines()))
+    _, data = _rows(camp / "multical.campaign.csv")
+    assert len(rows) == len(data) and rows[0]["label"].count(".") == 1
+    assert f"wrote {out}" in capsys.readouterr().out

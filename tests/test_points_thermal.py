@@ -102,3 +102,22 @@ def test_the_drift_is_taken_over_the_points_time(tmp_path):
     over_time, over_order = drift_share(pts), drift_share(replace(pts, time_each_s=None))
     assert set(over_time) == {"time"} and set(over_order) <= {"measurement order"}
     assert over_time["time"] > over_order.get("measurement order", 0.0) + 0.05
+
+
+def test_calibrate_writes_each_points_residual(tmp_path, capsys):
+    """--residuals: one row per point, its joint angles as read and its residual vector, whose rms is the fit's
+    (a trial: the per-point residuals had been in no file)."""
+    import csv
+    path, _ = _points(tmp_path / "t.validation.csv", 40.0)
+    out = tmp_path / "res.csv"
+    main(["calibrate", "--points", str(path), "--robot", "tx90", "--noise-um", "10", "--residuals", str(out),
+          "--json", str(tmp_path / "cal.json")])
+    rows = list(csv.DictReader(out.read_text().splitlines()))
+    assert len(rows) == 60 and rows[0]["row"] == "1"
+    q = read_points(path).q_deg
+    assert np.allclose([float(rows[5][f"q{i}"]) for i in range(1, 7)], q[5], atol=1e-6)
+    d = np.array([[float(r[c]) for c in ("dx_mm", "dy_mm", "dz_mm")] for r in rows])
+    assert np.allclose(np.linalg.norm(d, axis=1), [float(r["norm_mm"]) for r in rows], atol=2e-6)
+    import json
+    rms = json.loads((tmp_path / "cal.json").read_text())["residual_rms_mm"]
+    assert np.sqrt(np.mean(d ** 2)) == pytest.approx(rms, rel=1e-3)

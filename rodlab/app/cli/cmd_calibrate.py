@@ -27,7 +27,8 @@ from ...core.compliance import RodCompliance
 from ...core.errors import RodlabError
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
-from .calibration_printers import print_cautions, print_not_trusted, print_parameters, write_result_file
+from .calibration_printers import (print_cautions, print_not_trusted, print_parameters, write_residuals,
+                                   write_result_file)
 from .calibration_run import CalibrationRun, run_calibration, stated_noise_reason
 from .deviceargs import add_device_option, points_from_args, refuse_rod_slips
 from .reporting import default_folder, png_folder, write_command_report
@@ -78,6 +79,9 @@ def register(sub) -> None:
     p.add_argument("--json", default=None, help="write the contract's calibration result here")
     p.add_argument("--png", default=None, type=png_folder,
                    help="folder for figures: residuals per position; with --validate the validation error distribution")
+    p.add_argument("--residuals", default=None, metavar="RESIDUALS.csv",
+                   help="write each point's residual (measured minus model in {W} [mm], with its joint angles and, for "
+                        "a campaign, its position.point label) as a CSV")
     add_identify_options(p)
     p.set_defaults(func=cmd_calibrate)
 
@@ -97,6 +101,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if (args.points or args.sockets) and args.device:
         raise RodlabError("--device converts a campaign's raw sensor readings; instrument points and socket readings "
                           "have none: leave --device out")
+    if args.sockets and args.residuals:
+        raise RodlabError("--residuals writes the residual vectors of a campaign or instrument points; a socket fit's "
+                          "residuals are distances: leave --residuals out (--json has the fit's rms)")
     if args.sockets and args.joint_harmonics:
         raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
                           "no periodic joint errors: leave it out")
@@ -124,6 +131,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         res.warnings.insert(0, mixup.reason())
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
+    if args.residuals:
+        written.append(write_residuals(args.residuals, res, camp.q_deg, camp.labels()))
     if args.png:
         from rodlab.calibrate.plots import plot_error_distributions, plot_residuals
         written.append(plot_residuals(res, camp, args.png))
@@ -311,6 +320,8 @@ def _calibrate_points(args) -> int:
           else cross_validate_points(robot, pts, res.rms_mm, **options))
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, "none", before, after))
+    if args.residuals:
+        written.append(write_residuals(args.residuals, res, pts.q_deg))
     if args.png:
         if not errors:
             print("note: --png draws the validation error distributions of instrument points; give --validate",

@@ -108,20 +108,28 @@ class UpdateResult:
         return self.p_after > EXPLAIN_P
 
 
+#: an off-diagonal entry below this share of sqrt(c_mm c_nn) in the frame is moved additively, not in proportion
+SMALL_ENTRY = 0.05
+
+
 def model_compliance(model: str, sim=None, design: RodDesign | None = None):
     """design -> C_F [mm/N] of the compliance model ``frame`` (calibrated beam frame) or ``calc`` (closed form);
     with ``sim`` (the user's own simulated compliance of ``design``, :class:`~rodlab.core.compliance.RodCompliance`)
     that file moved entry by entry as the frame moves with the keys: ``C_sim * frame(d) / frame(design)`` (a trial:
-    update had fitted through rodlab's frame only, refusing what the user's own simulation called consistent)."""
+    update had fitted through rodlab's frame only, refusing what the user's own simulation called consistent);
+    an entry the frame makes small (below :data:`SMALL_ENTRY` of its diagonal's geometric mean: a near-zero
+    coupling) moves by the frame's change instead, ``C_sim + frame(d) - frame(design)``, where a ratio of two small
+    numbers would move it by any factor."""
     if sim is not None:
         base = frame_compliance(design)[0]
         C_sim = np.asarray(sim.C_F, float)
-        scale = np.abs(base).max()
+        d = np.sqrt(np.abs(np.diag(base)))
+        scaled = np.abs(base) > SMALL_ENTRY * np.outer(d, d)     # entries the frame resolves: moved in proportion
 
-        def moved(d):
-            C = frame_compliance(d)[0]
-            ratio = np.where(np.abs(base) > 1e-9 * scale, C / np.where(base == 0, 1.0, base), 1.0)
-            return C_sim * ratio
+        def moved(design_d):
+            C = frame_compliance(design_d)[0]
+            ratio = C / np.where(scaled, base, 1.0)
+            return np.where(scaled, C_sim * ratio, C_sim + (C - base))
         return moved
     if model == "frame":
         return lambda d: frame_compliance(d)[0]

@@ -232,14 +232,14 @@ def _harmonics_held_out(run: CalibrationRun, joints) -> list[str]:
 def _uncompensated_todo(f) -> str:
     """What to do about the rod's deflection found in the residuals of a calibration told not to compensate it
     (a trial: "0.208x ... what the compliance file says (a file of another rod ...)" beside a right file, the
-    factors being of a generic steel rod's shape, what the identification had not already absorbed)."""
+    factors being of a generic steel rod's deflection, what the identification had not already absorbed)."""
     k = f.parameters
-    return ("the rod deflects and this calibration does not compensate it (--compensation "
-            "none): the residuals still follow a rod's deflection under its weight and the contact "
-            f"force ({k.get('k_gravity', float('nan')):.2f}x and {k.get('k_force', float('nan')):.2f}x a generic steel "
-            "rod's of this tool: what the identified joint compliances and lengths did not absorb, not this rod's "
-            "own factor); calibrate with the rod's compliance file compensated (`--rod FILE`, the default "
-            "compensation, or `rodlab compare` for every method)")
+    factors = (f" (the part the identified joint compliances and lengths did not absorb: {k['k_gravity']:.2f} of a "
+               f"generic steel rod's deflection under its weight and {k['k_force']:.2f} of it under the contact "
+               "force, not this rod's own factors)" if {"k_gravity", "k_force"} <= set(k) else "")
+    return ("the rod deflects and this calibration does not compensate it (--compensation none): the residuals "
+            f"still follow a rod's deflection{factors}; compensate the deflection through the rod's compliance file "
+            "(`--rod FILE` with the default `--compensation file`, or `rodlab compare` for every method)")
 
 
 def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float | None = None) -> None:

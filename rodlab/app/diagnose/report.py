@@ -77,9 +77,11 @@ class Diagnosis:
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um{refit}"]
         if "repeatability_mm" in self.extra:
-            lines.append(f"  repeatability: the hold means scatter {self.extra['repeatability_mm'] * 1e3:.2f} um from "
-                         f"one repeat to the next ({self.extra['repeat_scatter_x_noise']:.1f} x the noise of a hold's "
-                         "mean) and share no misfit: the rig's repeatability (re-seating, friction from hold to hold), "
+            x = self.extra
+            lines.append(f"  repeatability: the hold means scatter {x['repeatability_mm'] * 1e3:.2f} um from one repeat to "
+                         f"the next ({x['repeat_scatter_x_noise']:.1f} x the noise of a hold's mean), no misfit shared "
+                         f"by the repeats detected (p = {x['shared_misfit_p']:.2g}; the largest, p = "
+                         f"{x['worst_group_p']:.2g}): the rig's repeatability (re-seating, friction from hold to hold), "
                          "against which the effects were judged")
         for i, f in enumerate(self.findings, 1):
             bound = set(f.evidence.get("at_bound", ()))

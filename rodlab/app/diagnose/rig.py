@@ -38,8 +38,8 @@ from .rig_outside import OUTSIDE
 from .rig_range import at_range_limit, range_finding
 from .rig_select import demean
 from .rig_steps import LACK_CHI_RED, Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import (GLITCH_Z, hold_line_residuals, hold_repeatability_mm, isolated_glitches, reading_noise,
-                        repeat_scatter, shared_misfit)
+from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, repeat_scatter
+from .rig_repeatability import MIN_REPEATS, repeatability
 from .rig_tolerant import diagnose_tolerant, verdict_of
 
 __all__ = ["diagnose_rig", "RigModelFit", "joint_places"]
@@ -156,11 +156,10 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
     again against that scatter (``sigma * sqrt(R)`` on every reading: right for what is constant within a hold,
     conservative for what changes within one): thousands of readings
     must not make a 2 % improvement of hold means that scatter 7x their noise look decisive. A misfit that every
-    repeat shares (an effect beyond its hypothesis) is structure, not scatter, and changes nothing here; where none
-    is left beside the scatter (:func:`.rig_noise.shared_misfit` p >= :data:`P_SHARED`), the scatter is the rig's
-    repeatability, said beside the noise, not an ``unexplained`` finding (a trial: 0.4 um from hold to hold beside
-    0.5 um gauge noise, better than the paper's gauges, had made every recording of the paper's rods
-    ``unexplained``)."""
+    repeat shares (an effect beyond its hypothesis) is structure, not scatter, and changes nothing here; where the
+    tests of :mod:`.rig_repeatability` find nothing beside the scatter, it is the rig's repeatability, said beside
+    the noise, not an ``unexplained`` finding (a trial: 0.4 um from hold to hold beside 0.5 um gauge noise, better
+    than the paper's gauges, had made every recording of the paper's rods ``unexplained``)."""
     diag, model = _diagnose_once(data, sim, design, max_terms, env, sigma)
     if not _lacks_fit(diag):
         return diag, model
@@ -169,18 +168,31 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
         return diag, model
     diag2, model2 = _diagnose_once(data, sim, design, max_terms, env, sigma, scatter)
     diag2.extra["selected_against_hold_scatter"] = scatter
-    if shared_misfit(data, model2.resid, sigma, scatter) >= P_SHARED:
-        _as_repeatability(diag2, data, model2.resid, scatter)
+    rep = repeatability(data, model2.resid, sigma, _fitted_to_holds(model2))
+    if rep is not None and rep.scatter_only:
+        _as_repeatability(diag2, rep)
         return diag2, model2
     for f in diag2.findings:
         if _is_lack_of_fit(f):
             f.explanation += (f"; the hold means scatter over the repeats {np.sqrt(scatter):.1f} x their noise, so the "
-                              "effects named were judged against that scatter, not against the noise of one reading")
+                              "effects named were judged against that scatter, not against the noise of one reading"
+                              + ("" if rep is None else _not_repeatability(rep)))
     return diag2, model2
 
 
-#: a misfit shared by the repeats of the holds is structure below this chance of the scatter alone
-P_SHARED = 1e-3
+def _not_repeatability(rep) -> str:
+    """Why the scatter is not taken for the rig's repeatability alone (:attr:`.rig_repeatability.Repeatability`)."""
+    if rep.repeats < MIN_REPEATS:
+        return (f"; with {rep.repeats} repeats of a hold a misfit they share cannot be told from the scatter: record "
+                f"{MIN_REPEATS} or more")
+    return (f"; beside that scatter the repeats share a misfit (p = {rep.p_omnibus:.2g}; the largest, "
+            f"p = {rep.p_worst:.2g}; the farthest hold {rep.worst_hold_z:.1f} scatter SDs off its repeats): structure "
+            "that returns at every repeat, or a borderline scatter (repeat the recording to tell)")
+
+
+def _fitted_to_holds(model: RigModelFit) -> int:
+    """The parameters a model fitted to the hold means: its effects' and, where fitted, the linear entries."""
+    return int(np.size(model.coef)) + (len(model.linear.entries) if model.linear is not None else 0)
 
 
 def _is_lack_of_fit(f: Finding) -> bool:
@@ -188,13 +200,12 @@ def _is_lack_of_fit(f: Finding) -> bool:
     return f.effect == OUTSIDE and "reduced_chi2" in f.parameters
 
 
-def _as_repeatability(diag: Diagnosis, data: RigSamples, resid: np.ndarray, scatter: float) -> None:
-    """The hold means' lack of fit taken as the rig's repeatability: no finding, the verdict of the others, the
-    repeatability in the report (``repeatability_mm``, ``repeat_scatter_x_noise``)."""
+def _as_repeatability(diag: Diagnosis, rep) -> None:
+    """The hold means' lack of fit taken as the rig's repeatability (:mod:`.rig_repeatability`): no finding, the
+    verdict of the others, the repeatability and its tests in the report."""
     diag.findings = [f for f in diag.findings if not _is_lack_of_fit(f)]
     diag.verdict = verdict_of(diag.findings)
-    diag.extra["repeatability_mm"] = hold_repeatability_mm(data, resid)
-    diag.extra["repeat_scatter_x_noise"] = float(np.sqrt(scatter))
+    diag.extra.update(rep.to_dict())
 
 
 def _diagnose_once(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float,

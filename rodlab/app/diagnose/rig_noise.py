@@ -15,9 +15,8 @@ A recording that allows none of these is refused with what to record instead.
 spike): one 0.5 mm reading among 10 000 had made the noise 5 um instead of 0.66 um and hidden a joint.
 
 :func:`repeat_scatter` measures how much a model's hold means scatter over the repeats beyond their noise
-(friction that varies from hold to hold, handling): random structure, unlike a misfit that every repeat shares;
-:func:`shared_misfit` tests for such a shared misfit against that scatter, and :func:`hold_repeatability_mm` is
-the scatter's size, the rig's repeatability from hold to hold.
+(friction that varies from hold to hold, handling): random structure, unlike a misfit that every repeat shares
+(:mod:`.rig_repeatability` tells the two apart).
 """
 from __future__ import annotations
 
@@ -28,10 +27,9 @@ import numpy as np
 from rodlab.core.errors import RodlabError
 from rodlab.stiffness_rig.samples import RigSamples
 
-from .chi2 import chi2_sf
 
 __all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals", "repeat_scatter",
-           "shared_misfit", "hold_repeatability_mm", "MIN_DOF", "GLITCH_Z"]
+           "repeated_hold_means", "MIN_DOF", "GLITCH_Z", "CHI2_1_MEDIAN"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
 MIN_DOF = 10
@@ -163,7 +161,7 @@ def _within_holds(data: RigSamples) -> tuple[float, int]:
     return float(np.nansum(resid ** 2)), dof
 
 
-def _repeated_hold_means(data: RigSamples, values: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+def repeated_hold_means(data: RigSamples, values: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """(hold means of ``values``, readings per hold) of every set of holds that repeat one (gauge, load axis and
     sign, mass, branch), two holds or more; the series' zeroing holds left out."""
     keep = ~data.reference
@@ -183,9 +181,9 @@ def _repeated_hold_means(data: RigSamples, values: np.ndarray) -> list[tuple[np.
 
 def _between_repeats(data: RigSamples) -> tuple[float, int]:
     """Between-hold sum of squares (each hold mean weighted by its readings) and degrees of freedom of the holds
-    that repeat one (:func:`_repeated_hold_means`)."""
+    that repeat one (:func:`repeated_hold_means`)."""
     ss, dof = 0.0, 0
-    for means, counts in _repeated_hold_means(data, data.y):
+    for means, counts in repeated_hold_means(data, data.y):
         grand = float((means * counts).sum() / counts.sum())
         ss += float((counts * (means - grand) ** 2).sum())
         dof += means.size - 1
@@ -199,35 +197,11 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
     median over the holds (divided by chi-square(1)'s median), so one stray hold does not set it. 1 when nothing
     repeats."""
     z2 = []
-    for means, counts in _repeated_hold_means(data, resid):
+    for means, counts in repeated_hold_means(data, resid):
         k = means.size
         grand = float(np.average(means, weights=counts))           # holds of unequal length weigh as they inform
         z2 += list((means - grand) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
-
-
-def shared_misfit(data: RigSamples, resid: np.ndarray, sigma: float, scatter: float) -> float:
-    """The chance [-] that the hold-to-hold scatter alone leaves the mean residual of each set of repeated holds
-    (gauge, load axis and sign, mass, branch) as far from 0 as it is: each mean against the scatter ``scatter``
-    (:func:`repeat_scatter`, in units of the hold means' noise from ``sigma`` [mm] per reading), their squares
-    summed against a chi-square of as many degrees of freedom. Small where a misfit returns at every repeat
-    (structure a modelled effect leaves); 1 when nothing repeats."""
-    z2 = []
-    for means, counts in _repeated_hold_means(data, resid):
-        shared = float(np.average(means, weights=counts))
-        z2.append(shared ** 2 / (max(scatter, 1.0) * sigma ** 2 / counts.sum()))
-    return chi2_sf(float(np.sum(z2)), len(z2)) if z2 else 1.0
-
-
-def hold_repeatability_mm(data: RigSamples, resid: np.ndarray) -> float:
-    """The robust SD [mm] of one hold's mean about the mean of the holds that repeat it (:func:`repeat_scatter`'s
-    groups): the rig's repeatability from one loading to the next (re-seating, friction from hold to hold), the
-    readings' own noise included. NaN when nothing repeats."""
-    d2 = []
-    for means, counts in _repeated_hold_means(data, resid):
-        k = means.size
-        d2 += list((means - float(np.average(means, weights=counts))) ** 2 * k / (k - 1))
-    return float(np.sqrt(np.median(d2) / CHI2_1_MEDIAN)) if d2 else float("nan")
 
 
 #: the median of a chi-square of one degree of freedom

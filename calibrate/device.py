@@ -1,12 +1,14 @@
-"""The MultiCal 3-D measuring device (``*.device.json``, ``rodlab.device/1``): three displacement sensors whose
-flat tips push the ball, and the points of its mount that probing the fixture measures.
+"""The MultiCal 3-D measuring device (``*.device.json``, ``rodlab.device/1`` or ``/2``): three displacement sensors
+whose flat tips push the ball, and the points of its mount that probing the fixture measures.
 
-Sensor k reads ``zero_mm + axis_D . x`` for the ball centre x in {D} (a flat tip on a sphere: only the
-displacement along its axis moves the tip) and pushes the ball along ``+axis_D`` with
-``force_at_zero_N - rate_N_per_mm * (reading - zero_mm)``. {D}: x along sensor 1, y in the plane of sensors 1
-and 2, origin at the virtual datum point (the reading ``zero_mm`` of every sensor); the axes need not be
-orthogonal. The three readings are three linear equations ``A x = s - zero`` (rows of A the axes), solved per
-point; the sensors' independent noise of one standard deviation sigma becomes ``sigma^2 A^-1 A^-T`` in {D}.
+Sensor k reads ``zero_mm + reading_sign * axis_D . x`` for the ball centre x in {D} (a flat tip on a sphere: only
+the displacement along its axis moves the tip; ``reading_sign`` -1, ``rodlab.device/2``, for a sensor whose reading
+falls as the ball moves along its axis: mounted the other way round, or its channel counting the other way) and
+pushes the ball along ``+axis_D`` with ``force_at_zero_N - rate_N_per_mm * (axis_D . x)``. {D}: x along sensor 1,
+y in the plane of sensors 1 and 2, origin at the virtual datum point (the reading ``zero_mm`` of every sensor); the
+axes need not be orthogonal. The three readings are three linear equations ``A x = sign (s - zero)`` (rows of A
+the axes), solved per point; the sensors' independent noise of one standard deviation sigma becomes
+``sigma^2 A^-1 A^-T`` in {D}.
 """
 from __future__ import annotations
 
@@ -21,9 +23,12 @@ from rodlab.core.schema import require_schema
 from .errors import CalibrationError
 
 __all__ = ["Sensor", "Device", "read_device", "write_device", "device_dict", "ideal_device", "misaligned_device",
-           "DEVICE_FORMAT", "CONVENTION_TOL", "MAX_CONDITION"]
+           "DEVICE_FORMAT", "DEVICE_FORMAT_SIGNED", "DEVICE_FORMATS", "CONVENTION_TOL", "MAX_CONDITION"]
 
 DEVICE_FORMAT = "rodlab.device/1"
+#: /2 adds each sensor's ``reading_sign`` (written only where a sensor reads the other way)
+DEVICE_FORMAT_SIGNED = "rodlab.device/2"
+DEVICE_FORMATS = (DEVICE_FORMAT, DEVICE_FORMAT_SIGNED)
 #: how far sensor 1 may be off x, and sensor 2 off the x-y plane, before the file breaks the convention
 CONVENTION_TOL = 1e-6
 #: sensors this close to coplanar (condition number of A) cannot locate the ball
@@ -38,7 +43,9 @@ class Sensor:
     zero_mm : its reading with the ball centre at the datum point [mm]
     range_mm : (low, high) readings it can give [mm]
     force_at_zero_N : spring force on the ball at the zero reading [N], or None (the fixture's contact force)
-    rate_N_per_mm : spring rate [N/mm] (the force falls by it per mm the reading rises)
+    rate_N_per_mm : spring rate [N/mm] (the force falls by it per mm the ball moves along the axis)
+    reading_sign : +1 (the reading rises as the ball moves along axis_D) or -1 (it falls: a sensor mounted the
+    other way round, or counting the other way)
     """
 
     axis_D: np.ndarray
@@ -46,6 +53,7 @@ class Sensor:
     range_mm: tuple
     force_at_zero_N: float | None = None
     rate_N_per_mm: float = 0.0
+    reading_sign: int = 1
 
     def __post_init__(self):
         a = np.asarray(self.axis_D, dtype=float)
@@ -54,6 +62,8 @@ class Sensor:
         object.__setattr__(self, "axis_D", a)
         lo, hi = (float(v) for v in self.range_mm)
         object.__setattr__(self, "range_mm", (lo, hi))
+        if self.reading_sign not in (1, -1):
+            raise ValueError(f"reading_sign must be 1 or -1, got {self.reading_sign!r}")
 
 
 @dataclass
@@ -81,23 +91,33 @@ class Device:
         return np.array([s.zero_mm for s in self.sensors])
 
     @property
+    def signs(self) -> np.ndarray:
+        """shape=(3,): each sensor's reading_sign."""
+        return np.array([s.reading_sign for s in self.sensors], float)
+
+    @property
     def has_springs(self) -> bool:
         """Whether every sensor states its spring force (then the contact force follows each reading)."""
         return all(s.force_at_zero_N is not None for s in self.sensors)
 
     def readings(self, x_D_mm: np.ndarray) -> np.ndarray:
         """Sensor readings [mm], shape=(N, 3), of ball centres x in {D} [mm], shape=(N, 3)."""
-        return self.zero_mm + np.asarray(x_D_mm, float) @ self.axes.T
+        return self.zero_mm + self.signs * (np.asarray(x_D_mm, float) @ self.axes.T)
+
+    def along_axes(self, readings_mm: np.ndarray) -> np.ndarray:
+        """shape=(N, 3): how far the ball is along each sensor's axis from the datum point [mm] (A x), from the
+        readings [mm], shape=(N, 3)."""
+        return self.signs * (np.asarray(readings_mm, float) - self.zero_mm)
 
     def positions(self, readings_mm: np.ndarray) -> np.ndarray:
-        """Ball centres in {D} [mm], shape=(N, 3), from the readings [mm], shape=(N, 3) (A x = s - zero)."""
-        return np.linalg.solve(self.axes, (np.asarray(readings_mm, float) - self.zero_mm).T).T
+        """Ball centres in {D} [mm], shape=(N, 3), from the readings [mm], shape=(N, 3) (A x = sign (s - zero))."""
+        return np.linalg.solve(self.axes, self.along_axes(readings_mm).T).T
 
     def force_D(self, readings_mm: np.ndarray) -> np.ndarray:
         """Contact force on the ball in {D} [N], shape=(N, 3): each spring along its axis at its reading."""
         f0 = np.array([s.force_at_zero_N for s in self.sensors], float)
         rate = np.array([s.rate_N_per_mm for s in self.sensors])
-        mag = f0 - rate * (np.asarray(readings_mm, float) - self.zero_mm)
+        mag = f0 - rate * self.along_axes(readings_mm)
         return mag @ self.axes
 
     def noise_shape_D(self) -> np.ndarray:
@@ -136,21 +156,24 @@ def misaligned_device(base: Device, misalign_deg: float, rng) -> Device:
     u = np.cross(A[2], rng.normal(size=3))
     u /= np.linalg.norm(u)
     A[2] = np.cos(a) * A[2] + np.sin(a) * np.cross(u, A[2])                 # Rodrigues, u normal to A[2]
-    sensors = [Sensor(A[k] / np.linalg.norm(A[k]), s0.zero_mm, s0.range_mm, s0.force_at_zero_N, s0.rate_N_per_mm)
-               for k, s0 in enumerate(base.sensors)]
+    sensors = [Sensor(A[k] / np.linalg.norm(A[k]), s0.zero_mm, s0.range_mm, s0.force_at_zero_N, s0.rate_N_per_mm,
+                      s0.reading_sign) for k, s0 in enumerate(base.sensors)]
     return Device(base.name, sensors, dict(base.features_D_mm), base.path)
 
 
 def device_dict(dev: Device) -> dict:
-    """The ``rodlab.device/1`` document of ``dev``."""
+    """The document of ``dev``: ``rodlab.device/1``, or ``/2`` where a sensor reads the other way."""
     sensors = []
     for s in dev.sensors:
         d = {"axis_D": [round(float(v), 12) for v in s.axis_D], "zero_mm": s.zero_mm, "range_mm": list(s.range_mm)}
         if s.force_at_zero_N is not None:
             d["force_at_zero_N"] = s.force_at_zero_N
             d["rate_N_per_mm"] = s.rate_N_per_mm
+        if s.reading_sign != 1:
+            d["reading_sign"] = s.reading_sign
         sensors.append(d)
-    out = {"format": DEVICE_FORMAT, "name": dev.name, "sensors": sensors}
+    signed = any(s.reading_sign != 1 for s in dev.sensors)
+    out = {"format": DEVICE_FORMAT_SIGNED if signed else DEVICE_FORMAT, "name": dev.name, "sensors": sensors}
     if dev.features_D_mm:
         out["features_D_mm"] = {k: [float(v) for v in p] for k, p in dev.features_D_mm.items()}
     return out
@@ -165,9 +188,10 @@ def read_device(path) -> Device:
     inside its range; every error names the file and the key."""
     p = Path(path)
     data, text = read_json(p, CalibrationError)
-    if not isinstance(data, dict) or data.get("format") != DEVICE_FORMAT:
-        raise CalibrationError(f"expected a JSON object with \"format\": \"{DEVICE_FORMAT}\"", path=p, key="format")
-    require_schema(data, DEVICE_FORMAT, p, text, CalibrationError)
+    if not isinstance(data, dict) or data.get("format") not in DEVICE_FORMATS:
+        raise CalibrationError(f"expected a JSON object with \"format\": \"{DEVICE_FORMAT}\" (or "
+                               f"\"{DEVICE_FORMAT_SIGNED}\" with a sensor's reading_sign)", path=p, key="format")
+    require_schema(data, data["format"], p, text, CalibrationError)
     sensors = [_sensor(p, k, s) for k, s in enumerate(data["sensors"], start=1)]
     _check_convention(p, sensors)
     feats = data.get("features_D_mm", {})
@@ -201,7 +225,12 @@ def _sensor(p: Path, k: int, s: dict) -> Sensor:
         raise CalibrationError("a spring rate needs the spring's force at the zero reading (force_at_zero_N)",
                                path=p, key=f"{key}.force_at_zero_N")
     return Sensor(a / n, float(s["zero_mm"]), (float(lo), float(hi)), s.get("force_at_zero_N"),
-                  float(s.get("rate_N_per_mm", 0.0)))
+                  float(s.get("rate_N_per_mm", 0.0)), int(s.get("reading_sign", 1)))
+
+
+#: how a sensor that reads the other way is declared (a device trial: it could only be turned round or rewritten)
+REVERSED_FIX = ("keep axis_D as designed and declare the sensor's reading_sign -1 (format rodlab.device/2), turn the "
+                "sensor round, or write its readings as 2 x zero_mm - reading")
 
 
 def _check_convention(p: Path, sensors: list) -> None:
@@ -215,8 +244,7 @@ def _check_convention(p: Path, sensors: list) -> None:
     if A[1, 1] <= 0:                      # review: a reversed sensor 2 had been blamed on sensor 3
         raise CalibrationError(f"{{D}} has y on sensor 2's side of the x axis: sensor 2's y must be > 0, got "
                                f"{A[1, 1]:g}. A sensor mounted the other way round (its reading falling as the ball "
-                               f"moves along its axis) is not a device axis: keep axis_D as designed and turn the "
-                               f"sensor round, or write its readings as 2 x zero_mm - reading", path=p,
+                               f"moves along its axis) is not a device axis: {REVERSED_FIX}", path=p,
                                key="sensors[2].axis_D")
     if np.linalg.cond(A) > MAX_CONDITION:
         raise CalibrationError(f"the three sensor axes are (nearly) coplanar (condition {np.linalg.cond(A):.3g}; expected "
@@ -226,5 +254,4 @@ def _check_convention(p: Path, sensors: list) -> None:
         raise CalibrationError(f"the three sensor axes are left-handed (det {np.linalg.det(A):.3g}; expected > 0): "
                                "sensor 3 must point to the side of +z that sensors 1 and 2 make right-handed. A sensor "
                                "mounted the other way round (its reading falling as the ball moves along its axis) is "
-                               "not a device axis: keep axis_D as designed and turn the sensor round, or write its "
-                               "readings as 2 x zero_mm - reading", path=p, key="sensors[3].axis_D")
+                               f"not a device axis: {REVERSED_FIX}", path=p, key="sensors[3].axis_D")

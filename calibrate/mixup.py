@@ -106,8 +106,9 @@ class Mixup:
         if self.sensor is not None:
             k, zero = self.sensor
             return (f"sensor {k}'s readings look reversed (the sensor mounted the other way round, or its channel "
-                    f"exported with the other sign): with s{k}_mm mirrored about its zero ({zero:g} mm) {fit}; turn "
-                    f"the sensor round, or write its readings as {2 * zero:g} - s{k}_mm")
+                    f"exported with the other sign): with s{k}_mm mirrored about its zero ({zero:g} mm) {fit}; "
+                    f"declare it in the device file (sensors[{k}].reading_sign: -1, format rodlab.device/2), turn the "
+                    f"sensor round, or write its readings as {2 * zero:g} - s{k}_mm")
         if self.readings is not None and len(self.readings) == 1:
             a = _READ[self.readings[0]]
             return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "

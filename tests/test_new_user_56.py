@@ -243,3 +243,39 @@ def test_simulated_raw_readings_through_the_users_own_device(tmp_path, capsys):
     assert "verdict: TRUSTED" in capsys.readouterr().out
     assert main(["simulate-campaign", "--rod", "rod1", "--device", str(path), "-o", str(tmp_path / "x")]) == 2
     assert "give --raw with it" in capsys.readouterr().err
+
+
+def test_a_sensor_that_reads_the_other_way_is_declared_in_the_device_file(raw, tmp_path, capsys):
+    """Sensor 2 reading the other way (mounted round, or its channel counting down): the campaign's mirrored s2
+    column calibrates through a device file that declares sensors[2].reading_sign -1 (rodlab.device/2) as the
+    original does through its own file (the device trials: it could only be turned round or the column rewritten);
+    the refusal without it names the declaration; the file round-trips."""
+    from rodlab.calibrate.device import DEVICE_FORMAT_SIGNED, read_device, write_device
+    doc = json.loads((raw / "multical.device.json").read_text())
+    zero = doc["sensors"][1]["zero_mm"]
+
+    def mirror(cols, cells):
+        j = cols.index("s2_mm")
+        cells[j] = f"{2 * zero - float(cells[j]):.4f}"
+    rev = _edited(raw, tmp_path, "rev.campaign.csv", mirror)
+    doc["format"], doc["sensors"][1]["reading_sign"] = DEVICE_FORMAT_SIGNED, -1
+    signed = tmp_path / "signed.device.json"
+    signed.write_text(json.dumps(doc))
+    dev = read_device(signed)
+    assert list(dev.signs) == [1, -1, 1]
+    x = np.array([[0.3, -0.2, 0.1], [-1.0, 0.5, 2.0]])
+    assert np.allclose(dev.positions(dev.readings(x)), x)
+    again = read_device(write_device(dev, tmp_path / "again.device.json"))
+    assert json.loads((tmp_path / "again.device.json").read_text())["format"] == DEVICE_FORMAT_SIGNED
+    assert list(again.signs) == [1, -1, 1]
+    capsys.readouterr()
+    args = [str(rev), "--device", str(signed), "--fixture", str(raw / "multical.fixture.json"), "--rod",
+            str(raw / "rod.compliance.json"), "--json", str(tmp_path / "signed.json")]
+    assert main(["calibrate", *args]) == 0
+    assert main(["calibrate", *_args(raw), "--json", str(tmp_path / "plain.json")]) == 0
+    a, b = (json.loads((tmp_path / f"{n}.json").read_text())["parameters"] for n in ("signed", "plain"))
+    assert all(abs(a[k]["value"] - b[k]["value"]) < 1e-6 * max(1.0, abs(b[k]["value"])) for k in b)
+    capsys.readouterr()
+    assert main(["calibrate", *_args(raw, rev)]) == 3
+    assert "sensors[2].reading_sign: -1" in capsys.readouterr().err
+    assert main(["validate", str(signed)]) == 0

@@ -49,6 +49,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
     FormatSpec("rodlab.fixture/2", "json", "fixture2.schema.json", (),
                "device fixture with each pose's uncertainty"),
     FormatSpec("rodlab.device/1", "json", "device.schema.json", (".device.json",), "3-D measuring device"),
+    FormatSpec("rodlab.device/2", "json", "device2.schema.json", (),
+               "3-D measuring device with sensors that read the other way"),
     FormatSpec("rodlab.robot/2", "toml", "robot.schema.json", (".robot.toml",), "robot file"),
     FormatSpec("rodlab.calibration/1", "json", "calibration.schema.json", (".cal.json",), "calibration result"),
     FormatSpec("rodlab.diagnosis/1", "json", "diagnosis.schema.json", (".diagnosis.json",), "diagnosis report"),

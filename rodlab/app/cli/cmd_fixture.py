@@ -64,7 +64,7 @@ def _all_flagged(fit, device) -> str:
         return (f"FLAGGED all {n} positions with the same suspect feature {suspects[0]!r}: the device file {device} "
                 f"does not describe the device that was probed (its features_D_mm are another device's, the probe "
                 f"file's feature names are swapped, or {suspects[0]!r} moved on the device: a loose seat); give this "
-                f"device's file (rodlab.device/1) or re-measure the feature, then run `rodlab fixture` again")
+                f"device's file (rodlab.device/1 or /2) or re-measure the feature, then run `rodlab fixture` again")
     return (f"FLAGGED all {n} positions, with different suspect features: the probe file's accuracy_mm "
             f"({fit.accuracy_mm:g} mm) may be the instrument's repeatability rather than its 1-sigma accuracy (state "
             f"the accuracy), or the device file {device} is another device's")

@@ -48,9 +48,9 @@ def register(sub) -> None:
                    help="with --raw: how far sensors 2 and 3 are off orthogonal, each in a drawn direction [deg] "
                         "(default 1; with --device 0: the device as its file says)")
     p.add_argument("--device", default=None, metavar="DEV.device.json",
-                   help="with --raw: your device's file (rodlab.device/1: its axes, zeros, ranges, springs, features) "
-                        "instead of the built-in orthogonal design; it is written as nominal.device.json, and as "
-                        "multical.device.json turned by --misalign-deg")
+                   help="with --raw: your device's file (rodlab.device/1 or /2: its axes, zeros, ranges, springs, "
+                        "reading signs, features) instead of the built-in orthogonal design; it is written as "
+                        "nominal.device.json, and as multical.device.json turned by --misalign-deg")
     p.add_argument("--seed", type=seed, default=0, help="random seed of the truth robot, noise and effects (default 0)")
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.set_defaults(func=cmd_simulate_campaign)

@@ -59,6 +59,7 @@ READERS = {
     "rodlab.fixture/1": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.fixture/2": _lazy("rodlab.calibrate", "read_fixture"),
     "rodlab.device/1": _lazy("rodlab.calibrate.device", "read_device"),
+    "rodlab.device/2": _lazy("rodlab.calibrate.device", "read_device"),
     "rodlab.probe/1": _lazy("rodlab.calibrate.probe", "read_probe"),
     "rodlab.robot/1": _lazy("rodlab.calibrate", "read_robot"),
     "rodlab.robot/2": _lazy("rodlab.calibrate", "read_robot"),
@@ -234,7 +235,7 @@ def _check_probes(checks: list) -> None:
     fixture` fits them (features the device lacks, another unit or device, too few or collinear features at a
     position: problems of the probe file's; a position whose residuals exceed the accuracy, swapped labels:
     warnings). More than one device file: not paired."""
-    devices = [f for f, c in checks if c.ok and c.format == "rodlab.device/1"]
+    devices = [f for f, c in checks if c.ok and c.format in ("rodlab.device/1", "rodlab.device/2")]
     if len(devices) != 1:
         return
     device = read_device(devices[0])

@@ -115,6 +115,11 @@ RULES = [
     ("absurd size", _set(("tube", "outer_diameter_mm"), 1e300), "tube.outer_diameter_mm", "<= 10000 mm"),
     ("length in um", _set(("L1_mm",), 300000.0), "L1_mm", "millimetres"),
     ("diameter in metres", _set(("tube", "outer_diameter_mm"), 0.04), "tube.outer_diameter_mm", "did you give metres"),
+    # a designer trial: OD and wall both in metres had been a tube sagging 9e10 mm, blamed on L2
+    ("diameter and wall in metres", lambda d: (_set(("tube", "outer_diameter_mm"), 0.04)(d),
+                                               _set(("tube", "wall_mm"), 0.005)(d)),
+     "tube.outer_diameter_mm", "0.005 m = 5 mm"),
+    ("wall in metres", _set(("tube", "wall_mm"), 0.005), "tube.wall_mm", "did you give metres (0.005 m = 5 mm)"),
 ]
 
 

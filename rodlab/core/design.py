@@ -50,6 +50,22 @@ def _check_pos(name: str, value: float, key: str, allow_zero: bool = False) -> N
         raise DesignError(f"{name} must be <= {MAX_SIZE_MM:g} mm (sizes are in millimetres), got {value:g}", key=key)
 
 
+#: a tube this thin [mm] (outer diameter, wall) is no rod's: the value was given in metres
+_METRES_OD_MM, _METRES_WALL_MM = 1.0, 0.05
+
+
+def _check_not_metres(od: float, wall: float, key: str) -> None:
+    """A tube's outer diameter below 1 mm or wall below 0.05 mm: sizes given in metres (a designer trial: 0.03 and
+    0.002 had been read as a tube that sags 9e10 mm, blamed on L2)."""
+    said = [f"{name} = {v:g}" for name, v, lim in (("outer_diameter_mm", od, _METRES_OD_MM),
+                                                 ("wall_mm", wall, _METRES_WALL_MM)) if v < lim]
+    if said:
+        given = [f"{v:g} m = {1000 * v:g} mm" for v, lim in ((od, _METRES_OD_MM), (wall, _METRES_WALL_MM)) if v < lim]
+        raise DesignError(f"{', '.join(said)}: thinner than any rod's tube; sizes are in millimetres: did you give "
+                          f"metres ({', '.join(given)})?",
+                          key=f"{key}.{'outer_diameter_mm' if od < _METRES_OD_MM else 'wall_mm'}")
+
+
 @dataclass(frozen=True)
 class TubeSpec:
     """A round tube (pipe I, pipe II).
@@ -65,6 +81,7 @@ class TubeSpec:
     def __post_init__(self) -> None:
         _check_pos("outer_diameter_mm", self.outer_diameter_mm, f"{self.key}.outer_diameter_mm")
         _check_pos("wall_mm", self.wall_mm, f"{self.key}.wall_mm")
+        _check_not_metres(self.outer_diameter_mm, self.wall_mm, self.key)
         if self.wall_mm >= self.outer_diameter_mm / 2 and self.outer_diameter_mm < 1.0 <= self.wall_mm:
             raise DesignError(
                 f"outer diameter {self.outer_diameter_mm:g} mm is smaller than the wall {self.wall_mm:g} mm: "

@@ -1,6 +1,8 @@
 """Rod designs: the contract format, defaults, and every validation rule."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import math
 
 import pytest
@@ -240,3 +242,19 @@ def test_the_built_in_designs_pass_the_schema_they_are_loaded_without():
         check = check_file(path)
         assert not check.problems, (name, check.problems)
         assert load_design(path) == resolve_design(name)
+
+
+def test_every_unknown_key_of_a_table_is_one_problem(tmp_path):
+    """`wal_mm` and `radius` in one [bend] table: both named at once, each with its line and suggestion (a designer
+    trial: the second had shown only after the first was fixed)."""
+    from rodlab.core.schema import check_file
+    text = Path(builtin_designs()["rod1"]).read_text()
+    assert "[bend]" in text and "radius_mm =" in text
+    text = text.replace("radius_mm =", "radius =", 1).replace("[bend]", "[bend]\nwal_mm = 2.0", 1)
+    path = tmp_path / "typo.rod.toml"
+    path.write_text(text)
+    keys = {p.key: p for p in check_file(path).problems}
+    assert {"bend.wal_mm", "bend.radius"} <= set(keys)
+    assert "wall_mm" in keys["bend.wal_mm"].fix and "radius_mm" in keys["bend.radius"].fix
+    assert keys["bend.radius"].line == text.splitlines().index(next(s for s in text.splitlines()
+                                                                    if s.startswith("radius ="))) + 1

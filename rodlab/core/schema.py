@@ -202,8 +202,23 @@ def _misspelt(err) -> str | None:
     return next((k for k in present if did_you_mean(k, [key])), None)
 
 
+def _unknown_keys(err) -> list[tuple[str, str, list]]:
+    """(message, fix, path) of each key an ``additionalProperties`` error finds unknown (a designer trial: the second
+    unknown key of a table had shown only once the first was fixed)."""
+    where, inst, schema = list(err.absolute_path), err.instance, err.schema
+    allowed = sorted(schema.get("properties", {}))
+    extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
+    out = []
+    for key in extra or ["?"]:
+        hint = did_you_mean(key, allowed).strip() or _newer_version_hint(schema.get("$id"), key)
+        out.append((f"unknown key `{key}`; allowed: {allowed}", hint or "remove it or check its spelling",
+                    where + [key]))
+    return out
+
+
 def _explain(err) -> tuple[str, str, list]:
-    """(message, fix, path) of one jsonschema error, in rodlab's words."""
+    """(message, fix, path) of one jsonschema error, in rodlab's words (an ``additionalProperties`` error's first
+    unknown key: :func:`_unknown_keys` gives each)."""
     where = list(err.absolute_path)
     v, inst, schema = err.validator, err.instance, err.schema
     if v == "required":
@@ -211,12 +226,7 @@ def _explain(err) -> tuple[str, str, list]:
         return (f"missing required key `{key}`", f"rename `{close}` to `{key}`" if close else
                 f"add `{key}` (see docs/formats.md)", where + [key])
     if v == "additionalProperties":
-        allowed = sorted(schema.get("properties", {}))
-        extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
-        key = extra[0] if extra else "?"
-        hint = did_you_mean(key, allowed).strip() or _newer_version_hint(schema.get("$id"), key)
-        return (f"unknown key `{key}`; allowed: {allowed}",
-                hint or "remove it or check its spelling", where + [key])
+        return _unknown_keys(err)[0]
     if v in ("const", "enum"):
         choices = [schema["const"]] if v == "const" else schema["enum"]
         hint = did_you_mean(inst, [str(c) for c in choices]).strip() if isinstance(inst, str) else ""
@@ -251,11 +261,11 @@ def data_problems(data, format_id: str, path: str = "", text: str = "", kind: st
     validator = _validator(ALIASES.get(format_id, format_id))
     out = []
     for err in validator.iter_errors(data):
-        message, fix, where = _explain(err)
-        located = where                                                      # a missing key: its table's line,
-        if err.validator == "required":                                      # or the line of its misspelling
-            located = where[:-1] + ([m] if (m := _misspelt(err)) else [])
-        out.append(Problem(path, message, _locate(text, kind, located) if text else None, _dotted(where), fix))
+        for message, fix, where in (_unknown_keys(err) if err.validator == "additionalProperties" else [_explain(err)]):
+            located = where                                                  # a missing key: its table's line,
+            if err.validator == "required":                                  # or the line of its misspelling
+                located = where[:-1] + ([m] if (m := _misspelt(err)) else [])
+            out.append(Problem(path, message, _locate(text, kind, located) if text else None, _dotted(where), fix))
     return sorted(out, key=lambda p: (p.line or 0, p.key or ""))
 
 

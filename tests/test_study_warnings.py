@@ -85,3 +85,17 @@ def test_the_study_cli_refuses_an_absurd_slip_metres_and_lists_every_unreadable_
     err = capsys.readouterr().err
     assert "2 of 3 designs cannot be read" in err and "rod9" in err and "t.rod.toml" in err
     assert not (tmp_path / "a").exists() and not (tmp_path / "c").exists()
+
+
+def test_a_warning_on_many_designs_is_said_once():
+    """19 designs' slip warnings had pushed the study's tables a screen down (a designer trial): more than
+    GROUPED_AFTER designs of one kind are one line naming how many, the first few and the range; fewer stay whole."""
+    from rodlab.app.study.design_warnings import GROUPED_AFTER, DesignWarning, warning_lines
+    from rodlab.core.enums import StudyWarning
+    many = [DesignWarning(StudyWarning.SLIP_DOMINATES, f"D{k}", f"D{k}: long text {k}", 0.9 + 0.005 * k)
+            for k in range(19)]
+    few = [DesignWarning(StudyWarning.SLIP_EXTRAPOLATED, "E1", "E1: its own text", 2758.0)]
+    lines = warning_lines(many + few)
+    assert len(lines) == 2 and lines[1] == "E1: its own text"
+    assert lines[0].startswith("19 designs (D0, D1, D2, ...)") and "90-99 %" in lines[0]
+    assert warning_lines(many[:GROUPED_AFTER]) == [w.text for w in many[:GROUPED_AFTER]]

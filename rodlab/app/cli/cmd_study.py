@@ -196,6 +196,7 @@ def _print_unusable(table) -> None:
 
 def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.app.study import StudySpec, run_study, write_study_outputs
+    from rodlab.app.study.design_warnings import warning_lines
     from rodlab.app.study.family import family_joints
     from rodlab.calibrate.predict import Priors
     from rodlab.calibrate.simulate import standard_fixture
@@ -232,8 +233,8 @@ def cmd_study(args: argparse.Namespace) -> int:
                               designs={c.label: c.design for c in cands})
     _print_unusable(res.table)
     print(f"assumptions (each an option): {_assumptions(args, cands)}")
-    for w in res.warnings:
-        print(f"warning: {w.text}")
+    for line in warning_lines(res.warnings):
+        print(f"warning: {line}")
     print(f"recommendation: {res.recommendation.text}")
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)

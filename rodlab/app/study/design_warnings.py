@@ -22,7 +22,8 @@ from rodlab.core.units import PAPER_C_ROD_UM_RANGE
 
 from .table import harms, headline_method
 
-__all__ = ["DesignWarning", "study_warnings", "SLIP_DOMINANT_SHARE", "METHODS_APART", "SLIP_EXTRAPOLATION_FACTOR"]
+__all__ = ["DesignWarning", "study_warnings", "warning_lines", "SLIP_DOMINANT_SHARE", "METHODS_APART",
+           "SLIP_EXTRAPOLATION_FACTOR", "GROUPED_AFTER"]
 
 #: the slip's share of the best method's mean-square error above which it is said to dominate (the paper's steel
 #: rods 4# and 6# on the TX90: 0.97-0.99, where Table 3's methods differ by 5 %; carbon 1#: 0.6)
@@ -34,16 +35,23 @@ METHODS_APART = 0.25
 SLIP_EXTRAPOLATION_FACTOR = 2.0
 
 
+#: a kind of warning on more designs than this is said once for all of them (a designer trial: 19 designs' four-line
+#: slip warnings had pushed the study's tables a screen down)
+GROUPED_AFTER = 3
+
+
 @dataclass(frozen=True)
 class DesignWarning:
-    """One warning on one design: ``kind``, the ``design``'s label and the ``text`` a designer reads."""
+    """One warning on one design: ``kind``, the ``design``'s label, the ``text`` a designer reads and the
+    ``value`` it turns on (the slip's share [-], c_rod [um], the method's mean error [mm])."""
 
     kind: StudyWarning
     design: str
     text: str
+    value: float = math.nan
 
     def to_dict(self) -> dict:
-        return {"kind": str(self.kind), "design": self.design, "text": self.text}
+        return {"kind": str(self.kind), "design": self.design, "text": self.text, "value": self.value}
 
 
 def _best(rows):
@@ -62,7 +70,8 @@ def _worse_than_nominal(design: str, rows, method: str) -> DesignWarning | None:
             if len(others) else ": calibrating with this rod would do harm with every method")
     return DesignWarning(StudyWarning.WORSE_THAN_NOMINAL, design, (
         f"{design}: with {method} compensation it leaves the robot less accurate than its nominal model "
-        f"({head['mean_mm'].iloc[0]:.3f} mm against {nominal:.3f} mm uncalibrated){tail}"))
+        f"({head['mean_mm'].iloc[0]:.3f} mm against {nominal:.3f} mm uncalibrated){tail}"),
+        float(head["mean_mm"].iloc[0]))
 
 
 def _slip_dominates(design: str, rows, rod_slip: float) -> DesignWarning | None:
@@ -78,7 +87,7 @@ def _slip_dominates(design: str, rows, rod_slip: float) -> DesignWarning | None:
         f"deflection under its own weight, which no compensation removes) is {100 * share:.0f} % of the best "
         f"method's mean-square error; the methods differ by {spread:.3f} mm, by how the identification absorbs "
         "that scatter rather than by what they compensate: their ranking says little here, a stiffer rod is what "
-        "helps"))
+        "helps"), share)
 
 
 def _slip_extrapolated(design: str, rows, rod_slip: float) -> DesignWarning | None:
@@ -90,7 +99,7 @@ def _slip_extrapolated(design: str, rows, rod_slip: float) -> DesignWarning | No
     return DesignWarning(StudyWarning.SLIP_EXTRAPOLATED, design, (
         f"{design}: c_rod {c_rod:.0f} um is {c_rod / hi:.1f} x the softest rod the slip {rod_slip:g} was fitted on "
         f"(the paper's rods, c_rod {lo:g}-{hi:g} um): its size is an extrapolation; read this design beside a "
-        "study with --rod-slip 0 (the elastic rod: what the compensation methods can do)"))
+        "study with --rod-slip 0 (the elastic rod: what the compensation methods can do)"), c_rod)
 
 
 def study_warnings(df, rod_slip: float) -> list[DesignWarning]:
@@ -107,4 +116,38 @@ def study_warnings(df, rod_slip: float) -> list[DesignWarning]:
             w = check(str(design), rows)
             if w is not None:
                 out.append(w)
+    return out
+
+
+#: what a kind of warning says for many designs at once: the sentence after their names, given the range of values
+_GROUPED = {
+    StudyWarning.WORSE_THAN_NOMINAL: lambda lo, hi: (
+        f"with the recommendation's method they leave the robot less accurate than its nominal model ({lo:.3f}-"
+        f"{hi:.3f} mm); the recommendation leaves them out"),
+    StudyWarning.SLIP_DOMINATES: lambda lo, hi: (
+        f"the rod's slip (--rod-slip: its non-repeatable deflection, which no compensation removes) is "
+        f"{100 * lo:.0f}-{100 * hi:.0f} % of the best method's mean-square error: the methods' ranking says little "
+        "there, a stiffer rod is what helps"),
+    StudyWarning.SLIP_EXTRAPOLATED: lambda lo, hi: (
+        f"c_rod {lo:.0f}-{hi:.0f} um, beyond the rods the slip was fitted on: its size is an extrapolation; read them "
+        "beside a study with --rod-slip 0"),
+}
+
+
+def warning_lines(warnings) -> list[str]:
+    """The warnings as a designer reads them: each on its own where a kind concerns at most :data:`GROUPED_AFTER`
+    designs, else one line for the kind naming how many and which (the first few), the range of its values, and
+    where each design's own sentence is (``study.json``)."""
+    out = []
+    kinds = list(dict.fromkeys(w.kind for w in warnings))
+    for kind in kinds:
+        group = [w for w in warnings if w.kind == kind]
+        if len(group) <= GROUPED_AFTER:
+            out += [w.text for w in group]
+            continue
+        names = ", ".join(w.design for w in group[:3]) + (", ..." if len(group) > 3 else "")
+        values = [w.value for w in group if math.isfinite(w.value)]
+        lo, hi = (min(values), max(values)) if values else (math.nan, math.nan)
+        out.append(f"{len(group)} designs ({names}): {_GROUPED[kind](lo, hi)} (each design's own warning: "
+                   "study.json `warnings`)")
     return out

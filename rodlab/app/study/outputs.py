@@ -12,7 +12,7 @@ from rodlab.app.report.views import frame_views
 from .plots import plot_heatmaps, plot_pareto
 from .report import write_study_report
 from .run import StudyRun, spec_dict
-from .design_warnings import DesignWarning, study_warnings
+from .design_warnings import DesignWarning, study_warnings, warning_lines
 from .table import Recommendation, recommend, study_table
 
 __all__ = ["StudyOutputs", "write_study_outputs", "best_method"]
@@ -60,7 +60,7 @@ def write_study_outputs(out_dir, run: StudyRun, robot_name: str, grid: bool, hea
     extra = _recommended_views(out, rec, designs or {})
     figs.update({f"Recommended design {rec.design} under a unit force at the ball (frame model, displacement "
                  f"x the factor written; all load cases in {extra[0]})": p for p in extra[1:]})
-    write_study_report(out, df, rec.text, figs, header, run.spec.monte_carlo, [w.text for w in warns])
+    write_study_report(out, df, rec.text, figs, header, run.spec.monte_carlo, warning_lines(warns))
     atomic_write_json(out / "study.json", json_safe({"format": "rodlab.study/1", "recommendation": rec.to_dict(),
                                                      "warnings": [w.to_dict() for w in warns],
                                                      "spec": spec_dict(run.spec), "robot": robot_name,

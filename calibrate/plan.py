@@ -115,8 +115,8 @@ def _enough(j, got: np.ndarray, k: int, counts: list, tried: int, reach: Reach) 
     raise CalibrationError(f"clamping position {j}: only {len(got)} of up to {tried} tried rod orientations reach the "
                            f"datum point from the device's open side ({counts[0]} reach it at all, {counts[1]} of them "
                            f"{reach.words()}), {k} needed; move the fixture within reach, or check the robot's base "
-                           f"pose (`rodlab plan --base`; `rodlab study` places the robot at the simulator's standard "
-                           f"base), its joint limits and the floor", key=f"positions.{j}")
+                           "pose (`rodlab plan --base`, `rodlab study --base` or `--fixture-distance-mm`), its joint "
+                           "limits and the floor", key=f"positions.{j}")
 
 
 def above_floor(robot, params: ModelParams, q_rad: np.ndarray, floor_mm: float, rod: Rod | None = None) -> np.ndarray:

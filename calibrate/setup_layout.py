@@ -20,16 +20,17 @@ DEVICE_TILT_ABC_DEG = np.array([-45.0, 35.26438968, 0.0])
 CONTACT_FORCE_D_N = np.array([1.10, 1.25, 1.05])
 
 
-def standard_base() -> np.ndarray:
-    """Pose of the robot base {0} in {W} [mm, deg], shape=(6,): {W} 650 mm in front of the robot, 250 mm up,
-    the device frame tilted 54.7 deg (axes up at equal angles) — the simulator's and the planner's setup."""
-    return matrix_to_pose(_base_in_world())
+def standard_base(distance_mm: float | None = None) -> np.ndarray:
+    """Pose of the robot base {0} in {W} [mm, deg], shape=(6,): {W} 650 mm (or ``distance_mm``) in front of the
+    robot, 250 mm up, the device frame tilted 54.7 deg (axes up at equal angles) — the simulator's and the planner's
+    setup."""
+    return matrix_to_pose(_base_in_world(distance_mm))
 
 
-def _base_in_world() -> np.ndarray:
+def _base_in_world(distance_mm: float | None = None) -> np.ndarray:
     T_base_W = np.eye(4)
     T_base_W[:3, :3] = rotation_from_abc(DEVICE_TILT_ABC_DEG)
-    T_base_W[:3, 3] = WORLD_IN_BASE_MM
+    T_base_W[:3, 3] = WORLD_IN_BASE_MM if distance_mm is None else [float(distance_mm), *WORLD_IN_BASE_MM[1:]]
     return np.linalg.inv(T_base_W)
 
 

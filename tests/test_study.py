@@ -172,3 +172,28 @@ def test_study_bad_options_name_the_option(tmp_path, capsys, argv, msg):
     assert rc == 2
     assert msg in capsys.readouterr().err
     assert not (tmp_path / "x" / "study.csv").exists()
+
+
+def test_the_fixture_distance_places_the_clamping_positions_and_rules_out_rods_that_cannot_reach(tmp_path, capsys):
+    """--fixture-distance-mm: {W} that far in front of the robot (a designer trial: the study could not be told the
+    fixture was 700 mm away, so its shortest rod always won); at 1350 mm the TX90 reaches with the long rod only,
+    the short one reported unreachable; the layout is on the page and the spec's base in study.json."""
+    import json
+
+    import pandas as pd
+
+    from rodlab.app.cli.main import main
+    from rodlab.calibrate.setup_layout import standard_base
+    out = tmp_path / "far"
+    rc = main(["study", "rod4", "--L1", "200,500", "--L2", "400,800", "--methods", "meas", "--draws", "16",
+               "--no-calibrate", "--no-budget", "--serial", "-q", "--fixture-distance-mm", "1350", "-o", str(out)])
+    assert rc == 0
+    df = pd.read_csv(out / "study.csv").drop_duplicates("design").set_index("design")
+    statuses = dict(zip(df["L1_mm"].astype(int).astype(str) + "-" + df["L2_mm"].astype(int).astype(str), df["status"]))
+    assert statuses["200-400"] == "unreachable" and statuses["500-800"] == "ok"
+    spec = json.loads((out / "study.json").read_text())["spec"]
+    assert np.allclose(spec["base"], standard_base(1350.0))
+    assert "1350 mm in front of the robot base" in (out / "study.html").read_text()
+    with pytest.raises(SystemExit):
+        main(["study", "rod4", "--fixture-distance-mm", "700", "--base", "0,0,0,0,0,0", "-o", str(out)])
+    assert "not allowed with argument" in capsys.readouterr().err

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import math
 
-__all__ = ["seed", "count", "nonneg_float", "pos_float", "joint_list"]
+import numpy as np
+
+__all__ = ["seed", "count", "nonneg_float", "pos_float", "joint_list", "base_pose"]
 
 
 def _int(text: str, low: int, what: str) -> int:
@@ -62,3 +64,15 @@ def joint_list(text: str) -> tuple:
     if not joints or min(joints) < 1:
         raise argparse.ArgumentTypeError(f"expected joint numbers separated by commas, e.g. 1,4; got {text!r}")
     return joints
+
+
+def base_pose(text: str):
+    """``--base X,Y,Z,A,B,C``: six finite numbers [mm, deg] (the robot base {0} in {W}), as a numpy array."""
+    try:
+        v = np.array([float(t) for t in text.split(",")])
+    except ValueError:
+        v = np.array([])
+    if v.shape != (6,) or not np.all(np.isfinite(v)):
+        raise argparse.ArgumentTypeError(f"expected six numbers X,Y,Z,A,B,C (the base pose in {{W}}, mm and deg), "
+                                         f"got {text!r}")
+    return v

@@ -14,7 +14,7 @@ from ...core.compliance import read_compliance
 from ...core.design_io import load_design
 from ...core.errors import RodlabError
 from ...core.fileio import atomic_write_text
-from .argtypes import count, seed
+from .argtypes import base_pose, count, seed
 from .robotargs import add_robot_options, robot_from_args
 from .rodargs import design_of_compliance
 
@@ -94,18 +94,6 @@ def finite(text: str) -> float:
 
 
 BASE_KEYS = ("base_x", "base_y", "base_z", "base_a", "base_b", "base_c")
-
-
-def base_pose(text: str) -> np.ndarray:
-    """``--base X,Y,Z,A,B,C``: six finite numbers [mm, deg]."""
-    try:
-        v = np.array([float(t) for t in text.split(",")])
-    except ValueError:
-        v = np.array([])
-    if v.shape != (6,) or not np.all(np.isfinite(v)):
-        raise argparse.ArgumentTypeError(f"expected six numbers X,Y,Z,A,B,C (the base pose in {{W}}, mm and deg), "
-                                         f"got {text!r}")
-    return v
 
 
 def _rod_exit(args, design, rod) -> np.ndarray:

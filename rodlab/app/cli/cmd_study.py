@@ -12,7 +12,7 @@ from ...core.design_io import resolve_design
 from ...core.errors import RodlabError
 from ...core.progress import progress as bar_of
 from ...core.units import PAPER_R_ROD, PAPER_ROD_SLIP
-from .argtypes import count, nonneg_float, seed
+from .argtypes import base_pose, count, nonneg_float, pos_float, seed
 from .reporting import add_report_option, write_command_report
 from .robotargs import add_robot_options, robot_from_args
 
@@ -42,6 +42,13 @@ def register(sub) -> None:
     p.add_argument("--fixture", default=None,
                    help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
                         "{W}, 650 mm in front of the robot)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--fixture-distance-mm", type=pos_float, default=None, metavar="D",
+                       help="the clamping positions' centre {W} D mm in front of the robot base, 250 mm up (default "
+                            "650): a rod that cannot reach them is reported unreachable")
+    where.add_argument("--base", type=base_pose, default=None, metavar="X,Y,Z,A,B,C",
+                       help="the robot base {0} in {W} [mm, deg], as `rodlab plan --base` takes it (write "
+                            "--base=-700,0,... when X is negative)")
     p.add_argument("--monte-carlo", action="store_true",
                    help="simulate and calibrate --replicates campaigns per design instead of the linear predictor")
     p.add_argument("--replicates", type=count, default=20,
@@ -194,6 +201,24 @@ def _print_unusable(table) -> None:
             print(f"note: {r.design}: {r.message}")
 
 
+def _base(args) -> tuple | None:
+    """The robot base {0} in {W} [mm, deg] from --base or --fixture-distance-mm; None: the standard layout."""
+    from rodlab.calibrate.setup_layout import standard_base
+    if args.base is not None:
+        return tuple(float(v) for v in args.base)
+    if args.fixture_distance_mm is not None:
+        return tuple(float(v) for v in standard_base(args.fixture_distance_mm))
+    return None
+
+
+def _layout(args) -> str:
+    if args.base is not None:
+        return "robot base {0} in {W} at " + ",".join(f"{v:g}" for v in args.base) + " (--base)"
+    distance = 650.0 if args.fixture_distance_mm is None else args.fixture_distance_mm
+    return f"{{W}} {distance:g} mm in front of the robot base, 250 mm up" + (
+        " (--fixture-distance-mm)" if args.fixture_distance_mm is not None else " (the standard layout)")
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     from rodlab.app.study import StudySpec, run_study, write_study_outputs
     from rodlab.app.study.design_warnings import warning_lines
@@ -211,7 +236,7 @@ def cmd_study(args: argparse.Namespace) -> int:
                     rod_slip=args.rod_slip)
     spec = StudySpec(methods, args.replicates, args.orientations, priors, _range2(args.r_prior_metal, "r-prior-metal"),
                      _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget,
-                     args.monte_carlo, args.draws)
+                     args.monte_carlo, args.draws, _base(args))
     cands, grid = _candidates(args)
     out = Path(args.output)
     t0 = time.perf_counter()
@@ -226,6 +251,7 @@ def cmd_study(args: argparse.Namespace) -> int:
                         args.workers, not args.serial, lambda done, total: bar.update(done - bar.n))
     elapsed = time.perf_counter() - t0
     header = {"robot": robot.name, "fixture": args.fixture or "simulator's five positions (standard_fixture)",
+              "layout": _layout(args),
               "designs": len(cands), "predictor": how, "methods": ", ".join(methods),
               "compliance": model_note, "assumptions": _assumptions(args, cands), "time": f"{elapsed:.0f} s"}
     res = write_study_outputs(out, run, robot.name, grid is not None, header,

@@ -93,9 +93,10 @@ def _physics(design, force_N: float) -> dict:
 
 
 def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, joints=None, seed: int = 0,
-                   candidates: int = 30) -> DesignSetup:
+                   candidates: int = 30, base=None) -> DesignSetup:
     """Everything of ``cand`` that does not depend on a replicate; a design the robot cannot use, or whose
-    computation fails, is a setup with that status and the reason (never an exception)."""
+    computation fails, is a setup with that status and the reason (never an exception). ``base``: the robot base
+    {0} in {W} [mm, deg] (None: the simulator's standard layout)."""
 
     row = dict(label=cand.label, L1_mm=cand.L1_mm, L2_mm=cand.L2_mm, material=cand.material, tube=cand.tube)
     if cand.design is None:
@@ -116,7 +117,7 @@ def prepare_design(cand: Candidate, robot, fixture, orientations: int, r_prior, 
         # the predicted compensation gains move within their seed-to-seed scatter (rod 6#'s 0.005-0.018 mm), and
         # the study's pages and its Table 3 comparison were made without it
         q_deg, obs = plan_poses(robot, fixture, Rod.rigid(d.tool_mm, fea.mass_kg, fea.com_T_mm), k=orientations,
-                                candidates=candidates, seed=seed, max_rod_angle_deg=None)
+                                candidates=candidates, seed=seed, max_rod_angle_deg=None, base_guess=base)
     except CalibrationError as e:
         setup.status, setup.message = DesignStatus.UNREACHABLE, f"{robot.name} with this rod: {e}"
         return setup

@@ -24,6 +24,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from rodlab import __version__
 from rodlab.calibrate import CalibrationError
 from rodlab.calibrate.predict import Priors, ReplicateOutcome, run_replicate
@@ -48,7 +50,8 @@ class StudySpec:
     per clamping position, ``priors`` (:class:`rodlab.calibrate.predict.Priors`; its ``r_rod`` is replaced per
     design by ``r_prior_metal`` / ``r_prior_composite``), ``seed``, ``budget`` (the error budget's extra
     identification per replicate), ``monte_carlo`` (simulate ``replicates`` campaigns per design instead of the
-    linear predictor's ``draws``)."""
+    linear predictor's ``draws``), ``base`` (shape=(6,) the robot base {0} in {W} [mm, deg]; None: the simulator's
+    standard layout, {W} 650 mm in front of the robot, 250 mm up)."""
 
     methods: tuple = ("none", "calc", "fea", "meas")
     replicates: int = 20
@@ -60,6 +63,11 @@ class StudySpec:
     budget: bool = True
     monte_carlo: bool = False
     draws: int = 256
+    base: tuple | None = None
+
+    def base_pose(self) -> np.ndarray:
+        """The robot base {0} in {W} [mm, deg], shape=(6,)."""
+        return standard_base() if self.base is None else np.asarray(self.base, float)
 
 
 @dataclass
@@ -125,7 +133,8 @@ def outcome_from_dict(d: dict):
 
 def _prepare_task(cand, robot, fixture, spec, joints) -> dict:
     prior = r_prior_of(cand.design, spec.r_prior_metal, spec.r_prior_composite) if cand.design else (1.0, 1.0)
-    return prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed).to_dict()
+    return prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed,
+                          base=spec.base_pose()).to_dict()
 
 
 def _replicate_task(setup: dict, robot, fixture, spec: StudySpec, seed: int) -> dict | None:
@@ -133,7 +142,7 @@ def _replicate_task(setup: dict, robot, fixture, spec: StudySpec, seed: int) -> 
     if not s.ok:
         return None
     try:
-        o = run_replicate(robot, s.plan_q_rad, fixture, standard_base(), s.fea, s.calc, spec.methods,
+        o = run_replicate(robot, s.plan_q_rad, fixture, spec.base_pose(), s.fea, s.calc, spec.methods,
                           replicate_priors(spec, s.r_prior), seed, spec.budget)
     except CalibrationError as e:
         return {"seed": seed, "error": str(e)}

@@ -9,7 +9,6 @@ from pathlib import Path
 from rodlab.calibrate import CalibrationError
 from rodlab.calibrate.predict import AccuracySummary, BudgetShares
 from rodlab.calibrate.predict_linear import LinearPrediction, predict_linear
-from rodlab.calibrate.simulate import standard_base
 from rodlab.core.blas_threads import one_blas_thread
 from rodlab.core.enums import DesignStatus, Method
 
@@ -53,11 +52,11 @@ def _fast_task(cand, robot, fixture, spec, joints) -> dict:
     that fails marks the design failed with the reason."""
 
     prior = r_prior_of(cand.design, spec.r_prior_metal, spec.r_prior_composite) if cand.design else (1.0, 1.0)
-    s = prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed)
+    s = prepare_design(cand, robot, fixture, spec.orientations, prior, joints, seed=spec.seed, base=spec.base_pose())
     if not s.ok:
         return {"setup": s.to_dict(), "prediction": None}
     try:
-        lp = predict_linear(robot, s.plan_q_rad, fixture, standard_base(), s.fea, s.calc, spec.methods,
+        lp = predict_linear(robot, s.plan_q_rad, fixture, spec.base_pose(), s.fea, s.calc, spec.methods,
                             replicate_priors(spec, s.r_prior), spec.draws, spec.seed)
     except CalibrationError as e:
         s.status, s.message = DesignStatus.FAILED, study_reason(e)

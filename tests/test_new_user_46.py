@@ -218,3 +218,13 @@ def test_calibrate_writes_a_campaigns_residuals_with_their_labels(camp, tmp_path
     _, data = _rows(camp / "multical.campaign.csv")
     assert len(rows) == len(data) and rows[0]["label"].count(".") == 1
     assert f"wrote {out}" in capsys.readouterr().out
+
+
+def test_a_soft_rod_rodlab_simulated_from_its_design_is_no_unit_slip(tmp_path):
+    """C_F of 9 mm/N from rodlab's own simulation of a 3 m design is that design's (a designer trial had been told
+    to divide it by 1000); the same numbers in a hand-made file still get the um/N hint."""
+    from dataclasses import replace as dc_replace
+    soft = dc_replace(ROD, C_F=ROD.C_F * 2000.0)
+    assert soft.simulated_by_rodlab and soft.unit_slips() == []
+    hand = dc_replace(soft, provenance={})
+    assert any("divide C_F by 1000" in s for s in hand.unit_slips())

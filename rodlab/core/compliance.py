@@ -344,6 +344,14 @@ class RodCompliance:
             log.warning("%s: %s", path, problem)
         return comp
 
+    @property
+    def simulated_by_rodlab(self) -> bool:
+        """Whether rodlab simulated this file from a design (its provenance names the rodlab version and the
+        design): its numbers are the design's, however soft, not a unit slip (a designer trial: a 3 m rod's own FEA
+        file had been told to divide C_F by 1000)."""
+        p = self.provenance or {}
+        return bool(p.get("rodlab_version")) and bool(p.get("design")) and str(self.method) in ("calc", "fea")
+
     def unit_slips(self) -> list[str]:
         """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond
         :data:`PLAUSIBLE_C_F_MM_PER_N` (um/N written as mm/N), a mass beyond :data:`PLAUSIBLE_MASS_KG` (grams),
@@ -351,7 +359,7 @@ class RodCompliance:
         rod that long (metres)."""
         out = []
         worst = float(np.abs(np.diag(self.C_F)).max())
-        if worst > PLAUSIBLE_C_F_MM_PER_N:
+        if worst > PLAUSIBLE_C_F_MM_PER_N and not self.simulated_by_rodlab:
             out.append(f"C_F_mm_per_N reaches {worst:.4g} mm/N on its diagonal; a measuring rod deflects 0.001-0.3 mm "
                        "per N at its ball: if the file is in um/N, divide C_F by 1000")
         if self.mass_kg > PLAUSIBLE_MASS_KG:

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+
+import pytest
 import subprocess
 import sys
 
@@ -22,9 +24,12 @@ def test_info_and_compliance(tmp_path, capsys):
     assert main(["info", "rod1"]) == 0
     out = capsys.readouterr().out
     assert "total mass" in out and "c_rod" in out and "ball_holder" in out
+    assert "cfrp_tube" in out and "kg/m^3" in out                # every material's numbers (a designer trial)
     assert main(["info", "rod2", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["design"]["L1_mm"] == 150.0
+    steel = data["materials"]["steel_304"]
+    assert steel["G_GPa"] == pytest.approx(steel["E_GPa"] / (2 * (1 + steel["nu"])))     # derived where not given
     out_file = tmp_path / "r.compliance.json"
     assert main(["compliance", "rod1", "-o", str(out_file)]) == 0
     assert json.loads(out_file.read_text())["method"] == "calc"

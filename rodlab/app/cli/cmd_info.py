@@ -38,7 +38,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.json:
         out = {"design": design.summary(), "tool_mm": design.tool_mm.tolist(),
                "parts": {str(p): m.to_dict() for p, m in parts.items()}, "total": total.to_dict(),
-               "calc": comp.to_dict()}
+               "calc": comp.to_dict(),
+               "materials": {m.name: _material_dict(m) for m in (design.material_of(p) for p in parts)}}
         print(json.dumps(out, indent=1))
         return 0
     s = design.summary()
@@ -57,6 +58,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         print(f"  {str(part):<12} {info['material']:<12} {od:>7g} {size!s:>11} {1e3 * mp.mass_kg:>9.2f}  [{com}]")
     print(f"  total mass {total.mass_kg * 1e3:.2f} g, COM in {{T}} = "
           f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm")
+    _print_materials(design, parts)
     for place, spring in design.joints.items():       # rodlab.rod/2: in series in every compliance below
         print(f"  declared joint at {place}: s_bend {spring.s_bend_rad_per_Nm:g}, s_torsion "
               f"{spring.s_torsion_rad_per_Nm:g} rad/(N m) (included in the compliance)")
@@ -70,6 +72,30 @@ def cmd_info(args: argparse.Namespace) -> int:
     for note in closed_form_notes(design, comp) + _c_rod_notes(comp.c_rod_um):
         print(f"  note: {note}")
     return 0
+
+
+def _material_dict(m) -> dict:
+    """A material's numbers for ``info --json`` (derived G and E_t included)."""
+    return {"E_GPa": m.E_GPa, "E_transverse_GPa": m.E_t_GPa, "G_GPa": m.G_axial_GPa, "nu": m.nu,
+            "density_kg_m3": m.density_kg_m3, "cte_ppm_K": m.cte_ppm_K, "strength_MPa": m.strength_MPa,
+            "source": m.source}
+
+
+def _print_materials(design, parts) -> None:
+    """The numbers each material of the design carries (a designer trial: a built-in laminate's moduli, density
+    and expansion were shown nowhere, so the design could not be checked by hand)."""
+    mats = {}
+    for part in parts:
+        m = design.material_of(part)
+        mats.setdefault(m.name, m)
+    print(f"  {'material':<12} {'E GPa':>7} {'E_t GPa':>8} {'G GPa':>7} {'nu':>5} {'kg/m^3':>7} {'ppm/K':>6} "
+          f"{'MPa':>6}  source")
+    for m in mats.values():
+        def num(v, fmt):
+            return format(v, fmt) if v is not None else "-"
+        print(f"  {m.name:<12} {m.E_GPa:>7.4g} {m.E_t_GPa:>8.4g} {m.G_axial_GPa:>7.4g} {m.nu:>5.3g} "
+              f"{m.density_kg_m3:>7.0f} {num(m.cte_ppm_K, '>6.3g')} {num(m.strength_MPa, '>6.0f')}  "
+              f"{m.source or '-'}")
 
 
 def _c_rod_notes(c_rod_um: float) -> list[str]:

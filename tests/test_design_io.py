@@ -258,3 +258,16 @@ def test_every_unknown_key_of_a_table_is_one_problem(tmp_path):
     assert "wall_mm" in keys["bend.wal_mm"].fix and "radius_mm" in keys["bend.radius"].fix
     assert keys["bend.radius"].line == text.splitlines().index(next(s for s in text.splitlines()
                                                                     if s.startswith("radius ="))) + 1
+
+
+def test_the_sag_warning_is_not_a_range_warning_and_a_hopeless_sag_says_so():
+    """A 3-6 m rod: its sag warning names the key and value, not "lies outside 250-2000 mm" (that is the other
+    warning's), and where the linear models are off by more than 1 mm it says no compensation helps."""
+    from dataclasses import replace
+
+    from rodlab.core.design_range import range_warnings
+    long = replace(resolve_design("rod1"), L2_mm=6000.0)
+    texts = [w.describe() for w in range_warnings(long)]
+    sag = next(t for t in texts if "sags" in t)
+    assert sag.startswith("key `L2_mm` = 6000 mm: the rod sags") and "no compensation brings" in sag
+    assert any("lies outside 250-2000 mm" in t and "sags" not in t for t in texts)

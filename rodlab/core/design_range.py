@@ -61,12 +61,18 @@ class RangeWarning:
     high: float
     unit: str
     reason: str
+    about_range: bool = True
 
     @property
     def outside(self) -> bool:
         return not self.low <= self.value <= self.high
 
     def describe(self) -> str:
+        """``key `K` = v unit lies outside lo-hi unit: reason``; a warning not about the checked range (the rod's
+        sag, ``about_range`` False) names the key and value alone (a designer trial: the sag had read as a range
+        warning)."""
+        if not self.about_range:
+            return f"key `{self.key}` = {self.value:g} {self.unit}: {self.reason}"
         where = (f"lies outside {self.low:g}-{self.high:g} {self.unit}" if self.outside else
                  f"(checked range {self.low:g}-{self.high:g} {self.unit})")
         return f"key `{self.key}` = {self.value:g} {self.unit} {where}: {self.reason}"
@@ -122,10 +128,12 @@ def range_warnings(design: RodDesign) -> list[RangeWarning]:
     if err > LINEAR_WARN_MM:
         key = _longer_key(design)
         lo, hi, unit = VERIFIED_RANGE[key]
+        unusable = ("; no compensation brings such a rod to a tracker's accuracy: shorten it or stiffen its tubes"
+                    if err > 1.0 else "")
         out.append(RangeWarning(key, float(getattr(design, key)), lo, hi, unit,
                                 f"the rod sags {sag:.3g} mm under its own weight, so the linear compliance models "
                                 f"are off by about {_length(err)} (more than {LINEAR_WARN_MM * 1e3:.0f} um, a "
-                                f"tracker's noise)"))
+                                f"tracker's noise){unusable}", about_range=False))
     return out
 
 

@@ -3,7 +3,8 @@ whose flat tips push the ball, and the points of its mount that probing the fixt
 
 Sensor k reads ``zero_mm + reading_sign * axis_D . x`` for the ball centre x in {D} (a flat tip on a sphere: only
 the displacement along its axis moves the tip; ``reading_sign`` -1, ``rodlab.device/2``, for a sensor whose reading
-falls as the ball moves along its axis: mounted the other way round, or its channel counting the other way) and
+falls as the ball moves along its axis: a gauge that counts down as its plunger extends, or a channel exported
+with the other sign; the sensor still sits on its side of the ball and pushes along ``+axis_D``) and
 pushes the ball along ``+axis_D`` with ``force_at_zero_N - rate_N_per_mm * (axis_D . x)``. {D}: x along sensor 1,
 y in the plane of sensors 1 and 2, origin at the virtual datum point (the reading ``zero_mm`` of every sensor); the
 axes need not be orthogonal. The three readings are three linear equations ``A x = sign (s - zero)`` (rows of A
@@ -44,8 +45,8 @@ class Sensor:
     range_mm : (low, high) readings it can give [mm]
     force_at_zero_N : spring force on the ball at the zero reading [N], or None (the fixture's contact force)
     rate_N_per_mm : spring rate [N/mm] (the force falls by it per mm the ball moves along the axis)
-    reading_sign : +1 (the reading rises as the ball moves along axis_D) or -1 (it falls: a sensor mounted the
-    other way round, or counting the other way)
+    reading_sign : +1 (the reading rises as the ball moves along axis_D) or -1 (it falls: a gauge counting down
+    as its plunger extends, a channel exported with the other sign; the sensor still pushes along +axis_D)
     """
 
     axis_D: np.ndarray
@@ -229,8 +230,8 @@ def _sensor(p: Path, k: int, s: dict) -> Sensor:
 
 
 #: how a sensor that reads the other way is declared (a device trial: it could only be turned round or rewritten)
-REVERSED_FIX = ("keep axis_D as designed and declare the sensor's reading_sign -1 (format rodlab.device/2), turn the "
-                "sensor round, or write its readings as 2 x zero_mm - reading")
+REVERSED_FIX = ("keep axis_D as designed (from the sensor towards the ball: the direction it pushes) and declare the "
+                "sensor's reading_sign -1 (format rodlab.device/2), or write its readings as 2 x zero_mm - reading")
 
 
 def _check_convention(p: Path, sensors: list) -> None:
@@ -243,7 +244,7 @@ def _check_convention(p: Path, sensors: list) -> None:
                                f"{A[1, 2]:g}; express the axes in that frame", path=p, key="sensors[2].axis_D")
     if A[1, 1] <= 0:                      # review: a reversed sensor 2 had been blamed on sensor 3
         raise CalibrationError(f"{{D}} has y on sensor 2's side of the x axis: sensor 2's y must be > 0, got "
-                               f"{A[1, 1]:g}. A sensor mounted the other way round (its reading falling as the ball "
+                               f"{A[1, 1]:g}. A sensor that reads the other way (its reading falling as the ball "
                                f"moves along its axis) is not a device axis: {REVERSED_FIX}", path=p,
                                key="sensors[2].axis_D")
     if np.linalg.cond(A) > MAX_CONDITION:
@@ -253,5 +254,5 @@ def _check_convention(p: Path, sensors: list) -> None:
     if np.linalg.det(A) <= 0:             # a device trial: a reversed sensor 3 written as -z had no fix
         raise CalibrationError(f"the three sensor axes are left-handed (det {np.linalg.det(A):.3g}; expected > 0): "
                                "sensor 3 must point to the side of +z that sensors 1 and 2 make right-handed. A sensor "
-                               "mounted the other way round (its reading falling as the ball moves along its axis) is "
+                               "that reads the other way (its reading falling as the ball moves along its axis) is "
                                f"not a device axis: {REVERSED_FIX}", path=p, key="sensors[3].axis_D")

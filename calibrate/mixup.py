@@ -105,10 +105,10 @@ class Mixup:
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")
         if self.sensor is not None:
             k, zero = self.sensor
-            return (f"sensor {k}'s readings look reversed (the sensor mounted the other way round, or its channel "
+            return (f"sensor {k}'s readings look reversed (the sensor counting the other way, or its channel "
                     f"exported with the other sign): with s{k}_mm mirrored about its zero ({zero:g} mm) {fit}; "
-                    f"declare it in the device file (sensors[{k}].reading_sign: -1, format rodlab.device/2), turn the "
-                    f"sensor round, or write its readings as {2 * zero:g} - s{k}_mm")
+                    f"flip the sign the device file gives it (sensors[{k}].reading_sign: -1, format rodlab.device/2; "
+                    f"or 1, removing a -1 the file already has), or write its readings as {2 * zero:g} - s{k}_mm")
         if self.readings is not None and len(self.readings) == 1:
             a = _READ[self.readings[0]]
             return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "

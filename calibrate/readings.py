@@ -1,6 +1,6 @@
 """Raw device readings to ball centres: a campaign's ``s1_mm, s2_mm, s3_mm`` through its device file.
 
-Each point's three readings solve ``A x = s - zero`` for the ball centre x in {D_j} (:class:`~calibrate.device.
+Each point's three readings solve ``A x = sign (s - zero)`` for the ball centre x in {D_j} (:class:`~calibrate.device.
 Device`); the sensors' independent noise reaches x as ``A^-1 A^-T`` per unit variance (the campaign's
 ``noise_shape_D``, which :func:`calibrate.observations.noise_covariance` turns to {W}); with the springs stated
 the contact force of each point is the springs' at its readings. A reading outside its sensor's range is

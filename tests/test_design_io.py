@@ -122,6 +122,8 @@ RULES = [
                                                _set(("tube", "wall_mm"), 0.005)(d)),
      "tube.outer_diameter_mm", "0.005 m = 5 mm"),
     ("wall in metres", _set(("tube", "wall_mm"), 0.005), "tube.wall_mm", "did you give metres (0.005 m = 5 mm)"),
+    # a review: a wall of 0.03 on a 40 mm tube read as metres is 30 mm, no tube: a typo, not metres
+    ("wall mistyped", _set(("tube", "wall_mm"), 0.03), "tube.wall_mm", "check the value"),
 ]
 
 
@@ -269,5 +271,5 @@ def test_the_sag_warning_is_not_a_range_warning_and_a_hopeless_sag_says_so():
     long = replace(resolve_design("rod1"), L2_mm=6000.0)
     texts = [w.describe() for w in range_warnings(long)]
     sag = next(t for t in texts if "sags" in t)
-    assert sag.startswith("key `L2_mm` = 6000 mm: the rod sags") and "no compensation brings" in sag
+    assert sag.startswith("key `L2_mm` = 6000 mm: the rod sags") and "no linear compliance model brings" in sag
     assert any("lies outside 250-2000 mm" in t and "sags" not in t for t in texts)

@@ -228,3 +228,10 @@ def test_a_soft_rod_rodlab_simulated_from_its_design_is_no_unit_slip(tmp_path):
     assert soft.simulated_by_rodlab and soft.unit_slips() == []
     hand = dc_replace(soft, provenance={})
     assert any("divide C_F by 1000" in s for s in hand.unit_slips())
+    path = write_compliance(ROD, tmp_path / "r.compliance.json")          # rodlab's file, C_F scaled by hand
+    data = json.loads(path.read_text())
+    data["C_F_mm_per_N"] = [[1000 * v for v in row] for row in data["C_F_mm_per_N"]]
+    (tmp_path / "e.compliance.json").write_text(json.dumps(data))
+    edited = read_compliance(tmp_path / "e.compliance.json")
+    assert not edited.simulated_by_rodlab and any("divide C_F by 1000" in s for s in edited.unit_slips())
+    assert read_compliance(path).simulated_by_rodlab

@@ -279,3 +279,9 @@ def test_a_sensor_that_reads_the_other_way_is_declared_in_the_device_file(raw, t
     assert main(["calibrate", *_args(raw, rev)]) == 3
     assert "sensors[2].reading_sign: -1" in capsys.readouterr().err
     assert main(["validate", str(signed)]) == 0
+    doc["format"] = "rodlab.device/1"                  # the sign in a /1 file: told its format, not "remove it"
+    (tmp_path / "v1.device.json").write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["validate", str(tmp_path / "v1.device.json")]) == 2
+    assert 'belongs to rodlab.device/2: change the file\'s format to "rodlab.device/2"' in capsys.readouterr().err
+    assert main(["validate", str(raw / "truth.json")]) == 0              # the simulator's own record

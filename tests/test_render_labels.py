@@ -4,7 +4,8 @@ from __future__ import annotations
 import numpy as np
 
 from rodlab.core.render3d import VIEWS, TriangleSet
-from rodlab.core.view3d import _grouped_labels, _tick_counts
+from rodlab.core.view3d import _PART_LABEL
+from rodlab.core.view_labels import grouped_labels, tick_counts
 
 
 def test_labels_of_parts_that_fall_together_in_a_view_are_one():
@@ -15,14 +16,14 @@ def test_labels_of_parts_that_fall_together_in_a_view_are_one():
                "pipe_II": np.array([-270.0, 0, 0]), "ball_holder": np.array([-30.0, 0, 0]),
                "ball": np.array([0.0, 0, 0])}
     direction, up, _ = VIEWS["yz"]
-    _, texts = _grouped_labels(centres, direction, up)
+    _, texts = grouped_labels(centres, direction, up, _PART_LABEL)
     assert "ring 2, pipe II, ball holder, ball" in texts and "pipe I" in texts
     direction, up, _ = VIEWS["xz"]
-    points, texts = _grouped_labels(centres, direction, up)
+    points, texts = grouped_labels(centres, direction, up, _PART_LABEL)
     assert "pipe II" in texts and "ball holder, ball" in texts and len(points) == len(texts) == 4
 
 
 def test_a_narrow_axis_gets_two_tick_labels():
     rod = TriangleSet("tube", np.array([[0.0, -22.5, 0], [950, 22.5, 0], [0, 0, -350]]), np.array([[0, 1, 2]]),
                       (0.5, 0.5, 0.5))
-    assert _tick_counts([rod]) == (5, 2, 5)
+    assert tick_counts([rod]) == (5, 2, 5)

@@ -192,6 +192,8 @@ def test_a_recording_or_compliance_file_in_other_units_is_valid_with_its_warning
     from dataclasses import replace
     from rodlab import calc_rod_compliance, resolve_design
     rod = calc_rod_compliance(resolve_design("rod1"))
-    write_compliance(replace(rod, C_F=rod.C_F * 1000.0), tmp_path / "um.compliance.json")
+    # a user's file in um/N (not rodlab's simulation of a design, whose numbers are the design's however soft)
+    write_compliance(replace(rod, C_F=rod.C_F * 1000.0, provenance={"generator": "my FEA"}),
+                     tmp_path / "um.compliance.json")
     assert main(["validate", str(tmp_path / "um.compliance.json")]) == 0
     assert "if the file is in um/N, divide C_F by 1000" in capsys.readouterr().out

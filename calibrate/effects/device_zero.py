@@ -94,6 +94,7 @@ class DeviceZero(CampaignEffectModel):
     def remedy(self, location: str, parameters: dict) -> str:
         d = ", ".join(f"{float(parameters.get('share', 1.0)) * parameters[n]:+.3f}" for n in NAMES)
         return (f"the device reads off its file's zero by ({d}) mm in {{D}}: the zero it read from is the device "
-                f"file's zero_mm + axis_D . d for each sensor (for sensors along x, y, z: each zero_mm plus that "
-                f"component); correct zero_mm and give the file with --device, or, for a campaign of ball centres, "
+                f"file's zero_mm + reading_sign x axis_D . d for each sensor (for sensors along x, y, z that read "
+                f"along them: each zero_mm plus that component; a sensor with reading_sign -1: minus it); correct "
+                f"zero_mm and give the file with --device, or, for a campaign of ball centres, "
                 f"subtract ({d}) from its x/y/z_mm; better, re-zero the sensors at the datum point and measure again")

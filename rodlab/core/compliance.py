@@ -184,6 +184,7 @@ class RodCompliance:
         None when the file has none (only a measured file has them)
     C_F_sigma : standard uncertainty of the measured C_F entries [mm/N], shape=(3, 3), NaN where unknown;
         None when the file has none
+    stored_c_rod_um : the c_rod_um the file stated [um] (NaN: a file without one; None: not read from a file)
     """
 
     rod: str
@@ -197,6 +198,7 @@ class RodCompliance:
     provenance: dict = field(default_factory=dict)
     r_mn: np.ndarray | None = None
     C_F_sigma: np.ndarray | None = None
+    stored_c_rod_um: float | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method", Method.parse(self.method, "method"))
@@ -331,7 +333,8 @@ class RodCompliance:
                        _as3(data["com_T_mm"], "com_T_mm", path), _as3(data["tool_mm"], "tool_mm", path),
                        float(data.get("r_rod", 1.0)), dict(data.get("provenance", {})),
                        _optional33(data, "r_mn", path, -1e3, 1e3),
-                       _optional33(data, "C_F_sigma_mm_per_N", path, 0.0, MAX_COMPLIANCE))
+                       _optional33(data, "C_F_sigma_mm_per_N", path, 0.0, MAX_COMPLIANCE),
+                       float(data.get("c_rod_um", math.nan)))
         except ComplianceError as e:
             if e.path is None:
                 raise ComplianceError(str(e).split(": ", 1)[-1] if e.key else str(e), path=path, key=e.key) from e
@@ -348,9 +351,17 @@ class RodCompliance:
     def simulated_by_rodlab(self) -> bool:
         """Whether rodlab simulated this file from a design (its provenance names the rodlab version and the
         design): its numbers are the design's, however soft, not a unit slip (a designer trial: a 3 m rod's own FEA
-        file had been told to divide C_F by 1000)."""
+        file had been told to divide C_F by 1000), with the matrices its c_rod_um was computed from."""
         p = self.provenance or {}
-        return bool(p.get("rodlab_version")) and bool(p.get("design")) and str(self.method) in ("calc", "fea")
+        made = bool(p.get("rodlab_version")) and bool(p.get("design")) and str(self.method) in ("calc", "fea")
+        return made and self._matrices_as_written()
+
+    def _matrices_as_written(self) -> bool:
+        """Whether a file's matrices are those its c_rod_um was computed from (True for an object not read from a
+        file): a review had scaled a rodlab file's C_F by 1000 by hand, keeping its provenance."""
+        if self.stored_c_rod_um is None:
+            return True
+        return bool(abs(self.stored_c_rod_um - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0))
 
     def unit_slips(self) -> list[str]:
         """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond

@@ -50,20 +50,31 @@ def _check_pos(name: str, value: float, key: str, allow_zero: bool = False) -> N
         raise DesignError(f"{name} must be <= {MAX_SIZE_MM:g} mm (sizes are in millimetres), got {value:g}", key=key)
 
 
-#: a tube this thin [mm] (outer diameter, wall) is no rod's: the value was given in metres
+#: a tube this thin [mm] (outer diameter, wall) is no rod's: the value was given in metres, or mistyped
 _METRES_OD_MM, _METRES_WALL_MM = 1.0, 0.05
+#: ... in metres where, read as metres, the tube is one a measuring rod could have (outer diameter at most this)
+_PLAUSIBLE_OD_MM = 300.0
 
 
 def _check_not_metres(od: float, wall: float, key: str) -> None:
-    """A tube's outer diameter below 1 mm or wall below 0.05 mm: sizes given in metres (a designer trial: 0.03 and
-    0.002 had been read as a tube that sags 9e10 mm, blamed on L2)."""
-    said = [f"{name} = {v:g}" for name, v, lim in (("outer_diameter_mm", od, _METRES_OD_MM),
-                                                 ("wall_mm", wall, _METRES_WALL_MM)) if v < lim]
-    if said:
-        given = [f"{v:g} m = {1000 * v:g} mm" for v, lim in ((od, _METRES_OD_MM), (wall, _METRES_WALL_MM)) if v < lim]
-        raise DesignError(f"{', '.join(said)}: thinner than any rod's tube; sizes are in millimetres: did you give "
-                          f"metres ({', '.join(given)})?",
-                          key=f"{key}.{'outer_diameter_mm' if od < _METRES_OD_MM else 'wall_mm'}")
+    """A tube's outer diameter below 1 mm or wall below 0.05 mm: sizes given in metres where, read as metres, they
+    make a rod's tube (a designer trial: 0.03 and 0.002 had been read as a tube that sags 9e10 mm, blamed on L2),
+    else a size no rod's tube has (a review: a wall of 0.03 on a 40 mm tube is a typo, not 30 mm)."""
+    tiny = [(name, v) for name, v, lim in (("outer_diameter_mm", od, _METRES_OD_MM),
+                                           ("wall_mm", wall, _METRES_WALL_MM)) if v < lim]
+    if not tiny:
+        return
+    said = ", ".join(f"{name} = {v:g}" for name, v in tiny)
+    where = f"{key}.{tiny[0][0]}"
+    od_m = 1000 * od if od < _METRES_OD_MM else od
+    wall_m = 1000 * wall if wall < _METRES_WALL_MM else wall
+    if wall_m < od_m / 2 and od_m <= _PLAUSIBLE_OD_MM:
+        given = ", ".join(f"{v:g} m = {1000 * v:g} mm" for _, v in tiny)
+        raise DesignError(f"{said}: thinner than any rod's tube; sizes are in millimetres: did you give metres "
+                          f"({given})?", key=where)
+    raise DesignError(f"{said}: thinner than any rod's tube (an outer diameter of at least {_METRES_OD_MM:g} mm, a "
+                      f"wall of at least {_METRES_WALL_MM:g} mm); sizes are in millimetres: check the value",
+                      key=where)
 
 
 @dataclass(frozen=True)
@@ -82,11 +93,6 @@ class TubeSpec:
         _check_pos("outer_diameter_mm", self.outer_diameter_mm, f"{self.key}.outer_diameter_mm")
         _check_pos("wall_mm", self.wall_mm, f"{self.key}.wall_mm")
         _check_not_metres(self.outer_diameter_mm, self.wall_mm, self.key)
-        if self.wall_mm >= self.outer_diameter_mm / 2 and self.outer_diameter_mm < 1.0 <= self.wall_mm:
-            raise DesignError(
-                f"outer diameter {self.outer_diameter_mm:g} mm is smaller than the wall {self.wall_mm:g} mm: "
-                f"outer_diameter_mm is in millimetres: did you give metres ({self.outer_diameter_mm:g} m = "
-                f"{1000 * self.outer_diameter_mm:g} mm)?", key=f"{self.key}.outer_diameter_mm")
         if self.wall_mm >= self.outer_diameter_mm / 2:
             raise DesignError(
                 f"wall {self.wall_mm} mm must be less than the outer radius {self.outer_diameter_mm / 2} mm "

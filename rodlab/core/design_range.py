@@ -128,7 +128,8 @@ def range_warnings(design: RodDesign) -> list[RangeWarning]:
     if err > LINEAR_WARN_MM:
         key = _longer_key(design)
         lo, hi, unit = VERIFIED_RANGE[key]
-        unusable = ("; no compensation brings such a rod to a tracker's accuracy: shorten it or stiffen its tubes"
+        unusable = ("; no linear compliance model brings such a rod to a tracker's accuracy: shorten it or stiffen "
+                    "its tubes"
                     if err > 1.0 else "")
         out.append(RangeWarning(key, float(getattr(design, key)), lo, hi, unit,
                                 f"the rod sags {sag:.3g} mm under its own weight, so the linear compliance models "

@@ -195,7 +195,7 @@ def material_from_table(name: str, table: Mapping, path=None) -> Material:
                 raise DesignError(f"expected a number, got {v!r}", path=path, key=f"materials.{name}.{key}")
             kwargs[key] = float(v)
     try:
-        return Material(name=name, source=str(table.get("source", f"user material in {path or 'design'}")),
+        return Material(name=name, source=str(table.get("source", f"defined in {path or 'the design file'} (no source given)")),
                         **kwargs)
     except DesignError as e:
         raise DesignError(e.detail, path=path, key=f"materials.{name}.{e.key}" if e.key else None) from e

@@ -72,7 +72,8 @@ FORMATS: dict[str, FormatSpec] = {s.id: s for s in (
 )}
 #: rodlab's own output records without a schema (nothing reads them back): only their JSON syntax is checked
 UNCHECKED = {f"rodlab.{n}/1": "an output record of rodlab without a schema: only its JSON syntax is checked"
-             for n in ("run", "sweep", "study", "joints", "mass", "comparison", "reference_designs")}
+             for n in ("run", "sweep", "study", "joints", "mass", "comparison", "reference_designs",
+                       "truth.campaign")}          # simulate-campaign's truth.json (a review)
 #: format ids a file may state that are checked with another id's schema
 ALIASES = {"rodlab.robot/1": "rodlab.robot/2", "rodlab.compliance/1": "rodlab.compliance/2",
            "rodlab.calibration/2": "rodlab.calibration/1"}
@@ -184,9 +185,25 @@ def _newer_version_hint(format_id: str | None, key: str) -> str:
     family = format_id.rsplit("/", 1)[0]
     for other in FORMATS:
         if other != format_id and other.rsplit("/", 1)[0] == family and FORMATS[other].kind != "csv":
-            if key in load_schema(other).get("properties", {}):
-                return f"`{key}` belongs to {other}: change the format line to format = \"{other}\""
+            if key in _property_names(load_schema(other)) and key not in _property_names(load_schema(format_id)):
+                change = (f"the format line to format = \"{other}\"" if FORMATS[other].kind == "toml" else
+                          f"the file's format to \"{other}\"")
+                return f"`{key}` belongs to {other}: change {change}"
     return ""
+
+
+def _property_names(schema) -> set:
+    """Every property name a schema declares, at any depth (a sensor's ``reading_sign`` of ``rodlab.device/2``
+    sits in ``$defs``: a review found the /1 file told to remove it, which silently un-reversed the sensor)."""
+    out: set = set()
+    if isinstance(schema, dict):
+        out |= set(schema.get("properties", {}) or {})
+        for v in schema.values():
+            out |= _property_names(v)
+    elif isinstance(schema, list):
+        for v in schema:
+            out |= _property_names(v)
+    return out
 
 
 def _missing_key(err) -> str:
@@ -202,7 +219,7 @@ def _misspelt(err) -> str | None:
     return next((k for k in present if did_you_mean(k, [key])), None)
 
 
-def _unknown_keys(err) -> list[tuple[str, str, list]]:
+def _unknown_keys(err, format_id: str | None = None) -> list[tuple[str, str, list]]:
     """(message, fix, path) of each key an ``additionalProperties`` error finds unknown (a designer trial: the second
     unknown key of a table had shown only once the first was fixed)."""
     where, inst, schema = list(err.absolute_path), err.instance, err.schema
@@ -210,7 +227,7 @@ def _unknown_keys(err) -> list[tuple[str, str, list]]:
     extra = [k for k in inst if k not in allowed] if isinstance(inst, dict) else []
     out = []
     for key in extra or ["?"]:
-        hint = did_you_mean(key, allowed).strip() or _newer_version_hint(schema.get("$id"), key)
+        hint = did_you_mean(key, allowed).strip() or _newer_version_hint(schema.get("$id") or format_id, key)
         out.append((f"unknown key `{key}`; allowed: {allowed}", hint or "remove it or check its spelling",
                     where + [key]))
     return out
@@ -261,7 +278,8 @@ def data_problems(data, format_id: str, path: str = "", text: str = "", kind: st
     validator = _validator(ALIASES.get(format_id, format_id))
     out = []
     for err in validator.iter_errors(data):
-        for message, fix, where in (_unknown_keys(err) if err.validator == "additionalProperties" else [_explain(err)]):
+        for message, fix, where in (_unknown_keys(err, format_id) if err.validator == "additionalProperties"
+                                    else [_explain(err)]):
             located = where                                                  # a missing key: its table's line,
             if err.validator == "required":                                  # or the line of its misspelling
                 located = where[:-1] + ([m] if (m := _misspelt(err)) else [])

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LocatedError, RenderError
+from .view_labels import grouped_labels, tick_counts
 from .vtkio import decode_strings
 from .fileio import atomic_write_bytes
 
@@ -386,14 +387,14 @@ def render_triangle_sets(sets, png, view, title: str = "", note: str | None = No
         used = np.asarray(ts.vertices)[np.unique(np.asarray(ts.triangles))]
         centres.setdefault(ts.label, []).append(used.mean(axis=0) if used.size else np.zeros(3))
     direction, up, labels = view
-    points, texts = _grouped_labels({n: np.mean(c, axis=0) for n, c in centres.items()}, direction, up)
+    points, texts = grouped_labels({n: np.mean(c, axis=0) for n, c in centres.items()}, direction, up, _PART_LABEL)
     plotter.add_point_labels(points, texts, font_size=13, shape_opacity=0.55, always_visible=True, show_points=False,
                              text_color="black", shape_color="white")
     plotter.view_vector(tuple(direction), viewup=tuple(up))
     plotter.enable_parallel_projection()
     plotter.reset_camera()
     if labels:
-        n_x, n_y, n_z = _tick_counts(sets)
+        n_x, n_y, n_z = tick_counts(sets)
         plotter.show_bounds(xtitle="x_T [mm]", ytitle="y_T [mm]", ztitle="z_T [mm]", color="black", font_size=10,
                             location="outer", grid=False, fmt="%.0f", n_xlabels=n_x, n_ylabels=n_y, n_zlabels=n_z)
     else:
@@ -403,38 +404,6 @@ def render_triangle_sets(sets, png, view, title: str = "", note: str | None = No
     if note:
         plotter.add_text(note, position="lower_left", font_size=10, color="black")
     return _screenshot(plotter, png)
-
-
-#: part labels whose centres lie closer than this share of the picture's extent in the view are one label
-LABEL_MERGE = 0.06
-
-
-def _grouped_labels(centres: dict, direction, up) -> tuple:
-    """(points (k, 3), texts) of the part labels in a view along ``direction`` (towards the camera) with ``up``:
-    parts whose centres fall within :data:`LABEL_MERGE` of the picture's extent of each other are one label, "ball
-    holder, ball" (a designer trial: the renderer had dropped the ball's label under the ball holder's, and drawn
-    ring 2's over the ball)."""
-    w = np.asarray(direction, float) / np.linalg.norm(direction)
-    u = np.cross(up, w)
-    u = u / np.linalg.norm(u) if np.linalg.norm(u) > 1e-9 else np.array([1.0, 0.0, 0.0])
-    v = np.cross(w, u)
-    names = list(centres)
-    xy = np.array([[centres[n] @ u, centres[n] @ v] for n in names])
-    tol = LABEL_MERGE * max(float(np.ptp(xy, axis=0).max()), 1e-9)
-    groups: list = []
-    for i in range(len(names)):
-        home = next((g for g in groups if np.linalg.norm(xy[i] - xy[g].mean(axis=0)) < tol), None)
-        (home.append(i) if home is not None else groups.append([i]))
-    points = np.array([np.mean([centres[names[i]] for i in g], axis=0) for g in groups])
-    return points, [", ".join(_PART_LABEL.get(names[i], names[i]) for i in g) for g in groups]
-
-
-def _tick_counts(sets) -> tuple:
-    """Labels per axis of the bounds: 2 on an axis less than a fifth of the widest (a 45 mm tube's five labels had
-    overlapped into one smear beside a 950 mm rod, a designer trial), else 5."""
-    pts = np.concatenate([np.asarray(ts.vertices, float) for ts in sets])
-    extent = np.ptp(pts, axis=0)
-    return tuple(2 if e < 0.2 * extent.max() else 5 for e in extent)
 
 
 def _screenshot(plotter, png) -> Path:

@@ -93,11 +93,14 @@ def _print_materials(design, parts) -> None:
     print(f"  {'material':<12} {'E GPa':>7} {'E_t GPa':>8} {'G GPa':>7} {'nu':>5} {'kg/m^3':>7} {'ppm/K':>6} "
           f"{'MPa':>6}  source")
     for m in mats.values():
-        def num(v, fmt):
-            return format(v, fmt) if v is not None else "-"
         print(f"  {m.name:<12} {m.E_GPa:>7.4g} {m.E_t_GPa:>8.4g} {m.G_axial_GPa:>7.4g} {m.nu:>5.3g} "
-              f"{m.density_kg_m3:>7.0f} {num(m.cte_ppm_K, '>6.3g')} {num(m.strength_MPa, '>6.0f')}  "
+              f"{m.density_kg_m3:>7.0f} {_cell(m.cte_ppm_K, '.3g'):>6} {_cell(m.strength_MPa, '.0f'):>6}  "
               f"{m.source or '-'}")
+
+
+def _cell(v, fmt: str) -> str:
+    """``v`` in ``fmt``, or ``-`` where the material does not give it."""
+    return "-" if v is None else format(v, fmt)
 
 
 def _c_rod_notes(c_rod_um: float) -> list[str]:

@@ -42,13 +42,7 @@ def register(sub) -> None:
     p.add_argument("--fixture", default=None,
                    help="*.fixture.json of the clamping positions (default: the simulator's five positions around "
                         "{W}, 650 mm in front of the robot)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--fixture-distance-mm", type=pos_float, default=None, metavar="D",
-                       help="the clamping positions' centre {W} D mm in front of the robot base, 250 mm up (default "
-                            "650): a rod that cannot reach them is reported unreachable")
-    where.add_argument("--base", type=base_pose, default=None, metavar="X,Y,Z,A,B,C",
-                       help="the robot base {0} in {W} [mm, deg], as `rodlab plan --base` takes it (write "
-                            "--base=-700,0,... when X is negative)")
+    _add_layout_options(p)
     p.add_argument("--monte-carlo", action="store_true",
                    help="simulate and calibrate --replicates campaigns per design instead of the linear predictor")
     p.add_argument("--replicates", type=count, default=20,
@@ -201,6 +195,17 @@ def _print_unusable(table) -> None:
             print(f"note: {r.design}: {r.message}")
 
 
+def _add_layout_options(p) -> None:
+    """--fixture-distance-mm and --base: where the clamping positions are relative to the robot."""
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--fixture-distance-mm", type=pos_float, default=None, metavar="D",
+                       help="the clamping positions' centre {W} D mm in front of the robot base, 250 mm up (default "
+                            "650): a rod that cannot reach them is reported unreachable")
+    where.add_argument("--base", type=base_pose, default=None, metavar="X,Y,Z,A,B,C",
+                       help="the robot base {0} in {W} [mm, deg], as `rodlab plan --base` takes it (write "
+                            "--base=-700,0,... when X is negative)")
+
+
 def _base(args) -> tuple | None:
     """The robot base {0} in {W} [mm, deg] from --base or --fixture-distance-mm; None: the standard layout."""
     from rodlab.calibrate.setup_layout import standard_base
@@ -244,7 +249,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     joints, model_note = family_joints(cands, grid is not None, not args.no_calibrate, cache)
     how = (f"{args.replicates} simulated campaigns (Monte Carlo)" if args.monte_carlo
            else f"linear predictor ({args.draws} draws)")
-    print(f"{len(cands)} designs on {robot.name}, {how} x {len(methods)} methods; compliance: {model_note}")
+    print(f"{len(cands)} designs on {robot.name}, {how} x {len(methods)} methods; compliance: {model_note}; "
+          f"layout: {_layout(args)}")
     tasks = len(cands) * (1 + args.replicates) if args.monte_carlo else len(cands)
     with bar_of(total=tasks, desc="study", unit="task" if args.monte_carlo else "design") as bar:
         run = run_study(cands, robot, fixture, spec, joints, cache, args.scheduler,

@@ -123,7 +123,7 @@ def study_warnings(df, rod_slip: float) -> list[DesignWarning]:
 _GROUPED = {
     StudyWarning.WORSE_THAN_NOMINAL: lambda lo, hi: (
         f"with the recommendation's method they leave the robot less accurate than its nominal model ({lo:.3f}-"
-        f"{hi:.3f} mm); the recommendation leaves them out"),
+        f"{hi:.3f} mm); the recommendation leaves them out while another design helps"),
     StudyWarning.SLIP_DOMINATES: lambda lo, hi: (
         f"the rod's slip (--rod-slip: its non-repeatable deflection, which no compensation removes) is "
         f"{100 * lo:.0f}-{100 * hi:.0f} % of the best method's mean-square error: the methods' ranking says little "

@@ -20,12 +20,15 @@ from .errors import CalibrationError
 from .rod import Rod
 from .units_line import units_line_problem
 
-__all__ = ["PointSet", "read_points", "SIGMA_COLUMNS", "POINT_TEXT", "POINT_EXTRAS", "POINT_OPTIONAL_NUMBERS"]
+__all__ = ["PointSet", "read_points", "SIGMA_COLUMNS", "POINT_TEXT", "POINT_EXTRAS", "POINT_OPTIONAL_NUMBERS",
+           "NAME_COLUMNS"]
 
 #: optional per-point uncertainty columns of a points file: one standard deviation per coordinate [mm]
 SIGMA_COLUMNS = ("sigma_x_mm", "sigma_y_mm", "sigma_z_mm")
 #: optional text columns of a tracker's export: name or label, time stamp (kept, not read)
 POINT_TEXT = ("name", "point_name", "label", "timestamp", "date")
+#: the text columns that name a point, in the order one is taken
+NAME_COLUMNS = ("name", "point_name", "label")
 #: optional number columns whose blank cells mean "not recorded" (NaN): time [s] and temperature [degC]
 POINT_OPTIONAL_NUMBERS = ("time_s", "temp_C")
 POINT_EXTRAS = (*POINT_TEXT, *POINT_OPTIONAL_NUMBERS)
@@ -39,7 +42,8 @@ class PointSet:
     flange frame {T} [mm]; rod_mass_kg [kg] and rod_com_T_mm (3,) [mm, {T}] the probe's payload; temp_C the
     file's one temperature [degC] (``# temp_C``) or None; sigma_mm (N, 3) the stated standard uncertainty of each
     coordinate [mm] or None; temp_each_C and time_each_s (N,) the temperature [degC] and time [s] of each point
-    (a ``temp_C`` / ``time_s`` column; NaN where a cell was blank) or None."""
+    (a ``temp_C`` / ``time_s`` column; NaN where a cell was blank) or None; names (N,) each point's name from a
+    ``name``, ``point_name`` or ``label`` column (the first the file has) or None."""
 
     q_deg: np.ndarray
     x_W_mm: np.ndarray
@@ -51,12 +55,13 @@ class PointSet:
     sigma_mm: np.ndarray | None = None
     temp_each_C: np.ndarray | None = None
     time_each_s: np.ndarray | None = None
+    names: tuple | None = None
 
     def __post_init__(self):
         n = np.shape(self.q_deg)[0]
         if np.shape(self.x_W_mm) != (n, 3):
             raise ValueError(f"x_W_mm must have shape ({n}, 3), got {np.shape(self.x_W_mm)}")
-        for name in ("temp_each_C", "time_each_s"):
+        for name in ("temp_each_C", "time_each_s", "names"):
             a = getattr(self, name)
             if a is not None and np.shape(a) != (n,):
                 raise ValueError(f"{name} must have shape ({n},), got {np.shape(a)}")
@@ -68,7 +73,8 @@ class PointSet:
         def cut(a):
             return None if a is None else a[idx]
         return replace(self, q_deg=self.q_deg[idx], x_W_mm=self.x_W_mm[idx], sigma_mm=cut(self.sigma_mm),
-                       temp_each_C=cut(self.temp_each_C), time_each_s=cut(self.time_each_s))
+                       temp_each_C=cut(self.temp_each_C), time_each_s=cut(self.time_each_s),
+                       names=None if self.names is None else tuple(np.asarray(self.names, object)[idx]))
 
     @property
     def rod(self) -> Rod:
@@ -93,7 +99,10 @@ def read_points(path, n_joints: int = 6) -> PointSet:
     q = np.array([[r[c] for c in qs] for _, r in rows])
     x = np.array([[r["x_mm"], r["y_mm"], r["z_mm"]] for _, r in rows])
     each = {c: np.array([r[c] for _, r in rows]) if c in header else None for c in POINT_OPTIONAL_NUMBERS}
-    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows), each["temp_C"], each["time_s"])
+    named = next((c for c in NAME_COLUMNS if c in header), None)
+    names = tuple(r[named] for _, r in rows) if named else None
+    return PointSet(q, x, tool, mass, com, temp, p, _point_sigmas(p, header, rows), each["temp_C"], each["time_s"],
+                    names)
 
 
 def _check_units_lines(p: Path, meta: dict) -> None:

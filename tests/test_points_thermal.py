@@ -121,3 +121,20 @@ def test_calibrate_writes_each_points_residual(tmp_path, capsys):
     import json
     rms = json.loads((tmp_path / "cal.json").read_text())["residual_rms_mm"]
     assert np.sqrt(np.mean(d ** 2)) == pytest.approx(rms, rel=1e-3)
+
+
+def test_a_points_files_names_reach_its_residuals(tmp_path):
+    """A tracker's `name` column (kept, not read before) labels each point's row of --residuals, quoted where a
+    name has a comma; subsets keep the names."""
+    import csv
+    path, _ = _points(tmp_path / "t.validation.csv", 0.0)
+    lines = path.read_text().splitlines()
+    lines[1] += ",name"
+    lines[2:] = [f'{ln},"P{k}, wall"' for k, ln in enumerate(lines[2:], start=1)]
+    path.write_text("\n".join(lines) + "\n")
+    pts = read_points(path)
+    assert pts.names[0] == "P1, wall" and pts.subset(np.arange(60) > 57).names == ("P59, wall", "P60, wall")
+    out = tmp_path / "res.csv"
+    main(["calibrate", "--points", str(path), "--robot", "tx90", "--noise-um", "10", "--residuals", str(out)])
+    rows = list(csv.DictReader(out.read_text().splitlines()))
+    assert [r["label"] for r in rows[:2]] == ["P1, wall", "P2, wall"]

@@ -1,6 +1,8 @@
 """What ``rodlab calibrate`` (campaign, points, sockets) prints and writes of an identification."""
 from __future__ import annotations
 
+import csv
+import io
 import sys
 from pathlib import Path
 
@@ -91,18 +93,19 @@ def write_result_file(args, result: dict) -> list:
 
 def write_residuals(path, res, q_deg, labels=None) -> Path:
     """Each point's residual of the identification ``res`` as a CSV (``--residuals``): ``row`` (the point's place
-    among the file's data rows, from 1), ``label`` (a campaign's ``position.point``), ``q1..qn`` [deg] as read,
-    ``dx_mm, dy_mm, dz_mm`` measured minus model in {W} (the instrument's frame for points, the world position's
-    {D} for a campaign) and ``norm_mm``; atomically (a trial: the per-point residuals had been in no file)."""
+    among the file's data rows, from 1), ``label`` (a campaign's ``position.point``, a points file's name),
+    ``q1..qn`` [deg] as read, ``dx_mm, dy_mm, dz_mm`` measured minus model in {W} (the instrument's frame for
+    points, the world position's {D} for a campaign) and ``norm_mm``; atomically (a trial: the per-point residuals
+    had been in no file)."""
     r = np.asarray(res.residuals_mm, float).reshape(-1, 3)
     q = np.asarray(q_deg, float)
-    head = ["row"] + (["label"] if labels is not None else []) + [f"q{i + 1}" for i in range(q.shape[1])] + \
-        ["dx_mm", "dy_mm", "dz_mm", "norm_mm"]
-    lines = [",".join(head)]
+    buf = io.StringIO()
+    out = csv.writer(buf, lineterminator="\n")
+    out.writerow(["row"] + (["label"] if labels is not None else []) + [f"q{i + 1}" for i in range(q.shape[1])]
+                 + ["dx_mm", "dy_mm", "dz_mm", "norm_mm"])
     for k, (qk, rk) in enumerate(zip(q, r)):
-        cells = [str(k + 1)] + ([str(labels[k])] if labels is not None else []) + [f"{v:.6f}" for v in qk] + \
-            [f"{v:.6f}" for v in rk] + [f"{np.linalg.norm(rk):.6f}"]
-        lines.append(",".join(cells))
-    written = atomic_write_text(path, "\n".join(lines) + "\n")
+        out.writerow([k + 1] + ([labels[k]] if labels is not None else []) + [f"{v:.6f}" for v in qk]
+                     + [f"{v:.6f}" for v in rk] + [f"{np.linalg.norm(rk):.6f}"])
+    written = atomic_write_text(path, buf.getvalue())
     print(f"wrote {written}")
     return written

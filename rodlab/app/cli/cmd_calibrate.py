@@ -321,7 +321,7 @@ def _calibrate_points(args) -> int:
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, "none", before, after))
     if args.residuals:
-        written.append(write_residuals(args.residuals, res, pts.q_deg))
+        written.append(write_residuals(args.residuals, res, pts.q_deg, pts.names))
     if args.png:
         if not errors:
             print("note: --png draws the validation error distributions of instrument points; give --validate",

@@ -38,7 +38,8 @@ from .rig_outside import OUTSIDE
 from .rig_range import at_range_limit, range_finding
 from .rig_select import demean
 from .rig_steps import LACK_CHI_RED, Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import GLITCH_Z, hold_line_residuals, isolated_glitches, reading_noise, repeat_scatter
+from .rig_noise import (GLITCH_Z, detection_floor_mm, hold_line_residuals, isolated_glitches, reading_noise,
+                        repeat_scatter)
 from .rig_repeatability import MIN_REPEATS, repeatability
 from .rig_tolerant import diagnose_tolerant, verdict_of
 
@@ -175,7 +176,7 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
     for f in diag2.findings:
         if _is_lack_of_fit(f):
             f.explanation += (f"; the hold means scatter over the repeats {np.sqrt(scatter):.1f} x their noise, so the "
-                              "effects named were judged against that scatter, not against the noise of one reading"
+                              "effects were judged against that scatter, not against the noise of one reading"
                               + ("" if rep is None else _not_repeatability(rep)))
     return diag2, model2
 
@@ -225,7 +226,7 @@ def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
     groups = data.zero_groups
-    prep = Prep(groups)
+    prep = Prep(groups, floor_mm=detection_floor_mm(data, sigma, scatter))
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None

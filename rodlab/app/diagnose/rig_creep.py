@@ -55,7 +55,7 @@ def two_term_step(library, ls, S: tuple, data, base, r0, prep, sigma: float, fol
         dbic = (rss - cur_rss) / sigma ** 2 + dk * np.log(n)
         log.debug("two-term creep (%s) for %s: delta BIC %.1f", term.settings, [library[i].effect for i in drop], dbic)
         better = dbic <= 0 if lenient else evidence((cur_rss - rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-        if better and admissible(lib, new_ls, key, c, sigma, prep.groups) and cv_improves(ls.cv_error(S),
+        if better and admissible(lib, new_ls, key, c, prep.detection) and cv_improves(ls.cv_error(S),
                                                                                           new_ls.cv_error(key)):
             log.info("creep of two terms (%s) in place of %s: delta BIC %.1f", term.settings,
                      [library[i].effect for i in drop], dbic)

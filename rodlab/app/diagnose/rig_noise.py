@@ -29,7 +29,7 @@ from rodlab.stiffness_rig.samples import RigSamples
 
 
 __all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals", "repeat_scatter",
-           "repeated_hold_means", "MIN_DOF", "GLITCH_Z", "CHI2_1_MEDIAN"]
+           "repeated_hold_means", "detection_floor_mm", "MIN_DOF", "GLITCH_Z", "CHI2_1_MEDIAN"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
 MIN_DOF = 10
@@ -202,6 +202,16 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
         grand = float(np.average(means, weights=counts))           # holds of unequal length weigh as they inform
         z2 += list((means - grand) ** 2 / (sigma ** 2 / counts) * k / (k - 1))
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
+
+
+def detection_floor_mm(data: RigSamples, sigma: float, scatter: float = 1.0) -> float:
+    """The noise [mm] a term's change of the readings is seen against: one reading's ``sigma``, or a hold mean's
+    scatter (``sigma sqrt(scatter / n)``, n the median hold's readings, ``scatter`` :func:`repeat_scatter`) where
+    that is larger; not the selection's per-reading ``sigma sqrt(scatter)``, which puts a hold mean's scatter on
+    every reading."""
+    keys = np.asarray(data.step, np.int64) * 4 + np.asarray(data.comp, np.int64)
+    n = float(np.median(np.unique(keys, return_counts=True)[1])) if keys.size else 1.0
+    return float(sigma * max(1.0, np.sqrt(max(scatter, 1.0) / max(n, 1.0))))
 
 
 #: the median of a chi-square of one degree of freedom

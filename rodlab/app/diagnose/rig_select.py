@@ -14,6 +14,7 @@ out (:func:`demean`).
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -26,7 +27,8 @@ from .criteria import DBIC_MIN, bic_penalty, cv_improves, evidence, weakest_term
 from .search import search
 from .subset import SubsetLS
 
-__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "admissible", "PTP_MIN", "BEAM"]
+__all__ = ["select", "subset_ls", "refine_tau", "alternatives", "demean", "compatible", "admissible", "Detection",
+           "PTP_MIN", "BEAM"]
 
 log = logging.getLogger(__name__)
 
@@ -47,15 +49,28 @@ def compatible(library: list[Hypothesis], S: tuple, j: int) -> bool:
     return True
 
 
-def admissible(library, ls: SubsetLS, S: tuple, coef, sigma: float, groups: np.ndarray) -> bool:
-    """Every term changes the readings of some series by >= PTP_MIN noise SDs peak to peak (detection limit) and
-    none sits on a physical bound (then it is not this physics)."""
+@dataclass(frozen=True)
+class Detection:
+    """What a term must change to be seen: ``groups`` (n,) the series of each reading (gauge zeros), ``floor_mm``
+    the noise of what a term changes [mm]: one reading's, or a hold mean's scatter where that is larger (the
+    hold-to-hold repeatability); never the selection's inflated per-reading sigma (a blind trial: 0.3 um of
+    repeatability had raised the floor to 2.8 um and hidden a load non-linearity, a tilted gauge and a small
+    friction)."""
+
+    groups: np.ndarray
+    floor_mm: float
+
+
+def admissible(library, ls: SubsetLS, S: tuple, coef, detect: Detection) -> bool:
+    """Every term changes the readings of some series by >= PTP_MIN noise SDs peak to peak (detection limit,
+    ``detect``) and none sits on a physical bound (then it is not this physics)."""
+    groups = detect.groups
     k = 0
     for j, contrib in zip(S, ls.contribution(S, coef)):
         t = library[j]
         val = coef[k:k + t.X.shape[1]]
         k += t.X.shape[1]
-        if max(np.ptp(contrib[groups == g]) for g in np.unique(groups)) < PTP_MIN * sigma:
+        if max(np.ptp(contrib[groups == g]) for g in np.unique(groups)) < PTP_MIN * detect.floor_mm:
             return False
         if np.any((np.abs(val - t.upper) < 1e-9 * np.maximum(1, np.abs(t.upper))) & (t.upper != 0)):
             return False
@@ -113,7 +128,7 @@ class _RigSpace:
     def trial(self, candidate) -> Trial:
         """An inadmissible subset lets the next try; the best admissible one is the step's only chance."""
         key, c, rss = candidate
-        if not admissible(self.library, self.ls, key, c, self.sigma, self.groups):
+        if not admissible(self.library, self.ls, key, c, self.groups):
             return Trial.NEXT
         dk = self.k_of(key) - self.k_of(self.cur)
         if not evidence((self.cur_rss - rss) / self.sigma ** 2, dk, bic_penalty(dk, self.n)).significant:
@@ -172,7 +187,7 @@ def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: floa
             c, rss = ls.fit(key)
             dk = t.n_params - u.n_params
             if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-                    and admissible(library, ls, key, c, sigma, groups)):
+                    and admissible(library, ls, key, c, groups)):
                 log.info("nested: %s -> %s", t.label, u.label)
                 return key, rss
     return None
@@ -196,7 +211,7 @@ def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of)
                 key = tuple(sorted(rest + (i,)))
                 c, rss = ls.fit(key)
                 if bic(key, rss) < bic(cur, cur_rss) - 1e-9 and (best is None or bic(key, rss) < bic(*best[:2])):
-                    if admissible(library, ls, key, c, sigma, groups):
+                    if admissible(library, ls, key, c, groups):
                         best = (key, rss)
         if best is None:
             break

@@ -16,7 +16,7 @@ from .criteria import DBIC_MIN, bic_penalty, evidence
 from .report import Finding
 from .rig_creep import two_term_step
 from .rig_outside import OUTSIDE
-from .rig_select import alternatives, compatible, demean, refine_tau, select, subset_ls
+from .rig_select import Detection, alternatives, compatible, demean, refine_tau, select, subset_ls
 
 __all__ = ["RigModelFit", "Prep", "select_refining_creep", "term_findings", "LackOfFit",
            "lack_of_fit", "LACK_CHI_RED"]
@@ -30,10 +30,12 @@ LACK_CHI_RED = 4.0
 class Prep:
     """Project a hypothesis' columns as the library's are: off each series' gauge zero and, where the linear part
     is fitted freely, off that too (``project``); the columns before projection (gauge zeros only) are kept by
-    term, for the fitted change of the readings."""
+    term, for the fitted change of the readings. ``detection``: the series and the noise floor [mm] a term must
+    change the readings by to be seen (:class:`.rig_select.Detection`)."""
 
-    def __init__(self, groups: np.ndarray, project=None) -> None:
+    def __init__(self, groups: np.ndarray, project=None, floor_mm: float = 0.0) -> None:
         self.groups, self.project, self.raw = groups, project, {}
+        self.detection = Detection(groups, floor_mm)
 
     def __call__(self, term: Hypothesis) -> Hypothesis:
         self.raw[id(term)] = demean(term.X, self.groups)
@@ -94,7 +96,7 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
     at high SNR must not be patched with extra terms such as a compliance scale); then a creep of two terms is
     tried in its place (:func:`.rig_creep.two_term_step`). Returns (library, its :class:`SubsetLS`, the chosen term
     indices)."""
-    S = select(library, ls, sigma, r0.size, max_terms, prep.groups)
+    S = select(library, ls, sigma, r0.size, max_terms, prep.detection)
     for _ in range(2):
         creep = [j for j in S if library[j].effect == "creep"]
         if not creep:
@@ -112,7 +114,7 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
             refined.append(prep(creep_hypothesis(data, base, tau)))
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
-        S = select(library, ls, sigma, r0.size, max_terms, prep.groups)
+        S = select(library, ls, sigma, r0.size, max_terms, prep.detection)
     return two_term_step(library, ls, S, data, base, r0, prep, sigma, folds)
 
 

@@ -23,6 +23,7 @@ from .envelope import Envelope
 from .report import Diagnosis
 from .rig_form import judge_linear
 from .rig_linear import Projector, fit_linear, linear_columns, measured_entries
+from .rig_noise import detection_floor_mm
 from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import demean, subset_ls
 from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings
@@ -47,7 +48,7 @@ def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: i
     groups = data.zero_groups
     entries = measured_entries(data, sim.C_F)
     L = linear_columns(data, entries)
-    prep = Prep(groups, Projector(groups, L))
+    prep = Prep(groups, Projector(groups, L), detection_floor_mm(data, sigma, scatter))
     lin0 = fit_linear(data, entries, L, data.y, sigma, sim.C_F)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     base = lin0.C_F[data.comp, data.axis] * data.F

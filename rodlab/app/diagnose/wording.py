@@ -27,7 +27,9 @@ def _rig_confirm(effect: str, location: str | None = None) -> str | None:
     for physics outside the vocabulary :func:`.rig_outside.confirm_outside`."""
     if effect == FindingKind.UNEXPLAINED:
         return confirm_outside(location) or ("repeat the named steps: structure that returns is physics, structure "
-                                             "that moves is handling")
+                                             "that moves is handling; `--sim-accuracy exact` (the simulation taken "
+                                             "as the rod) names what the tolerant diagnosis may leave to the rod's "
+                                             "linear part")
     return next((m.confirm_for(location) for e, m in RIG_EFFECTS.items() if e.value == effect), None)
 
 
@@ -73,7 +75,8 @@ def confirmation(f: Finding) -> str:
 
 
 def evidence_text(f: Finding) -> str:
-    """One line: explains X % of the residual (rms a -> b um); how sure."""
+    """One line: explains X % of the residual (rms a -> b um); how sure. A lack of fit (nothing fitted to it) says
+    what is left instead."""
     if f.effect == MODEL_FORM:
         ev = f.evidence
         return (f"the linear compliance measured entry by entry takes the readings' rms against the simulation from "
@@ -82,6 +85,9 @@ def evidence_text(f: Finding) -> str:
                 f"entries, p = {ev['envelope_p']:.2g}) of {ev.get('envelope', 'the simulation')}")
     if "readings_left_out" in f.parameters:          # readings screened out before the fit: not a fitted term
         return f"{f.parameters['readings_left_out']} readings left out before the diagnosis; nothing was fitted to them"
+    if f.effect == FindingKind.UNEXPLAINED and "reduced_chi2" in f.parameters:   # the lack of fit: nothing fitted
+        return (f"left after the findings: rms {f.rms_after_mm * 1e3:.2f} um; the structure is significant; its cause "
+                "is not modelled")
     share = explained_share(f)
     if share < 0:          # it lowers the residual weighted by the noise model, not the plain rms
         return (f"raises the plain rms ({f.rms_before_mm * 1e3:.2f} -> {f.rms_after_mm * 1e3:.2f} um) while it lowers "

@@ -204,14 +204,28 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
     return max(float(np.median(z2)) / CHI2_1_MEDIAN, 1.0) if z2 else 1.0
 
 
+#: holds repeated fewer times than this (the median) leave the hold scatter's floor on every reading
+FLOOR_REPEATS = 3
+
+
 def detection_floor_mm(data: RigSamples, sigma: float, scatter: float = 1.0) -> float:
     """The noise [mm] a term's change of the readings is seen against: one reading's ``sigma``, or a hold mean's
     scatter (``sigma sqrt(scatter / n)``, n the median hold's readings, ``scatter`` :func:`repeat_scatter`) where
     that is larger; not the selection's per-reading ``sigma sqrt(scatter)``, which puts a hold mean's scatter on
-    every reading."""
+    every reading. With fewer than :data:`FLOOR_REPEATS` repeats of a hold the scatter cannot be told from
+    structure, and the floor stays ``sigma sqrt(scatter)`` (the independent rig simulator's 2-repeat friction
+    with its own scatter had then been given a drift)."""
+    if scatter > 1.0 and _median_repeats(data) < FLOOR_REPEATS:
+        return float(sigma * np.sqrt(scatter))
     keys = np.asarray(data.step, np.int64) * 4 + np.asarray(data.comp, np.int64)
     n = float(np.median(np.unique(keys, return_counts=True)[1])) if keys.size else 1.0
     return float(sigma * max(1.0, np.sqrt(max(scatter, 1.0) / max(n, 1.0))))
+
+
+def _median_repeats(data: RigSamples) -> float:
+    """The median number of repeats of the holds that repeat one (:func:`repeated_hold_means`), 1 for none."""
+    sizes = [means.size for means, _ in repeated_hold_means(data, np.zeros(np.size(data.y)))]
+    return float(np.median(sizes)) if sizes else 1.0
 
 
 #: the median of a chi-square of one degree of freedom

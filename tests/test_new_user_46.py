@@ -224,7 +224,7 @@ def test_a_soft_rod_rodlab_simulated_from_its_design_is_no_unit_slip(tmp_path):
     """C_F of 9 mm/N from rodlab's own simulation of a 3 m design is that design's (a designer trial had been told
     to divide it by 1000); the same numbers in a hand-made file still get the um/N hint."""
     from dataclasses import replace as dc_replace
-    soft = dc_replace(ROD, C_F=ROD.C_F * 2000.0)
+    soft = read_compliance(write_compliance(dc_replace(ROD, C_F=ROD.C_F * 2000.0), tmp_path / "soft.compliance.json"))
     assert soft.simulated_by_rodlab and soft.unit_slips() == []
     hand = dc_replace(soft, provenance={})
     assert any("divide C_F by 1000" in s for s in hand.unit_slips())

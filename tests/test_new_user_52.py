@@ -125,6 +125,8 @@ def test_following_updates_advice_for_a_joint_writes_the_as_built_design(tmp_pat
     import re
 
     design = SHARED / "examples" / "rods" / "rod1.rod.toml"
+    if not design.exists():
+        pytest.skip("../shared/examples is not present beside the repository")
     sim, rec, out = tmp_path / "sim.json", tmp_path / "joint.rig.csv", tmp_path / "asbuilt.rod.toml"
     assert main(["fea", str(design), "--model", "frame", "-o", str(sim)]) == 0
     assert main(["rig", "simulate", "--sim", str(sim), "--design", str(design), "--effect",

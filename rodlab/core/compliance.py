@@ -184,7 +184,7 @@ class RodCompliance:
         None when the file has none (only a measured file has them)
     C_F_sigma : standard uncertainty of the measured C_F entries [mm/N], shape=(3, 3), NaN where unknown;
         None when the file has none
-    stored_c_rod_um : the c_rod_um the file stated [um] (NaN: a file without one; None: not read from a file)
+    stored_c_rod_um : the c_rod_um the file stated [um] (None: not read from a file, or the file had none)
     """
 
     rod: str
@@ -334,7 +334,7 @@ class RodCompliance:
                        float(data.get("r_rod", 1.0)), dict(data.get("provenance", {})),
                        _optional33(data, "r_mn", path, -1e3, 1e3),
                        _optional33(data, "C_F_sigma_mm_per_N", path, 0.0, MAX_COMPLIANCE),
-                       float(data.get("c_rod_um", math.nan)))
+                       None if data.get("c_rod_um") is None else float(data["c_rod_um"]))
         except ComplianceError as e:
             if e.path is None:
                 raise ComplianceError(str(e).split(": ", 1)[-1] if e.key else str(e), path=path, key=e.key) from e
@@ -357,10 +357,10 @@ class RodCompliance:
         return made and self._matrices_as_written()
 
     def _matrices_as_written(self) -> bool:
-        """Whether a file's matrices are those its c_rod_um was computed from (True for an object not read from a
-        file): a review had scaled a rodlab file's C_F by 1000 by hand, keeping its provenance."""
+        """Whether the file's matrices are those its stated c_rod_um was computed from (False without one: a review
+        had scaled a rodlab file's C_F by 1000 by hand, keeping its provenance)."""
         if self.stored_c_rod_um is None:
-            return True
+            return False
         return bool(abs(self.stored_c_rod_um - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0))
 
     def unit_slips(self) -> list[str]:

@@ -350,18 +350,12 @@ class RodCompliance:
     @property
     def simulated_by_rodlab(self) -> bool:
         """Whether rodlab simulated this file from a design (its provenance names the rodlab version and the
-        design): its numbers are the design's, however soft, not a unit slip (a designer trial: a 3 m rod's own FEA
-        file had been told to divide C_F by 1000), with the matrices its c_rod_um was computed from."""
-        p = self.provenance or {}
+        design, and it states the c_rod_um its matrices give): its numbers are the design's, however soft, not a
+        unit slip (a designer trial: a 3 m rod's own FEA file had been told to divide C_F by 1000; a review: a
+        rodlab file's C_F scaled by hand, its provenance kept, had then slipped past)."""
+        p, stated = self.provenance or {}, self.stored_c_rod_um
         made = bool(p.get("rodlab_version")) and bool(p.get("design")) and str(self.method) in ("calc", "fea")
-        return made and self._matrices_as_written()
-
-    def _matrices_as_written(self) -> bool:
-        """Whether the file's matrices are those its stated c_rod_um was computed from (False without one: a review
-        had scaled a rodlab file's C_F by 1000 by hand, keeping its provenance)."""
-        if self.stored_c_rod_um is None:
-            return False
-        return bool(abs(self.stored_c_rod_um - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0))
+        return made and stated is not None and abs(stated - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0)
 
     def unit_slips(self) -> list[str]:
         """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond

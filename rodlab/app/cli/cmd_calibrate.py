@@ -86,18 +86,11 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_calibrate)
 
 
-def cmd_calibrate(args: argparse.Namespace) -> int:
+def _refuse_mismatched_options(args) -> None:
+    """Options the kind of data given does not use, refused with what to leave out."""
     if args.points and args.thermal:
         raise RodlabError("--thermal compensates a rod's growth during a campaign (its temp_C column); instrument "
                           "points (--points) have no rod to grow: leave --thermal out")
-    if args.robot is None:
-        if args.points or args.sockets:
-            raise RodlabError(f"{'--points' if args.points else '--sockets'}: name the robot that made these readings "
-                              "with --robot (a built-in name such as ur5, a robot TOML or a URDF); the tx90 default "
-                              "is only for MultiCal campaigns")
-        args.robot = "tx90"
-        print("note: robot tx90 (the default, the paper's robot): give --robot NAME_OR_FILE for another",
-              file=sys.stderr)
     if (args.points or args.sockets) and args.device:
         raise RodlabError("--device converts a campaign's raw sensor readings; instrument points and socket readings "
                           "have none: leave --device out")
@@ -107,6 +100,18 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.sockets and args.joint_harmonics:
         raise RodlabError("--joint-harmonics is for a campaign or instrument points; the socket fit (--sockets) has "
                           "no periodic joint errors: leave it out")
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    _refuse_mismatched_options(args)
+    if args.robot is None:
+        if args.points or args.sockets:
+            raise RodlabError(f"{'--points' if args.points else '--sockets'}: name the robot that made these readings "
+                              "with --robot (a built-in name such as ur5, a robot TOML or a URDF); the tx90 default "
+                              "is only for MultiCal campaigns")
+        args.robot = "tx90"
+        print("note: robot tx90 (the default, the paper's robot): give --robot NAME_OR_FILE for another",
+              file=sys.stderr)
     if args.sockets:
         return calibrate_sockets(args)
     if args.points:

@@ -44,7 +44,8 @@ class LineFit:
     slope_mm_per_N : common slope (= C_F[component, axis]); se_mm_per_N : its standard error
     intercept_mm : {"load": a, "unload": a} of the common-slope model
     branch : per-branch independent lines {phase: {"slope_mm_per_N", "intercept_mm", "zero_load_kg"}}
-    zero_load_kg : {phase: mass where the common-slope line crosses zero displacement} (NaN if slope ~ 0)
+    zero_load_kg : {phase: mass where the common-slope line crosses zero displacement} (NaN if slope ~ 0);
+        zero_load_se_kg : {phase: its standard error} [kg] (delta method on the intercept and the slope)
     residual_rms_mm, n_holds : fit quality
     unloaded_apart : the holds without a hanger lie off both branch lines (friction that lets go at mass 0, or a
         dead load missing from ``mass_kg``): they were given a level of their own and do not bear on the slope
@@ -64,13 +65,14 @@ class LineFit:
     n_holds: int
     unloaded_apart: bool = False
     dead_load_kg: tuple | None = None
+    zero_load_se_kg: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"load_axis": str(self.axis), "component": _AX[self.component],
                 "slope_mm_per_N": self.slope_mm_per_N, "se_mm_per_N": self.se_mm_per_N,
                 "intercept_mm": self.intercept_mm, "zero_load_kg": self.zero_load_kg, "branch": self.branch,
                 "residual_rms_mm": self.residual_rms_mm, "n_holds": self.n_holds,
-                "unloaded_apart": self.unloaded_apart,
+                "unloaded_apart": self.unloaded_apart, "zero_load_se_kg": self.zero_load_se_kg,
                 "dead_load_kg": None if self.dead_load_kg is None else list(self.dead_load_kg)}
 
 
@@ -298,6 +300,8 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
     icpt = {"load": float(coef[0]), "unload": float(coef[1]) if two else float(coef[0])}
     significant = abs(slope) > 3 * se and abs(slope) > 0
     zero = {k: (float(-v / (slope * G0 * axis.sign)) if significant else float("nan")) for k, v in icpt.items()}
+    zero_se = {k: _zero_load_se(coef, cov, i, axis.sign) if significant else float("nan")
+               for k, i in (("load", 0), ("unload", 1 if two else 0))}
     branch = {}
     for name, m in (("load", ~uo), ("unload", uo)):
         if m.sum() >= 2 and np.ptp(Fo[m]) > 0:
@@ -305,7 +309,17 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float):
             branch[name] = {"slope_mm_per_N": float(b), "intercept_mm": float(a),
                             "zero_load_kg": float(-a / (b * G0 * axis.sign)) if significant else float("nan")}
     return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo),
-                   unloaded_apart=apart is not None, dead_load_kg=dead_load), res
+                   unloaded_apart=apart is not None, dead_load_kg=dead_load, zero_load_se_kg=zero_se), res
+
+
+def _zero_load_se(coef: np.ndarray, cov: np.ndarray, i: int, sign: float) -> float:
+    """The standard error [kg] of the zero-load crossing ``-a_i / (b g0 sign)`` of intercept ``i`` and the slope (the
+    last coefficient), by the delta method (a blind trial: +67 / +77 g crossings without one had read like the
+    paper's friction, where they were noise)."""
+    a, b = float(coef[i]), float(coef[-1])
+    grad = np.zeros(coef.size)
+    grad[i], grad[-1] = -1.0 / (b * G0 * sign), a / (b * b * G0 * sign)
+    return float(np.sqrt(max(grad @ cov @ grad, 0.0)))
 
 
 #: the holds without a hanger get a level of their own when that lowers the lines' residual this significantly

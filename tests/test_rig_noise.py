@@ -218,3 +218,24 @@ def test_an_effect_under_the_rigs_repeatability_is_still_named(tmp_path):
     diag, _ = diagnose_rig(read_recording(_hold_scatter(path, 0.0003, 6)), sim, design)
     named = {f.effect.value for f in diag.findings}
     assert "nonlinearity" in named and "unexplained" not in named, diag.summary()
+
+
+def test_the_zero_load_crossings_carry_their_standard_error(tmp_path):
+    """Friction of 0.3 N crosses the load axis at +-F_f / g0 (~31 g) on the rod's own axis: the fit's crossing is
+    there within its standard error, now stated (a blind trial: +67 / +77 g crossings without one had read like the
+    paper's friction)."""
+    from rodlab.core.units import G0
+    from rodlab.stiffness_rig import fit_recording
+    design = resolve_design("rod4")
+    sim = calc_rod_compliance(design)
+    model = RigModel(sim.C_F, {"friction": {"F_f_N": 0.3}}, noise_mm=0.0005, resolution_mm=0.0001, seed=2)
+    rec = read_recording(simulate_recording(model, LoadSchedule(repeats=4, hold_s=4.0), tmp_path / "f.rig.csv",
+                                            rod=design.name))
+    fit = fit_recording(rec, sim)
+    own = [ln for ln in fit.lines if ln.component == ln.axis.index]
+    assert own
+    for ln in own:
+        for phase in ("load", "unload"):
+            se = ln.zero_load_se_kg[phase]
+            assert 0 < se < 0.01                                                  # grams, not tens of grams
+            assert abs(abs(ln.zero_load_kg[phase]) - 0.3 / G0) < 4 * se + 0.002

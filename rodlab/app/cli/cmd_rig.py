@@ -170,12 +170,14 @@ def cmd_fit(args: argparse.Namespace) -> int:
     for w in comp.provenance["warnings"]:        # the fit's, and how the unmeasured entries were completed
         print(f"warning: {args.recording}: {w}", file=sys.stderr)
     print(f"rod {rec.rod}: {len(fit.holds)} holds, {noise_text(fit.noise_mm)}")
-    print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load (load / unload)':>28} {'sim um/N':>10}")
+    print(f"  {'load':>5} {'comp':>4} {'slope +- SE':>24} {'zero load +- SE (load / unload)':>36} {'sim um/N':>10}")
     for ln in fit.lines:
-        z = ln.zero_load_kg
-        zeros = f"{format_zero(z['load'])} / {format_zero(z['unload'])}"
+        z, se = ln.zero_load_kg, ln.zero_load_se_kg
+        zeros = " / ".join(format_zero(z[k]).removesuffix(" g") + f" +- {1e3 * se[k]:.2g} g"
+                           if np.isfinite(z[k]) and np.isfinite(se.get(k, np.nan)) else format_zero(z[k])
+                           for k in ("load", "unload"))
         print(f"  {ln.axis.value:>5} {'xyz'[ln.component]:>4} "
-              f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>28} "
+              f"{format_pm(ln.slope_mm_per_N * 1e3, ln.se_mm_per_N * 1e3, 'um/N'):>24} {zeros:>36} "
               f"{sim.C_F[ln.component, ln.axis.index] * 1e3:10.3f}")
     print(f"  r_rod (Eq. 21) = {fit.r_rod:.4f}; c_rod (Eq. 23) = {comp.c_rod_um:.1f} um (simulated {sim.c_rod_um:.1f})")
     if (note := r_rod_note(fit.r_rod, str(sim.method))) is not None:

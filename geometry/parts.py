@@ -34,8 +34,10 @@ PART_COLOURS: dict[Part, tuple[float, float, float]] = {
 
 #: RGB colours of a tube by its material's kind (the first name prefix that matches), so that a steel pipe I or an
 #: aluminium pipe II is not drawn black like carbon (a new user's trial); other materials keep the part's colour
-_MATERIAL_COLOURS = (("cfrp", (0.15, 0.15, 0.17)), ("carbon", (0.15, 0.15, 0.17)), ("steel", (0.55, 0.57, 0.60)),
-                     ("al_", (0.74, 0.76, 0.80)), ("ti_", (0.58, 0.56, 0.53)))
+#: tube colours by material name (steel a blue-grey and aluminium a light silver, told apart in one rod: a designer
+#: trial's steel bend had been the aluminium tubes' grey)
+_MATERIAL_COLOURS = (("cfrp", (0.15, 0.15, 0.17)), ("carbon", (0.15, 0.15, 0.17)), ("steel", (0.45, 0.50, 0.60)),
+                     ("al_", (0.80, 0.81, 0.84)), ("ti_", (0.58, 0.56, 0.53)))
 
 
 def part_colours(design) -> dict:

@@ -38,8 +38,8 @@ from .rig_outside import OUTSIDE
 from .rig_range import at_range_limit, range_finding
 from .rig_select import demean
 from .rig_steps import LACK_CHI_RED, Prep, RigModelFit, lack_of_fit, term_findings
-from .rig_noise import (GLITCH_Z, detection_floor_mm, hold_line_residuals, isolated_glitches, reading_noise,
-                        repeat_scatter)
+from .rig_noise import (GLITCH_Z, detection_floor_mm, gauge_scatter, hold_line_residuals, isolated_glitches,
+                        reading_noise, repeat_scatter)
 from .rig_repeatability import MIN_REPEATS, repeatability
 from .rig_tolerant import diagnose_tolerant, verdict_of
 
@@ -167,7 +167,8 @@ def _diagnose(data: RigSamples, sim: RodCompliance, design, max_terms: int, env:
     scatter = repeat_scatter(data, model.resid, sigma)
     if scatter <= LACK_CHI_RED:
         return diag, model
-    diag2, model2 = _diagnose_once(data, sim, design, max_terms, env, sigma, scatter)
+    floor = detection_floor_mm(data, sigma, scatter, gauge_scatter(data, model.resid, sigma))
+    diag2, model2 = _diagnose_once(data, sim, design, max_terms, env, sigma, scatter, floor)
     diag2.extra["selected_against_hold_scatter"] = scatter
     rep = repeatability(data, model2.resid, sigma, _fitted_to_holds(model2))
     if rep is not None and rep.scatter_only:
@@ -210,23 +211,26 @@ def _as_repeatability(diag: Diagnosis, rep) -> None:
 
 
 def _diagnose_once(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float,
-                   scatter: float = 1.0):
+                   scatter: float = 1.0, floor_mm: float | None = None):
+    """One diagnosis against ``sigma`` inflated by ``scatter``; ``floor_mm`` the terms' detection floor (default:
+    one reading's ``sigma``, :func:`.rig_noise.detection_floor_mm`)."""
+    floor = sigma if floor_mm is None else floor_mm
     if env.exact:
-        return _diagnose_exact(data, sim, design, max_terms, sigma, scatter)
-    return diagnose_tolerant(data, sim, design, max_terms, env, sigma, scatter)
+        return _diagnose_exact(data, sim, design, max_terms, sigma, scatter, floor)
+    return diagnose_tolerant(data, sim, design, max_terms, env, sigma, scatter, floor)
 
 
 def _diagnose_exact(data: RigSamples, sim: RodCompliance, design, max_terms: int, sigma: float,
-                    scatter: float = 1.0) -> tuple[Diagnosis, RigModelFit]:
+                    scatter: float = 1.0, floor_mm: float | None = None) -> tuple[Diagnosis, RigModelFit]:
     """Screen, attribute, locate and explain one recording against a simulation that is the rod (the steps of the
-    module docstring); ``scatter`` as :func:`.rig_tolerant.diagnose_tolerant`'s."""
+    module docstring); ``scatter`` and ``floor_mm`` as :func:`.rig_tolerant.diagnose_tolerant`'s."""
     n = data.y.size
     sigma_sel = sigma * float(np.sqrt(max(scatter, 1.0)))
     base = sim.C_F[data.comp, data.axis] * data.F
     # the zero of each gauge in each series is a nuisance parameter (it was set on one noisy, quantised
     # reading): project it out of the residual and of every term's columns (Frisch-Waugh)
     groups = data.zero_groups
-    prep = Prep(groups, floor_mm=detection_floor_mm(data, sigma, scatter))
+    prep = Prep(groups, floor_mm=sigma if floor_mm is None else floor_mm)
     r0 = demean(data.y - base, groups)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     folds = data.repeat if np.unique(data.repeat).size >= 2 else None

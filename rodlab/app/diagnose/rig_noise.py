@@ -29,7 +29,7 @@ from rodlab.stiffness_rig.samples import RigSamples
 
 
 __all__ = ["NoiseEstimate", "reading_noise", "isolated_glitches", "hold_line_residuals", "repeat_scatter",
-           "repeated_hold_means", "detection_floor_mm", "MIN_DOF", "GLITCH_Z", "CHI2_1_MEDIAN"]
+           "repeated_hold_means", "detection_floor_mm", "gauge_scatter", "MIN_DOF", "GLITCH_Z", "CHI2_1_MEDIAN"]
 
 #: degrees of freedom of the within-hold estimate below which the repeats are used too
 MIN_DOF = 10
@@ -208,14 +208,29 @@ def repeat_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
 FLOOR_REPEATS = 3
 
 
-def detection_floor_mm(data: RigSamples, sigma: float, scatter: float = 1.0) -> float:
+#: one gauge's hold scatter this many times the recording's (a median over all gauges) is scatter on that gauge,
+#: which the selection's sigma does not carry
+GAUGE_SPREAD = 4.0
+
+
+def gauge_scatter(data: RigSamples, resid: np.ndarray, sigma: float) -> float:
+    """The largest of the gauges' own :func:`repeat_scatter` of ``resid`` [mm]."""
+    comp = np.asarray(data.comp)
+    return max((repeat_scatter(data.subset(comp == c), np.asarray(resid)[comp == c], sigma)
+                for c in np.unique(comp)), default=1.0)
+
+
+def detection_floor_mm(data: RigSamples, sigma: float, scatter: float = 1.0, gauge_max: float | None = None) -> float:
     """The noise [mm] a term's change of the readings is seen against: one reading's ``sigma``, or a hold mean's
     scatter (``sigma sqrt(scatter / n)``, n the median hold's readings, ``scatter`` :func:`repeat_scatter`) where
     that is larger; not the selection's per-reading ``sigma sqrt(scatter)``, which puts a hold mean's scatter on
-    every reading. With fewer than :data:`FLOOR_REPEATS` repeats of a hold the scatter cannot be told from
-    structure, and the floor stays ``sigma sqrt(scatter)`` (the independent rig simulator's 2-repeat friction
-    with its own scatter had then been given a drift)."""
-    if scatter > 1.0 and _median_repeats(data) < FLOOR_REPEATS:
+    every reading. The floor stays ``sigma sqrt(scatter)`` with fewer than :data:`FLOOR_REPEATS` repeats of a hold
+    (the scatter cannot be told from structure: the independent rig simulator's 2-repeat friction had then been
+    given a drift) and where one gauge scatters :data:`GAUGE_SPREAD` times more than the recording
+    (``gauge_max``, :func:`gauge_scatter`: the selection's sigma, a median over the gauges, does not carry it, and a
+    review's 1 um on one gauge had been given a drift, a friction and a crosstalk)."""
+    if scatter > 1.0 and (_median_repeats(data) < FLOOR_REPEATS
+                          or (gauge_max is not None and gauge_max > GAUGE_SPREAD * scatter)):
         return float(sigma * np.sqrt(scatter))
     keys = np.asarray(data.step, np.int64) * 4 + np.asarray(data.comp, np.int64)
     n = float(np.median(np.unique(keys, return_counts=True)[1])) if keys.size else 1.0

@@ -23,7 +23,6 @@ from .envelope import Envelope
 from .report import Diagnosis
 from .rig_form import judge_linear
 from .rig_linear import Projector, fit_linear, linear_columns, measured_entries
-from .rig_noise import detection_floor_mm
 from .rig_outside import OUTSIDE, outside_hypotheses
 from .rig_select import demean, subset_ls
 from .rig_steps import Prep, RigModelFit, lack_of_fit, select_refining_creep, term_findings
@@ -38,17 +37,19 @@ def _hypotheses(data: RigSamples, C: np.ndarray, places: dict, tool: np.ndarray,
 
 
 def diagnose_tolerant(data: RigSamples, sim: RodCompliance, design, max_terms: int, env: Envelope,
-                      sigma: float, scatter: float = 1.0) -> tuple[Diagnosis, RigModelFit]:
+                      sigma: float, scatter: float = 1.0, floor_mm: float | None = None
+                      ) -> tuple[Diagnosis, RigModelFit]:
     """Diagnose ``data`` against ``sim`` within the envelope ``env`` (the steps of the module docstring); ``sigma``
     the noise of one reading [mm] (:func:`.rig_noise.reading_noise`); ``scatter``: the hold means' reduced
     chi-square that no effect explains (>= 1): effects are selected against ``sigma * sqrt(scatter)``, the hold
-    means' lack of fit against ``sigma``."""
+    means' lack of fit against ``sigma``; ``floor_mm``: the change a term must make to be seen (default
+    ``sigma``; :func:`.rig_noise.detection_floor_mm`)."""
     n = data.y.size
     sigma_sel = sigma * float(np.sqrt(max(scatter, 1.0)))
     groups = data.zero_groups
     entries = measured_entries(data, sim.C_F)
     L = linear_columns(data, entries)
-    prep = Prep(groups, Projector(groups, L), detection_floor_mm(data, sigma, scatter))
+    prep = Prep(groups, Projector(groups, L), sigma if floor_mm is None else floor_mm)
     lin0 = fit_linear(data, entries, L, data.y, sigma, sim.C_F)
     places, tool = joint_places(sim.tool_mm, design), np.asarray(sim.tool_mm, float)
     base = lin0.C_F[data.comp, data.axis] * data.F

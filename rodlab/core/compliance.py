@@ -339,10 +339,9 @@ class RodCompliance:
             if e.path is None:
                 raise ComplianceError(str(e).split(": ", 1)[-1] if e.key else str(e), path=path, key=e.key) from e
             raise
-        stored = data.get("c_rod_um")
-        if stored is not None and abs(stored - comp.c_rod_um) > 0.01 * max(abs(comp.c_rod_um), 1.0):
+        if comp.stored_c_rod_um is not None and not comp.c_rod_as_stated:
             log.warning("%s: stored c_rod_um %.4g differs from Eq. 23 on the matrices (%.4g); the matrices are used",
-                        path, stored, comp.c_rod_um)
+                        path, comp.stored_c_rod_um, comp.c_rod_um)
         for problem in (comp.unit_slips() if path is not None and warn_unit_slips else ()):  # a user's file
             log.warning("%s: %s", path, problem)
         return comp
@@ -353,9 +352,15 @@ class RodCompliance:
         design, and it states the c_rod_um its matrices give): its numbers are the design's, however soft, not a
         unit slip (a designer trial: a 3 m rod's own FEA file had been told to divide C_F by 1000; a review: a
         rodlab file's C_F scaled by hand, its provenance kept, had then slipped past)."""
-        p, stated = self.provenance or {}, self.stored_c_rod_um
+        p = self.provenance or {}
         made = bool(p.get("rodlab_version")) and bool(p.get("design")) and str(self.method) in ("calc", "fea")
-        return made and stated is not None and abs(stated - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0)
+        return made and self.stored_c_rod_um is not None and self.c_rod_as_stated
+
+    @property
+    def c_rod_as_stated(self) -> bool:
+        """Whether the file's stated c_rod_um is Eq. 23 on its matrices (to 1 %); False where it stated none."""
+        stated = self.stored_c_rod_um
+        return stated is not None and abs(stated - self.c_rod_um) <= 0.01 * max(abs(self.c_rod_um), 1.0)
 
     def unit_slips(self) -> list[str]:
         """Numbers no measuring rod has, each with the unit slip that gives them: C_F beyond

@@ -77,13 +77,13 @@ def admissible(library, ls: SubsetLS, S: tuple, coef, detect: Detection) -> bool
     return True
 
 
-def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_terms: int, groups) -> tuple:
+def select(library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, max_terms: int, detect: Detection) -> tuple:
     """Beam search over term subsets (width ``BEAM``) by the diagnosers' selection routine (:func:`.search.search`).
     The best admissible subset of each size replaces the current model only if delta BIC <= -10, the
     likelihood-ratio p < 1e-3 and the cross-validated error drops; subsets need not nest, so a strong but wrong
     first term does not lock in the path. Then terms that are no longer needed in the final model (drop-one
     test) are removed, and terms swapped while that lowers the BIC."""
-    space = _RigSpace(library, ls, sigma, n, groups)
+    space = _RigSpace(library, ls, sigma, n, detect)
     search(space, max_terms)
     return space.cur
 
@@ -95,8 +95,8 @@ class _RigSpace:
     tries = 4 * BEAM
     keep_growing = True
 
-    def __init__(self, library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, groups) -> None:
-        self.library, self.ls, self.sigma, self.n, self.groups = library, ls, sigma, n, groups
+    def __init__(self, library: list[Hypothesis], ls: SubsetLS, sigma: float, n: int, detect: Detection) -> None:
+        self.library, self.ls, self.sigma, self.n, self.detect = library, ls, sigma, n, detect
         self.npar = [t.n_params for t in library]
         self.cur: tuple = ()
         self.cur_rss = ls.fit(self.cur)[1]
@@ -128,7 +128,7 @@ class _RigSpace:
     def trial(self, candidate) -> Trial:
         """An inadmissible subset lets the next try; the best admissible one is the step's only chance."""
         key, c, rss = candidate
-        if not admissible(self.library, self.ls, key, c, self.groups):
+        if not admissible(self.library, self.ls, key, c, self.detect):
             return Trial.NEXT
         dk = self.k_of(key) - self.k_of(self.cur)
         if not evidence((self.cur_rss - rss) / self.sigma ** 2, dk, bic_penalty(dk, self.n)).significant:
@@ -152,8 +152,8 @@ class _RigSpace:
                 break
             self.cur = without(j)
             self.cur_rss = self.ls.fit(self.cur)[1]
-        self.cur = _swap(self.library, self.ls, self.cur, self.sigma, self.n, self.groups, self.k_of)
-        self.cur = _nested_simpler(self.library, self.ls, self.cur, self.sigma, self.n, self.groups)
+        self.cur = _swap(self.library, self.ls, self.cur, self.sigma, self.n, self.detect, self.k_of)
+        self.cur = _nested_simpler(self.library, self.ls, self.cur, self.sigma, self.n, self.detect)
 
 
 def _spans(X: np.ndarray, Y: np.ndarray) -> bool:
@@ -162,19 +162,19 @@ def _spans(X: np.ndarray, Y: np.ndarray) -> bool:
     return bool(np.linalg.norm(Y - X @ coef) <= 1e-8 * max(np.linalg.norm(Y), 1e-300))
 
 
-def _nested_simpler(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups) -> tuple:
+def _nested_simpler(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, detect: Detection) -> tuple:
     """Replace a term that contains a simpler term of another effect (its columns span the other's: a joint
     spring on pipe I has pipe I's torsion as its torsion part) by that simpler term, unless its extra parameters
     pass the test a new term must pass (delta BIC <= -10, likelihood-ratio p <= 1e-3): the data then say no more
     than the simpler physics. (The plain-BIC swaps keep an extra parameter that gains ~ln n in chi-square.) Each
     step lowers the parameter count, so this ends."""
     _, cur_rss = ls.fit(cur)
-    while (step := _simpler_term(library, ls, cur, cur_rss, sigma, n, groups)) is not None:
+    while (step := _simpler_term(library, ls, cur, cur_rss, sigma, n, detect)) is not None:
         cur, cur_rss = step
     return cur
 
 
-def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: float, n: int, groups):
+def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: float, n: int, detect: Detection):
     """The first reduction of :func:`_nested_simpler` of the model ``cur``: (the new model, its residual sum of
     squares), or None."""
     for j in cur:
@@ -187,13 +187,13 @@ def _simpler_term(library, ls: SubsetLS, cur: tuple, cur_rss: float, sigma: floa
             c, rss = ls.fit(key)
             dk = t.n_params - u.n_params
             if (not evidence((rss - cur_rss) / sigma ** 2, dk, bic_penalty(dk, n)).significant
-                    and admissible(library, ls, key, c, groups)):
+                    and admissible(library, ls, key, c, detect)):
                 log.info("nested: %s -> %s", t.label, u.label)
                 return key, rss
     return None
 
 
-def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of) -> tuple:
+def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, detect: Detection, k_of) -> tuple:
     """Replace one term of the final model by another while that lowers the BIC and keeps the model
     admissible with a cross-validated error no worse: a beam whose early slots went to a look-alike (a new
     hypothesis that resembles two others) can end on a neighbour of the best model of its size."""
@@ -211,7 +211,7 @@ def _swap(library, ls: SubsetLS, cur: tuple, sigma: float, n: int, groups, k_of)
                 key = tuple(sorted(rest + (i,)))
                 c, rss = ls.fit(key)
                 if bic(key, rss) < bic(cur, cur_rss) - 1e-9 and (best is None or bic(key, rss) < bic(*best[:2])):
-                    if admissible(library, ls, key, c, groups):
+                    if admissible(library, ls, key, c, detect):
                         best = (key, rss)
         if best is None:
             break

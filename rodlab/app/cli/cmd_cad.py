@@ -6,6 +6,7 @@ import time
 from pathlib import Path
 
 from ...core.design_io import resolve_design
+from ...core.progress import stages
 from .cadextra import require_cad
 from .reporting import add_report_option, write_command_report
 from .rodargs import design_help
@@ -29,14 +30,24 @@ def register(sub) -> None:
 
 
 def cmd_cad(args: argparse.Namespace) -> int:
-    geometry = require_cad()
     design = resolve_design(args.design)
     out = Path(args.output)
     t0 = time.perf_counter()
-    cad = geometry.build_cad(design)
-    written = [cad.export_step(out / "rod.step"), cad.export_stl(out / "rod.stl"), cad.write_mass_json(out / "mass.json")]
-    if not args.no_png:
-        written += geometry.render_views(cad, out, prefix="view", renderer=args.renderer)
+    steps = ["build123d", "assembly", "STEP", "STL", "mass"] + ([] if args.no_png else ["views"])
+    with stages(f"CAD of {design.name}", steps) as bar:        # 6-12 s in all: the import is 2-3 s of it
+        with bar.step("build123d"):
+            geometry = require_cad()
+        with bar.step("assembly"):
+            cad = geometry.build_cad(design)
+        with bar.step("STEP"):
+            written = [cad.export_step(out / "rod.step")]
+        with bar.step("STL"):
+            written.append(cad.export_stl(out / "rod.stl"))
+        with bar.step("mass"):
+            written.append(cad.write_mass_json(out / "mass.json"))
+        if not args.no_png:
+            with bar.step("views"):
+                written += geometry.render_views(cad, out, prefix="view", renderer=args.renderer)
     total = cad.total_mass_properties()
     print(f"rod {design.name}: {len(cad.solids)} parts, mass {total.mass_kg * 1e3:.2f} g, COM in {{T}} "
           f"[{', '.join(f'{round(v, 2) + 0.0:.2f}' for v in total.com_T_mm)}] mm ({time.perf_counter() - t0:.1f} s)")

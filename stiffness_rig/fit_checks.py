@@ -109,9 +109,12 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
     causes, warn, fixes = [], [], []
     for sc in (load.scale if load is not None else ()):
         off = abs(sc.ratio - 1.0)
-        if not np.isfinite(sc.ratio) or off <= LOAD_SCALE_WARN or off <= 5 * sc.se:
+        judged = np.isfinite(sc.se)                   # a short plan's slope is judged on gross slips only
+        if not np.isfinite(sc.ratio) or off <= LOAD_SCALE_WARN or (off <= 5 * sc.se if judged else
+                                                                   off <= LOAD_SCALE_REFUSE):
             continue
-        said = (f"on the {sc.axis.value} holds force_N grows {sc.ratio:.4g} +- {sc.se:.2g} times as fast as mass_kg x "
+        pm = f" +- {sc.se:.2g}" if judged else " (no scatter left to give its uncertainty)"
+        said = (f"on the {sc.axis.value} holds force_N grows {sc.ratio:.4g}{pm} times as fast as mass_kg x "
                 f"g0 ({sc.n_holds} holds with a hanger on; a calibrated load cell: 1)")
         if off <= LOAD_SCALE_REFUSE:
             warn.append(f"{said}: its calibration factor is {100 * (sc.ratio - 1):+.1f} % off, or the masses are; the "

@@ -114,7 +114,8 @@ class LoadScale:
     over the holds with a hanger on, one intercept per branch (friction and tare are constant on a branch).
 
     axis : the load axis of the holds; ratio : the slope [-] (1 for a load cell that reads newtons of the weights;
-    0.102 for one reading kgf, 0.225 lbf, 0 for one out of that axis's load path); se : its standard error [-];
+    0.102 for one reading kgf, 0.225 lbf, 0 for one out of that axis's load path); se : its standard error [-]
+    (NaN where the holds leave no scatter to estimate it: a short plan);
     n_holds : the holds it is fitted on
     """
 
@@ -198,8 +199,12 @@ def load_scale(axis: LoadAxis, weight_N: np.ndarray, force_N: np.ndarray, branch
     the holds of load axis ``axis`` given (shape=(m,) each); None when no branch has two different weights or nothing
     is left for the residuals."""
     labels, idx = np.unique(np.asarray(branch), return_inverse=True)
-    if not any(np.ptp(weight_N[idx == k]) > 0 for k in range(labels.size)) or weight_N.size - labels.size - 1 < 1:
+    if not any(np.ptp(weight_N[idx == k]) > 0 for k in range(labels.size)):
         return None
+    if weight_N.size - labels.size - 1 < 1:          # a short plan: the slope without a scatter to judge it by
+        X = np.column_stack([weight_N, np.eye(labels.size)[idx]])
+        coef = np.linalg.lstsq(X, force_N, rcond=None)[0]
+        return LoadScale(axis, float(coef[0]), float("nan"), int(weight_N.size))
     ratio, se = _slope_with_levels(weight_N, force_N, idx, labels.size)
     return LoadScale(axis, ratio, se, int(weight_N.size))
 

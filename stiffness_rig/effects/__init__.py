@@ -14,11 +14,11 @@ from rodlab.core.registry import refill_id_registry
 
 from ..errors import RigError
 from .base import HypothesisContext, RigEffectModel, RigState
-from .creep import CREEP_TAU_GRID_S, creep_hypothesis, two_term_creep_hypothesis
+from .creep import CREEP_TAU_GRID_S, creep_hypothesis, held_creep_share, two_term_creep_hypothesis
 from .springs import joint_places, spring_columns, spring_compliance, spring_matrices
 
 __all__ = ["RIG_EFFECTS", "RigEffect", "discover", "rig_effect", "complete_effects", "rig_hypotheses",
-           "RigEffectModel", "HypothesisContext", "RigState", "creep_hypothesis", "two_term_creep_hypothesis",
+           "RigEffectModel", "HypothesisContext", "RigState", "creep_hypothesis", "two_term_creep_hypothesis", "held_creep_share",
            "CREEP_TAU_GRID_S", "joint_places",
            "spring_matrices", "spring_compliance", "spring_columns", "vocabulary_markdown"]
 

@@ -10,8 +10,13 @@ from rodlab.core.hypothesis import Hypothesis, ParamSpec
 from ..errors import RigError
 from .base import RigEffectModel
 
-__all__ = ["Creep", "kelvin_voigt", "creep_hypothesis", "two_term_creep_hypothesis", "CREEP_TAU_GRID_S"]
+__all__ = ["Creep", "kelvin_voigt", "creep_hypothesis", "two_term_creep_hypothesis", "CREEP_TAU_GRID_S", "SETTLING_TAU_S",
+           "CREEP_PHI_PLAUSIBLE", "held_creep_share"]
 
+#: a creep time constant below this [s] is more likely a hung weight settling than a laminate's or bond's creep
+SETTLING_TAU_S = 1.0
+#: a creep deflection beyond this share of the elastic one is no laminate's or bond's at a rig's loads
+CREEP_PHI_PLAUSIBLE = 0.15
 #: time constants [s] of the creep hypotheses (a factor sqrt 2 apart); the chosen one is refined continuously
 CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 0.5), 3))
 
@@ -38,6 +43,21 @@ class Creep(RigEffectModel):
         if p.get("phi_2") is not None and not (p.get("tau_2_s") or 0) > 0:
             raise RigError(f"effect creep: phi_2 needs its time constant tau_2_s > 0 s, got {p.get('tau_2_s')!r}",
                            key="creep.tau_2_s")
+
+    def caution(self, p: dict) -> str | None:
+        """A time constant under :data:`SETTLING_TAU_S` or a creep beyond :data:`CREEP_PHI_PLAUSIBLE` is no
+        laminate's or bond's creep: a hung weight settling (a swing, a lift lowering it) reads so."""
+        terms = [(p.get("phi"), p.get("tau_s")), (p.get("phi_2"), p.get("tau_2_s"))]
+        fast = [(float(phi), float(tau)) for phi, tau in terms if phi is not None and tau is not None
+                and (float(tau) < SETTLING_TAU_S or abs(float(phi)) > CREEP_PHI_PLAUSIBLE)]
+        if not fast:
+            return None
+        phi, tau = fast[0]
+        return (f"a creep of {phi:.3g} with a {tau:.3g} s time constant is more likely each load settling (the weight "
+                f"swinging or still being lowered) than the rod's creep (laminates and bonds creep a few % over seconds "
+                f"to minutes): leave the first seconds of each hold out (`rig acquire` records them as settling and "
+                f"says so in its header) or wait for the readings to settle; the exported compliance takes the "
+                f"deflection a hold reaches")
 
     def deflection(self, x, C, F, t, state, p):
         dt = 0.0 if state.t_last is None else max(t - state.t_last, 0.0)
@@ -112,3 +132,22 @@ def two_term_creep_hypothesis(data, base: np.ndarray, tau: float, tau_2: float) 
                       f"hold at constant load, part of it within seconds (time constant {fast:.3g} s) and part "
                       f"slowly ({slow:.3g} s), more at higher load", hidden=2,
                       settings={"tau_s": float(tau), "tau_2_s": float(tau_2)})
+
+
+#: a creep term of a time constant up to this share of a hold is complete within it: part of the compliance
+FAST_CREEP_HOLD_SHARE = 1.0 / 3.0
+
+
+def held_creep_share(p: dict, hold_s: float) -> tuple[float, float]:
+    """(fast, slow): the creep of a finding's terms (``p``: its parameters) as shares of the elastic deflection,
+    those complete within a hold of ``hold_s`` seconds (a time constant up to :data:`FAST_CREEP_HOLD_SHARE` of
+    it: no reading sees the load's first instant, so their creep is the rod's compliance) and the rest."""
+    fast = slow = 0.0
+    for phi, tau in ((p.get("phi"), p.get("tau_s")), (p.get("phi_2"), p.get("tau_2_s"))):
+        if phi is None or tau is None or not float(tau) > 0:
+            continue
+        if float(tau) <= FAST_CREEP_HOLD_SHARE * hold_s:
+            fast += float(phi)
+        else:
+            slow += float(phi)
+    return fast, slow

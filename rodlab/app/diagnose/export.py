@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from rodlab.stiffness_rig.completion import complete_c_f
-from rodlab.stiffness_rig.effects import RIG_EFFECTS, RigEffect
+from rodlab.stiffness_rig.effects import RIG_EFFECTS, RigEffect, held_creep_share
 from rodlab.stiffness_rig.effects.springs import joint_places
 
 from ...core.compliance import RodCompliance
@@ -17,8 +17,9 @@ def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2
                          design=None) -> RodCompliance:
     """``sim`` plus the fitted structural terms (compliance scale, torsion, joint springs); C_g scaled by the
     change of c22 + c33 (as Eq. 22 does for the measured file). Where the linear compliance was fitted freely
-    (the simulation not taken to be exact), that fit is the corrected C_F. Rig effects (friction, tare, drift, crosstalk,
-    creep) belong to the rig, not the rod, and are left out. ``measured_axes``: the load axes the recording
+    (the simulation not taken to be exact), that fit is the corrected C_F. Rig effects (friction, tare, drift, crosstalk)
+    belong to the rig, not the rod, and are left out; a creep's share that a hold of the recording shows is kept
+    (:func:`_with_held_creep`). ``measured_axes``: the load axes the recording
     ``source`` loaded (0-2 for x-z); where the linear compliance was fitted freely, the entries it could not fit
     (an axis not loaded) are the simulation with the structural findings applied (:func:`_with_findings`: a
     compliant flange joint found from the loaded axes adds to c11 too; ``design`` places the joints); a diagonal
@@ -35,7 +36,8 @@ def corrected_compliance(sim: RodCompliance, diag, model, measured_axes=(0, 1, 2
         notes += _predicted_note(C, sim, diag, measured_axes) + _group_notes(grouped, measured_axes)
         for m, n in model.linear.entries:
             C[m, n] = C[n, m] = model.linear.C_F[m, n]
-    C = 0.5 * (C + C.T)
+    C, held = _with_held_creep(0.5 * (C + C.T), diag)
+    notes += held
     r = float((C[1, 1] + C[2, 2]) / (sim.C_F[1, 1] + sim.C_F[2, 2]))    # of the model, before any completion
     loaded = np.zeros((3, 3), dtype=bool)
     loaded[:, list(measured_axes)] = True
@@ -94,3 +96,26 @@ def _predicted_note(C: np.ndarray, sim: RodCompliance, diag, measured_axes) -> l
     axes = ", ".join("xyz"[i] for i in unloaded)
     return [f"no load along {axes}: {values} from {what}, a prediction, not a measurement; record a load along "
             f"{axes} to measure it"]
+
+
+def _with_held_creep(C: np.ndarray, diag) -> tuple[np.ndarray, list[str]]:
+    """``C`` with the creep that is complete within a hold of the recording (its median length:
+    :func:`~stiffness_rig.effects.creep.held_creep_share`): no reading, on the rig or in a calibration, sees the
+    load's first instant, so a fast creep is the rod's compliance (as the diagnosis reads a creep settled before a
+    hold's first reading); a slower one stays out, the file the elastic compliance, and a note says how much more
+    a load held for long deflects the rod."""
+    hold_s = float(diag.extra.get("hold_median_s") or 0.0)
+    creep = [f for f in diag.findings if f.effect == "creep"]
+    if not creep or not hold_s > 0:
+        return C, []
+    shares = [held_creep_share(f.parameters, hold_s) for f in creep]
+    fast, slow = sum(a for a, _ in shares), sum(b for _, b in shares)
+    notes = []
+    if fast:
+        notes.append(f"the creep found that is complete within a hold of the recording ({hold_s:.3g} s) is in the "
+                     f"file: x{1.0 + fast:.4f} on the elastic compliance")
+    if slow:
+        with_fast = " with the fast creep" if fast else ""
+        notes.append(f"the slower creep found is not in the file (the elastic compliance{with_fast}): a load held "
+                     f"for long deflects the rod x{(1.0 + fast + slow) / (1.0 + fast):.4f} as much")
+    return C * (1.0 + fast), notes

@@ -30,6 +30,7 @@ from ...core.enums import FindingKind, Method, Subject, Verdict
 from ...core.errors import RodlabError
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
+from rodlab.stiffness_rig.settling import after_settling, hold_part, settling_seconds
 
 from .envelope import Envelope, design_of, envelope_for
 from .report import Diagnosis, Finding
@@ -63,6 +64,20 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     if sim.method is Method.NONE:
         raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
                           "against; give the rod's calc, fea or meas compliance file")
+    cut = hold_part(rec)                      # an acquired recording's settling samples are no hold's
+    settling = {"samples_left_out": cut.dropped, "holds": cut.holds, "hold_samples": cut.per_hold}
+    seconds = None if cut.dropped else settling_seconds(rec)
+    if seconds is not None:                   # another tool's recording: its holds' settling read off the readings
+        cut = after_settling(rec, seconds)
+        settling = {"samples_left_out": cut.dropped, "holds": cut.holds, "seconds": seconds}
+    diag, model = _diagnose_recording(cut.recording, sim, design, max_terms, accuracy)
+    if cut.dropped:
+        diag.extra["settling"] = settling
+    return diag, model
+
+
+def _diagnose_recording(rec, sim: RodCompliance, design, max_terms: int, accuracy) -> tuple[Diagnosis, RigModelFit]:
+    """:func:`diagnose_rig` of ``rec`` as it is."""
     data = rig_samples(rec)
     name = rec.path or "the recording"
     if not np.any(data.mass > 0):
@@ -88,7 +103,18 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
         diag.verdict = Verdict.UNEXPLAINED
     _add_cautions(diag)
     diag.extra["noise_estimate"] = {"dof": noise.dof, "source": noise.source}
+    diag.extra["hold_median_s"] = _median_hold_s(data)
     return diag, model
+
+
+def _median_hold_s(data: RigSamples) -> float:
+    """The median hold's length [s]: its last reading's time after its first, plus one reading interval."""
+    ends, starts = {}, {}
+    for st, t in zip(data.step.tolist(), data.t_abs.tolist()):
+        ends[st] = max(ends.get(st, t), t)
+        starts[st] = min(starts.get(st, t), t)
+    dt = np.diff(np.unique(data.t_abs))
+    return float(np.median([ends[k] - starts[k] for k in ends]) + (np.median(dt) if dt.size else 0.0))
 
 
 def _note_glitches(diag: Diagnosis, data: RigSamples, glitch: np.ndarray) -> None:

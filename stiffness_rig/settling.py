@@ -1,0 +1,156 @@
+"""The settling samples of an acquired recording: what `rig acquire` records before each hold proper.
+
+`rodlab rig acquire` records every sample, also those read while a hold settles (the live readings must stay
+within the plan's ``settle.tolerance_mm`` for ``settle.window_s``), and then the hold proper: ``hold_s`` x
+``rate_Hz`` samples. The header's ``plan_fields`` states both, so the settling samples of each hold are the ones
+before its last ``hold_s x rate_Hz``. A hung weight's settling (a swing, a lift lowering it) is no property of the
+rod: fitted, it had read as a creep of phi 0.43 with a 0.5 s time constant, and the exported compliance had been
+40 % too stiff (an instrument trial's own gauges, settling with a 0.15 s time constant).
+"""
+from __future__ import annotations
+
+import dataclasses
+import re
+import warnings
+
+import numpy as np
+
+__all__ = ["SettlingCut", "stated_hold_samples", "hold_part", "settling_seconds", "after_settling"]
+
+#: a hold's level must move by more than this many reading-noise SDs for its settling to be looked at
+STEP_NOISE = 10.0
+#: the first reading of a settling hold is still this share of the step away from the hold's level, or more
+SETTLING_START = 0.1
+#: a settled reading is within this share of the step of its hold's level (the median over the holds)
+SETTLED_SHARE = 0.02
+#: a settling is over within this [s]; what goes on longer is a creep, for the diagnosis to name
+SETTLING_MAX_S = 1.5
+#: and stays over for at least this long after [s]
+SETTLED_CHECK_S = 1.0
+#: holds with a clear step needed to say a recording settles
+MIN_HOLDS = 4
+
+_FIELD = r"(?:^|\s){}=([0-9.eE+-]+)(?=\s|$)"
+
+
+@dataclasses.dataclass(frozen=True)
+class SettlingCut:
+    """The recording without each hold's settling samples.
+
+    recording : the hold proper of every hold (a hold with no more samples than ``per_hold`` kept whole);
+    per_hold : the samples of a hold proper the header states (``hold_s x rate_Hz``), None where it states none;
+    dropped : settling samples left out; holds : holds that had settling samples
+    """
+
+    recording: object
+    per_hold: int | None
+    dropped: int
+    holds: int
+
+
+def stated_hold_samples(meta: dict) -> int | None:
+    """``hold_s x rate_Hz`` from an acquired recording's ``plan_fields`` header entry; None where it has none."""
+    text = str(meta.get("plan_fields") or "")
+    found = [re.search(_FIELD.format(re.escape(k)), text) for k in ("hold_s", "rate_Hz")]
+    if not all(found):
+        return None
+    try:
+        hold_s, rate = (float(m.group(1)) for m in found)
+    except ValueError:
+        return None
+    n = int(round(hold_s * rate))
+    return n if n >= 2 else None
+
+
+def hold_part(rec) -> SettlingCut:
+    """``rec`` (a :class:`~rodlab.stiffness_rig.RigRecording`) with the samples before each hold's last
+    ``hold_s x rate_Hz`` left out, where its header states them; ``rec`` itself otherwise."""
+    n = stated_hold_samples(rec.meta)
+    if n is None:
+        return SettlingCut(rec, None, 0, 0)
+    keep = np.ones(rec.n, dtype=bool)
+    holds = 0
+    for st in np.unique(rec.step):
+        rows = np.flatnonzero(rec.step == st)
+        rows = rows[np.argsort(rec.time_s[rows], kind="stable")]
+        if rows.size > n:
+            keep[rows[:-n]] = False
+            holds += 1
+    if keep.all():
+        return SettlingCut(rec, n, 0, 0)
+    return SettlingCut(_subset(rec, keep), n, int((~keep).sum()), holds)
+
+
+def _subset(rec, keep: np.ndarray):
+    """The rows ``keep`` of a recording (every per-sample array; the header and path as they are)."""
+    changes = {}
+    for f in dataclasses.fields(rec):
+        value = getattr(rec, f.name)
+        if isinstance(value, np.ndarray) and value.shape[:1] == keep.shape:
+            changes[f.name] = value[keep]
+    return dataclasses.replace(rec, **changes)
+
+
+def settling_seconds(rec) -> float | None:
+    """How long each hold of ``rec`` settles [s], from its readings: pooled over the holds whose level moved by
+    more than :data:`STEP_NOISE` noise SDs, a reading's distance to its hold's level as a share of the step from
+    the previous hold's (the median over the holds at each reading of a hold) starts above
+    :data:`SETTLING_START` and stays within :data:`SETTLED_SHARE` from some time under :data:`SETTLING_MAX_S`
+    on; None where it does not (no settling, or a creep that goes on after it: time constants of seconds)."""
+    curves = _step_shares(rec)
+    if len(curves) < MIN_HOLDS:
+        return None
+    n = min(len(c) for c in curves)
+    u = np.median(np.array([c[:n] for c in curves]), axis=0)     # shape=(n, 2): time since the hold began, share
+    t, share = u[:, 0], u[:, 1]
+    if not share[0] > SETTLING_START:
+        return None
+    within = t < SETTLING_MAX_S + SETTLED_CHECK_S
+    for k in range(1, int(np.sum(t < SETTLING_MAX_S))):
+        if np.all(np.abs(share[k:][within[k:]]) < SETTLED_SHARE) and t[within].max() >= t[k] + SETTLED_CHECK_S:
+            return float(t[k])
+    return None
+
+
+def _step_shares(rec) -> list[np.ndarray]:
+    """Per hold whose level moved clearly, per reading of its largest-moving gauge: (time since the hold's first
+    reading [s], (reading - hold level) / (previous level - hold level)), shape=(m, 2); the level is the mean of
+    the hold's later half."""
+    out = []
+    prev, axis = None, None
+    for st in _steps_in_order(rec):
+        rows = np.flatnonzero(rec.step == st)
+        rows = rows[np.argsort(rec.time_s[rows], kind="stable")]
+        if rec.load_axis[rows[0]] is not axis:              # a new series: its gauges zeroed afresh
+            prev, axis = None, rec.load_axis[rows[0]]
+        late = rec.disp_mm[rows[rows.size // 2:]]
+        with warnings.catch_warnings():                     # a gauge not read is NaN throughout
+            warnings.simplefilter("ignore", RuntimeWarning)
+            level, noise = np.nanmean(late, axis=0), np.nanstd(late, axis=0)
+        if prev is not None and rows.size >= 6:
+            jump = prev - level
+            c = int(np.nanargmax(np.where(np.isfinite(jump), np.abs(jump), -1.0)))
+            if np.isfinite(jump[c]) and abs(jump[c]) > STEP_NOISE * max(float(noise[c]), 1e-9):
+                t = rec.time_s[rows] - rec.time_s[rows[0]]
+                out.append(np.column_stack([t, (rec.disp_mm[rows, c] - level[c]) / jump[c]]))
+        prev = level
+    return out
+
+
+def _steps_in_order(rec) -> list:
+    """The recording's steps in the order of their first reading."""
+    steps, first = np.unique(rec.step, return_index=True)
+    return [int(s) for s in steps[np.argsort(rec.time_s[first], kind="stable")]]
+
+
+def after_settling(rec, seconds: float) -> SettlingCut:
+    """``rec`` without the readings of each hold's first ``seconds`` (after its first reading)."""
+    keep = np.ones(rec.n, dtype=bool)
+    holds = 0
+    for st in np.unique(rec.step):
+        rows = np.flatnonzero(rec.step == st)
+        early = rows[rec.time_s[rows] - rec.time_s[rows].min() < seconds]
+        if early.size and early.size < rows.size:
+            keep[early] = False
+            holds += 1
+    return SettlingCut(_subset(rec, keep), None, int((~keep).sum()), holds)

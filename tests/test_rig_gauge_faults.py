@@ -155,3 +155,27 @@ def test_a_slip_beside_friction_and_creep_on_a_rod_off_its_simulation_is_found(t
     fr = next(f for f in diag.findings if f.effect == "friction")
     assert fr.parameters["F_f_N"] == pytest.approx(0.3, rel=0.05), diag.summary()
     assert not [f for f in diag.findings if f.effect == "drift"], diag.summary()
+
+
+def test_a_slip_within_a_hold_on_a_gauge_reading_to_1_um_is_found(tmp_path):
+    """Readings to 1 um with 0.5 um of noise, a rod 1.5x its simulation, the y gauge slipping by 5 um within a hold
+    halfway through the y series: the slip is named at its size, no drift beside it. The noise of the residual
+    had been the median successive difference, which on 1 um readings is the step itself (1.05 um): the slip read
+    4.8 SDs, under the 5 a slip needs, and a drift took its place (a blind tester's rig simulator)."""
+    model = RigModel(1.5 * SIM.C_F, {}, noise_mm=0.0005, resolution_mm=0.001, seed=27)
+    path = simulate_recording(model, SCHEDULE, tmp_path / "rec.rig.csv", rod=DESIGN.name)
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    y_steps = sorted({int(r[1]) for r in rows if r[4] == "y"})
+    mid = y_steps[len(y_steps) // 2]
+    hold_t = [float(r[0]) for r in rows if int(r[1]) == mid]
+    t0, step = 0.5 * (hold_t[0] + hold_t[-1]), 0.005
+
+    def slip(_, row):
+        if row["load_axis"] == "y" and row["disp_y_mm"] and float(row["time_s"]) >= t0:
+            row["disp_y_mm"] = f"{float(row['disp_y_mm']) + step:.3f}"
+    slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
+    diag, _ = diagnose_rig(read_recording(slipped), SIM, DESIGN)
+    f = next((f for f in diag.findings if "slip_mm" in f.parameters), None)
+    assert f is not None and f.location == "sensor:y", diag.summary()
+    assert f.parameters["slip_mm"] == pytest.approx(step, rel=0.1), diag.summary()
+    assert not [f for f in diag.findings if f.effect in ("drift", "creep")], diag.summary()

@@ -55,6 +55,10 @@ def register(sub) -> None:
                         "through it, moved by the frame's sensitivities to the keys (C_sim x frame(as built) / "
                         "frame(design)), with its method's accuracy, instead of through --model; the recording is "
                         "diagnosed against it too")
+    p.add_argument("--accept-unexplained", action="store_true",
+                   help="write the as-built design from a recording whose hold means the diagnosis leaves partly "
+                        "unexplained (refused by default: the linear compliance fitted beside such structure may "
+                        "carry part of it; its uncertainties are widened by the lack of fit)")
     p.add_argument("-o", "--output", required=True, help="the as-built design to write (*.rod.toml)")
     p.set_defaults(func=cmd_update)
 
@@ -81,9 +85,21 @@ def _explained_by_keys(finding, keys, design) -> bool:
     return bool(wanted & set(keys))
 
 
-def _warn_unexplained(path: str, diag) -> None:
-    """A recording the diagnosis leaves partly unexplained: its linear part may carry what is left."""
+def _check_unexplained(path: str, diag, accept: bool) -> None:
+    """A recording the diagnosis leaves partly unexplained. Structure left in the hold means (a lack of fit no
+    effect explains) may be carried by the linear compliance fitted beside it: refused unless ``accept`` (two
+    trials: an as-built file had been written beside it with a warning only); what the diagnosis modelled or left
+    out (a slip, a glitch, a stray hold, a gauge at its stop, correlated readings within the holds) a warning."""
     left = [f for f in diag.findings if f.effect == "unexplained"]
+    lack = [f for f in left if "reduced_chi2" in f.parameters]
+    if lack and not accept:
+        where = ", ".join(dict.fromkeys(f.location or "?" for f in lack))
+        chi = max(float(f.parameters["reduced_chi2"]) for f in lack)
+        raise VerdictError(f"{path}: the diagnosis leaves structure in the hold means unexplained (at {where}; reduced "
+                           f"chi-square {chi:.1f}): the linear compliance fitted beside it may carry part of it, so no "
+                           "as-built design is written; find its cause with `rodlab diagnose --rig` (re-record the "
+                           "holds it names), or give --accept-unexplained to write it anyway (its uncertainties "
+                           "widened by the lack of fit)")
     if left:
         where = ", ".join(dict.fromkeys(f.location or "?" for f in left))
         print(f"warning: {path}: the diagnosis leaves part of the recording unexplained (at {where}); the linear "
@@ -91,7 +107,7 @@ def _warn_unexplained(path: str, diag) -> None:
               "design", file=sys.stderr)
 
 
-def _measured(path: str, design, keys, model: str, own=None):
+def _measured(path: str, design, keys, model: str, own=None, accept_unexplained: bool = False):
     """The measured entries from a compliance file or, for a recording, its diagnosed linear part (against the
     ``model`` the keys are fitted through, or the user's own simulation ``own``)."""
     from ..update import Measured, model_compliance
@@ -112,7 +128,7 @@ def _measured(path: str, design, keys, model: str, own=None):
                               "this rod's as-built design; give this rod's recording (or its design)")
         _refuse_unfitted(path, unfitted, design, "your simulation (--sim)" if own else f"{model} model", keys)
         lin = fitted.linear
-        _warn_unexplained(path, diag)
+        _check_unexplained(path, diag, accept_unexplained)
         return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig
     comp = read_compliance(path)
     warn_rod_mismatch(comp.rod, design.name, path, "--measured", "the design", named_by="")
@@ -229,7 +245,7 @@ def cmd_update(args: argparse.Namespace) -> int:
         _check_key(design, key)
         _check_moves(design, key, "frame" if args.sim else args.model)
     own = _own_sim(args, design)
-    measured, causes = _measured(args.measured, design, keys, args.model, own)
+    measured, causes = _measured(args.measured, design, keys, args.model, own, args.accept_unexplained)
     if causes:
         print("the recording also shows: " + ", ".join(causes) + " (rig effects, separated from the linear "
               "compliance; see `rodlab diagnose --rig`)")

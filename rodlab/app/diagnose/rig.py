@@ -28,6 +28,7 @@ import numpy as np
 from ...core.compliance import RodCompliance
 from ...core.enums import FindingKind, Method, Subject, Verdict
 from ...core.errors import RodlabError
+from ...core.units import G0
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 from rodlab.stiffness_rig.settling import after_settling, hold_part, settling_seconds
@@ -102,6 +103,7 @@ def _diagnose_recording(rec, sim: RodCompliance, design, max_terms: int, accurac
         diag.findings += range_finding(limited, stopped, diag.rms_after_mm)
         diag.verdict = Verdict.UNEXPLAINED
     _add_cautions(diag)
+    _note_one_sided_split(diag)
     diag.extra["noise_estimate"] = {"dof": noise.dof, "source": noise.source}
     diag.extra["hold_median_s"] = _median_hold_s(data)
     return diag, model
@@ -140,6 +142,29 @@ def _add_cautions(diag: Diagnosis) -> None:
         text = models[f.effect].caution(f.parameters) if f.effect in models else None
         if text:
             f.evidence["caution"] = text
+
+
+def _note_one_sided_split(diag: Diagnosis) -> None:
+    """Friction and a tare whose weight equals it leave the loading branch where it was and shift the unloading
+    one alone: a split of the unloading branch (a joint's hysteresis of another shape than the vocabulary's
+    ``load_hysteresis``, split in proportion to the load) fits the same holds. Said with both findings (a blind
+    tester's bow-shaped hysteresis, two loads between 0 and the largest, had been friction and a tare, both
+    "decisive", with no alternative)."""
+    fr = next((f for f in diag.findings if f.effect == "friction" and "F_f_N" in f.intervals), None)
+    ta = next((f for f in diag.findings if f.effect == "tare" and "tare_kg" in f.intervals), None)
+    if fr is None or ta is None:
+        return
+    sd = [(hi - lo) / (2 * 1.96) for lo, hi in (fr.intervals["F_f_N"], ta.intervals["tare_kg"])]
+    gap = float(ta.parameters["tare_kg"]) * G0 - float(fr.parameters["F_f_N"])
+    if abs(gap) > 2.0 * np.hypot(sd[0], sd[1] * G0):
+        return
+    text = (f"the tare's weight ({float(ta.parameters['tare_kg']) * G0:.3g} N) equals the friction "
+            f"({float(fr.parameters['F_f_N']):.3g} N): the loading branch has not moved and the unloading branch "
+            "alone is shifted, which a hysteresis of a bond or clamped joint does as well (the unloading branch above "
+            "the loading one, its shape unknown); holds at more loads in between (e.g. 0.25 kg steps) tell the two "
+            "apart")
+    for f in (fr, ta):
+        f.evidence["caution"] = "; ".join(filter(None, (f.evidence.get("caution"), text)))
 
 
 def _without_a_stray_hold(data, sim: RodCompliance, design, max_terms: int, env: Envelope, sigma: float):

@@ -228,7 +228,9 @@ def _cause(h: Hypothesis, val, se, lr: float, scored, rms, q0: float, k: int) ->
         ev["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): the lever "
                              "from each place to the ball differs in each")
     text = (h.explanation + "; beyond what the design's tolerances and the simulation's accuracy explain "
-            f"(envelope chi-square {q0:.1f} on {k} entries -> {q0 - lr:.1f})")
+            f"(envelope chi-square {q0:.1f} on {k} entries -> {q0 - lr:.1f}; fitted together with the toleranced "
+            "keys, which carry their share of the difference: not the entries' measured / simulated ratio r_mn, "
+            "which `rig fit` and the export give)")
     return Finding(h.effect, location, text, params, intervals, rms[0], rms[1], ev)
 
 

@@ -204,7 +204,7 @@ def _slip_beside(data, r: np.ndarray, parts: list, nuisance: np.ndarray) -> np.n
         fitted = (k >= j) - Q @ (Q.T @ (k >= j).astype(float))       # the step column off the span
         rest = rp - step * fitted                                     # what neither explains: the noise
         sd = max(1.4826 * float(np.median(np.abs(rest - np.median(rest)))),        # readings to 1 um: the MAD
-                 1.4826 * float(np.median(np.abs(np.diff(rest)))) / np.sqrt(2.0))  # can fall below the noise
+                 _difference_sd(rest))                                              # can fall below the noise
         local = float(np.mean(rp[j:j + m]) - np.mean(rp[j - m:j]))    # the jump across the moment itself
         placed = (raw is not None and abs(int(data.step[idx[raw[0]]]) - int(data.step[idx[j]])) <= 1) or 4 * (n - j) >= n
         abrupt = local * step > 0 and abs(local) >= _SLIP_ABRUPT * abs(step)
@@ -270,10 +270,27 @@ def _is_slip(r: np.ndarray, j: int) -> bool:
     :data:`_SLIP_ABRUPT` happens between the :data:`_SLIP_MIN_READINGS` readings on each side of it. A slow creep or
     a warm-up drift changes the mean as much, but gradually."""
     m = _SLIP_MIN_READINGS
-    sd = 1.4826 * float(np.median(np.abs(np.diff(r)))) / np.sqrt(2.0)
+    sd = _difference_sd(r)
     step = float(np.mean(r[j:]) - np.mean(r[:j]))
     local = float(np.mean(r[j:j + m]) - np.mean(r[j - m:j]))
     return sd > 0 and abs(step) >= _SLIP_MIN_SD * sd and local * step > 0 and abs(local) >= _SLIP_ABRUPT * abs(step)
+
+
+#: the share of successive differences kept for the noise (the largest left out: a step, a glitch) and the
+#: standard deviation of a normal variable truncated there (1 - 2 q phi(q) / (2 Phi(q) - 1), q = 2.576)
+_DIFF_KEPT, _TRUNCATED_SD = 0.99, 0.9617
+
+
+def _difference_sd(r: np.ndarray) -> float:
+    """The noise SD of one reading of ``r`` from its successive differences (which one step hardly moves): their
+    rms over the :data:`_DIFF_KEPT` smallest, corrected for the truncation, over sqrt 2. Not their MAD: on readings
+    to 1 um with 0.5 um of noise most differences are 0 or +-1 um and the MAD is the step (1.05 um), which had
+    hidden a blind tester's 5 um slip of 10 noise SDs within a hold."""
+    d = np.abs(np.diff(np.asarray(r, float)))
+    if d.size == 0:
+        return 0.0
+    kept = np.sort(d)[:max(int(np.ceil(_DIFF_KEPT * d.size)), 1)]
+    return float(np.sqrt(np.mean(kept ** 2))) / _TRUNCATED_SD / np.sqrt(2.0)
 
 
 def confirm_outside(location: str | None) -> str | None:

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from rodlab.core.errors import did_you_mean
+from rodlab.core.fileio import toml_problem
 from rodlab.core.frames import pose_to_matrix
 from rodlab.core.schema import require_schema
 
@@ -90,8 +91,8 @@ def _load(p: Path) -> tuple[str, dict]:
     except (OSError, UnicodeDecodeError) as e:
         raise CalibrationError(f"cannot read: {e}", path=p) from e
     except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        raise CalibrationError(f"not valid TOML: {e}", path=p, line=int(m.group(1)) if m else None) from e
+        message, line = toml_problem(e, text)
+        raise CalibrationError(message, path=p, line=line) from e
 
 
 def _numbers(v, shape, where) -> np.ndarray:

@@ -33,6 +33,7 @@ from .config import RigPlan, RigProfile
 from .device import GaugeClient
 from .instruments import RigClient, Sample
 from .errors import RigError
+from .fit_checks import scale_cause
 from .recording import RecordingWriter
 from .recording_header import LOAD_BY_CELL, LOAD_BY_MASS
 from .resume import ResumePoint, identity_meta, resume_point
@@ -251,8 +252,9 @@ class _Session:
         if self.load_warned or weight < LOAD_CHECK_MIN_N or LOAD_RATIO[0] <= read / weight <= LOAD_RATIO[1]:
             return
         self.load_warned = True
+        cause, fix = scale_cause(read / weight, axis.value)
         text = (f"{label}: the load cell reads {read:.4g} N above its unloaded start for {mass:g} kg ({weight:.4g} "
-                f"N): check its scale, units, sign or Modbus word order; every sample is kept (Ctrl-C and the same "
+                f"N, a ratio of {read / weight:.4g}): {cause}. {fix} Every sample is kept (Ctrl-C and the same "
                 f"command resumes)")
         log.warning("%s", text)
         self.writer.comment(f"load check: {text}")

@@ -11,7 +11,7 @@ import numpy as np
 from .instrument_profile import UNITS
 
 __all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings", "creep_warnings",
-           "load_scale_problems", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
+           "load_scale_problems", "scale_cause", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
 _AX = "xyz"
 #: two measured entries c_mn, c_nm further apart than this many standard errors break reciprocity ...
@@ -120,7 +120,7 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
             warn.append(f"{said}: its calibration factor is {100 * (sc.ratio - 1):+.1f} % off, or the masses are; the "
                         "fit uses the load cell's readings: check it against a known weight")
             continue
-        cause, fix = _scale_cause(sc.ratio, sc.axis.value)
+        cause, fix = scale_cause(sc.ratio, sc.axis.value)
         causes.append(f"{said}: {cause}")
         fixes += [fix] if fix not in fixes else []
     if not causes:
@@ -129,23 +129,23 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
             "`rig fit --load mass`"], warn
 
 
-def _scale_cause(ratio: float, axis: str) -> tuple[str, str]:
+def scale_cause(ratio: float, axis: str) -> tuple[str, str]:
     """(what a load-cell scale ``ratio`` far from 1 says, its fix)."""
     if abs(ratio + 1.0) < 0.05:
         return ("the load cell reads with the opposite sign", "Give its channel sign = -1 in the rig profile for "
                 "the next recordings; for this one, negate the force_N column.")
-    if abs(ratio) < LOAD_SCALE_REFUSE:
-        return (f"it saw no load along {axis} (not in that axis's load path, or not connected)",
-                "Check the load cell's place in the load path.")
-    if abs(np.log(abs(ratio) / 65536.0)) < np.log(1.05):    # 2^16: a technician trial's int32 with swapped words
+    if abs(np.log(max(abs(ratio), 1e-12) / 65536.0)) < np.log(1.05):   # 2^16: a trial's int32 with swapped words
         return ("a 32-bit reading whose two 16-bit Modbus registers are taken in the wrong order (2^16 = 65536)",
                 "Set the load-cell instrument's word_order to the other value in the rig profile and record again.")
     miss, unit = min((abs(ratio * factor - 1.0), unit) for unit, factor in UNITS["force"].items() if unit != "N")
-    if miss < 0.05:                                  # the nearest unit (kgf and daN are 2 % apart)
+    if miss < 0.05 and abs(ratio) >= 0.05:          # the nearest unit (kgf and daN are 2 % apart; 0.097 is kgf's)
         factor = UNITS["force"][unit]
         return (f"its readings look like {unit}, not N",
                 f"Set the load-cell channel's units = \"{unit}\" in the rig profile for the next recordings; "
                 f"for this one, multiply force_N by {factor:.6g}.")
+    if abs(ratio) < LOAD_SCALE_REFUSE:
+        return (f"it saw no load along {axis} (not in that axis's load path, or not connected)",
+                "Check the load cell's place in the load path.")
     return (f"a wrong calibration factor or unit in the rig profile's load-cell channel (the readings x {1 / ratio:.4g} "
             "would be newtons)", "Correct its units or scale and record again.")
 

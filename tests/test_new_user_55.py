@@ -6,7 +6,7 @@ from __future__ import annotations
 from rodlab.app.cli import main
 from rodlab.stiffness_rig.config import RigPlan, read_plan
 from rodlab.stiffness_rig.drivers.base import Garbage
-from rodlab.stiffness_rig.fit_checks import _scale_cause
+from rodlab.stiffness_rig.fit_checks import scale_cause
 from rodlab.stiffness_rig.model import LoadSchedule
 from rodlab.stiffness_rig.protocol import garbage_reason, xor_checksum
 
@@ -65,5 +65,5 @@ def test_profile_errors_are_at_their_own_line(tmp_path, capsys):
 
 
 def test_a_swapped_modbus_word_order_is_named():
-    cause, fix = _scale_cause(65550.0, "y")
+    cause, fix = scale_cause(65550.0, "y")
     assert "16-bit Modbus registers" in cause and "word_order" in fix

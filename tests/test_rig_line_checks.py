@@ -180,6 +180,7 @@ def test_a_load_cell_off_the_hung_weight_is_said_during_the_acquisition(tmp_path
     assert ("# load check:" in text) == warned and ("the load cell reads" in caplog.text) == warned
     if warned:
         assert "for 1 kg" in text and text.count("# load check:") == 1       # said once, at the first loaded hold
+        assert "a ratio of 0.09" in text and "look like daN" in text        # a scale 10x too small reads as daN
 
 
 def test_a_non_ascii_init_line_is_refused_at_its_key(tmp_path):

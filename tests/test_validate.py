@@ -197,3 +197,19 @@ def test_a_recording_or_compliance_file_in_other_units_is_valid_with_its_warning
                      tmp_path / "um.compliance.json")
     assert main(["validate", str(tmp_path / "um.compliance.json")]) == 0
     assert "if the file is in um/N, divide C_F by 1000" in capsys.readouterr().out
+
+
+def test_a_key_or_table_given_twice_is_named(tmp_path, capsys):
+    """The TOML parser says only "Cannot overwrite a value": the key (or table) and its line are named (an
+    instrument trial's profile with a copied baudrate line)."""
+    from rodlab.app.cli.main import main
+    prof = tmp_path / "dup.profile.toml"
+    prof.write_text('format = "rodlab.rigprofile/2"\n[[instrument]]\nname = "g"\nport = "/dev/null"\n'
+                    'baudrate = 9600\nbaudrate = 19200  # the new gauge\n')
+    rod = tmp_path / "dup.rod.toml"
+    rod.write_text('name = "x"\n[tube]\nouter_diameter_mm = 40\n\n[tube]\nwall_mm = 5\n')
+    assert main(["validate", str(prof), str(rod)]) != 0
+    cap = capsys.readouterr()
+    out = cap.out + cap.err
+    assert "line 6" in out and "'baudrate' is given a second time in its table at line 6; keep one" in out
+    assert "the table [tube] is declared a second time at line 5; merge the two" in out

@@ -21,7 +21,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["write_generated", "atomic_write_text", "atomic_write_bytes", "atomic_write_json", "dumps_compact", "json_safe",
-           "sha256_file", "read_text_checked", "read_toml", "read_json", "separator_problem"]
+           "sha256_file", "read_text_checked", "read_toml", "read_json", "separator_problem", "toml_problem"]
 
 
 def _umask() -> int:
@@ -159,9 +159,27 @@ def read_toml(path, error_cls) -> tuple[dict, str]:
     try:
         return tomllib.loads(text), text
     except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        raise error_cls(f"not valid TOML: {e}{_kind_hint(text, 'TOML')}", path=p,
-                        line=int(m.group(1)) if m else None) from e
+        message, line = toml_problem(e, text)
+        raise error_cls(f"{message}{_kind_hint(text, 'TOML')}", path=p, line=line) from e
+
+
+def toml_problem(e: Exception, text: str) -> tuple[str, int | None]:
+    """(what is wrong, its line) from a TOML parser's error ``e`` on ``text``: its message, and for a key or table
+    given twice (the parser says only "Cannot overwrite a value") the key at that line and the fix."""
+    m = re.search(r"line (\d+)", str(e))
+    line = int(m.group(1)) if m else None
+    message = f"not valid TOML: {e}"
+    lines = text.splitlines()
+    if line and 0 < line <= len(lines) and re.search(r"overwrite|declare|twice|already", str(e), re.I):
+        here = lines[line - 1].split("#", 1)[0].strip()
+        table = re.fullmatch(r"\[\s*([^\[\]]+?)\s*\]", here)
+        key = re.match(r"([A-Za-z0-9_.\"' -]+?)\s*=", here)
+        if table:
+            message += f": the table [{table.group(1)}] is declared a second time at line {line}; merge the two"
+        elif key:
+            message += (f": {key.group(1).strip()!r} is given a second time in its table at line {line}; keep one "
+                        "of the two")
+    return message, line
 
 
 def read_json(path, error_cls) -> tuple[object, str]:

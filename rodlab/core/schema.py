@@ -19,7 +19,7 @@ from importlib import resources
 from pathlib import Path
 
 from .errors import did_you_mean
-from .fileio import read_toml
+from .fileio import read_toml, toml_problem
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -295,9 +295,8 @@ def _parse(p: Path, text: str, kind: str):
         return None, Problem(str(p), f"not valid JSON: {e.msg} (column {e.colno})", e.lineno, None,
                              "correct the syntax at that place")
     except tomllib.TOMLDecodeError as e:
-        m = re.search(r"line (\d+)", str(e))
-        return None, Problem(str(p), f"not valid TOML: {e}", int(m.group(1)) if m else None, None,
-                             "correct the syntax at that place")
+        message, line = toml_problem(e, text)
+        return None, Problem(str(p), message, line, None, "correct the syntax at that place")
 
 
 def check_file(path, format_id: str | None = None) -> FileCheck:

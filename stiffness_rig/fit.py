@@ -8,7 +8,7 @@ with their intercepts on the load axis in kg (the paper's ~0.1 kg). ``robust=Tru
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -22,12 +22,12 @@ from .completion import complete_c_f
 from .errors import RigError
 from .fit_checks import (creep_warnings, dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
                          load_drift_warnings, load_scale_problems, reciprocity_problems)
-from .glitches import GLITCH_Z, glitch_rows
+from .glitches import without_glitches
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load
 from .r_rod_checks import PLAUSIBLE_R_ROD, r_rod_caution, r_rod_note
 from .recording import RigRecording
-from .settling import hold_part
+from .settling import settled
 
 __all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "r_rod_note", "PLAUSIBLE_R_ROD",
            "noise_text"]
@@ -157,26 +157,14 @@ def _lsq(X, y, robust: bool, f_scale: float):
     return r.x
 
 
-def _without_glitches(rec: RigRecording) -> tuple[RigRecording, list[str]]:
-    """``rec`` with its glitches (:func:`~.glitches.glitch_rows`) blanked, and a warning naming their holds."""
-    rows, comps, off = glitch_rows(rec)
-    if rows.size == 0:
-        return rec, []
-    disp = rec.disp_mm.copy()
-    disp[rows, comps] = np.nan
-    steps = sorted({int(s) for s in rec.step[rows]})
-    return replace(rec, disp_mm=disp), [
-        f"{rows.size} single reading(s) far off their hold's line (step {', '.join(map(str, steps[:12]))}"
-        f"{', ...' if len(steps) > 12 else ''}; up to {np.max(np.abs(off)) * 1e3:.1f} um, more than {GLITCH_Z:g} "
-        "robust noise SDs): a gauge's glitch or an electrical spike, left out of the fit; check that gauge's cable "
-        "and protocol if they recur"]
-
-
 def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: bool = False) -> RigFit:
-    """Fit every (load axis, measured component) of ``rec``; Eq. 21 when ``sim`` is given. An acquired
-    recording's settling samples (before each hold's ``hold_s x rate_Hz``: :mod:`.settling`) and single readings
-    far off their hold's line (:mod:`.glitches`) are left out, the latter with a warning."""
-    rec, glitched = _without_glitches(hold_part(rec).recording)
+    """Fit every (load axis, measured component) of ``rec``; Eq. 21 when ``sim`` is given. Each hold's
+    settling (an acquired recording's samples before its ``hold_s x rate_Hz``, or the first seconds where the
+    readings show one: :mod:`.settling`, as the diagnosis) and single readings far off their hold's line
+    (:mod:`.glitches`) are left out, with a warning but for an acquired recording's settling."""
+    cut = settled(rec)
+    rec, glitched = without_glitches(cut.recording)
+    glitched = ([cut.text()] if cut.dropped and (cut.per_hold is None or cut.incomplete) else []) + glitched
     holds = hold_averages(rec)
     noise = holds.noise_mm()
     lines, resid_all = [], []

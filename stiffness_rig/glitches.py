@@ -7,11 +7,14 @@ and say where (:func:`isolated_glitches` on a recording's readings, :func:`glitc
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from .samples import RigSamples, rig_samples
 
-__all__ = ["isolated_glitches", "glitch_rows", "hold_line_residuals", "reading_quantum", "GLITCH_Z", "GLITCH_SHARE_MAX"]
+__all__ = ["isolated_glitches", "glitch_rows", "without_glitches", "hold_line_residuals", "reading_quantum", "GLITCH_Z",
+           "GLITCH_SHARE_MAX"]
 
 #: a reading this many robust SDs off its hold's line is a glitch (Gaussian noise: never, p ~ 1e-23) ...
 GLITCH_Z = 10.0
@@ -23,8 +26,10 @@ def isolated_glitches(data: RigSamples) -> np.ndarray:
     """The readings (bool, shape=(n,)) that are glitches: in a pass over every (hold, gauge), its one reading
     farthest off the line through the others (a leave-one-out residual: a spike cannot pull its own line), when
     that is more than :data:`GLITCH_Z` robust SDs and 5 gauge steps off; two passes (at most two per hold). Kept
-    only when rare (at most :data:`GLITCH_SHARE_MAX` of the readings) and not at one place in the holds (a
-    reading off in many holds at the same moment is settling or handling, not a glitch)."""
+    only when rare (at most :data:`GLITCH_SHARE_MAX` of the readings), not at one place in the holds (a
+    reading off in many holds at the same moment is settling or handling, not a glitch) and not where the hold's
+    level jumps (:func:`_at_a_jump`: a gauge slipping within a hold leaves its two readings next to the jump off
+    the line, which a review had found called two glitches)."""
     none = np.zeros(data.n, dtype=bool)
     resid, dof = hold_line_residuals(data)
     fitted = np.isfinite(resid)
@@ -41,6 +46,7 @@ def isolated_glitches(data: RigSamples) -> np.ndarray:
         if not worst.any():
             break
         flagged |= worst
+    flagged &= ~_at_a_jump(data, flagged, limit)
     if not flagged.any() or flagged.sum() > GLITCH_SHARE_MAX * data.n or _at_one_place(data, flagged):
         return none
     return flagged
@@ -64,6 +70,25 @@ def _worst_left_out(data: RigSamples, skip: np.ndarray, limit: float) -> np.ndar
         i = int(np.argmax(np.abs(loo)))
         if abs(loo[i]) > limit:
             out[u[i]] = True
+    return out
+
+
+#: readings on each side of a flagged one whose median is its hold's level there
+_SIDE = 5
+
+
+def _at_a_jump(data: RigSamples, flagged: np.ndarray, limit: float) -> np.ndarray:
+    """The flagged readings across which their (hold, gauge)'s level changes by more than half ``limit``: the
+    median of up to :data:`_SIDE` unflagged readings before against as many after. A spike leaves both sides
+    alike; a slip does not."""
+    out = np.zeros(data.n, dtype=bool)
+    keys = data.step * 4 + data.comp
+    for i in np.flatnonzero(flagged):
+        u = np.flatnonzero((keys == keys[i]) & ~flagged)
+        t = data.t_hold[u]
+        before, after = data.y[u[t < data.t_hold[i]]][-_SIDE:], data.y[u[t > data.t_hold[i]]][:_SIDE]
+        if before.size and after.size and abs(float(np.median(after) - np.median(before))) > 0.5 * limit:
+            out[i] = True
     return out
 
 
@@ -122,3 +147,18 @@ def glitch_rows(rec) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     comps = np.concatenate([np.full(int(np.isfinite(rec.disp_mm[:, c]).sum()), c) for c in range(3)])
     off = hold_line_residuals(data, flagged)[0][flagged] if flagged.any() else np.zeros(0)
     return rows[flagged], comps[flagged], off
+
+
+def without_glitches(rec):
+    """(``rec`` with its glitches (:func:`glitch_rows`) blanked, [a warning naming their holds]) for `rig fit`."""
+    rows, comps, off = glitch_rows(rec)
+    if rows.size == 0:
+        return rec, []
+    disp = rec.disp_mm.copy()
+    disp[rows, comps] = np.nan
+    steps = sorted({int(s) for s in rec.step[rows]})
+    return dataclasses.replace(rec, disp_mm=disp), [
+        f"{rows.size} single reading(s) far off their hold's line (step {', '.join(map(str, steps[:12]))}"
+        f"{', ...' if len(steps) > 12 else ''}; up to {np.max(np.abs(off)) * 1e3:.1f} um, more than {GLITCH_Z:g} "
+        "robust noise SDs): a gauge's glitch or an electrical spike, left out of the fit; check that gauge's cable "
+        "and protocol if they recur"]

@@ -101,11 +101,11 @@ def hold_averages(rec: RigRecording, settle_fraction: float = SETTLE_FRACTION) -
         dev = np.where(fin, d - mean, 0.0)
         std = np.where(cnt > 1, np.sqrt((dev ** 2).sum(axis=0) / np.maximum(cnt - 1, 1)), np.nan)
         slope = np.full(3, np.nan)
-        if s.size > 2 and np.ptp(t) > 0:
-            tc = t - t.mean()
-            for c in range(3):
-                if np.isfinite(d[:, c]).all():
-                    slope[c] = float(tc @ (d[:, c] - d[:, c].mean()) / (tc @ tc))
+        for c in range(3):                       # a reading or two left out as glitches keep the hold's trend
+            m = fin[:, c]
+            if m.sum() >= max(3, s.size - 2) and np.ptp(t[m]) > 0:
+                tc = t[m] - t[m].mean()
+                slope[c] = float(tc @ (d[m, c] - d[m, c].mean()) / (tc @ tc))
         temp = float(np.nanmean(rec.temp_C[s])) if rec.temp_C is not None and np.isfinite(rec.temp_C[s]).any() \
             else np.nan
         i0 = g[0]

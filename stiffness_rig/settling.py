@@ -15,7 +15,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SettlingCut", "stated_hold_samples", "hold_part", "settling_seconds", "after_settling"]
+__all__ = ["SettlingCut", "settled", "stated_hold_samples", "hold_part", "settling_seconds", "after_settling"]
 
 #: a hold's level must move by more than this many reading-noise SDs for its settling to be looked at
 STEP_NOISE = 10.0
@@ -37,15 +37,40 @@ _FIELD = r"(?:^|\s){}=([0-9.eE+-]+)(?=\s|$)"
 class SettlingCut:
     """The recording without each hold's settling samples.
 
-    recording : the hold proper of every hold (a hold with no more samples than ``per_hold`` kept whole);
-    per_hold : the samples of a hold proper the header states (``hold_s x rate_Hz``), None where it states none;
-    dropped : settling samples left out; holds : holds that had settling samples
+    recording : the hold proper of every hold; per_hold : the samples of a hold proper the header states
+    (``hold_s x rate_Hz``), None where it states none; dropped : samples left out; holds : holds that had
+    settling samples; incomplete : holds cut short (fewer samples than a settle window and a hold proper: an
+    acquisition interrupted there and resumed under a new step), left out whole
     """
 
     recording: object
     per_hold: int | None
     dropped: int
     holds: int
+    incomplete: int = 0
+    seconds: float | None = None
+
+    def to_dict(self) -> dict:
+        """The report's ``settling`` entry (empty where nothing was left out)."""
+        if not self.dropped:
+            return {}
+        how = {"hold_samples": self.per_hold} if self.per_hold is not None else {"seconds": self.seconds}
+        return {"samples_left_out": self.dropped, "holds": self.holds, "incomplete_holds": self.incomplete, **how}
+
+    def text(self) -> str:
+        """What was left out, in a sentence ('' where nothing was)."""
+        if not self.dropped:
+            return ""
+        if self.per_hold is not None:
+            cut = (f"; {self.incomplete} hold(s) cut short (an acquisition interrupted there and resumed) left out "
+                   "whole") if self.incomplete else ""
+            return (f"the {self.dropped} samples `rig acquire` recorded while {self.holds} hold(s) settled are left out "
+                    f"(each hold is its last {self.per_hold} samples, hold_s x rate_Hz of the header's plan_fields)"
+                    + cut)
+        return (f"each hold's first {self.seconds:.2g} s ({self.dropped} samples) left out: the readings approach each "
+                "hold's level from the previous one's and have settled by then, as a hung weight settles (a swing, "
+                "a lift still lowering it; a creep that fast would be cut too, and its deflection is in the settled "
+                "level)")
 
 
 def stated_hold_samples(meta: dict) -> int | None:
@@ -62,6 +87,17 @@ def stated_hold_samples(meta: dict) -> int | None:
     return n if n >= 2 else None
 
 
+def settled(rec) -> SettlingCut:
+    """``rec`` without its settling: the samples before each hold proper where the header states it
+    (:func:`hold_part`), else the readings of each hold's first seconds where the readings show a settling
+    (:func:`settling_seconds`, :func:`after_settling`); ``rec`` itself where neither."""
+    cut = hold_part(rec)
+    if cut.per_hold is not None:
+        return cut
+    seconds = settling_seconds(rec)
+    return cut if seconds is None else after_settling(rec, seconds)
+
+
 def hold_part(rec) -> SettlingCut:
     """``rec`` (a :class:`~rodlab.stiffness_rig.RigRecording`) with the samples before each hold's last
     ``hold_s x rate_Hz`` left out, where its header states them; ``rec`` itself otherwise."""
@@ -69,16 +105,19 @@ def hold_part(rec) -> SettlingCut:
     if n is None:
         return SettlingCut(rec, None, 0, 0)
     keep = np.ones(rec.n, dtype=bool)
-    holds = 0
+    holds = incomplete = 0
     for st in np.unique(rec.step):
         rows = np.flatnonzero(rec.step == st)
         rows = rows[np.argsort(rec.time_s[rows], kind="stable")]
         if rows.size > n:
             keep[rows[:-n]] = False
             holds += 1
+        elif rows.size < n + 2:          # a complete hold has a settle window (>= 2 samples) before its own
+            keep[rows] = False
+            incomplete += 1
     if keep.all():
         return SettlingCut(rec, n, 0, 0)
-    return SettlingCut(_subset(rec, keep), n, int((~keep).sum()), holds)
+    return SettlingCut(_subset(rec, keep), n, int((~keep).sum()), holds, incomplete)
 
 
 def _subset(rec, keep: np.ndarray):
@@ -97,17 +136,23 @@ def settling_seconds(rec) -> float | None:
     the previous hold's (the median over the holds at each reading of a hold) starts above
     :data:`SETTLING_START` and stays within :data:`SETTLED_SHARE` from some time under :data:`SETTLING_MAX_S`
     on; None where it does not (no settling, or a creep that goes on after it: time constants of seconds)."""
-    curves = _step_shares(rec)
+    span = SETTLING_MAX_S + SETTLED_CHECK_S
+    curves = [c for c in _step_shares(rec) if c[-1, 0] >= span]   # a short or cut hold cannot show it: left out
     if len(curves) < MIN_HOLDS:
         return None
     n = min(len(c) for c in curves)
-    u = np.median(np.array([c[:n] for c in curves]), axis=0)     # shape=(n, 2): time since the hold began, share
+    with warnings.catch_warnings():                                  # a reading blank in every hold stays NaN
+        warnings.simplefilter("ignore", RuntimeWarning)
+        u = np.nanmedian(np.array([c[:n] for c in curves]), axis=0)  # shape=(n, 2): time since the hold began, share
     t, share = u[:, 0], u[:, 1]
+    if not np.isfinite(t).all():
+        return None
     if not share[0] > SETTLING_START:
         return None
-    within = t < SETTLING_MAX_S + SETTLED_CHECK_S
+    within = t < span
     for k in range(1, int(np.sum(t < SETTLING_MAX_S))):
-        if np.all(np.abs(share[k:][within[k:]]) < SETTLED_SHARE) and t[within].max() >= t[k] + SETTLED_CHECK_S:
+        later = share[k:][within[k:]]
+        if np.all(np.abs(later[np.isfinite(later)]) < SETTLED_SHARE) and t[within].max() >= t[k] + SETTLED_CHECK_S:
             return float(t[k])
     return None
 
@@ -153,4 +198,4 @@ def after_settling(rec, seconds: float) -> SettlingCut:
         if early.size and early.size < rows.size:
             keep[early] = False
             holds += 1
-    return SettlingCut(_subset(rec, keep), None, int((~keep).sum()), holds)
+    return SettlingCut(_subset(rec, keep), None, int((~keep).sum()), holds, seconds=seconds)

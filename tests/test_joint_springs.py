@@ -160,7 +160,7 @@ def test_update_accepts_a_freed_joint_of_a_group_and_a_freed_modulus_for_a_scale
     modulus E fits, a torsion what a freed G fits."""
     from types import SimpleNamespace as F
 
-    from rodlab.app.cli.cmd_update import _explained_by_keys
+    from rodlab.app.cli.update_measured import _explained_by_keys
     tube = ROD1.pipe_I.material.name
     group = F(effect="joint_compliance", location="pipe_II|ring_1")
     assert _explained_by_keys(group, ["joints.pipe_II.s_bend_rad_per_Nm"], ROD1)

@@ -45,3 +45,18 @@ def test_the_cli_says_so_and_writes_the_file(tmp_path, capsys):
     out = tmp_path / "m.json"
     assert main(["rig", "fit", str(spiked), "--sim", "rod1", "-o", str(out)]) == 0
     assert f"(step {step}; up to 5" in capsys.readouterr().err and out.exists()
+
+
+def test_a_jump_within_a_hold_is_no_pair_of_glitches(tmp_path):
+    """A gauge slipping by 20 um halfway through a hold leaves the two readings next to the jump off the hold's
+    line (a review: `rig fit` had called them two glitches); the level changing across them says it is a jump."""
+    clean, _, _ = _spiked(tmp_path)
+    rec = read_recording(clean)
+    step = int(rec.step[400])
+    rows = np.flatnonzero(rec.step == step)
+    disp = rec.disp_mm.copy()
+    disp[rows[rows.size // 2]:rows[-1] + 1, 2] += 0.020
+    import dataclasses
+    jumped = dataclasses.replace(rec, disp_mm=disp)
+    assert glitch_rows(jumped)[0].size == 0
+    assert not any("single reading" in w for w in fit_recording(jumped).warnings)

@@ -1,8 +1,9 @@
 """A hung weight settles after every change of load (a swing, a lift lowering it): an instrument trial's gauges
 settled with a 0.15 s time constant, `diagnose --rig` read it as a creep of phi 0.43 and exported a compliance 40 %
 too stiff, and `rig fit` on a short plan let a load cell in the wrong unit through. Fixed: an acquired recording's
-settling samples (before each hold's ``hold_s x rate_Hz``) are left out, a creep faster than 1 s is taken as
-settling and the recording diagnosed without it, and a short plan's load-cell scale is judged on gross slips."""
+settling samples (before each hold's ``hold_s x rate_Hz``) are left out, another tool's recording whose holds
+approach their level within 1.5 s has those readings left out (`rig fit` and the diagnosis alike), a creep
+faster than 1 s is cautioned, and a short plan's load-cell scale is judged on gross slips."""
 from __future__ import annotations
 
 import json
@@ -15,7 +16,7 @@ import pytest
 from rodlab.app.cli.main import main
 from rodlab.core.compliance import read_compliance
 from rodlab.stiffness_rig import read_recording
-from rodlab.stiffness_rig.settling import after_settling, hold_part, stated_hold_samples
+from rodlab.stiffness_rig.settling import after_settling, hold_part, settling_seconds, stated_hold_samples
 
 R = 1.3                     # the rod as built against its closed-form simulation
 TAU_S = 0.15                # the weight's settling
@@ -156,3 +157,58 @@ def read_compliance_of_rod1(tmp_path):
     if not path.exists():
         assert main(["compliance", "rod1", "-o", str(path)]) == 0
     return read_compliance(path)
+
+
+@pytest.mark.parametrize("phi, tau_s", [(0.2, 2.0), (0.3, 1.2), (0.05, 4.0)])
+def test_a_real_creep_is_no_settling(tmp_path, phi, tau_s):
+    """Creeps of seconds go on after 1.5 s: the readings are not cut (a review tried these and more)."""
+    rec = tmp_path / "creep.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--effect", f"creep:phi={phi},tau_s={tau_s}", "--noise-um",
+                 "0.5", "--repeats", "2", "--seed", "3", "-o", str(rec)]) == 0
+    assert settling_seconds(read_recording(rec)) is None
+
+
+def test_a_blank_reading_or_a_short_hold_leaves_the_settling_found(tmp_path):
+    """One hold's first reading blank and another hold cut to 6 readings (a review: either had turned the detection
+    off): the other holds still show it."""
+    import dataclasses
+    rec = read_recording(_settling(tmp_path, None, "own.rig.csv"))
+    found = settling_seconds(rec)
+    disp, keep = rec.disp_mm.copy(), np.ones(rec.n, dtype=bool)
+    loaded = [int(s) for s in np.unique(rec.step) if rec.mass_kg[rec.step == s][0] > 0]
+    disp[np.flatnonzero(rec.step == loaded[0])[0]] = np.nan
+    keep[np.flatnonzero(rec.step == loaded[1])[6:]] = False
+    edited = dataclasses.replace(rec, disp_mm=disp)
+    edited = dataclasses.replace(edited, **{f.name: getattr(edited, f.name)[keep] for f in dataclasses.fields(edited)
+                                          if isinstance(getattr(edited, f.name), np.ndarray)})
+    assert found is not None and settling_seconds(edited) == pytest.approx(found, abs=0.15)
+
+
+def test_a_creep_complete_within_a_hold_is_in_the_export_and_a_slow_one_noted():
+    """The export's creep share (a unit test of both branches: a diagnosis with a fast and a slow term)."""
+    from rodlab.app.diagnose.export import _with_held_creep
+    from rodlab.app.diagnose.report import Diagnosis, Finding
+    C = np.eye(3) * 1e-3
+    creep = Finding("creep", None, "creep", {"phi": 0.05, "tau_s": 1.0, "phi_2": 0.02, "tau_2_s": 30.0}, {}, 1.0, 1.0,
+                    {})
+    diag = Diagnosis("rig", "explained", 5e-4, 1e-3, 5e-4, [creep], {"hold_median_s": 8.0})
+    out, notes = _with_held_creep(C, diag)
+    assert np.allclose(out, 1.05 * C)
+    assert "complete within a hold" in notes[0] and "x1.0500" in notes[0]
+    assert "slower creep" in notes[1] and f"x{1.07 / 1.05:.4f}" in notes[1]
+
+
+def test_a_hold_cut_short_in_an_acquired_recording_is_left_out_whole(tmp_path):
+    """An acquisition interrupted in a hold and resumed records that hold again under a new step: the cut one has
+    fewer samples than a settle window and a hold proper, so it is left out whole (a review: it had been kept with
+    its settling) and said."""
+    import dataclasses
+    rec = read_recording(_settling(tmp_path, "# plan_fields: rod=\"1#\" hold_s=6 rate_Hz=10.0", "acq.rig.csv"))
+    step = int(np.unique(rec.step)[3])
+    keep = np.ones(rec.n, dtype=bool)
+    keep[np.flatnonzero(rec.step == step)[30:]] = False          # 30 samples left of its 80
+    cut_rec = dataclasses.replace(rec, **{f.name: getattr(rec, f.name)[keep] for f in dataclasses.fields(rec)
+                                          if isinstance(getattr(rec, f.name), np.ndarray)})
+    cut = hold_part(cut_rec)
+    assert cut.incomplete == 1 and step not in set(cut.recording.step.tolist())
+    assert "1 hold(s) cut short" in cut.text()

@@ -169,3 +169,14 @@ def test_a_recording_with_structure_left_in_its_hold_means_is_refused_unless_acc
     assert "structure in the hold means unexplained" in err and "--accept-unexplained" in err and not out.exists()
     assert main(["update", "rod1", "--measured", str(rec), "--accept-unexplained", "-o", str(out)]) == 0
     assert out.exists() and "leaves part of the recording unexplained" in capsys.readouterr().err
+
+
+def test_an_ordinary_recording_with_repeats_is_updated_without_a_word_of_it(tmp_path, capsys):
+    """The refusal is for structure in the hold means: a recording of friction and noise over five repeats passes."""
+    rec, out = tmp_path / "r.rig.csv", tmp_path / "asbuilt.rod.toml"
+    assert main(["rig", "simulate", "--sim", "rod1", "--effect", "compliance_scale:r=1.2", "--effect",
+                 "friction:F_f_N=0.2", "--seed", "6", "-o", str(rec)]) == 0
+    capsys.readouterr()
+    assert main(["update", "rod1", "--measured", str(rec), "-o", str(out)]) == 0
+    cap = capsys.readouterr()
+    assert out.exists() and "unexplained" not in cap.err + cap.out

@@ -45,19 +45,25 @@ class Creep(RigEffectModel):
                            key="creep.tau_2_s")
 
     def caution(self, p: dict) -> str | None:
-        """A time constant under :data:`SETTLING_TAU_S` or a creep beyond :data:`CREEP_PHI_PLAUSIBLE` is no
-        laminate's or bond's creep: a hung weight settling (a swing, a lift lowering it) reads so."""
-        terms = [(p.get("phi"), p.get("tau_s")), (p.get("phi_2"), p.get("tau_2_s"))]
-        fast = [(float(phi), float(tau)) for phi, tau in terms if phi is not None and tau is not None
-                and (float(tau) < SETTLING_TAU_S or abs(float(phi)) > CREEP_PHI_PLAUSIBLE)]
-        if not fast:
-            return None
-        phi, tau = fast[0]
-        return (f"a creep of {phi:.3g} with a {tau:.3g} s time constant is more likely each load settling (the weight "
-                f"swinging or still being lowered) than the rod's creep (laminates and bonds creep a few % over seconds "
-                f"to minutes): leave the first seconds of each hold out (`rig acquire` records them as settling and "
-                f"says so in its header) or wait for the readings to settle; the exported compliance takes the "
-                f"deflection a hold reaches")
+        """A time constant under :data:`SETTLING_TAU_S` is more likely a hung weight settling; a creep beyond
+        :data:`CREEP_PHI_PLAUSIBLE` of the elastic deflection more than a laminate or a sound bond creeps."""
+        terms = [(float(phi), float(tau)) for phi, tau in ((p.get("phi"), p.get("tau_s")),
+                                                           (p.get("phi_2"), p.get("tau_2_s")))
+                 if phi is not None and tau is not None]
+        fast = [(phi, tau) for phi, tau in terms if tau < SETTLING_TAU_S]
+        if fast:
+            phi, tau = fast[0]
+            return (f"a creep with a {tau:.3g} s time constant (phi {phi:.3g}) is more likely each load settling (the "
+                    f"weight swinging or still being lowered) than the rod's creep (laminates and bonds creep over "
+                    f"seconds to minutes): leave the first seconds of each hold out or wait for the readings to settle "
+                    f"(`rig acquire` records its settling apart and says so in its header)")
+        large = [(phi, tau) for phi, tau in terms if abs(phi) > CREEP_PHI_PLAUSIBLE]
+        if large:
+            phi, tau = large[0]
+            return (f"a creep of {phi:.3g} of the elastic deflection (time constant {tau:.3g} s) is more than a laminate "
+                    f"or a sound bond creeps at a rig's loads (a few %): check the bonds and clamps for a joint slipping "
+                    f"or yielding under load")
+        return None
 
     def deflection(self, x, C, F, t, state, p):
         dt = 0.0 if state.t_last is None else max(t - state.t_last, 0.0)

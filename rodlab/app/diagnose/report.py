@@ -76,17 +76,8 @@ class Diagnosis:
                  "residuals)" if self.subject == Subject.CAMPAIGN and self.findings else "")
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um{refit}"]
-        if "settling" in self.extra:
-            x = self.extra["settling"]
-            if "hold_samples" in x:
-                lines.append(f"  settling: the {x['samples_left_out']} samples `rig acquire` recorded while "
-                             f"{x['holds']} hold(s) settled are left out (each hold is its last {x['hold_samples']} "
-                             "samples, hold_s x rate_Hz of the header's plan_fields), as `rig fit` leaves them out")
-            else:
-                lines.append(f"  settling: each hold's first {x['seconds']:.2g} s ({x['samples_left_out']} samples) "
-                             "left out: the readings approach each hold's level from the previous one's and have "
-                             "settled by then (a weight swinging or still being lowered, not the rod); the diagnosis "
-                             "is of the settled readings")
+        if self.extra.get("settling_text"):
+            lines.append(f"  settling: {self.extra['settling_text']}")
         if "repeatability_mm" in self.extra:
             x = self.extra
             lines.append(f"  repeatability: the hold means scatter {x['repeatability_mm'] * 1e3:.2f} um from one repeat to "

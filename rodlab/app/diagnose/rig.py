@@ -31,7 +31,7 @@ from ...core.errors import RodlabError
 from ...core.units import G0
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
-from rodlab.stiffness_rig.settling import after_settling, hold_part, settling_seconds
+from rodlab.stiffness_rig.settling import settled
 
 from .envelope import Envelope, design_of, envelope_for
 from .report import Diagnosis, Finding
@@ -65,15 +65,11 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     if sim.method is Method.NONE:
         raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
                           "against; give the rod's calc, fea or meas compliance file")
-    cut = hold_part(rec)                      # an acquired recording's settling samples are no hold's
-    settling = {"samples_left_out": cut.dropped, "holds": cut.holds, "hold_samples": cut.per_hold}
-    seconds = None if cut.dropped else settling_seconds(rec)
-    if seconds is not None:                   # another tool's recording: its holds' settling read off the readings
-        cut = after_settling(rec, seconds)
-        settling = {"samples_left_out": cut.dropped, "holds": cut.holds, "seconds": seconds}
+    cut = settled(rec)                        # a hold's settling is no property of the rod (as `rig fit`)
     diag, model = _diagnose_recording(cut.recording, sim, design, max_terms, accuracy)
     if cut.dropped:
-        diag.extra["settling"] = settling
+        diag.extra["settling"] = cut.to_dict()
+        diag.extra["settling_text"] = cut.text()
     return diag, model
 
 
@@ -155,6 +151,8 @@ def _note_one_sided_split(diag: Diagnosis) -> None:
     if fr is None or ta is None:
         return
     sd = [(hi - lo) / (2 * 1.96) for lo, hi in (fr.intervals["F_f_N"], ta.intervals["tare_kg"])]
+    if not np.all(np.isfinite(sd)):                  # a parameter at its bound has no interval to compare by
+        return
     gap = float(ta.parameters["tare_kg"]) * G0 - float(fr.parameters["F_f_N"])
     if abs(gap) > 2.0 * np.hypot(sd[0], sd[1] * G0):
         return

@@ -277,7 +277,7 @@ def _is_slip(r: np.ndarray, j: int) -> bool:
 
 
 #: the share of successive differences kept for the noise (the largest left out: a step, a glitch) and the
-#: standard deviation of a normal variable truncated there (1 - 2 q phi(q) / (2 Phi(q) - 1), q = 2.576)
+#: standard deviation of a normal variable truncated there (sqrt(1 - 2 q phi(q) / (2 Phi(q) - 1)), q = 2.576)
 _DIFF_KEPT, _TRUNCATED_SD = 0.99, 0.9617
 
 
@@ -289,8 +289,9 @@ def _difference_sd(r: np.ndarray) -> float:
     d = np.abs(np.diff(np.asarray(r, float)))
     if d.size == 0:
         return 0.0
-    kept = np.sort(d)[:max(int(np.ceil(_DIFF_KEPT * d.size)), 1)]
-    return float(np.sqrt(np.mean(kept ** 2))) / _TRUNCATED_SD / np.sqrt(2.0)
+    n = max(int(np.ceil(_DIFF_KEPT * d.size)), 1)
+    kept = np.sort(d)[:n]
+    return float(np.sqrt(np.mean(kept ** 2))) / (_TRUNCATED_SD if n < d.size else 1.0) / np.sqrt(2.0)
 
 
 def confirm_outside(location: str | None) -> str | None:

@@ -363,3 +363,23 @@ def test_a_length_typed_off_in_the_robot_file_is_a_caution(tmp_path, capsys):
     line = next(k for k, s in enumerate(UR10_A2_TYPO.splitlines(), start=1)
                 if s.startswith("a_mm = -607"))                        # the typed row's own a_mm
     assert f"my_ur10.toml line {line})" in err
+
+
+def test_real_wam_grid_is_predicted_by_blocks_not_by_its_interleaved_neighbours(tmp_path, capsys):
+    """Public tracker data of a Barrett WAM (7 joints, cable-driven; benchmarks/data/jacobi2025): the 216 grid
+    poses' interleaved folds keep every pose's grid neighbours in the fit and had predicted 2.17 mm; the source's
+    20 random test poses measure 3.02 mm after the same calibration. The folds in blocks of the file are predicted
+    too and the worse is stated: within 10 % of what the random poses measure, the interleaved one named beside it;
+    on the random poses themselves the gain (0.56 +- 0.30 mm) is not clear: NOT TRUSTED, exit 3."""
+    grid, test = (DATA / "jacobi2025" / f"wam_{n}.validation.csv" for n in ("grid", "random"))
+    robot = str(DATA / "jacobi2025" / "wam7.toml")
+    out = tmp_path / "cal.json"
+    assert main(["calibrate", "--points", str(grid), "--robot", robot, "--json", str(out)]) == 0
+    pred = json.loads(out.read_text())["fit"]["prediction"]
+    assert pred["grouping"] == "blocks of poses in file order" and pred["other_split"].startswith("interleaved poses")
+    capsys.readouterr()
+    assert main(["calibrate", "--points", str(grid), "--robot", robot, "--validate", str(test), "--json",
+                 str(out)]) == 3
+    measured = json.loads(out.read_text())["fit"]["prediction"]["mean_mm"]
+    assert pred["mean_mm"] == pytest.approx(measured, rel=0.10)
+    assert float(pred["other_split"].split(": ")[1].split(" ")[0]) < 0.8 * measured     # the neighbours' optimism

@@ -67,8 +67,8 @@ class PointsDiagnosis:
     def summary(self) -> str:
         lines = [f"instrument points: {self.points} poses, residual rms {self.rms_mm * 1e3:.1f} um per coordinate "
                  f"against {self.noise_mm * 1e3:.1f} um of instrument noise (reduced chi-square "
-                 f"{self.reduced_chi2:.1f} at that one level; the residual test above weighs each point by its own "
-                 f"sigma where the file states them)"]
+                 f"{self.reduced_chi2:.1f} at that one level; the calibration's residual test weighs each point by "
+                 f"its own sigma where the file states them)"]
         if not self.findings:
             lines.append("  no joint-, direction-, order- or temperature-dependent pattern stands out"
                          + ("" if self.consistent else "; the excess is spread over the workspace (the instrument "

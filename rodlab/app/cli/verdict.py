@@ -5,17 +5,22 @@ from __future__ import annotations
 
 import sys
 
-from rodlab.calibrate.trust import completeness_statement, prediction_cautions, prediction_warnings
+from rodlab.calibrate.trust import (campaign_excess, completeness_statement, prediction_cautions, prediction_warnings,
+                                   validated_excess)
 
 __all__ = ["judge", "print_verdict", "print_held"]
 
 
 def judge(res, prediction) -> None:
     """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result, and the
-    caution of a prediction along one-joint sweeps only."""
+    caution of a prediction along one-joint sweeps only; a campaign's residual excess that validation points
+    show the calibration predicts clearly better through is a caution instead of a reason
+    (:func:`~rodlab.calibrate.trust.validated_excess`)."""
     res.prediction = prediction
-    res.warnings = list(res.warnings) + prediction_warnings(prediction)
-    res.cautions = list(res.cautions) + prediction_cautions(prediction)
+    validated = validated_excess(res, prediction)      # a robot's errors outside the model, validated through
+    warnings = [w for w in res.warnings if not (validated and w == campaign_excess(res))]
+    res.warnings = warnings + prediction_warnings(prediction)
+    res.cautions = list(res.cautions) + prediction_cautions(prediction) + ([validated] if validated else [])
 
 
 def print_verdict(res) -> None:

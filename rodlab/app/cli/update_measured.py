@@ -118,14 +118,19 @@ def _with_remounting(C: np.ndarray, cov: np.ndarray) -> np.ndarray:
     return cov + np.diag((MEAS_RELATIVE * np.abs(C)) ** 2)
 
 
-def _key_for(finding, design) -> str:
-    """The design key that would fit a structural finding: a joint's compliance at its (first) place, every modulus
-    (:data:`~rodlab.app.update.MODULI`) for a uniform scale, pipe I's shear modulus G for a torsion."""
+def _keys_for(finding, design) -> list[str]:
+    """The design keys that would fit a structural finding: a joint's bending compliance at its (first) place and,
+    where the finding has a torsion that its interval keeps off 0, its torsional one (a CalculiX trial: without it
+    the tube's G had carried a bond's torsion, -54 %); every modulus (:data:`~rodlab.app.update.MODULI`) for a
+    uniform scale; pipe I's shear modulus G for a torsion."""
     if finding.effect == "joint_compliance":
-        return f"joints.{(finding.location or 'PLACE').split('|')[0]}.s_bend_rad_per_Nm"
+        place = (finding.location or "PLACE").split("|")[0]
+        lo = (finding.intervals.get("s_torsion_rad_per_Nm") or (0.0, 0.0))[0]
+        torsion = [f"joints.{place}.s_torsion_rad_per_Nm"] if lo > 0 else []
+        return [f"joints.{place}.s_bend_rad_per_Nm", *torsion]
     if finding.effect == "compliance_scale":
-        return MODULI
-    return f"materials.{design.pipe_I.material.name}.G_GPa"
+        return [MODULI]
+    return [f"materials.{design.pipe_I.material.name}.G_GPa"]
 
 
 def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list) -> None:
@@ -138,7 +143,7 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
             "torsion_compliance": "pipe I softer in torsion (its shear modulus or lay-up)"}
     named = "; ".join(f"{f.effect}" + (f" at {f.location}" if f.location else "") + f": {what[f.effect]}"
                       for f in findings)
-    wanted = [_key_for(f, design) for f in findings]
+    wanted = [k for f in findings for k in _keys_for(f, design)]
     if MODULI in wanted:                                 # moduli scales the freed materials' moduli too
         freed = [k for k in freed if not (k.startswith("materials.") and k.rpartition(".")[2] in MODULUS_KEYS)]
     keys = ",".join(dict.fromkeys([*freed, *wanted]))   # the keys freed, plus

@@ -106,8 +106,11 @@ def form_resolution(f: Finding) -> str:
                 "measurement later (`rodlab diagnose --sim MEASURED.compliance.json --sim-accuracy exact`)")
     parts = []
     for r in rows:
-        txt = (f"{r['place']}: stands out above s_bend {r['detectable_s_bend_rad_per_Nm']:.2g} rad/(N m) (best fit "
-               f"{r['best_fit_s_bend_rad_per_Nm']:.2g} +- {r['sd_s_bend_rad_per_Nm']:.2g})")
+        own = f.parameters.get(f"joints.{r['place']}.s_bend_rad_per_Nm")
+        beside = (f"its bond in the as-built keys {own if abs(own) > 1e-12 else 0.0:.2g}, and beyond them "
+                  if own is not None else "")
+        txt = (f"{r['place']}: stands out above s_bend {r['detectable_s_bend_rad_per_Nm']:.2g} rad/(N m) ({beside}"
+               f"a further {r['best_fit_s_bend_rad_per_Nm']:.2g} +- {r['sd_s_bend_rad_per_Nm']:.2g})")
         if "detectable_with_coupon_and_solid_fea" in r:
             txt += f", {r['detectable_with_coupon_and_solid_fea']:.2g} with a coupon test and a solid FEA"
         parts.append(txt)

@@ -262,3 +262,15 @@ def test_the_other_harmonic_completes_an_accepted_one_and_they_merge():
     merged = merge_completed([a, other, b])
     assert merged == [a, other] and a.rms_after_mm == 0.005 and "both eccentric and elliptical" in a.explanation
     assert set(a.parameters) == {"amp_sin_rad", "amp_cos_rad", "amp2_sin_rad", "amp2_cos_rad"}
+
+
+def test_a_once_per_turn_error_over_most_of_a_turn_is_advised_with_validation():
+    """Over 340 deg a once-per-revolution error is told from a smooth one, if not surely: identify it and keep it
+    where validation points show it helps (a device trial: that took its validation from 0.119 to 0.036 mm,
+    which the flat 'do not identify' had kept from the user); over 235 deg the refusal stays."""
+    from rodlab.calibrate.effects.periodic_joint_error import PeriodicJointError
+    e = PeriodicJointError()
+    most = e.remedy("joint:1", {"amp_sin_rad": 3e-4, "amp_cos_rad": 1e-4, "span_deg": 340.0})
+    assert "identify it with `--joint-harmonics 1`" in most and "--validate" in most and "do not" not in most
+    part = e.remedy("joint:3", {"amp_sin_rad": 3e-4, "amp_cos_rad": 1e-4, "span_deg": 235.0})
+    assert "do not identify it with `--joint-harmonics 3`" in part

@@ -213,3 +213,21 @@ def test_a_key_or_table_given_twice_is_named(tmp_path, capsys):
     out = cap.out + cap.err
     assert "line 6" in out and "'baudrate' is given a second time in its table at line 6; keep one" in out
     assert "the table [tube] is declared a second time at line 5; merge the two" in out
+
+
+def test_a_key_repeated_in_every_element_of_a_json_array_is_located_in_its_own_element(tmp_path, capsys):
+    """A device file (v1) with reading_sign in each of its three sensors: each problem at its own line (a device
+    trial: all three had been put at the first one's line)."""
+    import json as _json
+
+    from rodlab.app.cli.main import main
+    sensor = {"axis_D": [1, 0, 0], "zero_mm": 5.0, "range_mm": [0, 10], "rate_N_per_mm": 0.1,
+              "force_at_zero_N": 1.0, "reading_sign": 1}
+    text = _json.dumps({"format": "rodlab.device/1", "sensors": [sensor, sensor, sensor]}, indent=1)
+    path = tmp_path / "d.device.json"
+    path.write_text(text)
+    main(["validate", str(path)])
+    out = capsys.readouterr()
+    lines = [i + 1 for i, ln in enumerate(text.splitlines()) if "reading_sign" in ln]
+    for k, line in enumerate(lines, 1):
+        assert f"line {line}, key `sensors[{k}].reading_sign`" in out.out + out.err

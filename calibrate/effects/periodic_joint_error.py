@@ -43,6 +43,9 @@ def _partial_period(q: np.ndarray, m: int) -> str:
             "any smooth error of this joint fits as well; the amplitude holds over that range only)")
 
 
+#: a joint turned over at least this much [deg] shows most of a once-per-revolution error's period
+MOST_OF_A_TURN_DEG = 300.0
+
 class PeriodicJointError(CampaignEffectModel):
     effect = "periodic_joint_error"
     order = 30
@@ -130,6 +133,12 @@ class PeriodicJointError(CampaignEffectModel):
         twice = "amp2_sin_rad" in parameters
         times = ("once- and twice" if "amp_sin_rad" in parameters else "twice") if twice else "once"
         span = parameters.get("span_deg")
+        if span is not None and MOST_OF_A_TURN_DEG <= span < 360.0 and not twice:
+            return (f"joint {j} turned over {span:.0f} deg in this campaign, most of a revolution: a once-per-revolution "
+                    f"error is told from a smooth one there, but not surely: identify it with `--joint-harmonics {j}` "
+                    f"and keep it only where validation points (--validate) show it helps (a device trial: a real "
+                    f"once-per-turn error over 340 deg took the validation from 0.119 to 0.036 mm; a bending forearm "
+                    f"over 235 deg had made another one worse); or have the gearbox / encoder checked")
         if span is not None and span < 360.0:
             return (f"joint {j} turned over {span:.0f} deg only in this campaign, where a {times}-per-revolution error "
                     "cannot be told from any smooth error of the joint (a bending link, a gear that stiffens with "

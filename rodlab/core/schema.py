@@ -143,6 +143,8 @@ def _locate(text: str, kind: str, where: list) -> int | None:
                         re.finditer(rf"(?m)^\s*\[\[\s*{re.escape(table)}\s*\]\]", text[parent:])]
                 if part < len(hits):
                     pos = hits[part]
+            elif kind == "json":                             # the element itself, not the array's first key
+                pos = _json_element(text, pos, part)
             continue
         names.append(str(part))
         table = ".".join(names)
@@ -152,6 +154,38 @@ def _locate(text: str, kind: str, where: list) -> int | None:
             return text.count("\n", 0, pos) + 1 if pos else None
         pos = m.start() + (len(m.group(0)) - len(m.group(0).lstrip()) if kind == "toml" else 0)
     return text.count("\n", 0, pos) + 1 if where else None
+
+
+def _json_element(text: str, pos: int, index: int) -> int:
+    """Where element ``index`` of the JSON array that opens after ``pos`` begins (``pos`` where not found): a
+    key repeated in every element of ``sensors`` had been located at the first element's line for each."""
+    start = text.find("[", pos)
+    if start < 0:
+        return pos
+    depth, k, i, in_str = 0, 0, start, False
+    while i < len(text):
+        ch = text[i]
+        if in_str:
+            if ch == "\\":
+                i += 1
+            elif ch == '"':
+                in_str = False
+        elif ch == '"':
+            in_str = True
+        elif ch in "[{":
+            depth += 1
+            if depth == 2 and k == index:
+                return i
+        elif ch in "]}":
+            depth -= 1
+            if depth == 0:
+                return pos
+        elif ch == "," and depth == 1:
+            k += 1
+        elif depth == 1 and k == index and not ch.isspace():
+            return i                                         # a scalar element
+        i += 1
+    return pos
 
 
 def _find_key(text: str, kind: str, key: str, dotted: str, pos: int):

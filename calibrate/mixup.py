@@ -19,7 +19,7 @@ class Mixup:
     exchanged, or the one reading column negated (a 1-tuple), or None; target_change : (the first data row of the
     second part (1-based), each part's registered nominal misfit [mm]) of instrument points whose target or tool
     changed part-way through, or None; sensor : (1-based sensor, its zero [mm]) of raw device readings that read
-    reversed, or None."""
+    reversed, or None; sensors_exchanged : the two raw sensor columns (1-based) exchanged, or None."""
 
     joint: int | None
     positions: tuple | None
@@ -34,15 +34,17 @@ class Mixup:
     readings: tuple | None = None
     target_change: tuple | None = None
     sensor: tuple | None = None
+    sensors_exchanged: tuple | None = None
 
     def __post_init__(self) -> None:
         kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
                  + (self.columns is not None) + (self.zero_offset is not None) + (self.coupling is not None)
-                 + (self.readings is not None) + (self.target_change is not None) + (self.sensor is not None))
+                 + (self.readings is not None) + (self.target_change is not None) + (self.sensor is not None)
+                 + (self.sensors_exchanged is not None))
         if kinds != 1:
             raise ValueError("Mixup: give one of a joint, a pair of positions, a pair of joint columns, a zero offset "
                              "(joint, deg), a coupling (joint a, joint b, sign), a pair of reading columns, a "
-                             "reversed sensor or fixture_radians")
+                             "reversed sensor, two sensor columns exchanged or fixture_radians")
 
     @property
     def label(self) -> str:
@@ -52,6 +54,8 @@ class Mixup:
             return "fixture angles read as radians"
         if self.sensor is not None:
             return f"sensor {self.sensor[0]} reversed"
+        if self.sensors_exchanged is not None:
+            return f"columns s{self.sensors_exchanged[0]}_mm and s{self.sensors_exchanged[1]}_mm exchanged"
         if self.readings is not None and len(self.readings) == 1:
             return f"column {_READ[self.readings[0]]} negated"
         if self.readings is not None:
@@ -75,6 +79,8 @@ class Mixup:
             return ", ".join(_READ[k] for k in self.readings)
         if self.sensor is not None:
             return f"s{self.sensor[0]}_mm"
+        if self.sensors_exchanged is not None:
+            return ", ".join(f"s{k}_mm" for k in self.sensors_exchanged)
         if self.target_change is not None:
             return "x_mm, y_mm, z_mm"
         k = (self.joint if self.joint is not None else self.zero_offset[0] if self.zero_offset is not None
@@ -109,6 +115,11 @@ class Mixup:
                     f"exported with the other sign): with s{k}_mm mirrored about its zero ({zero:g} mm) {fit}; "
                     f"flip the sign the device file gives it (sensors[{k}].reading_sign: -1, format rodlab.device/2; "
                     f"or 1, removing a -1 the file already has), or write its readings as {2 * zero:g} - s{k}_mm")
+        if self.sensors_exchanged is not None:
+            a, b = self.sensors_exchanged
+            return (f"the s{a}_mm and s{b}_mm columns look exchanged (the device's sensors wired or exported in another "
+                    f"order than the device file's sensors[{a}] and [{b}]): with them swapped back {fit}; check the "
+                    f"channel order and swap the columns (or the two sensors' entries in the device file)")
         if self.readings is not None and len(self.readings) == 1:
             a = _READ[self.readings[0]]
             return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "

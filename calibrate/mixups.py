@@ -157,7 +157,8 @@ def _reading_trials(camp, fit_readings: Callable) -> tuple:
 
 def _sensor_trials(camp, fit_readings: Callable) -> tuple:
     """(:class:`Mixup`, ``run(full)``) of each raw sensor reading reversed, mirrored about its zero (a device trial:
-    sensor 2 mounted the other way round had been called unexplained). The device's map ``s = A x + zero`` is
+    sensor 2 mounted the other way round had been called unexplained), and of each pair of sensor columns
+    exchanged. The device's map ``s = A x + zero`` is
     recovered from the campaign's readings and their converted ball centres (exact: the conversion is linear)."""
     if camp.x_D_mm is None or camp.readings_mm is None or camp.n < 4:
         return ()
@@ -172,7 +173,16 @@ def _sensor_trials(camp, fit_readings: Callable) -> tuple:
         d[:, k] = -d[:, k]
         x = np.linalg.solve(A, d.T).T
         return lambda full: fit_readings(x, full)
-    return tuple((Mixup(None, None, 0.0, 0.0, sensor=(k + 1, round(float(zero[k]), 4))), run(k)) for k in range(3))
+
+    def swap(a: int, b: int):                  # a device trial: s1 and s2 exchanged had been a device zero
+        s = np.array(camp.readings_mm, float, copy=True)
+        s[:, [a, b]] = s[:, [b, a]]
+        x = np.linalg.solve(A, (s - zero).T).T
+        return lambda full: fit_readings(x, full)
+    reversed_ = [(Mixup(None, None, 0.0, 0.0, sensor=(k + 1, round(float(zero[k]), 4))), run(k)) for k in range(3)]
+    exchanged = [(Mixup(None, None, 0.0, 0.0, sensors_exchanged=(a + 1, b + 1)), swap(a, b))
+                 for a, b in itertools.combinations(range(3), 2)]
+    return tuple(reversed_ + exchanged)
 
 
 def _swapped(positions: np.ndarray, a: int, b: int) -> np.ndarray:

@@ -72,6 +72,18 @@ def test_a_reversed_sensor_is_named(raw, tmp_path, capsys):
     assert "sensor 2's readings look reversed" in capsys.readouterr().err
 
 
+def test_two_exchanged_sensor_columns_are_named(raw, tmp_path, capsys):
+    """s1_mm and s2_mm exchanged (the channels exported in another order): named with the fix (a device trial: it had
+    been read as the device file's zero, and the diagnosis as device axes 70 deg off)."""
+    def exchange(cols, cells):
+        a, b = cols.index("s1_mm"), cols.index("s2_mm")
+        cells[a], cells[b] = cells[b], cells[a]
+    swapped = _edited(raw, tmp_path, "swap.campaign.csv", exchange)
+    capsys.readouterr()
+    assert main(["calibrate", *_args(raw, swapped)]) == 3
+    assert "the s1_mm and s2_mm columns look exchanged" in capsys.readouterr().err
+
+
 def test_readings_in_um_and_a_missing_reading_are_told_their_fix(raw, tmp_path, capsys):
     def in_um(cols, cells):
         for c in ("s1_mm", "s2_mm", "s3_mm"):

@@ -58,7 +58,8 @@ def _common_offset(x_D_mm, args) -> str:
         return ""
     offset = ", ".join(f"{v:+.2f}" for v in mean)
     zero = (f"the device file {args.device} has another zero (zero_mm) or datum than the device that recorded "
-            "them" if getattr(args, "device", None) else "the sensors were zeroed elsewhere than at the datum point")
+            "them, or two of its sensors' columns are exchanged (a refusal below names that)"
+            if getattr(args, "device", None) else "the sensors were zeroed elsewhere than at the datum point")
     return f"; they share one offset ({offset}) mm in {{D}}: {zero}"
 
 

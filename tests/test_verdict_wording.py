@@ -43,3 +43,14 @@ def test_a_robots_error_outside_the_model_is_usable_as_validated(tmp_path, capsy
     io = capsys.readouterr()
     assert "usable? yes" in io.out and "complete? no" in io.out and "verdict: TRUSTED" in io.out
     assert "caution (trusted): the model is incomplete" in io.err and "usable at the validated accuracy" in io.err
+
+
+def test_a_finding_the_validation_refutes_is_advised_for_its_kind():
+    """A device trial: device axes the validation points refuted had been told to turn 'that joint' over its range."""
+    from rodlab.app.diagnose.advice import remedy
+    from rodlab.app.diagnose.campaign_holdout import HELD_OUT_WORSE
+    from rodlab.app.diagnose.report import Finding
+    device = Finding("device_axes", None, "axes", {}, {}, 1.0, 1.0, {HELD_OUT_WORSE: True})
+    joint = Finding("periodic_joint_error", "joint:2", "periodic", {}, {}, 1.0, 1.0, {HELD_OUT_WORSE: True})
+    assert "joint" not in remedy(device) and "reading columns' order and signs" in remedy(device)
+    assert "turns that joint over its range" in remedy(joint)

@@ -54,9 +54,11 @@ def remedy(f: Finding) -> str:
     if f.effect == FindingKind.UNEXPLAINED:
         return _unexplained(f)
     if f.evidence.get(HELD_OUT_WORSE):
-        return ("do not apply it to the robot: it fits the campaign's poses, not the validation's; record a "
-                "campaign that covers the poses the robot works in (and, for a joint's error, turns that joint over "
-                "its range) and diagnose it again")
+        joint = (f.location or "").startswith("joint:")
+        return ("do not apply it: it fits the campaign's poses, not the validation's; record a campaign that covers "
+                "the poses the robot works in" + (" and turns that joint over its range" if joint else "")
+                + " and diagnose it again" + ("" if joint else " (a device's finding: check its file against the "
+                                              "device, and its reading columns' order and signs)"))
     try:
         model = campaign_effect(f.effect)
     except RodlabError:

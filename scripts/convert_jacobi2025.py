@@ -53,10 +53,17 @@ HEADER = """# Laser-tracker points of a Universal Robots UR5, {name}: public dat
 
 def convert_set(path: Path, name: str) -> str:
     """The rodlab points file (text) of one source file."""
-    warn_if_changed(path, SHA256[name])
+    return points_text(path, SHA256[name], JOINTS, HEADER.format(name=f"{name} poses", source=path.name), 4)
+
+
+def points_text(path: Path, sha256: str, joints: list, head: str, digits: int) -> str:
+    """A rodlab points file (text) from one of the source's files: its ``joints`` columns [deg] and the measured
+    position target + difference [mm] (checked to be six-decimal readings), written with ``digits`` decimals under
+    the comment block ``head``."""
+    warn_if_changed(path, sha256)
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
-    q = np.column_stack([column(rows, j, path) for j in JOINTS])
+    q = np.column_stack([column(rows, j, path) for j in joints])
     target = np.column_stack([column(rows, f"{c}_t", path) for c in "xyz"])
     diff = np.column_stack([column(rows, f"{c}_dif", path) for c in "xyz"])
     x = target + diff
@@ -64,9 +71,9 @@ def convert_set(path: Path, name: str) -> str:
     if off_grid:
         print(f"warning: {path}: {off_grid} of {x.size} values of target + difference are not six-decimal readings; "
               f"check the sign of the difference columns", file=sys.stderr)
-    lines = [",".join([f"{v:.6f}" for v in qq] + [f"{v:.4f}" for v in xx]) for qq, xx in zip(q, x)]
-    head = HEADER.format(name=f"{name} poses", source=path.name)
-    return head + "q1,q2,q3,q4,q5,q6,x_mm,y_mm,z_mm\n" + "\n".join(lines) + "\n"
+    lines = [",".join([f"{v:.6f}" for v in qq] + [f"{v:.{digits}f}" for v in xx]) for qq, xx in zip(q, x)]
+    names = ",".join(f"q{i}" for i in range(1, len(joints) + 1))
+    return head + names + ",x_mm,y_mm,z_mm\n" + "\n".join(lines) + "\n"
 
 
 def main(argv=None) -> int:

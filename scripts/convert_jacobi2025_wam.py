@@ -17,13 +17,11 @@ readings, as for the UR5; checked). The payload is not in the source: 0.
 """
 from __future__ import annotations
 
-import csv
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from source_tables import column, convert_main, warn_if_changed
+from convert_jacobi2025 import points_text
+from source_tables import convert_main
 
 SETS = {"grid": "3D_WAM_uncalibrated_grid_cleaned.csv", "random": "3D_WAM_uncalibrated_random_cleaned.csv"}
 #: sha256 of the source files this script was written for (git commit 759068d of the source repository)
@@ -43,21 +41,8 @@ HEADER = """# Laser-tracker points of a Barrett WAM (7 joints, cable-driven), {n
 
 
 def convert_set(path: Path, name: str) -> str:
-    """The rodlab points file (text) of one source file."""
-    warn_if_changed(path, SHA256[name])
-    with open(path, newline="", encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
-    q = np.column_stack([column(rows, j, path) for j in JOINTS])
-    target = np.column_stack([column(rows, f"{c}_t", path) for c in "xyz"])
-    diff = np.column_stack([column(rows, f"{c}_dif", path) for c in "xyz"])
-    x = target + diff
-    off_grid = int(np.sum(np.abs(x * 1e6 - np.round(x * 1e6)) > 1e-3))
-    if off_grid:
-        print(f"warning: {path}: {off_grid} of {x.size} values of target + difference are not six-decimal readings; "
-              f"check the sign of the difference columns", file=sys.stderr)
-    lines = [",".join([f"{v:.6f}" for v in qq] + [f"{v:.6f}" for v in xx]) for qq, xx in zip(q, x)]
-    head = HEADER.format(name=f"{name} poses", source=path.name)
-    return head + ",".join(f"q{i}" for i in range(1, 8)) + ",x_mm,y_mm,z_mm\n" + "\n".join(lines) + "\n"
+    """The rodlab points file (text) of one source file (as the UR5's: :func:`convert_jacobi2025.points_text`)."""
+    return points_text(path, SHA256[name], JOINTS, HEADER.format(name=f"{name} poses", source=path.name), 6)
 
 
 def main(argv=None) -> int:

@@ -143,12 +143,8 @@ def test_a_slip_beside_friction_and_creep_on_a_rod_off_its_simulation_is_found(t
     rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
     z_steps = sorted({int(r[1]) for r in rows if r[4] == "z"})
     first, step = z_steps[len(z_steps) // 2], 0.0075
-
-    def slip(_, row):
-        if row["load_axis"] == "z" and row["disp_z_mm"] and int(row["step"]) >= first:
-            row["disp_z_mm"] = f"{float(row['disp_z_mm']) + step:.5f}"
-    slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
-    diag, _ = diagnose_rig(read_recording(slipped), SIM, DESIGN)
+    t0 = min(float(r[0]) for r in rows if int(r[1]) == first)
+    diag = _diagnosed_with_slip(path, tmp_path, "z", t0, step, 5)
     f = next((f for f in diag.findings if "slip_mm" in f.parameters), None)
     assert f is not None, diag.summary()
     assert f.location == "sensor:z" and f.parameters["slip_mm"] == pytest.approx(step, rel=0.1), diag.summary()
@@ -169,13 +165,18 @@ def test_a_slip_within_a_hold_on_a_gauge_reading_to_1_um_is_found(tmp_path):
     mid = y_steps[len(y_steps) // 2]
     hold_t = [float(r[0]) for r in rows if int(r[1]) == mid]
     t0, step = 0.5 * (hold_t[0] + hold_t[-1]), 0.005
-
-    def slip(_, row):
-        if row["load_axis"] == "y" and row["disp_y_mm"] and float(row["time_s"]) >= t0:
-            row["disp_y_mm"] = f"{float(row['disp_y_mm']) + step:.3f}"
-    slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
-    diag, _ = diagnose_rig(read_recording(slipped), SIM, DESIGN)
+    diag = _diagnosed_with_slip(path, tmp_path, "y", t0, step, 3)
     f = next((f for f in diag.findings if "slip_mm" in f.parameters), None)
     assert f is not None and f.location == "sensor:y", diag.summary()
     assert f.parameters["slip_mm"] == pytest.approx(step, rel=0.1), diag.summary()
     assert not [f for f in diag.findings if f.effect in ("drift", "creep")], diag.summary()
+
+
+def _diagnosed_with_slip(path, tmp_path, gauge: str, t0: float, step: float, decimals: int):
+    """The diagnosis of ``path`` with the ``gauge`` gauge read ``step`` [mm] high from ``t0`` [s] to the end of its
+    own load axis's series."""
+    def slip(_, row):
+        if row["load_axis"] == gauge and row[f"disp_{gauge}_mm"] and float(row["time_s"]) >= t0:
+            row[f"disp_{gauge}_mm"] = f"{float(row[f'disp_{gauge}_mm']) + step:.{decimals}f}"
+    slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
+    return diagnose_rig(read_recording(slipped), SIM, DESIGN)[0]

@@ -16,6 +16,15 @@ from rodlab.fea.frame import frame_compliance
 ROD3 = resolve_design("rod3")
 
 
+def _measured(tmp_path, rod: str, r: float):
+    """(simulated frame file, measured compliance file, as-built path) of ``rod`` r times as compliant."""
+    sim, rec, meas = (tmp_path / n for n in (f"{rod}.frame.json", f"{rod}.rig.csv", f"{rod}.meas.json"))
+    assert main(["fea", rod, "--model", "frame", "-o", str(sim)]) == 0
+    assert main(["rig", "simulate", "--sim", str(sim), "--effect", f"compliance_scale:r={r}", "-o", str(rec)]) == 0
+    assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(meas)]) == 0
+    return sim, meas, tmp_path / f"{rod}.asbuilt.rod.toml"
+
+
 def test_scaling_every_modulus_divides_every_compliance_entry():
     C0 = frame_compliance(ROD3)[0]
     C1 = frame_compliance(scale_moduli(ROD3, 0.5))[0]
@@ -23,10 +32,7 @@ def test_scaling_every_modulus_divides_every_compliance_entry():
 
 
 def test_the_papers_3_rod_at_its_measured_r_rod_is_brought_in(tmp_path, capsys):
-    sim, rec, meas, out = (tmp_path / n for n in ("rod3.frame.json", "r3.rig.csv", "r3.meas.json", "r3.asbuilt.rod.toml"))
-    assert main(["fea", "rod3", "--model", "frame", "-o", str(sim)]) == 0
-    assert main(["rig", "simulate", "--sim", str(sim), "--effect", "compliance_scale:r=2.302", "-o", str(rec)]) == 0
-    assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(meas)]) == 0
+    sim, meas, out = _measured(tmp_path, "rod3", 2.302)
     capsys.readouterr()
     assert main(["update", "rod3", "--measured", str(meas), "-o", str(out)]) == 0
     text = capsys.readouterr().out
@@ -65,10 +71,7 @@ def test_moduli_replace_a_tube_fit_that_explains_only_roughly(tmp_path, capsys):
     """Rod 1# 1.3x as compliant throughout: the tube's E and G fit its entries only roughly (p between 1e-3 and
     0.05: they had been kept, c33 a few % off; a blind trial's creeping rod), one factor of every modulus fits them
     within the noise with fewer keys: that one is taken, and said."""
-    sim, rec, meas, out = (tmp_path / n for n in ("r1.frame.json", "r1.rig.csv", "r1.meas.json", "r1.asbuilt.rod.toml"))
-    assert main(["fea", "rod1", "--model", "frame", "-o", str(sim)]) == 0
-    assert main(["rig", "simulate", "--sim", str(sim), "--effect", "compliance_scale:r=1.3", "-o", str(rec)]) == 0
-    assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(meas)]) == 0
+    _, meas, out = _measured(tmp_path, "rod1", 1.3)
     capsys.readouterr()
     assert main(["update", "rod1", "--measured", str(meas), "-o", str(out)]) == 0
     text = capsys.readouterr().out
@@ -80,10 +83,7 @@ def test_moduli_replace_a_tube_fit_that_explains_only_roughly(tmp_path, capsys):
 
 def test_a_tube_fit_within_the_noise_is_kept(tmp_path, capsys):
     """Rod 1# 1.1x as compliant: the tube's E and G explain it (p > 0.05): the designer's default keys stay."""
-    sim, rec, meas, out = (tmp_path / n for n in ("r1.frame.json", "r1.rig.csv", "r1.meas.json", "r1.asbuilt.rod.toml"))
-    assert main(["fea", "rod1", "--model", "frame", "-o", str(sim)]) == 0
-    assert main(["rig", "simulate", "--sim", str(sim), "--effect", "compliance_scale:r=1.1", "-o", str(rec)]) == 0
-    assert main(["rig", "fit", str(rec), "--sim", str(sim), "-o", str(meas)]) == 0
+    _, meas, out = _measured(tmp_path, "rod1", 1.1)
     assert main(["update", "rod1", "--measured", str(meas), "-o", str(out)]) == 0
     assert "--free materials.cfrp_tube.E_GPa,materials.cfrp_tube.G_GPa" in out.read_text()
     assert "moduli" not in capsys.readouterr().out

@@ -58,6 +58,7 @@ class Prediction:
     folds: int = 0
     failed: list = field(default_factory=list)
     other: str = ""          #: the other split's prediction where two were made, e.g. ``interleaved poses: 2.169 mm``
+    other_mean_mm: float | None = None     #: its mean held-out error [mm]
 
     def __post_init__(self):
         c, n = np.asarray(self.calibrated_mm, float), np.asarray(self.nominal_mm, float)
@@ -128,7 +129,8 @@ class Prediction:
                 "nominal_mean_mm": self.nominal_mean_mm, "gain_mm": self.gain_mm, "gain_se_mm": self.gain_se_mm,
                 "rms_per_coordinate_mm": self.rms_per_coordinate_mm, "overfit_ratio": self.overfit_ratio,
                 "clearly_better": self.clearly_better(), "failed_folds": list(self.failed),
-                **({"other_split": self.other} if self.other else {})}
+                **({"other_split": self.other} if self.other else {}),
+                **({"other_split_mean_mm": self.other_mean_mm} if self.other_mean_mm is not None else {})}
 
 
 def fold_labels(obs: Observations, k: int = DEFAULT_FOLDS) -> tuple[np.ndarray, str]:
@@ -245,8 +247,11 @@ def cross_validate(robot, obs: Observations, fit: Callable[[Observations], Model
     if grouping != INTERLEAVED or N < MIN_POINTS_FOR_BLOCKS * k:
         return first
     blocked = _cross_validate(obs, fit, nominal, errors, fit_rms_mm, np.arange(N) * k // N, BLOCKS)
-    worse, other = (blocked, first) if blocked.mean_mm >= first.mean_mm else (first, blocked)
-    return replace(worse, other=f"{other.grouping}: {other.mean_mm:.3f} mm")
+    if not blocked.points:                   # no block could be identified from the others: said, not stated
+        return replace(first, other=f"{BLOCKS}: every fold refused", failed=list(first.failed) + blocked.failed)
+    # a block that failed leaves the others' mean, which may be the easy regions': the blocks are stated then too
+    worse, other = ((blocked, first) if blocked.failed or blocked.mean_mm >= first.mean_mm else (first, blocked))
+    return replace(worse, other=f"{other.grouping}: {other.mean_mm:.3f} mm", other_mean_mm=other.mean_mm)
 
 
 def _cross_validate(obs, fit, nominal, errors, fit_rms_mm: float, labels: np.ndarray, grouping: str) -> Prediction:

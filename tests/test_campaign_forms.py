@@ -271,6 +271,6 @@ def test_a_once_per_turn_error_over_most_of_a_turn_is_advised_with_validation():
     from rodlab.calibrate.effects.periodic_joint_error import PeriodicJointError
     e = PeriodicJointError()
     most = e.remedy("joint:1", {"amp_sin_rad": 3e-4, "amp_cos_rad": 1e-4, "span_deg": 340.0})
-    assert "identify it with `--joint-harmonics 1`" in most and "--validate" in most and "do not" not in most
+    assert "`--joint-harmonics 1` fits four terms" in most and "--validate" in most and "do not" not in most
     part = e.remedy("joint:3", {"amp_sin_rad": 3e-4, "amp_cos_rad": 1e-4, "span_deg": 235.0})
     assert "do not identify it with `--joint-harmonics 3`" in part

@@ -54,3 +54,24 @@ def test_a_finding_the_validation_refutes_is_advised_for_its_kind():
     joint = Finding("periodic_joint_error", "joint:2", "periodic", {}, {}, 1.0, 1.0, {HELD_OUT_WORSE: True})
     assert "joint" not in remedy(device) and "reading columns' order and signs" in remedy(device)
     assert "turns that joint over its range" in remedy(joint)
+
+
+def test_a_mixed_up_file_is_refused_with_a_validation_file_too(tmp_path, capsys):
+    """The y_mm column negated: a validation file's clear gain must not make the excess a caution (a review: it had
+    been TRUSTED at 0.099 mm against 0.036 mm with the column right); the mix-up is named."""
+    out = tmp_path / "c"
+    rod = str(tmp_path / "rod1.compliance.json")
+    assert main(["fea", "rod1", "--model", "calc", "-o", rod]) == 0
+    assert main(["simulate-campaign", "--rod", rod, "-o", str(out)]) == 0
+    lines = (out / "multical.campaign.csv").read_text().splitlines()
+    j = lines[0].split(",").index("y_mm")
+    rows = [ln.split(",") for ln in lines[1:]]
+    for r in rows:
+        r[j] = f"{-float(r[j]):.4f}"
+    neg = tmp_path / "neg.campaign.csv"
+    neg.write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+    capsys.readouterr()
+    assert main(["calibrate", str(neg), "--fixture", str(out / "multical.fixture.json"), "--rod", rod, "--validate",
+                 str(out / "multical.validation.csv")]) == 3
+    err = capsys.readouterr().err
+    assert "the y_mm column looks negated" in err and "usable at the validated accuracy" not in err

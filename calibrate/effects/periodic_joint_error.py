@@ -135,8 +135,9 @@ class PeriodicJointError(CampaignEffectModel):
         span = parameters.get("span_deg")
         if span is not None and MOST_OF_A_TURN_DEG <= span < 360.0 and not twice:
             return (f"joint {j} turned over {span:.0f} deg in this campaign, most of a revolution: a once-per-revolution "
-                    f"error is told from a smooth one there, but not surely: identify it with `--joint-harmonics {j}` "
-                    f"and keep it only where validation points (--validate) show it helps (a device trial: a real "
+                    f"error is told from a smooth one there, but not surely, and `--joint-harmonics {j}` fits four terms "
+                    f"(once and twice per revolution), which over less than a turn may extrapolate: identify them and "
+                    f"keep them only where validation points (--validate) show they help (a device trial: a real "
                     f"once-per-turn error over 340 deg took the validation from 0.119 to 0.036 mm; a bending forearm "
                     f"over 235 deg had made another one worse); or have the gearbox / encoder checked")
         if span is not None and span < 360.0:

@@ -262,7 +262,7 @@ def _covariance(J: np.ndarray) -> np.ndarray:
     joint's compliance (1e-6 rad/(N m)) beside a modulus (GPa) spans 1e7 in column size, and the unscaled inverse
     had dropped the moduli's weak directions as numerically zero (a CalculiX trial: E 168.1 +- 0.1 GPa, correlation
     1.00 with G, 110 SDs from the truth). The priors' rows make every direction seen."""
-    from rodlab.calibrate.covariance import parameter_covariance  # heavy: rodlab.calibrate's package (~0.1 s)
+    from rodlab.calibrate.covariance import parameter_covariance  # heavy: rodlab.calibrate loads scipy (~0.1 s)
     return parameter_covariance(J)
 
 

@@ -157,10 +157,12 @@ def _locate(text: str, kind: str, where: list) -> int | None:
 
 
 def _json_element(text: str, pos: int, index: int) -> int:
-    """Where element ``index`` of the JSON array that opens after ``pos`` begins (``pos`` where not found): a
-    key repeated in every element of ``sensors`` had been located at the first element's line for each."""
-    start = text.find("[", pos)
-    if start < 0:
+    """Where element ``index`` of the JSON array that is the value at ``pos`` (just after its key) begins; ``pos``
+    where that value is no array or has no such element (a key repeated in every element of ``sensors`` had been
+    located at the first element's line for each)."""
+    colon = text.find(":", pos)
+    start = colon + 1 + (len(text[colon + 1:]) - len(text[colon + 1:].lstrip())) if colon >= 0 else -1
+    if start < 0 or not text.startswith("[", start):
         return pos
     depth, k, i, in_str = 0, 0, start, False
     while i < len(text):
@@ -170,20 +172,18 @@ def _json_element(text: str, pos: int, index: int) -> int:
                 i += 1
             elif ch == '"':
                 in_str = False
+        elif depth == 1 and k == index and not ch.isspace() and ch not in ",]":
+            return i                                         # the element's first character
         elif ch == '"':
             in_str = True
         elif ch in "[{":
             depth += 1
-            if depth == 2 and k == index:
-                return i
         elif ch in "]}":
             depth -= 1
             if depth == 0:
                 return pos
         elif ch == "," and depth == 1:
             k += 1
-        elif depth == 1 and k == index and not ch.isspace():
-            return i                                         # a scalar element
         i += 1
     return pos
 

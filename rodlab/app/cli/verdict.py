@@ -8,19 +8,29 @@ import sys
 from rodlab.calibrate.trust import (campaign_excess, completeness_statement, prediction_cautions, prediction_warnings,
                                    validated_excess)
 
-__all__ = ["judge", "print_verdict", "print_held"]
+__all__ = ["judge", "accept_validated", "print_verdict", "print_held"]
 
 
 def judge(res, prediction) -> None:
     """Record the held-out ``prediction`` (or None) on ``res`` and add its reasons not to use the result, and the
-    caution of a prediction along one-joint sweeps only; a campaign's residual excess that validation points
-    show the calibration predicts clearly better through is a caution instead of a reason
-    (:func:`~rodlab.calibrate.trust.validated_excess`)."""
+    caution of a prediction along one-joint sweeps only."""
     res.prediction = prediction
-    validated = validated_excess(res, prediction)      # a robot's errors outside the model, validated through
-    warnings = [w for w in res.warnings if not (validated and w == campaign_excess(res))]
-    res.warnings = warnings + prediction_warnings(prediction)
-    res.cautions = list(res.cautions) + prediction_cautions(prediction) + ([validated] if validated else [])
+    res.warnings = list(res.warnings) + prediction_warnings(prediction)
+    res.cautions = list(res.cautions) + prediction_cautions(prediction)
+
+
+def accept_validated(res, robots_own) -> bool:
+    """A campaign's residual excess made a caution instead of a reason where independent validation points show
+    the calibration predicts clearly better than the nominal model
+    (:func:`~rodlab.calibrate.trust.validated_excess`) and ``robots_own()`` (the campaign diagnosis, called only
+    then) puts the excess on the robot's own physics, not on the files; returns whether it did."""
+    validated = validated_excess(res, res.prediction)
+    excess = campaign_excess(res)
+    if not validated or excess not in res.warnings or not robots_own():
+        return False
+    res.warnings.remove(excess)
+    res.cautions = list(res.cautions) + [validated]
+    return True
 
 
 def print_verdict(res) -> None:

@@ -272,7 +272,8 @@ def _model_form(linear: LinearPart, env: Envelope, fit: _AsBuilt, causes, rms, j
     ev = dict(judged.to_dict(), resolve=_resolution(env, fit, causes), envelope=env.source)
     if fit.k:
         ev["keys_not_resolved"] = unresolved
-        far = _far_keys(env, fit.u)
+        far = [k for k in _far_keys(env, np.r_[env.accepted_u(fit.u[:len(env.params)]), fit.u[len(env.params):]])
+               if k.split(" ")[0] not in unresolved]
         if far:
             ev["caution"] = ("inside the envelope, but " + ", ".join(far) + ": near the tolerance's end, as a part "
                              "that is not what the design says would be (a loosening joint, another laminate); "

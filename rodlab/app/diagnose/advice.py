@@ -56,10 +56,12 @@ def remedy(f: Finding) -> str:
     if f.evidence.get(HELD_OUT_WORSE):
         joint = (f.location or "").startswith("joint:")
         device = str(f.effect).startswith("device_")
-        return ("do not apply it: it fits the campaign's poses, not the validation's; record a campaign that covers "
-                "the poses the robot works in" + (" and turns that joint over its range" if joint else "")
-                + " and diagnose it again" + (" (a device's finding: check its file against the device, and its "
-                                              "reading columns' order and signs)" if device else ""))
+        turn = " and turns that joint over its range" if joint else ""
+        check = (" (a device's finding: check its file against the device, and its reading columns' order and signs)"
+                 if device else "")
+        return ("do not apply it" + ("" if device else " to the robot") + ": it fits the campaign's poses, not the "
+                f"validation's; record a campaign that covers the poses the robot works in{turn} and diagnose it "
+                f"again{check}")
     try:
         model = campaign_effect(f.effect)
     except RodlabError:

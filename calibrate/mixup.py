@@ -117,18 +117,15 @@ class Mixup:
                     f"or 1, removing a -1 the file already has), or write its readings as {2 * zero:g} - s{k}_mm")
         if self.sensors_exchanged is not None:
             a, b = self.sensors_exchanged
-            return (f"the s{a}_mm and s{b}_mm columns look exchanged (the device's sensors wired or exported in another "
-                    f"order than the device file's sensors[{a}] and [{b}]): with them swapped back {fit}; check the "
-                    f"channel order and swap the columns (or the two sensors' entries in the device file)")
+            return _exchanged(f"s{a}_mm", f"s{b}_mm", fit, f" than the device file's sensors[{a}] and [{b}]",
+                              " (or the two sensors' entries in the device file)")
         if self.readings is not None and len(self.readings) == 1:
             a = _READ[self.readings[0]]
             return (f"the {a} column looks negated (the device's {a[0]} sensor wired or exported with the other sign: "
                     f"a mirrored, left-handed reading frame no clamping pose can turn into the device's): with {a} "
                     f"negated {fit}; check the sign of the device's {a[0]} channel and negate the {a} column")
         if self.readings is not None:
-            a, b = (_READ[k] for k in self.readings)
-            return (f"the {a} and {b} columns look exchanged (the device's sensors wired or exported in another "
-                    f"order): with them swapped back {fit}; check the device's channel order and swap the columns")
+            return _exchanged(*(_READ[k] for k in self.readings), fit)
         if self.zero_offset is not None:
             k, deg = self.zero_offset
             return (f"joint {k}'s zero differs from the robot file's by {deg:+g} deg: with {deg:+g} deg added to q{k} "
@@ -153,3 +150,9 @@ class Mixup:
         return (f"clamping positions {a} and {b} look swapped between the campaign and the fixture file: with their "
                 f"labels exchanged {fit}; check which clamping each block of the campaign was recorded at and "
                 f"correct the position column or the fixture file")
+
+
+def _exchanged(a: str, b: str, fit: str, against: str = "", also: str = "") -> str:
+    """The reason of two reading columns ``a`` and ``b`` exchanged (``fit``: what undoing it gives)."""
+    return (f"the {a} and {b} columns look exchanged (the device's sensors wired or exported in another order"
+            f"{against}): with them swapped back {fit}; check the device's channel order and swap the columns{also}")

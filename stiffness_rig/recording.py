@@ -16,7 +16,7 @@ import io
 import logging
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -88,6 +88,11 @@ class RigRecording:
     @property
     def n(self) -> int:
         return int(self.time_s.shape[0])
+
+    def subset(self, keep: np.ndarray) -> "RigRecording":
+        """The rows where ``keep`` (bool, shape=(n,)) is true; the header and path as they are."""
+        return replace(self, **{f.name: getattr(self, f.name)[keep] for f in fields(self)
+                                if isinstance(getattr(self, f.name), np.ndarray)})
 
     @property
     def rod(self) -> str:

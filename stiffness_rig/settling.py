@@ -112,22 +112,12 @@ def hold_part(rec) -> SettlingCut:
         if rows.size > n:
             keep[rows[:-n]] = False
             holds += 1
-        elif rows.size < n + 2:          # a complete hold has a settle window (>= 2 samples) before its own
+        else:                            # a complete hold has a settle window (>= 2 samples) before its own
             keep[rows] = False
             incomplete += 1
     if keep.all():
         return SettlingCut(rec, n, 0, 0)
-    return SettlingCut(_subset(rec, keep), n, int((~keep).sum()), holds, incomplete)
-
-
-def _subset(rec, keep: np.ndarray):
-    """The rows ``keep`` of a recording (every per-sample array; the header and path as they are)."""
-    changes = {}
-    for f in dataclasses.fields(rec):
-        value = getattr(rec, f.name)
-        if isinstance(value, np.ndarray) and value.shape[:1] == keep.shape:
-            changes[f.name] = value[keep]
-    return dataclasses.replace(rec, **changes)
+    return SettlingCut(rec.subset(keep), n, int((~keep).sum()), holds, incomplete)
 
 
 def settling_seconds(rec) -> float | None:
@@ -198,4 +188,4 @@ def after_settling(rec, seconds: float) -> SettlingCut:
         if early.size and early.size < rows.size:
             keep[early] = False
             holds += 1
-    return SettlingCut(_subset(rec, keep), None, int((~keep).sum()), holds, seconds=seconds)
+    return SettlingCut(rec.subset(keep), None, int((~keep).sum()), holds, seconds=seconds)

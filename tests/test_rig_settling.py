@@ -179,8 +179,7 @@ def test_a_blank_reading_or_a_short_hold_leaves_the_settling_found(tmp_path):
     disp[np.flatnonzero(rec.step == loaded[0])[0]] = np.nan
     keep[np.flatnonzero(rec.step == loaded[1])[6:]] = False
     edited = dataclasses.replace(rec, disp_mm=disp)
-    edited = dataclasses.replace(edited, **{f.name: getattr(edited, f.name)[keep] for f in dataclasses.fields(edited)
-                                          if isinstance(getattr(edited, f.name), np.ndarray)})
+    edited = edited.subset(keep)
     assert found is not None and settling_seconds(edited) == pytest.approx(found, abs=0.15)
 
 
@@ -202,13 +201,11 @@ def test_a_hold_cut_short_in_an_acquired_recording_is_left_out_whole(tmp_path):
     """An acquisition interrupted in a hold and resumed records that hold again under a new step: the cut one has
     fewer samples than a settle window and a hold proper, so it is left out whole (a review: it had been kept with
     its settling) and said."""
-    import dataclasses
     rec = read_recording(_settling(tmp_path, "# plan_fields: rod=\"1#\" hold_s=6 rate_Hz=10.0", "acq.rig.csv"))
     step = int(np.unique(rec.step)[3])
     keep = np.ones(rec.n, dtype=bool)
     keep[np.flatnonzero(rec.step == step)[30:]] = False          # 30 samples left of its 80
-    cut_rec = dataclasses.replace(rec, **{f.name: getattr(rec, f.name)[keep] for f in dataclasses.fields(rec)
-                                          if isinstance(getattr(rec, f.name), np.ndarray)})
+    cut_rec = rec.subset(keep)
     cut = hold_part(cut_rec)
     assert cut.incomplete == 1 and step not in set(cut.recording.step.tolist())
     assert "1 hold(s) cut short" in cut.text()

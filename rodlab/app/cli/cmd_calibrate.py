@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 
 import numpy as np
@@ -134,8 +135,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     mixup = _mixup(run, suspect=noisy is not None) if res.warnings else None
     if mixup is not None:                          # the cause first: the other reasons follow from it
         res.warnings.insert(0, mixup.reason())
-    else:                                          # a robot's own errors that the validation shows it works through
-        accept_validated(res, lambda: _robots_own(run, args, comp))
+    diagnosis = functools.cache(lambda: _campaign_diagnosis(run, args, comp))     # run once, where needed
+    if mixup is None:                              # a robot's own errors that the validation shows it works through
+        accept_validated(res, lambda: _robots_own(diagnosis()))
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.residuals:
@@ -153,7 +155,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if res.warnings:
         print_not_trusted(res)
         if mixup is None and res.residual_check is not None and res.residual_check.material:
-            _print_suspects(robot, camp, run.fixture, args, rod, comp, res.residual_check, other_rod_mm)
+            _print_suspects(diagnosis(), args, other_rod_mm)
         _note_ideal_device(args)
         return 3
     print_cautions(res)
@@ -220,18 +222,30 @@ ROBOT_PHYSICS = frozenset({"periodic_joint_error", "joint_stiffening", "lost_mot
                            "joint_zero_shift"})
 
 
-def _robots_own(run: CalibrationRun, args, comp) -> bool:
-    """Whether the campaign diagnosis puts a validated campaign's residual excess on the robot's own physics
-    (:data:`ROBOT_PHYSICS`) and on nothing of the files (a clamping pose, the device, the rod file, stray points),
-    so the excess is a caution (a review: a clamping position recorded 0.3 mm off had been trusted through a
-    validation file)."""
+def _campaign_diagnosis(run: CalibrationRun, args, comp):
+    """(the campaign diagnosis, None) with the calibration's residual test's noise model, each finding checked on
+    the validation points where there are some; or (None, why it cannot run: it identifies every parameter, the
+    calibration held some at nominal)."""
     from rodlab.app.diagnose import diagnose_campaign
     test = run.result.residual_check
     used = run.rod_file if comp.active else RodCompliance.none_like(run.rod_file)
+    points = points_from_args(args, args.validate, run.robot) if args.validate else None
     try:
         diag, _ = diagnose_campaign(run.robot, run.campaign, run.fixture, used, noise_mm=test.noise_mm,
-                                    fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
-    except RodlabError:
+                                    validate_points=points, fixture_sigma=test.fixture_sigma,
+                                    harmonics=args.joint_harmonics)
+    except RodlabError as e:
+        return None, str(e).replace(STRICT_HINT, "")
+    return diag, None
+
+
+def _robots_own(diagnosis) -> bool:
+    """Whether the campaign ``diagnosis`` (:func:`_campaign_diagnosis`) puts a validated campaign's residual excess
+    on the robot's own physics (:data:`ROBOT_PHYSICS`) and on nothing of the files (a clamping pose, the device, the
+    rod file, stray points), so the excess is a caution (a review: a clamping position recorded 0.3 mm off had been
+    trusted through a validation file)."""
+    diag, _ = diagnosis
+    if diag is None:
         return False
     effects = {str(f.effect) for f in diag.findings}
     return bool(effects & ROBOT_PHYSICS) and not effects - ROBOT_PHYSICS - {"unexplained"}
@@ -271,22 +285,17 @@ def _uncompensated_todo(f) -> str:
             "(`--rod FILE` with the default `--compensation file`, or `rodlab compare` for every method)")
 
 
-def _print_suspects(robot, camp, fix, args, rod, comp, test, other_rod_mm: float | None = None) -> None:
-    """The campaign diagnosis (the same residual test ``test``, with its noise model, then the hypotheses, each
+def _print_suspects(diagnosis, args, other_rod_mm: float | None = None) -> None:
+    """The campaign diagnosis (:func:`_campaign_diagnosis`: the same residual test, then the hypotheses, each
     checked on the validation points when there are some) and what to do about each; ``other_rod_mm``: how far the
     identified ball centre is from the rod file's (:func:`_warn_other_rod`), when the file looks like another rod's:
     a compliance found off is then that file's, not this rod's to measure."""
-    from rodlab.app.diagnose import diagnose_campaign
     from rodlab.app.diagnose.advice import remedy
     from rodlab.app.diagnose.campaign_holdout import HELD_OUT_WORSE
-    used = rod if comp.active else RodCompliance.none_like(rod)
-    points = points_from_args(args, args.validate, robot) if args.validate else None
-    try:
-        diag, _ = diagnose_campaign(robot, camp, fix, used, noise_mm=test.noise_mm, validate_points=points,
-                                    fixture_sigma=test.fixture_sigma, harmonics=args.joint_harmonics)
-    except RodlabError as e:   # the diagnosis identifies every parameter; the calibration held some at nominal
+    diag, why = diagnosis
+    if diag is None:           # the diagnosis identifies every parameter; the calibration held some at nominal
         print(f"suspects: the campaign diagnosis, which identifies every parameter, cannot run on this campaign "
-              f"({str(e).replace(STRICT_HINT, '')}); the verdict above stands", file=sys.stderr)
+              f"({why}); the verdict above stands", file=sys.stderr)
         return
     print(f"suspects (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
     for f in diag.findings:

@@ -255,6 +255,7 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     lower, upper, fixture_sigma = problem.lower, problem.upper, options.fixture_sigma
     x = problem.x.copy()                                # priors are centred on these initial values
     prior = np.zeros(len(infos), dtype=bool)
+    released: set[int] = set()
     offsets = np.zeros_like(obs.x_W_mm)
     noise_est = 0.01
     res = None
@@ -278,12 +279,24 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
         sig = _sigmas(robot, obs, p, [infos[k] for k in free], noise_est, fixture_sigma)
         weak = [k for k, s in zip(free, sig) if s / INTERNAL_SCALE[infos[k].unit] > PRIOR_SCALE[infos[k].unit]]
         newly = [k for k in weak if not prior[k]]
-        for k in newly:
-            prior[k] = True
-        log.info("compensation pass %d: offset change %.2e mm, rms %.4f mm, %d weak", it, change, noise_est, len(newly))
-        if change < 1e-5 and not newly and len(free) == len(free_all):
+        prior[newly] = True
+        freed = _release_priors(prior, free, weak, released)
+        log.info("compensation pass %d: offset change %.2e mm, rms %.4f mm, %d weak, %d released", it, change,
+                 noise_est, len(newly), len(freed))
+        if change < 1e-5 and not newly and not freed and len(free) == len(free_all):
             break
     return _Compensated(x, prior, offsets, noise_est, res, it, free)
+
+
+def _release_priors(prior: np.ndarray, free: list, weak: list, released: set) -> list:
+    """Take the prior off each parameter that carries one but is no longer weak (an early pass's scatter, before
+    the compensation, had made it look weak: a tool length well determined had stayed ``regularised``); each
+    parameter is released once at most, so a parameter at the edge cannot flip back and forth. Updates
+    ``prior`` and ``released`` in place; returns the parameters released."""
+    freed = [k for k in free if prior[k] and k not in weak and k not in released]
+    prior[freed] = False
+    released.update(freed)
+    return freed
 
 
 def _result(robot, obs, problem: _Problem, reasons, st: _Compensated, fixture_sigma) -> CalibrationResult:

@@ -26,7 +26,7 @@ def print_parameters(res) -> None:
         v, s = res.values[nm], res.sigma[nm]
         if info.unit == "rad/(N m)":
             bound = _at_bound(v, s)
-            at_bound += [nm] if bound else []
+            at_bound += [nm] if bound and res.status[nm] == "identified" else []
             print(f"  {nm:<14} {v * 1e6:14.3f} {s * 1e6:12.3f}  urad/(N m) {res.status[nm]}{bound}")
         else:
             print(f"  {nm:<14} {v:14.5f} {s:12.5f}  {info.unit:<10} {res.status[nm]}")
@@ -34,11 +34,27 @@ def print_parameters(res) -> None:
         print(f"note: {', '.join(at_bound)} at a physical bound of a joint compliance (0 or {C_MAX:g} rad/(N m)): the "
               "data push it beyond, so its sigma describes one side only and the value is a limit, not a measurement",
               file=sys.stderr)
+    _note_unidentified_compliance(res)
     _warn_negative(res)
     print_held(res)
     if res.residual_check is not None:
         t = res.residual_check
         print(f"  residuals {t.wording}: {t.describe()}")
+
+
+def _note_unidentified_compliance(res) -> None:
+    """One line where the data cannot identify the free joint compliances (each ``regularised``: its sigma from
+    the data alone beyond a joint's physical size): the fit keeps them near their start values, and says how
+    to measure them (a trial: five compliances of sigma 40-117,000 urad/(N m) read as results)."""
+    free_c = [nm for nm in res.free if next(i for i in res.infos if i.name == nm).unit == "rad/(N m)"]
+    weak = [nm for nm in free_c if res.status[nm] == "regularised"]
+    if not weak:
+        return
+    which = "the joint compliances are" if len(weak) == len(free_c) else f"{', '.join(weak)} are"
+    print(f"note: {which} not identifiable from these data (sigma beyond a joint's physical size): the fit keeps "
+          f"them near their start values, so read them as the start values, not as measurements; to identify them, "
+          f"measure the same poses under different loads (the rod's own weight at other arm postures, a payload)",
+          file=sys.stderr)
 
 
 #: a joint compliance held at 0 whose unbounded estimate lies this many sigma below 0 is a sag of the wrong sign

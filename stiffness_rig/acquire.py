@@ -59,6 +59,8 @@ class AcquisitionStatus:
     samples: int
     garbage: int
     reconnects: int
+    #: requests the instruments left unanswered and were repeated (each delays its sample by the port's timeout)
+    timeouts: int = 0
 
 
 class RecordingLock:
@@ -183,7 +185,7 @@ class _Session:
             self.writer.sync()
             if self.progress:
                 self.progress(AcquisitionStatus(k + 1, len(holds), label, self.samples, self.client.garbage,
-                                                self.client.reconnects))
+                                                self.client.reconnects, getattr(self.client, "timeouts", 0)))
 
     def _set_load(self, axis, rep, phase, mass) -> None:
         if self.operator is None:

@@ -137,6 +137,8 @@ class InstrumentClient:
             log.info("%s: garbage ignored (%d so far): %s", self._where(), self.garbage, g)
         except NoAnswer:
             self.timeouts += 1
+            log.info("%s: no answer within the port's timeout (%d so far): request repeated", self._where(),
+                     self.timeouts)
         except (*_port_errors(), AttributeError, TypeError) as e:
             self._reconnect(f"port lost ({type(e).__name__}: {e})")
         return None

@@ -35,10 +35,14 @@ def _plan(axes=("y", "z"), masses=(1.0, 2.0), repeats=1, hold_s=0.5):
 def test_acquisition_with_faults_recovers_compliance(tmp_path):
     model = RigModel(C, {"friction": {"F_f_N": 0.2}}, seed=4)
     with SimulatedRig(model, tmp_path / "tty", faults=Faults(garbage=0.08, drop=0.05, partial=0.05), seed=2) as dev:
-        out = acquire(_profile(dev.port), _plan(repeats=2), tmp_path / "r.rig.csv", use_loader=True)
+        statuses = []
+        out = acquire(_profile(dev.port), _plan(repeats=2), tmp_path / "r.rig.csv", use_loader=True,
+                      progress=statuses.append)
         kinds = {k for _, k in dev.events}
+        drops = sum(k == "drop" for _, k in dev.events)
     rec = read_recording(out)
     assert {"garbage", "drop", "partial"} <= kinds
+    assert statuses[-1].timeouts >= drops > 0           # each dropped answer counted (the CLI says how many)
     assert np.all(np.diff(rec.time_s) >= 0)
     assert rec.n <= len(dev.sent)                       # nothing invented
     fit = fit_recording(rec, SIM)

@@ -345,6 +345,10 @@ def cmd_acquire(args: argparse.Namespace) -> int:
     if last and (last[0].garbage or last[0].reconnects):    # counted while recording: said once at the end
         print(f"  the instruments sent {last[0].garbage} garbage line(s) (skipped) and the ports were reconnected "
               f"{last[0].reconnects} time(s) in this run; `-v` shows each")
+    if last and last[0].timeouts:
+        print(f"  {last[0].timeouts} request(s) went unanswered and were repeated: each such sample came one port "
+              f"timeout later (its time is the answer's, so the fit is unaffected); many of them point at the cable, "
+              f"the baud rate or a timeout_s shorter than the instrument's answer")
     return 0
 
 

@@ -25,7 +25,8 @@ if TYPE_CHECKING:
     from .crossval import Prediction
     from .result import CalibrationResult
 
-__all__ = ["trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness", "completeness_statement",
+__all__ = ["rms_text", "trust_warnings", "bound_warnings", "trust_cautions", "prediction_warnings", "completeness",
+           "completeness_statement",
            "unmodelled_gross", "typical_miss_mm", "stated_noise_warning", "implausible_device",
            "PLAUSIBLE_NOISE_FACTOR", "NOISY_FILE_CAUSES",
            "ERROR_BOUNDS", "MIN_READINGS_PER_PARAMETER", "OVERFIT_RATIO", "OVERFIT_SHARE", "USUAL_MOVE",
@@ -47,6 +48,12 @@ OVERFIT_RATIO = 3.0
 #: a held-out error several times a 3 um fit is harmless while it is a hundredth of the nominal's
 OVERFIT_SHARE = 0.5
 
+
+
+def rms_text(mm: float) -> str:
+    """A residual [mm] as printed: in um below a millimetre (one decimal), in mm above (a gross fit had printed
+    404644.9 um)."""
+    return f"{mm * 1e3:.1f} um" if mm < 1.0 else f"{mm:.4g} mm"
 
 def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     """Reasons not to use a calibration that the fit itself shows: no convergence, too few degrees of freedom,
@@ -83,7 +90,7 @@ def campaign_excess(res: "CalibrationResult") -> str | None:
               if not gross(test.birge, res.rms_mm) else
               f"not a noisier device ({res.rms_mm * 1e3:.0f} um rms per reading against the stated "
               f"{test.noise_mm * 1e3:.1f} um) but files that do not describe this campaign: {GROSS_CAUSES}")
-    return (f"residuals ({res.rms_mm * 1e3:.1f} um rms) are not noise: {test.describe()}; the model covers the "
+    return (f"residuals ({rms_text(res.rms_mm)} rms) are not noise: {test.describe()}; the model covers the "
             f"device's physics, so this is {causes}, and it biases every parameter: run `rodlab diagnose --campaign` "
             "on the same files to find which" + ("" if gross(test.birge, res.rms_mm) else
                                                  ", and validate on independent points (--validate)"))
@@ -99,7 +106,7 @@ def validated_excess(res: "CalibrationResult", pred: "Prediction | None") -> str
     if (campaign_excess(res) is None or gross(test.birge, res.rms_mm) or pred is None
             or pred.source is not AccuracySource.VALIDATION or not pred.clearly_better()):
         return None
-    return (f"the model is incomplete: the residuals ({res.rms_mm * 1e3:.1f} um rms) are not the device's noise "
+    return (f"the model is incomplete: the residuals ({rms_text(res.rms_mm)} rms) are not the device's noise "
             f"({test.describe()}): the robot's own errors outside the model (a periodic joint error, backlash, "
             "thermal growth), or a wrong clamping pose, a noisier device or another rod's file, bias the parameters; "
             "the independent validation points show the calibration predicts clearly better than the nominal model "
@@ -211,7 +218,7 @@ def completeness_statement(res: "CalibrationResult") -> str:
         return (f"complete? not tested: {test.dof} degree(s) of freedom are too few for the residuals to show what the "
                 "model leaves out")
     word = {Completeness.COMPLETE: "yes", Completeness.NEARLY: "nearly", Completeness.INCOMPLETE: "no"}
-    return (f"complete? {word[completeness(res)]}: the model leaves {res.rms_mm * 1e3:.1f} um rms per reading "
+    return (f"complete? {word[completeness(res)]}: the model leaves {rms_text(res.rms_mm)} rms per reading "
             f"unexplained (Birge ratio sqrt(chi-square / dof) {test.birge:.1f} by the residual test above, against "
             + (f"the device's {test.noise_mm * 1e3:.1f} um per reading and the clamping poses' uncertainty)"
                if test.clamping else f"the {test.source}'s noise {test.noise_phrase()} per reading)"))
@@ -333,7 +340,7 @@ def _incomplete_caution(res: "CalibrationResult") -> list[str]:
     test = res.residual_check
     if test is None or not test.material or test.clamping:
         return []
-    return [f"the model is incomplete: it leaves {res.rms_mm * 1e3:.1f} um rms per reading unexplained "
+    return [f"the model is incomplete: it leaves {rms_text(res.rms_mm)} rms per reading unexplained "
             f"(Birge ratio {test.birge:.1f} against the stated noise {test.noise_phrase()} per reading); "
             f"{_CAUSES.get(test.source, _CAUSES['instrument'])}. The predicted accuracy already includes what is "
             "left out"]

@@ -50,7 +50,8 @@ def _note_unidentified_compliance(res) -> None:
     weak = [nm for nm in free_c if res.status[nm] == "regularised"]
     if not weak:
         return
-    which = "the joint compliances are" if len(weak) == len(free_c) else f"{', '.join(weak)} are"
+    which = ("the joint compliances are" if len(weak) == len(free_c) else
+             f"{', '.join(weak)} {'is' if len(weak) == 1 else 'are'}")
     print(f"note: {which} not identifiable from these data (sigma beyond a joint's physical size): the fit keeps "
           f"them near their start values, so read them as the start values, not as measurements; to identify them, "
           f"measure the same poses under different loads (the rod's own weight at other arm postures, a payload)",

@@ -30,18 +30,20 @@ def _unexplained(f: Finding) -> str:
                 f"do not raise --noise-um: check the files first ({NOISY_FILE_CAUSES}), then the robot and the fixture "
                 "for play no effect models (backlash in a wrist joint, a loose ball, device or mount)")
     if f.parameters.get("spread") == "even":
-        return ("no structure by position or time: a device noisier than stated would give this; if its "
-                "specification or a repeatability test (the ball held still, read 30 times) shows a scatter of at "
-                f"least {f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise the excess is "
-                "structure no effect models: check the device's mounting and sensors, the ball and the fixture for "
-                "play")
+        return ("no structure by position or time: a device noisier than stated would give this, and so would the "
+                "robot's own repeatability or a backlash too small to name; if the device's specification or a "
+                "repeatability test (the ball held still, read 30 times) shows a scatter of at least "
+                f"{f.parameters['scatter_um']:.1f} um, state it with --noise-um; otherwise the excess is the robot's "
+                "or structure no effect models: validation points (--validate) show whether the calibration works "
+                "through it; check the device's mounting and sensors, the ball and the fixture for play")
     if f.parameters.get("spread") == "time":
         return ("the residuals change through the campaign: let the robot run warm to a steady temperature before "
                 "the campaign (log temp_C), check the device and the fixture for settling, and record again or "
                 "shorter; a noisier device would not give this")
-    return ("no modelled cause: check the device's mounting and the fixture for play, record more points at "
-            f"{f.location or 'the worst position'}, and compare with the simulated campaign of "
-            "`rodlab simulate-campaign`")
+    where = f.location or "the worst position"
+    return (f"no modelled cause: check {where}'s clamping pose in the fixture file (a pose recorded off shows there "
+            f"first), the device's mounting and the fixture for play, record more points at {where}, and compare "
+            "with the simulated campaign of `rodlab simulate-campaign`")
 
 
 def _implausible_device(f: Finding) -> bool:

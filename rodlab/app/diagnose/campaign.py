@@ -204,8 +204,10 @@ class CampaignSelection:
         A = np.column_stack([self.J] + self.cols + [h.X])
         k0 = self.J.shape[1] + sum(c.shape[1] for c in self.cols)
         val = best.coef[k0:k0 + h.X.shape[1]]
-        # detection limit: an effect that moves no point by 2 device-noise SDs is not reported
-        if not per_point and float(np.max(np.abs(self.L @ (h.X @ val)))) < 2.0 * self.noise_mm * self.birge:
+        # detection limit: an effect that moves no point by 2 SDs of the scatter it leaves is not reported (the
+        # scatter before it would count the effect itself: a backlash 0.02 deg raised its own bar and was never named)
+        left = self.birge / _birge_drop(self.r - A @ best.coef[:A.shape[1]], self.n, A.shape[1], self.birge)
+        if not per_point and float(np.max(np.abs(self.L @ (h.X @ val)))) < 2.0 * self.noise_mm * left:
             log.debug("campaign diagnosis: %s %s below the detection limit", h.effect, h.location)
             return False
         se = np.sqrt(np.clip(np.diag(np.linalg.pinv(A.T @ A))[k0:k0 + h.X.shape[1]], 0, None))

@@ -20,7 +20,8 @@ from rodlab.core.units import G0
 
 from .completion import complete_c_f
 from .errors import RigError
-from .fit_checks import (creep_warnings, dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
+from .creep_check import creep_within_holds
+from .fit_checks import (dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
                          load_drift_warnings, load_scale_problems, reciprocity_problems)
 from .glitches import without_glitches
 from .holds import Holds, hold_averages
@@ -157,6 +158,11 @@ def _lsq(X, y, robust: bool, f_scale: float):
     return r.x
 
 
+def _creep_text(rec: RigRecording) -> list[str]:
+    found = creep_within_holds(rec)
+    return [] if found is None else [found.text()]
+
+
 def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: bool = False) -> RigFit:
     """Fit every (load axis, measured component) of ``rec``; Eq. 21 when ``sim`` is given. Each hold's
     settling (an acquired recording's samples before its ``hold_s x rate_Hz``, or the first seconds where the
@@ -188,7 +194,8 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     refuse += scale_refuse
     warn += scale_warn
     fit.warnings = (refuse + warn + glitched + lack_of_fit_warnings(lines, holds, noise)
-                    + load_drift_warnings(fit.load) + creep_warnings(holds) + dead_load_warnings(lines))
+                    + load_drift_warnings(fit.load) + _creep_text(rec)
+                    + dead_load_warnings(lines))
     if refuse:
         fit.success, fit.message = False, "; ".join(refuse) + "; nothing was written"
     if sim is not None:

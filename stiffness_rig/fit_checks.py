@@ -10,7 +10,7 @@ import numpy as np
 
 from .instrument_profile import UNITS
 
-__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings", "creep_warnings",
+__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings",
            "load_scale_problems", "scale_cause", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
 _AX = "xyz"
@@ -34,8 +34,6 @@ LOAD_SCALE_REFUSE = 0.10
 LOAD_SCALE_WARN = 0.02
 #: the hold averages of a line scatter about it by more than this many times a hold average's noise
 LACK_FACTOR = 5.0
-#: the holds' own slopes follow the load step into them by this many standard errors: the rod creeps
-CREEP_Z = 6.0
 
 
 def reciprocity_problems(M: np.ndarray, S: np.ndarray) -> tuple[list[str], list[str]]:
@@ -148,32 +146,6 @@ def scale_cause(ratio: float, axis: str) -> tuple[str, str]:
                 "Check the load cell's place in the load path.")
     return (f"a wrong calibration factor or unit in the rig profile's load-cell channel (the readings x {1 / ratio:.4g} "
             "would be newtons)", "Correct its units or scale and record again.")
-
-
-def creep_warnings(holds) -> list[str]:
-    """A warning when the on-axis gauge keeps moving during the holds in the direction of the load step into them
-    (creep: the hold means, and so the lines' slopes, then depend on how long each hold lasts). The slope within
-    each hold is regressed on that step (with an intercept for a drift) per load axis."""
-    F = holds.load_N()
-    out = []
-    for axis in sorted(set(holds.axis), key=lambda a: a.value):
-        idx = np.nonzero(np.array([a is axis for a in holds.axis]))[0]
-        s = holds.slope_mm_per_s[idx, axis.index]
-        dF = np.diff(F[idx], prepend=F[idx][0])
-        ok = np.isfinite(s) & (np.arange(idx.size) > 0)
-        if ok.sum() < 6 or np.ptp(dF[ok]) <= 0:
-            continue
-        X = np.column_stack([np.ones(ok.sum()), dF[ok]])
-        coef, *_ = np.linalg.lstsq(X, s[ok], rcond=None)
-        resid = s[ok] - X @ coef
-        se = np.sqrt(float(resid @ resid) / (ok.sum() - 2) * np.linalg.inv(X.T @ X)[1, 1])
-        if coef[1] > CREEP_Z * se > 0:
-            out.append(f"the {_AX[axis.index]} gauge keeps moving during the holds of load axis {axis.value}, with "
-                       f"the load step into each ({coef[1] * 1e3:.2g} +- {se * 1e3:.1g} um/s per N): the rod creeps, "
-                       "and the hold means this fit takes, hence its compliance, depend on how long each hold lasts "
-                       "(a few per cent on a creeping laminate); `rodlab diagnose --rig` fits the creep and its "
-                       "--export writes the compliance with it removed")
-    return out
 
 
 def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:

@@ -269,6 +269,11 @@ def _load_cell_cause(holds: Holds, axis) -> str | None:
         return ("the load cell's force_N falls as the hung weight rises: it reads with the opposite sign (the gauges "
                 "are not the cause); give its channel sign = -1 in the rig profile, negate this recording's force_N "
                 "column, or fit on the hung masses with `rig fit --load mass`")
+    if span_f > 10 * span_w or abs(np.corrcoef(w, f)[0, 1]) < 0.5:
+        return (f"the load cell's force_N does not follow the hung weights (it spans {span_f:.3g} N over these holds "
+                f"where they span {span_w:.3g} N, correlation {np.corrcoef(w, f)[0, 1]:.2f}): its readings are "
+                "garbage, not loads (a byte or word order, a scale or a register of the wrong kind in the rig "
+                "profile?); check its channel, or fit on the hung masses with `rig fit --load mass`")
     return None
 
 

@@ -118,7 +118,7 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
             warn.append(f"{said}: its calibration factor is {100 * (sc.ratio - 1):+.1f} % off, or the masses are; the "
                         "fit uses the load cell's readings: check it against a known weight")
             continue
-        cause, fix = scale_cause(sc.ratio, sc.axis.value)
+        cause, fix = scale_cause(sc.ratio, sc.axis.value, sc.se if judged else None)
         causes.append(f"{said}: {cause}")
         fixes += [fix] if fix not in fixes else []
     if not causes:
@@ -127,8 +127,10 @@ def load_scale_problems(load) -> tuple[list[str], list[str]]:
             "`rig fit --load mass`"], warn
 
 
-def scale_cause(ratio: float, axis: str) -> tuple[str, str]:
-    """(what a load-cell scale ``ratio`` far from 1 says, its fix)."""
+def scale_cause(ratio: float, axis: str, se: float | None = None) -> tuple[str, str]:
+    """(what a load-cell scale ``ratio`` far from 1 says, its fix); ``se``: the ratio's standard error where the
+    holds give one (a ratio of 0.001 +- 1.5e-6 is a unit, kN read as N or a scale and a unit both converting, not
+    a cell out of the load path: an instrument trial had been told 'no load')."""
     if abs(ratio + 1.0) < 0.05:
         return ("the load cell reads with the opposite sign", "Give its channel sign = -1 in the rig profile for "
                 "the next recordings; for this one, negate the force_N column.")
@@ -136,9 +138,12 @@ def scale_cause(ratio: float, axis: str) -> tuple[str, str]:
         return ("a 32-bit reading whose two 16-bit Modbus registers are taken in the wrong order (2^16 = 65536)",
                 "Set the load-cell instrument's word_order to the other value in the rig profile and record again.")
     miss, unit = min((abs(ratio * factor - 1.0), unit) for unit, factor in UNITS["force"].items() if unit != "N")
-    if miss < 0.05 and abs(ratio) >= 0.05:          # the nearest unit (kgf and daN are 2 % apart; 0.097 is kgf's)
+    seen = abs(ratio) >= 0.05 or (se is not None and abs(ratio) > 20 * se)   # clearly a response, not noise
+    if miss < 0.05 and seen:          # the nearest unit (kgf and daN are 2 % apart; 0.097 is kgf's)
         factor = UNITS["force"][unit]
-        return (f"its readings look like {unit}, not N",
+        twice = (" (or the profile converts twice: a scale and a units both given for it)"
+                 if abs(np.log10(factor)) > 2.5 else "")
+        return (f"its readings look like {unit}, not N{twice}",
                 f"Set the load-cell channel's units = \"{unit}\" in the rig profile for the next recordings; "
                 f"for this one, multiply force_N by {factor:.6g}.")
     if abs(ratio) < LOAD_SCALE_REFUSE:

@@ -179,10 +179,12 @@ def _protocol_config(r, ins: dict, where: str, cls) -> dict:
             config[s.key] = s.default
             continue
         v = ins[s.key]
-        ok = isinstance(v, s.type) and not isinstance(v, bool) or (s.type is float and isinstance(v, int)
-                                                                    and not isinstance(v, bool))
+        ok = (isinstance(v, bool) if s.type is bool else
+              isinstance(v, s.type) and not isinstance(v, bool) or (s.type is float and isinstance(v, int)
+                                                                    and not isinstance(v, bool)))
         if not ok:
-            kind = {"str": "a string", "int": "an integer", "float": "a number", "list": "a list of tables"}
+            kind = {"str": "a string", "int": "an integer", "float": "a number", "list": "a list of tables",
+                    "bool": "true or false"}
             raise _err(r, f"expected {kind[s.type.__name__]}, got {v!r}", f"{where}.{s.key}")
         if s.choices and v not in s.choices:
             raise _err(r, f"expected one of {list(s.choices)}, got {v!r}", f"{where}.{s.key}")

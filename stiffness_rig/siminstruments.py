@@ -314,8 +314,10 @@ def _words(value: float, kind: str, word_order: str) -> list[int]:
     if kind in ("int16", "uint16"):
         return [int(round(value)) & 0xFFFF]
     raw = struct.pack(">f", value) if kind == "float32" else struct.pack(">I", int(round(value)) & 0xFFFFFFFF)
+    if word_order in ("BADC", "DCBA"):                          # bytes swapped within each word
+        raw = bytes([raw[1], raw[0], raw[3], raw[2]])
     hi, lo = struct.unpack(">HH", raw)
-    return [hi, lo] if word_order == "big" else [lo, hi]
+    return [hi, lo] if word_order in ("big", "ABCD", "BADC") else [lo, hi]
 
 
 @dataclass

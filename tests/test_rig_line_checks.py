@@ -144,7 +144,7 @@ def test_a_float32_load_cell_with_its_words_swapped_is_named_at_word_order(tmp_p
     cell.start()
     try:
         ser = serial.serial_for_url(str(cell.port), timeout=0.5)
-        for order, expect in (("big", 'set word_order = "little"'), ("little", None)):
+        for order, expect in (("big", "set word_order to one of 'little', 'BADC', 'DCBA'"), ("little", None)):
             d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
                                                        "word_order": order}]})
             if expect:
@@ -152,6 +152,35 @@ def test_a_float32_load_cell_with_its_words_swapped_is_named_at_word_order(tmp_p
                     d.poll(Link(ser))
             else:
                 assert d.poll(Link(ser))["f"] == pytest.approx(19.6133, rel=1e-6)
+        ser.close()
+    finally:
+        cell.stop()
+
+
+def test_a_float32_load_cell_with_its_bytes_swapped_in_each_word_reads_as_BADC(tmp_path):
+    """An instrument trial's load cell sent its float32 as BADC (bytes swapped within each word): no word order
+    read it, and the advice to swap the words recorded 8e14 N as a force. Read as CDAB it is garbage now; as BADC
+    it reads the load."""
+    import serial
+
+    from rodlab.stiffness_rig.drivers import Link
+    from rodlab.stiffness_rig.drivers.modbus_rtu import ModbusRTU
+    bench = SimBench(RigModel(C, seed=14, load_cell_noise_N=0.0))
+    cell = si.SimModbusRTU(bench, tmp_path / "ttyB", slave=1, registers={0: (lambda: 19.6133, "float32", "BADC", 3,
+                                                                             1.0)})
+    cell.start()
+    try:
+        ser = serial.serial_for_url(str(cell.port), timeout=0.5)
+        for order in ("big", "little", "DCBA"):
+            d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
+                                                       "word_order": order}]})
+            try:
+                got = d.poll(Link(ser))["f"]
+            except Garbage:
+                continue
+            assert got != pytest.approx(19.6133, rel=0.01)
+        d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32", "word_order": "BADC"}]})
+        assert d.poll(Link(ser))["f"] == pytest.approx(19.6133, rel=1e-6)
         ser.close()
     finally:
         cell.stop()
@@ -190,3 +219,18 @@ def test_a_non_ascii_init_line_is_refused_at_its_key(tmp_path):
     with pytest.raises(RigError) as ei:
         read_profile(_profile(tmp_path, body, None))
     assert ei.value.key == "instrument[1].init" and "ASCII" in str(ei.value)
+
+
+def test_modbus_local_echo_is_a_setting():
+    """An RS-485 adapter with its local echo on sends each request back first (an instrument trial: 'Checksum
+    error' on every reading): `local_echo = true` has minimalmodbus read and drop it."""
+    import serial
+
+    from rodlab.stiffness_rig.drivers import Link
+    from rodlab.stiffness_rig.drivers.modbus_rtu import ModbusRTU
+    regs = [{"name": "f", "address": 0, "type": "float32"}]
+    port = serial.serial_for_url("loop://", timeout=0.1)
+    for echo in (True, False):
+        d = ModbusRTU({"slave": 1, "registers": regs, "local_echo": echo})
+        assert d._client(Link(port)).handle_local_echo is echo
+    port.close()

@@ -37,34 +37,43 @@ def _register(entry, k: int) -> dict:
         raise SettingError(f"{where}.function", f"expected 3 (holding) or 4 (input), got {reg['function']!r}")
     if reg["type"] not in REGISTER_TYPES:
         raise SettingError(f"{where}.type", f"expected one of {sorted(REGISTER_TYPES)}, got {reg['type']!r}")
-    if reg["word_order"] not in ("big", "little"):
-        raise SettingError(f"{where}.word_order", f"expected big or little, got {reg['word_order']!r}")
+    if reg["word_order"] not in WORD_ORDERS:
+        raise SettingError(f"{where}.word_order", f"expected one of {', '.join(WORD_ORDERS)}, got "
+                                                  f"{reg['word_order']!r}")
     s = reg["scale"]
     if isinstance(s, bool) or not isinstance(s, (int, float)) or not math.isfinite(s) or s == 0:
         raise SettingError(f"{where}.scale", f"expected a finite non-zero number, got {s!r}")
     return reg
 
 
-#: the magnitudes a float32 register of an instrument can hold; its two words swapped give ~1e-30 or ~1e30
-FLOAT32_PLAUSIBLE = (1e-20, 1e15)
+#: the order of a 32-bit value's four bytes over its two registers, A the most significant: ``big`` (ABCD) and
+#: ``little`` (CDAB, the words swapped) as most instruments, BADC and DCBA (bytes swapped within each word: an
+#: instrument trial's load cell) by their letters; minimalmodbus's constant for each
+WORD_ORDERS = {"big": 0, "little": 3, "ABCD": 0, "CDAB": 3, "BADC": 2, "DCBA": 1}
+#: the magnitudes a float32 register of an instrument can hold; its bytes in another order give ~1e-30 or ~1e30,
+#: and often 1e11-1e15 (an instrument trial's BADC load cell read as CDAB: 8e14 N had passed a bound of 1e15)
+FLOAT32_PLAUSIBLE = (1e-15, 1e10)
 
 
 def _check_float(v: float, reg: dict) -> None:
     """Garbage naming ``word_order`` for a float32 no instrument reads (review: a load cell's float32 with its
     words swapped reads ~-5e32 N)."""
     if v != 0.0 and math.isfinite(v) and not FLOAT32_PLAUSIBLE[0] <= abs(v) <= FLOAT32_PLAUSIBLE[1]:
-        other = "little" if reg["word_order"] == "big" else "big"
-        raise Garbage(b"", f"register {reg['name']} reads {v:.3g}, no instrument's value: its two words in the "
-                           f"other order? set word_order = \"{other}\"")
+        other = [o for o in ("big", "little", "BADC", "DCBA") if WORD_ORDERS[o] != WORD_ORDERS[reg["word_order"]]]
+        raise Garbage(b"", f"register {reg['name']} reads {v:.3g}, no instrument's value: its four bytes in another "
+                           f"order? set word_order to one of {', '.join(repr(o) for o in other)} (the instrument's "
+                           "manual names it: ABCD = big, CDAB = little)")
 
 
 class ModbusRTU(Driver):
     name = "modbus_rtu"
-    summary = "Modbus RTU holding / input registers (int16/32, float32, word order, scale) via minimalmodbus"
+    summary = "Modbus RTU holding / input registers (int16/32, float32, byte order, scale) via minimalmodbus"
     settings = (Setting("slave", int, 1, "the instrument's Modbus address (1..247)"),
                 Setting("registers", list, None, "[[instrument.registers]] tables: name, address, function (3 "
                                                  "holding, 4 input), type (int16, uint16, int32, uint32, float32), "
-                                                 "word_order (big, little), scale"))
+                                                 "word_order (big = ABCD, little = CDAB, BADC, DCBA), scale"),
+                Setting("local_echo", bool, False, "true where the RS-485 adapter echoes each request back (its "
+                                                   "local echo on): the echo is read and dropped"))
     simulator = "SimModbusRTU"
     text_lines = False
 
@@ -94,11 +103,12 @@ class ModbusRTU(Driver):
         if self._instrument is None or self._serial is not link.serial:
             self._instrument = minimalmodbus.Instrument(link.serial, int(self.config.get("slave", 1)))
             self._instrument.clear_buffers_before_each_transaction = True
+            self._instrument.handle_local_echo = bool(self.config.get("local_echo", False))
             self._serial = link.serial
         return self._instrument
 
     def _read(self, inst, reg: dict) -> float:
-        order = minimalmodbus.BYTEORDER_BIG if reg["word_order"] == "big" else minimalmodbus.BYTEORDER_LITTLE_SWAP
+        order = WORD_ORDERS[reg["word_order"]]
         t, fc, a = reg["type"], reg["function"], reg["address"]
         if t in ("int16", "uint16"):
             v = inst.read_register(a, 0, fc, signed=t == "int16")

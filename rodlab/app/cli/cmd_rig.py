@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rodlab.stiffness_rig import fit_recording, plot_fit, read_recording
+from rodlab.stiffness_rig import RigError, fit_recording, plot_fit, read_recording
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places, rig_effect
 from rodlab.stiffness_rig.fit import noise_text, r_rod_note
 from rodlab.stiffness_rig.fit_checks import load_scale_problems
@@ -142,7 +142,13 @@ def _register_simulator(rsub) -> None:
 def _load_cell_left_out(rec, sim, args) -> dict:
     """``--load mass``: what the load cell said (its scale per load axis, what was wrong with it) before it is left
     out, for the provenance of the file written, and the note on stderr."""
-    cell = fit_recording(rec, sim, robust=args.robust)
+    try:
+        cell = fit_recording(rec, sim, robust=args.robust)
+    except RigError as e:               # readings no fit takes (absurd forces): left out all the same
+        said = f"on its readings no line could be fitted ({e.detail})"
+        print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0 (the load "
+              f"cell: {said})", file=sys.stderr)
+        return {"scale": [], "problems": [said]}
     refused, warned = load_scale_problems(cell.load)
     print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0"
           + (f" (the load cell: {(refused + warned)[0]})" if refused + warned else ""), file=sys.stderr)

@@ -26,11 +26,12 @@ def check_recording(rec, sim, units_checked: bool = False, override: str | None 
         raise
     except RigError:
         return
-    caution = r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None
-    caution = caution or "; ".join(gauge_scale_problems(fit.C_F_meas, sim.C_F)) or None
     # a load cell in another unit, wired the other way or out of the load path: the diagnosis would name a
-    # compliance scale of that factor (a cell in lbf: r = 4.33, "decisive")
-    caution = caution or "; ".join(load_scale_problems(fit.load)[0]) or None
+    # compliance scale of that factor (a cell in lbf: r = 4.33, "decisive"); first, as it explains an r_rod of
+    # that factor (a cell 1000 x low had been blamed on the masses and the gauges)
+    caution = "; ".join(load_scale_problems(fit.load)[0]) or None
+    caution = caution or (r_rod_caution(fit.r_rod, rec.rod, sim.rod) if fit.r_rod is not None else None)
+    caution = caution or "; ".join(gauge_scale_problems(fit.C_F_meas, sim.C_F)) or None
     caution = caution or "; ".join(reciprocity_problems(fit.C_F_meas, fit.C_F_se)[0]) or None
     if caution and not units_checked:
         lift = f" (if the files are right, give {override})" if override else ""

@@ -21,6 +21,7 @@ from rodlab.core.units import G0
 from .completion import complete_c_f
 from .errors import RigError
 from .creep_check import creep_within_holds
+from .gross import without_gross
 from .fit_checks import (dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
                          load_drift_warnings, load_scale_problems, reciprocity_problems)
 from .glitches import without_glitches
@@ -168,9 +169,11 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     settling (an acquired recording's samples before its ``hold_s x rate_Hz``, or the first seconds where the
     readings show one: :mod:`.settling`, as the diagnosis) and single readings far off their hold's line
     (:mod:`.glitches`) are left out, with a warning but for an acquired recording's settling."""
+    rec, gross = without_gross(rec)
     cut = settled(rec)
     rec, glitched = without_glitches(cut.recording)
-    glitched = ([cut.text()] if cut.dropped and (cut.per_hold is None or cut.incomplete) else []) + glitched
+    glitched = (([gross.text()] if gross.any else [])
+                + ([cut.text()] if cut.dropped and (cut.per_hold is None or cut.incomplete) else []) + glitched)
     holds = hold_averages(rec)
     noise = holds.noise_mm()
     lines, resid_all = [], []

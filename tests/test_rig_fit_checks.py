@@ -223,3 +223,31 @@ def test_rig_fit_warns_of_creep_on_a_short_plan(tmp_path):
                  "--masses", "0.75,1.5", "--hold-s", "4", "--seed", "17", "-o", str(rec)]) == 0
     warned = [w for w in fit_recording(read_recording(rec), None).warnings if "the rod creeps" in w]
     assert len(warned) == 1 and "load axes y, z" in warned[0]
+
+
+def test_a_gauge_switched_to_inches_for_seconds_is_left_out_not_refused(tmp_path):
+    """An instrument trial's dial gauge read inches for 3 s: ~20 readings of a hold at -11.5 mm where the rod moves
+    it a tenth of a millimetre had refused the recording ('no load response'). Such readings are left out and
+    said with their time; the fit is the clean recording's."""
+    import csv
+    src = tmp_path / "clean.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--seed", "4", "-o", str(src)]) == 0
+    lines = src.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    rows = list(csv.DictReader([ln for ln in lines if not ln.startswith("#")]))
+    y_rows = [i for i, r in enumerate(rows) if r["load_axis"] == "y"]
+    hit = y_rows[len(y_rows) // 2: len(y_rows) // 2 + 20]
+    for i in hit:
+        rows[i]["disp_y_mm"] = f"{float(rows[i]['disp_y_mm']) - 11.5:.6f}"
+    bad = tmp_path / "inch.rig.csv"
+    with open(bad, "w", newline="") as f:
+        f.write("\n".join(head) + "\n")
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    sim = calc_rod_compliance(resolve_design("rod1"))
+    clean, dirty = fit_recording(read_recording(src), sim), fit_recording(read_recording(bad), sim)
+    assert dirty.success
+    assert any("20 reading(s) of the y gauge" in w and "left out" in w for w in dirty.warnings)
+    assert not any("reading(s) of the" in w and "no rod or rig" in w for w in clean.warnings)
+    assert dirty.C_F_meas[1, 1] == pytest.approx(clean.C_F_meas[1, 1], rel=0.01)

@@ -76,6 +76,8 @@ class Diagnosis:
                  "residuals)" if self.subject == Subject.CAMPAIGN and self.findings else "")
         lines = [f"verdict: {self.verdict} ({self.subject}); noise {self.noise_mm * 1e3:.2f} um per reading; "
                  f"rms {self.rms_before_mm * 1e3:.2f} -> {self.rms_after_mm * 1e3:.2f} um{refit}"]
+        if self.extra.get("gross_text"):
+            lines.append(f"  gross readings: {self.extra['gross_text']}")
         if self.extra.get("settling_text"):
             lines.append(f"  settling: {self.extra['settling_text']}")
         if "repeatability_mm" in self.extra:

@@ -32,6 +32,7 @@ from ...core.units import G0
 from rodlab.stiffness_rig.effects import RIG_EFFECTS, joint_places
 from rodlab.stiffness_rig.samples import RigSamples, rig_samples
 from rodlab.stiffness_rig.settling import settled
+from rodlab.stiffness_rig.gross import without_gross
 
 from .envelope import Envelope, design_of, envelope_for
 from .report import Diagnosis, Finding
@@ -65,8 +66,11 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     if sim.method is Method.NONE:
         raise RodlabError(f"{sim.rod}: a compliance of method `none` (zero matrices) is no simulation to diagnose "
                           "against; give the rod's calc, fea or meas compliance file")
+    rec, gross = without_gross(rec)           # readings no rod gives (a unit switched for seconds; as `rig fit`)
     cut = settled(rec)                        # a hold's settling is no property of the rod (as `rig fit`)
     diag, model = _diagnose_recording(cut.recording, sim, design, max_terms, accuracy)
+    if gross.any:
+        diag.extra["gross_text"] = gross.text()
     if cut.dropped:
         diag.extra["settling"] = cut.to_dict()
         diag.extra["settling_text"] = cut.text()

@@ -170,9 +170,14 @@ def gauge_scale_problems(M: np.ndarray, C_sim: np.ndarray) -> list[str]:
     unit = next((name for name, f in UNIT_FACTORS.items() if abs(factor / f - 1.0) <= UNIT_FACTOR_TOLERANCE), None)
     if unit is None:
         return []
-    which = (f"the {_AX[odd]} gauge" if len(r) > 2 else f"the {_AX[odd]} or the {_AX[others[0]]} gauge")
+    if len(r) == 2:               # two gauges: the one farther from its simulation is the likelier (r_rod 1-2.3)
+        odd, ref_i = sorted(r, key=lambda i: abs(np.log(r[i])), reverse=True)
+        others, ref = [ref_i], r[ref_i]
+    which = (f"the {_AX[odd]} gauge" if len(r) > 2 or abs(np.log(r[others[0]])) < np.log(3.0) else
+             f"the {_AX[odd]} or the {_AX[others[0]]} gauge")
     listed = ", ".join(f"r_{i + 1}{i + 1} {r[i]:.3g}" for i in sorted(r))
-    return [f"{which} reads {factor:.3g} times {'less' if r[odd] < ref else 'more'} than the others against "
+    return [f"{which} reads {factor:.3g} times {'less' if r[odd] < ref else 'more'} than the "
+            f"{'others' if len(r) > 2 else 'other'} against "
             f"the simulation ({listed}): the factor between {unit}; its units or its scale in the profile; fix the "
             "column and fit again"]
 

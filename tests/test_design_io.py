@@ -124,6 +124,11 @@ RULES = [
     ("wall in metres", _set(("tube", "wall_mm"), 0.005), "tube.wall_mm", "did you give metres (0.005 m = 5 mm)"),
     # a review: a wall of 0.03 on a 40 mm tube read as metres is 30 mm, no tube: a typo, not metres
     ("wall mistyped", _set(("tube", "wall_mm"), 0.03), "tube.wall_mm", "check the value"),
+    # a designer trial: an OD of 1.575 (inches) had been blamed on the wall; a tube in cm on L2 alone
+    ("diameter in inches", _set(("tube", "outer_diameter_mm"), 1.575), "tube.outer_diameter_mm", "in inches?"),
+    ("tube in centimetres", lambda d: (_set(("tube", "outer_diameter_mm"), 4.0)(d), _set(("tube", "wall_mm"), 0.3)(d),
+                                       d.pop("bend", None)),
+     "L2_mm", "in centimetres? (4 cm = 40 mm)"),
 ]
 
 
@@ -273,3 +278,19 @@ def test_the_sag_warning_is_not_a_range_warning_and_a_hopeless_sag_says_so():
     sag = next(t for t in texts if "sags" in t)
     assert sag.startswith("key `L2_mm` = 6000 mm: the rod sags") and "no linear compliance model brings" in sag
     assert any("lies outside 250-2000 mm" in t and "sags" not in t for t in texts)
+
+
+def test_a_carbon_tube_without_a_bend_table_is_warned_of(tmp_path, rod1_dict, caplog):
+    """A designer trial: a carbon rod without [bend] was valid without a word, its bend a pultruded tube bent to
+    80 mm, which cannot be made; a steel [bend] gives no warning."""
+    import logging
+    tube = rod1_dict["tube"]
+    rod1_dict["bend"] = {"material": "steel_304", "outer_diameter_mm": tube["outer_diameter_mm"],
+                         "wall_mm": tube["wall_mm"], "radius_mm": 2.6 * tube["outer_diameter_mm"]}
+    with caplog.at_level(logging.WARNING, logger="rodlab"):
+        load_design(write_toml(tmp_path / "steel_bend.rod.toml", rod1_dict))
+    assert "no [bend] table" not in caplog.text
+    del rod1_dict["bend"]
+    with caplog.at_level(logging.WARNING, logger="rodlab"):
+        load_design(write_toml(tmp_path / "no_bend.rod.toml", rod1_dict))
+    assert "no [bend] table" in caplog.text and "cannot be" in caplog.text

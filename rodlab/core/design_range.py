@@ -86,6 +86,10 @@ def linear_model_error_mm(design: RodDesign) -> tuple[float, float]:
     return sag, sag * sag / max(reach, 1e-9)
 
 
+#: a tube thinner than this [mm] on a rod that sags beyond the limit is named as the likelier cause (a unit)
+THIN_TUBE_MM = 10.0
+
+
 def _longer_key(design: RodDesign) -> str:
     return "L2_mm" if design.L2_mm >= design.L1_mm else "L1_mm"
 
@@ -97,6 +101,13 @@ def check_design(design: RodDesign) -> None:
     reach = float(np.linalg.norm(design.tool_mm))
     if sag > SAG_LIMIT * reach:
         key = _longer_key(design)
+        thin = min(design.pipe_I.outer_diameter_mm, design.pipe_II.outer_diameter_mm)
+        if thin < THIN_TUBE_MM:           # a designer trial: a tube in cm had been blamed on L2 alone
+            raise DesignError(
+                f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight "
+                f"(limit {SAG_LIMIT:g} x its reach of {reach:.0f} mm); its tube's outer diameter of {thin:g} mm is "
+                f"thinner than any measuring rod's: sizes are in millimetres: in centimetres? ({thin:g} cm = "
+                f"{10 * thin:g} mm)", key=key)
         raise DesignError(
             f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight, "
             f"{sag / reach:.3g} x its reach of {reach:.0f} mm (limit {SAG_LIMIT:g}); it would hang rather than reach "

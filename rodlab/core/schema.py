@@ -294,7 +294,8 @@ def _explain(err) -> tuple[str, str, list]:
         op = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}[v]
         return f"expected a number {op} {schema[v]}, got {inst!r}", "correct the value (units are in the key)", where
     if v == "anyOf" and isinstance(inst, dict) and not where:
-        return err.message, "give [tube], or both [pipe_I] and [pipe_II]", where
+        return ("the design has no tube: neither a [tube] table nor both [pipe_I] and [pipe_II]",
+                "give [tube], or both [pipe_I] and [pipe_II]", where)
     if v == "anyOf" and where and where[0] == "tolerances":
         return (f"expected one standard deviation: a number >= 0 in the key's unit, or a percentage such as \"5%\", "
                 f"got {inst!r}", 'write e.g. 0.05 or "5%"', where)

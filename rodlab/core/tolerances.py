@@ -194,10 +194,12 @@ def _tolerance_entry(design: RodDesign, key: str, value) -> float:
                           did_you_mean(key, list(numeric_keys(design))), key=f"tolerances.{key}")
     sd = parse_tolerance_value(value, nominal, key)
     if nominal and sd >= TOLERANCE_MAX_SHARE * abs(nominal):
+        meant = ("a tolerance is one standard deviation, not a range: a few % is usual for a made part (\"5%\")"
+                 if isinstance(value, str) else f"an absolute tolerance in the wrong unit, or meant as a percentage "
+                 f"(\"{value:g}%\")?")
         raise DesignError(f"one standard deviation of {sd:g} on a value of {nominal:g} (its tolerance is "
                           f"{sd / abs(nominal):.0%} of it; {TOLERANCE_MAX_SHARE:.0%} or more is refused: "
-                          f"no part is made that loosely): an absolute tolerance in the wrong unit, or meant as a "
-                          f"percentage (\"{value}%\")?", key=f"tolerances.{key}")
+                          f"no part is made that loosely): {meant}", key=f"tolerances.{key}")
     return sd
 
 

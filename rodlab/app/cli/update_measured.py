@@ -79,7 +79,7 @@ def measured_entries_of(path: str, design, keys, model: str, own=None, accept_un
             raise RodlabError(f"{path}: the recording is of rod {rec.rod!r}, the design of rod {design.name!r}, and "
                               "they differ beyond the design's tolerances: a measurement of another rod cannot make "
                               "this rod's as-built design; give this rod's recording (or its design)")
-        _refuse_unfitted(path, unfitted, design, "your simulation (--sim)" if own else f"{model} model", keys)
+        _refuse_unfitted(path, unfitted, design, "simulation you gave (--sim)" if own else f"{model} model", keys)
         lin = fitted.linear
         _check_unexplained(path, diag, accept_unexplained)
         return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig

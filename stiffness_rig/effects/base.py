@@ -110,6 +110,11 @@ class RigEffectModel(EffectSchema):
         rod's data), or None."""
         return None
 
+    def place_caution(self, location: str | None) -> str | None:
+        """A warning a finding of this effect at ``location`` needs whatever its size (a place that may be the
+        rig's, not the rod's), or None."""
+        return None
+
     def hypotheses(self, data, ctx: HypothesisContext) -> list[Hypothesis]:
         """Candidate terms of this effect for the samples ``data`` (:class:`~rodlab.stiffness_rig.RigSamples`)."""
         return []

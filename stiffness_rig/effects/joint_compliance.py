@@ -33,6 +33,16 @@ class JointCompliance(RigEffectModel):
     structural = True
     locations = PLACES
 
+    def place_caution(self, location: str | None) -> str | None:
+        """A joint at the flange clamp is where the rod is mounted: on the rig that compliance may be the rig's
+        mount (a designer trial: a clamp of the rig put c11 +60 % into the rod's file without a word)."""
+        if "flange_clamp" not in (location or "").split("|"):
+            return None
+        return ("the flange clamp is where the rod is mounted: on the rig, part or all of this compliance may be the "
+                "rig's mount, which the robot's flange does not have; before it goes into the rod's file (`diagnose "
+                "--export`, `rodlab update`), re-clamp the rod (torque as on the robot) and measure again, or check "
+                "the rig's mount with a stiff dummy rod")
+
     def compliance(self, C, p, places):
         pt, ax = self.place(p, places, p.get("location", "ring_1"))
         return C + spring_compliance(pt, ax, self.value(p, "s_bend_rad_per_Nm") * 1e-3,

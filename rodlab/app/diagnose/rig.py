@@ -139,9 +139,10 @@ def _add_cautions(diag: Diagnosis) -> None:
     (``evidence["caution"]``, shown with the finding)."""
     models = {e.value: m for e, m in RIG_EFFECTS.items()}
     for f in diag.findings:
-        text = models[f.effect].caution(f.parameters) if f.effect in models else None
-        if text:
-            f.evidence["caution"] = text
+        model = models.get(f.effect)
+        texts = [t for t in ((model.caution(f.parameters), model.place_caution(f.location)) if model else ()) if t]
+        if texts:
+            f.evidence["caution"] = "; ".join(texts)
 
 
 def _note_one_sided_split(diag: Diagnosis) -> None:

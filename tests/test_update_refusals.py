@@ -180,3 +180,21 @@ def test_an_ordinary_recording_with_repeats_is_updated_without_a_word_of_it(tmp_
     assert main(["update", "rod1", "--measured", str(rec), "-o", str(out)]) == 0
     cap = capsys.readouterr()
     assert out.exists() and "unexplained" not in cap.err + cap.out
+
+
+def test_a_cause_the_data_fit_as_well_with_counts_as_freed():
+    """A designer trial's y and z series: a bond named as a uniform scale, a joint at ring_1 among the causes the
+    data fit about as well with; freeing that joint's keys had been refused ('not a key freed here') while it fits
+    (C_F within 1.7 % of the truth). A cause's alternatives count as freed, and the refusal lists their keys."""
+    from rodlab import resolve_design
+    from rodlab.app.cli.update_measured import _alternatives, _explained_by_keys
+    from rodlab.app.diagnose.report import Finding
+    design = resolve_design("rod1")
+    scale = Finding("compliance_scale", None, "", {"r": 1.3}, {}, 8e-3, 7e-4,
+                    {"alternatives": ["joint_compliance at ring_1", "torsion_compliance at pipe_I"]})
+    assert _explained_by_keys(scale, ["joints.ring_1.s_bend_rad_per_Nm"], design)
+    assert _explained_by_keys(scale, [f"materials.{design.pipe_I.material.name}.G_GPa"], design)
+    assert not _explained_by_keys(scale, ["joints.pipe_II.s_bend_rad_per_Nm"], design)
+    hint = _alternatives([scale], ["materials.cfrp_tube.E_GPa"])
+    assert "--free materials.cfrp_tube.E_GPa,joints.ring_1.s_bend_rad_per_Nm,joints.ring_1.s_torsion_rad_per_Nm" in hint
+    assert "a load series along x" in hint

@@ -223,7 +223,9 @@ def _refuse(args, res) -> None:
                        f"diagnose --rig {recording} --design {args.design}` weighs every toleranced key at once: "
                        "where it names a local cause, free that cause's key (a joint's "
                        "joints.PLACE.s_bend_rad_per_Nm); where it finds every member uniformly softer "
-                       f"(compliance_scale), free {MODULI}; where it calls the rod consistent (model_form), free the "
+                       f"(compliance_scale), free {MODULI}, and where it lists causes the data fit about as well "
+                       "with (a joint beside a scale: y and z series alone cannot tell them apart), free theirs in "
+                       "turn; where it calls the rod consistent (model_form), free the "
                        "keys its finding lists as resolved together with these, or the tube's sizes (tube.wall_mm, "
                        "tube.outer_diameter_mm); nothing was written" + _closed_form_hint(args, design))
 

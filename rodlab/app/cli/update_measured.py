@@ -22,17 +22,28 @@ __all__ = ["measured_entries_of"]
 _STRUCTURAL = ("joint_compliance", "torsion_compliance", "compliance_scale")
 
 
-def _explained_by_keys(finding, keys, design) -> bool:
+def _explained_by_keys(finding, keys, design, alternatives: bool = True) -> bool:
     """Whether a structural finding is what the freed ``keys`` fit: a joint freed at its place (or at one of the
-    places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E or the moduli freed, a torsion of
-    pipe I with its material's shear modulus G freed."""
-    if finding.effect == "joint_compliance":
+    places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E or the moduli freed, a
+    torsion of pipe I with its material's shear modulus G freed; or one of the causes the data fit about as well
+    with (a designer trial's y and z series: a bond named as a scale, the bond's key freed, refused)."""
+    others = ([a.split(" at ", 1) + [None] for a in getattr(finding, "evidence", {}).get("alternatives", ())]
+              if alternatives else [])
+    return any(_cause_freed(effect, location, keys, design)
+               for effect, location, *_ in [(finding.effect, finding.location)] + others)
+
+
+def _cause_freed(effect: str, location: str | None, keys, design) -> bool:
+    """Whether the freed ``keys`` fit the cause ``effect`` at ``location`` (see :func:`_explained_by_keys`)."""
+    if effect == "joint_compliance":
         freed = {k.split(".")[1] for k in keys if k.startswith("joints.")}
-        return bool(set((finding.location or "").split("|")) & freed)
-    if finding.effect == "compliance_scale":
+        return bool(set((location or "").split("|")) & freed)
+    if effect == "compliance_scale":
         wanted = {f"materials.{t.material.name}.E_GPa" for t in (design.pipe_I, design.pipe_II)} | {MODULI}
-    else:
+    elif effect == "torsion_compliance":
         wanted = {f"materials.{design.pipe_I.material.name}.G_GPa"}
+    else:
+        return False
     return bool(wanted & set(keys))
 
 
@@ -75,7 +86,9 @@ def measured_entries_of(path: str, design, keys, model: str, own=None, accept_un
         diag, fitted = diagnose_rig(rec, sim, design)
         rig = [f.effect for f in diag.findings if f.effect not in ("model_form", "unexplained", *_STRUCTURAL)]
         unfitted = [f for f in diag.findings if f.effect in _STRUCTURAL and not _explained_by_keys(f, keys, design)]
-        if unfitted and other_rod:
+        strictly = [f for f in diag.findings if f.effect in _STRUCTURAL
+                    and not _explained_by_keys(f, keys, design, alternatives=False)]
+        if strictly and other_rod:
             raise RodlabError(f"{path}: the recording is of rod {rec.rod!r}, the design of rod {design.name!r}, and "
                               "they differ beyond the design's tolerances: a measurement of another rod cannot make "
                               "this rod's as-built design; give this rod's recording (or its design)")
@@ -151,6 +164,20 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
                       f"through), the recording shows {named}; beyond the design's tolerances and not a key freed "
                       f"here. Free the key that fits it too (--free {keys})"
                       + (", or repair or re-bond the joint and measure again" if "joints." in keys else "")
+                      + _alternatives(findings, freed)
                       + " (`rodlab diagnose --rig` shows the findings)")
+
+
+def _alternatives(findings: list, freed: list) -> str:
+    """The --free lists of the joints the data fit about as well as a named cause (a designer trial's y and z
+    series: a bond named as a uniform scale, whose moduli were then refused, while the bond's key fitted)."""
+    places = [alt.split(" at ", 1)[1] for f in findings for alt in f.evidence.get("alternatives", ())
+              if alt.startswith("joint_compliance at ")]
+    if not places:
+        return ""
+    other = [",".join(dict.fromkeys([*freed, *(f"joints.{p.split('|')[0]}.s_{kind}_rad_per_Nm"
+                                                for kind in ("bend", "torsion"))])) for p in places[:2]]
+    return ("; the data fit about as well with a joint at " + ", ".join(p.split("|")[0] for p in places[:3])
+            + " (a load series along x tells them apart): try " + " or ".join(f"--free {o}" for o in other))
 
 

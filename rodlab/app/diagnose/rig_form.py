@@ -200,7 +200,7 @@ def judge_linear(linear: LinearPart, env: Envelope, causes: list, rms: tuple) ->
     if scored and chi2_sf(scored[0][0][2], scored[0][1].n_params) <= P_MAX:
         h = scored[0][1]
         val, se, lr = fit.refit_with_cause(_patterns(h, E), h.lower, h.upper, scored[0][0][0])
-        out.findings.append(_cause(h, val, se, lr, scored, rms, fit.q, len(E)))
+        out.findings.append(_cause(h, val, se, lr, scored, rms, fit.q, E))
         q1 = fit.q - lr
         if chi2_sf(q1, max(len(E) - h.X.shape[1], 1)) < P_MAX:
             out.findings.append(_outside(q1, len(E), rms, "beside the named cause"))
@@ -229,17 +229,22 @@ def _stands_out(scored: list) -> bool:
     return chi2_sf(lr, h.n_params) <= P_MAX
 
 
-def _cause(h: Hypothesis, val, se, lr: float, scored, rms, q0: float, k: int) -> Finding:
+def _cause(h: Hypothesis, val, se, lr: float, scored, rms, q0: float, entries) -> Finding:
     """A local cause outside the envelope: its parameters, the places that fit within delta 10."""
     params, intervals = h.reported(val, se)
     group = [g.location for (_, _, l2), g in scored[1:] if g.effect == h.effect and g.location
              and lr - l2 < DBIC_MIN]
     location = "|".join([h.location] + group) if h.location and group else h.location
+    k = len(entries)
     ev = {"lr_chi2": float(lr), "lr_p": chi2_sf(lr, h.n_params), "envelope_chi2_before": q0,
           "envelope_chi2_after": q0 - lr, "envelope_dof": k, "beyond_tolerance": True}
     alts = [g.label for (_, _, l2), g in scored[1:] if g.effect != h.effect and lr - l2 < DBIC_MIN]
     if alts:
         ev["alternatives"] = alts
+        if (0, 0) not in entries:            # no x series: a scale and a joint differ most in c11 and c13
+            ev["separate_by"] = ("a load series along x_T with the x gauge (c11, c13): a uniform scale raises every "
+                                 "entry alike, a joint those its lever reaches, and the y and z series alone cannot "
+                                 "tell them apart")
     if group:
         ev["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): the lever "
                              "from each place to the ball differs in each")

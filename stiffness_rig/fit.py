@@ -8,6 +8,7 @@ with their intercepts on the load axis in kg (the paper's ~0.1 kg). ``robust=Tru
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,10 +27,10 @@ from .fit_checks import (dead_load_warnings, gauge_scale_problems, lack_of_fit_w
                          load_drift_warnings, load_scale_problems, reciprocity_problems)
 from .glitches import without_glitches
 from .holds import Holds, hold_averages
-from .load import LoadCheck, measured_load
+from .load import LoadCheck, measured_load, zero_offset
 from .r_rod_checks import PLAUSIBLE_R_ROD, r_rod_caution, r_rod_note
 from .recording import RigRecording
-from .settling import settled
+from .settling import missing_holds_text, settled
 
 __all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "r_rod_note", "PLAUSIBLE_R_ROD",
            "noise_text"]
@@ -169,17 +170,19 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     settling (an acquired recording's samples before its ``hold_s x rate_Hz``, or the first seconds where the
     readings show one: :mod:`.settling`, as the diagnosis) and single readings far off their hold's line
     (:mod:`.glitches`) are left out, with a warning but for an acquired recording's settling."""
+    missing = missing_holds_text(rec)
     rec, gross = without_gross(rec)
     cut = settled(rec)
     rec, glitched = without_glitches(cut.recording)
-    glitched = (([gross.text()] if gross.any else [])
+    glitched = (([missing] if missing else []) + ([gross.text()] if gross.any else [])
                 + ([cut.text()] if cut.dropped and (cut.per_hold is None or cut.incomplete) else []) + glitched)
     holds = hold_averages(rec)
     noise = holds.noise_mm()
     lines, resid_all = [], []
     reference = _reference_holds(holds)
+    cell = _without_cell_offset(holds)         # the loads of the lines: the load cell's zero offset taken off
     for axis in sorted(set(holds.axis), key=lambda a: a.value):
-        h = holds.select(np.array([a is axis for a in holds.axis]) & ~reference)
+        h = cell.select(np.array([a is axis for a in holds.axis]) & ~reference)
         for c in range(3):
             fitted = _fit_line(h, axis, c, robust, noise)
             if fitted is not None:
@@ -278,6 +281,16 @@ def _load_cell_cause(holds: Holds, axis) -> str | None:
                 "garbage, not loads (a byte or word order, a scale or a register of the wrong kind in the rig "
                 "profile?); check its channel, or fit on the hung masses with `rig fit --load mass`")
     return None
+
+
+def _without_cell_offset(holds: Holds) -> Holds:
+    """``holds`` with the load cell's zero offset (:func:`~.load.zero_offset`) taken off its readings: the lines'
+    slopes do not depend on it, their zero-load crossings do (an instrument trial: a 0.35 N offset had read as a
+    +36 g crossing, a dead load that was not there)."""
+    if not holds.has_force:
+        return holds
+    zero = zero_offset(holds)
+    return dataclasses.replace(holds, force_N=holds.force_N - zero) if zero else holds
 
 
 def _reference_holds(holds) -> np.ndarray:

@@ -165,7 +165,7 @@ def measured_load(holds: Holds) -> LoadCheck | None:
             log.warning("the load cell read on %d of %d holds only; the fit uses mass_kg x g0 on every hold",
                         some, len(holds))
         return None
-    zero = _zero_offset(holds)
+    zero = zero_offset(holds)
     diff = holds.mass_kg * G0 - (holds.force_N - zero)
     branches, friction, tare = [], {}, {}
     for axis in sorted(set(holds.axis), key=lambda a: a.value):
@@ -209,7 +209,7 @@ def load_scale(axis: LoadAxis, weight_N: np.ndarray, force_N: np.ndarray, branch
     return LoadScale(axis, ratio, se, int(weight_N.size))
 
 
-def _zero_offset(holds: Holds) -> float:
+def zero_offset(holds: Holds) -> float:
     """The load cell's mean reading on the first hold of each load axis when it is without a hanger [N] (the
     series' zero reference: no hanger, no friction engaged yet; later holds at mass 0 may keep the slides'
     friction) where it differs from 0 by more than 5 standard errors; else 0."""

@@ -15,7 +15,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SettlingCut", "settled", "stated_hold_samples", "hold_part", "settling_seconds", "after_settling"]
+__all__ = ["missing_holds_text", "SettlingCut", "settled", "stated_hold_samples", "hold_part", "settling_seconds",
+           "after_settling"]
 
 #: a hold's level must move by more than this many reading-noise SDs for its settling to be looked at
 STEP_NOISE = 10.0
@@ -62,7 +63,7 @@ class SettlingCut:
         if not self.dropped:
             return ""
         if self.per_hold is not None:
-            cut = (f"; {self.incomplete} hold(s) cut short (an acquisition interrupted there and resumed) left out "
+            cut = (f"; {self.incomplete} hold(s) cut short (an acquisition interrupted there) left out "
                    "whole") if self.incomplete else ""
             return (f"the {self.dropped} samples `rig acquire` recorded while {self.holds} hold(s) settled are left out "
                     f"(each hold is its last {self.per_hold} samples, hold_s x rate_Hz of the header's plan_fields)"
@@ -71,6 +72,22 @@ class SettlingCut:
                 "hold's level from the previous one's and have settled by then, as a hung weight settles (a swing, "
                 "a lift still lowering it; a creep that fast would be cut too, and its deflection is in the settled "
                 "level)")
+
+
+def missing_holds_text(rec) -> str | None:
+    """A sentence where an acquired recording holds fewer holds than its plan (``holds.count`` of the header's
+    ``plan_fields``: an acquisition stopped early and not resumed), else None (an instrument trial: 20 of 26
+    holds had been fitted without a word)."""
+    m = re.search(_FIELD.format(re.escape("holds.count")), str(rec.meta.get("plan_fields") or ""))
+    try:
+        planned = int(float(m.group(1))) if m else 0
+    except ValueError:
+        return None
+    present = int(np.unique(rec.step).size)
+    if present >= planned:
+        return None
+    return (f"the recording holds {present} of its plan's {planned} holds (the acquisition stopped early): the fit "
+            "is of those; `rig acquire` with the same plan and -o resumes it after the last complete hold")
 
 
 def stated_hold_samples(meta: dict) -> int | None:

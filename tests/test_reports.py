@@ -146,6 +146,9 @@ def test_evidence_is_said_in_an_engineers_words():
     assert certainty(f).startswith("decisive")
     weak = Finding("tare", None, "", {}, {}, 0.002, 0.0019, {"lr_p": 0.01, "cv_sse_before": 1.0, "cv_sse_after": 1.1})
     assert certainty(weak).startswith("weak") and "held-out" in certainty(weak)
+    creep = Finding("creep", None, "", {}, {}, 0.002, 0.0015, {"lr_p": 3e-94, "cv_sse_before": 1.0,
+                                                                "cv_sse_after": 1.1})
+    assert certainty(creep).startswith("strong") and "another term may carry part of it" in certainty(creep)
     assert "2 F_f" in confirmation(f)
     fix = Finding("fixture_pose", "position:3", "", {}, {}, 0.04, 0.005, {"lr_p": 1e-20})
     assert "--free fixture_3_x" in confirmation(fix)

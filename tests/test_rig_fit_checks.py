@@ -113,6 +113,10 @@ def test_a_load_cell_zero_offset_is_not_a_tare(tmp_path):
     for axis, tare in off.load.tare_kg.items():
         assert abs(tare) < 0.002 and off.load.friction_N[axis] == pytest.approx(0.3, rel=0.05)
     np.testing.assert_allclose(off.C_F_meas, plain.C_F_meas, rtol=1e-9, atol=1e-12)
+    for a, b in zip(plain.lines, off.lines):      # the crossings too (an instrument trial: +36 g from 0.35 N)
+        for k in ("load", "unload"):
+            if np.isfinite(a.zero_load_kg[k]):                  # NaN where a line's slope is not significant
+                assert b.zero_load_kg[k] == pytest.approx(a.zero_load_kg[k], abs=5e-4)      # 0.5 g, not 51
 
 
 def test_the_diagnosis_names_a_gauge_read_backwards_in_one_series(tmp_path):
@@ -251,3 +255,17 @@ def test_a_gauge_switched_to_inches_for_seconds_is_left_out_not_refused(tmp_path
     assert any("20 reading(s) of the y gauge" in w and "left out" in w for w in dirty.warnings)
     assert not any("reading(s) of the" in w and "no rod or rig" in w for w in clean.warnings)
     assert dirty.C_F_meas[1, 1] == pytest.approx(clean.C_F_meas[1, 1], rel=0.01)
+
+
+def test_a_recording_short_of_its_plan_is_said(tmp_path):
+    """An instrument trial fitted 20 of its plan's 26 holds (the acquisition stopped, never resumed) without a word:
+    the header's plan_fields holds.count against the holds present is said."""
+    import dataclasses
+    rec = tmp_path / "r.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--seed", "3", "-o", str(rec)]) == 0
+    full = read_recording(rec)
+    n = int(np.unique(full.step).size)
+    meta = dict(full.meta, plan_fields=f'rod="1#" holds.count={n + 6} hold_s=8.0')
+    said = [w for w in fit_recording(dataclasses.replace(full, meta=meta), SIM).warnings if "of its plan's" in w]
+    assert said and f"holds {n} of its plan's {n + 6} holds" in said[0]
+    assert not [w for w in fit_recording(full, SIM).warnings if "of its plan's" in w]

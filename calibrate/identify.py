@@ -261,7 +261,9 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
     res = None
     it = 0
     free = list(free_all)
-    for it in range(1, options.max_compensation + 1):
+    passes = options.max_compensation
+    while it < passes:
+        it += 1
         target = obs.x_W_mm - offsets
         free = [k for k in free_all if not (it == 1 and k in rough)]
         fun, jac = _residual_functions(robot, obs, problem, _Pass(x, free, target, prior, noise_est))
@@ -285,6 +287,8 @@ def _compensate(robot, obs, problem: _Problem, compensations, options: FitOption
                  noise_est, len(newly), len(freed))
         if change < 1e-5 and not newly and not freed and len(free) == len(free_all):
             break
+        if it == options.max_compensation and (newly or freed):
+            passes = it + 1                   # the last pass changed the priors: one more solve under them
     return _Compensated(x, prior, offsets, noise_est, res, it, free)
 
 

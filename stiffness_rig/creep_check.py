@@ -20,13 +20,13 @@ import numpy as np
 
 from rodlab.core.units import G0
 
-from .effects.creep import CREEP_TAU_GRID_S, _relax
+from .effects.creep import CREEP_TAU_GRID_S, relax
 from .recording import RigRecording
 
 __all__ = ["CreepCheck", "creep_within_holds", "CREEP_Z"]
 
 #: standard errors the best creep's amplitude must stand out (13 time constants tried on each load axis): an
-#: independent simulator's 45 recordings without creep reach 3.0 at most, its creeping ones (2-4 %, 5-15 s) 4.2-14
+#: independent simulator's 45 recordings without creep reach 2.8 at most, its creeping ones (2-4 %, 5-15 s) 4.1-17
 CREEP_Z = 4.0
 #: a creep below this share of the deflection moves the compliance less than the readings' own uncertainty
 MIN_SHARE = 0.005
@@ -126,7 +126,7 @@ def _series_creep(t: np.ndarray, elastic: np.ndarray, repeat: np.ndarray, tau: f
     out = np.zeros(t.size)
     for r in np.unique(repeat):
         m = repeat == r
-        out[m] = _relax(t[m] / tau, elastic[m])
+        out[m] = relax(t[m] / tau, elastic[m])
     return out
 
 

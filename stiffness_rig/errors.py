@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from rodlab.core.errors import LocatedError
 
-__all__ = ["RigError", "DeviceError"]
+__all__ = ["RigError", "DeviceError", "NoLoadResponse"]
 
 
 class RigError(LocatedError):
@@ -12,3 +12,7 @@ class RigError(LocatedError):
 
 class DeviceError(RigError):
     """An instrument that does not answer or answers garbage beyond the retry policy."""
+
+
+class NoLoadResponse(RigError):
+    """A load axis does not deflect the rod along itself: the gauges or the loading, not the rod."""

@@ -8,9 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from rodlab.core.units import G0
+
+from .errors import NoLoadResponse
 from .instrument_profile import UNITS
 
-__all__ = ["reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings",
+__all__ = ["check_load_response", "reciprocity_problems", "lack_of_fit_warnings", "gauge_scale_problems", "load_drift_warnings",
            "load_scale_problems", "scale_cause", "RECIPROCITY_Z", "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
 _AX = "xyz"
@@ -195,3 +198,52 @@ def dead_load_warnings(lines: list) -> list[str]:
             f"missing from mass_kg whenever the hanger is on would put them (the hanger or loading frame not counted?): "
             f"the slopes are fitted without those holds, so the compliance is not biased by it; count the hanger in "
             f"mass_kg, or check with `rodlab diagnose --rig` (its tare)"]
+
+
+def check_load_response(lines: list, rec, holds) -> None:
+    """Refuse a recording in which a load axis does not deflect the rod along itself (gauges not connected or
+    not touching, no weight hung, a load cell that saw no load): its on-axis slope must be positive and above its
+    standard error x 3."""
+    for ln in lines:
+        if ln.component != ln.axis.index:
+            continue
+        if ln.slope_mm_per_N > 3 * ln.se_mm_per_N and ln.slope_mm_per_N > 0:
+            continue
+        backwards = ln.slope_mm_per_N < -10 * ln.se_mm_per_N
+        check = _load_cell_cause(holds, ln.axis) or (
+            f"the {_AX[ln.component]} gauge reads the rod's motion backwards: give it sign = -1 in the profile "
+            f"(or multiply the disp_{_AX[ln.component]}_mm column by -1), or check the load's direction" if backwards
+            else "check the gauges (connected, touching the rod, the right channel) and the loading (weights "
+                 "hung on that axis)")
+        raise NoLoadResponse(f"no load response on axis {ln.axis.value}: the {_AX[ln.component]} gauge moves "
+                             f"{ln.slope_mm_per_N * 1e3:.4f} +- {ln.se_mm_per_N * 1e3:.4f} um/N under the load along "
+                             f"{ln.axis.value} ({ln.n_holds} holds), nothing a rod does; {check}",
+                             path=rec.path, key="load_axis")
+
+
+def _load_cell_cause(holds, axis) -> str | None:
+    """What to check when the load is the load cell's and it is the cause on ``axis``'s holds: it hardly moved while
+    the hung weights did (below a tenth of their span: it saw no load), or it fell as they rose (wired or set the
+    other way, which reads as gauges reading backwards); else None."""
+    if not holds.has_force:
+        return None
+    on = np.array([a is axis for a in holds.axis])
+    w, f = holds.mass_kg[on] * G0, holds.force_N[on]
+    span_w = float(np.ptp(w)) if on.any() else 0.0
+    span_f = float(np.ptp(f)) if on.any() else 0.0
+    if span_w <= 0:
+        return None
+    if span_f < 0.1 * span_w:
+        return (f"the load cell's force_N spans {span_f:.3g} N over these holds while the hung weights span {span_w:.3g} "
+                f"N: it saw no load along {axis.value} (not in the load path of that axis, or not connected); check "
+                "it, or fit on the hung masses with `rig fit --load mass`")
+    if np.corrcoef(w, f)[0, 1] < -0.9:
+        return ("the load cell's force_N falls as the hung weight rises: it reads with the opposite sign (the gauges "
+                "are not the cause); give its channel sign = -1 in the rig profile, negate this recording's force_N "
+                "column, or fit on the hung masses with `rig fit --load mass`")
+    if span_f > 10 * span_w or abs(np.corrcoef(w, f)[0, 1]) < 0.5:
+        return (f"the load cell's force_N does not follow the hung weights (it spans {span_f:.3g} N over these holds "
+                f"where they span {span_w:.3g} N, correlation {np.corrcoef(w, f)[0, 1]:.2f}): its readings are "
+                "garbage, not loads (a byte or word order, a scale or a register of the wrong kind in the rig "
+                "profile?); check its channel, or fit on the hung masses with `rig fit --load mass`")
+    return None

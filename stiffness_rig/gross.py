@@ -54,8 +54,8 @@ class GrossReadings:
             m = self.comps == c
             off = float(np.median(np.abs(self.value_mm[m] - self.level_mm[m])))
             parts.append(f"{int(m.sum())} reading(s) of the {_AX[c]} gauge at {self.time_s[m].min():.1f}-"
-                         f"{self.time_s[m].max():.1f} s lie ~{off:.3g} mm from its other readings, where the rod "
-                         f"moves it {float(np.max(self.span_mm[m])) * 1e3:.0f} um over its series")
+                         f"{self.time_s[m].max():.1f} s lie ~{off:.3g} mm from its other readings, where its hold "
+                         f"levels span {float(np.max(self.span_mm[m])) * 1e3:.0f} um in their series")
         return ("; ".join(parts) + ": no rod or rig gives that (a unit switched on the gauge, the gauge lifted off "
                 "the rod or knocked, a misread answer); left out")
 

@@ -125,7 +125,7 @@ RULES = [
     # a review: a wall of 0.03 on a 40 mm tube read as metres is 30 mm, no tube: a typo, not metres
     ("wall mistyped", _set(("tube", "wall_mm"), 0.03), "tube.wall_mm", "check the value"),
     # a designer trial: an OD of 1.575 (inches) had been blamed on the wall; a tube in cm on L2 alone
-    ("diameter in inches", _set(("tube", "outer_diameter_mm"), 1.575), "tube.outer_diameter_mm", "in inches?"),
+    ("diameter in inches", _set(("tube", "outer_diameter_mm"), 1.575), "tube.outer_diameter_mm", "in inches (1.575 x 25.4"),
     ("tube in centimetres", lambda d: (_set(("tube", "outer_diameter_mm"), 4.0)(d), _set(("tube", "wall_mm"), 0.3)(d),
                                        d.pop("bend", None)),
      "L2_mm", "in centimetres? (4 cm = 40 mm)"),
@@ -289,8 +289,8 @@ def test_a_carbon_tube_without_a_bend_table_is_warned_of(tmp_path, rod1_dict, ca
                          "wall_mm": tube["wall_mm"], "radius_mm": 2.6 * tube["outer_diameter_mm"]}
     with caplog.at_level(logging.WARNING, logger="rodlab"):
         load_design(write_toml(tmp_path / "steel_bend.rod.toml", rod1_dict))
-    assert "no [bend] table" not in caplog.text
+    assert "no [bend] material" not in caplog.text
     del rod1_dict["bend"]
     with caplog.at_level(logging.WARNING, logger="rodlab"):
         load_design(write_toml(tmp_path / "no_bend.rod.toml", rod1_dict))
-    assert "no [bend] table" in caplog.text and "cannot be" in caplog.text
+    assert "no [bend] material" in caplog.text and "cannot be" in caplog.text

@@ -195,6 +195,7 @@ def test_a_cause_the_data_fit_as_well_with_counts_as_freed():
     assert _explained_by_keys(scale, ["joints.ring_1.s_bend_rad_per_Nm"], design)
     assert _explained_by_keys(scale, [f"materials.{design.pipe_I.material.name}.G_GPa"], design)
     assert not _explained_by_keys(scale, ["joints.pipe_II.s_bend_rad_per_Nm"], design)
+    scale.evidence["separate_by"] = "a load series along x_T"
     hint = _alternatives([scale], ["materials.cfrp_tube.E_GPa"])
     assert "--free materials.cfrp_tube.E_GPa,joints.ring_1.s_bend_rad_per_Nm,joints.ring_1.s_torsion_rad_per_Nm" in hint
     assert "a load series along x" in hint

@@ -94,15 +94,16 @@ class TubeSpec:
         _check_pos("wall_mm", self.wall_mm, f"{self.key}.wall_mm")
         _check_not_metres(self.outer_diameter_mm, self.wall_mm, self.key)
         if self.wall_mm >= self.outer_diameter_mm / 2:
-            unit = next((u for u, f in (("inches", 25.4), ("centimetres", 10.0))
-                         if self.outer_diameter_mm < 10.0             # thinner than any rod's tube
-                         and self.wall_mm < f * self.outer_diameter_mm / 2 <= _PLAUSIBLE_OD_MM / 2), None)
-            if unit is not None:          # a designer trial: an OD of 1.575 (in) had been blamed on the wall
-                f = 25.4 if unit == "inches" else 10.0
+            units = [(u, f) for u, f in (("inches", 25.4), ("centimetres", 10.0))
+                     if self.outer_diameter_mm < 10.0                 # thinner than any rod's tube
+                     and self.wall_mm < f * self.outer_diameter_mm / 2 <= _PLAUSIBLE_OD_MM / 2]
+            if units:                     # a designer trial: an OD of 1.575 (in) had been blamed on the wall
+                said = " or ".join(f"{u} ({self.outer_diameter_mm:g} x {f:g} = {f * self.outer_diameter_mm:g} mm)"
+                                   for u, f in units)
                 raise DesignError(
                     f"outer_diameter_mm = {self.outer_diameter_mm:g} is no more than twice the wall "
-                    f"({self.wall_mm:g} mm): in {unit}? ({self.outer_diameter_mm:g} x {f:g} = "
-                    f"{f * self.outer_diameter_mm:g} mm); sizes are in millimetres", key=f"{self.key}.outer_diameter_mm")
+                    f"({self.wall_mm:g} mm) and thinner than any rod's tube: in {said}? sizes are in millimetres; "
+                    f"else the wall is mistyped", key=f"{self.key}.outer_diameter_mm")
             raise DesignError(
                 f"wall {self.wall_mm} mm must be less than the outer radius {self.outer_diameter_mm / 2} mm "
                 f"(a tube, not a rod); reduce wall_mm", key=f"{self.key}.wall_mm")

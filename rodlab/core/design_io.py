@@ -31,7 +31,7 @@ from .joint_springs import JOINT_KEYS, JOINT_PLACES, JointSpring
 from .materials import Material, get_material, material_from_table
 from .tolerances import check_tolerance_table
 from .schema import require_schema
-from .design_range import check_design, range_warnings
+from .design_range import check_design, laminate_bend_warning, range_warnings
 
 __all__ = ["load_design", "design_from_dict", "design_to_dict", "builtin_designs", "resolve_design", "FORMAT_ROD",
            "FORMAT_ROD_V2", "ROD_FORMATS"]
@@ -373,19 +373,10 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
     for w in range_warnings(design):
         line = _line_of(text, None, w.key)
         log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())
-    if not isinstance(data.get("bend"), Mapping) and _laminate(design.pipe_I.material):
-        log.warning("%s: no [bend] table: the bend is pipe I's laminate (%s) bent to a %g mm radius, which a "
-                    "pultruded or wound carbon tube cannot be (the paper's rods bend a steel pipe joined by rings); "
-                    "give a [bend] of the pipe you will use (docs/formats.md)", p, design.pipe_I.material.name,
-                    design.bend.radius_mm)
+    bend = data.get("bend") if isinstance(data.get("bend"), Mapping) else {}
+    if (said := laminate_bend_warning(design, "material" in bend)) is not None:
+        log.warning("%s: %s", p, said)
     return design
-
-
-def _laminate(m) -> bool:
-    """A fibre laminate: far stiffer along than across (E_transverse below a third of E) or in shear (G below
-    half an isotropic material's E / 2(1 + nu))."""
-    return ((m.E_transverse_GPa is not None and m.E_transverse_GPa < m.E_GPa / 3.0)
-            or (m.G_GPa is not None and m.G_GPa < 0.5 * m.E_GPa / (2.0 * (1.0 + m.nu))))
 
 
 def builtin_designs() -> dict[str, Path]:

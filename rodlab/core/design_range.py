@@ -26,7 +26,7 @@ from .calc import calc_compliance
 from .design import RodDesign
 from .errors import DesignError
 
-__all__ = ["VERIFIED_RANGE", "SAG_LIMIT", "LINEAR_WARN_MM", "RangeWarning", "range_warnings",
+__all__ = ["laminate_bend_warning", "VERIFIED_RANGE", "SAG_LIMIT", "LINEAR_WARN_MM", "RangeWarning", "range_warnings",
            "check_design", "linear_model_error_mm"]
 
 #: key -> (low, high, unit): where the frame model was checked against solid FEA (the six paper rods, the
@@ -102,17 +102,13 @@ def check_design(design: RodDesign) -> None:
     if sag > SAG_LIMIT * reach:
         key = _longer_key(design)
         thin = min(design.pipe_I.outer_diameter_mm, design.pipe_II.outer_diameter_mm)
-        if thin < THIN_TUBE_MM:           # a designer trial: a tube in cm had been blamed on L2 alone
-            raise DesignError(
-                f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight "
-                f"(limit {SAG_LIMIT:g} x its reach of {reach:.0f} mm); its tube's outer diameter of {thin:g} mm is "
-                f"thinner than any measuring rod's: sizes are in millimetres: in centimetres? ({thin:g} cm = "
-                f"{10 * thin:g} mm)", key=key)
+        cm = (f"; its tube's outer diameter of {thin:g} mm is thinner than any measuring rod's: in centimetres? "
+              f"({thin:g} cm = {10 * thin:g} mm)" if thin < THIN_TUBE_MM else "")   # a designer trial: blamed on L2
         raise DesignError(
             f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight, "
             f"{sag / reach:.3g} x its reach of {reach:.0f} mm (limit {SAG_LIMIT:g}); it would hang rather than reach "
             f"and the linear compliance models do not describe it; shorten the rod or stiffen its tubes (rods "
-            f"checked: {_range_text()})", key=key)
+            f"checked: {_range_text()}){cm}", key=key)
 
 
 def _range_text() -> str:
@@ -151,3 +147,21 @@ def range_warnings(design: RodDesign) -> list[RangeWarning]:
 
 def _length(mm: float) -> str:
     return f"{mm * 1e3:.0f} um" if mm < 1.0 else f"{mm:.3g} mm"
+
+
+def laminate_bend_warning(design: RodDesign, bend_material_given: bool) -> str | None:
+    """A warning where the bend is a fibre laminate only because its material was not given (the tube's, bent to
+    the bend's radius: a pultruded or wound carbon tube cannot be bent; a designer trial's rod without ``[bend]``
+    had been valid without a word), else None."""
+    if bend_material_given or not _laminate(design.bend.material):
+        return None
+    return (f"no [bend] material: the bend is pipe I's laminate ({design.bend.material.name}) bent to a "
+            f"{design.bend.radius_mm:g} mm radius, which a pultruded or wound carbon tube cannot be (the paper's rods "
+            "bend a steel pipe joined by rings); give a [bend] of the pipe you will use (docs/formats.md)")
+
+
+def _laminate(m) -> bool:
+    """A fibre laminate: far stiffer along than across (E_transverse below a third of E) or in shear (G below
+    half an isotropic material's E / 2(1 + nu))."""
+    return ((m.E_transverse_GPa is not None and m.E_transverse_GPa < m.E_GPa / 3.0)
+            or (m.G_GPa is not None and m.G_GPa < 0.5 * m.E_GPa / (2.0 * (1.0 + m.nu))))

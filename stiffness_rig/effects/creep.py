@@ -11,7 +11,7 @@ from ..errors import RigError
 from .base import RigEffectModel
 
 __all__ = ["Creep", "kelvin_voigt", "creep_hypothesis", "two_term_creep_hypothesis", "CREEP_TAU_GRID_S", "SETTLING_TAU_S",
-           "CREEP_PHI_PLAUSIBLE", "held_creep_share"]
+           "CREEP_PHI_PLAUSIBLE", "held_creep_share", "relax"]
 
 #: a creep time constant below this [s] is more likely a hung weight settling than a laminate's or bond's creep
 SETTLING_TAU_S = 1.0
@@ -84,7 +84,7 @@ def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
     """Creep per unit phi of every sample, shape=(n, len(taus)), driven by the load history of each series: at
     every reading it relaxes towards the current elastic deflection ``base`` with each time constant ``taus``
     [s]: x_i = x_(i-1) exp(-dt_i / tau) + (1 - exp(-dt_i / tau)) base_i, summed in closed form
-    (:func:`_relax`)."""
+    (:func:`relax`)."""
     taus = np.atleast_1d(np.asarray(taus, float))
     out = np.zeros((base.size, taus.size))
     keys = data.zero_groups                    # per series: the rod is remounted, its creep starts afresh
@@ -92,7 +92,7 @@ def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
         idx = np.nonzero(keys == k)[0]
         idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
         for m, tau in enumerate(taus):
-            out[idx, m] = _relax(data.t_abs[idx] / tau, base[idx])
+            out[idx, m] = relax(data.t_abs[idx] / tau, base[idx])
     return out
 
 
@@ -100,7 +100,7 @@ def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
 _BLOCK = 500.0
 
 
-def _relax(s: np.ndarray, base: np.ndarray) -> np.ndarray:
+def relax(s: np.ndarray, base: np.ndarray) -> np.ndarray:
     """The recursion x_i = x_(i-1) e^-(s_i - s_(i-1)) + (1 - e^-(s_i - s_(i-1))) base_i from x = 0, over times
     ``s`` in time constants (sorted), as x_i = sum_(k <= i) pull_k e^-(s_i - s_k): a cumulative sum per block of
     :data:`_BLOCK` time constants, the state carried from block to block."""

@@ -53,7 +53,7 @@ def _note_unidentified_compliance(res) -> None:
     which = ("the joint compliances are" if len(weak) == len(free_c) else
              f"{', '.join(weak)} {'is' if len(weak) == 1 else 'are'}")
     print(f"note: {which} not identifiable from these data (sigma beyond a joint's physical size): the fit keeps "
-          f"them near their start values, so read them as the start values, not as measurements; to identify them, "
+          f"them near their start values (a prior), so read them as those, not as measurements; to identify them, "
           f"measure the same poses under different loads (the rod's own weight at other arm postures, a payload)",
           file=sys.stderr)
 

@@ -20,16 +20,15 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
-from rodlab.calibrate.identify import STRICT_HINT
 from rodlab.calibrate.trust import gross
 from rodlab.calibrate.validate import clearly_worse
 
-from ...core.compliance import RodCompliance
 from ...core.errors import RodlabError
 from .argtypes import joint_list
 from .calibrateargs import add_identify_options, pins_from_args
 from .calibration_printers import (print_cautions, print_not_trusted, print_parameters, write_residuals,
                                    write_result_file)
+from .calibrate_excess import campaign_diagnosis, pose_off, robots_own
 from .calibration_run import CalibrationRun, run_calibration, stated_noise_reason
 from .deviceargs import add_device_option, points_from_args, refuse_rod_slips
 from .reporting import default_folder, png_folder, write_command_report
@@ -135,9 +134,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     mixup = _mixup(run, suspect=noisy is not None) if res.warnings else None
     if mixup is not None:                          # the cause first: the other reasons follow from it
         res.warnings.insert(0, mixup.reason())
-    diagnosis = functools.cache(lambda: _campaign_diagnosis(run, args, comp))     # run once, where needed
-    accepted = mixup is None and accept_validated(res, lambda: _robots_own(diagnosis()))  # the robot's own errors,
-    # which the validation shows it works through
+    diagnosis = functools.cache(lambda: campaign_diagnosis(run, args, comp))     # run once, where needed
+    # the robot's own errors, which the validation shows it works through, and no clamping pose recorded off
+    accepted = mixup is None and accept_validated(res, lambda: robots_own(diagnosis()) and not pose_off(run))
     print_verdict(res)
     written = write_result_file(args, result_dict(robot, res, label, before, after))
     if args.residuals:
@@ -219,45 +218,6 @@ def _warn_other_rod(tool_mm, rod, path) -> float | None:
     return None
 
 
-#: campaign findings of the robot's own physics outside the model: the excess a validation may be trusted through
-ROBOT_PHYSICS = frozenset({"periodic_joint_error", "joint_stiffening", "lost_motion", "thermal_drift",
-                           "joint_zero_shift"})
-
-
-def _campaign_diagnosis(run: CalibrationRun, args, comp):
-    """(the campaign diagnosis, None) with the calibration's residual test's noise model, each finding checked on
-    the validation points where there are some; or (None, why it cannot run: it identifies every parameter, the
-    calibration held some at nominal)."""
-    from rodlab.app.diagnose import diagnose_campaign
-    test = run.result.residual_check
-    used = run.rod_file if comp.active else RodCompliance.none_like(run.rod_file)
-    points = points_from_args(args, args.validate, run.robot) if args.validate else None
-    try:
-        diag, _ = diagnose_campaign(run.robot, run.campaign, run.fixture, used, noise_mm=test.noise_mm,
-                                    validate_points=points, fixture_sigma=test.fixture_sigma,
-                                    harmonics=args.joint_harmonics)
-    except RodlabError as e:
-        return None, str(e).replace(STRICT_HINT, "")
-    return diag, None
-
-
-def _robots_own(diagnosis) -> bool:
-    """Whether the campaign ``diagnosis`` (:func:`_campaign_diagnosis`) puts a validated campaign's residual excess
-    on the robot's own physics (:data:`ROBOT_PHYSICS`) and on nothing of the files (a clamping pose, the device, the
-    rod file, stray points), so the excess is a caution (a review: a clamping position recorded 0.3 mm off had been
-    trusted through a validation file: the diagnosis names it ``fixture_pose`` where the robot's own errors leave it
-    visible). What no effect explains counts as the robot's own too: a robot's repeatability, a backlash below the
-    detection limit, a periodic error once modelled, link masses off (an independent trial's good calibrations had
-    been refused for them, validated 0.03-0.06 mm against 0.77 nominal); where it lies (at one position, evenly)
-    is no guide on such a robot (the trial's excess lay at position 1 with the right fixture file and evenly with
-    a pose 0.3 mm off), so the validation decides and the excess is printed with what to check."""
-    diag, _ = diagnosis
-    if diag is None:
-        return False
-    effects = {str(f.effect) for f in diag.findings}
-    return not effects - ROBOT_PHYSICS - {"unexplained"}
-
-
 def _mixup(run: CalibrationRun, suspect: bool = False):
     """A joint whose readings run the other way than the robot file's, or two clamping positions swapped, when the
     campaign is refused (:func:`~rodlab.calibrate.mixups.campaign_mixup`; ``suspect``: whatever its residual test
@@ -293,7 +253,7 @@ def _uncompensated_todo(f) -> str:
 
 
 def _print_suspects(diagnosis, args, other_rod_mm: float | None = None, heading: str = "suspects") -> None:
-    """The campaign diagnosis (:func:`_campaign_diagnosis`: the same residual test, then the hypotheses, each
+    """The campaign diagnosis (:func:`.calibrate_excess.campaign_diagnosis`: the same residual test, then the hypotheses, each
     checked on the validation points when there are some) and what to do about each; ``other_rod_mm``: how far the
     identified ball centre is from the rod file's (:func:`_warn_other_rod`), when the file looks like another rod's:
     a compliance found off is then that file's, not this rod's to measure."""
@@ -305,10 +265,12 @@ def _print_suspects(diagnosis, args, other_rod_mm: float | None = None, heading:
               f"({why}); the verdict above stands", file=sys.stderr)
         return
     print(f"{heading} (`rodlab diagnose --campaign`, verdict {diag.verdict}):", file=sys.stderr)
+    if not diag.findings:
+        print("  (nothing it can name: the excess has no structure its effects or a position show)", file=sys.stderr)
     for f in diag.findings:
         where = f" at {f.location}" if f.location else ""
         if f.effect == "unexplained" and f.parameters.get("spread") == "even":
-            where = " (spread evenly over the positions and the campaign's time)"   # its location: the least even
+            where = f" (spread evenly over the positions and the campaign's time; least evenly at {f.location})"
         held = " (caution: " + f.evidence["caution"] + ")" if f.evidence.get(HELD_OUT_WORSE) else ""
         todo = remedy(f)
         if args.compensation == "none" and f.effect == "rod_deflection":

@@ -145,9 +145,9 @@ def _load_cell_left_out(rec, sim, args) -> dict:
     try:
         cell = fit_recording(rec, sim, robust=args.robust)
     except RigError as e:               # readings no fit takes (absurd forces): left out all the same
-        said = f"on its readings no line could be fitted ({e.detail})"
-        print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0 (the load "
-              f"cell: {said})", file=sys.stderr)
+        said = f"the fit on its readings was refused: {e.detail}"
+        print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0 ({said})",
+              file=sys.stderr)
         return {"scale": [], "problems": [said]}
     refused, warned = load_scale_problems(cell.load)
     print(f"note: {args.recording}: the load cell's force_N is left out; the loads are mass_kg x g0"

@@ -27,10 +27,9 @@ def _explained_by_keys(finding, keys, design, alternatives: bool = True) -> bool
     places a group names, ``pipe_II|ring_1``), a compliance scale with the tubes' modulus E or the moduli freed, a
     torsion of pipe I with its material's shear modulus G freed; or one of the causes the data fit about as well
     with (a designer trial's y and z series: a bond named as a scale, the bond's key freed, refused)."""
-    others = ([a.split(" at ", 1) + [None] for a in getattr(finding, "evidence", {}).get("alternatives", ())]
-              if alternatives else [])
-    return any(_cause_freed(effect, location, keys, design)
-               for effect, location, *_ in [(finding.effect, finding.location)] + others)
+    others = _alternative_causes(finding) if alternatives else []
+    return any(_cause_freed(effect, location, keys, design) for effect, location in [(finding.effect, finding.location)]
+               + others)
 
 
 def _cause_freed(effect: str, location: str | None, keys, design) -> bool:
@@ -93,6 +92,9 @@ def measured_entries_of(path: str, design, keys, model: str, own=None, accept_un
                               "they differ beyond the design's tolerances: a measurement of another rod cannot make "
                               "this rod's as-built design; give this rod's recording (or its design)")
         _refuse_unfitted(path, unfitted, design, "simulation you gave (--sim)" if own else f"{model} model", keys)
+        for f in diag.findings:               # e.g. a joint at the flange clamp: maybe the rig's mount
+            if f.effect in _STRUCTURAL and f.evidence.get("caution"):
+                print(f"warning: {path}: {f.effect} at {f.location}: {f.evidence['caution']}", file=sys.stderr)
         lin = fitted.linear
         _check_unexplained(path, diag, accept_unexplained)
         return Measured(lin.entries, lin.C, _with_remounting(lin.C, lin.cov), path), rig
@@ -171,13 +173,24 @@ def _refuse_unfitted(path: str, findings: list, design, model: str, freed: list)
 def _alternatives(findings: list, freed: list) -> str:
     """The --free lists of the joints the data fit about as well as a named cause (a designer trial's y and z
     series: a bond named as a uniform scale, whose moduli were then refused, while the bond's key fitted)."""
-    places = [alt.split(" at ", 1)[1] for f in findings for alt in f.evidence.get("alternatives", ())
-              if alt.startswith("joint_compliance at ")]
+    places = list(dict.fromkeys(place for f in findings for effect, place in _alternative_causes(f)
+                                if effect == "joint_compliance" and place))[:2]
     if not places:
         return ""
-    other = [",".join(dict.fromkeys([*freed, *(f"joints.{p.split('|')[0]}.s_{kind}_rad_per_Nm"
-                                                for kind in ("bend", "torsion"))])) for p in places[:2]]
-    return ("; the data fit about as well with a joint at " + ", ".join(p.split("|")[0] for p in places[:3])
-            + " (a load series along x tells them apart): try " + " or ".join(f"--free {o}" for o in other))
+    other = [",".join(dict.fromkeys([*freed, *(f"joints.{p}.s_{kind}_rad_per_Nm" for kind in ("bend", "torsion"))]))
+             for p in places]
+    apart = " (a load series along x tells them apart)" if any(f.evidence.get("separate_by") for f in findings) else ""
+    return (f"; the data fit about as well with a joint at {' or '.join(places)}{apart}: try "
+            + " or ".join(f"--free {o}" for o in other))
+
+
+def _alternative_causes(finding) -> list[tuple[str, str | None]]:
+    """(effect, first place) of each cause a finding's diagnosis says the data fit about as well with (its
+    ``alternatives`` labels, 'EFFECT at PLACE[|PLACE] (settings)')."""
+    out = []
+    for label in getattr(finding, "evidence", {}).get("alternatives", ()):
+        effect, _, place = label.split(" (")[0].partition(" at ")
+        out.append((effect.strip(), place.split("|")[0].strip() or None))
+    return out
 
 

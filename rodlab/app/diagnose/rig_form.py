@@ -4,10 +4,11 @@ The difference d = C_meas - C_sim over the measured entries has, if the rod is t
 covariance S = (tolerances through the sensitivities) + (the method's accuracy) + (the measurement's own). With
 the tolerances integrated out this way:
 
-- inside the envelope (chi-square of d under S with p > 1e-3), the finding is ``model_form`` (effects v2): the
-  rod as built, with its r_mn (paper Eq. 20, entry by entry) and the as-built keys that explain them (their
-  posterior mean given d); no local cause is named, and the finding says how large a compliant joint would have
-  to be to stand out, and how much a coupon test and a solid FEA would lower that;
+- inside the envelope (chi-square of d under S with p > 1e-3) and with no local cause whose own likelihood ratio
+  stands out (p <= 1e-3, the targeted test being stronger than the chi-square over every entry), the finding is
+  ``model_form`` (effects v2): the rod as built, with its r_mn (paper Eq. 20, entry by entry) and the as-built
+  keys that explain them (their posterior mean given d), and how large a compliant joint would have to be to
+  stand out, and how much a coupon test and a solid FEA would lower that;
 - outside, a local cause (a compliant joint at a place, torsion of pipe I, a uniform scale beyond the material's
   spread) is named when its likelihood ratio against the envelope is significant (p <= 1e-3, the diagnosers'
   rule); places that fit within 10 of the best are named as a group; what none explains is ``unexplained`` at
@@ -246,8 +247,9 @@ def _cause(h: Hypothesis, val, se, lr: float, scored, rms, q0: float, entries) -
                                  "entry alike, a joint those its lever reaches, and the y and z series alone cannot "
                                  "tell them apart")
     if group:
-        ev["separate_by"] = ("load along x_T with the x gauge (pipe I bending) and along y_T (torsion): the lever "
-                             "from each place to the ball differs in each")
+        ev["separate_by"] = "; ".join(filter(None, (
+            "load along x_T with the x gauge (pipe I bending) and along y_T (torsion): the lever from each place to "
+            "the ball differs in each", ev.get("separate_by"))))
     text = (h.explanation + "; beyond what the design's tolerances and the simulation's accuracy explain "
             f"(envelope chi-square {q0:.1f} on {k} entries -> {q0 - lr:.1f}; fitted together with the toleranced "
             "keys, which carry their share of the difference: not the entries' measured / simulated ratio r_mn, "

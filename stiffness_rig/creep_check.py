@@ -55,7 +55,7 @@ class CreepCheck:
                 f"about {100 * self.share:.2g} % of the deflection with a time constant of about {self.tau_s:.2g} s "
                 f"would ({self.z:.0f} standard errors): the hold means this fit takes, hence its compliance, include "
                 f"part of it by how long each hold lasts ({self.hold_s:.2g} s here); `rodlab diagnose --rig` fits the "
-                "creep and its --export writes the compliance with it removed")
+                "creep and its --export writes the compliance without the part a hold does not complete")
 
 
 @dataclass

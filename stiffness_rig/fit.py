@@ -24,7 +24,7 @@ from .errors import NoLoadResponse, RigError
 from .creep_check import creep_within_holds
 from .gross import without_gross
 from .fit_checks import (check_load_response, dead_load_warnings, gauge_scale_problems, lack_of_fit_warnings,
-                         load_drift_warnings, load_scale_problems, reciprocity_problems)
+                         load_drift_warnings, load_scale_problems, reciprocity_problems, structural_zero_warnings)
 from .glitches import without_glitches
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load, zero_offset
@@ -192,6 +192,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
     fit = RigFit(M, S, lines, noise, holds, residuals_mm=np.concatenate(resid_all), load=measured_load(holds))
     refuse, warn = reciprocity_problems(M, S)
     refuse += gauge_scale_problems(M, sim.C_F) if sim is not None else []
+    warn += structural_zero_warnings(M, S, sim.C_F) if sim is not None else []
     scale_refuse, scale_warn = load_scale_problems(fit.load)
     refuse += scale_refuse
     warn += scale_warn

@@ -269,3 +269,21 @@ def test_a_recording_short_of_its_plan_is_said(tmp_path):
     said = [w for w in fit_recording(dataclasses.replace(full, meta=meta), SIM).warnings if "of its plan's" in w]
     assert said and f"holds {n} of its plan's {n + 6} holds" in said[0]
     assert not [w for w in fit_recording(full, SIM).warnings if "of its plan's" in w]
+
+
+def test_a_tilted_gauge_is_warned_of_by_rig_fit(tmp_path):
+    """An independent recordings trial: a z gauge tilted ~2.5 deg towards y wrote c23 = 4.4 % of c22 into the file
+    without a word, and one tilted 3 deg towards x broke c13 = c31 by 2.6 % at 6 standard errors (c33 1.3 % low)
+    under the refusal's 10 SEs and 20 %. Both are warned of now, with the tilt they amount to."""
+    from rodlab.stiffness_rig.fit_checks import reciprocity_problems
+    rec = tmp_path / "tilt.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--effect", "crosstalk:sensor=z,eps_y_rad=0.045", "--seed", "5",
+                 "-o", str(rec)]) == 0
+    said = [w for w in fit_recording(read_recording(rec), calc_rod_compliance(resolve_design("rod1"))).warnings
+            if "has none" in w]
+    assert said and said[0].startswith("c23 = +") and "tilted by ~" in said[0]
+    M = np.array([[0.7e-3, 0.0, -1.262e-3], [0.0, 7e-3, 0.0], [-1.23e-3, 0.0, 5.5e-3]])
+    S = np.full((3, 3), 0.0038e-3)
+    refuse, warn = reciprocity_problems(M, S)
+    assert not refuse and len(warn) == 1 and "z gauge tilted ~2.6 deg towards x" in warn[0]
+    assert reciprocity_problems(M, S * 3) == ([], [])               # 2 SEs apart: nothing said

@@ -194,7 +194,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     guessed = [f"c{m + 1}{n + 1}" for m, n in STRUCTURAL_ENTRIES
                if comp.C_F_sigma is not None and not np.isfinite(comp.C_F_sigma[m, n])]
     if guessed:
-        print(f"  not measured: {', '.join(guessed)} (the recording has no series that loads it): the file holds r_rod x "
+        short = sorted({a.value for a in fit.holds.axis} - {ln.axis.value for ln in fit.lines})
+        why = (f"the {', '.join(short)} series has too few holds at different loads to fit a line (3 or more "
+               "needed)" if short else "the recording has no series that loads it")
+        print(f"  not measured: {', '.join(guessed)} ({why}): the file holds r_rod x "
               "simulated there, with no uncertainty; `rodlab update` leaves it out")
     np.set_printoptions(precision=6, suppress=True)
     print(f"  measured C_F [mm/N] =\n{np.round(comp.C_F, 6) + 0.0}")     # no "-0." for what rounds to zero

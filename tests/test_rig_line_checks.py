@@ -2,6 +2,8 @@
 instrument that answers only once its ``init`` line came (remote mode): end to end on the pty simulators."""
 from __future__ import annotations
 
+import contextlib
+
 import pytest
 
 from rodlab.stiffness_rig import RigError
@@ -130,64 +132,50 @@ def test_a_silent_instrument_is_not_blamed_on_an_old_garbage_line():
     assert "no answer at all" in text and "ERR 7" not in text and "0 garbage answers" in text
 
 
-def test_a_float32_load_cell_with_its_words_swapped_is_named_at_word_order(tmp_path):
-    """A Modbus amplifier sending its float32 low word first to a profile that says big: each reading is
-    garbage naming word_order (review: -5e32 N had been a number like any other), the right order reads the
-    load cell."""
+@contextlib.contextmanager
+def _float32_cell(tmp_path, sent_order: str):
+    """A simulated Modbus load cell on a pty sending 19.6133 N as a float32 in ``sent_order``; yields
+    ``poll(word_order)``: one reading of it by a driver set to that order."""
     import serial
 
     from rodlab.stiffness_rig.drivers import Link
     from rodlab.stiffness_rig.drivers.modbus_rtu import ModbusRTU
     bench = SimBench(RigModel(C, seed=14, load_cell_noise_N=0.0))
-    cell = si.SimModbusRTU(bench, tmp_path / "ttyF", slave=1, registers={0: (lambda: 19.6133, "float32", "little", 3,
-                                                                             1.0)})
+    cell = si.SimModbusRTU(bench, tmp_path / "ttyF", slave=1,
+                           registers={0: (lambda: 19.6133, "float32", sent_order, 3, 1.0)})
     cell.start()
+    ser = serial.serial_for_url(str(cell.port), timeout=0.5)
     try:
-        ser = serial.serial_for_url(str(cell.port), timeout=0.5)
-        for order, expect in (("big", "set word_order to one of 'little', 'BADC', 'DCBA'"), ("little", None)):
-            d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
-                                                       "word_order": order}]})
-            if expect:
-                with pytest.raises(Garbage, match=expect):
-                    d.poll(Link(ser))
-            else:
-                assert d.poll(Link(ser))["f"] == pytest.approx(19.6133, rel=1e-6)
-        ser.close()
+        yield lambda order: ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
+                                                                   "word_order": order}]}).poll(Link(ser))["f"]
     finally:
+        ser.close()
         cell.stop()
+
+
+def test_a_float32_load_cell_with_its_words_swapped_is_named_at_word_order(tmp_path):
+    """A Modbus amplifier sending its float32 low word first to a profile that says big: each reading is
+    garbage naming word_order (review: -5e32 N had been a number like any other), the right order reads the
+    load cell."""
+    with _float32_cell(tmp_path, "little") as poll:
+        with pytest.raises(Garbage, match="set word_order to one of 'little', 'BADC', 'DCBA'"):
+            poll("big")
+        assert poll("little") == pytest.approx(19.6133, rel=1e-6)
 
 
 def test_a_float32_load_cell_with_its_bytes_swapped_in_each_word_reads_as_BADC(tmp_path):
     """An instrument trial's load cell sent its float32 as BADC (bytes swapped within each word): no word order
     read it, and the advice to swap the words recorded 8e14 N as a force. Read as CDAB it is garbage now; as BADC
     it reads the load."""
-    import serial
-
-    from rodlab.stiffness_rig.drivers import Link
-    from rodlab.stiffness_rig.drivers.modbus_rtu import ModbusRTU
-    bench = SimBench(RigModel(C, seed=14, load_cell_noise_N=0.0))
-    cell = si.SimModbusRTU(bench, tmp_path / "ttyB", slave=1, registers={0: (lambda: 19.6133, "float32", "BADC", 3,
-                                                                             1.0)})
-    cell.start()
-    try:
-        ser = serial.serial_for_url(str(cell.port), timeout=0.5)
-        for order in ("big", "little", "DCBA"):
-            d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32",
-                                                       "word_order": order}]})
-            if order == "little":               # the advice of the old message: garbage now, not 8e14 N
-                with pytest.raises(Garbage, match="its four bytes in another order"):
-                    d.poll(Link(ser))
-                continue
+    with _float32_cell(tmp_path, "BADC") as poll:
+        with pytest.raises(Garbage, match="its four bytes in another order"):
+            poll("little")                     # the advice of the old message: garbage now, not 8e14 N
+        for order in ("big", "DCBA"):
             try:
-                got = d.poll(Link(ser))["f"]
+                assert poll(order) != pytest.approx(19.6133, rel=0.01)
             except Garbage:
-                continue
-            assert got != pytest.approx(19.6133, rel=0.01)
-        d = ModbusRTU({"slave": 1, "registers": [{"name": "f", "address": 0, "type": "float32", "word_order": "BADC"}]})
-        assert d.poll(Link(ser))["f"] == pytest.approx(19.6133, rel=1e-6)
-        ser.close()
-    finally:
-        cell.stop()
+                pass
+        assert poll("BADC") == pytest.approx(19.6133, rel=1e-6)
 
 
 def test_a_line_in_another_separator_names_the_separator():

@@ -50,10 +50,10 @@ OVERFIT_SHARE = 0.5
 
 
 
-def rms_text(mm: float) -> str:
-    """A residual [mm] as printed: in um below a millimetre (one decimal), in mm above (a gross fit had printed
-    404644.9 um)."""
-    return f"{mm * 1e3:.1f} um" if mm < 1.0 else f"{mm:.4g} mm"
+def rms_text(mm: float, decimals: int = 1) -> str:
+    """A residual [mm] as printed: in um below a millimetre (``decimals`` after the point), in mm above (a gross
+    fit had printed 404644.9 um)."""
+    return f"{mm * 1e3:.{decimals}f} um" if mm < 1.0 else f"{mm:.4g} mm"
 
 def trust_warnings(robot, res: "CalibrationResult") -> list[str]:
     """Reasons not to use a calibration that the fit itself shows: no convergence, too few degrees of freedom,

@@ -7,8 +7,6 @@ and say where (:func:`isolated_glitches` on a recording's readings, :func:`glitc
 """
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from .samples import RigSamples, rig_samples
@@ -154,10 +152,8 @@ def without_glitches(rec):
     rows, comps, off = glitch_rows(rec)
     if rows.size == 0:
         return rec, []
-    disp = rec.disp_mm.copy()
-    disp[rows, comps] = np.nan
     steps = sorted({int(s) for s in rec.step[rows]})
-    return dataclasses.replace(rec, disp_mm=disp), [
+    return rec.without_readings(rows, comps), [
         f"{rows.size} single reading(s) far off their hold's line (step {', '.join(map(str, steps[:12]))}"
         f"{', ...' if len(steps) > 12 else ''}; up to {np.max(np.abs(off)) * 1e3:.1f} um, more than {GLITCH_Z:g} "
         "robust noise SDs): a gauge's glitch or an electrical spike, left out of the fit; check that gauge's cable "

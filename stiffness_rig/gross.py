@@ -10,7 +10,6 @@ recording's problem, left to the checks that follow.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,8 +64,7 @@ def gross_readings(rec: RigRecording) -> GrossReadings:
     (a run of one load axis: the gauges are zeroed at its start, so each series has its own level; see the
     module)."""
     rows, comps, levels, spans = [], [], [], []
-    la = list(rec.load_axis)
-    series = np.cumsum([0] + [a != b for a, b in zip(la[1:], la[:-1])]).astype(int)
+    series = rec.series()
     for c in range(3):
         for k in np.unique(series):
             ok = np.nonzero(np.isfinite(rec.disp_mm[:, c]) & (series == k))[0]
@@ -92,6 +90,4 @@ def without_gross(rec: RigRecording) -> tuple[RigRecording, GrossReadings]:
     gross = gross_readings(rec)
     if not gross.any:
         return rec, gross
-    disp = rec.disp_mm.copy()
-    disp[gross.rows, gross.comps] = np.nan
-    return dataclasses.replace(rec, disp_mm=disp), gross
+    return rec.without_readings(gross.rows, gross.comps), gross

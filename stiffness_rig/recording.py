@@ -94,6 +94,19 @@ class RigRecording:
         return replace(self, **{f.name: getattr(self, f.name)[keep] for f in fields(self)
                                 if isinstance(getattr(self, f.name), np.ndarray)})
 
+    def without_readings(self, rows: np.ndarray, comps: np.ndarray) -> "RigRecording":
+        """The recording with the gauge readings at (``rows``, ``comps``) blanked (NaN): readings left out as a
+        glitch or as no rod's; the rest as it is."""
+        disp = self.disp_mm.copy()
+        disp[rows, comps] = np.nan
+        return replace(self, disp_mm=disp)
+
+    def series(self) -> np.ndarray:
+        """shape=(n,) int: the series of each row, a run of one load axis (and sign) in recording order; the gauges
+        are zeroed whenever it changes, also when an axis is loaded a second time (y, z, y)."""
+        la = list(self.load_axis)
+        return np.cumsum([0] + [a != b for a, b in zip(la[1:], la[:-1])]).astype(int)
+
     @property
     def rod(self) -> str:
         return str(self.meta.get("rod", ""))

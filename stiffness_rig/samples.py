@@ -73,10 +73,8 @@ class RigSamples:
 def rig_samples(rec) -> RigSamples:
     """Flatten a :class:`~rodlab.stiffness_rig.RigRecording` into one row per measured reading (component by
     component, readings in recording order)."""
-    # a series runs while the load axis (and sign) stays the same: the gauges are zeroed whenever it changes, also
-    # when an axis is loaded a second time (y, z, y)
     la = list(rec.load_axis)
-    code = np.cumsum([0] + [a != b for a, b in zip(la[1:], la[:-1])]).astype(int)
+    code = rec.series()
     axes = [la[i] for i in np.unique(code, return_index=True)[1]]   # each series' load axis
     step = np.asarray(rec.step)
     idx = np.concatenate([np.nonzero(np.isfinite(rec.disp_mm[:, c]))[0] for c in range(3)])

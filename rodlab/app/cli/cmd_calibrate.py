@@ -20,7 +20,7 @@ from rodlab.calibrate.points import cross_validate_points, identify_points, stat
 from rodlab.calibrate.compensations import compensations_help
 from rodlab.calibrate.crossval import Prediction, cross_validate_identify
 from rodlab.calibrate.mixups import campaign_mixup
-from rodlab.calibrate.trust import gross
+from rodlab.calibrate.trust import gross, rms_text
 from rodlab.calibrate.validate import clearly_worse
 
 from ...core.errors import RodlabError
@@ -282,9 +282,9 @@ def _print_suspects(diagnosis, args, other_rod_mm: float | None = None, heading:
 
 
 def _print_result(res, before, after, label) -> None:
-    rms = f"{res.rms_mm * 1e3:.2f} um" if res.rms_mm < 1.0 else f"{res.rms_mm:.4g} mm"     # a gross fit in mm
     print(f"identification ({label} compensation): {len(res.free)} parameters from {res.residuals_mm.shape[0]} "
-          f"points, residual rms {rms} per reading, {res.iterations} compensation passes, {res.message}")
+          f"points, residual rms {rms_text(res.rms_mm, 2)} per reading, {res.iterations} compensation passes, "
+          f"{res.message}")
     print_parameters(res)
     if before is not None:
         print("  validation (base and tool refitted)   mean     max  median      SD  [mm]")

@@ -44,6 +44,26 @@ def test_friction_intercepts_in_kg(examples, sim):
             assert abs(ln.zero_load_kg["load"] - ln.zero_load_kg["unload"]) < 0.1 * Ff / G0
 
 
+def test_zero_load_from_the_unloaded_reference_not_the_gauge_zero(examples, sim, tmp_path):
+    """A gauge zeroed on one reading sits that reading's noise off: the crossings are taken from the unloaded
+    reference hold, so a constant offset of every reading moves none of them (it had read as a +15 g dead load at
+    18 standard errors on an independent null recording)."""
+    src = examples / "rig-null.rig.csv"
+
+    def offset(i, row):
+        for c in ("disp_x_mm", "disp_y_mm", "disp_z_mm"):
+            if row.get(c):
+                row[c] = f"{float(row[c]) + 0.004:.6f}"
+    shifted = fit_recording(read_recording(rewrite_recording(src, tmp_path / "off.rig.csv", offset)), sim)
+    plain = fit_recording(read_recording(src), sim)
+    for a, b in zip(plain.lines, shifted.lines):
+        if a.component != a.axis.index:
+            continue
+        for phase in ("load", "unload"):
+            assert b.zero_load_kg[phase] == pytest.approx(a.zero_load_kg[phase], abs=1e-9)
+            assert abs(b.zero_load_kg[phase]) < 3 * b.zero_load_se_kg[phase]      # a null: no dead load
+
+
 def test_measured_compliance_file(examples, sim, tmp_path):
     from rodlab import write_compliance
     rec = read_recording(examples / "rig-null.rig.csv")

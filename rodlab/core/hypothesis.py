@@ -102,6 +102,8 @@ class Hypothesis:
     defers_to : the effect of a commoner rival at the same location that goes first unless this hypothesis fits
         clearly better, not merely as well with fewer parameters (a joint's zero shifted at one clamping position
         defers to that position's fixture pose), or None
+    profile : {name: (low, high)} 95 % intervals over the hidden parameters' profile likelihood: internal units for
+        a column's name (they widen its interval given the settings), report units for a setting (its interval)
     """
 
     effect: str
@@ -118,6 +120,7 @@ class Hypothesis:
     report_scale: np.ndarray | None = None
     report_offset: np.ndarray | None = None
     defers_to: str | None = None
+    profile: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.effect = str(self.effect)                 # the contract spelling (Enums print as their value)
@@ -151,9 +154,12 @@ class Hypothesis:
         params, intervals = {}, {}
         for name, v, s, a, b in zip(self.names, internal, se, self.report_scale, self.report_offset):
             lo, hi = v - 1.96 * s, v + 1.96 * s
+            if name in self.profile:                   # the hidden parameters' uncertainty too
+                lo, hi = min(lo, self.profile[name][0]), max(hi, self.profile[name][1])
             params[name] = float(b + a * v)
             intervals[name] = sorted([float(b + a * lo), float(b + a * hi)])
         params.update({k: float(v) for k, v in self.settings.items()})
+        intervals.update({k: sorted(float(x) for x in self.profile[k]) for k in self.settings if k in self.profile})
         return params, intervals
 
 

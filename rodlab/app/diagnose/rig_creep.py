@@ -7,13 +7,19 @@ independent rig simulator's two-term case was creep plus ``compliance_scale`` 1.
 :func:`two_term_step` tries one creep of two terms in place of the creep and such a look-alike (kept at a delta
 BIC <= 0: one effect instead of two, at one more hidden parameter's cost), or in place of the creep alone
 (kept only if it passes the test a new term passes: delta BIC <= -10, likelihood-ratio p <= 1e-3).
+
+A creep of one term reports its amplitude's interval over the time constant's profile likelihood
+(:func:`with_creep_profile`): with the time constant taken as known, an independent simulator's phi missed its
+95 % interval by ~16 % in two cases of three.
 """
 from __future__ import annotations
 
+import dataclasses
 import logging
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.stats import chi2
 
 from rodlab.stiffness_rig.effects import CREEP_TAU_GRID_S, two_term_creep_hypothesis
 from rodlab.stiffness_rig.effects.creep import kelvin_voigt
@@ -21,7 +27,7 @@ from rodlab.stiffness_rig.effects.creep import kelvin_voigt
 from .criteria import bic_penalty, cv_improves, evidence
 from .rig_select import admissible, subset_ls
 
-__all__ = ["two_term_step", "FAST_CREEP_LOOKALIKES"]
+__all__ = ["two_term_step", "with_creep_profile", "FAST_CREEP_LOOKALIKES"]
 
 log = logging.getLogger(__name__)
 
@@ -104,3 +110,52 @@ def _rss(others: np.ndarray, creep: np.ndarray, r0: np.ndarray) -> float:
     X = np.column_stack([others, creep])
     coef = np.linalg.lstsq(X, r0, rcond=None)[0]
     return float(np.sum((r0 - X @ coef) ** 2)) if np.all(coef[-2:] >= 0) else np.inf
+
+
+#: the time constants of the profile: the chosen one times 2 ** (k / 16), k = -PROFILE_STEPS ... PROFILE_STEPS
+#: (a factor 4 either way in steps of 4.4 %)
+PROFILE_STEPS = 32
+#: the profile keeps the time constants whose fit is within this chi-square (95 %, one parameter) of the best
+PROFILE_CHI2 = float(chi2.ppf(0.95, 1))
+
+
+def with_creep_profile(library, S: tuple, data, base, r0, prep, sigma: float) -> list:
+    """``library`` with the chosen one-term creep's hypothesis carrying its profile (``Hypothesis.profile``): the
+    time constants whose best fit beside the other chosen terms is within :data:`PROFILE_CHI2` of the chosen one's,
+    their range as ``tau_s``'s interval and the union of phi's intervals over them as phi's (same columns: the
+    selection's fits stand). The time constants are stepped outward from the chosen one until the fit leaves that
+    range."""
+    creep = [j for j in S if library[j].effect == "creep" and library[j].X.shape[1] == 1]
+    if not creep:
+        return library
+    j = creep[0]
+    others = [library[i].X for i in S if i != j]
+    tau0 = float(library[j].settings["tau_s"])
+    chosen = _phi_fit(others, library[j].X, r0, sigma)
+    kept = [(tau0, chosen)]
+    for direction in (-1.0, 1.0):
+        for k in range(1, PROFILE_STEPS + 1):
+            tau = tau0 * 2.0 ** (direction * k / 16.0)
+            fit = _phi_fit(others, prep.project_columns(kelvin_voigt(data, base, np.array([tau]))), r0, sigma)
+            if (fit[0] - chosen[0]) / sigma ** 2 > PROFILE_CHI2 or fit[1] <= 0:
+                break
+            kept.append((tau, fit))
+    phis = np.array([[f[1] - 1.96 * f[2], f[1] + 1.96 * f[2]] for _, f in kept])
+    taus = [t for t, _ in kept]
+    profile = {library[j].names[0]: (float(phis[:, 0].min()), float(phis[:, 1].max())),
+               "tau_s": (float(min(taus)), float(max(taus)))}
+    log.debug("creep profile over tau %s: %s", np.round(sorted(taus), 3), profile)
+    out = list(library)
+    out[j] = dataclasses.replace(library[j], profile=profile)
+    prep.carry(library[j], out[j])
+    return out
+
+
+def _phi_fit(others: list, creep: np.ndarray, r0: np.ndarray, sigma: float) -> tuple[float, float, float]:
+    """(residual sum of squares, phi, its standard error) of ``r0`` on the columns ``others`` and one creep
+    column (the last)."""
+    X = np.column_stack(others + [creep]) if others else creep
+    coef, *_ = np.linalg.lstsq(X, r0, rcond=None)
+    rss = float(np.sum((r0 - X @ coef) ** 2))
+    cov = sigma ** 2 * np.linalg.pinv(X.T @ X)
+    return rss, float(coef[-1]), float(np.sqrt(max(cov[-1, -1], 0.0)))

@@ -14,7 +14,7 @@ from rodlab.stiffness_rig.samples import RigSamples
 
 from .criteria import DBIC_MIN, bic_penalty, evidence
 from .report import Finding
-from .rig_creep import two_term_step
+from .rig_creep import two_term_step, with_creep_profile
 from .rig_outside import OUTSIDE
 from .rig_select import Detection, alternatives, compatible, demean, refine_tau, select, subset_ls
 
@@ -41,6 +41,11 @@ class Prep:
         self.raw[id(term)] = demean(term.X, self.groups)
         term.X = self.project(term.X) if self.project is not None else self.raw[id(term)]
         return term
+
+    def carry(self, old: Hypothesis, new: Hypothesis) -> None:
+        """``new`` (a copy of ``old`` with the same columns) keeps ``old``'s columns before projection."""
+        if id(old) in self.raw:
+            self.raw[id(new)] = self.raw[id(old)]
 
     def project_columns(self, X: np.ndarray) -> np.ndarray:
         """Columns ``X`` (n, k) projected as a hypothesis' are (gauge zeros, the free linear part)."""
@@ -115,7 +120,8 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
         S = select(library, ls, sigma, r0.size, max_terms, prep.detection)
-    return two_term_step(library, ls, S, data, base, r0, prep, sigma, folds)
+    library, ls, S = two_term_step(library, ls, S, data, base, r0, prep, sigma, folds)
+    return with_creep_profile(library, S, data, base, r0, prep, sigma), ls, S
 
 
 def term_findings(library, ls, S: tuple, coef, rss: float, sigma: float, rss0: float) -> list[Finding]:

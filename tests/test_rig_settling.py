@@ -22,12 +22,12 @@ R = 1.3                     # the rod as built against its closed-form simulatio
 TAU_S = 0.15                # the weight's settling
 
 
-def _settling(tmp_path, header: str | None, name: str):
-    """rod 1#'s simulated recording (8 s holds at 10 Hz, r = 1.3) with every hold approaching its level from the
-    previous hold's with time constant TAU_S; ``header``: a plan_fields header line to add."""
-    src = tmp_path / "src.rig.csv"
+def _settling(tmp_path, header: str | None, name: str, r: float = R, tau_s: float = TAU_S):
+    """rod 1#'s simulated recording (8 s holds at 10 Hz, ``r`` x its closed form) with every hold approaching its
+    level from the previous hold's with time constant ``tau_s``; ``header``: a plan_fields header line to add."""
+    src = tmp_path / f"src{r:g}.rig.csv"
     if not src.exists():
-        assert main(["rig", "simulate", "--sim", "rod1", "--effect", f"compliance_scale:r={R}", "--noise-um", "0.5",
+        assert main(["rig", "simulate", "--sim", "rod1", "--effect", f"compliance_scale:r={r}", "--noise-um", "0.5",
                      "--repeats", "3", "--seed", "5", "-o", str(src)]) == 0
     rec = read_recording(src)
     d = rec.disp_mm.copy()
@@ -40,7 +40,7 @@ def _settling(tmp_path, header: str | None, name: str):
             warnings.simplefilter("ignore", RuntimeWarning)
             level = np.nanmean(d[rows[len(rows) // 2:]], axis=0)
         t = rec.time_s[rows] - rec.time_s[rows[0]] + 0.1
-        d[rows] += np.outer(np.exp(-t / TAU_S), np.nan_to_num(prev - level))
+        d[rows] += np.outer(np.exp(-t / tau_s), np.nan_to_num(prev - level))
         prev = level
     lines, k = [], 0
     for ln in src.read_text().splitlines():
@@ -98,6 +98,22 @@ def test_another_tools_recording_that_settles_is_diagnosed_settled(tmp_path, cap
     sim = read_compliance_of_rod1(tmp_path)
     for m, n in ((1, 1), (2, 2)):
         assert exp.C_F[m, n] == pytest.approx(R * sim.C_F[m, n], rel=0.01)
+
+
+def test_a_soft_rods_settling_is_cut_to_the_noise_not_to_a_share_of_the_step(tmp_path, capsys):
+    """A rod 30 x softer (steps of ~1 mm) settling with 0.25 s: 2 % of the step is ~20 um, 40 noise SDs; cut there,
+    the tail had read as a creep of 0.9 % at 28 standard errors (an instrument trial's own gauges). The cut goes on
+    until the tail is below a quarter of the noise: no creep in `rig fit` or the diagnosis."""
+    rec = _settling(tmp_path, None, "soft.rig.csv", r=30.0, tau_s=0.25)
+    seconds = settling_seconds(read_recording(rec))
+    assert 1.8 < seconds <= 3.0          # 0.25 s x ln(1 mm / (0.25 x 0.5 um)) = 2.25 s, less the first reading's 0.1 s
+    from rodlab.core.compliance import write_compliance
+    soft = write_compliance(read_compliance_of_rod1(tmp_path).scaled(30.0, "calc"), tmp_path / "soft.calc.json")
+    capsys.readouterr()
+    assert main(["rig", "fit", str(rec), "--sim", str(soft), "-o", str(tmp_path / "soft.meas.json")]) == 0
+    assert "creeps" not in capsys.readouterr().err
+    assert main(["diagnose", "--rig", str(rec), "--sim", str(soft), "--json", str(tmp_path / "d.json")]) in (0, 3)
+    assert "creep" not in [f["effect"] for f in json.loads((tmp_path / "d.json").read_text())["findings"]]
 
 
 @pytest.mark.parametrize("tau_s, in_file", [(1.5, True), (8.0, False)])

@@ -287,3 +287,27 @@ def test_a_tilted_gauge_is_warned_of_by_rig_fit(tmp_path):
     refuse, warn = reciprocity_problems(M, S)
     assert not refuse and len(warn) == 1 and "z gauge tilted ~2.6 deg towards x" in warn[0]
     assert reciprocity_problems(M, S * 3) == ([], [])               # 2 SEs apart: nothing said
+
+
+def test_a_rod_softer_one_way_is_warned_of_and_its_uncertainty_is_their_spread(tmp_path):
+    """An instrument trial: c22 8 % larger under -y than +y had been written as the mean with a standard error
+    5000 x too small and no word. Now a warning names the direction and the file's SE covers the spread; the
+    same recording without the one-way softness says nothing."""
+    from conftest import rewrite_recording
+    src = tmp_path / "pm.rig.csv"
+    assert main(["rig", "simulate", "--sim", "rod1", "--axes", "y,-y,z", "--noise-um", "0.3", "--seed", "2",
+                 "-o", str(src)]) == 0
+    sim = calc_rod_compliance(resolve_design("rod1"))
+
+    def softer_under_minus_y(i, row):
+        if row["load_axis"] == "-y" and row["disp_y_mm"]:
+            row["disp_y_mm"] = f"{1.08 * float(row['disp_y_mm']):.6f}"
+    one_way = fit_recording(read_recording(rewrite_recording(src, tmp_path / "ow.rig.csv", softer_under_minus_y)), sim)
+    said = [w for w in one_way.warnings if "larger under a load along -y" in w]
+    assert said and said[0].startswith("c22 is 7.4 % larger")
+    plus, minus = (next(ln.slope_mm_per_N for ln in one_way.lines if ln.component == 1 and str(ln.axis) == a)
+                   for a in ("y", "-y"))
+    assert one_way.C_F_se[1, 1] > 0.25 * abs(minus - plus)
+    clean = fit_recording(read_recording(src), sim)
+    assert not [w for w in clean.warnings if "larger under a load along" in w]
+    assert clean.C_F_se[1, 1] < 0.01 * abs(minus - plus)

@@ -45,10 +45,10 @@ def _edit(src, dst, edit) -> None:
         w.writerows(rows)
 
 
-def _calibrate(folder, campaign_csv, capsys, robot="tx90"):
+def _calibrate(folder, campaign_csv, capsys, robot="tx90", json_out=None, *extra):
     rod = next(folder.glob("*.compliance.json"))
     code = main(["calibrate", str(campaign_csv), "--fixture", str(folder / "multical.fixture.json"), "--rod", str(rod),
-                 "--robot", robot])
+                 "--robot", robot, *(["--json", str(json_out)] if json_out else []), *extra])
     return code, capsys.readouterr()
 
 
@@ -56,11 +56,14 @@ def _calibrate(folder, campaign_csv, capsys, robot="tx90"):
 def test_a_reversed_joint_is_named(campaign, tmp_path, capsys, joint):
     path = tmp_path / "reversed.campaign.csv"
     _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({f"q{joint}": f"{-float(r[f'q{joint}']):.4f}"}))
-    code, out = _calibrate(campaign, path, capsys)
-    assert code == 3
+    code, out = _calibrate(campaign, path, capsys, json_out=tmp_path / "r.json")
+    assert code == 2 and not (tmp_path / "r.json").exists()           # refused: nothing written
     assert f"joint {joint}'s readings run the other way than the robot file's joint {joint}" in out.err
     assert f"negate the q{joint} column or correct the robot file" in out.err
     assert "suspects" not in out.err                  # a diagnosis of the mirrored chain would mislead
+    code, out = _calibrate(campaign, path, capsys, "tx90", tmp_path / "r.json", "--columns-checked")
+    assert code == 3 and (tmp_path / "r.json").exists()               # the user says the files are right: a result
+    assert f"joint {joint}'s readings run the other way" in out.err
 
 
 def test_two_exchanged_joint_columns_are_named(campaign, tmp_path, capsys):
@@ -69,7 +72,7 @@ def test_two_exchanged_joint_columns_are_named(campaign, tmp_path, capsys):
     path = tmp_path / "exchanged.campaign.csv"
     _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"q2": r["q3"], "q3": r["q2"]}))
     code, out = _calibrate(campaign, path, capsys)
-    assert code == 3 and "the q2 and q3 columns look exchanged against the robot file's joints 2 and 3" in out.err
+    assert code == 2 and "the q2 and q3 columns look exchanged against the robot file's joints 2 and 3" in out.err
 
 
 def test_two_swapped_positions_are_named(campaign, tmp_path, capsys):
@@ -77,7 +80,7 @@ def test_two_swapped_positions_are_named(campaign, tmp_path, capsys):
     _edit(campaign / "multical.campaign.csv", path,
           lambda r: r.update({"position": {"2": "4", "4": "2"}.get(r["position"], r["position"])}))
     code, out = _calibrate(campaign, path, capsys)
-    assert code == 3
+    assert code == 2
     assert "clamping positions 2 and 4 look swapped between the campaign and the fixture file" in out.err
 
 
@@ -128,7 +131,7 @@ def test_two_exchanged_reading_columns_are_named(campaign, tmp_path, capsys):
     path = tmp_path / "xy.campaign.csv"
     _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({"x_mm": r["y_mm"], "y_mm": r["x_mm"]}))
     code, out = _calibrate(campaign, path, capsys)
-    assert code == 3 and "the x_mm and y_mm columns look exchanged" in out.err
+    assert code == 2 and "the x_mm and y_mm columns look exchanged" in out.err
     assert "q2 and q3" not in out.err
 
 
@@ -220,7 +223,7 @@ def test_fixture_angles_in_radians_are_named(campaign, tmp_path, capsys):
     rod = str(next(campaign.glob("*.compliance.json")))
     code = main(["calibrate", str(campaign / "multical.campaign.csv"), "--fixture", str(fix), "--rod", rod])
     err = capsys.readouterr().err
-    assert code == 3 and "the fixture file's angles a, b, c look like radians" in err and "suspects" not in err
+    assert code == 2 and "the fixture file's angles a, b, c look like radians" in err and "suspects" not in err
     code = main(["diagnose", "--campaign", str(campaign / "multical.campaign.csv"), "--fixture", str(fix), "--rod", rod])
     err = capsys.readouterr().err
     assert code == 2 and "rad.fixture.json, key `positions`" in err and "look like radians" in err
@@ -377,7 +380,7 @@ def test_a_negated_reading_column_is_named(campaign, tmp_path, capsys, column):
     path = tmp_path / "neg.campaign.csv"
     _edit(campaign / "multical.campaign.csv", path, lambda r: r.update({column: f"{-float(r[column]):.6f}"}))
     code, out = _calibrate(campaign, path, capsys)
-    assert code == 3 and f"the {column} column looks negated" in out.err
+    assert code == 2 and f"the {column} column looks negated" in out.err
     assert "look exchanged" not in out.err
 
 
@@ -391,7 +394,7 @@ def test_a_negated_column_stated_as_a_noisy_device_is_still_refused(campaign, tm
     fix = str(campaign / "multical.fixture.json")
     code = main(["calibrate", str(path), "--fixture", fix, "--rod", rod, "--robot", "tx90", "--noise-um", "90"])
     err = capsys.readouterr().err
-    assert code == 3 and "the y_mm column looks negated" in err and "pass the test only at the stated" in err
+    assert code == 2 and "the y_mm column looks negated" in err      # refused: the stated noise does not hide it
     out = tmp_path / "d.json"
     code = main(["diagnose", "--campaign", str(path), "--fixture", fix, "--rod", rod, "--json", str(out)])
     err = capsys.readouterr().err
@@ -449,7 +452,7 @@ def test_exchanged_reading_columns_are_named_over_a_robots_own_floor(tmp_path, c
     path = tmp_path / "yz.campaign.csv"
     _edit(tmp_path / "multical.campaign.csv", path, lambda r: r.update({"y_mm": r["z_mm"], "z_mm": r["y_mm"]}))
     code, out = _calibrate(tmp_path, path, capsys)
-    assert code == 3
+    assert code == 2
     assert "the y_mm and z_mm columns look exchanged" in out.err
     code, out = _calibrate(tmp_path, tmp_path / "multical.campaign.csv", capsys)       # as recorded: no mix-up said
     assert "look exchanged" not in out.err

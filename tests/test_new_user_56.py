@@ -68,7 +68,7 @@ def test_a_reversed_sensor_is_named(raw, tmp_path, capsys):
         cells[j] = f"{2 * zero - float(cells[j]):.4f}"
     rev = _edited(raw, tmp_path, "rev.campaign.csv", mirror)
     capsys.readouterr()
-    assert main(["calibrate", *_args(raw, rev)]) == 3
+    assert main(["calibrate", *_args(raw, rev)]) == 2
     assert "sensor 2's readings look reversed" in capsys.readouterr().err
 
 
@@ -80,7 +80,7 @@ def test_two_exchanged_sensor_columns_are_named(raw, tmp_path, capsys):
         cells[a], cells[b] = cells[b], cells[a]
     swapped = _edited(raw, tmp_path, "swap.campaign.csv", exchange)
     capsys.readouterr()
-    assert main(["calibrate", *_args(raw, swapped)]) == 3
+    assert main(["calibrate", *_args(raw, swapped)]) == 2
     assert "the s1_mm and s2_mm columns look exchanged" in capsys.readouterr().err
 
 
@@ -288,7 +288,7 @@ def test_a_sensor_that_reads_the_other_way_is_declared_in_the_device_file(raw, t
     a, b = (json.loads((tmp_path / f"{n}.json").read_text())["parameters"] for n in ("signed", "plain"))
     assert all(abs(a[k]["value"] - b[k]["value"]) < 1e-6 * max(1.0, abs(b[k]["value"])) for k in b)
     capsys.readouterr()
-    assert main(["calibrate", *_args(raw, rev)]) == 3
+    assert main(["calibrate", *_args(raw, rev)]) == 2
     assert "sensors[2].reading_sign: -1" in capsys.readouterr().err
     assert main(["validate", str(signed)]) == 0
     doc["format"] = "rodlab.device/1"                  # the sign in a /1 file: told its format, not "remove it"

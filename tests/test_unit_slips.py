@@ -142,7 +142,11 @@ def test_gross_residuals_do_not_advise_a_larger_noise(camp, tmp_path, capsys):
     """Joint 2's sign flipped: residuals thousands of times the device's noise are files that do not fit together,
     not a noisier device: the advice names the joints, units and files, never --noise-um."""
     bad = _scaled(camp / "c" / "multical.campaign.csv", tmp_path / "q2.campaign.csv", ("q2",), -1.0)
-    _calibrate(camp, bad)
+    assert _calibrate(camp, bad) == 2                     # the mix-up named and refused, nothing written
+    out = "".join(capsys.readouterr())
+    assert "joint 2's readings run the other way" in out and "state it with --noise-um" not in out
+    assert main(["calibrate", str(bad), "--fixture", str(camp / "c" / "multical.fixture.json"),
+                 "--rod", str(camp / "rod1.compliance.json"), "--columns-checked"]) == 3
     out = "".join(capsys.readouterr())
     assert "not a noisier device" in out and "order, signs" in out
     assert "state it with --noise-um" not in out

@@ -132,6 +132,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if noisy is not None:
         res.warnings.append(noisy)
     mixup = _mixup(run, suspect=noisy is not None) if res.warnings else None
+    if mixup is not None and not args.columns_checked:       # files that do not describe the campaign: refused
+        raise RodlabError(f"{args.campaign} with {args.fixture}: {mixup.reason()}; nothing was written (if the "
+                          "files are right as they are, give --columns-checked)")
     if mixup is not None:                          # the cause first: the other reasons follow from it
         res.warnings.insert(0, mixup.reason())
     diagnosis = functools.cache(lambda: campaign_diagnosis(run, args, comp))     # run once, where needed

@@ -115,6 +115,9 @@ class PeriodicJointError(CampaignEffectModel):
             if len(ms) > 1 and partial:
                 continue
             span = {"span_deg": round(float(np.rad2deg(np.ptp(q))), 1)} if _partial_period(q, 1) else {}
+            limits = getattr(ctx.robot, "limits_deg", None)          # the joint's range, for the advice
+            if span and limits is not None:
+                span["range_deg"] = round(float(np.ptp(limits[k])), 1)
             out.append(hypothesis(self.effect, f"joint:{k + 1}", names, np.hstack([cols[m] for m in ms]),
                                   f"{what} of joint {k + 1}: an angle error {times} per revolution, periodic in q"
                                   + partial, form_unresolved=bool(partial), settings=span))
@@ -144,9 +147,21 @@ class PeriodicJointError(CampaignEffectModel):
             return (f"joint {j} turned over {span:.0f} deg only in this campaign, where a {times}-per-revolution error "
                     "cannot be told from any smooth error of the joint (a bending link, a gear that stiffens with "
                     f"the torque): do not identify it with `--joint-harmonics {j}` from this campaign (its four terms "
-                    f"fit the campaign and extrapolate); record a campaign that turns joint {j} over a full revolution "
-                    "and check the result on validation points, or have the gearbox / encoder checked")
+                    f"fit the campaign and extrapolate); {_wider(j, span, parameters.get('range_deg'))} and check the "
+                    "result on validation points, or have the gearbox / encoder checked")
         return (f"joint {j} has a {times}-per-revolution angle error the kinematic model "
                 "does not hold: have the gearbox / encoder checked, or identify it with the robot (add joint "
                 f"{j} to `rodlab calibrate --joint-harmonics`) and compensate it in the "
                 "controller")
+
+
+def _wider(j: str, span: float, range_deg: float | None) -> str:
+    """What campaign shows more of joint ``j``'s period: a full revolution where its limits allow one, else its
+    whole range (a calibration engineer's trial: a full turn had been advised on a joint of 284 deg)."""
+    if range_deg is None or range_deg >= 360.0:
+        return f"record a campaign that turns joint {j} over a full revolution"
+    if range_deg <= span + 10.0:
+        return (f"the campaign already turns joint {j} over most of its {range_deg:.0f} deg range (a full revolution "
+                "is beyond its limits): only validation points (--validate) can tell whether the terms help")
+    return (f"record a campaign that turns joint {j} over its whole {range_deg:.0f} deg range (a full revolution is "
+            "beyond its limits)")

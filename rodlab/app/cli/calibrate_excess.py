@@ -49,7 +49,13 @@ def robots_own(diagnosis) -> bool:
     if diag is None:
         return False
     effects = {str(f.effect) for f in diag.findings}
-    return not effects - ROBOT_PHYSICS - {"unexplained"}
+    return not effects - ROBOT_PHYSICS - {"unexplained"} - HELD_OUT_TELLS
+
+
+#: findings of the files a validation's held-out points show the calibration works through: a few stray points
+#: (a calibration engineer's trial: two outliers beside a gear error and thermal growth had refused a calibration
+#: validated 1.167 -> 0.155 mm; printed with what to do under "what the model leaves out")
+HELD_OUT_TELLS = frozenset({"outliers"})
 
 
 def pose_off(run: CalibrationRun) -> bool:

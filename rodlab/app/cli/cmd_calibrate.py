@@ -278,6 +278,9 @@ def _print_suspects(diagnosis, args, other_rod_mm: float | None = None, heading:
         todo = remedy(f)
         if args.compensation == "none" and f.effect == "rod_deflection":
             todo = _uncompensated_todo(f)
+        elif f.effect == "outliers" and args.robust:
+            todo = (f"re-measure points {f.location.partition(':')[2]} (a gross alignment error); --robust already "
+                    "down-weights them in this calibration")
         elif other_rod_mm is not None and f.effect == "rod_deflection":
             todo = (f"the rod file looks like another rod's (its ball {other_rod_mm:.0f} mm from the identified one, "
                     f"warned above): calibrate with this rod's compliance file first; {todo}")

@@ -4,6 +4,7 @@ place, and a misclamped position is found beside an outlier inside it."""
 from __future__ import annotations
 
 import csv
+import re
 import json
 
 import numpy as np
@@ -136,3 +137,19 @@ def test_angle_rates_are_the_derivative_of_the_rotation():
         d[k] = np.rad2deg(h)
         W = (rotation_from_abc(abc + d) - R) @ R.T / h        # skew(omega) for a unit rate of angle k
         assert np.allclose(W, skew(E[:, k]), atol=1e-5)
+
+
+def test_strict_refuses_joint_compliances_the_campaign_cannot_identify(tmp_path, capsys, robot, rod):
+    """Three positions of four orientations leave c_4-c_6 regularised (sigma beyond a joint's size): `--strict`
+    refuses them by name, nothing written (a calibration engineer's trial: said not identifiable, yet TRUSTED under
+    --strict); without it they are kept at their start values and said so."""
+    from rodlab.app.cli import main
+    simulate_campaign(robot, rod, tmp_path, CampaignSpec(seed=5, positions=3, orientations=4))
+    write_compliance(rod, tmp_path / "rod.json")
+    assert _calibrate(tmp_path, "--strict") == 2 and not (tmp_path / "cal.json").exists()
+    err = capsys.readouterr().err
+    assert re.search(r"--strict: [a-z_0-9, ]*c_4, c_5, c_6 cannot be identified from these data", err)
+    main(["calibrate", str(tmp_path / "multical.campaign.csv"), "--fixture", str(tmp_path / "multical.fixture.json"),
+          "--rod", str(tmp_path / "rod.json")])
+    assert re.search(r"c_4, c_5, c_6 are not identifiable from these data|the joint compliances are not identifiable",
+                     capsys.readouterr().err)

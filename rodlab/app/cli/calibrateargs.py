@@ -37,7 +37,7 @@ def add_identify_options(p) -> None:
     add_report_option(p)
     p.add_argument("--strict", action="store_true",
                    help="refuse a data set that cannot identify every parameter (naming them and the remedy) "
-                        "instead of holding those at nominal")
+                        "instead of holding those at nominal or at their start values (regularised)")
     p.add_argument("--fix-unidentifiable", action="store_true",
                    help="hold the parameters these data cannot identify at nominal (and report them); the default "
                         "unless --strict, kept for scripts")

@@ -96,6 +96,8 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
     res, pins = constrain_to_ranges(lambda p: identify(robot, obs, Rod.of(rod), compensations, replace(options, pinned=p)),
                                     options.pinned, options.freed)
     options = replace(options, pinned=pins)       # with the range holds: the cross-validation fits the same model
+    if args.strict:
+        _refuse_regularised(res, args.campaign)
     if res.warnings:                              # not trusted: a flagged probing is the first place to look
         res.warnings[:0] = flagged_fixture_reasons(fix, args.fixture)
     run = CalibrationRun(robot, camp, res, observations=obs, rod=Rod.of(rod), compensations=compensations, fixture=fix,
@@ -107,6 +109,19 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
         if options.harmonics:             # the periodic terms checked on the held-out points before they are used
             run.without_harmonics_mm = _without_harmonics(robot, obs, rod, compensations, options, pts)
     return run
+
+
+def _refuse_regularised(res, path) -> None:
+    """``--strict``: refuse a campaign whose free parameters include ones these data cannot identify (status
+    ``regularised``: sigma from the data alone beyond the parameter's physical size, the value its prior's), naming
+    them (a calibration engineer's trial: c_4-c_6 said not identifiable had passed --strict as TRUSTED)."""
+    weak = [nm for nm in res.free if res.status[nm] == "regularised"]
+    if weak:
+        raise RodlabError(f"{path}: --strict: {', '.join(weak)} cannot be identified from these data (sigma beyond "
+                          "the parameter's physical size: the fit would keep them at their start values); measure the "
+                          "same poses under other loads (the rod's own weight at other arm postures, a payload) for "
+                          "joint compliances, or pin them (--pin NAME=VALUE), or drop --strict to keep them at their "
+                          "start values, reported as regularised")
 
 
 def _without_harmonics(robot, obs, rod, compensations, options, pts) -> np.ndarray | None:

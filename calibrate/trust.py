@@ -136,6 +136,18 @@ def _moved(robot, res: "CalibrationResult", info) -> float:
     return v if info.kind == "dtheta" else v - nominal[info.kind][info.index]
 
 
+def _metres_hint(robot, info, value: float) -> str:
+    """Where a length identified ~1000 x its nominal row's value: that row looks given in metres (a calibration
+    engineer's trial: d_4 = -0.670 in a robot file in mm had read as d_4 moved -670 mm)."""
+    if info.kind not in ("a", "d"):
+        return ""
+    nominal = float((robot.d_mm if info.kind == "d" else robot.a_mm)[info.index])
+    if nominal == 0.0 or not 500.0 <= value / nominal <= 2000.0:
+        return ""
+    return (f"; the robot file's {info.name} = {nominal:g} looks like metres (the data put it at {value:.4g} mm): "
+            f"give it in mm ({1000 * nominal:g})")
+
+
 def bound_warnings(robot, res: "CalibrationResult") -> list[str]:
     """Identified parameters beyond physical bounds: a geometric error no manufacturing leaves
     (:data:`ERROR_BOUNDS` from the nominal), a joint compliance no gearbox has."""
@@ -148,7 +160,7 @@ def bound_warnings(robot, res: "CalibrationResult") -> list[str]:
             err = _moved(robot, res, info)
             if abs(err) > ERROR_BOUNDS[info.kind]:
                 w.append(f"{info.name} moved {err:+.3g} {info.unit} from nominal (bound {ERROR_BOUNDS[info.kind]:g}): "
-                         f"not a plausible manufacturing error")
+                         f"not a plausible manufacturing error" + _metres_hint(robot, info, v))
         if info.kind == "c" and not (C_LOW - C_TOLERANCE <= v <= C_HIGH):
             w.append(f"{info.name} = {v:.3g} +- {res.sigma[info.name]:.2g} rad/(N m) is outside [{C_LOW:g}, {C_HIGH:g}] by "
                      "more than its uncertainty can explain: not a plausible gearbox compliance")

@@ -212,3 +212,15 @@ def test_a_compliance_file_in_um_per_n_is_refused_before_a_calibration_uses_it(c
                  str(camp / "c" / "multical.validation.csv")])
     err = capsys.readouterr().err
     assert code == 2 and err.count("divide C_F by 1000") == 1 and "divide C_F by 1000" not in caplog.text
+
+
+def test_a_robot_row_in_metres_is_named_where_the_data_put_it_1000_times_further():
+    """A calibration engineer's trial: d_4 = -0.670 in a robot file in mm read only as 'd_4 moved -670 mm'."""
+    from types import SimpleNamespace
+
+    from rodlab.calibrate.trust import _metres_hint
+    robot = SimpleNamespace(d_mm=np.array([0.0, 0.0, 0.0, -0.670]), a_mm=np.array([260.0, 680.0, -35.0, 0.0]))
+    d4 = SimpleNamespace(kind="d", index=3, name="d_4")
+    assert "d_4 = -0.67 looks like metres" in _metres_hint(robot, d4, -670.68) and "(-670)" in _metres_hint(robot, d4, -670.7)
+    assert _metres_hint(robot, d4, -12.0) == ""                              # an error, not a unit
+    assert _metres_hint(robot, SimpleNamespace(kind="a", index=1, name="a_2"), 695.0) == ""

@@ -128,7 +128,9 @@ RULES = [
     ("diameter in inches", _set(("tube", "outer_diameter_mm"), 1.575), "tube.outer_diameter_mm", "in inches (1.575 x 25.4"),
     ("tube in centimetres", lambda d: (_set(("tube", "outer_diameter_mm"), 4.0)(d), _set(("tube", "wall_mm"), 0.3)(d),
                                        d.pop("bend", None)),
-     "L2_mm", "in centimetres? (4 cm = 40 mm)"),
+     "tube.outer_diameter_mm", "given in centimetres (4 x 10 = 40 mm, wall 3 mm) or inches"),
+    # a designer trial: lengths in inches had read "L1 too short" alone
+    ("lengths in inches", lambda d: (d.update(L1_mm=15.75, L2_mm=23.6)), "L1_mm", "did you give inches (15.75 in = 400"),
 ]
 
 

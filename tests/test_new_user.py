@@ -304,14 +304,15 @@ def test_png_is_a_folder_everywhere_and_a_file_for_one_figure(tmp_path, capsys):
 
 
 def test_a_sweep_with_no_usable_design_fails_with_the_reasons(tmp_path, capsys):
-    """L1 / L2 given in metres: every design is invalid; the sweep still writes its table (each design's reason)
-    but exits 2 naming the first reasons (a new-user trial's had exited 0 with an all-grey figure)."""
+    """L1 / L2 given in metres: every design is invalid; the sweep exits 2 naming the first reasons (a new-user
+    trial's had exited 0 with an all-grey figure) before it runs or writes anything (another had found the table
+    and figure written beside the error)."""
     out = tmp_path / "s.csv"
     assert main(["sweep", "--base", "rod1", "--L1", "0.3:0.5:0.1", "--L2", "0.4:0.6:0.1", "--serial", "-o",
                  str(out)]) == 2
     err = capsys.readouterr().err
-    assert "none of the 9 designs is usable" in err and "millimetr" in err
-    assert out.exists()
+    assert "none of the 9 designs of --L1 x --L2 is a valid rod" in err and "millimetr" in err
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("entry,message", [

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import pandas as pd
+import pytest
 
 from rodlab.app.study import recommend, study_warnings
 from rodlab.app.study.table import STUDY_COLUMNS
@@ -113,3 +114,17 @@ def test_the_lightest_within_ten_percent_of_the_best_mean_is_recommended_not_wit
     near = _rows("AL-near", 300.0, (0.90, 0.40, 0.255), 1.6, 0.9, mass=0.81)
     rec = recommend(_table(carbon, near))
     assert rec.design == "AL-near" and "within 10 % of the best one's predicted mean error" in rec.text
+
+
+@pytest.mark.parametrize("option, said", [
+    (["--tubes", "30x16"], "--tubes 30x16: wall 16.0 mm must be less than the outer radius"),
+    (["--materials", "aluminium"], "--materials aluminium: unknown material 'aluminium'"),
+    (["--tubes", "3x0.2"], "--tubes 3x0.2: outer_diameter_mm = 3: the rod would sag"),
+])
+def test_a_variant_option_that_makes_no_rod_is_refused_before_anything_is_written(tmp_path, capsys, option, said):
+    """A new-user trial: each had run, written study.csv / .json / .html and an empty Pareto figure as "no design
+    usable" and then exited 2; the tube in cm had read `ComplianceError: key C_F_mm_per_N`."""
+    from rodlab.app.cli import main
+    out = tmp_path / "study"
+    assert main(["study", "rod1", *option, "--robot", "tx90", "-o", str(out)]) == 2
+    assert said in capsys.readouterr().err and not out.exists()

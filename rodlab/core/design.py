@@ -229,7 +229,24 @@ class RodDesign:
             given = ", ".join(f"{getattr(self, k):g} m = {1000 * getattr(self, k):g} mm" for k in metres)
             return DesignError(f"{said}: lengths are in millimetres: did you give metres ({given})? As given, "
                                f"{next(e.detail for e in problems if e.key in metres)}", key=metres[0])
+        inches = self._in_inches(problems)
+        if inches:
+            return inches
         return DesignError(first.detail, key=first.key, also=problems[1:])
+
+    def _in_inches(self, problems: list[DesignError]) -> DesignError | None:
+        """The lengths given in inches, where both read as inches make a rod of the checked range (150-1200 and
+        250-2000 mm) and a length is too short as given (a designer trial: L1 15.75, L2 23.6 had read "L1 too
+        short" alone); None otherwise."""
+        L1, L2 = self.L1_mm * 25.4, self.L2_mm * 25.4
+        if not (150.0 <= L1 <= 1200.0 and 250.0 <= L2 <= 2000.0) or self.L1_mm >= 100.0:
+            return None
+        bad = next((e for e in problems if e.key in ("L1_mm", "L2_mm")), None)
+        if bad is None:
+            return None
+        return DesignError(f"L1_mm = {self.L1_mm:g}, L2_mm = {self.L2_mm:g}: lengths are in millimetres: did you give "
+                           f"inches ({self.L1_mm:g} in = {L1:.4g} mm, {self.L2_mm:g} in = {L2:.4g} mm)? As given, "
+                           f"{bad.detail}", key=bad.key)
 
     # -- derived geometry ---------------------------------------------------------------
     @property

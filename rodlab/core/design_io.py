@@ -369,7 +369,9 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
     try:
         check_design(design)
     except DesignError as e:
-        raise DesignError(e.detail, path=p, line=_line_of(text, None, e.key), key=e.key, also=e.also) from e
+        table, _, key = (e.key or "").rpartition(".")             # `tube.outer_diameter_mm`: in [tube]
+        raise DesignError(e.detail, path=p, line=_line_of(text, table or None, key or None), key=e.key,
+                          also=e.also) from e
     for w in range_warnings(design):
         line = _line_of(text, None, w.key)
         log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())

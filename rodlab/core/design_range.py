@@ -101,14 +101,33 @@ def check_design(design: RodDesign) -> None:
     reach = float(np.linalg.norm(design.tool_mm))
     if sag > SAG_LIMIT * reach:
         key = _longer_key(design)
-        thin = min(design.pipe_I.outer_diameter_mm, design.pipe_II.outer_diameter_mm)
-        cm = (f"; its tube's outer diameter of {thin:g} mm is thinner than any measuring rod's: in centimetres? "
-              f"({thin:g} cm = {10 * thin:g} mm)" if thin < THIN_TUBE_MM else "")   # a designer trial: blamed on L2
+        tube = min((design.pipe_I, design.pipe_II), key=lambda t: t.outer_diameter_mm)
+        thin = tube.outer_diameter_mm
+        if thin < THIN_TUBE_MM:           # designer trials: a tube in cm or inches had been blamed on L2
+            raise DesignError(
+                f"outer_diameter_mm = {thin:g}: the rod would sag {sag:.3g} mm under its own weight, {sag / reach:.3g} "
+                f"x its reach of {reach:.0f} mm (limit {SAG_LIMIT:g}), and its tube is thinner than any measuring "
+                f"rod's: {_unit_guess(thin, tube.wall_mm)}sizes are in millimetres", key=f"{tube.key}.outer_diameter_mm")
         raise DesignError(
             f"{key} = {getattr(design, key):g} mm: the rod would sag {sag:.3g} mm under its own weight, "
             f"{sag / reach:.3g} x its reach of {reach:.0f} mm (limit {SAG_LIMIT:g}); it would hang rather than reach "
             f"and the linear compliance models do not describe it; shorten the rod or stiffen its tubes (rods "
-            f"checked: {_range_text()}){cm}", key=key)
+            f"checked: {_range_text()})", key=key)
+
+
+#: the largest tube a measuring rod has [mm] (a unit guess beyond it is no guess)
+_LARGEST_TUBE_MM = 120.0
+
+
+def _unit_guess(od: float, wall: float) -> str:
+    """'in centimetres (3 cm = 30 mm) or inches (...)? ' for a tube's size given in another unit, the units that
+    give a tube of a measuring rod's size; '' where none does."""
+    units = [(u, f) for u, f in (("centimetres", 10.0), ("inches", 25.4)) if THIN_TUBE_MM <= f * od <= _LARGEST_TUBE_MM]
+    if not units:
+        return ""
+    said = " or ".join(f"{u} ({od:g} x {f:g} = {f * od:g} mm, wall {f * wall:.3g} mm)" for u, f in units)
+    return f"given in {said}? "
+
 
 
 def _range_text() -> str:

@@ -130,7 +130,7 @@ def _lengths_mm(values, name: str, given: str) -> list:
 
 
 def _candidates(args):
-    from rodlab.app.study.designs import grid_candidates, list_candidates, parse_tube
+    from rodlab.app.study.designs import check_variants, grid_candidates, list_candidates, parse_tube
     from rodlab.fea.sweep import parse_range
     grid = args.L1 is not None or args.L2 is not None or args.materials or args.tubes
     if not grid:
@@ -142,6 +142,7 @@ def _candidates(args):
     L2s = _lengths_mm(parse_range(args.L2, "L2"), "L2", args.L2) if args.L2 else [base.L2_mm]
     mats = [m.strip() for m in args.materials.split(",")] if args.materials else [None]
     tubes = [parse_tube(t) for t in args.tubes.split(",")] if args.tubes else [None]
+    check_variants(base, mats, tubes)
     return grid_candidates(base, L1s, L2s, mats, tubes), (L1s, L2s)
 
 
@@ -243,6 +244,10 @@ def cmd_study(args: argparse.Namespace) -> int:
                      _range2(args.r_prior_composite, "r-prior-composite"), args.seed, not args.no_budget,
                      args.monte_carlo, args.draws, _base(args))
     cands, grid = _candidates(args)
+    if not any(c.design is not None for c in cands):
+        said = list(dict.fromkeys(c.invalid for c in cands))
+        raise RodlabError(f"none of the {len(cands)} designs is a valid rod, nothing was run or written: "
+                          + "; ".join(said[:3]) + (f"; and {len(said) - 3} more reasons" if len(said) > 3 else ""))
     out = Path(args.output)
     t0 = time.perf_counter()
     cache = Path(args.cache) if args.cache else out / "cache"
@@ -271,6 +276,8 @@ def cmd_study(args: argparse.Namespace) -> int:
     print(f"  wrote {', '.join(res.files)} in {out} ({elapsed:.0f} s)")
     write_command_report(args, [out / f for f in res.files if f.endswith((".json", ".png"))], out)
     designs = res.table.drop_duplicates("design")
-    if not (designs["status"] == "ok").any():
-        raise RodlabError(f"none of the {len(designs)} designs is usable (listed above, and in {out / 'study.csv'})")
+    if not (designs["status"] == "ok").any():     # a result, not an input error (those are refused up front)
+        print(f"no design is usable: none of the {len(designs)} designs (listed above, and in {out / 'study.csv'})",
+              file=sys.stderr)
+        return 3
     return 0

@@ -59,6 +59,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.model == "solid":
         geometry = require_mesher()
         mesher = geometry.mesh_rod
+    _refuse_if_none_valid(base, L1s, L2s)
     t0 = time.perf_counter()
     calibration, saved = _frame_calibration(args, base, L1s, L2s, out)
     with bar_of(total=len(L1s) * len(L2s), desc=f"sweep ({args.model})", unit="design") as bar:
@@ -87,6 +88,24 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise RodlabError(f"none of the {len(df)} designs is usable ({out} lists each one's reason): "
                           + "; ".join(reasons[:3]) + (f"; and {len(reasons) - 3} more reasons" if len(reasons) > 3 else ""))
     return 0
+
+
+def _refuse_if_none_valid(base, L1s, L2s) -> None:
+    """Refuse a grid none of whose L1 x L2 designs is a valid rod (lengths in metres, a range below the parts)
+    before anything runs or is written, naming the first reasons (a new-user trial: the table and figure of nine
+    invalid designs had been written beside an error)."""
+    from dataclasses import replace
+    reasons = []
+    for L1 in L1s:
+        for L2 in L2s:
+            try:
+                replace(base, L1_mm=float(L1), L2_mm=float(L2))
+                return
+            except RodlabError as e:
+                reasons.append(getattr(e, "detail", str(e)))
+    said = list(dict.fromkeys(reasons))
+    raise RodlabError(f"none of the {len(reasons)} designs of --L1 x --L2 is a valid rod, nothing was run or written: "
+                      + "; ".join(said[:3]) + (f"; and {len(said) - 3} more reasons" if len(said) > 3 else ""))
 
 
 def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):

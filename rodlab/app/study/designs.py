@@ -8,10 +8,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from rodlab.core.design import RodDesign
+from rodlab.core.design_range import check_design
 from rodlab.core.errors import RodlabError
 from rodlab.core.materials import get_material
 
-__all__ = ["Candidate", "grid_candidates", "list_candidates", "parse_tube", "r_prior_of", "R_PRIOR_METAL",
+__all__ = ["Candidate", "grid_candidates", "list_candidates", "parse_tube", "check_variants", "r_prior_of", "R_PRIOR_METAL",
            "R_PRIOR_COMPOSITE", "R_PRIOR_AS_BUILT", "is_as_built"]
 
 #: true / simulated compliance of a built rod (paper Table 2): stainless steel 1.01-1.05, carbon 1.23-2.30
@@ -85,10 +86,31 @@ def grid_candidates(base: RodDesign, L1s, L2s, materials=(None,), tubes=(None,))
     return out
 
 
+def check_variants(base: RodDesign, materials=(None,), tubes=(None,)) -> None:
+    """Refuse ``--materials`` or ``--tubes`` whose every value makes no rod of ``base``'s lengths (a material not
+    known, a wall no less than the radius, a tube so thin the rod would hang: a size in cm), naming the option and
+    the value, before a study runs (a new-user trial: each had run, written its pages as "no design usable" and
+    exited with an error; the size in cm had read `ComplianceError: key C_F_mm_per_N`). Where some values make
+    rods, the others are candidates with their reason, as any invalid combination is."""
+    for option, values in (("--materials", [(m, None) for m in materials if m]),
+                           ("--tubes", [(None, t) for t in tubes if t])):
+        failed = []
+        for mat, tube in values:
+            try:
+                check_design(_with_tube(base, mat, tube))
+            except RodlabError as e:
+                failed.append((mat or f"{tube[0]:g}x{tube[1]:g}", e))
+        if values and len(failed) == len(values):
+            value, e = failed[0]
+            raise RodlabError(f"{option} {value}: {getattr(e, 'detail', str(e))} (on {base.name}'s L1 "
+                              f"{base.L1_mm:g} mm and L2 {base.L2_mm:g} mm)") from e
+
+
 def _candidate(base, L1, L2, mat, tube) -> Candidate:
     label = f"{base.name} {L1:g}-{L2:g}" + (f" {mat}" if mat else "") + (f" {tube[0]:g}x{tube[1]:g}" if tube else "")
     try:
         d = replace(_with_tube(base, mat, tube), L1_mm=L1, L2_mm=L2, name=label)
+        check_design(d)                   # a rod that would hang is no candidate (its reason, not a compliance's)
     except RodlabError as e:
         m = mat or base.pipe_I.material.name
         t = f"{tube[0]:g}x{tube[1]:g}" if tube else _describe(base)[1]

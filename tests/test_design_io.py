@@ -12,7 +12,7 @@ from rodlab.core.design_io import builtin_designs
 from rodlab.core.enums import Part
 from rodlab.core.massprops import part_mass_properties
 
-from conftest import write_toml
+from conftest import legacy_dict, write_toml
 
 
 def test_builtins_load_and_match_paper_table2():
@@ -296,3 +296,20 @@ def test_a_carbon_tube_without_a_bend_table_is_warned_of(tmp_path, rod1_dict, ca
     with caplog.at_level(logging.WARNING, logger="rodlab"):
         load_design(write_toml(tmp_path / "no_bend.rod.toml", rod1_dict))
     assert "no [bend] material" in caplog.text and "cannot be" in caplog.text
+
+
+def test_a_foil_thin_wall_is_warned_of_on_its_line(tmp_path, rod1_dict, caplog):
+    """A new-user trial: a 0.05 mm wall on a 30 mm tube (D/t 600) passed with a sag warning pinned to L2 alone."""
+    import logging
+    rod1_dict["tube"]["wall_mm"] = 0.05
+    rod1_dict["tube"]["outer_diameter_mm"] = 30.0
+    rod1_dict.pop("bend", None)
+    path = write_toml(tmp_path / "foil.rod.toml", rod1_dict)
+    with caplog.at_level(logging.WARNING):
+        load_design(path)
+    said = [r.getMessage() for r in caplog.records if "is a foil" in r.getMessage()]
+    assert len(said) == 1 and "key `tube.wall_mm`" in said[0] and "D/t 600" in said[0] and ", line " in said[0]
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        load_design(write_toml(tmp_path / "rod1.rod.toml", legacy_dict("rod1")))
+    assert not [r for r in caplog.records if "is a foil" in r.getMessage()]

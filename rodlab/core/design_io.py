@@ -373,7 +373,8 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
         raise DesignError(e.detail, path=p, line=_line_of(text, table or None, key or None), key=e.key,
                           also=e.also) from e
     for w in range_warnings(design):
-        line = _line_of(text, None, w.key)
+        table, _, key = w.key.rpartition(".")
+        line = _line_of(text, table or None, key)
         log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())
     bend = data.get("bend") if isinstance(data.get("bend"), Mapping) else {}
     if (said := laminate_bend_warning(design, "material" in bend)) is not None:

@@ -150,6 +150,7 @@ def range_warnings(design: RodDesign) -> list[RangeWarning]:
                                 f"the ball centre lies {-z_ball:.1f} mm behind the flange plane (L1 - L2 cos(gamma) "
                                 f"< 0): pipe II reaches back beside the robot's wrist; check its clearance on your "
                                 f"robot over the wrist's range, or increase gamma_deg / L1_mm"))
+    out += _thin_wall_warnings(design)
     sag, err = linear_model_error_mm(design)
     if err > LINEAR_WARN_MM:
         key = _longer_key(design)
@@ -161,6 +162,27 @@ def range_warnings(design: RodDesign) -> list[RangeWarning]:
                                 f"the rod sags {sag:.3g} mm under its own weight, so the linear compliance models "
                                 f"are off by about {_length(err)} (more than {LINEAR_WARN_MM * 1e3:.0f} um, a "
                                 f"tracker's noise){unusable}", about_range=False))
+    return out
+
+
+#: a tube whose outer diameter is more than this many walls is thin-walled beyond any stock measuring-rod tube
+THIN_WALL_RATIO = 100.0
+
+
+def _thin_wall_warnings(design: RodDesign) -> list[RangeWarning]:
+    """A warning per tube whose diameter-to-wall ratio exceeds :data:`THIN_WALL_RATIO` (a new-user trial: a 0.05 mm
+    wall on a 30 mm tube, D/t 600, passed with a sag warning alone): beam theory and the linear FEA hold no dent,
+    local buckling or ovalisation of such a wall at the clamps."""
+    out = []
+    for tube in {t.key: t for t in (design.pipe_II, design.pipe_I)}.values():     # one per key of the file
+        ratio = tube.outer_diameter_mm / tube.wall_mm
+        if ratio > THIN_WALL_RATIO:
+            out.append(RangeWarning(f"{tube.key}.wall_mm", tube.wall_mm, tube.outer_diameter_mm / THIN_WALL_RATIO,
+                                    tube.outer_diameter_mm / 2, "mm",
+                                    f"a {tube.outer_diameter_mm:g} mm tube with a {tube.wall_mm:g} mm wall (D/t "
+                                    f"{ratio:.0f}) is a foil, not a stock tube (measuring rods' tubes: D/t 5-40): it "
+                                    "would dent, buckle locally or ovalise at its clamps and sleeves, which the beam "
+                                    "and linear FEA models do not hold; is the wall mistyped?", about_range=False))
     return out
 
 

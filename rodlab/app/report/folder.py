@@ -25,7 +25,8 @@ CAPTIONS = {
     "*3d_F?.png": "FEA fields in 3-D (rodlab view): the deformed rod (exaggerated) over its undeformed outline under a "
                   "unit force at the ball, coloured by von Mises stress (solid model: at the nodes; frame: the "
                   "sections' outer fibre)",
-    "deformed.png": "solid FEA: deformed shape under self-weight along -z_T (exaggerated), displacement colour",
+    "deformed.png": ("solid FEA: deformed shape under self-weight along -z_T (exaggerated, the largest displacement "
+                     "in the legend), coloured by part over the undeformed rod"),
     "fig8.png": "the paper's Fig. 8: load-deflection lines per axis with the fitted slopes; residuals below",
     "diagnosis_rig.png": "rig diagnosis: residuals per load axis and gauge before and after modelling the findings, "
                          "and against time",

@@ -140,6 +140,11 @@ class RigModel:
         self.state = RigState()
         self.C_true = self._true_compliance()
 
+    def with_plan(self, masses) -> None:
+        """Fill in what the load plan sets in the effects' parameters (a hysteresis loop's top load)."""
+        self.effects = {e: RIG_EFFECTS[e].with_plan(p, masses) for e, p in self.effects.items()}
+        self._active = [(RIG_EFFECTS[e], p) for e, p in self.effects.items()]
+
     def _true_compliance(self) -> np.ndarray:
         C = np.array(self.C_sim, dtype=float)
         for eff, p in self._active:

@@ -20,6 +20,7 @@ def simulate_recording(model: RigModel, schedule: LoadSchedule, path: str | Path
     if model.has_load_cell:
         meta["load_N"] = f"{LOAD_BY_CELL}, noise {model.load_cell_noise_N:g} N)"
     meta.update(extra_meta or {})
+    model.with_plan(schedule.masses)
     p = Path(path)
     tmp = p.with_name(f".{p.name}.{os.getpid()}.part")     # written whole, then renamed: never a partial file
     try:

@@ -87,6 +87,30 @@ def test_every_effect_is_simulated_and_diagnosed_by_its_name(tmp_path, effect):
         assert f.parameters[k] == pytest.approx(true[k], rel=0.2), (k, f.parameters, true)
 
 
+def test_a_hysteresis_loop_closing_at_the_top_load_is_named_as_such(tmp_path):
+    """Micro-slip closes its loop at no load and at the top load, widest half-way (an instrument trial's own rig
+    of such a loop had read as friction, a nonlinearity and a tare, each "decisive", the export biased): the
+    forward model's branches lie -+ eta_loop C F (1 - m / m_top) about the line, and the diagnosis names the loop
+    and its size, not the proportional form."""
+    loop = 0.05
+    model, rec = _simulate(tmp_path, {"load_hysteresis": {"eta_loop": loop}})
+    assert model.effects["load_hysteresis"]["top_kg"] == max(LoadSchedule().masses)       # from the plan
+    axis, top = LoadSchedule().holds()[0][0], max(LoadSchedule().masses)
+    plain = RigModel(SIM.C_F, {}, noise_mm=0.0, resolution_mm=0.0)
+    clean = RigModel(SIM.C_F, {"load_hysteresis": {"eta_loop": loop, "top_kg": top}}, noise_mm=0.0, resolution_mm=0.0)
+    for m in (0.5, 1.0, top):
+        line = plain.reading(0.0, Hold(1, axis, 1, Phase.LOAD, m, 0.0))[0]
+        up = clean.reading(0.0, Hold(1, axis, 1, Phase.LOAD, m, 0.0))[0]
+        down = clean.reading(0.0, Hold(2, axis, 1, Phase.UNLOAD, m, 0.0))[0]
+        assert np.allclose(down - line, line - up, equal_nan=True)
+        assert np.allclose(down - up, 2 * loop * (1 - m / top) * line, equal_nan=True)
+    diag, _ = diagnose_rig(rec, SIM, DESIGN, accuracy="exact")
+    f = diag.findings[0]
+    assert (f.effect, set(f.parameters)) == ("load_hysteresis", {"eta_loop"}), diag.summary()
+    lo, hi = f.intervals["eta_loop"]
+    assert f.parameters["eta_loop"] == pytest.approx(loop, rel=0.1) and hi - lo < 0.2 * loop
+
+
 def test_load_hysteresis_splits_the_branches_in_proportion_to_the_load():
     """Forward model: an unloading hold reads (1 + eta) times the loading hold at the same mass; no split at no
     load (friction's split would be the same at every load)."""

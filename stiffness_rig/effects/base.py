@@ -92,6 +92,10 @@ class RigEffectModel(EffectSchema):
     def load_compliance(self, C: np.ndarray, F: np.ndarray, hold, p: dict) -> np.ndarray:
         return C
 
+    def with_plan(self, p: dict, masses) -> dict:
+        """The parameters ``p`` with what the load plan sets (its ``masses`` [kg]) filled in where not given."""
+        return p
+
     def deflection(self, x: np.ndarray, C: np.ndarray, F: np.ndarray, t: float, state: RigState,
                    p: dict) -> np.ndarray:
         return x

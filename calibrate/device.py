@@ -225,8 +225,32 @@ def _sensor(p: Path, k: int, s: dict) -> Sensor:
     if "rate_N_per_mm" in s and "force_at_zero_N" not in s:
         raise CalibrationError("a spring rate needs the spring's force at the zero reading (force_at_zero_N)",
                                path=p, key=f"{key}.force_at_zero_N")
+    _check_spring(p, key, s, float(lo), float(hi))
     return Sensor(a / n, float(s["zero_mm"]), (float(lo), float(hi)), s.get("force_at_zero_N"),
                   float(s.get("rate_N_per_mm", 0.0)), int(s.get("reading_sign", 1)))
+
+
+def _check_spring(p: Path, key: str, s: dict, lo: float, hi: float) -> None:
+    """Refuse a spring that would stop pushing the ball within :data:`SPRING_SPAN_MM` of the zero reading, where a
+    ball aligned near the datum is read (a device trial's rate in N/m written as N/mm, 40 for 0.04, pulled the
+    ball with -11 N and was blamed on the rod)."""
+    f0, rate = s.get("force_at_zero_N"), float(s.get("rate_N_per_mm", 0.0))
+    if f0 is None or not rate:
+        return
+    zero = float(s["zero_mm"])
+    span = [max(lo, zero - SPRING_SPAN_MM), min(hi, zero + SPRING_SPAN_MM)]
+    ends = [float(f0) - rate * float(s.get("reading_sign", 1) or 1) * (r - zero) for r in span]
+    if min(ends) > 0:
+        return
+    per_m = f"; in N/m? ({rate:g} N/m = {rate / 1000:g} N/mm)" if float(f0) > abs(rate / 1000) * SPRING_SPAN_MM else ""
+    raise CalibrationError(f"a spring of {f0:g} N at the zero reading and {rate:g} N/mm pushes with {min(ends):.3g} N "
+                           f"{SPRING_SPAN_MM:g} mm from it: it would stop touching a ball aligned near the datum"
+                           f"{per_m}; give the rate in N/mm (the force falls by it per mm the ball moves along the "
+                           "axis)", path=p, key=f"{key}.rate_N_per_mm")
+
+
+#: a sensor's spring must push the ball over this span [mm] either side of its zero reading
+SPRING_SPAN_MM = 2.0
 
 
 #: how a sensor that reads the other way is declared (a device trial: it could only be turned round or rewritten)

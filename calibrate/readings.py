@@ -35,6 +35,7 @@ def apply_device(camp: Campaign, device: Device) -> Campaign:
                                f"({', '.join(RAW_COLUMNS)}), but this campaign gives the ball centre in {{D}} "
                                f"(x_mm, y_mm, z_mm); leave --device out", path=camp.path, key="x_mm")
     _check_ranges(camp, device)
+    _check_column_units(camp, device)
     x = device.positions(camp.readings_mm)
     shape = np.broadcast_to(device.noise_shape_D(), (camp.n, 3, 3)).copy()
     force = device.force_D(camp.readings_mm) if device.has_springs else None
@@ -56,6 +57,33 @@ def _check_ranges(camp: Campaign, device: Device) -> None:
                 f"its range [{lo:g}, {hi:g}] mm (device {device.path or device.name}){more}; "
                 + _range_cause(s, bad, lo, hi), path=camp.path, line=int(camp.lines[i]) if camp.lines.size else None,
                 key=RAW_COLUMNS[k])
+
+
+#: a raw column whose median lies this far [mm] from its sensor's zero is no ball aligned near the datum ...
+UNIT_SLIP_OFF_MM = 2.0
+#: ... and one that, scaled by a unit's factor, lies within this [mm] of the zero was written in that unit
+UNIT_SLIP_NEAR_MM = 0.5
+_UNITS = ((10.0, "cm", "multiply it by 10"), (25.4, "inches", "multiply it by 25.4"),
+          (0.001, "um", "divide it by 1000"))
+
+
+def _check_column_units(camp: Campaign, device: Device) -> None:
+    """Refuse a raw column in another unit: the ball is aligned near the datum, so each sensor reads about its
+    ``zero_mm``; a column whose median is far from it and, scaled by 10, 25.4 or 1/1000, near it was written in cm,
+    inches or um (a device trial: s2 in cm, 1.25 against a zero of 12.5, had been named as two exchanged columns
+    fitting to 3.4 mm)."""
+    for k, sensor in enumerate(device.sensors):
+        s = camp.readings_mm[:, k]
+        med = float(np.nanmedian(s))
+        if not np.isfinite(med) or abs(med - sensor.zero_mm) <= UNIT_SLIP_OFF_MM:
+            continue
+        for factor, unit, fix in _UNITS:
+            if abs(factor * med - sensor.zero_mm) <= UNIT_SLIP_NEAR_MM:
+                raise CalibrationError(
+                    f"sensor {k + 1}'s readings ({RAW_COLUMNS[k]}, median {med:g} mm) lie {abs(med - sensor.zero_mm):.3g}"
+                    f" mm from its zero_mm {sensor.zero_mm:g} (device {device.path or device.name}), which a ball "
+                    f"aligned near the datum does not give; in {unit} they lie {abs(factor * med - sensor.zero_mm):.2g}"
+                    f" mm from it: the column is in {unit}; {fix}", path=camp.path, key=RAW_COLUMNS[k])
 
 
 def _range_cause(s: np.ndarray, bad: np.ndarray, lo: float, hi: float) -> str:

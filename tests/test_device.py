@@ -75,6 +75,7 @@ def test_device_round_trip_and_conversion(tmp_path):
     (lambda d: d["sensors"][0].update(range_mm=[30.0, 0.0]), "sensors[1].range_mm"),
     (lambda d: d["sensors"][0].pop("zero_mm"), "sensors[1].zero_mm"),
     (lambda d: d["sensors"].pop(), "sensors"),
+    (lambda d: d["sensors"][1].update(rate_N_per_mm=40.0), "sensors[2].rate_N_per_mm"),   # N/m written as N/mm
 ])
 def test_device_file_refusals_name_the_key(tmp_path, edit, key):
     data = json.loads(write_device(ideal_device(), tmp_path / "d.device.json").read_text())

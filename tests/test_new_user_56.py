@@ -84,6 +84,18 @@ def test_two_exchanged_sensor_columns_are_named(raw, tmp_path, capsys):
     assert "the s1_mm and s2_mm columns look exchanged" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("column, factor, said", [("s2_mm", 0.1, "the column is in cm; multiply it by 10"),
+                                                   ("s1_mm", 1 / 25.4, "the column is in inches; multiply it by 25.4")])
+def test_a_raw_column_in_cm_or_inches_is_told_its_fix(raw, tmp_path, capsys, column, factor, said):
+    """A device trial: s2 in cm (1.25 against a zero of 12.5) had been named as two exchanged columns fitting to
+    3.4 mm, s1 in inches as a device zero offset; each is refused naming its unit."""
+    def scaled(cols, cells):
+        cells[cols.index(column)] = f"{factor * float(cells[cols.index(column)]):.6f}"
+    assert main(["calibrate", *_args(raw, _edited(raw, tmp_path, "unit.campaign.csv", scaled))]) == 2
+    err = capsys.readouterr().err
+    assert f"key `{column}`" in err and said in err and "exchanged" not in err
+
+
 def test_readings_in_um_and_a_missing_reading_are_told_their_fix(raw, tmp_path, capsys):
     def in_um(cols, cells):
         for c in ("s1_mm", "s2_mm", "s3_mm"):

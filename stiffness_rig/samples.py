@@ -70,9 +70,10 @@ class RigSamples:
         return RigSamples(*[getattr(self, f.name)[keep] for f in fields(self)])
 
 
-def rig_samples(rec) -> RigSamples:
+def rig_samples(rec, hold_start: dict | None = None) -> RigSamples:
     """Flatten a :class:`~rodlab.stiffness_rig.RigRecording` into one row per measured reading (component by
-    component, readings in recording order)."""
+    component, readings in recording order). ``hold_start``: {step: time of the hold's first recorded reading [s]}
+    where readings were left out before (a settling), for ``t_hold``; default each step's first reading here."""
     la = list(rec.load_axis)
     code = rec.series()
     axes = [la[i] for i in np.unique(code, return_index=True)[1]]   # each series' load axis
@@ -92,9 +93,20 @@ def rig_samples(rec) -> RigSamples:
         F=np.array([load[k] for k in st.tolist()]) * ax_sign, mass=np.asarray(rec.mass_kg, dtype=float)[idx],
         unload=np.array([p is Phase.UNLOAD for p in rec.phase], dtype=bool)[idx],
         reference=(st == step[first]) & (np.asarray(rec.mass_kg)[idx] == 0),
-        t_hold=t[idx] - t[first_of_step], t_series=t[idx] - t[first], temp=temp[idx] - temp[first],
+        t_hold=t[idx] - _starts(t, step, first_of_step, idx, hold_start), t_series=t[idx] - t[first],
+        temp=temp[idx] - temp[first],
         step=st.astype(int), repeat=np.asarray(rec.repeat, dtype=int)[idx], t_abs=t[idx],
         F_se=np.array([load_se[k] for k in st.tolist()]), series=code[idx])
+
+
+def _starts(t: np.ndarray, step: np.ndarray, first_of_step: np.ndarray, idx: np.ndarray, hold_start) -> np.ndarray:
+    """Each reading's hold start [s]: ``hold_start`` of its step where given (no later than its first reading
+    here), else its step's first reading here."""
+    here = t[first_of_step]
+    if not hold_start:
+        return here
+    given = np.array([hold_start.get(int(k), np.inf) for k in step[idx].tolist()], float)
+    return np.minimum(here, given)
 
 
 def _first_rows(keys: np.ndarray) -> np.ndarray:

@@ -209,6 +209,32 @@ def test_cli_simulates_every_effect_by_name(tmp_path, capsys):
     assert "unknown parameter 's_bend'" in capsys.readouterr().err and not (tmp_path / "bad.rig.csv").exists()
 
 
+def test_a_load_changed_as_its_hold_starts_drives_the_creep_from_there():
+    """``load_step_at`` 1: the old load until the new hold's recorded start (its first reading less ``t_hold``, a
+    settling left out), the new one after; the column equals the recurrence written out with that step, the
+    simulator's creep follows it, and a recording whose holds start with readings left out is read so (a paper-rod
+    trial: a weight hung as its hold began had read as a creep 2x too large and an export 3.5 % stiff)."""
+    from types import SimpleNamespace
+    from rodlab.stiffness_rig.effects.creep import kelvin_voigt, load_step_at
+    t = np.concatenate([np.arange(1.0, 9.0), np.arange(13.0, 21.0)])          # two holds, 4 s between
+    step = np.repeat([1, 2], 8)
+    t_hold = np.concatenate([np.arange(0.0, 8.0), np.arange(1.0, 9.0)])       # hold 2 recorded from 12 s
+    data = SimpleNamespace(t_abs=t, step=step, t_hold=t_hold, zero_groups=np.zeros(16, int))
+    base = np.where(step == 1, 1.0, 3.0)
+    tau = 5.0
+    x, t_prev, ref = 0.0, t[0], np.zeros(16)
+    for i in range(16):
+        if i == 8:                                          # the old load until 12 s, then the new one
+            x = base[7] + (x - base[7]) * np.exp(-(12.0 - t_prev) / tau)
+            t_prev = 12.0
+        x = base[i] + (x - base[i]) * np.exp(-(t[i] - t_prev) / tau)
+        t_prev, ref[i] = t[i], x
+    np.testing.assert_allclose(kelvin_voigt(data, base, np.array([tau]), 1.0)[:, 0], ref, rtol=1e-12)
+    assert not np.allclose(kelvin_voigt(data, base, np.array([tau]), 0.0)[:, 0], ref)
+    assert load_step_at(data) == 1.0
+    assert load_step_at(SimpleNamespace(step=step, t_hold=t_hold - np.repeat([0.0, 1.0], 8))) == 0.0
+
+
 def test_creep_columns_follow_the_kelvin_voigt_step_response():
     """A load stepped on at t0 and held: the creep column per unit phi is b (1 - exp(-(t - t0) / tau)) for every
     time constant of the grid, each series on its own clock; the grid's columns, computed in one pass, equal

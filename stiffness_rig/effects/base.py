@@ -44,11 +44,12 @@ class HypothesisContext:
 
 @dataclass
 class RigState:
-    """Mutable state of the forward model: the deflection [mm] in {T} of each creep term, shape=(2, 3), and the
-    time of the last reading [s]."""
+    """Mutable state of the forward model: the deflection [mm] in {T} of each creep term, shape=(2, 3), the time of
+    the last reading [s] and the creep each term was approaching then [mm], shape=(2, 3)."""
 
     creep: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
     t_last: float | None = None
+    creep_target: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
 
 
 class RigEffectModel(EffectSchema):

@@ -10,8 +10,8 @@ from rodlab.core.hypothesis import Hypothesis, ParamSpec
 from ..errors import RigError
 from .base import RigEffectModel
 
-__all__ = ["Creep", "kelvin_voigt", "creep_hypothesis", "two_term_creep_hypothesis", "CREEP_TAU_GRID_S", "SETTLING_TAU_S",
-           "CREEP_PHI_PLAUSIBLE", "held_creep_share", "relax"]
+__all__ = ["Creep", "kelvin_voigt", "load_step_at", "creep_hypothesis", "two_term_creep_hypothesis",
+           "CREEP_TAU_GRID_S", "SETTLING_TAU_S", "CREEP_PHI_PLAUSIBLE", "held_creep_share", "relax"]
 
 #: a creep time constant below this [s] is more likely a hung weight settling than a laminate's or bond's creep
 SETTLING_TAU_S = 1.0
@@ -21,6 +21,7 @@ CREEP_PHI_PLAUSIBLE = 0.15
 CREEP_TAU_GRID_S = tuple(float(v) for v in np.round(2.0 ** np.arange(0.0, 6.01, 0.5), 3))
 
 
+
 class Creep(RigEffectModel):
     effect = "creep"
     order = 70
@@ -28,7 +29,10 @@ class Creep(RigEffectModel):
               ParamSpec("tau_s", "s", "creep time constant", 6.0, magnitude=False),
               ParamSpec("phi_2", "-", "a second creep term's deflection at equilibrium over the elastic one "
                                       "(optional)"),
-              ParamSpec("tau_2_s", "s", "the second term's time constant (with phi_2)", magnitude=False))
+              ParamSpec("tau_2_s", "s", "the second term's time constant (with phi_2)", magnitude=False),
+              ParamSpec("load_step_at", "-", "when the load changes between holds, as a share of the gap: 0 right "
+                                             "after the previous hold's last reading, 1 as the new hold's readings "
+                                             "start", magnitude=False))
     example = {"phi": 0.02}
     physics = "viscoelastic creep of tubes or bonds"
     signature = "deflection grows during a constant-load hold, faster at higher load"
@@ -70,30 +74,74 @@ class Creep(RigEffectModel):
         terms = [(self.value(p, "phi"), float(p["tau_s"]))]
         if p.get("phi_2") is not None:
             terms.append((self.value(p, "phi_2"), float(p["tau_2_s"])))
+        late = min(max(self.value(p, "load_step_at"), 0.0), 1.0)
         for k, (phi, tau) in enumerate(terms):
             target = phi * (C @ F)
-            state.creep[k] = target + (state.creep[k] - target) * np.exp(-dt / tau)
+            if late and not np.allclose(target, state.creep_target[k]):      # the old load until the change
+                old = state.creep_target[k]
+                state.creep[k] = old + (state.creep[k] - old) * np.exp(-late * dt / tau)
+                dt_k = (1.0 - late) * dt
+            else:
+                dt_k = dt
+            state.creep[k] = target + (state.creep[k] - target) * np.exp(-dt_k / tau)
+            state.creep_target[k] = target
         return x + state.creep.sum(axis=0)
 
     def hypotheses(self, data, ctx) -> list[Hypothesis]:
-        columns = kelvin_voigt(data, ctx.base, np.array(CREEP_TAU_GRID_S))
-        return [creep_hypothesis(data, ctx.base, tau, columns[:, k]) for k, tau in enumerate(CREEP_TAU_GRID_S)]
+        step_at = load_step_at(data)
+        columns = kelvin_voigt(data, ctx.base, np.array(CREEP_TAU_GRID_S), step_at)
+        return [creep_hypothesis(data, ctx.base, tau, columns[:, k], step_at) for k, tau in enumerate(CREEP_TAU_GRID_S)]
 
 
-def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray) -> np.ndarray:
+def kelvin_voigt(data, base: np.ndarray, taus: np.ndarray, step_at: float = 0.0) -> np.ndarray:
     """Creep per unit phi of every sample, shape=(n, len(taus)), driven by the load history of each series: at
     every reading it relaxes towards the current elastic deflection ``base`` with each time constant ``taus``
     [s]: x_i = x_(i-1) exp(-dt_i / tau) + (1 - exp(-dt_i / tau)) base_i, summed in closed form
-    (:func:`relax`)."""
+    (:func:`relax`). ``step_at``: when the load changed between two holds, as a share of the time from the
+    previous hold's last reading to the new hold's first (0: right after the previous hold, 1: at the new hold's
+    first reading, the weight hung as its recording starts)."""
     taus = np.atleast_1d(np.asarray(taus, float))
     out = np.zeros((base.size, taus.size))
     keys = data.zero_groups                    # per series: the rod is remounted, its creep starts afresh
     for k in np.unique(keys):
         idx = np.nonzero(keys == k)[0]
         idx = idx[np.argsort(data.t_abs[idx], kind="stable")]
+        t, b, real = ((data.t_abs[idx], base[idx], slice(None)) if not step_at else
+                      _with_load_steps(data.t_abs[idx], base[idx], data.step[idx], data.t_hold[idx], step_at))
         for m, tau in enumerate(taus):
-            out[idx, m] = relax(data.t_abs[idx] / tau, base[idx])
+            out[idx, m] = relax(t / tau, b)[real]
     return out
+
+
+def load_step_at(data) -> float:
+    """When the load changed between holds (``load_step_at``), from what the recording shows: 1 (as the new hold's
+    recording started) where readings were left out at the holds' starts, a settling the readings showed or the
+    samples `rig acquire` records while a hold settles, both after the weight was hung; else 0 (before the hold's
+    first reading, which is settled: rodlab's simulator). A paper-rod trial hung each weight as its hold began:
+    read with 0, its creep came out 2x and the export 3.5 % stiff. With the linear compliance fitted beside it the
+    data cannot tell the two apart (the creep's share trades with the compliance), so the recording decides."""
+    step, t_hold = getattr(data, "step", None), getattr(data, "t_hold", None)
+    if step is None or t_hold is None or not np.size(step):
+        return 0.0
+    first = np.r_[True, np.diff(step) != 0]
+    return 1.0 if float(np.median(t_hold[first])) > 0.0 else 0.0
+
+
+def _with_load_steps(t: np.ndarray, base: np.ndarray, step: np.ndarray, t_hold: np.ndarray, step_at: float):
+    """(times, loads, the real samples' places) with a sample inserted at each change of hold, ``step_at`` of the
+    way from the previous reading to the new hold's start (its first reading's time less ``t_hold``: where a
+    settling was left out, the hold's first recorded reading), carrying the previous load: the load's change."""
+    real = np.arange(t.size)
+    if not step_at or t.size < 2:
+        return t, base, real
+    new = np.flatnonzero(np.diff(step) != 0) + 1               # each hold's first reading
+    start = np.clip(t[new] - t_hold[new], t[new - 1], t[new])
+    at = t[new - 1] + min(float(step_at), 1.0) * (start - t[new - 1])
+    at = np.minimum(at, np.nextafter(t[new], -np.inf))
+    t2 = np.insert(t, new, at)
+    b2 = np.insert(base, new, base[new - 1])
+    real = np.arange(t.size) + np.searchsorted(new, np.arange(t.size), side="right")
+    return t2, b2, real
 
 
 #: the span of scaled time [time constants] summed in one block (exp(500) ~ 1e217 stays finite)
@@ -118,14 +166,17 @@ def relax(s: np.ndarray, base: np.ndarray) -> np.ndarray:
     return out
 
 
-def creep_hypothesis(data, base: np.ndarray, tau: float, column: np.ndarray | None = None) -> Hypothesis:
-    """Kelvin-Voigt creep with time constant ``tau`` [s]; its amplitude phi is the linear parameter (``column``:
-    its response per unit phi, shape=(n,), when already computed)."""
-    X = (kelvin_voigt(data, base, tau)[:, 0] if column is None else column)[:, None]
+def creep_hypothesis(data, base: np.ndarray, tau: float, column: np.ndarray | None = None,
+                     step_at: float = 0.0) -> Hypothesis:
+    """Kelvin-Voigt creep with time constant ``tau`` [s], the load changed ``step_at`` of the way between holds
+    (:func:`kelvin_voigt`); its amplitude phi is the linear parameter (``column``: its response per unit phi,
+    shape=(n,), when already computed)."""
+    X = (kelvin_voigt(data, base, tau, step_at)[:, 0] if column is None else column)[:, None]
+    when = "" if not step_at else ", the weights changed as each hold's readings start"
     return Hypothesis(Creep.effect, None, ["phi"], X, [0.0], [1.0],
                       f"viscoelastic creep of the tubes or bonds: the deflection keeps growing during a hold at "
-                      f"constant load (time constant {tau:.3g} s), more at higher load", hidden=1,
-                      settings={"tau_s": float(tau)})
+                      f"constant load (time constant {tau:.3g} s{when}), more at higher load", hidden=1,
+                      settings={"tau_s": float(tau)} | ({"load_step_at": float(step_at)} if step_at else {}))
 
 
 def two_term_creep_hypothesis(data, base: np.ndarray, tau: float, tau_2: float) -> Hypothesis:

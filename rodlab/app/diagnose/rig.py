@@ -68,7 +68,8 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
                           "against; give the rod's calc, fea or meas compliance file")
     rec, gross = without_gross(rec)           # readings no rod gives (a unit switched for seconds; as `rig fit`)
     cut = settled(rec)                        # a hold's settling is no property of the rod (as `rig fit`)
-    diag, model = _diagnose_recording(cut.recording, sim, design, max_terms, accuracy)
+    starts = {int(k): float(rec.time_s[rec.step == k].min()) for k in np.unique(rec.step)} if cut.dropped else None
+    diag, model = _diagnose_recording(cut.recording, sim, design, max_terms, accuracy, starts)
     if gross.any:
         diag.extra["gross_text"] = gross.text()
     if cut.dropped:
@@ -77,9 +78,11 @@ def diagnose_rig(rec, sim: RodCompliance, design=None, max_terms: int = 3,
     return diag, model
 
 
-def _diagnose_recording(rec, sim: RodCompliance, design, max_terms: int, accuracy) -> tuple[Diagnosis, RigModelFit]:
-    """:func:`diagnose_rig` of ``rec`` as it is."""
-    data = rig_samples(rec)
+def _diagnose_recording(rec, sim: RodCompliance, design, max_terms: int, accuracy,
+                        hold_start: dict | None = None) -> tuple[Diagnosis, RigModelFit]:
+    """:func:`diagnose_rig` of ``rec`` as it is (``hold_start``: each step's first recorded reading [s] where a
+    settling was left out)."""
+    data = rig_samples(rec, hold_start)
     name = rec.path or "the recording"
     if not np.any(data.mass > 0):
         raise RodlabError(f"{name}: every hold's mass is 0: there is no load-deflection to diagnose; check the "

@@ -131,12 +131,14 @@ def with_creep_profile(library, S: tuple, data, base, r0, prep, sigma: float) ->
     j = creep[0]
     others = [library[i].X for i in S if i != j]
     tau0 = float(library[j].settings["tau_s"])
+    step_at = float(library[j].settings.get("load_step_at", 0.0))
     chosen = _phi_fit(others, library[j].X, r0, sigma)
     kept = [(tau0, chosen)]
     for direction in (-1.0, 1.0):
         for k in range(1, PROFILE_STEPS + 1):
             tau = tau0 * 2.0 ** (direction * k / 16.0)
-            fit = _phi_fit(others, prep.project_columns(kelvin_voigt(data, base, np.array([tau]))), r0, sigma)
+            fit = _phi_fit(others, prep.project_columns(kelvin_voigt(data, base, np.array([tau]), step_at)), r0,
+                           sigma)
             if (fit[0] - chosen[0]) / sigma ** 2 > PROFILE_CHI2 or fit[1] <= 0:
                 break
             kept.append((tau, fit))

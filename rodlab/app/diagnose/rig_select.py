@@ -236,9 +236,10 @@ def refine_tau(library, S: tuple, j: int, data: RigSamples, base, r0, prep) -> f
     """Creep time constant [s] minimising the residual of the model ``S`` (bounded, in log tau); ``prep`` projects a
     new term's columns as the library's were (gauge zeros, and the free linear part where it is fitted)."""
     others = [library[i] for i in S if i != j]
+    step_at = float(library[j].settings.get("load_step_at", 0.0))
 
     def rss(log_tau):
-        term = prep(creep_hypothesis(data, base, float(np.exp(log_tau))))
+        term = prep(creep_hypothesis(data, base, float(np.exp(log_tau)), step_at=step_at))
         return subset_ls(others + [term], r0, None).fit(tuple(range(len(others) + 1)))[1]
 
     t0 = np.log(library[j].settings["tau_s"])

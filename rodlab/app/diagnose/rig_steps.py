@@ -114,9 +114,10 @@ def select_refining_creep(library, ls, data: RigSamples, base, r0, prep: Prep, s
                 taus.append(tau)
         if all(abs(np.log(t / library[j].settings["tau_s"])) < 0.01 for t in taus):
             break
+        step_at = float(library[j].settings.get("load_step_at", 0.0))
         refined = []
         for tau in taus:
-            refined.append(prep(creep_hypothesis(data, base, tau)))
+            refined.append(prep(creep_hypothesis(data, base, tau, step_at=step_at)))
         library = [t for t in library if t.effect != "creep"] + refined
         ls = subset_ls(library, r0, folds)
         S = select(library, ls, sigma, r0.size, max_terms, prep.detection)

@@ -87,3 +87,15 @@ def test_a_tube_fit_within_the_noise_is_kept(tmp_path, capsys):
     assert main(["update", "rod1", "--measured", str(meas), "-o", str(out)]) == 0
     assert "--free materials.cfrp_tube.E_GPa,materials.cfrp_tube.G_GPa" in out.read_text()
     assert "moduli" not in capsys.readouterr().out
+
+
+def test_a_length_fitted_from_the_compliance_is_noted(tmp_path, capsys):
+    """A paper-rod trial: `--free L2_mm` wrote L2 533 +- 1.9 mm for 529 (a thinner wall read as a longer tube, the
+    tool point 8 mm off) without a word; a freed length is now said to need a caliper or the calibration's tool."""
+    _, meas, out = _measured(tmp_path, "rod1", 1.1)
+    capsys.readouterr()
+    main(["update", "rod1", "--measured", str(meas), "--free", "L2_mm", "-o", str(out)])
+    text = capsys.readouterr().out
+    assert "note: L2_mm was fitted from the compliance" in text and "caliper" in text
+    main(["update", "rod1", "--measured", str(meas), "-o", str(tmp_path / "plain.rod.toml")])
+    assert "fitted from the compliance" not in capsys.readouterr().out

@@ -92,6 +92,22 @@ def _closed_form_hint(args, design) -> str:
             f"stiffness against the solid FEA, which the recording keeps)")
 
 
+#: the rod's lengths: geometry a caliper or the calibration's tool vector measures, not the compliance
+LENGTH_KEYS = ("L1_mm", "L2_mm")
+
+
+def _lengths_note(res) -> None:
+    """A freed length (L1, L2) moves the ball and so every tool vector: fitted from the compliance it takes up
+    what other keys differ by (a paper-rod trial: L2 533 +- 1.9 mm for 529, a thinner wall read as a longer rod,
+    the tool point 8 mm off, without a word)."""
+    for k, v0, v, s in zip(res.keys, res.nominal, res.x, res.sigma):
+        if k in LENGTH_KEYS:
+            print(f"  note: {k} was fitted from the compliance ({v0:g} -> {v:.4g} +- {s:.2g} mm): a length moves the "
+                  "ball, and a compliance fit lets it take up what other keys differ by (a thinner wall reads as a "
+                  f"longer tube); measure {k} with a caliper or take the ball from the calibration's identified tool "
+                  "vector, and fit the walls and moduli with it held")
+
+
 def cmd_update(args: argparse.Namespace) -> int:
     from ...core.design_edit import write_edited_design
     from ..update import ROUGH_P, as_built_values, update_design
@@ -261,6 +277,7 @@ def _print(res, through: str) -> None:
                   "reads as a lower E): `rodlab diagnose --rig` weighs every toleranced key at once, and weighing the "
                   "rod or measuring the wall tells them apart")
     _moduli_note(res)
+    _lengths_note(res)
     names = [f"r_{m + 1}{n + 1}" for m, n in res.entries]
     print(f"  r_mn = measured / the prediction of {through}, its known bias against the solid FEA removed "
           f"(`rig fit` divides by the simulated file as it is):")

@@ -37,8 +37,11 @@ def check_header(header: list[str], p: Path, line: int) -> None:
     """Every column known, every required one present, none twice."""
     for col in header:
         if col not in COLUMNS + OPTIONAL_COLUMNS:
-            raise RigError(f"unknown column {col!r}; expected {list(COLUMNS + OPTIONAL_COLUMNS)}."
-                           + did_you_mean(col, COLUMNS + OPTIONAL_COLUMNS, units=True), path=p, line=line, key=col)
+            absent = [c for c in COLUMNS + OPTIONAL_COLUMNS if c not in header]     # a column the file has is no fix
+            missing = [c for c in COLUMNS if c not in header]
+            hint = did_you_mean(col, missing, units=True) or did_you_mean(col, absent, units=True)
+            raise RigError(f"unknown column {col!r}; expected {list(COLUMNS + OPTIONAL_COLUMNS)}." + hint,
+                           path=p, line=line, key=col)
     for col in COLUMNS:
         if col not in header:
             raise RigError(f"missing column {col!r}", path=p, line=line, key=col)

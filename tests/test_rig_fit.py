@@ -95,6 +95,8 @@ BAD = [
     ("missing column", HEADER.replace(",disp_z_mm", ""), GOOD, 3, "disp_z_mm", "missing"),
     ("extra column", HEADER.replace("disp_z_mm", "disp_z_mm,force_kN"), [g + ",1" for g in GOOD], 3, "force_kN",
      "unknown column"),
+    # an instrument trial: disp_w_mm beside disp_x/z had been told "did you mean disp_z_mm", a column it has
+    ("near-miss column", HEADER.replace("disp_y_mm", "disp_w_mm"), GOOD, 3, "disp_w_mm", "Did you mean `disp_y_mm`"),
     ("bad force", HEADER.replace("disp_z_mm", "disp_z_mm,force_N"), [g + ",0.0" for g in GOOD[:2]]
      + ["1.0,2,1,load,y,0.5,,1.0,0.0,heavy"], 6, "force_N", "number"),
     ("non-numeric", HEADER, GOOD[:2] + ["1.0,2,1,load,y,0.5,,abc,0.000"], 6, "disp_y_mm", "number"),

@@ -35,6 +35,7 @@ class Mixup:
     target_change: tuple | None = None
     sensor: tuple | None = None
     sensors_exchanged: tuple | None = None
+    radians_position: int | None = None
 
     def __post_init__(self) -> None:
         kinds = ((self.joint is not None) + (self.positions is not None) + self.fixture_radians
@@ -51,7 +52,8 @@ class Mixup:
         if self.target_change is not None:
             return f"target changed at data row {self.target_change[0]}"
         if self.fixture_radians:
-            return "fixture angles read as radians"
+            return ("fixture angles read as radians" if self.radians_position is None else
+                    f"position {self.radians_position}'s fixture angles read as radians")
         if self.sensor is not None:
             return f"sensor {self.sensor[0]} reversed"
         if self.sensors_exchanged is not None:
@@ -106,6 +108,10 @@ class Mixup:
                     f"and {b:.1f} mm rms, base and tool registered for each) but not together ({self.rms_given_mm:.1f} "
                     f"mm): the target or tool changed at data row {k} (two reflectors, a re-mounted target); give each "
                     "part its own file and calibrate each, or measure again with one target")
+        if self.fixture_radians and self.radians_position is not None:
+            return (f"the fixture file's angles a, b, c of position {self.radians_position} look like radians (the "
+                    f"other positions' are degrees): read as radians {fit}; the format's angles are degrees: convert "
+                    "them (degrees = radians x 180 / pi) and run again")
         if self.fixture_radians:
             return (f"the fixture file's angles a, b, c look like radians: read as radians {fit}; the format's angles "
                     "are degrees: convert them (degrees = radians x 180 / pi) and run again")

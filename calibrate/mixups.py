@@ -228,7 +228,25 @@ def campaign_mixup(robot, res, camp, fixture, rod_file, obs, rod, compensations,
         found = find_mixup(robot, res, obs.q_rad, camp.position, None, None, True, (
             (Mixup(None, None, 0.0, 0.0, fixture_radians=True),
              lambda full: fit(campaign_observations(camp, _degrees_from_radians(fixture), rod_file), full)),))
+    elif found is None and (single := _positions_could_be_radians(fixture)):
+        # one position's clamping written in radians among degrees (a device trial: named as outliers and a zero
+        # shift at that position)
+        found = find_mixup(robot, res, obs.q_rad, camp.position, None, None, True, tuple(
+            (Mixup(None, None, 0.0, 0.0, fixture_radians=True, radians_position=j),
+             lambda full, j=j: fit(campaign_observations(camp, _degrees_from_radians(fixture, j), rod_file), full))
+            for j in single))
     return found
+
+
+def _positions_could_be_radians(fixture) -> list:
+    """The positions whose a, b, c are all within +-pi with one beyond 0.05 (a clamping turned by radians' worth)
+    where the others' are not all so: one position's angles written in radians among degrees."""
+    within = {j: np.all(np.abs(np.asarray(p, float)[3:]) <= np.pi + 1e-3) and np.any(np.abs(np.asarray(p, float)[3:])
+                                                                                    > 0.05)
+              for j, p in fixture.poses.items()}
+    if all(within.values()) or len(within) < 3:
+        return []
+    return [j for j, w in within.items() if w]
 
 
 def _angles_could_be_radians(fixture) -> bool:
@@ -238,11 +256,14 @@ def _angles_could_be_radians(fixture) -> bool:
     return bool(np.all(np.abs(angles) <= np.pi + 1e-3) and np.any(np.abs(angles) > 1e-3))
 
 
-def _degrees_from_radians(fixture):
-    """``fixture`` with its angles (and their covariance) read as radians, in degrees."""
+def _degrees_from_radians(fixture, position=None):
+    """``fixture`` with its angles (and their covariance) read as radians, in degrees: every position's, or
+    ``position``'s alone."""
     k = np.r_[np.ones(3), np.full(3, np.degrees(1.0))]
-    poses = {j: np.asarray(p, float) * k for j, p in fixture.poses.items()}
-    cov = None if fixture.pose_cov is None else {j: c * np.outer(k, k) for j, c in fixture.pose_cov.items()}
+    turn = [j for j in fixture.poses if position is None or j == position]
+    poses = {j: np.asarray(p, float) * (k if j in turn else 1.0) for j, p in fixture.poses.items()}
+    cov = None if fixture.pose_cov is None else {j: c * (np.outer(k, k) if j in turn else 1.0)
+                                                 for j, c in fixture.pose_cov.items()}
     return replace(fixture, poses=poses, pose_cov=cov)
 
 

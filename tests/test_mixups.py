@@ -208,11 +208,22 @@ def test_columns_checked_warns_of_the_mixup_instead_of_refusing(tmp_path, capsys
     assert capsys.readouterr().err == ""
 
 
-def _fixture_in_radians(src: Path, dst: Path) -> Path:
+def _fixture_in_radians(src: Path, dst: Path, only=None) -> Path:
     data = json.loads(src.read_text())
-    data["positions"] = {j: p[:3] + [math.radians(a) for a in p[3:]] for j, p in data["positions"].items()}
+    data["positions"] = {j: p[:3] + [math.radians(a) for a in p[3:]] if only in (None, j) else p
+                         for j, p in data["positions"].items()}
     dst.write_text(json.dumps(data))
     return dst
+
+
+def test_one_positions_angles_in_radians_are_named(campaign, tmp_path, capsys):
+    """A device trial: position 2 alone written in radians had been named as outliers, a joint zero shift at
+    position 2 and a rod deflection; it is named as that position's angles, the files refused."""
+    fix = _fixture_in_radians(campaign / "multical.fixture.json", tmp_path / "rad2.fixture.json", only="2")
+    rod = str(next(campaign.glob("*.compliance.json")))
+    code = main(["calibrate", str(campaign / "multical.campaign.csv"), "--fixture", str(fix), "--rod", rod])
+    err = capsys.readouterr().err
+    assert code == 2 and "the fixture file's angles a, b, c of position 2 look like radians" in err
 
 
 def test_fixture_angles_in_radians_are_named(campaign, tmp_path, capsys):

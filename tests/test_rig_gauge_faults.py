@@ -180,3 +180,28 @@ def _diagnosed_with_slip(path, tmp_path, gauge: str, t0: float, step: float, dec
             row[f"disp_{gauge}_mm"] = f"{float(row[f'disp_{gauge}_mm']) + step:.{decimals}f}"
     slipped = rewrite_recording(path, tmp_path / "slipped.rig.csv", slip)
     return diagnose_rig(read_recording(slipped), SIM, DESIGN)[0]
+
+
+def test_every_gauge_of_a_series_jumping_at_once_is_the_rod_moving_in_its_clamp(tmp_path):
+    """An instrument trial: the rod slipped in its clamp at one hold, 12 um in y and 3 um in z; it had been named a y
+    gauge slip, the z step left to a drift and the unexplained. Both gauges stepping at one moment are named together
+    (each at its size); one gauge stepping alone stays that gauge's slip."""
+    path = _recording(tmp_path, resolution_mm=0.0001)
+    rows = [line.split(",") for line in path.read_text().splitlines() if line[:1].isdigit()]
+    y_steps = sorted({int(r[1]) for r in rows if r[4] == "y"})
+    t0 = min(float(r[0]) for r in rows if int(r[1]) == y_steps[len(y_steps) // 2])
+
+    def clamp(_, row):
+        if row["load_axis"] == "y" and float(row["time_s"]) >= t0:
+            row["disp_y_mm"] = f"{float(row['disp_y_mm']) + 0.012:.5f}"
+            row["disp_z_mm"] = f"{float(row['disp_z_mm']) + 0.003:.5f}"
+    moved = rewrite_recording(path, tmp_path / "clamp.rig.csv", clamp)
+    diag = diagnose_rig(read_recording(moved), SIM, DESIGN)[0]
+    f = next((f for f in diag.findings if "slip_y_mm" in f.parameters), None)
+    assert f is not None and "every gauge of the series jumped" in f.explanation, diag.summary()
+    assert f.parameters["slip_y_mm"] == pytest.approx(0.012, rel=0.05)
+    assert f.parameters["slip_z_mm"] == pytest.approx(0.003, rel=0.15)
+    assert not [g for g in diag.findings if g.effect == "drift"], diag.summary()
+    alone = _diagnosed_with_slip(path, tmp_path, "y", t0, 0.012, 5)
+    g = next(g for g in alone.findings if "slip" in "".join(g.parameters))
+    assert g.location == "sensor:y" and "slip_mm" in g.parameters, alone.summary()

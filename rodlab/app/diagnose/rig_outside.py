@@ -157,7 +157,31 @@ def _slips(data, base: np.ndarray, nuisance: np.ndarray | None = None) -> list[H
                 continue
             seen.add((c, int(after[0])))
             out.append(_slip_hypothesis(data, c, after))
+            together = _clamp_slip_hypothesis(data, after)
+            if together is not None and together.location not in {h.location for h in out}:
+                out.append(together)
     return out
+
+
+def _clamp_slip_hypothesis(data, after: np.ndarray) -> Hypothesis | None:
+    """Every gauge of the series of a slip (``after``: one gauge's readings from the slip on) stepping at the same
+    moment, each by its own amount: the rod moved in its clamp (or the rig's frame shifted), not one gauge (an
+    instrument trial's clamp slip of 12 um in y and 3 um in z had been named a y gauge slip, the z step left to a
+    drift and the unexplained); None where the series has one gauge."""
+    i0 = int(after[0])
+    series, t0 = data.series[i0], float(data.t_abs[i0])
+    gauges = sorted(set(data.comp[data.series == series].tolist()))
+    if len(gauges) < 2:
+        return None
+    cols = np.zeros((data.n, len(gauges)))
+    for k, c in enumerate(gauges):
+        cols[:, k] = (data.series == series) & (data.comp == c) & (data.t_abs >= t0)
+    step = int(data.step[i0])
+    return Hypothesis(OUTSIDE, f"step:{step}", [f"slip_{_AXES[c]}_mm" for c in gauges], cols,
+                      [-np.inf] * len(gauges), [np.inf] * len(gauges),
+                      f"every gauge of the series jumped at t = {t0:.0f} s (step {step}) at once and stayed: the rod "
+                      "moved in its clamp or the rig's frame shifted under the load, not one gauge (check the flange "
+                      "clamp's bolts and the frame's feet); outside the effect vocabulary", hidden=2)
 
 
 def _series_of_gauge(data, r: np.ndarray, c: int) -> list[tuple[np.ndarray, tuple | None]]:

@@ -250,7 +250,7 @@ def _check_spring(p: Path, key: str, s: dict, lo: float, hi: float) -> None:
 
 
 #: a sensor's spring must push the ball over this span [mm] either side of its zero reading
-SPRING_SPAN_MM = 2.0
+SPRING_SPAN_MM = 1.0
 
 
 #: how a sensor that reads the other way is declared (a device trial: it could only be turned round or rewritten)

@@ -63,19 +63,20 @@ def _check_ranges(camp: Campaign, device: Device) -> None:
 UNIT_SLIP_OFF_MM = 2.0
 #: ... and one that, scaled by a unit's factor, lies within this [mm] of the zero was written in that unit
 UNIT_SLIP_NEAR_MM = 0.5
-_UNITS = ((10.0, "cm", "multiply it by 10"), (25.4, "inches", "multiply it by 25.4"),
-          (0.001, "um", "divide it by 1000"))
+_UNITS = ((10.0, "cm", "multiply it by 10"), (25.4, "inches", "multiply it by 25.4"))   # um: out of range first
 
 
 def _check_column_units(camp: Campaign, device: Device) -> None:
     """Refuse a raw column in another unit: the ball is aligned near the datum, so each sensor reads about its
-    ``zero_mm``; a column whose median is far from it and, scaled by 10, 25.4 or 1/1000, near it was written in cm,
-    inches or um (a device trial: s2 in cm, 1.25 against a zero of 12.5, had been named as two exchanged columns
-    fitting to 3.4 mm)."""
+    ``zero_mm``; a column whose median is far from it and, scaled by 10 or 25.4, near it was written in cm or inches
+    (a column in um leaves the sensor's range and is refused before, :func:`_range_cause`; a device trial: s2 in
+    cm, 1.25 against a zero of 12.5, had been named as two exchanged columns fitting to 3.4 mm)."""
     for k, sensor in enumerate(device.sensors):
         s = camp.readings_mm[:, k]
+        if not np.isfinite(s).any():
+            continue
         med = float(np.nanmedian(s))
-        if not np.isfinite(med) or abs(med - sensor.zero_mm) <= UNIT_SLIP_OFF_MM:
+        if abs(med - sensor.zero_mm) <= UNIT_SLIP_OFF_MM:
             continue
         for factor, unit, fix in _UNITS:
             if abs(factor * med - sensor.zero_mm) <= UNIT_SLIP_NEAR_MM:

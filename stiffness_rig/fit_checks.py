@@ -131,7 +131,8 @@ def direction_warnings(lines: list) -> list[str]:
     c22 8 % larger under -y had been written as the mean, with a standard error 5000 x too small)."""
     by_entry: dict = {}
     for ln in lines:
-        by_entry.setdefault((ln.component, ln.axis.index), {}).setdefault(ln.axis.sign > 0, []).append(ln)
+        if ln.component == ln.axis.index:   # an on-axis entry: a cross entry's lines of opposite signs are no softness
+            by_entry.setdefault((ln.component, ln.axis.index), {}).setdefault(ln.axis.sign > 0, []).append(ln)
     out = []
     for (c, i), sides in sorted(by_entry.items()):
         if len(sides) < 2:

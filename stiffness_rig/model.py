@@ -135,14 +135,16 @@ class RigModel:
                            key="load_cell_noise_N")
         self.rng_load_cell = np.random.default_rng([self.seed, 1])
         self.effects = complete_effects(self.effects)
+        self._given = dict(self.effects)            # as completed, before a plan fills anything in
         self._active = [(RIG_EFFECTS[e], p) for e, p in self.effects.items()]
         self.rng = np.random.default_rng(self.seed)
         self.state = RigState()
         self.C_true = self._true_compliance()
 
     def with_plan(self, masses) -> None:
-        """Fill in what the load plan sets in the effects' parameters (a hysteresis loop's top load)."""
-        self.effects = {e: RIG_EFFECTS[e].with_plan(p, masses) for e, p in self.effects.items()}
+        """Fill in what the load plan sets in the effects' parameters (a hysteresis loop's top load), from the
+        parameters as given (another plan's fill-ins are not kept)."""
+        self.effects = {e: RIG_EFFECTS[e].with_plan(p, masses) for e, p in self._given.items()}
         self._active = [(RIG_EFFECTS[e], p) for e, p in self.effects.items()]
 
     def _true_compliance(self) -> np.ndarray:

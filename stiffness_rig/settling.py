@@ -167,19 +167,29 @@ def settling_seconds(rec) -> float | None:
     for k in range(1, int(np.sum(t < SETTLING_MAX_S))):
         later = share[k:][within[k:]]
         if np.all(np.abs(later[np.isfinite(later)]) < SETTLED_SHARE) and t[within].max() >= t[k] + SETTLED_CHECK_S:
-            return _to_the_noise(t, share, float(t[k]), shares)
+            return _to_the_noise(t, share, float(t[k]), shares, _resolution_mm(rec))
     return None
 
 
-def _to_the_noise(t: np.ndarray, share: np.ndarray, t_settled: float, shares: list) -> float:
+def _resolution_mm(rec) -> float:
+    """The gauges' resolution [mm] the header states (``resolution_mm``), else 0."""
+    try:
+        return max(float(rec.meta.get("resolution_mm") or 0.0), 0.0)
+    except (TypeError, ValueError):
+        return 0.0
+
+
+def _to_the_noise(t: np.ndarray, share: np.ndarray, t_settled: float, shares: list, resolution_mm: float = 0.0
+                  ) -> float:
     """The settling cut [s], past ``t_settled`` (within :data:`SETTLED_SHARE` of the step) until the tail is below
     :data:`TAIL_NOISE` of a reading's noise on the larger steps: 2 % of a 1 mm step is 20 um, and a soft rod's
     settling tail left in had read as a creep of 0.9 % at 28 standard errors (an instrument trial's own gauges,
     settling with 0.12-0.25 s). The tail's exponential is fitted to the median share curve where it stands above
     its own scatter; a tail slower than :data:`TAIL_TAU_MAX_S` is no weight's settling and is left to the
-    diagnosis."""
+    diagnosis. A reading's noise is at least its quantisation (``resolution_mm`` / sqrt 12); the cut leaves at least
+    two thirds of the median hold."""
     steps = np.array([c[1] for c in shares])
-    noise = float(np.median([c[2] for c in shares]))
+    noise = max(float(np.median([c[2] for c in shares])), resolution_mm / np.sqrt(12.0), 1e-6)
     big = float(np.quantile(steps, 0.9))
     floor = TAIL_NOISE * noise / big                                   # the share a settled tail stays below
     scatter = 1.25 * float(np.median(noise / steps)) / np.sqrt(len(shares))   # the median share's own scatter
@@ -190,7 +200,8 @@ def _to_the_noise(t: np.ndarray, share: np.ndarray, t_settled: float, shares: li
     if not slope < -1.0 / TAIL_TAU_MAX_S:
         return t_settled
     t_cut = (np.log(floor) - icpt) / slope
-    return float(np.clip(t_cut, t_settled, SETTLING_CUT_MAX_S))
+    hold = float(np.median([c[0][-1, 0] for c in shares]))
+    return float(np.clip(t_cut, t_settled, max(t_settled, min(SETTLING_CUT_MAX_S, hold / 3.0))))
 
 
 def _step_shares(rec) -> list[tuple[np.ndarray, float, float]]:

@@ -233,6 +233,10 @@ def test_a_load_changed_as_its_hold_starts_drives_the_creep_from_there():
     assert not np.allclose(kelvin_voigt(data, base, np.array([tau]), 0.0)[:, 0], ref)
     assert load_step_at(data) == 1.0
     assert load_step_at(SimpleNamespace(step=step, t_hold=t_hold - np.repeat([0.0, 1.0], 8))) == 0.0
+    # a review: one gauge blank on each hold's first row (gauges polled in turn) is no readings left out
+    two = SimpleNamespace(step=np.r_[step, step], t_hold=np.r_[t_hold - np.repeat([0.0, 1.0], 8),
+                                                               t_hold - np.repeat([0.0, 1.0], 8) + 0.1])
+    assert load_step_at(two) == 0.0
 
 
 def test_creep_columns_follow_the_kelvin_voigt_step_response():

@@ -123,8 +123,10 @@ def load_step_at(data) -> float:
     step, t_hold = getattr(data, "step", None), getattr(data, "t_hold", None)
     if step is None or t_hold is None or not np.size(step):
         return 0.0
-    first = np.r_[True, np.diff(step) != 0]
-    return 1.0 if float(np.median(t_hold[first])) > 0.0 else 0.0
+    steps, where = np.unique(np.asarray(step), return_inverse=True)
+    first = np.full(steps.size, np.inf)
+    np.minimum.at(first, where, np.asarray(t_hold, float))    # each hold's first reading on any gauge (a gauge
+    return 1.0 if float(np.median(first)) > 0.0 else 0.0     # blank on a hold's first row is no readings left out
 
 
 def _with_load_steps(t: np.ndarray, base: np.ndarray, step: np.ndarray, t_hold: np.ndarray, step_at: float):
@@ -179,16 +181,18 @@ def creep_hypothesis(data, base: np.ndarray, tau: float, column: np.ndarray | No
                       settings={"tau_s": float(tau)} | ({"load_step_at": float(step_at)} if step_at else {}))
 
 
-def two_term_creep_hypothesis(data, base: np.ndarray, tau: float, tau_2: float) -> Hypothesis:
+def two_term_creep_hypothesis(data, base: np.ndarray, tau: float, tau_2: float, step_at: float = 0.0) -> Hypothesis:
     """Kelvin-Voigt creep of two terms, time constants ``tau`` and ``tau_2`` [s] (a laminate's fast and a bond's
-    slow creep); their amplitudes phi and phi_2 are the linear parameters, the two time constants hidden."""
-    X = kelvin_voigt(data, base, np.array([tau, tau_2]))
+    slow creep), the load changed ``step_at`` of the way between holds (:func:`kelvin_voigt`); their amplitudes phi
+    and phi_2 are the linear parameters, the two time constants hidden."""
+    X = kelvin_voigt(data, base, np.array([tau, tau_2]), step_at)
     fast, slow = sorted((tau, tau_2))
     return Hypothesis(Creep.effect, None, ["phi", "phi_2"], X, [0.0, 0.0], [1.0, 1.0],
                       f"viscoelastic creep of the tubes or bonds in two terms: the deflection keeps growing during a "
                       f"hold at constant load, part of it within seconds (time constant {fast:.3g} s) and part "
                       f"slowly ({slow:.3g} s), more at higher load", hidden=2,
-                      settings={"tau_s": float(tau), "tau_2_s": float(tau_2)})
+                      settings={"tau_s": float(tau), "tau_2_s": float(tau_2)}
+                      | ({"load_step_at": float(step_at)} if step_at else {}))
 
 
 #: a creep term of a time constant up to this share of a hold is complete within it: part of the compliance

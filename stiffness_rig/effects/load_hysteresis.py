@@ -3,9 +3,9 @@ the way up (hysteresis of a bond or a clamped joint). Two forms:
 
 - ``eta``: the unloading branch lies above the loading one by a split that grows in proportion to the load: the
   unloading compliance is (1 + eta) C;
-- ``eta_loop``: micro-slip in a clamped or bonded joint (a Masing loop) that closes at no load and at the series'
-  top load: the branches lie -+ eta_loop C F (1 - F / F_top) about the line, widest half-way (an instrument trial's
-  own rig read as friction, a nonlinearity and a tare, each "decisive").
+- ``eta_loop``: micro-slip in a clamped or bonded joint, a symmetric loop (phenomenological) that closes at no
+  load and at the series' top load: the branches lie -+ eta_loop C F (1 - F / F_top) about the line, widest
+  half-way (an instrument trial's own rig read as friction, a nonlinearity and a tare, each "decisive").
 
 Friction splits the branches by a constant 2 F_f C whatever the load; a nonlinearity bends both branches the
 same way; creep's split depends on how long the holds last. These splits are zero at no load and the same in
@@ -28,7 +28,7 @@ class LoadHysteresis(RigEffectModel):
     order = 100
     params = (ParamSpec("eta", "-", "extra compliance on the unloading branch, relative to loading"),
               ParamSpec("eta_loop", "-", "a loop closing at no load and the top load: the branches lie -+ eta_loop "
-                                         "C F (1 - F / F_top) about the line (micro-slip, a Masing loop)"),
+                                         "C F (1 - F / F_top) about the line (micro-slip; a symmetric, phenomenological loop)"),
               ParamSpec("top_kg", "kg", "the top load of the loop (eta_loop; default: the plan's largest mass)",
                         magnitude=False))
     example = {"eta": 0.01}

@@ -118,10 +118,11 @@ def _refuse_regularised(res, path) -> None:
     weak = [nm for nm in res.free if res.status[nm] == "regularised"]
     if weak:
         raise RodlabError(f"{path}: --strict: {', '.join(weak)} cannot be identified from these data (sigma beyond "
-                          "the parameter's physical size: the fit would keep them at their start values); measure the "
-                          "same poses under other loads (the rod's own weight at other arm postures, a payload) for "
-                          "joint compliances, or pin them (--pin NAME=VALUE), or drop --strict to keep them at their "
-                          "start values, reported as regularised")
+                          "the parameter's physical size: the fit would keep them at their start values); for joint "
+                          "compliances measure the same poses under other loads (the rod's own weight at other arm "
+                          "postures, a payload), for geometric parameters more poses spread over the workspace "
+                          "(`rodlab plan`); or pin them (--pin NAME=VALUE), or drop --strict to keep them at their start "
+                          "values, reported as regularised")
 
 
 def _without_harmonics(robot, obs, rod, compensations, options, pts) -> np.ndarray | None:

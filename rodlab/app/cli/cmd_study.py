@@ -142,7 +142,7 @@ def _candidates(args):
     L2s = _lengths_mm(parse_range(args.L2, "L2"), "L2", args.L2) if args.L2 else [base.L2_mm]
     mats = [m.strip() for m in args.materials.split(",")] if args.materials else [None]
     tubes = [parse_tube(t) for t in args.tubes.split(",")] if args.tubes else [None]
-    check_variants(base, mats, tubes)
+    check_variants(base, mats, tubes, L1s, L2s)
     return grid_candidates(base, L1s, L2s, mats, tubes), (L1s, L2s)
 
 

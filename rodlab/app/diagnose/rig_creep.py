@@ -45,12 +45,13 @@ def two_term_step(library, ls, S: tuple, data, base, r0, prep, sigma: float, fol
         return library, ls, S
     j = creep[0]
     tau = float(library[j].settings["tau_s"])
+    step_at = float(library[j].settings.get("load_step_at", 0.0))
     n = r0.size
     _, cur_rss = ls.fit(S)
     k_cur = sum(library[i].n_params for i in S)
     for drop, lenient in _replacements(library, S, j):
         rest = tuple(i for i in S if i not in drop)
-        term = _best_second_term(library, rest, data, base, r0, prep, tau)
+        term = _best_second_term(library, rest, data, base, r0, prep, tau, step_at)
         if term is None:
             continue
         lib = library + [term]
@@ -78,12 +79,12 @@ def _replacements(library, S: tuple, j: int):
     yield (j,), False
 
 
-def _best_second_term(library, rest: tuple, data, base, r0, prep, tau: float):
+def _best_second_term(library, rest: tuple, data, base, r0, prep, tau: float, step_at: float = 0.0):
     """The two-term creep that fits best beside the terms ``rest``: its time constants from the grid and the
     chosen one, at least :data:`TAU_RATIO_MIN` apart (the columns made once), then both refined continuously
     within half a grid step; None when there is no such pair."""
     taus = np.unique(np.append(CREEP_TAU_GRID_S, tau))
-    K = prep.project_columns(kelvin_voigt(data, base, taus))
+    K = prep.project_columns(kelvin_voigt(data, base, taus, step_at))
     others = np.column_stack([library[i].X for i in rest]) if rest else np.zeros((r0.size, 0))
     best = None
     for a in range(taus.size):
@@ -95,13 +96,13 @@ def _best_second_term(library, rest: tuple, data, base, r0, prep, tau: float):
         return None
 
     def rss(log_taus):
-        return _rss(others, prep.project_columns(kelvin_voigt(data, base, np.exp(log_taus))), r0)
+        return _rss(others, prep.project_columns(kelvin_voigt(data, base, np.exp(log_taus), step_at)), r0)
 
     step = 0.25 * np.log(2.0)                           # half the grid's step (a factor sqrt 2)
     res = minimize(rss, best[1], method="Nelder-Mead", bounds=[(v - step, v + step) for v in best[1]],
                    options={"xatol": 0.01, "fatol": 1e-12 * best[0], "maxfev": 60})
     slow, fast = np.exp(res.x if res.fun < best[0] else best[1])
-    return prep(two_term_creep_hypothesis(data, base, float(slow), float(fast)))
+    return prep(two_term_creep_hypothesis(data, base, float(slow), float(fast), step_at))
 
 
 def _rss(others: np.ndarray, creep: np.ndarray, r0: np.ndarray) -> float:

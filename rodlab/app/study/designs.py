@@ -86,7 +86,7 @@ def grid_candidates(base: RodDesign, L1s, L2s, materials=(None,), tubes=(None,))
     return out
 
 
-def check_variants(base: RodDesign, materials=(None,), tubes=(None,)) -> None:
+def check_variants(base: RodDesign, materials=(None,), tubes=(None,), L1s=(), L2s=()) -> None:
     """Refuse ``--materials`` or ``--tubes`` whose every value makes no rod of ``base``'s lengths (a material not
     known, a wall no less than the radius, a tube so thin the rod would hang: a size in cm), naming the option and
     the value, before a study runs (a new-user trial: each had run, written its pages as "no design usable" and
@@ -96,14 +96,27 @@ def check_variants(base: RodDesign, materials=(None,), tubes=(None,)) -> None:
                            ("--tubes", [(None, t) for t in tubes if t])):
         failed = []
         for mat, tube in values:
-            try:
-                check_design(_with_tube(base, mat, tube))
-            except RodlabError as e:
+            e = _fails_everywhere(base, mat, tube, list(L1s) or [base.L1_mm], list(L2s) or [base.L2_mm])
+            if e is not None:
                 failed.append((mat or f"{tube[0]:g}x{tube[1]:g}", e))
         if values and len(failed) == len(values):
             value, e = failed[0]
-            raise RodlabError(f"{option} {value}: {getattr(e, 'detail', str(e))} (on {base.name}'s L1 "
-                              f"{base.L1_mm:g} mm and L2 {base.L2_mm:g} mm)") from e
+            raise RodlabError(f"{option} {value}: {getattr(e, 'detail', str(e))} (at every L1 x L2 of the "
+                              "study)") from e
+
+
+def _fails_everywhere(base: RodDesign, mat, tube, L1s, L2s) -> RodlabError | None:
+    """The first error of the variant (``mat``, ``tube``) of ``base`` where it makes no rod at any of the lengths
+    (a review: a thin tube refused on the base's lengths was a rod on the shorter ones of the grid), else None."""
+    first = None
+    for L1 in L1s:
+        for L2 in L2s:
+            try:
+                check_design(replace(_with_tube(base, mat, tube), L1_mm=float(L1), L2_mm=float(L2)))
+                return None
+            except RodlabError as e:
+                first = first or e
+    return first
 
 
 def _candidate(base, L1, L2, mat, tube) -> Candidate:

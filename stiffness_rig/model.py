@@ -157,6 +157,7 @@ class RigModel:
         """The rod is remounted for a new series: no creep left."""
         self.state.creep = np.zeros((2, 3))
         self.state.creep_target = np.zeros((2, 3))
+        self.state.gauge_contact = None
 
     def temperature(self, t: float) -> float:
         return self.T0_C + self.temp_amplitude_K * np.sin(2 * np.pi * t / self.temp_period_s)

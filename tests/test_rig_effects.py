@@ -111,6 +111,29 @@ def test_a_hysteresis_loop_closing_at_the_top_load_is_named_as_such(tmp_path):
     assert f.parameters["eta_loop"] == pytest.approx(loop, rel=0.1) and hi - lo < 0.2 * loop
 
 
+def test_gauge_backlash_trails_each_gauge_by_half_its_play_and_is_told_from_friction(tmp_path):
+    """A gauge with play b reads b/2 behind its motion: loading and unloading readings of one mass differ by b on
+    every gauge that moves, whatever its entry (friction's split is 2 F_f times the entry); an instrument trial's
+    4 um play had been read as a two-term creep, friction and a drift. The diagnosis names it at its size and a
+    friction recording stays friction."""
+    b = 0.004
+    model, rec = _simulate(tmp_path, {"gauge_backlash": {"backlash_mm": b}})
+    clean = RigModel(SIM.C_F, {"gauge_backlash": {"backlash_mm": b}}, noise_mm=0.0, resolution_mm=0.0)
+    axis = LoadSchedule().holds()[0][0]
+    clean.reset_series()
+    zero = clean.reading(0.0, Hold(1, axis, 1, Phase.LOAD, 0.0, 0.0))[0]
+    up = clean.reading(1.0, Hold(2, axis, 1, Phase.LOAD, 1.0, 1.0))[0]
+    top = clean.reading(2.0, Hold(3, axis, 1, Phase.LOAD, 2.0, 2.0))[0]
+    down = clean.reading(3.0, Hold(4, axis, 1, Phase.UNLOAD, 1.0, 3.0))[0]
+    moving = np.abs(top - zero) > b                                   # gauges that moved beyond the play
+    assert np.allclose((down - up)[moving], b, atol=1e-12) and moving.any()
+    diag, _ = diagnose_rig(rec, SIM, DESIGN, accuracy="exact")
+    f = diag.findings[0]
+    assert f.effect == "gauge_backlash" and f.parameters["backlash_mm"] == pytest.approx(b, rel=0.1), diag.summary()
+    _, fric = _simulate(tmp_path, {"friction": {"F_f_N": 0.3}})
+    assert diagnose_rig(fric, SIM, DESIGN, accuracy="exact")[0].findings[0].effect == "friction"
+
+
 def test_load_hysteresis_splits_the_branches_in_proportion_to_the_load():
     """Forward model: an unloading hold reads (1 + eta) times the loading hold at the same mass; no split at no
     load (friction's split would be the same at every load)."""

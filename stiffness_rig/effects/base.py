@@ -45,11 +45,13 @@ class HypothesisContext:
 @dataclass
 class RigState:
     """Mutable state of the forward model: the deflection [mm] in {T} of each creep term, shape=(2, 3), the time of
-    the last reading [s] and the creep each term was approaching then [mm], shape=(2, 3)."""
+    the last reading [s], the creep each term was approaching then [mm], shape=(2, 3), and where each gauge's
+    plunger sits against the rod with its play [mm], shape=(3,) (None before a series' first reading)."""
 
     creep: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
     t_last: float | None = None
     creep_target: np.ndarray = field(default_factory=lambda: np.zeros((2, 3)))
+    gauge_contact: np.ndarray | None = None
 
 
 class RigEffectModel(EffectSchema):

@@ -10,6 +10,7 @@ import numpy as np
 from rodlab.calibrate import (FitOptions, ModelParams, Rod, ThermalGrowth, campaign_observations, identify, read_fixture,
                               validate)
 from rodlab.calibrate.errors import CalibrationError
+from rodlab.calibrate.points import stated_noise_mm
 from rodlab.calibrate.residual_test import residual_test
 from rodlab.calibrate.trust import implausible_device, stated_noise_warning
 from rodlab.calibrate.kinematics import HARMONICS
@@ -54,6 +55,7 @@ class CalibrationRun:
     rod_file: object = None                # the compliance file as read (core.compliance.RodCompliance)
     without_harmonics_mm: np.ndarray | None = None   # with --joint-harmonics and --validate: the validation errors
     #                                                  [mm] of the same calibration without the periodic terms
+    validation_noise_mm: float | None = None          # the validation points' instrument noise per coordinate [mm]
 
     @property
     def label(self) -> str:
@@ -104,6 +106,7 @@ def run_calibration(args, rod: RodCompliance, deflection, camp=None) -> Calibrat
                          rod_file=rod,
                          options=options)
     if pts is not None:
+        run.validation_noise_mm = stated_noise_mm(pts, None)[1]
         run.nominal_mm = validate(robot, ModelParams.nominal(robot, pts.tool_mm), pts)[1]
         run.calibrated_mm = validate(robot, res.params, pts)[1]
         if options.harmonics:             # the periodic terms checked on the held-out points before they are used

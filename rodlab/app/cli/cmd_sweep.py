@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import io
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from ...core.design_io import resolve_design
@@ -94,7 +95,6 @@ def _refuse_if_none_valid(base, L1s, L2s) -> None:
     """Refuse a grid none of whose L1 x L2 designs is a valid rod (lengths in metres, a range below the parts)
     before anything runs or is written, naming the first reasons (a new-user trial: the table and figure of nine
     invalid designs had been written beside an error)."""
-    from dataclasses import replace
     reasons = []
     for L1 in L1s:
         for L2 in L2s:

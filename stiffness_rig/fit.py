@@ -31,6 +31,7 @@ from .load import LoadCheck, measured_load, zero_offset
 from .r_rod_checks import PLAUSIBLE_R_ROD, r_rod_caution, r_rod_note
 from .recording import RigRecording
 from .settling import missing_holds_text, settled
+from .zero_load import reference_level, zero_load_se
 
 __all__ = ["LineFit", "RigFit", "fit_recording", "NoLoadResponse", "r_rod_caution", "r_rod_note", "PLAUSIBLE_R_ROD",
            "noise_text"]
@@ -182,7 +183,7 @@ def fit_recording(rec: RigRecording, sim: RodCompliance | None = None, robust: b
         on_axis = np.array([a is axis for a in holds.axis])
         h = cell.select(on_axis & ~reference)
         for c in range(3):
-            fitted = _fit_line(h, axis, c, robust, noise, _reference_level(holds, on_axis & reference, c, noise))
+            fitted = _fit_line(h, axis, c, robust, noise, reference_level(holds, on_axis & reference, c, noise))
             if fitted is not None:
                 lines.append(fitted[0])
                 resid_all.append(fitted[1])
@@ -257,19 +258,6 @@ def _reference_holds(holds) -> np.ndarray:
     return reference
 
 
-def _reference_level(holds, ref: np.ndarray, c: int, noise: float) -> tuple[float, float]:
-    """The reading [mm] of component ``c`` on the axis's unloaded reference hold (``ref`` selects it) and its
-    variance [mm^2]; (0, 0) without one. The zero-load crossings are taken from this level, not from the gauge's
-    zero: a gauge zeroed on a single reading sits one reading's noise off, which read as a +15 g dead load at 18
-    standard errors on an independent null recording."""
-    idx = np.flatnonzero(ref)
-    if idx.size == 0 or not np.isfinite(holds.mean_mm[idx[0], c]):
-        return 0.0, 0.0
-    i = idx[0]
-    var = noise ** 2 / max(float(holds.n[i]), 1.0) if np.isfinite(noise) else float(holds.std_mm[i, c]) ** 2
-    return float(holds.mean_mm[i, c]), float(var) if np.isfinite(var) else 0.0
-
-
 def _fit_line(h, axis, c: int, robust: bool, noise: float, level: tuple[float, float] = (0.0, 0.0)):
     """The load-deflection line of component ``c`` of the holds ``h`` of one load axis (one intercept per
     branch when both load and unload holds exist), and its residuals [mm]; None with < 3 usable holds. The
@@ -303,7 +291,7 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float, level: tuple[float, f
     significant = abs(slope) > 3 * se and abs(slope) > 0
     y0, var0 = level
     zero = {k: (float(-(v - y0) / (slope * G0 * axis.sign)) if significant else float("nan")) for k, v in icpt.items()}
-    zero_se = {k: _zero_load_se(coef, cov, i, axis.sign, y0, var0) if significant else float("nan")
+    zero_se = {k: zero_load_se(coef, cov, i, axis.sign, y0, var0) if significant else float("nan")
                for k, i in (("load", 0), ("unload", 1 if two else 0))}
     branch = {}
     for name, m in (("load", ~uo), ("unload", uo)):
@@ -313,18 +301,6 @@ def _fit_line(h, axis, c: int, robust: bool, noise: float, level: tuple[float, f
                             "zero_load_kg": float(-(a - y0) / (b * G0 * axis.sign)) if significant else float("nan")}
     return LineFit(axis, c, slope, se, icpt, zero, branch, float(np.sqrt(np.mean(res ** 2))), len(yo),
                    unloaded_apart=apart is not None, dead_load_kg=dead_load, zero_load_se_kg=zero_se), res
-
-
-def _zero_load_se(coef: np.ndarray, cov: np.ndarray, i: int, sign: float, y0: float = 0.0,
-                  var0: float = 0.0) -> float:
-    """The standard error [kg] of the zero-load crossing ``-(a_i - y0) / (b g0 sign)`` of intercept ``i`` and the
-    slope (the last coefficient) from the reference level ``y0`` (variance ``var0``, independent of the line's
-    holds), by the delta method (a blind trial: +67 / +77 g crossings without one had read like the paper's
-    friction, where they were noise)."""
-    a, b = float(coef[i]) - y0, float(coef[-1])
-    grad = np.zeros(coef.size)
-    grad[i], grad[-1] = -1.0 / (b * G0 * sign), a / (b * b * G0 * sign)
-    return float(np.sqrt(max(grad @ cov @ grad + var0 / (b * G0) ** 2, 0.0)))
 
 
 #: the holds without a hanger get a level of their own when that lowers the lines' residual this significantly

@@ -354,3 +354,12 @@ def test_a_gauge_whose_calibration_factor_is_off_is_unexplained_at_the_gauge(tmp
     assert {f.effect for f in diag.findings} == {"unexplained"}, diag.summary()
     f = next(f for f in diag.findings if f.location == "sensor:z")
     assert f.parameters["gain_error"] == pytest.approx(0.05, abs=0.005) and "calibration factor" in f.explanation
+
+
+def test_a_tilted_gauge_finding_says_how_to_tell_it_from_a_coupling_of_the_rod():
+    """A paper-rod trial: a laminate's bend-twist coupling (c23 6 % of c22) was named tilted gauges and taken out of
+    the export; the finding now says how a coupling reads (alike both ways) and to keep the measured entry."""
+    model = RIG_EFFECTS[RigEffect("crosstalk")]
+    assert "a coupling reads there alike (c_mn = c_nm)" in model.confirm_for("sensor:z")
+    assert "a coupling reads there alike" in model.confirm_for("sensor:z|load:y")
+    assert "coupling" not in model.confirm_for("load:y")

@@ -23,8 +23,9 @@ from .completion import complete_c_f
 from .errors import NoLoadResponse, RigError
 from .creep_check import creep_within_holds
 from .gross import without_gross
-from .fit_checks import (check_load_response, dead_load_warnings, direction_warnings, gauge_scale_problems, lack_of_fit_warnings,
-                         load_drift_warnings, load_scale_problems, reciprocity_problems, structural_zero_warnings)
+from .fit_checks import (check_load_response, dead_load_warnings, direction_warnings, gauge_scale_problems,
+                         inverse_variance_mean, lack_of_fit_warnings, load_drift_warnings, load_scale_problems,
+                         reciprocity_problems, structural_zero_warnings)
 from .glitches import without_glitches
 from .holds import Holds, hold_averages
 from .load import LoadCheck, measured_load, zero_offset
@@ -368,10 +369,7 @@ def _combine_lines(lines: list) -> tuple[np.ndarray, np.ndarray]:
     M = np.full((3, 3), np.nan)
     S = np.full((3, 3), np.nan)
     for (c, i), vals in acc.items():
-        w = np.array([1 / max(se, 1e-12) ** 2 for _, se in vals])
-        slopes = np.array([s for s, _ in vals])
-        M[c, i] = float(np.sum(w * slopes) / w.sum())
-        chi2 = float(np.sum(w * (slopes - M[c, i]) ** 2))
+        M[c, i], se, chi2 = inverse_variance_mean([s for s, _ in vals], [se for _, se in vals])
         birge = np.sqrt(chi2 / (len(vals) - 1)) if len(vals) > 1 else 1.0
-        S[c, i] = float(max(birge, 1.0) / np.sqrt(w.sum()))
+        S[c, i] = float(max(birge, 1.0) * se)
     return M, S

@@ -13,8 +13,8 @@ from rodlab.core.units import G0
 from .errors import NoLoadResponse
 from .instrument_profile import UNITS
 
-__all__ = ["check_load_response", "direction_warnings", "structural_zero_warnings", "reciprocity_problems",
-           "lack_of_fit_warnings",
+__all__ = ["check_load_response", "direction_warnings", "inverse_variance_mean", "structural_zero_warnings",
+           "reciprocity_problems", "lack_of_fit_warnings",
            "gauge_scale_problems", "load_drift_warnings", "load_scale_problems", "scale_cause", "RECIPROCITY_Z",
            "LACK_FACTOR", "GAUGE_SCALE_RATIO", "LOAD_SCALE_REFUSE"]
 
@@ -153,8 +153,16 @@ def direction_warnings(lines: list) -> list[str]:
 
 def _mean_slope(lines: list) -> tuple[float, float]:
     """The inverse-variance mean of the lines' slopes [mm/N] and its standard error."""
-    w = np.array([1 / max(ln.se_mm_per_N, 1e-12) ** 2 for ln in lines])
-    return float(np.sum(w * [ln.slope_mm_per_N for ln in lines]) / w.sum()), float(1 / np.sqrt(w.sum()))
+    mean, se, _ = inverse_variance_mean([ln.slope_mm_per_N for ln in lines], [ln.se_mm_per_N for ln in lines])
+    return mean, se
+
+
+def inverse_variance_mean(values, ses) -> tuple[float, float, float]:
+    """(the inverse-variance mean of ``values``, its standard error, the chi-square of the values about it)."""
+    w = 1.0 / np.maximum(np.asarray(ses, float), 1e-12) ** 2
+    v = np.asarray(values, float)
+    mean = float(np.sum(w * v) / w.sum())
+    return mean, float(1 / np.sqrt(w.sum())), float(np.sum(w * (v - mean) ** 2))
 
 
 def lack_of_fit_warnings(lines: list, holds, noise_mm: float) -> list[str]:

@@ -72,6 +72,12 @@ def _line_of(text: str | None, table: str | None, key: str | None) -> int | None
     return header_line
 
 
+def _line_of_key(text: str | None, dotted: str | None) -> int | None:
+    """:func:`_line_of` for a dotted key: ``tube.outer_diameter_mm`` in ``[tube]``, ``L2_mm`` at the top."""
+    table, _, key = (dotted or "").rpartition(".")
+    return _line_of(text, table or None, key or None)
+
+
 def _unquote(key: str) -> str:
     """A TOML key as written without its quotes (``"tube.wall_mm"`` -> ``tube.wall_mm``)."""
     return key[1:-1] if len(key) > 1 and key[0] == key[-1] and key[0] in "\"'" else key
@@ -369,12 +375,9 @@ def load_design(path: str | Path, *, schema: bool = True) -> RodDesign:
     try:
         check_design(design)
     except DesignError as e:
-        table, _, key = (e.key or "").rpartition(".")             # `tube.outer_diameter_mm`: in [tube]
-        raise DesignError(e.detail, path=p, line=_line_of(text, table or None, key or None), key=e.key,
-                          also=e.also) from e
+        raise DesignError(e.detail, path=p, line=_line_of_key(text, e.key), key=e.key, also=e.also) from e
     for w in range_warnings(design):
-        table, _, key = w.key.rpartition(".")
-        line = _line_of(text, table or None, key)
+        line = _line_of_key(text, w.key)
         log.warning("%s%s, %s", p, f", line {line}" if line else "", w.describe())
     bend = data.get("bend") if isinstance(data.get("bend"), Mapping) else {}
     if (said := laminate_bend_warning(design, "material" in bend)) is not None:

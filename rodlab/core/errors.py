@@ -23,6 +23,7 @@ __all__ = [
     "ComplianceError",
     "did_you_mean",
     "expect_type",
+    "first_reasons",
 ]
 
 
@@ -68,6 +69,13 @@ def joint_alias_number(word: str) -> int | None:
     return int(m.group(1)) if m else None
 #: a name with its unit in brackets (``X [mm]``, ``x (mm)``): the contract writes ``x_mm``
 _BRACKET_UNIT = re.compile(r"(.+?)\s*[\[(]\s*(\w+)\s*[\])]")
+
+
+def first_reasons(reasons, k: int = 3) -> str:
+    """The first ``k`` of ``reasons`` joined by '; ', and how many more there are."""
+    reasons = list(reasons)
+    more = f"; and {len(reasons) - k} more reasons" if len(reasons) > k else ""
+    return "; ".join(reasons[:k]) + more
 
 
 def did_you_mean(word: str, choices: Iterable[str], units: bool = False) -> str:

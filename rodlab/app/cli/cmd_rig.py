@@ -368,16 +368,16 @@ def cmd_simulator(args: argparse.Namespace) -> int:
     sim = compliance_arg(args.sim)
     if args.profile is None and args.link is None:
         raise RodlabError("give --link (the one-port simulated counter) or --profile with --link-dir")
-    loop = parse_effects(args.effect).get("load_hysteresis") or {}
+    effects = parse_effects(args.effect)
+    loop = effects.get("load_hysteresis") or {}
     if loop.get("eta_loop") and not loop.get("top_kg"):
         raise RodlabError("--effect load_hysteresis: eta_loop needs top_kg (the loop's top load [kg]) in the live "
                           "simulator, which does not know the acquisition's plan: add top_kg=<the plan's largest mass>")
     if args.profile is not None:
-        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args),
-                         load_cell_noise_N=args.load_cell_noise_n)
+        model = RigModel(sim.C_F, effects, places=_places(sim, args), load_cell_noise_N=args.load_cell_noise_n)
         devices, what = profile_simulators(args, model, Faults(garbage=args.garbage))
     else:
-        model = RigModel(sim.C_F, parse_effects(args.effect), places=_places(sim, args))
+        model = RigModel(sim.C_F, effects, places=_places(sim, args))
         devices = [SimulatedRig(model, Path(args.link), protocol=args.protocol, checksum=args.checksum,
                                 faults=Faults(garbage=args.garbage))]
         what = f"on {args.link} ({args.protocol}, 3 gauges in um + temperature"

@@ -9,7 +9,7 @@ from pathlib import Path
 from rodlab.calibrate import read_fixture
 
 from ...core.design_io import resolve_design
-from ...core.errors import RodlabError
+from ...core.errors import RodlabError, first_reasons
 from ...core.progress import progress as bar_of
 from ...core.units import PAPER_R_ROD, PAPER_ROD_SLIP
 from .argtypes import base_pose, count, nonneg_float, pos_float, seed
@@ -245,9 +245,8 @@ def cmd_study(args: argparse.Namespace) -> int:
                      args.monte_carlo, args.draws, _base(args))
     cands, grid = _candidates(args)
     if not any(c.design is not None for c in cands):
-        said = list(dict.fromkeys(c.invalid for c in cands))
         raise RodlabError(f"none of the {len(cands)} designs is a valid rod, nothing was run or written: "
-                          + "; ".join(said[:3]) + (f"; and {len(said) - 3} more reasons" if len(said) > 3 else ""))
+                          + first_reasons(dict.fromkeys(c.invalid for c in cands)))
     out = Path(args.output)
     t0 = time.perf_counter()
     cache = Path(args.cache) if args.cache else out / "cache"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ...core.design_io import resolve_design
 from ...core.enums import FeaModel
-from ...core.errors import RodlabError
+from ...core.errors import RodlabError, first_reasons
 from ...core.fileio import atomic_write_bytes, atomic_write_text
 from ...core.progress import progress as bar_of
 from .argtypes import count
@@ -87,7 +87,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if not (df["status"] == "ok").any():
         reasons = sorted({str(m) for m in df["message"] if isinstance(m, str) and m})
         raise RodlabError(f"none of the {len(df)} designs is usable ({out} lists each one's reason): "
-                          + "; ".join(reasons[:3]) + (f"; and {len(reasons) - 3} more reasons" if len(reasons) > 3 else ""))
+                          + first_reasons(reasons))
     return 0
 
 
@@ -103,9 +103,8 @@ def _refuse_if_none_valid(base, L1s, L2s) -> None:
                 return
             except RodlabError as e:
                 reasons.append(getattr(e, "detail", str(e)))
-    said = list(dict.fromkeys(reasons))
     raise RodlabError(f"none of the {len(reasons)} designs of --L1 x --L2 is a valid rod, nothing was run or written: "
-                      + "; ".join(said[:3]) + (f"; and {len(said) - 3} more reasons" if len(said) > 3 else ""))
+                      + first_reasons(dict.fromkeys(reasons)))
 
 
 def _frame_calibration(args: argparse.Namespace, base, L1s, L2s, out: Path):

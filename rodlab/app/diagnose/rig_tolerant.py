@@ -10,9 +10,7 @@
 """
 from __future__ import annotations
 
-import dataclasses
-
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -126,7 +124,7 @@ def _on_refined_linear(library, ls, S: tuple, coef, rss: float, rf: _Refit, pass
         lin = fit_linear(rf.data, rf.entries, rf.L, rf.data.y - rf.prep.fitted_change(chosen, coef), rf.sigma,
                          rf.sim.C_F)
         fresh = {_term_key(h): h for h in _hypotheses(rf.data, lin.C_F, rf.places, rf.tool, False)}
-        swap = {j: dataclasses.replace(fresh[_term_key(library[j])], profile=library[j].profile)
+        swap = {j: replace(fresh[_term_key(library[j])], profile=library[j].profile)
                 for j in S if _term_key(library[j]) in fresh}        # a creep keeps its time constant's profile
         if not swap:
             break
